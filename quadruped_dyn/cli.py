@@ -1,0 +1,100 @@
+"""The ``quadruped-dyn`` command line. Exit codes: 0 success, 1 a check failed, 2 bad input."""
+
+from __future__ import annotations
+
+import json
+import sys
+from typing import Any
+
+import click
+import numpy as np
+
+from .errors import InputError
+from .robot import ROBOT_NAMES, Robot, load_robot
+
+EXIT_CHECK_FAILED = 1
+EXIT_BAD_INPUT = 2
+
+
+class _Group(click.Group):
+    """Maps InputError to exit code 2 with a one-line message and no traceback."""
+
+    def invoke(self, ctx: click.Context) -> Any:
+        try:
+            return super().invoke(ctx)
+        except InputError as e:
+            click.echo(f"error: {e}", err=True)
+            sys.exit(EXIT_BAD_INPUT)
+
+
+@click.group(cls=_Group)
+def main() -> None:
+    """quadruped_dyn: the paper's quadruped Newton-Euler dynamics, checked against Pinocchio."""
+
+
+@main.command()
+def robots() -> None:
+    """List the built-in robot names."""
+    for name in ROBOT_NAMES:
+        click.echo(name)
+
+
+def robot_info(robot: Robot) -> dict[str, Any]:
+    feet = [leg.foot_position(q) for leg, q in zip(robot.legs, robot.standing_q.reshape(4, 3))]
+    return {
+        "name": robot.name,
+        "urdf": str(robot.urdf),
+        "total_mass_kg": robot.total_mass,
+        "trunk_mass_kg": robot.trunk.mass,
+        "standing_q_rad": robot.standing_q.tolist(),
+        "legs": [
+            {
+                "label": leg.label,
+                "joints": [j.name for j in leg.joints],
+                "foot_frame": leg.foot_frame,
+                "hip_position_m": leg.hip.tolist(),
+                "thigh_length_m": float(np.linalg.norm(leg.joints[2].placement.p)),
+                "shank_length_m": float(np.linalg.norm(leg.foot.p)),
+                "link_masses_kg": [link.mass for link in leg.links],
+                "foot_position_standing_m": foot.tolist(),
+            }
+            for leg, foot in zip(robot.legs, feet)
+        ],
+    }
+
+
+@main.command()
+@click.argument("robot")
+@click.option("--json", "as_json", is_flag=True, help="Print JSON instead of a table.")
+def info(robot: str, as_json: bool) -> None:
+    """Legs, joints, link lengths, masses and standing foot positions of ROBOT (name or URDF path)."""
+    data = robot_info(load_robot(robot))
+    if as_json:
+        click.echo(json.dumps(data, indent=2))
+        return
+    click.echo(f"{data['name']}  ({data['urdf']})")
+    click.echo(f"total mass {data['total_mass_kg']:.3f} kg, trunk {data['trunk_mass_kg']:.3f} kg")
+    click.echo(f"{'leg':<4}{'joints (HAA, HFE, KFE)':<48}{'thigh m':>8}{'shank m':>8}{'mass kg':>8}  foot at standing (b, m)")
+    for leg in data["legs"]:
+        foot = " ".join(f"{x:+.3f}" for x in leg["foot_position_standing_m"])
+        click.echo(
+            f"{leg['label']:<4}{', '.join(leg['joints']):<48}{leg['thigh_length_m']:>8.3f}"
+            f"{leg['shank_length_m']:>8.3f}{sum(leg['link_masses_kg']):>8.3f}  {foot}"
+        )
+
+
+@main.command("make-urdf")
+@click.option("--check", is_flag=True, help="Only compare the committed URDF with a fresh generation.")
+def make_urdf(check: bool) -> None:
+    """Regenerate urdf/paper_quadruped.urdf from the paper's DH table and our parameters."""
+    from .paper_robot import URDF_PATH, urdf_text, write_urdf
+
+    if check:
+        same = URDF_PATH.is_file() and URDF_PATH.read_text() == urdf_text()
+        click.echo(f"{URDF_PATH}: {'up to date' if same else 'DIFFERS from the generator'}")
+        sys.exit(0 if same else EXIT_CHECK_FAILED)
+    click.echo(f"wrote {write_urdf()}")
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,146 @@
+"""Pinocchio ground truth, in the project's coordinates (see ``state`` for conventions).
+
+Every function takes the project's q (19,), v (18,), a = vdot (18,) and returns results in
+project order (6 body + 12 joints in FL, FR, BL, BR x HAA, HFE, KFE order), converting to
+and from Pinocchio's own order (``Robot.idx_q`` / ``idx_v``) explicitly. Nothing here calls
+the project's CasADi code: it is an independent implementation of the same quantities.
+
+Foot quantities are in the trunk frame b, positions relative to the trunk origin, and the
+foot Jacobians are w.r.t. the leg's own three joints.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pinocchio as pin
+
+from .robot import Robot
+from .state import NQ_FULL, NV_FULL, check_array, rotation
+
+LWA = pin.ReferenceFrame.LOCAL_WORLD_ALIGNED
+
+
+class PinocchioReference:
+    def __init__(self, robot: Robot) -> None:
+        self.robot = robot
+        self.model = robot.model
+        self.data = robot.model.createData()
+        self.perm = robot.v_perm
+
+    # ------------------------------------------------------------------ conversions
+    def pin_q(self, q: np.ndarray) -> np.ndarray:
+        q = check_array("q", q, (NQ_FULL,))
+        out = pin.neutral(self.model)
+        out[:7] = q[:7]
+        out[3:7] /= np.linalg.norm(q[3:7])
+        for k, (iq, nq) in enumerate(zip(self.robot.idx_q, self.robot.joint_nq)):
+            out[iq : iq + nq] = q[7 + k] if nq == 1 else (np.cos(q[7 + k]), np.sin(q[7 + k]))
+        return out
+
+    def pin_v(self, v: np.ndarray, name: str = "v") -> np.ndarray:
+        v = check_array(name, v, (NV_FULL,))
+        out = np.zeros(self.model.nv)
+        out[self.perm] = v
+        return out
+
+    def project_q(self, q_pin: np.ndarray) -> np.ndarray:
+        joints = [
+            q_pin[iq] if nq == 1 else np.arctan2(q_pin[iq + 1], q_pin[iq])
+            for iq, nq in zip(self.robot.idx_q, self.robot.joint_nq)
+        ]
+        return np.concatenate([q_pin[:7], joints])
+
+    def project_v(self, v_pin: np.ndarray) -> np.ndarray:
+        return np.asarray(v_pin)[self.perm]
+
+    def project_matrix(self, M_pin: np.ndarray) -> np.ndarray:
+        return np.asarray(M_pin)[np.ix_(self.perm, self.perm)]
+
+    # ------------------------------------------------------------------ dynamics
+    def rnea(self, q: np.ndarray, v: np.ndarray, a: np.ndarray) -> np.ndarray:
+        """Generalised forces (18,): body wrench (force, moment; body frame) and joint torques."""
+        return self.project_v(pin.rnea(self.model, self.data, self.pin_q(q), self.pin_v(v), self.pin_v(a, "a")))
+
+    def mass_matrix(self, q: np.ndarray) -> np.ndarray:
+        """M (18, 18) from crba; the Python binding returns it symmetrised."""
+        return self.project_matrix(pin.crba(self.model, self.data, self.pin_q(q)))
+
+    def nonlinear_effects(self, q: np.ndarray, v: np.ndarray) -> np.ndarray:
+        """C(q, v) + G(q) (18,)."""
+        return self.project_v(pin.nonLinearEffects(self.model, self.data, self.pin_q(q), self.pin_v(v)))
+
+    def gravity(self, q: np.ndarray) -> np.ndarray:
+        """G(q) (18,)."""
+        return self.project_v(pin.computeGeneralizedGravity(self.model, self.data, self.pin_q(q)))
+
+    def coriolis_matrix(self, q: np.ndarray, v: np.ndarray) -> np.ndarray:
+        """Pinocchio's Coriolis matrix C(q, v) (18, 18): C v = nle - G, Mdot - 2C skew."""
+        return self.project_matrix(pin.computeCoriolisMatrix(self.model, self.data, self.pin_q(q), self.pin_v(v)))
+
+    # ------------------------------------------------------------------ feet
+    def _leg_columns(self, leg: int) -> np.ndarray:
+        return self.robot.idx_v[3 * leg : 3 * leg + 3]
+
+    def foot_positions(self, q: np.ndarray) -> np.ndarray:
+        """(4, 3) foot positions relative to the trunk origin, trunk frame, m."""
+        qp = self.pin_q(q)
+        pin.framesForwardKinematics(self.model, self.data, qp)
+        base = self.data.oMi[1]
+        return np.array([base.actInv(self.data.oMf[f].translation) for f in self.robot.foot_frame_ids])
+
+    def foot_jacobians(self, q: np.ndarray) -> np.ndarray:
+        """(4, 3, 3): d(foot position in b)/d(own 3 joints), trunk frame."""
+        qp = self.pin_q(q)
+        pin.computeJointJacobians(self.model, self.data, qp)
+        pin.framesForwardKinematics(self.model, self.data, qp)
+        R = self.data.oMi[1].rotation
+        out = []
+        for leg, f in enumerate(self.robot.foot_frame_ids):
+            J = pin.getFrameJacobian(self.model, self.data, f, LWA)[:3]
+            out.append(R.T @ J[:, self._leg_columns(leg)])
+        return np.array(out)
+
+    def foot_accelerations(self, q: np.ndarray, v: np.ndarray, a: np.ndarray) -> np.ndarray:
+        """(4, 3) classical acceleration of each foot point in the world, in the trunk frame, m/s^2."""
+        pin.forwardKinematics(self.model, self.data, self.pin_q(q), self.pin_v(v), self.pin_v(a, "a"))
+        pin.updateFramePlacements(self.model, self.data)
+        R = self.data.oMi[1].rotation
+        return np.array(
+            [R.T @ pin.getFrameClassicalAcceleration(self.model, self.data, f, LWA).linear for f in self.robot.foot_frame_ids]
+        )
+
+    def foot_bias_accelerations(self, q: np.ndarray, v: np.ndarray) -> np.ndarray:
+        """(4, 3) Jdot qdot of each foot relative to the trunk (trunk frame): the foot's
+        classical acceleration with the trunk at rest and zero joint accelerations."""
+        v_joints = np.array(v, dtype=float)
+        v_joints[:6] = 0.0
+        return self.foot_accelerations(q, v_joints, np.zeros(NV_FULL))
+
+    def contact_jacobian(self, q: np.ndarray, stance: tuple[int, ...]) -> np.ndarray:
+        """(3k, 18) world-aligned linear Jacobians of the stance feet, project column order."""
+        qp = self.pin_q(q)
+        pin.computeJointJacobians(self.model, self.data, qp)
+        pin.framesForwardKinematics(self.model, self.data, qp)
+        rows = [pin.getFrameJacobian(self.model, self.data, self.robot.foot_frame_ids[i], LWA)[:3] for i in stance]
+        return np.vstack(rows)[:, self.perm] if rows else np.zeros((0, NV_FULL))
+
+    def constrained_forward_dynamics(
+        self, q: np.ndarray, v: np.ndarray, tau: np.ndarray, stance: tuple[int, ...]
+    ) -> tuple[np.ndarray, np.ndarray]:
+        """Stance feet as rigid point contacts (zero world acceleration).
+
+        Solves the KKT system [[M, Jc^T], [Jc, 0]] [a; -f] = [S^T tau - (C + G); -Jcdot v].
+        Returns a = vdot (18,) and the ground forces on the stance feet, world frame (k, 3), N.
+        """
+        tau = check_array("tau", tau, (12,))
+        M = self.mass_matrix(q)
+        h = self.nonlinear_effects(q, v)
+        Jc = self.contact_jacobian(q, stance)
+        drift = np.concatenate(
+            [rotation(q) @ acc for acc in self.foot_accelerations(q, v, np.zeros(NV_FULL))[list(stance)]]
+        ) if stance else np.zeros(0)
+        k = Jc.shape[0]
+        K = np.block([[M, Jc.T], [Jc, np.zeros((k, k))]])
+        rhs = np.concatenate([np.concatenate([np.zeros(6), tau]) - h, -drift])
+        sol = np.linalg.solve(K, rhs)
+        return sol[:NV_FULL], -sol[NV_FULL:].reshape(-1, 3)

@@ -1,0 +1,19 @@
+"""Every numeric tolerance of the project, each with the reason for its size.
+
+All are relative to the norm of the reference quantity unless the name says otherwise.
+"""
+
+#: Two double-precision evaluations of the same rigid-body quantity by different
+#: algorithms (CasADi recursion vs Pinocchio): round-off grows with the number of
+#: operations (~1e3) times machine epsilon (2.2e-16), so 1e-10 leaves a wide margin
+#: while catching any modelling error (those are >= 1e-6 relative).
+REL_TOL_TERMS = 1e-10
+
+#: Rotation / orthonormality checks on input (R^T R = I, |quaternion| = 1): inputs are
+#: typically produced by float64 code and accumulate ~1e-15 per operation.
+ORTHONORMAL_TOL = 1e-9
+
+#: Central finite differences with step FD_STEP: truncation error O(h^2) ~ 1e-10 times
+#: the third derivative, round-off ~ eps/h ~ 2e-11; 1e-6 relative is safely above both.
+FD_STEP = 1e-5
+REL_TOL_FD = 1e-6

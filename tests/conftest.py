@@ -1,0 +1,42 @@
+"""Shared fixtures: robots (session-scoped, parametrised), Pinocchio references, one
+``assert_close`` helper with the project's named tolerances."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from quadruped_dyn.pinocchio_ref import PinocchioReference
+from quadruped_dyn.robot import ROBOT_NAMES, Robot, example_robot_data_dir, load_robot
+from quadruped_dyn.tolerances import REL_TOL_TERMS
+
+SEEDS = (0, 1)
+
+
+@pytest.fixture(scope="session", params=ROBOT_NAMES)
+def robot(request: pytest.FixtureRequest) -> Robot:
+    return load_robot(request.param)
+
+
+@pytest.fixture(scope="session")
+def paper() -> Robot:
+    return load_robot("paper")
+
+
+@pytest.fixture(scope="session")
+def ref(robot: Robot) -> PinocchioReference:
+    return PinocchioReference(robot)
+
+
+@pytest.fixture(scope="session")
+def erd() -> object:
+    return example_robot_data_dir()
+
+
+def assert_close(actual: np.ndarray, expected: np.ndarray, rel: float = REL_TOL_TERMS, what: str = "") -> None:
+    """|actual - expected|_max <= rel * |expected|_max (the scale is 1 where expected is all zero)."""
+    actual, expected = np.asarray(actual, dtype=float), np.asarray(expected, dtype=float)
+    assert actual.shape == expected.shape, f"{what}: shape {actual.shape} != {expected.shape}"
+    scale = float(np.abs(expected).max(initial=0.0)) or 1.0
+    err = float(np.abs(actual - expected).max(initial=0.0))
+    assert err <= rel * scale, f"{what}: max abs error {err:.3e} > {rel:.1e} x {scale:.3e}"

@@ -1,0 +1,40 @@
+"""Pinocchio's own identities through the reference layer (project order), as in Pinocchio's
+unittest/python/bindings_rnea.py; a permutation or conversion slip breaks them."""
+
+from __future__ import annotations
+
+import numpy as np
+import pinocchio as pin
+import pytest
+
+from quadruped_dyn.state import NV_FULL, random_state
+from quadruped_dyn.tolerances import FD_STEP, REL_TOL_FD
+
+from .conftest import SEEDS, assert_close
+
+ZERO = np.zeros(NV_FULL)
+
+
+@pytest.mark.parametrize("seed", SEEDS)
+def test_rnea_identities(robot, ref, seed):
+    s = random_state(robot.lower, robot.upper, np.random.default_rng(seed))
+    M = ref.mass_matrix(s.q)
+    nle, g = ref.nonlinear_effects(s.q, s.v), ref.gravity(s.q)
+    assert_close(nle, ref.rnea(s.q, s.v, ZERO), what="nle = rnea(q, v, 0)")
+    assert_close(g, ref.rnea(s.q, ZERO, ZERO), what="G = rnea(q, 0, 0)")
+    assert_close(ref.coriolis_matrix(s.q, s.v) @ s.v, nle - g, what="C v = nle - G")
+    assert_close(M @ s.a + nle, ref.rnea(s.q, s.v, s.a), what="M a + C + G = rnea")
+    assert_close(M, M.T, what="M symmetric")
+    assert np.linalg.eigvalsh(M).min() > 0, "M not positive definite"
+
+
+@pytest.mark.parametrize("seed", SEEDS)
+def test_mdot_minus_2c_is_skew(robot, ref, seed):
+    s = random_state(robot.lower, robot.upper, np.random.default_rng(seed))
+    qp = ref.pin_q(s.q)
+    vp = ref.pin_v(s.v)
+    Mp = pin.crba(robot.model, ref.data, pin.integrate(robot.model, qp, FD_STEP * vp)).copy()
+    Mm = pin.crba(robot.model, ref.data, pin.integrate(robot.model, qp, -FD_STEP * vp)).copy()
+    Mdot = ref.project_matrix((Mp - Mm) / (2 * FD_STEP))
+    N = Mdot - 2 * ref.coriolis_matrix(s.q, s.v)
+    assert_close(N + N.T, np.zeros_like(N), rel=REL_TOL_FD * np.abs(Mdot).max(), what="Mdot - 2C skew")
