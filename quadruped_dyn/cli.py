@@ -83,6 +83,20 @@ def info(robot: str, as_json: bool) -> None:
         )
 
 
+@main.command()
+@click.argument("robot")
+@click.option("--samples", default=20, show_default=True, type=click.IntRange(min=1), help="Random states.")
+@click.option("--seed", default=0, show_default=True, type=int, help="Random seed.")
+@click.option("--json", "as_json", is_flag=True, help="Print the report as JSON.")
+def check(robot: str, samples: int, seed: int, as_json: bool) -> None:
+    """Check every symbolic term of ROBOT against Pinocchio on random states (exit 1 on failure)."""
+    from .check import run_check
+
+    report = run_check(load_robot(robot), samples, seed)
+    click.echo(json.dumps(report.as_dict(), indent=2) if as_json else report.table())
+    sys.exit(0 if report.passed else EXIT_CHECK_FAILED)
+
+
 @main.command("make-urdf")
 @click.option("--check", is_flag=True, help="Only compare the committed URDF with a fresh generation.")
 def make_urdf(check: bool) -> None:

@@ -44,7 +44,7 @@ def example_robot_data_dir() -> Path:
     try:
         dist = importlib.metadata.distribution("example-robot-data")
     except importlib.metadata.PackageNotFoundError as e:
-        raise InputError("example-robot-data is not installed; expected it as a dependency (pip install example-robot-data)") from e
+        raise InputError("example-robot-data is not installed; expected it installed (pip install example-robot-data)") from e
     return Path(str(dist.locate_file("cmeel.prefix/share/example-robot-data/robots")))
 
 
@@ -213,7 +213,8 @@ def load_robot(name_or_path: str) -> Robot:
         links = tuple(_inertia(model, j, f"the link moved by joint '{model.names[j]}'") for j in chain)
         fid = foot_ids[label] = _foot_frame(model, chain[-1])
         foot = model.frames[fid].placement
-        legs[label] = Leg(label, joints, links, Placement(np.array(foot.rotation), np.array(foot.translation)), model.frames[fid].name)  # type: ignore[arg-type]
+        foot_placement = Placement(np.array(foot.rotation), np.array(foot.translation))
+        legs[label] = Leg(label, joints, links, foot_placement, model.frames[fid].name)  # type: ignore[arg-type]
 
     ordered = tuple(legs[label] for label in LEG_LABELS)
     lower = np.array([j.lower for leg in ordered for j in leg.joints])

@@ -62,10 +62,11 @@ def test_bad_urdf(case, expected, tmp_path, erd):
     elif case == "zero_mass":
         paths[case] = _paper_variant(tmp_path, SHANK_MASS, '<mass value="0"/>')
     elif case == "non_pd_inertia":
-        i = paper_robot.urdf_text().index('<link name="FL_shank">')
-        ixx = re.search(r'ixx="([^"]+)"', paper_robot.urdf_text()[i:]).group(0)
-        paths[case] = _paper_variant(tmp_path, f'<link name="FL_shank">\n    <inertial>\n      <origin xyz="0.1 0 0" rpy="0 0 0"/>\n      {SHANK_MASS}\n      <inertia {ixx}',
-                                     f'<link name="FL_shank">\n    <inertial>\n      <origin xyz="0.1 0 0" rpy="0 0 0"/>\n      {SHANK_MASS}\n      <inertia ixx="-1"')
+        text = paper_robot.urdf_text()
+        shank = text.index('<link name="FL_shank">')
+        ixx = re.search(r'ixx="[^"]+"', text[shank:]).group(0)
+        paths[case] = _paper_variant(tmp_path, text[shank : text.index(ixx, shank) + len(ixx)],
+                                     text[shank : text.index(ixx, shank)] + 'ixx="-1"')
     code, err = _info(paths[case])
     assert code == 2, err
     assert re.search(expected, err), err
