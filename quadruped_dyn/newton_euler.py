@@ -177,10 +177,11 @@ def full_dynamics(robot: Robot) -> FullDynamics:
     # Walker & Orin: column k of M is the inverse dynamics of a unit acceleration e_k, g = 0, v = 0
     unit = ca.SX(ca.DM.eye(NV_FULL))
     M = ca.horzcat(*[inverse_dynamics(robot, qj, ca.SX.zeros(3), zero_v, unit[:, k], zero_f) for k in range(NV_FULL)])
-    M_ad = ca.jacobian(tau, a)
+    # entries that are identically zero (the leg-leg blocks) become structural zeros
+    M, M_ad = ca.sparsify(M), ca.sparsify(ca.jacobian(tau, a))
     C = inverse_dynamics(robot, qj, ca.SX.zeros(3), v, zero_v, zero_f)
     G = inverse_dynamics(robot, qj, g_b, zero_v, zero_v, zero_f)
-    Cmat = coriolis_matrix(robot, qj, v)
+    Cmat = ca.sparsify(coriolis_matrix(robot, qj, v))
     opts = {"cse": True}
     return FullDynamics(
         id_full=ca.Function("id_full", [q, v, a, f], [tau[:6], tau[6:]], ["q", "v", "a", "f"], ["w_res", "tau"], opts),

@@ -136,7 +136,9 @@ def dh_leg(label: str, params: PaperRobotParams = PARAMS) -> Leg:
 
 
 def _num(x: float) -> str:
-    s = f"{float(x):.12g}"
+    """Shortest text that reads back as the same double (so the URDF loses nothing)."""
+    s = repr(float(x))
+    s = s[:-2] if s.endswith(".0") else s
     return "0" if s in ("-0", "0") else s
 
 
@@ -145,11 +147,11 @@ def _vec(v: np.ndarray) -> str:
 
 
 def _rpy(R: np.ndarray) -> np.ndarray:
-    """URDF roll-pitch-yaw with R = Rz(yaw) Ry(pitch) Rx(roll); rounded so tiny noise prints as 0."""
+    """URDF roll-pitch-yaw with R = Rz(yaw) Ry(pitch) Rx(roll); rounded to 1e-15 so round-off noise prints as 0."""
     pitch = np.arctan2(-R[2, 0], np.hypot(R[0, 0], R[1, 0]))
     roll = np.arctan2(R[2, 1], R[2, 2])
     yaw = np.arctan2(R[1, 0], R[0, 0])
-    return np.round(np.array([roll, pitch, yaw]), 12)
+    return np.round(np.array([roll, pitch, yaw]), 15)
 
 
 def _origin(T: Placement) -> str:

@@ -8,6 +8,7 @@ Joint order inside the project: FL, FR, BL, BR x (HAA, HFE, KFE) -- 12 entries.
 ``Robot.idx_q`` / ``Robot.idx_v`` map project joint k to Pinocchio's q / v index.
 Links rigidly attached by fixed joints are merged into their parent's inertia (Pinocchio's
 URDF parser does this). Rotor armature is not part of the paper's model and is set to zero.
+Placement entries within ``SNAP_TOL`` of 0 or +-1 are snapped, in Pinocchio's model too.
 """
 
 from __future__ import annotations
@@ -151,6 +152,22 @@ def _chain(model: pin.Model, first: int) -> tuple[list[int], bool]:
     return chain, bool(children.get(chain[-1]))
 
 
+#: Placement entries within this of 0 or +-1 are snapped exactly. URDF text carries rotations
+#: as rpy angles, so cos(pi/2) arrives as ~6e-17 instead of 0; snapping keeps structural
+#: zeros zero (smaller symbolic graphs, smaller C) and moves nothing by more than 1e-12 m/rad.
+SNAP_TOL = 1e-12
+
+
+def _snap(M: pin.SE3) -> pin.SE3:
+    def snap(x: np.ndarray) -> np.ndarray:
+        x = np.array(x)
+        for target in (0.0, 1.0, -1.0):
+            x[np.abs(x - target) < SNAP_TOL] = target
+        return x
+
+    return pin.SE3(snap(M.rotation), snap(M.translation))
+
+
 def _parse_urdf(path: Path) -> pin.Model:
     try:
         root = ET.parse(path).getroot()
@@ -170,6 +187,10 @@ def load_robot(name_or_path: str) -> Robot:
     path = robot_path(name_or_path)
     model = _parse_urdf(path)
     model.armature[:] = 0.0
+    for j in range(1, model.njoints):
+        model.jointPlacements[j] = _snap(model.jointPlacements[j])
+    for frame in model.frames:
+        frame.placement = _snap(frame.placement)
     name = str(name_or_path) if str(name_or_path) in ROBOT_NAMES else path.stem
 
     hips = [j for j in range(2, model.njoints) if model.parents[j] == 1]

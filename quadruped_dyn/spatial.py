@@ -22,10 +22,12 @@ def skew(w: ca.SX) -> ca.SX:
 
 
 def axis_rotation(axis: np.ndarray, angle: ca.SX) -> ca.SX:
-    """Rotation by ``angle`` about the constant unit ``axis`` (Rodrigues); exact zeros kept
-    for axis-aligned joints so the expression graph stays small."""
-    K = ca.DM(_skew_np(axis))
-    return ca.DM.eye(3) + ca.sin(angle) * K + (1 - ca.cos(angle)) * ca.DM(_skew_np(axis) @ _skew_np(axis))
+    """Rotation by ``angle`` about the constant unit ``axis``: cos (I - a a^T) + a a^T + sin [a]x
+    (Rodrigues). Written so that for an axis-aligned joint the constant entries stay exact
+    0 and 1, keeping the expression graph (and the generated C) small."""
+    a = np.asarray(axis, dtype=float)
+    aaT = np.outer(a, a)
+    return ca.cos(angle) * ca.DM(np.eye(3) - aaT) + ca.DM(aaT) + ca.sin(angle) * ca.DM(_skew_np(a))
 
 
 def _skew_np(w: np.ndarray) -> np.ndarray:
