@@ -46,6 +46,7 @@ class CheckReport:
     samples: int
     seed: int
     terms: list[TermResult] = field(default_factory=list)
+    build_seconds: float = 0.0  # time to build the symbolic Functions
 
     @property
     def passed(self) -> bool:
@@ -53,7 +54,7 @@ class CheckReport:
 
     def as_dict(self) -> dict[str, object]:
         return {"robot": self.robot, "samples": self.samples, "seed": self.seed, "passed": self.passed,
-                "terms": [asdict(t) for t in self.terms]}
+                "build_seconds": self.build_seconds, "terms": [asdict(t) for t in self.terms]}
 
     def table(self) -> str:
         lines = [f"{'term':<28}{'max abs err':>13}{'max rel err':>13}{'tol':>9}  result"]
@@ -61,7 +62,8 @@ class CheckReport:
             verdict = "pass" if t.passed else "FAIL"
             lines.append(f"{t.name:<28}{t.max_abs_err:>13.2e}{t.max_rel_err:>13.2e}{t.tol:>9.0e}  {verdict}")
         verdict = "all terms pass" if self.passed else "SOME TERMS FAIL"
-        lines.append(f"{self.robot}: {len(self.terms)} terms on {self.samples} random states (seed {self.seed}): {verdict}")
+        lines.append(f"{self.robot}: {len(self.terms)} terms on {self.samples} random states (seed {self.seed}), "
+                     f"symbolic build {self.build_seconds:.2f} s: {verdict}")
         return "\n".join(lines)
 
 
@@ -97,7 +99,7 @@ def run_check(robot: Robot, samples: int = 20, seed: int = 0,
               progress: Callable[[int], None] | None = None) -> CheckReport:
     ref = PinocchioReference(robot)
     rng = np.random.default_rng(seed)
-    report = CheckReport(robot.name, samples, seed)
+    report = CheckReport(robot.name, samples, seed, build_seconds=full_dynamics(robot).build_seconds)
     terms: dict[str, TermResult] = {}
     for n in range(samples):
         s = random_state(robot.lower, robot.upper, rng)

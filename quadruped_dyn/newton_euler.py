@@ -32,7 +32,7 @@ from functools import cache
 
 import casadi as ca
 
-from .kinematics import joint_frames
+from .kinematics import foot_position, joint_frames
 from .leg import Leg
 from .robot import Robot
 from .spatial import (
@@ -89,6 +89,18 @@ def leg_newton_euler(
         f_next, n_next, R_next, P_next = f_i, n_i, R, P
     R_b1 = links[0][0]
     return LegForces(ca.vertcat(*tau), R_b1 @ f_next, R_b1 @ n_next)
+
+
+def hip_reaction_split(
+    leg: Leg, q: ca.SX, qd: ca.SX, qdd: ca.SX, omega_b: ca.SX, alpha_b: ca.SX, a0: ca.SX, f: ca.SX
+) -> tuple[LegForces, LegForces]:
+    """The paper's eq. (1)-(2): (suspended-leg part with f = 0, ground-force part), whose sum
+    is ``leg_newton_euler(..., f)``. The ground-force part is
+    tauhat = -J^T f, fhat_1 = -f, nhat_1 = -(r - h) x f (r the foot, h the hip; trunk frame)."""
+    suspended = leg_newton_euler(leg, q, qd, qdd, omega_b, alpha_b, a0, ca.SX.zeros(3))
+    r = foot_position(leg, q)
+    J = ca.jacobian(r, q)
+    return suspended, LegForces(-J.T @ f, -f, -ca.cross(r - dm(leg.hip), f))
 
 
 def inverse_dynamics(robot: Robot, q_joints: ca.SX, g_b: ca.SX, v: ca.SX, a: ca.SX, f: ca.SX) -> ca.SX:

@@ -11,7 +11,7 @@ import pytest
 from quadruped_dyn.check import run_check
 from quadruped_dyn.kinematics import joint_frames, robot_kinematics
 from quadruped_dyn.leg import LinkInertia
-from quadruped_dyn.newton_euler import full_dynamics, leg_newton_euler
+from quadruped_dyn.newton_euler import full_dynamics, hip_reaction_split, leg_newton_euler
 from quadruped_dyn.state import random_state, rotation
 from quadruped_dyn.tolerances import FD_STEP, REL_TOL_FD
 
@@ -86,19 +86,27 @@ def test_jacobians_against_finite_differences(robot, seed):
 
 
 def test_paper_split_of_the_hip_reaction(paper):
-    """Eq. (1)-(2): f_1 = fbar_1 + fhat_1 with fhat_1 = -f, nhat_1 = -(r - h) x f, and the
-    GRF part of the torques is -J^T f (the paper's second inward pass)."""
+    """Eq. (1)-(2): suspended part + ground-force part = the recursion with the foot force, and
+    the ground-force part of the torques is -J^T f (the paper's second inward pass)."""
     leg = paper.legs[3]
-    rng = np.random.default_rng(5)
-    vals = [rng.normal(size=3) for _ in range(7)]
-    f = vals[6]
-    full = leg_newton_euler(leg, *[ca.DM(x) for x in vals])
-    bar = leg_newton_euler(leg, *[ca.DM(x) for x in vals[:6]], ca.DM.zeros(3))
-    kin = robot_kinematics(paper)[3]
-    r, J = _np(kin.foot_position(vals[0])), _np(kin.foot_jacobian(vals[0]))
-    assert_close(_np(full.f1) - _np(bar.f1), -f, what="fhat_1")
-    assert_close(_np(full.n1) - _np(bar.n1), -np.cross(r - leg.hip, f), what="nhat_1")
-    assert_close(_np(full.tau) - _np(bar.tau), -J.T @ f, what="tau from GRF")
+    syms = [ca.SX.sym(n, 3) for n in ("q", "qd", "qdd", "omega_b", "alpha_b", "a0", "f")]
+    full = leg_newton_euler(leg, *syms)
+    bar, hat = hip_reaction_split(leg, *syms)
+    outputs = [x for forces in (full, bar, hat) for x in (forces.tau, forces.f1, forces.n1)]
+    vals = [np.random.default_rng(5).normal(size=3) for _ in syms]
+    out = [_np(x) for x in ca.Function("split", syms, outputs)(*vals)]
+    for k, name in enumerate(("tau", "f1", "n1")):
+        assert_close(out[3 + k] + out[6 + k], out[k], what=name)
+    J = _np(robot_kinematics(paper)[3].foot_jacobian(vals[0]))
+    assert_close(out[6], -J.T @ vals[6], what="tau from GRF")
+
+
+@pytest.mark.parametrize("urdf", ["laikago_description/urdf/laikago.urdf", "b1_description/urdf/b1.urdf"])
+def test_check_passes_on_other_quadrupeds(erd, urdf):
+    from quadruped_dyn.robot import load_robot
+
+    report = run_check(load_robot(str(erd / urdf)), samples=5)
+    assert report.passed, report.table()
 
 
 def test_joint_frames_are_rotations(paper):
