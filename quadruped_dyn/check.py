@@ -12,12 +12,13 @@ from dataclasses import asdict, dataclass, field
 
 import numpy as np
 
+from .grf import GRF_MODELS, STANCE_SETS, grf_solve
 from .kinematics import robot_kinematics
 from .newton_euler import full_dynamics
 from .pinocchio_ref import PinocchioReference
 from .robot import Robot
 from .state import FullState, random_state, rotation
-from .tolerances import REL_TOL_TERMS
+from .tolerances import COND_ERR_FACTOR, REL_TOL_TERMS
 
 
 @dataclass
@@ -46,21 +47,31 @@ class CheckReport:
     samples: int
     seed: int
     terms: list[TermResult] = field(default_factory=list)
+    grf: list[GrfResult] = field(default_factory=list)
     build_seconds: float = 0.0  # time to build the symbolic Functions
 
     @property
     def passed(self) -> bool:
-        return all(t.passed for t in self.terms)
+        return all(t.passed for t in self.terms) and all(g.passed for g in self.grf)
 
     def as_dict(self) -> dict[str, object]:
         return {"robot": self.robot, "samples": self.samples, "seed": self.seed, "passed": self.passed,
-                "build_seconds": self.build_seconds, "terms": [asdict(t) for t in self.terms]}
+                "build_seconds": self.build_seconds, "terms": [asdict(t) for t in self.terms],
+                "grf": [asdict(g) for g in self.grf]}
 
     def table(self) -> str:
         lines = [f"{'term':<28}{'max abs err':>13}{'max rel err':>13}{'tol':>9}  result"]
         for t in self.terms:
             verdict = "pass" if t.passed else "FAIL"
             lines.append(f"{t.name:<28}{t.max_abs_err:>13.2e}{t.max_rel_err:>13.2e}{t.tol:>9.0e}  {verdict}")
+        if self.grf:
+            lines.append("")
+            lines.append(f"{'GRF stance':<14}{'model':<10}{'rank':>5}{'max residual':>14}{'err vs SVD':>12}{'err vs pin':>12}"
+                         f"{'max cond':>10}  result")
+            for g in self.grf:
+                verdict = "pass" if g.passed else "FAIL"
+                lines.append(f"{g.stance:<14}{g.model:<10}{g.rank:>5}{g.max_residual:>14.2e}{g.max_err_vs_reference:>12.1e}"
+                             f"{g.max_err_vs_pinocchio:>12.1e}{g.max_cond:>10.1e}  {verdict}")
         verdict = "all terms pass" if self.passed else "SOME TERMS FAIL"
         lines.append(f"{self.robot}: {len(self.terms)} terms on {self.samples} random states (seed {self.seed}), "
                      f"symbolic build {self.build_seconds:.2f} s: {verdict}")
@@ -95,17 +106,62 @@ def _comparisons(robot: Robot, ref: PinocchioReference, s: FullState) -> Iterato
     )
 
 
+@dataclass
+class GrfResult:
+    stance: str
+    model: str
+    rank: int  # structural rank of the model's A
+    max_residual: float = 0.0  # N / N m: the largest wrench the model could not balance
+    max_err_vs_reference: float = 0.0  # relative, vs the SVD reference (lambda, residual, tau)
+    max_err_vs_pinocchio: float = 0.0  # rnea - Jc^T f vs (residual, tau), relative to max(|rnea|, |Jc^T f|)
+    max_cond: float = 0.0  # largest cond(A) over the samples (nonzero singular values)
+    rank_mismatches: int = 0  # samples where the numeric rank differed from the structural one
+    passed: bool = True
+
+
+def _rel(ours: np.ndarray, ref: np.ndarray, scale: float) -> float:
+    return float(np.abs(np.asarray(ours, dtype=float).ravel() - np.asarray(ref).ravel()).max(initial=0.0)) / (scale or 1.0)
+
+
+def _grf_sample(robot: Robot, ref: PinocchioReference, s: FullState, result: GrfResult) -> None:
+    g = grf_solve(robot, result.stance, result.model)
+    lam, f, residual, tau = (np.asarray(x, dtype=float).ravel() for x in g.function(s.q, s.v, s.a))
+    r = ref.grf_solve(s.q, s.v, s.a, g.stance.feet, g.stance.selection(result.model))
+    w_scale = float(np.abs(r.w_req).max())
+    nonzero = r.singular_values[: r.rank]
+    cond = float(nonzero[0] / nonzero[-1]) if nonzero.size else 1.0
+    err_ref = max(_rel(lam, r.lam, float(np.abs(r.lam).max(initial=0.0))), _rel(residual, r.residual, w_scale),
+                  _rel(tau, r.tau, float(np.abs(r.tau).max())))
+    R = rotation(s.q)
+    rnea = ref.rnea(s.q, s.v, s.a)
+    contact = ref.contact_jacobian(s.q, (0, 1, 2, 3)).T @ np.concatenate([R @ fi for fi in f.reshape(4, 3)])
+    pin_full = rnea - contact
+    # relative to the magnitude of the two terms whose difference is compared
+    pin_scale = max(float(np.abs(rnea).max()), float(np.abs(contact).max()))
+    err_pin = max(_rel(pin_full[:6], residual, pin_scale), _rel(pin_full[6:], tau, pin_scale))
+    allowed = max(REL_TOL_TERMS, COND_ERR_FACTOR * cond * np.finfo(float).eps)
+    result.max_residual = max(result.max_residual, float(np.abs(residual).max()))
+    result.max_err_vs_reference = max(result.max_err_vs_reference, err_ref)
+    result.max_err_vs_pinocchio = max(result.max_err_vs_pinocchio, err_pin)
+    result.max_cond = max(result.max_cond, cond)
+    result.rank_mismatches += int(r.rank != g.rank)
+    result.passed = result.passed and err_ref <= allowed and err_pin <= REL_TOL_TERMS and r.rank == g.rank
+
+
 def run_check(robot: Robot, samples: int = 20, seed: int = 0,
               progress: Callable[[int], None] | None = None) -> CheckReport:
     ref = PinocchioReference(robot)
     rng = np.random.default_rng(seed)
     report = CheckReport(robot.name, samples, seed, build_seconds=full_dynamics(robot).build_seconds)
     terms: dict[str, TermResult] = {}
+    report.grf = [GrfResult(st.name, m, st.rank(m)) for st in STANCE_SETS for m in GRF_MODELS]
     for n in range(samples):
         s = random_state(robot.lower, robot.upper, rng)
         for name, ours, theirs in _comparisons(robot, ref, s):
             term = terms.setdefault(name, TermResult(name))
             term.add([np.asarray(x, dtype=float) for x in ours] if isinstance(ours, list) else ours, theirs)
+        for result in report.grf:
+            _grf_sample(robot, ref, s, result)
         if progress:
             progress(n + 1)
     report.terms = list(terms.values())

@@ -11,11 +11,14 @@ foot Jacobians are w.r.t. the leg's own three joints.
 
 from __future__ import annotations
 
+from dataclasses import dataclass
+
 import numpy as np
 import pinocchio as pin
 
 from .robot import Robot
 from .state import NQ_FULL, NV_FULL, check_array, rotation
+from .tolerances import RANK_RTOL
 
 LWA = pin.ReferenceFrame.LOCAL_WORLD_ALIGNED
 
@@ -144,3 +147,31 @@ class PinocchioReference:
         rhs = np.concatenate([np.concatenate([np.zeros(6), tau]) - h, -drift])
         sol = np.linalg.solve(K, rhs)
         return sol[:NV_FULL], -sol[NV_FULL:].reshape(-1, 3)
+
+    # ------------------------------------------------------------------ ground reaction forces
+    def grf_solve(self, q: np.ndarray, v: np.ndarray, a: np.ndarray, feet: tuple[int, ...], P: np.ndarray) -> GrfReference:
+        """Minimum-norm GRF by SVD from Pinocchio quantities: w_req = base rows of rnea(q, v, a),
+        A = (base rows of Jc^T) blockdiag(R) P (forces f = P lambda in the trunk frame)."""
+        tau_full = self.rnea(q, v, a)
+        w_req = tau_full[:6]
+        R = rotation(q)
+        Jc = self.contact_jacobian(q, feet)
+        Rk = np.kron(np.eye(len(feet)), R)
+        A = Jc[:, :6].T @ Rk @ P if P.size else np.zeros((6, 0))
+        U, S, Vt = np.linalg.svd(A, full_matrices=False)
+        rank = int(np.sum(S > RANK_RTOL * S[0])) if S.size else 0
+        lam = Vt[:rank].T @ ((U[:, :rank].T @ w_req) / S[:rank])
+        f_b = P @ lam if P.size else np.zeros(0)
+        tau = tau_full[6:] - Jc[:, 6:].T @ (Rk @ f_b) if P.size else tau_full[6:]
+        return GrfReference(lam, f_b.reshape(-1, 3), w_req - A @ lam, tau, rank, S, w_req)
+
+
+@dataclass(frozen=True)
+class GrfReference:
+    lam: np.ndarray  # (n,) minimum-norm parameters
+    f_b: np.ndarray  # (k, 3) stance-foot forces, trunk frame, N
+    residual: np.ndarray  # (6,) w_req - A lambda: what the model cannot balance
+    tau: np.ndarray  # (12,) joint torques with these forces, N m
+    rank: int
+    singular_values: np.ndarray
+    w_req: np.ndarray  # (6,) required wrench (force; moment about the trunk origin), trunk frame

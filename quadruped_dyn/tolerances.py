@@ -17,3 +17,14 @@ ORTHONORMAL_TOL = 1e-9
 #: the third derivative, round-off ~ eps/h ~ 2e-11; 1e-6 relative is safely above both.
 FD_STEP = 1e-5
 REL_TOL_FD = 1e-6
+
+#: Numerical rank of a GRF system: singular values below RANK_RTOL * sigma_max count as zero.
+#: Structurally zero ones come out at ~1e-16 relative; the genuine smallest ones of the
+#: paper's systems stay above ~1e-4 relative for any foot layout a leg can reach.
+RANK_RTOL = 1e-9
+
+#: Two backward-stable solves of the same linear system agree to about cond(A) * eps in
+#: relative terms; a GRF solution is compared with the SVD reference within
+#: max(REL_TOL_TERMS, COND_ERR_FACTOR * cond(A) * eps), the factor covering the ~100
+#: operations that build A and w_req. Only ill-conditioned stances (cond > 1e4) get slack.
+COND_ERR_FACTOR = 100.0

@@ -1,0 +1,218 @@
+"""Ground reaction forces from the six body equations (SPEC section 4, paper section 4).
+
+The body equations (paper eq. (3)-(4)) with the stance feet's forces f_i (trunk frame) as
+unknowns read  sum_i [I; [r_i]x] f_i = w_req,  where w_req (6,) = (force; moment about the
+trunk origin) is the base residual of ``id_full`` with zero foot forces: what the trunk
+needs, given the motion, gravity and the suspended legs. A GRF model parameterises
+f = P lambda (P constant, 3k x n) so the system is  A lambda = w_req,  A = G P.
+
+Models:
+* ``paper``  -- the paper's assumptions, in the trunk frame (x forward, y left, z up):
+  4 feet: (fz1..fz4, fx, fy) with fx, fy common to all feet              -> rank 5
+  3 feet: (fz1..fz3, fx, fy_same, fy_opp): the stance foot on the lifted leg's side has
+          its own fy, the two on the opposite side share one             -> rank 6
+  2 feet: (f1, f2), all six components free                              -> rank 5
+  1 foot: (f1) all free (the paper is silent; an extension)              -> rank 3
+  0 feet: f = 0.
+* ``min_norm`` -- all 3k components free; the minimum-norm solution (pseudo-inverse).
+
+Rank 5 is structural, not bad luck: with four feet the yaw row is x_mean Fy - y_mean Fx of
+the force rows, so a yaw moment off that line cannot be balanced and one combination of the
+fz is free; with two feet (p1 - p2) x f1 has rank 2, so the force along the foot-to-foot
+line is free (a squeeze) and the moment about that line cannot be produced by the feet.
+
+Every case is solved rank-revealingly, returning the minimum-norm lambda and the residual
+w_req - A lambda (the part of w_req the model cannot balance). Symbolically, the square
+rank-deficient cases use explicit orthonormal null-space (N) and left-null-space (U) bases:
+A+ = (A + U N^T)^-1 - N U^T, where A + U N^T is invertible; no solve on a singular matrix.
+"""
+
+from __future__ import annotations
+
+import itertools
+from dataclasses import dataclass
+from functools import cache
+
+import casadi as ca
+import numpy as np
+
+from .errors import InputError
+from .kinematics import foot_position
+from .leg import LEG_LABELS
+from .linalg import least_squares, min_norm
+from .newton_euler import inverse_dynamics
+from .robot import Robot
+from .spatial import dm, quat_to_rotation, skew
+from .state import GRAVITY_W, NQ_FULL, NV_FULL
+
+GRF_MODELS: tuple[str, ...] = ("paper", "min_norm")
+
+
+@dataclass(frozen=True)
+class StanceSet:
+    """The feet on the ground, as indices into (FL, FR, BL, BR)."""
+
+    feet: tuple[int, ...]
+
+    @property
+    def name(self) -> str:
+        return "+".join(LEG_LABELS[i] for i in self.feet) or "none"
+
+    @property
+    def kind(self) -> str:
+        k = len(self.feet)
+        if k == 4:
+            return "stand"
+        if k == 3:
+            return f"walk (lifted {LEG_LABELS[self.lifted[0]]})"
+        if k == 2:
+            a, b = (LEG_LABELS[i] for i in self.feet)
+            if a[0] != b[0] and a[1] != b[1]:
+                return "trot (diagonal)"
+            return "pace (lateral)" if a[1] == b[1] else ("front" if a[0] == "F" else "back")
+        return "one foot" if k == 1 else "flight"
+
+    @property
+    def lifted(self) -> tuple[int, ...]:
+        return tuple(i for i in range(4) if i not in self.feet)
+
+    def selection(self, model: str) -> np.ndarray:
+        """P (3k, n): stacked stance-foot forces (trunk frame) = P lambda."""
+        k = len(self.feet)
+        if model not in GRF_MODELS:
+            raise InputError(f"unknown GRF model '{model}'; expected one of {GRF_MODELS}")
+        if model == "min_norm" or k < 3:
+            return np.eye(3 * k)
+        P = np.zeros((3 * k, 6))
+        for j in range(k):
+            P[3 * j + 2, j] = 1.0  # own fz
+            P[3 * j + 0, k] = 1.0  # common fx
+        if k == 4:
+            P[1::3, 5] = 1.0  # common fy
+        else:  # k == 3: the foot on the lifted leg's side has its own fy
+            side = LEG_LABELS[self.lifted[0]][1]
+            for j, foot in enumerate(self.feet):
+                P[3 * j + 1, 4 if LEG_LABELS[foot][1] == side else 5] = 1.0
+        return P
+
+    def rank(self, model: str) -> int:
+        """Structural rank of A = G P (feet in general position)."""
+        k = len(self.feet)
+        if k == 2 or (k == 4 and model == "paper"):
+            return 5
+        return min(6, self.selection(model).shape[1])
+
+
+#: All 16 stance sets: four feet, the four static-walk triples, the six pairs, singles, none.
+STANCE_SETS: tuple[StanceSet, ...] = tuple(
+    StanceSet(feet) for k in (4, 3, 2, 1, 0) for feet in itertools.combinations(range(4), k)
+)
+
+
+def stance_set(name: str) -> StanceSet:
+    """Look up a stance set by name, e.g. 'FL+BR' (order-insensitive) or 'none'."""
+    wanted = sorted(name.split("+")) if name != "none" else []
+    for s in STANCE_SETS:
+        if sorted(LEG_LABELS[i] for i in s.feet) == wanted:
+            return s
+    raise InputError(f"unknown stance set '{name}'; expected feet joined by '+' from {LEG_LABELS}, or 'none'")
+
+
+# ----------------------------------------------------------------------------- symbolic solve
+
+
+def contact_map(r: list[ca.SX]) -> ca.SX:
+    """G (6, 3k): wrench (force; moment about the trunk origin) of forces at points r_i."""
+    if not r:
+        return ca.SX.zeros(6, 0)
+    return ca.horzcat(*[ca.vertcat(ca.SX.eye(3), skew(ri)) for ri in r])
+
+
+def _unit(x: ca.SX) -> ca.SX:
+    return x / ca.norm_2(x)
+
+
+def _deficiency_bases(stance: StanceSet, model: str, r: list[ca.SX]) -> tuple[ca.SX, ca.SX] | None:
+    """Orthonormal (N, U): null space of A and left null space, for the rank-5 cases."""
+    k = len(stance.feet)
+    if k == 2:
+        e = _unit(r[0] - r[1])
+        return _unit(ca.vertcat(e, -e)), _unit(ca.vertcat(ca.cross(r[0], e), e))
+    if k == 4 and model == "paper":
+        x = ca.vertcat(*[ri[0] for ri in r])
+        y = ca.vertcat(*[ri[1] for ri in r])
+        rows = ca.horzcat(ca.SX.ones(4), x, y).T  # 3 x 4: sum, sum x, sum y of the fz must vanish
+        n = ca.vertcat(*[(-1) ** j * ca.det(rows[:, [c for c in range(4) if c != j]]) for j in range(4)])
+        N = _unit(ca.vertcat(n, 0, 0))
+        U = _unit(ca.vertcat(ca.sum1(y) / 4, -ca.sum1(x) / 4, 0, 0, 0, 1))  # yaw - x_mean Fy + y_mean Fx
+        return N, U
+    return None
+
+
+def min_norm_solve(A: ca.SX, w: ca.SX, bases: tuple[ca.SX, ca.SX] | None) -> ca.SX:
+    """Minimum-norm least-squares solution of A lambda = w for the structures that occur here:
+    square and rank-deficient with known orthonormal bases N, U: A+ w = (A + U N^T)^-1 w - N U^T w;
+    otherwise full row or full column rank, by Householder QR."""
+    m, n = A.shape
+    if n == 0:
+        return ca.SX.zeros(0)
+    if bases is not None:
+        N, U = bases
+        return least_squares(A + U @ N.T, w) - N @ (U.T @ w)
+    return min_norm(A, w) if n > m else least_squares(A, w)
+
+
+@dataclass(frozen=True)
+class GrfSolve:
+    """Named Function ``grf_<stance>_<model>``: q (19,), v (18,), a = vdot (18,) ->
+    lambda (n,), f (12,) ground forces on all feet in the trunk frame (0 for swing feet),
+    residual (6,) = w_req - A lambda, tau (12,) joint torques with those forces."""
+
+    stance: StanceSet
+    model: str
+    rank: int
+    function: ca.Function
+
+
+def _grf_solve(robot: Robot, stance: StanceSet, model: str) -> GrfSolve:
+    q, v, a = ca.SX.sym("q", NQ_FULL), ca.SX.sym("v", NV_FULL), ca.SX.sym("a", NV_FULL)
+    qj = q[7:]
+    g_b = quat_to_rotation(q[3:7]).T @ dm(GRAVITY_W)
+    w_req = inverse_dynamics(robot, qj, g_b, v, a, ca.SX.zeros(12))[:6]
+    r = [foot_position(robot.legs[i], qj[3 * i : 3 * i + 3]) for i in stance.feet]
+    P = stance.selection(model)
+    A = contact_map(r) @ dm(P) if P.size else ca.SX.zeros(6, 0)
+    lam = min_norm_solve(A, w_req, _deficiency_bases(stance, model, r))
+    f_stance = dm(P) @ lam if P.size else ca.SX.zeros(0)
+    f = ca.SX.zeros(12)
+    for j, i in enumerate(stance.feet):
+        f[3 * i : 3 * i + 3] = f_stance[3 * j : 3 * j + 3]
+    residual = w_req - (A @ lam if P.size else 0)
+    tau = inverse_dynamics(robot, qj, g_b, v, a, f)[6:]
+    name = f"grf_{stance.name.replace('+', '_')}_{model}"
+    outputs = ["lambda", "f", "residual", "tau"]
+    fun = ca.Function(name, [q, v, a], [lam, f, residual, tau], ["q", "v", "a"], outputs, {"cse": True})
+    return GrfSolve(stance, model, stance.rank(model), fun)
+
+
+@cache
+def grf_solves(robot: Robot) -> dict[tuple[str, str], GrfSolve]:
+    """All (stance name, model) solves of a robot, built once."""
+    return {(s.name, m): _grf_solve(robot, s, m) for s in STANCE_SETS for m in GRF_MODELS}
+
+
+def grf_solve(robot: Robot, stance: str | StanceSet, model: str = "paper") -> GrfSolve:
+    s = stance if isinstance(stance, StanceSet) else stance_set(stance)
+    s.selection(model)  # validates the model name
+    return grf_solves(robot)[(s.name, model)]
+
+
+# ----------------------------------------------------------------------------- friction
+
+
+def friction_cone(f_world: np.ndarray, mu: float) -> tuple[np.ndarray, np.ndarray]:
+    """Per stance foot (k, 3 world-frame forces; flat ground, normal z_w): feasible flags
+    (|f_t| <= mu f_z and f_z >= 0) and margins mu f_z - |f_t| (N; negative = slipping)."""
+    f = np.atleast_2d(np.asarray(f_world, dtype=float))
+    margin = mu * f[:, 2] - np.hypot(f[:, 0], f[:, 1])
+    return (margin >= 0) & (f[:, 2] >= 0), margin
