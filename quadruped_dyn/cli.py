@@ -97,6 +97,27 @@ def check(robot: str, samples: int, seed: int, as_json: bool) -> None:
     sys.exit(0 if report.passed else EXIT_CHECK_FAILED)
 
 
+@main.command()
+@click.argument("robot")
+@click.option("--out", "out_dir", required=True, type=click.Path(file_okay=False), help="Output directory.")
+@click.option("--precision", type=click.Choice(["double", "float"]), default="double", show_default=True,
+              help="Default casadi_real of the generated source (the Makefile builds both).")
+@click.option("--check", is_flag=True, help="Compare OUT with a fresh generation instead of writing (exit 1 if it differs).")
+def codegen(robot: str, out_dir: str, precision: str, check: bool) -> None:
+    """Generate standalone C for ROBOT's M, C, G, id and GRF solves, with a Makefile and a check program."""
+    from pathlib import Path
+
+    from .codegen import differing_files, generate
+
+    r = load_robot(robot)
+    if check:
+        stale = differing_files(r, Path(out_dir))
+        click.echo(f"{out_dir}: " + (f"differs from a fresh generation: {', '.join(stale)}" if stale else "up to date"))
+        sys.exit(EXIT_CHECK_FAILED if stale else 0)
+    for path in generate(r, Path(out_dir), precision):
+        click.echo(f"wrote {path}")
+
+
 @main.command("make-urdf")
 @click.option("--check", is_flag=True, help="Only compare the committed URDF with a fresh generation.")
 def make_urdf(check: bool) -> None:

@@ -169,6 +169,7 @@ class FullDynamics:
     M_full_ad: ca.Function  # q -> M (18, 18), CasADi AD of id_full w.r.t. a
     C_full: ca.Function  # q, v -> C (18,) velocity terms (g = 0, a = 0)
     G_full: ca.Function  # q -> G (18,) (v = 0, a = 0)
+    nle_full: ca.Function  # q, v -> C + G (18,) in one evaluation (Pinocchio's nonLinearEffects)
     coriolis: ca.Function  # q, v -> C(q, v) (18, 18), Pinocchio's factorisation
     build_seconds: float
 
@@ -193,6 +194,7 @@ def full_dynamics(robot: Robot) -> FullDynamics:
     M, M_ad = ca.sparsify(M), ca.sparsify(ca.jacobian(tau, a))
     C = inverse_dynamics(robot, qj, ca.SX.zeros(3), v, zero_v, zero_f)
     G = inverse_dynamics(robot, qj, g_b, zero_v, zero_v, zero_f)
+    nle = inverse_dynamics(robot, qj, g_b, v, zero_v, zero_f)
     Cmat = ca.sparsify(coriolis_matrix(robot, qj, v))
     opts = {"cse": True}
     return FullDynamics(
@@ -201,6 +203,7 @@ def full_dynamics(robot: Robot) -> FullDynamics:
         M_full_ad=ca.Function("M_full_ad", [q], [M_ad], ["q"], ["M"], opts),
         C_full=ca.Function("C_full", [q, v], [C], ["q", "v"], ["C"], opts),
         G_full=ca.Function("G_full", [q], [G], ["q"], ["G"], opts),
+        nle_full=ca.Function("nle_full", [q, v], [nle], ["q", "v"], ["nle"], opts),
         coriolis=ca.Function("coriolis_matrix", [q, v], [Cmat], ["q", "v"], ["C"], opts),
         build_seconds=time.perf_counter() - start,
     )
