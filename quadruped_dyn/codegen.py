@@ -24,11 +24,10 @@ from dataclasses import dataclass
 from pathlib import Path
 
 import casadi as ca
-
-from .errors import InputError
 import numpy as np
 import pinocchio as pin
 
+from .errors import InputError
 from .grf import STANCE_SETS, grf_solve, stance_set
 from .newton_euler import full_dynamics
 from .pinocchio_ref import PinocchioReference
