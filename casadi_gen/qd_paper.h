@@ -23,7 +23,7 @@
  *   residual part of the required trunk wrench the GRF model cannot balance: force [N], moment [N m]
  *
  * Functions (work sizes iw, w):
- *   qd_M_full(q[19]) -> (M[18x18, 192 nonzeros]);  iw 0, w 0
+ *   qd_M_full(q[19]) -> (M[18x18, 210 nonzeros]);  iw 0, w 0
  *   qd_C_full(q[19], v[18]) -> (C[18]);  iw 0, w 0
  *   qd_G_full(q[19]) -> (G[18]);  iw 0, w 0
  *   qd_nle_full(q[19], v[18]) -> (nle[18]);  iw 0, w 0

@@ -88,6 +88,7 @@ def _comparisons(robot: Robot, ref: PinocchioReference, s: FullState) -> Iterato
     G = ref.gravity(q)
     yield "M_full (Walker-Orin)", fd.M_full(q), M
     yield "M_full (CasADi AD)", fd.M_full_ad(q), M
+    yield "M_full (CRBA)", fd.M_full_crba(q), M
     yield "C_full", fd.C_full(q, v), ref.nonlinear_effects(q, v) - G
     yield "G_full", fd.G_full(q), G
     yield "coriolis_matrix", fd.coriolis(q, v), ref.coriolis_matrix(q, v)

@@ -118,6 +118,22 @@ def codegen(robot: str, out_dir: str, precision: str, check: bool) -> None:
         click.echo(f"wrote {path}")
 
 
+@main.command()
+@click.option("--robot", "robots", multiple=True, default=["paper"], show_default=True, help="Robot (repeatable).")
+@click.option("--calls", default=20000, show_default=True, type=click.IntRange(min=1), help="Calls per timing run.")
+@click.option("--reps", default=9, show_default=True, type=click.IntRange(min=1), help="Timing runs (median).")
+@click.option("--json", "as_json", is_flag=True, help="Print JSON.")
+def bench(robots: tuple[str, ...], calls: int, reps: int, as_json: bool) -> None:
+    """Time the generated C against Pinocchio's native C++ in the same run (ratios < 1: generated is faster)."""
+    from .bench import run_bench
+
+    reports = [run_bench(load_robot(r), calls, reps) for r in robots]
+    if as_json:
+        click.echo(json.dumps([r.as_dict() for r in reports], indent=2))
+    else:
+        click.echo("\n\n".join(r.table() for r in reports))
+
+
 @main.command("make-urdf")
 @click.option("--check", is_flag=True, help="Only compare the committed URDF with a fresh generation.")
 def make_urdf(check: bool) -> None:

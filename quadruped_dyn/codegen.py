@@ -39,7 +39,7 @@ PREFIX = "qd_"
 
 #: name -> builder; adding a generated function is one line here.
 CODEGEN_FUNCTIONS: dict[str, Callable[[Robot], ca.Function]] = {
-    "M_full": lambda r: full_dynamics(r).M_full,
+    "M_full": lambda r: full_dynamics(r).M_full_crba,  # = Walker-Orin M (tested), fewer operations
     "C_full": lambda r: full_dynamics(r).C_full,
     "G_full": lambda r: full_dynamics(r).G_full,
     "nle_full": lambda r: full_dynamics(r).nle_full,
@@ -111,7 +111,7 @@ def header_doc(robot: Robot, functions: list[ca.Function], work: dict[str, tuple
     return "\n".join(lines) + "\n"
 
 
-def _work_sizes(casadi_header: str) -> dict[str, tuple[int, int]]:
+def work_sizes(casadi_header: str) -> dict[str, tuple[int, int]]:
     sizes = dict(re.findall(r"#define (\w+_SZ_(?:IW|W)) (\d+)", casadi_header))
     names = {k.rsplit("_SZ_", 1)[0] for k in sizes}
     return {n: (int(sizes[f"{n}_SZ_IW"]), int(sizes[f"{n}_SZ_W"])) for n in names}
@@ -150,7 +150,7 @@ def generate(robot: Robot, out_dir: Path, precision: str = "double") -> list[Pat
         cg.generate(tmp + os.sep)
         c_text = _silence_unused_parameters((Path(tmp) / f"{name}.c").read_text())
         casadi_header = (Path(tmp) / f"{name}.h").read_text()
-    work = _work_sizes(casadi_header)
+    work = work_sizes(casadi_header)
     files = {
         f"{name}.c": c_text,
         f"{name}.h": header_doc(robot, functions, work) + casadi_header,

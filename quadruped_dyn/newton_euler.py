@@ -32,6 +32,7 @@ from functools import cache
 
 import casadi as ca
 
+from .crba import mass_matrix_crba
 from .kinematics import foot_position, joint_frames
 from .leg import Leg
 from .robot import Robot
@@ -167,6 +168,7 @@ class FullDynamics:
     id_full: ca.Function  # q, v, a, f -> (w_res (6,), tau (12,))
     M_full: ca.Function  # q -> M (18, 18), by the paper's unit accelerations (Walker & Orin)
     M_full_ad: ca.Function  # q -> M (18, 18), CasADi AD of id_full w.r.t. a
+    M_full_crba: ca.Function  # q -> M (18, 18), composite rigid bodies: the form generated as C
     C_full: ca.Function  # q, v -> C (18,) velocity terms (g = 0, a = 0)
     G_full: ca.Function  # q -> G (18,) (v = 0, a = 0)
     nle_full: ca.Function  # q, v -> C + G (18,) in one evaluation (Pinocchio's nonLinearEffects)
@@ -201,6 +203,7 @@ def full_dynamics(robot: Robot) -> FullDynamics:
         id_full=ca.Function("id_full", [q, v, a, f], [tau[:6], tau[6:]], ["q", "v", "a", "f"], ["w_res", "tau"], opts),
         M_full=ca.Function("M_full", [q], [M], ["q"], ["M"], opts),
         M_full_ad=ca.Function("M_full_ad", [q], [M_ad], ["q"], ["M"], opts),
+        M_full_crba=ca.Function("M_full_crba", [q], [mass_matrix_crba(robot, qj)], ["q"], ["M"], opts),
         C_full=ca.Function("C_full", [q, v], [C], ["q", "v"], ["C"], opts),
         G_full=ca.Function("G_full", [q], [G], ["q"], ["G"], opts),
         nle_full=ca.Function("nle_full", [q, v], [nle], ["q", "v"], ["nle"], opts),

@@ -122,3 +122,16 @@ def test_float_build_matches_double_build(paper):
         d = _call_ctypes(double, name, np.float64, args, sizes)
         x = _call_ctypes(single, name, np.float32, args, sizes)
         assert _function_scale_error(x, d) <= FLOAT_REL_TOL, name
+
+
+@pytest.mark.slow
+def test_bench_reports_ratios_against_pinocchio(paper):
+    """The benchmark harnesses build and run (no timing asserted: speed is a benchmark's job)."""
+    from quadruped_dyn.bench import PAIRS, run_bench
+
+    report = run_bench(paper, calls=200, reps=3)
+    entries = {e.name: e for e in report.entries}
+    for name, (algo, _) in PAIRS.items():
+        e = entries[name]
+        assert e.pinocchio == algo and e.pinocchio_ns > 0 and e.ratio == pytest.approx(e.generated_ns / e.pinocchio_ns)
+    assert report.code_bytes > 0 and report.library_bytes > 0

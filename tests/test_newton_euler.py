@@ -35,6 +35,7 @@ def test_terms_against_pinocchio(robot, ref, fd, seed):
     s = random_state(robot.lower, robot.upper, np.random.default_rng(seed))
     M, G = ref.mass_matrix(s.q), ref.gravity(s.q)
     assert_close(_np(fd.M_full(s.q)), M, what="M_full")
+    assert_close(_np(fd.M_full_crba(s.q)), M, what="M_full by CRBA")
     assert_close(_np(fd.G_full(s.q)), G, what="G_full")
     assert_close(_np(fd.C_full(s.q, s.v)), ref.nonlinear_effects(s.q, s.v) - G, what="C_full")
     assert_close(_np(fd.coriolis(s.q, s.v)), ref.coriolis_matrix(s.q, s.v), what="Coriolis matrix")
@@ -50,6 +51,7 @@ def test_identities(robot, fd, seed):
     s = random_state(robot.lower, robot.upper, np.random.default_rng(seed))
     M = _np(fd.M_full(s.q))
     assert_close(_np(fd.M_full_ad(s.q)), M, what="Walker-Orin M = AD M")
+    assert_close(_np(fd.M_full_crba(s.q)), M, what="Walker-Orin M = CRBA M")
     assert_close(M, M.T, what="M symmetric")
     assert np.linalg.eigvalsh(M).min() > 0
     w, tau = fd.id_full(s.q, s.v, s.a, np.zeros(12))

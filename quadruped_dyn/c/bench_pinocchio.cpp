@@ -1,0 +1,51 @@
+// Times Pinocchio's native C++ algorithms on a URDF with a free-flyer root, in the same run
+// as the generated code. Usage: bench_pinocchio URDF CALLS REPS. Prints one line per
+// algorithm: "name median_ns". State: neutral + 0.1 * random, velocities/accelerations random.
+#include <algorithm>
+#include <chrono>
+#include <cstdio>
+#include <cstdlib>
+#include <functional>
+#include <vector>
+
+#include <pinocchio/algorithm/crba.hpp>
+#include <pinocchio/algorithm/joint-configuration.hpp>
+#include <pinocchio/algorithm/rnea.hpp>
+#include <pinocchio/multibody.hpp>
+#include <pinocchio/parsers/urdf.hpp>
+
+namespace pin = pinocchio;
+
+static double median_ns(const std::function<void()>& f, int calls, int reps) {
+  std::vector<double> t;
+  for (int r = 0; r < reps; ++r) {
+    auto t0 = std::chrono::steady_clock::now();
+    for (int k = 0; k < calls; ++k) f();
+    auto t1 = std::chrono::steady_clock::now();
+    t.push_back(std::chrono::duration<double, std::nano>(t1 - t0).count() / calls);
+  }
+  std::sort(t.begin(), t.end());
+  return t[t.size() / 2];
+}
+
+int main(int argc, char** argv) {
+  if (argc != 4) {
+    std::fprintf(stderr, "usage: %s URDF CALLS REPS\n", argv[0]);
+    return 2;
+  }
+  pin::Model model;
+  pin::urdf::buildModel(argv[1], pin::JointModelFreeFlyer(), model);
+  pin::Data data(model);
+  const int calls = std::atoi(argv[2]), reps = std::atoi(argv[3]);
+  std::srand(7);
+  Eigen::VectorXd dq = 0.1 * Eigen::VectorXd::Random(model.nv);
+  Eigen::VectorXd q = pin::integrate(model, pin::neutral(model), dq);
+  Eigen::VectorXd v = Eigen::VectorXd::Random(model.nv), a = Eigen::VectorXd::Random(model.nv);
+  volatile double sink = 0;
+  std::printf("crba %.2f\n", median_ns([&] { pin::crba(model, data, q, pin::Convention::LOCAL); sink = sink + data.M(0, 0); }, calls, reps));
+  std::printf("nonLinearEffects %.2f\n", median_ns([&] { sink = sink + pin::nonLinearEffects(model, data, q, v)[0]; }, calls, reps));
+  std::printf("computeGeneralizedGravity %.2f\n",
+              median_ns([&] { sink = sink + pin::computeGeneralizedGravity(model, data, q)[0]; }, calls, reps));
+  std::printf("rnea %.2f\n", median_ns([&] { sink = sink + pin::rnea(model, data, q, v, a)[0]; }, calls, reps));
+  return 0;
+}
