@@ -23,11 +23,7 @@ int main(void) {
     casadi_real in[4][QD_MAX_IN], out[4][QD_MAX_OUT];
     const casadi_real* arg[4];
     casadi_real* res[4];
-    for (int i = 0; i < k->n_in; ++i) {
-      for (int j = 0; j < k->in_len[i]; ++j) in[i][j] = (casadi_real)k->in[i][j];
-      arg[i] = in[i];
-    }
-    for (int i = 0; i < k->n_out; ++i) res[i] = out[i];
+    qd_case_args(k, in, arg, out, res);
     if (k->fn(arg, res, iw, w, 0) != 0) {
       printf("%-24s returned an error\n", k->name);
       ++failed;

@@ -108,3 +108,12 @@ static const qd_case QD_CASES[] = {
   {"qd_grf_none", qd_grf_none, 3, 4, {qd_ref_q, qd_ref_v, qd_ref_a}, {19, 18, 18}, {qd_grf_none_out0, qd_grf_none_out1, qd_grf_none_out2, qd_grf_none_out3}, {0, 12, 6, 12}},
 };
 #define QD_N_CASES 21
+/* Point arg/res of case k at in/out, filled with its reference inputs in casadi_real. */
+static void qd_case_args(const qd_case* k, casadi_real in[4][QD_MAX_IN], const casadi_real* arg[4],
+                         casadi_real out[4][QD_MAX_OUT], casadi_real* res[4]) {
+  for (int i = 0; i < k->n_in; ++i) {
+    for (int j = 0; j < k->in_len[i]; ++j) in[i][j] = (casadi_real)k->in[i][j];
+    arg[i] = in[i];
+  }
+  for (int i = 0; i < k->n_out; ++i) res[i] = out[i];
+}

@@ -253,6 +253,17 @@ def reference_header(robot: Robot, functions: list[ca.Function], work: dict[str,
             f'{{{", ".join(str(k) for _, k in outs)}}}}},'
         )
     lines += ["static const qd_case QD_CASES[] = {", *cases, "};", f"#define QD_N_CASES {len(functions)}"]
+    lines += [
+        "/* Point arg/res of case k at in/out, filled with its reference inputs in casadi_real. */",
+        "static void qd_case_args(const qd_case* k, casadi_real in[4][QD_MAX_IN], const casadi_real* arg[4],",
+        "                         casadi_real out[4][QD_MAX_OUT], casadi_real* res[4]) {",
+        "  for (int i = 0; i < k->n_in; ++i) {",
+        "    for (int j = 0; j < k->in_len[i]; ++j) in[i][j] = (casadi_real)k->in[i][j];",
+        "    arg[i] = in[i];",
+        "  }",
+        "  for (int i = 0; i < k->n_out; ++i) res[i] = out[i];",
+        "}",
+    ]
     return "\n".join(lines) + "\n"
 
 

@@ -30,11 +30,7 @@ int main(int argc, char** argv) {
     casadi_real in[4][QD_MAX_IN], out[4][QD_MAX_OUT];
     const casadi_real* arg[4];
     casadi_real* res[4];
-    for (int i = 0; i < k->n_in; ++i) {
-      for (int j = 0; j < k->in_len[i]; ++j) in[i][j] = (casadi_real)k->in[i][j];
-      arg[i] = in[i];
-    }
-    for (int i = 0; i < k->n_out; ++i) res[i] = out[i];
+    qd_case_args(k, in, arg, out, res);
     for (int r = 0; r < reps; ++r) {
       double t0 = now_ns();
       for (int n = 0; n < calls; ++n) {
