@@ -15,7 +15,6 @@ from __future__ import annotations
 import hashlib
 import importlib.metadata
 import shutil
-import subprocess
 import sys
 import tempfile
 import time
@@ -35,6 +34,7 @@ from .codegen import (
     compiled_library,
     generate,
     load_external,
+    run_tool,
     work_sizes,
 )
 from .errors import InputError
@@ -121,11 +121,10 @@ def pinocchio_harness(cxx: str = "g++") -> Path:
         lib = prefix / "lib"
         tmp = exe.with_suffix(".building")
         print(f"building the Pinocchio benchmark harness once (about a minute) into {exe.parent}", file=sys.stderr)
-        subprocess.run(
+        run_tool(
             [cxx, *PINOCCHIO_CXX_FLAGS, f"-I{prefix / 'include'}", f"-I{prefix / 'include' / 'eigen3'}",
              f"-I{prefix / 'include' / 'urdfdom_headers'}", str(source), f"-L{lib}", f"-Wl,-rpath,{lib}",
-             "-lpinocchio_default", "-lpinocchio_parsers", "-lurdfdom_model", "-lboost_serialization", "-o", str(tmp)],
-            check=True,
+             "-lpinocchio_default", "-lpinocchio_parsers", "-lurdfdom_model", "-lboost_serialization", "-o", str(tmp)]
         )
         tmp.replace(exe)
     return exe
@@ -148,8 +147,8 @@ def run_bench(robot: Robot, calls: int = 20000, reps: int = 9, rounds: int = 3, 
         shutil.copy(TEMPLATES / "bench_qd.c", tmp)
         exe = Path(tmp) / "bench_qd"
         start = time.perf_counter()
-        subprocess.run([cc, *C_FLAGS, f"-DQD_HEADER=\"{h_path.name}\"", f"-DQD_REFERENCE=\"{ref_path.name}\"",
-                        "bench_qd.c", c_path.name, "-lm", "-o", exe.name], check=True, cwd=tmp)
+        run_tool([cc, *C_FLAGS, f"-DQD_HEADER=\"{h_path.name}\"", f"-DQD_REFERENCE=\"{ref_path.name}\"",
+                  "bench_qd.c", c_path.name, "-lm", "-o", exe.name], cwd=tmp)
         report.compile_s = time.perf_counter() - start
         harness = pinocchio_harness()
         generated: dict[str, float] = {}
@@ -157,7 +156,7 @@ def run_bench(robot: Robot, calls: int = 20000, reps: int = 9, rounds: int = 3, 
         for _ in range(rounds):  # alternate the two harnesses; keep each function's best median
             for out, cmd in ((generated, [str(exe), str(calls), str(reps)]),
                              (pinocchio, [str(harness), str(robot.urdf), str(calls), str(reps)])):
-                for name, ns in _parse(subprocess.run(cmd, capture_output=True, text=True, check=True).stdout).items():
+                for name, ns in _parse(run_tool(cmd)).items():
                     out[name] = min(ns, out.get(name, ns))
     library = compiled_library(robot, cc=cc)
     report.library_bytes = library.path.stat().st_size

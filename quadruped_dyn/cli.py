@@ -9,7 +9,7 @@ from typing import Any
 import click
 import numpy as np
 
-from .errors import InputError
+from .errors import BuildError, InputError
 from .robot import ROBOT_NAMES, Robot, load_robot
 
 EXIT_CHECK_FAILED = 1
@@ -17,7 +17,7 @@ EXIT_BAD_INPUT = 2
 
 
 class _Group(click.Group):
-    """Maps InputError to exit code 2 with a one-line message and no traceback."""
+    """Maps InputError to exit code 2 and BuildError to 1, with a one-line message and no traceback."""
 
     def invoke(self, ctx: click.Context) -> Any:
         try:
@@ -25,6 +25,9 @@ class _Group(click.Group):
         except InputError as e:
             click.echo(f"error: {e}", err=True)
             sys.exit(EXIT_BAD_INPUT)
+        except BuildError as e:
+            click.echo(f"error: {e}", err=True)
+            sys.exit(EXIT_CHECK_FAILED)
 
 
 @click.group(cls=_Group)

@@ -27,7 +27,7 @@ import casadi as ca
 import numpy as np
 import pinocchio as pin
 
-from .errors import InputError
+from .errors import BuildError, InputError
 from .grf import STANCE_SETS, grf_solve, stance_set
 from .newton_euler import full_dynamics
 from .pinocchio_ref import PinocchioReference
@@ -279,8 +279,20 @@ def cache_dir() -> Path:
     return Path(os.environ.get("XDG_CACHE_HOME", Path.home() / ".cache")) / "quadruped_dyn"
 
 
+def run_tool(cmd: list[str], cwd: str | Path | None = None) -> str:
+    """Run a compiler or harness; its stdout, or a BuildError naming the command and its complaint."""
+    try:
+        proc = subprocess.run(cmd, capture_output=True, text=True, cwd=cwd, check=False)
+    except FileNotFoundError as e:
+        raise BuildError(f"'{cmd[0]}' not found; expected it on PATH (a C/C++ compiler is needed here)") from e
+    if proc.returncode != 0:
+        tail = (proc.stderr or proc.stdout).strip().splitlines()[-1:] or ["no output"]
+        raise BuildError(f"'{Path(cmd[0]).name}' failed (exit {proc.returncode}): {tail[0][:300]}")
+    return proc.stdout
+
+
 def _compiler_version(cc: str) -> str:
-    return subprocess.run([cc, "--version"], capture_output=True, text=True, check=True).stdout.splitlines()[0]
+    return run_tool([cc, "--version"]).splitlines()[0]
 
 
 @dataclass(frozen=True)
@@ -303,7 +315,7 @@ def compiled_library(robot: Robot, precision: str = "double", cc: str = "gcc") -
         if not lib.is_file():
             target.mkdir(parents=True, exist_ok=True)
             building = target / f".{lib.name}.{os.getpid()}"
-            subprocess.run([cc, *flags, "-shared", str(c_path), "-o", str(building), "-lm"], check=True)
+            run_tool([cc, *flags, "-shared", str(c_path), "-o", str(building), "-lm"])
             shutil.copy(c_path, target / c_path.name)
             shutil.copy(h_path, target / h_path.name)
             building.replace(lib)  # atomic: a half-written library is never loaded

@@ -1,5 +1,9 @@
-"""Errors the toolkit raises for input it cannot use (the CLI maps them to exit code 2)."""
+"""Errors the toolkit raises (the CLI maps them to exit codes and a one-line message)."""
 
 
 class InputError(ValueError):
-    """Bad input: says what was found and what was expected, in one line."""
+    """Bad input (exit code 2): says what was found and what was expected, in one line."""
+
+
+class BuildError(RuntimeError):
+    """A compiler or harness failed or is missing (exit code 1): says which command and why."""

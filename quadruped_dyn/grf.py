@@ -37,13 +37,15 @@ import casadi as ca
 import numpy as np
 
 from .errors import InputError
+from .evaluate import evaluate
 from .kinematics import foot_position
 from .leg import LEG_LABELS
 from .linalg import least_squares, min_norm
 from .newton_euler import inverse_dynamics
 from .robot import Robot
 from .spatial import dm, quat_to_rotation, skew
-from .state import GRAVITY_W, NQ_FULL, NV_FULL
+from .state import GRAVITY_W, NQ_FULL, NV_FULL, rotation
+from .tolerances import RANK_RTOL
 
 GRF_MODELS: tuple[str, ...] = ("paper", "min_norm")
 
@@ -163,6 +165,18 @@ def min_norm_solve(A: ca.SX, w: ca.SX, bases: tuple[ca.SX, ca.SX] | None) -> ca.
 
 
 @dataclass(frozen=True)
+class GrfSolution:
+    lam: np.ndarray  # (n,) the model's unknowns, minimum norm
+    f_body: np.ndarray  # (k, 3) ground force on each stance foot, trunk frame, N
+    f_world: np.ndarray  # (k, 3) the same in the world frame, N
+    residual: np.ndarray  # (6,) required trunk wrench the model cannot balance: force N, moment N m
+    tau: np.ndarray  # (12,) joint torques, N m
+    rank: int  # rank of the model's 6 x n system
+    in_friction_cone: np.ndarray | None  # (k,) per stance foot, if mu was given
+    friction_margin: np.ndarray | None  # (k,) mu f_z - |f_t|, N
+
+
+@dataclass(frozen=True)
 class GrfSolve:
     """Named Function ``grf_<stance>_<model>``: q (19,), v (18,), a = vdot (18,) ->
     lambda (n,), f (12,) ground forces on all feet in the trunk frame (0 for swing feet),
@@ -172,6 +186,26 @@ class GrfSolve:
     model: str
     rank: int
     function: ca.Function
+    system: ca.Function  # q -> A (6, n), the model's body-equation matrix
+
+    def solve(self, q: np.ndarray, v: np.ndarray, a: np.ndarray, mu: float | None = None) -> GrfSolution:
+        """Numeric solve with checked inputs. Raises InputError where the stance feet are
+        coincident or collinear, so that A has less than its structural rank (the symbolic
+        solve, and the generated C, would return meaningless forces there)."""
+        (A,) = evaluate(self.system, q)
+        sv = np.linalg.svd(np.atleast_2d(A), compute_uv=False) if A.size else np.zeros(0)
+        numeric_rank = int(np.sum(sv > RANK_RTOL * sv[0])) if sv.size else 0
+        if numeric_rank < self.rank:
+            raise InputError(
+                f"stance {self.stance.name}: the body equations have rank {numeric_rank} at this configuration, "
+                f"{self.rank} expected; the stance feet are coincident or collinear"
+            )
+        lam, f, residual, tau = evaluate(self.function, q, v, a)
+        feet = list(self.stance.feet)
+        f_body = f.reshape(4, 3)[feet]
+        f_world = f_body @ rotation(np.asarray(q, dtype=float)).T
+        ok, margin = friction_cone(f_world, mu) if mu is not None else (None, None)
+        return GrfSolution(lam, f_body, f_world, residual, tau, self.rank, ok, margin)
 
 
 def _grf_solve(robot: Robot, stance: StanceSet, model: str) -> GrfSolve:
@@ -192,7 +226,8 @@ def _grf_solve(robot: Robot, stance: StanceSet, model: str) -> GrfSolve:
     name = f"grf_{stance.name.replace('+', '_')}_{model}"
     outputs = ["lambda", "f", "residual", "tau"]
     fun = ca.Function(name, [q, v, a], [lam, f, residual, tau], ["q", "v", "a"], outputs, {"cse": True})
-    return GrfSolve(stance, model, stance.rank(model), fun)
+    system = ca.Function(f"{name}_A", [q], [ca.densify(A)], ["q"], ["A"])
+    return GrfSolve(stance, model, stance.rank(model), fun, system)
 
 
 @cache

@@ -135,3 +135,22 @@ def test_bench_reports_ratios_against_pinocchio(paper):
         e = entries[name]
         assert e.pinocchio == algo and e.pinocchio_ns > 0 and e.ratio == pytest.approx(e.generated_ns / e.pinocchio_ns)
     assert report.code_bytes > 0 and report.library_bytes > 0
+
+
+def test_missing_compiler_is_a_clear_error(paper):
+    from quadruped_dyn.errors import BuildError
+
+    with pytest.raises(BuildError, match="'no-such-cc' not found"):
+        compiled_library(paper, cc="no-such-cc")
+
+
+def test_codegen_cli_bad_input(tmp_path):
+    from click.testing import CliRunner
+
+    from quadruped_dyn.cli import main
+
+    (tmp_path / "file").write_text("x")
+    result = CliRunner().invoke(main, ["codegen", "paper", "--out", str(tmp_path / "file")])
+    assert result.exit_code == 2 and "Traceback" not in result.output
+    result = CliRunner().invoke(main, ["codegen", "paper", "--out", str(tmp_path), "--precision", "half"])
+    assert result.exit_code == 2

@@ -140,3 +140,34 @@ def test_bad_stance_and_model_names(paper):
 
 def test_solves_are_built_once(paper):
     assert grf_solves(paper) is grf_solves(paper)
+
+
+def test_solve_refuses_coincident_or_collinear_feet(paper):
+    """FL and FR feet placed on the same point (reachable: both under the trunk's centre line)."""
+    from quadruped_dyn.kinematics import analytic_ik
+
+    target = np.array([0.19, 0.0, -0.25])
+    qj = paper.standing_q.copy()
+    qj[0:3], qj[3:6] = analytic_ik("FL", target), analytic_ik("FR", target)
+    q, zero = full_q(np.eye(3), np.zeros(3), qj), np.zeros(18)
+    with pytest.raises(InputError, match="rank 3 at this configuration, 5 expected"):
+        grf_solve(paper, "FL+FR").solve(q, zero, zero)
+    with pytest.raises(InputError, match="rank 5 at this configuration, 6 expected"):
+        grf_solve(paper, "FL+FR+BL").solve(q, zero, zero)  # FL, FR coincide: three feet on a line
+    assert grf_solve(paper, "FL+BR").solve(q, zero, zero).rank == 5  # still a proper pair
+
+
+def test_solve_reports_world_forces_and_friction(paper):
+    q, zero = full_q(np.eye(3), np.zeros(3), paper.standing_q), np.zeros(18)
+    sol = grf_solve(paper, "FL+FR+BL+BR").solve(q, zero, zero, mu=0.6)
+    assert_close(sol.f_world.sum(axis=0), [0, 0, paper.total_mass * 9.81], what="feet carry the weight")
+    assert sol.in_friction_cone.all() and np.abs(sol.residual).max() < 1e-10
+
+
+@pytest.mark.parametrize(
+    ("q", "match"),
+    [(np.full(19, np.nan), "NaN"), (np.zeros(19), "zero quaternion"), (np.zeros(5), "shape")],
+)
+def test_solve_rejects_bad_state(paper, q, match):
+    with pytest.raises(InputError, match=match):
+        grf_solve(paper, "FL+BR").solve(q, np.zeros(18), np.zeros(18))
