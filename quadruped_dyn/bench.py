@@ -12,6 +12,7 @@ computeGeneralizedGravity, id_full ~ rnea (id_full also applies 4 foot forces).
 
 from __future__ import annotations
 
+import functools
 import hashlib
 import importlib.metadata
 import shutil
@@ -186,7 +187,7 @@ def _python_call_times(robot: Robot, library: object, number: int = 2000) -> dic
     for name in PAIRS:
         f = load_external(library, name)  # type: ignore[arg-type]
         args = [inputs[f.name_in(i)] for i in range(f.n_in())]
-        out[name] = 1e6 * min(timeit.repeat(lambda f=f, args=args: f(*args), number=number, repeat=3)) / number
+        out[name] = 1e6 * min(timeit.repeat(functools.partial(f, *args), number=number, repeat=3)) / number
     pin_calls = {
         "crba": lambda: pin.crba(model, data, q),
         "nonLinearEffects": lambda: pin.nonLinearEffects(model, data, q, v),

@@ -28,7 +28,7 @@ import numpy as np
 import pinocchio as pin
 
 from .errors import BuildError, InputError
-from .grf import STANCE_SETS, grf_solve, stance_set
+from .grf import STANCE_SETS, StanceSet, grf_solve, stance_set
 from .newton_euler import full_dynamics
 from .pinocchio_ref import PinocchioReference
 from .robot import Robot
@@ -37,6 +37,10 @@ from .tolerances import FLOAT_REL_TOL, REL_TOL_TERMS
 
 PREFIX = "qd_"
 
+def _grf_paper(stance: StanceSet) -> Callable[[Robot], ca.Function]:
+    return lambda robot: grf_solve(robot, stance, "paper").function
+
+
 #: name -> builder; adding a generated function is one line here.
 CODEGEN_FUNCTIONS: dict[str, Callable[[Robot], ca.Function]] = {
     "M_full": lambda r: full_dynamics(r).M_full_crba,  # = Walker-Orin M (tested), fewer operations
@@ -44,7 +48,7 @@ CODEGEN_FUNCTIONS: dict[str, Callable[[Robot], ca.Function]] = {
     "G_full": lambda r: full_dynamics(r).G_full,
     "nle_full": lambda r: full_dynamics(r).nle_full,
     "id_full": lambda r: full_dynamics(r).id_full,
-    **{f"grf_{s.name.replace('+', '_')}": (lambda r, s=s: grf_solve(r, s, "paper").function) for s in STANCE_SETS},
+    **{f"grf_{s.name.replace('+', '_')}": _grf_paper(s) for s in STANCE_SETS},
 }
 
 #: What each input and output name means: shape is printed from the Function itself.

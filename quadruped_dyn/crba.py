@@ -20,14 +20,21 @@ from .spatial import dm, skew
 from .state import NV_FULL
 
 
-def _body_inertia(link: LinkInertia, R: ca.SX, p: ca.SX) -> tuple[ca.SX, ca.SX, ca.SX]:
+Inertia = tuple[ca.SX, ca.SX, ca.SX]  # (m, h, I_o)
+
+
+def _body_inertia(link: LinkInertia, R: ca.SX, p: ca.SX) -> Inertia:
     """(m, h, I_o) of a link placed at (R, p) in b: first moment and inertia about b's origin."""
     c = p + R @ dm(link.com)
     C = skew(c)
-    return link.mass, link.mass * c, R @ dm(link.inertia) @ R.T - link.mass * C @ C
+    return ca.SX(link.mass), link.mass * c, R @ dm(link.inertia) @ R.T - link.mass * C @ C
 
 
-def _apply(Y: tuple[ca.SX, ca.SX, ca.SX], S: ca.SX) -> ca.SX:
+def _add(Y1: Inertia, Y2: Inertia) -> Inertia:
+    return Y1[0] + Y2[0], Y1[1] + Y2[1], Y1[2] + Y2[2]
+
+
+def _apply(Y: Inertia, S: ca.SX) -> ca.SX:
     """Spatial inertia times motion S = (v, w): (m v + w x h, I_o w + h x v)."""
     m, h, I_o = Y
     v, w = S[:3], S[3:]
@@ -37,7 +44,7 @@ def _apply(Y: tuple[ca.SX, ca.SX, ca.SX], S: ca.SX) -> ca.SX:
 def mass_matrix_crba(robot: Robot, q_joints: ca.SX) -> ca.SX:
     """M (18, 18), sparse (leg-leg blocks absent), for the 12 joint angles."""
     M = ca.SX(ca.Sparsity(NV_FULL, NV_FULL))
-    m_total, h_total, I_total = _body_inertia(robot.trunk, ca.SX.eye(3), ca.SX.zeros(3))
+    total = _body_inertia(robot.trunk, ca.SX.eye(3), ca.SX.zeros(3))
     for k, leg in enumerate(robot.legs):
         frames = joint_frames(leg, q_joints[3 * k : 3 * k + 3])
         links = [_body_inertia(link, R, p) for link, (R, p) in zip(leg.links, frames)]
@@ -45,14 +52,15 @@ def mass_matrix_crba(robot: Robot, q_joints: ca.SX) -> ca.SX:
         composite = links[2]
         for j in reversed(range(3)):
             if j < 2:
-                composite = tuple(a + b for a, b in zip(links[j], composite))
+                composite = _add(links[j], composite)
             F = _apply(composite, S[j])
             col = 6 + 3 * k + j
             M[0:6, col] = F
             M[col, 0:6] = F.T
             for i in range(j + 1):
                 M[6 + 3 * k + i, col] = M[col, 6 + 3 * k + i] = ca.dot(S[i], F)
-        m_total, h_total, I_total = m_total + composite[0], h_total + composite[1], I_total + composite[2]
+        total = _add(total, composite)
+    m_total, h_total, I_total = total
     H = skew(h_total)
     M[0:6, 0:6] = ca.vertcat(ca.horzcat(m_total * ca.SX.eye(3), -H), ca.horzcat(H, I_total))
     return M

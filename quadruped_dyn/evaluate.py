@@ -18,8 +18,10 @@ def evaluate(f: ca.Function, *args: object) -> list[np.ndarray]:
     """Evaluate ``f`` on numeric inputs; returns its outputs as dense arrays (vectors 1-D)."""
     if len(args) != f.n_in():
         raise InputError(f"{f.name()} takes {f.n_in()} inputs {f.name_in()}; got {len(args)}")
-    values = [check_array(f.name_in(i), np.ravel(x) if np.ndim(x) > 1 and f.size2_in(i) == 1 else x,
-                          (f.size1_in(i),) if f.size2_in(i) == 1 else f.size_in(i)) for i, x in enumerate(args)]
+    values = [
+        check_array(f.name_in(i), x, (f.size1_in(i),) if f.size2_in(i) == 1 else (f.size1_in(i), f.size2_in(i)))
+        for i, x in enumerate(args)
+    ]
     if f.n_in() and f.name_in(0) == "q" and np.linalg.norm(values[0][3:7]) == 0.0:
         raise InputError("q has a zero quaternion; expected (x, y, z, w) of a rotation")
     out = f(*values)

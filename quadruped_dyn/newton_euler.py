@@ -81,7 +81,7 @@ def leg_newton_euler(
     # inward, starting at the foot frame: the foot pushes on the ground with f_4 = -f, n_4 = 0
     f_next, n_next = R_b.T @ (-f), ca.SX.zeros(3)
     R_next, P_next = ca.SX.eye(3), dm(leg.foot.p)
-    tau = []
+    tau: list[ca.SX] = []
     for i in reversed(range(3)):
         R, P, F, N, c = links[i]
         f_i = R_next @ f_next + F
@@ -89,7 +89,7 @@ def leg_newton_euler(
         tau.insert(0, ca.dot(n_i, dm(leg.joints[i].axis)))
         f_next, n_next, R_next, P_next = f_i, n_i, R, P
     R_b1 = links[0][0]
-    return LegForces(ca.vertcat(*tau), R_b1 @ f_next, R_b1 @ n_next)
+    return LegForces(ca.SX(ca.vertcat(*tau)), R_b1 @ f_next, R_b1 @ n_next)
 
 
 def hip_reaction_split(
