@@ -19,7 +19,6 @@ from .robot import Robot
 from .spatial import dm, skew
 from .state import NV_FULL
 
-
 Inertia = tuple[ca.SX, ca.SX, ca.SX]  # (m, h, I_o)
 
 

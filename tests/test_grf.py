@@ -5,12 +5,15 @@ from __future__ import annotations
 import casadi as ca
 import numpy as np
 import pytest
+from hypothesis import assume, given, settings
+from hypothesis import strategies as st
 
 from quadruped_dyn.errors import InputError
+from quadruped_dyn.evaluate import evaluate
 from quadruped_dyn.grf import GRF_MODELS, STANCE_SETS, friction_cone, grf_solve, grf_solves, stance_set
 from quadruped_dyn.linalg import least_squares, min_norm
 from quadruped_dyn.state import FullState, full_q, random_state, rotation
-from quadruped_dyn.tolerances import COND_ERR_FACTOR, REL_TOL_TERMS
+from quadruped_dyn.tolerances import COND_ERR_FACTOR, RANK_RTOL, REL_TOL_TERMS
 
 from .conftest import assert_close
 
@@ -171,3 +174,23 @@ def test_solve_reports_world_forces_and_friction(paper):
 def test_solve_rejects_bad_state(paper, q, match):
     with pytest.raises(InputError, match=match):
         grf_solve(paper, "FL+BR").solve(q, np.zeros(18), np.zeros(18))
+
+
+@settings(max_examples=40, deadline=None)
+@given(seed=st.integers(0, 2**32 - 1), stance=st.sampled_from(STANCE_SETS), model=st.sampled_from(GRF_MODELS))
+def test_minimum_norm_least_squares_optimality(paper, seed, stance, model):
+    """Without any reference solver: the residual is orthogonal to range(A) (least squares) and
+    lambda lies in range(A^T) (minimum norm), for any state the sampler draws."""
+    s = random_state(paper.lower, paper.upper, np.random.default_rng(seed))
+    solve = grf_solve(paper, stance, model)
+    (A,) = evaluate(solve.system, s.q)
+    lam, _, residual, _ = _solve(paper, s, stance.name, model)
+    if not lam.size:
+        return
+    U, sv, Vt = np.linalg.svd(A)
+    rank = int(np.sum(sv > RANK_RTOL * sv[0]))
+    assume(rank == solve.rank and sv[0] / sv[rank - 1] < 1e6)  # skip near-singular draws
+    scale = np.abs(A).max() * (np.abs(residual).max() + np.abs(A @ lam).max())
+    assert np.abs(A.T @ residual).max() <= COND_ERR_FACTOR * (sv[0] / sv[rank - 1]) * np.finfo(float).eps * scale
+    null = Vt[rank:]
+    assert np.abs(null @ lam).max(initial=0.0) <= COND_ERR_FACTOR * (sv[0] / sv[rank - 1]) * np.finfo(float).eps * np.abs(lam).max()
