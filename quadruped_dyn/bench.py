@@ -30,11 +30,12 @@ from .codegen import (
     C_FLAGS,
     PREFIX,
     TEMPLATES,
+    CompiledFunction,
+    CompiledLibrary,
     cache_dir,
     codegen_functions,
     compiled_library,
     generate,
-    load_external,
     run_tool,
     work_sizes,
 )
@@ -176,8 +177,9 @@ def run_bench(robot: Robot, calls: int = 20000, reps: int = 9, rounds: int = 3, 
     return report
 
 
-def _python_call_times(robot: Robot, library: object, number: int = 2000) -> dict[str, float]:
-    """Per-call time (us) through Python: the loaded generated functions and Pinocchio's bindings."""
+def _python_call_times(robot: Robot, library: CompiledLibrary, number: int = 2000) -> dict[str, float]:
+    """Per-call time (us) through Python: the generated functions via ``CompiledFunction`` (ctypes)
+    and Pinocchio's bindings."""
     ref = PinocchioReference(robot)
     s = random_state(robot.lower, robot.upper, np.random.default_rng(0))
     q, v, a = ref.pin_q(s.q), ref.pin_v(s.v), ref.pin_v(s.a)
@@ -185,8 +187,8 @@ def _python_call_times(robot: Robot, library: object, number: int = 2000) -> dic
     inputs = {"q": s.q, "v": s.v, "a": s.a, "f": s.f.ravel()}
     out: dict[str, float] = {}
     for name in PAIRS:
-        f = load_external(library, name)  # type: ignore[arg-type]
-        args = [inputs[f.name_in(i)] for i in range(f.n_in())]
+        f = CompiledFunction(library, name)
+        args = [inputs[n] for n in f.names_in]
         out[name] = 1e6 * min(timeit.repeat(functools.partial(f, *args), number=number, repeat=3)) / number
     pin_calls = {
         "crba": lambda: pin.crba(model, data, q),

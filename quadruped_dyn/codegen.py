@@ -13,6 +13,7 @@ units and frames, output sparsity, and work sizes.
 
 from __future__ import annotations
 
+import ctypes
 import hashlib
 import os
 import re
@@ -337,3 +338,55 @@ def differing_files(robot: Robot, directory: Path) -> list[str]:
         fresh = generate(robot, Path(tmp))
         return [p.name for p in fresh if not (Path(directory) / p.name).is_file()
                 or (Path(directory) / p.name).read_bytes() != p.read_bytes()]
+
+
+class CompiledFunction:
+    """A generated function of a double-precision library, called through ctypes with
+    preallocated buffers: a few microseconds per call from Python, against ~20 us through
+    ``casadi.external``. Inputs are checked for shape; outputs are fresh dense arrays
+    (vectors 1-D, matrices 2-D)."""
+
+    def __init__(self, library: CompiledLibrary, name: str) -> None:
+        self._lib = ctypes.CDLL(str(library.path))
+        self.name = PREFIX + name
+        self._fn = getattr(self._lib, self.name)
+        graph = ca.external(self.name, str(library.path))  # only to read names and sparsity
+        dbl = ctypes.POINTER(ctypes.c_double)
+        self._in = [np.zeros(graph.nnz_in(i)) for i in range(graph.n_in())]
+        self._out = [np.zeros(graph.nnz_out(i)) for i in range(graph.n_out())]
+        self._shapes = [(graph.size1_out(i), graph.size2_out(i)) for i in range(graph.n_out())]
+        self._index = [
+            np.ravel_multi_index(tuple(np.asarray(x, dtype=np.intp) for x in graph.sparsity_out(i).get_triplet()),
+                                 self._shapes[i], order="F")
+            for i in range(graph.n_out())
+        ]
+        self.names_in = graph.name_in()
+        self._arg = (dbl * max(1, len(self._in)))(*[a.ctypes.data_as(dbl) for a in self._in])
+        self._res = (dbl * max(1, len(self._out)))(*[r.ctypes.data_as(dbl) for r in self._out])
+        iw, w = work_sizes_of(self._lib, self.name)
+        self._iw = (ctypes.c_longlong * max(1, iw))()
+        self._w = (ctypes.c_double * max(1, w))()
+
+    def __call__(self, *args: np.ndarray) -> list[np.ndarray]:
+        if len(args) != len(self._in):
+            raise InputError(f"{self.name} takes inputs {self.names_in}; got {len(args)} arrays")
+        for buf, x, name in zip(self._in, args, self.names_in):
+            x = np.asarray(x, dtype=float).ravel()
+            if x.shape != buf.shape:
+                raise InputError(f"{name} has {x.size} entries; {self.name} expects {buf.size}")
+            buf[:] = x
+        if self._fn(self._arg, self._res, self._iw, self._w, 0) != 0:
+            raise BuildError(f"{self.name} returned an error")
+        outs = []
+        for buf, shape, index in zip(self._out, self._shapes, self._index):
+            dense = np.zeros(shape[0] * shape[1])
+            dense[index] = buf
+            outs.append(dense if shape[1] == 1 else dense.reshape(shape, order="F"))
+        return outs
+
+
+def work_sizes_of(lib: ctypes.CDLL, name: str) -> tuple[int, int]:
+    """(iw, w) work sizes a compiled function asks for, from its ``_work`` entry point."""
+    sizes = [ctypes.c_longlong() for _ in range(4)]
+    getattr(lib, f"{name}_work")(*[ctypes.byref(x) for x in sizes])
+    return sizes[2].value, sizes[3].value

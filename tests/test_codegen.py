@@ -14,6 +14,7 @@ import pytest
 from quadruped_dyn.codegen import (
     CODEGEN_FUNCTIONS,
     PREFIX,
+    CompiledFunction,
     codegen_functions,
     compiled_library,
     differing_files,
@@ -88,6 +89,8 @@ def test_loaded_back_equals_graph_and_pinocchio(robot, ref, library):
         expected = pinocchio_outputs(robot, ref, name, near_standing)
         err = _function_scale_error([c.ravel(order="F") for c in compiled], [np.ravel(e, order="F") for e in expected])
         assert err <= REL_TOL_TERMS, f"{name}: compiled vs Pinocchio {err:.1e}"
+        fast = CompiledFunction(library, name)(*[inputs[n] for n in ext.name_in()])
+        assert _function_scale_error(fast, compiled) == 0.0, f"{name}: ctypes call differs from casadi.external"
 
 
 def test_cache_key_tracks_the_source(paper):
