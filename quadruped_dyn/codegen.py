@@ -87,6 +87,13 @@ def _shape(sp: ca.Sparsity) -> str:
     return shape if sp.is_dense() else f"{shape}, {sp.nnz()} nonzeros"
 
 
+def _note(name: str) -> str:
+    if not name.startswith("grf_"):
+        return ""
+    stance = stance_set(name[4:].replace("_", "+"))
+    return f"  [{stance.kind}, rank {stance.rank('paper')}]"
+
+
 def header_doc(robot: Robot, functions: list[ca.Function], work: dict[str, tuple[int, int]]) -> str:
     """Documentation block: conventions, every signal once, every function's shapes and work sizes."""
     signals = sorted({f.name_in(i) for f in functions for i in range(f.n_in())}
@@ -102,6 +109,12 @@ def header_doc(robot: Robot, functions: list[ca.Function], work: dict[str, tuple
         " * pattern qd_NAME_sparsity_out(i) returns (CasADi's compressed-column format).",
         " * casadi_real is double unless defined before this header (e.g. -Dcasadi_real=float).",
         " *",
+        " * qd_grf_<feet>: the paper's GRF model for those stance feet (trunk-frame assumptions,",
+        " * quadruped_dyn/grf.py), minimum-norm solution. Where the model's rank is 5 (four feet,",
+        " * two feet) `residual` carries the trunk wrench the feet cannot balance. At coincident or",
+        " * collinear stance feet the system loses further rank and the outputs are meaningless;",
+        " * this code does not detect that (quadruped_dyn's GrfSolve.solve does).",
+        " *",
         " * Signals:",
         *[f" *   {name:<9}{SIGNAL_DOCS[name]}" for name in signals],
         " *",
@@ -111,7 +124,7 @@ def header_doc(robot: Robot, functions: list[ca.Function], work: dict[str, tuple
         ins = ", ".join(f"{f.name_in(i)}[{_shape(f.sparsity_in(i))}]" for i in range(f.n_in()))
         outs = ", ".join(f"{f.name_out(i)}[{_shape(f.sparsity_out(i))}]" for i in range(f.n_out()))
         iw, w = work[f.name()]
-        lines.append(f" *   {f.name()}({ins}) -> ({outs});  iw {iw}, w {w}")
+        lines.append(f" *   {f.name()}({ins}) -> ({outs});  iw {iw}, w {w}{_note(f.name()[len(PREFIX):])}")
     lines.append(" */")
     return "\n".join(lines) + "\n"
 
