@@ -208,8 +208,19 @@ class GrfSolve:
         return GrfSolution(lam, f_body, f_world, residual, tau, self.rank, ok, margin)
 
 
-def _grf_solve(robot: Robot, stance: StanceSet, model: str) -> GrfSolve:
-    q, v, a = ca.SX.sym("q", NQ_FULL), ca.SX.sym("v", NV_FULL), ca.SX.sym("a", NV_FULL)
+@dataclass(frozen=True)
+class GrfExpressions:
+    """SX expressions of one solve (see ``GrfSolve`` for the meaning of each)."""
+
+    lam: ca.SX
+    f: ca.SX
+    residual: ca.SX
+    tau: ca.SX
+    A: ca.SX
+
+
+def grf_expressions(robot: Robot, stance: StanceSet, model: str, q: ca.SX, v: ca.SX, a: ca.SX) -> GrfExpressions:
+    """The GRF solve and the joint torques for given (q, v, a = vdot) expressions."""
     qj = q[7:]
     g_b = quat_to_rotation(q[3:7]).T @ dm(GRAVITY_W)
     w_req = inverse_dynamics(robot, qj, g_b, v, a, ca.SX.zeros(12))[:6]
@@ -223,10 +234,16 @@ def _grf_solve(robot: Robot, stance: StanceSet, model: str) -> GrfSolve:
         f[3 * i : 3 * i + 3] = f_stance[3 * j : 3 * j + 3]
     residual = w_req - (A @ lam if P.size else 0)
     tau = inverse_dynamics(robot, qj, g_b, v, a, f)[6:]
+    return GrfExpressions(lam, f, residual, tau, A)
+
+
+def _grf_solve(robot: Robot, stance: StanceSet, model: str) -> GrfSolve:
+    q, v, a = ca.SX.sym("q", NQ_FULL), ca.SX.sym("v", NV_FULL), ca.SX.sym("a", NV_FULL)
+    e = grf_expressions(robot, stance, model, q, v, a)
     name = f"grf_{stance.name.replace('+', '_')}_{model}"
     outputs = ["lambda", "f", "residual", "tau"]
-    fun = ca.Function(name, [q, v, a], [lam, f, residual, tau], ["q", "v", "a"], outputs, {"cse": True})
-    system = ca.Function(f"{name}_A", [q], [ca.densify(A)], ["q"], ["A"])
+    fun = ca.Function(name, [q, v, a], [e.lam, e.f, e.residual, e.tau], ["q", "v", "a"], outputs, {"cse": True})
+    system = ca.Function(f"{name}_A", [q], [ca.densify(e.A)], ["q"], ["A"])
     return GrfSolve(stance, model, stance.rank(model), fun, system)
 
 
