@@ -219,10 +219,13 @@ class GrfExpressions:
     A: ca.SX
 
 
-def grf_expressions(robot: Robot, stance: StanceSet, model: str, q: ca.SX, v: ca.SX, a: ca.SX) -> GrfExpressions:
-    """The GRF solve and the joint torques for given (q, v, a = vdot) expressions."""
+def grf_expressions(
+    robot: Robot, stance: StanceSet, model: str, q: ca.SX, v: ca.SX, a: ca.SX, gravity: bool = True
+) -> GrfExpressions:
+    """The GRF solve and the joint torques for given (q, v, a = vdot) expressions
+    (``gravity=False`` drops gravity, as Walker & Orin's unit-acceleration columns need)."""
     qj = q[7:]
-    g_b = quat_to_rotation(q[3:7]).T @ dm(GRAVITY_W)
+    g_b = quat_to_rotation(q[3:7]).T @ dm(GRAVITY_W) if gravity else ca.SX.zeros(3)
     w_req = inverse_dynamics(robot, qj, g_b, v, a, ca.SX.zeros(12))[:6]
     r = [foot_position(robot.legs[i], qj[3 * i : 3 * i + 3]) for i in stance.feet]
     P = stance.selection(model)
