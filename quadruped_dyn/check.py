@@ -7,16 +7,19 @@ sample (the reference's infinity norm). A term passes when max_rel_err <= tol.
 
 from __future__ import annotations
 
+import itertools
 import time
 from collections.abc import Callable, Iterator
 from dataclasses import asdict, dataclass, field
 
 import numpy as np
+import pinocchio as pin
 
 from .grf import GRF_MODELS, STANCE_SETS, grf_solve, grf_solves
 from .kinematics import robot_kinematics
 from .newton_euler import full_dynamics
 from .pinocchio_ref import PinocchioReference
+from .reduced import reduced_model
 from .robot import Robot
 from .state import FullState, random_state, rotation
 from .tolerances import COND_ERR_FACTOR, REL_TOL_TERMS
@@ -150,18 +153,47 @@ def _grf_sample(robot: Robot, ref: PinocchioReference, s: FullState, result: Grf
     result.passed = result.passed and err_ref <= allowed and err_pin <= REL_TOL_TERMS and r.rank == g.rank
 
 
+#: Reduced models checked: standing, a static-walk triple, both trot pairs.
+REDUCED_STANCES = ("FL+FR+BL+BR", "FR+BL+BR", "FL+BR", "FR+BL")
+
+
+def _reduced_comparisons(
+    robot: Robot, ref: PinocchioReference, qj: np.ndarray, rng: np.random.Generator
+) -> Iterator[tuple[str, object, object]]:
+    """id_r, M_r, C_r, G_r of each reduced model against the Pinocchio-built reduced reference,
+    at a trunk orientation within 0.5 rad of upright (the roll row has tan(pitch))."""
+    quat = pin.Quaternion(pin.rpy.rpyToMatrix(*rng.uniform(-0.5, 0.5, 3))).coeffs()
+    for stance in REDUCED_STANCES:
+        m = reduced_model(robot, stance)
+        feet, P = m.stance.feet, m.stance.selection("paper")
+        q_r = np.concatenate([qj, [pin.rpy.matrixToRpy(pin.Quaternion(quat).toRotationMatrix())[0]]])[: m.n]
+        qd, qdd, zero = rng.normal(size=m.n), rng.normal(size=m.n), np.zeros(m.n)
+
+        def reference(qd_: np.ndarray, qdd_: np.ndarray, feet=feet, P=P, q_r=q_r) -> np.ndarray:
+            return ref.reduced_inverse_dynamics(feet, P, q_r, qd_, qdd_, quat)
+
+        G = reference(zero, zero)  # id_r is affine in qdd and gravity-free differences give C_r, M_r
+        yield f"id_r {stance}", m.id_r(q_r, qd, qdd, quat), reference(qd, qdd)
+        yield f"M_r {stance}", m.M_r(q_r, quat), np.column_stack([reference(zero, e) - G for e in np.eye(m.n)])
+        yield f"C_r {stance}", m.C_r(q_r, qd, quat), reference(qd, zero) - G
+        yield f"G_r {stance}", m.G_r(q_r, quat), G
+
+
 def run_check(robot: Robot, samples: int = 20, seed: int = 0,
               progress: Callable[[int], None] | None = None) -> CheckReport:
     ref = PinocchioReference(robot)
     rng = np.random.default_rng(seed)
     start = time.perf_counter()
     full_dynamics(robot), robot_kinematics(robot), grf_solves(robot)  # built once per robot and process
+    for stance in REDUCED_STANCES:
+        reduced_model(robot, stance)
     report = CheckReport(robot.name, samples, seed, build_seconds=time.perf_counter() - start)
     terms: dict[str, TermResult] = {}
     report.grf = [GrfResult(st.name, m, st.rank(m)) for st in STANCE_SETS for m in GRF_MODELS]
     for n in range(samples):
         s = random_state(robot.lower, robot.upper, rng)
-        for name, ours, theirs in _comparisons(robot, ref, s):
+        comparisons = itertools.chain(_comparisons(robot, ref, s), _reduced_comparisons(robot, ref, s.q[7:], rng))
+        for name, ours, theirs in comparisons:
             term = terms.setdefault(name, TermResult(name))
             term.add([np.asarray(x, dtype=float) for x in ours] if isinstance(ours, list) else ours, theirs)
         for result in report.grf:
