@@ -137,6 +137,54 @@ def bench(robots: tuple[str, ...], calls: int, reps: int, as_json: bool) -> None
         click.echo("\n\n".join(r.table() for r in reports))
 
 
+@main.command()
+@click.argument("robot", default="paper")
+@click.option("--horizon", default=1.2, show_default=True, type=click.FloatRange(min=0.01), help="Seconds (2 trot cycles).")
+@click.option("--dt", default=5e-4, show_default=True, type=click.FloatRange(min=1e-5, max=0.05), help="RK4 step, s.")
+@click.option("--out", "out_dir", default="results", show_default=True, type=click.Path(file_okay=False),
+              help="Directory for the plot and the JSON report.")
+@click.option("--json", "as_json", is_flag=True, help="Print the report as JSON.")
+def validate(robot: str, horizon: float, dt: float, out_dir: str, as_json: bool) -> None:
+    """The paper's trot experiment: IK -> id_r -> forward dynamics -> compare with IK (plot + report).
+
+    Two runs: 'paper' applies all of id_r (the roll moment as if actuated), 'physical' leaves
+    the roll unactuated. Percentage errors per joint (HAA..KFE of FL, FR, BL, BR)."""
+    from dataclasses import asdict
+    from pathlib import Path
+
+    from .gait import Trot
+    from .gait import validate as run_validation
+
+    gait = Trot()
+    if abs(gait.half / dt - round(gait.half / dt)) > 1e-9:
+        raise InputError(f"--dt {dt} does not divide the half period {gait.half} s; expected e.g. 1e-3")
+    r = load_robot(robot)
+    out = Path(out_dir)
+    out.mkdir(parents=True, exist_ok=True)
+    plot = out / f"{r.name}_trot_BR_HFE.png"
+    report, _ = run_validation(r, gait, horizon, dt, str(plot))
+    data = asdict(report)
+    (out / f"{r.name}_trot_validation.json").write_text(json.dumps(data, indent=2))
+    if as_json:
+        click.echo(json.dumps(data, indent=2))
+        return
+    names = [j.name for leg in r.legs for j in leg.joints]
+    click.echo(f"trot, {r.name}: horizon {horizon} s, {report.integrator}, dt {dt} s; % error = max|sim - IK| / max|IK| x 100")
+    for run, signals in report.runs.items():
+        diverged, departs = report.diverged_at_s[run], report.departs_1pct_at_s[run]
+        click.echo(f"  {run}: stance-foot closure error up to {report.max_closure_m[run]:.1e} m"
+                   + (f"; 1 % off IK at {departs:.3f} s" if departs is not None else "")
+                   + (f"; fell (a stance foot 0.1 m off its foothold) at {diverged:.3f} s" if diverged is not None else ""))
+        if departs is not None:
+            continue  # percentages of a run that left the reference mean nothing; see the JSON
+        for signal, errors in signals.items():
+            cells = " ".join("   n/a" if np.isnan(e) else f"{e:6.1e}" for e in errors)
+            click.echo(f"    {signal:<13}{cells}")
+    click.echo(f"    {'':<13}" + " ".join(f"{n[-7:]:>6}" for n in names))
+    click.echo(f"  largest roll moment id_r asks for (unactuated on the robot): {report.max_roll_moment_Nm:.2f} N m")
+    click.echo(f"  wrote {plot} and {out / (r.name + '_trot_validation.json')}")
+
+
 @main.command("make-urdf")
 @click.option("--check", is_flag=True, help="Only compare the committed URDF with a fresh generation.")
 def make_urdf(check: bool) -> None:

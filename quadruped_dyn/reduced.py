@@ -18,7 +18,8 @@ coordinate: it follows from the stance feet staying fixed on the ground.
 * M_r by Walker & Orin (unit qdd_r, g = 0, qd = 0) and by CasADi AD; C_r (g = 0, qdd = 0);
   G_r (qd = 0, qdd = 0). The GRF solve is linear, so id_r = M_r qdd + C_r + G_r exactly.
   M_r is not symmetric: the GRF assumptions project the dynamics.
-* fd_r(q_r, qd_r, tau, quat) = M_r^-1 (tau_ext - C_r - G_r), tau_ext = (tau, 0 for phi).
+* fd_r(q_r, qd_r, tau_ext, quat) = M_r^-1 (tau_ext - C_r - G_r), tau_ext (n,) = (tau, 0 for the
+  unactuated roll); a nonzero 13th entry applies the roll moment as if it were actuated.
 
 ``quat`` is the trunk orientation (x, y, z, w): it sets gravity in the trunk frame and, with
 two feet, the roll-rate row; it must agree with the stance (``pose`` reconstructs it).
@@ -103,7 +104,7 @@ class ReducedModel:
     """Named Functions of the reduced model of one stance set; n = 12 or 13 coordinates.
 
     Inputs: q_r, qd_r, qdd_r (n,) [rad, rad/s, rad/s^2; the 13th is the trunk roll phi],
-    quat (4,) trunk orientation (x, y, z, w), tau (12,) joint torques [N m]."""
+    quat (4,) trunk orientation (x, y, z, w), tau_ext (n,) joint torques [N m] (+ roll moment)."""
 
     stance: StanceSet
     n: int
@@ -113,7 +114,7 @@ class ReducedModel:
     M_r_ad: ca.Function  # q_r, quat -> (n, n), CasADi AD of id_r
     C_r: ca.Function  # q_r, qd_r, quat -> (n,)
     G_r: ca.Function  # q_r, quat -> (n,)
-    fd_r: ca.Function  # q_r, qd_r, tau, quat -> qdd_r (n,)
+    fd_r: ca.Function  # q_r, qd_r, tau_ext, quat -> qdd_r (n,)
     build_seconds: float
 
 
@@ -127,7 +128,7 @@ def reduced_model(robot: Robot, stance_name: str) -> ReducedModel:
     start = time.perf_counter()
     n = 13 if k == 2 else 12
     q, qd, qdd = ca.SX.sym("q_r", n), ca.SX.sym("qd_r", n), ca.SX.sym("qdd_r", n)
-    quat, tau = ca.SX.sym("quat", 4), ca.SX.sym("tau", 12)
+    quat, tau_ext = ca.SX.sym("quat", 4), ca.SX.sym("tau_ext", n)
     zero = ca.SX.zeros(n)
 
     def idr(qd_: ca.SX, qdd_: ca.SX, gravity: bool) -> ca.SX:
@@ -136,7 +137,6 @@ def reduced_model(robot: Robot, stance_name: str) -> ReducedModel:
     unit = ca.SX(ca.DM.eye(n))
     M = ca.horzcat(*[idr(zero, unit[:, c], gravity=False) for c in range(n)])
     C, G = idr(qd, zero, gravity=False), idr(zero, zero, gravity=True)
-    tau_ext = ca.vertcat(tau, ca.SX.zeros(n - 12))
     opts = {"cse": True}
     name = stance.name.replace("+", "_")
     v, a = _maps(robot, stance, q, qd, qdd, quat_to_rotation(quat))
@@ -150,7 +150,7 @@ def reduced_model(robot: Robot, stance_name: str) -> ReducedModel:
         M_r_ad=ca.Function(f"M_r_ad_{name}", [q, quat], [ca.jacobian(tau_r, qdd)], ["q_r", "quat"], ["M_r"], opts),
         C_r=ca.Function(f"C_r_{name}", [q, qd, quat], [C], ["q_r", "qd_r", "quat"], ["C_r"], opts),
         G_r=ca.Function(f"G_r_{name}", [q, quat], [G], ["q_r", "quat"], ["G_r"], opts),
-        fd_r=ca.Function(f"fd_r_{name}", [q, qd, tau, quat], [least_squares(M, tau_ext - C - G)],
-                         ["q_r", "qd_r", "tau", "quat"], ["qdd_r"], opts),
+        fd_r=ca.Function(f"fd_r_{name}", [q, qd, tau_ext, quat], [least_squares(M, tau_ext - C - G)],
+                         ["q_r", "qd_r", "tau_ext", "quat"], ["qdd_r"], opts),
         build_seconds=time.perf_counter() - start,
     )

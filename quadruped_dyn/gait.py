@@ -1,0 +1,284 @@
+"""Trot gait and the paper's validation experiment (SPEC section 6, paper section 6, Figs. 4-7).
+
+Trot: diagonal pairs (FL+BR, then FR+BL) alternate every half period; the trunk moves forward
+at constant speed and height with R = I (so the roll phi = 0). A stance foot stays at its
+world foothold; a swing foot moves to its next foothold with a quintic smoothstep forward and
+a 64 s^3 (1 - s)^3 bump upward: position, velocity and acceleration are continuous (C^2) at
+lift-off and touch-down. Footholds: the standing foot positions, shifted so that each foot is
+under its standing point in the middle of its stance.
+
+Experiment: analytic IK (DH leg) or numeric IK -> q, qd, qdd -> id_r -> tau(t); forward
+dynamics fd_r with tau(t), integrated by classical RK4 with a fixed step from the IK state at
+t = 0; the trunk orientation is integrated from the velocity map's omega_b. Two runs:
+* ``paper``: tau_ext = all 13 entries of id_r, the roll moment applied as if actuated -- the
+  paper's check, which compares the inverse/forward pair with itself;
+* ``physical``: tau_ext = (tau, 0): the roll is unactuated, as on the robot.
+Percentage error of a signal x: max_t |x_sim - x_ref| / max_t |x_ref| x 100. The trot is open-
+loop unstable in roll (an unactuated run is 1 % off within ~0.06 s on the paper's robot), so
+even the ``paper`` run's error is RK4's O(dt^4) error amplified by that instability: measured
+on the paper robot over 1.2 s, the largest joint-angle error is 1.6 / 0.096 / 0.006 % at
+dt = 2 / 1 / 0.5 ms (BR HFE: 2.4e-2 / 1.5e-3 / 8.6e-5 %).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+import pinocchio as pin
+
+from .errors import InputError
+from .evaluate import evaluate
+from .kinematics import analytic_ik, numeric_ik, robot_kinematics
+from .paper_robot import URDF_PATH
+from .reduced import reduced_model
+from .robot import Robot
+
+PAIRS = ((0, 3), (1, 2))  # FL+BR, FR+BL
+
+#: A reference signal whose largest |value| is below this fraction of the largest joint's is
+#: treated as identically zero (IK round-off, ~1e-16 rad/s, would give absurd percentages).
+ZERO_SIGNAL = 1e-9
+
+#: A simulation stops when a stance foot is this far from its foothold (m): the gait has
+#: failed (the robot rolls over), and integrating further only produces overflow.
+FALLEN_CLOSURE_M = 0.1
+
+
+@dataclass(frozen=True)
+class Trot:
+    speed: float = 0.2  # m/s, forward
+    period: float = 0.6  # s, a full cycle (two half periods)
+    step_height: float = 0.04  # m
+
+    @property
+    def half(self) -> float:
+        return self.period / 2
+
+    def stance(self, t: float) -> tuple[int, int]:
+        return PAIRS[int(np.floor(t / self.half + 1e-12)) % 2]
+
+    def foot(self, i: int, t: float, standing: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """World position, velocity, acceleration of foot i (standing = its standing position, b frame)."""
+        k = int(np.floor(t / self.half + 1e-12))
+        s = t / self.half - k
+        step = self.speed * self.half  # the trunk's advance in a half period
+        if i in PAIRS[k % 2]:  # stance: fixed at the foothold centred on this half period
+            x = standing[0] + step * (k + 0.5)
+            return np.array([x, standing[1], standing[2]]), np.zeros(3), np.zeros(3)
+        x0, dx = standing[0] + step * (k - 0.5), 2 * step
+        smooth = (10 * s**3 - 15 * s**4 + 6 * s**5, (30 * s**2 - 60 * s**3 + 30 * s**4) / self.half,
+                  (60 * s - 180 * s**2 + 120 * s**3) / self.half**2)
+        bump = (64 * s**3 * (1 - s) ** 3, 64 * (3 * s**2 * (1 - s) ** 3 - 3 * s**3 * (1 - s) ** 2) / self.half,
+                64 * (6 * s * (1 - s) ** 3 - 18 * s**2 * (1 - s) ** 2 + 6 * s**3 * (1 - s)) / self.half**2)
+        pos = np.array([x0 + dx * smooth[0], standing[1], standing[2] + self.step_height * bump[0]])
+        vel = np.array([dx * smooth[1], 0.0, self.step_height * bump[1]])
+        acc = np.array([dx * smooth[2], 0.0, self.step_height * bump[2]])
+        return pos, vel, acc
+
+
+@dataclass(frozen=True)
+class ReferenceSample:
+    q_r: np.ndarray  # (13,) joints + roll
+    qd_r: np.ndarray
+    qdd_r: np.ndarray
+    stance: tuple[int, int]
+
+
+def reference(robot: Robot, gait: Trot, t: float, q_guess: np.ndarray | None = None) -> ReferenceSample:
+    """IK of the trot at time t: trunk at (speed t, 0, 0), R = I; feet from the gait."""
+    kin = robot_kinematics(robot)
+    standing = [leg.foot_position(q) for leg, q in zip(robot.legs, robot.standing_q.reshape(4, 3))]
+    p, pd = np.array([gait.speed * t, 0.0, 0.0]), np.array([gait.speed, 0.0, 0.0])
+    q, qd, qdd = np.zeros(12), np.zeros(12), np.zeros(12)
+    for i, leg in enumerate(robot.legs):
+        P, Pd, Pdd = gait.foot(i, t, standing[i])
+        r, rd, rdd = P - p, Pd - pd, Pdd  # trunk frame = world orientation (R = I), no trunk acceleration
+        s = slice(3 * i, 3 * i + 3)
+        if robot.urdf == URDF_PATH:
+            q[s] = analytic_ik(leg.label, r)
+        else:
+            q[s] = numeric_ik(robot, i, r, None if q_guess is None else q_guess[s])
+        J = np.asarray(kin[i].foot_jacobian(q[s]))
+        qd[s] = np.linalg.solve(J, rd)
+        qdd[s] = np.linalg.solve(J, rdd - np.asarray(kin[i].foot_bias_acceleration(q[s], qd[s])).ravel())
+    return ReferenceSample(np.append(q, 0.0), np.append(qd, 0.0), np.append(qdd, 0.0), gait.stance(t))
+
+
+def _stance_name(stance: tuple[int, int]) -> str:
+    return "FL+BR" if stance == PAIRS[0] else "FR+BL"
+
+
+@dataclass
+class Simulation:
+    t: np.ndarray
+    q: np.ndarray  # (N, 13) simulated
+    qd: np.ndarray
+    qdd: np.ndarray
+    q_ref: np.ndarray  # (N, 13) from IK
+    qd_ref: np.ndarray
+    qdd_ref: np.ndarray
+    roll_moment: np.ndarray  # (N,) id_r's 13th entry along the reference, N m
+    closure_m: np.ndarray  # (N,) largest distance of a stance foot from its foothold, m
+    diverged_at: float | None  # s: where the run stopped, fallen or fd_r singular (None: full horizon)
+
+    def percent_error(self, sim: np.ndarray, ref: np.ndarray) -> np.ndarray:
+        """Per coordinate: max_t |sim - ref| / max_t |ref| x 100; nan where the reference is
+        (numerically) constant zero -- below ZERO_SIGNAL of the largest coordinate's range --
+        such as HAA rates in a straight trot, where a percentage means nothing."""
+        scale = np.abs(ref).max(axis=0)
+        meaningful = scale > ZERO_SIGNAL * scale.max()
+        with np.errstate(invalid="ignore", divide="ignore"):
+            return np.where(meaningful, np.abs(sim - ref).max(axis=0) / scale * 100, np.nan)
+
+    def departure_time(self, percent: float = 1.0) -> float | None:
+        """First time a joint angle is off its IK value by more than ``percent`` of that joint's
+        largest |angle|; None if never within the run."""
+        scale = np.abs(self.q_ref[:, :12]).max(axis=0)
+        off = np.abs(self.q[:, :12] - self.q_ref[:, :12]) > percent / 100 * scale
+        rows = np.flatnonzero(off.any(axis=1))
+        return float(self.t[rows[0]]) if rows.size else None
+
+
+@dataclass
+class ValidationReport:
+    robot: str
+    horizon_s: float
+    dt_s: float
+    integrator: str = "classical RK4, fixed step"
+    runs: dict[str, dict[str, list[float]]] = field(default_factory=dict)  # run -> signal -> % error per joint
+    max_roll_moment_Nm: float = 0.0
+    max_closure_m: dict[str, float] = field(default_factory=dict)
+    diverged_at_s: dict[str, float | None] = field(default_factory=dict)
+    departs_1pct_at_s: dict[str, float | None] = field(default_factory=dict)
+
+
+def simulate(robot: Robot, gait: Trot, horizon: float, dt: float, roll_actuated: bool) -> Simulation:
+    """Integrate fd_r under the IK torques from the IK state at t = 0 (see module docstring)."""
+    models = {name: reduced_model(robot, name) for name in ("FL+BR", "FR+BL")}
+    n = int(round(horizon / dt))
+    times = np.arange(n + 1) * dt
+    refs: list[ReferenceSample] = []
+    guess = None
+    for t in times:
+        refs.append(reference(robot, gait, float(t), guess))
+        guess = refs[-1].q_r[:12]
+
+    def tau_ext(t: float, stance: tuple[int, int], ref_sample: ReferenceSample | None = None) -> tuple[np.ndarray, float]:
+        """IK torques at t for the given stance pair (an RK stage at a switch keeps the step's pair)."""
+        r = ref_sample or reference(robot, gait, t, guess)
+        m = models[_stance_name(stance)]
+        (tau_r,) = evaluate(m.id_r, r.q_r, r.qd_r, r.qdd_r, np.array([0.0, 0.0, 0.0, 1.0]))
+        return (tau_r if roll_actuated else np.append(tau_r[:12], 0.0)), float(tau_r[12])
+
+    def deriv(t: float, q: np.ndarray, qd: np.ndarray, quat: np.ndarray, stance: tuple[int, int]) -> tuple:
+        m = models[_stance_name(stance)]
+        tau, _ = tau_ext(t, stance)
+        (qdd,) = evaluate(m.fd_r, q, qd, tau, quat)
+        v, _ = evaluate(m.maps, q, qd, np.zeros(13), quat)
+        omega = v[3:6]
+        quat_dot = 0.5 * (pin.Quaternion(quat) * pin.Quaternion(np.append(omega, 0.0))).coeffs()
+        return qd, qdd, quat_dot
+
+    q, qd, quat = refs[0].q_r.copy(), refs[0].qd_r.copy(), np.array([0.0, 0.0, 0.0, 1.0])
+    out_q, out_qd, out_qdd, roll, closure = [], [], [], [], []
+    kin = robot_kinematics(robot)
+    diverged_at = None
+    for k, t in enumerate(times):
+        stance = gait.stance(float(t))
+        m = models[_stance_name(stance)]
+        tau, roll_k = tau_ext(float(t), stance, refs[k])
+        try:
+            (qdd,) = evaluate(m.fd_r, q, qd, tau, quat)
+        except InputError:  # the state left the model's domain: report where
+            diverged_at = float(t)
+            break
+        out_q.append(q.copy())
+        out_qd.append(qd.copy())
+        out_qdd.append(qdd)
+        roll.append(roll_k)
+        closure.append(_closure(robot, kin, gait, float(t), q, quat, stance))
+        if closure[-1] > FALLEN_CLOSURE_M:  # a stance foot far off its foothold: the trot has failed
+            diverged_at = float(t)
+            break
+        if k == n:
+            break
+        # RK4 within one stance phase (the step never straddles a switch: dt divides the half period)
+        try:
+            k1 = deriv(t, q, qd, quat, stance)
+            k2 = deriv(t + dt / 2, q + dt / 2 * k1[0], qd + dt / 2 * k1[1], quat + dt / 2 * k1[2], stance)
+            k3 = deriv(t + dt / 2, q + dt / 2 * k2[0], qd + dt / 2 * k2[1], quat + dt / 2 * k2[2], stance)
+            k4 = deriv(t + dt, q + dt * k3[0], qd + dt * k3[1], quat + dt * k3[2], stance)
+        except InputError:
+            diverged_at = float(t)
+            break
+        q = q + dt / 6 * (k1[0] + 2 * k2[0] + 2 * k3[0] + k4[0])
+        qd = qd + dt / 6 * (k1[1] + 2 * k2[1] + 2 * k3[1] + k4[1])
+        quat = quat + dt / 6 * (k1[2] + 2 * k2[2] + 2 * k3[2] + k4[2])
+        quat /= np.linalg.norm(quat)
+    m_ = len(out_q)
+    return Simulation(times[:m_], np.array(out_q), np.array(out_qd), np.array(out_qdd),
+                      np.array([r.q_r for r in refs[:m_]]), np.array([r.qd_r for r in refs[:m_]]),
+                      np.array([r.qdd_r for r in refs[:m_]]), np.array(roll), np.array(closure), diverged_at)
+
+
+def _closure(robot: Robot, kin: tuple, gait: Trot, t: float, q: np.ndarray, quat: np.ndarray,
+             stance: tuple[int, int]) -> float:
+    """How far the stance feet are from their footholds, with the trunk pose that puts the
+    first stance foot on its foothold and the integrated orientation (m)."""
+    R = pin.Quaternion(quat).toRotationMatrix()
+    standing = [leg.foot_position(qs) for leg, qs in zip(robot.legs, robot.standing_q.reshape(4, 3))]
+    feet = [np.asarray(kin[i].foot_position(q[3 * i : 3 * i + 3])).ravel() for i in stance]
+    holds = [gait.foot(i, t, standing[i])[0] for i in stance]
+    p = holds[0] - R @ feet[0]
+    return float(max(np.linalg.norm(p + R @ f - h) for f, h in zip(feet, holds)))
+
+
+def validate(robot: Robot, gait: Trot | None = None, horizon: float = 1.2, dt: float = 5e-4,
+             plot_path: str | None = None) -> tuple[ValidationReport, dict[str, Simulation]]:
+    """Run both experiments; optionally plot the BR HFE comparison (the paper's Figs. 5-7)."""
+    gait = gait or Trot()
+    sims = {"paper": simulate(robot, gait, horizon, dt, roll_actuated=True),
+            "physical": simulate(robot, gait, horizon, dt, roll_actuated=False)}
+    report = ValidationReport(robot.name, horizon, dt)
+    for name, sim in sims.items():
+        report.runs[name] = {
+            "acceleration": sim.percent_error(sim.qdd, sim.qdd_ref)[:12].tolist(),
+            "velocity": sim.percent_error(sim.qd, sim.qd_ref)[:12].tolist(),
+            "displacement": sim.percent_error(sim.q, sim.q_ref)[:12].tolist(),
+        }
+        report.max_closure_m[name] = float(sim.closure_m.max())
+        report.diverged_at_s[name] = sim.diverged_at
+        report.departs_1pct_at_s[name] = sim.departure_time(1.0)
+    report.max_roll_moment_Nm = float(np.abs(sims["paper"].roll_moment).max())
+    if plot_path:
+        plot_br_hfe(sims, robot, plot_path)
+    return report, sims
+
+
+def plot_br_hfe(sims: dict[str, Simulation], robot: Robot, path: str) -> None:
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    j = 3 * 3 + 1  # BR HFE
+    fig, axes = plt.subplots(3, 1, figsize=(8, 8), sharex=True)
+    ref = sims["paper"]
+    for ax, key, label in zip(axes, ("qdd", "qd", "q"), ("acceleration (rad/s²)", "velocity (rad/s)", "displacement (rad)")):
+        ax.plot(ref.t, getattr(ref, key + "_ref")[:, j], "k-", lw=2.5, label="inverse kinematics")
+        ax.plot(ref.t, getattr(ref, key)[:, j], "C1--", lw=1.5, label="forward dynamics, roll moment applied (paper)")
+        phys = sims["physical"]
+        departs = phys.departure_time(1.0)
+        note = f" (1 % off at {departs:.3f} s)" if departs is not None else ""
+        ax.plot(phys.t, getattr(phys, key)[:, j], "C0:", lw=1.5, label="forward dynamics, roll unactuated" + note)
+        lo, hi = getattr(ref, key + "_ref")[:, j].min(), getattr(ref, key + "_ref")[:, j].max()
+        ax.set_ylim(lo - 0.3 * (hi - lo), hi + 0.3 * (hi - lo))  # the unactuated run leaves the frame as it falls
+        ax.set_ylabel(label)
+        ax.grid(alpha=0.3)
+    axes[0].set_title(f"{robot.legs[3].joints[1].name} ({robot.name}), trot")
+    axes[0].legend(fontsize=8)
+    axes[-1].set_xlabel("time (s)")
+    fig.tight_layout()
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
