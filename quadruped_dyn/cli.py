@@ -10,6 +10,7 @@ import click
 import numpy as np
 
 from .errors import BuildError, InputError
+from .leg import JOINT_ROLES
 from .robot import ROBOT_NAMES, Robot, load_robot
 
 EXIT_CHECK_FAILED = 1
@@ -168,7 +169,7 @@ def validate(robot: str, horizon: float, dt: float, out_dir: str, as_json: bool)
     if as_json:
         click.echo(json.dumps(data, indent=2))
         return
-    names = [j.name for leg in r.legs for j in leg.joints]
+    names = [f"{leg.label}_{role}" for leg in r.legs for role in JOINT_ROLES]
     click.echo(f"trot, {r.name}: horizon {horizon} s, {report.integrator}, dt {dt} s; % error = max|sim - IK| / max|IK| x 100")
     for run, signals in report.runs.items():
         diverged, departs = report.diverged_at_s[run], report.departs_1pct_at_s[run]
@@ -178,9 +179,9 @@ def validate(robot: str, horizon: float, dt: float, out_dir: str, as_json: bool)
         if departs is not None:
             continue  # percentages of a run that left the reference mean nothing; see the JSON
         for signal, errors in signals.items():
-            cells = " ".join("   n/a" if np.isnan(e) else f"{e:6.1e}" for e in errors)
+            cells = " ".join(f"{'n/a':>7}" if np.isnan(e) else f"{e:7.1e}" for e in errors)
             click.echo(f"    {signal:<13}{cells}")
-    click.echo(f"    {'':<13}" + " ".join(f"{n[-7:]:>6}" for n in names))
+    click.echo(f"    {'':<13}" + " ".join(f"{n:>7}" for n in names))
     click.echo(f"  largest roll moment id_r asks for (unactuated on the robot): {report.max_roll_moment_Nm:.2f} N m")
     click.echo(f"  wrote {plot} and {out / (r.name + '_trot_validation.json')}")
 

@@ -4,8 +4,9 @@ Trot: diagonal pairs (FL+BR, then FR+BL) alternate every half period; the trunk 
 at constant speed and height with R = I (so the roll phi = 0). A stance foot stays at its
 world foothold; a swing foot moves to its next foothold with a quintic smoothstep forward and
 a 64 s^3 (1 - s)^3 bump upward: position, velocity and acceleration are continuous (C^2) at
-lift-off and touch-down. Footholds: the standing foot positions, shifted so that each foot is
-under its standing point in the middle of its stance.
+lift-off and touch-down. Footholds: the feet of ``gait_posture`` (the paper's standing posture;
+for other robots a crouch with each foot under its HFE joint at CROUCH of the leg's length),
+shifted so that each foot is under that point in the middle of its stance.
 
 Experiment: analytic IK (DH leg) or numeric IK -> q, qd, qdd -> id_r -> tau(t); forward
 dynamics fd_r with tau(t), integrated by classical RK4 with a fixed step from the IK state at
@@ -23,6 +24,7 @@ dt = 2 / 1 / 0.5 ms (BR HFE: 2.4e-2 / 1.5e-3 / 8.6e-5 %).
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from functools import cache
 
 import numpy as np
 import pinocchio as pin
@@ -43,6 +45,35 @@ ZERO_SIGNAL = 1e-9
 #: A simulation stops when a stance foot is this far from its foothold (m): the gait has
 #: failed (the robot rolls over), and integrating further only produces overflow.
 FALLEN_CLOSURE_M = 0.1
+
+#: Crouch of the trot posture of URDF robots: feet this fraction of (thigh + shank) below the
+#: HFE joint, far enough from full extension for the legs' Jacobians to stay well conditioned.
+CROUCH = 0.75
+
+
+@cache
+def gait_posture(robot: Robot) -> np.ndarray:
+    """Joint angles (12,) the trot is built around (see the module docstring)."""
+    if robot.urdf == URDF_PATH:
+        return robot.standing_q
+    q = np.zeros(12)
+    for i, leg in enumerate(robot.legs):
+        hfe = (leg.joints[0].placement @ leg.joints[1].placement).p
+        neutral_foot = leg.foot_position(robot.standing_q[3 * i : 3 * i + 3])
+        length = np.linalg.norm(leg.joints[2].placement.p) + np.linalg.norm(leg.foot.p)
+        target = np.array([hfe[0], neutral_foot[1], hfe[2] - CROUCH * length])
+        lower, upper = np.array([j.lower for j in leg.joints]), np.array([j.upper for j in leg.joints])
+        for guess in ([0.0, 0.7, -1.4], [0.0, -0.7, 1.4]):  # knee bent one way, then the other
+            try:
+                qi = numeric_ik(robot, i, target, np.clip(guess, lower, upper))
+            except InputError:
+                continue
+            if np.all(qi >= lower - 1e-9) and np.all(qi <= upper + 1e-9):
+                q[3 * i : 3 * i + 3] = qi
+                break
+        else:
+            raise InputError(f"no crouched trot posture within joint limits for leg {leg.label} of {robot.name}")
+    return q
 
 
 @dataclass(frozen=True)
@@ -88,7 +119,9 @@ class ReferenceSample:
 def reference(robot: Robot, gait: Trot, t: float, q_guess: np.ndarray | None = None) -> ReferenceSample:
     """IK of the trot at time t: trunk at (speed t, 0, 0), R = I; feet from the gait."""
     kin = robot_kinematics(robot)
-    standing = [leg.foot_position(q) for leg, q in zip(robot.legs, robot.standing_q.reshape(4, 3))]
+    posture = gait_posture(robot)
+    standing = [leg.foot_position(q) for leg, q in zip(robot.legs, posture.reshape(4, 3))]
+    guess = posture if q_guess is None else q_guess
     p, pd = np.array([gait.speed * t, 0.0, 0.0]), np.array([gait.speed, 0.0, 0.0])
     q, qd, qdd = np.zeros(12), np.zeros(12), np.zeros(12)
     for i, leg in enumerate(robot.legs):
@@ -98,7 +131,7 @@ def reference(robot: Robot, gait: Trot, t: float, q_guess: np.ndarray | None = N
         if robot.urdf == URDF_PATH:
             q[s] = analytic_ik(leg.label, r)
         else:
-            q[s] = numeric_ik(robot, i, r, None if q_guess is None else q_guess[s])
+            q[s] = numeric_ik(robot, i, r, guess[s])
         J = np.asarray(kin[i].foot_jacobian(q[s]))
         qd[s] = np.linalg.solve(J, rd)
         qdd[s] = np.linalg.solve(J, rdd - np.asarray(kin[i].foot_bias_acceleration(q[s], qd[s])).ravel())
@@ -132,9 +165,10 @@ class Simulation:
             return np.where(meaningful, np.abs(sim - ref).max(axis=0) / scale * 100, np.nan)
 
     def departure_time(self, percent: float = 1.0) -> float | None:
-        """First time a joint angle is off its IK value by more than ``percent`` of that joint's
-        largest |angle|; None if never within the run."""
-        scale = np.abs(self.q_ref[:, :12]).max(axis=0)
+        """First time a joint angle is off its IK value by more than ``percent`` of the largest
+        |joint angle| of the reference (one scale for all joints: an HAA held at 0 has none of
+        its own); None if never within the run."""
+        scale = np.abs(self.q_ref[:, :12]).max()
         off = np.abs(self.q[:, :12] - self.q_ref[:, :12]) > percent / 100 * scale
         rows = np.flatnonzero(off.any(axis=1))
         return float(self.t[rows[0]]) if rows.size else None
@@ -227,7 +261,7 @@ def _closure(robot: Robot, kin: tuple, gait: Trot, t: float, q: np.ndarray, quat
     """How far the stance feet are from their footholds, with the trunk pose that puts the
     first stance foot on its foothold and the integrated orientation (m)."""
     R = pin.Quaternion(quat).toRotationMatrix()
-    standing = [leg.foot_position(qs) for leg, qs in zip(robot.legs, robot.standing_q.reshape(4, 3))]
+    standing = [leg.foot_position(qs) for leg, qs in zip(robot.legs, gait_posture(robot).reshape(4, 3))]
     feet = [np.asarray(kin[i].foot_position(q[3 * i : 3 * i + 3])).ravel() for i in stance]
     holds = [gait.foot(i, t, standing[i])[0] for i in stance]
     p = holds[0] - R @ feet[0]
@@ -276,7 +310,7 @@ def plot_br_hfe(sims: dict[str, Simulation], robot: Robot, path: str) -> None:
         ax.set_ylim(lo - 0.3 * (hi - lo), hi + 0.3 * (hi - lo))  # the unactuated run leaves the frame as it falls
         ax.set_ylabel(label)
         ax.grid(alpha=0.3)
-    axes[0].set_title(f"{robot.legs[3].joints[1].name} ({robot.name}), trot")
+    axes[0].set_title(f"BR HFE ({robot.legs[3].joints[1].name} of {robot.name}), trot")
     axes[0].legend(fontsize=8)
     axes[-1].set_xlabel("time (s)")
     fig.tight_layout()

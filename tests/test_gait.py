@@ -5,8 +5,9 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from quadruped_dyn.gait import PAIRS, Trot, reference, simulate
+from quadruped_dyn.gait import PAIRS, Trot, gait_posture, reference, simulate
 from quadruped_dyn.kinematics import robot_kinematics
+from quadruped_dyn.robot import load_robot
 
 from .conftest import assert_close
 
@@ -18,7 +19,7 @@ REL_TOL_DIFF = 1e-5
 
 
 def _standing(robot):
-    return [leg.foot_position(q) for leg, q in zip(robot.legs, robot.standing_q.reshape(4, 3))]
+    return [leg.foot_position(q) for leg, q in zip(robot.legs, gait_posture(robot).reshape(4, 3))]
 
 
 #: Position, velocity, acceleration jumps allowed across a switch sampled 2 EPS apart: the
@@ -44,15 +45,17 @@ def test_stance_feet_stay_on_their_footholds(paper):
             assert_close(P, GAIT.foot(i, 0.0, _standing(paper)[i])[0])
 
 
-def test_ik_reference_is_consistent(paper):
+@pytest.mark.parametrize("name", ["paper", "solo12", "go1"])  # analytic IK, numeric IK
+def test_ik_reference_is_consistent(name):
     """FK(q(t)) puts each foot where the gait says; qd, qdd are the derivatives of q."""
-    kin = robot_kinematics(paper)
+    robot = load_robot(name)
+    kin = robot_kinematics(robot)
     t = 0.37  # FR+BL stance, FL+BR swinging
-    r = reference(paper, GAIT, t)
+    r = reference(robot, GAIT, t)
     for i in range(4):
-        P = GAIT.foot(i, t, _standing(paper)[i])[0]
+        P = GAIT.foot(i, t, _standing(robot)[i])[0]
         assert_close(np.asarray(kin[i].foot_position(r.q_r[3 * i : 3 * i + 3])).ravel(), P - [GAIT.speed * t, 0, 0])
-    rp, rm = reference(paper, GAIT, t + H), reference(paper, GAIT, t - H)
+    rp, rm = reference(robot, GAIT, t + H, r.q_r[:12]), reference(robot, GAIT, t - H, r.q_r[:12])
     assert_close(r.qd_r, (rp.q_r - rm.q_r) / (2 * H), rel=REL_TOL_DIFF, what="qd = dq/dt")
     assert_close(r.qdd_r, (rp.qd_r - rm.qd_r) / (2 * H), rel=REL_TOL_DIFF, what="qdd = dqd/dt")
 
