@@ -10,7 +10,8 @@ shifted so that each foot is under that point in the middle of its stance.
 
 Experiment: analytic IK (DH leg) or numeric IK -> q, qd, qdd -> id_r -> tau(t); forward
 dynamics fd_r with tau(t), integrated by classical RK4 with a fixed step from the IK state at
-t = 0; the trunk orientation is integrated from the velocity map's omega_b. Two runs:
+t = 0; the trunk orientation follows from the stance legs, the footholds and the roll
+coordinate at every evaluation (``kinematics.pose_from_feet``). Two runs:
 * ``paper``: tau_ext = all 13 entries of id_r, the roll moment applied as if actuated -- the
   paper's check, which compares the inverse/forward pair with itself;
 * ``physical``: tau_ext = (tau, 0): the roll is unactuated, as on the robot.
@@ -31,7 +32,7 @@ import pinocchio as pin
 
 from .errors import InputError
 from .evaluate import evaluate
-from .kinematics import analytic_ik, numeric_ik, robot_kinematics
+from .kinematics import analytic_ik, numeric_ik, pose_from_feet, robot_kinematics
 from .paper_robot import URDF_PATH
 from .reduced import reduced_model
 from .robot import Robot
@@ -205,25 +206,33 @@ def simulate(robot: Robot, gait: Trot, horizon: float, dt: float, roll_actuated:
         (tau_r,) = evaluate(m.id_r, r.q_r, r.qd_r, r.qdd_r, np.array([0.0, 0.0, 0.0, 1.0]))
         return (tau_r if roll_actuated else np.append(tau_r[:12], 0.0)), float(tau_r[12])
 
-    def deriv(t: float, q: np.ndarray, qd: np.ndarray, quat: np.ndarray, stance: tuple[int, int]) -> tuple:
-        m = models[_stance_name(stance)]
-        tau, _ = tau_ext(t, stance)
-        (qdd,) = evaluate(m.fd_r, q, qd, tau, quat)
-        v, _ = evaluate(m.maps, q, qd, np.zeros(13), quat)
-        omega = v[3:6]
-        quat_dot = 0.5 * (pin.Quaternion(quat) * pin.Quaternion(np.append(omega, 0.0))).coeffs()
-        return qd, qdd, quat_dot
-
-    q, qd, quat = refs[0].q_r.copy(), refs[0].qd_r.copy(), np.array([0.0, 0.0, 0.0, 1.0])
-    out_q, out_qd, out_qdd, roll, closure = [], [], [], [], []
     kin = robot_kinematics(robot)
+    standing = [leg.foot_position(qs) for leg, qs in zip(robot.legs, gait_posture(robot).reshape(4, 3))]
+    pitch = [0.0]  # the previous pose's pitch picks between the two-feet pose solutions
+
+    def pose(t: float, q: np.ndarray, stance: tuple[int, int]) -> tuple[np.ndarray, float]:
+        """Trunk orientation from the stance legs and the roll coordinate (SPEC section 5), and
+        the closure error: how far the stance legs are from their footholds."""
+        feet = np.array([np.asarray(kin[i].foot_position(q[3 * i : 3 * i + 3])).ravel() for i in stance])
+        holds = np.array([gait.foot(i, t, standing[i])[0] for i in stance])
+        R, _, closure = pose_from_feet(feet, holds, roll=float(q[12]), pitch_hint=pitch[0])
+        return pin.Quaternion(R).coeffs(), closure
+
+    def qdd_of(t: float, q: np.ndarray, qd: np.ndarray, stance: tuple[int, int]) -> np.ndarray:
+        tau, _ = tau_ext(t, stance)
+        (qdd,) = evaluate(models[_stance_name(stance)].fd_r, q, qd, tau, pose(t, q, stance)[0])
+        return qdd
+
+    q, qd = refs[0].q_r.copy(), refs[0].qd_r.copy()
+    out_q, out_qd, out_qdd, roll, closure = [], [], [], [], []
     diverged_at = None
     for k, t in enumerate(times):
         stance = gait.stance(float(t))
-        m = models[_stance_name(stance)]
         tau, roll_k = tau_ext(float(t), stance, refs[k])
         try:
-            (qdd,) = evaluate(m.fd_r, q, qd, tau, quat)
+            quat, closure_k = pose(float(t), q, stance)
+            pitch[0] = float(pin.rpy.matrixToRpy(pin.Quaternion(quat).toRotationMatrix())[1])
+            (qdd,) = evaluate(models[_stance_name(stance)].fd_r, q, qd, tau, quat)
         except InputError:  # the state left the model's domain: report where
             diverged_at = float(t)
             break
@@ -231,41 +240,27 @@ def simulate(robot: Robot, gait: Trot, horizon: float, dt: float, roll_actuated:
         out_qd.append(qd.copy())
         out_qdd.append(qdd)
         roll.append(roll_k)
-        closure.append(_closure(robot, kin, gait, float(t), q, quat, stance))
-        if closure[-1] > FALLEN_CLOSURE_M:  # a stance foot far off its foothold: the trot has failed
+        closure.append(closure_k)
+        if closure_k > FALLEN_CLOSURE_M:  # a stance foot far off its foothold: the trot has failed
             diverged_at = float(t)
             break
         if k == n:
             break
         # RK4 within one stance phase (the step never straddles a switch: dt divides the half period)
         try:
-            k1 = deriv(t, q, qd, quat, stance)
-            k2 = deriv(t + dt / 2, q + dt / 2 * k1[0], qd + dt / 2 * k1[1], quat + dt / 2 * k1[2], stance)
-            k3 = deriv(t + dt / 2, q + dt / 2 * k2[0], qd + dt / 2 * k2[1], quat + dt / 2 * k2[2], stance)
-            k4 = deriv(t + dt, q + dt * k3[0], qd + dt * k3[1], quat + dt * k3[2], stance)
+            k1 = (qd, qdd)
+            k2 = (qd + dt / 2 * k1[1], qdd_of(t + dt / 2, q + dt / 2 * k1[0], qd + dt / 2 * k1[1], stance))
+            k3 = (qd + dt / 2 * k2[1], qdd_of(t + dt / 2, q + dt / 2 * k2[0], qd + dt / 2 * k2[1], stance))
+            k4 = (qd + dt * k3[1], qdd_of(t + dt, q + dt * k3[0], qd + dt * k3[1], stance))
         except InputError:
             diverged_at = float(t)
             break
         q = q + dt / 6 * (k1[0] + 2 * k2[0] + 2 * k3[0] + k4[0])
         qd = qd + dt / 6 * (k1[1] + 2 * k2[1] + 2 * k3[1] + k4[1])
-        quat = quat + dt / 6 * (k1[2] + 2 * k2[2] + 2 * k3[2] + k4[2])
-        quat /= np.linalg.norm(quat)
     m_ = len(out_q)
     return Simulation(times[:m_], np.array(out_q), np.array(out_qd), np.array(out_qdd),
                       np.array([r.q_r for r in refs[:m_]]), np.array([r.qd_r for r in refs[:m_]]),
                       np.array([r.qdd_r for r in refs[:m_]]), np.array(roll), np.array(closure), diverged_at)
-
-
-def _closure(robot: Robot, kin: tuple, gait: Trot, t: float, q: np.ndarray, quat: np.ndarray,
-             stance: tuple[int, int]) -> float:
-    """How far the stance feet are from their footholds, with the trunk pose that puts the
-    first stance foot on its foothold and the integrated orientation (m)."""
-    R = pin.Quaternion(quat).toRotationMatrix()
-    standing = [leg.foot_position(qs) for leg, qs in zip(robot.legs, gait_posture(robot).reshape(4, 3))]
-    feet = [np.asarray(kin[i].foot_position(q[3 * i : 3 * i + 3])).ravel() for i in stance]
-    holds = [gait.foot(i, t, standing[i])[0] for i in stance]
-    p = holds[0] - R @ feet[0]
-    return float(max(np.linalg.norm(p + R @ f - h) for f, h in zip(feet, holds)))
 
 
 def validate(robot: Robot, gait: Trot | None = None, horizon: float = 1.2, dt: float = 5e-4,

@@ -46,3 +46,31 @@ def test_unreachable_targets(paper):
         numeric_ik(paper, 0, paper_robot.hip_position("FL") + [0, 0, -0.5])
     with pytest.raises(InputError, match="shape"):
         analytic_ik("FL", np.zeros(2))
+
+
+@pytest.mark.parametrize("k", [2, 3, 4])
+def test_pose_from_feet_recovers_the_pose(k):
+    import pinocchio as pin
+
+    from quadruped_dyn.kinematics import pose_from_feet
+
+    rng = np.random.default_rng(k)
+    for _ in range(10):
+        roll, pitch, yaw = rng.uniform(-0.5, 0.5, 3)
+        R, p = pin.rpy.rpyToMatrix(roll, pitch, yaw), rng.normal(size=3)
+        r_b = rng.normal(scale=0.3, size=(k, 3))
+        hint = pitch + rng.normal(scale=0.05)  # two feet: two pitch solutions, the hint picks one
+        R_fit, p_fit, closure = pose_from_feet(r_b, r_b @ R.T + p, roll if k == 2 else None, hint)
+        assert_close(R_fit, R, what="R") and assert_close(p_fit, p, what="p")
+        assert closure < 1e-12
+
+
+def test_pose_from_feet_reports_closure():
+    from quadruped_dyn.kinematics import pose_from_feet
+
+    r_b = np.array([[0.2, 0.1, -0.3], [-0.2, 0.1, -0.3], [0.2, -0.1, -0.3]])
+    P_w = r_b + [0.0, 0.0, 0.3]
+    P_w[0, 0] += 0.03  # one foothold 3 cm away from where the leg reaches
+    assert 0.005 < pose_from_feet(r_b, P_w)[2] < 0.03
+    with pytest.raises(InputError, match="needs 3 or 4 stance feet, or 2 and the roll"):
+        pose_from_feet(r_b[:2], P_w[:2])
