@@ -26,19 +26,8 @@ from pathlib import Path
 import numpy as np
 import pinocchio as pin
 
-from .codegen import (
-    C_FLAGS,
-    PREFIX,
-    TEMPLATES,
-    CompiledFunction,
-    CompiledLibrary,
-    cache_dir,
-    codegen_functions,
-    compiled_library,
-    generate,
-    run_tool,
-    work_sizes,
-)
+from .codegen import PREFIX, TEMPLATES, codegen_functions, generate, work_sizes
+from .compiled import C_FLAGS, CompiledFunction, CompiledLibrary, cache_dir, compiled_library, run_tool
 from .errors import InputError
 from .pinocchio_ref import PinocchioReference
 from .robot import Robot

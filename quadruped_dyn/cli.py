@@ -96,7 +96,9 @@ def check(robot: str, samples: int, seed: int, as_json: bool) -> None:
     """Check every symbolic term of ROBOT against Pinocchio on random states (exit 1 on failure)."""
     from .check import run_check
 
-    report = run_check(load_robot(robot), samples, seed)
+    r = load_robot(robot)
+    with click.progressbar(length=samples, label=f"checking {r.name}", file=sys.stderr) as bar:
+        report = run_check(r, samples, seed, progress=lambda n: bar.update(1))
     click.echo(json.dumps(report.as_dict(), indent=2) if as_json else report.table())
     sys.exit(0 if report.passed else EXIT_CHECK_FAILED)
 

@@ -14,14 +14,12 @@ import pytest
 from quadruped_dyn.codegen import (
     CODEGEN_FUNCTIONS,
     PREFIX,
-    CompiledFunction,
     codegen_functions,
-    compiled_library,
     differing_files,
-    load_external,
     pinocchio_outputs,
     reference_state,
 )
+from quadruped_dyn.compiled import CompiledFunction, compiled_library, load_external
 from quadruped_dyn.robot import load_robot
 from quadruped_dyn.state import random_state
 from quadruped_dyn.tolerances import FLOAT_REL_TOL, REL_TOL_TERMS
