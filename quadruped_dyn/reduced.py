@@ -32,8 +32,10 @@ from dataclasses import dataclass
 from functools import cache
 
 import casadi as ca
+import numpy as np
 
 from .errors import InputError
+from .evaluate import evaluate
 from .grf import StanceSet, grf_expressions, stance_set
 from .kinematics import foot_position
 from .linalg import least_squares
@@ -41,6 +43,9 @@ from .robot import Robot
 from .spatial import quat_to_rotation, skew
 
 REDUCED_KINDS = {4: "stand", 3: "static walk", 2: "trot / pace"}
+
+#: Beyond this condition number M_r's solve keeps fewer than ~4 significant digits in double.
+MAX_COND_M_R = 1e12
 
 
 def roll_rate_row(R: ca.SX) -> ca.SX:
@@ -116,6 +121,17 @@ class ReducedModel:
     G_r: ca.Function  # q_r, quat -> (n,)
     fd_r: ca.Function  # q_r, qd_r, tau_ext, quat -> qdd_r (n,)
     build_seconds: float
+
+    def forward_dynamics(self, q_r: np.ndarray, qd_r: np.ndarray, tau_ext: np.ndarray,
+                         quat: np.ndarray) -> tuple[np.ndarray, float]:
+        """(qdd_r, cond(M_r)) with checked inputs; InputError where M_r is numerically singular."""
+        (M,) = evaluate(self.M_r, q_r, quat)
+        cond = float(np.linalg.cond(M))
+        if not cond < MAX_COND_M_R:
+            raise InputError(f"M_r of {self.stance.name} has condition number {cond:.1e} here; the reduced "
+                             "model is singular (e.g. a stance leg stretched straight or feet collinear)")
+        (qdd,) = evaluate(self.fd_r, q_r, qd_r, tau_ext, quat)
+        return qdd, cond
 
 
 @cache

@@ -104,3 +104,17 @@ def test_torques_of_a_real_motion_reproduce_it_under_constrained_dynamics(paper,
 def test_reduced_model_needs_two_to_four_feet(paper):
     with pytest.raises(InputError, match="needs 2, 3 or 4 stance feet"):
         reduced_model(paper, "FL")
+
+
+def test_forward_dynamics_reports_condition_and_refuses_singular_stances(paper):
+    from quadruped_dyn.kinematics import analytic_ik
+
+    m, q_r, qd, qdd, quat = _reduced(paper, "FL+FR+BL", np.random.default_rng(5))
+    (tau_r,) = evaluate(m.id_r, q_r, qd, qdd, quat)
+    qdd_fd, cond = m.forward_dynamics(q_r, qd, tau_r, quat)
+    assert_close(qdd_fd, qdd, rel=COND_ERR_FACTOR * cond * np.finfo(float).eps)
+    coincident = q_r.copy()  # FL and FR feet on one point: three feet on a line, GRF rank 5
+    target = np.array([0.19, 0.0, -0.25])
+    coincident[0:3], coincident[3:6] = analytic_ik("FL", target), analytic_ik("FR", target)
+    with pytest.raises(InputError, match="singular"):
+        m.forward_dynamics(coincident, qd, tau_r, quat)
