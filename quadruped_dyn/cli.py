@@ -142,37 +142,42 @@ def bench(robots: tuple[str, ...], calls: int, reps: int, as_json: bool) -> None
 
 @main.command()
 @click.argument("robot", default="paper")
-@click.option("--horizon", default=1.2, show_default=True, type=click.FloatRange(min=0.01), help="Seconds (2 trot cycles).")
+@click.option("--gait", "gait_name", type=click.Choice(["trot", "walk"]), default="trot", show_default=True,
+              help="Trot (the paper's experiment) or static walk.")
+@click.option("--horizon", default=None, type=click.FloatRange(min=0.01), help="Seconds [default: two gait cycles].")
 @click.option("--dt", default=5e-4, show_default=True, type=click.FloatRange(min=1e-5, max=0.05), help="RK4 step, s.")
 @click.option("--out", "out_dir", default="results", show_default=True, type=click.Path(file_okay=False),
               help="Directory for the plot and the JSON report.")
 @click.option("--json", "as_json", is_flag=True, help="Print the report as JSON.")
-def validate(robot: str, horizon: float, dt: float, out_dir: str, as_json: bool) -> None:
-    """The paper's trot experiment: IK -> id_r -> forward dynamics -> compare with IK (plot + report).
+def validate(robot: str, gait_name: str, horizon: float | None, dt: float, out_dir: str, as_json: bool) -> None:
+    """The paper's experiment: IK -> id_r -> forward dynamics -> compare with IK (plot + report).
 
-    Two runs: 'paper' applies all of id_r (the roll moment as if actuated), 'physical' leaves
-    the roll unactuated. Percentage errors per joint (HAA..KFE of FL, FR, BL, BR)."""
+    Trot: 'paper' applies all of id_r (the roll moment as if actuated), 'physical' leaves the
+    roll unactuated. Static walk: one run. Percentage errors per joint (FL, FR, BL, BR x HAA..KFE)."""
     from dataclasses import asdict
     from pathlib import Path
 
-    from .gait import Trot
+    from .gait import GAITS
     from .gait import validate as run_validation
 
-    gait = Trot()
-    if abs(gait.half / dt - round(gait.half / dt)) > 1e-9:
-        raise InputError(f"--dt {dt} does not divide the half period {gait.half} s; expected e.g. 1e-3")
+    gait = GAITS[gait_name]
+    horizon = 2 * gait.period if horizon is None else horizon
+    if abs(gait.phase_duration / dt - round(gait.phase_duration / dt)) > 1e-9:
+        raise InputError(f"--dt {dt} does not divide the gait's phase of {gait.phase_duration} s; expected e.g. 1e-3")
     r = load_robot(robot)
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
-    plot = out / f"{r.name}_trot_BR_HFE.png"
+    plot = out / f"{r.name}_{gait.name}_BR_HFE.png"
     report, _ = run_validation(r, gait, horizon, dt, str(plot))
     data = asdict(report)
-    (out / f"{r.name}_trot_validation.json").write_text(json.dumps(data, indent=2))
+    json_path = out / f"{r.name}_{gait.name}_validation.json"
+    json_path.write_text(json.dumps(data, indent=2))
     if as_json:
         click.echo(json.dumps(data, indent=2))
         return
     names = [f"{leg.label}_{role}" for leg in r.legs for role in JOINT_ROLES]
-    click.echo(f"trot, {r.name}: horizon {horizon} s, {report.integrator}, dt {dt} s; % error = max|sim - IK| / max|IK| x 100")
+    click.echo(f"{gait.name}, {r.name}: horizon {horizon} s, {report.integrator}, dt {dt} s; "
+               "% error = max|sim - IK| / max|IK| x 100")
     for run, signals in report.runs.items():
         diverged, departs = report.diverged_at_s[run], report.departs_1pct_at_s[run]
         click.echo(f"  {run}: stance-foot closure error up to {report.max_closure_m[run]:.1e} m"
@@ -184,8 +189,9 @@ def validate(robot: str, horizon: float, dt: float, out_dir: str, as_json: bool)
             cells = " ".join(f"{'n/a':>7}" if np.isnan(e) else f"{e:7.1e}" for e in errors)
             click.echo(f"    {signal:<13}{cells}")
     click.echo(f"    {'':<13}" + " ".join(f"{n:>7}" for n in names))
-    click.echo(f"  largest roll moment id_r asks for (unactuated on the robot): {report.max_roll_moment_Nm:.2f} N m")
-    click.echo(f"  wrote {plot} and {out / (r.name + '_trot_validation.json')}")
+    if gait.n_coords == 13:
+        click.echo(f"  largest roll moment id_r asks for (unactuated on the robot): {report.max_roll_moment_Nm:.2f} N m")
+    click.echo(f"  wrote {plot} and {json_path}")
 
 
 @main.command("make-urdf")

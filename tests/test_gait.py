@@ -1,17 +1,18 @@
-"""Trot gait and the paper's validation experiment."""
+"""Gaits (trot, static walk) and the paper's validation experiment."""
 
 from __future__ import annotations
 
 import numpy as np
 import pytest
 
-from quadruped_dyn.gait import PAIRS, Trot, gait_posture, reference, simulate
+from quadruped_dyn.gait import TROT, WALK, gait_posture, reference, simulate
 from quadruped_dyn.kinematics import robot_kinematics
 from quadruped_dyn.robot import load_robot
 
 from .conftest import assert_close
 
-GAIT = Trot()
+GAIT = TROT
+PAIRS = TROT.phases
 #: Central differences of the IK trajectory with step H: O(H^2) truncation on signals whose
 #: third derivative is ~1e3 rad/s^3, plus round-off eps / H.
 H = 1e-5
@@ -28,13 +29,26 @@ EPS = 1e-9
 C2_TOL = (2e-9, 2e-7, 2e-5)
 
 
-@pytest.mark.parametrize("k", [1, 2, 3])
-def test_feet_are_c2_at_lift_off_and_touch_down(paper, k):
-    t = k * GAIT.half
+@pytest.mark.parametrize("gait", [TROT, WALK], ids=["trot", "walk"])
+@pytest.mark.parametrize("k", [1, 2, 3, 4, 5])
+def test_feet_are_c2_at_lift_off_and_touch_down(paper, gait, k):
+    t = k * gait.phase_duration
     for i, standing in enumerate(_standing(paper)):
-        before, after = GAIT.foot(i, t - EPS, standing), GAIT.foot(i, t + EPS, standing)
+        before, after = gait.foot(i, t - EPS, standing), gait.foot(i, t + EPS, standing)
         for order, (a, b, tol) in enumerate(zip(before, after, C2_TOL)):
             assert np.abs(a - b).max() <= tol, f"foot {i}, derivative {order} jumps at t = {t}"
+
+
+def test_walk_swings_one_leg_at_a_time_and_advances_each_foot_one_stride(paper):
+    standing = _standing(paper)
+    for k, stance in enumerate(WALK.phases):
+        assert len(stance) == 3
+        t = (k + 0.5) * WALK.phase_duration
+        moving = [i for i in range(4) if np.abs(WALK.foot(i, t, standing[i])[1]).max() > 0]
+        assert moving == [i for i in range(4) if i not in stance]
+    for i in range(4):  # a full cycle later each foot stands one stride further on
+        a, b = WALK.foot(i, 0.01, standing[i])[0], WALK.foot(i, 0.01 + WALK.period, standing[i])[0]
+        assert_close(b - a, [WALK.speed * WALK.period, 0, 0])
 
 
 def test_stance_feet_stay_on_their_footholds(paper):
@@ -76,3 +90,12 @@ def test_unactuated_roll_departs(paper):
     sim = simulate(paper, GAIT, horizon=0.1, dt=1e-3, roll_actuated=False)
     assert np.abs(sim.roll_moment).max() > 0.1
     assert sim.departure_time(1.0) is not None
+
+
+def test_forward_dynamics_reproduces_ik_in_the_static_walk(paper):
+    """Three stance feet: no unactuated coordinate; over 0.1 s the reduced forward dynamics
+    under id_r's torques stays on the IK motion (RK4 error only)."""
+    sim = simulate(paper, WALK, horizon=0.1, dt=1e-3, roll_actuated=False)
+    assert sim.q.shape[1] == 12 and sim.diverged_at is None
+    assert np.nanmax(sim.percent_error(sim.q, sim.q_ref)) < 1e-6
+    assert sim.closure_m.max() < 1e-9
