@@ -79,6 +79,11 @@ def gait_posture(robot: Robot) -> np.ndarray:
     return q
 
 
+def gait_feet(robot: Robot) -> list[np.ndarray]:
+    """Foot positions (trunk frame, m) of ``gait_posture``: where the footholds are centred."""
+    return [leg.foot_position(q) for leg, q in zip(robot.legs, gait_posture(robot).reshape(4, 3))]
+
+
 @dataclass(frozen=True)
 class Gait:
     """A periodic gait: ``phases`` lists the stance feet of each equal phase of the cycle; each
@@ -149,9 +154,8 @@ class ReferenceSample:
 def reference(robot: Robot, gait: Gait, t: float, q_guess: np.ndarray | None = None) -> ReferenceSample:
     """IK of the gait at time t: trunk at (speed t, 0, 0), R = I; feet from the gait."""
     kin = robot_kinematics(robot)
-    posture = gait_posture(robot)
-    standing = [leg.foot_position(q) for leg, q in zip(robot.legs, posture.reshape(4, 3))]
-    guess = posture if q_guess is None else q_guess
+    standing = gait_feet(robot)
+    guess = gait_posture(robot) if q_guess is None else q_guess
     p, pd = np.array([gait.speed * t, 0.0, 0.0]), np.array([gait.speed, 0.0, 0.0])
     q, qd, qdd = np.zeros(12), np.zeros(12), np.zeros(12)
     for i, leg in enumerate(robot.legs):
@@ -242,7 +246,7 @@ def simulate(robot: Robot, gait: Gait, horizon: float, dt: float, roll_actuated:
         return (tau_r if roll_actuated else np.append(tau_r[:12], 0.0)), float(tau_r[12])
 
     kin = robot_kinematics(robot)
-    standing = [leg.foot_position(qs) for leg, qs in zip(robot.legs, gait_posture(robot).reshape(4, 3))]
+    standing = gait_feet(robot)
     pitch = [0.0]  # the previous pose's pitch picks between the two-feet pose solutions
 
     def pose(t: float, q: np.ndarray, stance: tuple[int, ...]) -> tuple[np.ndarray, float]:

@@ -16,6 +16,7 @@ from dataclasses import dataclass
 import numpy as np
 import pinocchio as pin
 
+from .leg import skew
 from .robot import Robot
 from .state import NQ_FULL, NV_FULL, check_array, rotation
 from .tolerances import RANK_RTOL
@@ -188,7 +189,7 @@ class PinocchioReference:
         R = rotation(q)
         v_joints = np.concatenate([np.zeros(6), qd_r[:12]])
         r, J, bias = self.foot_positions(q), self.foot_jacobians(q), self.foot_bias_accelerations(q, v_joints)
-        rows = [np.hstack([np.eye(3), -_skew(r[i])]) for i in feet]
+        rows = [np.hstack([np.eye(3), -skew(r[i])]) for i in feet]
         rhs_v = [-J[i] @ qd_r[3 * i : 3 * i + 3] for i in feet]
         if len(feet) == 2:
             rows.append(np.concatenate([np.zeros(3), roll_rate_row(R)])[None, :])
@@ -221,9 +222,6 @@ class PinocchioReference:
         e = (r1 - r2) / np.linalg.norm(r1 - r2)
         return np.concatenate([g.tau, [e @ (g.residual[3:] - np.cross(r1, g.residual[:3]))]])
 
-
-def _skew(w: np.ndarray) -> np.ndarray:
-    return np.array([[0.0, -w[2], w[1]], [w[2], 0.0, -w[0]], [-w[1], w[0], 0.0]])
 
 
 def roll_rate_row(R: np.ndarray) -> np.ndarray:

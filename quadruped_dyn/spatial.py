@@ -10,6 +10,7 @@ import casadi as ca
 import numpy as np
 
 from .leg import LinkInertia, Placement
+from .leg import skew as skew_np
 
 
 def skew(w: ca.SX) -> ca.SX:
@@ -27,11 +28,8 @@ def axis_rotation(axis: np.ndarray, angle: ca.SX) -> ca.SX:
     0 and 1, keeping the expression graph (and the generated C) small."""
     a = np.asarray(axis, dtype=float)
     aaT = np.outer(a, a)
-    return ca.cos(angle) * ca.DM(np.eye(3) - aaT) + ca.DM(aaT) + ca.sin(angle) * ca.DM(_skew_np(a))
+    return ca.cos(angle) * ca.DM(np.eye(3) - aaT) + ca.DM(aaT) + ca.sin(angle) * ca.DM(skew_np(a))
 
-
-def _skew_np(w: np.ndarray) -> np.ndarray:
-    return np.array([[0.0, -w[2], w[1]], [w[2], 0.0, -w[0]], [-w[1], w[0], 0.0]])
 
 
 def quat_to_rotation(quat: ca.SX) -> ca.SX:
