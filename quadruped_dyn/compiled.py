@@ -80,7 +80,7 @@ def generation_key(robot: Robot, precision: str, flags: tuple[str, ...], cc: str
     h = hashlib.sha256(robot.name.encode() + Path(robot.urdf).read_bytes())
     for path in sorted([*PACKAGE.glob("*.py"), *(PACKAGE / "c").glob("*")]):
         h.update(path.name.encode() + path.read_bytes())
-    h.update(f"{ca.__version__} {precision} {' '.join(flags)} {_compiler_version(cc)}".encode())
+    h.update(f"{ca.CasadiMeta.version()} {precision} {' '.join(flags)} {_compiler_version(cc)}".encode())
     return h.hexdigest()[:16]
 
 

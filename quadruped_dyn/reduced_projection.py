@@ -58,7 +58,7 @@ def rigid_motion(r: list[ca.SX], u: list[ca.SX], e: ca.SX | None = None, rate: c
     rho = [ri - rbar for ri in r]
     K = sum((ca.dot(p, p) * ca.SX.eye(3) - p @ p.T for p in rho[1:]), ca.dot(rho[0], rho[0]) * ca.SX.eye(3) - rho[0] @ rho[0].T)
     rhs = sum((skew(p) @ ui for p, ui in zip(rho[1:], u[1:])), skew(rho[0]) @ u[0])
-    if e is not None:
+    if e is not None and rate is not None:
         K, rhs = K + e @ e.T, rhs + e @ rate
     omega = _solve_symmetric3(K, rhs)
     return sum(u[1:], u[0]) / k + skew(rbar) @ omega, omega
@@ -84,7 +84,7 @@ class ReducedProjection:
     def velocity_and_bias(self, qd_r: ca.SX) -> tuple[ca.SX, ca.SX]:
         """(v (18,), k (18,)): the full velocity and the acceleration at qdd_r = 0 (a = vdot,
         spatial for the trunk: vdot_b = a_b - omega_b x v_b)."""
-        legs, feet = self.robot.legs, self.stance.feet
+        feet = self.stance.feet
         qj, qdj = self.q_joints, qd_r[:12]
         J = [ca.jacobian(ri, qj[3 * i : 3 * i + 3]) for ri, i in zip(self.r, feet)]
         Jqd = [Ji @ qdj[3 * i : 3 * i + 3] for Ji, i in zip(J, feet)]
@@ -93,7 +93,7 @@ class ReducedProjection:
         bias = []
         for ri, Ji, x, i in zip(self.r, J, Jqd, feet):
             s = slice(3 * i, 3 * i + 3)
-            Jdqd = ca.jacobian(ca.jacobian(foot_position(legs[i], qj[s]), qj[s]) @ qdj[s], qj[s]) @ qdj[s]
+            Jdqd = ca.jacobian(Ji @ qdj[s], qj[s]) @ qdj[s]
             bias.append(-(ca.cross(omega, ca.cross(omega, ri)) + 2 * ca.cross(omega, x) + Jdqd))
         rate = -ca.dot(roll_rate_row_dot(quat_to_rotation(self.quat), omega), omega) if e is not None else None
         a_b, alpha = rigid_motion(self.r, bias, e, rate)
