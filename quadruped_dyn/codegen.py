@@ -25,12 +25,14 @@ import pinocchio as pin
 
 from .errors import InputError
 from .grf import STANCE_SETS, StanceSet, grf_solve, stance_set
+from .leg import skew as skew_np
 from .newton_euler import full_dynamics
 from .pinocchio_ref import PinocchioReference
+from .pinocchio_ref import roll_rate_row as roll_rate_row_np
 from .reduced_projection import reduced_projection
 from .robot import Robot
 from .state import NV_FULL, FullState, full_q, rotation
-from .tolerances import FLOAT_REL_TOL, GRF_COND_ASSUMED, REL_TOL_TERMS
+from .tolerances import FLOAT_REL_TOL, GRF_COND_ASSUMED, MAP_COND_ASSUMED, REL_TOL_TERMS
 
 PREFIX = "qd_"
 
@@ -184,7 +186,9 @@ def header_doc(robot: Robot, functions: list[ca.Function], work: dict[str, tuple
         " * Return codes: 0 ok; QD_NONFINITE (1) an output is NaN/inf: coincident or collinear stance feet,",
         " * the trunk pitched +-90 deg (two feet: the roll row has tan(pitch)), a zero quaternion or a",
         " * non-finite input; QD_SINGULAR (2, fd_r only) M_r singular to working precision (an LU pivot",
-        " * below QD_SINGULAR_RTOL max|M_r|, e.g. a stance leg stretched straight); qdd_r is not written.",
+        " * below QD_SINGULAR_RTOL max|M_r|, e.g. two feet, the trunk pitched within ~1e-12 rad of 90 deg);",
+        " * qdd_r is not written then. A stance leg stretched straight is not singular here: the reduced",
+        " * model never inverts a leg's Jacobian (measured on the paper robot: cond(M_r) 1e3 -> 3e4).",
         " *",
         " * Signals:",
         *[f" *   {name:<9}{SIGNAL_DOCS[name]}" for name in signals],
@@ -369,11 +373,12 @@ def pinocchio_outputs(robot: Robot, ref: PinocchioReference, name: str, s: FullS
     raise KeyError(f"no Pinocchio reference for generated function '{name}'")
 
 
-def _tolerance_scale(ref: PinocchioReference, name: str, s: FullState) -> float:
+def tolerance_scale(ref: PinocchioReference, name: str, s: FullState) -> float:
     """How much the conditioning at ``s`` amplifies rounding in generated function ``name``,
-    beyond what the tolerances assume (GRF systems of condition <= GRF_COND_ASSUMED): for a
-    reduced function cond(A) / GRF_COND_ASSUMED of its stance set's GRF system, and for fd_r
-    times cond(M_r) (the solve amplifies M_r's and C_r + G_r's errors by it). 1 otherwise."""
+    beyond what the tolerances assume: for a reduced function cond(A) / GRF_COND_ASSUMED of its
+    stance set's GRF system times cond(A_s) / MAP_COND_ASSUMED of its stance-foot rows (the
+    velocity map), each at least 1, and for fd_r times cond(M_r) (the solve amplifies M_r's and
+    C_r + G_r's errors by it). 1 otherwise."""
     reduced = _reduced_parts(name)
     if not reduced:
         return 1.0
@@ -382,6 +387,11 @@ def _tolerance_scale(ref: PinocchioReference, name: str, s: FullState) -> float:
     q[7:] = reduced_inputs(s)["q_r"][:12]
     g = ref.grf_solve(q, v, a, stance.feet, stance.selection("paper"))
     scale = max(1.0, float(g.singular_values[0] / g.singular_values[g.rank - 1]) / GRF_COND_ASSUMED)
+    r = ref.foot_positions(q)
+    rows = [np.hstack([np.eye(3), -skew_np(r[i])]) for i in stance.feet]
+    if len(stance.feet) == 2:
+        rows.append(np.concatenate([np.zeros(3), roll_rate_row_np(rotation(q))])[None, :])
+    scale *= max(1.0, float(np.linalg.cond(np.vstack(rows))) / MAP_COND_ASSUMED)
     if kind == "fd_r":
         scale *= float(np.linalg.cond(_reduced_reference(ref, "M_r", stance, s)))
     return scale
@@ -423,7 +433,7 @@ def reference_header(robot: Robot, functions: list[ca.Function], work: dict[str,
     for f in functions:
         name = f.name()[len(PREFIX):]
         expected = pinocchio_outputs(robot, ref, name, s)
-        tol_scale = _tolerance_scale(ref, name, s)
+        tol_scale = tolerance_scale(ref, name, s)
         outs = []
         for i, dense in enumerate(expected):
             nz = _nonzeros(dense, f.sparsity_out(i))

@@ -114,8 +114,8 @@ def load_external(library: CompiledLibrary, name: str) -> ca.Function:
 RETURN_CODES = {
     1: "an output is not finite (coincident or collinear stance feet, the trunk pitched 90 deg with two "
     "stance feet, a zero quaternion, or a non-finite input); expected a stance the model can hold",
-    2: "M_r is singular to working precision here (e.g. a stance leg stretched straight); "
-    "expected a configuration with bent stance legs",
+    2: "M_r is singular to working precision here (e.g. two stance feet with the trunk pitched to within "
+    "~1e-12 rad of 90 deg); expected a configuration where the reduced model is regular",
 }
 
 

@@ -13,8 +13,10 @@ import numpy as np
 
 from .codegen import reduced_symbol
 from .compiled import CompiledFunction, compiled_library
+from .errors import InputError
 from .grf import StanceSet
 from .robot import Robot
+from .state import check_array
 
 
 class CompiledReducedDynamics:
@@ -25,7 +27,16 @@ class CompiledReducedDynamics:
         self.library = compiled_library(robot)
         self._functions: dict[str, CompiledFunction] = {}
 
-    def _call(self, name: str, stance: StanceSet, *args: np.ndarray) -> np.ndarray:
+    def _call(self, name: str, stance: StanceSet, inputs: dict[str, np.ndarray]) -> np.ndarray:
+        """Checked call: shapes, finiteness and a non-zero quaternion here; singular
+        configurations by the C function's return code (CompiledFunction raises InputError)."""
+        k = len(stance.feet)
+        if k not in (2, 3, 4):
+            raise InputError(f"stance {stance.name} has {k} feet; the reduced model needs 2, 3 or 4 distinct stance feet")
+        n = 13 if k == 2 else 12
+        args = [check_array(key, x, (4,) if key == "quat" else (n,)) for key, x in inputs.items()]
+        if not np.linalg.norm(args[-1]) > 0.0:
+            raise InputError("quat is zero; expected the trunk orientation as a quaternion (x, y, z, w)")
         symbol = reduced_symbol(name, stance)
         if symbol not in self._functions:
             self._functions[symbol] = CompiledFunction(self.library, symbol)
@@ -33,8 +44,8 @@ class CompiledReducedDynamics:
 
     def id_r(self, stance: StanceSet, q_r: np.ndarray, qd_r: np.ndarray, qdd_r: np.ndarray, quat: np.ndarray) -> np.ndarray:
         """tau_r (n,) [N m]: joint torques (and, for two feet, the moment about the support line)."""
-        return self._call("id_r", stance, q_r, qd_r, qdd_r, quat)
+        return self._call("id_r", stance, {"q_r": q_r, "qd_r": qd_r, "qdd_r": qdd_r, "quat": quat})
 
     def fd_r(self, stance: StanceSet, q_r: np.ndarray, qd_r: np.ndarray, tau_ext: np.ndarray, quat: np.ndarray) -> np.ndarray:
         """qdd_r (n,) = M_r^-1 (tau_ext - C_r - G_r); InputError where M_r is singular."""
-        return self._call("fd_r", stance, q_r, qd_r, tau_ext, quat)
+        return self._call("fd_r", stance, {"q_r": q_r, "qd_r": qd_r, "tau_ext": tau_ext, "quat": quat})

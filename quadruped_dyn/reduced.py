@@ -134,7 +134,7 @@ class ReducedModel:
         cond = float(np.linalg.cond(M))
         if not cond < MAX_COND_M_R:
             raise InputError(f"M_r of {self.stance.name} has condition number {cond:.1e} here; the reduced "
-                             "model is singular (e.g. a stance leg stretched straight or feet collinear)")
+                             "model is singular (e.g. collinear stance feet, or two feet with the trunk pitched 90 deg)")
         (qdd,) = evaluate(self.fd_r, q_r, qd_r, tau_ext, quat)
         return qdd, cond
 

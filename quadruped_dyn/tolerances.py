@@ -40,3 +40,10 @@ FLOAT_REL_TOL = 1e-5
 #: cond / GRF_COND_ASSUMED, and fd_r additionally by cond(M_r): errors of a backward-stable solve
 #: grow with the condition number, whatever the precision.
 GRF_COND_ASSUMED = 100.0
+
+#: Condition number of the reduced model's stance-foot rows [I, -[r_i]x] (+ the roll row for two
+#: feet) that the tolerances allow for: 6-20 for three or four feet and the diagonal and side
+#: pairs near standing. The front and back pairs (FL+FR, BL+BR) reach ~1e2-1e3: their support
+#: line is lateral, nearly perpendicular to the roll axis, so the roll row barely fixes the
+#: pitch about that line (exactly not at zero pitch and roll: singular there).
+MAP_COND_ASSUMED = 20.0

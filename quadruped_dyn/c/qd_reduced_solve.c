@@ -8,7 +8,9 @@
  *                 stance feet has tan(pitch)), a zero quaternion, or a non-finite input;
  *   QD_SINGULAR   (qd_fd_r_* only) M_r is singular to working precision: a pivot of its LU
  *                 factorisation (partial pivoting) is below QD_SINGULAR_RTOL * max|M_r|,
- *                 e.g. a stance leg stretched straight. The output is not written then. */
+ *                 e.g. two stance feet with the trunk pitched within ~1e-12 rad of 90 deg.
+ *                 The output is not written then. (A stance leg stretched straight is not
+ *                 singular: the reduced model never inverts a leg's Jacobian.) */
 #include <float.h>
 #include <math.h>
 
