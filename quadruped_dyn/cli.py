@@ -112,7 +112,8 @@ def check(robot: str, samples: int, seed: int, as_json: bool, against: str | Non
         from .cross_library import run_cross_library
 
         cross = run_cross_library(r, libraries, samples, seed)
-        data, text, passed = {**data, **cross.as_dict()}, f"{text}\n\n{cross.table()}", passed and cross.passed
+        passed = passed and cross.passed
+        data, text = {**data, **cross.as_dict(), "passed": passed}, f"{text}\n\n{cross.table()}"
     click.echo(json.dumps(data, indent=2) if as_json else text)
     sys.exit(0 if passed else EXIT_CHECK_FAILED)
 
