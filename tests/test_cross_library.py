@@ -291,3 +291,22 @@ def test_unexplained_difference_fails(monkeypatch, paper, corruption):
     assert failed == ["M"] and not report.passed
     result = CliRunner().invoke(main, ["check", "paper", "--samples", "1", "--against", "mujoco"])
     assert result.exit_code == 1 and "SOME DIFFERENCES UNEXPLAINED" in result.output
+
+
+@needs_mujoco
+def test_a_merge_that_changes_the_dynamics_is_not_an_explanation(monkeypatch, tmp_path):
+    """Merging welded inertials must be exact; a merge that moved mass would be caught, not excused."""
+    from quadruped_dyn import mujoco_ref
+
+    real_merge = mujoco_ref.merge_inertial
+
+    def heavier_merge(root: ET.Element, link: str) -> str | None:
+        neighbour = real_merge(root, link)
+        mass = _link(root, neighbour or "").find("inertial/mass")
+        assert mass is not None
+        mass.set("value", repr(1.01 * float(mass.get("value", "0"))))
+        return neighbour
+
+    monkeypatch.setattr(mujoco_ref, "merge_inertial", heavier_merge)
+    report = run_cross_library(load_robot(_variant(tmp_path, "dummy", _dummy_root)), ("mujoco",), SAMPLES, seed=10)
+    assert {r.term for r in report.results if not r.passed} == {"M", "C+G", "G"}
