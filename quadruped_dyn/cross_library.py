@@ -58,10 +58,10 @@ def parse_libraries(text: str) -> tuple[str, ...]:
     for n in names:
         if n not in LIBRARIES:
             raise InputError(f"unknown library '{n}' in --against; expected a comma-separated subset of: {', '.join(LIBRARIES)}")
-        package = LIBRARIES[n][1]
-        if importlib.util.find_spec(package) is None:
-            raise InputError(f"--against {n} needs the Python package '{package}', which is not installed; "
-                             f"expected it installed: {INSTALL_HINT}")
+    missing = [LIBRARIES[n][1] for n in names if importlib.util.find_spec(LIBRARIES[n][1]) is None]
+    if missing:  # after the names: a typo is reported before a missing package
+        raise InputError(f"--against {','.join(names)} needs the Python package(s) {', '.join(map(repr, missing))}, "
+                         f"not installed; expected them installed: {INSTALL_HINT}")
     return names
 
 
