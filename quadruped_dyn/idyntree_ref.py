@@ -56,6 +56,9 @@ class IDynTreeReference:
         self.dof_idx = np.array([model.getJoint(model.getJointIndex(n)).getDOFsOffset() for n in robot.joint_names])
         self.base = self.kin_dyn.getFloatingBase()
         self.feet = [leg.foot_frame for leg in robot.legs]
+        for foot in self.feet:
+            if model.getFrameIndex(foot) < 0:
+                raise IDynTreeRefusal(f"iDynTree has no frame for the foot link '{foot}'")
 
     def _set(self, q: np.ndarray, v: np.ndarray) -> None:
         H = np.eye(4)

@@ -65,7 +65,10 @@ def compile_model(root: ET.Element, robot: Robot, options: MuJoCoOptions) -> muj
     spec.option.gravity = GRAVITY_W
     spec.worldbody.first_body().add_freejoint()
     for leg in robot.legs:
-        spec.body(leg.foot_frame).add_site(name=f"quadruped_dyn_foot_{leg.label}", pos=[0.0, 0.0, 0.0])
+        foot = spec.body(leg.foot_frame)
+        if foot is None:
+            raise MuJoCoRefusal(f"MuJoCo has no body for the foot link '{leg.foot_frame}'")
+        foot.add_site(name=f"quadruped_dyn_foot_{leg.label}", pos=[0.0, 0.0, 0.0])
     try:
         return spec.compile()
     except ValueError as e:

@@ -310,3 +310,28 @@ def test_a_merge_that_changes_the_dynamics_is_not_an_explanation(monkeypatch, tm
     monkeypatch.setattr(mujoco_ref, "merge_inertial", heavier_merge)
     report = run_cross_library(load_robot(_variant(tmp_path, "dummy", _dummy_root)), ("mujoco",), SAMPLES, seed=10)
     assert {r.term for r in report.results if not r.passed} == {"M", "C+G", "G"}
+
+
+def _continuous_knees(root: ET.Element) -> None:
+    for joint in root.findall("joint"):
+        if joint.get("name", "").endswith("KFE"):
+            joint.set("type", "continuous")
+
+
+@needs_mujoco
+@needs_idyntree
+def test_continuous_joints_and_json_report(tmp_path):
+    """Continuous knees: (cos, sin) in Pinocchio's q, an angle in MuJoCo's and iDynTree's; the JSON
+    report carries one `cross_library` entry per library and term."""
+    import json
+
+    path = _variant(tmp_path, "continuous", _continuous_knees)
+    assert list(load_robot(path).joint_nq) == [1, 1, 2] * 4
+    result = CliRunner().invoke(main, ["check", path, "--samples", "2", "--json", "--against", "mujoco,idyntree"])
+    assert result.exit_code == 0, result.output
+    data = json.loads(result.stdout)
+    entries = data["cross_library"]
+    assert {(e["library"], e["term"]) for e in entries} == {(lib, t) for lib in ("mujoco", "idyntree")
+                                                             for t in cross_library.TERMS}
+    assert all(e["passed"] and e["max_rel_err"] <= REL_TOL_TERMS for e in entries)
+    assert data["passed"] and {c["kind"] for c in data["model_changes"]} >= {"fused_links"}
