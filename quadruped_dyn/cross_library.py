@@ -13,7 +13,8 @@ full-coordinate terms, converted to the project's conventions by its adapter
 
 A term passes when it agrees on the same model (<= ``REL_TOL_TERMS``) and either agrees with
 the original too or the difference is carried by a named model change (not one of
-``EXACT_CHANGES``, which must not change the dynamics). Errors are relative:
+``EXACT_CHANGES``, which must not change the dynamics). A library that refuses even the edited copy is
+reported (a ``refused`` change) and not compared. Errors are relative:
 max over states of max |lib - ref| / max |ref| (non-finite values count as inf: a failure).
 
 Terms: M (18 x 18), C + G (18,), G (18,), foot Jacobians (4 x 3 x 3, trunk frame, own joints).

@@ -14,7 +14,7 @@ MuJoCo's conventions and how they are converted (tested in ``tests/test_cross_li
 How the URDF is loaded: MuJoCo's URDF defaults (``fusestatic``: welded links are fused
 into their parent; ``discardvisual``), a free joint added to the root link, gravity
 ``GRAVITY_W``. Geometry is stripped and ``inertiafromgeom`` is off, so the inertias are the
-URDF's (MuJoCo's own choices are measured separately, in ``diagnose``).
+URDF's (MuJoCo's own choices are measured separately, in ``prepare``).
 """
 
 from __future__ import annotations
@@ -43,14 +43,13 @@ from .urdf_edit import (
 
 
 class MuJoCoRefusal(Exception):
-    """MuJoCo's compiler refused the model (its message, first line)."""
+    """MuJoCo's compiler refused the model (its message, on one line)."""
 
 
 @dataclass(frozen=True)
 class MuJoCoOptions:
     balanceinertia: bool = False  # MuJoCo: replace principal moments breaking A + B >= C by their mean
     inertia_from_geometry: bool = False  # MuJoCo's default 'auto': links without <inertial> get one from collision shapes
-    fuse_static: bool = True  # MuJoCo's default for URDF: welded links fused into their parent
 
 
 def compile_model(root: ET.Element, robot: Robot, options: MuJoCoOptions) -> mujoco.MjModel:
@@ -59,7 +58,6 @@ def compile_model(root: ET.Element, robot: Robot, options: MuJoCoOptions) -> muj
     strip_geometry(root, keep_primitive_collisions=options.inertia_from_geometry)
     spec = mujoco.MjSpec.from_string(to_text(root))
     spec.compiler.balanceinertia = options.balanceinertia
-    spec.compiler.fusestatic = options.fuse_static
     spec.compiler.inertiafromgeom = (mujoco.mjtInertiaFromGeom.mjINERTIAFROMGEOM_AUTO if options.inertia_from_geometry
                                      else mujoco.mjtInertiaFromGeom.mjINERTIAFROMGEOM_FALSE)
     spec.option.gravity = GRAVITY_W
@@ -152,7 +150,7 @@ def prepare(robot: Robot, states: Sequence[FullState], pin_ref: Dynamics) -> Pre
     except MuJoCoRefusal as refusal:
         problems = inertia_problems(original)
         changes.append(ModelChange("mujoco", "refused", [p.link for p in problems],
-                                   f"MuJoCo refuses the URDF: {refusal}. Inertias it refuses: "
+                                   f"MuJoCo refuses the URDF: {refusal}. Inertias it cannot take: "
                                    + ("; ".join(map(str, problems)) or "none found by the toolkit"), in_comparison=False))
         copy, edits = _accepted_copy(original, robot, states, pin_ref)
         changes += edits
