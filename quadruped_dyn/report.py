@@ -224,19 +224,16 @@ def generated_c(robot: Robot, out: Path) -> dict[str, Any]:
     from .codegen import PREFIX, codegen_functions, generate, pinocchio_outputs, reference_state, work_sizes
     from .compiled import CompiledFunction, compiled_library
     from .pinocchio_ref import PinocchioReference
+    from .symbolic import shapes
     from .tolerances import REL_TOL_TERMS
 
     directory = out / "c"
     paths = generate(robot, directory)
     work = work_sizes(paths[1].read_text())
 
-    def shapes(f: Any, n: int, name: Callable[[int], str], sp: Callable[[int], Any]) -> str:
-        return ", ".join(f"{name(i)}[{sp(i).size1()}" + (f"x{sp(i).size2()}" if sp(i).size2() > 1 else "") + "]"
-                         for i in range(n))
-
-    functions: list[dict[str, Any]] = [{"name": f.name(), "inputs": shapes(f, f.n_in(), f.name_in, f.sparsity_in),
-                  "outputs": shapes(f, f.n_out(), f.name_out, f.sparsity_out), "instructions": f.n_instructions(),
-                  "iw": work[f.name()][0], "w": work[f.name()][1]} for f in codegen_functions(robot)]
+    functions: list[dict[str, Any]] = [
+        {"name": f.name(), "inputs": shapes(f), "outputs": shapes(f, outputs=True), "instructions": f.n_instructions(),
+         "iw": work[f.name()][0], "w": work[f.name()][1]} for f in codegen_functions(robot)]
     start = time.perf_counter()
     library = compiled_library(robot)
     compile_s = time.perf_counter() - start

@@ -47,7 +47,7 @@ def stick_figure(chains: dict[str, np.ndarray], title: str) -> Any:
     side.set_aspect("equal")
     side.set_xlabel("x (m), forward")
     side.set_ylabel("z (m)")
-    side.set_title("side view (from the right: FR, BR in front)")
+    side.set_title("side view (x-z plane)")
     side.grid(alpha=0.3)
     fig.suptitle(title)
     fig.tight_layout()

@@ -114,6 +114,7 @@ figcaption { color: #555; font-size: 0.9em; }
 pre { background: #f7f7f7; padding: 0.6em; overflow-x: auto; font-size: 0.82em; }
 .na { color: #777; font-style: italic; }
 .warn { color: #8a4b00; }
+math { font-family: "STIX Two Math", "Cambria Math", "Latin Modern Math", "DejaVu Math TeX Gyre", math; }
 math[display="block"] { margin: 0.6em 0; font-size: 1.1em; overflow-x: auto; }
 .nb { border: 1px solid #ccc; padding: 0 1em; margin: 1em 0; }
 .nb-in { border-left: 3px solid #1565c0; } .nb-out { border-left: 3px solid #999; background: #fcfcfc; }

@@ -194,8 +194,12 @@ def _gait_block(gait: str, v: dict[str, Any], joint_names: Sequence[str], plot_h
                 + (f"; 1 % off IK at {departs:.3f} s" if departs is not None else "; within 1 % of IK over the horizon")
                 + (f"; fell (a stance foot 0.1 m off) at {fell:.3f} s" if fell is not None else ""))
         parts.append(f"<p><b>run '{esc(run)}'</b>: {esc(note)}</p>")
-        rows = [[s] + [num(x, ".1e") for x in signals.get(s, [])] for s in _SIGNALS if s in signals]
-        parts.append(table(["% error", *joint_names], rows))
+        if departs is None:
+            rows = [[s] + [num(x, ".1e") for x in signals.get(s, [])] for s in _SIGNALS if s in signals]
+            parts.append(table(["% error", *joint_names], rows))
+        else:
+            parts.append("<p>Percentage errors of a run that left the reference mean nothing (they are in the JSON "
+                         "beside this page).</p>")
         br = signals.get("displacement", [float("nan")] * 12)
         worst = max((x for x in br if _finite(x)), default=float("nan"))
         headline.append(f"{run}: BR HFE q {num(br[BR_HFE], '.1e')} %, worst joint {num(worst, '.1e')} %"

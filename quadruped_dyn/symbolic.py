@@ -151,7 +151,9 @@ class TermSize:
     pattern: np.ndarray  # bool: the first output's sparsity (matrix) or its Jacobian's w.r.t. all inputs (vector)
 
 
-def _pattern(f: ca.Function) -> np.ndarray:
+def sparsity_pattern(f: ca.Function) -> np.ndarray:
+    """The first output's structural nonzeros (a matrix), or those of its Jacobian w.r.t. all
+    inputs side by side (a vector)."""
     if f.size2_out(0) > 1:
         sp_out = f.sparsity_out(0)
     else:
@@ -176,12 +178,12 @@ def term_functions(robot: Robot) -> dict[str, ca.Function]:
 
 
 def term_sizes(robot: Robot) -> list[TermSize]:
-    def shapes(f: ca.Function, n: int, name: Callable[[int], str], sparsity: Callable[[int], ca.Sparsity]) -> str:
-        return ", ".join(f"{name(i)}[{sparsity(i).size1()}" + (f"x{sparsity(i).size2()}" if sparsity(i).size2() > 1 else "")
-                         + "]" for i in range(n))
+    return [TermSize(name, f.n_instructions(), shapes(f), shapes(f, outputs=True), sparsity_pattern(f))
+            for name, f in term_functions(robot).items()]
 
-    return [
-        TermSize(name, f.n_instructions(), shapes(f, f.n_in(), f.name_in, f.sparsity_in),
-                 shapes(f, f.n_out(), f.name_out, f.sparsity_out), _pattern(f))
-        for name, f in term_functions(robot).items()
-    ]
+
+def shapes(f: ca.Function, outputs: bool = False) -> str:
+    """Names and shapes of a Function's inputs (or outputs), e.g. 'q[19], v[18]' or 'M[18x18]'."""
+    n, name, sparsity = (f.n_out(), f.name_out, f.sparsity_out) if outputs else (f.n_in(), f.name_in, f.sparsity_in)
+    return ", ".join(f"{name(i)}[{sparsity(i).size1()}" + (f"x{sparsity(i).size2()}" if sparsity(i).size2() > 1 else "")
+                     + "]" for i in range(n))

@@ -33,3 +33,8 @@ COND_ERR_FACTOR = 100.0
 #: inputs included; sums of link contributions and the GRF solves (cond <~ 1e2 near
 #: standing) amplify that by up to ~1e2 (measured: at most 5e-7 on the paper robot).
 FLOAT_REL_TOL = 1e-5
+
+#: A typeset formula (coefficients rounded to symbolic.DISPLAY_DIGITS = 4 significant digits,
+#: each off by <= 5e-5 relative) against Pinocchio: a sum of a few such terms stays within
+#: ~2e-4 of the largest entry; 1e-3 catches any wrong term or sign.
+FORMULA_DISPLAY_REL_TOL = 1e-3
