@@ -63,7 +63,7 @@ class Progress:
 
         def done() -> None:
             if self.enabled:
-                again = f"\r{self.line}" if self.live else ""  # a count may have overwritten the end of the line
+                again = f"\r{self.line}\x1b[K" if self.live else ""  # rewrite the line a count has extended
                 print(f"{again} {time.perf_counter() - start:.1f} s", file=sys.stderr, flush=True)
 
         return done
@@ -367,6 +367,9 @@ def build_report(robot_arg: str = "paper", out: str | Path = "results", fast: bo
                  samples: int = CHECK_SAMPLES, with_notebooks: bool = True, show_progress: bool = True) -> ReportResult:
     """Write ``<out>/<robot>/report.html`` (see the module docstring); ``fast`` skips the
     benchmark. Arguments are validated (InputError) before any work."""
+    import matplotlib
+
+    matplotlib.use("Agg")  # figures go into the page, never to a window
     from . import report_sections as rs
     from .report_figures import footprint_figure, sparsity_figure, stick_figure
 

@@ -1,4 +1,4 @@
-"""The report's drawings (matplotlib, Agg): the robot as a stick figure, the GRF systems' free
+"""The report's drawings (matplotlib; the report selects the Agg backend): the robot as a stick figure, the GRF systems' free
 and unbalanced directions on the footprint, and the sparsity of each symbolic term.
 Each function takes plain data and returns a matplotlib Figure."""
 
@@ -7,13 +7,10 @@ from __future__ import annotations
 from collections.abc import Sequence
 from typing import Any
 
-import matplotlib
+import matplotlib.pyplot as plt
+import numpy as np
 
-matplotlib.use("Agg")
-import matplotlib.pyplot as plt  # noqa: E402
-import numpy as np  # noqa: E402
-
-from .leg import LEG_LABELS  # noqa: E402
+from .leg import LEG_LABELS
 
 _LEG_COLOURS = {"FL": "tab:blue", "FR": "tab:orange", "BL": "tab:green", "BR": "tab:red"}
 
