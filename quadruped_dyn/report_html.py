@@ -59,17 +59,14 @@ def cell(content: str, cls: str = "") -> str:
     return f'<td class="{cls}">{content}</td>' if cls else f"<td>{content}</td>"
 
 
-def table(header: Sequence[str], rows: Sequence[Sequence[str]], caption: str = "") -> str:
+def table(header: Sequence[str], rows: Sequence[Sequence[str]], caption: str = "", cls: str = "") -> str:
     """Rows of cells: each cell either from ``cell`` or plain text (escaped here)."""
     head = "".join(f"<th>{esc(h)}</th>" for h in header)
     body = "".join("<tr>" + "".join(c if c.startswith("<td") else f"<td>{esc(c)}</td>" for c in row) + "</tr>"
                    for row in rows)
     cap = f"<caption>{esc(caption)}</caption>" if caption else ""
-    return f"<table>{cap}<thead><tr>{head}</tr></thead><tbody>{body}</tbody></table>"
-
-
-def key_values(items: dict[str, object]) -> str:
-    return table(["", ""], [[k, str(v)] for k, v in items.items()])
+    attr = f' class="{cls}"' if cls else ""
+    return f"<table{attr}>{cap}<thead><tr>{head}</tr></thead><tbody>{body}</tbody></table>"
 
 
 def badge(verdict: str) -> str:
@@ -104,6 +101,7 @@ h3 { margin-top: 1.4em; }
 table { border-collapse: collapse; margin: 0.6em 0; font-size: 0.88em; }
 th, td { border: 1px solid #ddd; padding: 0.2em 0.55em; text-align: right; font-variant-numeric: tabular-nums; }
 th { background: #f3f3f3; } td:first-child, th:first-child { text-align: left; }
+table.summary td, table.summary th { text-align: left; }
 caption { text-align: left; font-weight: 600; padding: 0.3em 0; }
 td.good { background: #d9f2d9; } td.near { background: #fff0c2; } td.bad { background: #f8c9c9; font-weight: 600; }
 .verdict { display: inline-block; padding: 0.05em 0.6em; border-radius: 0.8em; font-size: 0.85em; font-weight: 600; }
@@ -128,6 +126,7 @@ def page(title: str, subtitle: str, sections: Sequence[Section]) -> str:
     summary = table(
         ["section", "result", "headline"],
         [[f'<td><a href="#{s.key}">{esc(s.title)}</a></td>', cell(badge(s.verdict)), s.headline] for s in sections],
+        cls="summary",
     )
     body = "\n".join(f'<section id="{s.key}"><h2>{esc(s.title)} {badge(s.verdict)}</h2>\n{s.body}\n</section>'
                      for s in sections)

@@ -10,7 +10,7 @@ import math
 from collections.abc import Sequence
 from typing import Any
 
-from .report_html import Section, badge, cell, esc, grade, key_values, not_available, num, table
+from .report_html import Section, badge, cell, esc, grade, not_available, num, table
 
 
 def _finite(*xs: Any) -> bool:
@@ -31,6 +31,18 @@ def generic_table(rows: Sequence[dict[str, Any]], caption: str = "") -> str:
         return str(x)
 
     return table(columns, [[show(row.get(c)) for c in columns] for row in rows], caption)
+
+
+def data_html(x: Any) -> str:
+    """Any JSON value as HTML: a dict as a key/value table (nested values rendered the same
+    way), a list of dicts as a table, other lists inline, numbers to 3 digits."""
+    if isinstance(x, dict):
+        return table(["", ""], [[str(k), cell(data_html(v))] for k, v in x.items()])
+    if isinstance(x, list) and x and all(isinstance(r, dict) for r in x):
+        return generic_table(x)
+    if isinstance(x, list):
+        return esc(", ".join(num(v, ".3g") if isinstance(v, float) else str(v) for v in x))
+    return num(x, ".3g") if isinstance(x, float) else esc(x)
 
 
 # ----------------------------------------------------------------------------- the robot
@@ -209,17 +221,11 @@ def _gait_block(gait: str, v: dict[str, Any], joint_names: Sequence[str], plot_h
                      f"{num(v['max_roll_moment_Nm'], '.2f')} N m.</p>")
     for key in ("max_pct_err", "max_pct_err_overall", "instability"):
         if key in v:
-            value = key_values(v[key]) if isinstance(v[key], dict) else f"<p>{esc(v[key])}</p>"
-            parts.append(f"<p><b>{esc(key)}</b></p>{value}")
+            parts.append(f"<p><b>{esc(key)}</b></p>{data_html(v[key])}")
     parts.append(plot_html)
     parts.append("<h4>Physics check (rigid-contact dynamics under the same torques)</h4>")
     physics = v.get("physics_check")
-    if isinstance(physics, dict):
-        parts.append(key_values({k: x for k, x in physics.items() if not isinstance(x, (dict, list))}))
-    elif isinstance(physics, list):
-        parts.append(generic_table(physics))
-    else:
-        parts.append(not_available("physics check in this version"))
+    parts.append(data_html(physics) if physics else not_available("physics check in this version"))
     return "\n".join(parts), f"{gait}: " + "; ".join(headline)
 
 
