@@ -8,7 +8,6 @@ import shutil
 import subprocess
 from pathlib import Path
 
-import numpy as np
 import pytest
 from click.testing import CliRunner
 
@@ -102,7 +101,7 @@ def test_page_renders_in_chromium(paper, tmp_path):
 @pytest.mark.slow
 @needs_chromium
 def test_full_report_renders(tmp_path):
-    """`report paper --fast` end to end (~3 min): every section present, no failure, every
+    """`report paper --fast` end to end (~4 min on a shared 2-core machine): every section present, no failure, every
     image loaded and every formula laid out in Chromium."""
     result = CliRunner().invoke(main, ["report", "paper", "--out", str(tmp_path), "--fast"])
     assert result.exit_code == 0, result.output
@@ -115,4 +114,3 @@ def test_full_report_renders(tmp_path):
     loaded, images, laid_out, maths = open_in_chromium(path, tmp_path)
     assert images >= 8 and loaded == images
     assert maths >= 3 and laid_out == maths
-    assert np.isfinite(images)
