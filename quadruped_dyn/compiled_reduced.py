@@ -48,6 +48,8 @@ class CompiledReducedDynamics:
         """tau_r (n,) [N m]: joint torques (and, for two feet, the moment about the support line)."""
         return self._call("id_r", stance, {"q_r": q_r, "qd_r": qd_r, "qdd_r": qdd_r, "quat": quat})
 
-    def fd_r(self, stance: StanceSet | str, q_r: np.ndarray, qd_r: np.ndarray, tau_ext: np.ndarray, quat: np.ndarray) -> np.ndarray:
+    def fd_r(
+        self, stance: StanceSet | str, q_r: np.ndarray, qd_r: np.ndarray, tau_ext: np.ndarray, quat: np.ndarray
+    ) -> np.ndarray:
         """qdd_r (n,) = M_r^-1 (tau_ext - C_r - G_r); InputError where M_r is singular."""
         return self._call("fd_r", stance, {"q_r": q_r, "qd_r": qd_r, "tau_ext": tau_ext, "quat": quat})
