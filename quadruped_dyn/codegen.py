@@ -383,8 +383,8 @@ def tolerance_scale(ref: PinocchioReference, name: str, s: FullState) -> float:
     """How much the conditioning at ``s`` amplifies rounding in generated function ``name``,
     beyond what the tolerances assume: for a reduced function cond(A) / GRF_COND_ASSUMED of its
     stance set's GRF system times cond(A_s) / MAP_COND_ASSUMED of its stance-foot rows (the
-    velocity map), each at least 1, and for fd_r times cond(M_r) (the solve amplifies M_r's and
-    C_r + G_r's errors by it). 1 otherwise."""
+    velocity map), each at least 1, and for fd_r times cond(M_r) / GRF_COND_ASSUMED (the solve
+    amplifies M_r's and C_r + G_r's errors by cond(M_r)). 1 otherwise."""
     reduced = _reduced_parts(name)
     if not reduced:
         return 1.0
@@ -398,8 +398,8 @@ def tolerance_scale(ref: PinocchioReference, name: str, s: FullState) -> float:
     if len(stance.feet) == 2:
         rows.append(np.concatenate([np.zeros(3), roll_rate_row_np(rotation(q))])[None, :])
     scale *= max(1.0, float(np.linalg.cond(np.vstack(rows))) / MAP_COND_ASSUMED)
-    if kind == "fd_r":
-        scale *= float(np.linalg.cond(_reduced_reference(ref, "M_r", stance, s)))
+    if kind == "fd_r":  # the tolerances allow for ~GRF_COND_ASSUMED of amplification already
+        scale *= max(1.0, float(np.linalg.cond(_reduced_reference(ref, "M_r", stance, s))) / GRF_COND_ASSUMED)
     return scale
 
 
@@ -426,7 +426,7 @@ def reference_header(robot: Robot, functions: list[ca.Function], work: dict[str,
         "typedef int (*qd_fn)(const casadi_real**, casadi_real**, casadi_int*, casadi_real*, int);",
         "typedef struct { const char* name; qd_fn fn; int n_in, n_out; const double* in[4]; int in_len[4];",
         "                 const double* out[4]; int out_nnz[4]; double tol_scale; } qd_case;",
-        "/* tol_scale: 1, or cond(M_r) for fd_r (a solve amplifies M_r's and C_r + G_r's errors by it) */",
+        "/* tol_scale: the conditioning beyond what the tolerances assume (codegen.tolerance_scale) */",
         f"#define QD_REL_TOL_DOUBLE {REL_TOL_TERMS:g}",
         f"#define QD_REL_TOL_FLOAT {FLOAT_REL_TOL:g}",
         f"#define QD_MAX_SZ_IW {max(iw for iw, _ in work.values())}",
