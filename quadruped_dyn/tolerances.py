@@ -47,3 +47,11 @@ GRF_COND_ASSUMED = 100.0
 #: line is lateral, nearly perpendicular to the roll axis, so the roll row barely fixes the
 #: pitch about that line (exactly not at zero pitch and roll: singular there).
 MAP_COND_ASSUMED = 20.0
+
+#: Canonical leg frames (``leg_frames``): entries of a re-expressed axis, offset, CoM (m) or
+#: inertia (relative to the largest entry) within this of 0 or +-1 are set exactly. URDFs write
+#: rotations as rpy angles with ~10 digits (hyq: pi/2 as 1.5707963268, cos = 4.9e-12), so axes
+#: arrive up to ~5e-12 rad off a coordinate axis and offsets ~2e-12 m off zero; snapping moves
+#: the model by that much (5e-12 relative at most, far below REL_TOL_TERMS) and keeps the
+#: structural zeros that make the generated code small. Nothing physical is below 1 nm.
+FRAME_SNAP_TOL = 1e-9
