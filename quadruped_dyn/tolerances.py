@@ -49,9 +49,8 @@ GRF_COND_ASSUMED = 100.0
 MAP_COND_ASSUMED = 20.0
 
 #: Canonical leg frames (``leg_frames``): entries of a re-expressed axis, offset, CoM (m) or
-#: inertia (relative to the largest entry) within this of 0 or +-1 are set exactly. URDFs write
-#: rotations as rpy angles with ~10 digits (hyq: pi/2 as 1.5707963268, cos = 4.9e-12), so axes
-#: arrive up to ~5e-12 rad off a coordinate axis and offsets ~2e-12 m off zero; snapping moves
-#: the model by that much (5e-12 relative at most, far below REL_TOL_TERMS) and keeps the
-#: structural zeros that make the generated code small. Nothing physical is below 1 nm.
-FRAME_SNAP_TOL = 1e-9
+#: inertia (relative to the largest entry) within this of 0 or +-1 are set exactly. The loaded
+#: model's placements are already snapped (``robot.SNAP_TOL``), so what is left is the round-off
+#: of composing the frame rotations (~1e-16); 1e-12 leaves a wide margin and is far below any
+#: number a URDF means (and below REL_TOL_TERMS as a change of the model).
+FRAME_SNAP_TOL = 1e-12
