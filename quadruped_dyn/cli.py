@@ -219,6 +219,21 @@ def validate(robot: str, gait_name: str, horizon: float | None, dt: float, out_d
     click.echo(f"  wrote {plot} and {json_path}")
 
 
+@main.command()
+@click.argument("robot", default="paper")
+@click.option("--out", "out_dir", default="results", show_default=True,
+              help="The page goes to OUT/<robot>/report.html, its files beside it.")
+@click.option("--fast", is_flag=True, help="Skip the benchmark (its first run compiles a C++ harness for minutes).")
+def report(robot: str, out_dir: str, fast: bool) -> None:
+    """One self-contained HTML page of everything the toolkit knows about ROBOT (exit 1 if a check fails)."""
+    from .report import build_report, prepare
+
+    prepare(robot, out_dir)  # bad input is reported before any work
+    result = build_report(robot, out_dir, fast)
+    click.echo(result.summary())
+    sys.exit(0 if result.passed else EXIT_CHECK_FAILED)
+
+
 @main.command("make-urdf")
 @click.option("--check", is_flag=True, help="Only compare the committed URDF with a fresh generation.")
 def make_urdf(check: bool) -> None:

@@ -244,17 +244,23 @@ def _entry_point(name: str) -> str:
 
 def _checked_reduced_c(c_text: str, casadi_header: str, functions: list[ca.Function]) -> str:
     """Insert ``c/qd_reduced_solve.c`` and route the entry points through it: every function
-    returns QD_NONFINITE for a non-finite output, fd_r solves M_r qdd_r = tau_ext - CG_r."""
+    returns QD_NONFINITE for a non-finite output; fd_r evaluates M_r and CG_r (CasADi's own
+    evaluation functions, checked once in the solve) and solves M_r qdd_r = tau_ext - CG_r."""
     first = c_text.index(f"\n/* {functions[0].name()}:")
     c_text = c_text[:first] + "\n" + (TEMPLATES / "qd_reduced_solve.c").read_text() + c_text[first:]
     work = work_sizes(casadi_header)
+    raw = {}  # entry point -> CasADi's static evaluation function
+    for f in functions:
+        found = re.search(_entry_point(f.name()), c_text)
+        if not found:
+            raise AssertionError(f"entry point of {f.name()} not found in CasADi's output")
+        raw[f.name()] = found.group(2)
     for f in functions:
         if f.sz_arg() != f.n_in() or work[f.name()] != (0, 0):
             raise AssertionError(f"{f.name()} needs work memory; qd_fd_r_solve assumes it does not")
         if f.name().startswith(PREFIX + "fd_r_"):
-            n = f.nnz_out(0)
-            m_r, cg_r = (g.name() for g in functions if g.name().startswith((PREFIX + "M_r_", PREFIX + "CG_r_")))
-            body = rf"\1  (void)\2;\n  return qd_fd_r_solve({n}, {m_r}, {cg_r}, arg, res, iw, w, mem);\n"
+            m_r, cg_r = (raw[g.name()] for g in functions if g.name().startswith((PREFIX + "M_r_", PREFIX + "CG_r_")))
+            body = rf"\1  (void)\2;\n  return qd_fd_r_solve({f.nnz_out(0)}, {m_r}, {cg_r}, arg, res, iw, w, mem);\n"
         else:
             nnz = ", ".join(str(f.nnz_out(i)) for i in range(f.n_out()))
             body = rf"\1  return qd_finite(\2(arg, res, iw, w, mem), res, {f.n_out()}, (const casadi_int[]){{{nnz}}});\n"

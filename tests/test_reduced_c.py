@@ -105,8 +105,9 @@ def test_python_layer_checks_its_inputs(paper):
         d.fd_r(stance, x["q_r"][:12], x["qd_r"], x["tau_ext"], x["quat"])
     with pytest.raises(InputError, match="tau_ext"):
         d.fd_r(stance, x["q_r"], x["qd_r"], np.full(13, np.inf), x["quat"])
-    with pytest.raises(InputError, match="stance"):
-        d.fd_r(stance_set("FL"), x["q_r"][:12], x["qd_r"][:12], x["tau_ext"][:12], x["quat"])
+    for bad in (stance_set("FL"), "FL", "FL+FL", "FL+XX", "none"):
+        with pytest.raises(InputError, match="stance"):
+            d.fd_r(bad, x["q_r"][:12], x["qd_r"][:12], x["tau_ext"][:12], x["quat"])
 
 
 def test_float_build_matches_pinocchio(paper):

@@ -67,8 +67,7 @@ int main(int argc, char** argv) {
     for (int set = 0; set < 16; ++set) {
       int k = __builtin_popcount(set);
       if (k < 2) continue;
-      typedef pin::RigidConstraintModel RCM;
-      std::vector<RCM, Eigen::aligned_allocator<RCM>> contacts;
+      std::vector<pin::RigidConstraintModel> contacts;
       std::string name = "constraintDynamics";
       for (int i = 0; i < 4; ++i) {
         if (!(set & (1 << i))) continue;
@@ -76,8 +75,8 @@ int main(int argc, char** argv) {
         contacts.emplace_back(pin::CONTACT_3D, model, frame.parentJoint, frame.placement, pin::LOCAL_WORLD_ALIGNED);
         name += std::string("_") + labels[i];
       }
-      std::vector<pin::RigidConstraintData, Eigen::aligned_allocator<pin::RigidConstraintData>> datas;
-      for (const RCM& c : contacts) datas.emplace_back(c);
+      std::vector<pin::RigidConstraintData> datas;
+      for (const pin::RigidConstraintModel& c : contacts) datas.emplace_back(c);
       pin::initConstraintDynamics(model, data, contacts, datas);
       pin::ProximalSettings prox(1e-12, 0.0, 1);
       std::printf("%s %.2f\n", name.c_str(), median_ns([&] {
