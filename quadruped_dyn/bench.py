@@ -42,10 +42,10 @@ FD_R_TARGET = 0.3
 
 #: generated function -> (Pinocchio algorithm, target ratio generated / Pinocchio)
 PAIRS = {
-    "M_full": ("crba", 0.5),
-    "nle_full": ("nonLinearEffects", 0.25),
-    "G_full": ("computeGeneralizedGravity", 0.25),
-    "id_full": ("rnea", 0.25),
+    "M_full": ("crba", 0.4),
+    "nle_full": ("nonLinearEffects", 0.18),
+    "G_full": ("computeGeneralizedGravity", 0.15),
+    "id_full": ("rnea", 0.2),
 }
 
 
