@@ -144,15 +144,25 @@ def codegen(robot: str, out_dir: str, precision: str, check: bool) -> None:
 @click.option("--calls", default=20000, show_default=True, type=click.IntRange(min=1), help="Calls per timing run.")
 @click.option("--reps", default=9, show_default=True, type=click.IntRange(min=1), help="Timing runs (median).")
 @click.option("--json", "as_json", is_flag=True, help="Print JSON.")
-def bench(robots: tuple[str, ...], calls: int, reps: int, as_json: bool) -> None:
+@click.option("--peers", default="", help="Also time other libraries' generated dynamics against the toolkit's, "
+              "same run, same flags (comma-separated): adam.")
+@click.option("--march-native", "native", is_flag=True, help="Build the --peers comparison (both sides) with -march=native.")
+def bench(robots: tuple[str, ...], calls: int, reps: int, as_json: bool, peers: str, native: bool) -> None:
     """Time the generated C against Pinocchio's native C++ in the same run (ratios < 1: generated is faster)."""
-    from .bench import run_bench
+    from dataclasses import asdict
 
-    reports = [run_bench(load_robot(r), calls, reps) for r in robots]
+    from .bench import run_bench
+    from .peers import parse_peers, peers_table, run_peers
+
+    peer_names = parse_peers(peers)
+    loaded = [load_robot(r) for r in robots]
+    reports = [run_bench(r, calls, reps) for r in loaded]
+    entries = [e for r in loaded for e in run_peers(r, peer_names, native, calls, reps)] if peer_names else []
     if as_json:
-        click.echo(json.dumps([r.as_dict() for r in reports], indent=2))
+        out: object = [r.as_dict() for r in reports]
+        click.echo(json.dumps({"bench": out, "peers": [asdict(e) for e in entries]} if peer_names else out, indent=2))
     else:
-        click.echo("\n\n".join(r.table() for r in reports))
+        click.echo("\n\n".join([r.table() for r in reports] + ([peers_table(entries, native)] if entries else [])))
 
 
 @main.command()

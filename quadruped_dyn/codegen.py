@@ -44,7 +44,7 @@ def _grf_paper(stance: StanceSet) -> Callable[[Robot], ca.Function]:
 CODEGEN_FUNCTIONS: dict[str, Callable[[Robot], ca.Function]] = {
     "M_full": lambda r: full_dynamics(r).M_full_crba,  # = Walker-Orin M (tested), fewer operations
     "C_full": lambda r: full_dynamics(r).C_full,
-    "G_full": lambda r: full_dynamics(r).G_full,
+    "G_full": lambda r: full_dynamics(r).G_full_crb,  # = Newton-Euler G (tested), fewer operations
     "nle_full": lambda r: full_dynamics(r).nle_full,
     "id_full": lambda r: full_dynamics(r).id_full,
     **{f"grf_{s.name.replace('+', '_')}": _grf_paper(s) for s in STANCE_SETS},

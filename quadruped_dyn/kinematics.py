@@ -19,6 +19,7 @@ import pinocchio as pin
 
 from .errors import InputError
 from .leg import Leg
+from .leg_frames import axis_aligned
 from .paper_robot import PARAMS, R_B0, PaperRobotParams, hip_position
 from .robot import Robot
 from .spatial import axis_rotation, dm, placement_rt
@@ -26,10 +27,12 @@ from .state import check_array
 
 
 def joint_frames(leg: Leg, q: ca.SX) -> list[tuple[ca.SX, ca.SX]]:
-    """(R_bi, p_bi) of the three joint frames (after their joint rotation) in the trunk frame."""
+    """(R_bi, p_bi) of the three joint frames (after their joint rotation) in the trunk frame,
+    in the leg's canonical frames (``leg_frames.axis_aligned``: parallel to the trunk frame at
+    q = 0, HFE and KFE origins slid along their axes)."""
     R, p = ca.SX.eye(3), ca.SX.zeros(3)
     frames = []
-    for i, joint in enumerate(leg.joints):
+    for i, joint in enumerate(axis_aligned(leg).joints):
         Rf, pf = placement_rt(joint.placement)
         p = p + R @ pf
         R = R @ Rf @ axis_rotation(joint.axis, q[i])
@@ -39,6 +42,7 @@ def joint_frames(leg: Leg, q: ca.SX) -> list[tuple[ca.SX, ca.SX]]:
 
 def foot_position(leg: Leg, q: ca.SX) -> ca.SX:
     """Foot (contact point) position in the trunk frame, m."""
+    leg = axis_aligned(leg)
     R3, p3 = joint_frames(leg, q)[-1]
     return p3 + R3 @ dm(leg.foot.p)
 

@@ -32,9 +32,10 @@ from functools import cache
 
 import casadi as ca
 
-from .crba import mass_matrix_crba
+from .crba import generalized_gravity, mass_matrix_crba
 from .kinematics import foot_position, joint_frames
 from .leg import Leg
+from .leg_frames import axis_aligned
 from .robot import Robot
 from .spatial import (
     axis_rotation,
@@ -62,13 +63,14 @@ def leg_newton_euler(
     """Craig's recursion for one leg. ``a0`` = a_b - g_b (classical trunk-origin acceleration
     minus gravity), ``omega_b``/``alpha_b`` trunk angular velocity/acceleration, ``f`` the
     ground force on the foot; all in the trunk frame."""
-    w, wd, vd = omega_b, alpha_b, a0
-    R_b = ca.SX.eye(3)
+    leg = axis_aligned(leg)
+    w, wd, vd, f_foot = omega_b, alpha_b, a0, -f
     links = []  # (R_parent_i, P_i, F_i, N_i) per link
     for i, (joint, link) in enumerate(zip(leg.joints, leg.links)):
         Rf, P = placement_rt(joint.placement)
         R = Rf @ axis_rotation(joint.axis, q[i])  # parent <- i
         z = dm(joint.axis)
+        f_foot = R.T @ f_foot  # the foot's push on the ground, carried link by link into the KFE frame
         vd = R.T @ (ca.cross(wd, P) + ca.cross(w, ca.cross(w, P)) + vd)
         w_parent = R.T @ w
         w = w_parent + qd[i] * z
@@ -76,10 +78,9 @@ def leg_newton_euler(
         c, Ic = dm(link.com), dm(link.inertia)
         vdc = ca.cross(wd, c) + ca.cross(w, ca.cross(w, c)) + vd
         links.append((R, P, link.mass * vdc, Ic @ wd + ca.cross(w, Ic @ w), c))
-        R_b = R_b @ R
 
     # inward, starting at the foot frame: the foot pushes on the ground with f_4 = -f, n_4 = 0
-    f_next, n_next = R_b.T @ (-f), ca.SX.zeros(3)
+    f_next, n_next = f_foot, ca.SX.zeros(3)
     R_next, P_next = ca.SX.eye(3), dm(leg.foot.p)
     tau: list[ca.SX] = []
     for i in reversed(range(3)):
@@ -142,7 +143,8 @@ def coriolis_matrix(robot: Robot, q_joints: ca.SX, v: ca.SX) -> ca.SX:
     J_base = ca.horzcat(ca.SX.eye(6), ca.SX.zeros(6, 12))
     Jdot_base = ca.horzcat(motion_cross(V_b), ca.SX.zeros(6, 12))
     add_body(spatial_inertia(robot.trunk, ca.SX.eye(3), ca.SX.zeros(3)), V_b, J_base, Jdot_base)
-    for k, leg in enumerate(robot.legs):
+    for k, urdf_leg in enumerate(robot.legs):
+        leg = axis_aligned(urdf_leg)  # the frames joint_frames returns
         J, Jdot, V = J_base, Jdot_base, V_b
         for i, ((R, p), link) in enumerate(zip(joint_frames(leg, q_joints[3 * k : 3 * k + 3]), leg.links)):
             col = 6 + 3 * k + i
@@ -171,6 +173,7 @@ class FullDynamics:
     M_full_crba: ca.Function  # q -> M (18, 18), composite rigid bodies: the form generated as C
     C_full: ca.Function  # q, v -> C (18,) velocity terms (g = 0, a = 0)
     G_full: ca.Function  # q -> G (18,) (v = 0, a = 0)
+    G_full_crb: ca.Function  # q -> G (18,) from composite first moments: the form generated as C
     nle_full: ca.Function  # q, v -> C + G (18,) in one evaluation (Pinocchio's nonLinearEffects)
     coriolis: ca.Function  # q, v -> C(q, v) (18, 18), Pinocchio's factorisation
     build_seconds: float
@@ -206,6 +209,7 @@ def full_dynamics(robot: Robot) -> FullDynamics:
         M_full_crba=ca.Function("M_full_crba", [q], [mass_matrix_crba(robot, qj)], ["q"], ["M"], opts),
         C_full=ca.Function("C_full", [q, v], [C], ["q", "v"], ["C"], opts),
         G_full=ca.Function("G_full", [q], [G], ["q"], ["G"], opts),
+        G_full_crb=ca.Function("G_full_crb", [q], [generalized_gravity(robot, qj, g_b)], ["q"], ["G"], opts),
         nle_full=ca.Function("nle_full", [q, v], [nle], ["q", "v"], ["nle"], opts),
         coriolis=ca.Function("coriolis_matrix", [q, v], [Cmat], ["q", "v"], ["C"], opts),
         build_seconds=time.perf_counter() - start,

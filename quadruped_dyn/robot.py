@@ -153,9 +153,11 @@ def _chain(model: pin.Model, first: int) -> tuple[list[int], bool]:
 
 
 #: Placement entries within this of 0 or +-1 are snapped exactly. URDF text carries rotations
-#: as rpy angles, so cos(pi/2) arrives as ~6e-17 instead of 0; snapping keeps structural
-#: zeros zero (smaller symbolic graphs, smaller C) and moves nothing by more than 1e-12 m/rad.
-SNAP_TOL = 1e-12
+#: as rpy angles, so cos(pi/2) arrives as ~6e-17 instead of 0, or as 4.9e-12 where pi/2 is
+#: written with ten digits (hyq, anymal_c: 1.5707963268); snapping keeps structural zeros zero
+#: (smaller symbolic graphs, smaller C: with the 4.9e-12 kept, every joint axis of hyq is tilted
+#: and its generated M costs 2.7x) and moves nothing by more than 1e-9 m/rad.
+SNAP_TOL = 1e-9
 
 
 def _snap(M: pin.SE3) -> pin.SE3:

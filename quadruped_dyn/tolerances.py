@@ -47,6 +47,13 @@ GRF_COND_ASSUMED = 100.0
 #: pitch about that line (exactly not at zero pitch and roll: singular there).
 MAP_COND_ASSUMED = 20.0
 
+#: Canonical leg frames (``leg_frames``): entries of a re-expressed axis, offset, CoM (m) or
+#: inertia (relative to the largest entry) within this of 0 or +-1 are set exactly. The loaded
+#: model's placements are already snapped (``robot.SNAP_TOL``), so what is left is the round-off
+#: of composing the frame rotations (~1e-16); 1e-12 leaves a wide margin and is far below any
+#: number a URDF means (and below REL_TOL_TERMS as a change of the model).
+FRAME_SNAP_TOL = 1e-12
+
 #: A typeset formula (coefficients rounded to symbolic.DISPLAY_DIGITS = 4 significant digits,
 #: each off by <= 5e-5 relative) against Pinocchio: a sum of a few such terms stays within
 #: ~2e-4 of the largest entry; 1e-3 catches any wrong term or sign.

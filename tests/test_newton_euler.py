@@ -37,6 +37,7 @@ def test_terms_against_pinocchio(robot, ref, fd, seed):
     assert_close(_np(fd.M_full(s.q)), M, what="M_full")
     assert_close(_np(fd.M_full_crba(s.q)), M, what="M_full by CRBA")
     assert_close(_np(fd.G_full(s.q)), G, what="G_full")
+    assert_close(_np(fd.G_full_crb(s.q)), G, what="G_full by composite first moments")
     assert_close(_np(fd.C_full(s.q, s.v)), ref.nonlinear_effects(s.q, s.v) - G, what="C_full")
     assert_close(_np(fd.coriolis(s.q, s.v)), ref.coriolis_matrix(s.q, s.v), what="Coriolis matrix")
     R = rotation(s.q)

@@ -6,7 +6,7 @@
 // (LOCAL_WORLD_ALIGNED, proximal settings mu = 0, one iteration: the exact KKT solve), named
 // "constraintDynamics_<feet>" with the feet joined by '_' (e.g. constraintDynamics_FL_BR).
 #include <algorithm>
-#include <chrono>
+#include <ctime>
 #include <cstdio>
 #include <cstdlib>
 #include <functional>
@@ -23,13 +23,20 @@
 
 namespace pin = pinocchio;
 
+// This thread's CPU time, ns: on a shared machine a wall clock also counts the time the scheduler
+// gives to others, which longer runs catch more often (as bench_qd.c).
+static double cpu_ns() {
+  timespec t;
+  clock_gettime(CLOCK_THREAD_CPUTIME_ID, &t);
+  return 1e9 * double(t.tv_sec) + double(t.tv_nsec);
+}
+
 static double median_ns(const std::function<void()>& f, int calls, int reps) {
   std::vector<double> t;
   for (int r = 0; r < reps; ++r) {
-    auto t0 = std::chrono::steady_clock::now();
+    double t0 = cpu_ns();
     for (int k = 0; k < calls; ++k) f();
-    auto t1 = std::chrono::steady_clock::now();
-    t.push_back(std::chrono::duration<double, std::nano>(t1 - t0).count() / calls);
+    t.push_back((cpu_ns() - t0) / calls);
   }
   std::sort(t.begin(), t.end());
   return t[t.size() / 2];
