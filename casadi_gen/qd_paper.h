@@ -14,6 +14,23 @@
  * collinear stance feet the system loses further rank and the outputs are meaningless;
  * this code does not detect that (quadruped_dyn's GrfSolve.solve does).
  *
+ * Reduced model (paper section 5; quadruped_dyn/reduced_projection.py), one set of functions per
+ * stance set of 2, 3 or 4 feet, named qd_<fn>_<feet>: n = 12 coordinates (the joint angles) for
+ * 3 or 4 stance feet, n = 13 for 2 (the 13th is the trunk roll phi, unactuated on the robot). The
+ * trunk's motion follows from the stance feet staying on the ground; quat gives its orientation.
+ *   M_r(q_r, quat)                  reduced inertia matrix, n x n column-major, not symmetric;
+ *   CG_r(q_r, qd_r, quat)           C_r + G_r in one Newton-Euler pass;
+ *   G_r(q_r, quat)                  gravity part;
+ *   id_r(q_r, qd_r, qdd_r, quat)    tau_r = M_r qdd_r + C_r + G_r (paper's GRF model);
+ *   fd_r(q_r, qd_r, tau_ext, quat)  qdd_r = M_r^-1 (tau_ext - C_r - G_r) (paper eq. (5)), by LU
+ *                                   with partial pivoting on the stack (no work memory needed).
+ * Return codes: 0 ok; QD_NONFINITE (1) an output is NaN/inf: coincident or collinear stance feet,
+ * the trunk pitched +-90 deg (two feet: the roll row has tan(pitch)), a zero quaternion or a
+ * non-finite input; QD_SINGULAR (2, fd_r only) M_r singular to working precision (an LU pivot
+ * below QD_SINGULAR_RTOL max|M_r|, e.g. two feet, the trunk pitched within ~1e-12 rad of 90 deg);
+ * qdd_r is not written then. A stance leg stretched straight is not singular here: the reduced
+ * model never inverts a leg's Jacobian (measured on the paper robot: cond(M_r) 1e3 -> 3e4).
+ *
  * Signals:
  *   q        p [m, world frame], quaternion (x, y, z, w) of R (trunk -> world, need not be unit), 12 joint angles [rad] in order FL, FR, BL, BR x (HAA, HFE, KFE)
  *   v        v_b [m/s], omega_b [rad/s] (trunk frame), 12 joint rates [rad/s]
@@ -27,6 +44,15 @@
  *   tau      joint torques [N m]
  *   lambda   the GRF model's unknowns (minimum-norm solution), see quadruped_dyn/grf.py
  *   residual part of the required trunk wrench the GRF model cannot balance: force [N], moment [N m]
+ *   q_r      reduced coordinates: 12 joint angles [rad] (FL, FR, BL, BR x HAA, HFE, KFE); for two stance feet a 13th, the trunk roll phi [rad] (R = Rz(psi) Ry(theta) Rx(phi)), which these functions take from quat
+ *   qd_r     d/dt q_r [rad/s]; the 13th is the roll rate phid
+ *   qdd_r    d2/dt2 q_r [rad/s^2]; the 13th is the roll acceleration
+ *   quat     trunk orientation (x, y, z, w) of R (trunk -> world; need not be unit); must agree with the stance: it sets gravity in the trunk frame and, with two feet, the roll-rate row
+ *   tau_ext  joint torques [N m] (project order); for two feet a 13th entry, a moment about the foot-to-foot line [N m] applied as if the roll were actuated (0 on the robot)
+ *   M_r      reduced inertia matrix (n x n, column-major) = d tau_r / d qdd_r; not symmetric
+ *   CG_r     C_r(q_r, qd_r) + G_r(q_r): tau_r at qdd_r = 0 [N m]
+ *   G_r      tau_r at qd_r = 0, qdd_r = 0 [N m]
+ *   tau_r    12 joint torques [N m] with the paper's GRF model of the stance set; for two feet a 13th entry: the trunk moment about the foot-to-foot line (from foot 2 to foot 1) that the feet cannot produce [N m], 0 for a motion the robot can make (the roll is unactuated)
  *
  * Functions (work sizes iw, w):
  *   qd_M_full(q[19]) -> (M[18x18, 210 nonzeros]);  iw 0, w 0
@@ -50,6 +76,61 @@
  *   qd_grf_BL(q[19], v[18], a[18]) -> (lambda[3], f[12], residual[6], tau[12]);  iw 0, w 0  [one foot, rank 3]
  *   qd_grf_BR(q[19], v[18], a[18]) -> (lambda[3], f[12], residual[6], tau[12]);  iw 0, w 0  [one foot, rank 3]
  *   qd_grf_none(q[19], v[18], a[18]) -> (lambda[0], f[12], residual[6], tau[12]);  iw 0, w 0  [flight, rank 0]
+ *   qd_M_r_FL_FR_BL_BR(q_r[12], quat[4]) -> (M_r[12x12]);  iw 0, w 0  [stand, returns QD_NONFINITE / QD_SINGULAR]
+ *   qd_CG_r_FL_FR_BL_BR(q_r[12], qd_r[12], quat[4]) -> (CG_r[12]);  iw 0, w 0  [stand, returns QD_NONFINITE / QD_SINGULAR]
+ *   qd_G_r_FL_FR_BL_BR(q_r[12], quat[4]) -> (G_r[12]);  iw 0, w 0  [stand, returns QD_NONFINITE / QD_SINGULAR]
+ *   qd_id_r_FL_FR_BL_BR(q_r[12], qd_r[12], qdd_r[12], quat[4]) -> (tau_r[12]);  iw 0, w 0  [stand, returns QD_NONFINITE / QD_SINGULAR]
+ *   qd_fd_r_FL_FR_BL_BR(q_r[12], qd_r[12], tau_ext[12], quat[4]) -> (qdd_r[12]);  iw 0, w 0  [stand, returns QD_NONFINITE / QD_SINGULAR]
+ *   qd_M_r_FL_FR_BL(q_r[12], quat[4]) -> (M_r[12x12]);  iw 0, w 0  [walk (lifted BR), returns QD_NONFINITE / QD_SINGULAR]
+ *   qd_CG_r_FL_FR_BL(q_r[12], qd_r[12], quat[4]) -> (CG_r[12]);  iw 0, w 0  [walk (lifted BR), returns QD_NONFINITE / QD_SINGULAR]
+ *   qd_G_r_FL_FR_BL(q_r[12], quat[4]) -> (G_r[12]);  iw 0, w 0  [walk (lifted BR), returns QD_NONFINITE / QD_SINGULAR]
+ *   qd_id_r_FL_FR_BL(q_r[12], qd_r[12], qdd_r[12], quat[4]) -> (tau_r[12]);  iw 0, w 0  [walk (lifted BR), returns QD_NONFINITE / QD_SINGULAR]
+ *   qd_fd_r_FL_FR_BL(q_r[12], qd_r[12], tau_ext[12], quat[4]) -> (qdd_r[12]);  iw 0, w 0  [walk (lifted BR), returns QD_NONFINITE / QD_SINGULAR]
+ *   qd_M_r_FL_FR_BR(q_r[12], quat[4]) -> (M_r[12x12]);  iw 0, w 0  [walk (lifted BL), returns QD_NONFINITE / QD_SINGULAR]
+ *   qd_CG_r_FL_FR_BR(q_r[12], qd_r[12], quat[4]) -> (CG_r[12]);  iw 0, w 0  [walk (lifted BL), returns QD_NONFINITE / QD_SINGULAR]
+ *   qd_G_r_FL_FR_BR(q_r[12], quat[4]) -> (G_r[12]);  iw 0, w 0  [walk (lifted BL), returns QD_NONFINITE / QD_SINGULAR]
+ *   qd_id_r_FL_FR_BR(q_r[12], qd_r[12], qdd_r[12], quat[4]) -> (tau_r[12]);  iw 0, w 0  [walk (lifted BL), returns QD_NONFINITE / QD_SINGULAR]
+ *   qd_fd_r_FL_FR_BR(q_r[12], qd_r[12], tau_ext[12], quat[4]) -> (qdd_r[12]);  iw 0, w 0  [walk (lifted BL), returns QD_NONFINITE / QD_SINGULAR]
+ *   qd_M_r_FL_BL_BR(q_r[12], quat[4]) -> (M_r[12x12]);  iw 0, w 0  [walk (lifted FR), returns QD_NONFINITE / QD_SINGULAR]
+ *   qd_CG_r_FL_BL_BR(q_r[12], qd_r[12], quat[4]) -> (CG_r[12]);  iw 0, w 0  [walk (lifted FR), returns QD_NONFINITE / QD_SINGULAR]
+ *   qd_G_r_FL_BL_BR(q_r[12], quat[4]) -> (G_r[12]);  iw 0, w 0  [walk (lifted FR), returns QD_NONFINITE / QD_SINGULAR]
+ *   qd_id_r_FL_BL_BR(q_r[12], qd_r[12], qdd_r[12], quat[4]) -> (tau_r[12]);  iw 0, w 0  [walk (lifted FR), returns QD_NONFINITE / QD_SINGULAR]
+ *   qd_fd_r_FL_BL_BR(q_r[12], qd_r[12], tau_ext[12], quat[4]) -> (qdd_r[12]);  iw 0, w 0  [walk (lifted FR), returns QD_NONFINITE / QD_SINGULAR]
+ *   qd_M_r_FR_BL_BR(q_r[12], quat[4]) -> (M_r[12x12]);  iw 0, w 0  [walk (lifted FL), returns QD_NONFINITE / QD_SINGULAR]
+ *   qd_CG_r_FR_BL_BR(q_r[12], qd_r[12], quat[4]) -> (CG_r[12]);  iw 0, w 0  [walk (lifted FL), returns QD_NONFINITE / QD_SINGULAR]
+ *   qd_G_r_FR_BL_BR(q_r[12], quat[4]) -> (G_r[12]);  iw 0, w 0  [walk (lifted FL), returns QD_NONFINITE / QD_SINGULAR]
+ *   qd_id_r_FR_BL_BR(q_r[12], qd_r[12], qdd_r[12], quat[4]) -> (tau_r[12]);  iw 0, w 0  [walk (lifted FL), returns QD_NONFINITE / QD_SINGULAR]
+ *   qd_fd_r_FR_BL_BR(q_r[12], qd_r[12], tau_ext[12], quat[4]) -> (qdd_r[12]);  iw 0, w 0  [walk (lifted FL), returns QD_NONFINITE / QD_SINGULAR]
+ *   qd_M_r_FL_FR(q_r[13], quat[4]) -> (M_r[13x13]);  iw 0, w 0  [front, returns QD_NONFINITE / QD_SINGULAR]
+ *   qd_CG_r_FL_FR(q_r[13], qd_r[13], quat[4]) -> (CG_r[13]);  iw 0, w 0  [front, returns QD_NONFINITE / QD_SINGULAR]
+ *   qd_G_r_FL_FR(q_r[13], quat[4]) -> (G_r[13]);  iw 0, w 0  [front, returns QD_NONFINITE / QD_SINGULAR]
+ *   qd_id_r_FL_FR(q_r[13], qd_r[13], qdd_r[13], quat[4]) -> (tau_r[13]);  iw 0, w 0  [front, returns QD_NONFINITE / QD_SINGULAR]
+ *   qd_fd_r_FL_FR(q_r[13], qd_r[13], tau_ext[13], quat[4]) -> (qdd_r[13]);  iw 0, w 0  [front, returns QD_NONFINITE / QD_SINGULAR]
+ *   qd_M_r_FL_BL(q_r[13], quat[4]) -> (M_r[13x13]);  iw 0, w 0  [pace (lateral), returns QD_NONFINITE / QD_SINGULAR]
+ *   qd_CG_r_FL_BL(q_r[13], qd_r[13], quat[4]) -> (CG_r[13]);  iw 0, w 0  [pace (lateral), returns QD_NONFINITE / QD_SINGULAR]
+ *   qd_G_r_FL_BL(q_r[13], quat[4]) -> (G_r[13]);  iw 0, w 0  [pace (lateral), returns QD_NONFINITE / QD_SINGULAR]
+ *   qd_id_r_FL_BL(q_r[13], qd_r[13], qdd_r[13], quat[4]) -> (tau_r[13]);  iw 0, w 0  [pace (lateral), returns QD_NONFINITE / QD_SINGULAR]
+ *   qd_fd_r_FL_BL(q_r[13], qd_r[13], tau_ext[13], quat[4]) -> (qdd_r[13]);  iw 0, w 0  [pace (lateral), returns QD_NONFINITE / QD_SINGULAR]
+ *   qd_M_r_FL_BR(q_r[13], quat[4]) -> (M_r[13x13]);  iw 0, w 0  [trot (diagonal), returns QD_NONFINITE / QD_SINGULAR]
+ *   qd_CG_r_FL_BR(q_r[13], qd_r[13], quat[4]) -> (CG_r[13]);  iw 0, w 0  [trot (diagonal), returns QD_NONFINITE / QD_SINGULAR]
+ *   qd_G_r_FL_BR(q_r[13], quat[4]) -> (G_r[13]);  iw 0, w 0  [trot (diagonal), returns QD_NONFINITE / QD_SINGULAR]
+ *   qd_id_r_FL_BR(q_r[13], qd_r[13], qdd_r[13], quat[4]) -> (tau_r[13]);  iw 0, w 0  [trot (diagonal), returns QD_NONFINITE / QD_SINGULAR]
+ *   qd_fd_r_FL_BR(q_r[13], qd_r[13], tau_ext[13], quat[4]) -> (qdd_r[13]);  iw 0, w 0  [trot (diagonal), returns QD_NONFINITE / QD_SINGULAR]
+ *   qd_M_r_FR_BL(q_r[13], quat[4]) -> (M_r[13x13]);  iw 0, w 0  [trot (diagonal), returns QD_NONFINITE / QD_SINGULAR]
+ *   qd_CG_r_FR_BL(q_r[13], qd_r[13], quat[4]) -> (CG_r[13]);  iw 0, w 0  [trot (diagonal), returns QD_NONFINITE / QD_SINGULAR]
+ *   qd_G_r_FR_BL(q_r[13], quat[4]) -> (G_r[13]);  iw 0, w 0  [trot (diagonal), returns QD_NONFINITE / QD_SINGULAR]
+ *   qd_id_r_FR_BL(q_r[13], qd_r[13], qdd_r[13], quat[4]) -> (tau_r[13]);  iw 0, w 0  [trot (diagonal), returns QD_NONFINITE / QD_SINGULAR]
+ *   qd_fd_r_FR_BL(q_r[13], qd_r[13], tau_ext[13], quat[4]) -> (qdd_r[13]);  iw 0, w 0  [trot (diagonal), returns QD_NONFINITE / QD_SINGULAR]
+ *   qd_M_r_FR_BR(q_r[13], quat[4]) -> (M_r[13x13]);  iw 0, w 0  [pace (lateral), returns QD_NONFINITE / QD_SINGULAR]
+ *   qd_CG_r_FR_BR(q_r[13], qd_r[13], quat[4]) -> (CG_r[13]);  iw 0, w 0  [pace (lateral), returns QD_NONFINITE / QD_SINGULAR]
+ *   qd_G_r_FR_BR(q_r[13], quat[4]) -> (G_r[13]);  iw 0, w 0  [pace (lateral), returns QD_NONFINITE / QD_SINGULAR]
+ *   qd_id_r_FR_BR(q_r[13], qd_r[13], qdd_r[13], quat[4]) -> (tau_r[13]);  iw 0, w 0  [pace (lateral), returns QD_NONFINITE / QD_SINGULAR]
+ *   qd_fd_r_FR_BR(q_r[13], qd_r[13], tau_ext[13], quat[4]) -> (qdd_r[13]);  iw 0, w 0  [pace (lateral), returns QD_NONFINITE / QD_SINGULAR]
+ *   qd_M_r_BL_BR(q_r[13], quat[4]) -> (M_r[13x13]);  iw 0, w 0  [back, returns QD_NONFINITE / QD_SINGULAR]
+ *   qd_CG_r_BL_BR(q_r[13], qd_r[13], quat[4]) -> (CG_r[13]);  iw 0, w 0  [back, returns QD_NONFINITE / QD_SINGULAR]
+ *   qd_G_r_BL_BR(q_r[13], quat[4]) -> (G_r[13]);  iw 0, w 0  [back, returns QD_NONFINITE / QD_SINGULAR]
+ *   qd_id_r_BL_BR(q_r[13], qd_r[13], qdd_r[13], quat[4]) -> (tau_r[13]);  iw 0, w 0  [back, returns QD_NONFINITE / QD_SINGULAR]
+ *   qd_fd_r_BL_BR(q_r[13], qd_r[13], tau_ext[13], quat[4]) -> (qdd_r[13]);  iw 0, w 0  [back, returns QD_NONFINITE / QD_SINGULAR]
  */
 /* This file was automatically generated by CasADi 3.8.2.
  *  It consists of: 
@@ -451,6 +532,1271 @@ int qd_grf_none_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *s
 void qd_paper_casadi_version(int* major, int* minor, int* patch);
 int qd_paper_casadi_int_size(void);
 int qd_paper_casadi_real_size(void);
+#ifdef __cplusplus
+} /* extern "C" */
+#endif
+/* This file was automatically generated by CasADi 3.8.2.
+ *  It consists of: 
+ *   1) content generated by CasADi runtime: not copyrighted
+ *   2) template code copied from CasADi source: permissively licensed (MIT-0)
+ *   3) user code: owned by the user
+ *
+ */
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+#ifndef casadi_real
+#define casadi_real double
+#endif
+
+#ifndef casadi_int
+#define casadi_int long long int
+#endif
+
+int qd_M_r_FL_FR_BL_BR(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem);
+int qd_M_r_FL_FR_BL_BR_checkout(void);
+void qd_M_r_FL_FR_BL_BR_release(int mem);
+void qd_M_r_FL_FR_BL_BR_incref(void);
+void qd_M_r_FL_FR_BL_BR_decref(void);
+casadi_int qd_M_r_FL_FR_BL_BR_n_in(void);
+casadi_int qd_M_r_FL_FR_BL_BR_n_out(void);
+casadi_real qd_M_r_FL_FR_BL_BR_default_in(casadi_int i);
+const char* qd_M_r_FL_FR_BL_BR_name_in(casadi_int i);
+const char* qd_M_r_FL_FR_BL_BR_name_out(casadi_int i);
+const casadi_int* qd_M_r_FL_FR_BL_BR_sparsity_in(casadi_int i);
+const casadi_int* qd_M_r_FL_FR_BL_BR_sparsity_out(casadi_int i);
+int qd_M_r_FL_FR_BL_BR_work(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz_iw, casadi_int *sz_w);
+int qd_M_r_FL_FR_BL_BR_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz_iw, casadi_int *sz_w);
+#define qd_M_r_FL_FR_BL_BR_SZ_ARG 2
+#define qd_M_r_FL_FR_BL_BR_SZ_RES 1
+#define qd_M_r_FL_FR_BL_BR_SZ_IW 0
+#define qd_M_r_FL_FR_BL_BR_SZ_W 0
+int qd_CG_r_FL_FR_BL_BR(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem);
+int qd_CG_r_FL_FR_BL_BR_checkout(void);
+void qd_CG_r_FL_FR_BL_BR_release(int mem);
+void qd_CG_r_FL_FR_BL_BR_incref(void);
+void qd_CG_r_FL_FR_BL_BR_decref(void);
+casadi_int qd_CG_r_FL_FR_BL_BR_n_in(void);
+casadi_int qd_CG_r_FL_FR_BL_BR_n_out(void);
+casadi_real qd_CG_r_FL_FR_BL_BR_default_in(casadi_int i);
+const char* qd_CG_r_FL_FR_BL_BR_name_in(casadi_int i);
+const char* qd_CG_r_FL_FR_BL_BR_name_out(casadi_int i);
+const casadi_int* qd_CG_r_FL_FR_BL_BR_sparsity_in(casadi_int i);
+const casadi_int* qd_CG_r_FL_FR_BL_BR_sparsity_out(casadi_int i);
+int qd_CG_r_FL_FR_BL_BR_work(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz_iw, casadi_int *sz_w);
+int qd_CG_r_FL_FR_BL_BR_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz_iw, casadi_int *sz_w);
+#define qd_CG_r_FL_FR_BL_BR_SZ_ARG 3
+#define qd_CG_r_FL_FR_BL_BR_SZ_RES 1
+#define qd_CG_r_FL_FR_BL_BR_SZ_IW 0
+#define qd_CG_r_FL_FR_BL_BR_SZ_W 0
+int qd_G_r_FL_FR_BL_BR(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem);
+int qd_G_r_FL_FR_BL_BR_checkout(void);
+void qd_G_r_FL_FR_BL_BR_release(int mem);
+void qd_G_r_FL_FR_BL_BR_incref(void);
+void qd_G_r_FL_FR_BL_BR_decref(void);
+casadi_int qd_G_r_FL_FR_BL_BR_n_in(void);
+casadi_int qd_G_r_FL_FR_BL_BR_n_out(void);
+casadi_real qd_G_r_FL_FR_BL_BR_default_in(casadi_int i);
+const char* qd_G_r_FL_FR_BL_BR_name_in(casadi_int i);
+const char* qd_G_r_FL_FR_BL_BR_name_out(casadi_int i);
+const casadi_int* qd_G_r_FL_FR_BL_BR_sparsity_in(casadi_int i);
+const casadi_int* qd_G_r_FL_FR_BL_BR_sparsity_out(casadi_int i);
+int qd_G_r_FL_FR_BL_BR_work(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz_iw, casadi_int *sz_w);
+int qd_G_r_FL_FR_BL_BR_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz_iw, casadi_int *sz_w);
+#define qd_G_r_FL_FR_BL_BR_SZ_ARG 2
+#define qd_G_r_FL_FR_BL_BR_SZ_RES 1
+#define qd_G_r_FL_FR_BL_BR_SZ_IW 0
+#define qd_G_r_FL_FR_BL_BR_SZ_W 0
+int qd_id_r_FL_FR_BL_BR(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem);
+int qd_id_r_FL_FR_BL_BR_checkout(void);
+void qd_id_r_FL_FR_BL_BR_release(int mem);
+void qd_id_r_FL_FR_BL_BR_incref(void);
+void qd_id_r_FL_FR_BL_BR_decref(void);
+casadi_int qd_id_r_FL_FR_BL_BR_n_in(void);
+casadi_int qd_id_r_FL_FR_BL_BR_n_out(void);
+casadi_real qd_id_r_FL_FR_BL_BR_default_in(casadi_int i);
+const char* qd_id_r_FL_FR_BL_BR_name_in(casadi_int i);
+const char* qd_id_r_FL_FR_BL_BR_name_out(casadi_int i);
+const casadi_int* qd_id_r_FL_FR_BL_BR_sparsity_in(casadi_int i);
+const casadi_int* qd_id_r_FL_FR_BL_BR_sparsity_out(casadi_int i);
+int qd_id_r_FL_FR_BL_BR_work(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz_iw, casadi_int *sz_w);
+int qd_id_r_FL_FR_BL_BR_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz_iw, casadi_int *sz_w);
+#define qd_id_r_FL_FR_BL_BR_SZ_ARG 4
+#define qd_id_r_FL_FR_BL_BR_SZ_RES 1
+#define qd_id_r_FL_FR_BL_BR_SZ_IW 0
+#define qd_id_r_FL_FR_BL_BR_SZ_W 0
+int qd_fd_r_FL_FR_BL_BR(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem);
+int qd_fd_r_FL_FR_BL_BR_checkout(void);
+void qd_fd_r_FL_FR_BL_BR_release(int mem);
+void qd_fd_r_FL_FR_BL_BR_incref(void);
+void qd_fd_r_FL_FR_BL_BR_decref(void);
+casadi_int qd_fd_r_FL_FR_BL_BR_n_in(void);
+casadi_int qd_fd_r_FL_FR_BL_BR_n_out(void);
+casadi_real qd_fd_r_FL_FR_BL_BR_default_in(casadi_int i);
+const char* qd_fd_r_FL_FR_BL_BR_name_in(casadi_int i);
+const char* qd_fd_r_FL_FR_BL_BR_name_out(casadi_int i);
+const casadi_int* qd_fd_r_FL_FR_BL_BR_sparsity_in(casadi_int i);
+const casadi_int* qd_fd_r_FL_FR_BL_BR_sparsity_out(casadi_int i);
+int qd_fd_r_FL_FR_BL_BR_work(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz_iw, casadi_int *sz_w);
+int qd_fd_r_FL_FR_BL_BR_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz_iw, casadi_int *sz_w);
+#define qd_fd_r_FL_FR_BL_BR_SZ_ARG 4
+#define qd_fd_r_FL_FR_BL_BR_SZ_RES 1
+#define qd_fd_r_FL_FR_BL_BR_SZ_IW 0
+#define qd_fd_r_FL_FR_BL_BR_SZ_W 0
+void qd_paper_r_FL_FR_BL_BR_casadi_version(int* major, int* minor, int* patch);
+int qd_paper_r_FL_FR_BL_BR_casadi_int_size(void);
+int qd_paper_r_FL_FR_BL_BR_casadi_real_size(void);
+#ifdef __cplusplus
+} /* extern "C" */
+#endif
+/* This file was automatically generated by CasADi 3.8.2.
+ *  It consists of: 
+ *   1) content generated by CasADi runtime: not copyrighted
+ *   2) template code copied from CasADi source: permissively licensed (MIT-0)
+ *   3) user code: owned by the user
+ *
+ */
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+#ifndef casadi_real
+#define casadi_real double
+#endif
+
+#ifndef casadi_int
+#define casadi_int long long int
+#endif
+
+int qd_M_r_FL_FR_BL(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem);
+int qd_M_r_FL_FR_BL_checkout(void);
+void qd_M_r_FL_FR_BL_release(int mem);
+void qd_M_r_FL_FR_BL_incref(void);
+void qd_M_r_FL_FR_BL_decref(void);
+casadi_int qd_M_r_FL_FR_BL_n_in(void);
+casadi_int qd_M_r_FL_FR_BL_n_out(void);
+casadi_real qd_M_r_FL_FR_BL_default_in(casadi_int i);
+const char* qd_M_r_FL_FR_BL_name_in(casadi_int i);
+const char* qd_M_r_FL_FR_BL_name_out(casadi_int i);
+const casadi_int* qd_M_r_FL_FR_BL_sparsity_in(casadi_int i);
+const casadi_int* qd_M_r_FL_FR_BL_sparsity_out(casadi_int i);
+int qd_M_r_FL_FR_BL_work(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz_iw, casadi_int *sz_w);
+int qd_M_r_FL_FR_BL_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz_iw, casadi_int *sz_w);
+#define qd_M_r_FL_FR_BL_SZ_ARG 2
+#define qd_M_r_FL_FR_BL_SZ_RES 1
+#define qd_M_r_FL_FR_BL_SZ_IW 0
+#define qd_M_r_FL_FR_BL_SZ_W 0
+int qd_CG_r_FL_FR_BL(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem);
+int qd_CG_r_FL_FR_BL_checkout(void);
+void qd_CG_r_FL_FR_BL_release(int mem);
+void qd_CG_r_FL_FR_BL_incref(void);
+void qd_CG_r_FL_FR_BL_decref(void);
+casadi_int qd_CG_r_FL_FR_BL_n_in(void);
+casadi_int qd_CG_r_FL_FR_BL_n_out(void);
+casadi_real qd_CG_r_FL_FR_BL_default_in(casadi_int i);
+const char* qd_CG_r_FL_FR_BL_name_in(casadi_int i);
+const char* qd_CG_r_FL_FR_BL_name_out(casadi_int i);
+const casadi_int* qd_CG_r_FL_FR_BL_sparsity_in(casadi_int i);
+const casadi_int* qd_CG_r_FL_FR_BL_sparsity_out(casadi_int i);
+int qd_CG_r_FL_FR_BL_work(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz_iw, casadi_int *sz_w);
+int qd_CG_r_FL_FR_BL_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz_iw, casadi_int *sz_w);
+#define qd_CG_r_FL_FR_BL_SZ_ARG 3
+#define qd_CG_r_FL_FR_BL_SZ_RES 1
+#define qd_CG_r_FL_FR_BL_SZ_IW 0
+#define qd_CG_r_FL_FR_BL_SZ_W 0
+int qd_G_r_FL_FR_BL(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem);
+int qd_G_r_FL_FR_BL_checkout(void);
+void qd_G_r_FL_FR_BL_release(int mem);
+void qd_G_r_FL_FR_BL_incref(void);
+void qd_G_r_FL_FR_BL_decref(void);
+casadi_int qd_G_r_FL_FR_BL_n_in(void);
+casadi_int qd_G_r_FL_FR_BL_n_out(void);
+casadi_real qd_G_r_FL_FR_BL_default_in(casadi_int i);
+const char* qd_G_r_FL_FR_BL_name_in(casadi_int i);
+const char* qd_G_r_FL_FR_BL_name_out(casadi_int i);
+const casadi_int* qd_G_r_FL_FR_BL_sparsity_in(casadi_int i);
+const casadi_int* qd_G_r_FL_FR_BL_sparsity_out(casadi_int i);
+int qd_G_r_FL_FR_BL_work(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz_iw, casadi_int *sz_w);
+int qd_G_r_FL_FR_BL_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz_iw, casadi_int *sz_w);
+#define qd_G_r_FL_FR_BL_SZ_ARG 2
+#define qd_G_r_FL_FR_BL_SZ_RES 1
+#define qd_G_r_FL_FR_BL_SZ_IW 0
+#define qd_G_r_FL_FR_BL_SZ_W 0
+int qd_id_r_FL_FR_BL(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem);
+int qd_id_r_FL_FR_BL_checkout(void);
+void qd_id_r_FL_FR_BL_release(int mem);
+void qd_id_r_FL_FR_BL_incref(void);
+void qd_id_r_FL_FR_BL_decref(void);
+casadi_int qd_id_r_FL_FR_BL_n_in(void);
+casadi_int qd_id_r_FL_FR_BL_n_out(void);
+casadi_real qd_id_r_FL_FR_BL_default_in(casadi_int i);
+const char* qd_id_r_FL_FR_BL_name_in(casadi_int i);
+const char* qd_id_r_FL_FR_BL_name_out(casadi_int i);
+const casadi_int* qd_id_r_FL_FR_BL_sparsity_in(casadi_int i);
+const casadi_int* qd_id_r_FL_FR_BL_sparsity_out(casadi_int i);
+int qd_id_r_FL_FR_BL_work(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz_iw, casadi_int *sz_w);
+int qd_id_r_FL_FR_BL_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz_iw, casadi_int *sz_w);
+#define qd_id_r_FL_FR_BL_SZ_ARG 4
+#define qd_id_r_FL_FR_BL_SZ_RES 1
+#define qd_id_r_FL_FR_BL_SZ_IW 0
+#define qd_id_r_FL_FR_BL_SZ_W 0
+int qd_fd_r_FL_FR_BL(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem);
+int qd_fd_r_FL_FR_BL_checkout(void);
+void qd_fd_r_FL_FR_BL_release(int mem);
+void qd_fd_r_FL_FR_BL_incref(void);
+void qd_fd_r_FL_FR_BL_decref(void);
+casadi_int qd_fd_r_FL_FR_BL_n_in(void);
+casadi_int qd_fd_r_FL_FR_BL_n_out(void);
+casadi_real qd_fd_r_FL_FR_BL_default_in(casadi_int i);
+const char* qd_fd_r_FL_FR_BL_name_in(casadi_int i);
+const char* qd_fd_r_FL_FR_BL_name_out(casadi_int i);
+const casadi_int* qd_fd_r_FL_FR_BL_sparsity_in(casadi_int i);
+const casadi_int* qd_fd_r_FL_FR_BL_sparsity_out(casadi_int i);
+int qd_fd_r_FL_FR_BL_work(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz_iw, casadi_int *sz_w);
+int qd_fd_r_FL_FR_BL_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz_iw, casadi_int *sz_w);
+#define qd_fd_r_FL_FR_BL_SZ_ARG 4
+#define qd_fd_r_FL_FR_BL_SZ_RES 1
+#define qd_fd_r_FL_FR_BL_SZ_IW 0
+#define qd_fd_r_FL_FR_BL_SZ_W 0
+void qd_paper_r_FL_FR_BL_casadi_version(int* major, int* minor, int* patch);
+int qd_paper_r_FL_FR_BL_casadi_int_size(void);
+int qd_paper_r_FL_FR_BL_casadi_real_size(void);
+#ifdef __cplusplus
+} /* extern "C" */
+#endif
+/* This file was automatically generated by CasADi 3.8.2.
+ *  It consists of: 
+ *   1) content generated by CasADi runtime: not copyrighted
+ *   2) template code copied from CasADi source: permissively licensed (MIT-0)
+ *   3) user code: owned by the user
+ *
+ */
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+#ifndef casadi_real
+#define casadi_real double
+#endif
+
+#ifndef casadi_int
+#define casadi_int long long int
+#endif
+
+int qd_M_r_FL_FR_BR(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem);
+int qd_M_r_FL_FR_BR_checkout(void);
+void qd_M_r_FL_FR_BR_release(int mem);
+void qd_M_r_FL_FR_BR_incref(void);
+void qd_M_r_FL_FR_BR_decref(void);
+casadi_int qd_M_r_FL_FR_BR_n_in(void);
+casadi_int qd_M_r_FL_FR_BR_n_out(void);
+casadi_real qd_M_r_FL_FR_BR_default_in(casadi_int i);
+const char* qd_M_r_FL_FR_BR_name_in(casadi_int i);
+const char* qd_M_r_FL_FR_BR_name_out(casadi_int i);
+const casadi_int* qd_M_r_FL_FR_BR_sparsity_in(casadi_int i);
+const casadi_int* qd_M_r_FL_FR_BR_sparsity_out(casadi_int i);
+int qd_M_r_FL_FR_BR_work(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz_iw, casadi_int *sz_w);
+int qd_M_r_FL_FR_BR_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz_iw, casadi_int *sz_w);
+#define qd_M_r_FL_FR_BR_SZ_ARG 2
+#define qd_M_r_FL_FR_BR_SZ_RES 1
+#define qd_M_r_FL_FR_BR_SZ_IW 0
+#define qd_M_r_FL_FR_BR_SZ_W 0
+int qd_CG_r_FL_FR_BR(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem);
+int qd_CG_r_FL_FR_BR_checkout(void);
+void qd_CG_r_FL_FR_BR_release(int mem);
+void qd_CG_r_FL_FR_BR_incref(void);
+void qd_CG_r_FL_FR_BR_decref(void);
+casadi_int qd_CG_r_FL_FR_BR_n_in(void);
+casadi_int qd_CG_r_FL_FR_BR_n_out(void);
+casadi_real qd_CG_r_FL_FR_BR_default_in(casadi_int i);
+const char* qd_CG_r_FL_FR_BR_name_in(casadi_int i);
+const char* qd_CG_r_FL_FR_BR_name_out(casadi_int i);
+const casadi_int* qd_CG_r_FL_FR_BR_sparsity_in(casadi_int i);
+const casadi_int* qd_CG_r_FL_FR_BR_sparsity_out(casadi_int i);
+int qd_CG_r_FL_FR_BR_work(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz_iw, casadi_int *sz_w);
+int qd_CG_r_FL_FR_BR_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz_iw, casadi_int *sz_w);
+#define qd_CG_r_FL_FR_BR_SZ_ARG 3
+#define qd_CG_r_FL_FR_BR_SZ_RES 1
+#define qd_CG_r_FL_FR_BR_SZ_IW 0
+#define qd_CG_r_FL_FR_BR_SZ_W 0
+int qd_G_r_FL_FR_BR(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem);
+int qd_G_r_FL_FR_BR_checkout(void);
+void qd_G_r_FL_FR_BR_release(int mem);
+void qd_G_r_FL_FR_BR_incref(void);
+void qd_G_r_FL_FR_BR_decref(void);
+casadi_int qd_G_r_FL_FR_BR_n_in(void);
+casadi_int qd_G_r_FL_FR_BR_n_out(void);
+casadi_real qd_G_r_FL_FR_BR_default_in(casadi_int i);
+const char* qd_G_r_FL_FR_BR_name_in(casadi_int i);
+const char* qd_G_r_FL_FR_BR_name_out(casadi_int i);
+const casadi_int* qd_G_r_FL_FR_BR_sparsity_in(casadi_int i);
+const casadi_int* qd_G_r_FL_FR_BR_sparsity_out(casadi_int i);
+int qd_G_r_FL_FR_BR_work(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz_iw, casadi_int *sz_w);
+int qd_G_r_FL_FR_BR_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz_iw, casadi_int *sz_w);
+#define qd_G_r_FL_FR_BR_SZ_ARG 2
+#define qd_G_r_FL_FR_BR_SZ_RES 1
+#define qd_G_r_FL_FR_BR_SZ_IW 0
+#define qd_G_r_FL_FR_BR_SZ_W 0
+int qd_id_r_FL_FR_BR(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem);
+int qd_id_r_FL_FR_BR_checkout(void);
+void qd_id_r_FL_FR_BR_release(int mem);
+void qd_id_r_FL_FR_BR_incref(void);
+void qd_id_r_FL_FR_BR_decref(void);
+casadi_int qd_id_r_FL_FR_BR_n_in(void);
+casadi_int qd_id_r_FL_FR_BR_n_out(void);
+casadi_real qd_id_r_FL_FR_BR_default_in(casadi_int i);
+const char* qd_id_r_FL_FR_BR_name_in(casadi_int i);
+const char* qd_id_r_FL_FR_BR_name_out(casadi_int i);
+const casadi_int* qd_id_r_FL_FR_BR_sparsity_in(casadi_int i);
+const casadi_int* qd_id_r_FL_FR_BR_sparsity_out(casadi_int i);
+int qd_id_r_FL_FR_BR_work(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz_iw, casadi_int *sz_w);
+int qd_id_r_FL_FR_BR_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz_iw, casadi_int *sz_w);
+#define qd_id_r_FL_FR_BR_SZ_ARG 4
+#define qd_id_r_FL_FR_BR_SZ_RES 1
+#define qd_id_r_FL_FR_BR_SZ_IW 0
+#define qd_id_r_FL_FR_BR_SZ_W 0
+int qd_fd_r_FL_FR_BR(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem);
+int qd_fd_r_FL_FR_BR_checkout(void);
+void qd_fd_r_FL_FR_BR_release(int mem);
+void qd_fd_r_FL_FR_BR_incref(void);
+void qd_fd_r_FL_FR_BR_decref(void);
+casadi_int qd_fd_r_FL_FR_BR_n_in(void);
+casadi_int qd_fd_r_FL_FR_BR_n_out(void);
+casadi_real qd_fd_r_FL_FR_BR_default_in(casadi_int i);
+const char* qd_fd_r_FL_FR_BR_name_in(casadi_int i);
+const char* qd_fd_r_FL_FR_BR_name_out(casadi_int i);
+const casadi_int* qd_fd_r_FL_FR_BR_sparsity_in(casadi_int i);
+const casadi_int* qd_fd_r_FL_FR_BR_sparsity_out(casadi_int i);
+int qd_fd_r_FL_FR_BR_work(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz_iw, casadi_int *sz_w);
+int qd_fd_r_FL_FR_BR_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz_iw, casadi_int *sz_w);
+#define qd_fd_r_FL_FR_BR_SZ_ARG 4
+#define qd_fd_r_FL_FR_BR_SZ_RES 1
+#define qd_fd_r_FL_FR_BR_SZ_IW 0
+#define qd_fd_r_FL_FR_BR_SZ_W 0
+void qd_paper_r_FL_FR_BR_casadi_version(int* major, int* minor, int* patch);
+int qd_paper_r_FL_FR_BR_casadi_int_size(void);
+int qd_paper_r_FL_FR_BR_casadi_real_size(void);
+#ifdef __cplusplus
+} /* extern "C" */
+#endif
+/* This file was automatically generated by CasADi 3.8.2.
+ *  It consists of: 
+ *   1) content generated by CasADi runtime: not copyrighted
+ *   2) template code copied from CasADi source: permissively licensed (MIT-0)
+ *   3) user code: owned by the user
+ *
+ */
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+#ifndef casadi_real
+#define casadi_real double
+#endif
+
+#ifndef casadi_int
+#define casadi_int long long int
+#endif
+
+int qd_M_r_FL_BL_BR(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem);
+int qd_M_r_FL_BL_BR_checkout(void);
+void qd_M_r_FL_BL_BR_release(int mem);
+void qd_M_r_FL_BL_BR_incref(void);
+void qd_M_r_FL_BL_BR_decref(void);
+casadi_int qd_M_r_FL_BL_BR_n_in(void);
+casadi_int qd_M_r_FL_BL_BR_n_out(void);
+casadi_real qd_M_r_FL_BL_BR_default_in(casadi_int i);
+const char* qd_M_r_FL_BL_BR_name_in(casadi_int i);
+const char* qd_M_r_FL_BL_BR_name_out(casadi_int i);
+const casadi_int* qd_M_r_FL_BL_BR_sparsity_in(casadi_int i);
+const casadi_int* qd_M_r_FL_BL_BR_sparsity_out(casadi_int i);
+int qd_M_r_FL_BL_BR_work(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz_iw, casadi_int *sz_w);
+int qd_M_r_FL_BL_BR_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz_iw, casadi_int *sz_w);
+#define qd_M_r_FL_BL_BR_SZ_ARG 2
+#define qd_M_r_FL_BL_BR_SZ_RES 1
+#define qd_M_r_FL_BL_BR_SZ_IW 0
+#define qd_M_r_FL_BL_BR_SZ_W 0
+int qd_CG_r_FL_BL_BR(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem);
+int qd_CG_r_FL_BL_BR_checkout(void);
+void qd_CG_r_FL_BL_BR_release(int mem);
+void qd_CG_r_FL_BL_BR_incref(void);
+void qd_CG_r_FL_BL_BR_decref(void);
+casadi_int qd_CG_r_FL_BL_BR_n_in(void);
+casadi_int qd_CG_r_FL_BL_BR_n_out(void);
+casadi_real qd_CG_r_FL_BL_BR_default_in(casadi_int i);
+const char* qd_CG_r_FL_BL_BR_name_in(casadi_int i);
+const char* qd_CG_r_FL_BL_BR_name_out(casadi_int i);
+const casadi_int* qd_CG_r_FL_BL_BR_sparsity_in(casadi_int i);
+const casadi_int* qd_CG_r_FL_BL_BR_sparsity_out(casadi_int i);
+int qd_CG_r_FL_BL_BR_work(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz_iw, casadi_int *sz_w);
+int qd_CG_r_FL_BL_BR_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz_iw, casadi_int *sz_w);
+#define qd_CG_r_FL_BL_BR_SZ_ARG 3
+#define qd_CG_r_FL_BL_BR_SZ_RES 1
+#define qd_CG_r_FL_BL_BR_SZ_IW 0
+#define qd_CG_r_FL_BL_BR_SZ_W 0
+int qd_G_r_FL_BL_BR(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem);
+int qd_G_r_FL_BL_BR_checkout(void);
+void qd_G_r_FL_BL_BR_release(int mem);
+void qd_G_r_FL_BL_BR_incref(void);
+void qd_G_r_FL_BL_BR_decref(void);
+casadi_int qd_G_r_FL_BL_BR_n_in(void);
+casadi_int qd_G_r_FL_BL_BR_n_out(void);
+casadi_real qd_G_r_FL_BL_BR_default_in(casadi_int i);
+const char* qd_G_r_FL_BL_BR_name_in(casadi_int i);
+const char* qd_G_r_FL_BL_BR_name_out(casadi_int i);
+const casadi_int* qd_G_r_FL_BL_BR_sparsity_in(casadi_int i);
+const casadi_int* qd_G_r_FL_BL_BR_sparsity_out(casadi_int i);
+int qd_G_r_FL_BL_BR_work(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz_iw, casadi_int *sz_w);
+int qd_G_r_FL_BL_BR_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz_iw, casadi_int *sz_w);
+#define qd_G_r_FL_BL_BR_SZ_ARG 2
+#define qd_G_r_FL_BL_BR_SZ_RES 1
+#define qd_G_r_FL_BL_BR_SZ_IW 0
+#define qd_G_r_FL_BL_BR_SZ_W 0
+int qd_id_r_FL_BL_BR(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem);
+int qd_id_r_FL_BL_BR_checkout(void);
+void qd_id_r_FL_BL_BR_release(int mem);
+void qd_id_r_FL_BL_BR_incref(void);
+void qd_id_r_FL_BL_BR_decref(void);
+casadi_int qd_id_r_FL_BL_BR_n_in(void);
+casadi_int qd_id_r_FL_BL_BR_n_out(void);
+casadi_real qd_id_r_FL_BL_BR_default_in(casadi_int i);
+const char* qd_id_r_FL_BL_BR_name_in(casadi_int i);
+const char* qd_id_r_FL_BL_BR_name_out(casadi_int i);
+const casadi_int* qd_id_r_FL_BL_BR_sparsity_in(casadi_int i);
+const casadi_int* qd_id_r_FL_BL_BR_sparsity_out(casadi_int i);
+int qd_id_r_FL_BL_BR_work(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz_iw, casadi_int *sz_w);
+int qd_id_r_FL_BL_BR_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz_iw, casadi_int *sz_w);
+#define qd_id_r_FL_BL_BR_SZ_ARG 4
+#define qd_id_r_FL_BL_BR_SZ_RES 1
+#define qd_id_r_FL_BL_BR_SZ_IW 0
+#define qd_id_r_FL_BL_BR_SZ_W 0
+int qd_fd_r_FL_BL_BR(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem);
+int qd_fd_r_FL_BL_BR_checkout(void);
+void qd_fd_r_FL_BL_BR_release(int mem);
+void qd_fd_r_FL_BL_BR_incref(void);
+void qd_fd_r_FL_BL_BR_decref(void);
+casadi_int qd_fd_r_FL_BL_BR_n_in(void);
+casadi_int qd_fd_r_FL_BL_BR_n_out(void);
+casadi_real qd_fd_r_FL_BL_BR_default_in(casadi_int i);
+const char* qd_fd_r_FL_BL_BR_name_in(casadi_int i);
+const char* qd_fd_r_FL_BL_BR_name_out(casadi_int i);
+const casadi_int* qd_fd_r_FL_BL_BR_sparsity_in(casadi_int i);
+const casadi_int* qd_fd_r_FL_BL_BR_sparsity_out(casadi_int i);
+int qd_fd_r_FL_BL_BR_work(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz_iw, casadi_int *sz_w);
+int qd_fd_r_FL_BL_BR_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz_iw, casadi_int *sz_w);
+#define qd_fd_r_FL_BL_BR_SZ_ARG 4
+#define qd_fd_r_FL_BL_BR_SZ_RES 1
+#define qd_fd_r_FL_BL_BR_SZ_IW 0
+#define qd_fd_r_FL_BL_BR_SZ_W 0
+void qd_paper_r_FL_BL_BR_casadi_version(int* major, int* minor, int* patch);
+int qd_paper_r_FL_BL_BR_casadi_int_size(void);
+int qd_paper_r_FL_BL_BR_casadi_real_size(void);
+#ifdef __cplusplus
+} /* extern "C" */
+#endif
+/* This file was automatically generated by CasADi 3.8.2.
+ *  It consists of: 
+ *   1) content generated by CasADi runtime: not copyrighted
+ *   2) template code copied from CasADi source: permissively licensed (MIT-0)
+ *   3) user code: owned by the user
+ *
+ */
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+#ifndef casadi_real
+#define casadi_real double
+#endif
+
+#ifndef casadi_int
+#define casadi_int long long int
+#endif
+
+int qd_M_r_FR_BL_BR(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem);
+int qd_M_r_FR_BL_BR_checkout(void);
+void qd_M_r_FR_BL_BR_release(int mem);
+void qd_M_r_FR_BL_BR_incref(void);
+void qd_M_r_FR_BL_BR_decref(void);
+casadi_int qd_M_r_FR_BL_BR_n_in(void);
+casadi_int qd_M_r_FR_BL_BR_n_out(void);
+casadi_real qd_M_r_FR_BL_BR_default_in(casadi_int i);
+const char* qd_M_r_FR_BL_BR_name_in(casadi_int i);
+const char* qd_M_r_FR_BL_BR_name_out(casadi_int i);
+const casadi_int* qd_M_r_FR_BL_BR_sparsity_in(casadi_int i);
+const casadi_int* qd_M_r_FR_BL_BR_sparsity_out(casadi_int i);
+int qd_M_r_FR_BL_BR_work(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz_iw, casadi_int *sz_w);
+int qd_M_r_FR_BL_BR_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz_iw, casadi_int *sz_w);
+#define qd_M_r_FR_BL_BR_SZ_ARG 2
+#define qd_M_r_FR_BL_BR_SZ_RES 1
+#define qd_M_r_FR_BL_BR_SZ_IW 0
+#define qd_M_r_FR_BL_BR_SZ_W 0
+int qd_CG_r_FR_BL_BR(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem);
+int qd_CG_r_FR_BL_BR_checkout(void);
+void qd_CG_r_FR_BL_BR_release(int mem);
+void qd_CG_r_FR_BL_BR_incref(void);
+void qd_CG_r_FR_BL_BR_decref(void);
+casadi_int qd_CG_r_FR_BL_BR_n_in(void);
+casadi_int qd_CG_r_FR_BL_BR_n_out(void);
+casadi_real qd_CG_r_FR_BL_BR_default_in(casadi_int i);
+const char* qd_CG_r_FR_BL_BR_name_in(casadi_int i);
+const char* qd_CG_r_FR_BL_BR_name_out(casadi_int i);
+const casadi_int* qd_CG_r_FR_BL_BR_sparsity_in(casadi_int i);
+const casadi_int* qd_CG_r_FR_BL_BR_sparsity_out(casadi_int i);
+int qd_CG_r_FR_BL_BR_work(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz_iw, casadi_int *sz_w);
+int qd_CG_r_FR_BL_BR_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz_iw, casadi_int *sz_w);
+#define qd_CG_r_FR_BL_BR_SZ_ARG 3
+#define qd_CG_r_FR_BL_BR_SZ_RES 1
+#define qd_CG_r_FR_BL_BR_SZ_IW 0
+#define qd_CG_r_FR_BL_BR_SZ_W 0
+int qd_G_r_FR_BL_BR(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem);
+int qd_G_r_FR_BL_BR_checkout(void);
+void qd_G_r_FR_BL_BR_release(int mem);
+void qd_G_r_FR_BL_BR_incref(void);
+void qd_G_r_FR_BL_BR_decref(void);
+casadi_int qd_G_r_FR_BL_BR_n_in(void);
+casadi_int qd_G_r_FR_BL_BR_n_out(void);
+casadi_real qd_G_r_FR_BL_BR_default_in(casadi_int i);
+const char* qd_G_r_FR_BL_BR_name_in(casadi_int i);
+const char* qd_G_r_FR_BL_BR_name_out(casadi_int i);
+const casadi_int* qd_G_r_FR_BL_BR_sparsity_in(casadi_int i);
+const casadi_int* qd_G_r_FR_BL_BR_sparsity_out(casadi_int i);
+int qd_G_r_FR_BL_BR_work(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz_iw, casadi_int *sz_w);
+int qd_G_r_FR_BL_BR_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz_iw, casadi_int *sz_w);
+#define qd_G_r_FR_BL_BR_SZ_ARG 2
+#define qd_G_r_FR_BL_BR_SZ_RES 1
+#define qd_G_r_FR_BL_BR_SZ_IW 0
+#define qd_G_r_FR_BL_BR_SZ_W 0
+int qd_id_r_FR_BL_BR(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem);
+int qd_id_r_FR_BL_BR_checkout(void);
+void qd_id_r_FR_BL_BR_release(int mem);
+void qd_id_r_FR_BL_BR_incref(void);
+void qd_id_r_FR_BL_BR_decref(void);
+casadi_int qd_id_r_FR_BL_BR_n_in(void);
+casadi_int qd_id_r_FR_BL_BR_n_out(void);
+casadi_real qd_id_r_FR_BL_BR_default_in(casadi_int i);
+const char* qd_id_r_FR_BL_BR_name_in(casadi_int i);
+const char* qd_id_r_FR_BL_BR_name_out(casadi_int i);
+const casadi_int* qd_id_r_FR_BL_BR_sparsity_in(casadi_int i);
+const casadi_int* qd_id_r_FR_BL_BR_sparsity_out(casadi_int i);
+int qd_id_r_FR_BL_BR_work(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz_iw, casadi_int *sz_w);
+int qd_id_r_FR_BL_BR_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz_iw, casadi_int *sz_w);
+#define qd_id_r_FR_BL_BR_SZ_ARG 4
+#define qd_id_r_FR_BL_BR_SZ_RES 1
+#define qd_id_r_FR_BL_BR_SZ_IW 0
+#define qd_id_r_FR_BL_BR_SZ_W 0
+int qd_fd_r_FR_BL_BR(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem);
+int qd_fd_r_FR_BL_BR_checkout(void);
+void qd_fd_r_FR_BL_BR_release(int mem);
+void qd_fd_r_FR_BL_BR_incref(void);
+void qd_fd_r_FR_BL_BR_decref(void);
+casadi_int qd_fd_r_FR_BL_BR_n_in(void);
+casadi_int qd_fd_r_FR_BL_BR_n_out(void);
+casadi_real qd_fd_r_FR_BL_BR_default_in(casadi_int i);
+const char* qd_fd_r_FR_BL_BR_name_in(casadi_int i);
+const char* qd_fd_r_FR_BL_BR_name_out(casadi_int i);
+const casadi_int* qd_fd_r_FR_BL_BR_sparsity_in(casadi_int i);
+const casadi_int* qd_fd_r_FR_BL_BR_sparsity_out(casadi_int i);
+int qd_fd_r_FR_BL_BR_work(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz_iw, casadi_int *sz_w);
+int qd_fd_r_FR_BL_BR_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz_iw, casadi_int *sz_w);
+#define qd_fd_r_FR_BL_BR_SZ_ARG 4
+#define qd_fd_r_FR_BL_BR_SZ_RES 1
+#define qd_fd_r_FR_BL_BR_SZ_IW 0
+#define qd_fd_r_FR_BL_BR_SZ_W 0
+void qd_paper_r_FR_BL_BR_casadi_version(int* major, int* minor, int* patch);
+int qd_paper_r_FR_BL_BR_casadi_int_size(void);
+int qd_paper_r_FR_BL_BR_casadi_real_size(void);
+#ifdef __cplusplus
+} /* extern "C" */
+#endif
+/* This file was automatically generated by CasADi 3.8.2.
+ *  It consists of: 
+ *   1) content generated by CasADi runtime: not copyrighted
+ *   2) template code copied from CasADi source: permissively licensed (MIT-0)
+ *   3) user code: owned by the user
+ *
+ */
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+#ifndef casadi_real
+#define casadi_real double
+#endif
+
+#ifndef casadi_int
+#define casadi_int long long int
+#endif
+
+int qd_M_r_FL_FR(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem);
+int qd_M_r_FL_FR_checkout(void);
+void qd_M_r_FL_FR_release(int mem);
+void qd_M_r_FL_FR_incref(void);
+void qd_M_r_FL_FR_decref(void);
+casadi_int qd_M_r_FL_FR_n_in(void);
+casadi_int qd_M_r_FL_FR_n_out(void);
+casadi_real qd_M_r_FL_FR_default_in(casadi_int i);
+const char* qd_M_r_FL_FR_name_in(casadi_int i);
+const char* qd_M_r_FL_FR_name_out(casadi_int i);
+const casadi_int* qd_M_r_FL_FR_sparsity_in(casadi_int i);
+const casadi_int* qd_M_r_FL_FR_sparsity_out(casadi_int i);
+int qd_M_r_FL_FR_work(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz_iw, casadi_int *sz_w);
+int qd_M_r_FL_FR_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz_iw, casadi_int *sz_w);
+#define qd_M_r_FL_FR_SZ_ARG 2
+#define qd_M_r_FL_FR_SZ_RES 1
+#define qd_M_r_FL_FR_SZ_IW 0
+#define qd_M_r_FL_FR_SZ_W 0
+int qd_CG_r_FL_FR(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem);
+int qd_CG_r_FL_FR_checkout(void);
+void qd_CG_r_FL_FR_release(int mem);
+void qd_CG_r_FL_FR_incref(void);
+void qd_CG_r_FL_FR_decref(void);
+casadi_int qd_CG_r_FL_FR_n_in(void);
+casadi_int qd_CG_r_FL_FR_n_out(void);
+casadi_real qd_CG_r_FL_FR_default_in(casadi_int i);
+const char* qd_CG_r_FL_FR_name_in(casadi_int i);
+const char* qd_CG_r_FL_FR_name_out(casadi_int i);
+const casadi_int* qd_CG_r_FL_FR_sparsity_in(casadi_int i);
+const casadi_int* qd_CG_r_FL_FR_sparsity_out(casadi_int i);
+int qd_CG_r_FL_FR_work(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz_iw, casadi_int *sz_w);
+int qd_CG_r_FL_FR_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz_iw, casadi_int *sz_w);
+#define qd_CG_r_FL_FR_SZ_ARG 3
+#define qd_CG_r_FL_FR_SZ_RES 1
+#define qd_CG_r_FL_FR_SZ_IW 0
+#define qd_CG_r_FL_FR_SZ_W 0
+int qd_G_r_FL_FR(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem);
+int qd_G_r_FL_FR_checkout(void);
+void qd_G_r_FL_FR_release(int mem);
+void qd_G_r_FL_FR_incref(void);
+void qd_G_r_FL_FR_decref(void);
+casadi_int qd_G_r_FL_FR_n_in(void);
+casadi_int qd_G_r_FL_FR_n_out(void);
+casadi_real qd_G_r_FL_FR_default_in(casadi_int i);
+const char* qd_G_r_FL_FR_name_in(casadi_int i);
+const char* qd_G_r_FL_FR_name_out(casadi_int i);
+const casadi_int* qd_G_r_FL_FR_sparsity_in(casadi_int i);
+const casadi_int* qd_G_r_FL_FR_sparsity_out(casadi_int i);
+int qd_G_r_FL_FR_work(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz_iw, casadi_int *sz_w);
+int qd_G_r_FL_FR_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz_iw, casadi_int *sz_w);
+#define qd_G_r_FL_FR_SZ_ARG 2
+#define qd_G_r_FL_FR_SZ_RES 1
+#define qd_G_r_FL_FR_SZ_IW 0
+#define qd_G_r_FL_FR_SZ_W 0
+int qd_id_r_FL_FR(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem);
+int qd_id_r_FL_FR_checkout(void);
+void qd_id_r_FL_FR_release(int mem);
+void qd_id_r_FL_FR_incref(void);
+void qd_id_r_FL_FR_decref(void);
+casadi_int qd_id_r_FL_FR_n_in(void);
+casadi_int qd_id_r_FL_FR_n_out(void);
+casadi_real qd_id_r_FL_FR_default_in(casadi_int i);
+const char* qd_id_r_FL_FR_name_in(casadi_int i);
+const char* qd_id_r_FL_FR_name_out(casadi_int i);
+const casadi_int* qd_id_r_FL_FR_sparsity_in(casadi_int i);
+const casadi_int* qd_id_r_FL_FR_sparsity_out(casadi_int i);
+int qd_id_r_FL_FR_work(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz_iw, casadi_int *sz_w);
+int qd_id_r_FL_FR_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz_iw, casadi_int *sz_w);
+#define qd_id_r_FL_FR_SZ_ARG 4
+#define qd_id_r_FL_FR_SZ_RES 1
+#define qd_id_r_FL_FR_SZ_IW 0
+#define qd_id_r_FL_FR_SZ_W 0
+int qd_fd_r_FL_FR(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem);
+int qd_fd_r_FL_FR_checkout(void);
+void qd_fd_r_FL_FR_release(int mem);
+void qd_fd_r_FL_FR_incref(void);
+void qd_fd_r_FL_FR_decref(void);
+casadi_int qd_fd_r_FL_FR_n_in(void);
+casadi_int qd_fd_r_FL_FR_n_out(void);
+casadi_real qd_fd_r_FL_FR_default_in(casadi_int i);
+const char* qd_fd_r_FL_FR_name_in(casadi_int i);
+const char* qd_fd_r_FL_FR_name_out(casadi_int i);
+const casadi_int* qd_fd_r_FL_FR_sparsity_in(casadi_int i);
+const casadi_int* qd_fd_r_FL_FR_sparsity_out(casadi_int i);
+int qd_fd_r_FL_FR_work(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz_iw, casadi_int *sz_w);
+int qd_fd_r_FL_FR_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz_iw, casadi_int *sz_w);
+#define qd_fd_r_FL_FR_SZ_ARG 4
+#define qd_fd_r_FL_FR_SZ_RES 1
+#define qd_fd_r_FL_FR_SZ_IW 0
+#define qd_fd_r_FL_FR_SZ_W 0
+void qd_paper_r_FL_FR_casadi_version(int* major, int* minor, int* patch);
+int qd_paper_r_FL_FR_casadi_int_size(void);
+int qd_paper_r_FL_FR_casadi_real_size(void);
+#ifdef __cplusplus
+} /* extern "C" */
+#endif
+/* This file was automatically generated by CasADi 3.8.2.
+ *  It consists of: 
+ *   1) content generated by CasADi runtime: not copyrighted
+ *   2) template code copied from CasADi source: permissively licensed (MIT-0)
+ *   3) user code: owned by the user
+ *
+ */
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+#ifndef casadi_real
+#define casadi_real double
+#endif
+
+#ifndef casadi_int
+#define casadi_int long long int
+#endif
+
+int qd_M_r_FL_BL(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem);
+int qd_M_r_FL_BL_checkout(void);
+void qd_M_r_FL_BL_release(int mem);
+void qd_M_r_FL_BL_incref(void);
+void qd_M_r_FL_BL_decref(void);
+casadi_int qd_M_r_FL_BL_n_in(void);
+casadi_int qd_M_r_FL_BL_n_out(void);
+casadi_real qd_M_r_FL_BL_default_in(casadi_int i);
+const char* qd_M_r_FL_BL_name_in(casadi_int i);
+const char* qd_M_r_FL_BL_name_out(casadi_int i);
+const casadi_int* qd_M_r_FL_BL_sparsity_in(casadi_int i);
+const casadi_int* qd_M_r_FL_BL_sparsity_out(casadi_int i);
+int qd_M_r_FL_BL_work(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz_iw, casadi_int *sz_w);
+int qd_M_r_FL_BL_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz_iw, casadi_int *sz_w);
+#define qd_M_r_FL_BL_SZ_ARG 2
+#define qd_M_r_FL_BL_SZ_RES 1
+#define qd_M_r_FL_BL_SZ_IW 0
+#define qd_M_r_FL_BL_SZ_W 0
+int qd_CG_r_FL_BL(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem);
+int qd_CG_r_FL_BL_checkout(void);
+void qd_CG_r_FL_BL_release(int mem);
+void qd_CG_r_FL_BL_incref(void);
+void qd_CG_r_FL_BL_decref(void);
+casadi_int qd_CG_r_FL_BL_n_in(void);
+casadi_int qd_CG_r_FL_BL_n_out(void);
+casadi_real qd_CG_r_FL_BL_default_in(casadi_int i);
+const char* qd_CG_r_FL_BL_name_in(casadi_int i);
+const char* qd_CG_r_FL_BL_name_out(casadi_int i);
+const casadi_int* qd_CG_r_FL_BL_sparsity_in(casadi_int i);
+const casadi_int* qd_CG_r_FL_BL_sparsity_out(casadi_int i);
+int qd_CG_r_FL_BL_work(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz_iw, casadi_int *sz_w);
+int qd_CG_r_FL_BL_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz_iw, casadi_int *sz_w);
+#define qd_CG_r_FL_BL_SZ_ARG 3
+#define qd_CG_r_FL_BL_SZ_RES 1
+#define qd_CG_r_FL_BL_SZ_IW 0
+#define qd_CG_r_FL_BL_SZ_W 0
+int qd_G_r_FL_BL(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem);
+int qd_G_r_FL_BL_checkout(void);
+void qd_G_r_FL_BL_release(int mem);
+void qd_G_r_FL_BL_incref(void);
+void qd_G_r_FL_BL_decref(void);
+casadi_int qd_G_r_FL_BL_n_in(void);
+casadi_int qd_G_r_FL_BL_n_out(void);
+casadi_real qd_G_r_FL_BL_default_in(casadi_int i);
+const char* qd_G_r_FL_BL_name_in(casadi_int i);
+const char* qd_G_r_FL_BL_name_out(casadi_int i);
+const casadi_int* qd_G_r_FL_BL_sparsity_in(casadi_int i);
+const casadi_int* qd_G_r_FL_BL_sparsity_out(casadi_int i);
+int qd_G_r_FL_BL_work(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz_iw, casadi_int *sz_w);
+int qd_G_r_FL_BL_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz_iw, casadi_int *sz_w);
+#define qd_G_r_FL_BL_SZ_ARG 2
+#define qd_G_r_FL_BL_SZ_RES 1
+#define qd_G_r_FL_BL_SZ_IW 0
+#define qd_G_r_FL_BL_SZ_W 0
+int qd_id_r_FL_BL(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem);
+int qd_id_r_FL_BL_checkout(void);
+void qd_id_r_FL_BL_release(int mem);
+void qd_id_r_FL_BL_incref(void);
+void qd_id_r_FL_BL_decref(void);
+casadi_int qd_id_r_FL_BL_n_in(void);
+casadi_int qd_id_r_FL_BL_n_out(void);
+casadi_real qd_id_r_FL_BL_default_in(casadi_int i);
+const char* qd_id_r_FL_BL_name_in(casadi_int i);
+const char* qd_id_r_FL_BL_name_out(casadi_int i);
+const casadi_int* qd_id_r_FL_BL_sparsity_in(casadi_int i);
+const casadi_int* qd_id_r_FL_BL_sparsity_out(casadi_int i);
+int qd_id_r_FL_BL_work(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz_iw, casadi_int *sz_w);
+int qd_id_r_FL_BL_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz_iw, casadi_int *sz_w);
+#define qd_id_r_FL_BL_SZ_ARG 4
+#define qd_id_r_FL_BL_SZ_RES 1
+#define qd_id_r_FL_BL_SZ_IW 0
+#define qd_id_r_FL_BL_SZ_W 0
+int qd_fd_r_FL_BL(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem);
+int qd_fd_r_FL_BL_checkout(void);
+void qd_fd_r_FL_BL_release(int mem);
+void qd_fd_r_FL_BL_incref(void);
+void qd_fd_r_FL_BL_decref(void);
+casadi_int qd_fd_r_FL_BL_n_in(void);
+casadi_int qd_fd_r_FL_BL_n_out(void);
+casadi_real qd_fd_r_FL_BL_default_in(casadi_int i);
+const char* qd_fd_r_FL_BL_name_in(casadi_int i);
+const char* qd_fd_r_FL_BL_name_out(casadi_int i);
+const casadi_int* qd_fd_r_FL_BL_sparsity_in(casadi_int i);
+const casadi_int* qd_fd_r_FL_BL_sparsity_out(casadi_int i);
+int qd_fd_r_FL_BL_work(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz_iw, casadi_int *sz_w);
+int qd_fd_r_FL_BL_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz_iw, casadi_int *sz_w);
+#define qd_fd_r_FL_BL_SZ_ARG 4
+#define qd_fd_r_FL_BL_SZ_RES 1
+#define qd_fd_r_FL_BL_SZ_IW 0
+#define qd_fd_r_FL_BL_SZ_W 0
+void qd_paper_r_FL_BL_casadi_version(int* major, int* minor, int* patch);
+int qd_paper_r_FL_BL_casadi_int_size(void);
+int qd_paper_r_FL_BL_casadi_real_size(void);
+#ifdef __cplusplus
+} /* extern "C" */
+#endif
+/* This file was automatically generated by CasADi 3.8.2.
+ *  It consists of: 
+ *   1) content generated by CasADi runtime: not copyrighted
+ *   2) template code copied from CasADi source: permissively licensed (MIT-0)
+ *   3) user code: owned by the user
+ *
+ */
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+#ifndef casadi_real
+#define casadi_real double
+#endif
+
+#ifndef casadi_int
+#define casadi_int long long int
+#endif
+
+int qd_M_r_FL_BR(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem);
+int qd_M_r_FL_BR_checkout(void);
+void qd_M_r_FL_BR_release(int mem);
+void qd_M_r_FL_BR_incref(void);
+void qd_M_r_FL_BR_decref(void);
+casadi_int qd_M_r_FL_BR_n_in(void);
+casadi_int qd_M_r_FL_BR_n_out(void);
+casadi_real qd_M_r_FL_BR_default_in(casadi_int i);
+const char* qd_M_r_FL_BR_name_in(casadi_int i);
+const char* qd_M_r_FL_BR_name_out(casadi_int i);
+const casadi_int* qd_M_r_FL_BR_sparsity_in(casadi_int i);
+const casadi_int* qd_M_r_FL_BR_sparsity_out(casadi_int i);
+int qd_M_r_FL_BR_work(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz_iw, casadi_int *sz_w);
+int qd_M_r_FL_BR_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz_iw, casadi_int *sz_w);
+#define qd_M_r_FL_BR_SZ_ARG 2
+#define qd_M_r_FL_BR_SZ_RES 1
+#define qd_M_r_FL_BR_SZ_IW 0
+#define qd_M_r_FL_BR_SZ_W 0
+int qd_CG_r_FL_BR(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem);
+int qd_CG_r_FL_BR_checkout(void);
+void qd_CG_r_FL_BR_release(int mem);
+void qd_CG_r_FL_BR_incref(void);
+void qd_CG_r_FL_BR_decref(void);
+casadi_int qd_CG_r_FL_BR_n_in(void);
+casadi_int qd_CG_r_FL_BR_n_out(void);
+casadi_real qd_CG_r_FL_BR_default_in(casadi_int i);
+const char* qd_CG_r_FL_BR_name_in(casadi_int i);
+const char* qd_CG_r_FL_BR_name_out(casadi_int i);
+const casadi_int* qd_CG_r_FL_BR_sparsity_in(casadi_int i);
+const casadi_int* qd_CG_r_FL_BR_sparsity_out(casadi_int i);
+int qd_CG_r_FL_BR_work(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz_iw, casadi_int *sz_w);
+int qd_CG_r_FL_BR_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz_iw, casadi_int *sz_w);
+#define qd_CG_r_FL_BR_SZ_ARG 3
+#define qd_CG_r_FL_BR_SZ_RES 1
+#define qd_CG_r_FL_BR_SZ_IW 0
+#define qd_CG_r_FL_BR_SZ_W 0
+int qd_G_r_FL_BR(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem);
+int qd_G_r_FL_BR_checkout(void);
+void qd_G_r_FL_BR_release(int mem);
+void qd_G_r_FL_BR_incref(void);
+void qd_G_r_FL_BR_decref(void);
+casadi_int qd_G_r_FL_BR_n_in(void);
+casadi_int qd_G_r_FL_BR_n_out(void);
+casadi_real qd_G_r_FL_BR_default_in(casadi_int i);
+const char* qd_G_r_FL_BR_name_in(casadi_int i);
+const char* qd_G_r_FL_BR_name_out(casadi_int i);
+const casadi_int* qd_G_r_FL_BR_sparsity_in(casadi_int i);
+const casadi_int* qd_G_r_FL_BR_sparsity_out(casadi_int i);
+int qd_G_r_FL_BR_work(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz_iw, casadi_int *sz_w);
+int qd_G_r_FL_BR_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz_iw, casadi_int *sz_w);
+#define qd_G_r_FL_BR_SZ_ARG 2
+#define qd_G_r_FL_BR_SZ_RES 1
+#define qd_G_r_FL_BR_SZ_IW 0
+#define qd_G_r_FL_BR_SZ_W 0
+int qd_id_r_FL_BR(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem);
+int qd_id_r_FL_BR_checkout(void);
+void qd_id_r_FL_BR_release(int mem);
+void qd_id_r_FL_BR_incref(void);
+void qd_id_r_FL_BR_decref(void);
+casadi_int qd_id_r_FL_BR_n_in(void);
+casadi_int qd_id_r_FL_BR_n_out(void);
+casadi_real qd_id_r_FL_BR_default_in(casadi_int i);
+const char* qd_id_r_FL_BR_name_in(casadi_int i);
+const char* qd_id_r_FL_BR_name_out(casadi_int i);
+const casadi_int* qd_id_r_FL_BR_sparsity_in(casadi_int i);
+const casadi_int* qd_id_r_FL_BR_sparsity_out(casadi_int i);
+int qd_id_r_FL_BR_work(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz_iw, casadi_int *sz_w);
+int qd_id_r_FL_BR_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz_iw, casadi_int *sz_w);
+#define qd_id_r_FL_BR_SZ_ARG 4
+#define qd_id_r_FL_BR_SZ_RES 1
+#define qd_id_r_FL_BR_SZ_IW 0
+#define qd_id_r_FL_BR_SZ_W 0
+int qd_fd_r_FL_BR(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem);
+int qd_fd_r_FL_BR_checkout(void);
+void qd_fd_r_FL_BR_release(int mem);
+void qd_fd_r_FL_BR_incref(void);
+void qd_fd_r_FL_BR_decref(void);
+casadi_int qd_fd_r_FL_BR_n_in(void);
+casadi_int qd_fd_r_FL_BR_n_out(void);
+casadi_real qd_fd_r_FL_BR_default_in(casadi_int i);
+const char* qd_fd_r_FL_BR_name_in(casadi_int i);
+const char* qd_fd_r_FL_BR_name_out(casadi_int i);
+const casadi_int* qd_fd_r_FL_BR_sparsity_in(casadi_int i);
+const casadi_int* qd_fd_r_FL_BR_sparsity_out(casadi_int i);
+int qd_fd_r_FL_BR_work(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz_iw, casadi_int *sz_w);
+int qd_fd_r_FL_BR_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz_iw, casadi_int *sz_w);
+#define qd_fd_r_FL_BR_SZ_ARG 4
+#define qd_fd_r_FL_BR_SZ_RES 1
+#define qd_fd_r_FL_BR_SZ_IW 0
+#define qd_fd_r_FL_BR_SZ_W 0
+void qd_paper_r_FL_BR_casadi_version(int* major, int* minor, int* patch);
+int qd_paper_r_FL_BR_casadi_int_size(void);
+int qd_paper_r_FL_BR_casadi_real_size(void);
+#ifdef __cplusplus
+} /* extern "C" */
+#endif
+/* This file was automatically generated by CasADi 3.8.2.
+ *  It consists of: 
+ *   1) content generated by CasADi runtime: not copyrighted
+ *   2) template code copied from CasADi source: permissively licensed (MIT-0)
+ *   3) user code: owned by the user
+ *
+ */
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+#ifndef casadi_real
+#define casadi_real double
+#endif
+
+#ifndef casadi_int
+#define casadi_int long long int
+#endif
+
+int qd_M_r_FR_BL(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem);
+int qd_M_r_FR_BL_checkout(void);
+void qd_M_r_FR_BL_release(int mem);
+void qd_M_r_FR_BL_incref(void);
+void qd_M_r_FR_BL_decref(void);
+casadi_int qd_M_r_FR_BL_n_in(void);
+casadi_int qd_M_r_FR_BL_n_out(void);
+casadi_real qd_M_r_FR_BL_default_in(casadi_int i);
+const char* qd_M_r_FR_BL_name_in(casadi_int i);
+const char* qd_M_r_FR_BL_name_out(casadi_int i);
+const casadi_int* qd_M_r_FR_BL_sparsity_in(casadi_int i);
+const casadi_int* qd_M_r_FR_BL_sparsity_out(casadi_int i);
+int qd_M_r_FR_BL_work(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz_iw, casadi_int *sz_w);
+int qd_M_r_FR_BL_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz_iw, casadi_int *sz_w);
+#define qd_M_r_FR_BL_SZ_ARG 2
+#define qd_M_r_FR_BL_SZ_RES 1
+#define qd_M_r_FR_BL_SZ_IW 0
+#define qd_M_r_FR_BL_SZ_W 0
+int qd_CG_r_FR_BL(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem);
+int qd_CG_r_FR_BL_checkout(void);
+void qd_CG_r_FR_BL_release(int mem);
+void qd_CG_r_FR_BL_incref(void);
+void qd_CG_r_FR_BL_decref(void);
+casadi_int qd_CG_r_FR_BL_n_in(void);
+casadi_int qd_CG_r_FR_BL_n_out(void);
+casadi_real qd_CG_r_FR_BL_default_in(casadi_int i);
+const char* qd_CG_r_FR_BL_name_in(casadi_int i);
+const char* qd_CG_r_FR_BL_name_out(casadi_int i);
+const casadi_int* qd_CG_r_FR_BL_sparsity_in(casadi_int i);
+const casadi_int* qd_CG_r_FR_BL_sparsity_out(casadi_int i);
+int qd_CG_r_FR_BL_work(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz_iw, casadi_int *sz_w);
+int qd_CG_r_FR_BL_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz_iw, casadi_int *sz_w);
+#define qd_CG_r_FR_BL_SZ_ARG 3
+#define qd_CG_r_FR_BL_SZ_RES 1
+#define qd_CG_r_FR_BL_SZ_IW 0
+#define qd_CG_r_FR_BL_SZ_W 0
+int qd_G_r_FR_BL(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem);
+int qd_G_r_FR_BL_checkout(void);
+void qd_G_r_FR_BL_release(int mem);
+void qd_G_r_FR_BL_incref(void);
+void qd_G_r_FR_BL_decref(void);
+casadi_int qd_G_r_FR_BL_n_in(void);
+casadi_int qd_G_r_FR_BL_n_out(void);
+casadi_real qd_G_r_FR_BL_default_in(casadi_int i);
+const char* qd_G_r_FR_BL_name_in(casadi_int i);
+const char* qd_G_r_FR_BL_name_out(casadi_int i);
+const casadi_int* qd_G_r_FR_BL_sparsity_in(casadi_int i);
+const casadi_int* qd_G_r_FR_BL_sparsity_out(casadi_int i);
+int qd_G_r_FR_BL_work(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz_iw, casadi_int *sz_w);
+int qd_G_r_FR_BL_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz_iw, casadi_int *sz_w);
+#define qd_G_r_FR_BL_SZ_ARG 2
+#define qd_G_r_FR_BL_SZ_RES 1
+#define qd_G_r_FR_BL_SZ_IW 0
+#define qd_G_r_FR_BL_SZ_W 0
+int qd_id_r_FR_BL(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem);
+int qd_id_r_FR_BL_checkout(void);
+void qd_id_r_FR_BL_release(int mem);
+void qd_id_r_FR_BL_incref(void);
+void qd_id_r_FR_BL_decref(void);
+casadi_int qd_id_r_FR_BL_n_in(void);
+casadi_int qd_id_r_FR_BL_n_out(void);
+casadi_real qd_id_r_FR_BL_default_in(casadi_int i);
+const char* qd_id_r_FR_BL_name_in(casadi_int i);
+const char* qd_id_r_FR_BL_name_out(casadi_int i);
+const casadi_int* qd_id_r_FR_BL_sparsity_in(casadi_int i);
+const casadi_int* qd_id_r_FR_BL_sparsity_out(casadi_int i);
+int qd_id_r_FR_BL_work(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz_iw, casadi_int *sz_w);
+int qd_id_r_FR_BL_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz_iw, casadi_int *sz_w);
+#define qd_id_r_FR_BL_SZ_ARG 4
+#define qd_id_r_FR_BL_SZ_RES 1
+#define qd_id_r_FR_BL_SZ_IW 0
+#define qd_id_r_FR_BL_SZ_W 0
+int qd_fd_r_FR_BL(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem);
+int qd_fd_r_FR_BL_checkout(void);
+void qd_fd_r_FR_BL_release(int mem);
+void qd_fd_r_FR_BL_incref(void);
+void qd_fd_r_FR_BL_decref(void);
+casadi_int qd_fd_r_FR_BL_n_in(void);
+casadi_int qd_fd_r_FR_BL_n_out(void);
+casadi_real qd_fd_r_FR_BL_default_in(casadi_int i);
+const char* qd_fd_r_FR_BL_name_in(casadi_int i);
+const char* qd_fd_r_FR_BL_name_out(casadi_int i);
+const casadi_int* qd_fd_r_FR_BL_sparsity_in(casadi_int i);
+const casadi_int* qd_fd_r_FR_BL_sparsity_out(casadi_int i);
+int qd_fd_r_FR_BL_work(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz_iw, casadi_int *sz_w);
+int qd_fd_r_FR_BL_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz_iw, casadi_int *sz_w);
+#define qd_fd_r_FR_BL_SZ_ARG 4
+#define qd_fd_r_FR_BL_SZ_RES 1
+#define qd_fd_r_FR_BL_SZ_IW 0
+#define qd_fd_r_FR_BL_SZ_W 0
+void qd_paper_r_FR_BL_casadi_version(int* major, int* minor, int* patch);
+int qd_paper_r_FR_BL_casadi_int_size(void);
+int qd_paper_r_FR_BL_casadi_real_size(void);
+#ifdef __cplusplus
+} /* extern "C" */
+#endif
+/* This file was automatically generated by CasADi 3.8.2.
+ *  It consists of: 
+ *   1) content generated by CasADi runtime: not copyrighted
+ *   2) template code copied from CasADi source: permissively licensed (MIT-0)
+ *   3) user code: owned by the user
+ *
+ */
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+#ifndef casadi_real
+#define casadi_real double
+#endif
+
+#ifndef casadi_int
+#define casadi_int long long int
+#endif
+
+int qd_M_r_FR_BR(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem);
+int qd_M_r_FR_BR_checkout(void);
+void qd_M_r_FR_BR_release(int mem);
+void qd_M_r_FR_BR_incref(void);
+void qd_M_r_FR_BR_decref(void);
+casadi_int qd_M_r_FR_BR_n_in(void);
+casadi_int qd_M_r_FR_BR_n_out(void);
+casadi_real qd_M_r_FR_BR_default_in(casadi_int i);
+const char* qd_M_r_FR_BR_name_in(casadi_int i);
+const char* qd_M_r_FR_BR_name_out(casadi_int i);
+const casadi_int* qd_M_r_FR_BR_sparsity_in(casadi_int i);
+const casadi_int* qd_M_r_FR_BR_sparsity_out(casadi_int i);
+int qd_M_r_FR_BR_work(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz_iw, casadi_int *sz_w);
+int qd_M_r_FR_BR_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz_iw, casadi_int *sz_w);
+#define qd_M_r_FR_BR_SZ_ARG 2
+#define qd_M_r_FR_BR_SZ_RES 1
+#define qd_M_r_FR_BR_SZ_IW 0
+#define qd_M_r_FR_BR_SZ_W 0
+int qd_CG_r_FR_BR(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem);
+int qd_CG_r_FR_BR_checkout(void);
+void qd_CG_r_FR_BR_release(int mem);
+void qd_CG_r_FR_BR_incref(void);
+void qd_CG_r_FR_BR_decref(void);
+casadi_int qd_CG_r_FR_BR_n_in(void);
+casadi_int qd_CG_r_FR_BR_n_out(void);
+casadi_real qd_CG_r_FR_BR_default_in(casadi_int i);
+const char* qd_CG_r_FR_BR_name_in(casadi_int i);
+const char* qd_CG_r_FR_BR_name_out(casadi_int i);
+const casadi_int* qd_CG_r_FR_BR_sparsity_in(casadi_int i);
+const casadi_int* qd_CG_r_FR_BR_sparsity_out(casadi_int i);
+int qd_CG_r_FR_BR_work(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz_iw, casadi_int *sz_w);
+int qd_CG_r_FR_BR_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz_iw, casadi_int *sz_w);
+#define qd_CG_r_FR_BR_SZ_ARG 3
+#define qd_CG_r_FR_BR_SZ_RES 1
+#define qd_CG_r_FR_BR_SZ_IW 0
+#define qd_CG_r_FR_BR_SZ_W 0
+int qd_G_r_FR_BR(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem);
+int qd_G_r_FR_BR_checkout(void);
+void qd_G_r_FR_BR_release(int mem);
+void qd_G_r_FR_BR_incref(void);
+void qd_G_r_FR_BR_decref(void);
+casadi_int qd_G_r_FR_BR_n_in(void);
+casadi_int qd_G_r_FR_BR_n_out(void);
+casadi_real qd_G_r_FR_BR_default_in(casadi_int i);
+const char* qd_G_r_FR_BR_name_in(casadi_int i);
+const char* qd_G_r_FR_BR_name_out(casadi_int i);
+const casadi_int* qd_G_r_FR_BR_sparsity_in(casadi_int i);
+const casadi_int* qd_G_r_FR_BR_sparsity_out(casadi_int i);
+int qd_G_r_FR_BR_work(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz_iw, casadi_int *sz_w);
+int qd_G_r_FR_BR_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz_iw, casadi_int *sz_w);
+#define qd_G_r_FR_BR_SZ_ARG 2
+#define qd_G_r_FR_BR_SZ_RES 1
+#define qd_G_r_FR_BR_SZ_IW 0
+#define qd_G_r_FR_BR_SZ_W 0
+int qd_id_r_FR_BR(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem);
+int qd_id_r_FR_BR_checkout(void);
+void qd_id_r_FR_BR_release(int mem);
+void qd_id_r_FR_BR_incref(void);
+void qd_id_r_FR_BR_decref(void);
+casadi_int qd_id_r_FR_BR_n_in(void);
+casadi_int qd_id_r_FR_BR_n_out(void);
+casadi_real qd_id_r_FR_BR_default_in(casadi_int i);
+const char* qd_id_r_FR_BR_name_in(casadi_int i);
+const char* qd_id_r_FR_BR_name_out(casadi_int i);
+const casadi_int* qd_id_r_FR_BR_sparsity_in(casadi_int i);
+const casadi_int* qd_id_r_FR_BR_sparsity_out(casadi_int i);
+int qd_id_r_FR_BR_work(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz_iw, casadi_int *sz_w);
+int qd_id_r_FR_BR_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz_iw, casadi_int *sz_w);
+#define qd_id_r_FR_BR_SZ_ARG 4
+#define qd_id_r_FR_BR_SZ_RES 1
+#define qd_id_r_FR_BR_SZ_IW 0
+#define qd_id_r_FR_BR_SZ_W 0
+int qd_fd_r_FR_BR(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem);
+int qd_fd_r_FR_BR_checkout(void);
+void qd_fd_r_FR_BR_release(int mem);
+void qd_fd_r_FR_BR_incref(void);
+void qd_fd_r_FR_BR_decref(void);
+casadi_int qd_fd_r_FR_BR_n_in(void);
+casadi_int qd_fd_r_FR_BR_n_out(void);
+casadi_real qd_fd_r_FR_BR_default_in(casadi_int i);
+const char* qd_fd_r_FR_BR_name_in(casadi_int i);
+const char* qd_fd_r_FR_BR_name_out(casadi_int i);
+const casadi_int* qd_fd_r_FR_BR_sparsity_in(casadi_int i);
+const casadi_int* qd_fd_r_FR_BR_sparsity_out(casadi_int i);
+int qd_fd_r_FR_BR_work(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz_iw, casadi_int *sz_w);
+int qd_fd_r_FR_BR_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz_iw, casadi_int *sz_w);
+#define qd_fd_r_FR_BR_SZ_ARG 4
+#define qd_fd_r_FR_BR_SZ_RES 1
+#define qd_fd_r_FR_BR_SZ_IW 0
+#define qd_fd_r_FR_BR_SZ_W 0
+void qd_paper_r_FR_BR_casadi_version(int* major, int* minor, int* patch);
+int qd_paper_r_FR_BR_casadi_int_size(void);
+int qd_paper_r_FR_BR_casadi_real_size(void);
+#ifdef __cplusplus
+} /* extern "C" */
+#endif
+/* This file was automatically generated by CasADi 3.8.2.
+ *  It consists of: 
+ *   1) content generated by CasADi runtime: not copyrighted
+ *   2) template code copied from CasADi source: permissively licensed (MIT-0)
+ *   3) user code: owned by the user
+ *
+ */
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+#ifndef casadi_real
+#define casadi_real double
+#endif
+
+#ifndef casadi_int
+#define casadi_int long long int
+#endif
+
+int qd_M_r_BL_BR(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem);
+int qd_M_r_BL_BR_checkout(void);
+void qd_M_r_BL_BR_release(int mem);
+void qd_M_r_BL_BR_incref(void);
+void qd_M_r_BL_BR_decref(void);
+casadi_int qd_M_r_BL_BR_n_in(void);
+casadi_int qd_M_r_BL_BR_n_out(void);
+casadi_real qd_M_r_BL_BR_default_in(casadi_int i);
+const char* qd_M_r_BL_BR_name_in(casadi_int i);
+const char* qd_M_r_BL_BR_name_out(casadi_int i);
+const casadi_int* qd_M_r_BL_BR_sparsity_in(casadi_int i);
+const casadi_int* qd_M_r_BL_BR_sparsity_out(casadi_int i);
+int qd_M_r_BL_BR_work(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz_iw, casadi_int *sz_w);
+int qd_M_r_BL_BR_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz_iw, casadi_int *sz_w);
+#define qd_M_r_BL_BR_SZ_ARG 2
+#define qd_M_r_BL_BR_SZ_RES 1
+#define qd_M_r_BL_BR_SZ_IW 0
+#define qd_M_r_BL_BR_SZ_W 0
+int qd_CG_r_BL_BR(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem);
+int qd_CG_r_BL_BR_checkout(void);
+void qd_CG_r_BL_BR_release(int mem);
+void qd_CG_r_BL_BR_incref(void);
+void qd_CG_r_BL_BR_decref(void);
+casadi_int qd_CG_r_BL_BR_n_in(void);
+casadi_int qd_CG_r_BL_BR_n_out(void);
+casadi_real qd_CG_r_BL_BR_default_in(casadi_int i);
+const char* qd_CG_r_BL_BR_name_in(casadi_int i);
+const char* qd_CG_r_BL_BR_name_out(casadi_int i);
+const casadi_int* qd_CG_r_BL_BR_sparsity_in(casadi_int i);
+const casadi_int* qd_CG_r_BL_BR_sparsity_out(casadi_int i);
+int qd_CG_r_BL_BR_work(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz_iw, casadi_int *sz_w);
+int qd_CG_r_BL_BR_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz_iw, casadi_int *sz_w);
+#define qd_CG_r_BL_BR_SZ_ARG 3
+#define qd_CG_r_BL_BR_SZ_RES 1
+#define qd_CG_r_BL_BR_SZ_IW 0
+#define qd_CG_r_BL_BR_SZ_W 0
+int qd_G_r_BL_BR(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem);
+int qd_G_r_BL_BR_checkout(void);
+void qd_G_r_BL_BR_release(int mem);
+void qd_G_r_BL_BR_incref(void);
+void qd_G_r_BL_BR_decref(void);
+casadi_int qd_G_r_BL_BR_n_in(void);
+casadi_int qd_G_r_BL_BR_n_out(void);
+casadi_real qd_G_r_BL_BR_default_in(casadi_int i);
+const char* qd_G_r_BL_BR_name_in(casadi_int i);
+const char* qd_G_r_BL_BR_name_out(casadi_int i);
+const casadi_int* qd_G_r_BL_BR_sparsity_in(casadi_int i);
+const casadi_int* qd_G_r_BL_BR_sparsity_out(casadi_int i);
+int qd_G_r_BL_BR_work(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz_iw, casadi_int *sz_w);
+int qd_G_r_BL_BR_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz_iw, casadi_int *sz_w);
+#define qd_G_r_BL_BR_SZ_ARG 2
+#define qd_G_r_BL_BR_SZ_RES 1
+#define qd_G_r_BL_BR_SZ_IW 0
+#define qd_G_r_BL_BR_SZ_W 0
+int qd_id_r_BL_BR(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem);
+int qd_id_r_BL_BR_checkout(void);
+void qd_id_r_BL_BR_release(int mem);
+void qd_id_r_BL_BR_incref(void);
+void qd_id_r_BL_BR_decref(void);
+casadi_int qd_id_r_BL_BR_n_in(void);
+casadi_int qd_id_r_BL_BR_n_out(void);
+casadi_real qd_id_r_BL_BR_default_in(casadi_int i);
+const char* qd_id_r_BL_BR_name_in(casadi_int i);
+const char* qd_id_r_BL_BR_name_out(casadi_int i);
+const casadi_int* qd_id_r_BL_BR_sparsity_in(casadi_int i);
+const casadi_int* qd_id_r_BL_BR_sparsity_out(casadi_int i);
+int qd_id_r_BL_BR_work(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz_iw, casadi_int *sz_w);
+int qd_id_r_BL_BR_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz_iw, casadi_int *sz_w);
+#define qd_id_r_BL_BR_SZ_ARG 4
+#define qd_id_r_BL_BR_SZ_RES 1
+#define qd_id_r_BL_BR_SZ_IW 0
+#define qd_id_r_BL_BR_SZ_W 0
+int qd_fd_r_BL_BR(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem);
+int qd_fd_r_BL_BR_checkout(void);
+void qd_fd_r_BL_BR_release(int mem);
+void qd_fd_r_BL_BR_incref(void);
+void qd_fd_r_BL_BR_decref(void);
+casadi_int qd_fd_r_BL_BR_n_in(void);
+casadi_int qd_fd_r_BL_BR_n_out(void);
+casadi_real qd_fd_r_BL_BR_default_in(casadi_int i);
+const char* qd_fd_r_BL_BR_name_in(casadi_int i);
+const char* qd_fd_r_BL_BR_name_out(casadi_int i);
+const casadi_int* qd_fd_r_BL_BR_sparsity_in(casadi_int i);
+const casadi_int* qd_fd_r_BL_BR_sparsity_out(casadi_int i);
+int qd_fd_r_BL_BR_work(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz_iw, casadi_int *sz_w);
+int qd_fd_r_BL_BR_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz_iw, casadi_int *sz_w);
+#define qd_fd_r_BL_BR_SZ_ARG 4
+#define qd_fd_r_BL_BR_SZ_RES 1
+#define qd_fd_r_BL_BR_SZ_IW 0
+#define qd_fd_r_BL_BR_SZ_W 0
+void qd_paper_r_BL_BR_casadi_version(int* major, int* minor, int* patch);
+int qd_paper_r_BL_BR_casadi_int_size(void);
+int qd_paper_r_BL_BR_casadi_real_size(void);
 #ifdef __cplusplus
 } /* extern "C" */
 #endif

@@ -15,17 +15,19 @@ import os
 import shutil
 import subprocess
 import tempfile
+from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass
 from pathlib import Path
 
 import casadi as ca
 import numpy as np
 
-from .codegen import PREFIX, generate
+from .codegen import PREFIX, generate, stem
 from .errors import BuildError, InputError
 from .robot import Robot
 
 C_FLAGS = ("-std=c99", "-pedantic", "-Wall", "-Wextra", "-Werror", "-O3", "-fPIC")
+COMPILE_JOBS = 2  # this machine's cores
 
 
 def cache_dir() -> Path:
@@ -58,30 +60,63 @@ class CompiledLibrary:
     key: str  # hash of the C source, header, flags and compiler: a stale library is never reused
 
 
+def compile_sources(sources: list[Path], flags: tuple[str, ...], output: Path, cc: str = "gcc") -> None:
+    """Compile C sources into one shared library: one object per source, two compilers at a
+    time (the generated files are large; this machine has two cores)."""
+    objects = [output.parent / f"{output.name}.{i}.o" for i in range(len(sources))]
+    with ThreadPoolExecutor(max_workers=COMPILE_JOBS) as pool:
+        list(pool.map(lambda so: run_tool([cc, *flags, "-c", str(so[0]), "-o", str(so[1])]), zip(sources, objects)))
+    run_tool([cc, "-shared", *map(str, objects), "-o", str(output), "-lm"])
+    for o in objects:
+        o.unlink()
+
+
+PACKAGE = Path(__file__).resolve().parent
+
+
+def generation_key(robot: Robot, precision: str, flags: tuple[str, ...], cc: str) -> str:
+    """Hash of everything the compiled library depends on: the URDF's bytes, this package's
+    source (the generator and its C templates), CasADi's version, precision, flags and compiler."""
+    h = hashlib.sha256(robot.name.encode() + Path(robot.urdf).read_bytes())
+    for path in sorted([*PACKAGE.glob("*.py"), *(PACKAGE / "c").glob("*")]):
+        h.update(path.name.encode() + path.read_bytes())
+    h.update(f"{ca.CasadiMeta.version()} {precision} {' '.join(flags)} {_compiler_version(cc)}".encode())
+    return h.hexdigest()[:16]
+
+
 def compiled_library(robot: Robot, precision: str = "double", cc: str = "gcc") -> CompiledLibrary:
-    """Generate, compile and cache the shared library of ``robot``'s functions."""
-    with tempfile.TemporaryDirectory() as tmp:
-        c_path, h_path = generate(robot, Path(tmp), precision)[:2]
-        flags = (*C_FLAGS, f"-Dcasadi_real={precision}")
-        key = hashlib.sha256(
-            c_path.read_bytes() + h_path.read_bytes() + " ".join(flags).encode() + _compiler_version(cc).encode()
-        ).hexdigest()[:16]
-        target = cache_dir() / key
-        lib = target / f"lib{c_path.stem}.so"
-        if not lib.is_file():
+    """Generate, compile and cache the shared library of ``robot``'s functions (all of
+    ``codegen.generate``'s C sources: full-coordinate terms, GRF solves, reduced models)."""
+    flags = (*C_FLAGS, f"-Dcasadi_real={precision}")
+    key = generation_key(robot, precision, flags, cc)
+    target = cache_dir() / key
+    lib = target / f"lib{stem(robot)}.so"
+    if not lib.is_file():
+        with tempfile.TemporaryDirectory() as tmp:
+            paths = generate(robot, Path(tmp), precision, reference=False)
+            sources = [p for p in paths if p.suffix == ".c" and p.name.startswith(stem(robot))]
             target.mkdir(parents=True, exist_ok=True)
             building = target / f".{lib.name}.{os.getpid()}"
-            run_tool([cc, *flags, "-shared", str(c_path), "-o", str(building), "-lm"])
-            shutil.copy(c_path, target / c_path.name)
-            shutil.copy(h_path, target / h_path.name)
+            compile_sources(sources, flags, building, cc)
+            for p in (*sources, paths[1]):
+                shutil.copy(p, target / p.name)
             building.replace(lib)  # atomic: a half-written library is never loaded
-    return CompiledLibrary(lib, target / c_path.name, key)
+    return CompiledLibrary(lib, target / f"{stem(robot)}.c", key)
 
 
 def load_external(library: CompiledLibrary, name: str) -> ca.Function:
     """A generated function (double build) loaded back as a CasADi Function."""
     return ca.external(PREFIX + name, str(library.path))
 
+
+
+#: Return codes of the generated reduced functions (c/qd_reduced_solve.c) and what they mean.
+RETURN_CODES = {
+    1: "an output is not finite (coincident or collinear stance feet, the trunk pitched 90 deg with two "
+    "stance feet, a zero quaternion, or a non-finite input); expected a stance the model can hold",
+    2: "M_r is singular to working precision here (e.g. two stance feet with the trunk pitched to within "
+    "~1e-12 rad of 90 deg); expected a configuration where the reduced model is regular",
+}
 
 
 class CompiledFunction:
@@ -119,8 +154,9 @@ class CompiledFunction:
             if x.shape != buf.shape:
                 raise InputError(f"{name} has {x.size} entries; {self.name} expects {buf.size}")
             buf[:] = x
-        if self._fn(self._arg, self._res, self._iw, self._w, 0) != 0:
-            raise BuildError(f"{self.name} returned an error")
+        flag = self._fn(self._arg, self._res, self._iw, self._w, 0)
+        if flag != 0:
+            raise InputError(f"{self.name}: {RETURN_CODES.get(flag, f'error code {flag}')}")
         outs = []
         for buf, shape, index in zip(self._out, self._shapes, self._index):
             dense = np.zeros(shape[0] * shape[1])

@@ -157,11 +157,21 @@ def min_norm_solve(A: ca.SX, w: ca.SX, bases: tuple[ca.SX, ca.SX] | None) -> ca.
     otherwise full row or full column rank, by Householder QR."""
     m, n = A.shape
     if n == 0:
-        return ca.SX.zeros(0)
+        return ca.SX.zeros(0, w.shape[1])
     if bases is not None:
         N, U = bases
         return least_squares(A + U @ N.T, w) - N @ (U.T @ w)
     return min_norm(A, w) if n > m else least_squares(A, w)
+
+
+def solve_lambda(stance: StanceSet, model: str, r: list[ca.SX], w_req: ca.SX) -> tuple[ca.SX, ca.SX]:
+    """(lambda, A): the model's minimum-norm unknowns for the required trunk wrench(es) w_req
+    (6, m: one column per right-hand side), stance feet at r (trunk frame), and A = G P."""
+    P = stance.selection(model)
+    if not P.size:
+        return ca.SX.zeros(0, w_req.shape[1]), ca.SX.zeros(6, 0)
+    A = contact_map(r) @ dm(P)
+    return min_norm_solve(A, w_req, _deficiency_bases(stance, model, r)), A
 
 
 @dataclass(frozen=True)
@@ -229,8 +239,7 @@ def grf_expressions(
     w_req = inverse_dynamics(robot, qj, g_b, v, a, ca.SX.zeros(12))[:6]
     r = [foot_position(robot.legs[i], qj[3 * i : 3 * i + 3]) for i in stance.feet]
     P = stance.selection(model)
-    A = contact_map(r) @ dm(P) if P.size else ca.SX.zeros(6, 0)
-    lam = min_norm_solve(A, w_req, _deficiency_bases(stance, model, r))
+    lam, A = solve_lambda(stance, model, r, w_req)
     f_stance = dm(P) @ lam if P.size else ca.SX.zeros(0)
     f = ca.SX.zeros(12)
     for j, i in enumerate(stance.feet):

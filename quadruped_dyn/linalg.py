@@ -30,35 +30,35 @@ def householder_qr(M: ca.SX) -> tuple[list[ca.SX], ca.SX]:
 def _apply_qt(reflections: list[ca.SX], b: ca.SX) -> ca.SX:
     b = ca.SX(b)
     for j, v in enumerate(reflections):
-        b[j:] = b[j:] - 2 * v * ca.dot(v, b[j:])
+        b[j:, :] = b[j:, :] - 2 * v @ (v.T @ b[j:, :])
     return b
 
 
 def _apply_q(reflections: list[ca.SX], y: ca.SX, m: int) -> ca.SX:
-    b = ca.vertcat(y, ca.SX.zeros(m - y.shape[0]))
+    b = ca.vertcat(y, ca.SX.zeros(m - y.shape[0], y.shape[1]))
     for j in reversed(range(len(reflections))):
         v = reflections[j]
-        b[j:] = b[j:] - 2 * v * ca.dot(v, b[j:])
+        b[j:, :] = b[j:, :] - 2 * v @ (v.T @ b[j:, :])
     return b
 
 
 def _solve_upper(R: ca.SX, b: ca.SX, transpose: bool = False) -> ca.SX:
-    """x with R x = b (R upper triangular), or R^T x = b with ``transpose``."""
+    """x with R x = b (R upper triangular), or R^T x = b with ``transpose``; b may have several columns."""
     n = R.shape[0]
-    x = [ca.SX(0)] * n
+    x = [ca.SX.zeros(1, b.shape[1])] * n
     for i in range(n) if transpose else reversed(range(n)):
         known = range(i) if transpose else range(i + 1, n)
-        x[i] = (b[i] - sum((R[j, i] if transpose else R[i, j]) * x[j] for j in known)) / R[i, i]
+        x[i] = (b[i, :] - sum(((R[j, i] if transpose else R[i, j]) * x[j] for j in known), ca.SX.zeros(1, b.shape[1]))) / R[i, i]
     return ca.vertcat(*x)
 
 
 def least_squares(A: ca.SX, b: ca.SX) -> ca.SX:
-    """argmin |A x - b| for A of full column rank (square included)."""
+    """argmin |A x - b| for A of full column rank (square included); b may have several columns."""
     reflections, R = householder_qr(A)
-    return _solve_upper(R, _apply_qt(reflections, b)[: A.shape[1]])
+    return _solve_upper(R, _apply_qt(reflections, b)[: A.shape[1], :])
 
 
 def min_norm(A: ca.SX, b: ca.SX) -> ca.SX:
     """The minimum-norm solution of A x = b for A of full row rank: A^T = Q R, x = Q R^-T b."""
     reflections, R = householder_qr(A.T)
-    return _apply_q(reflections, _solve_upper(R, b, transpose=True), A.shape[1])
+    return _apply_q(reflections, _solve_upper(R, ca.SX(b), transpose=True), A.shape[1])

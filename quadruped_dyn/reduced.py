@@ -55,6 +55,13 @@ def roll_rate_row(R: ca.SX) -> ca.SX:
     return ca.vertcat(1, -R[2, 0] * R[2, 1] / c2, -R[2, 0] * R[2, 2] / c2)
 
 
+def roll_rate_row_dot(R: ca.SX, omega: ca.SX) -> ca.SX:
+    """d/dt e_phi(R) along Rdot = R [omega]x (omega in the trunk frame)."""
+    R_sym = ca.SX.sym("R", 3, 3)
+    e_dot = ca.jtimes(roll_rate_row(R_sym), ca.vec(R_sym), ca.vec(R_sym @ skew(omega)))
+    return ca.substitute(e_dot, R_sym, R)
+
+
 def _maps(robot: Robot, stance: StanceSet, q_r: ca.SX, qd_r: ca.SX, qdd_r: ca.SX, R: ca.SX) -> tuple[ca.SX, ca.SX]:
     """Full v (18,) and a = vdot (18,) from the reduced coordinates."""
     rows, rhs_v, feet = [], [], []
@@ -78,9 +85,7 @@ def _maps(robot: Robot, stance: StanceSet, q_r: ca.SX, qd_r: ca.SX, qdd_r: ca.SX
         for r, J, Jdqd, qd, qdd in feet
     ]
     if two_feet:
-        R_sym = ca.SX.sym("R", 3, 3)  # e_phi's rate: d/dt e_phi(R) along Rdot = R [omega]x
-        e_dot = ca.jtimes(roll_rate_row(R_sym), ca.vec(R_sym), ca.vec(R_sym @ skew(omega)))
-        rhs_a.append(qdd_r[12] - ca.dot(ca.substitute(e_dot, R_sym, R), omega))
+        rhs_a.append(qdd_r[12] - ca.dot(roll_rate_row_dot(R, omega), omega))
     acc = least_squares(A, ca.vertcat(*rhs_a))  # (a_b classical, alpha)
     v = ca.vertcat(v_b, omega, qd_r[:12])
     a = ca.vertcat(acc[:3] - ca.cross(omega, v_b), acc[3:], qdd_r[:12])
@@ -129,7 +134,7 @@ class ReducedModel:
         cond = float(np.linalg.cond(M))
         if not cond < MAX_COND_M_R:
             raise InputError(f"M_r of {self.stance.name} has condition number {cond:.1e} here; the reduced "
-                             "model is singular (e.g. a stance leg stretched straight or feet collinear)")
+                             "model is singular (e.g. collinear stance feet, or two feet with the trunk pitched 90 deg)")
         (qdd,) = evaluate(self.fd_r, q_r, qd_r, tau_ext, quat)
         return qdd, cond
 

@@ -30,6 +30,20 @@ RANK_RTOL = 1e-9
 COND_ERR_FACTOR = 100.0
 
 #: The float build of the generated C against double values: float rounds at 6e-8 relative,
-#: inputs included; sums of link contributions and the GRF solves (cond <~ 1e2 near
-#: standing) amplify that by up to ~1e2 (measured: at most 5e-7 on the paper robot).
+#: inputs included; sums of link contributions and the GRF solves (cond <~ GRF_COND_ASSUMED
+#: near standing) amplify that by up to ~1e2 (measured: at most 5e-7 on the paper robot).
 FLOAT_REL_TOL = 1e-5
+
+#: Condition number of a GRF system that FLOAT_REL_TOL and REL_TOL_TERMS allow for. The reduced
+#: model of a stance set whose GRF system is worse conditioned at a checked state (e.g. the two
+#: back feet, BL+BR: cond ~1e3-1e4, their line passing near the CoM) gets its tolerance scaled by
+#: cond / GRF_COND_ASSUMED, and fd_r additionally by cond(M_r): errors of a backward-stable solve
+#: grow with the condition number, whatever the precision.
+GRF_COND_ASSUMED = 100.0
+
+#: Condition number of the reduced model's stance-foot rows [I, -[r_i]x] (+ the roll row for two
+#: feet) that the tolerances allow for: 6-20 for three or four feet and the diagonal and side
+#: pairs near standing. The front and back pairs (FL+FR, BL+BR) reach ~1e2-1e3: their support
+#: line is lateral, nearly perpendicular to the roll axis, so the roll row barely fixes the
+#: pitch about that line (exactly not at zero pitch and roll: singular there).
+MAP_COND_ASSUMED = 20.0

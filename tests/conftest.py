@@ -6,6 +6,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
+from quadruped_dyn.compiled import CompiledLibrary, compiled_library
 from quadruped_dyn.pinocchio_ref import PinocchioReference
 from quadruped_dyn.robot import ROBOT_NAMES, Robot, example_robot_data_dir, load_robot
 from quadruped_dyn.tolerances import REL_TOL_TERMS
@@ -26,6 +27,12 @@ def paper() -> Robot:
 @pytest.fixture(scope="session")
 def ref(robot: Robot) -> PinocchioReference:
     return PinocchioReference(robot)
+
+
+@pytest.fixture(scope="session")
+def library(robot: Robot) -> CompiledLibrary:
+    """The robot's generated C, compiled once (and cached across runs)."""
+    return compiled_library(robot)
 
 
 @pytest.fixture(scope="session")

@@ -118,3 +118,27 @@ def test_forward_dynamics_reports_condition_and_refuses_singular_stances(paper):
     coincident[0:3], coincident[3:6] = analytic_ik("FL", target), analytic_ik("FR", target)
     with pytest.raises(InputError, match="singular"):
         m.forward_dynamics(coincident, qd, tau_r, quat)
+
+
+@pytest.mark.parametrize("name", ["paper", "go2"])
+def test_projection_forms_equal_walker_orin(name):
+    """The generated forms (reduced_projection: S M_full T, one-pass C_r + G_r, closed-form maps)
+    against the paper's recipe (reduced: Walker-Orin columns, Householder least squares), every
+    stance set of two, three or four feet."""
+    import casadi as ca
+
+    from quadruped_dyn.codegen import REDUCED_STANCE_SETS, reduced_functions
+
+    robot = load_robot(name)
+    rng = np.random.default_rng(5)
+    for stance in REDUCED_STANCE_SETS:
+        m, q_r, qd, qdd, quat = _reduced(robot, stance.name, rng)
+        M_r, CG_r, G_r, id_r, _ = reduced_functions(robot, stance)
+        (M,) = evaluate(m.M_r, q_r, quat)
+        assert_close(np.array(M_r(q_r, quat)), M, what=f"M_r {stance.name}")
+        assert_close(np.array(CG_r(q_r, qd, quat)).ravel(), evaluate(m.C_r, q_r, qd, quat)[0] + evaluate(m.G_r, q_r, quat)[0],
+                     what=f"CG_r {stance.name}")
+        assert_close(np.array(G_r(q_r, quat)).ravel(), evaluate(m.G_r, q_r, quat)[0], what=f"G_r {stance.name}")
+        assert_close(np.array(id_r(q_r, qd, qdd, quat)).ravel(), evaluate(m.id_r, q_r, qd, qdd, quat)[0],
+                     what=f"id_r {stance.name}")
+        assert isinstance(M_r, ca.Function)

@@ -1,0 +1,90 @@
+/* quadruped_dyn: checks and the forward-dynamics solve of the reduced model (hand-written,
+ * inserted into each generated qd_<robot>_r_<stance>.c; see quadruped_dyn/codegen.py).
+ *
+ * Return codes of the reduced functions (qd_M_r_*, qd_CG_r_*, qd_G_r_*, qd_id_r_*, qd_fd_r_*):
+ *   0             success
+ *   QD_NONFINITE  an output is NaN or inf: coincident or collinear stance feet (the trunk
+ *                 motion is undetermined), the trunk pitched +-90 deg (the roll row of two
+ *                 stance feet has tan(pitch)), a zero quaternion, or a non-finite input;
+ *   QD_SINGULAR   (qd_fd_r_* only) M_r is singular to working precision: a pivot of its LU
+ *                 factorisation (partial pivoting) is below QD_SINGULAR_RTOL * max|M_r|,
+ *                 e.g. two stance feet with the trunk pitched within ~1e-12 rad of 90 deg.
+ *                 The output is not written then. (A stance leg stretched straight is not
+ *                 singular: the reduced model never inverts a leg's Jacobian.) */
+#include <float.h>
+#include <math.h>
+
+#ifndef QD_NONFINITE
+#define QD_NONFINITE 1
+#define QD_SINGULAR 2
+#endif
+
+/* Machine epsilon of casadi_real (float, double or long double builds). */
+#define QD_EPS (sizeof(casadi_real) == sizeof(float) ? (casadi_real)FLT_EPSILON \
+                : sizeof(casadi_real) == sizeof(double) ? (casadi_real)DBL_EPSILON : (casadi_real)LDBL_EPSILON)
+/* A pivot this small relative to max|M_r| means M_r is singular to working precision
+ * (condition number beyond ~1 / (QD_SINGULAR_RTOL)): 1e-13 in double, 5e-5 in float. */
+#define QD_SINGULAR_RTOL (450 * QD_EPS)
+#define QD_N_MAX 13
+
+typedef int (*qd_eval_fn)(const casadi_real**, casadi_real**, casadi_int*, casadi_real*, int);
+
+/* flag, or QD_NONFINITE if any of the n_out outputs (nnz[i] entries each) is not finite. */
+static int qd_finite(int flag, casadi_real** res, int n_out, const casadi_int* nnz) {
+  if (flag) return flag;
+  for (int i = 0; i < n_out; ++i) {
+    if (!res[i]) continue;
+    for (casadi_int j = 0; j < nnz[i]; ++j) {
+      if (!isfinite(res[i][j])) return QD_NONFINITE;
+    }
+  }
+  return 0;
+}
+
+/* qdd_r = M_r^-1 (tau_ext - (C_r + G_r)): arg = (q_r, qd_r, tau_ext, quat), res = (qdd_r).
+ * M_r and C_r + G_r from the checked generated functions, then a dense LU with partial
+ * pivoting; no heap, all temporaries on the stack (n <= QD_N_MAX). */
+static int qd_fd_r_solve(int n, qd_eval_fn M_r, qd_eval_fn CG_r, const casadi_real** arg, casadi_real** res,
+                         casadi_int* iw, casadi_real* w, int mem) {
+  casadi_real M[QD_N_MAX * QD_N_MAX], b[QD_N_MAX];
+  const casadi_real* m_arg[2] = {arg[0], arg[3]};
+  const casadi_real* cg_arg[3] = {arg[0], arg[1], arg[3]};
+  casadi_real* m_res[1] = {M};
+  casadi_real* cg_res[1] = {b};
+  int flag = M_r(m_arg, m_res, iw, w, mem);
+  if (!flag) flag = CG_r(cg_arg, cg_res, iw, w, mem);
+  if (flag) return flag;
+  casadi_real scale = 0;
+  for (int i = 0; i < n * n; ++i) scale = fabs(M[i]) > scale ? fabs(M[i]) : scale;
+  for (int i = 0; i < n; ++i) b[i] = arg[2][i] - b[i];
+  for (int k = 0; k < n; ++k) { /* M is column-major: M[i + n j] = M_ij */
+    int p = k;
+    for (int i = k + 1; i < n; ++i) p = fabs(M[i + n * k]) > fabs(M[p + n * k]) ? i : p;
+    if (!(fabs(M[p + n * k]) > QD_SINGULAR_RTOL * scale)) return QD_SINGULAR;
+    if (p != k) {
+      for (int j = k; j < n; ++j) {
+        casadi_real t = M[k + n * j];
+        M[k + n * j] = M[p + n * j];
+        M[p + n * j] = t;
+      }
+      casadi_real t = b[k];
+      b[k] = b[p];
+      b[p] = t;
+    }
+    for (int i = k + 1; i < n; ++i) {
+      casadi_real l = M[i + n * k] / M[k + n * k];
+      for (int j = k + 1; j < n; ++j) M[i + n * j] -= l * M[k + n * j];
+      b[i] -= l * b[k];
+    }
+  }
+  for (int i = n - 1; i >= 0; --i) {
+    for (int j = i + 1; j < n; ++j) b[i] -= M[i + n * j] * b[j];
+    b[i] /= M[i + n * i];
+  }
+  if (res[0]) {
+    for (int i = 0; i < n; ++i) res[0][i] = b[i];
+  }
+  casadi_int nnz[1] = {n};
+  return qd_finite(0, res, 1, nnz);
+}
+
