@@ -10,7 +10,6 @@ import click
 import numpy as np
 
 from .errors import BuildError, InputError
-from .leg import JOINT_ROLES
 from .robot import ROBOT_NAMES, Robot, load_robot
 
 EXIT_CHECK_FAILED = 1
@@ -149,8 +148,8 @@ def bench(robots: tuple[str, ...], calls: int, reps: int, as_json: bool) -> None
               help="Error-controlled DOP853, or classical RK4 with the fixed step --dt.")
 @click.option("--dt", default=1e-3, show_default=True, type=float,
               help="RK4 step, s; with DOP853 the sampling interval of the output.")
-@click.option("--backend", type=click.Choice(["casadi"]), default="casadi", show_default=True,
-              help="Evaluation of the reduced model: the CasADi graph.")
+@click.option("--backend", type=click.Choice(["c", "casadi"]), default="c", show_default=True,
+              help="Evaluation of the reduced model: the generated C (built once, cached) or the CasADi graph.")
 @click.option("--no-physics", is_flag=True, help="Skip the physics check (rigid-contact dynamics).")
 @click.option("--out", "out_dir", default="results", show_default=True, type=click.Path(file_okay=False),
               help="Directory for the plots, the CSV and the JSON report.")
@@ -163,10 +162,11 @@ def validate(robot: str, gait_name: str, horizon: float | None, integrator: str,
     Trot: 'paper' applies all of id_r (the roll moment as if actuated), 'physical' leaves the
     roll unactuated. Percentage errors per joint (FL, FR, BL, BR x HAA, HFE, KFE)."""
     import math
+    import tempfile
     from pathlib import Path
 
     from .gait import GAITS
-    from .simulate import CasadiReducedDynamics
+    from .simulate import reduced_dynamics
     from .validation import SIGNALS, joint_names, report, run_experiment, static_stability
     from .validation_files import output_paths, plot_br_hfe, plot_physics_check, write_csv, write_json
 
@@ -185,12 +185,11 @@ def validate(robot: str, gait_name: str, horizon: float | None, integrator: str,
     paths = output_paths(out, r.name, gait.name)
     try:  # an unwritable --out is bad input, found before minutes of simulation
         out.mkdir(parents=True, exist_ok=True)
-        for path in paths.values():
-            with path.open("a"):
-                pass
+        with tempfile.TemporaryFile(dir=out):
+            pass
     except OSError as e:
         raise InputError(f"--out {out_dir}: cannot write there ({e.strerror}); expected a writable directory") from e
-    dynamics = CasadiReducedDynamics(r)
+    dynamics = reduced_dynamics(r, backend)
     runs = 3 + (gait.n_coords == 13) + (0 if no_physics else 5)
     with click.progressbar(length=int(round(runs * horizon * 1000)), label=f"simulating {r.name} {gait.name}",
                            file=sys.stderr) as bar:
@@ -223,17 +222,18 @@ def validate(robot: str, gait_name: str, horizon: float | None, integrator: str,
         click.echo(f"    {s:<4} total {_pct(b['total_pct'])} %, amplified round-off {_pct(b['roundoff_pct'])} %, "
                    f"truncation {_pct(b['truncation_pct'])} %")
     st = data["static_stability"]
-    margin = st["min_com_margin_m"]
+    margin, at = st["min_com_margin_m"], st["min_com_margin_at_s"]
     click.echo(f"  smallest f_z {st['min_fz_N']:.2f} N (at {st['min_fz_at_s']:.3f} s, weight {st['weight_N']:.1f} N)"
-               + (f"; smallest CoM margin {margin * 100:.2f} cm (at {st['min_com_margin_at_s']:.3f} s)" if margin is not None else ""))
+               + ("" if margin is None else f"; smallest CoM margin {margin * 100:.2f} cm (at {at:.3f} s)"))
     for name, run in data["runs"].items():
         if run["stopped_at_s"] is not None or run["departs_1pct_at_s"] is not None:
             click.echo(f"  run {name}: 1 % off IK at {run['departs_1pct_at_s']} s, stopped (fell) at {run['stopped_at_s']} s")
     for name, pc in data.get("physics_check", {}).items():
         if isinstance(pc, dict):
             rr = pc["rigid_vs_reduced"]
+            ik = pc["rigid_vs_ik"]
             click.echo(f"  physics check, {name}: rigid-contact vs reduced max {rr['max_joint_angle_diff_rad']:.1e} rad, "
-                       f"1 % at {rr['time_to_1pct_s']} s; rigid vs IK max {pc['rigid_vs_ik']['max_joint_angle_diff_rad']:.1e} rad")
+                       f"1 % at {rr['time_to_1pct_s']} s; rigid vs IK max {ik['max_joint_angle_diff_rad']:.1e} rad")
     click.echo("  wrote " + ", ".join(str(p) for p in paths.values() if p.exists()))
 
 

@@ -13,14 +13,12 @@ no actuator here.
 
 from __future__ import annotations
 
-from collections.abc import Callable
-
 import numpy as np
 
 from .errors import InputError
 from .gait import Plan
 from .pinocchio_ref import PinocchioReference
-from .simulate import RTOL, IkTorques, Progress, Run, TorqueLaw, _dop853_segment, _rk4_segment, _sample_times
+from .simulate import RTOL, IkTorques, Progress, Run, TorqueLaw, integrate_phases
 from .state import rotation
 
 #: A run stops when the trunk is this far (m) from where the plan puts it: the robot has
@@ -69,39 +67,29 @@ def simulate_rigid(plan: Plan, ik: IkTorques, law: TorqueLaw, horizon: float, dt
             raise InputError(f"the rigid-contact dynamics are singular at t = {t:.4f} s")
         return a
 
-    def rhs(stance: tuple[int, ...]) -> Callable[[float, np.ndarray], np.ndarray]:
-        return lambda t, y: _derivative(y[:19], y[19:], accel(t, y, stance))
+    def rhs(stance: tuple[int, ...], t: float, y: np.ndarray) -> np.ndarray:
+        return _derivative(y[:19], y[19:], accel(t, y, stance))
 
-    samples = _sample_times(horizon, dt)
-    bounds = np.concatenate([[0.0], plan.switch_times(horizon), [samples[-1]]])
     out: list[tuple[float, np.ndarray, np.ndarray, float]] = []
     stopped_at = None
 
     class Fallen(Exception):
         pass
 
-    def record(t: float, y: np.ndarray, stance: tuple[int, ...]) -> None:
+    def record(stance: tuple[int, ...], t: float, y: np.ndarray) -> None:
         a = accel(t, y, stance)
         off = float(np.linalg.norm(y[:3] - plan.trunk(t)[0]))
         out.append((t, y.copy(), a, off))
         if off > FALLEN_TRUNK_M:
             raise Fallen
 
+    def touch_down(stance: tuple[int, ...], y: np.ndarray) -> np.ndarray:
+        q = y[:19].copy()
+        q[3:7] /= np.linalg.norm(q[3:7])
+        return np.concatenate([q, _impact(ref, q, y[19:], stance)])
+
     try:
-        for t0, t1 in zip(bounds[:-1], bounds[1:]):
-            stance = gait.stance(0.5 * (t0 + t1))
-            if t0 > 0:
-                q = y[:19].copy()
-                q[3:7] /= np.linalg.norm(q[3:7])
-                y = np.concatenate([q, _impact(ref, q, y[19:], stance)])
-            inside = samples[(samples >= t0 - 1e-12) & (samples < t1 - 1e-12)]
-            if t1 == bounds[-1]:
-                inside = samples[samples >= t0 - 1e-12]
-            segment = _rk4_segment if integrator == "rk4" else _dop853_segment
-            y = segment(rhs(stance), y, t0, t1, dt if integrator == "rk4" else rtol, inside,
-                        lambda t, y, s=stance: record(t, y, s))
-            if progress:
-                progress(float(t1))
+        integrate_phases(plan, y, horizon, dt, integrator, rtol, rhs, record, switch=touch_down, progress=progress)
     except (Fallen, InputError, np.linalg.LinAlgError):
         stopped_at = float(out[-1][0]) if out else 0.0
     t = np.array([o[0] for o in out])

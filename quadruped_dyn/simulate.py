@@ -17,14 +17,16 @@ Integrators (restarted at every stance switch, where the model changes):
 A run stops where a stance foot is FALLEN_CLOSURE_M off its foothold (the robot has fallen) or
 the model is singular; ``Run.stopped_at`` says when.
 
-Evaluation backend: anything with the two methods of ``ReducedDynamics``; here the CasADi
-graph (``CasadiReducedDynamics``).
+Evaluation backend: anything with the two methods of ``ReducedDynamics``: the generated C
+(``compiled_reduced.CompiledReducedDynamics``, the default) or the CasADi graph
+(``CasadiReducedDynamics``); ``reduced_dynamics`` picks one by name.
 """
 
 from __future__ import annotations
 
 from collections.abc import Callable
 from dataclasses import dataclass
+from functools import partial
 from typing import Protocol
 
 import numpy as np
@@ -86,6 +88,20 @@ class CasadiReducedDynamics:
         if not cond < MAX_COND_M_R:
             raise InputError(f"M_r of {stance.name} has condition number {cond:.1e} here; the reduced model is singular")
         return np.linalg.solve(M, tau_ext - C - G)
+
+
+BACKENDS = ("c", "casadi")
+
+
+def reduced_dynamics(robot: Robot, backend: str = "c") -> ReducedDynamics:
+    """The reduced model evaluated by the generated C ("c") or the CasADi graph ("casadi")."""
+    if backend == "c":
+        from .compiled_reduced import CompiledReducedDynamics
+
+        return CompiledReducedDynamics(robot)
+    if backend == "casadi":
+        return CasadiReducedDynamics(robot)
+    raise InputError(f"unknown backend '{backend}'; expected one of {', '.join(BACKENDS)}")
 
 
 class IkTorques:
@@ -169,6 +185,7 @@ def simulate_reduced(plan: Plan, dynamics: ReducedDynamics, law: TorqueLaw, hori
         feet = np.array([np.asarray(kin[i].foot_position(q[3 * i : 3 * i + 3])).ravel() for i in stance])
         roll = float(q[12]) if len(stance) == 2 else None
         R, _, closure = pose_from_feet(feet, plan.footholds(t, stance), roll=roll, pitch_hint=pitch[0])
+        pitch[0] = float(pin.rpy.matrixToRpy(R)[1])
         return pin.Quaternion(R).coeffs(), closure
 
     def qdd_of(t: float, q: np.ndarray, qd: np.ndarray, stance: tuple[int, ...]) -> tuple[np.ndarray, float]:
@@ -183,50 +200,69 @@ def simulate_reduced(plan: Plan, dynamics: ReducedDynamics, law: TorqueLaw, hori
         qdd = dynamics.fd_r(StanceSet(stance), q, qd, tau, quat)
         return qdd, closure
 
-    def rhs(stance: tuple[int, ...]) -> Callable[[float, np.ndarray], np.ndarray]:
-        return lambda t, y: np.concatenate([y[n:], qdd_of(t, y[:n], y[n:], stance)[0]])
-
-    def projection(stance: tuple[int, ...]) -> Callable[[float, np.ndarray], np.ndarray] | None:
-        return (lambda t, y: project_on_stance(plan, stance, t, y, pitch[0])) if project else None
-
     ref0, _ = ik(0.0, gait.stance(0.0))
     y = np.concatenate([ref0.q_r, ref0.qd_r])
     for _ in range(initial_ulps):
         y = np.nextafter(y, np.inf)
-    samples = _sample_times(horizon, dt)
-    bounds = np.concatenate([[0.0], plan.switch_times(horizon), [samples[-1]]])
     out_t: list[float] = []
     out_y: list[np.ndarray] = []
     out_qdd: list[np.ndarray] = []
     out_closure: list[float] = []
     stopped_at = None
 
-    def record(t: float, y: np.ndarray, stance: tuple[int, ...]) -> None:
+    def record(stance: tuple[int, ...], t: float, y: np.ndarray) -> None:
         qdd, closure = qdd_of(t, y[:n], y[n:], stance)
         out_t.append(t)
         out_y.append(y.copy())
         out_qdd.append(qdd)
         out_closure.append(closure)
 
+    def rhs(stance: tuple[int, ...], t: float, y: np.ndarray) -> np.ndarray:
+        return np.concatenate([y[n:], qdd_of(t, y[:n], y[n:], stance)[0]])
+
+    def projection(stance: tuple[int, ...], t: float, y: np.ndarray) -> np.ndarray:
+        return project_on_stance(plan, stance, t, y, pitch[0])
+
     try:
-        pitch[0] = 0.0
-        for t0, t1 in zip(bounds[:-1], bounds[1:]):
-            stance = gait.stance(0.5 * (t0 + t1))
-            inside = samples[(samples >= t0 - 1e-12) & (samples < t1 - 1e-12)]
-            if t1 == bounds[-1]:
-                inside = samples[samples >= t0 - 1e-12]
-            if integrator == "rk4":
-                y = _rk4_segment(rhs(stance), y, t0, t1, dt, inside, lambda t, y: record(t, y, stance))
-            else:
-                y = _dop853_segment(rhs(stance), y, t0, t1, rtol, inside, lambda t, y: record(t, y, stance),
-                                    projection(stance))
-            if progress:
-                progress(float(t1))
+        integrate_phases(plan, y, horizon, dt, integrator, rtol, rhs, record, projection if project else None,
+                         progress=progress)
     except (_Fallen, InputError):
         stopped_at = float(out_t[-1]) if out_t else 0.0
     Y = np.array(out_y).reshape(-1, 2 * n)
     return Run(np.array(out_t), Y[:, :n], Y[:, n:], np.array(out_qdd).reshape(-1, n), np.array(out_closure),
                stopped_at, evaluations[0])
+
+
+Stance = tuple[int, ...]
+
+
+def integrate_phases(plan: Plan, y: np.ndarray, horizon: float, dt: float, integrator: str, rtol: float,
+                     rhs: Callable[[Stance, float, np.ndarray], np.ndarray],
+                     record: Callable[[Stance, float, np.ndarray], None],
+                     project: Callable[[Stance, float, np.ndarray], np.ndarray] | None = None,
+                     switch: Callable[[Stance, np.ndarray], np.ndarray] | None = None,
+                     progress: Progress | None = None) -> np.ndarray:
+    """Integrate y' = rhs(stance, t, y) phase by phase of the plan up to ``horizon``, restarting
+    at every stance switch (``switch`` maps the state across it, e.g. an impact), calling
+    ``record`` on the samples every ``dt``; ``project`` after every DOP853 step. Exceptions
+    of the callbacks propagate: the caller decides what a failure means."""
+    samples = _sample_times(horizon, dt)
+    bounds = np.concatenate([[0.0], plan.switch_times(horizon), [samples[-1]]])
+    for t0, t1 in zip(bounds[:-1], bounds[1:]):
+        stance = plan.stance(0.5 * (t0 + t1))
+        if switch is not None and t0 > 0:
+            y = switch(stance, y)
+        last = t1 == bounds[-1]
+        inside = samples[(samples >= t0 - 1e-12) & ((samples < t1 - 1e-12) | last)]
+        f = partial(rhs, stance)
+        rec = partial(record, stance)
+        if integrator == "rk4":
+            y = _rk4_segment(f, y, t0, t1, dt, inside, rec)
+        else:
+            y = _dop853_segment(f, y, t0, t1, rtol, inside, rec, partial(project, stance) if project else None)
+        if progress:
+            progress(float(t1))
+    return y
 
 
 def project_on_stance(plan: Plan, stance: tuple[int, ...], t: float, y: np.ndarray, pitch_hint: float = 0.0) -> np.ndarray:

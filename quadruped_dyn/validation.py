@@ -37,7 +37,7 @@ from .leg import JOINT_ROLES
 from .reduced import reduced_model
 from .rigid_contact import simulate_rigid
 from .robot import Robot
-from .simulate import RTOL, IDENTITY_QUAT, IkTorques, ReducedDynamics, Run, TorqueLaw, simulate_reduced
+from .simulate import IDENTITY_QUAT, RTOL, IkTorques, ReducedDynamics, Run, TorqueLaw, simulate_reduced
 
 #: A reference signal whose largest |value| is below this fraction of the largest joint's is
 #: treated as identically zero (IK round-off, ~1e-16 rad/s, would give absurd percentages).
@@ -118,9 +118,10 @@ def _series(t: np.ndarray, d: np.ndarray, every: float = 0.1) -> list[list[float
     return [[round(float(t[i]), 6), float(d[i])] for i in idx if i < len(d)]
 
 
-def static_stability(plan: Plan, ik: IkTorques, horizon: float) -> dict[str, Any]:
+def static_stability(plan: Plan, ik: IkTorques, horizon: float, dt: float = STABILITY_DT) -> dict[str, Any]:
     """Along the reference: smallest f_z (N) of the paper's GRF model on any stance foot, and
-    smallest CoM margin (m) inside the support triangle (three or more feet; Pinocchio's CoM)."""
+    smallest CoM margin (m) inside the support triangle (three or more feet; Pinocchio's CoM),
+    sampled every ``dt`` (s)."""
     import pinocchio as pin
 
     from .pinocchio_ref import PinocchioReference
@@ -129,7 +130,7 @@ def static_stability(plan: Plan, ik: IkTorques, horizon: float) -> dict[str, Any
     pin_ref = PinocchioReference(robot)
     min_fz, min_margin = np.inf, np.inf
     at_fz = at_margin = 0.0
-    for t in np.arange(0.0, horizon + 1e-9, STABILITY_DT):
+    for t in np.arange(0.0, horizon + 1e-9, dt):
         stance = plan.stance(float(t))
         ref, _ = ik(float(t), stance)
         name = StanceSet(stance).name
