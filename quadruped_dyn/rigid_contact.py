@@ -18,12 +18,8 @@ import numpy as np
 from .errors import InputError
 from .gait import Plan
 from .pinocchio_ref import PinocchioReference
-from .simulate import RTOL, IkTorques, Progress, Run, TorqueLaw, integrate_phases
+from .simulate import FALLEN_TRUNK_M, RTOL, IkTorques, Progress, Run, TorqueLaw, integrate_phases
 from .state import rotation
-
-#: A run stops when the trunk is this far (m) from where the plan puts it: the robot has
-#: fallen (a foot drifting under rigid contacts would show as the same).
-FALLEN_TRUNK_M = 0.1
 
 
 def _derivative(q: np.ndarray, v: np.ndarray, a: np.ndarray) -> np.ndarray:

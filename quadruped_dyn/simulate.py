@@ -2,9 +2,11 @@
 
 State: the reduced coordinates q_r (12 joint angles in FL, FR, BL, BR x HAA, HFE, KFE order,
 + the trunk roll phi for a gait with two-feet phases) and their rates. The trunk orientation
-is not a state: at every evaluation it follows from the stance legs, the plan's footholds and
-the roll (``kinematics.pose_from_feet``); quat = (x, y, z, w). qdd_r = fd_r(stance, q_r, qd_r,
-tau_ext, quat) with the stance of the plan's phase.
+is not a state: at every evaluation it follows from the stance legs, their footholds (where
+each foot landed: the plan's, to round-off, while the run follows IK) and the roll
+(``kinematics.pose_from_feet``); quat = (x, y, z, w). qdd_r = fd_r(stance, q_r, qd_r, tau_ext,
+quat) with the stance of the plan's phase. The state is kept on the stance closure
+(``project_on_stance``) after every DOP853 step.
 
 Torques (``TorqueLaw``): tau_ext(t) = scale * id_r(IK reference at t) + Kp (q_ref - q) + Kd (qd_ref
 - qd) on the 12 joints; the 13th (roll) entry is id_r's roll moment when ``roll_applied`` (the
@@ -14,8 +16,8 @@ Integrators (restarted at every stance switch, where the model changes):
 * ``dop853``: scipy's explicit Runge-Kutta 8(5,3) with error control, rtol = atol = ``RTOL``
   (rad, rad/s), sampled every ``dt`` from its 7th-order dense output;
 * ``rk4``: classical RK4 with the fixed step ``dt`` (which must divide a phase).
-A run stops where a stance foot is FALLEN_CLOSURE_M off its foothold (the robot has fallen) or
-the model is singular; ``Run.stopped_at`` says when.
+A run stops where the robot has fallen (FALLEN_CLOSURE_M, FALLEN_TRUNK_M) or the model is
+singular; ``Run.stopped_at`` says when.
 
 Evaluation backend: anything with the two methods of ``ReducedDynamics``: the generated C
 (``compiled_reduced.CompiledReducedDynamics``, the default) or the CasADi graph
@@ -43,9 +45,11 @@ from .reduced import MAX_COND_M_R, reduced_model
 from .reference import ReferenceSample, reference
 from .robot import Robot
 
-#: A simulation stops when a stance foot is this far from its foothold (m): the gait has
-#: failed (the robot rolls over), and integrating further only produces overflow.
+#: A simulation stops when a stance foot is this far from its foothold, or the trunk this far
+#: from where the plan puts it (m): the robot has fallen, and integrating further only
+#: produces overflow.
 FALLEN_CLOSURE_M = 0.1
+FALLEN_TRUNK_M = 0.1
 
 #: DOP853's relative and absolute tolerance (rad, rad/s: signals of order 1). Measured on the
 #: paper robot's trot, 1.2 s: at 1e-13 the truncation error is below the amplified round-off
@@ -181,12 +185,30 @@ def simulate_reduced(plan: Plan, dynamics: ReducedDynamics, law: TorqueLaw, hori
     pitch = [0.0]  # the previous pose's pitch picks between the two-feet pose solutions
     evaluations = [0]
 
-    def pose(t: float, q: np.ndarray, stance: tuple[int, ...]) -> tuple[np.ndarray, float]:
+    footholds = {i: plan.foot(i, 0.0)[0] for i in range(4)}  # world, where each foot stands (or last stood)
+    current = [gait.stance(0.0)]
+
+    def fit(q: np.ndarray, stance: tuple[int, ...]) -> tuple[np.ndarray, np.ndarray, float]:
         feet = np.array([np.asarray(kin[i].foot_position(q[3 * i : 3 * i + 3])).ravel() for i in stance])
         roll = float(q[12]) if len(stance) == 2 else None
-        R, _, closure = pose_from_feet(feet, plan.footholds(t, stance), roll=roll, pitch_hint=pitch[0])
+        R, p, closure = pose_from_feet(feet, np.array([footholds[i] for i in stance]), roll=roll, pitch_hint=pitch[0])
         pitch[0] = float(pin.rpy.matrixToRpy(R)[1])
+        return R, p, closure
+
+    def pose(t: float, q: np.ndarray, stance: tuple[int, ...]) -> tuple[np.ndarray, float]:
+        R, p, closure = fit(q, stance)
+        if closure > FALLEN_CLOSURE_M or np.linalg.norm(p - plan.trunk(t)[0]) > FALLEN_TRUNK_M:
+            raise _Fallen
         return pin.Quaternion(R).coeffs(), closure
+
+    def touch_down(stance: tuple[int, ...], y: np.ndarray) -> np.ndarray:
+        """A landing foot stands where the simulated motion puts it (on the planned foothold
+        to round-off while the run follows IK); the coordinates carry over unchanged."""
+        R, p, _ = fit(y[:n], current[0])
+        for i in set(stance) - set(current[0]):
+            footholds[i] = R @ np.asarray(kin[i].foot_position(y[3 * i : 3 * i + 3])).ravel() + p
+        current[0] = stance
+        return y
 
     def qdd_of(t: float, q: np.ndarray, qd: np.ndarray, stance: tuple[int, ...]) -> tuple[np.ndarray, float]:
         evaluations[0] += 1
@@ -195,8 +217,6 @@ def simulate_reduced(plan: Plan, dynamics: ReducedDynamics, law: TorqueLaw, hori
         if n == 13:
             tau = np.append(tau, tau_ik[12] if (law.roll_applied and len(stance) == 2) else 0.0)
         quat, closure = pose(t, q, stance)
-        if closure > FALLEN_CLOSURE_M:
-            raise _Fallen
         qdd = dynamics.fd_r(StanceSet(stance), q, qd, tau, quat)
         return qdd, closure
 
@@ -221,11 +241,11 @@ def simulate_reduced(plan: Plan, dynamics: ReducedDynamics, law: TorqueLaw, hori
         return np.concatenate([y[n:], qdd_of(t, y[:n], y[n:], stance)[0]])
 
     def projection(stance: tuple[int, ...], t: float, y: np.ndarray) -> np.ndarray:
-        return project_on_stance(plan, stance, t, y, pitch[0])
+        return project_on_stance(plan.robot, stance, np.array([footholds[i] for i in stance]), y, pitch[0])
 
     try:
         integrate_phases(plan, y, horizon, dt, integrator, rtol, rhs, record, projection if project else None,
-                         progress=progress)
+                         touch_down, progress)
     except (_Fallen, InputError):
         stopped_at = float(out_t[-1]) if out_t else 0.0
     Y = np.array(out_y).reshape(-1, 2 * n)
@@ -265,19 +285,20 @@ def integrate_phases(plan: Plan, y: np.ndarray, horizon: float, dt: float, integ
     return y
 
 
-def project_on_stance(plan: Plan, stance: tuple[int, ...], t: float, y: np.ndarray, pitch_hint: float = 0.0) -> np.ndarray:
+def project_on_stance(robot: Robot, stance: tuple[int, ...], holds: np.ndarray, y: np.ndarray,
+                      pitch_hint: float = 0.0) -> np.ndarray:
     """The state y = (q_r, qd_r) moved onto the stance closure: the stance feet on their
-    footholds for the trunk pose fitted to them (``pose_from_feet``; two Newton steps of each
+    footholds ``holds`` (k, 3; world, m) for the trunk pose fitted to them (``pose_from_feet``; two Newton steps of each
     stance leg's IK), and the stance legs' rates those of the trunk twist fitted to them (SPEC
     section 5's velocity map, least squares, roll-rate row for two feet). The reduced coordinates
     are redundant -- 12 for 9 degrees of freedom with three feet, 13 for 12 with two -- and the
-    paper's ODE does not keep the closure: its drift off it is the fastest-growing error."""
+    paper's ODE does not keep the closure: its drift off it is the fastest-growing error. Right
+    after a touch-down whose foot lands moving, the rate projection is a kinematic impact."""
     from .pinocchio_ref import roll_rate_row
 
-    kin = robot_kinematics(plan.robot)
+    kin = robot_kinematics(robot)
     n = y.size // 2
     q, qd = y[:n].copy(), y[n:].copy()
-    holds = plan.footholds(t, stance)
     roll = float(q[12]) if len(stance) == 2 else None
     for _ in range(2):
         feet = np.array([np.asarray(kin[i].foot_position(q[3 * i : 3 * i + 3])).ravel() for i in stance])

@@ -62,9 +62,11 @@ def test_projection_puts_a_perturbed_state_back_on_the_stance_closure(paper):
     ref, _ = ik(0.1, plan.stance(0.1))
     y = np.concatenate([ref.q_r, ref.qd_r])
     rng = np.random.default_rng(0)
-    assert_close(project_on_stance(plan, plan.stance(0.1), 0.1, y), y, what="a consistent state stays")
-    moved = project_on_stance(plan, plan.stance(0.1), 0.1, y + rng.normal(scale=1e-6, size=y.size))
-    again = project_on_stance(plan, plan.stance(0.1), 0.1, moved)
+    stance = plan.stance(0.1)
+    holds = plan.footholds(0.1, stance)
+    assert_close(project_on_stance(paper, stance, holds, y), y, what="a consistent state stays")
+    moved = project_on_stance(paper, stance, holds, y + rng.normal(scale=1e-6, size=y.size))
+    again = project_on_stance(paper, stance, holds, moved)
     assert_close(again, moved, what="projection is idempotent")
 
 
