@@ -90,7 +90,12 @@ def test_support_margin_and_deepest_point():
     assert_close(point, [0.5, r])
 
 
-@pytest.mark.parametrize("name", [*ROBOT_NAMES, "b1"])
+#: Every built-in robot and b1 by path; four of them only in the slow suite (~20 s each).
+STABILITY_ROBOTS = [pytest.param(n, marks=pytest.mark.slow) if n in ("go2", "go1", "a1", "hyq") else n
+                    for n in (*ROBOT_NAMES, "b1")]
+
+
+@pytest.mark.parametrize("name", STABILITY_ROBOTS)
 def test_walk_is_statically_stable(name, erd):
     """Along a full cycle: the CoM (Pinocchio's, of the actual IK configuration) stays at least
     MIN_COM_MARGIN_M inside the support triangle and the paper's GRF model gives f_z >= 0."""
