@@ -6,7 +6,7 @@ is not a state: at every evaluation it follows from the stance legs, their footh
 each foot landed: the plan's, to round-off, while the run follows IK) and the roll
 (``kinematics.pose_from_feet``); quat = (x, y, z, w). qdd_r = fd_r(stance, q_r, qd_r, tau_ext,
 quat) with the stance of the plan's phase. The state is kept on the stance closure
-(``project_on_stance``) after every DOP853 step.
+(``project_on_stance``) after every step.
 
 Torques (``TorqueLaw``): tau_ext(t) = scale * id_r(IK reference at t) + Kp (q_ref - q) + Kd (qd_ref
 - qd) on the 12 joints; the 13th (roll) entry is id_r's roll moment when ``roll_applied`` (the
@@ -175,7 +175,7 @@ def simulate_reduced(plan: Plan, dynamics: ReducedDynamics, law: TorqueLaw, hori
     """Integrate the reduced forward dynamics from the IK state at t = 0 (see the module
     docstring); ``initial_ulps`` moves every initial coordinate and rate that many ulps up (the
     twin run that measures how round-off grows). ``project``: keep the state on the stance
-    closure (``project_on_stance``) after every DOP853 step."""
+    closure (``project_on_stance``) after every step."""
     if integrator not in ("dop853", "rk4"):
         raise InputError(f"unknown integrator '{integrator}'; expected dop853 or rk4")
     robot, gait = plan.robot, plan.gait
@@ -264,7 +264,7 @@ def integrate_phases(plan: Plan, y: np.ndarray, horizon: float, dt: float, integ
                      progress: Progress | None = None) -> np.ndarray:
     """Integrate y' = rhs(stance, t, y) phase by phase of the plan up to ``horizon``, restarting
     at every stance switch (``switch`` maps the state across it, e.g. an impact), calling
-    ``record`` on the samples every ``dt``; ``project`` after every DOP853 step. Exceptions
+    ``record`` on the samples every ``dt``; ``project`` after every step. Exceptions
     of the callbacks propagate: the caller decides what a failure means."""
     samples = _sample_times(horizon, dt)
     bounds = np.concatenate([[0.0], plan.switch_times(horizon), [samples[-1]]])
@@ -276,10 +276,11 @@ def integrate_phases(plan: Plan, y: np.ndarray, horizon: float, dt: float, integ
         inside = samples[(samples >= t0 - 1e-12) & ((samples < t1 - 1e-12) | last)]
         f = partial(rhs, stance)
         rec = partial(record, stance)
+        proj = partial(project, stance) if project else None
         if integrator == "rk4":
-            y = _rk4_segment(f, y, t0, t1, dt, inside, rec)
+            y = _rk4_segment(f, y, t0, t1, dt, inside, rec, proj)
         else:
-            y = _dop853_segment(f, y, t0, t1, rtol, inside, rec, partial(project, stance) if project else None)
+            y = _dop853_segment(f, y, t0, t1, rtol, inside, rec, proj)
         if progress:
             progress(float(t1))
     return y
@@ -323,7 +324,8 @@ def project_on_stance(robot: Robot, stance: tuple[int, ...], holds: np.ndarray, 
 
 
 def _rk4_segment(f: Callable[[float, np.ndarray], np.ndarray], y: np.ndarray, t0: float, t1: float, dt: float,
-                 samples: np.ndarray, record: Callable[[float, np.ndarray], None]) -> np.ndarray:
+                 samples: np.ndarray, record: Callable[[float, np.ndarray], None],
+                 project: Callable[[float, np.ndarray], np.ndarray] | None = None) -> np.ndarray:
     steps = int(round((t1 - t0) / dt))
     if abs(steps * dt - (t1 - t0)) > 1e-9:
         raise InputError(f"dt {dt} s does not divide the gait's phase of {t1 - t0} s; expected e.g. 1e-3")
@@ -335,6 +337,8 @@ def _rk4_segment(f: Callable[[float, np.ndarray], np.ndarray], y: np.ndarray, t0
         k3 = f(t + dt / 2, y + dt / 2 * k2)
         k4 = f(t + dt, y + dt * k3)
         y = y + dt / 6 * (k1 + 2 * k2 + 2 * k3 + k4)
+        if project is not None:
+            y = project(t + dt, y)
     if samples.size and samples[-1] >= t1 - 1e-12:  # the horizon's last sample
         record(t1, y)
     return y

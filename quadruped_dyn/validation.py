@@ -225,7 +225,7 @@ def report(exp: Experiment, integrator: str, dt: float, backend: str, stability:
     out: dict[str, Any] = {
         "robot": plan.robot.name, "gait": plan.gait.name, "horizon_s": horizon, "backend": backend,
         "integrator": method + "; restarted at every stance switch; state projected onto the stance closure after "
-                      "every step" + (" (DOP853 only)" if integrator == "rk4" else ""),
+                      "every step",
         "max_pct_err": {n: {s: errors[s][j] for s in SIGNALS} for j, n in enumerate(names)},
         "max_pct_err_overall": {s: _worst(errors[s]) for s in SIGNALS},
         "instability": {"growth_rate_per_s": growth_rate(paper.t[: len(d_twin)], d_twin),
