@@ -7,7 +7,8 @@ load on a shared 2-core machine). Ratios generated / Pinocchio are what to read;
 times drift with the machine's load. The Pinocchio harness links
 the pin wheel's libraries (built for generic x86-64), so neither side uses -march=native.
 Pairs: M_full ~ crba, nle_full (C + G in one call) ~ nonLinearEffects, G_full ~
-computeGeneralizedGravity, id_full ~ rnea (id_full also applies 4 foot forces).
+computeGeneralizedGravity, id_full ~ rnea (id_full also applies 4 foot forces), fd_r_<feet> ~
+constraintDynamics with those stance feet. The reduced terms M_r, CG_r, G_r, id_r are timed alone.
 """
 
 from __future__ import annotations
@@ -27,11 +28,16 @@ import numpy as np
 import pinocchio as pin
 
 from .codegen import PREFIX, TEMPLATES, codegen_functions, generate, work_sizes
-from .compiled import C_FLAGS, CompiledFunction, CompiledLibrary, cache_dir, compiled_library, run_tool
+from .compiled import C_FLAGS, CompiledFunction, CompiledLibrary, cache_dir, compile_sources, compiled_library, run_tool
 from .errors import InputError
 from .pinocchio_ref import PinocchioReference
 from .robot import Robot
 from .state import random_state
+
+#: fd_r_<feet> is timed against Pinocchio's constraintDynamics with the same stance feet as rigid
+#: point contacts (different physics: the paper's GRF model vs rigid contacts; the same job, a
+#: forward dynamics step of a robot on those feet). Target ratio generated / Pinocchio.
+FD_R_TARGET = 0.3
 
 #: generated function -> (Pinocchio algorithm, target ratio generated / Pinocchio)
 PAIRS = {
@@ -133,20 +139,23 @@ def run_bench(robot: Robot, calls: int = 20000, reps: int = 9, rounds: int = 3, 
         paths = generate(robot, Path(tmp))
         report.generation_s = time.perf_counter() - start
         c_path, h_path, ref_path = paths[:3]
-        report.code_bytes = c_path.stat().st_size
+        sources = [p for p in paths if p.suffix == ".c" and p.name.startswith(c_path.stem)]
+        report.code_bytes = sum(p.stat().st_size for p in sources)
         report.work_bytes = max(8 * (iw + w) for iw, w in work_sizes(h_path.read_text()).values())
         shutil.copy(TEMPLATES / "bench_qd.c", tmp)
-        exe = Path(tmp) / "bench_qd"
+        exe, lib = Path(tmp) / "bench_qd", Path(tmp) / f"lib{c_path.stem}.so"
         start = time.perf_counter()
-        run_tool([cc, *C_FLAGS, f"-DQD_HEADER=\"{h_path.name}\"", f"-DQD_REFERENCE=\"{ref_path.name}\"",
-                  "bench_qd.c", c_path.name, "-lm", "-o", exe.name], cwd=tmp)
+        compile_sources(sources, C_FLAGS, lib, cc)
         report.compile_s = time.perf_counter() - start
+        run_tool([cc, *C_FLAGS, f"-DQD_HEADER=\"{h_path.name}\"", f"-DQD_REFERENCE=\"{ref_path.name}\"",
+                  "bench_qd.c", lib.name, f"-Wl,-rpath,{tmp}", "-lm", "-o", exe.name], cwd=tmp)
         harness = pinocchio_harness()
+        feet = [robot.model.frames[i].name for i in robot.foot_frame_ids]
         generated: dict[str, float] = {}
         pinocchio: dict[str, float] = {}
         for _ in range(rounds):  # alternate the two harnesses; keep each function's best median
             for out, cmd in ((generated, [str(exe), str(calls), str(reps)]),
-                             (pinocchio, [str(harness), str(robot.urdf), str(calls), str(reps)])):
+                             (pinocchio, [str(harness), str(robot.urdf), str(calls), str(reps), *feet])):
                 for name, ns in _parse(run_tool(cmd)).items():
                     out[name] = min(ns, out.get(name, ns))
     library = compiled_library(robot, cc=cc)
@@ -154,8 +163,8 @@ def run_bench(robot: Robot, calls: int = 20000, reps: int = 9, rounds: int = 3, 
     python_us = _python_call_times(robot, library)
     for name, ns in ((n[len(PREFIX):], t) for n, t in generated.items()):
         entry = BenchEntry(name, ns, python_generated_us=python_us.get(name))
-        if name in PAIRS:
-            algo, target = PAIRS[name]
+        if name in PAIRS or name.startswith("fd_r_"):
+            algo, target = PAIRS.get(name) or (f"constraintDynamics_{name[len('fd_r_'):]}", FD_R_TARGET)
             entry.pinocchio, entry.pinocchio_ns, entry.target = algo, pinocchio[algo], target
             entry.ratio = ns / pinocchio[algo]
             entry.python_pinocchio_us = python_us.get(algo)

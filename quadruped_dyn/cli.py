@@ -91,15 +91,30 @@ def info(robot: str, as_json: bool) -> None:
 @click.option("--samples", default=20, show_default=True, type=click.IntRange(min=1), help="Random states.")
 @click.option("--seed", default=0, show_default=True, type=int, help="Random seed.")
 @click.option("--json", "as_json", is_flag=True, help="Print the report as JSON.")
-def check(robot: str, samples: int, seed: int, as_json: bool) -> None:
+@click.option("--against", default=None, metavar="LIBS",
+              help="Also compare M, C + G, G and foot Jacobians with other libraries, after diagnosing what each does "
+                   "to the URDF: comma-separated subset of mujoco,idyntree (pip install 'quadruped_dyn[xlib]').")
+def check(robot: str, samples: int, seed: int, as_json: bool, against: str | None) -> None:
     """Check every symbolic term of ROBOT against Pinocchio on random states (exit 1 on failure)."""
     from .check import run_check
 
+    libraries: tuple[str, ...] = ()
+    if against is not None:
+        from .cross_library import parse_libraries
+
+        libraries = parse_libraries(against)
     r = load_robot(robot)
     with click.progressbar(length=samples, label=f"checking {r.name}", file=sys.stderr) as bar:
         report = run_check(r, samples, seed, progress=lambda n: bar.update(1))
-    click.echo(json.dumps(report.as_dict(), indent=2) if as_json else report.table())
-    sys.exit(0 if report.passed else EXIT_CHECK_FAILED)
+    data, text, passed = report.as_dict(), report.table(), report.passed
+    if libraries:
+        from .cross_library import run_cross_library
+
+        cross = run_cross_library(r, libraries, samples, seed)
+        passed = passed and cross.passed
+        data, text = {**data, **cross.as_dict(), "passed": passed}, f"{text}\n\n{cross.table()}"
+    click.echo(json.dumps(data, indent=2) if as_json else text)
+    sys.exit(0 if passed else EXIT_CHECK_FAILED)
 
 
 @main.command()
@@ -239,6 +254,21 @@ def validate(robot: str, gait_name: str, horizon: float | None, integrator: str,
 
 def _pct(x: float | None) -> str:
     return "n/a" if x is None else f"{x:.1e}"
+
+
+@main.command()
+@click.argument("robot", default="paper")
+@click.option("--out", "out_dir", default="results", show_default=True,
+              help="The page goes to OUT/<robot>/report.html, its files beside it.")
+@click.option("--fast", is_flag=True, help="Skip the benchmark (its first run compiles a C++ harness for minutes).")
+def report(robot: str, out_dir: str, fast: bool) -> None:
+    """One self-contained HTML page of everything the toolkit knows about ROBOT (exit 1 if a check fails)."""
+    from .report import build_report, prepare
+
+    prepare(robot, out_dir)  # bad input is reported before any work
+    result = build_report(robot, out_dir, fast)
+    click.echo(result.summary())
+    sys.exit(0 if result.passed else EXIT_CHECK_FAILED)
 
 
 @main.command("make-urdf")

@@ -14,7 +14,7 @@ import numpy as np
 from .codegen import reduced_symbol
 from .compiled import CompiledFunction, compiled_library
 from .errors import InputError
-from .grf import StanceSet
+from .grf import StanceSet, stance_set
 from .robot import Robot
 from .state import check_array
 
@@ -27,9 +27,11 @@ class CompiledReducedDynamics:
         self.library = compiled_library(robot)
         self._functions: dict[str, CompiledFunction] = {}
 
-    def _call(self, name: str, stance: StanceSet, inputs: dict[str, np.ndarray]) -> np.ndarray:
-        """Checked call: shapes, finiteness and a non-zero quaternion here; singular
-        configurations by the C function's return code (CompiledFunction raises InputError)."""
+    def _call(self, name: str, stance: StanceSet | str, inputs: dict[str, np.ndarray]) -> np.ndarray:
+        """Checked call: the stance (a StanceSet or a name like 'FL+BR'), shapes, finiteness and a
+        non-zero quaternion here; singular configurations by the C function's return code
+        (CompiledFunction raises InputError)."""
+        stance = stance_set(stance) if isinstance(stance, str) else stance
         k = len(stance.feet)
         if k not in (2, 3, 4):
             raise InputError(f"stance {stance.name} has {k} feet; the reduced model needs 2, 3 or 4 distinct stance feet")
@@ -42,10 +44,12 @@ class CompiledReducedDynamics:
             self._functions[symbol] = CompiledFunction(self.library, symbol)
         return self._functions[symbol](*args)[0]
 
-    def id_r(self, stance: StanceSet, q_r: np.ndarray, qd_r: np.ndarray, qdd_r: np.ndarray, quat: np.ndarray) -> np.ndarray:
+    def id_r(self, stance: StanceSet | str, q_r: np.ndarray, qd_r: np.ndarray, qdd_r: np.ndarray, quat: np.ndarray) -> np.ndarray:
         """tau_r (n,) [N m]: joint torques (and, for two feet, the moment about the support line)."""
         return self._call("id_r", stance, {"q_r": q_r, "qd_r": qd_r, "qdd_r": qdd_r, "quat": quat})
 
-    def fd_r(self, stance: StanceSet, q_r: np.ndarray, qd_r: np.ndarray, tau_ext: np.ndarray, quat: np.ndarray) -> np.ndarray:
+    def fd_r(
+        self, stance: StanceSet | str, q_r: np.ndarray, qd_r: np.ndarray, tau_ext: np.ndarray, quat: np.ndarray
+    ) -> np.ndarray:
         """qdd_r (n,) = M_r^-1 (tau_ext - C_r - G_r); InputError where M_r is singular."""
         return self._call("fd_r", stance, {"q_r": q_r, "qd_r": qd_r, "tau_ext": tau_ext, "quat": quat})

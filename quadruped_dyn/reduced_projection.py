@@ -27,8 +27,9 @@ from dataclasses import dataclass
 import casadi as ca
 
 from .crba import mass_matrix_crba
-from .grf import StanceSet, solve_lambda
+from .grf import StanceSet
 from .kinematics import foot_position
+from .leg import LEG_LABELS
 from .newton_euler import inverse_dynamics
 from .reduced import roll_rate_row, roll_rate_row_dot
 from .robot import Robot
@@ -36,9 +37,9 @@ from .spatial import dm, quat_to_rotation, skew
 from .state import GRAVITY_W, NV_FULL
 
 
-def _solve_symmetric3(K: ca.SX, b: ca.SX) -> ca.SX:
-    """K^-1 b for a symmetric 3 x 3 K, by its adjugate (K here is conditioned like the foot
-    layout, ~1e1-1e2; it is singular, and the result not finite, for collinear feet)."""
+def _solve3(K: ca.SX, b: ca.SX) -> ca.SX:
+    """K^-1 b for a 3 x 3 K, by its adjugate (K here is conditioned like the foot layout,
+    ~1e1-1e2; it is singular, and the result not finite, for collinear feet)."""
     adj = ca.SX(3, 3)
     for i in range(3):
         for j in range(3):
@@ -60,8 +61,68 @@ def rigid_motion(r: list[ca.SX], u: list[ca.SX], e: ca.SX | None = None, rate: c
     rhs = sum((skew(p) @ ui for p, ui in zip(rho[1:], u[1:])), skew(rho[0]) @ u[0])
     if e is not None and rate is not None:
         K, rhs = K + e @ e.T, rhs + e @ rate
-    omega = _solve_symmetric3(K, rhs)
+    omega = _solve3(K, rhs)
     return sum(u[1:], u[0]) / k + skew(rbar) @ omega, omega
+
+
+def _two_feet_forces(r: list[ca.SX], force: ca.SX, moment: ca.SX) -> ca.SX:
+    """The paper's two-foot GRF (all six components free) in closed form: the pseudo-inverse
+    solution (f_1, f_2) (6, m) for the required trunk wrench (force, moment about the trunk
+    origin; 3, m each), as grf.solve_lambda's explicit null-space solve gives it (tested).
+    The wrench is first projected onto what the feet can produce, removing its component
+    along the left null vector u = (r_1 x e, e) / |.| (e along d = r_1 - r_2); then, with rbar
+    the feet's midpoint, f_1,2 = force / 2 +- g with d x g = moment - rbar x force, whose
+    minimum-norm solution (g orthogonal to d) is g = (moment - rbar x force) x d / |d|^2."""
+    d, rbar = r[0] - r[1], (r[0] + r[1]) / 2
+    u_f, u_m = ca.cross(r[0], d), d
+    unbalanced = (u_f.T @ force + u_m.T @ moment) / (ca.dot(u_f, u_f) + ca.dot(u_m, u_m))
+    force, moment = force - u_f @ unbalanced, moment - u_m @ unbalanced
+    g = -skew(d) @ (moment - skew(rbar) @ force) / ca.dot(d, d)
+    return ca.vertcat(force / 2 + g, force / 2 - g)
+
+
+def _three_feet_forces(stance: StanceSet, r: list[ca.SX], force: ca.SX, moment: ca.SX) -> ca.SX:
+    """The paper's three-foot GRF in closed form (its 6 x 6 system is regular): per foot
+    (fx, fy_i, fz_i) (9, m) with fx common, fy_i = fy_same for the foot on the lifted leg's side
+    and fy_opp for the other two, for the required trunk force and moment (3, m each, about the
+    trunk origin). fx = F_x / 3; (fy_same, fy_opp) from F_y and the yaw moment; the fz from F_z
+    and the roll and pitch moments (the support triangle's 3 x 3 system). Equal to
+    grf.solve_lambda's QR solve (tested)."""
+    side = LEG_LABELS[stance.lifted[0]][1]
+    same = [LEG_LABELS[i][1] == side for i in stance.feet]
+    x, y, z = ([ri[c] for ri in r] for c in range(3))
+    fx = force[0, :] / 3
+    n_roll = moment[0, :]
+    n_pitch = moment[1, :] - (z[0] + z[1] + z[2]) * fx
+    n_yaw = moment[2, :] + (y[0] + y[1] + y[2]) * fx
+    x_same = sum(xi for xi, s_ in zip(x, same) if s_)
+    x_opp = sum(xi for xi, s_ in zip(x, same) if not s_)
+    det = 2 * x_same - x_opp  # x_same fy_s + x_opp fy_o = n_yaw, fy_s + 2 fy_o = F_y
+    fy_same = (2 * n_yaw - x_opp * force[1, :]) / det
+    fy_opp = (x_same * force[1, :] - n_yaw) / det
+    fy = [fy_same if s_ else fy_opp for s_ in same]
+    B = ca.vertcat(ca.horzcat(1, 1, 1), ca.horzcat(*y), -ca.horzcat(*x))
+    fz = _solve3(B, ca.vertcat(force[2, :], n_roll + z[0] * fy[0] + z[1] * fy[1] + z[2] * fy[2], n_pitch))
+    return ca.vertcat(*[ca.vertcat(fx, fy[j], fz[j, :]) for j in range(3)])
+
+
+def _four_feet_forces(r: list[ca.SX], force: ca.SX, moment: ca.SX) -> ca.SX:
+    """The paper's four-foot GRF (fz per foot, fx and fy common) in closed form: the
+    pseudo-inverse solution, per foot (fx, fy, fz_i) (12, m), as grf.solve_lambda's null-space
+    solve gives it (tested). The wrench is first projected onto what the model can produce,
+    removing its component along the left null vector u = (ybar, -xbar, 0, 0, 0, 1) (a yaw
+    moment off the line xbar F_y - ybar F_x); then fx = F_x / 4, fy = F_y / 4, and the fz are
+    the minimum-norm solution of F_z and the roll and pitch moments: fz = B^T (B B^T)^-1 rhs,
+    B = [1; y; -x] (3 x 4)."""
+    x, y, z = (ca.vertcat(*[ri[c] for ri in r]) for c in range(3))
+    u_f = ca.vertcat(ca.sum1(y) / 4, -ca.sum1(x) / 4, 0)
+    unbalanced = (u_f.T @ force + moment[2, :]) / (1 + ca.dot(u_f, u_f))
+    force = force - u_f @ unbalanced
+    fx, fy = force[0, :] / 4, force[1, :] / 4
+    Z = ca.sum1(z)
+    B = ca.horzcat(ca.SX.ones(4), y, -x).T
+    fz = B.T @ _solve3(B @ B.T, ca.vertcat(force[2, :], moment[0, :] + Z * fy, moment[1, :] - Z * fx))
+    return ca.vertcat(*[ca.vertcat(fx, fy, fz[j, :]) for j in range(4)])
 
 
 @dataclass(frozen=True)
@@ -103,8 +164,12 @@ class ReducedProjection:
 
     def project(self, F: ca.SX) -> ca.SX:
         """tau_r (n, m) = S F for full generalized forces F (18, m) (module docstring)."""
-        lam, _ = solve_lambda(self.stance, "paper", self.r, F[:6, :])
-        f = dm(self.stance.selection("paper")) @ lam
+        if len(self.r) == 2:
+            f = _two_feet_forces(self.r, F[:3, :], F[3:6, :])
+        elif len(self.r) == 3:
+            f = _three_feet_forces(self.stance, self.r, F[:3, :], F[3:6, :])
+        else:
+            f = _four_feet_forces(self.r, F[:3, :], F[3:6, :])
         tau = ca.SX(F[6:, :])
         for j, i in enumerate(self.stance.feet):
             J = ca.jacobian(self.r[j], self.q_r[3 * i : 3 * i + 3])

@@ -35,10 +35,9 @@ COND_ERR_FACTOR = 100.0
 FLOAT_REL_TOL = 1e-5
 
 #: Condition number of a GRF system that FLOAT_REL_TOL and REL_TOL_TERMS allow for. The reduced
-#: model of a stance set whose GRF system is worse conditioned at a checked state (e.g. the two
-#: back feet, BL+BR: cond ~1e3-1e4, their line passing near the CoM) gets its tolerance scaled by
-#: cond / GRF_COND_ASSUMED, and fd_r additionally by cond(M_r): errors of a backward-stable solve
-#: grow with the condition number, whatever the precision.
+#: model of a stance set whose GRF system is worse conditioned at a checked state gets its
+#: tolerance scaled by cond / GRF_COND_ASSUMED, and fd_r additionally by cond(M_r): errors of a
+#: backward-stable solve grow with the condition number, whatever the precision.
 GRF_COND_ASSUMED = 100.0
 
 #: Condition number of the reduced model's stance-foot rows [I, -[r_i]x] (+ the roll row for two
@@ -47,3 +46,8 @@ GRF_COND_ASSUMED = 100.0
 #: line is lateral, nearly perpendicular to the roll axis, so the roll row barely fixes the
 #: pitch about that line (exactly not at zero pitch and roll: singular there).
 MAP_COND_ASSUMED = 20.0
+
+#: A typeset formula (coefficients rounded to symbolic.DISPLAY_DIGITS = 4 significant digits,
+#: each off by <= 5e-5 relative) against Pinocchio: a sum of a few such terms stays within
+#: ~2e-4 of the largest entry; 1e-3 catches any wrong term or sign.
+FORMULA_DISPLAY_REL_TOL = 1e-3

@@ -34,6 +34,10 @@ from .test_codegen import REL_TOL_GRAPH
 #: n * eps relative to |M_r| |qdd_r| + |rhs| (n = 13): far below 1e-12.
 REL_TOL_RESIDUAL = 1e-12
 
+#: As check_qd.c's QD_MAX_TOL: a float case whose conditioning-scaled tolerance exceeds this
+#: could only fail on NaN, so it is not checked in float (the double build checks it).
+FLOAT_MAX_TOL = 1e-2
+
 
 def _inputs(s, n):
     return {k: (v if k == "quat" else v[:n]) for k, v in reduced_inputs(s).items()}
@@ -105,8 +109,9 @@ def test_python_layer_checks_its_inputs(paper):
         d.fd_r(stance, x["q_r"][:12], x["qd_r"], x["tau_ext"], x["quat"])
     with pytest.raises(InputError, match="tau_ext"):
         d.fd_r(stance, x["q_r"], x["qd_r"], np.full(13, np.inf), x["quat"])
-    with pytest.raises(InputError, match="stance"):
-        d.fd_r(stance_set("FL"), x["q_r"][:12], x["qd_r"][:12], x["tau_ext"][:12], x["quat"])
+    for bad in (stance_set("FL"), "FL", "FL+FL", "FL+XX", "none"):
+        with pytest.raises(InputError, match="stance"):
+            d.fd_r(bad, x["q_r"][:12], x["qd_r"][:12], x["tau_ext"][:12], x["quat"])
 
 
 def test_float_build_matches_pinocchio(paper):
@@ -128,5 +133,8 @@ def test_float_build_matches_pinocchio(paper):
             arg = (ptr * len(args))(*[a.ctypes.data_as(ptr) for a in args])
             res = (ptr * 1)(out.ctypes.data_as(ptr))
             assert getattr(lib, f.name())(arg, res, None, None, 0) == 0, name
+            tol = FLOAT_REL_TOL * tolerance_scale(ref, name, s)
+            if tol > FLOAT_MAX_TOL:  # fd_r of BL+BR: cond(M_r) ~5e5 leaves float no digits to check
+                continue
             expected = np.ravel(pinocchio_outputs(paper, ref, name, s)[0], order="F")
-            assert_close(out.astype(float), expected, rel=FLOAT_REL_TOL * tolerance_scale(ref, name, s), what=name)
+            assert_close(out.astype(float), expected, rel=tol, what=name)

@@ -1,6 +1,10 @@
 // Times Pinocchio's native C++ algorithms on a URDF with a free-flyer root, in the same run
-// as the generated code. Usage: bench_pinocchio URDF CALLS REPS. Prints one line per
-// algorithm: "name median_ns". State: neutral + 0.1 * random, velocities/accelerations random.
+// as the generated code. Usage: bench_pinocchio URDF CALLS REPS [FOOT_FL FOOT_FR FOOT_BL FOOT_BR].
+// Prints one line per algorithm: "name median_ns". State: neutral + 0.1 * random,
+// velocities/accelerations/torques random. With the four foot frames (project order), also
+// constraintDynamics with every set of 2, 3 or 4 stance feet as rigid 3-D point contacts
+// (LOCAL_WORLD_ALIGNED, proximal settings mu = 0, one iteration: the exact KKT solve), named
+// "constraintDynamics_<feet>" with the feet joined by '_' (e.g. constraintDynamics_FL_BR).
 #include <algorithm>
 #include <chrono>
 #include <cstdio>
@@ -8,6 +12,9 @@
 #include <functional>
 #include <vector>
 
+#include <string>
+
+#include <pinocchio/algorithm/constrained-dynamics.hpp>
 #include <pinocchio/algorithm/crba.hpp>
 #include <pinocchio/algorithm/joint-configuration.hpp>
 #include <pinocchio/algorithm/rnea.hpp>
@@ -29,8 +36,8 @@ static double median_ns(const std::function<void()>& f, int calls, int reps) {
 }
 
 int main(int argc, char** argv) {
-  if (argc != 4) {
-    std::fprintf(stderr, "usage: %s URDF CALLS REPS\n", argv[0]);
+  if (argc != 4 && argc != 8) {
+    std::fprintf(stderr, "usage: %s URDF CALLS REPS [FOOT_FL FOOT_FR FOOT_BL FOOT_BR]\n", argv[0]);
     return 2;
   }
   pin::Model model;
@@ -47,5 +54,27 @@ int main(int argc, char** argv) {
   std::printf("computeGeneralizedGravity %.2f\n",
               median_ns([&] { sink = sink + pin::computeGeneralizedGravity(model, data, q)[0]; }, calls, reps));
   std::printf("rnea %.2f\n", median_ns([&] { sink = sink + pin::rnea(model, data, q, v, a)[0]; }, calls, reps));
+  if (argc == 8) {
+    const char* labels[4] = {"FL", "FR", "BL", "BR"};
+    Eigen::VectorXd tau = Eigen::VectorXd::Random(model.nv);
+    for (int set = 0; set < 16; ++set) {
+      int k = __builtin_popcount(set);
+      if (k < 2) continue;
+      std::vector<pin::RigidConstraintModel> contacts;
+      std::string name = "constraintDynamics";
+      for (int i = 0; i < 4; ++i) {
+        if (!(set & (1 << i))) continue;
+        const pin::Frame& frame = model.frames[model.getFrameId(argv[4 + i])];
+        contacts.emplace_back(pin::CONTACT_3D, model, frame.parentJoint, frame.placement, pin::LOCAL_WORLD_ALIGNED);
+        name += std::string("_") + labels[i];
+      }
+      std::vector<pin::RigidConstraintData> datas;
+      for (const pin::RigidConstraintModel& c : contacts) datas.emplace_back(c);
+      pin::initConstraintDynamics(model, data, contacts, datas);
+      pin::ProximalSettings prox(1e-12, 0.0, 1);
+      std::printf("%s %.2f\n", name.c_str(), median_ns([&] {
+        sink = sink + pin::constraintDynamics(model, data, q, v, tau, contacts, datas, prox)[0]; }, calls, reps));
+    }
+  }
   return 0;
 }

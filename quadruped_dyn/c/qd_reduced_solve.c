@@ -42,10 +42,12 @@ static int qd_finite(int flag, casadi_real** res, int n_out, const casadi_int* n
 }
 
 /* qdd_r = M_r^-1 (tau_ext - (C_r + G_r)): arg = (q_r, qd_r, tau_ext, quat), res = (qdd_r).
- * M_r and C_r + G_r from the checked generated functions, then a dense LU with partial
- * pivoting; no heap, all temporaries on the stack (n <= QD_N_MAX). */
-static int qd_fd_r_solve(int n, qd_eval_fn M_r, qd_eval_fn CG_r, const casadi_real** arg, casadi_real** res,
-                         casadi_int* iw, casadi_real* w, int mem) {
+ * M_r and C_r + G_r from the generated evaluations (checked here in one pass), then a dense LU with partial
+ * pivoting, column-oriented (M_r is column-major: the inner loops run down contiguous
+ * columns); no heap, all temporaries on the stack (n <= QD_N_MAX). Each generated file calls
+ * it once with a constant n, so the compiler can specialise it. */
+static inline int qd_fd_r_solve(int n, qd_eval_fn M_r, qd_eval_fn CG_r, const casadi_real** arg, casadi_real** res,
+                                casadi_int* iw, casadi_real* w, int mem) {
   casadi_real M[QD_N_MAX * QD_N_MAX], b[QD_N_MAX];
   const casadi_real* m_arg[2] = {arg[0], arg[3]};
   const casadi_real* cg_arg[3] = {arg[0], arg[1], arg[3]};
@@ -54,15 +56,23 @@ static int qd_fd_r_solve(int n, qd_eval_fn M_r, qd_eval_fn CG_r, const casadi_re
   int flag = M_r(m_arg, m_res, iw, w, mem);
   if (!flag) flag = CG_r(cg_arg, cg_res, iw, w, mem);
   if (flag) return flag;
-  casadi_real scale = 0;
-  for (int i = 0; i < n * n; ++i) scale = fabs(M[i]) > scale ? fabs(M[i]) : scale;
-  for (int i = 0; i < n; ++i) b[i] = arg[2][i] - b[i];
-  for (int k = 0; k < n; ++k) { /* M is column-major: M[i + n j] = M_ij */
+  casadi_real scale = 0, sum = 0; /* a NaN or inf anywhere makes the sum non-finite */
+  for (int i = 0; i < n * n; ++i) {
+    scale = fabs(M[i]) > scale ? fabs(M[i]) : scale;
+    sum += M[i];
+  }
+  for (int i = 0; i < n; ++i) {
+    b[i] = arg[2][i] - b[i];
+    sum += b[i];
+  }
+  if (!isfinite(sum)) return QD_NONFINITE;
+  for (int k = 0; k < n; ++k) { /* M[i + n j] = M_ij */
+    casadi_real* col = M + n * k;
     int p = k;
-    for (int i = k + 1; i < n; ++i) p = fabs(M[i + n * k]) > fabs(M[p + n * k]) ? i : p;
-    if (!(fabs(M[p + n * k]) > QD_SINGULAR_RTOL * scale)) return QD_SINGULAR;
+    for (int i = k + 1; i < n; ++i) p = fabs(col[i]) > fabs(col[p]) ? i : p;
+    if (!(fabs(col[p]) > QD_SINGULAR_RTOL * scale)) return QD_SINGULAR;
     if (p != k) {
-      for (int j = k; j < n; ++j) {
+      for (int j = 0; j < n; ++j) {
         casadi_real t = M[k + n * j];
         M[k + n * j] = M[p + n * j];
         M[p + n * j] = t;
@@ -71,15 +81,18 @@ static int qd_fd_r_solve(int n, qd_eval_fn M_r, qd_eval_fn CG_r, const casadi_re
       b[k] = b[p];
       b[p] = t;
     }
-    for (int i = k + 1; i < n; ++i) {
-      casadi_real l = M[i + n * k] / M[k + n * k];
-      for (int j = k + 1; j < n; ++j) M[i + n * j] -= l * M[k + n * j];
-      b[i] -= l * b[k];
+    casadi_real inv = 1 / col[k];
+    for (int i = k + 1; i < n; ++i) col[i] *= inv; /* the multipliers, L below the diagonal */
+    for (int j = k + 1; j < n; ++j) {
+      casadi_real* cj = M + n * j;
+      casadi_real u = cj[k];
+      for (int i = k + 1; i < n; ++i) cj[i] -= col[i] * u;
     }
+    for (int i = k + 1; i < n; ++i) b[i] -= col[i] * b[k];
   }
-  for (int i = n - 1; i >= 0; --i) {
-    for (int j = i + 1; j < n; ++j) b[i] -= M[i + n * j] * b[j];
-    b[i] /= M[i + n * i];
+  for (int j = n - 1; j >= 0; --j) { /* U x = b, column by column */
+    b[j] /= M[j + n * j];
+    for (int i = 0; i < j; ++i) b[i] -= M[i + n * j] * b[j];
   }
   if (res[0]) {
     for (int i = 0; i < n; ++i) res[0][i] = b[i];
@@ -87,4 +100,3 @@ static int qd_fd_r_solve(int n, qd_eval_fn M_r, qd_eval_fn CG_r, const casadi_re
   casadi_int nnz[1] = {n};
   return qd_finite(0, res, 1, nnz);
 }
-
