@@ -132,6 +132,28 @@ def dh_leg(label: str, params: PaperRobotParams = PARAMS) -> Leg:
     return Leg(label, joints, link_inertias(params), rows[3].placement(), f"{label}_foot")  # type: ignore[arg-type]
 
 
+#: Two placements are "the same" when every entry agrees to this (m or unitless): the URDF
+#: writer prints shortest round-trip doubles and the loader snaps entries within 1e-12.
+DH_MATCH_TOL = 1e-9
+
+
+def dh_form(leg: Leg) -> PaperRobotParams | None:
+    """The DH parameters (hip, l2, l3) if ``leg`` has the paper's DH form (Table 1 with frame
+    0 as R_B0 at a hip in the trunk plane), else None: decided by what the leg is -- its joint
+    placements, axes and foot -- not by which file it came from."""
+    hip = leg.hip
+    params = PaperRobotParams(l2=float(leg.joints[2].placement.p[0]), l3=float(leg.foot.p[0]),
+                              hip_x=abs(float(hip[0])), hip_y=abs(float(hip[1])))
+    if params.l2 <= 0 or params.l3 <= 0:
+        return None
+    dh = dh_leg(leg.label, params)
+    pairs = [(a.placement, b.placement) for a, b in zip(leg.joints, dh.joints)] + [(leg.foot, dh.foot)]
+    same = all(np.allclose(a.R, b.R, rtol=0, atol=DH_MATCH_TOL) and np.allclose(a.p, b.p, rtol=0, atol=DH_MATCH_TOL)
+               for a, b in pairs)
+    axes = all(np.allclose(j.axis, [0.0, 0.0, 1.0], rtol=0, atol=DH_MATCH_TOL) for j in leg.joints)
+    return params if same and axes else None
+
+
 # ----------------------------------------------------------------------------- URDF writer
 
 
