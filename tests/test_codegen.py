@@ -138,9 +138,9 @@ def test_bench_reports_ratios_against_pinocchio(paper):
 
 
 def test_missing_compiler_is_a_clear_error(paper):
-    from quadruped_dyn.errors import BuildError
+    from quadruped_dyn.errors import InputError
 
-    with pytest.raises(BuildError, match="'no-such-cc' not found"):
+    with pytest.raises(InputError, match="'no-such-cc' not found"):
         compiled_library(paper, cc="no-such-cc")
 
 
