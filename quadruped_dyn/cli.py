@@ -4,12 +4,13 @@ from __future__ import annotations
 
 import json
 import sys
+import warnings
 from typing import Any
 
 import click
 import numpy as np
 
-from .errors import BuildError, InputError
+from .errors import BuildError, InputError, UrdfWarning
 from .leg import JOINT_ROLES
 from .robot import ROBOT_NAMES, Robot, load_robot
 
@@ -17,12 +18,20 @@ EXIT_CHECK_FAILED = 1
 EXIT_BAD_INPUT = 2
 
 
+def _warn_one_line(message: Warning | str, category: type[Warning], *args: object, **kwargs: object) -> None:
+    click.echo(f"warning: {message}", err=True)
+
+
 class _Group(click.Group):
-    """Maps InputError to exit code 2 and BuildError to 1, with a one-line message and no traceback."""
+    """Maps InputError to exit code 2 and BuildError to 1, with a one-line message and no traceback;
+    prints UrdfWarnings as one line each."""
 
     def invoke(self, ctx: click.Context) -> Any:
         try:
-            return super().invoke(ctx)
+            with warnings.catch_warnings():
+                warnings.simplefilter("always", UrdfWarning)
+                warnings.showwarning = _warn_one_line
+                return super().invoke(ctx)
         except InputError as e:
             click.echo(f"error: {e}", err=True)
             sys.exit(EXIT_BAD_INPUT)

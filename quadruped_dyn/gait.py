@@ -37,7 +37,6 @@ from .errors import InputError
 from .evaluate import evaluate
 from .grf import StanceSet
 from .kinematics import analytic_ik, numeric_ik, pose_from_feet, robot_kinematics
-from .paper_robot import URDF_PATH
 from .reduced import reduced_model
 from .robot import Robot
 
@@ -57,7 +56,7 @@ CROUCH = 0.75
 @cache
 def gait_posture(robot: Robot) -> np.ndarray:
     """Joint angles (12,) the trot is built around (see the module docstring)."""
-    if robot.urdf == URDF_PATH:
+    if robot.name == "paper":
         return robot.standing_q
     q = np.zeros(12)
     for i, leg in enumerate(robot.legs):
@@ -162,7 +161,7 @@ def reference(robot: Robot, gait: Gait, t: float, q_guess: np.ndarray | None = N
         P, Pd, Pdd = gait.foot(i, t, standing[i])
         r, rd, rdd = P - p, Pd - pd, Pdd  # trunk frame = world orientation (R = I), no trunk acceleration
         s = slice(3 * i, 3 * i + 3)
-        if robot.urdf == URDF_PATH:
+        if robot.name == "paper":
             q[s] = analytic_ik(leg.label, r)
         else:
             q[s] = numeric_ik(robot, i, r, guess[s])
