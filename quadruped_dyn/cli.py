@@ -106,7 +106,7 @@ def info(robot: str, as_json: bool) -> None:
                    "to the URDF: comma-separated subset of mujoco,idyntree (pip install 'quadruped_dyn[xlib]').")
 def check(robot: str, samples: int, seed: int, as_json: bool, against: str | None) -> None:
     """Check every symbolic term of ROBOT against Pinocchio on random states (exit 1 on failure)."""
-    from .check import run_check
+    from .check import json_safe, run_check
 
     libraries: tuple[str, ...] = ()
     if against is not None:
@@ -123,7 +123,7 @@ def check(robot: str, samples: int, seed: int, as_json: bool, against: str | Non
         cross = run_cross_library(r, libraries, samples, seed)
         passed = passed and cross.passed
         data, text = {**data, **cross.as_dict(), "passed": passed}, f"{text}\n\n{cross.table()}"
-    click.echo(json.dumps(data, indent=2) if as_json else text)
+    click.echo(json.dumps(json_safe(data), indent=2, allow_nan=False) if as_json else text)
     sys.exit(0 if passed else EXIT_CHECK_FAILED)
 
 
