@@ -236,14 +236,16 @@ def report(robot: str, out_dir: str, fast: bool) -> None:
 @main.command("make-urdf")
 @click.option("--check", is_flag=True, help="Only compare the committed URDF with a fresh generation.")
 def make_urdf(check: bool) -> None:
-    """Regenerate urdf/paper_quadruped.urdf from the paper's DH table and our parameters."""
-    from .paper_robot import URDF_PATH, urdf_text, write_urdf
+    """Regenerate the paper robot's URDF (package data, and urdf/ in a checkout) from the paper's DH table."""
+    from .paper_robot import URDF_COPIES, stale_urdf_copies, write_urdf
 
     if check:
-        same = URDF_PATH.is_file() and URDF_PATH.read_text() == urdf_text()
-        click.echo(f"{URDF_PATH}: {'up to date' if same else 'DIFFERS from the generator'}")
-        sys.exit(0 if same else EXIT_CHECK_FAILED)
-    click.echo(f"wrote {write_urdf()}")
+        stale = stale_urdf_copies()
+        for path in URDF_COPIES:
+            click.echo(f"{path}: {'DIFFERS from the generator' if path in stale else 'up to date'}")
+        sys.exit(EXIT_CHECK_FAILED if stale else 0)
+    for path in write_urdf():
+        click.echo(f"wrote {path}")
 
 
 if __name__ == "__main__":

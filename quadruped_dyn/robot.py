@@ -32,7 +32,7 @@ from .leg import LEG_LABELS, Leg, LegJoint, LinkInertia, Placement
 from .paper_robot import STANDING_Q, URDF_PATH
 from .urdf_validation import inertia_problem, validate_urdf
 
-#: Built-in robots: the paper's (generated, in urdf/) and six from example-robot-data.
+#: Built-in robots: the paper's (generated, package data) and six from example-robot-data.
 _ERD_FILES = {
     "solo12": "solo_description/robots/solo12.urdf",
     "go2": "go2_description/urdf/go2.urdf",
