@@ -25,6 +25,7 @@ from collections.abc import Callable
 from pathlib import Path
 
 from .errors import InputError
+from .paths import writable_dir
 
 HASH_SUFFIX = ".sha256"
 PARTIAL_MARK = ".partial-"  # in the name of a file being written; never trusted
@@ -54,21 +55,6 @@ def verified(artefact: Path) -> bool:
         return False
 
 
-def _writable_entry(entry: Path) -> None:
-    """Create the entry directory, or an InputError naming the cache and what is expected."""
-    root = entry.parent
-    hint = "expected a writable directory (set QUADRUPED_DYN_CACHE to choose another)"
-    for p in (root, *root.parents):
-        if p.exists() and not p.is_dir():
-            raise InputError(f"cache path '{root}' is blocked by the file '{p}'; {hint}")
-    try:
-        entry.mkdir(parents=True, exist_ok=True)
-    except OSError as e:
-        raise InputError(f"cannot create the cache entry '{entry}' ({e.strerror}); {hint}") from e
-    if not os.access(entry, os.W_OK | os.X_OK):
-        raise InputError(f"cache directory '{entry}' is not writable; {hint}")
-
-
 def _write_atomic(path: Path, write: Callable[[Path], object]) -> None:
     partial = path.with_name(f"{path.name}{PARTIAL_MARK}{os.getpid()}")
     try:
@@ -88,7 +74,7 @@ def cached_build(key: str, name: str, build: Callable[[Path], None]) -> Path:
     artefact = entry / name
     if verified(artefact):  # entries are replaced only by atomic renames: no lock needed to read
         return artefact
-    _writable_entry(entry)
+    writable_dir(entry, f"the cache (QUADRUPED_DYN_CACHE) entry '{entry}'")
     try:
         lock = open(entry / ".lock", "a")  # noqa: SIM115 -- held for the whole build
     except OSError as e:

@@ -3,6 +3,8 @@
 from __future__ import annotations
 
 import json
+import math
+import shutil
 import sys
 import warnings
 from typing import Any
@@ -12,6 +14,7 @@ import numpy as np
 
 from .errors import BuildError, InputError, UrdfWarning
 from .leg import JOINT_ROLES
+from .paths import writable_dir
 from .robot import ROBOT_NAMES, Robot, load_robot
 
 EXIT_CHECK_FAILED = 1
@@ -23,8 +26,8 @@ def _warn_one_line(message: Warning | str, category: type[Warning], *args: objec
 
 
 class _Group(click.Group):
-    """Maps InputError to exit code 2 and BuildError to 1, with a one-line message and no traceback;
-    prints UrdfWarnings as one line each."""
+    """Maps InputError and click's usage errors to exit code 2 and BuildError to 1, with a one-line
+    message and no traceback; prints UrdfWarnings as one line each."""
 
     def invoke(self, ctx: click.Context) -> Any:
         try:
@@ -35,9 +38,54 @@ class _Group(click.Group):
         except InputError as e:
             click.echo(f"error: {e}", err=True)
             sys.exit(EXIT_BAD_INPUT)
+        except click.UsageError as e:
+            click.echo(f"error: {e.format_message()}", err=True)
+            sys.exit(EXIT_BAD_INPUT)
         except BuildError as e:
             click.echo(f"error: {e}", err=True)
             sys.exit(EXIT_CHECK_FAILED)
+
+
+class _FiniteFloat(click.FloatRange):
+    """A FloatRange that also refuses NaN and inf (they compare False with every bound)."""
+
+    name = "finite float"
+
+    def convert(self, value: Any, param: click.Parameter | None, ctx: click.Context | None) -> Any:
+        number = super().convert(value, param, ctx)
+        if not math.isfinite(number):
+            self.fail(f"{value!r} is not a finite number", param, ctx)
+        return number
+
+
+def _require_tools(*tools: str) -> None:
+    missing = [t for t in tools if shutil.which(t) is None]
+    if missing:
+        raise InputError(f"{', '.join(missing)} not found; expected on PATH (Debian: apt-get install gcc g++)")
+
+
+class _ProgressLines:
+    """Progress as one stderr line per ~10 % (click's bar draws nothing when stderr is not a terminal)."""
+
+    def __init__(self, label: str, length: int) -> None:
+        self.label, self.length, self.done = label, length, 0
+
+    def __enter__(self) -> _ProgressLines:
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        return None
+
+    def update(self, n: int) -> None:
+        self.done += n
+        if self.done % max(1, self.length // 10) == 0 or self.done == self.length:
+            click.echo(f"{self.label}: {self.done}/{self.length}", err=True)
+
+
+def _progress(label: str, length: int) -> Any:
+    if sys.stderr.isatty():
+        return click.progressbar(length=length, label=label, file=sys.stderr)
+    return _ProgressLines(label, length)
 
 
 @click.group(cls=_Group)
@@ -99,7 +147,7 @@ def info(robot: str, as_json: bool) -> None:
 @main.command()
 @click.argument("robot")
 @click.option("--samples", default=20, show_default=True, type=click.IntRange(min=1), help="Random states.")
-@click.option("--seed", default=0, show_default=True, type=int, help="Random seed.")
+@click.option("--seed", default=0, show_default=True, type=click.IntRange(min=0), help="Random seed.")
 @click.option("--json", "as_json", is_flag=True, help="Print the report as JSON.")
 @click.option("--against", default=None, metavar="LIBS",
               help="Also compare M, C + G, G and foot Jacobians with other libraries, after diagnosing what each does "
@@ -114,7 +162,7 @@ def check(robot: str, samples: int, seed: int, as_json: bool, against: str | Non
 
         libraries = parse_libraries(against)
     r = load_robot(robot)
-    with click.progressbar(length=samples, label=f"checking {r.name}", file=sys.stderr) as bar:
+    with _progress(f"checking {r.name}", samples) as bar:
         report = run_check(r, samples, seed, progress=lambda n: bar.update(1))
     data, text, passed = report.as_dict(), report.table(), report.passed
     if libraries:
@@ -129,7 +177,7 @@ def check(robot: str, samples: int, seed: int, as_json: bool, against: str | Non
 
 @main.command()
 @click.argument("robot")
-@click.option("--out", "out_dir", required=True, type=click.Path(file_okay=False), help="Output directory.")
+@click.option("--out", "out_dir", required=True, type=click.Path(), help="Output directory.")
 @click.option("--precision", type=click.Choice(["double", "float"]), default="double", show_default=True,
               help="Default casadi_real of the generated source (the Makefile builds both).")
 @click.option("--check", is_flag=True, help="Compare OUT with a fresh generation instead of writing (exit 1 if it differs).")
@@ -141,10 +189,12 @@ def codegen(robot: str, out_dir: str, precision: str, check: bool) -> None:
 
     r = load_robot(robot)
     if check:
+        if not Path(out_dir).is_dir():
+            raise InputError(f"--out '{out_dir}' is not a directory; expected the directory to compare (--check)")
         stale = differing_files(r, Path(out_dir))
         click.echo(f"{out_dir}: " + (f"differs from a fresh generation: {', '.join(stale)}" if stale else "up to date"))
         sys.exit(EXIT_CHECK_FAILED if stale else 0)
-    for path in generate(r, Path(out_dir), precision):
+    for path in generate(r, writable_dir(out_dir, f"--out '{out_dir}'"), precision):
         click.echo(f"wrote {path}")
 
 
@@ -157,7 +207,12 @@ def bench(robots: tuple[str, ...], calls: int, reps: int, as_json: bool) -> None
     """Time the generated C against Pinocchio's native C++ in the same run (ratios < 1: generated is faster)."""
     from .bench import run_bench
 
-    reports = [run_bench(load_robot(r), calls, reps) for r in robots]
+    from .cache import cache_dir
+
+    _require_tools("gcc", "g++")
+    writable_dir(cache_dir(), f"the cache directory '{cache_dir()}' (QUADRUPED_DYN_CACHE)")
+    loaded = [load_robot(r) for r in robots]  # every argument checked before minutes of work
+    reports = [run_bench(r, calls, reps) for r in loaded]
     if as_json:
         click.echo(json.dumps([r.as_dict() for r in reports], indent=2))
     else:
@@ -168,9 +223,10 @@ def bench(robots: tuple[str, ...], calls: int, reps: int, as_json: bool) -> None
 @click.argument("robot", default="paper")
 @click.option("--gait", "gait_name", type=click.Choice(["trot", "walk"]), default="trot", show_default=True,
               help="Trot (the paper's experiment) or static walk.")
-@click.option("--horizon", default=None, type=click.FloatRange(min=0.01), help="Seconds [default: two gait cycles].")
-@click.option("--dt", default=5e-4, show_default=True, type=click.FloatRange(min=1e-5, max=0.05), help="RK4 step, s.")
-@click.option("--out", "out_dir", default="results", show_default=True, type=click.Path(file_okay=False),
+@click.option("--horizon", default=None, type=_FiniteFloat(min=0.01, max=1e3),
+              help="Seconds [default: two gait cycles].")
+@click.option("--dt", default=5e-4, show_default=True, type=_FiniteFloat(min=1e-5, max=0.05), help="RK4 step, s.")
+@click.option("--out", "out_dir", default="results", show_default=True, type=click.Path(),
               help="Directory for the plot and the JSON report.")
 @click.option("--json", "as_json", is_flag=True, help="Print the report as JSON.")
 def validate(robot: str, gait_name: str, horizon: float | None, dt: float, out_dir: str, as_json: bool) -> None:
@@ -179,7 +235,6 @@ def validate(robot: str, gait_name: str, horizon: float | None, dt: float, out_d
     Trot: 'paper' applies all of id_r (the roll moment as if actuated), 'physical' leaves the
     roll unactuated. Static walk: one run. Percentage errors per joint (FL, FR, BL, BR x HAA..KFE)."""
     from dataclasses import asdict
-    from pathlib import Path
 
     from .gait import GAITS
     from .gait import validate as run_validation
@@ -188,9 +243,10 @@ def validate(robot: str, gait_name: str, horizon: float | None, dt: float, out_d
     horizon = 2 * gait.period if horizon is None else horizon
     if abs(gait.phase_duration / dt - round(gait.phase_duration / dt)) > 1e-9:
         raise InputError(f"--dt {dt} does not divide the gait's phase of {gait.phase_duration} s; expected e.g. 1e-3")
+    if horizon < dt:
+        raise InputError(f"--horizon {horizon} s is shorter than one step (--dt {dt} s); expected horizon >= dt")
+    out = writable_dir(out_dir, f"--out '{out_dir}'")
     r = load_robot(robot)
-    out = Path(out_dir)
-    out.mkdir(parents=True, exist_ok=True)
     plot = out / f"{r.name}_{gait.name}_BR_HFE.png"
     report, _ = run_validation(r, gait, horizon, dt, str(plot))
     data = asdict(report)
