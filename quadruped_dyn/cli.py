@@ -206,7 +206,6 @@ def codegen(robot: str, out_dir: str, precision: str, check: bool) -> None:
 def bench(robots: tuple[str, ...], calls: int, reps: int, as_json: bool) -> None:
     """Time the generated C against Pinocchio's native C++ in the same run (ratios < 1: generated is faster)."""
     from .bench import run_bench
-
     from .cache import cache_dir
 
     _require_tools("gcc", "g++")

@@ -175,3 +175,26 @@ def test_edited_copy_is_another_robot(tmp_path):
     path = _variant(tmp_path, _mass("0.2"), name="heavier.urdf")
     robot = load_robot(str(path))
     assert robot.name == "heavier"
+
+
+def test_no_parser_noise_at_the_file_descriptor_level(tmp_path):
+    """Pinocchio's C++ parser printed 4-6 lines straight to fd 2 for a NaN origin; validation
+    now rejects the file before the parser sees it (a subprocess sees all of stderr)."""
+    import subprocess
+    import sys
+
+    path = _variant(tmp_path, lambda r: _set(r, "FL_HAA", "origin", "xyz", "nan 0 0"))
+    proc = subprocess.run([sys.executable, "-m", "quadruped_dyn.cli", "info", str(path)],
+                          capture_output=True, text=True, check=False)
+    assert proc.returncode == 2
+    assert proc.stderr.count("\n") == 1 and proc.stderr.startswith("error: joint 'FL_HAA' <origin>"), proc.stderr
+
+
+def test_validate_runs_on_a_copy_of_the_paper_urdf(tmp_path):
+    """The trot experiment used to refuse any copy of the paper URDF (identity by unresolved path)."""
+    copy = tmp_path / "copy.urdf"
+    shutil.copy(paper_robot.URDF_PATH, copy)
+    result = CliRunner().invoke(main, ["validate", str(copy), "--horizon", "0.01", "--dt", "0.001",
+                                       "--out", str(tmp_path / "out")])
+    assert result.exit_code == 0, result.output
+    assert (tmp_path / "out" / "paper_trot_validation.json").is_file()
