@@ -59,3 +59,25 @@ def test_report_json_is_strict_and_says_fail():
     assert data["terms"][0]["max_rel_err"] is None and data["terms"][0]["passed"] is False
     assert data["grf"][0]["max_residual"] is None and data["grf"][0]["passed"] is False
     assert "FAIL" in report.table()
+
+
+def test_c_check_program_fails_on_nan(tmp_path):
+    """check_qd.c compared with `if (d > err)`, which skips a NaN: a NaN reference value now
+    fails its function (built from a copy of casadi_gen with one reference entry set to NAN)."""
+    import shutil
+    import subprocess
+    from pathlib import Path
+
+    work = tmp_path / "casadi_gen"
+    shutil.copytree(Path(__file__).resolve().parent.parent / "casadi_gen", work, ignore=shutil.ignore_patterns("build"))
+    reference = work / "qd_paper_reference.h"
+    text = reference.read_text()
+    head = "qd_M_full_out0[210] = {"
+    assert head in text
+    reference.write_text(text.replace(head, head + "NAN + ", 1))
+    subprocess.run(["make", "-C", str(work), "build/check_qd"], capture_output=True, check=True)
+    proc = subprocess.run([str(work / "build" / "check_qd")], capture_output=True, text=True, check=False)
+    assert proc.returncode != 0
+    lines = {line.split()[0]: line for line in proc.stdout.splitlines() if line.startswith("qd_")}
+    assert lines["qd_M_full"].endswith("FAIL"), lines["qd_M_full"]
+    assert "1 failed" in proc.stdout
