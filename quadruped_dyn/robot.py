@@ -209,9 +209,11 @@ def _parse_urdf(path: Path) -> pin.Model:
         raise InputError(f"Pinocchio cannot parse '{path}': {str(e).strip().splitlines()[0]}") from e
 
 
-def load_robot(name_or_path: str) -> Robot:
-    """Load a built-in robot by name, or any quadruped URDF by path (cached per file)."""
-    return _load(robot_path(name_or_path))
+def load_robot(name_or_path: str, cached: bool = True) -> Robot:
+    """Load a built-in robot by name, or any quadruped URDF by path (cached per file unless
+    ``cached`` is False, e.g. for a temporary file)."""
+    path = robot_path(name_or_path)
+    return _load(path) if cached else _load.__wrapped__(path)
 
 
 @cache
