@@ -188,6 +188,13 @@ def test_verified_entry_is_reused_without_building(cache):
     assert cached_build("probe", "libprobe.so", must_not_build) == lib
 
 
+def test_generated_library_comes_from_a_verified_entry(paper):
+    from quadruped_dyn.compiled import compiled_library
+
+    assert verified(compiled_library(paper).path)
+
+
+@pytest.mark.slow  # rebuilds the paper's whole library (full terms, GRF and 11 reduced models): ~2.5 min
 def test_truncated_generated_library_is_rebuilt_without_a_signal(paper, tmp_path):
     """End to end, in a child process (a SIGBUS would kill it): the paper's compiled library,
     truncated in the cache, is detected, rebuilt and gives Pinocchio's M."""

@@ -61,6 +61,7 @@ def test_report_json_is_strict_and_says_fail():
     assert "FAIL" in report.table()
 
 
+@pytest.mark.slow  # compiles casadi_gen's library: ~1 min
 def test_c_check_program_fails_on_nan(tmp_path):
     """check_qd.c compared with `if (d > err)`, which skips a NaN: a NaN reference value now
     fails its function (built from a copy of casadi_gen with one reference entry set to NAN)."""
