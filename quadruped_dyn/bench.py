@@ -28,8 +28,9 @@ import casadi as ca
 import numpy as np
 import pinocchio as pin
 
+from .cache import cache_dir, cached_build
 from .codegen import PREFIX, TEMPLATES, codegen_functions, generate, work_sizes
-from .compiled import C_FLAGS, CompiledFunction, CompiledLibrary, cache_dir, compile_sources, compiled_library, run_tool
+from .compiled import C_FLAGS, CompiledFunction, CompiledLibrary, compile_sources, compiled_library, run_tool
 from .errors import InputError
 from .pinocchio_ref import PinocchioReference
 from .robot import Robot
@@ -120,19 +121,17 @@ def pinocchio_harness(cxx: str = "g++") -> Path:
                              "cmeel-urdfdom-headers packages (pip install cmeel-eigen cmeel-urdfdom-headers)")
     source = TEMPLATES / "bench_pinocchio.cpp"
     key = hashlib.sha256(source.read_bytes() + pin.__version__.encode() + " ".join(PINOCCHIO_CXX_FLAGS).encode()).hexdigest()[:16]
-    exe = cache_dir() / f"pinocchio-bench-{key}" / "bench_pinocchio"
-    if not exe.is_file():
-        exe.parent.mkdir(parents=True, exist_ok=True)
-        lib = prefix / "lib"
-        tmp = exe.with_suffix(".building")
-        print(f"building the Pinocchio benchmark harness once (about a minute) into {exe.parent}", file=sys.stderr)
+    lib = prefix / "lib"
+
+    def build(exe: Path) -> None:
+        print(f"building the Pinocchio benchmark harness once (about a minute) into {cache_dir()}", file=sys.stderr)
         run_tool(
             [cxx, *PINOCCHIO_CXX_FLAGS, f"-I{prefix / 'include'}", f"-I{prefix / 'include' / 'eigen3'}",
              f"-I{prefix / 'include' / 'urdfdom_headers'}", str(source), f"-L{lib}", f"-Wl,-rpath,{lib}",
-             "-lpinocchio_default", "-lpinocchio_parsers", "-lurdfdom_model", "-lboost_serialization", "-o", str(tmp)]
+             "-lpinocchio_default", "-lpinocchio_parsers", "-lurdfdom_model", "-lboost_serialization", "-o", str(exe)]
         )
-        tmp.replace(exe)
-    return exe
+
+    return cached_build(f"pinocchio-bench-{key}", "bench_pinocchio", build)
 
 
 def _parse(output: str) -> dict[str, float]:

@@ -2,12 +2,14 @@
 
 Error measures per term, over all samples: ``max_abs_err`` = max |ours - reference| over
 entries; ``max_rel_err`` = max over samples of that error divided by max |reference| of the
-sample (the reference's infinity norm). A term passes when max_rel_err <= tol.
+sample (the reference's infinity norm). A term passes when max_rel_err <= tol. A NaN or inf on
+either side is an infinite error (``compare``): it fails, and is null in the JSON report.
 """
 
 from __future__ import annotations
 
 import itertools
+import math
 import time
 from collections.abc import Callable, Iterator
 from dataclasses import asdict, dataclass, field
@@ -15,6 +17,7 @@ from dataclasses import asdict, dataclass, field
 import numpy as np
 import pinocchio as pin
 
+from .compare import max_abs_error, relative_error, scale_of, within
 from .grf import GRF_MODELS, STANCE_SETS, grf_solve, grf_solves
 from .kinematics import robot_kinematics
 from .newton_euler import full_dynamics
@@ -34,15 +37,9 @@ class TermResult:
     passed: bool = True
 
     def add(self, ours: object, reference: object) -> None:
-        ours_arr = np.asarray(ours, dtype=float).squeeze()
-        ref_arr = np.asarray(reference, dtype=float).squeeze()
-        if ours_arr.shape != ref_arr.shape:
-            raise AssertionError(f"{self.name}: shape {ours_arr.shape} vs reference {ref_arr.shape}")
-        err = float(np.abs(ours_arr - ref_arr).max())
-        scale = float(np.abs(ref_arr).max()) or 1.0
-        self.max_abs_err = max(self.max_abs_err, err)
-        self.max_rel_err = max(self.max_rel_err, err / scale)
-        self.passed = bool(self.max_rel_err <= self.tol)
+        self.max_abs_err = max(self.max_abs_err, max_abs_error(ours, reference))
+        self.max_rel_err = max(self.max_rel_err, relative_error(ours, reference))
+        self.passed = within(self.max_rel_err, self.tol)
 
 
 @dataclass
@@ -59,9 +56,11 @@ class CheckReport:
         return all(t.passed for t in self.terms) and all(g.passed for g in self.grf)
 
     def as_dict(self) -> dict[str, object]:
-        return {"robot": self.robot, "samples": self.samples, "seed": self.seed, "passed": self.passed,
-                "build_seconds": self.build_seconds, "terms": [asdict(t) for t in self.terms],
-                "grf": [asdict(g) for g in self.grf]}
+        """Plain JSON types; a non-finite error is None (strict JSON has no inf)."""
+        return json_safe(  # type: ignore[return-value]
+            {"robot": self.robot, "samples": self.samples, "seed": self.seed, "passed": self.passed,
+             "build_seconds": self.build_seconds, "terms": [asdict(t) for t in self.terms],
+             "grf": [asdict(g) for g in self.grf]})
 
     def table(self) -> str:
         lines = [f"{'term':<28}{'max abs err':>13}{'max rel err':>13}{'tol':>9}  result"]
@@ -80,6 +79,20 @@ class CheckReport:
         lines.append(f"{self.robot}: {len(self.terms)} terms on {self.samples} random states (seed {self.seed}), "
                      f"symbolic build {self.build_seconds:.2f} s: {verdict}")
         return "\n".join(lines)
+
+
+def json_safe(x: object) -> object:
+    if isinstance(x, dict):
+        return {k: json_safe(v) for k, v in x.items()}
+    if isinstance(x, list):
+        return [json_safe(v) for v in x]
+    if isinstance(x, bool | np.bool_):
+        return bool(x)
+    if isinstance(x, float | np.floating):
+        return float(x) if math.isfinite(x) else None
+    if isinstance(x, np.integer):
+        return int(x)
+    return x
 
 
 def _comparisons(robot: Robot, ref: PinocchioReference, s: FullState) -> Iterator[tuple[str, object, object]]:
@@ -124,33 +137,28 @@ class GrfResult:
     passed: bool = True
 
 
-def _rel(ours: np.ndarray, ref: np.ndarray, scale: float) -> float:
-    return float(np.abs(np.asarray(ours, dtype=float).ravel() - np.asarray(ref).ravel()).max(initial=0.0)) / (scale or 1.0)
-
-
 def _grf_sample(robot: Robot, ref: PinocchioReference, s: FullState, result: GrfResult) -> None:
     g = grf_solve(robot, result.stance, result.model)
     lam, f, residual, tau = (np.asarray(x, dtype=float).ravel() for x in g.function(s.q, s.v, s.a))
     r = ref.grf_solve(s.q, s.v, s.a, g.stance.feet, g.stance.selection(result.model))
-    w_scale = float(np.abs(r.w_req).max())
     nonzero = r.singular_values[: r.rank]
     cond = float(nonzero[0] / nonzero[-1]) if nonzero.size else 1.0
-    err_ref = max(_rel(lam, r.lam, float(np.abs(r.lam).max(initial=0.0))), _rel(residual, r.residual, w_scale),
-                  _rel(tau, r.tau, float(np.abs(r.tau).max())))
+    err_ref = max(relative_error(lam, r.lam), relative_error(residual, r.residual, scale_of(r.w_req)),
+                  relative_error(tau, r.tau))
     R = rotation(s.q)
     rnea = ref.rnea(s.q, s.v, s.a)
     contact = ref.contact_jacobian(s.q, (0, 1, 2, 3)).T @ np.concatenate([R @ fi for fi in f.reshape(4, 3)])
     pin_full = rnea - contact
     # relative to the magnitude of the two terms whose difference is compared
-    pin_scale = max(float(np.abs(rnea).max()), float(np.abs(contact).max()))
-    err_pin = max(_rel(pin_full[:6], residual, pin_scale), _rel(pin_full[6:], tau, pin_scale))
-    allowed = max(REL_TOL_TERMS, COND_ERR_FACTOR * cond * np.finfo(float).eps)
-    result.max_residual = max(result.max_residual, float(np.abs(residual).max()))
+    pin_scale = max(scale_of(rnea), scale_of(contact))
+    err_pin = max(relative_error(pin_full[:6], residual, pin_scale), relative_error(pin_full[6:], tau, pin_scale))
+    allowed = max(REL_TOL_TERMS, COND_ERR_FACTOR * cond * float(np.finfo(float).eps))
+    result.max_residual = max(result.max_residual, max_abs_error(residual, np.zeros_like(residual)))
     result.max_err_vs_reference = max(result.max_err_vs_reference, err_ref)
     result.max_err_vs_pinocchio = max(result.max_err_vs_pinocchio, err_pin)
     result.max_cond = max(result.max_cond, cond)
     result.rank_mismatches += int(r.rank != g.rank)
-    result.passed = result.passed and err_ref <= allowed and err_pin <= REL_TOL_TERMS and r.rank == g.rank
+    result.passed = result.passed and within(err_ref, allowed) and within(err_pin, REL_TOL_TERMS) and r.rank == g.rank
 
 
 #: Reduced models checked: standing, a static-walk triple, both trot pairs.

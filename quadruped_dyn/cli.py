@@ -3,31 +3,76 @@
 from __future__ import annotations
 
 import json
+import math
+import shutil
 import sys
+import warnings
 from typing import Any
 
 import click
 import numpy as np
 
-from .errors import BuildError, InputError
+from .errors import BuildError, InputError, UrdfWarning
+from .paths import writable_dir
 from .robot import ROBOT_NAMES, Robot, load_robot
 
 EXIT_CHECK_FAILED = 1
 EXIT_BAD_INPUT = 2
 
 
+def _warn_one_line(message: Warning | str, category: type[Warning], *args: object, **kwargs: object) -> None:
+    click.echo(f"warning: {message}", err=True)
+
+
 class _Group(click.Group):
-    """Maps InputError to exit code 2 and BuildError to 1, with a one-line message and no traceback."""
+    """Maps InputError and click's usage errors to exit code 2 and BuildError to 1, with a one-line
+    message and no traceback; prints UrdfWarnings as one line each."""
 
     def invoke(self, ctx: click.Context) -> Any:
         try:
-            return super().invoke(ctx)
+            with warnings.catch_warnings():
+                warnings.simplefilter("always", UrdfWarning)
+                warnings.showwarning = _warn_one_line
+                return super().invoke(ctx)
         except InputError as e:
             click.echo(f"error: {e}", err=True)
+            sys.exit(EXIT_BAD_INPUT)
+        except click.UsageError as e:
+            click.echo(f"error: {e.format_message()}", err=True)
             sys.exit(EXIT_BAD_INPUT)
         except BuildError as e:
             click.echo(f"error: {e}", err=True)
             sys.exit(EXIT_CHECK_FAILED)
+
+
+def _require_tools(*tools: str) -> None:
+    missing = [t for t in tools if shutil.which(t) is None]
+    if missing:
+        raise InputError(f"{', '.join(missing)} not found; expected on PATH (Debian: apt-get install gcc g++)")
+
+
+class _ProgressLines:
+    """Progress as one stderr line per ~10 % (click's bar draws nothing when stderr is not a terminal)."""
+
+    def __init__(self, label: str, length: int) -> None:
+        self.label, self.length, self.done = label, length, 0
+
+    def __enter__(self) -> _ProgressLines:
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        return None
+
+    def update(self, n: int) -> None:
+        self.done += n
+        if self.done % max(1, self.length // 10) == 0 or self.done == self.length:
+            click.echo(f"{self.label}: {self.done}/{self.length}", err=True)
+
+
+def _progress(label: str, length: int) -> Any:
+    if sys.stderr.isatty():
+        return click.progressbar(length=length, label=label, file=sys.stderr)
+    return _ProgressLines(label, length)
 
 
 @click.group(cls=_Group)
@@ -89,14 +134,14 @@ def info(robot: str, as_json: bool) -> None:
 @main.command()
 @click.argument("robot")
 @click.option("--samples", default=20, show_default=True, type=click.IntRange(min=1), help="Random states.")
-@click.option("--seed", default=0, show_default=True, type=int, help="Random seed.")
+@click.option("--seed", default=0, show_default=True, type=click.IntRange(min=0), help="Random seed.")
 @click.option("--json", "as_json", is_flag=True, help="Print the report as JSON.")
 @click.option("--against", default=None, metavar="LIBS",
               help="Also compare M, C + G, G and foot Jacobians with other libraries, after diagnosing what each does "
                    "to the URDF: comma-separated subset of mujoco,idyntree (pip install 'quadruped_dyn[xlib]').")
 def check(robot: str, samples: int, seed: int, as_json: bool, against: str | None) -> None:
     """Check every symbolic term of ROBOT against Pinocchio on random states (exit 1 on failure)."""
-    from .check import run_check
+    from .check import json_safe, run_check
 
     libraries: tuple[str, ...] = ()
     if against is not None:
@@ -104,7 +149,7 @@ def check(robot: str, samples: int, seed: int, as_json: bool, against: str | Non
 
         libraries = parse_libraries(against)
     r = load_robot(robot)
-    with click.progressbar(length=samples, label=f"checking {r.name}", file=sys.stderr) as bar:
+    with _progress(f"checking {r.name}", samples) as bar:
         report = run_check(r, samples, seed, progress=lambda n: bar.update(1))
     data, text, passed = report.as_dict(), report.table(), report.passed
     if libraries:
@@ -113,13 +158,13 @@ def check(robot: str, samples: int, seed: int, as_json: bool, against: str | Non
         cross = run_cross_library(r, libraries, samples, seed)
         passed = passed and cross.passed
         data, text = {**data, **cross.as_dict(), "passed": passed}, f"{text}\n\n{cross.table()}"
-    click.echo(json.dumps(data, indent=2) if as_json else text)
+    click.echo(json.dumps(json_safe(data), indent=2, allow_nan=False) if as_json else text)
     sys.exit(0 if passed else EXIT_CHECK_FAILED)
 
 
 @main.command()
 @click.argument("robot")
-@click.option("--out", "out_dir", required=True, type=click.Path(file_okay=False), help="Output directory.")
+@click.option("--out", "out_dir", required=True, type=click.Path(), help="Output directory.")
 @click.option("--precision", type=click.Choice(["double", "float"]), default="double", show_default=True,
               help="Default casadi_real of the generated source (the Makefile builds both).")
 @click.option("--check", is_flag=True, help="Compare OUT with a fresh generation instead of writing (exit 1 if it differs).")
@@ -131,10 +176,12 @@ def codegen(robot: str, out_dir: str, precision: str, check: bool) -> None:
 
     r = load_robot(robot)
     if check:
+        if not Path(out_dir).is_dir():
+            raise InputError(f"--out '{out_dir}' is not a directory; expected the directory to compare (--check)")
         stale = differing_files(r, Path(out_dir))
         click.echo(f"{out_dir}: " + (f"differs from a fresh generation: {', '.join(stale)}" if stale else "up to date"))
         sys.exit(EXIT_CHECK_FAILED if stale else 0)
-    for path in generate(r, Path(out_dir), precision):
+    for path in generate(r, writable_dir(out_dir, f"--out '{out_dir}'"), precision):
         click.echo(f"wrote {path}")
 
 
@@ -151,10 +198,13 @@ def bench(robots: tuple[str, ...], calls: int, reps: int, as_json: bool, peers: 
     from dataclasses import asdict
 
     from .bench import run_bench
+    from .cache import cache_dir
     from .peers import parse_peers, peers_table, run_peers
 
     peer_names = parse_peers(peers)
-    loaded = [load_robot(r) for r in robots]
+    _require_tools("gcc", "g++")
+    writable_dir(cache_dir(), f"the cache directory '{cache_dir()}' (QUADRUPED_DYN_CACHE)")
+    loaded = [load_robot(r) for r in robots]  # every argument checked before minutes of work
     reports = [run_bench(r, calls, reps) for r in loaded]
     entries = [e for r in loaded for e in run_peers(r, peer_names, native, calls, reps)] if peer_names else []
     if as_json:
@@ -176,7 +226,7 @@ def bench(robots: tuple[str, ...], calls: int, reps: int, as_json: bool, peers: 
 @click.option("--backend", type=click.Choice(["c", "casadi"]), default="c", show_default=True,
               help="Evaluation of the reduced model: the generated C (built once, cached) or the CasADi graph.")
 @click.option("--no-physics", is_flag=True, help="Skip the physics check (rigid-contact dynamics).")
-@click.option("--out", "out_dir", default="results", show_default=True, type=click.Path(file_okay=False),
+@click.option("--out", "out_dir", default="results", show_default=True, type=click.Path(),
               help="Directory for the plots, the CSV and the JSON report.")
 @click.option("--json", "as_json", is_flag=True, help="Print the report as JSON.")
 def validate(robot: str, gait_name: str, horizon: float | None, integrator: str, dt: float, backend: str,
@@ -186,9 +236,6 @@ def validate(robot: str, gait_name: str, horizon: float | None, integrator: str,
 
     Trot: 'paper' applies all of id_r (the roll moment as if actuated), 'physical' leaves the
     roll unactuated. Percentage errors per joint (FL, FR, BL, BR x HAA, HFE, KFE)."""
-    import math
-    import tempfile
-    from pathlib import Path
 
     from .gait import GAITS
     from .simulate import reduced_dynamics
@@ -205,15 +252,9 @@ def validate(robot: str, gait_name: str, horizon: float | None, integrator: str,
         raise InputError(f"--horizon {horizon} s is shorter than one step (--dt {dt} s); expected horizon >= dt")
     if integrator == "rk4" and abs(gait.phase_duration / dt - round(gait.phase_duration / dt)) > 1e-9:
         raise InputError(f"--dt {dt} does not divide the gait's phase of {gait.phase_duration} s; expected e.g. 1e-3")
+    out = writable_dir(out_dir, f"--out '{out_dir}'")
     r = load_robot(robot)
-    out = Path(out_dir)
     paths = output_paths(out, r.name, gait.name)
-    try:  # an unwritable --out is bad input, found before minutes of simulation
-        out.mkdir(parents=True, exist_ok=True)
-        with tempfile.TemporaryFile(dir=out):
-            pass
-    except OSError as e:
-        raise InputError(f"--out {out_dir}: cannot write there ({e.strerror}); expected a writable directory") from e
     dynamics = reduced_dynamics(r, backend)
     runs = 3 + (gait.n_coords == 13) + (0 if no_physics else 5)
     with click.progressbar(length=int(round(runs * horizon * 1000)), label=f"simulating {r.name} {gait.name}",
@@ -284,14 +325,16 @@ def report(robot: str, out_dir: str, fast: bool) -> None:
 @main.command("make-urdf")
 @click.option("--check", is_flag=True, help="Only compare the committed URDF with a fresh generation.")
 def make_urdf(check: bool) -> None:
-    """Regenerate urdf/paper_quadruped.urdf from the paper's DH table and our parameters."""
-    from .paper_robot import URDF_PATH, urdf_text, write_urdf
+    """Regenerate the paper robot's URDF (package data, and urdf/ in a checkout) from the paper's DH table."""
+    from .paper_robot import URDF_COPIES, stale_urdf_copies, write_urdf
 
     if check:
-        same = URDF_PATH.is_file() and URDF_PATH.read_text() == urdf_text()
-        click.echo(f"{URDF_PATH}: {'up to date' if same else 'DIFFERS from the generator'}")
-        sys.exit(0 if same else EXIT_CHECK_FAILED)
-    click.echo(f"wrote {write_urdf()}")
+        stale = stale_urdf_copies()
+        for path in URDF_COPIES:
+            click.echo(f"{path}: {'DIFFERS from the generator' if path in stale else 'up to date'}")
+        sys.exit(EXIT_CHECK_FAILED if stale else 0)
+    for path in write_urdf():
+        click.echo(f"wrote {path}")
 
 
 if __name__ == "__main__":

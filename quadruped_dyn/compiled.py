@@ -1,17 +1,17 @@
 """Compiling the generated C, caching the libraries, and calling them from Python.
 
-A library is built from ``codegen.generate``'s output with ``C_FLAGS`` and cached under a hash
-of the C source, the header, the flags and the compiler version, so a stale library is never
-loaded (``$QUADRUPED_DYN_CACHE``, else ``$XDG_CACHE_HOME/quadruped_dyn``, else
-``~/.cache/quadruped_dyn``). ``load_external`` gives a CasADi Function (convenient, ~20 us per
-call from Python); ``CompiledFunction`` calls through ctypes (~2-4 us).
+A library is built from ``codegen.generate``'s output with ``C_FLAGS`` and cached under
+``generation_key`` (everything it depends on), so a stale library is never loaded;
+``cache.cached_build`` verifies its bytes before it is loaded. ``load_external`` gives
+a CasADi Function (convenient, ~20 us per call from Python); ``CompiledFunction`` calls
+through ctypes (~2-4 us).
 """
 
 from __future__ import annotations
 
 import ctypes
 import hashlib
-import os
+import re
 import shutil
 import subprocess
 import tempfile
@@ -22,6 +22,7 @@ from pathlib import Path
 import casadi as ca
 import numpy as np
 
+from .cache import cached_build
 from .codegen import PREFIX, generate, stem
 from .errors import BuildError, InputError
 from .robot import Robot
@@ -30,19 +31,13 @@ C_FLAGS = ("-std=c99", "-pedantic", "-Wall", "-Wextra", "-Werror", "-O3", "-fPIC
 COMPILE_JOBS = 2  # this machine's cores
 
 
-def cache_dir() -> Path:
-    """$QUADRUPED_DYN_CACHE, else $XDG_CACHE_HOME/quadruped_dyn, else ~/.cache/quadruped_dyn."""
-    if "QUADRUPED_DYN_CACHE" in os.environ:
-        return Path(os.environ["QUADRUPED_DYN_CACHE"])
-    return Path(os.environ.get("XDG_CACHE_HOME", Path.home() / ".cache")) / "quadruped_dyn"
-
-
 def run_tool(cmd: list[str], cwd: str | Path | None = None) -> str:
-    """Run a compiler or harness; its stdout, or a BuildError naming the command and its complaint."""
+    """Run a compiler or harness; its stdout, or a BuildError naming the command and its complaint
+    (an InputError if the program is not installed)."""
     try:
         proc = subprocess.run(cmd, capture_output=True, text=True, cwd=cwd, check=False)
-    except FileNotFoundError as e:
-        raise BuildError(f"'{cmd[0]}' not found; expected it on PATH (a C/C++ compiler is needed here)") from e
+    except FileNotFoundError as e:  # the environment, not a failed check: bad input (exit 2)
+        raise InputError(f"'{cmd[0]}' not found; expected it on PATH (a C/C++ compiler is needed here)") from e
     if proc.returncode != 0:
         tail = (proc.stderr or proc.stdout).strip().splitlines()[-1:] or ["no output"]
         raise BuildError(f"'{Path(cmd[0]).name}' failed (exit {proc.returncode}): {tail[0][:300]}")
@@ -74,11 +69,25 @@ def compile_sources(sources: list[Path], flags: tuple[str, ...], output: Path, c
 PACKAGE = Path(__file__).resolve().parent
 
 
+def generator_sources() -> list[Path]:
+    """codegen.py and the package modules it imports, transitively (relative imports), and the
+    C templates: what the generated code depends on, and nothing else (editing the report or
+    the experiment does not invalidate the compiled libraries)."""
+    found, todo = set(), ["codegen"]
+    while todo:
+        name = todo.pop()
+        if name in found or not (PACKAGE / f"{name}.py").is_file():
+            continue
+        found.add(name)
+        todo += re.findall(r"^\s*from \.(\w+) import", (PACKAGE / f"{name}.py").read_text(), flags=re.M)
+    return sorted([*(PACKAGE / f"{n}.py" for n in found), *(PACKAGE / "c").glob("*")])
+
+
 def generation_key(robot: Robot, precision: str, flags: tuple[str, ...], cc: str) -> str:
-    """Hash of everything the compiled library depends on: the URDF's bytes, this package's
-    source (the generator and its C templates), CasADi's version, precision, flags and compiler."""
+    """Hash of everything the compiled library depends on: the URDF's bytes, the generator's
+    source (``generator_sources``), CasADi's version, precision, flags and compiler."""
     h = hashlib.sha256(robot.name.encode() + Path(robot.urdf).read_bytes())
-    for path in sorted([*PACKAGE.glob("*.py"), *(PACKAGE / "c").glob("*")]):
+    for path in generator_sources():
         h.update(path.name.encode() + path.read_bytes())
     h.update(f"{ca.CasadiMeta.version()} {precision} {' '.join(flags)} {_compiler_version(cc)}".encode())
     return h.hexdigest()[:16]
@@ -86,22 +95,21 @@ def generation_key(robot: Robot, precision: str, flags: tuple[str, ...], cc: str
 
 def compiled_library(robot: Robot, precision: str = "double", cc: str = "gcc") -> CompiledLibrary:
     """Generate, compile and cache the shared library of ``robot``'s functions (all of
-    ``codegen.generate``'s C sources: full-coordinate terms, GRF solves, reduced models)."""
+    ``codegen.generate``'s C sources: full-coordinate terms, GRF solves, reduced models);
+    ``cache.cached_build`` verifies its bytes before it is returned."""
     flags = (*C_FLAGS, f"-Dcasadi_real={precision}")
     key = generation_key(robot, precision, flags, cc)
-    target = cache_dir() / key
-    lib = target / f"lib{stem(robot)}.so"
-    if not lib.is_file():
+
+    def build(building: Path) -> None:
         with tempfile.TemporaryDirectory() as tmp:
             paths = generate(robot, Path(tmp), precision, reference=False)
             sources = [p for p in paths if p.suffix == ".c" and p.name.startswith(stem(robot))]
-            target.mkdir(parents=True, exist_ok=True)
-            building = target / f".{lib.name}.{os.getpid()}"
             compile_sources(sources, flags, building, cc)
-            for p in (*sources, paths[1]):
-                shutil.copy(p, target / p.name)
-            building.replace(lib)  # atomic: a half-written library is never loaded
-    return CompiledLibrary(lib, target / f"{stem(robot)}.c", key)
+            for p in (*sources, paths[1]):  # for reading; the library is what is verified
+                shutil.copy(p, building.parent / p.name)
+
+    lib = cached_build(key, f"lib{stem(robot)}.so", build)
+    return CompiledLibrary(lib, lib.parent / f"{stem(robot)}.c", key)
 
 
 def load_external(library: CompiledLibrary, name: str) -> ca.Function:

@@ -125,7 +125,7 @@ def pinocchio_of(urdf_text: str) -> PinocchioReference:
     with tempfile.TemporaryDirectory() as tmp:
         path = Path(tmp) / "copy.urdf"
         path.write_text(urdf_text)
-        robot = load_robot.__wrapped__(str(path))  # uncached: a temporary file
+        robot = load_robot(str(path), cached=False)  # a temporary file
     return PinocchioReference(robot)
 
 

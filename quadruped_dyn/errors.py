@@ -6,4 +6,10 @@ class InputError(ValueError):
 
 
 class BuildError(RuntimeError):
-    """A compiler or harness failed or is missing (exit code 1): says which command and why."""
+    """A compiler or harness failed (exit code 1): says which command and why. A missing
+    compiler is an InputError (exit code 2): the environment, not a check, is wrong."""
+
+
+class UrdfWarning(UserWarning):
+    """A URDF oddity that does not change the answers (e.g. an unphysical inertia of a link
+    merged into a physical body); the CLI prints it as one line."""

@@ -37,7 +37,7 @@ import casadi as ca
 import numpy as np
 
 from .errors import InputError
-from .evaluate import evaluate
+from .evaluate import checked_fields, evaluate
 from .kinematics import foot_position
 from .leg import LEG_LABELS
 from .linalg import least_squares, min_norm
@@ -198,10 +198,15 @@ class GrfSolve:
     function: ca.Function
     system: ca.Function  # q -> A (6, n), the model's body-equation matrix
 
+    def __post_init__(self) -> None:
+        checked_fields(self)  # numeric calls check shapes, finiteness, quaternions (evaluate.py)
+
     def solve(self, q: np.ndarray, v: np.ndarray, a: np.ndarray, mu: float | None = None) -> GrfSolution:
         """Numeric solve with checked inputs. Raises InputError where the stance feet are
         coincident or collinear, so that A has less than its structural rank (the symbolic
         solve, and the generated C, would return meaningless forces there)."""
+        if mu is not None:
+            check_friction_coefficient(mu)
         (A,) = evaluate(self.system, q)
         sv = np.linalg.svd(np.atleast_2d(A), compute_uv=False) if A.size else np.zeros(0)
         numeric_rank = int(np.sum(sv > RANK_RTOL * sv[0])) if sv.size else 0
@@ -277,6 +282,17 @@ def grf_solve(robot: Robot, stance: str | StanceSet, model: str = "paper") -> Gr
 def friction_cone(f_world: np.ndarray, mu: float) -> tuple[np.ndarray, np.ndarray]:
     """Per stance foot (k, 3 world-frame forces; flat ground, normal z_w): feasible flags
     (|f_t| <= mu f_z and f_z >= 0) and margins mu f_z - |f_t| (N; negative = slipping)."""
+    check_friction_coefficient(mu)
     f = np.atleast_2d(np.asarray(f_world, dtype=float))
     margin = mu * f[:, 2] - np.hypot(f[:, 0], f[:, 1])
     return (margin >= 0) & (f[:, 2] >= 0), margin
+
+
+def check_friction_coefficient(mu: object) -> None:
+    """InputError unless mu is a finite number >= 0."""
+    try:
+        value = float(mu)  # type: ignore[arg-type]
+    except (TypeError, ValueError) as e:
+        raise InputError(f"mu = {mu!r} is not a number; expected a friction coefficient >= 0") from e
+    if not (np.isfinite(value) and value >= 0.0):
+        raise InputError(f"mu = {value} is not a friction coefficient; expected a finite number >= 0")

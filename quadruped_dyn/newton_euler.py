@@ -33,6 +33,7 @@ from functools import cache
 import casadi as ca
 
 from .crba import generalized_gravity, mass_matrix_crba
+from .evaluate import checked_fields
 from .kinematics import foot_position, joint_frames
 from .leg import Leg
 from .leg_frames import axis_aligned
@@ -177,6 +178,9 @@ class FullDynamics:
     nle_full: ca.Function  # q, v -> C + G (18,) in one evaluation (Pinocchio's nonLinearEffects)
     coriolis: ca.Function  # q, v -> C(q, v) (18, 18), Pinocchio's factorisation
     build_seconds: float
+
+    def __post_init__(self) -> None:
+        checked_fields(self)  # numeric calls check shapes, finiteness, quaternions (evaluate.py)
 
 
 def _ordered_inputs() -> tuple[ca.SX, ca.SX, ca.SX, ca.SX]:

@@ -1,5 +1,7 @@
 """The paper's robot: its DH table (Table 1), the physical parameters we chose, and the
-generator of ``urdf/paper_quadruped.urdf`` from them.
+generator of its URDF from them: ``quadruped_dyn/urdf/paper_quadruped.urdf`` (package data,
+so an installed package has it) and the same bytes at ``urdf/paper_quadruped.urdf`` in a
+source checkout (``URDF_COPIES``: ``make-urdf`` writes both, ``make-urdf --check`` compares both).
 
 DH convention: Craig's *modified* DH, ``T_{i-1,i} = RotX(alpha_{i-1}) TransX(a_{i-1})
 RotZ(theta_i) TransZ(d_i)``. Because RotZ and TransZ commute, each row compiles to a fixed
@@ -23,6 +25,7 @@ from xml.sax.saxutils import quoteattr
 
 import numpy as np
 
+from .errors import InputError
 from .leg import JOINT_ROLES, LEG_LABELS, Leg, LegJoint, LinkInertia, Placement
 
 
@@ -237,10 +240,27 @@ def urdf_text(params: PaperRobotParams = PARAMS) -> str:
     return "\n".join(lines) + "\n"
 
 
-URDF_PATH = Path(__file__).resolve().parent.parent / "urdf" / "paper_quadruped.urdf"
+#: The paper robot's URDF the toolkit loads: package data.
+URDF_PATH = Path(__file__).resolve().parent / "urdf" / "paper_quadruped.urdf"
+_CHECKOUT = Path(__file__).resolve().parent.parent
+#: Every copy of it: the package's, and in a source checkout (pyproject.toml beside the
+#: package) the top-level urdf/ one, for readers of the repository.
+URDF_COPIES = (URDF_PATH, *([_CHECKOUT / "urdf" / URDF_PATH.name] if (_CHECKOUT / "pyproject.toml").is_file() else []))
 
 
-def write_urdf(path: Path = URDF_PATH, params: PaperRobotParams = PARAMS) -> Path:
-    path.parent.mkdir(parents=True, exist_ok=True)
-    path.write_text(urdf_text(params))
-    return path
+def write_urdf(params: PaperRobotParams = PARAMS) -> list[Path]:
+    """Write every copy of the URDF (``URDF_COPIES``); InputError if one cannot be written."""
+    text = urdf_text(params)
+    for path in URDF_COPIES:
+        try:
+            path.parent.mkdir(parents=True, exist_ok=True)
+            path.write_text(text)
+        except OSError as e:
+            raise InputError(f"cannot write '{path}' ({e.strerror}); expected a writable file") from e
+    return list(URDF_COPIES)
+
+
+def stale_urdf_copies(params: PaperRobotParams = PARAMS) -> list[Path]:
+    """The copies of the URDF that are missing or differ from a fresh generation."""
+    text = urdf_text(params)
+    return [p for p in URDF_COPIES if not (p.is_file() and p.read_text() == text)]

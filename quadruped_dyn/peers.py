@@ -26,8 +26,9 @@ from pathlib import Path
 import casadi as ca
 import numpy as np
 
+from .cache import cached_build
 from .codegen import CODEGEN_FUNCTIONS, PREFIX, TEMPLATES, _silence_unused_parameters
-from .compiled import C_FLAGS, _compiler_version, cache_dir, run_tool
+from .compiled import C_FLAGS, _compiler_version, run_tool
 from .errors import InputError
 from .pinocchio_ref import PinocchioReference
 from .robot import Robot
@@ -128,16 +129,13 @@ def _harness(functions: list[ca.Function], flags: tuple[str, ...], cc: str) -> P
         (Path(tmp) / "qd_peers.c").write_text(source)
         key = hashlib.sha256((source + listing + (TEMPLATES / "bench_peers.c").read_text() + " ".join(flags)
                               + _compiler_version(cc)).encode()).hexdigest()[:16]
-        exe = cache_dir() / f"peers-{key}" / "bench_peers"
-        if not exe.is_file():
-            (Path(tmp) / "qd_peers_list.h").write_text(listing)
-            shutil.copy(TEMPLATES / "bench_peers.c", tmp)
-            run_tool([cc, *flags, "qd_peers.c", "bench_peers.c", "-lm", "-o", "bench_peers"], cwd=tmp)
-            exe.parent.mkdir(parents=True, exist_ok=True)
-            building = exe.with_suffix(".building")
-            shutil.copy(Path(tmp) / "bench_peers", building)
-            building.replace(exe)  # atomic: a half-copied program is never run
-    return exe
+        (Path(tmp) / "qd_peers_list.h").write_text(listing)
+        shutil.copy(TEMPLATES / "bench_peers.c", tmp)
+
+        def build(target: Path) -> None:
+            run_tool([cc, *flags, "qd_peers.c", "bench_peers.c", "-lm", "-o", str(target)], cwd=tmp)
+
+        return cached_build(f"peers-{key}", "bench_peers", build)  # verified, atomic, locked
 
 
 def run_peers(robot: Robot, peers: tuple[str, ...] = PEERS, native: bool = False, calls: int = 20000, reps: int = 9,

@@ -35,7 +35,7 @@ import casadi as ca
 import numpy as np
 
 from .errors import InputError
-from .evaluate import evaluate
+from .evaluate import checked_fields, evaluate
 from .grf import StanceSet, grf_expressions, stance_set
 from .kinematics import foot_position
 from .linalg import least_squares
@@ -126,6 +126,9 @@ class ReducedModel:
     G_r: ca.Function  # q_r, quat -> (n,)
     fd_r: ca.Function  # q_r, qd_r, tau_ext, quat -> qdd_r (n,)
     build_seconds: float
+
+    def __post_init__(self) -> None:
+        checked_fields(self)  # numeric calls check shapes, finiteness, quaternions (evaluate.py)
 
     def forward_dynamics(self, q_r: np.ndarray, qd_r: np.ndarray, tau_ext: np.ndarray,
                          quat: np.ndarray) -> tuple[np.ndarray, float]:

@@ -268,7 +268,6 @@ def generated_c(robot: Robot, out: Path) -> dict[str, Any]:
 def symbolic_data(robot: Robot) -> tuple[list[dict[str, Any]] | None, str, list[dict[str, Any]], list[tuple[str, np.ndarray]]]:
     """Formulas of the DH robot checked against Pinocchio at random joint angles; sizes and
     sparsity patterns of every term."""
-    from .paper_robot import URDF_PATH
     from .pinocchio_ref import PinocchioReference
     from .state import full_q
     from .symbolic import DISPLAY_DIGITS, paper_formulas, term_sizes
@@ -276,7 +275,7 @@ def symbolic_data(robot: Robot) -> tuple[list[dict[str, Any]] | None, str, list[
 
     formulas = None
     note = "Formulas are typeset for the robot built from the paper's DH table (`paper`); this robot has no DH description."
-    if robot.urdf == URDF_PATH:
+    if robot.name == "paper":  # the paper's URDF by any path or copy (robot.load_robot's identity)
         ref = PinocchioReference(robot)
         rng = np.random.default_rng(0)
         states = [rng.uniform(robot.lower, robot.upper) for _ in range(20)]
@@ -333,10 +332,9 @@ def _first_line(cmd: list[str]) -> str:
 
 
 def notebooks(robot: Robot) -> tuple[list[dict[str, Any]] | None, str]:
-    from .paper_robot import URDF_PATH
     from .report_notebooks import error_count, execute, notebook_paths, render
 
-    if robot.urdf != URDF_PATH:
+    if robot.name != "paper":
         return None, "The notebooks are written for the paper's robot: see the report of `paper`."
     paths = notebook_paths()
     if not paths:

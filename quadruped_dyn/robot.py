@@ -9,12 +9,17 @@ Joint order inside the project: FL, FR, BL, BR x (HAA, HFE, KFE) -- 12 entries.
 Links rigidly attached by fixed joints are merged into their parent's inertia (Pinocchio's
 URDF parser does this). Rotor armature is not part of the paper's model and is set to zero.
 Placement entries within ``SNAP_TOL`` of 0 or +-1 are snapped, in Pinocchio's model too.
+
+The URDF is validated (``urdf_validation``) before Pinocchio parses it. One robot, one
+identity: a file whose bytes are those of a built-in robot's URDF, reached by its name, by
+any path or as a copy, loads as that robot (its name, its standing posture).
 """
 
 from __future__ import annotations
 
+import hashlib
 import importlib.metadata
-import xml.etree.ElementTree as ET
+import warnings
 from dataclasses import dataclass
 from functools import cache
 from pathlib import Path
@@ -22,11 +27,12 @@ from pathlib import Path
 import numpy as np
 import pinocchio as pin
 
-from .errors import InputError
+from .errors import InputError, UrdfWarning
 from .leg import LEG_LABELS, Leg, LegJoint, LinkInertia, Placement
 from .paper_robot import STANDING_Q, URDF_PATH
+from .urdf_validation import inertia_problem, validate_urdf
 
-#: Built-in robots: the paper's (generated, in urdf/) and six from example-robot-data.
+#: Built-in robots: the paper's (generated, package data) and six from example-robot-data.
 _ERD_FILES = {
     "solo12": "solo_description/robots/solo12.urdf",
     "go2": "go2_description/urdf/go2.urdf",
@@ -49,25 +55,47 @@ def example_robot_data_dir() -> Path:
     return Path(str(dist.locate_file("cmeel.prefix/share/example-robot-data/robots")))
 
 
+def _builtin_path(name: str) -> Path:
+    return URDF_PATH if name == "paper" else example_robot_data_dir() / _ERD_FILES[name]
+
+
 def robot_path(name_or_path: str | Path) -> Path:
-    """Resolve a built-in robot name or a URDF path to an existing file."""
+    """Resolve a built-in robot name or a URDF path to an existing file (absolute, symlinks resolved)."""
     key = str(name_or_path)
-    if key == "paper":
-        return URDF_PATH
-    if key in _ERD_FILES:
-        return example_robot_data_dir() / _ERD_FILES[key]
+    if key in ROBOT_NAMES:
+        path = _builtin_path(key)
+        if not path.is_file():
+            raise InputError(f"the URDF of built-in robot '{key}' is missing at '{path}'; expected the installed "
+                             "package's file (reinstall quadruped_dyn / example-robot-data)")
+        return path.resolve()
     path = Path(key)
     if not path.is_file():
         raise InputError(f"no such file: '{key}'; expected a URDF path or one of: {', '.join(ROBOT_NAMES)}")
-    return path
+    return path.resolve()
+
+
+@cache
+def _builtin_digests() -> dict[str, str]:
+    """SHA-256 of each built-in robot's URDF that is installed."""
+    return {name: _digest(_builtin_path(name)) for name in ROBOT_NAMES if _builtin_path(name).is_file()}
+
+
+def _digest(path: Path) -> str:
+    return hashlib.sha256(path.read_bytes()).hexdigest()
+
+
+def builtin_name(path: Path) -> str | None:
+    """The built-in robot whose URDF has the same bytes as ``path``, or None."""
+    digest = _digest(path)
+    return next((name for name, d in _builtin_digests().items() if d == digest), None)
 
 
 @dataclass(frozen=True, eq=False)
 class Robot:
     """A quadruped: Pinocchio free-flyer model plus the project's view of it."""
 
-    name: str
-    urdf: Path
+    name: str  # the built-in name if the URDF's bytes are a built-in's, else the file's stem
+    urdf: Path  # absolute
     model: pin.Model  # free-flyer model; q = (p, quat xyzw, joints), v = (v_b, omega_b, qd)
     trunk: LinkInertia  # in the trunk frame b
     legs: tuple[Leg, Leg, Leg, Leg]  # FL, FR, BL, BR
@@ -110,6 +138,10 @@ def _inertia(model: pin.Model, joint_id: int, what: str) -> LinkInertia:
             f"{what} has mass {Y.mass:g} kg and inertia eigenvalues {np.array2string(eig, precision=3)} kg m^2; "
             "expected a positive mass and a positive-definite inertia"
         )
+    problem = inertia_problem(eig)
+    if problem is not None:
+        raise InputError(f"{what} (fixed links merged) has an inertia that {problem}: principal moments "
+                         f"{np.array2string(eig, precision=3)} kg m^2; expected a physical rigid body")
     return LinkInertia(float(Y.mass), np.array(Y.lever), I)
 
 
@@ -171,29 +203,30 @@ def _snap(M: pin.SE3) -> pin.SE3:
 
 
 def _parse_urdf(path: Path) -> pin.Model:
-    try:
-        root = ET.parse(path).getroot()
-    except ET.ParseError as e:
-        raise InputError(f"'{path}' is not well-formed XML ({e}); expected a URDF file") from e
-    if root.tag != "robot":
-        raise InputError(f"'{path}' has root element <{root.tag}>; expected a URDF <robot>")
+    for message in validate_urdf(path):
+        warnings.warn(f"{path.name}: {message}", UrdfWarning, stacklevel=2)
     try:
         return pin.buildModelFromUrdf(str(path), pin.JointModelFreeFlyer())
     except Exception as e:  # Pinocchio raises plain ValueError/RuntimeError with the parser's text
         raise InputError(f"Pinocchio cannot parse '{path}': {str(e).strip().splitlines()[0]}") from e
 
 
-@cache
-def load_robot(name_or_path: str) -> Robot:
-    """Load a built-in robot by name, or any quadruped URDF by path (cached per argument)."""
+def load_robot(name_or_path: str, cached: bool = True) -> Robot:
+    """Load a built-in robot by name, or any quadruped URDF by path (cached per file unless
+    ``cached`` is False, e.g. for a temporary file)."""
     path = robot_path(name_or_path)
+    return _load(path) if cached else _load.__wrapped__(path)
+
+
+@cache
+def _load(path: Path) -> Robot:
     model = _parse_urdf(path)
     model.armature[:] = 0.0
     for j in range(1, model.njoints):
         model.jointPlacements[j] = _snap(model.jointPlacements[j])
     for frame in model.frames:
         frame.placement = _snap(frame.placement)
-    name = str(name_or_path) if str(name_or_path) in ROBOT_NAMES else path.stem
+    name = builtin_name(path) or path.stem
 
     hips = [j for j in range(2, model.njoints) if model.parents[j] == 1]
     found = [_chain(model, h) for h in hips]
@@ -242,7 +275,7 @@ def load_robot(name_or_path: str) -> Robot:
     ordered = tuple(legs[label] for label in LEG_LABELS)
     lower = np.array([j.lower for leg in ordered for j in leg.joints])
     upper = np.array([j.upper for leg in ordered for j in leg.joints])
-    standing = np.tile(STANDING_Q, 4) if path == URDF_PATH else np.clip(0.0, lower, upper)
+    standing = np.tile(STANDING_Q, 4) if name == "paper" else np.clip(0.0, lower, upper)
     ids = [model.getJointId(j.name) for leg in ordered for j in leg.joints]
     return Robot(
         name=name,

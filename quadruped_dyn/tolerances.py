@@ -58,3 +58,9 @@ FRAME_SNAP_TOL = 1e-12
 #: each off by <= 5e-5 relative) against Pinocchio: a sum of a few such terms stays within
 #: ~2e-4 of the largest entry; 1e-3 catches any wrong term or sign.
 FORMULA_DISPLAY_REL_TOL = 1e-3
+
+#: A URDF inertia's principal moments may miss positive semi-definiteness or the triangle
+#: inequality A + B >= C by this much relative to the largest moment and still count as
+#: physical: URDF numbers are printed with 6-7 significant digits (CAD exports), so a thin
+#: rod or a flat plate (A + B = C exactly) arrives broken by ~1e-7 relative.
+INERTIA_REL_TOL = 1e-6

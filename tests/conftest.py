@@ -6,6 +6,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
+from quadruped_dyn.compare import relative_error, scale_of, within
 from quadruped_dyn.compiled import CompiledLibrary, compiled_library
 from quadruped_dyn.pinocchio_ref import PinocchioReference
 from quadruped_dyn.robot import ROBOT_NAMES, Robot, example_robot_data_dir, load_robot
@@ -41,9 +42,9 @@ def erd() -> object:
 
 
 def assert_close(actual: np.ndarray, expected: np.ndarray, rel: float = REL_TOL_TERMS, what: str = "") -> None:
-    """|actual - expected|_max <= rel * |expected|_max (the scale is 1 where expected is all zero)."""
+    """|actual - expected|_max <= rel * |expected|_max (the scale is 1 where expected is all zero);
+    a NaN or inf on either side fails (``quadruped_dyn.compare``)."""
     actual, expected = np.asarray(actual, dtype=float), np.asarray(expected, dtype=float)
     assert actual.shape == expected.shape, f"{what}: shape {actual.shape} != {expected.shape}"
-    scale = float(np.abs(expected).max(initial=0.0)) or 1.0
-    err = float(np.abs(actual - expected).max(initial=0.0))
-    assert err <= rel * scale, f"{what}: max abs error {err:.3e} > {rel:.1e} x {scale:.3e}"
+    err = relative_error(actual, expected)
+    assert within(err, rel), f"{what}: max relative error {err:.3e} > {rel:.1e} (scale {scale_of(expected):.3e})"

@@ -41,7 +41,7 @@ SHANK_MASS = f'<mass value="{paper_robot.PARAMS.shank_mass:g}"/>'
         ("fixed_base_arm", r"joint chains from the trunk.*expected a quadruped"),
         ("prismatic", r"leg joint 'FL_HAA' is JointModelP.*expected revolute"),
         ("zero_mass", r"moved by joint 'FL_KFE' has mass 0 kg.*expected a positive mass"),
-        ("non_pd_inertia", r"moved by joint 'FL_KFE'.*eigenvalues.*expected a positive mass and a positive-definite"),
+        ("non_pd_inertia", r"link 'FL_shank' <inertial> <inertia> is not positive semi-definite.*expected a physical rigid body"),
     ],
 )
 def test_bad_urdf(case, expected, tmp_path, erd):

@@ -11,9 +11,9 @@ from .conftest import assert_close
 
 
 def test_committed_urdf_is_reproducible():
-    assert paper_robot.URDF_PATH.read_text() == paper_robot.urdf_text(), (
-        "urdf/paper_quadruped.urdf differs from the generator: run `quadruped-dyn make-urdf`"
-    )
+    """Both copies (package data and the checkout's urdf/) are the generator's output."""
+    assert len(paper_robot.URDF_COPIES) == 2, "a source checkout has the package's and urdf/'s copy"
+    assert not paper_robot.stale_urdf_copies(), "differs from the generator: run `quadruped-dyn make-urdf`"
 
 
 def test_frame0_is_a_rotation_not_the_papers_reflection():
