@@ -10,7 +10,7 @@ from pathlib import Path
 import pytest
 from click.testing import CliRunner
 
-from quadruped_dyn import bench, codegen, gait, paper_robot, robot
+from quadruped_dyn import bench, codegen, paper_robot, robot, validation
 from quadruped_dyn.cli import main
 
 
@@ -29,7 +29,7 @@ def no_work(monkeypatch):
     def tripwire(*args, **kwargs):
         raise AssertionError("the work started before the arguments were checked")
 
-    monkeypatch.setattr(gait, "validate", tripwire)
+    monkeypatch.setattr(validation, "run_experiment", tripwire)
     monkeypatch.setattr(codegen, "generate", tripwire)
     monkeypatch.setattr(bench, "run_bench", tripwire)
 
@@ -45,12 +45,14 @@ ARGUMENTS = [
     (["check", "paper", "--seed", "-1"], r"Invalid value for '--seed': -1 is not in the range x>=0"),
     (["check", "paper", "--samples", "0"], r"Invalid value for '--samples'"),
     (["check", "paper", "--samples", "many"], r"Invalid value for '--samples'"),
-    (["validate", "--dt", "nan"], r"Invalid value for '--dt': 'nan' is not a finite number"),
-    (["validate", "--dt", "inf"], r"Invalid value for '--dt'"),
-    (["validate", "--horizon", "nan"], r"Invalid value for '--horizon': 'nan' is not a finite number"),
-    (["validate", "--horizon", "inf"], r"Invalid value for '--horizon'"),
+    (["validate", "--dt", "nan"], r"--dt nan is not a positive finite number"),
+    (["validate", "--dt", "inf"], r"--dt inf is not a positive finite number"),
+    (["validate", "--dt", "-1e-3"], r"--dt -0.001 is not a positive finite number"),
+    (["validate", "--horizon", "nan"], r"--horizon nan is not a positive finite number"),
+    (["validate", "--horizon", "inf"], r"--horizon inf is not a positive finite number"),
+    (["validate", "--horizon", "0"], r"--horizon 0.0 is not a positive finite number"),
     (["validate", "--horizon", "0.01", "--dt", "0.05"], r"--horizon 0.01 s is shorter than one step \(--dt 0.05 s\)"),
-    (["validate", "--dt", "0.0007"], r"--dt 0.0007 does not divide the gait's phase"),
+    (["validate", "--integrator", "rk4", "--dt", "0.0007"], r"--dt 0.0007 does not divide the gait's phase"),
     (["validate", "--gait", "gallop"], r"Invalid value for '--gait'"),
     (["codegen", "paper", "--out", "gen", "--precision", "half"], r"Invalid value for '--precision'"),
     (["bench", "--robot", "solo12", "--robot", "/nonexistent.urdf"], r"no such file: '/nonexistent.urdf'"),
