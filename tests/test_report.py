@@ -69,10 +69,11 @@ def test_sections_tolerate_missing_data():
                     rs.notebooks_section(None), rs.experiment_section({"trot": None}, [], {})):
         assert section.verdict == "not available"
         assert "not available" in section.body
-    minimal = {"runs": {"paper": {"displacement": [0.1] * 12}}, "physics_check": {"max_deviation": 0.3, "plot": [1]},
-               "max_pct_err_overall": 0.5}
+    minimal = {"runs": {"paper": {"stopped_at_s": None}}, "physics_check": {"max_deviation": 0.3, "plot": [1]},
+               "max_pct_err": {"j10": {"q": 0.25}}, "max_pct_err_overall": {"q": 0.5}}
     section = rs.experiment_section({"trot": minimal}, [f"j{k}" for k in range(12)], {})
-    assert section.verdict == "result" and "max_pct_err_overall" in section.body and "max_deviation" in section.body
+    assert section.verdict == "result" and "max_deviation" in section.body
+    assert "BR HFE q 2.5e-01 %" in section.headline and "5.0e-01" in section.headline
 
 
 def test_failing_term_is_red_and_fails():
