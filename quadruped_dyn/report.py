@@ -30,7 +30,7 @@ from typing import Any
 import numpy as np
 
 from .errors import InputError
-from .leg import JOINT_ROLES, LEG_LABELS
+from .leg import JOINT_ROLES
 from .report_html import Section, figure, page, png_image
 from .robot import ROBOT_NAMES, Robot, load_robot, robot_path
 
@@ -432,11 +432,11 @@ def build_report(robot_arg: str = "paper", out: str | Path = "results", fast: bo
     done()
 
     done = progress.step("the paper's experiment: trot and static walk")
-    joint_names = [f"{label} {role}" for label in LEG_LABELS for role in JOINT_ROLES]
-
     def experiment_section() -> Section:
+        from .validation import joint_names  # the labels the validation JSON is keyed by
+
         validations, plots = experiment(robot, target)
-        return rs.experiment_section(validations, joint_names, plots)
+        return rs.experiment_section(validations, joint_names(robot), plots)
 
     attempt("experiment", "The paper's experiment: trot and static walk", experiment_section)
     done()
