@@ -31,6 +31,12 @@ int main(void) {
     casadi_real* res[4];
     qd_case_args(k, in, arg, out, res);
     int flag = k->fn(arg, res, iw, w, 0);
+    if (flag == 2 && QD_TOL * k->tol_scale > QD_MAX_TOL) { /* QD_SINGULAR where this precision has < 2 digits */
+      printf("%-24s skipped: singular to this precision (cond x eps = %.1e), as its return code says\n", k->name,
+             QD_TOL * k->tol_scale);
+      ++skipped;
+      continue;
+    }
     if (flag != 0) {
       printf("%-24s returned %d\n", k->name, flag);
       ++failed;
