@@ -9,12 +9,12 @@
  * casadi_real is double unless defined before this header (e.g. -Dcasadi_real=float).
  *
  * qd_grf_<feet>: the paper's GRF model for those stance feet (trunk-frame assumptions,
- * quadruped_dyn/grf.py), minimum-norm solution. Where the model's rank is 5 (four feet,
+ * quadruped_dyn/dynamics/grf.py), minimum-norm solution. Where the model's rank is 5 (four feet,
  * two feet) `residual` carries the trunk wrench the feet cannot balance. At coincident or
  * collinear stance feet the system loses further rank and the outputs are meaningless;
  * this code does not detect that (quadruped_dyn's GrfSolve.solve does).
  *
- * Reduced model (paper section 5; quadruped_dyn/reduced_projection.py), one set of functions per
+ * Reduced model (paper section 5; quadruped_dyn/dynamics/reduced_projection.py), one set of functions per
  * stance set of 2, 3 or 4 feet, named qd_<fn>_<feet>: n = 12 coordinates (the joint angles) for
  * 3 or 4 stance feet, n = 13 for 2 (the 13th is the trunk roll phi, unactuated on the robot). The
  * trunk's motion follows from the stance feet staying on the ground; quat gives its orientation.
@@ -42,7 +42,7 @@
  *   nle      C(q, v) + G(q), as Pinocchio's nonLinearEffects
  *   w_res    base wrench residual: force [N], moment about the trunk origin [N m], trunk frame; zero when the foot forces produce the motion
  *   tau      joint torques [N m]
- *   lambda   the GRF model's unknowns (minimum-norm solution), see quadruped_dyn/grf.py
+ *   lambda   the GRF model's unknowns (minimum-norm solution), see quadruped_dyn/dynamics/grf.py
  *   residual part of the required trunk wrench the GRF model cannot balance: force [N], moment [N m]
  *   q_r      reduced coordinates: 12 joint angles [rad] (FL, FR, BL, BR x HAA, HFE, KFE); for two stance feet a 13th, the trunk roll phi [rad] (R = Rz(psi) Ry(theta) Rx(phi)), which these functions take from quat
  *   qd_r     d/dt q_r [rad/s]; the 13th is the roll rate phid

@@ -6,10 +6,10 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from quadruped_dyn.compare import relative_error, scale_of, within
-from quadruped_dyn.compiled import CompiledLibrary, compiled_library
-from quadruped_dyn.pinocchio_ref import PinocchioReference
-from quadruped_dyn.robot import ROBOT_NAMES, Robot, example_robot_data_dir, load_robot
+from quadruped_dyn.codegen.library import CompiledLibrary, compiled_library
+from quadruped_dyn.math.compare import relative_error, scale_of, within
+from quadruped_dyn.model.robot import ROBOT_NAMES, Robot, example_robot_data_dir, load_robot
+from quadruped_dyn.references.pinocchio import PinocchioReference
 from quadruped_dyn.tolerances import REL_TOL_TERMS
 
 SEEDS = (0, 1)
@@ -43,7 +43,7 @@ def erd() -> object:
 
 def assert_close(actual: np.ndarray, expected: np.ndarray, rel: float = REL_TOL_TERMS, what: str = "") -> None:
     """|actual - expected|_max <= rel * |expected|_max (the scale is 1 where expected is all zero);
-    a NaN or inf on either side fails (``quadruped_dyn.compare``)."""
+    a NaN or inf on either side fails (``quadruped_dyn.math.compare``)."""
     actual, expected = np.asarray(actual, dtype=float), np.asarray(expected, dtype=float)
     assert actual.shape == expected.shape, f"{what}: shape {actual.shape} != {expected.shape}"
     err = relative_error(actual, expected)

@@ -9,8 +9,8 @@ import sys
 import pytest
 from click.testing import CliRunner
 
-from quadruped_dyn import paper_robot
 from quadruped_dyn.cli import main
+from quadruped_dyn.model import paper_robot
 
 
 def _info(path: str) -> tuple[int, str]:

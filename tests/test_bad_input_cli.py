@@ -10,8 +10,11 @@ from pathlib import Path
 import pytest
 from click.testing import CliRunner
 
-from quadruped_dyn import bench, codegen, paper_robot, robot, validation
+from quadruped_dyn.bench import timing as bench
 from quadruped_dyn.cli import main
+from quadruped_dyn.codegen import emit as codegen
+from quadruped_dyn.experiment import paper_experiment as validation
+from quadruped_dyn.model import paper_robot, robot
 
 
 def _fails_with(args: list[str], expected: str, env: dict[str, str] | None = None) -> None:

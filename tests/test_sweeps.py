@@ -5,7 +5,7 @@ from __future__ import annotations
 
 import pytest
 
-from quadruped_dyn.check import run_check
+from quadruped_dyn.checks.terms import run_check
 
 
 @pytest.mark.slow

@@ -1,0 +1,1 @@
+"""Benchmarks: the generated C against Pinocchio and other libraries' generated code, same run."""

@@ -1,0 +1,208 @@
+"""Benchmark of the generated C against Pinocchio's native C++, measured in the same run.
+
+Both sides are timed in compiled code (``c/bench_qd.c`` and ``c/bench_pinocchio.cpp``):
+the median over ``reps`` runs of ``calls`` calls each; the two harnesses alternate for
+``rounds`` rounds and each function keeps its best median (the least disturbed by other
+load on a shared 2-core machine). Ratios generated / Pinocchio are what to read; absolute
+times drift with the machine's load. The Pinocchio harness links
+the pin wheel's libraries (built for generic x86-64), so neither side uses -march=native.
+Pairs: M_full ~ crba, nle_full (C + G in one call) ~ nonLinearEffects, G_full ~
+computeGeneralizedGravity, id_full ~ rnea (id_full also applies 4 foot forces), fd_r_<feet> ~
+constraintDynamics with those stance feet. The reduced terms M_r, CG_r, G_r, id_r are timed alone.
+"""
+
+from __future__ import annotations
+
+import functools
+import hashlib
+import importlib.metadata
+import shutil
+import sys
+import tempfile
+import time
+import timeit
+from dataclasses import asdict, dataclass, field
+from pathlib import Path
+
+import casadi as ca
+import numpy as np
+import pinocchio as pin
+
+from quadruped_dyn.codegen.cache import cache_dir, cached_build
+from quadruped_dyn.codegen.emit import PREFIX, codegen_functions, generate, work_sizes
+from quadruped_dyn.codegen.library import C_FLAGS, CompiledFunction, CompiledLibrary, compile_sources, compiled_library, run_tool
+from quadruped_dyn.errors import InputError
+from quadruped_dyn.model.robot import Robot
+from quadruped_dyn.model.state import random_state
+from quadruped_dyn.references.pinocchio import PinocchioReference
+
+#: fd_r_<feet> is timed against Pinocchio's constraintDynamics with the same stance feet as rigid
+#: point contacts (different physics: the paper's GRF model vs rigid contacts; the same job, a
+#: forward dynamics step of a robot on those feet). Target ratio generated / Pinocchio.
+FD_R_TARGET = 0.3
+
+#: generated function -> (Pinocchio algorithm, target ratio generated / Pinocchio)
+PAIRS = {
+    "M_full": ("crba", 0.4),
+    "nle_full": ("nonLinearEffects", 0.18),
+    "G_full": ("computeGeneralizedGravity", 0.15),
+    "id_full": ("rnea", 0.2),
+}
+
+HARNESSES = Path(__file__).resolve().parent / "c"
+
+
+@dataclass
+class BenchEntry:
+    name: str
+    generated_ns: float
+    pinocchio: str | None = None
+    pinocchio_ns: float | None = None
+    ratio: float | None = None
+    target: float | None = None
+    python_generated_us: float | None = None
+    python_pinocchio_us: float | None = None
+
+
+@dataclass
+class BenchReport:
+    robot: str
+    entries: list[BenchEntry] = field(default_factory=list)
+    code_bytes: int = 0  # generated C source
+    library_bytes: int = 0  # compiled shared library (-O3)
+    work_bytes: int = 0  # largest caller-provided work memory (iw + w) of any function; temporaries are locals
+    generation_s: float = 0.0
+    compile_s: float = 0.0
+    pinocchio_version: str = pin.__version__
+
+    def as_dict(self) -> dict[str, object]:
+        return asdict(self)
+
+    def table(self) -> str:
+        lines = [f"{'function':<22}{'generated ns':>13}{'Pinocchio':>36}{'ratio':>8}{'target':>8}"
+                 f"{'py gen us':>11}{'py pin us':>11}"]
+        for e in self.entries:
+            pin_txt = f"{e.pinocchio} {e.pinocchio_ns:.0f} ns" if e.pinocchio else ""
+            ratio = f"{e.ratio:.2f}" if e.ratio is not None else ""
+            target = f"<={e.target:.2f}" if e.target is not None else ""
+            py = f"{e.python_generated_us:.1f}" if e.python_generated_us is not None else ""
+            pp = f"{e.python_pinocchio_us:.1f}" if e.python_pinocchio_us is not None else ""
+            lines.append(f"{e.name:<22}{e.generated_ns:>13.1f}{pin_txt:>36}{ratio:>8}{target:>8}{py:>11}{pp:>11}")
+        lines.append(
+            f"{self.robot}: C source {self.code_bytes / 1e3:.0f} kB, library {self.library_bytes / 1e3:.0f} kB, "
+            f"max work memory {self.work_bytes} B, generation {self.generation_s:.1f} s, compile {self.compile_s:.1f} s "
+            f"(Pinocchio {self.pinocchio_version})"
+        )
+        return "\n".join(lines)
+
+
+def arithmetic_operations(f: ca.Function) -> int:
+    """Operations of an SX Function's generated C: its instructions less inputs, outputs and
+    constants (constants are literals in the C; equal ones are shared or not by round-off)."""
+    skip = (ca.OP_CONST, ca.OP_INPUT, ca.OP_OUTPUT)
+    return sum(f.instruction_id(k) not in skip for k in range(f.n_instructions()))
+
+
+def _cmeel_prefix() -> Path:
+    return Path(str(importlib.metadata.distribution("pin").locate_file("cmeel.prefix")))
+
+
+PINOCCHIO_CXX_FLAGS = (
+    "-O3", "-DNDEBUG", "-std=c++17", "-DPINOCCHIO_ENABLE_TEMPLATE_INSTANTIATION",
+    "-DBOOST_MPL_LIMIT_LIST_SIZE=30", "-DBOOST_MPL_LIMIT_VECTOR_SIZE=30",
+    "-DBOOST_MPL_CFG_NO_PREPROCESSED_HEADERS", "-DBOOST_FUSION_INVOKE_MAX_ARITY=12",
+)
+
+
+def pinocchio_harness(cxx: str = "g++") -> Path:
+    """The compiled Pinocchio benchmark, built once per (source, pin version, flags)."""
+    prefix = _cmeel_prefix()
+    for header in ("eigen3/Eigen/Core", "urdfdom_headers/urdf_model/model.h"):
+        if not (prefix / "include" / header).is_file():
+            raise InputError(f"missing {header} under {prefix}/include; expected the cmeel-eigen and "
+                             "cmeel-urdfdom-headers packages (pip install cmeel-eigen cmeel-urdfdom-headers)")
+    source = HARNESSES / "bench_pinocchio.cpp"
+    key = hashlib.sha256(source.read_bytes() + pin.__version__.encode() + " ".join(PINOCCHIO_CXX_FLAGS).encode()).hexdigest()[:16]
+    lib = prefix / "lib"
+
+    def build(exe: Path) -> None:
+        print(f"building the Pinocchio benchmark harness once (about a minute) into {cache_dir()}", file=sys.stderr)
+        run_tool(
+            [cxx, *PINOCCHIO_CXX_FLAGS, f"-I{prefix / 'include'}", f"-I{prefix / 'include' / 'eigen3'}",
+             f"-I{prefix / 'include' / 'urdfdom_headers'}", str(source), f"-L{lib}", f"-Wl,-rpath,{lib}",
+             "-lpinocchio_default", "-lpinocchio_parsers", "-lurdfdom_model", "-lboost_serialization", "-o", str(exe)]
+        )
+
+    return cached_build(f"pinocchio-bench-{key}", "bench_pinocchio", build)
+
+
+def _parse(output: str) -> dict[str, float]:
+    return {name: float(value) for name, value in (line.split() for line in output.strip().splitlines())}
+
+
+def run_bench(robot: Robot, calls: int = 20000, reps: int = 9, rounds: int = 3, cc: str = "gcc") -> BenchReport:
+    report = BenchReport(robot.name)
+    start = time.perf_counter()
+    codegen_functions(robot)  # symbolic build + generation, timed apart from compilation
+    with tempfile.TemporaryDirectory() as tmp:
+        paths = generate(robot, Path(tmp))
+        report.generation_s = time.perf_counter() - start
+        c_path, h_path, ref_path = paths[:3]
+        sources = [p for p in paths if p.suffix == ".c" and p.name.startswith(c_path.stem)]
+        report.code_bytes = sum(p.stat().st_size for p in sources)
+        report.work_bytes = max(8 * (iw + w) for iw, w in work_sizes(h_path.read_text()).values())
+        shutil.copy(HARNESSES / "bench_qd.c", tmp)
+        exe, lib = Path(tmp) / "bench_qd", Path(tmp) / f"lib{c_path.stem}.so"
+        start = time.perf_counter()
+        compile_sources(sources, C_FLAGS, lib, cc)
+        report.compile_s = time.perf_counter() - start
+        run_tool([cc, *C_FLAGS, f"-DQD_HEADER=\"{h_path.name}\"", f"-DQD_REFERENCE=\"{ref_path.name}\"",
+                  "bench_qd.c", lib.name, f"-Wl,-rpath,{tmp}", "-lm", "-o", exe.name], cwd=tmp)
+        harness = pinocchio_harness()
+        feet = [robot.model.frames[i].name for i in robot.foot_frame_ids]
+        generated: dict[str, float] = {}
+        pinocchio: dict[str, float] = {}
+        for _ in range(rounds):  # alternate the two harnesses; keep each function's best median
+            for out, cmd in ((generated, [str(exe), str(calls), str(reps)]),
+                             (pinocchio, [str(harness), str(robot.urdf), str(calls), str(reps), *feet])):
+                for name, ns in _parse(run_tool(cmd)).items():
+                    out[name] = min(ns, out.get(name, ns))
+    library = compiled_library(robot, cc=cc)
+    report.library_bytes = library.path.stat().st_size
+    python_us = _python_call_times(robot, library)
+    for name, ns in ((n[len(PREFIX):], t) for n, t in generated.items()):
+        entry = BenchEntry(name, ns, python_generated_us=python_us.get(name))
+        if name in PAIRS or name.startswith("fd_r_"):
+            algo, target = PAIRS.get(name) or (f"constraintDynamics_{name[len('fd_r_'):]}", FD_R_TARGET)
+            entry.pinocchio, entry.pinocchio_ns, entry.target = algo, pinocchio[algo], target
+            entry.ratio = ns / pinocchio[algo]
+            entry.python_pinocchio_us = python_us.get(algo)
+        report.entries.append(entry)
+    c_plus_g = generated[PREFIX + "C_full"] + generated[PREFIX + "G_full"]
+    report.entries.append(BenchEntry("C_full + G_full", c_plus_g, "nonLinearEffects", pinocchio["nonLinearEffects"],
+                                     c_plus_g / pinocchio["nonLinearEffects"], 0.25))
+    return report
+
+
+def _python_call_times(robot: Robot, library: CompiledLibrary, number: int = 2000) -> dict[str, float]:
+    """Per-call time (us) through Python: the generated functions via ``CompiledFunction`` (ctypes)
+    and Pinocchio's bindings."""
+    ref = PinocchioReference(robot)
+    s = random_state(robot.lower, robot.upper, np.random.default_rng(0))
+    q, v, a = ref.pin_q(s.q), ref.pin_v(s.v), ref.pin_v(s.a)
+    model, data = robot.model, ref.data
+    inputs = {"q": s.q, "v": s.v, "a": s.a, "f": s.f.ravel()}
+    out: dict[str, float] = {}
+    for name in PAIRS:
+        f = CompiledFunction(library, name)
+        args = [inputs[n] for n in f.names_in]
+        out[name] = 1e6 * min(timeit.repeat(functools.partial(f, *args), number=number, repeat=3)) / number
+    pin_calls = {
+        "crba": lambda: pin.crba(model, data, q),
+        "nonLinearEffects": lambda: pin.nonLinearEffects(model, data, q, v),
+        "computeGeneralizedGravity": lambda: pin.computeGeneralizedGravity(model, data, q),
+        "rnea": lambda: pin.rnea(model, data, q, v, a),
+    }
+    for algo, call in pin_calls.items():
+        out[algo] = 1e6 * min(timeit.repeat(call, number=number, repeat=3)) / number
+    return out

@@ -1,0 +1,179 @@
+"""Pinocchio's values at a fixed state for the generated C's check program (``<stem>_reference.h``)."""
+
+from __future__ import annotations
+
+import tempfile
+from pathlib import Path
+
+import casadi as ca
+import numpy as np
+import pinocchio as pin
+
+from quadruped_dyn.codegen.emit import PREFIX, generate, reduced_parts, stem
+from quadruped_dyn.math.rigid import skew as skew_np
+from quadruped_dyn.model.robot import Robot
+from quadruped_dyn.model.stance import StanceSet, stance_set
+from quadruped_dyn.model.state import NV_FULL, FullState, full_q, rotation
+from quadruped_dyn.references.pinocchio import PinocchioReference
+from quadruped_dyn.references.pinocchio import roll_rate_row as roll_rate_row_np
+from quadruped_dyn.tolerances import FLOAT_REL_TOL, GRF_COND_ASSUMED, MAP_COND_ASSUMED, REL_TOL_TERMS
+
+REFERENCE_DIGITS = 12  # significant digits of the reference header: 5e-13 relative, far below the 1e-10 check
+
+def _rounded(x: np.ndarray) -> np.ndarray:
+    return np.array([float(f"{v:.{REFERENCE_DIGITS}g}") for v in np.ravel(x)]).reshape(np.shape(x))
+
+def reference_state(robot: Robot) -> FullState:
+    """A fixed, well-conditioned state near standing (seeded; the same on every machine),
+    rounded to the digits the reference header prints so Pinocchio sees exactly its inputs."""
+    rng = np.random.default_rng(2025)
+    joints = np.clip(robot.standing_q + rng.normal(scale=0.05, size=12), robot.lower, robot.upper)
+    R = pin.rpy.rpyToMatrix(*rng.normal(scale=0.1, size=3))
+    return FullState(_rounded(full_q(R, rng.normal(scale=0.5, size=3), joints)), _rounded(rng.normal(scale=0.5, size=18)),
+                     _rounded(rng.normal(size=18)), _rounded(rng.normal(scale=20.0, size=(4, 3))))
+
+def reduced_inputs(s: FullState) -> dict[str, np.ndarray]:
+    """Inputs of the reduced functions (13 entries; 12-coordinate functions take the first 12)
+    derived from a full state: its joints and trunk roll, joint rates and accelerations (+ one
+    body component for the roll's), orientation, and torques from its accelerations."""
+    roll = pin.rpy.matrixToRpy(rotation(s.q))[0]
+    return {"q_r": _rounded(np.append(s.q[7:], roll)), "qd_r": np.append(s.v[6:], s.v[3]),
+            "qdd_r": np.append(s.a[6:], s.a[3]), "quat": s.q[3:7], "tau_ext": 10.0 * s.a[5:]}
+
+def _reduced_reference(ref: PinocchioReference, kind: str, stance: StanceSet, s: FullState) -> np.ndarray:
+    """Pinocchio-built value (SPEC section 5's independent reference) of reduced function ``kind``."""
+    n = 13 if len(stance.feet) == 2 else 12
+    x = {k: v[:n] for k, v in reduced_inputs(s).items() if k != "quat"}
+
+    def id_r(qd: np.ndarray, qdd: np.ndarray) -> np.ndarray:
+        return ref.reduced_inverse_dynamics(stance.feet, stance.selection("paper"), x["q_r"], qd, qdd, s.q[3:7])
+
+    zero = np.zeros(n)
+    G = id_r(zero, zero)  # id_r is affine in qdd: M_r's columns are differences
+    values = {"G_r": lambda: G, "CG_r": lambda: id_r(x["qd_r"], zero), "id_r": lambda: id_r(x["qd_r"], x["qdd_r"])}
+    if kind in values:
+        return values[kind]()
+    M = np.column_stack([id_r(zero, e) - G for e in np.eye(n)])
+    return M if kind == "M_r" else np.linalg.solve(M, x["tau_ext"] - id_r(x["qd_r"], zero))
+
+def pinocchio_outputs(robot: Robot, ref: PinocchioReference, name: str, s: FullState) -> list[np.ndarray]:
+    """Pinocchio's values of generated function ``name`` (without prefix) at state s."""
+    reduced = reduced_parts(name)
+    if reduced:
+        return [_reduced_reference(ref, *reduced, s)]
+    if name == "M_full":
+        return [ref.mass_matrix(s.q)]
+    if name == "C_full":
+        return [ref.nonlinear_effects(s.q, s.v) - ref.gravity(s.q)]
+    if name == "G_full":
+        return [ref.gravity(s.q)]
+    if name == "nle_full":
+        return [ref.nonlinear_effects(s.q, s.v)]
+    if name == "id_full":
+        R = rotation(s.q)
+        full = ref.rnea(s.q, s.v, s.a) - ref.contact_jacobian(s.q, (0, 1, 2, 3)).T @ np.concatenate([R @ f for f in s.f])
+        return [full[:6], full[6:]]
+    if name.startswith("grf_"):
+        stance = stance_set(name[4:].replace("_", "+"))
+        r = ref.grf_solve(s.q, s.v, s.a, stance.feet, stance.selection("paper"))
+        f = np.zeros((4, 3))
+        f[list(stance.feet)] = r.f_b
+        return [r.lam, f.ravel(), r.residual, r.tau]
+    raise KeyError(f"no Pinocchio reference for generated function '{name}'")
+
+def tolerance_scale(ref: PinocchioReference, name: str, s: FullState) -> float:
+    """How much the conditioning at ``s`` amplifies rounding in generated function ``name``,
+    beyond what the tolerances assume: for a reduced function cond(A) / GRF_COND_ASSUMED of its
+    stance set's GRF system times cond(A_s) / MAP_COND_ASSUMED of its stance-foot rows (the
+    velocity map), each at least 1, and for fd_r times cond(M_r) / GRF_COND_ASSUMED (the solve
+    amplifies M_r's and C_r + G_r's errors by cond(M_r)). 1 otherwise."""
+    reduced = reduced_parts(name)
+    if not reduced:
+        return 1.0
+    kind, stance = reduced
+    q, v, a = s.q.copy(), np.zeros(NV_FULL), np.zeros(NV_FULL)
+    q[7:] = reduced_inputs(s)["q_r"][:12]
+    g = ref.grf_solve(q, v, a, stance.feet, stance.selection("paper"))
+    scale = max(1.0, float(g.singular_values[0] / g.singular_values[g.rank - 1]) / GRF_COND_ASSUMED)
+    r = ref.foot_positions(q)
+    rows = [np.hstack([np.eye(3), -skew_np(r[i])]) for i in stance.feet]
+    if len(stance.feet) == 2:
+        rows.append(np.concatenate([np.zeros(3), roll_rate_row_np(rotation(q))])[None, :])
+    scale *= max(1.0, float(np.linalg.cond(np.vstack(rows))) / MAP_COND_ASSUMED)
+    if kind == "fd_r":  # the tolerances allow for ~GRF_COND_ASSUMED of amplification already
+        scale *= max(1.0, float(np.linalg.cond(_reduced_reference(ref, "M_r", stance, s))) / GRF_COND_ASSUMED)
+    return scale
+
+def _nonzeros(dense: np.ndarray, sp: ca.Sparsity) -> np.ndarray:
+    rows, cols = sp.get_triplet()
+    return np.asarray(dense, dtype=float).reshape(sp.size1(), sp.size2(), order="F")[rows, cols]
+
+def _c_array(name: str, values: np.ndarray) -> str:
+    body = ", ".join(f"{float(x):.{REFERENCE_DIGITS}g}" for x in values) if len(values) else "0"
+    return f"static const double {name}[{max(len(values), 1)}] = {{{body}}};"
+
+def reference_header(robot: Robot, functions: list[ca.Function], work: dict[str, tuple[int, int]]) -> str:
+    """C header: Pinocchio's values of every generated function at ``reference_state``."""
+    ref = PinocchioReference(robot)
+    s = reference_state(robot)
+    inputs = {"q": s.q, "v": s.v, "a": s.a, "f": s.f.ravel(), **reduced_inputs(s)}
+    inputs = {k: v for k, v in inputs.items() if any(k in f.name_in() for f in functions)}
+    lines = [
+        f"/* Reference values for the generated functions of '{robot.name}', computed by Pinocchio",
+        " * (crba, nonLinearEffects, computeGeneralizedGravity, rnea, contact Jacobians, SVD GRF)",
+        " * at a fixed state near standing; 12 significant digits. Generated; do not edit. */",
+        "typedef int (*qd_fn)(const casadi_real**, casadi_real**, casadi_int*, casadi_real*, int);",
+        "typedef struct { const char* name; qd_fn fn; int n_in, n_out; const double* in[4]; int in_len[4];",
+        "                 const double* out[4]; int out_nnz[4]; double tol_scale; } qd_case;",
+        "/* tol_scale: the conditioning beyond what the tolerances assume (codegen.tolerance_scale) */",
+        f"#define QD_REL_TOL_DOUBLE {REL_TOL_TERMS:g}",
+        f"#define QD_REL_TOL_FLOAT {FLOAT_REL_TOL:g}",
+        f"#define QD_MAX_SZ_IW {max(iw for iw, _ in work.values())}",
+        f"#define QD_MAX_SZ_W {max(w for _, w in work.values())}",
+        f"#define QD_MAX_IN {max(len(x) for x in inputs.values())}",
+        f"#define QD_MAX_OUT {max(f.nnz_out(i) for f in functions for i in range(f.n_out()))}",
+        *[_c_array(f"qd_ref_{k}", x) for k, x in inputs.items()],
+    ]
+    cases = []
+    for f in functions:
+        name = f.name()[len(PREFIX):]
+        expected = pinocchio_outputs(robot, ref, name, s)
+        tol_scale = tolerance_scale(ref, name, s)
+        outs = []
+        for i, dense in enumerate(expected):
+            nz = _nonzeros(dense, f.sparsity_out(i))
+            lines.append(_c_array(f"{f.name()}_out{i}", nz))
+            outs.append((f"{f.name()}_out{i}", len(nz)))
+        ins = [(f"qd_ref_{f.name_in(i)}", f.nnz_in(i)) for i in range(f.n_in())]
+        cases.append(
+            f'  {{"{f.name()}", {f.name()}, {f.n_in()}, {f.n_out()}, {{{", ".join(n for n, _ in ins)}}}, '
+            f'{{{", ".join(str(k) for _, k in ins)}}}, {{{", ".join(n for n, _ in outs)}}}, '
+            f'{{{", ".join(str(k) for _, k in outs)}}}, {tol_scale:.3g}}},'
+        )
+    lines += ["static const qd_case QD_CASES[] = {", *cases, "};", f"#define QD_N_CASES {len(functions)}"]
+    lines += [
+        "/* Point arg/res of case k at in/out, filled with its reference inputs in casadi_real. */",
+        "static void qd_case_args(const qd_case* k, casadi_real in[4][QD_MAX_IN], const casadi_real* arg[4],",
+        "                         casadi_real out[4][QD_MAX_OUT], casadi_real* res[4]) {",
+        "  for (int i = 0; i < k->n_in; ++i) {",
+        "    for (int j = 0; j < k->in_len[i]; ++j) in[i][j] = (casadi_real)k->in[i][j];",
+        "    arg[i] = in[i];",
+        "  }",
+        "  for (int i = 0; i < k->n_out; ++i) res[i] = out[i];",
+        "}",
+    ]
+    return "\n".join(lines) + "\n"
+
+def generate_checked(robot: Robot, out_dir: Path, precision: str = "double") -> list[Path]:
+    """``codegen.emit.generate`` plus ``<stem>_reference.h``: the C package that checks itself
+    against Pinocchio (``make check``)."""
+    return generate(robot, out_dir, precision,
+                    extra_files=lambda functions, work: {f"{stem(robot)}_reference.h": reference_header(robot, functions, work)})
+
+
+def differing_files(robot: Robot, directory: Path) -> list[str]:
+    """Names of the files in ``directory`` that a fresh generation would change (or add)."""
+    with tempfile.TemporaryDirectory() as tmp:
+        fresh = generate_checked(robot, Path(tmp))
+        return [p.name for p in fresh if not (Path(directory) / p.name).is_file()
+                or (Path(directory) / p.name).read_bytes() != p.read_bytes()]

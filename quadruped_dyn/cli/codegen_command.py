@@ -1,0 +1,35 @@
+"""``codegen``: standalone C with a Makefile and a check program."""
+
+from __future__ import annotations
+
+import sys
+
+import click
+
+from quadruped_dyn.cli.app import EXIT_CHECK_FAILED
+from quadruped_dyn.errors import InputError
+from quadruped_dyn.files.paths import writable_dir
+from quadruped_dyn.model.robot import load_robot
+
+
+@click.command()
+@click.argument("robot")
+@click.option("--out", "out_dir", required=True, type=click.Path(), help="Output directory.")
+@click.option("--precision", type=click.Choice(["double", "float"]), default="double", show_default=True,
+              help="Default casadi_real of the generated source (the Makefile builds both).")
+@click.option("--check", is_flag=True, help="Compare OUT with a fresh generation instead of writing (exit 1 if it differs).")
+def codegen(robot: str, out_dir: str, precision: str, check: bool) -> None:
+    """Generate standalone C for ROBOT's M, C, G, id and GRF solves, with a Makefile and a check program."""
+    from pathlib import Path
+
+    from quadruped_dyn.checks.c_reference import differing_files, generate_checked
+
+    r = load_robot(robot)
+    if check:
+        if not Path(out_dir).is_dir():
+            raise InputError(f"--out '{out_dir}' is not a directory; expected the directory to compare (--check)")
+        stale = differing_files(r, Path(out_dir))
+        click.echo(f"{out_dir}: " + (f"differs from a fresh generation: {', '.join(stale)}" if stale else "up to date"))
+        sys.exit(EXIT_CHECK_FAILED if stale else 0)
+    for path in generate_checked(r, writable_dir(out_dir, f"--out '{out_dir}'"), precision):
+        click.echo(f"wrote {path}")

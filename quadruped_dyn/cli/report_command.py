@@ -1,0 +1,24 @@
+"""``report``: one self-contained HTML page of everything."""
+
+from __future__ import annotations
+
+import sys
+
+import click
+
+from quadruped_dyn.cli.app import EXIT_CHECK_FAILED
+
+
+@click.command()
+@click.argument("robot", default="paper")
+@click.option("--out", "out_dir", default="results", show_default=True,
+              help="The page goes to OUT/<robot>/report.html, its files beside it.")
+@click.option("--fast", is_flag=True, help="Skip the benchmark (its first run compiles a C++ harness for minutes).")
+def report(robot: str, out_dir: str, fast: bool) -> None:
+    """One self-contained HTML page of everything the toolkit knows about ROBOT (exit 1 if a check fails)."""
+    from quadruped_dyn.report.build import build_report, prepare
+
+    prepare(robot, out_dir)  # bad input is reported before any work
+    result = build_report(robot, out_dir, fast)
+    click.echo(result.summary())
+    sys.exit(0 if result.passed else EXIT_CHECK_FAILED)

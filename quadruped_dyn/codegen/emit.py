@@ -1,0 +1,308 @@
+"""Standalone C code generation (SPEC section 7).
+
+``CODEGEN_FUNCTIONS`` lists what is generated, one line per function. Each becomes a C
+function ``qd_<name>(const casadi_real** arg, casadi_real** res, casadi_int* iw,
+casadi_real* w, int mem)``: C99, no CasADi runtime, no malloc, no global state (all
+temporaries are locals; ``iw``/``w`` are caller-provided work arrays of the sizes the
+header states), so it is thread-safe. ``casadi_real`` is ``double`` unless the including
+code defines it (``-Dcasadi_real=float`` gives the float build of the same source).
+
+The header opens with the documentation of every function: inputs and outputs with shapes,
+units and frames, output sparsity, and work sizes. ``compiled`` builds and loads the code.
+"""
+
+from __future__ import annotations
+
+import os
+import re
+import tempfile
+from collections.abc import Callable
+from pathlib import Path
+
+import casadi as ca
+
+from quadruped_dyn.dynamics.grf import grf_solve
+from quadruped_dyn.dynamics.newton_euler import full_dynamics
+from quadruped_dyn.dynamics.reduced_projection import reduced_projection
+from quadruped_dyn.errors import InputError
+from quadruped_dyn.model.robot import Robot
+from quadruped_dyn.model.stance import STANCE_SETS, StanceSet, stance_set
+
+PREFIX = "qd_"
+
+def _grf_paper(stance: StanceSet) -> Callable[[Robot], ca.Function]:
+    return lambda robot: grf_solve(robot, stance, "paper").function
+
+
+#: name -> builder; adding a generated function is one line here.
+CODEGEN_FUNCTIONS: dict[str, Callable[[Robot], ca.Function]] = {
+    "M_full": lambda r: full_dynamics(r).M_full_crba,  # = Walker-Orin M (tested), fewer operations
+    "C_full": lambda r: full_dynamics(r).C_full,
+    "G_full": lambda r: full_dynamics(r).G_full_crb,  # = Newton-Euler G (tested), fewer operations
+    "nle_full": lambda r: full_dynamics(r).nle_full,
+    "id_full": lambda r: full_dynamics(r).id_full,
+    **{f"grf_{s.name.replace('+', '_')}": _grf_paper(s) for s in STANCE_SETS},
+}
+
+#: Stance sets with a reduced model (SPEC section 5): four feet, the four triples, the six pairs.
+REDUCED_STANCE_SETS: tuple[StanceSet, ...] = tuple(st for st in STANCE_SETS if len(st.feet) >= 2)
+
+#: Reduced-model functions generated for every stance set in REDUCED_STANCE_SETS, as
+#: qd_<name>_<feet> (feet joined by '_'), each in the file qd_<robot>_r_<feet>.c.
+REDUCED_NAMES = ("M_r", "CG_r", "G_r", "id_r", "fd_r")
+
+
+def reduced_symbol(name: str, stance: StanceSet) -> str:
+    """C name (without prefix) of reduced function ``name`` of a stance set, e.g. 'fd_r_FL_BR'."""
+    return f"{name}_{stance.name.replace('+', '_')}"
+
+
+def reduced_functions(robot: Robot, stance: StanceSet) -> list[ca.Function]:
+    """The generated reduced functions of one stance set (``reduced_projection``'s forms),
+    named with the C prefix. ``fd_r`` is a signature only (qdd_r = tau_ext): its generated body
+    is replaced by the hand-written solve of ``c/qd_reduced_solve.c``."""
+    n = 13 if len(stance.feet) == 2 else 12
+    q_r, qd_r, qdd_r = ca.SX.sym("q_r", n), ca.SX.sym("qd_r", n), ca.SX.sym("qdd_r", n)
+    quat, tau_ext = ca.SX.sym("quat", 4), ca.SX.sym("tau_ext", n)
+    p = reduced_projection(robot, stance, q_r, quat)
+    opts = {"cse": True}
+
+    def function(name: str, inputs: dict[str, ca.SX], outputs: dict[str, ca.SX]) -> ca.Function:
+        return ca.Function(PREFIX + reduced_symbol(name, stance), list(inputs.values()), list(outputs.values()),
+                           list(inputs), list(outputs), opts)
+
+    return [
+        function("M_r", {"q_r": q_r, "quat": quat}, {"M_r": ca.densify(p.mass_matrix())}),
+        function("CG_r", {"q_r": q_r, "qd_r": qd_r, "quat": quat}, {"CG_r": ca.densify(p.coriolis_gravity(qd_r))}),
+        function("G_r", {"q_r": q_r, "quat": quat}, {"G_r": ca.densify(p.gravity())}),
+        function("id_r", {"q_r": q_r, "qd_r": qd_r, "qdd_r": qdd_r, "quat": quat},
+                 {"tau_r": ca.densify(p.inverse_dynamics(qd_r, qdd_r))}),
+        function("fd_r", {"q_r": q_r, "qd_r": qd_r, "tau_ext": tau_ext, "quat": quat}, {"qdd_r": tau_ext}),
+    ]
+
+
+#: What each input and output name means: shape is printed from the Function itself.
+SIGNAL_DOCS = {
+    "q": "p [m, world frame], quaternion (x, y, z, w) of R (trunk -> world, need not be unit), "
+    "12 joint angles [rad] in order FL, FR, BL, BR x (HAA, HFE, KFE)",
+    "v": "v_b [m/s], omega_b [rad/s] (trunk frame), 12 joint rates [rad/s]",
+    "a": "vdot: d/dt of v; trunk part is the SPATIAL acceleration vdot_b = a_b - omega_b x v_b "
+    "[m/s^2], alpha_b [rad/s^2]; 12 joint accelerations [rad/s^2]",
+    "f": "ground force on each foot FL, FR, BL, BR, trunk frame [N]",
+    "M": "joint-space inertia matrix (6 trunk + 12 joints), column-major nonzeros [kg, kg m, kg m^2]",
+    "C": "velocity terms C(q, v) (g = 0, a = 0): trunk force [N], moment [N m], joint torques [N m]",
+    "G": "gravity terms G(q): trunk force [N], moment [N m] (trunk frame), joint torques [N m]",
+    "nle": "C(q, v) + G(q), as Pinocchio's nonLinearEffects",
+    "w_res": "base wrench residual: force [N], moment about the trunk origin [N m], trunk frame; "
+    "zero when the foot forces produce the motion",
+    "tau": "joint torques [N m]",
+    "lambda": "the GRF model's unknowns (minimum-norm solution), see quadruped_dyn/dynamics/grf.py",
+    "residual": "part of the required trunk wrench the GRF model cannot balance: force [N], moment [N m]",
+    "q_r": "reduced coordinates: 12 joint angles [rad] (FL, FR, BL, BR x HAA, HFE, KFE); for two stance feet a "
+    "13th, the trunk roll phi [rad] (R = Rz(psi) Ry(theta) Rx(phi)), which these functions take from quat",
+    "qd_r": "d/dt q_r [rad/s]; the 13th is the roll rate phid",
+    "qdd_r": "d2/dt2 q_r [rad/s^2]; the 13th is the roll acceleration",
+    "quat": "trunk orientation (x, y, z, w) of R (trunk -> world; need not be unit); must agree with the "
+    "stance: it sets gravity in the trunk frame and, with two feet, the roll-rate row",
+    "tau_ext": "joint torques [N m] (project order); for two feet a 13th entry, a moment about the "
+    "foot-to-foot line [N m] applied as if the roll were actuated (0 on the robot)",
+    "M_r": "reduced inertia matrix (n x n, column-major) = d tau_r / d qdd_r; not symmetric",
+    "CG_r": "C_r(q_r, qd_r) + G_r(q_r): tau_r at qdd_r = 0 [N m]",
+    "G_r": "tau_r at qd_r = 0, qdd_r = 0 [N m]",
+    "tau_r": "12 joint torques [N m] with the paper's GRF model of the stance set; for two feet a 13th entry: "
+    "the trunk moment about the foot-to-foot line (from foot 2 to foot 1) that the feet cannot produce [N m], "
+    "0 for a motion the robot can make (the roll is unactuated)",
+}
+
+
+def codegen_functions(robot: Robot) -> list[ca.Function]:
+    """The generated Functions, renamed with the C prefix (same graphs, no wrapper call)."""
+    out = []
+    for name, build in CODEGEN_FUNCTIONS.items():
+        f = build(robot)
+        args = f.sx_in()
+        out.append(ca.Function(PREFIX + name, args, f.call(args), f.name_in(), f.name_out(), {"cse": True}))
+    return out
+
+
+def _shape(sp: ca.Sparsity) -> str:
+    shape = f"{sp.size1()}x{sp.size2()}" if sp.size2() > 1 else f"{sp.size1()}"
+    return shape if sp.is_dense() else f"{shape}, {sp.nnz()} nonzeros"
+
+
+def reduced_parts(name: str) -> tuple[str, StanceSet] | None:
+    """('fd_r', stance) for 'fd_r_FL_BR'; None for a full-coordinate or GRF function."""
+    for kind in REDUCED_NAMES:
+        if name.startswith(kind + "_"):
+            return kind, stance_set(name[len(kind) + 1 :].replace("_", "+"))
+    return None
+
+
+def _note(name: str) -> str:
+    if name.startswith("grf_"):
+        stance = stance_set(name[4:].replace("_", "+"))
+        return f"  [{stance.kind}, rank {stance.rank('paper')}]"
+    reduced = reduced_parts(name)
+    return f"  [{reduced[1].kind}, returns QD_NONFINITE / QD_SINGULAR]" if reduced else ""
+
+
+def header_doc(robot: Robot, functions: list[ca.Function], work: dict[str, tuple[int, int]]) -> str:
+    """Documentation block: conventions, every signal once, every function's shapes and work sizes."""
+    signals = sorted({f.name_in(i) for f in functions for i in range(f.n_in())}
+                     | {f.name_out(i) for f in functions for i in range(f.n_out())}, key=list(SIGNAL_DOCS).index)
+    lines = [
+        f"/* quadruped_dyn: generated dynamics of the robot '{robot.name}' ({robot.urdf.name}).",
+        " * Generated by `quadruped-dyn codegen`; do not edit.",
+        " *",
+        " * Call qd_NAME(arg, res, iw, w, 0): arg[i] points to input i, res[i] to output i (a null",
+        " * res[i] skips it), iw and w are caller-provided work arrays of qd_NAME_SZ_IW and",
+        " * qd_NAME_SZ_W entries. No malloc, no global state: thread-safe with per-thread work.",
+        " * Vectors are contiguous; a sparse output holds its nonzeros column by column in the",
+        " * pattern qd_NAME_sparsity_out(i) returns (CasADi's compressed-column format).",
+        " * casadi_real is double unless defined before this header (e.g. -Dcasadi_real=float).",
+        " *",
+        " * qd_grf_<feet>: the paper's GRF model for those stance feet (trunk-frame assumptions,",
+        " * quadruped_dyn/dynamics/grf.py), minimum-norm solution. Where the model's rank is 5 (four feet,",
+        " * two feet) `residual` carries the trunk wrench the feet cannot balance. At coincident or",
+        " * collinear stance feet the system loses further rank and the outputs are meaningless;",
+        " * this code does not detect that (quadruped_dyn's GrfSolve.solve does).",
+        " *",
+        " * Reduced model (paper section 5; quadruped_dyn/dynamics/reduced_projection.py), one set of functions per",
+        " * stance set of 2, 3 or 4 feet, named qd_<fn>_<feet>: n = 12 coordinates (the joint angles) for",
+        " * 3 or 4 stance feet, n = 13 for 2 (the 13th is the trunk roll phi, unactuated on the robot). The",
+        " * trunk's motion follows from the stance feet staying on the ground; quat gives its orientation.",
+        " *   M_r(q_r, quat)                  reduced inertia matrix, n x n column-major, not symmetric;",
+        " *   CG_r(q_r, qd_r, quat)           C_r + G_r in one Newton-Euler pass;",
+        " *   G_r(q_r, quat)                  gravity part;",
+        " *   id_r(q_r, qd_r, qdd_r, quat)    tau_r = M_r qdd_r + C_r + G_r (paper's GRF model);",
+        " *   fd_r(q_r, qd_r, tau_ext, quat)  qdd_r = M_r^-1 (tau_ext - C_r - G_r) (paper eq. (5)), by LU",
+        " *                                   with partial pivoting on the stack (no work memory needed).",
+        " * Return codes: 0 ok; QD_NONFINITE (1) an output is NaN/inf: coincident or collinear stance feet,",
+        " * the trunk pitched +-90 deg (two feet: the roll row has tan(pitch)), a zero quaternion or a",
+        " * non-finite input; QD_SINGULAR (2, fd_r only) M_r singular to working precision (an LU pivot",
+        " * below QD_SINGULAR_RTOL max|M_r|, e.g. two feet, the trunk pitched within ~1e-12 rad of 90 deg);",
+        " * qdd_r is not written then. A stance leg stretched straight is not singular here: the reduced",
+        " * model never inverts a leg's Jacobian (measured on the paper robot: cond(M_r) 1e3 -> 3e4).",
+        " *",
+        " * Signals:",
+        *[f" *   {name:<9}{SIGNAL_DOCS[name]}" for name in signals],
+        " *",
+        " * Functions (work sizes iw, w):",
+    ]
+    for f in functions:
+        ins = ", ".join(f"{f.name_in(i)}[{_shape(f.sparsity_in(i))}]" for i in range(f.n_in()))
+        outs = ", ".join(f"{f.name_out(i)}[{_shape(f.sparsity_out(i))}]" for i in range(f.n_out()))
+        iw, w = work[f.name()]
+        lines.append(f" *   {f.name()}({ins}) -> ({outs});  iw {iw}, w {w}{_note(f.name()[len(PREFIX):])}")
+    lines.append(" */")
+    return "\n".join(lines) + "\n"
+
+
+def work_sizes(casadi_header: str) -> dict[str, tuple[int, int]]:
+    sizes = dict(re.findall(r"#define (\w+_SZ_(?:IW|W)) (\d+)", casadi_header))
+    names = {k.rsplit("_SZ_", 1)[0] for k in sizes}
+    return {n: (int(sizes[f"{n}_SZ_IW"]), int(sizes[f"{n}_SZ_W"])) for n in names}
+
+
+_UNUSED = "(void)arg; (void)res; (void)iw; (void)w; (void)mem;"
+
+
+def _silence_unused_parameters(c_source: str) -> str:
+    """CasADi's evaluation functions ignore some of their five parameters and its
+    release hooks ignore ``mem``: cast them to void so -Wextra -Werror passes."""
+    c_source = re.sub(r"(static int casadi_f\d+\([^)]*\) \{\n)", lambda m: m.group(1) + f"  {_UNUSED}\n", c_source)
+    return re.sub(r"(void \w+_release\(int mem\) \{\n)", lambda m: m.group(1) + "  (void)mem;\n", c_source)
+
+
+TEMPLATES = Path(__file__).resolve().parent / "c"
+
+
+def stem(robot: Robot) -> str:
+    return f"qd_{re.sub(r'[^A-Za-z0-9_]', '_', robot.name)}"
+
+
+def _casadi_c(file_stem: str, functions: list[ca.Function], precision: str) -> tuple[str, str]:
+    """(C source, CasADi's header) of ``functions`` generated into ``file_stem``.c."""
+    cg = ca.CodeGenerator(f"{file_stem}.c", {"with_header": True, "casadi_real": precision})
+    for f in functions:
+        cg.add(f)
+    with tempfile.TemporaryDirectory() as tmp:
+        cg.generate(tmp + os.sep)
+        return _silence_unused_parameters((Path(tmp) / f"{file_stem}.c").read_text()), (Path(tmp) / f"{file_stem}.h").read_text()
+
+
+def _entry_point(name: str) -> str:
+    return (rf"(CASADI_SYMBOL_EXPORT int {name}\(const casadi_real\*\* arg, casadi_real\*\* res, casadi_int\* iw, "
+            rf"casadi_real\* w, int mem\)\{{\n)  return (casadi_f\d+)\(arg, res, iw, w, mem\);\n")
+
+
+def _checked_reduced_c(c_text: str, casadi_header: str, functions: list[ca.Function]) -> str:
+    """Insert ``c/qd_reduced_solve.c`` and route the entry points through it: every function
+    returns QD_NONFINITE for a non-finite output; fd_r evaluates M_r and CG_r (CasADi's own
+    evaluation functions, checked once in the solve) and solves M_r qdd_r = tau_ext - CG_r."""
+    first = c_text.index(f"\n/* {functions[0].name()}:")
+    c_text = c_text[:first] + "\n" + (TEMPLATES / "qd_reduced_solve.c").read_text() + c_text[first:]
+    work = work_sizes(casadi_header)
+    raw = {}  # entry point -> CasADi's static evaluation function
+    for f in functions:
+        found = re.search(_entry_point(f.name()), c_text)
+        if not found:
+            raise AssertionError(f"entry point of {f.name()} not found in CasADi's output")
+        raw[f.name()] = found.group(2)
+    for f in functions:
+        if f.sz_arg() != f.n_in() or work[f.name()] != (0, 0):
+            raise AssertionError(f"{f.name()} needs work memory; qd_fd_r_solve assumes it does not")
+        if f.name().startswith(PREFIX + "fd_r_"):
+            m_r, cg_r = (raw[g.name()] for g in functions if g.name().startswith((PREFIX + "M_r_", PREFIX + "CG_r_")))
+            body = rf"\1  (void)\2;\n  return qd_fd_r_solve({f.nnz_out(0)}, {m_r}, {cg_r}, arg, res, iw, w, mem);\n"
+        else:
+            nnz = ", ".join(str(f.nnz_out(i)) for i in range(f.n_out()))
+            body = rf"\1  return qd_finite(\2(arg, res, iw, w, mem), res, {f.n_out()}, (const casadi_int[]){{{nnz}}});\n"
+        c_text, count = re.subn(_entry_point(f.name()), body, c_text)
+        if count != 1:
+            raise AssertionError(f"entry point of {f.name()} not found in CasADi's output")
+    return c_text
+
+
+def generate(robot: Robot, out_dir: Path, precision: str = "double",
+             extra_files: Callable[[list[ca.Function], dict[str, tuple[int, int]]], dict[str, str]] | None = None,
+             ) -> list[Path]:
+    """Write into ``out_dir``: qd_<robot>.c (full-coordinate terms and GRF solves), qd_<robot>.h
+    (one header for all), the files ``extra_files(functions, work sizes)`` returns (e.g. the
+    reference values of ``checks.c_reference``), check_qd.c, the Makefile, and qd_<robot>_r_<feet>.c (the reduced
+    model of each stance set of 2-4 feet). Returns the paths in that order."""
+    if precision not in ("double", "float"):
+        raise InputError(f"precision '{precision}' is not supported; expected 'double' or 'float'")
+    out_dir = Path(out_dir)
+    out_dir.mkdir(parents=True, exist_ok=True)
+    name = stem(robot)
+    full = codegen_functions(robot)
+    c_full, casadi_header = _casadi_c(name, full, precision)
+    sources = {f"{name}.c": c_full}
+    functions = list(full)
+    for stance in REDUCED_STANCE_SETS:
+        reduced = reduced_functions(robot, stance)
+        file_stem = f"{name}_r_{stance.name.replace('+', '_')}"
+        c_text, h_text = _casadi_c(file_stem, reduced, precision)
+        sources[f"{file_stem}.c"] = _checked_reduced_c(c_text, h_text, reduced)
+        casadi_header += h_text
+        functions += reduced
+    work = work_sizes(casadi_header)
+    files = {
+        f"{name}.c": c_full,
+        f"{name}.h": header_doc(robot, functions, work) + casadi_header,
+        **(extra_files(functions, work) if extra_files else {}),
+        "check_qd.c": (TEMPLATES / "check_qd.c").read_text(),
+        "Makefile": (TEMPLATES / "Makefile").read_text().replace("ROBOT ?= paper", f"ROBOT ?= {name[3:]}"),
+        **sources,
+    }
+    paths = []
+    for file_name, text in files.items():
+        (out_dir / file_name).write_text(text)
+        paths.append(out_dir / file_name)
+    return paths
+
+
+# ----------------------------------------------------------------------------- reference values
+
+

@@ -1,0 +1,78 @@
+"""Leg kinematics, symbolic (CasADi SX), from the project's leg structure.
+
+All quantities are in the trunk frame b, positions relative to the trunk origin:
+joint frame placements (R_bi, p_bi), the foot position r, the foot's linear Jacobian
+J = dr/dq w.r.t. the leg's own three joints, and Jdot qdot (the foot's classical
+acceleration relative to the trunk when qddot = 0).
+
+Inverse kinematics: ``analytic_ik`` for the paper's DH leg, ``numeric_ik`` for any leg.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from functools import cache
+
+import casadi as ca
+
+from quadruped_dyn.math.spatial import axis_rotation, dm, placement_rt
+from quadruped_dyn.model.leg import Leg
+from quadruped_dyn.model.leg_frames import axis_aligned
+from quadruped_dyn.model.robot import Robot
+
+
+def joint_frames(leg: Leg, q: ca.SX) -> list[tuple[ca.SX, ca.SX]]:
+    """(R_bi, p_bi) of the three joint frames (after their joint rotation) in the trunk frame,
+    in the leg's canonical frames (``leg_frames.axis_aligned``: parallel to the trunk frame at
+    q = 0, HFE and KFE origins slid along their axes)."""
+    R, p = ca.SX.eye(3), ca.SX.zeros(3)
+    frames = []
+    for i, joint in enumerate(axis_aligned(leg).joints):
+        Rf, pf = placement_rt(joint.placement)
+        p = p + R @ pf
+        R = R @ Rf @ axis_rotation(joint.axis, q[i])
+        frames.append((R, p))
+    return frames
+
+
+def foot_position(leg: Leg, q: ca.SX) -> ca.SX:
+    """Foot (contact point) position in the trunk frame, m."""
+    leg = axis_aligned(leg)
+    R3, p3 = joint_frames(leg, q)[-1]
+    return p3 + R3 @ dm(leg.foot.p)
+
+
+@dataclass(frozen=True)
+class LegKinematics:
+    """Named CasADi Functions of one leg: q (3,), qd (3,) -> b-frame quantities."""
+
+    foot_position: ca.Function  # q -> r (3,)
+    foot_jacobian: ca.Function  # q -> J (3, 3)
+    foot_bias_acceleration: ca.Function  # q, qd -> Jdot qdot (3,)
+
+
+def leg_kinematics(leg: Leg) -> LegKinematics:
+    q, qd = ca.SX.sym("q", 3), ca.SX.sym("qd", 3)
+    r = foot_position(leg, q)
+    J = ca.jacobian(r, q)
+    Jdot_qd = ca.jacobian(J @ qd, q) @ qd
+    name = leg.label
+    return LegKinematics(
+        ca.Function(f"foot_position_{name}", [q], [r], ["q"], ["r"]),
+        ca.Function(f"foot_jacobian_{name}", [q], [J], ["q"], ["J"]),
+        ca.Function(f"foot_bias_acceleration_{name}", [q, qd], [Jdot_qd], ["q", "qd"], ["Jdot_qd"]),
+    )
+
+
+@cache
+def robot_kinematics(robot: Robot) -> tuple[LegKinematics, ...]:
+    """The four legs' kinematics Functions, built once per robot."""
+    return tuple(leg_kinematics(leg) for leg in robot.legs)
+
+
+# ----------------------------------------------------------------------------- inverse kinematics
+
+
+# ----------------------------------------------------------------------------- trunk pose from the feet
+
+

@@ -1,0 +1,94 @@
+"""Full-coordinate rigid-contact dynamics along a gait plan: the physics check (SPEC section 6).
+
+Nothing here uses the paper's model: the robot is Pinocchio's free-flyer model (q = (p, quat x
+y z w, 12 joints), v = (v_b, omega_b, qd), project order) with the stance feet as rigid point
+contacts, a = vdot from the KKT system of ``PinocchioReference.constrained_forward_dynamics``
+(``crba``, ``nonLinearEffects``, contact Jacobians, classical foot accelerations). The stance
+switches at the plan's phases: a foot lifts when its phase says so, whatever its force, and a
+foot that lands is stopped by a plastic impact (v+ = v- - M^-1 Jc^T (Jc M^-1 Jc^T)^-1 Jc v-, all
+stance feet), then held where it landed. Integrated with the same method and tolerances as the
+reduced model (``simulate``), under the same torque law on the 12 joints; the trunk roll has
+no actuator here.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from quadruped_dyn.errors import InputError
+from quadruped_dyn.experiment.gait import Plan
+from quadruped_dyn.experiment.simulate import FALLEN_TRUNK_M, RTOL, IkTorques, Progress, Run, TorqueLaw, integrate_phases
+from quadruped_dyn.model.state import rotation
+from quadruped_dyn.references.pinocchio import PinocchioReference
+
+
+def _derivative(q: np.ndarray, v: np.ndarray, a: np.ndarray) -> np.ndarray:
+    """d/dt of (q (19,), v (18,)): pdot = R v_b, quaternion rate 1/2 quat (x) (omega, 0), qd."""
+    quat = q[3:7] / np.linalg.norm(q[3:7])
+    x, y, z, w = quat
+    omega = v[3:6]
+    quat_dot = 0.5 * np.array([[w, -z, y], [z, w, -x], [-y, x, w], [-x, -y, -z]]) @ omega
+    return np.concatenate([rotation(q) @ v[:3], quat_dot, v[6:], a])
+
+
+def _impact(ref: PinocchioReference, q: np.ndarray, v: np.ndarray, stance: tuple[int, ...]) -> np.ndarray:
+    """Velocity after a plastic impact of all stance feet (their velocities go to zero)."""
+    M = ref.mass_matrix(q)
+    Jc = ref.contact_jacobian(q, stance)
+    MinvJt = np.linalg.solve(M, Jc.T)
+    return v - MinvJt @ np.linalg.solve(Jc @ MinvJt, Jc @ v)
+
+
+def simulate_rigid(plan: Plan, ik: IkTorques, law: TorqueLaw, horizon: float, dt: float,
+                   integrator: str = "dop853", rtol: float = RTOL, progress: Progress | None = None) -> Run:
+    """Integrate the rigid-contact dynamics from the IK state at t = 0 under ``law``; the
+    returned ``Run`` holds the 12 joint angles, rates and accelerations, and as closure the
+    trunk's distance from the plan's trunk position (m)."""
+    robot, gait = plan.robot, plan.gait
+    ref = PinocchioReference(robot)
+    ref0, _ = ik(0.0, gait.stance(0.0))
+    stance0 = gait.stance(0.0)
+    q0, v0, _ = ref.reduced_motion(stance0, ref0.q_r, ref0.qd_r, ref0.qdd_r, np.array([0.0, 0.0, 0.0, 1.0]))
+    q0[:3] = plan.trunk(0.0)[0]
+    y = np.concatenate([q0, v0])
+    evaluations = [0]
+
+    def accel(t: float, y: np.ndarray, stance: tuple[int, ...]) -> np.ndarray:
+        evaluations[0] += 1
+        q, v = y[:19], y[19:]
+        reference_t, tau_ik = ik(t, stance)
+        tau = law.joints(reference_t, tau_ik, q[7:], v[6:])
+        a, _ = ref.constrained_forward_dynamics(q, v, tau, stance)
+        if not np.all(np.isfinite(a)):
+            raise InputError(f"the rigid-contact dynamics are singular at t = {t:.4f} s")
+        return a
+
+    def rhs(stance: tuple[int, ...], t: float, y: np.ndarray) -> np.ndarray:
+        return _derivative(y[:19], y[19:], accel(t, y, stance))
+
+    out: list[tuple[float, np.ndarray, np.ndarray, float]] = []
+    stopped_at = None
+
+    class Fallen(Exception):
+        pass
+
+    def record(stance: tuple[int, ...], t: float, y: np.ndarray) -> None:
+        a = accel(t, y, stance)
+        off = float(np.linalg.norm(y[:3] - plan.trunk(t)[0]))
+        out.append((t, y.copy(), a, off))
+        if off > FALLEN_TRUNK_M:
+            raise Fallen
+
+    def touch_down(stance: tuple[int, ...], y: np.ndarray) -> np.ndarray:
+        q = y[:19].copy()
+        q[3:7] /= np.linalg.norm(q[3:7])
+        return np.concatenate([q, _impact(ref, q, y[19:], stance)])
+
+    try:
+        integrate_phases(plan, y, horizon, dt, integrator, rtol, rhs, record, switch=touch_down, progress=progress)
+    except (Fallen, InputError, np.linalg.LinAlgError):
+        stopped_at = float(out[-1][0]) if out else 0.0
+    t = np.array([o[0] for o in out])
+    Y = np.array([o[1] for o in out]).reshape(-1, 37)
+    A = np.array([o[2] for o in out]).reshape(-1, 18)
+    return Run(t, Y[:, 7:19], Y[:, 25:], A[:, 6:], np.array([o[3] for o in out]), stopped_at, evaluations[0])

@@ -1,0 +1,1 @@
+"""Output files: directories proven writable before work starts."""

@@ -1,0 +1,25 @@
+"""Output and cache directories: created and proven writable before any work is done."""
+
+from __future__ import annotations
+
+import tempfile
+from pathlib import Path
+
+from quadruped_dyn.errors import InputError
+
+
+def writable_dir(path: str | Path, what: str) -> Path:
+    """Create ``path`` (with its parents) and prove a file can be written in it; an InputError
+    naming ``what`` (e.g. "--out 'gen'") otherwise: a file in the way, /proc, a read-only directory."""
+    out = Path(path)
+    expected = "expected a writable directory"
+    for p in (out, *out.parents):
+        if p.exists() and not p.is_dir():
+            raise InputError(f"{what}: '{p}' is a file; {expected}")
+    try:
+        out.mkdir(parents=True, exist_ok=True)
+        with tempfile.TemporaryFile(dir=out):
+            pass
+    except OSError as e:
+        raise InputError(f"{what} is not writable ({e.strerror}); {expected}") from e
+    return out

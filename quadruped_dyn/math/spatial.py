@@ -1,0 +1,80 @@
+"""Small CasADi (SX) helpers: rotations, cross-product matrices, 6D spatial algebra.
+
+Spatial vectors are ordered (linear, angular), as in Pinocchio: a motion V = (v, omega)
+and a force F = (f, n).
+"""
+
+from __future__ import annotations
+
+import casadi as ca
+import numpy as np
+
+from quadruped_dyn.math.rigid import LinkInertia, Placement
+from quadruped_dyn.math.rigid import skew as skew_np
+
+
+def skew(w: ca.SX) -> ca.SX:
+    """[w]x such that skew(w) @ x = w x x."""
+    return ca.vertcat(
+        ca.horzcat(0, -w[2], w[1]),
+        ca.horzcat(w[2], 0, -w[0]),
+        ca.horzcat(-w[1], w[0], 0),
+    )
+
+
+def axis_rotation(axis: np.ndarray, angle: ca.SX) -> ca.SX:
+    """Rotation by ``angle`` about the constant unit ``axis``: cos (I - a a^T) + a a^T + sin [a]x
+    (Rodrigues). Written so that for an axis-aligned joint the constant entries stay exact
+    0 and 1, keeping the expression graph (and the generated C) small."""
+    a = np.asarray(axis, dtype=float)
+    aaT = np.outer(a, a)
+    return ca.cos(angle) * ca.DM(np.eye(3) - aaT) + ca.DM(aaT) + ca.sin(angle) * ca.DM(skew_np(a))
+
+
+
+def quat_to_rotation(quat: ca.SX) -> ca.SX:
+    """R (b -> w) from a quaternion (x, y, z, w); scale-invariant, so it need not be unit."""
+    x, y, z, w = quat[0], quat[1], quat[2], quat[3]
+    s = 2 / (x * x + y * y + z * z + w * w)
+    return ca.vertcat(
+        ca.horzcat(1 - s * (y * y + z * z), s * (x * y - z * w), s * (x * z + y * w)),
+        ca.horzcat(s * (x * y + z * w), 1 - s * (x * x + z * z), s * (y * z - x * w)),
+        ca.horzcat(s * (x * z - y * w), s * (y * z + x * w), 1 - s * (x * x + y * y)),
+    )
+
+
+def dm(x: np.ndarray) -> ca.DM:
+    return ca.DM(np.asarray(x, dtype=float))
+
+
+def placement_rt(T: Placement) -> tuple[ca.DM, ca.DM]:
+    return dm(T.R), dm(T.p)
+
+
+def motion_cross(V: ca.SX) -> ca.SX:
+    """6x6 matrix of V x (motion cross product), V = (v, omega)."""
+    v, w = V[:3], V[3:]
+    Z = ca.SX.zeros(3, 3)
+    return ca.vertcat(ca.horzcat(skew(w), skew(v)), ca.horzcat(Z, skew(w)))
+
+
+def force_cross(V: ca.SX) -> ca.SX:
+    """6x6 matrix of V x* (dual cross product on forces): -motion_cross(V)^T."""
+    return -motion_cross(V).T
+
+
+def force_cross_bar(F: ca.SX) -> ca.SX:
+    """6x6 matrix M with M @ V = V x* F for a force F = (f, n)."""
+    f, n = F[:3], F[3:]
+    Z = ca.SX.zeros(3, 3)
+    return ca.vertcat(ca.horzcat(Z, -skew(f)), ca.horzcat(-skew(f), -skew(n)))
+
+
+def spatial_inertia(link: LinkInertia, R: ca.SX, p: ca.SX) -> ca.SX:
+    """6x6 spatial inertia of ``link`` (given in a frame placed at (R, p)), expressed at the
+    origin and axes of the outer frame: [[m I, -m [c]x], [m [c]x, I_c - m [c]x [c]x]]."""
+    c = p + R @ dm(link.com)
+    Ic = R @ dm(link.inertia) @ R.T
+    C = skew(c)
+    m = link.mass
+    return ca.vertcat(ca.horzcat(m * ca.DM.eye(3), -m * C), ca.horzcat(m * C, Ic - m * C @ C))

@@ -1,0 +1,89 @@
+"""The project's full-coordinate state and its conventions (SPEC section 2).
+
+Frames: world w (z up, gravity ``GRAVITY_W``), trunk/body b with pose (R, p), R maps b -> w.
+
+Full coordinates (18 velocities = 6 body + 12 joints), project joint order
+FL, FR, BL, BR x (HAA, HFE, KFE):
+
+* ``q`` (19,) = (p [m, world], quaternion (x, y, z, w) of R, 12 joint angles [rad])
+* ``v`` (18,) = (v_b, omega_b, qd): body twist in the body frame, v_b = R^T pdot [m/s],
+  omega_b [rad/s]; joint rates [rad/s]
+* ``a`` (18,) = vdot, the time derivative of v. For the body this is the **spatial**
+  acceleration vdot_b = a_b - omega_b x v_b, where a_b = R^T pddot is the **classical**
+  acceleration the paper's Newton-Euler uses. ``spatial_from_classical`` and
+  ``classical_from_spatial`` convert. With this choice M, C, G are the usual
+  Lagrangian terms M(q) vdot + C(q, v) + G(q) = tau, identical to Pinocchio's.
+
+The quaternion order (x, y, z, w) is Pinocchio's; it need not be normalised on input to the
+symbolic functions but ``full_q`` always writes a unit one.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+import pinocchio as pin
+
+from quadruped_dyn.errors import InputError
+from quadruped_dyn.tolerances import ORTHONORMAL_TOL
+
+GRAVITY_W = np.array([0.0, 0.0, -9.81])  # m/s^2, world frame
+NQ_FULL = 19
+NV_FULL = 18
+
+
+def full_q(R: np.ndarray, p: np.ndarray, q_joints: np.ndarray) -> np.ndarray:
+    """Pack (R, p, 12 joint angles) into the project's q (19,)."""
+    R = check_array("R", R, (3, 3))
+    if np.abs(R.T @ R - np.eye(3)).max() > ORTHONORMAL_TOL or np.linalg.det(R) < 0:
+        raise InputError("R is not a rotation matrix; expected R^T R = I and det R = +1")
+    quat = pin.Quaternion(R).coeffs()  # (x, y, z, w)
+    return np.concatenate([check_array("p", p, (3,)), quat, check_array("q_joints", q_joints, (12,))])
+
+
+def rotation(q: np.ndarray) -> np.ndarray:
+    """R (b -> w) from the project's q; the quaternion is normalised first."""
+    quat = np.asarray(q[3:7], dtype=float)
+    return pin.Quaternion(quat / np.linalg.norm(quat)).toRotationMatrix()
+
+
+def spatial_from_classical(omega_b: np.ndarray, v_b: np.ndarray, a_b: np.ndarray) -> np.ndarray:
+    """vdot_b = a_b - omega_b x v_b (body frame)."""
+    return a_b - np.cross(omega_b, v_b)
+
+
+def classical_from_spatial(omega_b: np.ndarray, v_b: np.ndarray, vdot_b: np.ndarray) -> np.ndarray:
+    """a_b = vdot_b + omega_b x v_b (body frame)."""
+    return vdot_b + np.cross(omega_b, v_b)
+
+
+def check_array(name: str, x: object, shape: tuple[int, ...]) -> np.ndarray:
+    """A float array of the given shape with finite entries, or a clear InputError."""
+    try:
+        arr = np.asarray(x, dtype=float)
+    except (TypeError, ValueError) as e:
+        raise InputError(f"{name} is not numeric; expected an array of shape {shape}") from e
+    if arr.shape != shape:
+        raise InputError(f"{name} has shape {arr.shape}; expected {shape}")
+    if not np.all(np.isfinite(arr)):
+        raise InputError(f"{name} contains NaN or inf; expected finite values")
+    return arr
+
+
+@dataclass(frozen=True)
+class FullState:
+    """A sampled full-coordinate state: q (19,), v (18,), a = vdot (18,), foot forces (4, 3)."""
+
+    q: np.ndarray
+    v: np.ndarray
+    a: np.ndarray
+    f: np.ndarray  # ground force on each foot, body frame, N, project leg order
+
+
+def random_state(lower: np.ndarray, upper: np.ndarray, rng: np.random.Generator) -> FullState:
+    """Random orientation and position, joints uniform inside [lower, upper], unit-scale rates."""
+    quat = rng.normal(size=4)
+    R = pin.Quaternion(quat / np.linalg.norm(quat)).toRotationMatrix()
+    q = full_q(R, rng.uniform(-1.0, 1.0, 3), rng.uniform(lower, upper))
+    return FullState(q, rng.normal(size=NV_FULL), rng.normal(size=NV_FULL), rng.normal(scale=20.0, size=(4, 3)))

@@ -1,0 +1,154 @@
+"""One validation pass over a URDF before anything is built from it (SPEC section 8).
+
+Pinocchio's parser accepts numbers that make every later answer wrong (a zero joint axis,
+NaN or 1e300 masses, lower > upper limits, inertias no body can have) and ignores ``mimic``.
+``validate_urdf`` reads the XML itself and rejects, with an ``InputError`` naming the element
+and the value:
+
+- XML that is not a URDF ``<robot>``;
+- numbers that are not numbers, not finite, or absurd (beyond ``MAX_LENGTH_M``, ``MAX_MASS_KG``,
+  ``MAX_ANGLE_RAD``) in any origin, axis, limit, mass or inertia;
+- a zero joint axis; a joint with lower > upper limits;
+- ``mimic`` joints (a leg needs three independent joints); ``floating`` or ``planar`` joints
+  (a leg hangs from the trunk by revolute joints);
+- a negative mass; an inertia that is not positive semi-definite or breaks the triangle
+  inequality of its principal moments (A + B >= C): rejected for a link a joint moves (a leg
+  link), returned as a warning for a link attached by a fixed joint (a camera on the trunk, a
+  dummy foot): Pinocchio merges it into its parent's body, and ``robot.load_robot`` checks
+  the merged bodies of the trunk and the legs.
+
+``continuous`` joints are legal: their limits are not read.
+"""
+
+from __future__ import annotations
+
+import math
+import xml.etree.ElementTree as ET
+from pathlib import Path
+
+import numpy as np
+
+from quadruped_dyn.errors import InputError
+from quadruped_dyn.tolerances import INERTIA_REL_TOL
+
+#: Larger than any legged robot by two orders of magnitude: a length, mass or angle beyond
+#: these is a units or typing mistake, and squares of such numbers lose all precision.
+MAX_LENGTH_M = 100.0
+MAX_MASS_KG = 1e5
+MAX_ANGLE_RAD = 100.0
+MAX_INERTIA_KG_M2 = MAX_MASS_KG * MAX_LENGTH_M**2
+
+#: An axis shorter than this is no direction anyone wrote; Pinocchio would normalise noise.
+MIN_AXIS_NORM = 1e-6
+
+JOINT_TYPES = ("revolute", "continuous", "prismatic", "fixed")
+
+
+def _numbers(where: str, attribute: str, text: str | None, count: int, bound: float, default: str | None = None) -> np.ndarray:
+    """``count`` finite numbers of magnitude <= bound from an attribute's text, or an InputError."""
+    text = default if text is None else text
+    if text is None:
+        raise InputError(f"{where} has no {attribute}; expected {count} number(s)")
+    try:
+        values = np.array([float(x) for x in text.split()])
+    except ValueError as e:
+        raise InputError(f'{where} has {attribute}="{text}"; expected {count} number(s)') from e
+    if values.size != count:
+        raise InputError(f'{where} has {attribute}="{text}"; expected {count} number(s)')
+    if not np.all(np.isfinite(values)):
+        raise InputError(f'{where} has {attribute}="{text}"; expected finite numbers')
+    if np.any(np.abs(values) > bound):
+        raise InputError(f'{where} has {attribute}="{text}"; expected magnitudes <= {bound:g}')
+    return values
+
+
+def _origin(where: str, element: ET.Element | None) -> None:
+    origin = None if element is None else element.find("origin")
+    if origin is not None:
+        _numbers(f"{where} <origin>", "xyz", origin.get("xyz"), 3, MAX_LENGTH_M, default="0 0 0")
+        _numbers(f"{where} <origin>", "rpy", origin.get("rpy"), 3, MAX_ANGLE_RAD, default="0 0 0")
+
+
+def _joint(joint: ET.Element) -> None:
+    name = joint.get("name")
+    kind = joint.get("type")
+    where = f"joint '{name}'"
+    if kind not in JOINT_TYPES:
+        raise InputError(f"{where} has type '{kind}'; expected revolute or continuous joints in the legs, fixed elsewhere")
+    _origin(where, joint)
+    if kind == "fixed":
+        return
+    if joint.find("mimic") is not None:
+        raise InputError(f"{where} has a <mimic> element (it copies joint '{joint.find('mimic').get('joint')}'); "  # type: ignore[union-attr]
+                         "expected a leg of 3 independent joints")
+    axis_element = joint.find("axis")
+    axis = _numbers(f"{where} <axis>", "xyz", None if axis_element is None else axis_element.get("xyz"), 3, MAX_LENGTH_M,
+                    default="1 0 0")
+    if not np.linalg.norm(axis) >= MIN_AXIS_NORM:
+        raise InputError(f'{where} has <axis xyz="{axis_element.get("xyz")}">; expected a nonzero direction')  # type: ignore[union-attr]
+    limit = joint.find("limit")
+    if kind != "continuous" and limit is not None:
+        bound = MAX_ANGLE_RAD if kind == "revolute" else MAX_LENGTH_M
+        lower = _numbers(f"{where} <limit>", "lower", limit.get("lower"), 1, bound, default="0")[0]
+        upper = _numbers(f"{where} <limit>", "upper", limit.get("upper"), 1, bound, default="0")[0]
+        if lower > upper:
+            raise InputError(f'{where} has <limit lower="{limit.get("lower")}" upper="{limit.get("upper")}">; '
+                             "expected lower <= upper")
+
+
+def inertia_problem(moments: np.ndarray) -> str | None:
+    """What makes principal moments (ascending, kg m^2) unphysical, or None."""
+    slack = INERTIA_REL_TOL * max(float(np.abs(moments).max()), math.ulp(0.0))
+    if moments[0] < -slack:
+        return "is not positive semi-definite"
+    if moments[0] + moments[1] < moments[2] - slack:
+        return "breaks the triangle inequality A + B >= C"
+    return None
+
+
+def _inertial(link: str, inertial: ET.Element, moved: bool, warnings: list[str]) -> None:
+    where = f"link '{link}' <inertial>"
+    _origin(where, inertial)
+    mass_element = inertial.find("mass")
+    if mass_element is None:
+        raise InputError(f"{where} has no <mass>; expected <mass value=...> in kg")
+    (mass,) = _numbers(f"{where} <mass>", "value", mass_element.get("value"), 1, MAX_MASS_KG)
+    if mass < 0.0:
+        raise InputError(f'{where} has <mass value="{mass_element.get("value")}">; expected a mass >= 0 kg')
+    element = inertial.find("inertia")
+    if element is None:
+        return
+    names = ("ixx", "ixy", "ixz", "iyy", "iyz", "izz")
+    xx, xy, xz, yy, yz, zz = (
+        _numbers(f"{where} <inertia>", n, element.get(n), 1, MAX_INERTIA_KG_M2, default="0")[0] for n in names
+    )
+    moments = np.linalg.eigvalsh(np.array([[xx, xy, xz], [xy, yy, yz], [xz, yz, zz]]))
+    problem = inertia_problem(moments)
+    if problem is None:
+        return
+    message = (f"{where} <inertia> {problem}: principal moments {np.array2string(moments, precision=3)} kg m^2; "
+               "expected a physical rigid body")
+    if moved:
+        raise InputError(message)
+    warnings.append(message + " (a fixed link: warned; the body it is merged into is checked)")
+
+
+def validate_urdf(path: Path) -> list[str]:
+    """Validate the URDF at ``path``; returns warnings (one line each), raises InputError."""
+    try:
+        root = ET.parse(path).getroot()
+    except ET.ParseError as e:
+        raise InputError(f"'{path}' is not well-formed XML ({e}); expected a URDF file") from e
+    if root.tag != "robot":
+        raise InputError(f"'{path}' has root element <{root.tag}>; expected a URDF <robot>")
+    joints = root.findall("joint")
+    for joint in joints:
+        _joint(joint)
+    moved = {c.get("link") for j in joints if j.get("type") != "fixed" for c in j.findall("child")}
+    warnings: list[str] = []
+    for link in root.findall("link"):
+        inertial = link.find("inertial")
+        if inertial is not None:
+            name = link.get("name", "?")
+            _inertial(name, inertial, name in moved, warnings)
+    return warnings

@@ -1,0 +1,279 @@
+"""The report's numbers, gathered from the public APIs (each section's data as plain values)."""
+
+from __future__ import annotations
+
+import importlib.metadata
+import json
+import os
+import platform
+import subprocess
+import sys
+import time
+import warnings
+from datetime import datetime, timezone
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from quadruped_dyn.errors import InputError
+from quadruped_dyn.model.leg import JOINT_ROLES
+from quadruped_dyn.model.robot import Robot, load_robot
+from quadruped_dyn.report.html import png_image
+
+#: Random states of the check (the README's numbers use 200).
+CHECK_SAMPLES = 200
+
+#: Friction coefficient of the friction-cone column (rubber foot on a hard floor).
+FRICTION_MU = 0.6
+
+#: The experiment's sampling interval, s (the ``validate`` default).
+EXPERIMENT_DT = 1e-3
+
+#: Libraries whose versions the page records.
+LIBRARIES = ("quadruped_dyn", "pin", "casadi", "numpy", "sympy", "matplotlib", "example-robot-data", "click",
+             "nbclient", "ipykernel", "markdown-it-py", "pygments")
+
+def load_with_warnings(robot_arg: str) -> tuple[Robot, list[str]]:
+    """The robot, and every warning raised while loading it (Python warnings, and the
+    ``warnings`` attribute of a Robot if the loader records them)."""
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        robot = load_robot(robot_arg)
+    messages = [str(w.message) for w in caught]
+    return robot, messages + [str(w) for w in getattr(robot, "warnings", ())]
+
+def robot_data(robot: Robot, urdf_warnings: list[str]) -> dict[str, Any]:
+    from quadruped_dyn.model.robot_summary import robot_info
+
+    info = robot_info(robot)
+    info["joints"] = [{"name": j.name, "leg": leg.label, "role": role, "lower": j.lower, "upper": j.upper,
+                       "standing": float(robot.standing_q[3 * i + k])}
+                      for i, leg in enumerate(robot.legs) for k, (j, role) in enumerate(zip(leg.joints, JOINT_ROLES))]
+    info["warnings"] = urdf_warnings
+    return info
+
+def leg_points(robot: Robot, q_joints: np.ndarray) -> dict[str, np.ndarray]:
+    """World points (Pinocchio forward kinematics) of each leg's HAA, HFE, KFE origins and
+    foot, trunk level with its origin placed so the lowest foot touches z = 0."""
+    import pinocchio as pin
+
+    from quadruped_dyn.model.state import full_q
+    from quadruped_dyn.references.pinocchio import PinocchioReference
+
+    data = robot.model.createData()
+    q = PinocchioReference(robot).pin_q(full_q(np.eye(3), np.zeros(3), q_joints))
+    pin.framesForwardKinematics(robot.model, data, q)
+    chains = {}
+    for leg, foot in zip(robot.legs, robot.foot_frame_ids):
+        joints = [data.oMi[robot.model.getJointId(j.name)].translation for j in leg.joints]
+        chains[leg.label] = np.array([*joints, data.oMf[foot].translation])
+    lowest = min(c[-1, 2] for c in chains.values())
+    return {label: c - [0.0, 0.0, lowest] for label, c in chains.items()}
+
+def grf_posture(robot: Robot, q_joints: np.ndarray, mu: float) -> tuple[dict[str, Any], list[dict[str, Any]], np.ndarray]:
+    """The paper model's solve of every stance set at ``q_joints``, trunk level and still:
+    ranks (structural and from an SVD of Pinocchio's contact Jacobians), residual, friction;
+    and, for the rank-5 cases drawn on the footprint, the free direction's forces."""
+    from quadruped_dyn.dynamics.grf import friction_cone, grf_solve
+    from quadruped_dyn.model.stance import STANCE_SETS
+    from quadruped_dyn.model.state import full_q, rotation
+    from quadruped_dyn.references.pinocchio import PinocchioReference
+
+    ref = PinocchioReference(robot)
+    q = full_q(np.eye(3), np.zeros(3), q_joints)
+    v = a = np.zeros(18)
+    feet = ref.foot_positions(q)
+    stances, cases = [], []
+    for s in STANCE_SETS:
+        if not s.feet:
+            continue
+        P = s.selection("paper")
+        r = ref.grf_solve(q, v, a, s.feet, P)
+        lam, f, residual, _ = (np.asarray(x, dtype=float).ravel() for x in grf_solve(robot, s).function(q, v, a))
+        f_world = f.reshape(4, 3)[list(s.feet)] @ rotation(q).T
+        ok, margin = friction_cone(f_world, mu)
+        stances.append({"stance": s.name, "kind": s.kind, "rank": s.rank("paper"), "numeric_rank": r.rank,
+                        "singular_values": r.singular_values.tolist(), "max_residual": float(np.abs(residual).max()),
+                        "min_friction_margin_N": float(margin.min()), "in_cone": bool(ok.all())})
+        if s.name in ("FL+FR+BL+BR", "FL+BR", "FR+BL"):
+            Jc = ref.contact_jacobian(q, s.feet)
+            A = Jc[:, :6].T @ np.kron(np.eye(len(s.feet)), rotation(q)) @ P
+            _, _, Vt = np.linalg.svd(A)
+            cases.append({"name": s.name, "stance": s.feet, "f_free": (P @ Vt[-1]).reshape(-1, 3)})
+    return {"mu": mu, "stances": stances}, cases, feet
+
+def reduced_rows(robot: Robot, q_joints: np.ndarray) -> list[dict[str, Any]]:
+    """cond(M_r), asymmetry and M_r against the Pinocchio-built reduced reference, for every
+    stance set of 2, 3 or 4 feet, at ``q_joints``, trunk level (roll 0), still."""
+    from quadruped_dyn.dynamics.guarded import guarded_call
+    from quadruped_dyn.dynamics.reduced import MAX_COND_M_R, REDUCED_KINDS, reduced_model
+    from quadruped_dyn.model.stance import STANCE_SETS
+    from quadruped_dyn.references.pinocchio import PinocchioReference
+    from quadruped_dyn.tolerances import REL_TOL_TERMS
+
+    ref = PinocchioReference(robot)
+    quat = np.array([0.0, 0.0, 0.0, 1.0])
+    rows = []
+    for s in STANCE_SETS:
+        if len(s.feet) not in REDUCED_KINDS:
+            continue
+        m = reduced_model(robot, s.name)
+        q_r = np.append(q_joints, np.zeros(m.n - 12))
+        try:
+            (M,) = guarded_call(m.M_r, q_r, quat)
+            cond = float(np.linalg.cond(M))
+            if not cond < MAX_COND_M_R:
+                raise InputError(f"cond(M_r) = {cond:.1e}, beyond {MAX_COND_M_R:.0e}: numerically singular")
+        except InputError as e:  # a result: e.g. a front or back pair, whose free pitch the roll cannot describe
+            rows.append({"stance": s.name, "kind": s.kind, "n": m.n, "cond": float("inf"), "asymmetry": None,
+                         "err_vs_pinocchio": None, "tol": REL_TOL_TERMS, "singular": str(e)})
+            continue
+        P, zero = s.selection("paper"), np.zeros(m.n)
+        base = ref.reduced_inverse_dynamics(s.feet, P, q_r, zero, zero, quat)
+        M_ref = np.column_stack([ref.reduced_inverse_dynamics(s.feet, P, q_r, zero, e, quat) - base for e in np.eye(m.n)])
+        scale = float(np.abs(M_ref).max())
+        rows.append({"stance": s.name, "kind": s.kind, "n": m.n, "cond": cond,
+                     "asymmetry": float(np.abs(M - M.T).max() / np.abs(M).max()),
+                     "err_vs_pinocchio": float(np.abs(M - M_ref).max() / scale), "tol": REL_TOL_TERMS})
+    return rows
+
+def experiment(robot: Robot, out: Path) -> tuple[dict[str, dict[str, Any] | None], dict[str, str]]:
+    """Both gaits' validation (two cycles each, DOP853 sampled every EXPERIMENT_DT, with the
+    physics check): the JSON dicts and the BR HFE figures, written beside the report as
+    ``validate`` writes them."""
+    from quadruped_dyn.experiment.gait import GAITS
+    from quadruped_dyn.experiment.outputs import output_paths, plot_br_hfe, plot_physics_check, write_json
+    from quadruped_dyn.experiment.paper_experiment import report as validation_report
+    from quadruped_dyn.experiment.paper_experiment import run_experiment, static_stability
+    from quadruped_dyn.experiment.simulate import reduced_dynamics
+
+    validations: dict[str, dict[str, Any] | None] = {}
+    plots: dict[str, str] = {}
+    for name, gait in GAITS.items():
+        horizon = 2 * gait.period
+        exp = run_experiment(robot, gait, reduced_dynamics(robot, "c"), horizon, EXPERIMENT_DT)
+        data = validation_report(exp, "dop853", EXPERIMENT_DT, "c", static_stability(exp.plan, exp.ik, horizon))
+        paths = output_paths(out, robot.name, name)
+        write_json(paths["json"], data)
+        plot_br_hfe(paths["plot"], exp)
+        plot_physics_check(paths["physics_plot"], exp)
+        validations[name] = json.loads(paths["json"].read_text())
+        plots[name] = (f"<figure>{png_image(paths['plot'].read_bytes(), f'BR HFE, {name}')}<figcaption>BR HFE: acceleration, "
+                       f"velocity, displacement, forward dynamics against IK (the paper's Figs. 7, 6, 5)</figcaption></figure>"
+                       f"<figure>{png_image(paths['physics_plot'].read_bytes(), f'physics check, {name}')}<figcaption>"
+                       "largest joint-angle difference: reduced model vs rigid contacts</figcaption></figure>")
+    return validations, plots
+
+def generated_c(robot: Robot, out: Path) -> dict[str, Any]:
+    """Generate the C beside the report, compile (cached) and compare each function with
+    Pinocchio at the fixed reference state."""
+    from quadruped_dyn.checks.c_reference import generate_checked, pinocchio_outputs, reference_state
+    from quadruped_dyn.codegen.emit import PREFIX, codegen_functions, work_sizes
+    from quadruped_dyn.codegen.library import CompiledFunction, compiled_library
+    from quadruped_dyn.dynamics.formulas import shapes
+    from quadruped_dyn.references.pinocchio import PinocchioReference
+    from quadruped_dyn.tolerances import REL_TOL_TERMS
+
+    directory = out / "c"
+    paths = generate_checked(robot, directory)
+    work = work_sizes(paths[1].read_text())
+
+    functions: list[dict[str, Any]] = [
+        {"name": f.name(), "inputs": shapes(f), "outputs": shapes(f, outputs=True), "instructions": f.n_instructions(),
+         "iw": work[f.name()][0], "w": work[f.name()][1]} for f in codegen_functions(robot)]
+    start = time.perf_counter()
+    library = compiled_library(robot)
+    compile_s = time.perf_counter() - start
+    ref, s = PinocchioReference(robot), reference_state(robot)
+    inputs = {"q": s.q, "v": s.v, "a": s.a, "f": s.f.ravel()}
+    checks = []
+    for f in functions:
+        name = f["name"][len(PREFIX):]
+        fn = CompiledFunction(library, name)
+        ours = fn(*[inputs[n] for n in fn.names_in])
+        expected = pinocchio_outputs(robot, ref, name, s)
+        ours_all = np.concatenate([np.asarray(o, dtype=float).ravel() for o in ours])
+        expected_all = np.concatenate([np.asarray(e, dtype=float).ravel() for e in expected])
+        # relative to the largest reference output: a residual that should be ~0 has no scale of its own
+        err = float(np.abs(ours_all - expected_all).max() / (np.abs(expected_all).max() or 1.0))
+        checks.append({"name": f["name"], "max_rel_err": err, "tol": REL_TOL_TERMS})
+    return {"directory": str(directory), "files": [{"name": p.name, "bytes": p.stat().st_size} for p in paths],
+            "functions": functions, "checks": checks, "compile_s": compile_s,
+            "library_bytes": library.path.stat().st_size}
+
+def symbolic_data(robot: Robot) -> tuple[list[dict[str, Any]] | None, str, list[dict[str, Any]], list[tuple[str, np.ndarray]]]:
+    """Formulas of the DH robot checked against Pinocchio at random joint angles; sizes and
+    sparsity patterns of every term."""
+    from quadruped_dyn.dynamics.formulas import DISPLAY_DIGITS, paper_formulas, term_sizes
+    from quadruped_dyn.model.state import full_q
+    from quadruped_dyn.references.pinocchio import PinocchioReference
+    from quadruped_dyn.tolerances import REL_TOL_TERMS
+
+    formulas = None
+    note = "Formulas are typeset for the robot built from the paper's DH table (`paper`); this robot has no DH description."
+    if robot.name == "paper":  # the paper's URDF by any path or copy (robot.load_robot's identity)
+        ref = PinocchioReference(robot)
+        rng = np.random.default_rng(0)
+        states = [rng.uniform(robot.lower, robot.upper) for _ in range(20)]
+        references = [
+            lambda q: ref.foot_positions(q)[0],
+            lambda q: ref.foot_jacobians(q)[0],
+            lambda q: ref.gravity(q)[6:9],
+        ]
+        formulas = []
+        for formula, reference in zip(paper_formulas(robot), references):
+            err = 0.0
+            for qj in states:
+                expected = np.asarray(reference(full_q(np.eye(3), np.zeros(3), qj)))
+                got = formula.evaluate(qj[:3]).reshape(expected.shape)
+                err = max(err, float(np.abs(got - expected).max() / (np.abs(expected).max() or 1.0)))
+            formulas.append({"title": formula.title, "latex": formula.latex, "mathml": formula.mathml,
+                             "max_err_vs_pinocchio": err, "tol": REL_TOL_TERMS})
+        note = (f"Front-left leg of the DH robot, from the CasADi expressions (SX → SymPy, simplified). Trunk frame "
+                f"(x forward, y left, z up), trunk level (R = I); θ1, θ2, θ3 = HAA, HFE, KFE (rad). Coefficients shown "
+                f"to {DISPLAY_DIGITS} digits; checked with full precision on 20 random joint states.")
+    sizes = term_sizes(robot)
+    rows = [{"name": t.name, "instructions": t.instructions, "inputs": t.inputs, "outputs": t.outputs,
+             "nonzeros": int(t.pattern.sum())} for t in sizes]
+    return formulas, note, rows, [(t.name, t.pattern) for t in sizes]
+
+def versions() -> dict[str, Any]:
+    libraries = {}
+    for name in LIBRARIES:
+        try:
+            libraries[name] = importlib.metadata.version(name)
+        except importlib.metadata.PackageNotFoundError:
+            libraries[name] = "not installed"
+    cpu = next((line.split(":", 1)[1].strip() for line in _read("/proc/cpuinfo").splitlines()
+                if line.startswith("model name")), platform.processor() or "unknown")
+    machine = {"python": sys.version.split()[0], "platform": platform.platform(), "cpu": cpu,
+               "cores": os.cpu_count(), "compiler": _first_line(["gcc", "--version"]),
+               "date (UTC)": datetime.now(timezone.utc).strftime("%Y-%m-%d %H:%M")}
+    return {"machine": machine, "libraries": libraries}
+
+def _read(path: str) -> str:
+    try:
+        return Path(path).read_text()
+    except OSError:
+        return ""
+
+def _first_line(cmd: list[str]) -> str:
+    try:
+        return subprocess.run(cmd, capture_output=True, text=True, check=False).stdout.splitlines()[0]
+    except (OSError, IndexError):
+        return "not found"
+
+def notebooks(robot: Robot) -> tuple[list[dict[str, Any]] | None, str]:
+    from quadruped_dyn.report.notebooks import error_count, execute, notebook_paths, render
+
+    if robot.name != "paper":
+        return None, "The notebooks are written for the paper's robot: see the report of `paper`."
+    paths = notebook_paths()
+    if not paths:
+        return None, "The notebooks are part of a source checkout, not of an installed package."
+    rendered = []
+    for path in paths:
+        nb, seconds = execute(path)
+        rendered.append({"name": path.name, "seconds": seconds, "errors": error_count(nb), "html": render(nb)})
+    return rendered, ""

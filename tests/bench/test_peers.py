@@ -1,0 +1,32 @@
+"""Peers in the benchmark (adam's generated CasADi functions): checked against Pinocchio, then timed."""
+
+from __future__ import annotations
+
+import importlib.util
+
+import pytest
+from click.testing import CliRunner
+
+from quadruped_dyn.cli import main
+
+
+def test_unknown_peer_is_bad_input():
+    result = CliRunner().invoke(main, ["bench", "--peers", "adam,pinocchio_cg"])
+    assert result.exit_code == 2 and "Traceback" not in result.output
+    assert "unknown peer(s) pinocchio_cg; expected a comma-separated list of: adam" in result.stderr
+
+
+@pytest.mark.slow
+@pytest.mark.skipif(importlib.util.find_spec("adam") is None, reason="adam-robotics not installed")
+@pytest.mark.parametrize("name", ["solo12", "go2"])
+def test_adam_checked_then_timed(name):
+    """adam's M and C + G equal Pinocchio's (else run_peers raises before timing); times positive."""
+    from quadruped_dyn.bench.peers import ADAM_PAIRS, run_peers
+    from quadruped_dyn.model.robot import load_robot
+    from quadruped_dyn.tolerances import REL_TOL_TERMS
+
+    entries = run_peers(load_robot(name), calls=200, reps=3, rounds=1)
+    assert [(e.ours, e.peer) for e in entries] == list(ADAM_PAIRS.items())
+    for e in entries:
+        assert e.checked_rel_error <= REL_TOL_TERMS
+        assert e.ours_ns > 0 and e.peer_ns > 0 and e.ours_operations > 0 and e.peer_operations > 0

@@ -1,0 +1,158 @@
+"""Generated C: reproducible, standalone and warning-free, and equal to the CasADi graph and
+to Pinocchio when compiled and loaded back (double), and to the double build (float)."""
+
+from __future__ import annotations
+
+import ctypes
+import re
+import shutil
+import subprocess
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from quadruped_dyn.checks.c_reference import differing_files, pinocchio_outputs, reference_state
+from quadruped_dyn.codegen.emit import (
+    CODEGEN_FUNCTIONS,
+    PREFIX,
+    REDUCED_NAMES,
+    REDUCED_STANCE_SETS,
+    codegen_functions,
+    reduced_symbol,
+)
+from quadruped_dyn.codegen.library import CompiledFunction, compiled_library, load_external
+from quadruped_dyn.math.compare import max_abs_error, scale_of
+from quadruped_dyn.model.robot import load_robot
+from quadruped_dyn.model.state import random_state
+from quadruped_dyn.tolerances import FLOAT_REL_TOL, REL_TOL_TERMS
+
+CASADI_GEN = Path(__file__).resolve().parents[2] / "casadi_gen"
+
+#: The compiled code and the in-memory CasADi graph perform the same operations; only the
+#: compiler's reassociation (-O3 without -ffast-math keeps IEEE order) could differ.
+REL_TOL_GRAPH = 1e-13
+
+
+def _function_scale_error(ours: list[np.ndarray], expected: list[np.ndarray]) -> float:
+    """Max error over a function's outputs, relative to its largest expected value."""
+    err = max(max_abs_error(np.ravel(o), np.ravel(e)) for o, e in zip(ours, expected))  # inf for NaN/inf
+    return err / scale_of(np.concatenate([np.ravel(e) for e in expected]))
+
+
+def test_committed_code_is_reproducible():
+    stale = differing_files(load_robot("paper"), CASADI_GEN)
+    assert not stale, f"casadi_gen differs from a fresh generation in {stale}: run `quadruped-dyn codegen paper --out casadi_gen`"
+
+
+def test_c_program_builds_and_passes(tmp_path):
+    """`make check` in a copy of casadi_gen: -std=c99 -pedantic -Wall -Wextra -Werror, double and float."""
+    work = tmp_path / "casadi_gen"
+    shutil.copytree(CASADI_GEN, work, ignore=shutil.ignore_patterns("build"))
+    proc = subprocess.run(["make", "-C", str(work), "-j2", "check"], capture_output=True, text=True, check=False)
+    assert proc.returncode == 0, proc.stdout[-3000:] + proc.stderr[-3000:]
+    n = len(CODEGEN_FUNCTIONS) + len(REDUCED_NAMES) * len(REDUCED_STANCE_SETS)
+    assert f"\n{n} passed, 0 failed\n" in proc.stdout, "double: every function checked and passing"
+    skipped = re.findall(r"\n\d+ passed, 0 failed, (\d+) skipped\n", proc.stdout)
+    assert proc.stdout.count(" 0 failed") == 2 and all(int(k) <= 2 for k in skipped), proc.stdout[-500:]
+    assert not [p.name for p in CASADI_GEN.glob("qd_paper*.c") if "malloc" in p.read_text()]
+
+
+def test_header_documents_every_function():
+    header = (CASADI_GEN / "qd_paper.h").read_text()
+    doc = header[: header.index("*/")]
+    for name in [*CODEGEN_FUNCTIONS, *(reduced_symbol(k, st) for k in REDUCED_NAMES for st in REDUCED_STANCE_SETS)]:
+        assert f" *   {PREFIX}{name}(" in doc
+    for signal in ("quaternion (x, y, z, w)", "SPATIAL acceleration", "trunk frame [N]", "[N m]", "trunk roll phi",
+                   "QD_NONFINITE", "QD_SINGULAR", "foot-to-foot line"):
+        assert signal in doc
+
+
+def _evaluate(f, inputs: dict[str, np.ndarray]) -> list[np.ndarray]:
+    out = f(*[inputs[f.name_in(i)] for i in range(f.n_in())])
+    return [np.asarray(x.full()) for x in (out if isinstance(out, tuple) else [out])]
+
+
+def test_loaded_back_equals_graph_and_pinocchio(robot, ref, library):
+    """Against the graph at a random state; against Pinocchio near standing, where every GRF
+    system is well conditioned (random states can make 3-foot systems nearly singular)."""
+    graphs = {f.name(): f for f in codegen_functions(robot)}
+    random = random_state(robot.lower, robot.upper, np.random.default_rng(11))
+    near_standing = reference_state(robot)
+    for name in CODEGEN_FUNCTIONS:
+        ext = load_external(library, name)
+        for s in (random, near_standing):
+            inputs = {"q": s.q, "v": s.v, "a": s.a, "f": s.f.ravel()}
+            compiled = _evaluate(ext, inputs)
+            assert _function_scale_error(compiled, _evaluate(graphs[PREFIX + name], inputs)) <= REL_TOL_GRAPH, name
+        expected = pinocchio_outputs(robot, ref, name, near_standing)
+        err = _function_scale_error([c.ravel(order="F") for c in compiled], [np.ravel(e, order="F") for e in expected])
+        assert err <= REL_TOL_TERMS, f"{name}: compiled vs Pinocchio {err:.1e}"
+        fast = CompiledFunction(library, name)(*[inputs[n] for n in ext.name_in()])
+        assert _function_scale_error(fast, compiled) == 0.0, f"{name}: ctypes call differs from casadi.external"
+
+
+def test_cache_key_tracks_the_source(paper):
+    a, b = compiled_library(paper), compiled_library(paper)
+    assert a.key == b.key and a.path == b.path, "same source, same key"
+    assert compiled_library(paper, "float").key != a.key
+    assert compiled_library(load_robot("solo12")).key != a.key
+
+
+def _call_ctypes(lib: ctypes.CDLL, name: str, real: type, args: list[np.ndarray], sizes: list[int]) -> list[np.ndarray]:
+    fn = getattr(lib, PREFIX + name)
+    arg_arrays = [np.ascontiguousarray(x, dtype=real) for x in args]
+    res_arrays = [np.zeros(n, dtype=real) for n in sizes]
+    ptr = ctypes.POINTER(ctypes.c_float if real is np.float32 else ctypes.c_double)
+    arg = (ptr * len(args))(*[a.ctypes.data_as(ptr) for a in arg_arrays])
+    res = (ptr * len(sizes))(*[r.ctypes.data_as(ptr) for r in res_arrays])
+    work = np.zeros(4096, dtype=real)
+    assert fn(arg, res, None, work.ctypes.data_as(ptr), 0) == 0
+    return res_arrays
+
+
+def test_float_build_matches_double_build(paper):
+    double = ctypes.CDLL(str(compiled_library(paper, "double").path))
+    single = ctypes.CDLL(str(compiled_library(paper, "float").path))
+    graphs = {f.name(): f for f in codegen_functions(paper)}
+    s = random_state(paper.lower, paper.upper, np.random.default_rng(3))
+    inputs = {"q": s.q, "v": s.v, "a": s.a, "f": s.f.ravel()}
+    for name in CODEGEN_FUNCTIONS:
+        f = graphs[PREFIX + name]
+        args = [inputs[f.name_in(i)] for i in range(f.n_in())]
+        sizes = [f.nnz_out(i) for i in range(f.n_out())]
+        d = _call_ctypes(double, name, np.float64, args, sizes)
+        x = _call_ctypes(single, name, np.float32, args, sizes)
+        assert _function_scale_error(x, d) <= FLOAT_REL_TOL, name
+
+
+@pytest.mark.slow
+def test_bench_reports_ratios_against_pinocchio(paper):
+    """The benchmark harnesses build and run (no timing asserted: speed is a benchmark's job)."""
+    from quadruped_dyn.bench.timing import PAIRS, run_bench
+
+    report = run_bench(paper, calls=200, reps=3)
+    entries = {e.name: e for e in report.entries}
+    for name, (algo, _) in PAIRS.items():
+        e = entries[name]
+        assert e.pinocchio == algo and e.pinocchio_ns > 0 and e.ratio == pytest.approx(e.generated_ns / e.pinocchio_ns)
+    assert report.code_bytes > 0 and report.library_bytes > 0
+
+
+def test_missing_compiler_is_a_clear_error(paper):
+    from quadruped_dyn.errors import InputError
+
+    with pytest.raises(InputError, match="'no-such-cc' not found"):
+        compiled_library(paper, cc="no-such-cc")
+
+
+def test_codegen_cli_bad_input(tmp_path):
+    from click.testing import CliRunner
+
+    from quadruped_dyn.cli import main
+
+    (tmp_path / "file").write_text("x")
+    result = CliRunner().invoke(main, ["codegen", "paper", "--out", str(tmp_path / "file")])
+    assert result.exit_code == 2 and "Traceback" not in result.output
+    result = CliRunner().invoke(main, ["codegen", "paper", "--out", str(tmp_path), "--precision", "half"])
+    assert result.exit_code == 2

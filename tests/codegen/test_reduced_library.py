@@ -1,0 +1,131 @@
+"""The reduced model's generated C (SPEC sections 5, 7), compiled and loaded back: equal to its
+CasADi graph and to the Pinocchio-built reference on every built-in robot, every stance set of
+two, three or four feet; fd_r solves M_r qdd_r = tau_ext - C_r - G_r; singular configurations
+are reported by the return code; the float build agrees with the double one."""
+
+from __future__ import annotations
+
+import ctypes
+
+import numpy as np
+import pinocchio as pin
+import pytest
+
+from quadruped_dyn.checks.c_reference import pinocchio_outputs, reduced_inputs, reference_state, tolerance_scale
+from quadruped_dyn.codegen.emit import REDUCED_NAMES, REDUCED_STANCE_SETS, reduced_functions, reduced_symbol
+from quadruped_dyn.codegen.library import CompiledFunction, compiled_library
+from quadruped_dyn.codegen.reduced_library import CompiledReducedDynamics
+from quadruped_dyn.errors import InputError
+from quadruped_dyn.model.stance import stance_set
+from quadruped_dyn.tolerances import FLOAT_REL_TOL, REL_TOL_TERMS
+from tests.codegen.test_emit import REL_TOL_GRAPH
+from tests.conftest import assert_close
+
+#: fd_r's backward error: the LU solve with partial pivoting leaves a residual of a few
+#: n * eps relative to |M_r| |qdd_r| + |rhs| (n = 13): far below 1e-12.
+REL_TOL_RESIDUAL = 1e-12
+
+#: As check_qd.c's QD_MAX_TOL: a float case whose conditioning-scaled tolerance exceeds this
+#: could only fail on NaN, so it is not checked in float (the double build checks it).
+FLOAT_MAX_TOL = 1e-2
+
+
+def _inputs(s, n):
+    return {k: (v if k == "quat" else v[:n]) for k, v in reduced_inputs(s).items()}
+
+
+def test_compiled_reduced_equal_graph_and_pinocchio(robot, ref, library):
+    s = reference_state(robot)
+    for stance in REDUCED_STANCE_SETS:
+        graphs = {f.name(): f for f in reduced_functions(robot, stance)}
+        n = 13 if len(stance.feet) == 2 else 12
+        x = _inputs(s, n)
+        out = {}
+        for kind in REDUCED_NAMES:
+            name = reduced_symbol(kind, stance)
+            f = CompiledFunction(library, name)
+            (out[kind],) = f(*[x[k] for k in f.names_in])
+            scale = tolerance_scale(ref, name, s)
+            expected = pinocchio_outputs(robot, ref, name, s)[0]
+            assert_close(out[kind], expected, rel=REL_TOL_TERMS * scale, what=f"{name} vs Pinocchio")
+            if kind != "fd_r":  # fd_r's graph is a signature; its body is the C solve
+                graph = np.array(graphs["qd_" + name](*[x[k] for k in f.names_in]))
+                assert_close(out[kind], graph.reshape(out[kind].shape), rel=REL_TOL_GRAPH, what=f"{name} vs graph")
+        rhs = x["tau_ext"] - out["CG_r"]
+        residual = out["M_r"] @ out["fd_r"] - rhs
+        bound = np.abs(out["M_r"]) @ np.abs(out["fd_r"]) + np.abs(rhs)
+        assert np.all(np.abs(residual) <= REL_TOL_RESIDUAL * bound), f"fd_r {stance.name}: backward error"
+        assert_close(out["M_r"] @ x["qdd_r"] + out["CG_r"], out["id_r"], what=f"id_r = M_r qdd + CG_r, {stance.name}")
+
+
+def _stance_args(robot, stance_name):
+    stance = stance_set(stance_name)
+    n = 13 if len(stance.feet) == 2 else 12
+    x = _inputs(reference_state(robot), n)
+    return stance, x
+
+
+def test_singular_configurations_are_reported(paper):
+    """The C return codes, through the Python layer: QD_SINGULAR for two feet with the trunk
+    pitched to within 1e-13 rad of 90 deg (the roll row has tan(pitch): cond(M_r) ~ 1e14 and
+    beyond), QD_NONFINITE for a zero quaternion and a NaN input. A stretched stance leg is NOT
+    singular: the reduced model never inverts the leg's Jacobian (cond(M_r) 1e3 -> 3e4)."""
+    library = compiled_library(paper)
+    stance, x = _stance_args(paper, "FL+BR")
+    fd = CompiledFunction(library, reduced_symbol("fd_r", stance))
+    pitched = pin.Quaternion(pin.rpy.rpyToMatrix(0.0, np.pi / 2 - 1e-13, 0.0)).coeffs()
+    with pytest.raises(InputError, match="M_r is singular"):
+        fd(x["q_r"], x["qd_r"], x["tau_ext"], pitched)
+    for name in ("M_r", "fd_r"):
+        f = CompiledFunction(library, reduced_symbol(name, stance))
+        args = {"q_r": x["q_r"], "qd_r": x["qd_r"], "tau_ext": x["tau_ext"], "quat": np.zeros(4)}
+        with pytest.raises(InputError, match="not finite"):
+            f(*[args[k] for k in f.names_in])
+    f = CompiledFunction(library, reduced_symbol("id_r", stance))
+    with pytest.raises(InputError, match="not finite"):
+        f(np.full(13, np.nan), x["qd_r"], x["qdd_r"], x["quat"])
+    stance, x = _stance_args(paper, "FR+BL+BR")
+    q = x["q_r"].copy()
+    q[3 * 3 + 2] = 0.0  # BR knee straight
+    qdd = CompiledReducedDynamics(paper).fd_r(stance, q, x["qd_r"], x["tau_ext"], x["quat"])
+    assert np.all(np.isfinite(qdd))
+
+
+def test_python_layer_checks_its_inputs(paper):
+    d = CompiledReducedDynamics(paper)
+    stance, x = _stance_args(paper, "FL+BR")
+    with pytest.raises(InputError, match="quat"):
+        d.fd_r(stance, x["q_r"], x["qd_r"], x["tau_ext"], np.zeros(4))
+    with pytest.raises(InputError, match="q_r"):
+        d.fd_r(stance, x["q_r"][:12], x["qd_r"], x["tau_ext"], x["quat"])
+    with pytest.raises(InputError, match="tau_ext"):
+        d.fd_r(stance, x["q_r"], x["qd_r"], np.full(13, np.inf), x["quat"])
+    for bad in (stance_set("FL"), "FL", "FL+FL", "FL+XX", "none"):
+        with pytest.raises(InputError, match="stance"):
+            d.fd_r(bad, x["q_r"][:12], x["qd_r"][:12], x["tau_ext"][:12], x["quat"])
+
+
+def test_float_build_matches_pinocchio(paper):
+    """Every reduced function of the float build against Pinocchio's values, within the float
+    tolerance scaled by the conditioning (tolerance_scale)."""
+    from quadruped_dyn.references.pinocchio import PinocchioReference
+
+    lib = ctypes.CDLL(str(compiled_library(paper, "float").path))
+    ref = PinocchioReference(paper)
+    s = reference_state(paper)
+    for stance in REDUCED_STANCE_SETS:
+        n = 13 if len(stance.feet) == 2 else 12
+        x = _inputs(s, n)
+        for f in reduced_functions(paper, stance):
+            name = f.name()[3:]
+            args = [np.ascontiguousarray(x[f.name_in(i)], dtype=np.float32) for i in range(f.n_in())]
+            out = np.zeros(f.nnz_out(0), dtype=np.float32)
+            ptr = ctypes.POINTER(ctypes.c_float)
+            arg = (ptr * len(args))(*[a.ctypes.data_as(ptr) for a in args])
+            res = (ptr * 1)(out.ctypes.data_as(ptr))
+            assert getattr(lib, f.name())(arg, res, None, None, 0) == 0, name
+            tol = FLOAT_REL_TOL * tolerance_scale(ref, name, s)
+            if tol > FLOAT_MAX_TOL:  # fd_r of BL+BR: cond(M_r) ~5e5 leaves float no digits to check
+                continue
+            expected = np.ravel(pinocchio_outputs(paper, ref, name, s)[0], order="F")
+            assert_close(out.astype(float), expected, rel=tol, what=name)

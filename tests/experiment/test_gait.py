@@ -1,0 +1,135 @@
+"""Gait plans (trot, statically stable walk) and the IK reference."""
+
+from __future__ import annotations
+
+import shutil
+
+import numpy as np
+import pytest
+
+from quadruped_dyn.dynamics.kinematics import robot_kinematics
+from quadruped_dyn.experiment.gait import TROT, WALK, deepest_point, gait_plan, support_margin
+from quadruped_dyn.experiment.paper_experiment import static_stability
+from quadruped_dyn.experiment.plan_ik import reference
+from quadruped_dyn.experiment.simulate import CasadiReducedDynamics, IkTorques
+from quadruped_dyn.model.paper_robot import dh_form
+from quadruped_dyn.model.robot import ROBOT_NAMES, load_robot
+from tests.conftest import assert_close
+
+#: Central differences of the IK trajectory with step H: O(H^2) truncation on signals whose
+#: third derivative is ~1e3 rad/s^3, plus round-off eps / H.
+H = 1e-5
+REL_TOL_DIFF = 1e-5
+
+#: Position, velocity, acceleration jumps allowed across a switch sampled 2 EPS apart: the
+#: next derivative (velocity <= 1 m/s, acceleration <= 1e2 m/s^2, jerk <= 1e4 m/s^3) times 2 EPS.
+EPS = 1e-9
+C2_TOL = (2e-9, 2e-7, 2e-5)
+
+#: The walk's static-stability targets (SPEC section 6): the CoM at least this far inside the
+#: support triangle (m) at all times, and no stance foot pulling on the ground.
+MIN_COM_MARGIN_M = 0.02
+#: Static-stability samples in the tests, s (the CLI uses 5 ms; 20 ms keeps the sweep short).
+STABILITY_DT_TEST = 0.02
+
+
+@pytest.mark.parametrize("gait", [TROT, WALK], ids=["trot", "walk"])
+@pytest.mark.parametrize("k", [1, 2, 3, 4, 5])
+def test_feet_and_trunk_are_c2_at_lift_off_and_touch_down(paper, gait, k):
+    plan = gait_plan(paper, gait)
+    t = k * gait.phase_duration
+    for i in range(4):
+        before, after = plan.foot(i, t - EPS), plan.foot(i, t + EPS)
+        for order, (a, b, tol) in enumerate(zip(before, after, C2_TOL)):
+            assert np.abs(a - b).max() <= tol, f"foot {i}, derivative {order} jumps at t = {t}"
+    for order, (a, b, tol) in enumerate(zip(plan.trunk(t - EPS), plan.trunk(t + EPS), C2_TOL)):
+        assert np.abs(a - b).max() <= tol, f"trunk derivative {order} jumps at t = {t}"
+
+
+def test_trunk_rate_and_acceleration_are_derivatives_of_its_position(paper):
+    plan = gait_plan(paper, WALK)
+    for t in (0.13, 0.52, 1.01):
+        p, pd, pdd = plan.trunk(t)
+        (pp, pdp, _), (pm, pdm, _) = plan.trunk(t + H), plan.trunk(t - H)
+        assert_close(pd, (pp - pm) / (2 * H), rel=REL_TOL_DIFF, what="trunk velocity")
+        assert_close(pdd, (pdp - pdm) / (2 * H), rel=REL_TOL_DIFF, what="trunk acceleration")
+
+
+def test_walk_swings_one_leg_at_a_time_and_advances_each_foot_one_stride(paper):
+    plan = gait_plan(paper, WALK)
+    for k, stance in enumerate(WALK.phases):
+        assert len(stance) == 3
+        t = (k + 0.5) * WALK.phase_duration
+        moving = [i for i in range(4) if np.abs(plan.foot(i, t)[1]).max() > 0]
+        assert moving == [i for i in range(4) if i not in stance]
+    for i in range(4):  # a full cycle later each foot stands one stride further on
+        a, b = plan.foot(i, 0.01)[0], plan.foot(i, 0.01 + WALK.period)[0]
+        assert_close(b - a, [WALK.speed * WALK.period, 0, 0])
+
+
+def test_consecutive_swing_legs_share_a_side_or_an_end():
+    """Around the foot rectangle: the support triangles before and after a switch overlap in
+    a triangle, not only along a diagonal (where the CoM would have no margin)."""
+    from quadruped_dyn.model.leg import LEG_LABELS
+
+    swings = [WALK.swing_phase(i) for i in range(4)]
+    order = [LEG_LABELS[swings.index(k)] for k in range(4)]
+    for a, b in zip(order, order[1:] + order[:1]):
+        assert a[0] == b[0] or a[1] == b[1], f"{a} then {b} is a diagonal switch"
+
+
+def test_support_margin_and_deepest_point():
+    square = np.array([[0.0, 0.0], [1.0, 0.0], [1.0, 1.0], [0.0, 1.0]])
+    assert support_margin(np.array([0.5, 0.5]), square) == pytest.approx(0.5)
+    assert support_margin(np.array([1.5, 0.5]), square) == pytest.approx(-0.5)
+    tri_a, tri_b = square[[0, 1, 2]], square[[0, 1, 3]]  # overlap: triangle (0,0), (1,0), (0.5,0.5)
+    point, depth = deepest_point(tri_a, tri_b)
+    r = 0.5 / (1 + np.sqrt(2))  # inradius of that right isosceles triangle (legs 1/sqrt(2))
+    assert depth == pytest.approx(r)
+    assert_close(point, [0.5, r])
+
+
+#: Every built-in robot and b1 by path; four of them only in the slow suite (~20 s each).
+STABILITY_ROBOTS = [pytest.param(n, marks=pytest.mark.slow) if n in ("go2", "go1", "a1", "hyq") else n
+                    for n in (*ROBOT_NAMES, "b1")]
+
+
+@pytest.mark.parametrize("name", STABILITY_ROBOTS)
+def test_walk_is_statically_stable(name, erd):
+    """Along a full cycle: the CoM (Pinocchio's, of the actual IK configuration) stays at least
+    MIN_COM_MARGIN_M inside the support triangle and the paper's GRF model gives f_z >= 0."""
+    robot = load_robot(str(erd / "b1_description/urdf/b1.urdf") if name == "b1" else name)
+    plan = gait_plan(robot, WALK)
+    result = static_stability(plan, IkTorques(plan, CasadiReducedDynamics(robot)), WALK.period, STABILITY_DT_TEST)
+    assert result["min_com_margin_m"] >= MIN_COM_MARGIN_M, result
+    assert result["min_fz_N"] >= 0.0, result
+
+
+@pytest.mark.parametrize("name", ["paper", "solo12", "go1"])  # analytic IK, numeric IK
+@pytest.mark.parametrize("gait", [TROT, WALK], ids=["trot", "walk"])
+def test_ik_reference_is_consistent(name, gait):
+    """FK(q(t)) puts each foot where the plan says relative to the trunk; qd, qdd are the
+    derivatives of q."""
+    robot = load_robot(name)
+    plan = gait_plan(robot, gait)
+    kin = robot_kinematics(robot)
+    t = 0.37
+    r = reference(plan, t)
+    for i in range(4):
+        foot = np.asarray(kin[i].foot_position(r.q_r[3 * i : 3 * i + 3])).ravel()
+        assert_close(foot, plan.foot(i, t)[0] - plan.trunk(t)[0])
+    rp, rm = reference(plan, t + H, r.q_r[:12]), reference(plan, t - H, r.q_r[:12])
+    assert_close(r.qd_r, (rp.q_r - rm.q_r) / (2 * H), rel=REL_TOL_DIFF, what="qd = dq/dt")
+    assert_close(r.qdd_r, (rp.qd_r - rm.qd_r) / (2 * H), rel=REL_TOL_DIFF, what="qdd = dqd/dt")
+
+
+def test_closed_form_ik_is_chosen_by_the_leg_not_the_file(paper, tmp_path):
+    """A copy of the paper's URDF is the same robot: its legs have the DH form, so it gets the
+    closed-form IK and the same reference; a URDF robot of another form does not."""
+    copy = tmp_path / "copy.urdf"
+    shutil.copy(paper.urdf, copy)
+    robot = load_robot(str(copy))
+    assert all(dh_form(leg) is not None for leg in robot.legs)
+    assert not any(dh_form(leg) is not None for leg in load_robot("solo12").legs)
+    a, b = reference(gait_plan(paper, WALK), 0.41), reference(gait_plan(robot, WALK), 0.41)
+    np.testing.assert_array_equal(a.q_r, b.q_r)

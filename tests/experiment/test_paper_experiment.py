@@ -1,0 +1,83 @@
+"""The validation report: its measures on known signals, and the ``validate`` command's
+output files and bad-input handling."""
+
+from __future__ import annotations
+
+import csv
+import json
+
+import numpy as np
+import pytest
+from click.testing import CliRunner
+
+from quadruped_dyn.cli import main
+from quadruped_dyn.experiment.paper_experiment import departure, growth_rate, percent_errors
+
+
+def test_growth_rate_of_an_exponential():
+    t = np.linspace(0, 2, 201)
+    assert growth_rate(t, 1e-16 * np.exp(7.0 * t)) == pytest.approx(7.0, rel=1e-9)
+    assert growth_rate(t, np.zeros_like(t)) is None
+
+
+def test_percent_errors_and_departure():
+    ref = np.column_stack([np.sin(np.linspace(0, 3, 50)), np.zeros(50)])
+    sim = ref + np.column_stack([np.full(50, 1e-3), np.full(50, 1e-3)])
+    err = percent_errors(sim, ref)
+    assert err[0] == pytest.approx(1e-3 / np.abs(ref[:, 0]).max() * 100)
+    assert err[1] is None, "a reference that is identically zero has no percentage"
+    sim_nan = sim.copy()
+    sim_nan[10, 0] = np.nan
+    assert not percent_errors(sim_nan, ref)[0] < 1.0, "a NaN never passes"
+    t = np.linspace(0, 1, 50)
+    d, at = departure(t, np.tile(t[:, None], 12), np.zeros((50, 12)), scale=10.0)
+    assert at == pytest.approx(t[np.argmax(d > 0.1)])
+
+
+@pytest.mark.parametrize(
+    "args, message",
+    [
+        (["--horizon", "nan"], "--horizon nan"),
+        (["--horizon", "inf"], "--horizon inf"),
+        (["--horizon", "-1"], "--horizon -1"),
+        (["--dt", "0"], "--dt 0"),
+        (["--dt", "nan"], "--dt nan"),
+        (["--horizon", "0.001", "--dt", "0.01"], "shorter than one step"),
+        (["--integrator", "rk4", "--dt", "0.007"], "does not divide"),
+    ],
+)
+def test_bad_input_is_one_line_and_exit_2(args, message, tmp_path):
+    result = CliRunner().invoke(main, ["validate", "paper", "--out", str(tmp_path), *args])
+    assert result.exit_code == 2, result.output
+    lines = result.output.strip().splitlines()
+    assert len(lines) == 1 and message in lines[0] and "Traceback" not in result.output
+
+
+def test_unwritable_out_is_bad_input_before_simulating(tmp_path):
+    blocker = tmp_path / "file"
+    blocker.write_text("")
+    result = CliRunner().invoke(main, ["validate", "paper", "--out", str(blocker / "sub")])
+    assert result.exit_code == 2
+    assert len(result.output.strip().splitlines()) == 1 and "--out" in result.output
+    assert "simulating" not in result.output
+
+
+def test_validate_writes_json_csv_and_plots(tmp_path):
+    """A short walk, CasADi backend, no physics check: the issue's JSON keys, a CSV with a
+    column per joint and signal, the BR HFE plot, joint names above the table's columns."""
+    result = CliRunner().invoke(main, ["validate", "paper", "--gait", "walk", "--horizon", "0.04", "--dt", "0.01",
+                                       "--backend", "casadi", "--no-physics", "--out", str(tmp_path)])
+    assert result.exit_code == 0, result.output
+    data = json.loads((tmp_path / "paper_walk_validation.json").read_text())
+    for key in ("max_pct_err", "max_pct_err_overall", "horizon_s", "integrator", "instability"):
+        assert key in data
+    assert set(data["instability"]) >= {"growth_rate_per_s", "error_budget"}
+    assert set(data["max_pct_err"]["BR_HFE"]) == {"q", "qd", "qdd"}
+    assert all(v is not None and v < 1e-6 for v in data["max_pct_err_overall"].values())
+    with (tmp_path / "paper_walk_timeseries.csv").open() as f:
+        rows = list(csv.reader(f))
+    assert len(rows) == 6 and len(rows[0]) == 1 + 12 * 3 * 2
+    assert (tmp_path / "paper_walk_BR_HFE.png").stat().st_size > 0
+    lines = result.output.splitlines()
+    header = next(i for i, line in enumerate(lines) if "FL_HAA" in line)
+    assert lines[header + 1].split()[0] == "q"

@@ -1,0 +1,200 @@
+"""URDF validation (SPEC section 8): variants of the paper's URDF, generated here, are rejected
+with one line naming the element and the value (exit 2), or load and give the right answers
+(continuous joints, an odd inertia on a fixed link, the same file by another path)."""
+
+from __future__ import annotations
+
+import re
+import shutil
+import xml.etree.ElementTree as ET
+from collections.abc import Callable
+from pathlib import Path
+
+import numpy as np
+import pytest
+from click.testing import CliRunner
+
+from quadruped_dyn.checks.terms import run_check
+from quadruped_dyn.cli import main
+from quadruped_dyn.dynamics.newton_euler import full_dynamics
+from quadruped_dyn.errors import UrdfWarning
+from quadruped_dyn.model import paper_robot
+from quadruped_dyn.model.robot import load_robot
+from quadruped_dyn.model.state import random_state
+from quadruped_dyn.references.pinocchio import PinocchioReference
+from tests.conftest import assert_close
+
+
+def _variant(tmp_path: Path, edit: Callable[[ET.Element], None], name: str = "variant.urdf") -> Path:
+    root = ET.fromstring(paper_robot.urdf_text())
+    edit(root)
+    path = tmp_path / name
+    path.write_text(ET.tostring(root, encoding="unicode"))
+    return path
+
+
+def _joint(root: ET.Element, name: str) -> ET.Element:
+    return next(j for j in root.iter("joint") if j.get("name") == name)
+
+
+def _inertial(root: ET.Element, link: str) -> ET.Element:
+    return next(x for x in root.iter("link") if x.get("name") == link).find("inertial")  # type: ignore[return-value]
+
+
+def _set(root: ET.Element, joint: str, child: str, attribute: str, value: str) -> None:
+    _joint(root, joint).find(child).set(attribute, value)  # type: ignore[union-attr]
+
+
+def _mass(value: str) -> Callable[[ET.Element], None]:
+    return lambda r: _inertial(r, "FL_shank").find("mass").set("value", value)  # type: ignore[union-attr]
+
+
+def _inertia(**values: str) -> Callable[[ET.Element], None]:
+    def edit(r: ET.Element) -> None:
+        element = _inertial(r, "FL_shank").find("inertia")
+        for k, v in values.items():
+            element.set(k, v)  # type: ignore[union-attr]
+
+    return edit
+
+
+def _mimic(r: ET.Element) -> None:
+    ET.SubElement(_joint(r, "FL_KFE"), "mimic", joint="FL_HFE", multiplier="1")
+
+
+def _drop_mass(r: ET.Element) -> None:
+    inertial = _inertial(r, "FL_shank")
+    inertial.remove(inertial.find("mass"))  # type: ignore[arg-type]
+
+
+#: (case, edit of the paper URDF, expected one-line message)
+BAD_URDFS = [
+    ("zero axis", lambda r: _set(r, "FL_HFE", "axis", "xyz", "0 0 0"),
+     r"joint 'FL_HFE' has <axis xyz=\"0 0 0\">; expected a nonzero direction"),
+    ("NaN axis", lambda r: _set(r, "FL_HFE", "axis", "xyz", "nan 0 1"),
+     r"joint 'FL_HFE' <axis> has xyz=\"nan 0 1\"; expected finite numbers"),
+    ("inf origin", lambda r: _set(r, "FL_HAA", "origin", "xyz", "inf 0.07 0"),
+     r"joint 'FL_HAA' <origin> has xyz=\"inf 0.07 0\"; expected finite numbers"),
+    ("NaN rpy", lambda r: _set(r, "FL_HAA", "origin", "rpy", "0 nan 0"),
+     r"joint 'FL_HAA' <origin> has rpy=\"0 nan 0\"; expected finite numbers"),
+    ("1e300 length", lambda r: _set(r, "FL_KFE", "origin", "xyz", "1e300 0 0"),
+     r"joint 'FL_KFE' <origin> has xyz=\"1e300 0 0\"; expected magnitudes <= 100"),
+    ("non-numeric origin", lambda r: _set(r, "FL_KFE", "origin", "xyz", "a b c"),
+     r"joint 'FL_KFE' <origin> has xyz=\"a b c\"; expected 3 number"),
+    ("two-number origin", lambda r: _set(r, "FL_KFE", "origin", "xyz", "0.2 0"),
+     r"joint 'FL_KFE' <origin> has xyz=\"0.2 0\"; expected 3 number"),
+    ("lower > upper", lambda r: _set(r, "FL_KFE", "limit", "lower", "1"),
+     r"joint 'FL_KFE' has <limit lower=\"1\" upper=\"-0.3\">; expected lower <= upper"),
+    ("NaN limit", lambda r: _set(r, "FL_KFE", "limit", "upper", "nan"),
+     r"joint 'FL_KFE' <limit> has upper=\"nan\"; expected finite numbers"),
+    ("mimic joint", _mimic,
+     r"joint 'FL_KFE' has a <mimic> element \(it copies joint 'FL_HFE'\); expected a leg of 3 independent"),
+    ("floating joint", lambda r: _joint(r, "FL_HAA").set("type", "floating"),
+     r"joint 'FL_HAA' has type 'floating'; expected revolute or continuous joints in the legs"),
+    ("planar joint", lambda r: _joint(r, "FL_HFE").set("type", "planar"),
+     r"joint 'FL_HFE' has type 'planar'; expected revolute or continuous"),
+    ("NaN mass", _mass("nan"), r"link 'FL_shank' <inertial> <mass> has value=\"nan\"; expected finite numbers"),
+    ("1e400 mass", _mass("1e400"), r"link 'FL_shank' <inertial> <mass> has value=\"1e400\"; expected finite numbers"),
+    ("1e300 mass", _mass("1e300"), r"<mass> has value=\"1e300\"; expected magnitudes <= 100000"),
+    ("negative mass", _mass("-0.15"), r"<mass value=\"-0.15\">; expected a mass >= 0 kg"),
+    ("no mass", _drop_mass, r"link 'FL_shank' <inertial> has no <mass>"),
+    ("NaN inertia", _inertia(iyy="nan"), r"link 'FL_shank' <inertial> <inertia> has iyy=\"nan\"; expected finite"),
+    ("negative inertia", _inertia(ixx="-1"), r"link 'FL_shank' <inertial> <inertia> is not positive semi-definite"),
+    ("A + B < C", _inertia(ixx="1e-4", iyy="1e-4", izz="1e-3"),
+     r"link 'FL_shank' <inertial> <inertia> breaks the triangle inequality A \+ B >= C: principal moments"),
+]
+
+
+@pytest.mark.parametrize(("case", "edit", "expected"), BAD_URDFS, ids=[c[0] for c in BAD_URDFS])
+def test_bad_urdf_is_one_line_exit_2(case, edit, expected, tmp_path):
+    path = _variant(tmp_path, edit)
+    for command in (["info", str(path)], ["check", str(path), "--samples", "1"]):
+        result = CliRunner().invoke(main, command)
+        assert result.exit_code == 2, (case, result.output)
+        assert "Traceback" not in result.output
+        assert re.search(expected, result.stderr), result.stderr
+        assert result.stderr.count("\n") == 1, "expected one line"
+
+
+def test_odd_inertia_on_a_fixed_link_is_a_warning(tmp_path):
+    """A link fixed to the trunk with anymal_c's 'hatch' inertia (A + B < C): one warning line,
+    and the robot loads with the merged (physical) trunk."""
+
+    def add_hatch(r: ET.Element) -> None:
+        link = ET.SubElement(r, "link", name="hatch")
+        inertial = ET.SubElement(link, "inertial")
+        ET.SubElement(inertial, "mass", value="0.1")
+        ET.SubElement(inertial, "inertia", ixx="0.001", ixy="0.001", ixz="0.001", iyy="0.001", iyz="0.001", izz="0.001")
+        joint = ET.SubElement(r, "joint", name="hatch_fixed", type="fixed")
+        ET.SubElement(joint, "parent", link="trunk")
+        ET.SubElement(joint, "child", link="hatch")
+
+    path = _variant(tmp_path, add_hatch)
+    with pytest.warns(UrdfWarning, match=r"link 'hatch' .*triangle inequality.*a fixed link: warned"):
+        robot = load_robot(str(path))
+    assert robot.trunk.mass == pytest.approx(paper_robot.PARAMS.trunk_mass + 0.1)
+    result = CliRunner().invoke(main, ["info", str(path)])
+    assert result.exit_code == 0
+    assert [line for line in result.stderr.splitlines() if line.startswith("warning:")] == result.stderr.splitlines()
+
+
+def test_continuous_joints_keep_working(tmp_path):
+    """All 12 joints continuous ((cos, sin) in Pinocchio's q): every term still agrees with
+    Pinocchio, and M equals the revolute robot's at the same angles."""
+
+    def continuous(r: ET.Element) -> None:
+        for joint in r.iter("joint"):
+            if joint.get("type") == "revolute":
+                joint.set("type", "continuous")
+
+    robot = load_robot(str(_variant(tmp_path, continuous)))
+    assert (robot.joint_nq == 2).all()
+    report = run_check(robot, samples=2, seed=0)
+    assert report.passed, report.table()
+    paper = load_robot("paper")
+    s = random_state(paper.lower, paper.upper, np.random.default_rng(0))
+    assert_close(np.asarray(full_dynamics(robot).M_full(s.q)), PinocchioReference(paper).mass_matrix(s.q), what="M")
+
+
+def test_one_robot_identity(tmp_path, monkeypatch):
+    """The built-in name, a relative path, a copy and a symlink of the paper URDF are one robot."""
+    copy = tmp_path / "copy.urdf"
+    shutil.copy(paper_robot.URDF_PATH, copy)
+    (tmp_path / "link.urdf").symlink_to(paper_robot.URDF_PATH)
+    monkeypatch.chdir(paper_robot.URDF_PATH.parent)
+    robots = [load_robot(x) for x in ("paper", paper_robot.URDF_PATH.name, str(copy), str(tmp_path / "link.urdf"))]
+    for r in robots:
+        assert r.name == "paper"
+        assert np.array_equal(r.standing_q, robots[0].standing_q)
+    outputs = {CliRunner().invoke(main, ["info", x, "--json"]).output.replace(str(copy), "URDF")
+               for x in ("paper", str(copy))}
+    assert len({re.sub(r'"urdf": "[^"]*"', "", o) for o in outputs}) == 1
+
+
+def test_edited_copy_is_another_robot(tmp_path):
+    path = _variant(tmp_path, _mass("0.2"), name="heavier.urdf")
+    robot = load_robot(str(path))
+    assert robot.name == "heavier"
+
+
+def test_no_parser_noise_at_the_file_descriptor_level(tmp_path):
+    """Pinocchio's C++ parser printed 4-6 lines straight to fd 2 for a NaN origin; validation
+    now rejects the file before the parser sees it (a subprocess sees all of stderr)."""
+    import subprocess
+    import sys
+
+    path = _variant(tmp_path, lambda r: _set(r, "FL_HAA", "origin", "xyz", "nan 0 0"))
+    proc = subprocess.run([sys.executable, "-m", "quadruped_dyn.cli", "info", str(path)],
+                          capture_output=True, text=True, check=False)
+    assert proc.returncode == 2
+    assert proc.stderr.count("\n") == 1 and proc.stderr.startswith("error: joint 'FL_HAA' <origin>"), proc.stderr
+
+
+def test_validate_runs_on_a_copy_of_the_paper_urdf(tmp_path):
+    """The trot experiment used to refuse any copy of the paper URDF (identity by unresolved path)."""
+    copy = tmp_path / "copy.urdf"
+    shutil.copy(paper_robot.URDF_PATH, copy)
+    result = CliRunner().invoke(main, ["validate", str(copy), "--horizon", "0.01", "--dt", "0.001",
+                                       "--out", str(tmp_path / "out")])
+    assert result.exit_code == 0, result.output
+    assert (tmp_path / "out" / "paper_trot_validation.json").is_file()

@@ -1,0 +1,117 @@
+"""`quadruped-dyn report`: bad input before any work, sections that tolerate missing data, and
+the written page opened in a real headless Chromium with every image loaded."""
+
+from __future__ import annotations
+
+import re
+import shutil
+import subprocess
+from pathlib import Path
+
+import pytest
+from click.testing import CliRunner
+
+from quadruped_dyn.cli import main
+from quadruped_dyn.dynamics.formulas import paper_formulas
+from quadruped_dyn.report import sections as rs
+from quadruped_dyn.report.figures import stick_figure
+from quadruped_dyn.report.gather import leg_points, robot_data
+from quadruped_dyn.report.html import figure, page
+
+CHROMIUM = shutil.which("chromium") or shutil.which("chromium-browser")
+needs_chromium = pytest.mark.skipif(CHROMIUM is None, reason="chromium is not installed (Debian: apt-get install chromium)")
+
+#: Appended to a copy of the page: after load, counts the images that decoded and the formulas
+#: that the browser laid out as MathML (a <math> element Chromium renders has display "block math").
+_PROBE = """<script>
+window.addEventListener("load", () => {
+  const images = [...document.images];
+  const loaded = images.filter(i => i.complete && i.naturalWidth > 0).length;
+  const maths = [...document.querySelectorAll("math")];
+  const laidOut = maths.filter(m => getComputedStyle(m).display.includes("math") && m.getBoundingClientRect().height > 0).length;
+  document.body.setAttribute("data-probe", `images ${loaded}/${images.length} math ${laidOut}/${maths.length}`);
+});
+</script>"""
+
+
+def open_in_chromium(page_path: Path, tmp_path: Path) -> tuple[int, int, int, int]:
+    """(images loaded, images, formulas laid out, formulas) of the page in headless Chromium
+    with a fresh profile and networking off."""
+    probe = tmp_path / "probed.html"
+    probe.write_text(page_path.read_text().replace("</body>", _PROBE + "</body>"))
+    cmd = [CHROMIUM, "--headless", "--no-sandbox", "--disable-gpu", "--disable-quic", "--no-first-run",
+           "--disable-background-networking", "--disable-component-update", "--disable-sync",
+           f"--user-data-dir={tmp_path / 'profile'}", "--virtual-time-budget=20000", "--dump-dom", probe.as_uri()]
+    dom = subprocess.run(cmd, capture_output=True, text=True, timeout=180, check=False).stdout
+    m = re.search(r'data-probe="images (\d+)/(\d+) math (\d+)/(\d+)"', dom)
+    assert m, f"the page did not finish loading in Chromium: {dom[:300]!r}"
+    loaded, images, laid_out, maths = (int(x) for x in m.groups())
+    return loaded, images, laid_out, maths
+
+
+def test_bad_robot_is_one_line_exit_2(tmp_path):
+    result = CliRunner().invoke(main, ["report", "nosuch", "--out", str(tmp_path)])
+    assert result.exit_code == 2
+    assert result.stderr.count("\n") == 1 and "expected a URDF path or one of" in result.stderr
+
+
+def test_unwritable_out_is_one_line_exit_2(tmp_path):
+    blocker = tmp_path / "file"
+    blocker.write_text("")
+    result = CliRunner().invoke(main, ["report", "paper", "--out", str(blocker)])
+    assert result.exit_code == 2
+    assert result.stderr.count("\n") == 1 and "expected a writable --out directory" in result.stderr
+
+
+def test_sections_tolerate_missing_data():
+    """Producers change in parallel: a renderer given less (or more) than today's keys says so."""
+    for section in (rs.terms_section(None), rs.generated_c_section(None, None), rs.reduced_section(None),
+                    rs.notebooks_section(None), rs.experiment_section({"trot": None}, [], {})):
+        assert section.verdict == "not available"
+        assert "not available" in section.body
+    minimal = {"runs": {"paper": {"stopped_at_s": None}}, "physics_check": {"max_deviation": 0.3, "plot": [1]},
+               "max_pct_err": {"j10": {"q": 0.25}}, "max_pct_err_overall": {"q": 0.5}}
+    section = rs.experiment_section({"trot": minimal}, [f"j{k}" for k in range(12)], {})
+    assert section.verdict == "result" and "max_deviation" in section.body
+    assert "BR HFE q 2.5e-01 %" in section.headline and "5.0e-01" in section.headline
+
+
+def test_failing_term_is_red_and_fails():
+    check = {"samples": 1, "seed": 0, "passed": False, "build_seconds": 0.1,
+             "terms": [{"name": "M_full", "max_abs_err": float("nan"), "max_rel_err": float("nan"), "tol": 1e-10,
+                        "passed": False}], "grf": []}
+    section = rs.terms_section(check)
+    assert section.verdict == "FAIL" and 'class="bad"' in section.body
+
+
+@needs_chromium
+def test_page_renders_in_chromium(paper, tmp_path):
+    """Figures and formulas of the page machinery, in a real browser (the full report: the slow test)."""
+    fig = figure(stick_figure(leg_points(paper, paper.standing_q), "paper"), "stick figure")
+    formulas = [{"title": f.title, "latex": f.latex, "mathml": f.mathml, "max_err_vs_pinocchio": 0.0, "tol": 1e-10}
+                for f in paper_formulas(paper)]
+    sizes = [{"name": "G_full", "instructions": 1, "inputs": "q[19]", "outputs": "G[18]", "nonzeros": 1}]
+    sections = [rs.robot_section(robot_data(paper, []), fig), rs.symbolic_section(formulas, "", sizes, fig)]
+    path = tmp_path / "page.html"
+    path.write_text(page("test", "", sections))
+    assert "http" not in path.read_text()  # nothing to fetch
+    loaded, images, laid_out, maths = open_in_chromium(path, tmp_path)
+    assert (loaded, laid_out) == (images, maths) == (2, 3)
+
+
+@pytest.mark.slow
+@needs_chromium
+def test_full_report_renders(tmp_path):
+    """`report paper --fast` end to end (~4 min on a shared 2-core machine): every section present, no failure, every
+    image loaded and every formula laid out in Chromium."""
+    result = CliRunner().invoke(main, ["report", "paper", "--out", str(tmp_path), "--fast"])
+    assert result.exit_code == 0, result.output
+    path = tmp_path / "paper" / "report.html"
+    html = path.read_text()
+    for key in ("robot", "terms", "grf", "reduced", "experiment", "c", "symbolic", "notebooks", "versions"):
+        assert f'<section id="{key}">' in html
+    assert "v-fail" not in html.split("<h2>Summary</h2>")[1].split("</table>")[0]
+    assert not re.search(r'(src|href)="https?:', html)
+    loaded, images, laid_out, maths = open_in_chromium(path, tmp_path)
+    assert images >= 8 and loaded == images
+    assert maths >= 3 and laid_out == maths
