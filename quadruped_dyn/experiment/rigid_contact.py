@@ -13,6 +13,8 @@ no actuator here.
 
 from __future__ import annotations
 
+from collections.abc import Callable
+
 import numpy as np
 
 from quadruped_dyn.errors import InputError
@@ -40,16 +42,23 @@ def _impact(ref: PinocchioReference, q: np.ndarray, v: np.ndarray, stance: tuple
 
 
 def simulate_rigid(plan: Plan, ik: IkTorques, law: TorqueLaw, horizon: float, dt: float,
-                   integrator: str = "dop853", rtol: float = RTOL, progress: Progress | None = None) -> Run:
+                   integrator: str = "dop853", rtol: float = RTOL, progress: Progress | None = None,
+                   initial: tuple[np.ndarray, np.ndarray] | None = None,
+                   trunk: Callable[[float], np.ndarray] | None = None) -> Run:
     """Integrate the rigid-contact dynamics from the IK state at t = 0 under ``law``; the
     returned ``Run`` holds the 12 joint angles, rates and accelerations, and as closure the
-    trunk's distance from the plan's trunk position (m)."""
+    trunk's distance from the plan's trunk position (m). ``initial`` = (q (19,), v (18,))
+    replaces the IK state, ``trunk(t)`` (world position, m) the plan's trunk, for a reference
+    that is not the plan's (e.g. an optimised gait with the plan's phases)."""
     robot, gait = plan.robot, plan.gait
     ref = PinocchioReference(robot)
     ref0, _ = ik(0.0, gait.stance(0.0))
     stance0 = gait.stance(0.0)
     q0, v0, _ = ref.reduced_motion(stance0, ref0.q_r, ref0.qd_r, ref0.qdd_r, np.array([0.0, 0.0, 0.0, 1.0]))
     q0[:3] = plan.trunk(0.0)[0]
+    if initial is not None:
+        q0, v0 = np.asarray(initial[0], dtype=float), np.asarray(initial[1], dtype=float)
+    trunk_at = trunk if trunk is not None else (lambda t: plan.trunk(t)[0])
     y = np.concatenate([q0, v0])
     evaluations = [0]
 
@@ -74,7 +83,7 @@ def simulate_rigid(plan: Plan, ik: IkTorques, law: TorqueLaw, horizon: float, dt
 
     def record(stance: tuple[int, ...], t: float, y: np.ndarray) -> None:
         a = accel(t, y, stance)
-        off = float(np.linalg.norm(y[:3] - plan.trunk(t)[0]))
+        off = float(np.linalg.norm(y[:3] - trunk_at(t)))
         out.append((t, y.copy(), a, off))
         if off > FALLEN_TRUNK_M:
             raise Fallen

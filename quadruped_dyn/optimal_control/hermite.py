@@ -22,15 +22,18 @@ BASIS = np.array([
 ])
 
 
-def weights(s: float, h: float) -> np.ndarray:
-    """(3, 6): the weights of (y_0, y'_0, y''_0, y_1, y'_1, y''_1) in y, y', y'' at fraction s
-    of an interval of length h."""
-    powers = np.array([[s**j for j in range(6)],
-                       [j * s ** (j - 1) if j >= 1 else 0.0 for j in range(6)],
-                       [j * (j - 1) * s ** (j - 2) if j >= 2 else 0.0 for j in range(6)]])
-    W = powers @ BASIS.T  # (3, 6): d^m/ds^m of each basis function
+def weights(s: float, h: float, orders: int = 3) -> np.ndarray:
+    """(orders, 6): the weights of the end values (y_0, y'_0, y''_0, y_1, y'_1, y''_1) in the
+    derivatives 0 .. orders - 1 of y at fraction s of an interval of length h (orders = 5 adds
+    the jerk and the snap)."""
+
+    def falling(j: int, m: int) -> float:
+        return float(np.prod(np.arange(j, j - m, -1))) if j >= m else 0.0
+
+    powers = np.array([[falling(j, m) * s ** (j - m) if j >= m else 0.0 for j in range(6)] for m in range(orders)])
+    W = powers @ BASIS.T  # d^m/ds^m of each basis function
     scale = np.array([1.0, h, h**2, 1.0, h, h**2])
-    return W * scale / np.array([[1.0], [h], [h**2]])
+    return W * scale / np.array([[h**m] for m in range(orders)])
 
 
 def interpolate(y0: tuple, y1: tuple, s: float, h: float) -> tuple:

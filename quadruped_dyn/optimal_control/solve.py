@@ -40,6 +40,8 @@ class Solution:
     solve_seconds: float
     build_seconds: float
     hessian: str
+    g: np.ndarray  # the constraint values at w
+    transcribe_seconds: float = 0.0
 
     @property
     def converged(self) -> bool:
@@ -99,4 +101,4 @@ def solve(tr: Transcription, hessian: str = "exact", expand: bool = True, w0: np
     w = np.asarray(sol["x"]).ravel()
     g = np.asarray(sol["g"]).ravel()
     return Solution(tr, w, str(stats["return_status"]), bool(stats["success"]), int(stats["iter_count"]),
-                    float(sol["f"]), constraint_violation(tr, w, g), seconds, build, hessian)
+                    float(sol["f"]), constraint_violation(tr, w, g), seconds, build, hessian, g, tr.build_seconds)

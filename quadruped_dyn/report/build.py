@@ -38,6 +38,7 @@ from quadruped_dyn.report.gather import (
     symbolic_data,
     versions,
 )
+from quadruped_dyn.report.gather import optimal_trot as gather_optimal_trot
 from quadruped_dyn.report.html import Section, figure, page
 
 
@@ -182,6 +183,8 @@ def build_report(robot_arg: str = "paper", out: str | Path = "results", fast: bo
 
     attempt("experiment", "The paper's experiment: trot and static walk", experiment_section)
     done()
+
+    attempt("optimal_control", "A trot the robot can do", lambda: rs.optimal_control_section(*gather_optimal_trot(robot, target)))
 
     done = progress.step("generated C" + ("" if fast else " and the benchmark"))
 

@@ -277,3 +277,22 @@ def notebooks(robot: Robot) -> tuple[list[dict[str, Any]] | None, str]:
         nb, seconds = execute(path)
         rendered.append({"name": path.name, "seconds": seconds, "errors": error_count(nb), "html": render(nb)})
     return rendered, ""
+
+
+def optimal_trot(robot: Robot, out: Path) -> tuple[dict[str, Any], str]:
+    """The trot optimised on the reduced model (``optimize``'s defaults) and replayed open loop in the
+    rigid-contact dynamics for two cycles: the JSON dict and the plot, written beside the report."""
+    from quadruped_dyn.experiment.gait import TROT
+    from quadruped_dyn.optimal_control.outputs import output_paths, report, write_outputs
+    from quadruped_dyn.optimal_control.replay import replay_rigid
+    from quadruped_dyn.optimal_control.solve import solve
+    from quadruped_dyn.optimal_control.transcription import transcribe
+
+    sol = solve(transcribe(robot, TROT))
+    replay = replay_rigid(sol, 2.0) if sol.converged else None
+    data = report(sol, replay)
+    paths = output_paths(out, robot.name, "trot")
+    write_outputs(paths, sol, replay, data)
+    plot = (f"<figure>{png_image(paths['plot'].read_bytes(), 'optimised trot')}<figcaption>the optimised trot against "
+            "today's plan: joint angles, trunk, torques, and the open-loop rigid-contact replay</figcaption></figure>")
+    return json.loads(paths["json"].read_text()), plot

@@ -346,3 +346,33 @@ def versions_section(versions: dict[str, Any]) -> Section:
         ["library", "version"], [[k, str(v)] for k, v in libraries.items()], "libraries")
     headline = ", ".join(f"{k} {libraries[k]}" for k in ("pin", "casadi", "numpy") if k in libraries)
     return Section("versions", "Versions and machine", "result", headline, body)
+
+
+# ----------------------------------------------------------------------------- optimal control
+
+
+def optimal_control_section(data: dict[str, Any] | None, plot: str = "") -> Section:
+    """``data``: the JSON ``optimize`` writes for the trot (docs/optimal_control.md)."""
+    title = "A trot the robot can do"
+    if data is None:
+        return Section("optimal_control", title, "not available", "not run", not_available("the optimised trot"))
+    e, f = data["effort"], data["formulation"]
+    rp = data.get("rigid_contact_replay") or {}
+    converged = bool(data["converged"])
+    rows = [["IPOPT status", esc(data["status"])], ["iterations", str(data["iterations"])],
+            ["solve time (s, loaded machine)", num(data["solve_seconds"], ".1f")],
+            ["constraint violation", num(data["constraint_violation"])],
+            ["largest roll moment needed (N m): optimised / plan",
+             f"{num(e['max_roll_moment_optimised_Nm'])} / {num(e['max_roll_moment_plan_Nm'], '.2f')}"],
+            ["torque effort, optimised / plan", num(e["ratio"], ".3f")],
+            ["rigid-contact replay: 1 % off the optimised motion at (s)", num(rp.get("time_to_1pct_s"), ".3f")],
+            ["growth rate of the departure (1/s)", num(rp.get("growth_rate_per_s"), ".1f")]]
+    html = (f"<p>Direct collocation on the reduced model ({f['nodes']} nodes, {f['variables']} variables, "
+            f"{f['constraints']} constraints): the trunk roll unactuated (id_r's 13th entry = 0 at every collocation point), "
+            f"the paper's GRF inside the friction cone (μ = {f['mu']:g}, f_z ≥ {f['fz_min_N']:.2f} N), URDF joint and "
+            "effort limits, swing clearance, periodicity at the plan's speed; effort plus closeness to the plan. "
+            "Today's plan needs a roll moment from nowhere; the optimised trot does not.</p>"
+            + table(["quantity", "value"], rows) + plot)
+    headline = (f"{data['status']}, roll moment {num(e['max_roll_moment_optimised_Nm'])} N m (plan "
+                f"{num(e['max_roll_moment_plan_Nm'], '.2f')}); replay 1 % at {num(rp.get('time_to_1pct_s'), '.3f')} s")
+    return Section("optimal_control", title, "result" if converged else "FAIL", headline, html)

@@ -1,0 +1,84 @@
+"""``optimize``: one periodic gait cycle optimised on the reduced model (CasADi + IPOPT), replayed
+open loop in the rigid-contact dynamics (docs/optimal_control.md)."""
+
+from __future__ import annotations
+
+import json
+import math
+import sys
+
+import click
+
+from quadruped_dyn.cli.app import EXIT_CHECK_FAILED
+from quadruped_dyn.errors import InputError
+from quadruped_dyn.files.paths import writable_dir
+from quadruped_dyn.model.robot import load_robot
+
+
+@click.command()
+@click.argument("robot", default="paper")
+@click.option("--gait", "gait_name", type=click.Choice(["trot", "walk"]), default="trot", show_default=True,
+              help="Trot (roll unactuated) or statically stable walk.")
+@click.option("--nodes", default=None, type=int, help="Collocation nodes per phase [default: 8].")
+@click.option("--mu", default=None, type=float, help="Friction coefficient of the cone [default: 0.6].")
+@click.option("--speed", default=None, type=float, help="Forward speed, m/s [default: the gait's].")
+@click.option("--hessian", type=click.Choice(["exact", "limited-memory"]), default="exact", show_default=True,
+              help="IPOPT's Hessian: exact (assembled from the blocks' SX Hessians) or L-BFGS.")
+@click.option("--cycles", default=2.0, show_default=True, type=float,
+              help="Cycles of the rigid-contact replay (0: no replay).")
+@click.option("--out", "out_dir", default="results", show_default=True, type=click.Path(),
+              help="Directory for the CSV, the JSON report and the plot.")
+@click.option("--json", "as_json", is_flag=True, help="Print the report as JSON.")
+def optimize(robot: str, gait_name: str, nodes: int | None, mu: float | None, speed: float | None, hessian: str,
+             cycles: float, out_dir: str, as_json: bool) -> None:
+    """Optimise one periodic gait cycle on the reduced model: the roll unactuated (id_r's 13th entry
+    = 0), the paper's GRF in the friction cone, URDF joint and effort limits, swing clearance,
+    periodicity at the plan's speed; effort + closeness to the plan. Exit 1 with IPOPT's status when
+    the solve does not converge."""
+    from quadruped_dyn.experiment.gait import GAITS
+    from quadruped_dyn.optimal_control.outputs import output_paths, report, write_outputs
+    from quadruped_dyn.optimal_control.replay import replay_rigid
+    from quadruped_dyn.optimal_control.solve import MAX_CONSTRAINT_VIOLATION, solve
+    from quadruped_dyn.optimal_control.transcription import MU, NODES_PER_PHASE, Options, transcribe
+
+    if not (math.isfinite(cycles) and cycles >= 0):
+        raise InputError(f"--cycles {cycles} is not a number of cycles; expected e.g. 2")
+    gait = GAITS[gait_name]
+    options = Options(nodes_per_phase=NODES_PER_PHASE if nodes is None else nodes, mu=MU if mu is None else mu, speed=speed)
+    out = writable_dir(out_dir, f"--out '{out_dir}'")
+    r = load_robot(robot)
+    options.check(r, gait)  # bad input: exit 2 before any work
+    click.echo(f"transcribing {r.name} {gait.name} ...", err=True)
+    tr = transcribe(r, gait, options)
+    click.echo(f"solving: {tr.lbw.size} variables, {tr.lbg.size} constraints, {hessian} Hessian ...", err=True)
+    sol = solve(tr, hessian)
+    if not sol.converged:
+        click.echo(f"error: IPOPT did not converge on {r.name} {gait.name}: {sol.status} after {sol.iterations} iterations, "
+                   f"constraint violation {sol.constraint_violation:.1e} (allowed {MAX_CONSTRAINT_VIOLATION:g})", err=True)
+        sys.exit(EXIT_CHECK_FAILED)
+    replay = None
+    if cycles > 0:
+        click.echo(f"replaying the torques open loop in the rigid-contact dynamics for {cycles:g} cycles ...", err=True)
+        replay = replay_rigid(sol, cycles)
+    paths = output_paths(out, r.name, gait.name)
+    data = report(sol, replay)
+    write_outputs(paths, sol, replay, data)
+    if as_json:
+        click.echo(json.dumps(json.loads(paths["json"].read_text()), indent=2))
+        return
+    e = data["effort"]
+    click.echo(f"{gait.name}, {r.name}: {sol.status} in {sol.iterations} iterations, {sol.solve_seconds:.1f} s "
+               f"(+ {sol.build_seconds:.1f} s building), constraint violation {sol.constraint_violation:.1e}")
+    click.echo(f"  effort {e['optimised_Nm2s']:.3g} N^2 m^2 s vs the plan's {e['plan_Nm2s']:.3g} "
+               f"({100 * (1 - e['ratio']):+.1f} % lower); largest roll moment needed "
+               f"{e['max_roll_moment_optimised_Nm']:.1e} N m (plan {e['max_roll_moment_plan_Nm']:.2f})")
+    if "feasibility" in data:
+        f = data["feasibility"]
+        opt, pl = f["optimised"], f["plan"]
+        click.echo(f"  smallest f_z {opt['min_fz_N']:.2f} N (plan {pl['min_fz_N']:.2f}), CoM margin "
+                   f"{100 * opt['min_com_margin_m']:.2f} cm (plan {100 * pl['min_com_margin_m']:.2f})")
+    if replay is not None:
+        s = replay.summary()
+        click.echo(f"  rigid-contact replay, open loop: 1 % off at {s['time_to_1pct_s']} s of {s['horizon_s']:g} s, "
+                   f"growth rate {s['growth_rate_per_s']} /s, stopped at {s['stopped_at_s']}")
+    click.echo("  wrote " + ", ".join(str(p) for p in paths.values()))
