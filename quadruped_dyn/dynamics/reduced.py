@@ -30,7 +30,6 @@ from __future__ import annotations
 import time
 from dataclasses import dataclass
 from functools import cache
-from typing import Any
 
 import casadi as ca
 import numpy as np
@@ -52,14 +51,12 @@ REDUCED_KINDS = {4: "stand", 3: "static walk", 2: "trot / pace"}
 MAX_COND_M_R = 1e12
 
 
-def roll_rate_row(R: Any) -> Any:
+def roll_rate_row(R: ca.SX) -> ca.SX:
     """e_phi with phid = e_phi . omega_b for R = Rz(psi) Ry(theta) Rx(phi), written with R's
-    entries (cos theta > 0): tan(theta) sin(phi) = -R20 R21 / (R21^2 + R22^2), etc. One formula
-    for both: an SX column for a symbolic R, a numpy (3,) for a numeric one (the experiment's
-    projection). ``references.pinocchio`` keeps its own, independent derivation."""
+    entries (cos theta > 0): tan(theta) sin(phi) = -R20 R21 / (R21^2 + R22^2), etc.
+    ``references.pinocchio.roll_rate_row`` is the reference's own, independent derivation."""
     c2 = R[2, 1] ** 2 + R[2, 2] ** 2
-    row = (1, -R[2, 0] * R[2, 1] / c2, -R[2, 0] * R[2, 2] / c2)
-    return np.array(row, dtype=float) if isinstance(R, np.ndarray) else ca.vertcat(*row)
+    return ca.vertcat(1, -R[2, 0] * R[2, 1] / c2, -R[2, 0] * R[2, 2] / c2)
 
 
 def roll_rate_row_dot(R: ca.SX, omega: ca.SX) -> ca.SX:
