@@ -114,9 +114,9 @@ def grf_section(check: dict[str, Any] | None, posture: dict[str, Any] | None, fo
     """``check``: as for ``terms_section`` (its ``grf`` list); ``posture``: the solves at the
     gait posture standing still (``stances``: stance, kind, rank, numeric_rank, singular_values,
     max_residual, min_friction_margin_N, in_cone; ``mu``)."""
-    body = ["<p>The body equations A(r) λ = w_req of each stance set (SPEC §4): the paper's model (common f_x, f_y, ...) "
-            "has rank 5 with four and with two feet. The solve is rank-revealing: minimum-norm λ, and the residual — the "
-            "part of the required trunk wrench the feet cannot produce.</p>"]
+    body = ["<p>The body equations A(r) λ = w_req of each stance set (docs/formulation.md §4): the paper's model "
+            "(common f_x, f_y, ...) has rank 5 with four and with two feet. The solve is rank-revealing: minimum-norm λ, "
+            "and the residual — the part of the required trunk wrench the feet cannot produce.</p>"]
     ok = True
     grf = (check or {}).get("grf", [])
     if grf:

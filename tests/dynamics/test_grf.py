@@ -17,7 +17,7 @@ from quadruped_dyn.model.state import FullState, full_q, random_state, rotation
 from quadruped_dyn.tolerances import COND_ERR_FACTOR, RANK_RTOL, REL_TOL_TERMS
 from tests.conftest import assert_close
 
-EXPECTED_RANK = {  # (number of feet, model) -> rank, SPEC section 4
+EXPECTED_RANK = {  # (number of feet, model) -> rank, docs/formulation.md §4
     (4, "paper"): 5, (3, "paper"): 6, (2, "paper"): 5, (1, "paper"): 3, (0, "paper"): 0,
     (4, "min_norm"): 6, (3, "min_norm"): 6, (2, "min_norm"): 5, (1, "min_norm"): 3, (0, "min_norm"): 0,
 }
