@@ -190,7 +190,7 @@ def test_minimum_norm_least_squares_optimality(paper, seed, stance, model):
     U, sv, Vt = np.linalg.svd(A)
     rank = int(np.sum(sv > RANK_RTOL * sv[0]))
     assume(rank == solve.rank and sv[0] / sv[rank - 1] < 1e6)  # skip near-singular draws
-    allowed = COND_ERR_FACTOR * (sv[0] / sv[rank - 1]) * np.finfo(float).eps  # relative, as in check.py
+    allowed = COND_ERR_FACTOR * (sv[0] / sv[rank - 1]) * np.finfo(float).eps  # relative, as in checks/terms.py
     scale = np.abs(A).max() * (np.abs(residual).max() + np.abs(A @ lam).max())
     assert np.abs(A.T @ residual).max() <= allowed * scale, "residual not orthogonal to range(A)"
     assert np.abs(Vt[rank:] @ lam).max(initial=0.0) <= allowed * np.abs(lam).max(), "lambda has a null-space part"
