@@ -39,7 +39,7 @@ def reduced_inputs(s: FullState) -> dict[str, np.ndarray]:
             "qdd_r": np.append(s.a[6:], s.a[3]), "quat": s.q[3:7], "tau_ext": 10.0 * s.a[5:]}
 
 def _reduced_reference(ref: PinocchioReference, kind: str, stance: StanceSet, s: FullState) -> np.ndarray:
-    """Pinocchio-built value (SPEC section 5's independent reference) of reduced function ``kind``."""
+    """Pinocchio-built value (docs/formulation.md §8's independent reference) of reduced function ``kind``."""
     n = 13 if len(stance.feet) == 2 else 12
     x = {k: v[:n] for k, v in reduced_inputs(s).items() if k != "quat"}
 

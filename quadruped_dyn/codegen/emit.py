@@ -1,4 +1,4 @@
-"""Standalone C code generation (SPEC section 7).
+"""Standalone C code generation (docs/formulation.md §11).
 
 ``CODEGEN_FUNCTIONS`` lists what is generated, one line per function. Each becomes a C
 function ``qd_<name>(const casadi_real** arg, casadi_real** res, casadi_int* iw,
@@ -45,7 +45,7 @@ CODEGEN_FUNCTIONS: dict[str, Callable[[Robot], ca.Function]] = {
     **{f"grf_{s.name.replace('+', '_')}": _grf_paper(s) for s in STANCE_SETS},
 }
 
-#: Stance sets with a reduced model (SPEC section 5): four feet, the four triples, the six pairs.
+#: Stance sets with a reduced model (docs/formulation.md §5-§6): four feet, the four triples, the six pairs.
 REDUCED_STANCE_SETS: tuple[StanceSet, ...] = tuple(st for st in STANCE_SETS if len(st.feet) >= 2)
 
 #: Reduced-model functions generated for every stance set in REDUCED_STANCE_SETS, as

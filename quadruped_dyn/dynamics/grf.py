@@ -1,4 +1,4 @@
-"""Ground reaction forces from the six body equations (SPEC section 4, paper section 4).
+"""Ground reaction forces from the six body equations (docs/formulation.md §3-§4, paper section 4).
 
 The body equations (paper eq. (3)-(4)) with the stance feet's forces f_i (trunk frame) as
 unknowns read  sum_i [I; [r_i]x] f_i = w_req,  where w_req (6,) = (force; moment about the

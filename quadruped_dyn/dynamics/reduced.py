@@ -1,4 +1,4 @@
-"""Reduced coordinates and forward dynamics (SPEC section 5, paper section 5), symbolic.
+"""Reduced coordinates and forward dynamics (docs/formulation.md §5-§6.1, paper section 5), symbolic.
 
 Coordinates q_r: the 12 joint angles (three or four stance feet: static walk, standing),
 plus the trunk roll phi for two stance feet (trot, pace): 13. The trunk motion is not a

@@ -1,4 +1,4 @@
-"""The paper's validation experiment, compared and reported (SPEC section 6, paper Figs. 5-7).
+"""The paper's validation experiment, compared and reported (docs/formulation.md §9-§10, paper Figs. 5-7).
 
 Plan (``gait``) -> IK reference (``reference``) -> id_r -> tau(t) -> reduced forward dynamics
 (``simulate``) -> compared with the IK reference, per joint:

@@ -1,4 +1,4 @@
-"""Forward simulation of the paper's reduced dynamics along a gait plan (SPEC sections 5-6).
+"""Forward simulation of the paper's reduced dynamics along a gait plan (docs/formulation.md §6, §9.3).
 
 State: the reduced coordinates q_r (12 joint angles in FL, FR, BL, BR x HAA, HFE, KFE order,
 + the trunk roll phi for a gait with two-feet phases) and their rates. The trunk orientation
@@ -285,8 +285,8 @@ def project_on_stance(robot: Robot, stance: tuple[int, ...], holds: np.ndarray, 
                       pitch_hint: float = 0.0) -> np.ndarray:
     """The state y = (q_r, qd_r) moved onto the stance closure: the stance feet on their
     footholds ``holds`` (k, 3; world, m) for the trunk pose fitted to them (``pose_from_feet``; two Newton steps of each
-    stance leg's IK), and the stance legs' rates those of the trunk twist fitted to them (SPEC
-    section 5's velocity map, least squares, roll-rate row for two feet). The reduced coordinates
+    stance leg's IK), and the stance legs' rates those of the trunk twist fitted to them (docs/
+    formulation.md §5's velocity map, least squares, roll-rate row for two feet). The reduced coordinates
     are redundant -- 12 for 9 degrees of freedom with three feet, 13 for 12 with two -- and the
     paper's ODE does not keep the closure: its drift off it is the fastest-growing error. Right
     after a touch-down whose foot lands moving, the rate projection is a kinematic impact."""

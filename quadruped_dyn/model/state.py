@@ -1,4 +1,4 @@
-"""The project's full-coordinate state and its conventions (SPEC section 2).
+"""The project's full-coordinate state and its conventions (docs/conventions.md §1-§3).
 
 Frames: world w (z up, gravity ``GRAVITY_W``), trunk/body b with pose (R, p), R maps b -> w.
 

@@ -26,6 +26,7 @@ from quadruped_dyn.model.robot import ROBOT_NAMES, robot_path
 from quadruped_dyn.report.gather import (
     CHECK_SAMPLES,
     FRICTION_MU,
+    cross_library,
     experiment,
     generated_c,
     grf_posture,
@@ -138,12 +139,16 @@ def build_report(robot_arg: str = "paper", out: str | Path = "results", fast: bo
     attempt("robot", "The robot", robot_section)
     done()
 
-    done = progress.step(f"every term against Pinocchio ({samples} random states)")
+    done = progress.step(f"every term against Pinocchio ({samples} random states) and other libraries")
     check: dict[str, Any] | None = None
     try:
         from quadruped_dyn.checks.terms import run_check
 
         check = run_check(robot, samples, 0, progress=lambda n: progress.count(n, samples)).as_dict()
+        try:  # MuJoCo and iDynTree as references, when installed; a failure here is shown, the terms are kept
+            check = {**check, **cross_library(robot)}
+        except Exception as e:
+            check = {**check, "cross_library_passed": False, "cross_library_note": f"could not run: {type(e).__name__}: {e}"}
         sections.append(rs.terms_section(check))
     except Exception as e:
         sections.append(_failed("terms", "Every term against Pinocchio", e))

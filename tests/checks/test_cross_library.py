@@ -102,7 +102,7 @@ def test_other_quadrupeds_by_path(relative, erd):
 
 @needs_mujoco
 def test_anymal_c_diagnosis_names_every_change_with_its_size():
-    """SPEC section 9: cameras break A + B >= C, the hatch is singular, 'base' has no inertial."""
+    """docs/results.md, other libraries: cameras break A + B >= C, the hatch is singular, 'base' has no inertial."""
     report = run_cross_library(load_robot("anymal_c"), ("mujoco",), SAMPLES, seed=0)
     changes = {c.kind: c for c in report.changes}
     assert {"hatch", "depth_camera_front_camera"} <= set(changes["refused"].links)
@@ -251,7 +251,7 @@ def test_moving_link_breaking_triangle_is_balanced_as_mujoco_does(tmp_path, monk
     """No welded neighbour: the comparison carries MuJoCo's balanceinertia rule, written into the copy
     (principal moments -> their mean). MuJoCo with balanceinertia on the original equals Pinocchio on
     that copy, so the difference from the original is the named change, and it is large.
-    The toolkit itself refuses such a leg link (SPEC section 8, urdf_validation); the comparison is
+    The toolkit itself refuses such a leg link (docs/reliability.md §2, urdf_rules); the comparison is
     exercised with that validation bypassed."""
     import quadruped_dyn.model.robot
 
