@@ -10,12 +10,18 @@ import math
 from collections.abc import Sequence
 from typing import Any
 
+from quadruped_dyn.math.compare import within
 from quadruped_dyn.model.leg import BR_HFE
 from quadruped_dyn.report.html import Section, badge, cell, esc, grade, not_available, num, table
 
 
 def _finite(*xs: Any) -> bool:
     return all(isinstance(x, (int, float)) and math.isfinite(x) for x in xs)
+
+
+def _within(err: Any, tol: Any) -> bool:
+    """``compare.within`` for values read from JSON: None (a non-finite value) or a non-number never passes."""
+    return _finite(err, tol) and within(err, tol)
 
 
 def generic_table(rows: Sequence[dict[str, Any]], caption: str = "") -> str:
@@ -200,8 +206,7 @@ def reduced_section(rows: Sequence[dict[str, Any]] | None, posture_note: str = "
     table_rows = [[r["stance"], r["kind"], str(r["n"]), num(r["cond"], ".2e"), num(r["asymmetry"], ".3f"),
                    cell(num(r["err_vs_pinocchio"]), grade(r["err_vs_pinocchio"], r["tol"]))] for r in regular]
     table_rows += [[r["stance"], r["kind"], str(r["n"]), cell("singular", "near"), "", "n/a"] for r in singular]
-    ok = bool(regular) and all(_finite(r["err_vs_pinocchio"], r["cond"]) and r["err_vs_pinocchio"] <= r["tol"]
-                               for r in regular)
+    ok = bool(regular) and all(_finite(r["cond"]) and _within(r["err_vs_pinocchio"], r["tol"]) for r in regular)
     conds = [r["cond"] for r in regular] or [float("nan")]
     body = (f"<p>M_r = ∂τ_r/∂q̈_r (Walker &amp; Orin unit accelerations) of every stance set of 2, 3 or 4 feet at "
             f"{esc(posture_note)}, trunk level. M_r is not symmetric: the paper's GRF assumptions project the dynamics. "
@@ -382,7 +387,7 @@ def generated_c_section(gen: dict[str, Any] | None, bench: Sequence[dict[str, An
             return "not checked"
         if "status" in c:
             return str(c["status"])
-        return "pass" if _finite(c.get("max_rel_err"), c.get("tol")) and c["max_rel_err"] <= c["tol"] else "FAIL"
+        return "pass" if _within(c.get("max_rel_err"), c.get("tol")) else "FAIL"
 
     rows = []
     for f in functions:
@@ -436,10 +441,10 @@ def symbolic_section(formulas: Sequence[dict[str, Any]] | None, formulas_note: s
         body.append(f"<p>{esc(formulas_note)}</p>")
         for f in formulas:
             err, tol = f["max_err_vs_pinocchio"], f["tol"]
-            ok = ok and _finite(err) and err <= tol
+            ok = ok and _within(err, tol)
             body.append(f"<p><b>{esc(f['title'])}</b> — the formula evaluated with full-precision coefficients agrees "
                         f"with Pinocchio to {num(err)} (relative, tol {num(tol, '.0e')}) "
-                        f"{badge('pass' if err <= tol else 'FAIL')}"
+                        f"{badge('pass' if _within(err, tol) else 'FAIL')}"
                         f"</p>{f['mathml']}<details><summary>LaTeX</summary><pre>{esc(f['latex'])}</pre></details>")
     else:
         body.append(f"<p class=\"na\">{esc(formulas_note)}</p>")
