@@ -13,3 +13,7 @@ class BuildError(RuntimeError):
 class UrdfWarning(UserWarning):
     """A URDF oddity that does not change the answers (e.g. an unphysical inertia of a link
     merged into a physical body); the CLI prints it as one line."""
+
+
+class NumericalError(RuntimeError):
+    """A numerical outcome that is not a result (singular M_r, failed integration, ...): exit 1."""

@@ -229,7 +229,7 @@ def reference_differences(committed: str, fresh: str) -> list[str]:
     in_case = {name for outs in b.case_outputs.values() for name in outs}
     groups = [(case, outs, b.rel_tol * b.tol_scale[case]) for case, outs in b.case_outputs.items()]
     groups += [(name, (name,), b.rel_tol) for name in b.arrays if name not in in_case]
-    for case, outs, tol in groups:
+    for _case, outs, tol in groups:
         scale = scale_of(np.concatenate([b.arrays[o] for o in outs]))
         for o in outs:
             diff = np.abs(a.arrays[o] - b.arrays[o]) / scale
@@ -261,7 +261,8 @@ class GenerationDiff:
         if self.sources:
             parts.append(f"source differs from a fresh generation: {', '.join(self.sources)}")
         if self.references:
-            shown = "; ".join(self.references[:5]) + (f"; ... ({len(self.references)} in all)" if len(self.references) > 5 else "")
+            more = f"; ... ({len(self.references)} in all)" if len(self.references) > 5 else ""
+            shown = "; ".join(self.references[:5]) + more
             parts.append(f"reference values differ beyond tolerance: {shown}")
         return "; ".join(parts) or "up to date"
 

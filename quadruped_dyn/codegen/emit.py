@@ -25,6 +25,7 @@ from quadruped_dyn.dynamics.grf import grf_solve
 from quadruped_dyn.dynamics.newton_euler import full_dynamics
 from quadruped_dyn.dynamics.reduced_projection import reduced_projection
 from quadruped_dyn.errors import InputError
+from quadruped_dyn.files.safe_write import output_path, write_text
 from quadruped_dyn.model.robot import Robot
 from quadruped_dyn.model.stance import STANCE_SETS, StanceSet, stance_set
 
@@ -296,11 +297,7 @@ def generate(robot: Robot, out_dir: Path, precision: str = "double",
         "Makefile": (TEMPLATES / "Makefile").read_text().replace("ROBOT ?= paper", f"ROBOT ?= {name[3:]}"),
         **sources,
     }
-    paths = []
-    for file_name, text in files.items():
-        (out_dir / file_name).write_text(text)
-        paths.append(out_dir / file_name)
-    return paths
+    return [write_text(output_path(out_dir, file_name), text) for file_name, text in files.items()]
 
 
 # ----------------------------------------------------------------------------- reference values

@@ -23,7 +23,9 @@ from pathlib import Path
 from typing import Any
 
 from quadruped_dyn.errors import InputError
-from quadruped_dyn.model.robot import ROBOT_NAMES, robot_path
+from quadruped_dyn.files.paths import writable_dir
+from quadruped_dyn.files.safe_write import output_dir, output_path, write_text
+from quadruped_dyn.model.robot import robot_name, robot_path
 from quadruped_dyn.report.gather import (
     CHECK_SAMPLES,
     FRICTION_MU,
@@ -73,10 +75,9 @@ def prepare(robot_arg: str, out: str | Path) -> tuple[Path, Path]:
     """Validate the arguments before any work: (URDF path, the robot's output directory).
     InputError for an unknown robot or an output directory that cannot be written."""
     urdf = robot_path(robot_arg)
-    name = robot_arg if robot_arg in ROBOT_NAMES else urdf.stem  # as load_robot names it
-    target = Path(out) / name
+    # as load_robot names it: a safe name, one path component; never a link out of --out
+    target = output_dir(writable_dir(out, f"--out '{out}'"), robot_name(urdf))
     try:
-        target.mkdir(parents=True, exist_ok=True)
         probe = target / f".write-test-{os.getpid()}"
         probe.write_text("")
         probe.unlink()
@@ -219,6 +220,6 @@ def build_report(robot_arg: str = "paper", out: str | Path = "results", fast: bo
     path = target / "report.html"
     subtitle = (f"{robot.urdf} — built {datetime.now(timezone.utc):%Y-%m-%d %H:%M} UTC by quadruped-dyn report"
                 + (" --fast" if fast else ""))
-    path.write_text(page(f"quadruped_dyn report: {robot.name}", subtitle, sections))
+    write_text(output_path(target, "report.html"), page(f"quadruped_dyn report: {robot.name}", subtitle, sections))
     done()
     return ReportResult(path, sections)

@@ -17,6 +17,7 @@ from typing import Any
 import numpy as np
 
 from quadruped_dyn.errors import InputError
+from quadruped_dyn.files.safe_write import output_dir
 from quadruped_dyn.model.leg import JOINT_ROLES
 from quadruped_dyn.model.robot import Robot, load_robot
 from quadruped_dyn.report.html import png_image
@@ -175,7 +176,7 @@ def generated_c(robot: Robot, out: Path) -> dict[str, Any]:
     from quadruped_dyn.references.pinocchio import PinocchioReference
     from quadruped_dyn.tolerances import REL_TOL_TERMS
 
-    directory = out / "c"
+    directory = output_dir(out, "c")
     paths = generate_checked(robot, directory)
     work = work_sizes(paths[1].read_text())
 
