@@ -40,7 +40,7 @@ from quadruped_dyn.report.gather import (
     symbolic_data,
     versions,
 )
-from quadruped_dyn.report.html import Section, figure, page
+from quadruped_dyn.report.html import Section, esc, figure, page
 
 
 class Progress:
@@ -111,7 +111,7 @@ class ReportResult:
 
 def _failed(key: str, title: str, e: Exception) -> Section:
     message = f"{type(e).__name__}: {str(e).strip().splitlines()[0] if str(e).strip() else ''}"
-    return Section(key, title, "FAIL", message[:160], f'<p class="warn">Could not build this section: {message}</p>')
+    return Section(key, title, "FAIL", message[:160], f'<p class="warn">Could not build this section: {esc(message)}</p>')
 
 
 def build_report(robot_arg: str = "paper", out: str | Path = "results", fast: bool = False,
