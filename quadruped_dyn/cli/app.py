@@ -78,6 +78,12 @@ def _flush_stdout_quietly() -> None:
         os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
 
 
+def echo(text: object) -> None:
+    """One line of a command's output, control characters escaped (names and paths from input
+    may carry terminal escape sequences)."""
+    click.echo(printable(text))
+
+
 def require_tools(*tools: str) -> None:
     missing = [t for t in tools if shutil.which(t) is None]
     if missing:

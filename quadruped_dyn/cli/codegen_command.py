@@ -6,8 +6,9 @@ import sys
 
 import click
 
-from quadruped_dyn.cli.app import EXIT_CHECK_FAILED
+from quadruped_dyn.cli.app import EXIT_CHECK_FAILED, echo
 from quadruped_dyn.errors import InputError
+from quadruped_dyn.files.names import printable
 from quadruped_dyn.files.paths import writable_dir
 from quadruped_dyn.model.robot import load_robot
 
@@ -27,9 +28,9 @@ def codegen(robot: str, out_dir: str, precision: str, check: bool) -> None:
     r = load_robot(robot)
     if check:
         if not Path(out_dir).is_dir():
-            raise InputError(f"--out '{out_dir}' is not a directory; expected the directory to compare (--check)")
+            raise InputError(f"--out '{printable(out_dir)}' is not a directory; expected the directory to compare (--check)")
         diff = compare_generation(r, Path(out_dir), precision)  # the precision asked for, not always double
-        click.echo(f"{out_dir} ({precision}): {diff.summary()}")
+        echo(f"{out_dir} ({precision}): {diff.summary()}")
         sys.exit(EXIT_CHECK_FAILED if diff else 0)
     for path in generate_checked(r, writable_dir(out_dir, f"--out '{out_dir}'"), precision):
-        click.echo(f"wrote {path}")
+        echo(f"wrote {path}")

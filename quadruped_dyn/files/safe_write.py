@@ -6,7 +6,8 @@ separator, not ``.``/``..``, no NUL), so it lies in ``out_dir`` itself (a link a
 replaced by the write, not followed). ``write_bytes`` /
 ``write_text`` create a new temporary file beside the target (``O_CREAT | O_EXCL``: never an
 existing file or link) and rename it over the target atomically: a symlink already at the target
-is replaced, not written through, and a reader never sees a partial file. An OSError (a full disk,
+is replaced, not written through, and a reader never sees a partial file; anything else that is not
+a regular file (a directory, a device such as /dev/full, a FIFO) is refused, never replaced. An OSError (a full disk,
 a read-only directory, a directory in the way) is an ``InputError`` naming the file.
 """
 
@@ -44,6 +45,8 @@ def _umask() -> int:
 def write_bytes(path: str | Path, data: bytes) -> Path:
     """Write ``data`` to ``path`` by create-new + atomic rename (see the module docstring)."""
     path = Path(path)
+    if path.exists() and not path.is_symlink() and not path.is_file():  # a directory, a device, a FIFO
+        raise InputError(f"cannot write '{printable(path)}': it exists and is not a regular file; expected a file path")
     try:
         fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name[:100]}.", suffix=".partial")
     except OSError as e:
