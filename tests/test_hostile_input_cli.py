@@ -13,6 +13,7 @@ from pathlib import Path
 import pytest
 from click.testing import CliRunner
 
+from quadruped_dyn.checks import c_reference
 from quadruped_dyn.cli import main
 from quadruped_dyn.codegen import emit as codegen
 from quadruped_dyn.experiment import paper_experiment as validation
@@ -35,6 +36,7 @@ def no_work(monkeypatch):
 
     monkeypatch.setattr(validation, "run_experiment", tripwire)
     monkeypatch.setattr(codegen, "generate", tripwire)
+    monkeypatch.setattr(c_reference, "generate", tripwire)  # bound by name there: patched and restored too
 
 
 def _cli(*args: str, stdout: object = subprocess.PIPE, env: dict[str, str] | None = None) -> subprocess.CompletedProcess:
