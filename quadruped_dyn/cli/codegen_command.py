@@ -32,5 +32,5 @@ def codegen(robot: str, out_dir: str, precision: str, check: bool) -> None:
         diff = compare_generation(r, Path(out_dir), precision)  # the precision asked for, not always double
         echo(f"{out_dir} ({precision}): {diff.summary()}")
         sys.exit(EXIT_CHECK_FAILED if diff else 0)
-    for path in generate_checked(r, writable_dir(out_dir, f"--out '{out_dir}'"), precision):
+    for path in generate_checked(r, writable_dir(out_dir, f"--out '{out_dir}'"), precision).all():
         echo(f"wrote {path}")

@@ -13,7 +13,6 @@ trunk's spatial acceleration, as everywhere in the project.
 
 from __future__ import annotations
 
-import os
 import sys
 import time
 from collections.abc import Callable
@@ -22,13 +21,13 @@ from datetime import datetime, timezone
 from pathlib import Path
 from typing import Any
 
-from quadruped_dyn.errors import InputError
 from quadruped_dyn.files.paths import writable_dir
 from quadruped_dyn.files.safe_write import output_dir, output_path, write_text
 from quadruped_dyn.model.robot import robot_name, robot_path
 from quadruped_dyn.report.gather import (
     CHECK_SAMPLES,
     FRICTION_MU,
+    cross_library,
     experiment,
     generated_c,
     grf_posture,
@@ -76,14 +75,8 @@ def prepare(robot_arg: str, out: str | Path) -> tuple[Path, Path]:
     InputError for an unknown robot or an output directory that cannot be written."""
     urdf = robot_path(robot_arg)
     # as load_robot names it: a safe name, one path component; never a link out of --out
-    target = output_dir(writable_dir(out, f"--out '{out}'"), robot_name(urdf))
-    try:
-        probe = target / f".write-test-{os.getpid()}"
-        probe.write_text("")
-        probe.unlink()
-    except OSError as e:
-        raise InputError(f"cannot write to '{target}' ({e.strerror}); expected a writable --out directory") from e
-    return urdf, target
+    target = output_dir(writable_dir(out, f"--out '{out}'", "a writable --out directory"), robot_name(urdf))
+    return urdf, writable_dir(target, f"--out '{target}'", "a writable --out directory")
 
 
 # ----------------------------------------------------------------------------- gathering
@@ -147,12 +140,16 @@ def build_report(robot_arg: str = "paper", out: str | Path = "results", fast: bo
     attempt("robot", "The robot", robot_section)
     done()
 
-    done = progress.step(f"every term against Pinocchio ({samples} random states)")
+    done = progress.step(f"every term against Pinocchio ({samples} random states) and other libraries")
     check: dict[str, Any] | None = None
     try:
         from quadruped_dyn.checks.terms import run_check
 
         check = run_check(robot, samples, 0, progress=lambda n: progress.count(n, samples)).as_dict()
+        try:  # MuJoCo and iDynTree as references, when installed; a failure here is shown, the terms are kept
+            check = {**check, **cross_library(robot)}
+        except Exception as e:
+            check = {**check, "cross_library_passed": False, "cross_library_note": f"could not run: {type(e).__name__}: {e}"}
         sections.append(rs.terms_section(check))
     except Exception as e:
         sections.append(_failed("terms", "Every term against Pinocchio", e))
