@@ -22,9 +22,11 @@ def robots() -> None:
 @click.command()
 @click.argument("robot")
 @click.option("--json", "as_json", is_flag=True, help="Print JSON instead of a table.")
-def info(robot: str, as_json: bool) -> None:
+@click.option("--foot-frames", default=None, metavar="FL,FR,BL,BR",
+              help="The foot frame of each leg (comma-separated, leg order FL, FR, BL, BR) instead of the chosen ones.")
+def info(robot: str, as_json: bool, foot_frames: str | None) -> None:
     """Legs, joints, link lengths, masses and standing foot positions of ROBOT (name or URDF path)."""
-    data = robot_info(load_robot(robot))
+    data = robot_info(load_robot(robot, foot_frames=foot_frames))
     if as_json:
         click.echo(json.dumps(data, indent=2))
         return

@@ -220,3 +220,25 @@ def test_parser_errors_are_one_line(tmp_path, what):
     assert proc.returncode == 2 and proc.stdout == "", proc.stderr
     lines = proc.stderr.strip().splitlines()
     assert len(lines) == 1 and lines[0].startswith("error: ") and "Traceback" not in proc.stderr, proc.stderr
+
+
+def test_foot_frames_on_the_command_line(tmp_path):
+    """`info --foot-frames` names the feet; a wrong list is one line, exit 2; without it the
+    warning says which frame was chosen."""
+    import json
+
+    from click.testing import CliRunner
+
+    from quadruped_dyn.cli import main
+
+    sensor = _with_extra_frames(tmp_path, {"foot_sensor": 0.05})
+    chosen = CliRunner().invoke(main, ["info", str(sensor), "--json"])
+    assert chosen.exit_code == 0 and "warning: leg FL: foot frame 'FL_foot'" in chosen.stderr
+    named = CliRunner().invoke(main, ["info", str(sensor), "--json", "--foot-frames",
+                                      "FL_foot_sensor,FR_foot_sensor,BL_foot_sensor,BR_foot_sensor"])
+    legs = json.loads(named.stdout)["legs"]
+    assert named.exit_code == 0 and [leg["foot_frame"] for leg in legs] == [f"{x}_foot_sensor" for x in ("FL", "FR", "BL", "BR")]
+    assert legs[0]["shank_length_m"] == pytest.approx(0.05, abs=1e-9)
+    for bad in ("FL_foot", "a,b,c,d"):
+        result = CliRunner().invoke(main, ["info", str(sensor), "--foot-frames", bad])
+        assert result.exit_code == 2 and result.stderr.count("\n") == 1 and "foot" in result.stderr, result.output
