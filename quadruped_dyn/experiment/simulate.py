@@ -276,7 +276,7 @@ def integrate_phases(plan: Plan, y: np.ndarray, horizon: float, dt: float, integ
         if integrator == "rk4":
             y = _rk4_segment(f, y, t0, t1, dt, inside, rec, proj)
         else:
-            y = _dop853_segment(f, y, t0, t1, rtol, inside, rec, proj)
+            y = _dop853_segment(f, y, t0, t1, rtol, inside, rec, proj, progress)
         if progress:
             progress(float(t1))
     return y
@@ -344,10 +344,12 @@ def _rk4_segment(f: Callable[[float, np.ndarray], np.ndarray], y: np.ndarray, t0
 
 def _dop853_segment(f: Callable[[float, np.ndarray], np.ndarray], y: np.ndarray, t0: float, t1: float, rtol: float,
                     samples: np.ndarray, record: Callable[[float, np.ndarray], None],
-                    project: Callable[[float, np.ndarray], np.ndarray] | None = None) -> np.ndarray:
+                    project: Callable[[float, np.ndarray], np.ndarray] | None = None,
+                    progress: Progress | None = None) -> np.ndarray:
     """DOP853 over [t0, t1]; ``project`` (if given) maps the state back onto the constraint
     manifold after every accepted step (coordinate projection: the step's end value and its
-    stored derivative are replaced, so the next step starts on the manifold)."""
+    stored derivative are replaced, so the next step starts on the manifold); ``progress`` gets
+    the time reached after every step."""
     solver = DOP853(f, t0, y, t1, rtol=rtol, atol=rtol)
     pending = list(samples)
     while pending and pending[0] <= t0 + 1e-12:
@@ -363,4 +365,6 @@ def _dop853_segment(f: Callable[[float, np.ndarray], np.ndarray], y: np.ndarray,
         while pending and pending[0] <= solver.t + 1e-12:
             ts = pending.pop(0)
             record(ts, solver.y if abs(ts - solver.t) < 1e-12 else dense(ts))
+        if progress is not None:
+            progress(float(solver.t))
     return np.asarray(solver.y)
