@@ -94,3 +94,18 @@ def test_all_feet_in_one_call_equal_the_per_leg_functions(paper):
             s = slice(3 * i, 3 * i + 3)
             np.testing.assert_array_equal(r[:, i], np.asarray(kin[i].foot_position(q[s])).ravel())
             np.testing.assert_array_equal(J[:, s], np.asarray(kin[i].foot_jacobian(q[s])))
+
+
+def test_rigid_contact_fast_path_equals_the_reference_bit_for_bit(paper):
+    """The physics check's per-evaluation KKT solve gives ``constrained_forward_dynamics``'s a exactly."""
+    from quadruped_dyn.experiment.rigid_contact import _kkt_accelerations
+    from quadruped_dyn.references.pinocchio import PinocchioReference
+
+    ref = PinocchioReference(paper)
+    rng = np.random.default_rng(2)
+    for stance in [(0, 3), (0, 1, 3), (0, 1, 2, 3), ()]:
+        quat = rng.normal(size=4)
+        q = np.concatenate([rng.normal(size=3), quat / np.linalg.norm(quat), rng.normal(size=12) * 0.3])
+        v, tau = rng.normal(size=18), rng.normal(size=12)
+        expected, _ = ref.constrained_forward_dynamics(q, v, tau, stance)
+        np.testing.assert_array_equal(_kkt_accelerations(ref, q, v, tau, stance), expected)
