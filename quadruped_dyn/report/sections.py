@@ -268,7 +268,9 @@ def _rest(data: dict[str, Any], shown: Sequence[str]) -> str:
 
 #: What each run of the experiment is (experiment.paper_experiment's runs).
 RUN_NOTES = {"paper": "id_r's torques, roll moment applied (the paper's check)", "physical": "roll unactuated",
-             "twin": "paper, initial state one ulp up", "refined": "paper, tighter tolerance or half the step"}
+             "twin": "paper, initial state one ulp up", "refined": "paper, tighter tolerance or half the step",
+             "plus_1pct": "1.01 × id_r's torques, roll unactuated (physics check)",
+             "pd": "1.01 × id_r's torques + joint PD, roll unactuated (physics check)"}
 
 
 def runs_table(runs: dict[str, Any]) -> str:
