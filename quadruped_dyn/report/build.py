@@ -22,7 +22,8 @@ from pathlib import Path
 from typing import Any
 
 from quadruped_dyn.files.paths import writable_dir
-from quadruped_dyn.model.robot import ROBOT_NAMES, Robot, robot_path
+from quadruped_dyn.files.safe_write import output_dir, output_path, write_text
+from quadruped_dyn.model.robot import Robot, robot_name, robot_path
 from quadruped_dyn.report.gather import (
     CHECK_SAMPLES,
     FRICTION_MU,
@@ -38,7 +39,7 @@ from quadruped_dyn.report.gather import (
     symbolic_data,
     versions,
 )
-from quadruped_dyn.report.html import Section, figure, page
+from quadruped_dyn.report.html import Section, esc, figure, page
 
 
 class Progress:
@@ -73,8 +74,8 @@ def prepare(robot_arg: str, out: str | Path) -> tuple[Path, Path]:
     """Validate the arguments before any work: (URDF path, the robot's output directory).
     InputError for an unknown robot or an output directory that cannot be written."""
     urdf = robot_path(robot_arg)
-    name = robot_arg if robot_arg in ROBOT_NAMES else urdf.stem  # as load_robot names it
-    target = Path(out) / name
+    # as load_robot names it: a safe name, one path component; never a link out of --out
+    target = output_dir(writable_dir(out, f"--out '{out}'", "a writable --out directory"), robot_name(urdf))
     return urdf, writable_dir(target, f"--out '{target}'", "a writable --out directory")
 
 
@@ -103,7 +104,7 @@ class ReportResult:
 
 def _failed(key: str, title: str, e: Exception) -> Section:
     message = f"{type(e).__name__}: {str(e).strip().splitlines()[0] if str(e).strip() else ''}"
-    return Section(key, title, "FAIL", message[:160], f'<p class="warn">Could not build this section: {message}</p>')
+    return Section(key, title, "FAIL", message[:160], f'<p class="warn">Could not build this section: {esc(message)}</p>')
 
 
 @dataclass
@@ -154,7 +155,7 @@ def build_report(robot_arg: str = "paper", out: str | Path = "results", fast: bo
     path = target / "report.html"
     subtitle = (f"{robot.urdf} — built {datetime.now(timezone.utc):%Y-%m-%d %H:%M} UTC by quadruped-dyn report"
                 + (" --fast" if fast else ""))
-    path.write_text(page(f"quadruped_dyn report: {robot.name}", subtitle, sections))
+    write_text(output_path(target, "report.html"), page(f"quadruped_dyn report: {robot.name}", subtitle, sections))
     done()
     return ReportResult(path, sections)
 

@@ -97,7 +97,8 @@ def terms_section(check: dict[str, Any] | None) -> Section:
     rows = [[t["name"], num(t["max_abs_err"]),
              cell(num(t["max_rel_err"]), grade(t["max_rel_err"], t["tol"])), num(t["tol"], ".0e"),
              cell(badge("pass" if t["passed"] else "FAIL"))] for t in terms]
-    worst = max((t["max_rel_err"] for t in terms), default=float("nan"))
+    # a non-finite error (NaN/inf, None once through JSON) is the worst of all: shown, never raised on
+    worst = max((t["max_rel_err"] if _finite(t["max_rel_err"]) else float("inf") for t in terms), default=float("nan"))
     ok = bool(check.get("passed")) and all(_finite(t["max_rel_err"]) for t in terms)
     body = [
         f"<p>{check.get('samples')} random states (seed {check.get('seed')}): joint angles inside limits, random "
