@@ -36,6 +36,7 @@ from quadruped_dyn.dynamics.reduced import reduced_model
 from quadruped_dyn.experiment.gait import Gait, Plan, gait_plan, support_margin
 from quadruped_dyn.experiment.rigid_contact import simulate_rigid
 from quadruped_dyn.experiment.simulate import IDENTITY_QUAT, RTOL, IkTorques, ReducedDynamics, Run, TorqueLaw, simulate_reduced
+from quadruped_dyn.experiment.torque_table import IkTorqueTable
 from quadruped_dyn.model.leg import JOINT_ROLES
 from quadruped_dyn.model.robot import Robot
 from quadruped_dyn.model.stance import StanceSet
@@ -168,7 +169,7 @@ def run_experiment(robot: Robot, gait: Gait, dynamics: ReducedDynamics, horizon:
     """Every run ``validate`` reports (see the module docstring); ``progress`` gets the
     simulated seconds of each finished stretch."""
     plan = gait_plan(robot, gait)
-    ik = IkTorques(plan, dynamics)
+    ik = IkTorqueTable(plan, dynamics)  # the runs' reference torques; the compared reference stays exact
     done = [0.0]
 
     def tick(t: float) -> None:  # per-run progress -> total seconds simulated
@@ -199,7 +200,7 @@ def run_experiment(robot: Robot, gait: Gait, dynamics: ReducedDynamics, horizon:
             exp.rigid[law.name] = simulate_rigid(plan, ik, law, horizon, dt, integrator, progress=tick)
     # the planned grid, also when the 'paper' run stopped early (its own times would shrink the reference)
     grid = np.arange(int(np.floor(horizon / dt + 1e-9)) + 1) * dt
-    refs = [ik(float(t), plan.stance(float(t)))[0] for t in grid]
+    refs = [ik.exact(float(t), plan.stance(float(t)))[0] for t in grid]
     exp.reference = {"t": grid, "q": np.array([r.q_r for r in refs]), "qd": np.array([r.qd_r for r in refs]),
                      "qdd": np.array([r.qdd_r for r in refs])}
     return exp
