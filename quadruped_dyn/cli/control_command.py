@@ -15,13 +15,13 @@ from quadruped_dyn.model.robot import load_robot
 @click.argument("robot")
 @click.option("--gait", "gait_name", default="walk", show_default=True, help="walk (static, 3 feet) or trot.")
 @click.option("--controller", "controllers", multiple=True, metavar="NAME",
-              help="pd, ff+pd, ct, ct+att (repeatable) [default: all].")
+              help="pd, ff+pd, ct, id+pd, ff+pd+level, ct+level (repeatable) [default: all].")
 @click.option("--cycles", default=10, show_default=True, type=int, help="Gait cycles to simulate.")
 @click.option("--rate", "rate_hz", default=1000.0, show_default=True, type=float, help="Control rate, Hz.")
 @click.option("--timestep", default=0.0005, show_default=True, type=float, help="MuJoCo's step, s.")
 @click.option("--mu", default=0.8, show_default=True, type=float, help="Friction coefficient of feet and floor.")
-@click.option("--kp-per-kg", default=None, type=float, help="Joint PD stiffness, N m/rad per kg [default: 10].")
-@click.option("--kd-per-kg", default=None, type=float, help="Joint PD damping, N m s/rad per kg [default: 0.3].")
+@click.option("--kp-per-kg", default=None, type=float, help="Joint PD stiffness, N m/rad per kg [default: 20].")
+@click.option("--kd-per-kg", default=None, type=float, help="Joint PD damping, N m s/rad per kg [default: 0.5].")
 @click.option("--out", "out_dir", default="results", show_default=True, type=click.Path(),
               help="Directory for the JSON, CSV, plots and animation.")
 @click.option("--no-animation", is_flag=True, help="Skip the animation.")
@@ -36,7 +36,7 @@ def control(robot: str, gait_name: str, controllers: tuple[str, ...], cycles: in
 
     from quadruped_dyn.control.closed_loop import prepare, run_all
     from quadruped_dyn.control.controllers import Gains
-    from quadruped_dyn.control.outputs import animate, output_paths, plot, plot_grf, write_csv, write_json
+    from quadruped_dyn.control.outputs import write_all
     from quadruped_dyn.control.plant import PlantOptions
     from quadruped_dyn.control.run import LoopOptions
 
@@ -55,15 +55,7 @@ def control(robot: str, gait_name: str, controllers: tuple[str, ...], cycles: in
             done[0] = max(done[0], ms)
 
         run_all(study, progress=tick, keep_qpos=not no_animation)
-    paths = output_paths(out, study.robot.name, gait_name)
-    data = write_json(paths["json"], study)
-    write_csv(paths["csv"], study)
-    plot(paths["plot"], study)
-    plot_grf(paths["grf_plot"], study)
-    if not no_animation:
-        res = study.results
-        best = max(res, key=lambda n: (res[n]["simulated_s"], -(res[n]["tracking"]["rms_rad"] or 1e9)))
-        animate(paths["animation"], study, best)
+    data, paths = write_all(out, study, animation=not no_animation)
     if as_json:
         click.echo(json.dumps(data, indent=2))
         return

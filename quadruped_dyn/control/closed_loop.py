@@ -9,7 +9,8 @@ from typing import Any
 from quadruped_dyn.control.controllers import Gains, GeneratedC, parse_controllers
 from quadruped_dyn.control.measures import summary
 from quadruped_dyn.control.plant import Plant, PlantOptions, build_plant
-from quadruped_dyn.control.run import LoopOptions, Progress, Trace, reference_cycle, run_controller, settled_state
+from quadruped_dyn.control.reference import reference_cycle
+from quadruped_dyn.control.run import LoopOptions, Progress, Trace, run_controller, settled_state
 from quadruped_dyn.errors import InputError
 from quadruped_dyn.experiment.gait import GAITS, Plan, gait_plan
 from quadruped_dyn.model.robot import Robot

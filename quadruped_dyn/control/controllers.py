@@ -12,6 +12,10 @@ CasADi graph.
 * ``ff+pd``: tau = id_r(q_ref, qd_ref, qdd_ref, R = I)[:12] + the same PD: the paper's
   torques along the plan (its 13th entry, the roll moment the feet cannot produce, is
   not applied: no joint actuates the roll).
+* ``ct``, ``id+pd`` and the ``+level`` variants take the stance set of their model from the plan
+  and the foot contact switches (``model_stance``): a foot the plan has in stance but which
+  is off the ground is a swing leg for the model (a lightly loaded foot that lifts early, a
+  late touch-down); pd and ff+pd use the plan's stance only.
 * ``ct``: computed torque on the reduced model at the **measured** state,
   tau = [M_r(q, R) (qdd_ref + Kp_a e + Kd_a edot) + CG_r(q, qd, R)][:12], e = q_ref - q.
   With two stance feet the 13th coordinate is the trunk roll phi, measured by the IMU
@@ -19,16 +23,15 @@ CasADi graph.
   acceleration -Kp_a phi - Kd_a phid, and the 13th row of the result -- the moment about
   the foot-to-foot line it would take -- is dropped (unactuated), so the roll is only
   influenced through the coupling of M_r's first 12 rows.
-* ``ct+att``: ``ct`` with trunk-attitude feedback through the GRF model: the commanded
-  reduced accelerations of the stance legs also carry the joint accelerations that rotate
-  the trunk about its origin with alpha_c = -Kp_att (roll, pitch, 0) - Kd_att omega_b
-  (trunk frame; feet held), qdd_i += -J_i^-1 (alpha_c x r_i), so M_r turns them into joint
-  torques whose ground forces (the paper's GRF model) produce the corrective moment. With
-  two feet the part about the foot-to-foot line cannot be produced by the feet either; this
-  controller also commands the roll coordinate's acceleration and, unlike ``ct``, keeps
-  the swing legs' share of the 13th row: the joint accelerations of the swing legs are
-  changed (least squares) so that the 13th row of M_r qdd + CG_r is zero -- the swing legs'
-  reaction is used to roll the trunk as commanded, as far as it can.
+* ``id+pd``: id_r at the **measured** state (joint q, qd; roll and roll rate from the IMU for
+  two feet; the trunk orientation) with the reference's accelerations, plus the same joint PD.
+* ``ff+pd+level`` and ``ct+level``: the same, tracking the reference levelled by the IMU
+  (``levelled``): trunk-attitude feedback through the legs -- the stance legs' targets tilt
+  the trunk back to level (their forces, through the ground, produce the correcting moment),
+  the swing feet land on the ground whatever the tilt. With two feet the moment about the
+  foot-to-foot line, which the paper's model leaves unbalanced and which rolls the trunk,
+  cannot be produced by the stance feet: what counters it is the swing pair, whose feet are
+  brought down to the ground on the side the trunk rolls towards and catch it at touch-down.
 
 Gains are per kg of robot (``Gains``): Kp = kp_per_kg m, Kd = kd_per_kg m for the joint PD
 (pd, ff+pd); the computed-torque controllers' gains are accelerations (1/s^2, 1/s), a
@@ -47,8 +50,8 @@ import pinocchio as pin
 
 from quadruped_dyn.codegen.emit import reduced_symbol
 from quadruped_dyn.codegen.library import CompiledFunction, compiled_library
-from quadruped_dyn.control.plant import Measurement
-from quadruped_dyn.dynamics.kinematics import robot_kinematics
+from quadruped_dyn.control.plant import Command, Measurement
+from quadruped_dyn.control.reference import Reference
 from quadruped_dyn.errors import InputError
 from quadruped_dyn.experiment.plan_ik import ReferenceSample
 from quadruped_dyn.model.robot import Robot
@@ -56,12 +59,13 @@ from quadruped_dyn.model.stance import StanceSet
 
 IDENTITY_QUAT = np.array([0.0, 0.0, 0.0, 1.0])
 
-#: Joint PD gains per kg of robot: the paper robot (10 kg) gets 100 N m/rad and 3 N m s/rad.
-#: Stiffer than the physics check's (3 and 0.15 per kg, where contacts are rigid): with
-#: those, on MuJoCo's soft contacts, the paper robot's walk tracks to ~0.05 rad and topples in
-#: its second cycle under ff+pd; the walk's CoM margin is 2 cm.
-KP_PER_KG = 10.0  # N m / rad / kg
-KD_PER_KG = 0.3  # N m s / rad / kg
+#: Joint PD gains per kg of robot: the paper robot (10 kg) gets 200 N m/rad and 5 N m s/rad,
+#: run by the joint drivers at the plant's rate (``plant.Command``). Stiffer than the physics
+#: check's (3 and 0.15 per kg, rigid contacts): measured on the paper robot's walk under ff+pd
+#: on MuJoCo's soft contacts, 3 cycles: 5 and 0.2 per kg fall in the 2nd cycle, 10 and 0.3
+#: in the 3rd, 20 and 0.5 stay up with 0.005 rad RMS tracking. The walk's CoM margin is 2 cm.
+KP_PER_KG = 20.0  # N m / rad / kg
+KD_PER_KG = 0.5  # N m s / rad / kg
 
 #: Natural frequency (rad/s) and damping ratio of the computed-torque controllers' error
 #: dynamics: 20 rad/s (3.2 Hz) is well below the 1 kHz loop and the contact's ~50 Hz
@@ -69,9 +73,6 @@ KD_PER_KG = 0.3  # N m s / rad / kg
 CT_OMEGA = 20.0
 CT_ZETA = 1.0
 
-#: Trunk attitude loop of ``ct+att``: natural frequency (rad/s) and damping ratio.
-ATT_OMEGA = 10.0
-ATT_ZETA = 1.0
 
 
 @dataclass(frozen=True)
@@ -80,8 +81,6 @@ class Gains:
     kd_per_kg: float = KD_PER_KG  # N m s / rad / kg
     ct_omega: float = CT_OMEGA  # rad/s
     ct_zeta: float = CT_ZETA
-    att_omega: float = ATT_OMEGA  # rad/s
-    att_zeta: float = ATT_ZETA
 
     def validate(self) -> None:
         for name, value in vars(self).items():
@@ -97,8 +96,8 @@ class Gains:
 class Controller(Protocol):
     name: str
 
-    def torques(self, ref: ReferenceSample, stance: StanceSet, meas: Measurement) -> np.ndarray:
-        """Joint torques (12,), N m, project order."""
+    def command(self, ref: ReferenceSample, stance: StanceSet, meas: Measurement) -> Command:
+        """This tick's command to the joint drivers (feedforward torques, PD target and gains)."""
         ...
 
 
@@ -144,20 +143,46 @@ class Pd:
         self.kp, self.kd = gains.kp_per_kg * robot.total_mass, gains.kd_per_kg * robot.total_mass
         self.c = c
 
-    def feedback(self, ref: ReferenceSample, meas: Measurement) -> np.ndarray:
-        return self.kp * (ref.q_r[:12] - meas.q) + self.kd * (ref.qd_r[:12] - meas.qd)
+    def pd(self, ref: ReferenceSample, tau: np.ndarray) -> Command:
+        """The joint PD to the reference, run by the drivers, plus a feedforward ``tau``."""
+        return Command(tau, ref.q_r[:12], ref.qd_r[:12], self.kp, self.kd)
 
-    def torques(self, ref: ReferenceSample, stance: StanceSet, meas: Measurement) -> np.ndarray:
-        return self.feedback(ref, meas)
+    def command(self, ref: ReferenceSample, stance: StanceSet, meas: Measurement) -> Command:
+        return self.pd(ref, np.zeros(12))
 
 
 class FfPd(Pd):
     name = "ff+pd"
 
-    def torques(self, ref: ReferenceSample, stance: StanceSet, meas: Measurement) -> np.ndarray:
+    def command(self, ref: ReferenceSample, stance: StanceSet, meas: Measurement) -> Command:
         n = 13 if len(stance.feet) == 2 else 12
         tau = self.c("id_r", stance, _pad(ref.q_r, n), _pad(ref.qd_r, n), _pad(ref.qdd_r, n), IDENTITY_QUAT)
-        return tau[:12] + self.feedback(ref, meas)
+        return self.pd(ref, tau[:12])
+
+
+class MeasuredIdPd(Pd):
+    """id_r at the **measured** state with the reference's accelerations, plus the same joint PD
+    (run by the drivers): the model's torques where the robot is, not where the plan is."""
+
+    name = "id+pd"
+
+    def command(self, ref: ReferenceSample, stance: StanceSet, meas: Measurement) -> Command:
+        stance = model_stance(stance, meas)
+        qdd = ref.qdd_r[:12]
+        q, qd = meas.q, meas.qd
+        if len(stance.feet) == 2:
+            roll, roll_rate = imu_roll(meas)
+            q, qd, qdd = np.append(q, roll), np.append(qd, roll_rate), np.append(qdd, 0.0)
+        tau = self.c("id_r", stance, q, qd, qdd, meas.quat)
+        return self.pd(ref, tau[:12])
+
+
+def model_stance(stance: StanceSet, meas: Measurement) -> StanceSet:
+    """The stance set of the computed-torque controllers' model: the plan's stance feet that the
+    foot contact switches report on the ground (a foot that lifts early or lands late is a swing
+    leg for the model), the plan's set if fewer than two remain (the reduced model needs two)."""
+    feet = tuple(i for i in stance.feet if meas.touching[i])
+    return StanceSet(feet) if len(feet) >= 2 else stance
 
 
 class ComputedTorque:
@@ -176,45 +201,57 @@ class ComputedTorque:
         return (np.append(meas.q, roll), np.append(meas.qd, roll_rate),
                 np.append(qdd, -self.kp * roll - self.kd * roll_rate))
 
-    def torques(self, ref: ReferenceSample, stance: StanceSet, meas: Measurement) -> np.ndarray:
+    def command(self, ref: ReferenceSample, stance: StanceSet, meas: Measurement) -> Command:
+        stance = model_stance(stance, meas)
         q, qd, qdd = self.commanded(ref, stance, meas)
         M = self.c("M_r", stance, q, meas.quat)
         CG = self.c("CG_r", stance, q, qd, meas.quat)
-        return (M @ qdd + CG)[:12]
+        return Command((M @ qdd + CG)[:12])
 
 
-class ComputedTorqueAttitude(ComputedTorque):
-    name = "ct+att"
-
-    def __init__(self, robot: Robot, gains: Gains, c: GeneratedC) -> None:
-        super().__init__(robot, gains, c)
-        self.kp_att, self.kd_att = gains.att_omega**2, 2 * gains.att_zeta * gains.att_omega
-        self.kin = robot_kinematics(robot)
-
-    def torques(self, ref: ReferenceSample, stance: StanceSet, meas: Measurement) -> np.ndarray:
-        q, qd, qdd = self.commanded(ref, stance, meas)
-        R = pin.Quaternion(meas.quat / np.linalg.norm(meas.quat)).toRotationMatrix()
-        roll, pitch, _ = pin.rpy.matrixToRpy(R)
-        alpha = -self.kp_att * np.array([roll, pitch, 0.0]) - self.kd_att * meas.omega_b
-        for i in stance.feet:
-            s = slice(3 * i, 3 * i + 3)
-            r = np.asarray(self.kin[i].foot_position(meas.q[s])).ravel()
-            J = np.asarray(self.kin[i].foot_jacobian(meas.q[s]))
-            qdd[s] += np.linalg.solve(J, -np.cross(alpha, r))
-        M = self.c("M_r", stance, q, meas.quat)
-        CG = self.c("CG_r", stance, q, qd, meas.quat)
-        if len(stance.feet) == 2:
-            qdd[12] = -self.kp_att * q[12] - self.kd_att * qd[12]
-            swing = np.concatenate([np.arange(3 * i, 3 * i + 3) for i in range(4) if i not in stance.feet])
-            row = M[12]
-            residual = row @ qdd + CG[12]  # the moment about the support line it would take, N m
-            a = row[swing]
-            if a @ a > 0:
-                qdd[swing] -= a * residual / (a @ a)
-        return (M @ qdd + CG)[:12]
+def levelled(ref: Reference, meas: Measurement) -> Reference:
+    """The reference corrected for the measured trunk tilt: each foot's target moved in the trunk
+    frame by delta x r_i, delta = (roll, pitch, 0) from the IMU -- where the plan's foot (on
+    the ground, or on its swing path) is seen from a trunk tilted by delta, to first order --
+    so that the stance legs push the trunk back to level and the swing feet land on the ground
+    rather than above or below it; the rates likewise with (omega_x, omega_y, 0). Through the
+    inverse foot Jacobians at the reference (``Reference.J_inv``): no kinematics per tick."""
+    R = pin.Quaternion(meas.quat / np.linalg.norm(meas.quat)).toRotationMatrix()
+    roll, pitch, _ = pin.rpy.matrixToRpy(R)
+    delta = np.array([roll, pitch, 0.0])
+    rate = np.array([meas.omega_b[0], meas.omega_b[1], 0.0])
+    dq = np.einsum("ijk,ik->ij", ref.J_inv, np.cross(delta, ref.r_feet)).ravel()
+    dqd = np.einsum("ijk,ik->ij", ref.J_inv, np.cross(rate, ref.r_feet)).ravel()
+    q, qd = ref.q_r.copy(), ref.qd_r.copy()
+    q[:12] += dq
+    qd[:12] += dqd
+    return Reference(q, qd, ref.qdd_r, ref.stance, ref.r_feet, ref.J_inv)
 
 
-CONTROLLERS = {c.name: c for c in (Pd, FfPd, ComputedTorque, ComputedTorqueAttitude)}
+class FfPdLevel(FfPd):
+    """``ff+pd`` tracking the IMU-levelled reference (``levelled``); the feedforward id_r stays
+    the plan's."""
+
+    name = "ff+pd+level"
+
+    def command(self, ref: ReferenceSample, stance: StanceSet, meas: Measurement) -> Command:
+        n = 13 if len(stance.feet) == 2 else 12
+        tau = self.c("id_r", stance, _pad(ref.q_r, n), _pad(ref.qd_r, n), _pad(ref.qdd_r, n), IDENTITY_QUAT)
+        assert isinstance(ref, Reference)
+        return self.pd(levelled(ref, meas), tau[:12])
+
+
+class ComputedTorqueLevel(ComputedTorque):
+    """``ct`` tracking the IMU-levelled reference (``levelled``)."""
+
+    name = "ct+level"
+
+    def command(self, ref: ReferenceSample, stance: StanceSet, meas: Measurement) -> Command:
+        assert isinstance(ref, Reference)
+        return super().command(levelled(ref, meas), stance, meas)
+
+
+CONTROLLERS = {c.name: c for c in (Pd, FfPd, ComputedTorque, MeasuredIdPd, FfPdLevel, ComputedTorqueLevel)}
 
 
 def parse_controllers(names: tuple[str, ...] | list[str]) -> list[str]:

@@ -6,9 +6,10 @@
 * **trunk drift** against the plan (trunk origin at the plan's position with R = I): height
   error (final, max |.|), roll / pitch max |.|, yaw final, forward and lateral position error
   (final), m and deg.
-* **foot slip**: for each foot and each interval in which the plan has it in stance, the largest
-  horizontal distance of the foot frame's origin from where it was at the interval's start
-  (m); max and median over intervals, per foot and overall.
+* **foot slip**: for each foot and each interval in which the plan has it in stance, the
+  horizontal path length of the foot frame's origin while MuJoCo has it on the ground (m; a
+  sphere rolling without slipping moves its centre too, by radius x its rolling angle, a few
+  mm); max and median over intervals, per foot and overall.
 * **GRF**: MuJoCo's contact forces vs the paper's GRF model at the same instants (samples every
   ``LoopOptions.grf_every`` ticks; only instants where MuJoCo's feet in contact are exactly the
   plan's stance), per stance kind (4, 3, 2 feet): per-foot force difference |f_paper - f_mujoco|
@@ -61,7 +62,13 @@ def trunk_drift(trace: Trace, plan: Plan) -> dict[str, Any]:
 
 
 def foot_slip(trace: Trace) -> dict[str, Any]:
+    """Per foot and plan-stance interval, the horizontal path length of the foot frame's origin
+    while MuJoCo has it on the ground (consecutive ticks both touching), m."""
     per_foot: list[list[float]] = [[] for _ in range(4)]
+    if trace.t.size < 2:
+        return {"max_m": None, "median_m": None, "per_foot_max_m": [None] * 4}
+    step = np.linalg.norm(np.diff(trace.feet[:, :, :2], axis=0), axis=2)  # (N-1, 4)
+    on = trace.touching[1:] & trace.touching[:-1]
     for i in range(4):
         inside = np.array([i in s for s in trace.stance])
         k = 0
@@ -72,8 +79,7 @@ def foot_slip(trace: Trace) -> dict[str, Any]:
             end = k
             while end < inside.size and inside[end]:
                 end += 1
-            xy = trace.feet[k:end, i, :2]
-            per_foot[i].append(float(np.linalg.norm(xy - xy[0], axis=1).max()))
+            per_foot[i].append(float((step[k : end - 1, i] * on[k : end - 1, i]).sum()))
             k = end
     flat = [x for f in per_foot for x in f]
     return {"max_m": max(flat) if flat else None, "median_m": float(np.median(flat)) if flat else None,

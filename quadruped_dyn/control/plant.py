@@ -7,8 +7,14 @@ How the URDF becomes the plant (``build_plant``):
   ``accepted_urdf``; every change is listed in ``Plant.changes``). The URDF's joint limits
   (MuJoCo enforces them as soft limits) and ``<dynamics damping friction>`` are kept: they are
   the robot. The controllers' model knows neither.
-* The trunk on a free joint; one torque actuator per joint (project order FL, FR, BL, BR x HAA,
-  HFE, KFE), ``ctrl`` clamped at the URDF's effort limit.
+* The trunk on a free joint; per joint (project order FL, FR, BL, BR x HAA, HFE, KFE) the
+  low-level command of a legged robot's motor drivers (as Unitree's (q, dq, Kp, Kd, tau)):
+  tau_ff + Kp (q_des - q) + Kd (qd_des - qd), the PD evaluated by the drivers at every plant
+  step (MuJoCo position and velocity actuators; ``implicitfast`` treats the damping
+  implicitly), the feedforward held over the control tick; the sum clamped at the URDF's
+  effort limit (``actfrcrange`` of the joint). Robots like solo12 have links of ~1e-4 kg m^2:
+  a joint damping of a few 0.1 N m s/rad applied explicitly once per 1 ms tick is unstable
+  (Kd dt / I > 2), which is why real drivers run the PD at 10-40 kHz.
 * A ground plane and one contact sphere per foot, centred at the foot frame's origin (the
   paper's contact point), radius the foot link's collision sphere if the URDF has one there,
   else ``DEFAULT_FOOT_RADIUS``. The sphere touches the ground ``radius`` below the contact
@@ -76,6 +82,17 @@ class PlantOptions:
 
 
 @dataclass(frozen=True)
+class Command:
+    """One control tick's command per joint (12,): feedforward torque (N m), PD target and gains."""
+
+    tau: np.ndarray
+    q_des: np.ndarray | None = None
+    qd_des: np.ndarray | None = None
+    kp: float = 0.0  # N m / rad
+    kd: float = 0.0  # N m s / rad
+
+
+@dataclass(frozen=True)
 class Measurement:
     """What a robot measures: encoders and an IMU (exact here: no noise, no delay)."""
 
@@ -83,6 +100,7 @@ class Measurement:
     qd: np.ndarray  # (12,) joint rates, rad/s
     quat: np.ndarray  # (4,) trunk orientation x y z w (trunk -> world)
     omega_b: np.ndarray  # (3,) trunk angular velocity, trunk frame, rad/s
+    touching: np.ndarray  # (4,) foot contact switches (MuJoCo's contacts of the last step)
 
 
 @dataclass
@@ -104,13 +122,14 @@ class Plant:
         self.foot_geoms = np.array([m.geom(f"quadruped_dyn_foot_{leg.label}").id for leg in self.robot.legs])
         self.foot_sites = [m.site(f"quadruped_dyn_foot_{leg.label}").id for leg in self.robot.legs]
         self.floor_geom = m.geom("quadruped_dyn_floor").id
+        self._gains = (0.0, 0.0)
 
     # -------------------------------------------------------------------- state
     def measure(self) -> Measurement:
         d = self.data
         w, x, y, z = d.qpos[3:7]
         return Measurement(d.qpos[self.qpos_idx].copy(), d.qvel[self.dof_idx].copy(), np.array([x, y, z, w]),
-                           d.qvel[3:6].copy())
+                           d.qvel[3:6].copy(), self.contact_forces()[1])
 
     def full_state(self) -> tuple[np.ndarray, np.ndarray]:
         """The true state in the project's full coordinates: q (19,), v (18,)."""
@@ -148,10 +167,23 @@ class Plant:
     def trunk_position(self) -> np.ndarray:
         return self.data.qpos[:3].copy()
 
-    def step(self, tau: np.ndarray, substeps: int) -> None:
-        """Apply joint torques tau (12,) (MuJoCo clamps them at the effort limits) for ``substeps`` steps."""
-        self.data.ctrl[:] = tau
-        mujoco.mj_step(self.model, self.data, substeps)
+    def step(self, command: Command, substeps: int) -> None:
+        """Apply the command for ``substeps`` plant steps (the drivers' PD at every step; the sum
+        clamped at the effort limits)."""
+        m, d = self.model, self.data
+        d.ctrl[:12] = command.tau
+        d.ctrl[12:24] = command.q_des if command.q_des is not None else 0.0
+        d.ctrl[24:36] = command.qd_des if command.qd_des is not None else 0.0
+        if command.kp != self._gains[0] or command.kd != self._gains[1]:
+            m.actuator_gainprm[12:24, 0], m.actuator_biasprm[12:24, 1] = command.kp, -command.kp
+            m.actuator_gainprm[24:36, 0], m.actuator_biasprm[24:36, 2] = command.kd, -command.kd
+            self._gains = (command.kp, command.kd)
+        mujoco.mj_step(m, d, substeps)
+
+    def joint_torques(self) -> np.ndarray:
+        """(12,) the drivers' total torque of the last step before the effort clamp, N m."""
+        f = self.data.actuator_force
+        return f[:12] + f[12:24] + f[24:36]
 
     # -------------------------------------------------------------------- contacts
     def foot_positions(self) -> np.ndarray:
@@ -221,10 +253,18 @@ def _spec(text: str, robot: Robot, options: PlantOptions, floor_z: float, radius
         foot.add_geom(name=f"quadruped_dyn_foot_{leg.label}", type=mujoco.mjtGeom.mjGEOM_SPHERE, size=[radius, 0, 0],
                       friction=[options.mu, 0.005, 0.0001], condim=3, rgba=[0.1, 0.1, 0.1, 1])
     for name, limit in zip(robot.joint_names, effort):
-        act = spec.add_actuator(name=f"quadruped_dyn_tau_{name}", target=name)
-        act.trntype = mujoco.mjtTrn.mjTRN_JOINT
-        act.ctrllimited = mujoco.mjtLimited.mjLIMITED_TRUE
-        act.ctrlrange = [-limit, limit]
+        joint = spec.joint(name)
+        joint.actfrclimited = mujoco.mjtLimited.mjLIMITED_TRUE
+        joint.actfrcrange = [-limit, limit]
+    for kind in ("tau", "kp", "kd"):  # actuators 0-11 feedforward, 12-23 position, 24-35 velocity
+        for name in robot.joint_names:
+            act = spec.add_actuator(name=f"quadruped_dyn_{kind}_{name}", target=name)
+            act.trntype = mujoco.mjtTrn.mjTRN_JOINT
+            act.ctrllimited = mujoco.mjtLimited.mjLIMITED_FALSE
+            if kind == "kp":
+                act.set_to_position(kp=0.0)
+            elif kind == "kd":
+                act.set_to_velocity(kv=0.0)
     return spec
 
 

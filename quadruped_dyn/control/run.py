@@ -31,16 +31,16 @@ import math
 import time
 from collections.abc import Callable
 from dataclasses import dataclass, field
-from functools import cache
 
 import numpy as np
 
 from quadruped_dyn.codegen.library import CompiledFunction
 from quadruped_dyn.control.controllers import Controller, Gains, GeneratedC, Pd, make_controller
 from quadruped_dyn.control.plant import Plant, PlantOptions
+from quadruped_dyn.control.reference import reference_cycle
 from quadruped_dyn.errors import InputError
 from quadruped_dyn.experiment.gait import Plan
-from quadruped_dyn.experiment.plan_ik import ReferenceSample, reference
+from quadruped_dyn.experiment.plan_ik import ReferenceSample
 from quadruped_dyn.model.stance import StanceSet
 from quadruped_dyn.model.state import rotation
 from quadruped_dyn.references.pinocchio import PinocchioReference
@@ -78,42 +78,6 @@ class LoopOptions:
         return int(round(steps))
 
 
-#: The IK reference is computed at knots this far apart (s) and interpolated at the control
-#: rate: cubic Hermite in (q, qd), linear in qdd. Measured on the paper robot's walk against
-#: IK at every 1 ms tick: error ~1e-8 rad in q, ~1e-2 rad/s^2 in qdd (IK costs ~5 ms a sample
-#: here, 1.2 s of walk at 1 kHz would take 6 s per robot and gait).
-REFERENCE_KNOT_S = 0.005
-
-
-@cache
-def reference_cycle(plan: Plan, rate_hz: float) -> tuple[ReferenceSample, ...]:
-    """The IK reference at the control rate over one gait cycle (see the module docstring and
-    ``REFERENCE_KNOT_S``); the stance set of each tick is the plan's."""
-    period = plan.gait.period
-    m = max(1, int(round(period / REFERENCE_KNOT_S)))
-    h = period / m
-    knots, guess = [], None
-    for j in range(m + 1):
-        s = reference(plan, j * h, guess)
-        guess = s.q_r[:12]
-        knots.append(s)
-    Q = np.array([s.q_r for s in knots])
-    QD = np.array([s.qd_r for s in knots])
-    QDD = np.array([s.qdd_r for s in knots])
-    out = []
-    for k in range(int(round(period * rate_hz))):
-        t = k / rate_hz
-        j = min(int(t / h), m - 1)
-        u = t / h - j
-        h00, h10, h01, h11 = 2 * u**3 - 3 * u**2 + 1, u**3 - 2 * u**2 + u, -2 * u**3 + 3 * u**2, u**3 - u**2
-        d00, d10, d01, d11 = (6 * u**2 - 6 * u) / h, 3 * u**2 - 4 * u + 1, (-6 * u**2 + 6 * u) / h, 3 * u**2 - 2 * u
-        q = h00 * Q[j] + h10 * h * QD[j] + h01 * Q[j + 1] + h11 * h * QD[j + 1]
-        qd = d00 * Q[j] + d10 * QD[j] + d01 * Q[j + 1] + d11 * QD[j + 1]
-        qdd = (1 - u) * QDD[j] + u * QDD[j + 1]
-        out.append(ReferenceSample(q, qd, qdd, plan.stance(t)))
-    return tuple(out)
-
-
 @dataclass
 class Trace:
     """One closed-loop run, sampled at every control tick (arrays (N, ...))."""
@@ -124,7 +88,7 @@ class Trace:
     qd: np.ndarray
     q_ref: np.ndarray  # (N, 12)
     qd_ref: np.ndarray
-    tau: np.ndarray  # (N, 12) commanded torques, N m (before MuJoCo's clamp)
+    tau: np.ndarray  # (N, 12) the drivers' torques at the tick's last plant step, N m (before the effort clamp)
     trunk_p: np.ndarray  # (N, 3) world, m
     trunk_R: np.ndarray  # (N, 3, 3)
     feet: np.ndarray  # (N, 4, 3) foot frame origins, world, m
@@ -155,7 +119,7 @@ def settled_state(plant: Plant, plan: Plan, gains: Gains, c: GeneratedC, rate_hz
     hold = ReferenceSample(ref0.q_r[:12], np.zeros(12), np.zeros(12), four.feet)
     for _ in range(int(round(settle_s * rate_hz))):
         meas = plant.measure()
-        plant.step(c("G_r", four, meas.q, meas.quat) + pd.feedback(hold, meas), substeps)
+        plant.step(pd.pd(hold, c("G_r", four, meas.q, meas.quat)), substeps)
     q, _ = plant.full_state()
     stance0 = plan.stance(0.0)
     _, v, _ = PinocchioReference(plant.robot).reduced_motion(stance0, ref0.q_r, ref0.qd_r, ref0.qdd_r, q[3:7])
@@ -188,12 +152,12 @@ def run_controller(plant: Plant, plan: Plan, name: str, gains: Gains, options: L
             ref = cycle[k % len(cycle)]
             stance = StanceSet(ref.stance)
             try:
-                tau = controller.torques(ref, stance, meas)
+                command = controller.command(ref, stance, meas)
             except InputError as e:
                 stopped = f"controller failed at t = {t:.3f} s: {e}"
                 raise _Stop from e
             t1 = time.perf_counter_ns()
-            if not np.all(np.isfinite(tau)):
+            if not np.all(np.isfinite(command.tau)):
                 stopped = f"controller returned a non-finite torque at t = {t:.3f} s"
                 raise _Stop
             sample = k % options.grf_every == 0
@@ -201,8 +165,9 @@ def run_controller(plant: Plant, plan: Plan, name: str, gains: Gains, options: L
                 q_full, v_full = plant.full_state()
             p, R = plant.trunk_position(), plant.rotation()
             feet = plant.foot_positions()
-            plant.step(tau, substeps)
+            plant.step(command, substeps)
             t2 = time.perf_counter_ns()
+            tau = plant.joint_torques()
             f, touch = plant.contact_forces()
             for key, value in (("t", t), ("q", meas.q), ("qd", meas.qd), ("q_ref", ref.q_r[:12]), ("qd_ref", ref.qd_r[:12]),
                                ("tau", tau), ("p", p), ("R", R), ("feet", feet), ("f", f), ("touch", touch),

@@ -27,6 +27,7 @@ from quadruped_dyn.model.robot import ROBOT_NAMES, robot_path
 from quadruped_dyn.report.gather import (
     CHECK_SAMPLES,
     FRICTION_MU,
+    closed_loop,
     experiment,
     generated_c,
     grf_posture,
@@ -207,6 +208,7 @@ def build_report(robot_arg: str = "paper", out: str | Path = "results", fast: bo
     attempt("symbolic", "Symbolic terms", symbolic_section)
     done()
 
+    attempt("closed_loop", "Closed loop in MuJoCo", lambda: rs.closed_loop_section(closed_loop(robot, target, 1 if fast else 10)))
     done = progress.step("notebooks")
     if with_notebooks:
         attempt("notebooks", "Notebooks, executed", lambda: rs.notebooks_section(*notebooks(robot)))
