@@ -13,7 +13,6 @@ trunk's spatial acceleration, as everywhere in the project.
 
 from __future__ import annotations
 
-import os
 import sys
 import time
 from collections.abc import Callable
@@ -22,12 +21,13 @@ from datetime import datetime, timezone
 from pathlib import Path
 from typing import Any
 
-from quadruped_dyn.errors import InputError
+from quadruped_dyn.files.paths import writable_dir
 from quadruped_dyn.model.robot import ROBOT_NAMES, robot_path
 from quadruped_dyn.report.gather import (
     CHECK_SAMPLES,
     FRICTION_MU,
     closed_loop,
+    cross_library,
     experiment,
     generated_c,
     grf_posture,
@@ -76,14 +76,7 @@ def prepare(robot_arg: str, out: str | Path) -> tuple[Path, Path]:
     urdf = robot_path(robot_arg)
     name = robot_arg if robot_arg in ROBOT_NAMES else urdf.stem  # as load_robot names it
     target = Path(out) / name
-    try:
-        target.mkdir(parents=True, exist_ok=True)
-        probe = target / f".write-test-{os.getpid()}"
-        probe.write_text("")
-        probe.unlink()
-    except OSError as e:
-        raise InputError(f"cannot write to '{target}' ({e.strerror}); expected a writable --out directory") from e
-    return urdf, target
+    return urdf, writable_dir(target, f"--out '{target}'", "a writable --out directory")
 
 
 # ----------------------------------------------------------------------------- gathering
@@ -147,12 +140,16 @@ def build_report(robot_arg: str = "paper", out: str | Path = "results", fast: bo
     attempt("robot", "The robot", robot_section)
     done()
 
-    done = progress.step(f"every term against Pinocchio ({samples} random states)")
+    done = progress.step(f"every term against Pinocchio ({samples} random states) and other libraries")
     check: dict[str, Any] | None = None
     try:
         from quadruped_dyn.checks.terms import run_check
 
         check = run_check(robot, samples, 0, progress=lambda n: progress.count(n, samples)).as_dict()
+        try:  # MuJoCo and iDynTree as references, when installed; a failure here is shown, the terms are kept
+            check = {**check, **cross_library(robot)}
+        except Exception as e:
+            check = {**check, "cross_library_passed": False, "cross_library_note": f"could not run: {type(e).__name__}: {e}"}
         sections.append(rs.terms_section(check))
     except Exception as e:
         sections.append(_failed("terms", "Every term against Pinocchio", e))
