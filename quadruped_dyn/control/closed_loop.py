@@ -7,7 +7,7 @@ from dataclasses import dataclass, field
 from typing import Any
 
 from quadruped_dyn.control.controllers import Gains, GeneratedC, parse_controllers
-from quadruped_dyn.control.measures import summary
+from quadruped_dyn.control.measures import grf_comparison, summary
 from quadruped_dyn.control.plant import Plant, PlantOptions, build_plant
 from quadruped_dyn.control.reference import reference_cycle
 from quadruped_dyn.control.run import LoopOptions, Progress, Trace, run_controller, settled_state
@@ -27,6 +27,7 @@ class ClosedLoop:
     controllers: list[str]
     results: dict[str, dict[str, Any]] = field(default_factory=dict)
     traces: dict[str, Trace] = field(default_factory=dict)
+    standing_grf: list[dict] = field(default_factory=list)  # four feet, while settling
 
     def as_dict(self) -> dict[str, Any]:
         p = self.plant
@@ -39,6 +40,7 @@ class ClosedLoop:
                       "model_changes": p.changes, "effort_Nm": p.effort.tolist()},
             "gains": self.gains.as_dict(self.robot),
             "measured": "joint q, qd; trunk orientation and angular rate (IMU, exact); stance set from the plan",
+            "standing_grf": grf_comparison(self.standing_grf, self.robot.total_mass * 9.81)["4 feet"],
             "controllers": {k: {kk: vv for kk, vv in v.items() if kk != "series"} for k, v in self.results.items()},
         }
 
@@ -67,7 +69,8 @@ def run_all(study: ClosedLoop, progress: Progress | None = None, keep_qpos: bool
     """Run every selected controller; ``progress`` gets the simulated time summed over the runs."""
     c = GeneratedC(study.robot)
     reference_cycle(study.plan, study.loop.rate_hz)
-    initial = settled_state(study.plant, study.plan, study.gains, c, study.loop.rate_hz, study.substeps, study.loop.settle_s)
+    initial, study.standing_grf = settled_state(study.plant, study.plan, study.gains, c, study.loop.rate_hz,
+                                                study.substeps, study.loop.settle_s, study.loop.grf_every)
     horizon = study.loop.cycles * study.plan.gait.period
     for j, name in enumerate(study.controllers):
         tick = (lambda t, j=j: progress(j * horizon + t)) if progress else None

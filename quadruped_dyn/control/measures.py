@@ -10,7 +10,8 @@
   horizontal path length of the foot frame's origin while MuJoCo has it on the ground (m; a
   sphere rolling without slipping moves its centre too, by radius x its rolling angle, a few
   mm); max and median over intervals, per foot and overall.
-* **GRF**: MuJoCo's contact forces vs the paper's GRF model at the same instants (samples every
+* **GRF** (also of the four-feet stand while the robot settles, ``ClosedLoop.standing_grf``):
+  MuJoCo's contact forces vs the paper's GRF model at the same instants (samples every
   ``LoopOptions.grf_every`` ticks; only instants where MuJoCo's feet in contact are exactly the
   plan's stance), per stance kind (4, 3, 2 feet): per-foot force difference |f_paper - f_mujoco|
   (N; median, max), relative to |f_mujoco| summed over the stance feet, and the difference
@@ -86,10 +87,11 @@ def foot_slip(trace: Trace) -> dict[str, Any]:
             "per_foot_max_m": [max(f) if f else None for f in per_foot]}
 
 
-def grf_comparison(trace: Trace, robot_weight: float) -> dict[str, Any]:
+def grf_comparison(grf: list[dict], robot_weight: float) -> dict[str, Any]:
+    """Per stance kind, of the samples ``grf`` (``run._grf_sample``'s dicts)."""
     out: dict[str, Any] = {}
     for k, kind in STANCE_KINDS.items():
-        samples = [s for s in trace.grf if len(s["stance"]) == k]
+        samples = [s for s in grf if len(s["stance"]) == k]
         matched = [s for s in samples if s["contacts_match"]]
         entry: dict[str, Any] = {"samples": len(samples), "compared": len(matched)}
         if matched:
@@ -139,7 +141,7 @@ def summary(trace: Trace, plant: Plant, plan: Plan, dt: float, cycles: int) -> d
         "tracking": tracking(trace),
         "trunk": drift,
         "foot_slip": foot_slip(trace),
-        "grf": grf_comparison(trace, plant.robot.total_mass * 9.81),
+        "grf": grf_comparison(trace.grf, plant.robot.total_mass * 9.81),
         "saturation": saturation(trace, plant, dt),
         "compute": compute_time(trace),
         "series": series,

@@ -108,22 +108,33 @@ class _Stop(Exception):
     pass
 
 
-def settled_state(plant: Plant, plan: Plan, gains: Gains, c: GeneratedC, rate_hz: float,
-                  substeps: int, settle_s: float) -> tuple[np.ndarray, np.ndarray]:
-    """(q (19,), v (18,)): the initial state every run starts from (see the module docstring)."""
+def settled_state(plant: Plant, plan: Plan, gains: Gains, c: GeneratedC, rate_hz: float, substeps: int,
+                  settle_s: float, grf_every: int = 10) -> tuple[tuple[np.ndarray, np.ndarray], list[dict]]:
+    """((q (19,), v (18,)), GRF samples): the initial state every run starts from (see the module
+    docstring), and MuJoCo's contact forces vs the paper's four-feet GRF model over the second
+    half of the settling (the robot standing: the only four-feet instants of the gaits)."""
     ref0 = reference_cycle(plan, rate_hz)[0]
     four = StanceSet((0, 1, 2, 3))
     q0 = np.concatenate([plan.trunk(0.0)[0], [0.0, 0.0, 0.0, 1.0], ref0.q_r[:12]])
     plant.set_state(q0, np.zeros(18))
     pd = Pd(plant.robot, gains, c)
     hold = ReferenceSample(ref0.q_r[:12], np.zeros(12), np.zeros(12), four.feet)
-    for _ in range(int(round(settle_s * rate_hz))):
+    ticks = int(round(settle_s * rate_hz))
+    functions: dict[str, CompiledFunction] = {}
+    grf = []
+    for k in range(ticks):
         meas = plant.measure()
+        sample = k >= ticks // 2 and k % grf_every == 0
+        if sample:
+            q_full, v_full = plant.full_state()
         plant.step(pd.pd(hold, c("G_r", four, meas.q, meas.quat)), substeps)
+        if sample:
+            f, touch = plant.contact_forces()
+            grf.append(_grf_sample(plant, functions, c, k / rate_hz - settle_s, four, q_full, v_full, f, touch))
     q, _ = plant.full_state()
     stance0 = plan.stance(0.0)
     _, v, _ = PinocchioReference(plant.robot).reduced_motion(stance0, ref0.q_r, ref0.qd_r, ref0.qdd_r, q[3:7])
-    return q, v
+    return (q, v), grf
 
 
 def run_controller(plant: Plant, plan: Plan, name: str, gains: Gains, options: LoopOptions, substeps: int,

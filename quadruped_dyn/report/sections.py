@@ -532,6 +532,12 @@ def closed_loop_section(loop: dict[str, Any] | None) -> Section:
                             "C median [µs]", "C max [µs]", "tick median [µs]"], rows,
                            "every controller, from the same settled state; C = the generated-C calls of one tick "
                            "(ctypes included); tick = the controller's whole tick in Python (machine shared, loaded)"))
+        stand = d.get("standing_grf") or {}
+        if stand.get("compared"):
+            grf_rows.insert(0, ["(settling, PD + G_r)", "4 feet", str(stand.get("compared")),
+                                num(stand.get("diff_median_N"), ".3g"),
+                                num(stand.get("diff_max_N"), ".3g"), num(stand.get("relative_median"), ".2f"),
+                                " / ".join(num(x, ".3g") for x in stand.get("diff_xyz_median_N", []))])
         parts.append(table(["controller", "stance", "instants", "|Δf| median [N]", "|Δf| max [N]", "relative median",
                             "|Δf| x / y / z median [N]"], grf_rows,
                            "MuJoCo's contact forces vs the paper's GRF model at the same instants (measured state, "
