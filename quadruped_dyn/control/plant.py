@@ -123,6 +123,7 @@ class Plant:
         self.foot_sites = [m.site(f"quadruped_dyn_foot_{leg.label}").id for leg in self.robot.legs]
         self.floor_geom = m.geom("quadruped_dyn_floor").id
         self._gains = (0.0, 0.0)
+        self._warnings = 0
 
     # -------------------------------------------------------------------- state
     def measure(self) -> Measurement:
@@ -179,6 +180,15 @@ class Plant:
             m.actuator_gainprm[24:36, 0], m.actuator_biasprm[24:36, 2] = command.kd, -command.kd
             self._gains = (command.kp, command.kd)
         mujoco.mj_step(m, d, substeps)
+
+    def unstable(self) -> bool:
+        """MuJoCo found non-finite or huge accelerations or controls (and reset the state): the
+        warning counters grew since the last call."""
+        w = self.data.warning
+        count = sum(int(w[k].number) for k in (mujoco.mjtWarning.mjWARN_BADQACC, mujoco.mjtWarning.mjWARN_BADCTRL,
+                                                mujoco.mjtWarning.mjWARN_BADQPOS, mujoco.mjtWarning.mjWARN_BADQVEL))
+        grew, self._warnings = count > self._warnings, count
+        return grew
 
     def joint_torques(self) -> np.ndarray:
         """(12,) the drivers' total torque of the last step before the effort clamp, N m."""

@@ -168,7 +168,7 @@ def run_controller(plant: Plant, plan: Plan, name: str, gains: Gains, options: L
                 stopped = f"controller failed at t = {t:.3f} s: {e}"
                 raise _Stop from e
             t1 = time.perf_counter_ns()
-            if not np.all(np.isfinite(command.tau)):
+            if not all(x is None or np.all(np.isfinite(x)) for x in (command.tau, command.q_des, command.qd_des)):
                 stopped = f"controller returned a non-finite torque at t = {t:.3f} s"
                 raise _Stop
             sample = k % options.grf_every == 0
@@ -178,6 +178,9 @@ def run_controller(plant: Plant, plan: Plan, name: str, gains: Gains, options: L
             feet = plant.foot_positions()
             plant.step(command, substeps)
             t2 = time.perf_counter_ns()
+            if plant.unstable():
+                stopped = f"MuJoCo reports the simulation unstable at t = {t:.3f} s (non-finite or huge accelerations)"
+                raise _Stop
             tau = plant.joint_torques()
             f, touch = plant.contact_forces()
             for key, value in (("t", t), ("q", meas.q), ("qd", meas.qd), ("q_ref", ref.q_r[:12]), ("qd_ref", ref.qd_r[:12]),
