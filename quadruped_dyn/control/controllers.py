@@ -17,7 +17,7 @@ CasADi graph.
   is off the ground is a swing leg for the model (a lightly loaded foot that lifts early, a
   late touch-down); pd and ff+pd use the plan's stance only.
 * ``ct``: computed torque on the reduced model at the **measured** state,
-  tau = [M_r(q, R) (qdd_ref + Kp_a e + Kd_a edot) + CG_r(q, qd, R)][:12], e = q_ref - q.
+  tau = the first 12 entries of M_r(q, R) (qdd_ref + Kp_a e + Kd_a edot) + CG_r(q, qd, R), e = q_ref - q.
   With two stance feet the 13th coordinate is the trunk roll phi, measured by the IMU
   (phi from R = Rz Ry Rx(phi), phid = e_phi . omega_b); its reference is 0, its commanded
   acceleration -Kp_a phi - Kd_a phid, and the 13th row of the result -- the moment about
