@@ -17,6 +17,7 @@ import os
 import re
 import tempfile
 from collections.abc import Callable
+from dataclasses import dataclass
 from pathlib import Path
 
 import casadi as ca
@@ -25,6 +26,7 @@ from quadruped_dyn.dynamics.grf import grf_solve
 from quadruped_dyn.dynamics.newton_euler import full_dynamics
 from quadruped_dyn.dynamics.reduced_projection import reduced_projection
 from quadruped_dyn.errors import InputError
+from quadruped_dyn.files.safe_write import output_path, write_text
 from quadruped_dyn.model.robot import Robot
 from quadruped_dyn.model.stance import STANCE_SETS, StanceSet, stance_set
 
@@ -207,7 +209,7 @@ def work_sizes(casadi_header: str) -> dict[str, tuple[int, int]]:
 _UNUSED = "(void)arg; (void)res; (void)iw; (void)w; (void)mem;"
 
 
-def _silence_unused_parameters(c_source: str) -> str:
+def silence_unused_parameters(c_source: str) -> str:
     """CasADi's evaluation functions ignore some of their five parameters and its
     release hooks ignore ``mem``: cast them to void so -Wextra -Werror passes."""
     c_source = re.sub(r"(static int casadi_f\d+\([^)]*\) \{\n)", lambda m: m.group(1) + f"  {_UNUSED}\n", c_source)
@@ -228,7 +230,7 @@ def _casadi_c(file_stem: str, functions: list[ca.Function], precision: str) -> t
         cg.add(f)
     with tempfile.TemporaryDirectory() as tmp:
         cg.generate(tmp + os.sep)
-        return _silence_unused_parameters((Path(tmp) / f"{file_stem}.c").read_text()), (Path(tmp) / f"{file_stem}.h").read_text()
+        return silence_unused_parameters((Path(tmp) / f"{file_stem}.c").read_text()), (Path(tmp) / f"{file_stem}.h").read_text()
 
 
 def _entry_point(name: str) -> str:
@@ -264,13 +266,34 @@ def _checked_reduced_c(c_text: str, casadi_header: str, functions: list[ca.Funct
     return c_text
 
 
+@dataclass(frozen=True)
+class GeneratedFiles:
+    """The files ``generate`` wrote, by what they are (callers never rely on an order)."""
+
+    source: Path  # qd_<robot>.c: full-coordinate terms and GRF solves
+    header: Path  # qd_<robot>.h: one header for all, documentation first
+    extra: dict[str, Path]  # file name -> path of each of ``extra_files``' files (e.g. the reference values)
+    check_program: Path  # check_qd.c
+    makefile: Path
+    reduced: tuple[Path, ...]  # qd_<robot>_r_<feet>.c: the reduced model of each stance set of 2-4 feet
+
+    @property
+    def c_sources(self) -> list[Path]:
+        """The generated C files of the library (not the check program)."""
+        return [self.source, *self.reduced]
+
+    def all(self) -> list[Path]:
+        """Every file, in the order they were written."""
+        return [self.source, self.header, *self.extra.values(), self.check_program, self.makefile, *self.reduced]
+
+
 def generate(robot: Robot, out_dir: Path, precision: str = "double",
              extra_files: Callable[[list[ca.Function], dict[str, tuple[int, int]]], dict[str, str]] | None = None,
-             ) -> list[Path]:
+             ) -> GeneratedFiles:
     """Write into ``out_dir``: qd_<robot>.c (full-coordinate terms and GRF solves), qd_<robot>.h
     (one header for all), the files ``extra_files(functions, work sizes)`` returns (e.g. the
     reference values of ``checks.c_reference``), check_qd.c, the Makefile, and qd_<robot>_r_<feet>.c (the reduced
-    model of each stance set of 2-4 feet). Returns the paths in that order."""
+    model of each stance set of 2-4 feet); returns them by role (``GeneratedFiles``)."""
     if precision not in ("double", "float"):
         raise InputError(f"precision '{precision}' is not supported; expected 'double' or 'float'")
     out_dir = Path(out_dir)
@@ -288,21 +311,20 @@ def generate(robot: Robot, out_dir: Path, precision: str = "double",
         casadi_header += h_text
         functions += reduced
     work = work_sizes(casadi_header)
+    extra = extra_files(functions, work) if extra_files else {}
     files = {
         f"{name}.c": c_full,
         f"{name}.h": header_doc(robot, functions, work) + casadi_header,
-        **(extra_files(functions, work) if extra_files else {}),
+        **extra,
         "check_qd.c": (TEMPLATES / "check_qd.c").read_text(),
         "Makefile": (TEMPLATES / "Makefile").read_text().replace("ROBOT ?= paper", f"ROBOT ?= {name[3:]}"),
         **sources,
     }
-    paths = []
     for file_name, text in files.items():
-        (out_dir / file_name).write_text(text)
-        paths.append(out_dir / file_name)
-    return paths
+        write_text(output_path(out_dir, file_name), text)  # under out_dir, never through a link
+    return GeneratedFiles(source=out_dir / f"{name}.c", header=out_dir / f"{name}.h",
+                          extra={f: out_dir / f for f in extra}, check_program=out_dir / "check_qd.c",
+                          makefile=out_dir / "Makefile", reduced=tuple(out_dir / f for f in sources if f != f"{name}.c"))
 
-
-# ----------------------------------------------------------------------------- reference values
 
 

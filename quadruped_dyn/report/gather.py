@@ -17,7 +17,9 @@ from typing import Any
 
 import numpy as np
 
-from quadruped_dyn.errors import InputError
+from quadruped_dyn.errors import InputError, NumericalError
+from quadruped_dyn.files.safe_write import output_dir
+from quadruped_dyn.math.compare import relative_error, scale_of
 from quadruped_dyn.model.leg import JOINT_ROLES
 from quadruped_dyn.model.robot import Robot, load_robot
 from quadruped_dyn.report.html import png_image
@@ -125,18 +127,15 @@ def reduced_rows(robot: Robot, q_joints: np.ndarray) -> list[dict[str, Any]]:
             (M,) = guarded_call(m.M_r, q_r, quat)
             cond = float(np.linalg.cond(M))
             if not cond < MAX_COND_M_R:
-                raise InputError(f"cond(M_r) = {cond:.1e}, beyond {MAX_COND_M_R:.0e}: numerically singular")
-        except InputError as e:  # a result: e.g. a front or back pair, whose free pitch the roll cannot describe
+                raise NumericalError(f"cond(M_r) = {cond:.1e}, beyond {MAX_COND_M_R:.0e}: numerically singular")
+        except (InputError, NumericalError) as e:  # a result: e.g. a front or back pair (its free pitch is not the roll)
             rows.append({"stance": s.name, "kind": s.kind, "n": m.n, "cond": float("inf"), "asymmetry": None,
                          "err_vs_pinocchio": None, "tol": REL_TOL_TERMS, "singular": str(e)})
             continue
-        P, zero = s.selection("paper"), np.zeros(m.n)
-        base = ref.reduced_inverse_dynamics(s.feet, P, q_r, zero, zero, quat)
-        M_ref = np.column_stack([ref.reduced_inverse_dynamics(s.feet, P, q_r, zero, e, quat) - base for e in np.eye(m.n)])
-        scale = float(np.abs(M_ref).max())
+        M_ref = ref.reduced_mass_matrix(s.feet, s.selection("paper"), q_r, quat)
         rows.append({"stance": s.name, "kind": s.kind, "n": m.n, "cond": cond,
-                     "asymmetry": float(np.abs(M - M.T).max() / np.abs(M).max()),
-                     "err_vs_pinocchio": float(np.abs(M - M_ref).max() / scale), "tol": REL_TOL_TERMS})
+                     "asymmetry": relative_error(M, M.T, scale_of(M)),
+                     "err_vs_pinocchio": relative_error(M, M_ref), "tol": REL_TOL_TERMS})
     return rows
 
 def experiment(robot: Robot, out: Path) -> tuple[dict[str, dict[str, Any] | None], dict[str, str]]:
@@ -144,10 +143,11 @@ def experiment(robot: Robot, out: Path) -> tuple[dict[str, dict[str, Any] | None
     physics check): the JSON dicts and the BR HFE figures, written beside the report as
     ``validate`` writes them."""
     from quadruped_dyn.experiment.gait import GAITS
-    from quadruped_dyn.experiment.outputs import output_paths, plot_br_hfe, plot_physics_check, write_json
+    from quadruped_dyn.experiment.outputs import output_paths, plot_br_hfe, plot_physics_check
     from quadruped_dyn.experiment.paper_experiment import report as validation_report
     from quadruped_dyn.experiment.paper_experiment import run_experiment, static_stability
     from quadruped_dyn.experiment.simulate import reduced_dynamics
+    from quadruped_dyn.files.json import write_json
 
     validations: dict[str, dict[str, Any] | None] = {}
     plots: dict[str, str] = {}
@@ -172,19 +172,19 @@ def generated_c(robot: Robot, out: Path) -> dict[str, Any]:
     function with Pinocchio at the fixed reference state, as the generated ``check_qd`` does."""
     import casadi as ca
 
-    from quadruped_dyn.checks.c_reference import reference_header, reference_state
-    from quadruped_dyn.codegen.emit import generate, stem
+    from quadruped_dyn.checks.c_reference import reference_header, reference_header_name, reference_state
+    from quadruped_dyn.codegen.emit import generate
     from quadruped_dyn.codegen.library import compiled_library
     from quadruped_dyn.dynamics.formulas import shapes
 
-    directory = out / "c"
+    directory = out / "c"  # created by output_dir (never a link out of --out) when generated
     generated: dict[str, Any] = {}
 
     def reference_file(functions: list[ca.Function], work: dict[str, tuple[int, int]]) -> dict[str, str]:
         generated.update(functions=functions, work=work)  # every generated Function, as generate() builds them
-        return {f"{stem(robot)}_reference.h": reference_header(robot, functions, work)}
+        return {reference_header_name(robot): reference_header(robot, functions, work)}
 
-    paths = generate(robot, directory, extra_files=reference_file)
+    paths = generate(robot, output_dir(out, "c"), extra_files=reference_file).all()
     work = generated["work"]
     functions: list[dict[str, Any]] = [
         {"name": f.name(), "inputs": shapes(f), "outputs": shapes(f, outputs=True), "instructions": f.n_instructions(),
@@ -260,7 +260,7 @@ def symbolic_data(robot: Robot) -> tuple[list[dict[str, Any]] | None, str, list[
             for qj in states:
                 expected = np.asarray(reference(full_q(np.eye(3), np.zeros(3), qj)))
                 got = formula.evaluate(qj[:3]).reshape(expected.shape)
-                err = max(err, float(np.abs(got - expected).max() / (np.abs(expected).max() or 1.0)))
+                err = max(err, relative_error(got, expected))
             formulas.append({"title": formula.title, "latex": formula.latex, "mathml": formula.mathml,
                              "max_err_vs_pinocchio": err, "tol": REL_TOL_TERMS})
         note = (f"Front-left leg of the DH robot, from the CasADi expressions (SX → SymPy, simplified). Trunk frame "
@@ -331,3 +331,23 @@ def cross_library(robot: Robot) -> dict[str, Any]:
     data = json_safe(run_cross_library(robot, installed, CROSS_LIBRARY_SAMPLES, 0).as_dict())
     assert isinstance(data, dict)
     return {**data, "cross_library_samples": CROSS_LIBRARY_SAMPLES, "cross_library_note": note}
+
+def closed_loop(robot: Robot, out: Path, cycles: int = 10) -> dict[str, Any]:
+    """The closed loop in MuJoCo (``quadruped-dyn control``), walk and trot, every controller:
+    per gait the JSON as ``control --json`` prints it, the plots (PNG bytes) and the animation
+    (GIF bytes, or why there is none); the files are written to ``out`` too."""
+    from quadruped_dyn.control.closed_loop import prepare, run_all
+    from quadruped_dyn.control.outputs import best_controller, rendering_available, write_all
+    from quadruped_dyn.control.run import LoopOptions
+
+    rendering, why = rendering_available()
+    gaits: dict[str, Any] = {}
+    for gait in ("walk", "trot"):
+        study = run_all(prepare(robot, gait, loop=LoopOptions(cycles=cycles)), keep_qpos=rendering)
+        data, paths = write_all(out, study, animation=rendering)
+        gif = paths["animation"]
+        gaits[gait] = {"data": data, "plot_png": paths["plot"].read_bytes(), "grf_png": paths["grf_plot"].read_bytes(),
+                       "gif": gif.read_bytes() if gif.exists() else None, "animated": best_controller(study.results),
+                       "animation_note": "" if gif.exists() else f"no animation: offscreen rendering unavailable ({why})"}
+    return {"cycles": cycles, "gaits": gaits}
+

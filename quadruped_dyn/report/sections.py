@@ -10,11 +10,18 @@ import math
 from collections.abc import Sequence
 from typing import Any
 
-from quadruped_dyn.report.html import Section, badge, cell, esc, grade, not_available, num, table
+from quadruped_dyn.math.compare import within
+from quadruped_dyn.model.leg import BR_HFE
+from quadruped_dyn.report.html import Section, badge, cell, esc, grade, not_available, num, png_image, table
 
 
 def _finite(*xs: Any) -> bool:
     return all(isinstance(x, (int, float)) and math.isfinite(x) for x in xs)
+
+
+def _within(err: Any, tol: Any) -> bool:
+    """``compare.within`` for values read from JSON: None (a non-finite value) or a non-number never passes."""
+    return _finite(err, tol) and within(err, tol)
 
 
 def generic_table(rows: Sequence[dict[str, Any]], caption: str = "") -> str:
@@ -90,7 +97,8 @@ def terms_section(check: dict[str, Any] | None) -> Section:
     rows = [[t["name"], num(t["max_abs_err"]),
              cell(num(t["max_rel_err"]), grade(t["max_rel_err"], t["tol"])), num(t["tol"], ".0e"),
              cell(badge("pass" if t["passed"] else "FAIL"))] for t in terms]
-    worst = max((t["max_rel_err"] for t in terms), default=float("nan"))
+    # a non-finite error (NaN/inf, None once through JSON) is the worst of all: shown, never raised on
+    worst = max((t["max_rel_err"] if _finite(t["max_rel_err"]) else float("inf") for t in terms), default=float("nan"))
     ok = bool(check.get("passed")) and all(_finite(t["max_rel_err"]) for t in terms)
     body = [
         f"<p>{check.get('samples')} random states (seed {check.get('seed')}): joint angles inside limits, random "
@@ -199,8 +207,7 @@ def reduced_section(rows: Sequence[dict[str, Any]] | None, posture_note: str = "
     table_rows = [[r["stance"], r["kind"], str(r["n"]), num(r["cond"], ".2e"), num(r["asymmetry"], ".3f"),
                    cell(num(r["err_vs_pinocchio"]), grade(r["err_vs_pinocchio"], r["tol"]))] for r in regular]
     table_rows += [[r["stance"], r["kind"], str(r["n"]), cell("singular", "near"), "", "n/a"] for r in singular]
-    ok = bool(regular) and all(_finite(r["err_vs_pinocchio"], r["cond"]) and r["err_vs_pinocchio"] <= r["tol"]
-                               for r in regular)
+    ok = bool(regular) and all(_finite(r["cond"]) and _within(r["err_vs_pinocchio"], r["tol"]) for r in regular)
     conds = [r["cond"] for r in regular] or [float("nan")]
     body = (f"<p>M_r = ∂τ_r/∂q̈_r (Walker &amp; Orin unit accelerations) of every stance set of 2, 3 or 4 feet at "
             f"{esc(posture_note)}, trunk level. M_r is not symmetric: the paper's GRF assumptions project the dynamics. "
@@ -219,9 +226,6 @@ def reduced_section(rows: Sequence[dict[str, Any]] | None, posture_note: str = "
 
 
 # ----------------------------------------------------------------------------- the paper's experiment
-
-
-BR_HFE = 3 * 3 + 1  # project joint index of BR HFE, the joint of the paper's Figs. 5-7
 
 
 def _gait_block(gait: str, v: dict[str, Any], joint_names: Sequence[str], plot_html: str) -> tuple[str, str]:
@@ -386,7 +390,7 @@ def generated_c_section(gen: dict[str, Any] | None, bench: Sequence[dict[str, An
             return "not checked"
         if "status" in c:
             return str(c["status"])
-        return "pass" if _finite(c.get("max_rel_err"), c.get("tol")) and c["max_rel_err"] <= c["tol"] else "FAIL"
+        return "pass" if _within(c.get("max_rel_err"), c.get("tol")) else "FAIL"
 
     rows = []
     for f in functions:
@@ -440,10 +444,10 @@ def symbolic_section(formulas: Sequence[dict[str, Any]] | None, formulas_note: s
         body.append(f"<p>{esc(formulas_note)}</p>")
         for f in formulas:
             err, tol = f["max_err_vs_pinocchio"], f["tol"]
-            ok = ok and _finite(err) and err <= tol
+            ok = ok and _within(err, tol)
             body.append(f"<p><b>{esc(f['title'])}</b> — the formula evaluated with full-precision coefficients agrees "
                         f"with Pinocchio to {num(err)} (relative, tol {num(tol, '.0e')}) "
-                        f"{badge('pass' if err <= tol else 'FAIL')}"
+                        f"{badge('pass' if _within(err, tol) else 'FAIL')}"
                         f"</p>{f['mathml']}<details><summary>LaTeX</summary><pre>{esc(f['latex'])}</pre></details>")
     else:
         body.append(f"<p class=\"na\">{esc(formulas_note)}</p>")
@@ -483,3 +487,80 @@ def versions_section(versions: dict[str, Any]) -> Section:
         ["library", "version"], [[k, str(v)] for k, v in libraries.items()], "libraries")
     headline = ", ".join(f"{k} {libraries[k]}" for k in ("pin", "casadi", "numpy") if k in libraries)
     return Section("versions", "Versions and machine", "result", headline, body)
+
+
+# ----------------------------------------------------------------------------- closed loop
+
+
+def closed_loop_section(loop: dict[str, Any] | None) -> Section:
+    """``loop``: ``gather.closed_loop``'s data -- per gait the ``control --json`` output, plots
+    (PNG bytes) and the animation (GIF bytes or None)."""
+    import base64
+
+    if not loop or not loop.get("gaits"):
+        return Section("closed_loop", "Closed loop in MuJoCo", "not available", "not run", not_available("closed loop"))
+    parts = ["<p>The generated C in the loop of a simulated robot whose contacts nobody here wrote: MuJoCo, soft, "
+             "frictional, unilateral contacts, the robot built from the same URDF. Controllers at 1 kHz read joint q, "
+             "q̇ and an IMU (trunk orientation, angular rate); the stance set is the plan's (the ct controllers also use "
+             "the foot contact switches). pd: joint PD; ff+pd: id_r at the plan + PD; ct: computed torque on M_r, CG_r at "
+             "the measured state; +level: the reference levelled by the IMU. See docs/closed_loop.md.</p>"]
+    headlines = []
+    for gait, g in loop["gaits"].items():
+        d = g.get("data", {})
+        plant = d.get("plant", {})
+        gains = d.get("gains", {})
+        period = num(d.get("period_s"), "g")
+        parts.append(f"<h3>{esc(gait)}: {esc(d.get('robot'))}, {esc(d.get('cycles'))} cycles of {period} s</h3>")
+        parts.append(f"<p>MuJoCo step {num(plant.get('timestep_s'), 'g')} s ({esc(plant.get('integrator'))}), mu "
+                     f"{num(plant.get('mu'), 'g')}, foot radius {num(plant.get('foot_radius_m'), 'g')} m "
+                     f"({esc(plant.get('foot_radius_from'))}); joint PD "
+                     f"{num(gains.get('kp_Nm_per_rad'), '.3g')} N m/rad, "
+                     f"{num(gains.get('kd_Nms_per_rad'), '.3g')} N m s/rad ({num(gains.get('kp_per_kg'), 'g')}, "
+                     f"{num(gains.get('kd_per_kg'), 'g')} per kg); ct error dynamics "
+                     f"{num(gains.get('ct_omega'), 'g')} rad/s.</p>")
+        rows, grf_rows = [], []
+        up = []
+        for name, r in d.get("controllers", {}).items():
+            t, tr, c, sat, slip = (r.get(k) or {} for k in ("trunk", "tracking", "compute", "saturation", "foot_slip"))
+            fell = "no" if not r.get("fell") else f"at {num(r.get('fell_at_s'), '.3g')} s"
+            rows.append([name, num(r.get("cycles_up"), "g"), fell,
+                         num(tr.get("rms_rad"), ".2e"), num(tr.get("max_rad"), ".2e"), num(t.get("height_max_m"), ".2e"),
+                         num(t.get("roll_max_deg"), ".3g"), num(t.get("pitch_max_deg"), ".3g"),
+                         num(t.get("yaw_final_deg"), ".3g"),
+                         num(slip.get("max_m"), ".2e"), num(sat.get("time_s"), ".3g"), num(c.get("c_calls_median_us"), ".3g"),
+                         num(c.get("c_calls_max_us"), ".3g"), num(c.get("tick_python_median_us"), ".3g")])
+            up.append(f"{name} {num(r.get('cycles_up'), 'g')}")
+            for kind, e in (r.get("grf") or {}).items():
+                if e.get("compared"):
+                    grf_rows.append([name, kind, str(e.get("compared")), num(e.get("diff_median_N"), ".3g"),
+                                     num(e.get("diff_max_N"), ".3g"), num(e.get("relative_median"), ".2f"),
+                                     " / ".join(num(x, ".3g") for x in e.get("diff_xyz_median_N", []))])
+        parts.append(table(["controller", "cycles up", "fell", "joint RMS [rad]", "joint max [rad]", "height max [m]",
+                            "roll max [°]", "pitch max [°]", "yaw final [°]", "slip max [m]", "saturated [s]",
+                            "C median [µs]", "C max [µs]", "tick median [µs]"], rows,
+                           "every controller, from the same settled state; C = the generated-C calls of one tick "
+                           "(ctypes included); tick = the controller's whole tick in Python (machine shared, loaded)"))
+        stand = d.get("standing_grf") or {}
+        if stand.get("compared"):
+            grf_rows.insert(0, ["(settling, PD + G_r)", "4 feet", str(stand.get("compared")),
+                                num(stand.get("diff_median_N"), ".3g"),
+                                num(stand.get("diff_max_N"), ".3g"), num(stand.get("relative_median"), ".2f"),
+                                " / ".join(num(x, ".3g") for x in stand.get("diff_xyz_median_N", []))])
+        parts.append(table(["controller", "stance", "instants", "|Δf| median [N]", "|Δf| max [N]", "relative median",
+                            "|Δf| x / y / z median [N]"], grf_rows,
+                           "MuJoCo's contact forces vs the paper's GRF model at the same instants (measured state, "
+                           "MuJoCo's acceleration; instants whose MuJoCo contacts are the plan's stance); a result about "
+                           "the paper's assumptions (common fx, fy; rank-5 pairs), not a pass/fail"))
+        if g.get("plot_png"):
+            parts.append(png_image(g["plot_png"], f"{gait}: tracking and trunk attitude per controller"))
+        if g.get("grf_png"):
+            parts.append(png_image(g["grf_png"], f"{gait}: GRF difference over time"))
+        if g.get("gif"):
+            parts.append(f'<figure><img alt="{esc(gait)} animation" src="data:image/gif;base64,'
+                         f'{base64.b64encode(g["gif"]).decode()}"><figcaption>{esc(gait)}, controller '
+                         f'{esc(g.get("animated"))}, first seconds</figcaption></figure>')
+        else:
+            parts.append(f"<p class=\"na\">{esc(g.get('animation_note', 'no animation'))}</p>")
+        headlines.append(f"{gait}: cycles up " + ", ".join(up))
+    return Section("closed_loop", "Closed loop in MuJoCo", "result", " | ".join(headlines), "\n".join(parts))
+
