@@ -96,9 +96,14 @@ def generator_sources() -> list[Path]:
 
 
 def generation_key(robot: Robot, precision: str, flags: tuple[str, ...], cc: str) -> str:
-    """Hash of everything the compiled library depends on: the URDF's bytes, the generator's
-    source (``generator_sources``), CasADi's version, precision, flags and compiler."""
-    h = hashlib.sha256(robot.name.encode() + Path(robot.urdf).read_bytes())
+    """Hash of everything the compiled library depends on: the bytes ``robot``'s model was parsed
+    from (``Robot.urdf_sha256``, recorded at load: not the file as it is now, which may have been
+    edited since) and the foot frames chosen, the generator's source (``generator_sources``),
+    CasADi's version, precision, flags and compiler."""
+    if not robot.urdf_sha256:
+        raise InputError(f"robot '{robot.name}' records no hash of its URDF; expected a Robot from load_robot")
+    feet = ",".join(leg.foot_frame for leg in robot.legs)
+    h = hashlib.sha256(f"{robot.name}\n{robot.urdf_sha256}\n{feet}\n".encode())
     for path in generator_sources():
         h.update(str(path.relative_to(PACKAGE)).encode() + path.read_bytes())
     h.update(f"{ca.CasadiMeta.version()} {precision} {' '.join(flags)} {compiler_version(cc)}".encode())

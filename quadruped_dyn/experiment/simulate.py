@@ -37,7 +37,7 @@ from scipy.integrate import DOP853
 
 from quadruped_dyn.dynamics.guarded import guarded_call
 from quadruped_dyn.dynamics.kinematics import robot_kinematics
-from quadruped_dyn.dynamics.reduced import reduced_model, roll_rate_row
+from quadruped_dyn.dynamics.reduced import reduced_model
 from quadruped_dyn.errors import InputError, NumericalError
 from quadruped_dyn.experiment.gait import Plan
 from quadruped_dyn.experiment.plan_ik import ReferenceSample, reference
@@ -290,6 +290,8 @@ def project_on_stance(robot: Robot, stance: tuple[int, ...], holds: np.ndarray, 
     are redundant -- 12 for 9 degrees of freedom with three feet, 13 for 12 with two -- and the
     paper's ODE does not keep the closure: its drift off it is the fastest-growing error. Right
     after a touch-down whose foot lands moving, the rate projection is a kinematic impact."""
+    from quadruped_dyn.references.pinocchio import roll_rate_row  # its rounding is the experiment's (issue 19 rewrites this)
+
     kin = robot_kinematics(robot)
     n = y.size // 2
     q, qd = y[:n].copy(), y[n:].copy()

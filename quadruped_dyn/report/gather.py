@@ -18,6 +18,7 @@ from typing import Any
 import numpy as np
 
 from quadruped_dyn.errors import InputError, NumericalError
+from quadruped_dyn.files.safe_write import output_dir
 from quadruped_dyn.math.compare import relative_error, scale_of
 from quadruped_dyn.model.leg import JOINT_ROLES
 from quadruped_dyn.model.robot import Robot, load_robot
@@ -176,14 +177,14 @@ def generated_c(robot: Robot, out: Path) -> dict[str, Any]:
     from quadruped_dyn.codegen.library import compiled_library
     from quadruped_dyn.dynamics.formulas import shapes
 
-    directory = out / "c"
+    directory = out / "c"  # created by output_dir (never a link out of --out) when generated
     generated: dict[str, Any] = {}
 
     def reference_file(functions: list[ca.Function], work: dict[str, tuple[int, int]]) -> dict[str, str]:
         generated.update(functions=functions, work=work)  # every generated Function, as generate() builds them
         return {reference_header_name(robot): reference_header(robot, functions, work)}
 
-    paths = generate(robot, directory, extra_files=reference_file).all()
+    paths = generate(robot, output_dir(out, "c"), extra_files=reference_file).all()
     work = generated["work"]
     functions: list[dict[str, Any]] = [
         {"name": f.name(), "inputs": shapes(f), "outputs": shapes(f, outputs=True), "instructions": f.n_instructions(),
