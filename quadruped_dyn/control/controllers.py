@@ -33,6 +33,9 @@ CasADi graph.
   cannot be produced by the stance feet: what counters it is the swing pair, whose feet are
   brought down to the ground on the side the trunk rolls towards and catch it at touch-down.
 
+* ``ff+pd+step``: ``ff+pd`` with capture-point foot placement of the swing feet (``FfPdStep``),
+  the trunk velocity estimated from encoders and IMU: what catches the trot's roll.
+
 Gains are per kg of robot (``Gains``): Kp = kp_per_kg m, Kd = kd_per_kg m for the joint PD
 (pd, ff+pd); the computed-torque controllers' gains are accelerations (1/s^2, 1/s), a
 natural frequency and damping ratio independent of the mass.
@@ -225,7 +228,7 @@ def levelled(ref: Reference, meas: Measurement) -> Reference:
     q, qd = ref.q_r.copy(), ref.qd_r.copy()
     q[:12] += dq
     qd[:12] += dqd
-    return Reference(q, qd, ref.qdd_r, ref.stance, ref.r_feet, ref.J_inv)
+    return Reference(q, qd, ref.qdd_r, ref.stance, ref.r_feet, ref.J_inv, ref.J, ref.phase_s)
 
 
 class FfPdLevel(FfPd):
@@ -241,6 +244,51 @@ class FfPdLevel(FfPd):
         return self.pd(levelled(ref, meas), tau[:12])
 
 
+class FfPdStep(FfPd):
+    """``ff+pd`` with capture-point foot placement: the trunk's horizontal velocity relative to
+    the stance feet is estimated from the encoders and the IMU (v_b = -(omega_b x r_i + J_i qd_i),
+    averaged over the stance feet, kinematics at the reference), its error e_v against the
+    plan's, and each swing foot's target is moved horizontally (trunk frame) towards
+    sqrt(h / g) e_v at touch-down (h: the trunk's height above the feet; the capture point of a
+    linear inverted pendulum), ramped in with the swing's smoothstep; a foot keeps the offset it
+    landed with through its stance. This is what acts on the roll the paper's model leaves
+    unbalanced in the trot: the diagonal pair falling sideways is caught by the next pair
+    landing further out."""
+
+    name = "ff+pd+step"
+
+    def __init__(self, robot: Robot, gains: Gains, c: GeneratedC) -> None:
+        super().__init__(robot, gains, c)
+        self.offsets = np.zeros((4, 3))  # trunk frame, m: where each foot landed relative to the plan
+        self.swing_from = np.zeros((4, 3))
+        self.was_stance = [True] * 4
+
+    def command(self, ref: ReferenceSample, stance: StanceSet, meas: Measurement) -> Command:
+        assert isinstance(ref, Reference)
+        base = super().command(ref, stance, meas)
+        feet = list(stance.feet)
+        Jqd = np.einsum("ijk,ik->ij", ref.J, meas.qd.reshape(4, 3))
+        Jqd_ref = np.einsum("ijk,ik->ij", ref.J, ref.qd_r[:12].reshape(4, 3))
+        v = -(np.cross(meas.omega_b, ref.r_feet[feet]) + Jqd[feet]).mean(axis=0)
+        v_plan = -Jqd_ref[feet].mean(axis=0)
+        h = -float(ref.r_feet[:, 2].mean())
+        target = np.zeros(3)
+        target[:2] = math.sqrt(max(h, 0.0) / 9.81) * (v - v_plan)[:2]
+        s = ref.phase_s
+        ramp = 10 * s**3 - 15 * s**4 + 6 * s**5
+        q_des = np.array(base.q_des if base.q_des is not None else ref.q_r[:12], dtype=float)
+        for i in range(4):
+            if i in feet:
+                self.was_stance[i] = True
+            else:
+                if self.was_stance[i]:  # lift-off: ramp from the offset it stood with
+                    self.swing_from[i] = self.offsets[i].copy()
+                    self.was_stance[i] = False
+                self.offsets[i] = (1 - ramp) * self.swing_from[i] + ramp * target
+            q_des[3 * i : 3 * i + 3] += ref.J_inv[i] @ self.offsets[i]
+        return Command(base.tau, q_des, base.qd_des, base.kp, base.kd)
+
+
 class ComputedTorqueLevel(ComputedTorque):
     """``ct`` tracking the IMU-levelled reference (``levelled``)."""
 
@@ -251,7 +299,7 @@ class ComputedTorqueLevel(ComputedTorque):
         return super().command(levelled(ref, meas), stance, meas)
 
 
-CONTROLLERS = {c.name: c for c in (Pd, FfPd, ComputedTorque, MeasuredIdPd, FfPdLevel, ComputedTorqueLevel)}
+CONTROLLERS = {c.name: c for c in (Pd, FfPd, ComputedTorque, MeasuredIdPd, FfPdLevel, ComputedTorqueLevel, FfPdStep)}
 
 
 def parse_controllers(names: tuple[str, ...] | list[str]) -> list[str]:

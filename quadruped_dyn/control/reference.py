@@ -24,6 +24,8 @@ class Reference(ReferenceSample):
 
     r_feet: np.ndarray  # (4, 3) foot positions, trunk frame, m
     J_inv: np.ndarray  # (4, 3, 3) inverse foot Jacobians d r_i / d q_i
+    J: np.ndarray  # (4, 3, 3) foot Jacobians
+    phase_s: float  # fraction [0, 1) of the current gait phase
 
 
 #: The IK reference is computed at knots this far apart (s) and interpolated at the control
@@ -60,6 +62,6 @@ def reference_cycle(plan: Plan, rate_hz: float) -> tuple[Reference, ...]:
         qd = d00 * Q[j] + d10 * QD[j] + d01 * Q[j + 1] + d11 * QD[j + 1]
         qdd = (1 - u) * QDD[j] + u * QDD[j + 1]
         r = np.array([np.asarray(kin[i].foot_position(q[3 * i : 3 * i + 3])).ravel() for i in range(4)])
-        J_inv = np.array([np.linalg.inv(np.asarray(kin[i].foot_jacobian(q[3 * i : 3 * i + 3]))) for i in range(4)])
-        out.append(Reference(q, qd, qdd, plan.stance(t), r, J_inv))
+        J = np.array([np.asarray(kin[i].foot_jacobian(q[3 * i : 3 * i + 3])) for i in range(4)])
+        out.append(Reference(q, qd, qdd, plan.stance(t), r, np.linalg.inv(J), J, plan.gait.phase(t)[1]))
     return tuple(out)

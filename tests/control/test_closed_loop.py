@@ -135,6 +135,6 @@ def test_walk_ten_cycles(name: str) -> None:
 @pytest.mark.parametrize("name", ["paper", "solo12", "go2"])
 def test_trot_outcome_of_every_controller(name: str) -> None:
     study = run_all(prepare(load_robot(name), "trot", loop=LoopOptions(cycles=10)))
-    assert set(study.results) == {"pd", "ff+pd", "ct", "id+pd", "ff+pd+level", "ct+level"}
+    assert set(study.results) == {"pd", "ff+pd", "ct", "id+pd", "ff+pd+level", "ct+level", "ff+pd+step"}
     for r in study.results.values():
         assert r["simulated_s"] > 0 and (r["fell"] or r["cycles_up"] == 10)
