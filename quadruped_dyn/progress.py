@@ -18,7 +18,7 @@ from types import TracebackType
 from typing import TextIO
 
 from rich.console import Console
-from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn, TimeRemainingColumn
+from rich.progress import BarColumn, MofNCompleteColumn, Progress, TaskID, TextColumn, TimeElapsedColumn, TimeRemainingColumn
 
 #: Without a terminal, a progress line every this many seconds (and at the start and the end).
 LINE_PERIOD_S = 10.0
@@ -38,7 +38,7 @@ class Bar:
         self.done = 0.0
         self.live = enabled and self.stream.isatty()
         self._progress: Progress | None = None
-        self._task = None
+        self._task: TaskID | None = None
         self._start = self._last_line = time.monotonic()
 
     def _describe(self) -> str:

@@ -171,6 +171,18 @@ class CompiledFunction:
         self._iw = (ctypes.c_longlong * max(1, iw))()
         self._w = (ctypes.c_double * max(1, w))()
 
+    def raw(self, *args: np.ndarray) -> list[np.ndarray]:
+        """The hot path of a control loop: inputs (float64 arrays of the right sizes, not checked)
+        copied into the preallocated buffers, the C function called, its output buffers returned
+        (the nonzeros, column-major; overwritten by the next call). A non-zero return code
+        raises InputError as ``__call__`` does."""
+        for buf, x in zip(self._in, args):
+            buf[:] = x
+        flag = self._fn(self._arg, self._res, self._iw, self._w, 0)
+        if flag != 0:
+            raise InputError(f"{self.name}: {RETURN_CODES.get(flag, f'error code {flag}')}")
+        return self._out
+
     def __call__(self, *args: np.ndarray) -> list[np.ndarray]:
         if len(args) != len(self._in):
             raise InputError(f"{self.name} takes inputs {self.names_in}; got {len(args)} arrays")

@@ -26,6 +26,7 @@ from quadruped_dyn.progress import Steps
 from quadruped_dyn.report.gather import (
     CHECK_SAMPLES,
     FRICTION_MU,
+    closed_loop,
     cross_library,
     experiment,
     generated_c,
@@ -111,7 +112,7 @@ def build_report(robot_arg: str = "paper", out: str | Path = "results", fast: bo
 
     matplotlib.use("Agg")  # figures go into the page, never to a window
     _, target = prepare(robot_arg, out)
-    progress = Progress(9, show_progress)
+    progress = Progress(10, show_progress)  # loading, the steps of _steps, writing the page
     done = progress.step(f"loading {robot_arg}")
     robot, urdf_warnings = load_with_warnings(robot_arg)
     job = _Job(robot, urdf_warnings, target, fast, samples, progress)
@@ -148,6 +149,8 @@ def _steps(job: _Job, with_notebooks: bool) -> list[tuple[str, str, str, Callabl
          lambda: _experiment_section(job)),
         ("generated C" + ("" if job.fast else " and the benchmark"), "c", "Generated C", lambda: _c_section(job)),
         ("symbolic terms", "symbolic", "Symbolic terms", lambda: _symbolic_section(job)),
+        ("closed loop in MuJoCo", "closed_loop", "Closed loop in MuJoCo",
+         lambda: rs.closed_loop_section(closed_loop(job.robot, job.target, 1 if job.fast else 10))),
         ("notebooks", "notebooks", "Notebooks, executed", notebooks_built),
     ]
 

@@ -336,3 +336,23 @@ def cross_library(robot: Robot) -> dict[str, Any]:
     data = json_safe(run_cross_library(robot, installed, CROSS_LIBRARY_SAMPLES, 0).as_dict())
     assert isinstance(data, dict)
     return {**data, "cross_library_samples": CROSS_LIBRARY_SAMPLES, "cross_library_note": note}
+
+def closed_loop(robot: Robot, out: Path, cycles: int = 10) -> dict[str, Any]:
+    """The closed loop in MuJoCo (``quadruped-dyn control``), walk and trot, every controller:
+    per gait the JSON as ``control --json`` prints it, the plots (PNG bytes) and the animation
+    (GIF bytes, or why there is none); the files are written to ``out`` too."""
+    from quadruped_dyn.control.closed_loop import prepare, run_all
+    from quadruped_dyn.control.outputs import best_controller, rendering_available, write_all
+    from quadruped_dyn.control.run import LoopOptions
+
+    rendering, why = rendering_available()
+    gaits: dict[str, Any] = {}
+    for gait in ("walk", "trot"):
+        study = run_all(prepare(robot, gait, loop=LoopOptions(cycles=cycles)), keep_qpos=rendering)
+        data, paths = write_all(out, study, animation=rendering)
+        gif = paths["animation"]
+        gaits[gait] = {"data": data, "plot_png": paths["plot"].read_bytes(), "grf_png": paths["grf_plot"].read_bytes(),
+                       "gif": gif.read_bytes() if gif.exists() else None, "animated": best_controller(study.results),
+                       "animation_note": "" if gif.exists() else f"no animation: offscreen rendering unavailable ({why})"}
+    return {"cycles": cycles, "gaits": gaits}
+
