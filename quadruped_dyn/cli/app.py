@@ -90,28 +90,12 @@ def require_tools(*tools: str) -> None:
         raise InputError(f"{', '.join(missing)} not found; expected on PATH (Debian: apt-get install gcc g++)")
 
 
-class _ProgressLines:
-    """Progress as one stderr line per ~10 % (click's bar draws nothing when stderr is not a terminal)."""
-
-    def __init__(self, label: str, length: int) -> None:
-        self.label, self.length, self.done = label, length, 0
-
-    def __enter__(self) -> _ProgressLines:
-        return self
-
-    def __exit__(self, *exc: object) -> None:
-        return None
-
-    def update(self, n: int) -> None:
-        self.done += n
-        if self.done % max(1, self.length // 10) == 0 or self.done == self.length:
-            click.echo(f"{self.label}: {self.done}/{self.length}", err=True)
-
-
 def progress(label: str, length: int) -> Any:
-    if sys.stderr.isatty():
-        return click.progressbar(length=length, label=label, file=sys.stderr)
-    return _ProgressLines(label, length)
+    """A counted step on stderr (``quadruped_dyn.progress.Bar``: a live bar on a terminal,
+    periodic lines otherwise)."""
+    from quadruped_dyn.progress import Bar
+
+    return Bar(label, length)
 
 
 @click.group(cls=_Group)

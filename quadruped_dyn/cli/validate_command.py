@@ -4,7 +4,6 @@ from __future__ import annotations
 
 import json
 import math
-import sys
 from typing import TYPE_CHECKING
 
 import click
@@ -68,10 +67,11 @@ def validate(robot: str, gait_name: str, horizon: float | None, integrator: str,
     r = load_robot(robot)
     paths = output_paths(out, r.name, gait.name)
     dynamics = reduced_dynamics(r, backend)
-    with click.progressbar(length=int(round(runs * horizon * 1000)), label=f"simulating {r.name} {gait.name}",
-                           file=sys.stderr) as bar:
+    from quadruped_dyn.progress import Bar
+
+    with Bar(f"simulating {r.name} {gait.name}", runs * horizon, "s simulated", runs=runs) as bar:
         exp = run_experiment(r, gait, dynamics, horizon, dt, integrator, physics=not no_physics,
-                             progress=lambda seconds: bar.update(int(round(seconds * 1000))))
+                             progress=bar.advance)
     compared = compared_samples(exp)
     if compared < MIN_COMPARED_SAMPLES:
         stop = exp.runs["paper"].stopped_at

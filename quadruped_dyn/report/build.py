@@ -13,8 +13,6 @@ trunk's spatial acceleration, as everywhere in the project.
 
 from __future__ import annotations
 
-import sys
-import time
 from collections.abc import Callable
 from dataclasses import dataclass
 from datetime import datetime, timezone
@@ -24,6 +22,7 @@ from typing import Any
 from quadruped_dyn.files.paths import writable_dir
 from quadruped_dyn.files.safe_write import output_dir, output_path, write_text
 from quadruped_dyn.model.robot import Robot, robot_name, robot_path
+from quadruped_dyn.progress import Steps
 from quadruped_dyn.report.gather import (
     CHECK_SAMPLES,
     FRICTION_MU,
@@ -42,33 +41,7 @@ from quadruped_dyn.report.gather import (
 )
 from quadruped_dyn.report.html import Section, esc, figure, page
 
-
-class Progress:
-    """One line per step on stderr: ``[k/N] what ... 12.3 s``; on a terminal, a step with
-    a count (``count(n, total)``) shows it as it goes."""
-
-    def __init__(self, total: int, enabled: bool = True) -> None:
-        self.total, self.k, self.enabled = total, 0, enabled
-        self.line = ""
-        self.live = enabled and sys.stderr.isatty()
-
-    def step(self, what: str) -> Callable[[], None]:
-        self.k += 1
-        start = time.perf_counter()
-        self.line = f"[{self.k}/{self.total}] {what} ..."
-        if self.enabled:
-            print(self.line, end="", file=sys.stderr, flush=True)
-
-        def done() -> None:
-            if self.enabled:
-                again = f"\r{self.line}\x1b[K" if self.live else ""  # rewrite the line a count has extended
-                print(f"{again} {time.perf_counter() - start:.1f} s", file=sys.stderr, flush=True)
-
-        return done
-
-    def count(self, n: int, total: int) -> None:
-        if self.live:
-            print(f"\r{self.line} {n}/{total}", end="", file=sys.stderr, flush=True)
+Progress = Steps  # numbered steps with a bar inside a long one (quadruped_dyn.progress)
 
 
 def prepare(robot_arg: str, out: str | Path) -> tuple[Path, Path]:
@@ -227,7 +200,7 @@ def _experiment_section(job: _Job) -> Section:
     from quadruped_dyn.experiment.paper_experiment import joint_names  # the labels the validation JSON is keyed by
     from quadruped_dyn.report import sections as rs
 
-    validations, plots = experiment(job.robot, job.target)
+    validations, plots = experiment(job.robot, job.target, job.progress)
     return rs.experiment_section(validations, joint_names(job.robot), plots)
 
 

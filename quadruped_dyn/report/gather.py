@@ -138,10 +138,11 @@ def reduced_rows(robot: Robot, q_joints: np.ndarray) -> list[dict[str, Any]]:
                      "err_vs_pinocchio": relative_error(M, M_ref), "tol": REL_TOL_TERMS})
     return rows
 
-def experiment(robot: Robot, out: Path) -> tuple[dict[str, dict[str, Any] | None], dict[str, str]]:
+def experiment(robot: Robot, out: Path, progress: Any = None) -> tuple[dict[str, dict[str, Any] | None], dict[str, str]]:
     """Both gaits' validation (two cycles each, DOP853 sampled every EXPERIMENT_DT, with the
     physics check): the JSON dicts and the BR HFE figures, written beside the report as
-    ``validate`` writes them."""
+    ``validate`` writes them. ``progress``: a ``quadruped_dyn.progress.Steps`` whose current
+    step gets a bar of the simulated seconds and runs."""
     from quadruped_dyn.experiment.gait import GAITS
     from quadruped_dyn.experiment.outputs import output_paths, plot_br_hfe, plot_physics_check
     from quadruped_dyn.experiment.paper_experiment import report as validation_report
@@ -151,9 +152,13 @@ def experiment(robot: Robot, out: Path) -> tuple[dict[str, dict[str, Any] | None
 
     validations: dict[str, dict[str, Any] | None] = {}
     plots: dict[str, str] = {}
+    runs = {name: 3 + (gait.n_coords == 13) + 5 for name, gait in GAITS.items()}  # as run_experiment does them
+    bar = progress.bar(sum(n * 2 * GAITS[g].period for g, n in runs.items()), "s simulated",
+                       runs=None) if progress is not None else None
     for name, gait in GAITS.items():
         horizon = 2 * gait.period
-        exp = run_experiment(robot, gait, reduced_dynamics(robot, "c"), horizon, EXPERIMENT_DT)
+        exp = run_experiment(robot, gait, reduced_dynamics(robot, "c"), horizon, EXPERIMENT_DT,
+                             progress=bar.advance if bar is not None else None)
         data = validation_report(exp, "dop853", EXPERIMENT_DT, "c", static_stability(exp.plan, exp.ik, horizon))
         paths = output_paths(out, robot.name, name)
         write_json(paths["json"], data)

@@ -79,3 +79,18 @@ def test_run_on_the_interpolant_equals_the_exact_run_to_round_off(paper):
     spread = max(np.abs(twin.q - a.q).max(), 1e-15)
     diff = np.abs(b.q - a.q).max()
     assert np.isfinite(diff) and diff <= 10 * spread + 1e-14, (diff, spread)
+
+
+def test_all_feet_in_one_call_equal_the_per_leg_functions(paper):
+    """``robot_feet`` (the simulations' one-call kinematics) gives the per-leg functions' values bit for bit."""
+    from quadruped_dyn.dynamics.kinematics import robot_feet, robot_kinematics
+
+    feet, kin = robot_feet(paper), robot_kinematics(paper)
+    rng = np.random.default_rng(1)
+    for _ in range(10):
+        q = rng.normal(size=12)
+        r, J = (np.asarray(x) for x in feet(q))
+        for i in range(4):
+            s = slice(3 * i, 3 * i + 3)
+            np.testing.assert_array_equal(r[:, i], np.asarray(kin[i].foot_position(q[s])).ravel())
+            np.testing.assert_array_equal(J[:, s], np.asarray(kin[i].foot_jacobian(q[s])))
