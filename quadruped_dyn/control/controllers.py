@@ -256,6 +256,7 @@ class FfPdStep(FfPd):
     landing further out."""
 
     name = "ff+pd+step"
+    gain = 1.0  # times the capture point's sqrt(h / g)
 
     def __init__(self, robot: Robot, gains: Gains, c: GeneratedC) -> None:
         super().__init__(robot, gains, c)
@@ -273,7 +274,7 @@ class FfPdStep(FfPd):
         v_plan = -Jqd_ref[feet].mean(axis=0)
         h = -float(ref.r_feet[:, 2].mean())
         target = np.zeros(3)
-        target[:2] = math.sqrt(max(h, 0.0) / 9.81) * (v - v_plan)[:2]
+        target[:2] = self.gain * math.sqrt(max(h, 0.0) / 9.81) * (v - v_plan)[:2]
         s = ref.phase_s
         ramp = 10 * s**3 - 15 * s**4 + 6 * s**5
         q_des = np.array(base.q_des if base.q_des is not None else ref.q_r[:12], dtype=float)
