@@ -112,6 +112,14 @@ SIGNAL_DOCS = {
     "tau_r": "12 joint torques [N m] with the paper's GRF model of the stance set; for two feet a 13th entry: "
     "the trunk moment about the foot-to-foot line (from foot 2 to foot 1) that the feet cannot produce [N m], "
     "0 for a motion the robot can make (the roll is unactuated)",
+    # derivatives (qd_<robot>_d.c, docs/derivatives.md): d/dq along pinocchio.integrate, 18 columns
+    "tau_full": "generalized force (18): trunk wrench (force [N], moment [N m], trunk frame), 12 joint torques [N m]",
+    "dtau_dq": "d rnea / dq (18x18): columns along the tangent dq = (dv_b, dw_b, dq_joints), body-frame increment",
+    "dtau_dv": "d rnea / dv (18x18)",
+    "dtau_da": "d rnea / da = M (18x18)",
+    "da_dq": "d a / dq (18x18, dense), a = M^-1 (tau_full - C - G); tangent columns as dtau_dq",
+    "da_dv": "d a / dv (18x18, dense)",
+    "da_dtau": "d a / d tau_full = M^-1 (18x18, dense)",
 }
 
 
@@ -143,6 +151,8 @@ def _note(name: str) -> str:
         stance = stance_set(name[4:].replace("_", "+"))
         return f"  [{stance.kind}, rank {stance.rank('paper')}]"
     reduced = reduced_parts(name)
+    if name == "dfd_full":
+        return "  [returns QD_NONFINITE / QD_SINGULAR]"
     return f"  [{reduced[1].kind}, returns QD_NONFINITE / QD_SINGULAR]" if reduced else ""
 
 
@@ -183,6 +193,16 @@ def header_doc(robot: Robot, functions: list[ca.Function], work: dict[str, tuple
         " * below QD_SINGULAR_RTOL max|M_r|, e.g. two feet, the trunk pitched within ~1e-12 rad of 90 deg);",
         " * qdd_r is not written then. A stance leg stretched straight is not singular here: the reduced",
         " * model never inverts a leg's Jacobian (measured on the paper robot: cond(M_r) 1e3 -> 3e4).",
+        " *",
+        " * Derivatives (qd_<robot>_d.c; quadruped_dyn/dynamics/derivatives.py, docs/derivatives.md). d/dq is",
+        " * along pinocchio.integrate(q, dq): dq (18) = (dv_b, dw_b, dq_joints), a body-frame (local) increment",
+        " * of the trunk pose (p -> p + R dv_b, R -> R exp([dw_b]x)), as Pinocchio's analytical derivatives;",
+        " * no column is a derivative w.r.t. a quaternion entry, and the first three (position) are zero.",
+        " *   did_full(q, v, a)               d rnea/dq, d rnea/dv, d rnea/da = M (rnea: no foot forces);",
+        " *   dfd_full_parts(q, v)            M (dense) and C + G;",
+        " *   dfd_full(q, v, tau_full)        d a/dq, d a/dv, d a/dtau = M^-1 of a = M^-1 (tau_full - C - G):",
+        " *                                   Cholesky of M on the stack, -M^-1 d rnea/dx at a. Returns",
+        " *                                   QD_SINGULAR (2) if M is not positive definite to working precision.",
         " *",
         " * Signals:",
         *[f" *   {name:<9}{SIGNAL_DOCS[name]}" for name in signals],
@@ -270,7 +290,7 @@ def generate(robot: Robot, out_dir: Path, precision: str = "double",
     """Write into ``out_dir``: qd_<robot>.c (full-coordinate terms and GRF solves), qd_<robot>.h
     (one header for all), the files ``extra_files(functions, work sizes)`` returns (e.g. the
     reference values of ``checks.c_reference``), check_qd.c, the Makefile, and qd_<robot>_r_<feet>.c (the reduced
-    model of each stance set of 2-4 feet). Returns the paths in that order."""
+    model of each stance set of 2-4 feet), qd_<robot>_d.c (derivatives). Returns the paths in that order."""
     if precision not in ("double", "float"):
         raise InputError(f"precision '{precision}' is not supported; expected 'double' or 'float'")
     out_dir = Path(out_dir)
@@ -287,6 +307,12 @@ def generate(robot: Robot, out_dir: Path, precision: str = "double",
         sources[f"{file_stem}.c"] = _checked_reduced_c(c_text, h_text, reduced)
         casadi_header += h_text
         functions += reduced
+    from quadruped_dyn.codegen.emit_derivatives import derivative_functions, derivative_source
+
+    derivatives = derivative_functions(robot)  # qd_<robot>_d.c: derivatives of the full dynamics
+    sources[f"{name}_d.c"], h_text = derivative_source(f"{name}_d", derivatives, precision)
+    casadi_header += h_text
+    functions += derivatives
     work = work_sizes(casadi_header)
     files = {
         f"{name}.c": c_full,

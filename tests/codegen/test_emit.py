@@ -21,6 +21,7 @@ from quadruped_dyn.codegen.emit import (
     codegen_functions,
     reduced_symbol,
 )
+from quadruped_dyn.codegen.emit_derivatives import DERIVATIVE_NAMES
 from quadruped_dyn.codegen.library import CompiledFunction, compiled_library, load_external
 from quadruped_dyn.math.compare import max_abs_error, scale_of
 from quadruped_dyn.model.robot import load_robot
@@ -51,7 +52,7 @@ def test_c_program_builds_and_passes(tmp_path):
     shutil.copytree(CASADI_GEN, work, ignore=shutil.ignore_patterns("build"))
     proc = subprocess.run(["make", "-C", str(work), "-j2", "check"], capture_output=True, text=True, check=False)
     assert proc.returncode == 0, proc.stdout[-3000:] + proc.stderr[-3000:]
-    n = len(CODEGEN_FUNCTIONS) + len(REDUCED_NAMES) * len(REDUCED_STANCE_SETS)
+    n = len(CODEGEN_FUNCTIONS) + len(REDUCED_NAMES) * len(REDUCED_STANCE_SETS) + len(DERIVATIVE_NAMES)
     assert f"\n{n} passed, 0 failed\n" in proc.stdout, "double: every function checked and passing"
     skipped = re.findall(r"\n\d+ passed, 0 failed, (\d+) skipped\n", proc.stdout)
     assert proc.stdout.count(" 0 failed") == 2 and all(int(k) <= 2 for k in skipped), proc.stdout[-500:]
