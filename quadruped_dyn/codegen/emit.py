@@ -17,6 +17,7 @@ import os
 import re
 import tempfile
 from collections.abc import Callable
+from dataclasses import dataclass
 from pathlib import Path
 
 import casadi as ca
@@ -227,7 +228,7 @@ def work_sizes(casadi_header: str) -> dict[str, tuple[int, int]]:
 _UNUSED = "(void)arg; (void)res; (void)iw; (void)w; (void)mem;"
 
 
-def _silence_unused_parameters(c_source: str) -> str:
+def silence_unused_parameters(c_source: str) -> str:
     """CasADi's evaluation functions ignore some of their five parameters and its
     release hooks ignore ``mem``: cast them to void so -Wextra -Werror passes."""
     c_source = re.sub(r"(static int casadi_f\d+\([^)]*\) \{\n)", lambda m: m.group(1) + f"  {_UNUSED}\n", c_source)
@@ -241,17 +242,17 @@ def stem(robot: Robot) -> str:
     return f"qd_{re.sub(r'[^A-Za-z0-9_]', '_', robot.name)}"
 
 
-def _casadi_c(file_stem: str, functions: list[ca.Function], precision: str) -> tuple[str, str]:
+def casadi_c(file_stem: str, functions: list[ca.Function], precision: str) -> tuple[str, str]:
     """(C source, CasADi's header) of ``functions`` generated into ``file_stem``.c."""
     cg = ca.CodeGenerator(f"{file_stem}.c", {"with_header": True, "casadi_real": precision})
     for f in functions:
         cg.add(f)
     with tempfile.TemporaryDirectory() as tmp:
         cg.generate(tmp + os.sep)
-        return _silence_unused_parameters((Path(tmp) / f"{file_stem}.c").read_text()), (Path(tmp) / f"{file_stem}.h").read_text()
+        return silence_unused_parameters((Path(tmp) / f"{file_stem}.c").read_text()), (Path(tmp) / f"{file_stem}.h").read_text()
 
 
-def _entry_point(name: str) -> str:
+def entry_point(name: str) -> str:
     return (rf"(CASADI_SYMBOL_EXPORT int {name}\(const casadi_real\*\* arg, casadi_real\*\* res, casadi_int\* iw, "
             rf"casadi_real\* w, int mem\)\{{\n)  return (casadi_f\d+)\(arg, res, iw, w, mem\);\n")
 
@@ -265,7 +266,7 @@ def _checked_reduced_c(c_text: str, casadi_header: str, functions: list[ca.Funct
     work = work_sizes(casadi_header)
     raw = {}  # entry point -> CasADi's static evaluation function
     for f in functions:
-        found = re.search(_entry_point(f.name()), c_text)
+        found = re.search(entry_point(f.name()), c_text)
         if not found:
             raise AssertionError(f"entry point of {f.name()} not found in CasADi's output")
         raw[f.name()] = found.group(2)
@@ -278,32 +279,55 @@ def _checked_reduced_c(c_text: str, casadi_header: str, functions: list[ca.Funct
         else:
             nnz = ", ".join(str(f.nnz_out(i)) for i in range(f.n_out()))
             body = rf"\1  return qd_finite(\2(arg, res, iw, w, mem), res, {f.n_out()}, (const casadi_int[]){{{nnz}}});\n"
-        c_text, count = re.subn(_entry_point(f.name()), body, c_text)
+        c_text, count = re.subn(entry_point(f.name()), body, c_text)
         if count != 1:
             raise AssertionError(f"entry point of {f.name()} not found in CasADi's output")
     return c_text
 
 
+@dataclass(frozen=True)
+class GeneratedFiles:
+    """The files ``generate`` wrote, by what they are (callers never rely on an order)."""
+
+    source: Path  # qd_<robot>.c: full-coordinate terms and GRF solves
+    header: Path  # qd_<robot>.h: one header for all, documentation first
+    extra: dict[str, Path]  # file name -> path of each of ``extra_files``' files (e.g. the reference values)
+    check_program: Path  # check_qd.c
+    makefile: Path
+    reduced: tuple[Path, ...]  # qd_<robot>_r_<feet>.c: the reduced model of each stance set of 2-4 feet
+    derivatives: tuple[Path, ...] = ()  # qd_<robot>_d.c: derivatives of the full dynamics (codegen/emit_derivatives.py)
+
+    @property
+    def c_sources(self) -> list[Path]:
+        """The generated C files of the library (not the check program)."""
+        return [self.source, *self.reduced, *self.derivatives]
+
+    def all(self) -> list[Path]:
+        """Every file, in the order they were written."""
+        return [self.source, self.header, *self.extra.values(), self.check_program, self.makefile, *self.reduced,
+                *self.derivatives]
+
+
 def generate(robot: Robot, out_dir: Path, precision: str = "double",
              extra_files: Callable[[list[ca.Function], dict[str, tuple[int, int]]], dict[str, str]] | None = None,
-             ) -> list[Path]:
+             ) -> GeneratedFiles:
     """Write into ``out_dir``: qd_<robot>.c (full-coordinate terms and GRF solves), qd_<robot>.h
     (one header for all), the files ``extra_files(functions, work sizes)`` returns (e.g. the
     reference values of ``checks.c_reference``), check_qd.c, the Makefile, and qd_<robot>_r_<feet>.c (the reduced
-    model of each stance set of 2-4 feet), qd_<robot>_d.c (derivatives). Returns the paths in that order."""
+    model of each stance set of 2-4 feet), qd_<robot>_d.c (derivatives); returns them by role (``GeneratedFiles``)."""
     if precision not in ("double", "float"):
         raise InputError(f"precision '{precision}' is not supported; expected 'double' or 'float'")
     out_dir = Path(out_dir)
     out_dir.mkdir(parents=True, exist_ok=True)
     name = stem(robot)
     full = codegen_functions(robot)
-    c_full, casadi_header = _casadi_c(name, full, precision)
+    c_full, casadi_header = casadi_c(name, full, precision)
     sources = {f"{name}.c": c_full}
     functions = list(full)
     for stance in REDUCED_STANCE_SETS:
         reduced = reduced_functions(robot, stance)
         file_stem = f"{name}_r_{stance.name.replace('+', '_')}"
-        c_text, h_text = _casadi_c(file_stem, reduced, precision)
+        c_text, h_text = casadi_c(file_stem, reduced, precision)
         sources[f"{file_stem}.c"] = _checked_reduced_c(c_text, h_text, reduced)
         casadi_header += h_text
         functions += reduced
@@ -314,21 +338,22 @@ def generate(robot: Robot, out_dir: Path, precision: str = "double",
     casadi_header += h_text
     functions += derivatives
     work = work_sizes(casadi_header)
+    extra = extra_files(functions, work) if extra_files else {}
     files = {
         f"{name}.c": c_full,
         f"{name}.h": header_doc(robot, functions, work) + casadi_header,
-        **(extra_files(functions, work) if extra_files else {}),
+        **extra,
         "check_qd.c": (TEMPLATES / "check_qd.c").read_text(),
         "Makefile": (TEMPLATES / "Makefile").read_text().replace("ROBOT ?= paper", f"ROBOT ?= {name[3:]}"),
         **sources,
     }
-    paths = []
     for file_name, text in files.items():
         (out_dir / file_name).write_text(text)
-        paths.append(out_dir / file_name)
-    return paths
+    return GeneratedFiles(source=out_dir / f"{name}.c", header=out_dir / f"{name}.h",
+                          extra={f: out_dir / f for f in extra}, check_program=out_dir / "check_qd.c",
+                          makefile=out_dir / "Makefile",
+                          reduced=tuple(out_dir / f for f in sources if f not in (f"{name}.c", f"{name}_d.c")),
+                          derivatives=(out_dir / f"{name}_d.c",))
 
-
-# ----------------------------------------------------------------------------- reference values
 
 

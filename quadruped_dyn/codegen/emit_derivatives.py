@@ -21,7 +21,7 @@ import re
 
 import casadi as ca
 
-from quadruped_dyn.codegen.emit import PREFIX, TEMPLATES, _casadi_c, _entry_point, work_sizes
+from quadruped_dyn.codegen.emit import PREFIX, TEMPLATES, casadi_c, entry_point, work_sizes
 from quadruped_dyn.dynamics.derivatives import full_derivatives
 from quadruped_dyn.dynamics.newton_euler import full_dynamics
 from quadruped_dyn.model.robot import Robot
@@ -48,13 +48,13 @@ def derivative_functions(robot: Robot) -> list[ca.Function]:
 def derivative_source(file_stem: str, functions: list[ca.Function], precision: str) -> tuple[str, str]:
     """(C source, CasADi's header) of qd_<robot>_d.c: CasADi's code with c/qd_derivatives_solve.c
     inserted; every entry point returns QD_NONFINITE for a non-finite output, dfd_full solves."""
-    c_text, h_text = _casadi_c(file_stem, functions, precision)
+    c_text, h_text = casadi_c(file_stem, functions, precision)
     first = c_text.index(f"\n/* {functions[0].name()}:")
     c_text = c_text[:first] + "\n" + (TEMPLATES / "qd_derivatives_solve.c").read_text() + c_text[first:]
     work = work_sizes(h_text)
     raw = {}
     for f in functions:
-        found = re.search(_entry_point(f.name()), c_text)
+        found = re.search(entry_point(f.name()), c_text)
         if not found or work[f.name()] != (0, 0):
             raise AssertionError(f"entry point of {f.name()} not found, or it needs work memory")
         raw[f.name()] = found.group(2)
@@ -66,7 +66,7 @@ def derivative_source(file_stem: str, functions: list[ca.Function], precision: s
         else:
             nnz = ", ".join(str(f.nnz_out(i)) for i in range(f.n_out()))
             body = rf"\1  return qd_d_finite(\2(arg, res, iw, w, mem), res, {f.n_out()}, (const casadi_int[]){{{nnz}}});\n"
-        c_text, count = re.subn(_entry_point(f.name()), body, c_text)
+        c_text, count = re.subn(entry_point(f.name()), body, c_text)
         if count != 1:
             raise AssertionError(f"entry point of {f.name()} not found in CasADi's output")
     # dfd_full calls qd_did_full_sparsity_out, defined further down: declare it first

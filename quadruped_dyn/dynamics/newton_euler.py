@@ -35,8 +35,8 @@ import casadi as ca
 from quadruped_dyn.dynamics.crba import generalized_gravity, mass_matrix_crba
 from quadruped_dyn.dynamics.guarded import guard_fields
 from quadruped_dyn.dynamics.kinematics import foot_position, joint_frames
+from quadruped_dyn.math.rigid import axis_rotation
 from quadruped_dyn.math.spatial import (
-    axis_rotation,
     dm,
     force_cross,
     force_cross_bar,

@@ -30,7 +30,8 @@ from quadruped_dyn.dynamics.crba import mass_matrix_crba
 from quadruped_dyn.dynamics.kinematics import foot_position
 from quadruped_dyn.dynamics.newton_euler import inverse_dynamics
 from quadruped_dyn.dynamics.reduced import roll_rate_row, roll_rate_row_dot
-from quadruped_dyn.math.spatial import dm, quat_to_rotation, skew
+from quadruped_dyn.math.rigid import skew
+from quadruped_dyn.math.spatial import dm, quat_to_rotation
 from quadruped_dyn.model.leg import LEG_LABELS
 from quadruped_dyn.model.robot import Robot
 from quadruped_dyn.model.stance import StanceSet

@@ -1,4 +1,5 @@
-"""Rigid-body quantities, numeric: placements, link inertias, rotations about an axis, cross-product matrices.
+"""Rigid-body quantities: placements and link inertias (numeric), and the rotation about an axis
+and the cross-product matrix, each one formula for numbers (numpy) and symbols (CasADi).
 
 Frames: a ``Placement`` maps child-frame points into the parent frame (x_parent = R x_child + p).
 """
@@ -6,7 +7,9 @@ Frames: a ``Placement`` maps child-frame points into the parent frame (x_parent 
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import Any
 
+import casadi as ca
 import numpy as np
 
 
@@ -40,13 +43,22 @@ class LinkInertia:
     inertia: np.ndarray  # (3, 3) about the CoM, axes of the joint frame, kg m^2
 
 
-def axis_rotation(axis: np.ndarray, angle: float) -> np.ndarray:
-    """Rotation by ``angle`` (rad) about the unit ``axis`` (Rodrigues)."""
-    k = np.asarray(axis, dtype=float)
-    K = skew(k)
-    return np.eye(3) + np.sin(angle) * K + (1.0 - np.cos(angle)) * (K @ K)
+def skew(w: Any) -> Any:
+    """Cross-product matrix: ``skew(w) @ x == w x x``. One formula for numbers and symbols: a numpy
+    (3, 3) for a numeric w, a CasADi matrix of w's type for an SX / MX / DM w."""
+    rows = ((0, -w[2], w[1]), (w[2], 0, -w[0]), (-w[1], w[0], 0))
+    if isinstance(w, ca.SX | ca.MX | ca.DM):
+        return ca.vertcat(*[ca.horzcat(*row) for row in rows])
+    return np.array(rows, dtype=float)
 
 
-def skew(w: np.ndarray) -> np.ndarray:
-    """Cross-product matrix: ``skew(w) @ x == np.cross(w, x)``."""
-    return np.array([[0.0, -w[2], w[1]], [w[2], 0.0, -w[0]], [-w[1], w[0], 0.0]])
+def axis_rotation(axis: np.ndarray, angle: Any) -> Any:
+    """Rotation by ``angle`` (rad) about the constant unit ``axis`` (Rodrigues):
+    cos (I - a a^T) + a a^T + sin [a]x. A numpy (3, 3) for a numeric angle, SX for a symbolic one;
+    written so that for an axis-aligned joint the constant entries stay exact 0 and 1, keeping the
+    expression graph (and the generated C) small."""
+    a = np.asarray(axis, dtype=float)
+    aaT = np.outer(a, a)
+    if isinstance(angle, ca.SX):
+        return ca.cos(angle) * ca.DM(np.eye(3) - aaT) + ca.DM(aaT) + ca.sin(angle) * ca.DM(skew(a))
+    return np.cos(angle) * (np.eye(3) - aaT) + aaT + np.sin(angle) * skew(a)

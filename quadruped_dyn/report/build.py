@@ -13,7 +13,6 @@ trunk's spatial acceleration, as everywhere in the project.
 
 from __future__ import annotations
 
-import os
 import sys
 import time
 from collections.abc import Callable
@@ -22,7 +21,7 @@ from datetime import datetime, timezone
 from pathlib import Path
 from typing import Any
 
-from quadruped_dyn.errors import InputError
+from quadruped_dyn.files.paths import writable_dir
 from quadruped_dyn.model.robot import ROBOT_NAMES, robot_path
 from quadruped_dyn.report.gather import (
     CHECK_SAMPLES,
@@ -75,14 +74,7 @@ def prepare(robot_arg: str, out: str | Path) -> tuple[Path, Path]:
     urdf = robot_path(robot_arg)
     name = robot_arg if robot_arg in ROBOT_NAMES else urdf.stem  # as load_robot names it
     target = Path(out) / name
-    try:
-        target.mkdir(parents=True, exist_ok=True)
-        probe = target / f".write-test-{os.getpid()}"
-        probe.write_text("")
-        probe.unlink()
-    except OSError as e:
-        raise InputError(f"cannot write to '{target}' ({e.strerror}); expected a writable --out directory") from e
-    return urdf, target
+    return urdf, writable_dir(target, f"--out '{target}'", "a writable --out directory")
 
 
 # ----------------------------------------------------------------------------- gathering

@@ -16,7 +16,8 @@ from typing import Any
 
 import numpy as np
 
-from quadruped_dyn.errors import InputError
+from quadruped_dyn.errors import InputError, NumericalError
+from quadruped_dyn.math.compare import relative_error, scale_of
 from quadruped_dyn.model.leg import JOINT_ROLES
 from quadruped_dyn.model.robot import Robot, load_robot
 from quadruped_dyn.report.html import png_image
@@ -124,18 +125,15 @@ def reduced_rows(robot: Robot, q_joints: np.ndarray) -> list[dict[str, Any]]:
             (M,) = guarded_call(m.M_r, q_r, quat)
             cond = float(np.linalg.cond(M))
             if not cond < MAX_COND_M_R:
-                raise InputError(f"cond(M_r) = {cond:.1e}, beyond {MAX_COND_M_R:.0e}: numerically singular")
-        except InputError as e:  # a result: e.g. a front or back pair, whose free pitch the roll cannot describe
+                raise NumericalError(f"cond(M_r) = {cond:.1e}, beyond {MAX_COND_M_R:.0e}: numerically singular")
+        except (InputError, NumericalError) as e:  # a result: e.g. a front or back pair (its free pitch is not the roll)
             rows.append({"stance": s.name, "kind": s.kind, "n": m.n, "cond": float("inf"), "asymmetry": None,
                          "err_vs_pinocchio": None, "tol": REL_TOL_TERMS, "singular": str(e)})
             continue
-        P, zero = s.selection("paper"), np.zeros(m.n)
-        base = ref.reduced_inverse_dynamics(s.feet, P, q_r, zero, zero, quat)
-        M_ref = np.column_stack([ref.reduced_inverse_dynamics(s.feet, P, q_r, zero, e, quat) - base for e in np.eye(m.n)])
-        scale = float(np.abs(M_ref).max())
+        M_ref = ref.reduced_mass_matrix(s.feet, s.selection("paper"), q_r, quat)
         rows.append({"stance": s.name, "kind": s.kind, "n": m.n, "cond": cond,
-                     "asymmetry": float(np.abs(M - M.T).max() / np.abs(M).max()),
-                     "err_vs_pinocchio": float(np.abs(M - M_ref).max() / scale), "tol": REL_TOL_TERMS})
+                     "asymmetry": relative_error(M, M.T, scale_of(M)),
+                     "err_vs_pinocchio": relative_error(M, M_ref), "tol": REL_TOL_TERMS})
     return rows
 
 def experiment(robot: Robot, out: Path) -> tuple[dict[str, dict[str, Any] | None], dict[str, str]]:
@@ -143,10 +141,11 @@ def experiment(robot: Robot, out: Path) -> tuple[dict[str, dict[str, Any] | None
     physics check): the JSON dicts and the BR HFE figures, written beside the report as
     ``validate`` writes them."""
     from quadruped_dyn.experiment.gait import GAITS
-    from quadruped_dyn.experiment.outputs import output_paths, plot_br_hfe, plot_physics_check, write_json
+    from quadruped_dyn.experiment.outputs import output_paths, plot_br_hfe, plot_physics_check
     from quadruped_dyn.experiment.paper_experiment import report as validation_report
     from quadruped_dyn.experiment.paper_experiment import run_experiment, static_stability
     from quadruped_dyn.experiment.simulate import reduced_dynamics
+    from quadruped_dyn.files.json import write_json
 
     validations: dict[str, dict[str, Any] | None] = {}
     plots: dict[str, str] = {}
@@ -176,8 +175,8 @@ def generated_c(robot: Robot, out: Path) -> dict[str, Any]:
     from quadruped_dyn.tolerances import REL_TOL_TERMS
 
     directory = out / "c"
-    paths = generate_checked(robot, directory)
-    work = work_sizes(paths[1].read_text())
+    files = generate_checked(robot, directory)
+    work = work_sizes(files.header.read_text())
 
     functions: list[dict[str, Any]] = [
         {"name": f.name(), "inputs": shapes(f), "outputs": shapes(f, outputs=True), "instructions": f.n_instructions(),
@@ -196,9 +195,9 @@ def generated_c(robot: Robot, out: Path) -> dict[str, Any]:
         ours_all = np.concatenate([np.asarray(o, dtype=float).ravel() for o in ours])
         expected_all = np.concatenate([np.asarray(e, dtype=float).ravel() for e in expected])
         # relative to the largest reference output: a residual that should be ~0 has no scale of its own
-        err = float(np.abs(ours_all - expected_all).max() / (np.abs(expected_all).max() or 1.0))
+        err = relative_error(ours_all, expected_all)
         checks.append({"name": f["name"], "max_rel_err": err, "tol": REL_TOL_TERMS})
-    return {"directory": str(directory), "files": [{"name": p.name, "bytes": p.stat().st_size} for p in paths],
+    return {"directory": str(directory), "files": [{"name": p.name, "bytes": p.stat().st_size} for p in files.all()],
             "functions": functions, "checks": checks, "compile_s": compile_s,
             "library_bytes": library.path.stat().st_size}
 
@@ -227,7 +226,7 @@ def symbolic_data(robot: Robot) -> tuple[list[dict[str, Any]] | None, str, list[
             for qj in states:
                 expected = np.asarray(reference(full_q(np.eye(3), np.zeros(3), qj)))
                 got = formula.evaluate(qj[:3]).reshape(expected.shape)
-                err = max(err, float(np.abs(got - expected).max() / (np.abs(expected).max() or 1.0)))
+                err = max(err, relative_error(got, expected))
             formulas.append({"title": formula.title, "latex": formula.latex, "mathml": formula.mathml,
                              "max_err_vs_pinocchio": err, "tol": REL_TOL_TERMS})
         note = (f"Front-left leg of the DH robot, from the CasADi expressions (SX → SymPy, simplified). Trunk frame "

@@ -10,6 +10,7 @@ import math
 from collections.abc import Sequence
 from typing import Any
 
+from quadruped_dyn.model.leg import BR_HFE
 from quadruped_dyn.report.html import Section, badge, cell, esc, grade, not_available, num, table
 
 
@@ -186,9 +187,6 @@ def reduced_section(rows: Sequence[dict[str, Any]] | None, posture_note: str = "
 
 
 # ----------------------------------------------------------------------------- the paper's experiment
-
-
-BR_HFE = 3 * 3 + 1  # project joint index of BR HFE, the joint of the paper's Figs. 5-7
 
 
 def _gait_block(gait: str, v: dict[str, Any], joint_names: Sequence[str], plot_html: str) -> tuple[str, str]:

@@ -100,7 +100,7 @@ def test_cache_key_tracks_the_source(paper):
     assert compiled_library(load_robot("solo12")).key != a.key
 
 
-def _call_ctypes(lib: ctypes.CDLL, name: str, real: type, args: list[np.ndarray], sizes: list[int]) -> list[np.ndarray]:
+def call_ctypes(lib: ctypes.CDLL, name: str, real: type, args: list[np.ndarray], sizes: list[int]) -> list[np.ndarray]:
     fn = getattr(lib, PREFIX + name)
     arg_arrays = [np.ascontiguousarray(x, dtype=real) for x in args]
     res_arrays = [np.zeros(n, dtype=real) for n in sizes]
@@ -122,8 +122,8 @@ def test_float_build_matches_double_build(paper):
         f = graphs[PREFIX + name]
         args = [inputs[f.name_in(i)] for i in range(f.n_in())]
         sizes = [f.nnz_out(i) for i in range(f.n_out())]
-        d = _call_ctypes(double, name, np.float64, args, sizes)
-        x = _call_ctypes(single, name, np.float32, args, sizes)
+        d = call_ctypes(double, name, np.float64, args, sizes)
+        x = call_ctypes(single, name, np.float32, args, sizes)
         assert _function_scale_error(x, d) <= FLOAT_REL_TOL, name
 
 

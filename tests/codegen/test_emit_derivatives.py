@@ -14,7 +14,7 @@ from quadruped_dyn.errors import InputError
 from quadruped_dyn.model.state import random_state
 from quadruped_dyn.references.pinocchio import PinocchioDerivatives, PinocchioReference
 from quadruped_dyn.tolerances import FLOAT_REL_TOL, REL_TOL_DERIVATIVES
-from tests.codegen.test_emit import _call_ctypes
+from tests.codegen.test_emit import call_ctypes
 from tests.conftest import assert_close
 
 
@@ -39,8 +39,8 @@ def test_float_derivatives_match_double(paper):
 
     s = random_state(paper.lower, paper.upper, np.random.default_rng(5))
     tau = 5.0 * s.a
-    d = _call_ctypes(ctypes.CDLL(str(double.path)), "dfd_full", np.float64, [s.q, s.v, tau], [324] * 3)
-    x = _call_ctypes(ctypes.CDLL(str(single.path)), "dfd_full", np.float32, [s.q, s.v, tau], [324] * 3)
+    d = call_ctypes(ctypes.CDLL(str(double.path)), "dfd_full", np.float64, [s.q, s.v, tau], [324] * 3)
+    x = call_ctypes(ctypes.CDLL(str(single.path)), "dfd_full", np.float32, [s.q, s.v, tau], [324] * 3)
     cond = np.linalg.cond(PinocchioReference(paper).mass_matrix(s.q))
     for a, b in zip(x, d):  # M^-1 amplifies float's rounding by up to cond(M)
         assert_close(a, b, FLOAT_REL_TOL * max(1.0, cond / 100.0), "float dfd_full")

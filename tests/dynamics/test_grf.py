@@ -10,7 +10,7 @@ from hypothesis import strategies as st
 
 from quadruped_dyn.dynamics.grf import friction_cone, grf_solve, grf_solves
 from quadruped_dyn.dynamics.guarded import guarded_call
-from quadruped_dyn.errors import InputError
+from quadruped_dyn.errors import InputError, NumericalError
 from quadruped_dyn.math.linalg import least_squares, min_norm
 from quadruped_dyn.model.stance import GRF_MODELS, STANCE_SETS, stance_set
 from quadruped_dyn.model.state import FullState, full_q, random_state, rotation
@@ -153,9 +153,9 @@ def test_solve_refuses_coincident_or_collinear_feet(paper):
     qj = paper.standing_q.copy()
     qj[0:3], qj[3:6] = analytic_ik("FL", target), analytic_ik("FR", target)
     q, zero = full_q(np.eye(3), np.zeros(3), qj), np.zeros(18)
-    with pytest.raises(InputError, match="rank 3 at this configuration, 5 expected"):
+    with pytest.raises(NumericalError, match="rank 3 at this configuration, 5 expected"):
         grf_solve(paper, "FL+FR").solve(q, zero, zero)
-    with pytest.raises(InputError, match="rank 5 at this configuration, 6 expected"):
+    with pytest.raises(NumericalError, match="rank 5 at this configuration, 6 expected"):
         grf_solve(paper, "FL+FR+BL").solve(q, zero, zero)  # FL, FR coincide: three feet on a line
     assert grf_solve(paper, "FL+BR").solve(q, zero, zero).rank == 5  # still a proper pair
 
