@@ -83,3 +83,18 @@ REL_TOL_DERIVATIVES = 1e-9
 #: and a wrong term (a missing orientation dependence, a sign) is an O(1e-2 - 1) error.
 FD_STEP_DERIVATIVES = 1e-4
 REL_TOL_FD_DERIVATIVES = 2e-6
+
+#: The tol_scale of a case in the generated C's reference header (a ratio of condition numbers,
+#: printed to 3 significant digits) on two machines: the CPU's round-off moves it by ~1e-15
+#: relative, which can flip its third printed digit (up to 1e-2 relative for 1.00 vs 1.01); 2e-2
+#: allows that and still catches any change of the state or the conditioning.
+REFERENCE_TOL_SCALE_REL_TOL = 2e-2
+
+#: The per-phase interpolant of the plan's reference torques (``experiment.torque_table``),
+#: checked at the midpoints between its nodes, relative to each signal's largest magnitude over
+#: the phase (joint angles, rates, accelerations, torques, each as a group). Measured on paper,
+#: solo12 and go2, trot and walk: degree 64 reaches 3e-15 to 7e-15 and degree 96 or 128 does not
+#: go lower -- that floor is the exact IK and id_r's own round-off (a few hundred operations,
+#: atan2 / acos), not interpolation error. 1e-14 accepts only an interpolant at that floor, far
+#: below DOP853's tolerance (1e-13).
+TABLE_REL_TOL = 1e-14

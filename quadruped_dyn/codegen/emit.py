@@ -1,4 +1,4 @@
-"""Standalone C code generation (SPEC section 7).
+"""Standalone C code generation (docs/formulation.md §11).
 
 ``CODEGEN_FUNCTIONS`` lists what is generated, one line per function. Each becomes a C
 function ``qd_<name>(const casadi_real** arg, casadi_real** res, casadi_int* iw,
@@ -26,6 +26,7 @@ from quadruped_dyn.dynamics.grf import grf_solve
 from quadruped_dyn.dynamics.newton_euler import full_dynamics
 from quadruped_dyn.dynamics.reduced_projection import reduced_projection
 from quadruped_dyn.errors import InputError
+from quadruped_dyn.files.safe_write import output_path, write_text
 from quadruped_dyn.model.robot import Robot
 from quadruped_dyn.model.stance import STANCE_SETS, StanceSet, stance_set
 
@@ -45,7 +46,7 @@ CODEGEN_FUNCTIONS: dict[str, Callable[[Robot], ca.Function]] = {
     **{f"grf_{s.name.replace('+', '_')}": _grf_paper(s) for s in STANCE_SETS},
 }
 
-#: Stance sets with a reduced model (SPEC section 5): four feet, the four triples, the six pairs.
+#: Stance sets with a reduced model (docs/formulation.md §5-§6): four feet, the four triples, the six pairs.
 REDUCED_STANCE_SETS: tuple[StanceSet, ...] = tuple(st for st in STANCE_SETS if len(st.feet) >= 2)
 
 #: Reduced-model functions generated for every stance set in REDUCED_STANCE_SETS, as
@@ -348,7 +349,7 @@ def generate(robot: Robot, out_dir: Path, precision: str = "double",
         **sources,
     }
     for file_name, text in files.items():
-        (out_dir / file_name).write_text(text)
+        write_text(output_path(out_dir, file_name), text)  # under out_dir, never through a link
     return GeneratedFiles(source=out_dir / f"{name}.c", header=out_dir / f"{name}.h",
                           extra={f: out_dir / f for f in extra}, check_program=out_dir / "check_qd.c",
                           makefile=out_dir / "Makefile",

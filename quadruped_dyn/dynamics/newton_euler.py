@@ -1,4 +1,4 @@
-"""The paper's recursive Newton-Euler (SPEC section 3), symbolic, in full coordinates.
+"""The paper's recursive Newton-Euler (docs/formulation.md §2-§3), symbolic, in full coordinates.
 
 Per leg (Craig's recursion, quantities in each link's own frame):
   outward  omega_i, omegadot_i, vdot_i (classical acceleration of the frame origin) from the

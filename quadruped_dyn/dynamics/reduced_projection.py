@@ -1,4 +1,4 @@
-"""The reduced terms as projections of the full ones: the forms generated as C (SPEC sections 5, 7).
+"""The reduced terms as projections of the full ones: the forms generated as C (docs/formulation.md §6.2, §11).
 
 ``reduced`` follows the paper's recipe (id_r through the maps and the GRF solve; M_r column by
 column, Walker & Orin): that is the reference. The same quantities, written so that the work is

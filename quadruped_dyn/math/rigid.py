@@ -53,12 +53,15 @@ def skew(w: Any) -> Any:
 
 
 def axis_rotation(axis: np.ndarray, angle: Any) -> Any:
-    """Rotation by ``angle`` (rad) about the constant unit ``axis`` (Rodrigues):
-    cos (I - a a^T) + a a^T + sin [a]x. A numpy (3, 3) for a numeric angle, SX for a symbolic one;
-    written so that for an axis-aligned joint the constant entries stay exact 0 and 1, keeping the
-    expression graph (and the generated C) small."""
+    """Rotation by ``angle`` (rad) about the constant unit ``axis`` (Rodrigues), a numpy (3, 3) for a
+    numeric angle, SX for a symbolic one. One formula, K = [a]x, K^2 = a a^T - I, in the arrangement
+    each side has always used: for SX cos (I - a a^T) + a a^T + sin K, so that for an axis-aligned
+    joint the constant entries stay exact 0 and 1 (a small graph, small generated C); for numbers
+    I + sin K + (1 - cos) K^2, whose rounding the numeric foot positions (and so the gait's
+    footholds and the experiment's round-off) are measured with."""
     a = np.asarray(axis, dtype=float)
-    aaT = np.outer(a, a)
+    K = skew(a)
     if isinstance(angle, ca.SX):
-        return ca.cos(angle) * ca.DM(np.eye(3) - aaT) + ca.DM(aaT) + ca.sin(angle) * ca.DM(skew(a))
-    return np.cos(angle) * (np.eye(3) - aaT) + aaT + np.sin(angle) * skew(a)
+        aaT = np.outer(a, a)
+        return ca.cos(angle) * ca.DM(np.eye(3) - aaT) + ca.DM(aaT) + ca.sin(angle) * ca.DM(K)
+    return np.eye(3) + np.sin(angle) * K + (1.0 - np.cos(angle)) * (K @ K)

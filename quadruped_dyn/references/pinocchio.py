@@ -144,7 +144,7 @@ class PinocchioReference:
     ) -> tuple[np.ndarray, np.ndarray]:
         """Stance feet as rigid point contacts (zero world acceleration).
 
-        Solves the KKT system [[M, Jc^T], [Jc, 0]] [a; -f] = [S^T tau - (C + G); -Jcdot v].
+        Solves the KKT system ``[[M, Jc^T], [Jc, 0]] [a; -f] = [S^T tau - (C + G); -Jcdot v]``.
         Returns a = vdot (18,) and the ground forces on the stance feet, world frame (k, 3), N.
         """
         tau = check_array("tau", tau, (12,))
@@ -192,7 +192,7 @@ class PinocchioReference:
     def reduced_motion(
         self, feet: tuple[int, ...], q_r: np.ndarray, qd_r: np.ndarray, qdd_r: np.ndarray, quat: np.ndarray
     ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """(q, v, a = vdot) of the full robot from reduced coordinates (SPEC section 5), with
+        """(q, v, a = vdot) of the full robot from reduced coordinates (docs/formulation.md §5), with
         Pinocchio's foot positions, Jacobians and Jdot qdot and numpy least squares; the
         roll-rate row's derivative from the Euler-angle rates (an independent derivation)."""
         q = np.concatenate([np.zeros(3), quat, q_r[:12]])

@@ -1,4 +1,4 @@
-"""The reduced model's generated C (SPEC sections 5, 7), compiled and loaded back: equal to its
+"""The reduced model's generated C (docs/formulation.md §6.2, §11), compiled and loaded back: equal to its
 CasADi graph and to the Pinocchio-built reference on every built-in robot, every stance set of
 two, three or four feet; fd_r solves M_r qdd_r = tau_ext - C_r - G_r; singular configurations
 are reported by the return code; the float build agrees with the double one."""

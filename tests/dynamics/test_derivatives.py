@@ -91,7 +91,7 @@ def _central(f, x0: np.ndarray, h: float = FD_STEP_DERIVATIVES) -> np.ndarray:
 
 
 def _reference_fd_r(ref, stance, q_r, qd, tau, quat):
-    """qdd_r of the Pinocchio-built reduced reference (SPEC section 5), and its M_r."""
+    """qdd_r of the Pinocchio-built reduced reference (docs/formulation.md section 5), and its M_r."""
     n = q_r.size
     P = stance.selection("paper")
 

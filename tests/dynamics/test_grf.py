@@ -17,7 +17,7 @@ from quadruped_dyn.model.state import FullState, full_q, random_state, rotation
 from quadruped_dyn.tolerances import COND_ERR_FACTOR, RANK_RTOL, REL_TOL_TERMS
 from tests.conftest import assert_close
 
-EXPECTED_RANK = {  # (number of feet, model) -> rank, SPEC section 4
+EXPECTED_RANK = {  # (number of feet, model) -> rank, docs/formulation.md §4
     (4, "paper"): 5, (3, "paper"): 6, (2, "paper"): 5, (1, "paper"): 3, (0, "paper"): 0,
     (4, "min_norm"): 6, (3, "min_norm"): 6, (2, "min_norm"): 5, (1, "min_norm"): 3, (0, "min_norm"): 0,
 }
@@ -190,7 +190,7 @@ def test_minimum_norm_least_squares_optimality(paper, seed, stance, model):
     U, sv, Vt = np.linalg.svd(A)
     rank = int(np.sum(sv > RANK_RTOL * sv[0]))
     assume(rank == solve.rank and sv[0] / sv[rank - 1] < 1e6)  # skip near-singular draws
-    allowed = COND_ERR_FACTOR * (sv[0] / sv[rank - 1]) * np.finfo(float).eps  # relative, as in check.py
+    allowed = COND_ERR_FACTOR * (sv[0] / sv[rank - 1]) * np.finfo(float).eps  # relative, as in checks/terms.py
     scale = np.abs(A).max() * (np.abs(residual).max() + np.abs(A @ lam).max())
     assert np.abs(A.T @ residual).max() <= allowed * scale, "residual not orthogonal to range(A)"
     assert np.abs(Vt[rank:] @ lam).max(initial=0.0) <= allowed * np.abs(lam).max(), "lambda has a null-space part"

@@ -1,4 +1,4 @@
-"""Reduced coordinates (SPEC section 5): id_r against a Pinocchio-built reference, Walker-Orin
+"""Reduced coordinates (docs/formulation.md §5-§6): id_r against a Pinocchio-built reference, Walker-Orin
 vs AD, id_r = M_r qdd + C_r + G_r, forward dynamics, and the physics check against
 Pinocchio-quantity constrained dynamics with the stance feet as rigid point contacts."""
 
