@@ -7,7 +7,8 @@ load on a shared 2-core machine). Ratios generated / Pinocchio are what to read;
 times drift with the machine's load. The Pinocchio harness links
 the pin wheel's libraries (built for generic x86-64), so neither side uses -march=native.
 Pairs: M_full ~ crba, nle_full (C + G in one call) ~ nonLinearEffects, G_full ~
-computeGeneralizedGravity, id_full ~ rnea (id_full also applies 4 foot forces), fd_r_<feet> ~
+computeGeneralizedGravity, id_full ~ rnea (id_full also applies 4 foot forces), did_full ~ computeRNEADerivatives,
+dfd_full ~ computeABADerivatives, fd_r_<feet> ~
 constraintDynamics with those stance feet. The reduced terms M_r, CG_r, G_r, id_r are timed alone.
 """
 
@@ -48,6 +49,9 @@ PAIRS = {
     "nle_full": ("nonLinearEffects", 0.18),
     "G_full": ("computeGeneralizedGravity", 0.15),
     "id_full": ("rnea", 0.2),
+    # derivatives (docs/derivatives.md): d/dq, d/dv, d/da (= M) of rnea; d/dq, d/dv, d/dtau (= M^-1) of aba
+    "did_full": ("computeRNEADerivatives", 0.5),
+    "dfd_full": ("computeABADerivatives", 0.5),
 }
 
 HARNESSES = Path(__file__).resolve().parent / "c"
@@ -193,7 +197,7 @@ def _python_call_times(robot: Robot, library: CompiledLibrary, number: int = 200
     s = random_state(robot.lower, robot.upper, np.random.default_rng(0))
     q, v, a = ref.pin_q(s.q), ref.pin_v(s.v), ref.pin_v(s.a)
     model, data = robot.model, ref.data
-    inputs = {"q": s.q, "v": s.v, "a": s.a, "f": s.f.ravel()}
+    inputs = {"q": s.q, "v": s.v, "a": s.a, "f": s.f.ravel(), "tau_full": 5.0 * s.a}
     out: dict[str, float] = {}
     for name in PAIRS:
         f = CompiledFunction(library, name)
@@ -204,6 +208,8 @@ def _python_call_times(robot: Robot, library: CompiledLibrary, number: int = 200
         "nonLinearEffects": lambda: pin.nonLinearEffects(model, data, q, v),
         "computeGeneralizedGravity": lambda: pin.computeGeneralizedGravity(model, data, q),
         "rnea": lambda: pin.rnea(model, data, q, v, a),
+        "computeRNEADerivatives": lambda: pin.computeRNEADerivatives(model, data, q, v, a),
+        "computeABADerivatives": lambda: pin.computeABADerivatives(model, data, q, v, 5.0 * a),
     }
     for algo, call in pin_calls.items():
         out[algo] = 1e6 * min(timeit.repeat(call, number=number, repeat=3)) / number

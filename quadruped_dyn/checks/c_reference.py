@@ -16,7 +16,7 @@ from quadruped_dyn.math.compare import relative_error, scale_of, within
 from quadruped_dyn.model.robot import Robot
 from quadruped_dyn.model.stance import StanceSet, stance_set
 from quadruped_dyn.model.state import NV_FULL, FullState, full_q, rotation
-from quadruped_dyn.references.pinocchio import PinocchioReference
+from quadruped_dyn.references.pinocchio import PinocchioDerivatives, PinocchioReference
 from quadruped_dyn.tolerances import (
     FLOAT_REL_TOL,
     GRF_COND_ASSUMED,
@@ -46,6 +46,10 @@ def reduced_inputs(s: FullState) -> dict[str, np.ndarray]:
     roll = pin.rpy.matrixToRpy(rotation(s.q))[0]
     return {"q_r": _rounded(np.append(s.q[7:], roll)), "qd_r": np.append(s.v[6:], s.v[3]),
             "qdd_r": np.append(s.a[6:], s.a[3]), "quat": s.q[3:7], "tau_ext": 10.0 * s.a[5:]}
+
+def reference_tau_full(s: FullState) -> np.ndarray:
+    """The generalized force (18,) dfd_full is checked at: 5 a (rounded like the state)."""
+    return _rounded(5.0 * s.a)
 
 def _reduced_reference(ref: PinocchioReference, kind: str, stance: StanceSet, s: FullState) -> np.ndarray:
     """Pinocchio-built value (docs/formulation.md §8's independent reference) of reduced function ``kind``."""
@@ -80,6 +84,13 @@ def pinocchio_outputs(robot: Robot, ref: PinocchioReference, name: str, s: FullS
         R = rotation(s.q)
         full = ref.rnea(s.q, s.v, s.a) - ref.contact_jacobian(s.q, (0, 1, 2, 3)).T @ np.concatenate([R @ f for f in s.f])
         return [full[:6], full[6:]]
+    if name in ("did_full", "dfd_full", "dfd_full_parts"):
+        derivatives = PinocchioDerivatives(ref)
+        if name == "did_full":
+            return list(derivatives.rnea_derivatives(s.q, s.v, s.a))
+        if name == "dfd_full":
+            return list(derivatives.aba_derivatives(s.q, s.v, reference_tau_full(s)))
+        return [ref.mass_matrix(s.q), ref.nonlinear_effects(s.q, s.v)]
     if name.startswith("grf_"):
         stance = stance_set(name[4:].replace("_", "+"))
         r = ref.grf_solve(s.q, s.v, s.a, stance.feet, stance.selection("paper"))
@@ -95,6 +106,8 @@ def tolerance_scale(ref: PinocchioReference, name: str, s: FullState) -> float:
     velocity map), each at least 1, and for fd_r times cond(M_r) / GRF_COND_ASSUMED (the solve
     amplifies M_r's and C_r + G_r's errors by cond(M_r)). 1 otherwise."""
     reduced = reduced_parts(name)
+    if name == "dfd_full":  # M^-1 amplifies the errors of M and of d rnea by cond(M)
+        return max(1.0, float(np.linalg.cond(ref.mass_matrix(s.q))) / GRF_COND_ASSUMED)
     if not reduced:
         return 1.0
     kind, stance = reduced
@@ -119,11 +132,12 @@ def reference_header(robot: Robot, functions: list[ca.Function], work: dict[str,
     """C header: Pinocchio's values of every generated function at ``reference_state``."""
     ref = PinocchioReference(robot)
     s = reference_state(robot)
-    inputs = {"q": s.q, "v": s.v, "a": s.a, "f": s.f.ravel(), **reduced_inputs(s)}
+    inputs = {"q": s.q, "v": s.v, "a": s.a, "f": s.f.ravel(), "tau_full": reference_tau_full(s), **reduced_inputs(s)}
     inputs = {k: v for k, v in inputs.items() if any(k in f.name_in() for f in functions)}
     lines = [
         f"/* Reference values for the generated functions of '{robot.name}', computed by Pinocchio",
-        " * (crba, nonLinearEffects, computeGeneralizedGravity, rnea, contact Jacobians, SVD GRF)",
+        " * (crba, nonLinearEffects, computeGeneralizedGravity, rnea, contact Jacobians, SVD GRF,",
+        " * computeRNEADerivatives, computeABADerivatives)",
         " * at a fixed state near standing; 12 significant digits. Generated; do not edit. */",
         "typedef int (*qd_fn)(const casadi_real**, casadi_real**, casadi_int*, casadi_real*, int);",
         "typedef struct { const char* name; qd_fn fn; int n_in, n_out; const double* in[4]; int in_len[4];",

@@ -16,6 +16,7 @@ from dataclasses import asdict, dataclass, field
 import numpy as np
 import pinocchio as pin
 
+from quadruped_dyn.dynamics.derivatives import full_derivatives
 from quadruped_dyn.dynamics.grf import grf_solve, grf_solves
 from quadruped_dyn.dynamics.kinematics import robot_kinematics
 from quadruped_dyn.dynamics.newton_euler import full_dynamics
@@ -25,8 +26,8 @@ from quadruped_dyn.math.compare import max_abs_error, relative_error, scale_of, 
 from quadruped_dyn.model.robot import Robot
 from quadruped_dyn.model.stance import GRF_MODELS, STANCE_SETS
 from quadruped_dyn.model.state import FullState, random_state, rotation
-from quadruped_dyn.references.pinocchio import PinocchioReference
-from quadruped_dyn.tolerances import COND_ERR_FACTOR, REL_TOL_TERMS
+from quadruped_dyn.references.pinocchio import PinocchioDerivatives, PinocchioReference
+from quadruped_dyn.tolerances import COND_ERR_FACTOR, REL_TOL_DERIVATIVES, REL_TOL_TERMS
 
 
 @dataclass
@@ -174,12 +175,24 @@ def _reduced_comparisons(
         yield f"G_r {stance}", m.G_r(q_r, quat), G
 
 
+def _derivative_comparisons(robot: Robot, ref: PinocchioReference, s: FullState,
+                            rng: np.random.Generator) -> Iterator[tuple[str, object, object]]:
+    """did_full and dfd_full (dynamics/derivatives.py; d/dq along pinocchio.integrate) against
+    Pinocchio's analytical derivatives, computeRNEADerivatives and computeABADerivatives."""
+    d, pd = full_derivatives(robot), PinocchioDerivatives(ref)
+    for k, (ours, theirs) in enumerate(zip(d.did_full(s.q, s.v, s.a), pd.rnea_derivatives(s.q, s.v, s.a))):
+        yield f"did_full {('dtau_dq', 'dtau_dv', 'dtau_da')[k]}", ours, theirs
+    tau = rng.normal(scale=10.0, size=18)
+    for k, (ours, theirs) in enumerate(zip(d.dfd_full(s.q, s.v, tau), pd.aba_derivatives(s.q, s.v, tau))):
+        yield f"dfd_full {('da_dq', 'da_dv', 'da_dtau')[k]}", ours, theirs
+
+
 def run_check(robot: Robot, samples: int = 20, seed: int = 0,
               progress: Callable[[int], None] | None = None) -> CheckReport:
     ref = PinocchioReference(robot)
     rng = np.random.default_rng(seed)
     start = time.perf_counter()
-    full_dynamics(robot), robot_kinematics(robot), grf_solves(robot)  # built once per robot and process
+    full_dynamics(robot), robot_kinematics(robot), grf_solves(robot), full_derivatives(robot)  # once per robot and process
     for stance in REDUCED_STANCES:
         reduced_model(robot, stance)
     report = CheckReport(robot.name, samples, seed, build_seconds=time.perf_counter() - start)
@@ -187,9 +200,11 @@ def run_check(robot: Robot, samples: int = 20, seed: int = 0,
     report.grf = [GrfResult(st.name, m, st.rank(m)) for st in STANCE_SETS for m in GRF_MODELS]
     for n in range(samples):
         s = random_state(robot.lower, robot.upper, rng)
-        comparisons = itertools.chain(_comparisons(robot, ref, s), _reduced_comparisons(robot, ref, s.q[7:], rng))
+        comparisons = itertools.chain(_comparisons(robot, ref, s), _reduced_comparisons(robot, ref, s.q[7:], rng),
+                                      _derivative_comparisons(robot, ref, s, rng))
         for name, ours, theirs in comparisons:
-            term = terms.setdefault(name, TermResult(name))
+            tol = REL_TOL_DERIVATIVES if name.startswith(("did_full", "dfd_full")) else REL_TOL_TERMS
+            term = terms.setdefault(name, TermResult(name, tol=tol))
             term.add([np.asarray(x, dtype=float) for x in ours] if isinstance(ours, list) else ours, theirs)
         for result in report.grf:
             _grf_sample(robot, ref, s, result)

@@ -8,8 +8,9 @@ _MODULES: dict[str, tuple[str, ...]] = {
     "emit": (
         "PREFIX", "CODEGEN_FUNCTIONS", "REDUCED_STANCE_SETS", "REDUCED_NAMES", "reduced_symbol", "reduced_functions",
         "SIGNAL_DOCS", "codegen_functions", "reduced_parts", "header_doc", "work_sizes", "silence_unused_parameters",
-        "TEMPLATES", "stem", "GeneratedFiles", "generate",
+        "TEMPLATES", "stem", "casadi_c", "entry_point", "GeneratedFiles", "generate",
     ),
+    "emit_derivatives": ("DERIVATIVE_NAMES", "derivative_functions", "derivative_source"),
     "library": (
         "C_FLAGS", "COMPILE_JOBS", "run_tool", "compiler_version", "CompiledLibrary", "compile_sources", "PACKAGE",
         "generator_sources", "generation_key", "compiled_library", "load_external", "RETURN_CODES", "CompiledFunction",

@@ -114,6 +114,14 @@ SIGNAL_DOCS = {
     "tau_r": "12 joint torques [N m] with the paper's GRF model of the stance set; for two feet a 13th entry: "
     "the trunk moment about the foot-to-foot line (from foot 2 to foot 1) that the feet cannot produce [N m], "
     "0 for a motion the robot can make (the roll is unactuated)",
+    # derivatives (qd_<robot>_d.c, docs/derivatives.md): d/dq along pinocchio.integrate, 18 columns
+    "tau_full": "generalized force (18): trunk wrench (force [N], moment [N m], trunk frame), 12 joint torques [N m]",
+    "dtau_dq": "d rnea / dq (18x18): columns along the tangent dq = (dv_b, dw_b, dq_joints), body-frame increment",
+    "dtau_dv": "d rnea / dv (18x18)",
+    "dtau_da": "d rnea / da = M (18x18)",
+    "da_dq": "d a / dq (18x18, dense), a = M^-1 (tau_full - C - G); tangent columns as dtau_dq",
+    "da_dv": "d a / dv (18x18, dense)",
+    "da_dtau": "d a / d tau_full = M^-1 (18x18, dense)",
 }
 
 
@@ -145,6 +153,8 @@ def _note(name: str) -> str:
         stance = stance_set(name[4:].replace("_", "+"))
         return f"  [{stance.kind}, rank {stance.rank('paper')}]"
     reduced = reduced_parts(name)
+    if name == "dfd_full":
+        return "  [returns QD_NONFINITE / QD_SINGULAR]"
     return f"  [{reduced[1].kind}, returns QD_NONFINITE / QD_SINGULAR]" if reduced else ""
 
 
@@ -186,6 +196,16 @@ def header_doc(robot: Robot, functions: list[ca.Function], work: dict[str, tuple
         " * qdd_r is not written then. A stance leg stretched straight is not singular here: the reduced",
         " * model never inverts a leg's Jacobian (measured on the paper robot: cond(M_r) 1e3 -> 3e4).",
         " *",
+        " * Derivatives (qd_<robot>_d.c; quadruped_dyn/dynamics/derivatives.py, docs/derivatives.md). d/dq is",
+        " * along pinocchio.integrate(q, dq): dq (18) = (dv_b, dw_b, dq_joints), a body-frame (local) increment",
+        " * of the trunk pose (p -> p + R dv_b, R -> R exp([dw_b]x)), as Pinocchio's analytical derivatives;",
+        " * no column is a derivative w.r.t. a quaternion entry, and the first three (position) are zero.",
+        " *   did_full(q, v, a)               d rnea/dq, d rnea/dv, d rnea/da = M (rnea: no foot forces);",
+        " *   dfd_full_parts(q, v)            M (dense) and C + G;",
+        " *   dfd_full(q, v, tau_full)        d a/dq, d a/dv, d a/dtau = M^-1 of a = M^-1 (tau_full - C - G):",
+        " *                                   Cholesky of M on the stack, -M^-1 d rnea/dx at a. Returns",
+        " *                                   QD_SINGULAR (2) if M is not positive definite to working precision.",
+        " *",
         " * Signals:",
         *[f" *   {name:<9}{SIGNAL_DOCS[name]}" for name in signals],
         " *",
@@ -223,7 +243,7 @@ def stem(robot: Robot) -> str:
     return f"qd_{re.sub(r'[^A-Za-z0-9_]', '_', robot.name)}"
 
 
-def _casadi_c(file_stem: str, functions: list[ca.Function], precision: str) -> tuple[str, str]:
+def casadi_c(file_stem: str, functions: list[ca.Function], precision: str) -> tuple[str, str]:
     """(C source, CasADi's header) of ``functions`` generated into ``file_stem``.c."""
     cg = ca.CodeGenerator(f"{file_stem}.c", {"with_header": True, "casadi_real": precision})
     for f in functions:
@@ -233,7 +253,7 @@ def _casadi_c(file_stem: str, functions: list[ca.Function], precision: str) -> t
         return silence_unused_parameters((Path(tmp) / f"{file_stem}.c").read_text()), (Path(tmp) / f"{file_stem}.h").read_text()
 
 
-def _entry_point(name: str) -> str:
+def entry_point(name: str) -> str:
     return (rf"(CASADI_SYMBOL_EXPORT int {name}\(const casadi_real\*\* arg, casadi_real\*\* res, casadi_int\* iw, "
             rf"casadi_real\* w, int mem\)\{{\n)  return (casadi_f\d+)\(arg, res, iw, w, mem\);\n")
 
@@ -247,7 +267,7 @@ def _checked_reduced_c(c_text: str, casadi_header: str, functions: list[ca.Funct
     work = work_sizes(casadi_header)
     raw = {}  # entry point -> CasADi's static evaluation function
     for f in functions:
-        found = re.search(_entry_point(f.name()), c_text)
+        found = re.search(entry_point(f.name()), c_text)
         if not found:
             raise AssertionError(f"entry point of {f.name()} not found in CasADi's output")
         raw[f.name()] = found.group(2)
@@ -260,7 +280,7 @@ def _checked_reduced_c(c_text: str, casadi_header: str, functions: list[ca.Funct
         else:
             nnz = ", ".join(str(f.nnz_out(i)) for i in range(f.n_out()))
             body = rf"\1  return qd_finite(\2(arg, res, iw, w, mem), res, {f.n_out()}, (const casadi_int[]){{{nnz}}});\n"
-        c_text, count = re.subn(_entry_point(f.name()), body, c_text)
+        c_text, count = re.subn(entry_point(f.name()), body, c_text)
         if count != 1:
             raise AssertionError(f"entry point of {f.name()} not found in CasADi's output")
     return c_text
@@ -276,15 +296,17 @@ class GeneratedFiles:
     check_program: Path  # check_qd.c
     makefile: Path
     reduced: tuple[Path, ...]  # qd_<robot>_r_<feet>.c: the reduced model of each stance set of 2-4 feet
+    derivatives: tuple[Path, ...] = ()  # qd_<robot>_d.c: derivatives of the full dynamics (codegen/emit_derivatives.py)
 
     @property
     def c_sources(self) -> list[Path]:
         """The generated C files of the library (not the check program)."""
-        return [self.source, *self.reduced]
+        return [self.source, *self.reduced, *self.derivatives]
 
     def all(self) -> list[Path]:
         """Every file, in the order they were written."""
-        return [self.source, self.header, *self.extra.values(), self.check_program, self.makefile, *self.reduced]
+        return [self.source, self.header, *self.extra.values(), self.check_program, self.makefile, *self.reduced,
+                *self.derivatives]
 
 
 def generate(robot: Robot, out_dir: Path, precision: str = "double",
@@ -293,23 +315,29 @@ def generate(robot: Robot, out_dir: Path, precision: str = "double",
     """Write into ``out_dir``: qd_<robot>.c (full-coordinate terms and GRF solves), qd_<robot>.h
     (one header for all), the files ``extra_files(functions, work sizes)`` returns (e.g. the
     reference values of ``checks.c_reference``), check_qd.c, the Makefile, and qd_<robot>_r_<feet>.c (the reduced
-    model of each stance set of 2-4 feet); returns them by role (``GeneratedFiles``)."""
+    model of each stance set of 2-4 feet), qd_<robot>_d.c (derivatives); returns them by role (``GeneratedFiles``)."""
     if precision not in ("double", "float"):
         raise InputError(f"precision '{precision}' is not supported; expected 'double' or 'float'")
     out_dir = Path(out_dir)
     out_dir.mkdir(parents=True, exist_ok=True)
     name = stem(robot)
     full = codegen_functions(robot)
-    c_full, casadi_header = _casadi_c(name, full, precision)
+    c_full, casadi_header = casadi_c(name, full, precision)
     sources = {f"{name}.c": c_full}
     functions = list(full)
     for stance in REDUCED_STANCE_SETS:
         reduced = reduced_functions(robot, stance)
         file_stem = f"{name}_r_{stance.name.replace('+', '_')}"
-        c_text, h_text = _casadi_c(file_stem, reduced, precision)
+        c_text, h_text = casadi_c(file_stem, reduced, precision)
         sources[f"{file_stem}.c"] = _checked_reduced_c(c_text, h_text, reduced)
         casadi_header += h_text
         functions += reduced
+    from quadruped_dyn.codegen.emit_derivatives import derivative_functions, derivative_source
+
+    derivatives = derivative_functions(robot)  # qd_<robot>_d.c: derivatives of the full dynamics
+    sources[f"{name}_d.c"], h_text = derivative_source(f"{name}_d", derivatives, precision)
+    casadi_header += h_text
+    functions += derivatives
     work = work_sizes(casadi_header)
     extra = extra_files(functions, work) if extra_files else {}
     files = {
@@ -324,7 +352,9 @@ def generate(robot: Robot, out_dir: Path, precision: str = "double",
         write_text(output_path(out_dir, file_name), text)  # under out_dir, never through a link
     return GeneratedFiles(source=out_dir / f"{name}.c", header=out_dir / f"{name}.h",
                           extra={f: out_dir / f for f in extra}, check_program=out_dir / "check_qd.c",
-                          makefile=out_dir / "Makefile", reduced=tuple(out_dir / f for f in sources if f != f"{name}.c"))
+                          makefile=out_dir / "Makefile",
+                          reduced=tuple(out_dir / f for f in sources if f not in (f"{name}.c", f"{name}_d.c")),
+                          derivatives=(out_dir / f"{name}_d.c",))
 
 
 

@@ -5,6 +5,11 @@ from quadruped_dyn.exports import lazy_exports
 
 _MODULES: dict[str, tuple[str, ...]] = {
     "crba": ("mass_matrix_crba", "generalized_gravity"),
+    "derivatives": (
+        "quaternion_tangent", "configuration_tangent", "tangent_jacobian", "cholesky_solve", "rnea_tangent_derivatives",
+        "FullDerivatives", "full_derivatives", "rotation_jacobian", "ReducedDerivatives", "reduced_derivatives",
+        "grf_derivatives",
+    ),
     "formulas": (
         "DISPLAY_DIGITS", "to_sympy", "rounded", "Formula", "paper_formulas", "TermSize", "sparsity_pattern", "term_functions",
         "term_sizes", "shapes",

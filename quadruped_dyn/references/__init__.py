@@ -7,6 +7,6 @@ _MODULES: dict[str, tuple[str, ...]] = {
     "idyntree": ("IDynTreeRefusal", "load_model", "IDynTreeReference"),
     "interface": ("TERMS", "Dynamics", "terms_at", "max_rel_errors", "pinocchio_of", "ModelChange", "Prepared"),
     "mujoco": ("MuJoCoRefusal", "MuJoCoOptions", "compile_model", "MuJoCoReference"),
-    "pinocchio": ("LWA", "GrfReference", "PinocchioReference", "roll_rate_row", "roll_rates"),
+    "pinocchio": ("LWA", "GrfReference", "PinocchioReference", "roll_rate_row", "roll_rates", "PinocchioDerivatives"),
 }
 __all__, __getattr__, __dir__ = lazy_exports(__name__, _MODULES)

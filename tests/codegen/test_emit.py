@@ -27,6 +27,7 @@ from quadruped_dyn.codegen.emit import (
     codegen_functions,
     reduced_symbol,
 )
+from quadruped_dyn.codegen.emit_derivatives import DERIVATIVE_NAMES
 from quadruped_dyn.codegen.library import CompiledFunction, compiled_library, load_external
 from quadruped_dyn.math.compare import max_abs_error, scale_of
 from quadruped_dyn.model.robot import load_robot
@@ -95,7 +96,7 @@ def test_c_program_builds_and_passes(tmp_path):
     shutil.copytree(CASADI_GEN, work, ignore=shutil.ignore_patterns("build"))
     proc = subprocess.run(["make", "-C", str(work), "-j2", "check"], capture_output=True, text=True, check=False)
     assert proc.returncode == 0, proc.stdout[-3000:] + proc.stderr[-3000:]
-    n = len(CODEGEN_FUNCTIONS) + len(REDUCED_NAMES) * len(REDUCED_STANCE_SETS)
+    n = len(CODEGEN_FUNCTIONS) + len(REDUCED_NAMES) * len(REDUCED_STANCE_SETS) + len(DERIVATIVE_NAMES)
     assert f"\n{n} passed, 0 failed\n" in proc.stdout, "double: every function checked and passing"
     skipped = re.findall(r"\n\d+ passed, 0 failed, (\d+) skipped\n", proc.stdout)
     assert proc.stdout.count(" 0 failed") == 2 and all(int(k) <= 2 for k in skipped), proc.stdout[-500:]
@@ -143,7 +144,7 @@ def test_cache_key_tracks_the_source(paper):
     assert compiled_library(load_robot("solo12")).key != a.key
 
 
-def _call_ctypes(lib: ctypes.CDLL, name: str, real: type, args: list[np.ndarray], sizes: list[int]) -> list[np.ndarray]:
+def call_ctypes(lib: ctypes.CDLL, name: str, real: type, args: list[np.ndarray], sizes: list[int]) -> list[np.ndarray]:
     fn = getattr(lib, PREFIX + name)
     arg_arrays = [np.ascontiguousarray(x, dtype=real) for x in args]
     res_arrays = [np.zeros(n, dtype=real) for n in sizes]
@@ -165,8 +166,8 @@ def test_float_build_matches_double_build(paper):
         f = graphs[PREFIX + name]
         args = [inputs[f.name_in(i)] for i in range(f.n_in())]
         sizes = [f.nnz_out(i) for i in range(f.n_out())]
-        d = _call_ctypes(double, name, np.float64, args, sizes)
-        x = _call_ctypes(single, name, np.float32, args, sizes)
+        d = call_ctypes(double, name, np.float64, args, sizes)
+        x = call_ctypes(single, name, np.float32, args, sizes)
         assert _function_scale_error(x, d) <= FLOAT_REL_TOL, name
 
 
