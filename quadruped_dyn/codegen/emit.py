@@ -215,6 +215,10 @@ def _silence_unused_parameters(c_source: str) -> str:
 
 
 TEMPLATES = Path(__file__).resolve().parent / "c"
+#: start-up and memory map of the check program on QEMU's MPS2 Cortex-M boards (the Makefile's cross builds)
+CORTEX_M_FILES = ("qd_cortex_m_startup.c", "qd_cortex_m.ld")
+#: the thread-safety check program (`make check-threads`)
+THREADS_FILE = "qd_threads.c"
 
 
 def stem(robot: Robot) -> str:
@@ -269,7 +273,8 @@ def generate(robot: Robot, out_dir: Path, precision: str = "double",
              ) -> list[Path]:
     """Write into ``out_dir``: qd_<robot>.c (full-coordinate terms and GRF solves), qd_<robot>.h
     (one header for all), the files ``extra_files(functions, work sizes)`` returns (e.g. the
-    reference values of ``checks.c_reference``), check_qd.c, the Makefile, and qd_<robot>_r_<feet>.c (the reduced
+    reference values of ``checks.c_reference``), check_qd.c, the Cortex-M start-up files, qd_threads.c,
+    the Makefile, and qd_<robot>_r_<feet>.c (the reduced
     model of each stance set of 2-4 feet). Returns the paths in that order."""
     if precision not in ("double", "float"):
         raise InputError(f"precision '{precision}' is not supported; expected 'double' or 'float'")
@@ -293,6 +298,7 @@ def generate(robot: Robot, out_dir: Path, precision: str = "double",
         f"{name}.h": header_doc(robot, functions, work) + casadi_header,
         **(extra_files(functions, work) if extra_files else {}),
         "check_qd.c": (TEMPLATES / "check_qd.c").read_text(),
+        **{f: (TEMPLATES / f).read_text() for f in (*CORTEX_M_FILES, THREADS_FILE)},  # docs/embedded.md
         "Makefile": (TEMPLATES / "Makefile").read_text().replace("ROBOT ?= paper", f"ROBOT ?= {name[3:]}"),
         **sources,
     }
