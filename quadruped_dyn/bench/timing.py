@@ -28,8 +28,9 @@ import casadi as ca
 import numpy as np
 import pinocchio as pin
 
+from quadruped_dyn.checks.c_reference import generate_checked, reference_header_name
 from quadruped_dyn.codegen.cache import cache_dir, cached_build
-from quadruped_dyn.codegen.emit import PREFIX, codegen_functions, generate, work_sizes
+from quadruped_dyn.codegen.emit import PREFIX, codegen_functions, work_sizes
 from quadruped_dyn.codegen.library import C_FLAGS, CompiledFunction, CompiledLibrary, compile_sources, compiled_library, run_tool
 from quadruped_dyn.errors import InputError
 from quadruped_dyn.model.robot import Robot
@@ -145,13 +146,14 @@ def run_bench(robot: Robot, calls: int = 20000, reps: int = 9, rounds: int = 3, 
     start = time.perf_counter()
     codegen_functions(robot)  # symbolic build + generation, timed apart from compilation
     with tempfile.TemporaryDirectory() as tmp:
-        paths = generate(robot, Path(tmp))
+        files = generate_checked(robot, Path(tmp))  # the check program's reference inputs drive the harness
         report.generation_s = time.perf_counter() - start
-        c_path, h_path, ref_path = paths[:3]
-        sources = [p for p in paths if p.suffix == ".c" and p.name.startswith(c_path.stem)]
+        c_path, h_path, ref_path = files.source, files.header, files.extra[reference_header_name(robot)]
+        sources = files.c_sources
         report.code_bytes = sum(p.stat().st_size for p in sources)
         report.work_bytes = max(8 * (iw + w) for iw, w in work_sizes(h_path.read_text()).values())
-        shutil.copy(HARNESSES / "bench_qd.c", tmp)
+        for name in ("bench_qd.c", "bench_median.h"):
+            shutil.copy(HARNESSES / name, tmp)
         exe, lib = Path(tmp) / "bench_qd", Path(tmp) / f"lib{c_path.stem}.so"
         start = time.perf_counter()
         compile_sources(sources, C_FLAGS, lib, cc)

@@ -9,13 +9,11 @@ import casadi as ca
 import numpy as np
 import pinocchio as pin
 
-from quadruped_dyn.codegen.emit import PREFIX, generate, reduced_parts, stem
-from quadruped_dyn.math.rigid import skew as skew_np
+from quadruped_dyn.codegen.emit import PREFIX, GeneratedFiles, generate, reduced_parts, stem
 from quadruped_dyn.model.robot import Robot
 from quadruped_dyn.model.stance import StanceSet, stance_set
 from quadruped_dyn.model.state import NV_FULL, FullState, full_q, rotation
 from quadruped_dyn.references.pinocchio import PinocchioReference
-from quadruped_dyn.references.pinocchio import roll_rate_row as roll_rate_row_np
 from quadruped_dyn.tolerances import FLOAT_REL_TOL, GRF_COND_ASSUMED, MAP_COND_ASSUMED, REL_TOL_TERMS
 
 REFERENCE_DIGITS = 12  # significant digits of the reference header: 5e-13 relative, far below the 1e-10 check
@@ -41,7 +39,7 @@ def reduced_inputs(s: FullState) -> dict[str, np.ndarray]:
             "qdd_r": np.append(s.a[6:], s.a[3]), "quat": s.q[3:7], "tau_ext": 10.0 * s.a[5:]}
 
 def _reduced_reference(ref: PinocchioReference, kind: str, stance: StanceSet, s: FullState) -> np.ndarray:
-    """Pinocchio-built value (SPEC section 5's independent reference) of reduced function ``kind``."""
+    """Pinocchio-built value (docs/formulation.md §8's independent reference) of reduced function ``kind``."""
     n = 13 if len(stance.feet) == 2 else 12
     x = {k: v[:n] for k, v in reduced_inputs(s).items() if k != "quat"}
 
@@ -49,11 +47,11 @@ def _reduced_reference(ref: PinocchioReference, kind: str, stance: StanceSet, s:
         return ref.reduced_inverse_dynamics(stance.feet, stance.selection("paper"), x["q_r"], qd, qdd, s.q[3:7])
 
     zero = np.zeros(n)
-    G = id_r(zero, zero)  # id_r is affine in qdd: M_r's columns are differences
-    values = {"G_r": lambda: G, "CG_r": lambda: id_r(x["qd_r"], zero), "id_r": lambda: id_r(x["qd_r"], x["qdd_r"])}
+    values = {"G_r": lambda: id_r(zero, zero), "CG_r": lambda: id_r(x["qd_r"], zero),
+              "id_r": lambda: id_r(x["qd_r"], x["qdd_r"])}
     if kind in values:
         return values[kind]()
-    M = np.column_stack([id_r(zero, e) - G for e in np.eye(n)])
+    M = ref.reduced_mass_matrix(stance.feet, stance.selection("paper"), x["q_r"], s.q[3:7])
     return M if kind == "M_r" else np.linalg.solve(M, x["tau_ext"] - id_r(x["qd_r"], zero))
 
 def pinocchio_outputs(robot: Robot, ref: PinocchioReference, name: str, s: FullState) -> list[np.ndarray]:
@@ -95,11 +93,7 @@ def tolerance_scale(ref: PinocchioReference, name: str, s: FullState) -> float:
     q[7:] = reduced_inputs(s)["q_r"][:12]
     g = ref.grf_solve(q, v, a, stance.feet, stance.selection("paper"))
     scale = max(1.0, float(g.singular_values[0] / g.singular_values[g.rank - 1]) / GRF_COND_ASSUMED)
-    r = ref.foot_positions(q)
-    rows = [np.hstack([np.eye(3), -skew_np(r[i])]) for i in stance.feet]
-    if len(stance.feet) == 2:
-        rows.append(np.concatenate([np.zeros(3), roll_rate_row_np(rotation(q))])[None, :])
-    scale *= max(1.0, float(np.linalg.cond(np.vstack(rows))) / MAP_COND_ASSUMED)
+    scale *= max(1.0, float(np.linalg.cond(ref.velocity_map(q, stance.feet))) / MAP_COND_ASSUMED)
     if kind == "fd_r":  # the tolerances allow for ~GRF_COND_ASSUMED of amplification already
         scale *= max(1.0, float(np.linalg.cond(_reduced_reference(ref, "M_r", stance, s))) / GRF_COND_ASSUMED)
     return scale
@@ -164,16 +158,21 @@ def reference_header(robot: Robot, functions: list[ca.Function], work: dict[str,
     ]
     return "\n".join(lines) + "\n"
 
-def generate_checked(robot: Robot, out_dir: Path, precision: str = "double") -> list[Path]:
-    """``codegen.emit.generate`` plus ``<stem>_reference.h``: the C package that checks itself
-    against Pinocchio (``make check``)."""
+def reference_header_name(robot: Robot) -> str:
+    """File name of the reference values beside the generated C: ``<stem>_reference.h``."""
+    return f"{stem(robot)}_reference.h"
+
+
+def generate_checked(robot: Robot, out_dir: Path, precision: str = "double") -> GeneratedFiles:
+    """``codegen.emit.generate`` plus ``<stem>_reference.h`` (in ``extra``, under
+    ``reference_header_name``): the C package that checks itself against Pinocchio (``make check``)."""
     return generate(robot, out_dir, precision,
-                    extra_files=lambda functions, work: {f"{stem(robot)}_reference.h": reference_header(robot, functions, work)})
+                    extra_files=lambda functions, work: {reference_header_name(robot): reference_header(robot, functions, work)})
 
 
 def differing_files(robot: Robot, directory: Path) -> list[str]:
     """Names of the files in ``directory`` that a fresh generation would change (or add)."""
     with tempfile.TemporaryDirectory() as tmp:
-        fresh = generate_checked(robot, Path(tmp))
+        fresh = generate_checked(robot, Path(tmp)).all()
         return [p.name for p in fresh if not (Path(directory) / p.name).is_file()
                 or (Path(directory) / p.name).read_bytes() != p.read_bytes()]

@@ -9,7 +9,6 @@ either side is an infinite error (``compare``): it fails, and is null in the JSO
 from __future__ import annotations
 
 import itertools
-import math
 import time
 from collections.abc import Callable, Iterator
 from dataclasses import asdict, dataclass, field
@@ -21,6 +20,7 @@ from quadruped_dyn.dynamics.grf import grf_solve, grf_solves
 from quadruped_dyn.dynamics.kinematics import robot_kinematics
 from quadruped_dyn.dynamics.newton_euler import full_dynamics
 from quadruped_dyn.dynamics.reduced import reduced_model
+from quadruped_dyn.files.json import json_safe
 from quadruped_dyn.math.compare import max_abs_error, relative_error, scale_of, within
 from quadruped_dyn.model.robot import Robot
 from quadruped_dyn.model.stance import GRF_MODELS, STANCE_SETS
@@ -80,20 +80,6 @@ class CheckReport:
         lines.append(f"{self.robot}: {len(self.terms)} terms on {self.samples} random states (seed {self.seed}), "
                      f"symbolic build {self.build_seconds:.2f} s: {verdict}")
         return "\n".join(lines)
-
-
-def json_safe(x: object) -> object:
-    if isinstance(x, dict):
-        return {k: json_safe(v) for k, v in x.items()}
-    if isinstance(x, list):
-        return [json_safe(v) for v in x]
-    if isinstance(x, bool | np.bool_):
-        return bool(x)
-    if isinstance(x, float | np.floating):
-        return float(x) if math.isfinite(x) else None
-    if isinstance(x, np.integer):
-        return int(x)
-    return x
 
 
 def _comparisons(robot: Robot, ref: PinocchioReference, s: FullState) -> Iterator[tuple[str, object, object]]:
@@ -181,9 +167,9 @@ def _reduced_comparisons(
         def reference(qd_: np.ndarray, qdd_: np.ndarray, feet=feet, P=P, q_r=q_r) -> np.ndarray:
             return ref.reduced_inverse_dynamics(feet, P, q_r, qd_, qdd_, quat)
 
-        G = reference(zero, zero)  # id_r is affine in qdd and gravity-free differences give C_r, M_r
+        G = reference(zero, zero)  # id_r is affine in qdd: the gravity-free difference gives C_r
         yield f"id_r {stance}", m.id_r(q_r, qd, qdd, quat), reference(qd, qdd)
-        yield f"M_r {stance}", m.M_r(q_r, quat), np.column_stack([reference(zero, e) - G for e in np.eye(m.n)])
+        yield f"M_r {stance}", m.M_r(q_r, quat), ref.reduced_mass_matrix(feet, P, q_r, quat)
         yield f"C_r {stance}", m.C_r(q_r, qd, quat), reference(qd, zero) - G
         yield f"G_r {stance}", m.G_r(q_r, quat), G
 

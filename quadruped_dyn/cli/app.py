@@ -1,4 +1,4 @@
-"""The ``quadruped-dyn`` group: exit codes (0 success, 1 a check failed, 2 bad input), one-line errors
+"""The ``quadruped-dyn`` group: exit codes (0 success, 1 a check or a computation failed, 2 bad input), one-line errors
 and warnings, progress on stderr. Each command lives in its own module of this package."""
 
 from __future__ import annotations
@@ -10,7 +10,7 @@ from typing import Any
 
 import click
 
-from quadruped_dyn.errors import BuildError, InputError, UrdfWarning
+from quadruped_dyn.errors import BuildError, InputError, NumericalError, UrdfWarning
 
 EXIT_CHECK_FAILED = 1
 EXIT_BAD_INPUT = 2
@@ -21,7 +21,7 @@ def _warn_one_line(message: Warning | str, category: type[Warning], *args: objec
 
 
 class _Group(click.Group):
-    """Maps InputError and click's usage errors to exit code 2 and BuildError to 1, with a one-line
+    """Maps InputError and click's usage errors to exit code 2 and BuildError and NumericalError to 1, with a one-line
     message and no traceback; prints UrdfWarnings as one line each."""
 
     def invoke(self, ctx: click.Context) -> Any:
@@ -36,7 +36,7 @@ class _Group(click.Group):
         except click.UsageError as e:
             click.echo(f"error: {e.format_message()}", err=True)
             sys.exit(EXIT_BAD_INPUT)
-        except BuildError as e:
+        except (BuildError, NumericalError) as e:
             click.echo(f"error: {e}", err=True)
             sys.exit(EXIT_CHECK_FAILED)
 

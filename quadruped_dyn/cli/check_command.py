@@ -21,7 +21,8 @@ from quadruped_dyn.model.robot import load_robot
                    "to the URDF: comma-separated subset of mujoco,idyntree (pip install 'quadruped_dyn[xlib]').")
 def check(robot: str, samples: int, seed: int, as_json: bool, against: str | None) -> None:
     """Check every symbolic term of ROBOT against Pinocchio on random states (exit 1 on failure)."""
-    from quadruped_dyn.checks.terms import json_safe, run_check
+    from quadruped_dyn.checks.terms import run_check
+    from quadruped_dyn.files.json import json_safe
 
     libraries: tuple[str, ...] = ()
     if against is not None:

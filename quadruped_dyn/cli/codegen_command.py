@@ -31,5 +31,5 @@ def codegen(robot: str, out_dir: str, precision: str, check: bool) -> None:
         stale = differing_files(r, Path(out_dir))
         click.echo(f"{out_dir}: " + (f"differs from a fresh generation: {', '.join(stale)}" if stale else "up to date"))
         sys.exit(EXIT_CHECK_FAILED if stale else 0)
-    for path in generate_checked(r, writable_dir(out_dir, f"--out '{out_dir}'"), precision):
+    for path in generate_checked(r, writable_dir(out_dir, f"--out '{out_dir}'"), precision).all():
         click.echo(f"wrote {path}")

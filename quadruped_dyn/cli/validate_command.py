@@ -5,12 +5,16 @@ from __future__ import annotations
 import json
 import math
 import sys
+from typing import TYPE_CHECKING
 
 import click
 
 from quadruped_dyn.errors import InputError
 from quadruped_dyn.files.paths import writable_dir
 from quadruped_dyn.model.robot import load_robot
+
+if TYPE_CHECKING:
+    from quadruped_dyn.experiment.gait import Gait
 
 
 @click.command()
@@ -37,20 +41,14 @@ def validate(robot: str, gait_name: str, horizon: float | None, integrator: str,
     roll unactuated. Percentage errors per joint (FL, FR, BL, BR x HAA, HFE, KFE)."""
 
     from quadruped_dyn.experiment.gait import GAITS
-    from quadruped_dyn.experiment.outputs import output_paths, plot_br_hfe, plot_physics_check, write_csv, write_json
-    from quadruped_dyn.experiment.paper_experiment import SIGNALS, joint_names, report, run_experiment, static_stability
+    from quadruped_dyn.experiment.outputs import output_paths, plot_br_hfe, plot_physics_check, summary_text, write_csv
+    from quadruped_dyn.experiment.paper_experiment import joint_names, report, run_experiment, static_stability
     from quadruped_dyn.experiment.simulate import reduced_dynamics
+    from quadruped_dyn.files.json import write_json
 
     gait = GAITS[gait_name]
     horizon = 2 * gait.period if horizon is None else horizon
-    if not (math.isfinite(horizon) and horizon > 0):
-        raise InputError(f"--horizon {horizon} is not a positive finite number of seconds; expected e.g. {2 * gait.period}")
-    if not (math.isfinite(dt) and dt > 0):
-        raise InputError(f"--dt {dt} is not a positive finite number of seconds; expected e.g. 1e-3")
-    if horizon < dt:
-        raise InputError(f"--horizon {horizon} s is shorter than one step (--dt {dt} s); expected horizon >= dt")
-    if integrator == "rk4" and abs(gait.phase_duration / dt - round(gait.phase_duration / dt)) > 1e-9:
-        raise InputError(f"--dt {dt} does not divide the gait's phase of {gait.phase_duration} s; expected e.g. 1e-3")
+    _check_times(gait, horizon, dt, integrator)
     out = writable_dir(out_dir, f"--out '{out_dir}'")
     r = load_robot(robot)
     paths = output_paths(out, r.name, gait.name)
@@ -72,35 +70,16 @@ def validate(robot: str, gait_name: str, horizon: float | None, integrator: str,
     if as_json:
         click.echo(json.dumps(json.loads(paths["json"].read_text()), indent=2))
         return
-    names = joint_names(r)
-    click.echo(f"{gait.name}, {r.name}: horizon {data['horizon_s']:g} s; {data['integrator']}")
-    click.echo("% error = max|sim - IK| / max|IK| x 100, reduced forward dynamics, 'paper' run (n/a: IK signal is zero)")
-    click.echo(f"  {'':<6}" + " ".join(f"{n:>8}" for n in names))
-    for s in SIGNALS:
-        cells = [data["max_pct_err"][n][s] for n in names]
-        click.echo(f"  {s:<6}" + " ".join(f"{'n/a':>8}" if c is None else f"{c:8.1e}" for c in cells))
-    inst = data["instability"]
-    rate = inst["growth_rate_per_s"]
-    click.echo(f"  instability: one ulp grows to {inst['one_ulp_grows_to_rad']:.1e} rad"
-               + (f", growth rate {rate:.1f} /s" if rate is not None else ""))
-    for s, b in inst["error_budget"].items():
-        click.echo(f"    {s:<4} total {_pct(b['total_pct'])} %, amplified round-off {_pct(b['roundoff_pct'])} %, "
-                   f"truncation {_pct(b['truncation_pct'])} %")
-    st = data["static_stability"]
-    margin, at = st["min_com_margin_m"], st["min_com_margin_at_s"]
-    click.echo(f"  smallest f_z {st['min_fz_N']:.2f} N (at {st['min_fz_at_s']:.3f} s, weight {st['weight_N']:.1f} N)"
-               + ("" if margin is None else f"; smallest CoM margin {margin * 100:.2f} cm (at {at:.3f} s)"))
-    for name, run in data["runs"].items():
-        if run["stopped_at_s"] is not None or run["departs_1pct_at_s"] is not None:
-            click.echo(f"  run {name}: 1 % off IK at {run['departs_1pct_at_s']} s, stopped (fell) at {run['stopped_at_s']} s")
-    for name, pc in data.get("physics_check", {}).items():
-        if isinstance(pc, dict):
-            rr = pc["rigid_vs_reduced"]
-            ik = pc["rigid_vs_ik"]
-            click.echo(f"  physics check, {name}: rigid-contact vs reduced max {rr['max_joint_angle_diff_rad']:.1e} rad, "
-                       f"1 % at {rr['time_to_1pct_s']} s; rigid vs IK max {ik['max_joint_angle_diff_rad']:.1e} rad")
-    click.echo("  wrote " + ", ".join(str(p) for p in paths.values() if p.exists()))
+    click.echo(summary_text(data, joint_names(r), [p for p in paths.values() if p.exists()]))
 
 
-def _pct(x: float | None) -> str:
-    return "n/a" if x is None else f"{x:.1e}"
+def _check_times(gait: Gait, horizon: float, dt: float, integrator: str) -> None:
+    """InputError unless --horizon and --dt are positive, finite, horizon >= dt, and (RK4) dt divides a phase."""
+    if not (math.isfinite(horizon) and horizon > 0):
+        raise InputError(f"--horizon {horizon} is not a positive finite number of seconds; expected e.g. {2 * gait.period}")
+    if not (math.isfinite(dt) and dt > 0):
+        raise InputError(f"--dt {dt} is not a positive finite number of seconds; expected e.g. 1e-3")
+    if horizon < dt:
+        raise InputError(f"--horizon {horizon} s is shorter than one step (--dt {dt} s); expected horizon >= dt")
+    if integrator == "rk4" and abs(gait.phase_duration / dt - round(gait.phase_duration / dt)) > 1e-9:
+        raise InputError(f"--dt {dt} does not divide the gait's phase of {gait.phase_duration} s; expected e.g. 1e-3")

@@ -1,4 +1,4 @@
-"""Standalone C code generation (SPEC section 7).
+"""Standalone C code generation (docs/formulation.md §11).
 
 ``CODEGEN_FUNCTIONS`` lists what is generated, one line per function. Each becomes a C
 function ``qd_<name>(const casadi_real** arg, casadi_real** res, casadi_int* iw,
@@ -17,6 +17,7 @@ import os
 import re
 import tempfile
 from collections.abc import Callable
+from dataclasses import dataclass
 from pathlib import Path
 
 import casadi as ca
@@ -44,7 +45,7 @@ CODEGEN_FUNCTIONS: dict[str, Callable[[Robot], ca.Function]] = {
     **{f"grf_{s.name.replace('+', '_')}": _grf_paper(s) for s in STANCE_SETS},
 }
 
-#: Stance sets with a reduced model (SPEC section 5): four feet, the four triples, the six pairs.
+#: Stance sets with a reduced model (docs/formulation.md §5-§6): four feet, the four triples, the six pairs.
 REDUCED_STANCE_SETS: tuple[StanceSet, ...] = tuple(st for st in STANCE_SETS if len(st.feet) >= 2)
 
 #: Reduced-model functions generated for every stance set in REDUCED_STANCE_SETS, as
@@ -207,7 +208,7 @@ def work_sizes(casadi_header: str) -> dict[str, tuple[int, int]]:
 _UNUSED = "(void)arg; (void)res; (void)iw; (void)w; (void)mem;"
 
 
-def _silence_unused_parameters(c_source: str) -> str:
+def silence_unused_parameters(c_source: str) -> str:
     """CasADi's evaluation functions ignore some of their five parameters and its
     release hooks ignore ``mem``: cast them to void so -Wextra -Werror passes."""
     c_source = re.sub(r"(static int casadi_f\d+\([^)]*\) \{\n)", lambda m: m.group(1) + f"  {_UNUSED}\n", c_source)
@@ -232,7 +233,7 @@ def _casadi_c(file_stem: str, functions: list[ca.Function], precision: str) -> t
         cg.add(f)
     with tempfile.TemporaryDirectory() as tmp:
         cg.generate(tmp + os.sep)
-        return _silence_unused_parameters((Path(tmp) / f"{file_stem}.c").read_text()), (Path(tmp) / f"{file_stem}.h").read_text()
+        return silence_unused_parameters((Path(tmp) / f"{file_stem}.c").read_text()), (Path(tmp) / f"{file_stem}.h").read_text()
 
 
 def _entry_point(name: str) -> str:
@@ -268,14 +269,37 @@ def _checked_reduced_c(c_text: str, casadi_header: str, functions: list[ca.Funct
     return c_text
 
 
+@dataclass(frozen=True)
+class GeneratedFiles:
+    """The files ``generate`` wrote, by what they are (callers never rely on an order)."""
+
+    source: Path  # qd_<robot>.c: full-coordinate terms and GRF solves
+    header: Path  # qd_<robot>.h: one header for all, documentation first
+    extra: dict[str, Path]  # file name -> path of each of ``extra_files``' files (e.g. the reference values)
+    check_program: Path  # check_qd.c
+    makefile: Path
+    reduced: tuple[Path, ...]  # qd_<robot>_r_<feet>.c: the reduced model of each stance set of 2-4 feet
+    embedded: tuple[Path, ...] = ()  # Cortex-M start-up and linker script, qd_threads.c (docs/embedded.md)
+
+    @property
+    def c_sources(self) -> list[Path]:
+        """The generated C files of the library (not the check program)."""
+        return [self.source, *self.reduced]
+
+    def all(self) -> list[Path]:
+        """Every file, in the order they were written."""
+        return [self.source, self.header, *self.extra.values(), self.check_program, *self.embedded, self.makefile,
+                *self.reduced]
+
+
 def generate(robot: Robot, out_dir: Path, precision: str = "double",
              extra_files: Callable[[list[ca.Function], dict[str, tuple[int, int]]], dict[str, str]] | None = None,
-             ) -> list[Path]:
+             ) -> GeneratedFiles:
     """Write into ``out_dir``: qd_<robot>.c (full-coordinate terms and GRF solves), qd_<robot>.h
     (one header for all), the files ``extra_files(functions, work sizes)`` returns (e.g. the
-    reference values of ``checks.c_reference``), check_qd.c, the Cortex-M start-up files, qd_threads.c,
-    the Makefile, and qd_<robot>_r_<feet>.c (the reduced
-    model of each stance set of 2-4 feet). Returns the paths in that order."""
+    reference values of ``checks.c_reference``), check_qd.c, the Cortex-M start-up files and qd_threads.c
+    (docs/embedded.md), the Makefile, and qd_<robot>_r_<feet>.c (the reduced model of each stance set
+    of 2-4 feet); returns them by role (``GeneratedFiles``)."""
     if precision not in ("double", "float"):
         raise InputError(f"precision '{precision}' is not supported; expected 'double' or 'float'")
     out_dir = Path(out_dir)
@@ -293,22 +317,22 @@ def generate(robot: Robot, out_dir: Path, precision: str = "double",
         casadi_header += h_text
         functions += reduced
     work = work_sizes(casadi_header)
+    extra = extra_files(functions, work) if extra_files else {}
     files = {
         f"{name}.c": c_full,
         f"{name}.h": header_doc(robot, functions, work) + casadi_header,
-        **(extra_files(functions, work) if extra_files else {}),
+        **extra,
         "check_qd.c": (TEMPLATES / "check_qd.c").read_text(),
         **{f: (TEMPLATES / f).read_text() for f in (*CORTEX_M_FILES, THREADS_FILE)},  # docs/embedded.md
         "Makefile": (TEMPLATES / "Makefile").read_text().replace("ROBOT ?= paper", f"ROBOT ?= {name[3:]}"),
         **sources,
     }
-    paths = []
     for file_name, text in files.items():
         (out_dir / file_name).write_text(text)
-        paths.append(out_dir / file_name)
-    return paths
+    return GeneratedFiles(source=out_dir / f"{name}.c", header=out_dir / f"{name}.h",
+                          extra={f: out_dir / f for f in extra}, check_program=out_dir / "check_qd.c",
+                          makefile=out_dir / "Makefile", reduced=tuple(out_dir / f for f in sources if f != f"{name}.c"),
+                          embedded=tuple(out_dir / f for f in (*CORTEX_M_FILES, THREADS_FILE)))
 
-
-# ----------------------------------------------------------------------------- reference values
 
 

@@ -1,4 +1,4 @@
-"""Ground reaction forces from the six body equations (SPEC section 4, paper section 4).
+"""Ground reaction forces from the six body equations (docs/formulation.md §3-§4, paper section 4).
 
 The body equations (paper eq. (3)-(4)) with the stance feet's forces f_i (trunk frame) as
 unknowns read  sum_i [I; [r_i]x] f_i = w_req,  where w_req (6,) = (force; moment about the
@@ -38,9 +38,10 @@ import numpy as np
 from quadruped_dyn.dynamics.guarded import guard_fields, guarded_call
 from quadruped_dyn.dynamics.kinematics import foot_position
 from quadruped_dyn.dynamics.newton_euler import inverse_dynamics
-from quadruped_dyn.errors import InputError
+from quadruped_dyn.errors import InputError, NumericalError
 from quadruped_dyn.math.linalg import least_squares, min_norm
-from quadruped_dyn.math.spatial import dm, quat_to_rotation, skew
+from quadruped_dyn.math.rigid import skew
+from quadruped_dyn.math.spatial import dm, quat_to_rotation
 from quadruped_dyn.model.robot import Robot
 from quadruped_dyn.model.stance import GRF_MODELS, STANCE_SETS, StanceSet, stance_set
 from quadruped_dyn.model.state import GRAVITY_W, NQ_FULL, NV_FULL, rotation
@@ -128,8 +129,8 @@ class GrfSolve:
         guard_fields(self)  # numeric calls check shapes, finiteness, quaternions (dynamics/guarded.py)
 
     def solve(self, q: np.ndarray, v: np.ndarray, a: np.ndarray, mu: float | None = None) -> GrfSolution:
-        """Numeric solve with checked inputs. Raises InputError where the stance feet are
-        coincident or collinear, so that A has less than its structural rank (the symbolic
+        """Numeric solve with checked inputs (InputError). Raises NumericalError where the stance
+        feet are coincident or collinear, so that A has less than its structural rank (the symbolic
         solve, and the generated C, would return meaningless forces there)."""
         if mu is not None:
             check_friction_coefficient(mu)
@@ -137,7 +138,7 @@ class GrfSolve:
         sv = np.linalg.svd(np.atleast_2d(A), compute_uv=False) if A.size else np.zeros(0)
         numeric_rank = int(np.sum(sv > RANK_RTOL * sv[0])) if sv.size else 0
         if numeric_rank < self.rank:
-            raise InputError(
+            raise NumericalError(
                 f"stance {self.stance.name}: the body equations have rank {numeric_rank} at this configuration, "
                 f"{self.rank} expected; the stance feet are coincident or collinear"
             )

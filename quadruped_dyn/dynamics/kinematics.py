@@ -15,7 +15,8 @@ from functools import cache
 
 import casadi as ca
 
-from quadruped_dyn.math.spatial import axis_rotation, dm, placement_rt
+from quadruped_dyn.math.rigid import axis_rotation
+from quadruped_dyn.math.spatial import dm, placement_rt
 from quadruped_dyn.model.leg import Leg
 from quadruped_dyn.model.leg_frames import axis_aligned
 from quadruped_dyn.model.robot import Robot

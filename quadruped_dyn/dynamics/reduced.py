@@ -1,4 +1,4 @@
-"""Reduced coordinates and forward dynamics (SPEC section 5, paper section 5), symbolic.
+"""Reduced coordinates and forward dynamics (docs/formulation.md §5-§6.1, paper section 5), symbolic.
 
 Coordinates q_r: the 12 joint angles (three or four stance feet: static walk, standing),
 plus the trunk roll phi for two stance feet (trot, pace): 13. The trunk motion is not a
@@ -37,11 +37,13 @@ import numpy as np
 from quadruped_dyn.dynamics.grf import grf_expressions
 from quadruped_dyn.dynamics.guarded import guard_fields, guarded_call
 from quadruped_dyn.dynamics.kinematics import foot_position
-from quadruped_dyn.errors import InputError
+from quadruped_dyn.errors import InputError, NumericalError
 from quadruped_dyn.math.linalg import least_squares
-from quadruped_dyn.math.spatial import quat_to_rotation, skew
+from quadruped_dyn.math.rigid import skew
+from quadruped_dyn.math.spatial import quat_to_rotation
 from quadruped_dyn.model.robot import Robot
 from quadruped_dyn.model.stance import StanceSet, stance_set
+from quadruped_dyn.model.state import check_array
 
 REDUCED_KINDS = {4: "stand", 3: "static walk", 2: "trot / pace"}
 
@@ -51,7 +53,8 @@ MAX_COND_M_R = 1e12
 
 def roll_rate_row(R: ca.SX) -> ca.SX:
     """e_phi with phid = e_phi . omega_b for R = Rz(psi) Ry(theta) Rx(phi), written with R's
-    entries (cos theta > 0): tan(theta) sin(phi) = -R20 R21 / (R21^2 + R22^2), etc."""
+    entries (cos theta > 0): tan(theta) sin(phi) = -R20 R21 / (R21^2 + R22^2), etc.
+    ``references.pinocchio.roll_rate_row`` is the reference's own, independent derivation."""
     c2 = R[2, 1] ** 2 + R[2, 2] ** 2
     return ca.vertcat(1, -R[2, 0] * R[2, 1] / c2, -R[2, 0] * R[2, 2] / c2)
 
@@ -133,14 +136,22 @@ class ReducedModel:
 
     def forward_dynamics(self, q_r: np.ndarray, qd_r: np.ndarray, tau_ext: np.ndarray,
                          quat: np.ndarray) -> tuple[np.ndarray, float]:
-        """(qdd_r, cond(M_r)) with checked inputs; InputError where M_r is numerically singular."""
+        """(qdd_r, cond(M_r)) by ``solve_forward_dynamics`` from this graph's M_r, C_r and G_r, with
+        checked inputs (InputError); NumericalError where M_r is numerically singular."""
         (M,) = guarded_call(self.M_r, q_r, quat)
-        cond = float(np.linalg.cond(M))
-        if not cond < MAX_COND_M_R:
-            raise InputError(f"M_r of {self.stance.name} has condition number {cond:.1e} here; the reduced "
-                             "model is singular (e.g. collinear stance feet, or two feet with the trunk pitched 90 deg)")
-        (qdd,) = guarded_call(self.fd_r, q_r, qd_r, tau_ext, quat)
-        return qdd, cond
+        (C,), (G,) = guarded_call(self.C_r, q_r, qd_r, quat), guarded_call(self.G_r, q_r, quat)
+        return solve_forward_dynamics(self.stance, M, check_array("tau_ext", tau_ext, (self.n,)) - C - G)
+
+
+def solve_forward_dynamics(stance: StanceSet, M_r: np.ndarray, rhs: np.ndarray) -> tuple[np.ndarray, float]:
+    """The reduced forward dynamics (paper eq. (5)), the one numeric definition: qdd_r = M_r^-1 rhs
+    with rhs = tau_ext - C_r - G_r, by LU, and cond(M_r); NumericalError where cond(M_r) is not below
+    MAX_COND_M_R. (The generated C's fd_r does the same solve in C, c/qd_reduced_solve.c.)"""
+    cond = float(np.linalg.cond(M_r))
+    if not cond < MAX_COND_M_R:
+        raise NumericalError(f"M_r of {stance.name} has condition number {cond:.1e} here; the reduced model is "
+                             "singular (e.g. collinear stance feet, or two feet with the trunk pitched 90 deg)")
+    return np.linalg.solve(M_r, rhs), cond
 
 
 @cache

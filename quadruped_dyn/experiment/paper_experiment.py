@@ -1,4 +1,4 @@
-"""The paper's validation experiment, compared and reported (SPEC section 6, paper Figs. 5-7).
+"""The paper's validation experiment, compared and reported (docs/formulation.md §9-§10, paper Figs. 5-7).
 
 Plan (``gait``) -> IK reference (``reference``) -> id_r -> tau(t) -> reduced forward dynamics
 (``simulate``) -> compared with the IK reference, per joint:
@@ -39,6 +39,7 @@ from quadruped_dyn.experiment.simulate import IDENTITY_QUAT, RTOL, IkTorques, Re
 from quadruped_dyn.model.leg import JOINT_ROLES
 from quadruped_dyn.model.robot import Robot
 from quadruped_dyn.model.stance import StanceSet
+from quadruped_dyn.model.state import GRAVITY_W
 
 #: A reference signal whose largest |value| is below this fraction of the largest joint's is
 #: treated as identically zero (IK round-off, ~1e-16 rad/s, would give absurd percentages).
@@ -57,7 +58,6 @@ STABILITY_DT = 5e-3
 DEPARTURE_PCT = 1.0
 
 SIGNALS = ("q", "qd", "qdd")
-BR_HFE = 3 * 3 + 1
 
 
 @dataclass
@@ -146,7 +146,7 @@ def static_stability(plan: Plan, ik: IkTorques, horizon: float, dt: float = STAB
             if margin < min_margin:
                 min_margin, at_margin = margin, float(t)
     return {
-        "min_fz_N": min_fz, "min_fz_at_s": at_fz, "weight_N": robot.total_mass * 9.81,
+        "min_fz_N": min_fz, "min_fz_at_s": at_fz, "weight_N": float(robot.total_mass * -GRAVITY_W[2]),
         "min_com_margin_m": None if min_margin == np.inf else float(min_margin),
         "min_com_margin_at_s": None if min_margin == np.inf else at_margin,
     }

@@ -1,4 +1,4 @@
-"""The IK reference of a gait plan: joint angles, rates and accelerations (SPEC section 6).
+"""The IK reference of a gait plan: joint angles, rates and accelerations (docs/formulation.md §9.2).
 
 The trunk follows ``Plan.trunk`` with R = I, so each foot's position relative to the trunk,
 in the trunk frame, is r = P - p, with rate Pd - pd and classical acceleration Pdd - pdd. Leg

@@ -1,4 +1,4 @@
-"""Full-coordinate rigid-contact dynamics along a gait plan: the physics check (SPEC section 6).
+"""Full-coordinate rigid-contact dynamics along a gait plan: the physics check (docs/formulation.md §9.4).
 
 Nothing here uses the paper's model: the robot is Pinocchio's free-flyer model (q = (p, quat x
 y z w, 12 joints), v = (v_b, omega_b, qd), project order) with the stance feet as rigid point
@@ -15,7 +15,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from quadruped_dyn.errors import InputError
+from quadruped_dyn.errors import InputError, NumericalError
 from quadruped_dyn.experiment.gait import Plan
 from quadruped_dyn.experiment.simulate import FALLEN_TRUNK_M, RTOL, IkTorques, Progress, Run, TorqueLaw, integrate_phases
 from quadruped_dyn.model.state import rotation
@@ -60,7 +60,7 @@ def simulate_rigid(plan: Plan, ik: IkTorques, law: TorqueLaw, horizon: float, dt
         tau = law.joints(reference_t, tau_ik, q[7:], v[6:])
         a, _ = ref.constrained_forward_dynamics(q, v, tau, stance)
         if not np.all(np.isfinite(a)):
-            raise InputError(f"the rigid-contact dynamics are singular at t = {t:.4f} s")
+            raise NumericalError(f"the rigid-contact dynamics are singular at t = {t:.4f} s")
         return a
 
     def rhs(stance: tuple[int, ...], t: float, y: np.ndarray) -> np.ndarray:
@@ -86,7 +86,7 @@ def simulate_rigid(plan: Plan, ik: IkTorques, law: TorqueLaw, horizon: float, dt
 
     try:
         integrate_phases(plan, y, horizon, dt, integrator, rtol, rhs, record, switch=touch_down, progress=progress)
-    except (Fallen, InputError, np.linalg.LinAlgError):
+    except (Fallen, NumericalError, InputError, np.linalg.LinAlgError):
         stopped_at = float(out[-1][0]) if out else 0.0
     t = np.array([o[0] for o in out])
     Y = np.array([o[1] for o in out]).reshape(-1, 37)

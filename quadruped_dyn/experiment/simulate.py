@@ -1,4 +1,4 @@
-"""Forward simulation of the paper's reduced dynamics along a gait plan (SPEC sections 5-6).
+"""Forward simulation of the paper's reduced dynamics along a gait plan (docs/formulation.md §6, §9.3).
 
 State: the reduced coordinates q_r (12 joint angles in FL, FR, BL, BR x HAA, HFE, KFE order,
 + the trunk roll phi for a gait with two-feet phases) and their rates. The trunk orientation
@@ -37,8 +37,8 @@ from scipy.integrate import DOP853
 
 from quadruped_dyn.dynamics.guarded import guarded_call
 from quadruped_dyn.dynamics.kinematics import robot_kinematics
-from quadruped_dyn.dynamics.reduced import MAX_COND_M_R, reduced_model
-from quadruped_dyn.errors import InputError
+from quadruped_dyn.dynamics.reduced import reduced_model
+from quadruped_dyn.errors import InputError, NumericalError
 from quadruped_dyn.experiment.gait import Plan
 from quadruped_dyn.experiment.plan_ik import ReferenceSample, reference
 from quadruped_dyn.experiment.trunk_pose import pose_from_feet
@@ -70,7 +70,7 @@ class ReducedDynamics(Protocol):
 
     def fd_r(self, stance: StanceSet, q_r: np.ndarray, qd_r: np.ndarray, tau_ext: np.ndarray,
              quat: np.ndarray) -> np.ndarray:
-        """qdd_r (n,); InputError where M_r is singular."""
+        """qdd_r (n,); NumericalError where M_r is singular, InputError for bad input."""
         ...
 
 
@@ -86,13 +86,7 @@ class CasadiReducedDynamics:
 
     def fd_r(self, stance: StanceSet, q_r: np.ndarray, qd_r: np.ndarray, tau_ext: np.ndarray,
              quat: np.ndarray) -> np.ndarray:
-        m = reduced_model(self.robot, stance.name)
-        (M,) = guarded_call(m.M_r, q_r, quat)
-        (C,), (G,) = guarded_call(m.C_r, q_r, qd_r, quat), guarded_call(m.G_r, q_r, quat)
-        cond = np.linalg.cond(M)
-        if not cond < MAX_COND_M_R:
-            raise InputError(f"M_r of {stance.name} has condition number {cond:.1e} here; the reduced model is singular")
-        return np.linalg.solve(M, tau_ext - C - G)
+        return reduced_model(self.robot, stance.name).forward_dynamics(q_r, qd_r, tau_ext, quat)[0]
 
 
 BACKENDS = ("c", "casadi")
@@ -247,7 +241,7 @@ def simulate_reduced(plan: Plan, dynamics: ReducedDynamics, law: TorqueLaw, hori
     try:
         integrate_phases(plan, y, horizon, dt, integrator, rtol, rhs, record, projection if project else None,
                          touch_down, progress)
-    except (_Fallen, InputError):
+    except (_Fallen, NumericalError, InputError):  # a run that falls apart can also end in a non-finite state
         stopped_at = float(out_t[-1]) if out_t else 0.0
     Y = np.array(out_y).reshape(-1, 2 * n)
     return Run(np.array(out_t), Y[:, :n], Y[:, n:], np.array(out_qdd).reshape(-1, n), np.array(out_closure),
@@ -291,12 +285,12 @@ def project_on_stance(robot: Robot, stance: tuple[int, ...], holds: np.ndarray, 
                       pitch_hint: float = 0.0) -> np.ndarray:
     """The state y = (q_r, qd_r) moved onto the stance closure: the stance feet on their
     footholds ``holds`` (k, 3; world, m) for the trunk pose fitted to them (``pose_from_feet``; two Newton steps of each
-    stance leg's IK), and the stance legs' rates those of the trunk twist fitted to them (SPEC
-    section 5's velocity map, least squares, roll-rate row for two feet). The reduced coordinates
+    stance leg's IK), and the stance legs' rates those of the trunk twist fitted to them (docs/
+    formulation.md §5's velocity map, least squares, roll-rate row for two feet). The reduced coordinates
     are redundant -- 12 for 9 degrees of freedom with three feet, 13 for 12 with two -- and the
     paper's ODE does not keep the closure: its drift off it is the fastest-growing error. Right
     after a touch-down whose foot lands moving, the rate projection is a kinematic impact."""
-    from quadruped_dyn.references.pinocchio import roll_rate_row
+    from quadruped_dyn.references.pinocchio import roll_rate_row  # its rounding is the experiment's (issue 19 rewrites this)
 
     kin = robot_kinematics(robot)
     n = y.size // 2
@@ -358,7 +352,7 @@ def _dop853_segment(f: Callable[[float, np.ndarray], np.ndarray], y: np.ndarray,
     while solver.status == "running":
         message = solver.step()
         if solver.status == "failed":  # e.g. a run that is falling apart: the caller reports where it stopped
-            raise InputError(f"DOP853 failed at t = {solver.t:.4f} s: {message}")
+            raise NumericalError(f"DOP853 failed at t = {solver.t:.4f} s: {message}")
         if project is not None:
             solver.y = project(solver.t, solver.y)
             solver.f = f(solver.t, solver.y)  # scipy's RungeKutta keeps the end derivative here (FSAL)

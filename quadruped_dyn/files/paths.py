@@ -8,11 +8,12 @@ from pathlib import Path
 from quadruped_dyn.errors import InputError
 
 
-def writable_dir(path: str | Path, what: str) -> Path:
+def writable_dir(path: str | Path, what: str, expected: str = "a writable directory") -> Path:
     """Create ``path`` (with its parents) and prove a file can be written in it; an InputError
-    naming ``what`` (e.g. "--out 'gen'") otherwise: a file in the way, /proc, a read-only directory."""
+    naming ``what`` (e.g. "--out 'gen'") and saying ``expected`` otherwise: a file in the way,
+    /proc, a read-only directory."""
     out = Path(path)
-    expected = "expected a writable directory"
+    expected = f"expected {expected}"
     for p in (out, *out.parents):
         if p.exists() and not p.is_dir():
             raise InputError(f"{what}: '{p}' is a file; {expected}")

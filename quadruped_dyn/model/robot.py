@@ -221,58 +221,13 @@ def load_robot(name_or_path: str, cached: bool = True) -> Robot:
 
 @cache
 def _load(path: Path) -> Robot:
-    model = _parse_urdf(path)
-    model.armature[:] = 0.0
-    for j in range(1, model.njoints):
-        model.jointPlacements[j] = _snap(model.jointPlacements[j])
-    for frame in model.frames:
-        frame.placement = _snap(frame.placement)
+    model = _prepared_model(path)
     name = builtin_name(path) or path.stem
-
-    hips = [j for j in range(2, model.njoints) if model.parents[j] == 1]
-    found = [_chain(model, h) for h in hips]
-    chains = [c for c, _ in found]
-    shape = [f"{len(c)}+branches" if branches else len(c) for c, branches in found]
-    if len(chains) != 4 or any(n != 3 for n in shape):
-        raise InputError(
-            f"'{path.name}' has {len(chains)} joint chains from the trunk with {shape} joints; "
-            "expected a quadruped: 4 legs of 3 revolute joints (HAA, HFE, KFE)"
-        )
-    for chain in chains:
-        for j in chain:
-            if _axis(model.joints[j]) is None:
-                raise InputError(
-                    f"leg joint '{model.names[j]}' is {model.joints[j].shortname()}; expected revolute joints only"
-                )
-
     legs: dict[str, Leg] = {}
     foot_ids: dict[str, int] = {}
-    for chain in chains:
-        hip = model.jointPlacements[chain[0]].translation
-        if abs(hip[0]) < 1e-9 or abs(hip[1]) < 1e-9:
-            raise InputError(
-                f"hip '{model.names[chain[0]]}' at {np.round(hip, 4)} lies on a trunk axis; "
-                "expected hips with nonzero x (front/back) and y (left/right)"
-            )
-        label = ("F" if hip[0] > 0 else "B") + ("L" if hip[1] > 0 else "R")
-        if label in legs:
-            raise InputError(f"two legs have their hip in the {label} quadrant; expected one leg per quadrant")
-        joints = tuple(
-            LegJoint(
-                name=model.names[j],
-                placement=Placement(np.array(model.jointPlacements[j].rotation), np.array(model.jointPlacements[j].translation)),
-                axis=_axis(model.joints[j]),  # type: ignore[arg-type]
-                lower=_limit(model, j, lower=True),
-                upper=_limit(model, j, lower=False),
-            )
-            for j in chain
-        )
-        links = tuple(_inertia(model, j, f"the link moved by joint '{model.names[j]}'") for j in chain)
-        fid = foot_ids[label] = _foot_frame(model, chain[-1])
-        foot = model.frames[fid].placement
-        foot_placement = Placement(np.array(foot.rotation), np.array(foot.translation))
-        legs[label] = Leg(label, joints, links, foot_placement, model.frames[fid].name)  # type: ignore[arg-type]
-
+    for chain in _leg_chains(model, path):
+        leg, foot_ids[leg.label] = _leg(model, chain, taken=legs)
+        legs[leg.label] = leg
     ordered = tuple(legs[label] for label in LEG_LABELS)
     lower = np.array([j.lower for leg in ordered for j in leg.joints])
     upper = np.array([j.upper for leg in ordered for j in leg.joints])
@@ -290,6 +245,66 @@ def _load(path: Path) -> Robot:
         foot_frame_ids=tuple(foot_ids[label] for label in LEG_LABELS),  # type: ignore[arg-type]
         standing_q=standing,
     )
+
+
+def _prepared_model(path: Path) -> pin.Model:
+    """Pinocchio's free-flyer model of the validated URDF, without armature, placements snapped."""
+    model = _parse_urdf(path)
+    model.armature[:] = 0.0
+    for j in range(1, model.njoints):
+        model.jointPlacements[j] = _snap(model.jointPlacements[j])
+    for frame in model.frames:
+        frame.placement = _snap(frame.placement)
+    return model
+
+
+def _leg_chains(model: pin.Model, path: Path) -> list[list[int]]:
+    """The four joint chains hanging from the trunk, each of 3 revolute joints; InputError otherwise."""
+    hips = [j for j in range(2, model.njoints) if model.parents[j] == 1]
+    found = [_chain(model, h) for h in hips]
+    chains = [c for c, _ in found]
+    shape = [f"{len(c)}+branches" if branches else len(c) for c, branches in found]
+    if len(chains) != 4 or any(n != 3 for n in shape):
+        raise InputError(
+            f"'{path.name}' has {len(chains)} joint chains from the trunk with {shape} joints; "
+            "expected a quadruped: 4 legs of 3 revolute joints (HAA, HFE, KFE)"
+        )
+    for chain in chains:
+        for j in chain:
+            if _axis(model.joints[j]) is None:
+                raise InputError(
+                    f"leg joint '{model.names[j]}' is {model.joints[j].shortname()}; expected revolute joints only"
+                )
+    return chains
+
+
+def _leg(model: pin.Model, chain: list[int], taken: dict[str, Leg]) -> tuple[Leg, int]:
+    """The leg of one joint chain, labelled by its hip's quadrant (not one of ``taken``), and the
+    Pinocchio id of its foot frame."""
+    hip = model.jointPlacements[chain[0]].translation
+    if abs(hip[0]) < 1e-9 or abs(hip[1]) < 1e-9:
+        raise InputError(
+            f"hip '{model.names[chain[0]]}' at {np.round(hip, 4)} lies on a trunk axis; "
+            "expected hips with nonzero x (front/back) and y (left/right)"
+        )
+    label = ("F" if hip[0] > 0 else "B") + ("L" if hip[1] > 0 else "R")
+    if label in taken:
+        raise InputError(f"two legs have their hip in the {label} quadrant; expected one leg per quadrant")
+    joints = tuple(
+        LegJoint(
+            name=model.names[j],
+            placement=Placement(np.array(model.jointPlacements[j].rotation), np.array(model.jointPlacements[j].translation)),
+            axis=_axis(model.joints[j]),  # type: ignore[arg-type]
+            lower=_limit(model, j, lower=True),
+            upper=_limit(model, j, lower=False),
+        )
+        for j in chain
+    )
+    links = tuple(_inertia(model, j, f"the link moved by joint '{model.names[j]}'") for j in chain)
+    fid = _foot_frame(model, chain[-1])
+    foot = model.frames[fid].placement
+    foot_placement = Placement(np.array(foot.rotation), np.array(foot.translation))
+    return Leg(label, joints, links, foot_placement, model.frames[fid].name), fid  # type: ignore[arg-type]
 
 
 def _limit(model: pin.Model, j: int, lower: bool) -> float:

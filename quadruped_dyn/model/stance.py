@@ -1,4 +1,4 @@
-"""Stance sets: which feet are on the ground, and the paper's GRF parameterisation of each (docs/formulation.md#grf)."""
+"""Stance sets: which feet are on the ground, and the paper's GRF parameterisation of each (docs/formulation.md §4)."""
 
 from __future__ import annotations
 

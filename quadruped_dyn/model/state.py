@@ -1,4 +1,4 @@
-"""The project's full-coordinate state and its conventions (SPEC section 2).
+"""The project's full-coordinate state and its conventions (docs/conventions.md §1-§3).
 
 Frames: world w (z up, gravity ``GRAVITY_W``), trunk/body b with pose (R, p), R maps b -> w.
 
@@ -26,6 +26,7 @@ import numpy as np
 import pinocchio as pin
 
 from quadruped_dyn.errors import InputError
+from quadruped_dyn.math.compare import max_abs_error, within
 from quadruped_dyn.tolerances import ORTHONORMAL_TOL
 
 GRAVITY_W = np.array([0.0, 0.0, -9.81])  # m/s^2, world frame
@@ -36,7 +37,7 @@ NV_FULL = 18
 def full_q(R: np.ndarray, p: np.ndarray, q_joints: np.ndarray) -> np.ndarray:
     """Pack (R, p, 12 joint angles) into the project's q (19,)."""
     R = check_array("R", R, (3, 3))
-    if np.abs(R.T @ R - np.eye(3)).max() > ORTHONORMAL_TOL or np.linalg.det(R) < 0:
+    if not within(max_abs_error(R.T @ R, np.eye(3)), ORTHONORMAL_TOL) or np.linalg.det(R) < 0:
         raise InputError("R is not a rotation matrix; expected R^T R = I and det R = +1")
     quat = pin.Quaternion(R).coeffs()  # (x, y, z, w)
     return np.concatenate([check_array("p", p, (3,)), quat, check_array("q_joints", q_joints, (12,))])

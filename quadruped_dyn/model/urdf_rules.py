@@ -1,4 +1,4 @@
-"""One validation pass over a URDF before anything is built from it (SPEC section 8).
+"""One validation pass over a URDF before anything is built from it (docs/reliability.md §2).
 
 Pinocchio's parser accepts numbers that make every later answer wrong (a zero joint axis,
 NaN or 1e300 masses, lower > upper limits, inertias no body can have) and ignores ``mimic``.

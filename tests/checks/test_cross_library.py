@@ -18,10 +18,10 @@ from quadruped_dyn.checks import cross_library
 from quadruped_dyn.checks.cross_library import run_cross_library
 from quadruped_dyn.cli import main
 from quadruped_dyn.errors import InputError
+from quadruped_dyn.math.compare import relative_error
 from quadruped_dyn.model import paper_robot
 from quadruped_dyn.model.robot import ROBOT_NAMES, load_robot
 from quadruped_dyn.model.state import random_state, rotation
-from quadruped_dyn.references import interface
 from quadruped_dyn.references.interface import ModelChange, Prepared, max_rel_errors
 from quadruped_dyn.references.pinocchio import PinocchioReference
 from quadruped_dyn.tolerances import REL_TOL_TERMS
@@ -71,9 +71,10 @@ def test_against_bad_library_list_is_exit_2_before_loading(against, expected):
 
 
 def test_rel_err_fails_on_non_finite():
-    assert interface.rel_err(np.array([np.nan]), np.array([1.0])) == np.inf
-    assert interface.rel_err(np.array([1.0]), np.array([np.inf])) == np.inf
-    assert interface.rel_err(np.array([1.0 + 1e-12]), np.array([1.0])) == pytest.approx(1e-12, rel=1e-3)
+    """The cross-library comparison's error (``interface.max_rel_errors``) is compare.relative_error."""
+    assert relative_error(np.array([np.nan]), np.array([1.0])) == np.inf
+    assert relative_error(np.array([1.0]), np.array([np.inf])) == np.inf
+    assert relative_error(np.array([1.0 + 1e-12]), np.array([1.0])) == pytest.approx(1e-12, rel=1e-3)
 
 
 # ---------------------------------------------------------------------------- every robot, both libraries
@@ -101,7 +102,7 @@ def test_other_quadrupeds_by_path(relative, erd):
 
 @needs_mujoco
 def test_anymal_c_diagnosis_names_every_change_with_its_size():
-    """SPEC section 9: cameras break A + B >= C, the hatch is singular, 'base' has no inertial."""
+    """docs/results.md, other libraries: cameras break A + B >= C, the hatch is singular, 'base' has no inertial."""
     report = run_cross_library(load_robot("anymal_c"), ("mujoco",), SAMPLES, seed=0)
     changes = {c.kind: c for c in report.changes}
     assert {"hatch", "depth_camera_front_camera"} <= set(changes["refused"].links)
@@ -250,7 +251,7 @@ def test_moving_link_breaking_triangle_is_balanced_as_mujoco_does(tmp_path, monk
     """No welded neighbour: the comparison carries MuJoCo's balanceinertia rule, written into the copy
     (principal moments -> their mean). MuJoCo with balanceinertia on the original equals Pinocchio on
     that copy, so the difference from the original is the named change, and it is large.
-    The toolkit itself refuses such a leg link (SPEC section 8, urdf_validation); the comparison is
+    The toolkit itself refuses such a leg link (docs/reliability.md §2, urdf_rules); the comparison is
     exercised with that validation bypassed."""
     import quadruped_dyn.model.robot
 
