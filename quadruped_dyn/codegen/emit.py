@@ -22,6 +22,7 @@ from pathlib import Path
 
 import casadi as ca
 
+from quadruped_dyn.codegen.work_memory import memory_doc
 from quadruped_dyn.dynamics.grf import grf_solve
 from quadruped_dyn.dynamics.newton_euler import full_dynamics
 from quadruped_dyn.dynamics.reduced_projection import reduced_projection
@@ -195,6 +196,7 @@ def header_doc(robot: Robot, functions: list[ca.Function], work: dict[str, tuple
         outs = ", ".join(f"{f.name_out(i)}[{_shape(f.sparsity_out(i))}]" for i in range(f.n_out()))
         iw, w = work[f.name()]
         lines.append(f" *   {f.name()}({ins}) -> ({outs});  iw {iw}, w {w}{_note(f.name()[len(PREFIX):])}")
+    lines += memory_doc(functions, work)  # caller memory per function (docs/embedded.md)
     lines.append(" */")
     return "\n".join(lines) + "\n"
 
@@ -213,6 +215,34 @@ def silence_unused_parameters(c_source: str) -> str:
     release hooks ignore ``mem``: cast them to void so -Wextra -Werror passes."""
     c_source = re.sub(r"(static int casadi_f\d+\([^)]*\) \{\n)", lambda m: m.group(1) + f"  {_UNUSED}\n", c_source)
     return re.sub(r"(void \w+_release\(int mem\) \{\n)", lambda m: m.group(1) + "  (void)mem;\n", c_source)
+
+
+#: Elementary functions the generated code calls, each routed through a wrapper in casadi_real's precision.
+_WRAPPED_MATH = ("sin", "cos", "tan", "sqrt", "fabs")
+_PRECISION_MATH = """
+/* quadruped_dyn: the elementary functions in casadi_real's precision. A float build
+ * (-Dcasadi_real=float) calls sinf, cosf, ... instead of promoting to double, so it does no
+ * double arithmetic (none on a single-precision FPU: -Wdouble-promotion clean); a double build
+ * calls sin, cos, ... exactly as before. */
+#define QD_REAL_IS_FLOAT (sizeof(casadi_real) == sizeof(float))
+""" + "".join(f"static inline casadi_real qd_{f}(casadi_real x) {{ return QD_REAL_IS_FLOAT ? (casadi_real){f}f((float)x) "
+              f": (casadi_real){f}((double)x); }}\n" for f in _WRAPPED_MATH)
+_MATH_CALL = re.compile(rf"(?<![\w.])({'|'.join(_WRAPPED_MATH)})\(")
+
+
+def _precision_math(c_source: str) -> str:
+    """Route the elementary functions through ``_PRECISION_MATH`` and write CasADi's double
+    literals in products and quotients as integers ((2.*a) -> (2*a), (1./a) -> (1/a): the same
+    value in double, no promotion in float)."""
+    unknown = set(re.findall(r"(?<![\w.])(atan2?|asin|acos|exp|log|pow|tanh|sinh|cosh|floor|ceil|fmin|fmax|erf)\(",
+                             c_source))
+    if unknown:
+        raise AssertionError(f"elementary functions {sorted(unknown)} have no precision wrapper in emit._WRAPPED_MATH")
+    used = bool(_MATH_CALL.search(c_source))
+    c_source = _MATH_CALL.sub(r"qd_\1(", c_source)  # before the wrappers go in: they call the real ones
+    c_source = c_source.replace("#include <math.h>\n", "#include <math.h>\n" + _PRECISION_MATH, 1) if used else c_source
+    c_source = re.sub(r"\((\d+)\.\*", r"(\1*", c_source)
+    return re.sub(r"\((\d+)\./", r"(\1/", c_source)
 
 
 TEMPLATES = Path(__file__).resolve().parent / "c"
@@ -318,6 +348,7 @@ def generate(robot: Robot, out_dir: Path, precision: str = "double",
         functions += reduced
     work = work_sizes(casadi_header)
     extra = extra_files(functions, work) if extra_files else {}
+    sources = {file_name: _precision_math(text) for file_name, text in sources.items()}
     files = {
         f"{name}.c": c_full,
         f"{name}.h": header_doc(robot, functions, work) + casadi_header,

@@ -330,3 +330,11 @@ def cross_library(robot: Robot) -> dict[str, Any]:
     data = json_safe(run_cross_library(robot, installed, CROSS_LIBRARY_SAMPLES, 0).as_dict())
     assert isinstance(data, dict)
     return {**data, "cross_library_samples": CROSS_LIBRARY_SAMPLES, "cross_library_note": note}
+
+
+def embedded_footprint(robot: Robot, directory: Path) -> dict[str, Any]:
+    """Caller memory, code size and stack on Cortex-M of the generated C in ``directory``
+    (``checks.embedded``; the cross builds take minutes once, then are cached)."""
+    from quadruped_dyn.checks.embedded import embedded_summary
+
+    return embedded_summary(robot, directory)
