@@ -73,3 +73,18 @@ FLOAT_FD_R_PER_COND = 1.0
 #: A float result with a larger error is not a result (the issue's 1 %). Measured: every float
 #: fd_r that returned 0 (not QD_SINGULAR) was within it (at most 1.1e-3 on the paper robot).
 FLOAT_USABLE_REL_ERR = 1e-2
+
+#: The tol_scale of a case in the generated C's reference header (a ratio of condition numbers,
+#: printed to 3 significant digits) on two machines: the CPU's round-off moves it by ~1e-15
+#: relative, which can flip its third printed digit (up to 1e-2 relative for 1.00 vs 1.01); 2e-2
+#: allows that and still catches any change of the state or the conditioning.
+REFERENCE_TOL_SCALE_REL_TOL = 2e-2
+
+#: The per-phase interpolant of the plan's reference torques (``experiment.torque_table``),
+#: checked at the midpoints between its nodes, relative to each signal's largest magnitude over
+#: the phase (joint angles, rates, accelerations, torques, each as a group). Measured on paper,
+#: solo12 and go2, trot and walk: degree 64 reaches 3e-15 to 7e-15 and degree 96 or 128 does not
+#: go lower -- that floor is the exact IK and id_r's own round-off (a few hundred operations,
+#: atan2 / acos), not interpolation error. 1e-14 accepts only an interpolant at that floor, far
+#: below DOP853's tolerance (1e-13).
+TABLE_REL_TOL = 1e-14

@@ -200,3 +200,18 @@ def test_check_progress_without_a_terminal():
     result = CliRunner().invoke(main, ["check", "paper", "--samples", "2"])
     assert result.exit_code == 0
     assert "checking paper: 2/2" in result.stderr
+
+
+def test_numerical_failure_is_exit_1_one_line(monkeypatch):
+    """A numerical outcome is not bad input: NumericalError exits 1 with one line, no traceback."""
+    from quadruped_dyn.checks import terms
+    from quadruped_dyn.errors import NumericalError
+
+    def singular(*args, **kwargs):
+        raise NumericalError("M_r of FL+FR has condition number 3.0e+17 here; the reduced model is singular")
+
+    monkeypatch.setattr(terms, "run_check", singular)
+    result = CliRunner().invoke(main, ["check", "paper", "--samples", "1"])
+    assert result.exit_code == 1, result.output
+    assert "Traceback" not in result.output
+    assert result.stderr == "error: M_r of FL+FR has condition number 3.0e+17 here; the reduced model is singular\n"

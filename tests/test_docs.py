@@ -31,7 +31,8 @@ def test_site_builds_strict_and_offline(tmp_path):
 def test_every_subpackage_has_an_api_page():
     pages = {p.stem for p in (ROOT / "docs" / "api").glob("*.md")}
     packages = {p.parent.name for p in (ROOT / "quadruped_dyn").glob("*/__init__.py")}
-    assert packages <= pages, f"no API page for {sorted(packages - pages)}"
+    assert packages <= pages, (f"no API page for {sorted(packages - pages)}: add docs/api/<package>.md with one "
+                               "'::: quadruped_dyn.<package>.<module>' line per module, and its line in mkdocs.yml's nav")
     for package in packages:
         modules = {p.stem for p in (ROOT / "quadruped_dyn" / package).glob("*.py")} - {"__init__", "__main__"}
         listed = set(re.findall(rf"^::: quadruped_dyn\.{package}\.(\w+)$", (ROOT / "docs" / "api" / f"{package}.md").read_text(),

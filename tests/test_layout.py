@@ -18,7 +18,9 @@ import pytest
 
 import quadruped_dyn
 
-OPTIONAL = {"quadruped_dyn.references.mujoco": "mujoco", "quadruped_dyn.references.idyntree": "idyntree"}
+OPTIONAL = {"quadruped_dyn.references.mujoco": "mujoco", "quadruped_dyn.references.idyntree": "idyntree",
+            **{f"quadruped_dyn.control.{m}": "mujoco" for m in ("plant", "reference", "controllers", "run", "measures",
+                                                               "outputs", "closed_loop")}}
 MODULES = sorted(m.name for m in pkgutil.walk_packages(quadruped_dyn.__path__, "quadruped_dyn.")
                  if not m.name.endswith("__main__"))
 

@@ -95,7 +95,7 @@ def _reduced() -> str:
     from quadruped_dyn.codegen.emit import REDUCED_STANCE_SETS, reduced_symbol
     from quadruped_dyn.codegen.library import CompiledFunction, compiled_library
     from quadruped_dyn.dynamics.reduced import MAX_COND_M_R
-    from quadruped_dyn.errors import InputError
+    from quadruped_dyn.errors import InputError, NumericalError
     from quadruped_dyn.model.robot import load_robot
 
     robot = load_robot("paper")
@@ -107,7 +107,7 @@ def _reduced() -> str:
         try:
             (M,) = CompiledFunction(library, reduced_symbol("M_r", s))(q_r, np.array([0.0, 0.0, 0.0, 1.0]))
             cond = float(np.linalg.cond(np.asarray(M).reshape(n, n)))
-        except InputError:  # a non-finite M_r: singular
+        except (InputError, NumericalError):  # a non-finite M_r (QD_NONFINITE) or a singular one
             cond = float("inf")
         if not cond < MAX_COND_M_R:
             singular.append(s.name)

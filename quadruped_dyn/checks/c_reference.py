@@ -2,7 +2,9 @@
 
 from __future__ import annotations
 
+import re
 import tempfile
+from dataclasses import dataclass
 from pathlib import Path
 
 import casadi as ca
@@ -10,11 +12,18 @@ import numpy as np
 import pinocchio as pin
 
 from quadruped_dyn.codegen.emit import PREFIX, GeneratedFiles, generate, reduced_parts, stem
+from quadruped_dyn.math.compare import relative_error, scale_of, within
 from quadruped_dyn.model.robot import Robot
 from quadruped_dyn.model.stance import StanceSet, stance_set
 from quadruped_dyn.model.state import NV_FULL, FullState, full_q, rotation
 from quadruped_dyn.references.pinocchio import PinocchioReference
-from quadruped_dyn.tolerances import FLOAT_REL_TOL, GRF_COND_ASSUMED, MAP_COND_ASSUMED, REL_TOL_TERMS
+from quadruped_dyn.tolerances import (
+    FLOAT_REL_TOL,
+    GRF_COND_ASSUMED,
+    MAP_COND_ASSUMED,
+    REFERENCE_TOL_SCALE_REL_TOL,
+    REL_TOL_TERMS,
+)
 
 REFERENCE_DIGITS = 12  # significant digits of the reference header: 5e-13 relative, far below the 1e-10 check
 
@@ -170,9 +179,111 @@ def generate_checked(robot: Robot, out_dir: Path, precision: str = "double") -> 
                     extra_files=lambda functions, work: {reference_header_name(robot): reference_header(robot, functions, work)})
 
 
-def differing_files(robot: Robot, directory: Path) -> list[str]:
-    """Names of the files in ``directory`` that a fresh generation would change (or add)."""
+#: A C array of the reference header: ``static const double <name>[<n>] = {<values>};``
+_ARRAY = re.compile(r"static const double (\w+)\[(\d+)\] = \{([^}]*)\};")
+#: A row of the case table: ``{"<name>", ..., {<output arrays>}, {<nnz>}, <tol_scale>},``
+_CASE = re.compile(r'^  \{"(\w+)", .*\{([\w, ]*)\}, \{[\d, ]*\}, ([-+.\deE]+|inf|nan)\},$', re.M)
+
+
+@dataclass(frozen=True)
+class ReferenceHeader:
+    """A ``<stem>_reference.h`` split into what must be reproduced byte for byte (``skeleton``: the
+    text with every value replaced by a placeholder: names, sizes, the case table's layout) and the
+    values Pinocchio computed (``arrays`` by C name; ``tol_scale`` and output arrays per case), whose
+    last digits depend on the CPU and the BLAS kernel."""
+
+    skeleton: str
+    arrays: dict[str, np.ndarray]
+    case_outputs: dict[str, tuple[str, ...]]
+    tol_scale: dict[str, float]
+    rel_tol: float
+
+
+def parse_reference_header(text: str) -> ReferenceHeader:
+    arrays = {m.group(1): np.array([float(x) for x in m.group(3).split(",")]) for m in _ARRAY.finditer(text)}
+    cases = {m.group(1): tuple(x.strip() for x in m.group(2).split(",")) for m in _CASE.finditer(text)}
+    scales = {m.group(1): float(m.group(3)) for m in _CASE.finditer(text)}
+    skeleton = _ARRAY.sub(lambda m: f"static const double {m.group(1)}[{m.group(2)}] = {{...}};", text)
+    skeleton = re.sub(r", ([-+.\deE]+|inf|nan)\},$", ", ...},", skeleton, flags=re.M)
+    tol = re.search(r"#define QD_REL_TOL_DOUBLE (\S+)", text)
+    return ReferenceHeader(skeleton, arrays, cases, scales, float(tol.group(1)) if tol else float("nan"))
+
+
+def reference_differences(committed: str, fresh: str) -> list[str]:
+    """How the reference values of ``committed`` differ from ``fresh`` beyond their tolerance, one
+    line per value that moved (empty if they agree): the structure must be identical; each case's
+    outputs must agree within the tolerance ``check_qd.c`` applies to the generated code
+    (QD_REL_TOL_DOUBLE x tol_scale, relative to the case's largest output), the inputs within
+    QD_REL_TOL_DOUBLE of their own scale, and each tol_scale within REFERENCE_TOL_SCALE_REL_TOL.
+    Two machines' Pinocchio differ by round-off (~1e-15 relative), far inside these."""
+    a, b = parse_reference_header(committed), parse_reference_header(fresh)
+    if a.skeleton != b.skeleton:
+        old, new = a.skeleton.splitlines(), b.skeleton.splitlines()
+        line = next((i for i, (x, y) in enumerate(zip(old, new)) if x != y), min(len(old), len(new)))
+        return [f"the structure differs (not only values) from line {line + 1}"]
+    moved = [f"{k} has {len(b.arrays[k])} values in one and {len(a.arrays[k])} in the other"
+             for k in b.arrays if len(a.arrays[k]) != len(b.arrays[k])]
+    if moved:
+        return moved
+    in_case = {name for outs in b.case_outputs.values() for name in outs}
+    groups = [(case, outs, b.rel_tol * b.tol_scale[case]) for case, outs in b.case_outputs.items()]
+    groups += [(name, (name,), b.rel_tol) for name in b.arrays if name not in in_case]
+    for _case, outs, tol in groups:
+        scale = scale_of(np.concatenate([b.arrays[o] for o in outs]))
+        for o in outs:
+            diff = np.abs(a.arrays[o] - b.arrays[o]) / scale
+            diff[~(np.isfinite(a.arrays[o]) & np.isfinite(b.arrays[o]))] = np.inf
+            for i in np.flatnonzero(~(diff <= tol)):
+                moved.append(f"{o}[{i}] {a.arrays[o][i]:.12g} -> {b.arrays[o][i]:.12g} "
+                             f"(moved {diff[i]:.1e} of the case's scale {scale:.3g}; tolerance {tol:.1e})")
+    for case in b.tol_scale:
+        x, y = a.tol_scale[case], b.tol_scale[case]
+        if not within(relative_error(x, y), REFERENCE_TOL_SCALE_REL_TOL):
+            moved.append(f"tol_scale of {case} {x:.3g} -> {y:.3g}")
+    return moved
+
+
+@dataclass(frozen=True)
+class GenerationDiff:
+    """How a directory differs from a fresh generation: ``sources`` (files that must be byte for
+    byte equal: the C, the header, the Makefile; missing files count) and ``references`` (one line
+    per reference value beyond its tolerance, ``reference_differences``)."""
+
+    sources: list[str]
+    references: list[str]
+
+    def __bool__(self) -> bool:
+        return bool(self.sources or self.references)
+
+    def summary(self) -> str:
+        parts = []
+        if self.sources:
+            parts.append(f"source differs from a fresh generation: {', '.join(self.sources)}")
+        if self.references:
+            more = f"; ... ({len(self.references)} in all)" if len(self.references) > 5 else ""
+            shown = "; ".join(self.references[:5]) + more
+            parts.append(f"reference values differ beyond tolerance: {shown}")
+        return "; ".join(parts) or "up to date"
+
+
+def compare_generation(robot: Robot, directory: Path, precision: str = "double") -> GenerationDiff:
+    """Compare ``directory`` with a fresh generation at ``precision``: every file byte for byte,
+    except ``<stem>_reference.h`` whose values are compared numerically (``reference_differences``)."""
+    sources, references = [], []
     with tempfile.TemporaryDirectory() as tmp:
-        fresh = generate_checked(robot, Path(tmp)).all()
-        return [p.name for p in fresh if not (Path(directory) / p.name).is_file()
-                or (Path(directory) / p.name).read_bytes() != p.read_bytes()]
+        for p in generate_checked(robot, Path(tmp), precision).all():
+            old = Path(directory) / p.name
+            if not old.is_file():
+                sources.append(p.name)
+            elif p.name == reference_header_name(robot):
+                references += [f"{p.name}: {m}" for m in reference_differences(old.read_text(), p.read_text())]
+            elif old.read_bytes() != p.read_bytes():
+                sources.append(p.name)
+    return GenerationDiff(sources, references)
+
+
+def differing_files(robot: Robot, directory: Path, precision: str = "double") -> list[str]:
+    """Names of the files in ``directory`` that a fresh generation would change (or add); the
+    reference header only if its values moved beyond their tolerance."""
+    diff = compare_generation(robot, directory, precision)
+    return diff.sources + sorted({m.split(":", 1)[0] for m in diff.references})

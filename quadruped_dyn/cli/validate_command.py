@@ -4,14 +4,19 @@ from __future__ import annotations
 
 import json
 import math
-import sys
 from typing import TYPE_CHECKING
 
 import click
 
-from quadruped_dyn.errors import InputError
+from quadruped_dyn.errors import InputError, NumericalError
 from quadruped_dyn.files.paths import writable_dir
 from quadruped_dyn.model.robot import load_robot
+
+#: Samples per run (horizon / dt) that validate accepts: 100x the default two cycles at 1 ms,
+#: minutes of integration per run; beyond it the work (and memory: a state per sample and run)
+#: is refused before it starts. Beyond WARN_SAMPLES the cost is stated.
+MAX_SAMPLES = 200_000
+WARN_SAMPLES = 20_000
 
 if TYPE_CHECKING:
     from quadruped_dyn.experiment.gait import Gait
@@ -42,22 +47,37 @@ def validate(robot: str, gait_name: str, horizon: float | None, integrator: str,
 
     from quadruped_dyn.experiment.gait import GAITS
     from quadruped_dyn.experiment.outputs import output_paths, plot_br_hfe, plot_physics_check, summary_text, write_csv
-    from quadruped_dyn.experiment.paper_experiment import joint_names, report, run_experiment, static_stability
+    from quadruped_dyn.experiment.paper_experiment import (
+        MIN_COMPARED_SAMPLES,
+        compared_samples,
+        joint_names,
+        report,
+        run_experiment,
+        static_stability,
+    )
     from quadruped_dyn.experiment.simulate import reduced_dynamics
     from quadruped_dyn.files.json import write_json
 
     gait = GAITS[gait_name]
     horizon = 2 * gait.period if horizon is None else horizon
     _check_times(gait, horizon, dt, integrator)
+    runs = 3 + (gait.n_coords == 13) + (0 if no_physics else 5)
+    _check_work(horizon, dt, runs)
     out = writable_dir(out_dir, f"--out '{out_dir}'")
     r = load_robot(robot)
     paths = output_paths(out, r.name, gait.name)
     dynamics = reduced_dynamics(r, backend)
-    runs = 3 + (gait.n_coords == 13) + (0 if no_physics else 5)
-    with click.progressbar(length=int(round(runs * horizon * 1000)), label=f"simulating {r.name} {gait.name}",
-                           file=sys.stderr) as bar:
+    from quadruped_dyn.progress import Bar
+
+    with Bar(f"simulating {r.name} {gait.name}", runs * horizon, "s simulated", runs=runs) as bar:
         exp = run_experiment(r, gait, dynamics, horizon, dt, integrator, physics=not no_physics,
-                             progress=lambda seconds: bar.update(int(round(seconds * 1000))))
+                             progress=bar.advance)
+    compared = compared_samples(exp)
+    if compared < MIN_COMPARED_SAMPLES:
+        stop = exp.runs["paper"].stopped_at
+        raise NumericalError(f"the 'paper' run stopped at t = {stop if stop is not None else 0.0:g} s after {compared} "
+                             f"sample(s) (--dt {dt:g} s); a comparison with IK needs at least {MIN_COMPARED_SAMPLES}: "
+                             "no result (try a smaller --dt)")
     stability = static_stability(exp.plan, exp.ik, horizon)
     data = report(exp, integrator, dt, backend, stability)
     write_json(paths["json"], data)
@@ -83,3 +103,15 @@ def _check_times(gait: Gait, horizon: float, dt: float, integrator: str) -> None
         raise InputError(f"--horizon {horizon} s is shorter than one step (--dt {dt} s); expected horizon >= dt")
     if integrator == "rk4" and abs(gait.phase_duration / dt - round(gait.phase_duration / dt)) > 1e-9:
         raise InputError(f"--dt {dt} does not divide the gait's phase of {gait.phase_duration} s; expected e.g. 1e-3")
+
+
+def _check_work(horizon: float, dt: float, runs: int) -> None:
+    """InputError beyond MAX_SAMPLES samples per run (horizon / dt: the work and the memory are
+    bounded before they start); beyond WARN_SAMPLES a one-line warning says what it will cost."""
+    samples = horizon / dt
+    if samples > MAX_SAMPLES:
+        raise InputError(f"--horizon {horizon:g} s at --dt {dt:g} s is {samples:.3g} samples per run; expected at most "
+                         f"{MAX_SAMPLES:,} samples (horizon / dt) per run; a larger --dt or a shorter --horizon")
+    if samples > WARN_SAMPLES:
+        click.echo(f"warning: {int(samples):,} samples per run x {runs} runs: expect {samples / WARN_SAMPLES:.0f}x the "
+                   "default's time (minutes)", err=True)

@@ -27,6 +27,7 @@ from quadruped_dyn.dynamics.grf import grf_solve
 from quadruped_dyn.dynamics.newton_euler import full_dynamics
 from quadruped_dyn.dynamics.reduced_projection import reduced_projection
 from quadruped_dyn.errors import InputError
+from quadruped_dyn.files.safe_write import output_path, write_text
 from quadruped_dyn.model.robot import Robot
 from quadruped_dyn.model.stance import STANCE_SETS, StanceSet, stance_set
 
@@ -359,7 +360,7 @@ def generate(robot: Robot, out_dir: Path, precision: str = "double",
         **sources,
     }
     for file_name, text in files.items():
-        (out_dir / file_name).write_text(text)
+        write_text(output_path(out_dir, file_name), text)  # under out_dir, never through a link
     return GeneratedFiles(source=out_dir / f"{name}.c", header=out_dir / f"{name}.h",
                           extra={f: out_dir / f for f in extra}, check_program=out_dir / "check_qd.c",
                           makefile=out_dir / "Makefile", reduced=tuple(out_dir / f for f in sources if f != f"{name}.c"),

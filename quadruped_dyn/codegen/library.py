@@ -96,9 +96,14 @@ def generator_sources() -> list[Path]:
 
 
 def generation_key(robot: Robot, precision: str, flags: tuple[str, ...], cc: str) -> str:
-    """Hash of everything the compiled library depends on: the URDF's bytes, the generator's
-    source (``generator_sources``), CasADi's version, precision, flags and compiler."""
-    h = hashlib.sha256(robot.name.encode() + Path(robot.urdf).read_bytes())
+    """Hash of everything the compiled library depends on: the bytes ``robot``'s model was parsed
+    from (``Robot.urdf_sha256``, recorded at load: not the file as it is now, which may have been
+    edited since) and the foot frames chosen, the generator's source (``generator_sources``),
+    CasADi's version, precision, flags and compiler."""
+    if not robot.urdf_sha256:
+        raise InputError(f"robot '{robot.name}' records no hash of its URDF; expected a Robot from load_robot")
+    feet = ",".join(leg.foot_frame for leg in robot.legs)
+    h = hashlib.sha256(f"{robot.name}\n{robot.urdf_sha256}\n{feet}\n".encode())
     for path in generator_sources():
         h.update(str(path.relative_to(PACKAGE)).encode() + path.read_bytes())
     h.update(f"{ca.CasadiMeta.version()} {precision} {' '.join(flags)} {compiler_version(cc)}".encode())
@@ -165,6 +170,18 @@ class CompiledFunction:
         iw, w = work_sizes_of(self._lib, self.name)
         self._iw = (ctypes.c_longlong * max(1, iw))()
         self._w = (ctypes.c_double * max(1, w))()
+
+    def raw(self, *args: np.ndarray) -> list[np.ndarray]:
+        """The hot path of a control loop: inputs (float64 arrays of the right sizes, not checked)
+        copied into the preallocated buffers, the C function called, its output buffers returned
+        (the nonzeros, column-major; overwritten by the next call). A non-zero return code
+        raises InputError as ``__call__`` does."""
+        for buf, x in zip(self._in, args):
+            buf[:] = x
+        flag = self._fn(self._arg, self._res, self._iw, self._w, 0)
+        if flag != 0:
+            raise InputError(f"{self.name}: {RETURN_CODES.get(flag, f'error code {flag}')}")
+        return self._out
 
     def __call__(self, *args: np.ndarray) -> list[np.ndarray]:
         if len(args) != len(self._in):

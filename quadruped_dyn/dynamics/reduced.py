@@ -28,14 +28,15 @@ two feet, the roll-rate row; it must agree with the stance (``pose`` reconstruct
 from __future__ import annotations
 
 import time
+from collections.abc import Callable
 from dataclasses import dataclass
 from functools import cache
 
 import casadi as ca
 import numpy as np
 
-from quadruped_dyn.dynamics.grf import grf_expressions
-from quadruped_dyn.dynamics.guarded import guard_fields, guarded_call
+from quadruped_dyn.dynamics.grf import GrfSolve, grf_expressions, grf_solve
+from quadruped_dyn.dynamics.guarded import guard_fields, guarded_call, with_condition
 from quadruped_dyn.dynamics.kinematics import foot_position
 from quadruped_dyn.errors import InputError, NumericalError
 from quadruped_dyn.math.linalg import least_squares
@@ -130,9 +131,36 @@ class ReducedModel:
     G_r: ca.Function  # q_r, quat -> (n,)
     fd_r: ca.Function  # q_r, qd_r, tau_ext, quat -> qdd_r (n,)
     build_seconds: float
+    grf: GrfSolve | None = None  # the stance set's GRF solve: its rank is checked before numeric calls
 
     def __post_init__(self) -> None:
         guard_fields(self)  # numeric calls check shapes, finiteness, quaternions (dynamics/guarded.py)
+        # finite nonsense is not an answer: every numeric call first checks the GRF system's rank
+        # (collinear or coincident stance feet), fd_r also M_r's condition number
+        for name in ("maps", "id_r", "M_r", "M_r_ad", "C_r", "G_r"):
+            f = getattr(self, name)
+            object.__setattr__(self, name, with_condition(f, self._regular_at(f)))
+        object.__setattr__(self, "fd_r", with_condition(self.fd_r, self._solvable_at(self.fd_r)))
+
+    def _regular_at(self, f: ca.Function) -> Callable[[list[np.ndarray]], None]:
+        i_q, i_quat = f.name_in().index("q_r"), f.name_in().index("quat")
+
+        def check(values: list[np.ndarray]) -> None:
+            if self.grf is not None:
+                self.grf.check_regular(np.concatenate([np.zeros(3), values[i_quat], values[i_q][:12]]))
+
+        return check
+
+    def _solvable_at(self, f: ca.Function) -> Callable[[list[np.ndarray]], None]:
+        regular = self._regular_at(f)
+        i_q, i_quat = f.name_in().index("q_r"), f.name_in().index("quat")
+
+        def check(values: list[np.ndarray]) -> None:
+            regular(values)
+            (M,) = guarded_call(self.M_r, values[i_q], values[i_quat])
+            solve_forward_dynamics(self.stance, M, np.zeros(self.n))  # NumericalError where M_r is singular
+
+        return check
 
     def forward_dynamics(self, q_r: np.ndarray, qd_r: np.ndarray, tau_ext: np.ndarray,
                          quat: np.ndarray) -> tuple[np.ndarray, float]:
@@ -154,9 +182,15 @@ def solve_forward_dynamics(stance: StanceSet, M_r: np.ndarray, rhs: np.ndarray) 
     return np.linalg.solve(M_r, rhs), cond
 
 
-@cache
 def reduced_model(robot: Robot, stance_name: str) -> ReducedModel:
     """Build the reduced model for a stance set of two, three or four feet (once per robot)."""
+    if not isinstance(robot, Robot):
+        raise InputError(f"robot is {type(robot).__name__}; expected a Robot (quadruped_dyn.load_robot)")
+    return _reduced_model(robot, stance_set(stance_name).name)  # checked before the cache hashes it
+
+
+@cache
+def _reduced_model(robot: Robot, stance_name: str) -> ReducedModel:
     stance = stance_set(stance_name)
     k = len(stance.feet)
     if k not in REDUCED_KINDS:
@@ -189,4 +223,5 @@ def reduced_model(robot: Robot, stance_name: str) -> ReducedModel:
         fd_r=ca.Function(f"fd_r_{name}", [q, qd, tau_ext, quat], [least_squares(M, tau_ext - C - G)],
                          ["q_r", "qd_r", "tau_ext", "quat"], ["qdd_r"], opts),
         build_seconds=time.perf_counter() - start,
+        grf=grf_solve(robot, stance, "paper"),
     )

@@ -10,13 +10,16 @@ from typing import Any
 import numpy as np
 
 from quadruped_dyn.experiment.paper_experiment import DEPARTURE_PCT, SIGNALS, Experiment, departure, joint_names
+from quadruped_dyn.files.safe_write import output_path, save_figure, text_writer
 from quadruped_dyn.model.leg import BR_HFE
 
 
 def output_paths(out_dir: Path, robot: str, gait: str) -> dict[str, Path]:
+    """The run's files, each a plain file name in ``out_dir`` (``files.safe_write.output_path``)."""
     stem = f"{robot}_{gait}"
-    return {"json": out_dir / f"{stem}_validation.json", "csv": out_dir / f"{stem}_timeseries.csv",
-            "plot": out_dir / f"{stem}_BR_HFE.png", "physics_plot": out_dir / f"{stem}_physics_check.png"}
+    names = {"json": f"{stem}_validation.json", "csv": f"{stem}_timeseries.csv", "plot": f"{stem}_BR_HFE.png",
+             "physics_plot": f"{stem}_physics_check.png"}
+    return {k: output_path(out_dir, name) for k, name in names.items()}
 
 
 def write_csv(path: Path, exp: Experiment) -> None:
@@ -25,7 +28,7 @@ def write_csv(path: Path, exp: Experiment) -> None:
     names = joint_names(exp.plan.robot)
     m = min(len(run.t), len(ref["t"]))
     header = ["t_s"] + [f"{n}_{s}_{w}" for n in names for s in SIGNALS for w in ("ik", "sim")]
-    with path.open("w", newline="") as f:
+    with text_writer(path) as f:
         w = csv.writer(f)
         w.writerow(header)
         for k in range(m):
@@ -66,7 +69,7 @@ def plot_br_hfe(path: Path, exp: Experiment) -> None:
     axes[0].legend(fontsize=8)
     axes[-1].set_xlabel("time (s)")
     fig.tight_layout()
-    fig.savefig(path, dpi=110)
+    save_figure(fig, path, dpi=110)
     plt.close(fig)
 
 
@@ -98,7 +101,7 @@ def plot_physics_check(path: Path, exp: Experiment) -> None:
     ax.grid(alpha=0.3, which="both")
     ax.legend(fontsize=7)
     fig.tight_layout()
-    fig.savefig(path, dpi=110)
+    save_figure(fig, path, dpi=110)
     plt.close(fig)
 
 

@@ -36,7 +36,7 @@ import pinocchio as pin
 from scipy.integrate import DOP853
 
 from quadruped_dyn.dynamics.guarded import guarded_call
-from quadruped_dyn.dynamics.kinematics import robot_kinematics
+from quadruped_dyn.dynamics.kinematics import robot_feet, robot_kinematics
 from quadruped_dyn.dynamics.reduced import reduced_model
 from quadruped_dyn.errors import InputError, NumericalError
 from quadruped_dyn.experiment.gait import Plan
@@ -176,6 +176,7 @@ def simulate_reduced(plan: Plan, dynamics: ReducedDynamics, law: TorqueLaw, hori
     robot, gait = plan.robot, plan.gait
     ik = ik or IkTorques(plan, dynamics)
     kin = robot_kinematics(robot)
+    feet_of = robot_feet(robot)
     n = gait.n_coords
     pitch = [0.0]  # the previous pose's pitch picks between the two-feet pose solutions
     evaluations = [0]
@@ -184,7 +185,7 @@ def simulate_reduced(plan: Plan, dynamics: ReducedDynamics, law: TorqueLaw, hori
     current = [gait.stance(0.0)]
 
     def fit(q: np.ndarray, stance: tuple[int, ...]) -> tuple[np.ndarray, np.ndarray, float]:
-        feet = np.array([np.asarray(kin[i].foot_position(q[3 * i : 3 * i + 3])).ravel() for i in stance])
+        feet = np.asarray(feet_of(q[:12])[0]).T[list(stance)]
         roll = float(q[12]) if len(stance) == 2 else None
         R, p, closure = pose_from_feet(feet, np.array([footholds[i] for i in stance]), roll=roll, pitch_hint=pitch[0])
         pitch[0] = float(pin.rpy.matrixToRpy(R)[1])
@@ -275,7 +276,7 @@ def integrate_phases(plan: Plan, y: np.ndarray, horizon: float, dt: float, integ
         if integrator == "rk4":
             y = _rk4_segment(f, y, t0, t1, dt, inside, rec, proj)
         else:
-            y = _dop853_segment(f, y, t0, t1, rtol, inside, rec, proj)
+            y = _dop853_segment(f, y, t0, t1, rtol, inside, rec, proj, progress)
         if progress:
             progress(float(t1))
     return y
@@ -292,20 +293,22 @@ def project_on_stance(robot: Robot, stance: tuple[int, ...], holds: np.ndarray, 
     after a touch-down whose foot lands moving, the rate projection is a kinematic impact."""
     from quadruped_dyn.references.pinocchio import roll_rate_row  # its rounding is the experiment's (issue 19 rewrites this)
 
-    kin = robot_kinematics(robot)
+    feet_of = robot_feet(robot)
     n = y.size // 2
     q, qd = y[:n].copy(), y[n:].copy()
     roll = float(q[12]) if len(stance) == 2 else None
     for _ in range(2):
-        feet = np.array([np.asarray(kin[i].foot_position(q[3 * i : 3 * i + 3])).ravel() for i in stance])
+        r_all, J_all = (np.asarray(x) for x in feet_of(q[:12]))
+        feet = r_all.T[list(stance)]
         R, p, _ = pose_from_feet(feet, holds, roll=roll, pitch_hint=pitch_hint)
         for j, i in enumerate(stance):
             s = slice(3 * i, 3 * i + 3)
-            q[s] += np.linalg.solve(np.asarray(kin[i].foot_jacobian(q[s])), R.T @ (holds[j] - p) - feet[j])
+            q[s] += np.linalg.solve(J_all[:, s], R.T @ (holds[j] - p) - feet[j])
     rows, rhs, legs = [], [], []
+    r_all, J_all = (np.asarray(x) for x in feet_of(q[:12]))
     for i in stance:
         s = slice(3 * i, 3 * i + 3)
-        r, J = np.asarray(kin[i].foot_position(q[s])).ravel(), np.asarray(kin[i].foot_jacobian(q[s]))
+        r, J = r_all[:, i].copy(), J_all[:, s]
         rows.append(np.hstack([np.eye(3), -skew(r)]))
         rhs.append(-J @ qd[s])
         legs.append((s, r, J))
@@ -341,10 +344,12 @@ def _rk4_segment(f: Callable[[float, np.ndarray], np.ndarray], y: np.ndarray, t0
 
 def _dop853_segment(f: Callable[[float, np.ndarray], np.ndarray], y: np.ndarray, t0: float, t1: float, rtol: float,
                     samples: np.ndarray, record: Callable[[float, np.ndarray], None],
-                    project: Callable[[float, np.ndarray], np.ndarray] | None = None) -> np.ndarray:
+                    project: Callable[[float, np.ndarray], np.ndarray] | None = None,
+                    progress: Progress | None = None) -> np.ndarray:
     """DOP853 over [t0, t1]; ``project`` (if given) maps the state back onto the constraint
     manifold after every accepted step (coordinate projection: the step's end value and its
-    stored derivative are replaced, so the next step starts on the manifold)."""
+    stored derivative are replaced, so the next step starts on the manifold); ``progress`` gets
+    the time reached after every step."""
     solver = DOP853(f, t0, y, t1, rtol=rtol, atol=rtol)
     pending = list(samples)
     while pending and pending[0] <= t0 + 1e-12:
@@ -360,4 +365,6 @@ def _dop853_segment(f: Callable[[float, np.ndarray], np.ndarray], y: np.ndarray,
         while pending and pending[0] <= solver.t + 1e-12:
             ts = pending.pop(0)
             record(ts, solver.y if abs(ts - solver.t) < 1e-12 else dense(ts))
+        if progress is not None:
+            progress(float(solver.t))
     return np.asarray(solver.y)

@@ -9,6 +9,8 @@ from typing import Any
 
 import numpy as np
 
+from quadruped_dyn.files.safe_write import write_text
+
 
 def json_safe(x: Any) -> Any:
     """``x`` as plain JSON types: dicts and lists (tuples become lists) recursively, numpy
@@ -27,5 +29,6 @@ def json_safe(x: Any) -> Any:
 
 
 def write_json(path: Path, data: dict[str, Any]) -> None:
-    """``data`` through ``json_safe``, indented, into ``path``."""
-    path.write_text(json.dumps(json_safe(data), indent=2, allow_nan=False))
+    """``data`` through ``json_safe``, indented, into ``path`` (``safe_write``: create-new + atomic
+    rename, never through a link)."""
+    write_text(path, json.dumps(json_safe(data), indent=2, allow_nan=False))

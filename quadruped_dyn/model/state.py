@@ -61,10 +61,20 @@ def classical_from_spatial(omega_b: np.ndarray, v_b: np.ndarray, vdot_b: np.ndar
 
 def check_array(name: str, x: object, shape: tuple[int, ...]) -> np.ndarray:
     """A float array of the given shape with finite entries, or a clear InputError."""
+    if isinstance(x, (str, bytes)):
+        raise InputError(f"{name} is a string; expected a numeric array of shape {shape}")
     try:
-        arr = np.asarray(x, dtype=float)
-    except (TypeError, ValueError) as e:
-        raise InputError(f"{name} is not numeric; expected an array of shape {shape}") from e
+        raw = np.asarray(x)  # an object's own __array__ may raise anything: that is bad input too
+        if np.iscomplexobj(raw):
+            raise InputError(f"{name} is complex; expected a real array of shape {shape} (the imaginary part would be lost)")
+        if raw.dtype.kind not in "biuf":
+            raise InputError(f"{name} has entries of type {raw.dtype}; expected a real numeric array of shape {shape}")
+        arr = np.asarray(raw, dtype=float)
+    except InputError:
+        raise
+    except Exception as e:
+        raise InputError(f"{name} is not numeric ({type(e).__name__}: {str(e)[:80]}); expected an array of shape "
+                         f"{shape}") from e
     if arr.shape != shape:
         raise InputError(f"{name} has shape {arr.shape}; expected {shape}")
     if not np.all(np.isfinite(arr)):

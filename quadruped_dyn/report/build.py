@@ -13,8 +13,6 @@ trunk's spatial acceleration, as everywhere in the project.
 
 from __future__ import annotations
 
-import sys
-import time
 from collections.abc import Callable
 from dataclasses import dataclass
 from datetime import datetime, timezone
@@ -22,10 +20,13 @@ from pathlib import Path
 from typing import Any
 
 from quadruped_dyn.files.paths import writable_dir
-from quadruped_dyn.model.robot import ROBOT_NAMES, Robot, robot_path
+from quadruped_dyn.files.safe_write import output_dir, output_path, write_text
+from quadruped_dyn.model.robot import Robot, robot_name, robot_path
+from quadruped_dyn.progress import Steps
 from quadruped_dyn.report.gather import (
     CHECK_SAMPLES,
     FRICTION_MU,
+    closed_loop,
     cross_library,
     embedded_footprint,
     experiment,
@@ -39,43 +40,17 @@ from quadruped_dyn.report.gather import (
     symbolic_data,
     versions,
 )
-from quadruped_dyn.report.html import Section, figure, page
+from quadruped_dyn.report.html import Section, esc, figure, page
 
-
-class Progress:
-    """One line per step on stderr: ``[k/N] what ... 12.3 s``; on a terminal, a step with
-    a count (``count(n, total)``) shows it as it goes."""
-
-    def __init__(self, total: int, enabled: bool = True) -> None:
-        self.total, self.k, self.enabled = total, 0, enabled
-        self.line = ""
-        self.live = enabled and sys.stderr.isatty()
-
-    def step(self, what: str) -> Callable[[], None]:
-        self.k += 1
-        start = time.perf_counter()
-        self.line = f"[{self.k}/{self.total}] {what} ..."
-        if self.enabled:
-            print(self.line, end="", file=sys.stderr, flush=True)
-
-        def done() -> None:
-            if self.enabled:
-                again = f"\r{self.line}\x1b[K" if self.live else ""  # rewrite the line a count has extended
-                print(f"{again} {time.perf_counter() - start:.1f} s", file=sys.stderr, flush=True)
-
-        return done
-
-    def count(self, n: int, total: int) -> None:
-        if self.live:
-            print(f"\r{self.line} {n}/{total}", end="", file=sys.stderr, flush=True)
+Progress = Steps  # numbered steps with a bar inside a long one (quadruped_dyn.progress)
 
 
 def prepare(robot_arg: str, out: str | Path) -> tuple[Path, Path]:
     """Validate the arguments before any work: (URDF path, the robot's output directory).
     InputError for an unknown robot or an output directory that cannot be written."""
     urdf = robot_path(robot_arg)
-    name = robot_arg if robot_arg in ROBOT_NAMES else urdf.stem  # as load_robot names it
-    target = Path(out) / name
+    # as load_robot names it: a safe name, one path component; never a link out of --out
+    target = output_dir(writable_dir(out, f"--out '{out}'", "a writable --out directory"), robot_name(urdf))
     return urdf, writable_dir(target, f"--out '{target}'", "a writable --out directory")
 
 
@@ -104,7 +79,7 @@ class ReportResult:
 
 def _failed(key: str, title: str, e: Exception) -> Section:
     message = f"{type(e).__name__}: {str(e).strip().splitlines()[0] if str(e).strip() else ''}"
-    return Section(key, title, "FAIL", message[:160], f'<p class="warn">Could not build this section: {message}</p>')
+    return Section(key, title, "FAIL", message[:160], f'<p class="warn">Could not build this section: {esc(message)}</p>')
 
 
 @dataclass
@@ -138,7 +113,7 @@ def build_report(robot_arg: str = "paper", out: str | Path = "results", fast: bo
 
     matplotlib.use("Agg")  # figures go into the page, never to a window
     _, target = prepare(robot_arg, out)
-    progress = Progress(9, show_progress)
+    progress = Progress(10, show_progress)  # loading, the steps of _steps, writing the page
     done = progress.step(f"loading {robot_arg}")
     robot, urdf_warnings = load_with_warnings(robot_arg)
     job = _Job(robot, urdf_warnings, target, fast, samples, progress)
@@ -155,7 +130,7 @@ def build_report(robot_arg: str = "paper", out: str | Path = "results", fast: bo
     path = target / "report.html"
     subtitle = (f"{robot.urdf} — built {datetime.now(timezone.utc):%Y-%m-%d %H:%M} UTC by quadruped-dyn report"
                 + (" --fast" if fast else ""))
-    path.write_text(page(f"quadruped_dyn report: {robot.name}", subtitle, sections))
+    write_text(output_path(target, "report.html"), page(f"quadruped_dyn report: {robot.name}", subtitle, sections))
     done()
     return ReportResult(path, sections)
 
@@ -175,6 +150,8 @@ def _steps(job: _Job, with_notebooks: bool) -> list[tuple[str, str, str, Callabl
          lambda: _experiment_section(job)),
         ("generated C" + ("" if job.fast else " and the benchmark"), "c", "Generated C", lambda: _c_section(job)),
         ("symbolic terms", "symbolic", "Symbolic terms", lambda: _symbolic_section(job)),
+        ("closed loop in MuJoCo", "closed_loop", "Closed loop in MuJoCo",
+         lambda: rs.closed_loop_section(closed_loop(job.robot, job.target, 1 if job.fast else 10))),
         ("notebooks", "notebooks", "Notebooks, executed", notebooks_built),
     ]
 
@@ -224,7 +201,7 @@ def _experiment_section(job: _Job) -> Section:
     from quadruped_dyn.experiment.paper_experiment import joint_names  # the labels the validation JSON is keyed by
     from quadruped_dyn.report import sections as rs
 
-    validations, plots = experiment(job.robot, job.target)
+    validations, plots = experiment(job.robot, job.target, job.progress)
     return rs.experiment_section(validations, joint_names(job.robot), plots)
 
 

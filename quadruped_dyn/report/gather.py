@@ -18,6 +18,7 @@ from typing import Any
 import numpy as np
 
 from quadruped_dyn.errors import InputError, NumericalError
+from quadruped_dyn.files.safe_write import output_dir
 from quadruped_dyn.math.compare import relative_error, scale_of
 from quadruped_dyn.model.leg import JOINT_ROLES
 from quadruped_dyn.model.robot import Robot, load_robot
@@ -137,10 +138,11 @@ def reduced_rows(robot: Robot, q_joints: np.ndarray) -> list[dict[str, Any]]:
                      "err_vs_pinocchio": relative_error(M, M_ref), "tol": REL_TOL_TERMS})
     return rows
 
-def experiment(robot: Robot, out: Path) -> tuple[dict[str, dict[str, Any] | None], dict[str, str]]:
+def experiment(robot: Robot, out: Path, progress: Any = None) -> tuple[dict[str, dict[str, Any] | None], dict[str, str]]:
     """Both gaits' validation (two cycles each, DOP853 sampled every EXPERIMENT_DT, with the
     physics check): the JSON dicts and the BR HFE figures, written beside the report as
-    ``validate`` writes them."""
+    ``validate`` writes them. ``progress``: a ``quadruped_dyn.progress.Steps`` whose current
+    step gets a bar of the simulated seconds and runs."""
     from quadruped_dyn.experiment.gait import GAITS
     from quadruped_dyn.experiment.outputs import output_paths, plot_br_hfe, plot_physics_check
     from quadruped_dyn.experiment.paper_experiment import report as validation_report
@@ -150,9 +152,13 @@ def experiment(robot: Robot, out: Path) -> tuple[dict[str, dict[str, Any] | None
 
     validations: dict[str, dict[str, Any] | None] = {}
     plots: dict[str, str] = {}
+    runs = {name: 3 + (gait.n_coords == 13) + 5 for name, gait in GAITS.items()}  # as run_experiment does them
+    bar = progress.bar(sum(n * 2 * GAITS[g].period for g, n in runs.items()), "s simulated",
+                       runs=None) if progress is not None else None
     for name, gait in GAITS.items():
         horizon = 2 * gait.period
-        exp = run_experiment(robot, gait, reduced_dynamics(robot, "c"), horizon, EXPERIMENT_DT)
+        exp = run_experiment(robot, gait, reduced_dynamics(robot, "c"), horizon, EXPERIMENT_DT,
+                             progress=bar.advance if bar is not None else None)
         data = validation_report(exp, "dop853", EXPERIMENT_DT, "c", static_stability(exp.plan, exp.ik, horizon))
         paths = output_paths(out, robot.name, name)
         write_json(paths["json"], data)
@@ -176,14 +182,14 @@ def generated_c(robot: Robot, out: Path) -> dict[str, Any]:
     from quadruped_dyn.codegen.library import compiled_library
     from quadruped_dyn.dynamics.formulas import shapes
 
-    directory = out / "c"
+    directory = out / "c"  # created by output_dir (never a link out of --out) when generated
     generated: dict[str, Any] = {}
 
     def reference_file(functions: list[ca.Function], work: dict[str, tuple[int, int]]) -> dict[str, str]:
         generated.update(functions=functions, work=work)  # every generated Function, as generate() builds them
         return {reference_header_name(robot): reference_header(robot, functions, work)}
 
-    paths = generate(robot, directory, extra_files=reference_file).all()
+    paths = generate(robot, output_dir(out, "c"), extra_files=reference_file).all()
     work = generated["work"]
     functions: list[dict[str, Any]] = [
         {"name": f.name(), "inputs": shapes(f), "outputs": shapes(f, outputs=True), "instructions": f.n_instructions(),
@@ -338,3 +344,24 @@ def embedded_footprint(robot: Robot, directory: Path) -> dict[str, Any]:
     from quadruped_dyn.checks.embedded import embedded_summary
 
     return embedded_summary(robot, directory)
+
+
+def closed_loop(robot: Robot, out: Path, cycles: int = 10) -> dict[str, Any]:
+    """The closed loop in MuJoCo (``quadruped-dyn control``), walk and trot, every controller:
+    per gait the JSON as ``control --json`` prints it, the plots (PNG bytes) and the animation
+    (GIF bytes, or why there is none); the files are written to ``out`` too."""
+    from quadruped_dyn.control.closed_loop import prepare, run_all
+    from quadruped_dyn.control.outputs import best_controller, rendering_available, write_all
+    from quadruped_dyn.control.run import LoopOptions
+
+    rendering, why = rendering_available()
+    gaits: dict[str, Any] = {}
+    for gait in ("walk", "trot"):
+        study = run_all(prepare(robot, gait, loop=LoopOptions(cycles=cycles)), keep_qpos=rendering)
+        data, paths = write_all(out, study, animation=rendering)
+        gif = paths["animation"]
+        gaits[gait] = {"data": data, "plot_png": paths["plot"].read_bytes(), "grf_png": paths["grf_plot"].read_bytes(),
+                       "gif": gif.read_bytes() if gif.exists() else None, "animated": best_controller(study.results),
+                       "animation_note": "" if gif.exists() else f"no animation: offscreen rendering unavailable ({why})"}
+    return {"cycles": cycles, "gaits": gaits}
+

@@ -12,7 +12,7 @@ from typing import Any
 
 from quadruped_dyn.math.compare import within
 from quadruped_dyn.model.leg import BR_HFE
-from quadruped_dyn.report.html import Section, badge, cell, esc, grade, not_available, num, table
+from quadruped_dyn.report.html import Section, badge, cell, esc, grade, not_available, num, png_image, table
 
 
 def _finite(*xs: Any) -> bool:
@@ -97,7 +97,8 @@ def terms_section(check: dict[str, Any] | None) -> Section:
     rows = [[t["name"], num(t["max_abs_err"]),
              cell(num(t["max_rel_err"]), grade(t["max_rel_err"], t["tol"])), num(t["tol"], ".0e"),
              cell(badge("pass" if t["passed"] else "FAIL"))] for t in terms]
-    worst = max((t["max_rel_err"] for t in terms), default=float("nan"))
+    # a non-finite error (NaN/inf, None once through JSON) is the worst of all: shown, never raised on
+    worst = max((t["max_rel_err"] if _finite(t["max_rel_err"]) else float("inf") for t in terms), default=float("nan"))
     ok = bool(check.get("passed")) and all(_finite(t["max_rel_err"]) for t in terms)
     body = [
         f"<p>{check.get('samples')} random states (seed {check.get('seed')}): joint angles inside limits, random "
@@ -267,7 +268,9 @@ def _rest(data: dict[str, Any], shown: Sequence[str]) -> str:
 
 #: What each run of the experiment is (experiment.paper_experiment's runs).
 RUN_NOTES = {"paper": "id_r's torques, roll moment applied (the paper's check)", "physical": "roll unactuated",
-             "twin": "paper, initial state one ulp up", "refined": "paper, tighter tolerance or half the step"}
+             "twin": "paper, initial state one ulp up", "refined": "paper, tighter tolerance or half the step",
+             "plus_1pct": "1.01 × id_r's torques, roll unactuated (physics check)",
+             "pd": "1.01 × id_r's torques + joint PD, roll unactuated (physics check)"}
 
 
 def runs_table(runs: dict[str, Any]) -> str:
@@ -514,3 +517,80 @@ def versions_section(versions: dict[str, Any]) -> Section:
         ["library", "version"], [[k, str(v)] for k, v in libraries.items()], "libraries")
     headline = ", ".join(f"{k} {libraries[k]}" for k in ("pin", "casadi", "numpy") if k in libraries)
     return Section("versions", "Versions and machine", "result", headline, body)
+
+
+# ----------------------------------------------------------------------------- closed loop
+
+
+def closed_loop_section(loop: dict[str, Any] | None) -> Section:
+    """``loop``: ``gather.closed_loop``'s data -- per gait the ``control --json`` output, plots
+    (PNG bytes) and the animation (GIF bytes or None)."""
+    import base64
+
+    if not loop or not loop.get("gaits"):
+        return Section("closed_loop", "Closed loop in MuJoCo", "not available", "not run", not_available("closed loop"))
+    parts = ["<p>The generated C in the loop of a simulated robot whose contacts nobody here wrote: MuJoCo, soft, "
+             "frictional, unilateral contacts, the robot built from the same URDF. Controllers at 1 kHz read joint q, "
+             "q̇ and an IMU (trunk orientation, angular rate); the stance set is the plan's (the ct controllers also use "
+             "the foot contact switches). pd: joint PD; ff+pd: id_r at the plan + PD; ct: computed torque on M_r, CG_r at "
+             "the measured state; +level: the reference levelled by the IMU. See docs/closed_loop.md.</p>"]
+    headlines = []
+    for gait, g in loop["gaits"].items():
+        d = g.get("data", {})
+        plant = d.get("plant", {})
+        gains = d.get("gains", {})
+        period = num(d.get("period_s"), "g")
+        parts.append(f"<h3>{esc(gait)}: {esc(d.get('robot'))}, {esc(d.get('cycles'))} cycles of {period} s</h3>")
+        parts.append(f"<p>MuJoCo step {num(plant.get('timestep_s'), 'g')} s ({esc(plant.get('integrator'))}), mu "
+                     f"{num(plant.get('mu'), 'g')}, foot radius {num(plant.get('foot_radius_m'), 'g')} m "
+                     f"({esc(plant.get('foot_radius_from'))}); joint PD "
+                     f"{num(gains.get('kp_Nm_per_rad'), '.3g')} N m/rad, "
+                     f"{num(gains.get('kd_Nms_per_rad'), '.3g')} N m s/rad ({num(gains.get('kp_per_kg'), 'g')}, "
+                     f"{num(gains.get('kd_per_kg'), 'g')} per kg); ct error dynamics "
+                     f"{num(gains.get('ct_omega'), 'g')} rad/s.</p>")
+        rows, grf_rows = [], []
+        up = []
+        for name, r in d.get("controllers", {}).items():
+            t, tr, c, sat, slip = (r.get(k) or {} for k in ("trunk", "tracking", "compute", "saturation", "foot_slip"))
+            fell = "no" if not r.get("fell") else f"at {num(r.get('fell_at_s'), '.3g')} s"
+            rows.append([name, num(r.get("cycles_up"), "g"), fell,
+                         num(tr.get("rms_rad"), ".2e"), num(tr.get("max_rad"), ".2e"), num(t.get("height_max_m"), ".2e"),
+                         num(t.get("roll_max_deg"), ".3g"), num(t.get("pitch_max_deg"), ".3g"),
+                         num(t.get("yaw_final_deg"), ".3g"),
+                         num(slip.get("max_m"), ".2e"), num(sat.get("time_s"), ".3g"), num(c.get("c_calls_median_us"), ".3g"),
+                         num(c.get("c_calls_max_us"), ".3g"), num(c.get("tick_python_median_us"), ".3g")])
+            up.append(f"{name} {num(r.get('cycles_up'), 'g')}")
+            for kind, e in (r.get("grf") or {}).items():
+                if e.get("compared"):
+                    grf_rows.append([name, kind, str(e.get("compared")), num(e.get("diff_median_N"), ".3g"),
+                                     num(e.get("diff_max_N"), ".3g"), num(e.get("relative_median"), ".2f"),
+                                     " / ".join(num(x, ".3g") for x in e.get("diff_xyz_median_N", []))])
+        parts.append(table(["controller", "cycles up", "fell", "joint RMS [rad]", "joint max [rad]", "height max [m]",
+                            "roll max [°]", "pitch max [°]", "yaw final [°]", "slip max [m]", "saturated [s]",
+                            "C median [µs]", "C max [µs]", "tick median [µs]"], rows,
+                           "every controller, from the same settled state; C = the generated-C calls of one tick "
+                           "(ctypes included); tick = the controller's whole tick in Python (machine shared, loaded)"))
+        stand = d.get("standing_grf") or {}
+        if stand.get("compared"):
+            grf_rows.insert(0, ["(settling, PD + G_r)", "4 feet", str(stand.get("compared")),
+                                num(stand.get("diff_median_N"), ".3g"),
+                                num(stand.get("diff_max_N"), ".3g"), num(stand.get("relative_median"), ".2f"),
+                                " / ".join(num(x, ".3g") for x in stand.get("diff_xyz_median_N", []))])
+        parts.append(table(["controller", "stance", "instants", "|Δf| median [N]", "|Δf| max [N]", "relative median",
+                            "|Δf| x / y / z median [N]"], grf_rows,
+                           "MuJoCo's contact forces vs the paper's GRF model at the same instants (measured state, "
+                           "MuJoCo's acceleration; instants whose MuJoCo contacts are the plan's stance); a result about "
+                           "the paper's assumptions (common fx, fy; rank-5 pairs), not a pass/fail"))
+        if g.get("plot_png"):
+            parts.append(png_image(g["plot_png"], f"{gait}: tracking and trunk attitude per controller"))
+        if g.get("grf_png"):
+            parts.append(png_image(g["grf_png"], f"{gait}: GRF difference over time"))
+        if g.get("gif"):
+            parts.append(f'<figure><img alt="{esc(gait)} animation" src="data:image/gif;base64,'
+                         f'{base64.b64encode(g["gif"]).decode()}"><figcaption>{esc(gait)}, controller '
+                         f'{esc(g.get("animated"))}, first seconds</figcaption></figure>')
+        else:
+            parts.append(f"<p class=\"na\">{esc(g.get('animation_note', 'no animation'))}</p>")
+        headlines.append(f"{gait}: cycles up " + ", ".join(up))
+    return Section("closed_loop", "Closed loop in MuJoCo", "result", " | ".join(headlines), "\n".join(parts))
+

@@ -258,7 +258,7 @@ def test_moving_link_breaking_triangle_is_balanced_as_mujoco_does(tmp_path, monk
     path = _variant(tmp_path, "thigh", _thigh_breaks_triangle)
     with pytest.raises(InputError, match=r"link 'FL_thigh' .*triangle inequality"):
         load_robot(path)
-    monkeypatch.setattr(quadruped_dyn.model.robot, "validate_urdf", lambda path: [])
+    monkeypatch.setattr(quadruped_dyn.model.robot, "validate_urdf", lambda path, data=None: [])
     monkeypatch.setattr(quadruped_dyn.model.robot, "inertia_problem", lambda moments: None)  # the merged-body check
     robot = load_robot(path, cached=False)
     report = run_cross_library(robot, ("mujoco",), SAMPLES, seed=7)
@@ -348,3 +348,31 @@ def test_continuous_joints_and_json_report(tmp_path):
                                                              for t in cross_library.TERMS}
     assert all(e["passed"] and e["max_rel_err"] <= REL_TOL_TERMS for e in entries)
     assert data["passed"] and {c["kind"] for c in data["model_changes"]} >= {"fused_links"}
+
+
+@pytest.mark.parametrize("against", ["mujoco,idyntree", "mujoco", "idyntree,mujoco"])
+def test_a_library_asked_for_and_not_compared_fails(monkeypatch, paper, against):
+    """MuJoCo refusing the URDF and its edited copy compares nothing: the check fails (exit 1) and
+    says which library was not compared and why, in the table and the JSON; iDynTree's rows alone
+    are not a pass (#18 item 5)."""
+    import json
+
+    from quadruped_dyn.references import mujoco as mujoco_ref
+
+    def refuse(*args, **kwargs):
+        raise mujoco_ref.MuJoCoRefusal("Error: mass and inertia of moving bodies must be larger than mjMINVAL")
+
+    monkeypatch.setattr(mujoco_ref, "compile_model", refuse)
+    report = run_cross_library(paper, against.split(","), samples=2)
+    assert not report.passed and list(report.not_compared) == ["mujoco"]
+    assert "refuses the edited copy too" in report.not_compared["mujoco"]
+    assert "mujoco    (nothing)       not compared: MuJoCo refuses" in report.table()
+    assert "NOT COMPARED: mujoco" in report.table()
+    if against != "mujoco,idyntree":
+        return  # the command line once (it runs the whole term check first)
+    result = CliRunner().invoke(main, ["check", "paper", "--samples", "2", "--json", "--against", against])
+    assert result.exit_code == 1, result.output
+    data = json.loads(result.stdout)
+    assert data["cross_library_passed"] is False and data["passed"] is False
+    assert list(data["cross_library_not_compared"]) == ["mujoco"]
+    assert {e["library"] for e in data["cross_library"]} == {"idyntree"}

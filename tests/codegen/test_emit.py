@@ -12,7 +12,13 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from quadruped_dyn.checks.c_reference import differing_files, pinocchio_outputs, reference_state
+from quadruped_dyn.checks.c_reference import (
+    compare_generation,
+    parse_reference_header,
+    pinocchio_outputs,
+    reference_differences,
+    reference_state,
+)
 from quadruped_dyn.codegen.emit import (
     CODEGEN_FUNCTIONS,
     PREFIX,
@@ -41,8 +47,46 @@ def _function_scale_error(ours: list[np.ndarray], expected: list[np.ndarray]) ->
 
 
 def test_committed_code_is_reproducible():
-    stale = differing_files(load_robot("paper"), CASADI_GEN)
-    assert not stale, f"casadi_gen differs from a fresh generation in {stale}: run `quadruped-dyn codegen paper --out casadi_gen`"
+    """The C, header and Makefile byte for byte; the Pinocchio-computed reference values (their
+    last digits depend on the CPU and BLAS) within their tolerance, naming any that moved."""
+    diff = compare_generation(load_robot("paper"), CASADI_GEN)
+    assert not diff, f"casadi_gen: {diff.summary()}: run `quadruped-dyn codegen paper --out casadi_gen`"
+
+
+def _perturbed(text: str, array: str, index: int, factor: float) -> str:
+    """The reference header with entry ``index`` of C array ``array`` multiplied by ``factor``."""
+    head, rest = text.split(f"static const double {array}[", 1)
+    size, body = rest.split("] = {", 1)
+    values, tail = body.split("};", 1)
+    items = values.split(", ")
+    items[index] = repr(float(items[index]) * factor)
+    return f"{head}static const double {array}[{size}] = {{{', '.join(items)}}};{tail}"
+
+
+def test_reference_values_are_compared_numerically():
+    """Round-off of another CPU (a few ulps, a residual's tiny value tripled) is not a difference;
+    a value moved beyond the tolerance is reported by name, index and amount; a change of the
+    structure (an array's size, a case's name) is a difference whatever the values."""
+    text = (CASADI_GEN / "qd_paper_reference.h").read_text()
+    header = parse_reference_header(text)
+    assert len(header.case_outputs) == len(CODEGEN_FUNCTIONS) + len(REDUCED_NAMES) * len(REDUCED_STANCE_SETS)
+    assert header.rel_tol == REL_TOL_TERMS and all(np.isfinite(v).all() for v in header.arrays.values())
+    residual = "qd_grf_FL_FR_BL_out2"  # the GRF residual: values at the round-off level
+    assert reference_differences(text, text) == []
+    assert reference_differences(text, _perturbed(text, "qd_M_full_out0", 0, 1 + 1e-14)) == []
+    assert reference_differences(text, _perturbed(text, residual, 0, 3.0)) == []
+    assert reference_differences(text, _perturbed(text, "qd_ref_q", 7, 1 + 1e-13)) == []
+    moved = reference_differences(text, _perturbed(text, "qd_M_full_out0", 3, 1 + 1e-6))
+    assert len(moved) == 1 and moved[0].startswith("qd_M_full_out0[3] ") and "tolerance 1.0e-10" in moved[0], moved
+    moved = reference_differences(text, _perturbed(text, "qd_ref_v", 2, 2.0))
+    assert len(moved) == 1 and moved[0].startswith("qd_ref_v[2] "), moved
+    assert reference_differences(text, _perturbed(text, "qd_G_full_out0", 0, float("nan")))[0].startswith("qd_G_full_out0[0]")
+    longer = text.replace("qd_ref_f[12] = {", "qd_ref_f[12] = {1, ", 1)
+    assert "qd_ref_f has 13 values" in reference_differences(text, longer)[0]
+    renamed = text.replace('"qd_M_full", qd_M_full', '"qd_M_fulx", qd_M_full')
+    assert "structure differs" in reference_differences(text, renamed)[0]
+    resized = text.replace("qd_ref_f[12]", "qd_ref_f[13]")
+    assert "structure differs" in reference_differences(text, resized)[0]
 
 
 def test_c_program_builds_and_passes(tmp_path):
@@ -156,3 +200,23 @@ def test_codegen_cli_bad_input(tmp_path):
     assert result.exit_code == 2 and "Traceback" not in result.output
     result = CliRunner().invoke(main, ["codegen", "paper", "--out", str(tmp_path), "--precision", "half"])
     assert result.exit_code == 2
+
+
+def test_codegen_check_compares_at_the_precision_asked_for(tmp_path):
+    """`codegen --precision float --check` compares with a float generation (it compared with a
+    double one and reported a false difference); the source and the reference values are
+    reported separately."""
+    from click.testing import CliRunner
+
+    from quadruped_dyn.checks.c_reference import generate_checked
+    from quadruped_dyn.cli import main
+
+    generate_checked(load_robot("paper"), tmp_path, "float")
+    ok = CliRunner().invoke(main, ["codegen", "paper", "--out", str(tmp_path), "--precision", "float", "--check"])
+    assert ok.exit_code == 0 and "(float): up to date" in ok.output, ok.output
+    (tmp_path / "qd_paper_reference.h").write_text(
+        _perturbed((tmp_path / "qd_paper_reference.h").read_text(), "qd_C_full_out0", 1, 1.01))
+    bad = CliRunner().invoke(main, ["codegen", "paper", "--out", str(tmp_path), "--check"])
+    assert bad.exit_code == 1, bad.output
+    assert "source differs from a fresh generation: qd_paper.c, qd_paper.h" in bad.output, bad.output
+    assert "reference values differ beyond tolerance: qd_paper_reference.h: qd_C_full_out0[1] " in bad.output

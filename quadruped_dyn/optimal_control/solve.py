@@ -1,0 +1,102 @@
+"""Solve a transcribed gait cycle with IPOPT (shipped with the casadi wheel), warm-started from the plan.
+
+``solve`` returns a ``Solution`` whatever IPOPT says; ``Solution.converged`` is True only for
+IPOPT's "Solve_Succeeded" with the constraint violation (recomputed here from the NLP's own
+bounds, not taken from IPOPT) at most MAX_CONSTRAINT_VIOLATION. Callers must check it
+(the CLI exits 1 with IPOPT's status otherwise).
+"""
+
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass
+from typing import Any
+
+import casadi as ca
+import numpy as np
+
+from quadruped_dyn.optimal_control.transcription import Transcription
+
+#: The issue's acceptance: constraint violation (max over g and the bounds, in the NLP's units:
+#: N m, N, m, m/s, m/s^2, rad) at most this.
+MAX_CONSTRAINT_VIOLATION = 1e-8
+
+#: IPOPT's options: tight tolerances so the violation lands below MAX_CONSTRAINT_VIOLATION.
+IPOPT_OPTIONS = {"tol": 1e-8, "constr_viol_tol": 1e-9, "acceptable_iter": 0, "max_iter": 500,
+                 "print_level": 0, "mu_strategy": "adaptive", "linear_solver": "mumps"}
+
+HESSIANS = ("exact", "limited-memory")
+
+
+@dataclass
+class Solution:
+    transcription: Transcription
+    w: np.ndarray
+    status: str  # IPOPT's return_status
+    success: bool
+    iterations: int
+    objective: float
+    constraint_violation: float
+    solve_seconds: float
+    build_seconds: float
+    hessian: str
+
+    @property
+    def converged(self) -> bool:
+        return self.status == "Solve_Succeeded" and self.constraint_violation <= MAX_CONSTRAINT_VIOLATION
+
+
+def constraint_violation(tr: Transcription, w: np.ndarray, g: np.ndarray) -> float:
+    """max over the constraints and the variable bounds of the distance to the feasible interval."""
+    gv = np.maximum(tr.lbg - g, 0) + np.maximum(g - tr.ubg, 0)
+    wv = np.maximum(tr.lbw - w, 0) + np.maximum(w - tr.ubw, 0)
+    return float(max(gv.max(initial=0.0), wv.max(initial=0.0)))
+
+
+def block_hessian(tr: Transcription) -> ca.Function:
+    """IPOPT's Hessian of the Lagrangian, assembled from each block's own: sum_i A_i^T H_i(A_i w + b_i) A_i
+    with H_i the SX Hessian of (sigma * W_EFFORT * weight_dt * effort_i + lam_i . g_i) -- one per distinct
+    block Function, built in well under a second, where CasADi's Hessian of the whole MX graph takes a minute."""
+    from quadruped_dyn.optimal_control.transcription import W_EFFORT
+
+    nw = tr.lbw.size
+    w, lam_f, lam_g = ca.MX.sym("w", nw), ca.MX.sym("lam_f"), ca.MX.sym("lam_g", tr.lbg.size)
+    hess: dict[str, ca.Function] = {}
+    assert tr.quadratic_hessian is not None
+    total = lam_f * tr.quadratic_hessian
+    for piece in tr.pieces:
+        name = piece.fun.name()
+        if name not in hess:
+            z = ca.SX.sym("z", piece.fun.size1_in(0))
+            out = piece.fun(z)
+            lam, sigma = ca.SX.sym("lam", out[0].shape[0]), ca.SX.sym("sigma")
+            L = sigma * out[1] + ca.dot(lam, out[0])
+            hess[name] = ca.Function(f"hess_{name}", [z, lam, sigma], [ca.hessian(L, z)[0]])
+        Hi = hess[name](piece.A @ w + piece.b, lam_g[piece.start : piece.stop], lam_f * W_EFFORT * piece.weight_dt)
+        total = total + ca.mtimes([piece.A.T, Hi, piece.A])
+    return ca.Function("nlp_hess_l", [w, ca.MX.sym("p", 0), lam_f, lam_g], [ca.triu(total)],
+                       ["x", "p", "lam_f", "lam_g"], ["triu_hess_gamma_x_x"])
+
+
+def solve(tr: Transcription, hessian: str = "exact", expand: bool = True, w0: np.ndarray | None = None,
+          verbose: bool = False) -> Solution:
+    """IPOPT from the plan (``tr.w0``) or ``w0``."""
+    opts = dict(IPOPT_OPTIONS)
+    if hessian == "limited-memory":
+        opts["hessian_approximation"] = "limited-memory"
+    if verbose:
+        opts["print_level"] = 5
+    start = time.perf_counter()
+    nlp_opts: dict[str, Any] = {"ipopt": opts, "expand": expand, "print_time": False}
+    if hessian == "exact":
+        nlp_opts["hess_lag"] = block_hessian(tr)
+    solver = ca.nlpsol("gait_cycle", "ipopt", tr.nlp, nlp_opts)
+    build = time.perf_counter() - start
+    start = time.perf_counter()
+    sol = solver(x0=tr.w0 if w0 is None else w0, lbx=tr.lbw, ubx=tr.ubw, lbg=tr.lbg, ubg=tr.ubg)
+    seconds = time.perf_counter() - start
+    stats = solver.stats()
+    w = np.asarray(sol["x"]).ravel()
+    g = np.asarray(sol["g"]).ravel()
+    return Solution(tr, w, str(stats["return_status"]), bool(stats["success"]), int(stats["iter_count"]),
+                    float(sol["f"]), constraint_violation(tr, w, g), seconds, build, hessian)

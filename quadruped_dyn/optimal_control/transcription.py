@@ -1,0 +1,376 @@
+"""One periodic gait cycle on the reduced model, transcribed as a nonlinear program (docs/optimal_control.md).
+
+Method: direct collocation in inverse-dynamics form. The motion is a piecewise quintic
+Hermite trajectory (``hermite``) of the 18 coordinates of ``node`` (12 joints, the roll -- the
+trot's 13th reduced coordinate -- pitch, yaw, trunk position) through K = phases x nodes-per-phase
+nodes over one cycle of the plan's period; the decision variables are the values, rates and
+accelerations at the nodes (3 x 18 per node) and the footholds' (x, y) within FOOTHOLD_BOUND_M
+of the plan's. The phase timing is the plan's (not optimised). Torques are not variables: they
+are the reduced inverse dynamics id_r of the motion. The dynamics enter as constraints at the
+collocation points -- every node and, with ``midpoints``, every interval's midpoint (the
+interpolant evaluated there):
+
+* roll unactuated (two stance feet): id_r's 13th entry = 0, the moment about the foot-to-foot
+  line that the paper's trot leaves to an actuator that does not exist;
+* effort |tau_j| <= the URDF's effort limit (a robot without one, e.g. solo12's 1000 N m
+  placeholder, is limited by it anyway);
+* the paper's GRF in the friction cone: f_z >= FZ_MIN_FRACTION of the weight on every stance
+  foot and mu^2 f_z^2 >= f_x^2 + f_y^2 (world frame, flat ground);
+* static walk (three stance feet): the CoM's ground projection at least MIN_COM_MARGIN_M inside
+  the support triangle, as today's plan guarantees;
+* stance feet pinned to their footholds (world position, velocity and acceleration zero);
+  at a phase switch all four feet are down, the constraints of both phases apply there;
+* swing feet above the ground by at least CLEARANCE_FRACTION of the plan's bump at every node;
+* joint angles and rates within the URDF's limits (bounds); trunk angles within TRUNK_ANGLE_RAD,
+  trunk height within TRUNK_HEIGHT_M of the plan's;
+* periodicity: node K (the next cycle's first) is node 0 moved forward by speed x period, and
+  every foothold moves forward by the same: the plan's forward speed.
+
+Objective (per cycle, trapezoid rule in time): W_EFFORT * integral sum_j (tau_j / tau_ref)^2 dt,
+tau_ref = m g l (robot weight times leg length), plus W_PLAN * integral of |joints - plan|^2
+(rad^2) + |trunk angles|^2 (rad^2) + |(p - p_plan) / 0.1 m|^2 dt, plus W_SMOOTH on the squared
+jumps of the accelerations between nodes (keeps the interpolant smooth between collocation points).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+from typing import Any
+
+import casadi as ca
+import numpy as np
+
+from quadruped_dyn.errors import InputError
+from quadruped_dyn.experiment.gait import Gait, Plan, gait_plan
+from quadruped_dyn.experiment.plan_ik import reference
+from quadruped_dyn.model.robot import Robot
+from quadruped_dyn.model.stance import StanceSet
+from quadruped_dyn.model.state import GRAVITY_W
+from quadruped_dyn.optimal_control.hermite import weights
+from quadruped_dyn.optimal_control.node import N_X, node_functions
+
+#: Friction coefficient of the cone (rubber feet on a dry floor are ~0.8-1; 0.6 leaves margin).
+MU = 0.6
+#: Smallest normal force on a stance foot, fraction of the robot's weight: a foot that carries
+#: less is about to slip or lift in any real contact.
+FZ_MIN_FRACTION = 0.05
+#: Static walk: CoM projection at least this far inside the support triangle (today's plan: >= 2 cm).
+MIN_COM_MARGIN_M = 0.02
+#: A swing foot stays above this fraction of the plan's bump (64 s^3 (1 - s)^3 step height).
+CLEARANCE_FRACTION = 0.5
+#: Footholds move at most this far (x and y) from the plan's, m.
+FOOTHOLD_BOUND_M = 0.03
+#: Trunk roll, pitch and yaw bounds (rad), and the trunk height's distance from the plan's (m).
+TRUNK_ANGLE_RAD = 0.3
+TRUNK_HEIGHT_M = 0.03
+#: Objective weights (module docstring): effort per s, closeness to the plan per rad^2 s, smoothness.
+W_EFFORT = 1.0
+W_PLAN = 1.0
+W_SMOOTH = 1e-6
+#: Fewest nodes per phase: below this the collocation points are too sparse for the swing's bump.
+MIN_NODES_PER_PHASE = 3
+#: Default nodes per phase.
+NODES_PER_PHASE = 8
+#: A step (speed x period) longer than this fraction of the leg's length is beyond what the legs reach.
+MAX_STEP_FRACTION = 0.6
+#: Position scale of the trunk's closeness term, m.
+P_SCALE_M = 0.1
+
+
+@dataclass(frozen=True)
+class Options:
+    nodes_per_phase: int = NODES_PER_PHASE
+    mu: float = MU
+    fz_min_fraction: float = FZ_MIN_FRACTION
+    midpoints: bool = True
+    speed: float | None = None  # m/s; None: the gait's
+
+    def check(self, robot: Robot, gait: Gait) -> None:
+        """InputError for options no solve can satisfy, before any work."""
+        if not isinstance(self.nodes_per_phase, int) or self.nodes_per_phase < MIN_NODES_PER_PHASE:
+            raise InputError(f"--nodes {self.nodes_per_phase} is too few; expected at least {MIN_NODES_PER_PHASE} per phase")
+        if not (math.isfinite(self.mu) and self.mu > 0):
+            raise InputError(f"mu = {self.mu} is not a friction coefficient the feet can stand on; expected mu > 0")
+        if not (math.isfinite(self.fz_min_fraction) and 0 <= self.fz_min_fraction < 1 / len(gait.phases[0])):
+            raise InputError(f"f_z minimum {self.fz_min_fraction} of the weight per foot cannot be carried; "
+                             f"expected 0 <= fraction < {1 / len(gait.phases[0]):.2f}")
+        speed = gait.speed if self.speed is None else self.speed
+        reach = leg_length(robot)
+        if not (math.isfinite(speed) and 0 <= speed * gait.period <= MAX_STEP_FRACTION * reach):
+            top = MAX_STEP_FRACTION * reach / gait.period
+            raise InputError(f"speed {speed} m/s is beyond what {robot.name}'s legs allow for a {gait.period} s cycle; "
+                             f"expected 0 <= speed <= {top:.2f} m/s (a step of at most {MAX_STEP_FRACTION:g} leg lengths)")
+
+
+def leg_length(robot: Robot) -> float:
+    """Thigh + shank of the first leg, m."""
+    leg = robot.legs[0]
+    return float(np.linalg.norm(leg.joints[2].placement.p) + np.linalg.norm(leg.foot.p))
+
+
+def _bump(s: float) -> float:
+    return 64 * s**3 * (1 - s) ** 3
+
+
+@dataclass(frozen=True)
+class Piece:
+    """One block of constraints: g[start:stop] = fun(A w + b).g, objective += weight_dt * fun(...).effort."""
+
+    fun: ca.Function
+    A: ca.DM
+    b: np.ndarray
+    start: int
+    stop: int
+    weight_dt: float
+
+
+@dataclass
+class Transcription:
+    """The NLP of one gait cycle: nlpsol's dict, bounds, the warm start and how to read a solution."""
+
+    robot: Robot
+    gait: Gait
+    plan: Plan
+    options: Options
+    speed: float
+    h: float  # node spacing, s
+    n_nodes: int  # K
+    nlp: dict
+    lbw: np.ndarray
+    ubw: np.ndarray
+    lbg: np.ndarray
+    ubg: np.ndarray
+    w0: np.ndarray
+    groups: dict[str, list[tuple[int, int, int]]] = field(default_factory=dict)  # name -> (node, start, stop) of g
+    outputs: ca.Function | None = None  # w -> tau (12, P (N + 1)), roll, effort, ...
+    x_plan: np.ndarray | None = None  # (18, K) the plan's coordinates at the nodes (the warm start)
+    pieces: list[Piece] = field(default_factory=list)  # the blocks of g (and of the effort), for the Hessian
+    quadratic_hessian: ca.DM | None = None  # of the objective's quadratic part (closeness, smoothness)
+
+    def unpack(self, w: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+        """(X, Xd, Xdd (18, K), footholds (2, 4) offsets from the plan's, m)."""
+        K = self.n_nodes
+        w = np.asarray(w, dtype=float).ravel()
+        X, Xd, Xdd = (w[i * N_X * K : (i + 1) * N_X * K].reshape(K, N_X).T for i in range(3))
+        return X, Xd, Xdd, w[3 * N_X * K :].reshape(4, 2).T
+
+    def phase_of(self, k: int) -> tuple[int, ...]:
+        """The phases node k belongs to (two at a switch)."""
+        N, P = self.options.nodes_per_phase, len(self.gait.phases)
+        p = k // N
+        return ((p - 1) % P, p) if k % N == 0 else (p,)
+
+
+def plan_coordinates(plan: Plan, t: float, guess: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The plan's 18 coordinates (joints, roll = pitch = yaw = 0, trunk position), rates, accelerations at t."""
+    ref = reference(plan, t, guess)
+    p, pd, pdd = plan.trunk(t)
+    z3 = np.zeros(3)
+    return (np.concatenate([ref.q_r[:12], z3, p]), np.concatenate([ref.qd_r[:12], z3, pd]),
+            np.concatenate([ref.qdd_r[:12], z3, pdd]))
+
+
+def transcribe(robot: Robot, gait: Gait, options: Options = Options()) -> Transcription:
+    """Build the NLP (module docstring); ``options.check`` first."""
+    options.check(robot, gait)
+    speed = gait.speed if options.speed is None else options.speed
+    if speed != gait.speed:
+        gait = Gait(gait.name, gait.phases, speed, gait.period, gait.step_height, gait.sway)
+    plan = gait_plan(robot, gait)
+    P, N = len(gait.phases), options.nodes_per_phase
+    K = P * N
+    h = gait.period / K
+    T = gait.period
+    shift = speed * T
+    nf = node_functions(robot, gait.phases)
+    weight = robot.total_mass * -GRAVITY_W[2]
+    fz_min = options.fz_min_fraction * weight
+    tau_ref = weight * leg_length(robot)
+    effort_limit = np.asarray(robot.model.effortLimit[robot.idx_v], dtype=float)
+    rate_limit = np.asarray(robot.model.velocityLimit[robot.idx_v], dtype=float)
+    swing_phase = [gait.swing_phase(i) for i in range(4)]
+
+    # warm start: the plan at the nodes
+    Xp, Xdp, Xddp = np.zeros((N_X, K)), np.zeros((N_X, K)), np.zeros((N_X, K))
+    guess = None
+    for k in range(K):
+        Xp[:, k], Xdp[:, k], Xddp[:, k] = plan_coordinates(plan, k * h, guess)
+        guess = Xp[:12, k]
+    if np.any(Xp[:12] < robot.lower[:, None] - 1e-9) or np.any(Xp[:12] > robot.upper[:, None] + 1e-9):
+        raise InputError(f"the {gait.name} plan of {robot.name} leaves the joint limits at speed {speed} m/s; "
+                         "expected a slower gait")
+    holds0 = np.array([plan.foot(i, 0.0)[0] for i in range(4)])  # (4, 3) world, at t = 0
+    ground = holds0[:, 2]
+
+    # One SX Function per (phase, feet pinned there) for a node, one per phase for a midpoint;
+    # the NLP (MX) calls them, so each is differentiated once, not once per node.
+
+    def hold(i: int, p: int, Hv: ca.SX) -> ca.SX:
+        """World foothold of foot i during (or at the start of) phase p."""
+        x0 = holds0[i, 0] + Hv[0, i] + (shift if p > swing_phase[i] else 0.0)
+        return ca.vertcat(x0, holds0[i, 1] + Hv[1, i], ground[i])
+
+    cache: dict[tuple, tuple[ca.Function, list[tuple[str, int, np.ndarray, np.ndarray]]]] = {}
+
+    def node_point(p: int, pinned: tuple[int, ...]) -> tuple[ca.Function, list[tuple[str, int, np.ndarray, np.ndarray]]]:
+        """(Function x, xd, xdd, H -> g, effort density, tau, roll; layout of g: name, size, lo, hi).
+        The clearance rows' lower bound is set per node (layout gives 0)."""
+        key = ("node", p, pinned)
+        if key in cache:
+            return cache[key]
+        z = ca.SX.sym("z", 3 * N_X + 8)
+        xs = (z[:N_X], z[N_X : 2 * N_X], z[2 * N_X : 3 * N_X])
+        Hs = ca.reshape(z[3 * N_X :], 2, 4)
+        stance = gait.phases[p]
+        tau, roll, f = nf.dynamics[stance](*xs)
+        rows: list[tuple[str, ca.SX, Any, Any]] = []
+        if len(stance) == 2:
+            rows.append(("roll_moment", roll, 0.0, 0.0))
+        rows.append(("effort", tau, -effort_limit, effort_limit))
+        F = ca.reshape(f, 3, len(stance))
+        rows.append(("fz_min", F[2, :], fz_min, np.inf))
+        rows.append(("friction", options.mu**2 * F[2, :] ** 2 - F[0, :] ** 2 - F[1, :] ** 2, 0.0, np.inf))
+        feet, feet_d, feet_dd, com = nf.kinematics(*xs)
+        if len(stance) == 3:
+            tri = [hold(i, p, Hs) for i in stance]
+            plan_tri = [holds0[i, :2] + (shift if p > swing_phase[i] else 0.0) * np.array([1.0, 0.0]) for i in stance]
+            for a, b, c in ((0, 1, 2), (1, 2, 0), (2, 0, 1)):
+                edge = tri[b][:2] - tri[a][:2]
+                normal = ca.vertcat(-edge[1], edge[0]) / ca.norm_2(edge)
+                e_plan = plan_tri[b] - plan_tri[a]  # which side is inside: the plan's triangle (footholds move little)
+                side = float(np.sign(np.array([-e_plan[1], e_plan[0]]) @ (plan_tri[c] - plan_tri[a])))
+                rows.append(("com_margin", side * ca.dot(normal, com[:2] - tri[a][:2]), MIN_COM_MARGIN_M, np.inf))
+        for i in pinned:
+            rows.append(("stance_foot", ca.vertcat(feet[:, i] - hold(i, p, Hs), feet_d[:, i], feet_dd[:, i]), 0.0, 0.0))
+        for i in range(4):
+            if i not in stance:
+                rows.append(("clearance", feet[2, i] - ground[i], 0.0, np.inf))
+        layout = [(n, int(ca.vec(e).shape[0]), np.broadcast_to(np.asarray(lo, float), (int(ca.vec(e).shape[0]),)).copy(),
+                   np.broadcast_to(np.asarray(hi, float), (int(ca.vec(e).shape[0]),)).copy()) for n, e, lo, hi in rows]
+        fun = ca.Function(f"node_point_{p}_{''.join(map(str, pinned))}", [z],
+                          [ca.vertcat(*[ca.vec(e) for _, e, _, _ in rows]), ca.sumsqr(tau) / tau_ref**2, tau, roll],
+                          ["z"], ["g", "effort", "tau", "roll"], {"cse": True})
+        cache[key] = (fun, layout)
+        return cache[key]
+
+    def mid_point(p: int) -> tuple[ca.Function, list[tuple[str, int, np.ndarray, np.ndarray]]]:
+        key = ("mid", p)
+        if key in cache:
+            return cache[key]
+        z = ca.SX.sym("z", 3 * N_X)  # the interpolant's (x, xd, xdd) at the midpoint
+        xs = (z[:N_X], z[N_X : 2 * N_X], z[2 * N_X :])
+        stance = gait.phases[p]
+        tau, roll, _ = nf.dynamics[stance](*xs)
+        rows: list[tuple[str, ca.SX, Any, Any]] = [("roll_moment_midpoint", roll, 0.0, 0.0)] if len(stance) == 2 else []
+        rows.append(("effort_midpoint", tau, -effort_limit, effort_limit))
+        layout = [(n, int(ca.vec(e).shape[0]), np.broadcast_to(np.asarray(lo, float), (int(ca.vec(e).shape[0]),)).copy(),
+                   np.broadcast_to(np.asarray(hi, float), (int(ca.vec(e).shape[0]),)).copy()) for n, e, lo, hi in rows]
+        fun = ca.Function(f"mid_point_{p}", [z], [ca.vertcat(*[ca.vec(e) for _, e, _, _ in rows]), ca.SX(0), tau, roll],
+                          ["z"], ["g", "effort", "tau", "roll"], {"cse": True})
+        cache[key] = (fun, layout)
+        return cache[key]
+
+    nw = 3 * N_X * K + 8
+    w = ca.MX.sym("w", nw)
+    X, Xd, Xdd = (ca.reshape(w[i * N_X * K : (i + 1) * N_X * K], N_X, K) for i in range(3))
+    H_index = np.arange(3 * N_X * K, nw)
+
+    def node_map(k: int) -> tuple[np.ndarray, np.ndarray]:
+        """(A (54, nw), b (54,)): the node's (x, xd, xdd) = A w + b (node K: node 0 moved forward)."""
+        j = k % K
+        A = np.zeros((3 * N_X, nw))
+        for i in range(3):
+            A[i * N_X : (i + 1) * N_X, i * N_X * K + j * N_X : i * N_X * K + (j + 1) * N_X] = np.eye(N_X)
+        b = np.zeros(3 * N_X)
+        if k >= K:
+            b[15] = shift
+        return A, b
+
+    g: list[ca.MX] = []
+    lbg: list[np.ndarray] = []
+    ubg: list[np.ndarray] = []
+    groups: dict[str, list[tuple[int, int, int]]] = {}
+    size = [0]
+    effort: ca.MX = ca.MX(0)
+    taus, rolls = [], []
+    pieces: list[Piece] = []
+
+    def place(k: int, fun: ca.Function, layout: list, A: np.ndarray, b: np.ndarray, weight_dt: float,
+              s_phase: float | None = None) -> None:
+        nonlocal effort
+        out, dens, tau, roll = fun(ca.mtimes(ca.DM(ca.sparsify(ca.DM(A))), w) + b)
+        start = size[0]
+        g.append(out)
+        for name, m, lo, hi in layout:
+            lo = lo.copy()
+            if name == "clearance" and s_phase is not None and 0 < s_phase < 1:
+                lo[:] = CLEARANCE_FRACTION * gait.step_height * _bump(s_phase)
+            lbg.append(lo)
+            ubg.append(hi)
+            groups.setdefault(name, []).append((k, size[0], size[0] + m))
+            size[0] += m
+        pieces.append(Piece(fun, ca.sparsify(ca.DM(A)), b, start, size[0], weight_dt))
+        effort = effort + weight_dt * dens
+        taus.append(tau)
+        rolls.append(roll)
+
+    for k in range(K):
+        switch = k % N == 0
+        phases = (((k // N) - 1) % P, k // N) if switch else (k // N,)
+        for p in phases:
+            at_end = switch and p != k // N
+            stance = gait.phases[p]
+            pinned = stance if not (switch and not at_end) else tuple(i for i in stance if i not in gait.phases[phases[0]])
+            fun, layout = node_point(p, pinned)
+            A, b = node_map(K if (k == 0 and at_end) else k)  # the previous cycle's last phase ends at node K
+            AH = np.zeros((8, nw))
+            AH[:, H_index] = np.eye(8)
+            place(k, fun, layout, np.vstack([A, AH]), np.concatenate([b, np.zeros(8)]),
+                  h / 2 if switch else h, 1.0 if at_end else (k - p * N) / N)
+    if options.midpoints:
+        W = weights(0.5, h)  # (3, 6)
+        for k in range(K):
+            fun, layout = mid_point(k // N)
+            (A0, b0), (A1, b1) = node_map(k), node_map(k + 1)
+            blocks0 = [A0[i * N_X : (i + 1) * N_X] for i in range(3)] + [A1[i * N_X : (i + 1) * N_X] for i in range(3)]
+            offs = [b0[i * N_X : (i + 1) * N_X] for i in range(3)] + [b1[i * N_X : (i + 1) * N_X] for i in range(3)]
+            A = np.vstack([sum(W[m, j] * blocks0[j] for j in range(6)) for m in range(3)])
+            b = np.concatenate([sum(W[m, j] * offs[j] for j in range(6)) for m in range(3)])
+            place(k, fun, layout, A, b, 0.0)
+
+    closeness: ca.MX = ca.MX(0)
+    smooth: ca.MX = ca.MX(0)
+    omega = 2 * np.pi / T  # rates and accelerations compared in units of the cycle's frequency
+    for k in range(K):
+        for x_, ref, scale in ((X[:, k], Xp[:, k], 1.0), (Xd[:, k], Xdp[:, k], omega), (Xdd[:, k], Xddp[:, k], omega**2)):
+            d = (x_ - ref) / scale
+            closeness += h * (ca.sumsqr(d[:15]) + ca.sumsqr(d[15:18] / P_SCALE_M))
+        smooth += ca.sumsqr(Xdd[:, (k + 1) % K] - Xdd[:, k]) * h
+    quadratic = W_PLAN * closeness + W_SMOOTH * smooth
+    objective = W_EFFORT * effort + quadratic
+    quad_hessian = ca.Function("q", [w], [quadratic]).expand()
+    ws = ca.SX.sym("w", nw)
+    Q = ca.DM(ca.evalf(ca.hessian(quad_hessian(ws), ws)[0]))
+
+    big = np.inf
+    lo_x = np.full((N_X, K), -big)
+    hi_x = np.full((N_X, K), big)
+    lo_x[:12], hi_x[:12] = robot.lower[:, None], robot.upper[:, None]
+    lo_x[12:15], hi_x[12:15] = -TRUNK_ANGLE_RAD, TRUNK_ANGLE_RAD
+    lo_x[17], hi_x[17] = Xp[17] - TRUNK_HEIGHT_M, Xp[17] + TRUNK_HEIGHT_M
+    lo_xd = np.full((N_X, K), -big)
+    hi_xd = np.full((N_X, K), big)
+    lo_xd[:12], hi_xd[:12] = -rate_limit[:, None], rate_limit[:, None]
+    lbw = np.concatenate([lo_x.T.ravel(), lo_xd.T.ravel(), np.full(N_X * K, -big), np.full(8, -FOOTHOLD_BOUND_M)])
+    ubw = np.concatenate([hi_x.T.ravel(), hi_xd.T.ravel(), np.full(N_X * K, big), np.full(8, FOOTHOLD_BOUND_M)])
+    w0 = np.concatenate([Xp.T.ravel(), Xdp.T.ravel(), Xddp.T.ravel(), np.zeros(8)])
+    outputs = ca.Function("outputs", [w], [ca.horzcat(*taus), ca.horzcat(*rolls), effort, closeness],
+                          ["w"], ["tau", "roll", "effort", "closeness"])
+    nlp = {"x": w, "f": objective, "g": ca.vertcat(*g)}
+    return Transcription(robot, gait, plan, options, speed, h, K, nlp, lbw, ubw, np.concatenate(lbg), np.concatenate(ubg),
+                         w0, groups, outputs, Xp, pieces, Q)
+
+
+def stance_name(stance: tuple[int, ...]) -> str:
+    return StanceSet(stance).name
