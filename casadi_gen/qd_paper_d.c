@@ -20,6 +20,17 @@ extern "C" {
 
 #include <math.h>
 
+/* quadruped_dyn: the elementary functions in casadi_real's precision. A float build
+ * (-Dcasadi_real=float) calls sinf, cosf, ... instead of promoting to double, so it does no
+ * double arithmetic (none on a single-precision FPU: -Wdouble-promotion clean); a double build
+ * calls sin, cos, ... exactly as before. */
+#define QD_REAL_IS_FLOAT (sizeof(casadi_real) == sizeof(float))
+static inline casadi_real qd_sin(casadi_real x) { return QD_REAL_IS_FLOAT ? (casadi_real)sinf((float)x) : (casadi_real)sin((double)x); }
+static inline casadi_real qd_cos(casadi_real x) { return QD_REAL_IS_FLOAT ? (casadi_real)cosf((float)x) : (casadi_real)cos((double)x); }
+static inline casadi_real qd_tan(casadi_real x) { return QD_REAL_IS_FLOAT ? (casadi_real)tanf((float)x) : (casadi_real)tan((double)x); }
+static inline casadi_real qd_sqrt(casadi_real x) { return QD_REAL_IS_FLOAT ? (casadi_real)sqrtf((float)x) : (casadi_real)sqrt((double)x); }
+static inline casadi_real qd_fabs(casadi_real x) { return QD_REAL_IS_FLOAT ? (casadi_real)fabsf((float)x) : (casadi_real)fabs((double)x); }
+
 #ifndef casadi_real
 #define casadi_real double
 #endif
@@ -168,7 +179,7 @@ CASADI_SYMBOL_EXPORT const casadi_int* qd_did_full_sparsity_out(casadi_int i);
  * generated qd_<robot>_d.c; see quadruped_dyn/codegen/emit_derivatives.py).
  *
  * d/dq is along pinocchio.integrate(q, dq): dq (18) = (dv_b, dw_b, dq_joints), a body-frame
- * (local) increment of the trunk pose, p -> p + R dv_b, R -> R exp([dw_b]x); 18 columns, none of
+ * (local) increment of the trunk pose, p -> p + R dv_b, R -> R Exp([dw_b]x); 18 columns, none of
  * them a derivative with respect to a quaternion entry (docs/derivatives.md).
  *
  * qd_dfd_full(q, v, tau_full) -> (da_dq, da_dv, da_dtau), a = M^-1 (tau_full - C - G):
@@ -243,7 +254,7 @@ static int qd_dfd_full_solve(qd_d_eval_fn parts, qd_d_eval_fn did, const casadi_
       for (int i = j; i < QD_NV; ++i) cj[i] -= ck[i] * u;
     }
     if (!(cj[j] > QD_SINGULAR_RTOL * scale)) return QD_SINGULAR;
-    const casadi_real d = sqrt(cj[j]), inv = 1 / d;
+    const casadi_real d = qd_sqrt(cj[j]), inv = 1 / d;
     cj[j] = d;
     for (int i = j + 1; i < QD_NV; ++i) cj[i] *= inv;
   }
@@ -375,16 +386,16 @@ static int casadi_f0(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   if (res[0]!=0) res[0][52]=a000;
   if (res[0]!=0) res[0][53]=a000;
   a001=arg[0]? arg[0][8] : 0;
-  a002=cos(a001);
+  a002=qd_cos(a001);
   a003=arg[0]? arg[0][9] : 0;
-  a004=cos(a003);
+  a004=qd_cos(a003);
   a005=1.4999999999999999e-01;
-  a001=sin(a001);
+  a001=qd_sin(a001);
   a006=arg[0]? arg[0][7] : 0;
-  a007=cos(a006);
+  a007=qd_cos(a006);
   a008=(a001*a007);
   a009=(a004*a008);
-  a003=sin(a003);
+  a003=qd_sin(a003);
   a010=(a002*a007);
   a011=(a003*a010);
   a009=(a009+a011);
@@ -408,15 +419,15 @@ static int casadi_f0(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a011=(a001*a015);
   a018=(a018+a011);
   a011=arg[0]? arg[0][11] : 0;
-  a019=cos(a011);
+  a019=qd_cos(a011);
   a020=arg[0]? arg[0][12] : 0;
-  a021=cos(a020);
-  a011=sin(a011);
+  a021=qd_cos(a020);
+  a011=qd_sin(a011);
   a022=arg[0]? arg[0][10] : 0;
-  a023=cos(a022);
+  a023=qd_cos(a022);
   a024=(a011*a023);
   a025=(a021*a024);
-  a020=sin(a020);
+  a020=qd_sin(a020);
   a026=(a019*a023);
   a027=(a020*a026);
   a025=(a025+a027);
@@ -440,15 +451,15 @@ static int casadi_f0(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a033=(a033+a027);
   a027=(a018+a033);
   a034=arg[0]? arg[0][14] : 0;
-  a035=cos(a034);
+  a035=qd_cos(a034);
   a036=arg[0]? arg[0][15] : 0;
-  a037=cos(a036);
-  a034=sin(a034);
+  a037=qd_cos(a036);
+  a034=qd_sin(a034);
   a038=arg[0]? arg[0][13] : 0;
-  a039=cos(a038);
+  a039=qd_cos(a038);
   a040=(a034*a039);
   a041=(a037*a040);
-  a036=sin(a036);
+  a036=qd_sin(a036);
   a042=(a035*a039);
   a043=(a036*a042);
   a041=(a041+a043);
@@ -472,15 +483,15 @@ static int casadi_f0(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a049=(a049+a043);
   a027=(a027+a049);
   a043=arg[0]? arg[0][17] : 0;
-  a050=cos(a043);
+  a050=qd_cos(a043);
   a051=arg[0]? arg[0][18] : 0;
-  a052=cos(a051);
-  a043=sin(a043);
+  a052=qd_cos(a051);
+  a043=qd_sin(a043);
   a053=arg[0]? arg[0][16] : 0;
-  a054=cos(a053);
+  a054=qd_cos(a053);
   a055=(a043*a054);
   a056=(a052*a055);
-  a051=sin(a051);
+  a051=qd_sin(a051);
   a057=(a050*a054);
   a058=(a051*a057);
   a056=(a056+a058);
@@ -522,7 +533,7 @@ static int casadi_f0(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a065=(a065-a068);
   a065=(a058*a065);
   a068=(a027*a065);
-  a006=sin(a006);
+  a006=qd_sin(a006);
   a071=(a002*a006);
   a073=(a004*a071);
   a074=(a001*a006);
@@ -546,7 +557,7 @@ static int casadi_f0(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a076=(a076+a079);
   a079=(a001*a076);
   a081=(a081+a079);
-  a022=sin(a022);
+  a022=qd_sin(a022);
   a079=(a019*a022);
   a082=(a021*a079);
   a083=(a011*a022);
@@ -571,7 +582,7 @@ static int casadi_f0(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a088=(a011*a085);
   a090=(a090+a088);
   a088=(a081+a090);
-  a038=sin(a038);
+  a038=qd_sin(a038);
   a091=(a035*a038);
   a092=(a037*a091);
   a093=(a034*a038);
@@ -596,7 +607,7 @@ static int casadi_f0(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a098=(a034*a095);
   a100=(a100+a098);
   a088=(a088+a100);
-  a053=sin(a053);
+  a053=qd_sin(a053);
   a098=(a050*a053);
   a101=(a052*a098);
   a102=(a043*a053);
@@ -10497,12 +10508,12 @@ static int casadi_f0(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a142=(a142-a164);
   a164=(a268*a142);
   a327=(a327+a164);
-  a004=(2.*a004);
+  a004=(2*a004);
   a004=(a004*a003);
   a004=(a234*a004);
   a003=(a207*a003);
   a004=(a004+a003);
-  a002=(2.*a002);
+  a002=(2*a002);
   a002=(a002*a001);
   a001=(a004*a002);
   a327=(a327-a001);
@@ -10514,7 +10525,7 @@ static int casadi_f0(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a164=(a164-a217);
   a136=(a124*a252);
   a217=(a217+a136);
-  a217=(2.*a217);
+  a217=(2*a217);
   a164=(a164+a217);
   a317=(a317+a164);
   a164=casadi_sq(a021);
@@ -10541,12 +10552,12 @@ static int casadi_f0(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a164=(a164-a152);
   a152=(a179*a164);
   a227=(a227+a152);
-  a021=(2.*a021);
+  a021=(2*a021);
   a021=(a021*a020);
   a021=(a234*a021);
   a020=(a207*a020);
   a021=(a021+a020);
-  a019=(2.*a019);
+  a019=(2*a019);
   a019=(a019*a011);
   a011=(a021*a019);
   a227=(a227-a011);
@@ -10557,7 +10568,7 @@ static int casadi_f0(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a020=(a020-a152);
   a341=(a126*a205);
   a152=(a152+a341);
-  a152=(2.*a152);
+  a152=(2*a152);
   a020=(a020+a152);
   a317=(a317+a020);
   a020=casadi_sq(a037);
@@ -10584,12 +10595,12 @@ static int casadi_f0(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a020=(a020-a214);
   a214=(a275*a020);
   a118=(a118+a214);
-  a037=(2.*a037);
+  a037=(2*a037);
   a037=(a037*a036);
   a037=(a234*a037);
   a036=(a207*a036);
   a037=(a037+a036);
-  a035=(2.*a035);
+  a035=(2*a035);
   a035=(a035*a034);
   a034=(a037*a035);
   a118=(a118-a034);
@@ -10600,7 +10611,7 @@ static int casadi_f0(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a036=(a036-a214);
   a115=(a124*a271);
   a214=(a214+a115);
-  a214=(2.*a214);
+  a214=(2*a214);
   a036=(a036+a214);
   a317=(a317+a036);
   a036=casadi_sq(a052);
@@ -10627,12 +10638,12 @@ static int casadi_f0(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a193=(a193-a335);
   a335=(a301*a193);
   a036=(a036+a335);
-  a052=(2.*a052);
+  a052=(2*a052);
   a052=(a052*a051);
   a234=(a234*a052);
   a207=(a207*a051);
   a234=(a234+a207);
-  a050=(2.*a050);
+  a050=(2*a050);
   a050=(a050*a043);
   a043=(a234*a050);
   a036=(a036-a043);
@@ -10643,7 +10654,7 @@ static int casadi_f0(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a003=(a003-a207);
   a051=(a126*a244);
   a207=(a207+a051);
-  a207=(2.*a207);
+  a207=(2*a207);
   a003=(a003+a207);
   a317=(a317+a003);
   if (res[2]!=0) res[2][51]=a317;
@@ -10817,24 +10828,24 @@ static int casadi_f0(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a348=(a348+a142);
   if (res[2]!=0) res[2][70]=a348;
   a005=(a124*a005);
-  a348=(2.*a007);
+  a348=(2*a007);
   a348=(a348*a006);
   a154=(a154*a348);
   a005=(a005-a154);
   a033=(a126*a033);
-  a154=(2.*a023);
+  a154=(2*a023);
   a154=(a154*a022);
   a294=(a294*a154);
   a033=(a033-a294);
   a005=(a005+a033);
   a072=(a124*a072);
-  a033=(2.*a039);
+  a033=(2*a039);
   a033=(a033*a038);
   a133=(a133*a033);
   a072=(a072-a133);
   a005=(a005+a072);
   a292=(a126*a292);
-  a072=(2.*a054);
+  a072=(2*a054);
   a072=(a072*a053);
   a288=(a288*a072);
   a292=(a292-a288);
@@ -11191,70 +11202,70 @@ static int casadi_f1(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   if (res[0]!=0) res[0][2]=a001;
   if (res[0]!=0) res[0][3]=a001;
   a002=arg[0]? arg[0][7] : 0;
-  a003=sin(a002);
+  a003=qd_sin(a002);
   a004=arg[0]? arg[0][8] : 0;
-  a005=cos(a004);
+  a005=qd_cos(a004);
   a006=5.5000000000000007e-02;
   a007=1.4999999999999999e-02;
   a008=arg[0]? arg[0][9] : 0;
-  a009=cos(a008);
+  a009=qd_cos(a008);
   a010=(a007*a009);
   a011=2.9999999999999999e-02;
   a012=(a010+a011);
   a012=(a006+a012);
   a013=(a005*a012);
-  a004=sin(a004);
-  a008=sin(a008);
+  a004=qd_sin(a004);
+  a008=qd_sin(a008);
   a014=(a007*a008);
   a015=(a004*a014);
   a013=(a013-a015);
   a016=(a003*a013);
   a017=arg[0]? arg[0][10] : 0;
-  a018=sin(a017);
+  a018=qd_sin(a017);
   a019=arg[0]? arg[0][11] : 0;
-  a020=cos(a019);
+  a020=qd_cos(a019);
   a021=arg[0]? arg[0][12] : 0;
-  a022=cos(a021);
+  a022=qd_cos(a021);
   a023=(a007*a022);
   a024=(a023+a011);
   a024=(a006+a024);
   a025=(a020*a024);
-  a019=sin(a019);
-  a021=sin(a021);
+  a019=qd_sin(a019);
+  a021=qd_sin(a021);
   a026=(a007*a021);
   a027=(a019*a026);
   a025=(a025-a027);
   a028=(a018*a025);
   a029=(a016+a028);
   a030=arg[0]? arg[0][13] : 0;
-  a031=sin(a030);
+  a031=qd_sin(a030);
   a032=arg[0]? arg[0][14] : 0;
-  a033=cos(a032);
+  a033=qd_cos(a032);
   a034=arg[0]? arg[0][15] : 0;
-  a035=cos(a034);
+  a035=qd_cos(a034);
   a036=(a007*a035);
   a037=(a036+a011);
   a037=(a006+a037);
   a038=(a033*a037);
-  a032=sin(a032);
-  a034=sin(a034);
+  a032=qd_sin(a032);
+  a034=qd_sin(a034);
   a039=(a007*a034);
   a040=(a032*a039);
   a038=(a038-a040);
   a041=(a031*a038);
   a029=(a029+a041);
   a042=arg[0]? arg[0][16] : 0;
-  a043=sin(a042);
+  a043=qd_sin(a042);
   a044=arg[0]? arg[0][17] : 0;
-  a045=cos(a044);
+  a045=qd_cos(a044);
   a046=arg[0]? arg[0][18] : 0;
-  a047=cos(a046);
+  a047=qd_cos(a046);
   a048=(a007*a047);
   a049=(a048+a011);
   a049=(a006+a049);
   a050=(a045*a049);
-  a044=sin(a044);
-  a046=sin(a046);
+  a044=qd_sin(a044);
+  a046=qd_sin(a046);
   a051=(a007*a046);
   a052=(a044*a051);
   a050=(a050-a052);
@@ -11262,20 +11273,20 @@ static int casadi_f1(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a029=(a029+a053);
   a054=(-a029);
   if (res[0]!=0) res[0][4]=a054;
-  a002=cos(a002);
+  a002=qd_cos(a002);
   a055=(a002*a013);
   a056=8.0500000000000016e-02;
   a057=(a055+a056);
-  a017=cos(a017);
+  a017=qd_cos(a017);
   a058=(a017*a025);
   a059=-8.0500000000000016e-02;
   a060=(a058+a059);
   a057=(a057+a060);
-  a030=cos(a030);
+  a030=qd_cos(a030);
   a060=(a030*a038);
   a056=(a060+a056);
   a057=(a057+a056);
-  a042=cos(a042);
+  a042=qd_cos(a042);
   a056=(a042*a050);
   a059=(a056+a059);
   a057=(a057+a059);
@@ -11441,12 +11452,12 @@ static int casadi_f1(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a090=(a090-a101);
   a101=(a092*a090);
   a100=(a100+a101);
-  a101=(2.*a009);
+  a101=(2*a009);
   a101=(a101*a008);
   a101=(a089*a101);
   a102=(a097*a008);
   a101=(a101+a102);
-  a102=(2.*a005);
+  a102=(2*a005);
   a102=(a102*a004);
   a103=(a101*a102);
   a100=(a100-a103);
@@ -11460,7 +11471,7 @@ static int casadi_f1(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a108=7.0000000000000007e-02;
   a109=(a108*a055);
   a107=(a107+a109);
-  a107=(2.*a107);
+  a107=(2*a107);
   a105=(a105+a107);
   a105=(a057+a105);
   a110=casadi_sq(a022);
@@ -11487,12 +11498,12 @@ static int casadi_f1(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a110=(a110-a116);
   a116=(a111*a110);
   a115=(a115+a116);
-  a116=(2.*a022);
+  a116=(2*a022);
   a116=(a116*a021);
   a116=(a089*a116);
   a117=(a097*a021);
   a116=(a116+a117);
-  a117=(2.*a020);
+  a117=(2*a020);
   a117=(a117*a019);
   a118=(a116*a117);
   a115=(a115-a118);
@@ -11504,7 +11515,7 @@ static int casadi_f1(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a121=-7.0000000000000007e-02;
   a122=(a121*a058);
   a120=(a120+a122);
-  a120=(2.*a120);
+  a120=(2*a120);
   a119=(a119+a120);
   a105=(a105+a119);
   a119=casadi_sq(a035);
@@ -11531,12 +11542,12 @@ static int casadi_f1(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a119=(a119-a128);
   a128=(a123*a119);
   a127=(a127+a128);
-  a128=(2.*a035);
+  a128=(2*a035);
   a128=(a128*a034);
   a128=(a089*a128);
   a129=(a097*a034);
   a128=(a128+a129);
-  a129=(2.*a033);
+  a129=(2*a033);
   a129=(a129*a032);
   a130=(a128*a129);
   a127=(a127-a130);
@@ -11548,7 +11559,7 @@ static int casadi_f1(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a131=(a131-a133);
   a134=(a108*a060);
   a133=(a133+a134);
-  a133=(2.*a133);
+  a133=(2*a133);
   a131=(a131+a133);
   a105=(a105+a131);
   a131=casadi_sq(a047);
@@ -11575,12 +11586,12 @@ static int casadi_f1(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a096=(a096-a136);
   a136=(a091*a096);
   a135=(a135+a136);
-  a136=(2.*a047);
+  a136=(2*a047);
   a136=(a136*a046);
   a089=(a089*a136);
   a097=(a097*a046);
   a089=(a089+a097);
-  a097=(2.*a045);
+  a097=(2*a045);
   a097=(a097*a044);
   a136=(a089*a097);
   a135=(a135-a136);
@@ -11591,7 +11602,7 @@ static int casadi_f1(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a104=(a104-a137);
   a138=(a121*a056);
   a137=(a137+a138);
-  a137=(2.*a137);
+  a137=(2*a137);
   a104=(a104+a137);
   a105=(a105+a104);
   if (res[0]!=0) res[0][57]=a105;
@@ -11766,24 +11777,24 @@ static int casadi_f1(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a140=(a140+a000);
   if (res[0]!=0) res[0][76]=a140;
   a016=(a108*a016);
-  a140=(2.*a002);
+  a140=(2*a002);
   a140=(a140*a003);
   a099=(a099*a140);
   a016=(a016-a099);
   a028=(a121*a028);
-  a099=(2.*a017);
+  a099=(2*a017);
   a099=(a099*a018);
   a114=(a114*a099);
   a028=(a028-a114);
   a016=(a016+a028);
   a041=(a108*a041);
-  a028=(2.*a030);
+  a028=(2*a030);
   a028=(a028*a031);
   a126=(a126*a028);
   a041=(a041-a126);
   a016=(a016+a041);
   a053=(a121*a053);
-  a041=(2.*a042);
+  a041=(2*a042);
   a041=(a041*a043);
   a086=(a086*a041);
   a053=(a053-a086);

@@ -19,7 +19,11 @@ from quadruped_dyn.model.robot import load_robot
 @click.option("--precision", type=click.Choice(["double", "float"]), default="double", show_default=True,
               help="Default casadi_real of the generated source (the Makefile builds both).")
 @click.option("--check", is_flag=True, help="Compare OUT with a fresh generation instead of writing (exit 1 if it differs).")
-def codegen(robot: str, out_dir: str, precision: str, check: bool) -> None:
+@click.option("--json", "as_json", is_flag=True,
+              help="Print a JSON summary instead of the file list: every function's caller memory, and its code size "
+                   "and worst-case stack on Cortex-M7 and Cortex-M4F at -Os and -O2 (cross builds: minutes, "
+                   "cached; docs/embedded.md).")
+def codegen(robot: str, out_dir: str, precision: str, check: bool, as_json: bool) -> None:
     """Generate standalone C for ROBOT's M, C, G, id and GRF solves, with a Makefile and a check program."""
     from pathlib import Path
 
@@ -32,5 +36,13 @@ def codegen(robot: str, out_dir: str, precision: str, check: bool) -> None:
         diff = compare_generation(r, Path(out_dir), precision)  # the precision asked for, not always double
         echo(f"{out_dir} ({precision}): {diff.summary()}")
         sys.exit(EXIT_CHECK_FAILED if diff else 0)
-    for path in generate_checked(r, writable_dir(out_dir, f"--out '{out_dir}'"), precision).all():
+    paths = generate_checked(r, writable_dir(out_dir, f"--out '{out_dir}'"), precision).all()
+    if as_json:
+        import json
+
+        from quadruped_dyn.checks.embedded import embedded_summary
+
+        echo(json.dumps(embedded_summary(r, Path(out_dir)), indent=1))
+        return
+    for path in paths:
         echo(f"wrote {path}")

@@ -22,6 +22,7 @@ from pathlib import Path
 
 import casadi as ca
 
+from quadruped_dyn.codegen.work_memory import memory_doc
 from quadruped_dyn.dynamics.grf import grf_solve
 from quadruped_dyn.dynamics.newton_euler import full_dynamics
 from quadruped_dyn.dynamics.reduced_projection import reduced_projection
@@ -198,7 +199,7 @@ def header_doc(robot: Robot, functions: list[ca.Function], work: dict[str, tuple
         " *",
         " * Derivatives (qd_<robot>_d.c; quadruped_dyn/dynamics/derivatives.py, docs/derivatives.md). d/dq is",
         " * along pinocchio.integrate(q, dq): dq (18) = (dv_b, dw_b, dq_joints), a body-frame (local) increment",
-        " * of the trunk pose (p -> p + R dv_b, R -> R exp([dw_b]x)), as Pinocchio's analytical derivatives;",
+        " * of the trunk pose (p -> p + R dv_b, R -> R Exp([dw_b]x)), as Pinocchio's analytical derivatives;",
         " * no column is a derivative w.r.t. a quaternion entry, and the first three (position) are zero.",
         " *   did_full(q, v, a)               d rnea/dq, d rnea/dv, d rnea/da = M (rnea: no foot forces);",
         " *   dfd_full_parts(q, v)            M (dense) and C + G;",
@@ -216,6 +217,7 @@ def header_doc(robot: Robot, functions: list[ca.Function], work: dict[str, tuple
         outs = ", ".join(f"{f.name_out(i)}[{_shape(f.sparsity_out(i))}]" for i in range(f.n_out()))
         iw, w = work[f.name()]
         lines.append(f" *   {f.name()}({ins}) -> ({outs});  iw {iw}, w {w}{_note(f.name()[len(PREFIX):])}")
+    lines += memory_doc(functions, work)  # caller memory per function (docs/embedded.md)
     lines.append(" */")
     return "\n".join(lines) + "\n"
 
@@ -236,7 +238,39 @@ def silence_unused_parameters(c_source: str) -> str:
     return re.sub(r"(void \w+_release\(int mem\) \{\n)", lambda m: m.group(1) + "  (void)mem;\n", c_source)
 
 
+#: Elementary functions the generated code calls, each routed through a wrapper in casadi_real's precision.
+_WRAPPED_MATH = ("sin", "cos", "tan", "sqrt", "fabs")
+_PRECISION_MATH = """
+/* quadruped_dyn: the elementary functions in casadi_real's precision. A float build
+ * (-Dcasadi_real=float) calls sinf, cosf, ... instead of promoting to double, so it does no
+ * double arithmetic (none on a single-precision FPU: -Wdouble-promotion clean); a double build
+ * calls sin, cos, ... exactly as before. */
+#define QD_REAL_IS_FLOAT (sizeof(casadi_real) == sizeof(float))
+""" + "".join(f"static inline casadi_real qd_{f}(casadi_real x) {{ return QD_REAL_IS_FLOAT ? (casadi_real){f}f((float)x) "
+              f": (casadi_real){f}((double)x); }}\n" for f in _WRAPPED_MATH)
+_MATH_CALL = re.compile(rf"(?<![\w.])({'|'.join(_WRAPPED_MATH)})\(")
+
+
+def _precision_math(c_source: str) -> str:
+    """Route the elementary functions through ``_PRECISION_MATH`` and write CasADi's double
+    literals in products and quotients as integers ((2.*a) -> (2*a), (1./a) -> (1/a): the same
+    value in double, no promotion in float)."""
+    unknown = set(re.findall(r"(?<![\w.])(atan2?|asin|acos|exp|log|pow|tanh|sinh|cosh|floor|ceil|fmin|fmax|erf)\(",
+                             c_source))
+    if unknown:
+        raise AssertionError(f"elementary functions {sorted(unknown)} have no precision wrapper in emit._WRAPPED_MATH")
+    used = bool(_MATH_CALL.search(c_source))
+    c_source = _MATH_CALL.sub(r"qd_\1(", c_source)  # before the wrappers go in: they call the real ones
+    c_source = c_source.replace("#include <math.h>\n", "#include <math.h>\n" + _PRECISION_MATH, 1) if used else c_source
+    c_source = re.sub(r"\((\d+)\.\*", r"(\1*", c_source)
+    return re.sub(r"\((\d+)\./", r"(\1/", c_source)
+
+
 TEMPLATES = Path(__file__).resolve().parent / "c"
+#: start-up and memory map of the check program on QEMU's MPS2 Cortex-M boards (the Makefile's cross builds)
+CORTEX_M_FILES = ("qd_cortex_m_startup.c", "qd_cortex_m.ld")
+#: the thread-safety check program (`make check-threads`)
+THREADS_FILE = "qd_threads.c"
 
 
 def stem(robot: Robot) -> str:
@@ -297,6 +331,7 @@ class GeneratedFiles:
     makefile: Path
     reduced: tuple[Path, ...]  # qd_<robot>_r_<feet>.c: the reduced model of each stance set of 2-4 feet
     derivatives: tuple[Path, ...] = ()  # qd_<robot>_d.c: derivatives of the full dynamics (codegen/emit_derivatives.py)
+    embedded: tuple[Path, ...] = ()  # Cortex-M start-up and linker script, qd_threads.c (docs/embedded.md)
 
     @property
     def c_sources(self) -> list[Path]:
@@ -305,8 +340,8 @@ class GeneratedFiles:
 
     def all(self) -> list[Path]:
         """Every file, in the order they were written."""
-        return [self.source, self.header, *self.extra.values(), self.check_program, self.makefile, *self.reduced,
-                *self.derivatives]
+        return [self.source, self.header, *self.extra.values(), self.check_program, *self.embedded, self.makefile,
+                *self.reduced, *self.derivatives]
 
 
 def generate(robot: Robot, out_dir: Path, precision: str = "double",
@@ -314,8 +349,9 @@ def generate(robot: Robot, out_dir: Path, precision: str = "double",
              ) -> GeneratedFiles:
     """Write into ``out_dir``: qd_<robot>.c (full-coordinate terms and GRF solves), qd_<robot>.h
     (one header for all), the files ``extra_files(functions, work sizes)`` returns (e.g. the
-    reference values of ``checks.c_reference``), check_qd.c, the Makefile, and qd_<robot>_r_<feet>.c (the reduced
-    model of each stance set of 2-4 feet), qd_<robot>_d.c (derivatives); returns them by role (``GeneratedFiles``)."""
+    reference values of ``checks.c_reference``), check_qd.c, the Cortex-M start-up files and qd_threads.c
+    (docs/embedded.md), the Makefile, qd_<robot>_r_<feet>.c (the reduced model of each stance set
+    of 2-4 feet) and qd_<robot>_d.c (derivatives); returns them by role (``GeneratedFiles``)."""
     if precision not in ("double", "float"):
         raise InputError(f"precision '{precision}' is not supported; expected 'double' or 'float'")
     out_dir = Path(out_dir)
@@ -340,11 +376,13 @@ def generate(robot: Robot, out_dir: Path, precision: str = "double",
     functions += derivatives
     work = work_sizes(casadi_header)
     extra = extra_files(functions, work) if extra_files else {}
+    sources = {file_name: _precision_math(text) for file_name, text in sources.items()}
     files = {
         f"{name}.c": c_full,
         f"{name}.h": header_doc(robot, functions, work) + casadi_header,
         **extra,
         "check_qd.c": (TEMPLATES / "check_qd.c").read_text(),
+        **{f: (TEMPLATES / f).read_text() for f in (*CORTEX_M_FILES, THREADS_FILE)},  # docs/embedded.md
         "Makefile": (TEMPLATES / "Makefile").read_text().replace("ROBOT ?= paper", f"ROBOT ?= {name[3:]}"),
         **sources,
     }
@@ -354,7 +392,8 @@ def generate(robot: Robot, out_dir: Path, precision: str = "double",
                           extra={f: out_dir / f for f in extra}, check_program=out_dir / "check_qd.c",
                           makefile=out_dir / "Makefile",
                           reduced=tuple(out_dir / f for f in sources if f not in (f"{name}.c", f"{name}_d.c")),
-                          derivatives=(out_dir / f"{name}_d.c",))
+                          derivatives=(out_dir / f"{name}_d.c",),
+                          embedded=tuple(out_dir / f for f in (*CORTEX_M_FILES, THREADS_FILE)))
 
 
 

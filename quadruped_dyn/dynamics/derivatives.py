@@ -2,7 +2,7 @@
 
 **Tangent convention.** A derivative with respect to the configuration q (19,) = (p, quaternion
 x y z w, 12 joints) is taken along ``pinocchio.integrate(model, q, dq)``: dq (18,) = (dv_b, dw_b,
-dq_j) is a body-frame (local) increment of the trunk's pose, p -> p + R dv_b, R -> R exp([dw_b]x),
+dq_j) is a body-frame (local) increment of the trunk's pose, p -> p + R dv_b, R -> R Exp([dw_b]x),
 and joint angles q_j -> q_j + dq_j. So d/dq has 18 columns, not 19: none is a derivative with
 respect to a quaternion entry. Velocities v = (v_b, w_b, qd) (body frame) and a = vdot (spatial
 for the trunk, ``model/state.py``) are vector spaces and are differentiated entry by entry. This

@@ -28,6 +28,7 @@ from quadruped_dyn.report.gather import (
     FRICTION_MU,
     closed_loop,
     cross_library,
+    embedded_footprint,
     experiment,
     generated_c,
     grf_posture,
@@ -212,6 +213,7 @@ def _c_section(job: _Job) -> Section:
         return rs.generated_c_section(gen, None, "skipped with --fast")
     from quadruped_dyn.bench.timing import run_bench
 
+    gen["embedded"] = embedded_footprint(job.robot, Path(gen["directory"]))  # cross builds, cached (docs/embedded.md)
     return rs.generated_c_section(gen, run_bench(job.robot).as_dict())
 
 

@@ -337,6 +337,15 @@ def cross_library(robot: Robot) -> dict[str, Any]:
     assert isinstance(data, dict)
     return {**data, "cross_library_samples": CROSS_LIBRARY_SAMPLES, "cross_library_note": note}
 
+
+def embedded_footprint(robot: Robot, directory: Path) -> dict[str, Any]:
+    """Caller memory, code size and stack on Cortex-M of the generated C in ``directory``
+    (``checks.embedded``; the cross builds take minutes once, then are cached)."""
+    from quadruped_dyn.checks.embedded import embedded_summary
+
+    return embedded_summary(robot, directory)
+
+
 def closed_loop(robot: Robot, out: Path, cycles: int = 10) -> dict[str, Any]:
     """The closed loop in MuJoCo (``quadruped-dyn control``), walk and trot, every controller:
     per gait the JSON as ``control --json`` prints it, the plots (PNG bytes) and the animation

@@ -370,6 +370,34 @@ def experiment_section(validations: dict[str, dict[str, Any] | None], joint_name
 # ----------------------------------------------------------------------------- generated C
 
 
+def embedded_html(embedded: dict[str, Any]) -> str:
+    """Code size and worst-case stack on Cortex-M (``checks.embedded.embedded_summary``): the
+    issue's budgets per build, then every function's code and stack at each build."""
+    fp = embedded.get("footprint", {})
+    out = ["<h3>Embedded targets: flash and stack (Cortex-M)</h3>"]
+    if "builds" not in fp:
+        return "\n".join(out + [not_available(f"footprint ({fp.get('skipped', 'not measured')})")])
+    builds = fp["builds"]
+
+    def budget(value: int, limit: int) -> str:
+        return cell(f"{value / 1024:.1f}", "pass" if value <= limit else "FAIL")
+
+    rows = [[f"{b['target']} {b['cflags']}", budget(b["full_code"], b["budgets"]["full_code"]),
+             budget(max(b["reduced_code"].values()), b["budgets"]["reduced_code"]),
+             budget(b["max_stack"], b["budgets"]["stack"]), budget(b["total"], b["budgets"]["total"])] for b in builds]
+    out.append(table(["build", "M + C+G + id kB (≤ 64)", "worst stance M_r + CG_r + fd_r kB (≤ 48)",
+                      "max stack kB (≤ 8)", "whole robot kB (≤ 1024)"], rows,
+                     f"code + read-only data (nm), worst-case stack (-fstack-usage call graph); {esc(builds[0]['compiler'])}"))
+    names = list(builds[0]["functions"])
+    memory = {f["name"]: f for f in embedded.get("functions", [])}
+    out.append(table(["function", "caller B (double/float)",
+                      *[f"{b['target']} {b['cflags']} code / stack B" for b in builds]],
+                     [[n, f"{memory[n]['caller_bytes_double']}/{memory[n]['caller_bytes_float']}" if n in memory else "",
+                       *[f"{b['functions'][n]['code']:,} / {b['functions'][n]['stack']:,}" for b in builds]] for n in names],
+                     "per function: its code with the generated functions it calls (libm counted once per robot)"))
+    return "\n".join(out)
+
+
 def generated_c_section(gen: dict[str, Any] | None, bench: Sequence[dict[str, Any]] | dict[str, Any] | None,
                         bench_note: str = "") -> Section:
     """``gen``: files (name, bytes), functions (name, inputs, outputs, instructions, iw, w),
@@ -424,6 +452,8 @@ def generated_c_section(gen: dict[str, Any] | None, bench: Sequence[dict[str, An
         bench_headline = f"ratio to Pinocchio {min(ratios):.2f} – {max(ratios):.2f}" if ratios else "benchmark ran"
     if not reports:
         body.append(not_available(f"benchmark ({bench_note})" if bench_note else "benchmark"))
+    if gen.get("embedded"):
+        body.append(embedded_html(gen["embedded"]))  # Cortex-M footprint (docs/embedded.md)
     size = sum(f["bytes"] for f in files)
     checked = f"{verdicts.count('pass')} pass vs Pinocchio" + (f", {verdicts.count('skipped')} skipped" if "skipped" in verdicts
                                                               else "")

@@ -2,7 +2,7 @@
  * generated qd_<robot>_d.c; see quadruped_dyn/codegen/emit_derivatives.py).
  *
  * d/dq is along pinocchio.integrate(q, dq): dq (18) = (dv_b, dw_b, dq_joints), a body-frame
- * (local) increment of the trunk pose, p -> p + R dv_b, R -> R exp([dw_b]x); 18 columns, none of
+ * (local) increment of the trunk pose, p -> p + R dv_b, R -> R Exp([dw_b]x); 18 columns, none of
  * them a derivative with respect to a quaternion entry (docs/derivatives.md).
  *
  * qd_dfd_full(q, v, tau_full) -> (da_dq, da_dv, da_dtau), a = M^-1 (tau_full - C - G):
