@@ -45,6 +45,12 @@ from quadruped_dyn.report.html import Section, esc, figure, page
 Progress = Steps  # numbered steps with a bar inside a long one (quadruped_dyn.progress)
 
 
+#: Gait cycles of the report's closed loop (walk and trot, every controller): 2 keeps the main job
+#: short (7 controllers x 2 gaits x 2 cycles, ~25 s simulated); `quadruped-dyn control --cycles 10`
+#: and the slow tests run the 10-cycle study (docs/closed_loop.md).
+REPORT_CLOSED_LOOP_CYCLES = 2
+
+
 def prepare(robot_arg: str, out: str | Path) -> tuple[Path, Path]:
     """Validate the arguments before any work: (URDF path, the robot's output directory).
     InputError for an unknown robot or an output directory that cannot be written."""
@@ -151,7 +157,7 @@ def _steps(job: _Job, with_notebooks: bool) -> list[tuple[str, str, str, Callabl
         ("generated C" + ("" if job.fast else " and the benchmark"), "c", "Generated C", lambda: _c_section(job)),
         ("symbolic terms", "symbolic", "Symbolic terms", lambda: _symbolic_section(job)),
         ("closed loop in MuJoCo", "closed_loop", "Closed loop in MuJoCo",
-         lambda: rs.closed_loop_section(closed_loop(job.robot, job.target, 1 if job.fast else 10))),
+         lambda: rs.closed_loop_section(closed_loop(job.robot, job.target, REPORT_CLOSED_LOOP_CYCLES))),
         ("notebooks", "notebooks", "Notebooks, executed", notebooks_built),
     ]
 
