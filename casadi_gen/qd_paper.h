@@ -31,6 +31,16 @@
  * qdd_r is not written then. A stance leg stretched straight is not singular here: the reduced
  * model never inverts a leg's Jacobian (measured on the paper robot: cond(M_r) 1e3 -> 3e4).
  *
+ * Derivatives (qd_<robot>_d.c; quadruped_dyn/dynamics/derivatives.py, docs/derivatives.md). d/dq is
+ * along pinocchio.integrate(q, dq): dq (18) = (dv_b, dw_b, dq_joints), a body-frame (local) increment
+ * of the trunk pose (p -> p + R dv_b, R -> R Exp([dw_b]x)), as Pinocchio's analytical derivatives;
+ * no column is a derivative w.r.t. a quaternion entry, and the first three (position) are zero.
+ *   did_full(q, v, a)               d rnea/dq, d rnea/dv, d rnea/da = M (rnea: no foot forces);
+ *   dfd_full_parts(q, v)            M (dense) and C + G;
+ *   dfd_full(q, v, tau_full)        d a/dq, d a/dv, d a/dtau = M^-1 of a = M^-1 (tau_full - C - G):
+ *                                   Cholesky of M on the stack, -M^-1 d rnea/dx at a. Returns
+ *                                   QD_SINGULAR (2) if M is not positive definite to working precision.
+ *
  * Signals:
  *   q        p [m, world frame], quaternion (x, y, z, w) of R (trunk -> world, need not be unit), 12 joint angles [rad] in order FL, FR, BL, BR x (HAA, HFE, KFE)
  *   v        v_b [m/s], omega_b [rad/s] (trunk frame), 12 joint rates [rad/s]
@@ -53,6 +63,13 @@
  *   CG_r     C_r(q_r, qd_r) + G_r(q_r): tau_r at qdd_r = 0 [N m]
  *   G_r      tau_r at qd_r = 0, qdd_r = 0 [N m]
  *   tau_r    12 joint torques [N m] with the paper's GRF model of the stance set; for two feet a 13th entry: the trunk moment about the foot-to-foot line (from foot 2 to foot 1) that the feet cannot produce [N m], 0 for a motion the robot can make (the roll is unactuated)
+ *   tau_full generalized force (18): trunk wrench (force [N], moment [N m], trunk frame), 12 joint torques [N m]
+ *   dtau_dq  d rnea / dq (18x18): columns along the tangent dq = (dv_b, dw_b, dq_joints), body-frame increment
+ *   dtau_dv  d rnea / dv (18x18)
+ *   dtau_da  d rnea / da = M (18x18)
+ *   da_dq    d a / dq (18x18, dense), a = M^-1 (tau_full - C - G); tangent columns as dtau_dq
+ *   da_dv    d a / dv (18x18, dense)
+ *   da_dtau  d a / d tau_full = M^-1 (18x18, dense)
  *
  * Functions (work sizes iw, w):
  *   qd_M_full(q[19]) -> (M[18x18, 210 nonzeros]);  iw 0, w 0
@@ -131,6 +148,48 @@
  *   qd_G_r_BL_BR(q_r[13], quat[4]) -> (G_r[13]);  iw 0, w 0  [back, returns QD_NONFINITE / QD_SINGULAR]
  *   qd_id_r_BL_BR(q_r[13], qd_r[13], qdd_r[13], quat[4]) -> (tau_r[13]);  iw 0, w 0  [back, returns QD_NONFINITE / QD_SINGULAR]
  *   qd_fd_r_BL_BR(q_r[13], qd_r[13], tau_ext[13], quat[4]) -> (qdd_r[13]);  iw 0, w 0  [back, returns QD_NONFINITE / QD_SINGULAR]
+ *   qd_did_full(q[19], v[18], a[18]) -> (dtau_dq[18x18, 216 nonzeros], dtau_dv[18x18, 212 nonzeros], dtau_da[18x18, 210 nonzeros]);  iw 0, w 0
+ *   qd_dfd_full_parts(q[19], v[18]) -> (M[18x18], nle[18]);  iw 0, w 0
+ *   qd_dfd_full(q[19], v[18], tau_full[18]) -> (da_dq[18x18], da_dv[18x18], da_dtau[18x18]);  iw 0, w 0  [returns QD_NONFINITE / QD_SINGULAR]
+ *
+ * Embedded use (docs/embedded.md): memory the caller provides per call, in bytes on a 32-bit
+ * target: arg and res pointer arrays (4 B each), iw (8 B casadi_int), w, and the
+ * inputs and outputs themselves; double / float. Code size and worst-case stack depend on the
+ * compiler and its flags: measured by `quadruped-dyn codegen ROBOT --out DIR --json` (cross
+ * builds, docs/embedded.md), not stated here.
+ *
+ * Float build (-Dcasadi_real=float) against the double build, relative to the largest output
+ * (measured at 300 states near standing, docs/embedded.md): the full-coordinate terms within
+ * 1e-05; the GRF solves and reduced terms lose the digits of the stance set's GRF system
+ * and velocity map conditioning (front or back pair: float can leave no correct digit; use
+ * double there); fd_r within 1 x FLT_EPSILON x cond_1(M_r) (QD_SINGULAR flags the
+ * worst cases by its pivot test; measured: no float fd_r result returned as 0 was off by more
+ * than 0.01).
+ *
+ * Caller memory per function, bytes, double/float:
+ *   qd_M_full 1840/924; qd_C_full 452/232; qd_G_full 304/156; qd_nle_full 452/232;
+ *   qd_id_full 704/364; qd_grf_FL_FR_BL_BR 756/392; qd_grf_FL_FR_BL 756/392;
+ *   qd_grf_FL_FR_BR 756/392; qd_grf_FL_BL_BR 756/392; qd_grf_FR_BL_BR 756/392;
+ *   qd_grf_FL_FR 756/392; qd_grf_FL_BL 756/392; qd_grf_FL_BR 756/392; qd_grf_FR_BL 756/392;
+ *   qd_grf_FR_BR 756/392; qd_grf_BL_BR 756/392; qd_grf_FL 732/380; qd_grf_FR 732/380;
+ *   qd_grf_BL 732/380; qd_grf_BR 732/380; qd_grf_none 708/368; qd_M_r_FL_FR_BL_BR 1292/652;
+ *   qd_CG_r_FL_FR_BL_BR 336/176; qd_G_r_FL_FR_BL_BR 236/124; qd_id_r_FL_FR_BL_BR 436/228;
+ *   qd_fd_r_FL_FR_BL_BR 436/228; qd_M_r_FL_FR_BL 1292/652; qd_CG_r_FL_FR_BL 336/176;
+ *   qd_G_r_FL_FR_BL 236/124; qd_id_r_FL_FR_BL 436/228; qd_fd_r_FL_FR_BL 436/228;
+ *   qd_M_r_FL_FR_BR 1292/652; qd_CG_r_FL_FR_BR 336/176; qd_G_r_FL_FR_BR 236/124;
+ *   qd_id_r_FL_FR_BR 436/228; qd_fd_r_FL_FR_BR 436/228; qd_M_r_FL_BL_BR 1292/652;
+ *   qd_CG_r_FL_BL_BR 336/176; qd_G_r_FL_BL_BR 236/124; qd_id_r_FL_BL_BR 436/228;
+ *   qd_fd_r_FL_BL_BR 436/228; qd_M_r_FR_BL_BR 1292/652; qd_CG_r_FR_BL_BR 336/176;
+ *   qd_G_r_FR_BL_BR 236/124; qd_id_r_FR_BL_BR 436/228; qd_fd_r_FR_BL_BR 436/228;
+ *   qd_M_r_FL_FR 1500/756; qd_CG_r_FL_FR 360/188; qd_G_r_FL_FR 252/132; qd_id_r_FL_FR 468/244;
+ *   qd_fd_r_FL_FR 468/244; qd_M_r_FL_BL 1500/756; qd_CG_r_FL_BL 360/188; qd_G_r_FL_BL 252/132;
+ *   qd_id_r_FL_BL 468/244; qd_fd_r_FL_BL 468/244; qd_M_r_FL_BR 1500/756; qd_CG_r_FL_BR 360/188;
+ *   qd_G_r_FL_BR 252/132; qd_id_r_FL_BR 468/244; qd_fd_r_FL_BR 468/244; qd_M_r_FR_BL 1500/756;
+ *   qd_CG_r_FR_BL 360/188; qd_G_r_FR_BL 252/132; qd_id_r_FR_BL 468/244; qd_fd_r_FR_BL 468/244;
+ *   qd_M_r_FR_BR 1500/756; qd_CG_r_FR_BR 360/188; qd_G_r_FR_BR 252/132; qd_id_r_FR_BR 468/244;
+ *   qd_fd_r_FR_BR 468/244; qd_M_r_BL_BR 1500/756; qd_CG_r_BL_BR 360/188; qd_G_r_BL_BR 252/132;
+ *   qd_id_r_BL_BR 468/244; qd_fd_r_BL_BR 468/244; qd_did_full 5568/2796;
+ *   qd_dfd_full_parts 3048/1532; qd_dfd_full 8240/4132;
  */
 /* This file was automatically generated by CasADi 3.8.2.
  *  It consists of: 
@@ -1797,6 +1856,85 @@ int qd_fd_r_BL_BR_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_int 
 void qd_paper_r_BL_BR_casadi_version(int* major, int* minor, int* patch);
 int qd_paper_r_BL_BR_casadi_int_size(void);
 int qd_paper_r_BL_BR_casadi_real_size(void);
+#ifdef __cplusplus
+} /* extern "C" */
+#endif
+/* This file was automatically generated by CasADi 3.8.2.
+ *  It consists of: 
+ *   1) content generated by CasADi runtime: not copyrighted
+ *   2) template code copied from CasADi source: permissively licensed (MIT-0)
+ *   3) user code: owned by the user
+ *
+ */
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+#ifndef casadi_real
+#define casadi_real double
+#endif
+
+#ifndef casadi_int
+#define casadi_int long long int
+#endif
+
+int qd_did_full(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem);
+int qd_did_full_checkout(void);
+void qd_did_full_release(int mem);
+void qd_did_full_incref(void);
+void qd_did_full_decref(void);
+casadi_int qd_did_full_n_in(void);
+casadi_int qd_did_full_n_out(void);
+casadi_real qd_did_full_default_in(casadi_int i);
+const char* qd_did_full_name_in(casadi_int i);
+const char* qd_did_full_name_out(casadi_int i);
+const casadi_int* qd_did_full_sparsity_in(casadi_int i);
+const casadi_int* qd_did_full_sparsity_out(casadi_int i);
+int qd_did_full_work(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz_iw, casadi_int *sz_w);
+int qd_did_full_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz_iw, casadi_int *sz_w);
+#define qd_did_full_SZ_ARG 3
+#define qd_did_full_SZ_RES 3
+#define qd_did_full_SZ_IW 0
+#define qd_did_full_SZ_W 0
+int qd_dfd_full_parts(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem);
+int qd_dfd_full_parts_checkout(void);
+void qd_dfd_full_parts_release(int mem);
+void qd_dfd_full_parts_incref(void);
+void qd_dfd_full_parts_decref(void);
+casadi_int qd_dfd_full_parts_n_in(void);
+casadi_int qd_dfd_full_parts_n_out(void);
+casadi_real qd_dfd_full_parts_default_in(casadi_int i);
+const char* qd_dfd_full_parts_name_in(casadi_int i);
+const char* qd_dfd_full_parts_name_out(casadi_int i);
+const casadi_int* qd_dfd_full_parts_sparsity_in(casadi_int i);
+const casadi_int* qd_dfd_full_parts_sparsity_out(casadi_int i);
+int qd_dfd_full_parts_work(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz_iw, casadi_int *sz_w);
+int qd_dfd_full_parts_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz_iw, casadi_int *sz_w);
+#define qd_dfd_full_parts_SZ_ARG 2
+#define qd_dfd_full_parts_SZ_RES 2
+#define qd_dfd_full_parts_SZ_IW 0
+#define qd_dfd_full_parts_SZ_W 0
+int qd_dfd_full(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem);
+int qd_dfd_full_checkout(void);
+void qd_dfd_full_release(int mem);
+void qd_dfd_full_incref(void);
+void qd_dfd_full_decref(void);
+casadi_int qd_dfd_full_n_in(void);
+casadi_int qd_dfd_full_n_out(void);
+casadi_real qd_dfd_full_default_in(casadi_int i);
+const char* qd_dfd_full_name_in(casadi_int i);
+const char* qd_dfd_full_name_out(casadi_int i);
+const casadi_int* qd_dfd_full_sparsity_in(casadi_int i);
+const casadi_int* qd_dfd_full_sparsity_out(casadi_int i);
+int qd_dfd_full_work(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz_iw, casadi_int *sz_w);
+int qd_dfd_full_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz_iw, casadi_int *sz_w);
+#define qd_dfd_full_SZ_ARG 3
+#define qd_dfd_full_SZ_RES 3
+#define qd_dfd_full_SZ_IW 0
+#define qd_dfd_full_SZ_W 0
+void qd_paper_d_casadi_version(int* major, int* minor, int* patch);
+int qd_paper_d_casadi_int_size(void);
+int qd_paper_d_casadi_real_size(void);
 #ifdef __cplusplus
 } /* extern "C" */
 #endif

@@ -20,6 +20,17 @@ extern "C" {
 
 #include <math.h>
 
+/* quadruped_dyn: the elementary functions in casadi_real's precision. A float build
+ * (-Dcasadi_real=float) calls sinf, cosf, ... instead of promoting to double, so it does no
+ * double arithmetic (none on a single-precision FPU: -Wdouble-promotion clean); a double build
+ * calls sin, cos, ... exactly as before. */
+#define QD_REAL_IS_FLOAT (sizeof(casadi_real) == sizeof(float))
+static inline casadi_real qd_sin(casadi_real x) { return QD_REAL_IS_FLOAT ? (casadi_real)sinf((float)x) : (casadi_real)sin((double)x); }
+static inline casadi_real qd_cos(casadi_real x) { return QD_REAL_IS_FLOAT ? (casadi_real)cosf((float)x) : (casadi_real)cos((double)x); }
+static inline casadi_real qd_tan(casadi_real x) { return QD_REAL_IS_FLOAT ? (casadi_real)tanf((float)x) : (casadi_real)tan((double)x); }
+static inline casadi_real qd_sqrt(casadi_real x) { return QD_REAL_IS_FLOAT ? (casadi_real)sqrtf((float)x) : (casadi_real)sqrt((double)x); }
+static inline casadi_real qd_fabs(casadi_real x) { return QD_REAL_IS_FLOAT ? (casadi_real)fabsf((float)x) : (casadi_real)fabs((double)x); }
+
 #ifndef casadi_real
 #define casadi_real double
 #endif
@@ -76,7 +87,7 @@ static const casadi_int casadi_s2[3] = {13, 13, 1};
  *   0             success
  *   QD_NONFINITE  an output is NaN or inf: coincident or collinear stance feet (the trunk
  *                 motion is undetermined), the trunk pitched +-90 deg (the roll row of two
- *                 stance feet has tan(pitch)), a zero quaternion, or a non-finite input;
+ *                 stance feet has qd_tan(pitch)), a zero quaternion, or a non-finite input;
  *   QD_SINGULAR   (qd_fd_r_* only) M_r is singular to working precision: a pivot of its LU
  *                 factorisation (partial pivoting) is below QD_SINGULAR_RTOL * max|M_r|,
  *                 e.g. two stance feet with the trunk pitched within ~1e-12 rad of 90 deg.
@@ -129,7 +140,7 @@ static inline int qd_fd_r_solve(int n, qd_eval_fn M_r, qd_eval_fn CG_r, const ca
   if (flag) return flag;
   casadi_real scale = 0, sum = 0; /* a NaN or inf anywhere makes the sum non-finite */
   for (int i = 0; i < n * n; ++i) {
-    scale = fabs(M[i]) > scale ? fabs(M[i]) : scale;
+    scale = qd_fabs(M[i]) > scale ? qd_fabs(M[i]) : scale;
     sum += M[i];
   }
   for (int i = 0; i < n; ++i) {
@@ -140,8 +151,8 @@ static inline int qd_fd_r_solve(int n, qd_eval_fn M_r, qd_eval_fn CG_r, const ca
   for (int k = 0; k < n; ++k) { /* M[i + n j] = M_ij */
     casadi_real* col = M + n * k;
     int p = k;
-    for (int i = k + 1; i < n; ++i) p = fabs(col[i]) > fabs(col[p]) ? i : p;
-    if (!(fabs(col[p]) > QD_SINGULAR_RTOL * scale)) return QD_SINGULAR;
+    for (int i = k + 1; i < n; ++i) p = qd_fabs(col[i]) > qd_fabs(col[p]) ? i : p;
+    if (!(qd_fabs(col[p]) > QD_SINGULAR_RTOL * scale)) return QD_SINGULAR;
     if (p != k) {
       for (int j = 0; j < n; ++j) {
         casadi_real t = M[k + n * j];
@@ -196,9 +207,9 @@ static int casadi_f0(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a003=1.0126562500000001e-03;
   a004=9.9578125000000014e-04;
   a005=arg[0]? arg[0][2] : 0;
-  a006=cos(a005);
+  a006=qd_cos(a005);
   a007=casadi_sq(a006);
-  a005=sin(a005);
+  a005=qd_sin(a005);
   a008=casadi_sq(a005);
   a007=(a007-a008);
   a007=(a004*a007);
@@ -223,19 +234,19 @@ static int casadi_f0(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a009=(a009-a007);
   a009=(a001*a009);
   a007=arg[0]? arg[0][1] : 0;
-  a018=cos(a007);
+  a018=qd_cos(a007);
   a019=casadi_sq(a018);
-  a007=sin(a007);
+  a007=qd_sin(a007);
   a020=casadi_sq(a007);
   a019=(a019-a020);
   a020=(a009*a019);
   a017=(a017+a020);
-  a020=(2.*a006);
+  a020=(2*a006);
   a020=(a020*a005);
   a020=(a004*a020);
   a021=(a014*a005);
   a020=(a020+a021);
-  a021=(2.*a018);
+  a021=(2*a018);
   a021=(a021*a007);
   a022=(a020*a021);
   a017=(a017-a022);
@@ -249,15 +260,15 @@ static int casadi_f0(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   if (res[0]!=0) res[0][5]=a023;
   a024=2.0000000000000001e-01;
   a025=arg[0]? arg[0][8] : 0;
-  a026=sin(a025);
+  a026=qd_sin(a025);
   a027=arg[0]? arg[0][7] : 0;
-  a028=sin(a027);
+  a028=qd_sin(a027);
   a029=arg[0]? arg[0][6] : 0;
-  a030=sin(a029);
+  a030=qd_sin(a029);
   a031=(a028*a030);
   a031=(a026*a031);
-  a025=cos(a025);
-  a027=cos(a027);
+  a025=qd_cos(a025);
+  a027=qd_cos(a027);
   a032=(a027*a030);
   a033=(a025*a032);
   a031=(a031-a033);
@@ -273,16 +284,16 @@ static int casadi_f0(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a035=(a024*a034);
   a033=(a033-a035);
   a035=arg[0]? arg[0][9] : 0;
-  a036=sin(a035);
+  a036=qd_sin(a035);
   a037=arg[0]? arg[0][10] : 0;
-  a038=sin(a037);
+  a038=qd_sin(a037);
   a039=(a036*a038);
   a040=arg[0]? arg[0][11] : 0;
-  a041=sin(a040);
+  a041=qd_sin(a040);
   a042=(a039*a041);
-  a037=cos(a037);
+  a037=qd_cos(a037);
   a043=(a036*a037);
-  a040=cos(a040);
+  a040=qd_cos(a040);
   a044=(a043*a040);
   a042=(a042-a044);
   a042=(a024*a042);
@@ -291,7 +302,7 @@ static int casadi_f0(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a044=(a033-a042);
   a045=7.0000000000000007e-02;
   a046=arg[0]? arg[0][0] : 0;
-  a047=cos(a046);
+  a047=qd_cos(a046);
   a048=5.5000000000000007e-02;
   a049=1.4999999999999999e-02;
   a006=(a049*a006);
@@ -321,7 +332,7 @@ static int casadi_f0(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a060=(a024*a060);
   a059=(a059+a060);
   a060=(a058-a059);
-  a029=cos(a029);
+  a029=qd_cos(a029);
   a061=(a029*a027);
   a062=(a024*a061);
   a062=(a045+a062);
@@ -332,7 +343,7 @@ static int casadi_f0(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a063=(a024*a063);
   a062=(a062+a063);
   a063=-7.0000000000000007e-02;
-  a035=cos(a035);
+  a035=qd_cos(a035);
   a065=(a035*a037);
   a066=(a024*a065);
   a066=(a063+a066);
@@ -353,7 +364,7 @@ static int casadi_f0(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a070=(a067*a069);
   a071=(a060*a056);
   a070=(a070-a071);
-  a046=sin(a046);
+  a046=qd_sin(a046);
   a009=(a046*a009);
   a071=(a046*a052);
   a072=(a019*a071);
@@ -558,7 +569,7 @@ static int casadi_f0(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a080=(a080+a077);
   a080=(-a080);
   if (res[0]!=0) res[0][11]=a080;
-  a080=sqrt(a076);
+  a080=qd_sqrt(a076);
   a077=(a067/a080);
   a039=(a058*a054);
   a039=(a069-a039);
@@ -854,9 +865,9 @@ static int casadi_f0(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   if (res[0]!=0) res[0][40]=a023;
   if (res[0]!=0) res[0][41]=a023;
   a086=arg[0]? arg[0][5] : 0;
-  a104=cos(a086);
+  a104=qd_cos(a086);
   a101=casadi_sq(a104);
-  a086=sin(a086);
+  a086=qd_sin(a086);
   a100=casadi_sq(a086);
   a101=(a101-a100);
   a101=(a004*a101);
@@ -876,19 +887,19 @@ static int casadi_f0(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a100=(a100-a101);
   a100=(a001*a100);
   a101=arg[0]? arg[0][4] : 0;
-  a107=cos(a101);
+  a107=qd_cos(a101);
   a105=casadi_sq(a107);
-  a101=sin(a101);
+  a101=qd_sin(a101);
   a103=casadi_sq(a101);
   a105=(a105-a103);
   a103=(a100*a105);
   a108=(a108+a103);
-  a103=(2.*a104);
+  a103=(2*a104);
   a103=(a103*a086);
   a103=(a004*a103);
   a109=(a014*a086);
   a103=(a103+a109);
-  a109=(2.*a107);
+  a109=(2*a107);
   a109=(a109*a101);
   a110=(a103*a109);
   a108=(a108-a110);
@@ -897,7 +908,7 @@ static int casadi_f0(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   if (res[0]!=0) res[0][43]=a023;
   if (res[0]!=0) res[0][44]=a023;
   a111=arg[0]? arg[0][3] : 0;
-  a112=cos(a111);
+  a112=qd_cos(a111);
   a104=(a049*a104);
   a113=(a104+a050);
   a113=(a048+a113);
@@ -917,7 +928,7 @@ static int casadi_f0(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a119=(a067*a109);
   a120=(a060*a118);
   a119=(a119-a120);
-  a111=sin(a111);
+  a111=qd_sin(a111);
   a100=(a111*a100);
   a120=(a111*a114);
   a121=(a019*a120);
@@ -1533,10 +1544,10 @@ static int casadi_f0(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a146=(a012+a146);
   a140=(a143-a146);
   a140=(a001*a140);
-  a131=(2.*a027);
+  a131=(2*a027);
   a131=(a131*a028);
   a152=(a140*a131);
-  a153=(2.*a025);
+  a153=(2*a025);
   a153=(a153*a026);
   a153=(a004*a153);
   a154=(a014*a026);
@@ -1651,7 +1662,7 @@ static int casadi_f0(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a022=(a022-a178);
   a022=(a022-a178);
   a178=(a178+a055);
-  a178=(2.*a178);
+  a178=(2*a178);
   a022=(a022+a178);
   a176=(a176+a022);
   a110=(a110+a177);
@@ -1659,7 +1670,7 @@ static int casadi_f0(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a110=(a110-a019);
   a110=(a110-a019);
   a019=(a019+a117);
-  a019=(2.*a019);
+  a019=(2*a019);
   a110=(a110+a019);
   a176=(a176+a110);
   a153=(a153+a177);
@@ -1667,7 +1678,7 @@ static int casadi_f0(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a153=(a153-a110);
   a153=(a153-a110);
   a110=(a110+a131);
-  a110=(2.*a110);
+  a110=(2*a110);
   a153=(a153+a110);
   a176=(a176+a153);
   a153=casadi_sq(a040);
@@ -1694,12 +1705,12 @@ static int casadi_f0(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a012=(a012-a022);
   a022=(a008*a012);
   a153=(a153+a022);
-  a040=(2.*a040);
+  a040=(2*a040);
   a040=(a040*a041);
   a004=(a004*a040);
   a014=(a014*a041);
   a004=(a004+a014);
-  a014=(2.*a037);
+  a014=(2*a037);
   a014=(a014*a038);
   a041=(a004*a014);
   a153=(a153-a041);
@@ -1710,7 +1721,7 @@ static int casadi_f0(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a177=(a177-a040);
   a022=(a063*a171);
   a040=(a040+a022);
-  a040=(2.*a040);
+  a040=(2*a040);
   a177=(a177+a040);
   a176=(a176+a177);
   a177=(a176*a150);
@@ -1835,24 +1846,24 @@ static int casadi_f0(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a011=(a005*a142);
   a014=(a014+a011);
   a011=(a045*a071);
-  a047=(2.*a047);
+  a047=(2*a047);
   a047=(a047*a046);
   a016=(a016*a047);
   a011=(a011-a016);
   a016=(a063*a120);
-  a112=(2.*a112);
+  a112=(2*a112);
   a112=(a112*a111);
   a006=(a006*a112);
   a016=(a016-a006);
   a011=(a011+a016);
   a016=(a045*a163);
-  a006=(2.*a029);
+  a006=(2*a029);
   a006=(a006*a030);
   a143=(a143*a006);
   a016=(a016-a143);
   a011=(a011+a016);
   a016=(a063*a168);
-  a143=(2.*a035);
+  a143=(2*a035);
   a143=(a143*a036);
   a001=(a001*a143);
   a016=(a016-a001);
@@ -4181,27 +4192,27 @@ static int casadi_f1(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a001=-1.9000000000000000e-01;
   a002=2.0000000000000001e-01;
   a003=arg[0]? arg[0][7] : 0;
-  a004=sin(a003);
+  a004=qd_sin(a003);
   a005=(a002*a004);
   a006=(a001+a005);
-  a003=cos(a003);
+  a003=qd_cos(a003);
   a007=arg[0]? arg[0][8] : 0;
-  a008=sin(a007);
+  a008=qd_sin(a007);
   a009=(a003*a008);
-  a007=cos(a007);
+  a007=qd_cos(a007);
   a010=(a004*a007);
   a009=(a009+a010);
   a009=(a002*a009);
   a006=(a006+a009);
   a010=arg[0]? arg[0][10] : 0;
-  a011=sin(a010);
+  a011=qd_sin(a010);
   a012=(a002*a011);
   a013=(a001+a012);
-  a010=cos(a010);
+  a010=qd_cos(a010);
   a014=arg[0]? arg[0][11] : 0;
-  a015=sin(a014);
+  a015=qd_sin(a014);
   a016=(a010*a015);
-  a014=cos(a014);
+  a014=qd_cos(a014);
   a017=(a011*a014);
   a016=(a016+a017);
   a016=(a002*a016);
@@ -4213,7 +4224,7 @@ static int casadi_f1(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a020=casadi_sq(a019);
   a021=7.0000000000000007e-02;
   a022=arg[0]? arg[0][6] : 0;
-  a023=cos(a022);
+  a023=qd_cos(a022);
   a024=(a023*a003);
   a025=(a002*a024);
   a026=(a021+a025);
@@ -4225,7 +4236,7 @@ static int casadi_f1(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a026=(a026+a027);
   a029=-7.0000000000000007e-02;
   a030=arg[0]? arg[0][9] : 0;
-  a031=cos(a030);
+  a031=qd_cos(a030);
   a032=(a031*a010);
   a033=(a002*a032);
   a034=(a029+a033);
@@ -4240,7 +4251,7 @@ static int casadi_f1(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a038=(a026-a037);
   a039=casadi_sq(a038);
   a040=(a020+a039);
-  a022=sin(a022);
+  a022=qd_sin(a022);
   a041=(a022*a004);
   a042=(a041*a008);
   a043=(a022*a003);
@@ -4249,7 +4260,7 @@ static int casadi_f1(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a045=(a002*a045);
   a046=(a002*a043);
   a045=(a045-a046);
-  a030=sin(a030);
+  a030=qd_sin(a030);
   a047=(a030*a011);
   a048=(a047*a015);
   a049=(a030*a010);
@@ -4552,7 +4563,7 @@ static int casadi_f1(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a062=(a118*a119);
   a069=(a089*a093);
   a062=(a062-a069);
-  a062=(2.*a062);
+  a062=(2*a062);
   a129=(a129+a062);
   a062=(a080*a091);
   a069=(a002*a074);
@@ -4602,7 +4613,7 @@ static int casadi_f1(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a073=(a089*a081);
   a119=(a071*a119);
   a073=(a073-a119);
-  a073=(2.*a073);
+  a073=(2*a073);
   a027=(a027+a073);
   a077=(a077-a075);
   a077=(a002*a077);
@@ -4664,7 +4675,7 @@ static int casadi_f1(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a042=(a118*a123);
   a092=(a089*a115);
   a042=(a042-a092);
-  a042=(2.*a042);
+  a042=(2*a042);
   a090=(a090+a042);
   a042=(a102*a113);
   a092=(a002*a096);
@@ -4714,7 +4725,7 @@ static int casadi_f1(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a077=(a089*a103);
   a123=(a071*a123);
   a077=(a077-a123);
-  a077=(2.*a077);
+  a077=(2*a077);
   a035=(a035+a077);
   a099=(a099-a097);
   a099=(a002*a099);
@@ -4776,9 +4787,9 @@ static int casadi_f1(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a099=(a099+a050);
   a099=(a099/a067);
   a050=(a059/a067);
-  a048=(2.*a064);
+  a048=(2*a064);
   a048=(a048*a112);
-  a112=(2.*a066);
+  a112=(2*a066);
   a114=(a068*a071);
   a106=(a064*a089);
   a114=(a114-a106);
@@ -4805,7 +4816,7 @@ static int casadi_f1(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a093=(a071*a093);
   a081=(a118*a081);
   a093=(a093-a081);
-  a093=(2.*a093);
+  a093=(2*a093);
   a125=(a125+a093);
   a093=(a007*a004);
   a081=(a008*a003);
@@ -4831,7 +4842,7 @@ static int casadi_f1(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a115=(a071*a115);
   a103=(a118*a103);
   a115=(a115-a103);
-  a115=(2.*a115);
+  a115=(2*a115);
   a044=(a044+a115);
   a115=(a014*a011);
   a103=(a015*a010);
@@ -4869,9 +4880,9 @@ static int casadi_f1(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a063=(a063/a111);
   a127=(a000*a063);
   a060=arg[0]? arg[0][0] : 0;
-  a099=cos(a060);
+  a099=qd_cos(a060);
   a058=(a099*a071);
-  a060=sin(a060);
+  a060=qd_sin(a060);
   a056=(a060*a118);
   a058=(a058-a056);
   a056=(a060*a071);
@@ -4884,10 +4895,10 @@ static int casadi_f1(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a070=(a070-a054);
   a070=(a127+a070);
   a054=arg[0]? arg[0][1] : 0;
-  a061=cos(a054);
+  a061=qd_cos(a054);
   a012=1.8642708333333339e-03;
   a115=(a061*a063);
-  a054=sin(a054);
+  a054=qd_sin(a054);
   a128=(a128*a042);
   a126=(a126*a062);
   a128=(a128-a126);
@@ -4925,10 +4936,10 @@ static int casadi_f1(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a016=(a016-a005);
   a042=(a042+a016);
   a016=arg[0]? arg[0][2] : 0;
-  a005=cos(a016);
+  a005=qd_cos(a016);
   a093=5.0843750000000010e-04;
   a009=(a005*a115);
-  a016=sin(a016);
+  a016=qd_sin(a016);
   a081=(a054*a063);
   a074=(a061*a055);
   a081=(a081+a074);
@@ -5137,9 +5148,9 @@ static int casadi_f1(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a096=(-a096);
   if (res[0]!=0) res[0][2]=a096;
   a096=arg[0]? arg[0][3] : 0;
-  a114=cos(a096);
+  a114=qd_cos(a096);
   a027=(a114*a071);
-  a096=sin(a096);
+  a096=qd_sin(a096);
   a049=(a096*a118);
   a027=(a027-a049);
   a049=(a096*a071);
@@ -5152,9 +5163,9 @@ static int casadi_f1(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a105=(a105-a125);
   a105=(a127+a105);
   a125=arg[0]? arg[0][4] : 0;
-  a044=cos(a125);
+  a044=qd_cos(a125);
   a126=(a044*a063);
-  a125=sin(a125);
+  a125=qd_sin(a125);
   a073=(a114*a128);
   a119=(a096*a072);
   a073=(a073-a119);
@@ -5179,9 +5190,9 @@ static int casadi_f1(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a069=(a069-a130);
   a025=(a025+a069);
   a069=arg[0]? arg[0][5] : 0;
-  a130=cos(a069);
+  a130=qd_cos(a069);
   a131=(a130*a126);
-  a069=sin(a069);
+  a069=qd_sin(a069);
   a132=(a125*a063);
   a133=(a044*a073);
   a132=(a132+a133);
@@ -6162,7 +6173,7 @@ static int casadi_f1(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a093=(a093+a124);
   a093=(-a093);
   if (res[0]!=0) res[0][11]=a093;
-  a031=sqrt(a031);
+  a031=qd_sqrt(a031);
   a013=(a013/a031);
   a093=(a026*a171);
   a124=(a045*a077);
@@ -6275,12 +6286,12 @@ static int casadi_f2(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   casadi_real a72, a73, a74, a75, a76, a77, a78, a79, a80, a81, a82, a83;
   casadi_real a84, a85, a86, a87, a88, a89, a90;
   a00=arg[0]? arg[0][1] : 0;
-  a01=sin(a00);
+  a01=qd_sin(a00);
   a02=arg[0]? arg[0][2] : 0;
-  a03=sin(a02);
+  a03=qd_sin(a02);
   a04=1.4999999999999999e-02;
   a05=arg[0]? arg[0][0] : 0;
-  a06=sin(a05);
+  a06=qd_sin(a05);
   a07=-9.8100000000000005e+00;
   a08=2.;
   a09=arg[1]? arg[1][0] : 0;
@@ -6301,7 +6312,7 @@ static int casadi_f2(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a15=(a13*a15);
   a16=(a07*a15);
   a17=(a06*a16);
-  a05=cos(a05);
+  a05=qd_cos(a05);
   a18=1.;
   a10=(a13*a10);
   a18=(a18-a10);
@@ -6311,8 +6322,8 @@ static int casadi_f2(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a19=(a04*a17);
   a20=(a03*a19);
   a21=(a01*a20);
-  a00=cos(a00);
-  a02=cos(a02);
+  a00=qd_cos(a00);
+  a02=qd_cos(a02);
   a19=(a02*a19);
   a22=5.5000000000000007e-02;
   a23=(a22*a17);
@@ -6361,20 +6372,20 @@ static int casadi_f2(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a24=(-a24);
   if (res[0]!=0) res[0][2]=a24;
   a24=arg[0]? arg[0][4] : 0;
-  a30=sin(a24);
+  a30=qd_sin(a24);
   a31=arg[0]? arg[0][5] : 0;
-  a32=sin(a31);
+  a32=qd_sin(a31);
   a33=arg[0]? arg[0][3] : 0;
-  a34=sin(a33);
+  a34=qd_sin(a33);
   a35=(a34*a16);
-  a33=cos(a33);
+  a33=qd_cos(a33);
   a36=(a33*a10);
   a35=(a35+a36);
   a36=(a04*a35);
   a37=(a32*a36);
   a38=(a30*a37);
-  a24=cos(a24);
-  a31=cos(a31);
+  a24=qd_cos(a24);
+  a31=qd_cos(a31);
   a36=(a31*a36);
   a39=(a22*a35);
   a36=(a36+a39);
@@ -6414,20 +6425,20 @@ static int casadi_f2(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a43=(-a43);
   if (res[0]!=0) res[0][5]=a43;
   a43=arg[0]? arg[0][7] : 0;
-  a47=sin(a43);
+  a47=qd_sin(a43);
   a48=arg[0]? arg[0][8] : 0;
-  a49=sin(a48);
+  a49=qd_sin(a48);
   a50=arg[0]? arg[0][6] : 0;
-  a51=sin(a50);
+  a51=qd_sin(a50);
   a52=(a51*a16);
-  a50=cos(a50);
+  a50=qd_cos(a50);
   a53=(a50*a10);
   a52=(a52+a53);
   a53=(a04*a52);
   a54=(a49*a53);
   a55=(a47*a54);
-  a43=cos(a43);
-  a48=cos(a48);
+  a43=qd_cos(a43);
+  a48=qd_cos(a48);
   a53=(a48*a53);
   a56=(a22*a52);
   a53=(a53+a56);
@@ -6531,15 +6542,15 @@ static int casadi_f2(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a31=(a31-a52);
   a15=(a15+a31);
   a52=arg[0]? arg[0][9] : 0;
-  a60=cos(a52);
+  a60=qd_cos(a52);
   a61=arg[0]? arg[0][10] : 0;
-  a62=cos(a61);
+  a62=qd_cos(a61);
   a63=arg[0]? arg[0][11] : 0;
-  a64=sin(a63);
-  a63=cos(a63);
+  a64=qd_sin(a63);
+  a63=qd_cos(a63);
   a65=(a62*a07);
-  a61=sin(a61);
-  a52=sin(a52);
+  a61=qd_sin(a61);
+  a52=qd_sin(a52);
   a66=(a52*a10);
   a67=(a60*a16);
   a66=(a66-a67);
@@ -6986,7 +6997,7 @@ static int casadi_f2(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a04=(a04+a62);
   a04=(-a04);
   if (res[0]!=0) res[0][11]=a04;
-  a33=sqrt(a33);
+  a33=qd_sqrt(a33);
   a74=(a74/a33);
   a04=(a02*a15);
   a62=(a82*a17);
@@ -7107,27 +7118,27 @@ static int casadi_f3(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a001=-1.9000000000000000e-01;
   a002=2.0000000000000001e-01;
   a003=arg[0]? arg[0][7] : 0;
-  a004=sin(a003);
+  a004=qd_sin(a003);
   a005=(a002*a004);
   a006=(a001+a005);
-  a003=cos(a003);
+  a003=qd_cos(a003);
   a007=arg[0]? arg[0][8] : 0;
-  a008=sin(a007);
+  a008=qd_sin(a007);
   a009=(a003*a008);
-  a007=cos(a007);
+  a007=qd_cos(a007);
   a010=(a004*a007);
   a009=(a009+a010);
   a009=(a002*a009);
   a006=(a006+a009);
   a010=arg[0]? arg[0][10] : 0;
-  a011=sin(a010);
+  a011=qd_sin(a010);
   a012=(a002*a011);
   a013=(a001+a012);
-  a010=cos(a010);
+  a010=qd_cos(a010);
   a014=arg[0]? arg[0][11] : 0;
-  a015=sin(a014);
+  a015=qd_sin(a014);
   a016=(a010*a015);
-  a014=cos(a014);
+  a014=qd_cos(a014);
   a017=(a011*a014);
   a016=(a016+a017);
   a016=(a002*a016);
@@ -7139,7 +7150,7 @@ static int casadi_f3(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a020=casadi_sq(a019);
   a021=7.0000000000000007e-02;
   a022=arg[0]? arg[0][6] : 0;
-  a023=cos(a022);
+  a023=qd_cos(a022);
   a024=(a023*a003);
   a025=(a002*a024);
   a026=(a021+a025);
@@ -7151,7 +7162,7 @@ static int casadi_f3(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a026=(a026+a027);
   a029=-7.0000000000000007e-02;
   a030=arg[0]? arg[0][9] : 0;
-  a031=cos(a030);
+  a031=qd_cos(a030);
   a032=(a031*a010);
   a033=(a002*a032);
   a034=(a029+a033);
@@ -7166,7 +7177,7 @@ static int casadi_f3(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a038=(a026-a037);
   a039=casadi_sq(a038);
   a040=(a020+a039);
-  a022=sin(a022);
+  a022=qd_sin(a022);
   a041=(a022*a004);
   a042=(a041*a008);
   a043=(a022*a003);
@@ -7175,7 +7186,7 @@ static int casadi_f3(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a045=(a002*a045);
   a046=(a002*a043);
   a045=(a045-a046);
-  a030=sin(a030);
+  a030=qd_sin(a030);
   a047=(a030*a011);
   a048=(a047*a015);
   a049=(a030*a010);
@@ -7585,7 +7596,7 @@ static int casadi_f3(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a158=(a157*a159);
   a069=(a149*a150);
   a158=(a158-a069);
-  a158=(2.*a158);
+  a158=(2*a158);
   a020=(a020+a158);
   a158=(a145*a079);
   a069=(a002*a071);
@@ -7635,7 +7646,7 @@ static int casadi_f3(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a082=(a149*a146);
   a073=(a062*a159);
   a082=(a082-a073);
-  a082=(2.*a082);
+  a082=(2*a082);
   a027=(a027+a082);
   a074=(a074-a072);
   a074=(a002*a074);
@@ -7697,7 +7708,7 @@ static int casadi_f3(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a042=(a157*a161);
   a080=(a149*a156);
   a042=(a042-a080);
-  a042=(2.*a042);
+  a042=(2*a042);
   a078=(a078+a042);
   a042=(a151*a118);
   a080=(a002*a110);
@@ -7747,7 +7758,7 @@ static int casadi_f3(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a074=(a149*a152);
   a112=(a062*a161);
   a074=(a074-a112);
-  a074=(2.*a074);
+  a074=(2*a074);
   a035=(a035+a074);
   a113=(a113-a111);
   a113=(a002*a113);
@@ -7809,9 +7820,9 @@ static int casadi_f3(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a113=(a113+a050);
   a113=(a113/a067);
   a050=(a059/a067);
-  a048=(2.*a064);
+  a048=(2*a064);
   a048=(a048*a117);
-  a117=(2.*a066);
+  a117=(2*a066);
   a119=(a068*a062);
   a128=(a064*a149);
   a119=(a119-a128);
@@ -7838,7 +7849,7 @@ static int casadi_f3(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a071=(a062*a150);
   a067=(a157*a146);
   a071=(a071-a067);
-  a071=(2.*a071);
+  a071=(2*a071);
   a084=(a084+a071);
   a071=(a007*a004);
   a067=(a008*a003);
@@ -7864,7 +7875,7 @@ static int casadi_f3(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a110=(a062*a156);
   a005=(a157*a152);
   a110=(a110-a005);
-  a110=(2.*a110);
+  a110=(2*a110);
   a044=(a044+a110);
   a110=(a014*a011);
   a005=(a015*a010);
@@ -7905,9 +7916,9 @@ static int casadi_f3(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a086=(a090-a086);
   a113=(a000*a086);
   a058=arg[0]? arg[0][0] : 0;
-  a056=cos(a058);
+  a056=qd_cos(a058);
   a019=(a056*a062);
-  a058=sin(a058);
+  a058=qd_sin(a058);
   a083=(a058*a157);
   a019=(a019-a083);
   a083=(a058*a062);
@@ -7920,10 +7931,10 @@ static int casadi_f3(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a061=(a061-a110);
   a113=(a113+a061);
   a061=arg[0]? arg[0][1] : 0;
-  a110=cos(a061);
+  a110=qd_cos(a061);
   a016=1.8642708333333339e-03;
   a005=(a110*a086);
-  a061=sin(a061);
+  a061=qd_sin(a061);
   a071=(a040*a085);
   a009=(a057*a077);
   a071=(a071-a009);
@@ -8071,10 +8082,10 @@ static int casadi_f3(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a139=(a139-a134);
   a042=(a042+a139);
   a139=arg[0]? arg[0][2] : 0;
-  a134=cos(a139);
+  a134=qd_cos(a139);
   a122=5.0843750000000010e-04;
   a121=(a134*a005);
-  a139=sin(a139);
+  a139=qd_sin(a139);
   a086=(a061*a086);
   a106=(a110*a055);
   a086=(a086+a106);
@@ -8461,9 +8472,9 @@ static int casadi_f3(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a152=(a090-a152);
   a101=(a000*a152);
   a146=arg[0]? arg[0][3] : 0;
-  a052=cos(a146);
+  a052=qd_cos(a146);
   a126=(a052*a062);
-  a146=sin(a146);
+  a146=qd_sin(a146);
   a111=(a146*a157);
   a126=(a126-a111);
   a111=(a146*a062);
@@ -8476,9 +8487,9 @@ static int casadi_f3(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a161=(a161-a027);
   a101=(a101+a161);
   a161=arg[0]? arg[0][4] : 0;
-  a027=cos(a161);
+  a027=qd_cos(a161);
   a084=(a027*a152);
-  a161=sin(a161);
+  a161=qd_sin(a161);
   a044=(a052*a009);
   a040=(a146*a087);
   a044=(a044-a040);
@@ -8503,9 +8514,9 @@ static int casadi_f3(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a050=(a050-a119);
   a136=(a136+a050);
   a050=arg[0]? arg[0][5] : 0;
-  a119=cos(a050);
+  a119=qd_cos(a050);
   a103=(a119*a084);
-  a050=sin(a050);
+  a050=qd_sin(a050);
   a152=(a161*a152);
   a048=(a027*a044);
   a152=(a152+a048);
@@ -9501,7 +9512,7 @@ static int casadi_f3(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a122=(a122+a135);
   a122=(-a122);
   if (res[0]!=0) res[0][11]=a122;
-  a031=sqrt(a031);
+  a031=qd_sqrt(a031);
   a013=(a013/a031);
   a122=(a026*a175);
   a135=(a045*a112);

@@ -20,6 +20,17 @@ extern "C" {
 
 #include <math.h>
 
+/* quadruped_dyn: the elementary functions in casadi_real's precision. A float build
+ * (-Dcasadi_real=float) calls sinf, cosf, ... instead of promoting to double, so it does no
+ * double arithmetic (none on a single-precision FPU: -Wdouble-promotion clean); a double build
+ * calls sin, cos, ... exactly as before. */
+#define QD_REAL_IS_FLOAT (sizeof(casadi_real) == sizeof(float))
+static inline casadi_real qd_sin(casadi_real x) { return QD_REAL_IS_FLOAT ? (casadi_real)sinf((float)x) : (casadi_real)sin((double)x); }
+static inline casadi_real qd_cos(casadi_real x) { return QD_REAL_IS_FLOAT ? (casadi_real)cosf((float)x) : (casadi_real)cos((double)x); }
+static inline casadi_real qd_tan(casadi_real x) { return QD_REAL_IS_FLOAT ? (casadi_real)tanf((float)x) : (casadi_real)tan((double)x); }
+static inline casadi_real qd_sqrt(casadi_real x) { return QD_REAL_IS_FLOAT ? (casadi_real)sqrtf((float)x) : (casadi_real)sqrt((double)x); }
+static inline casadi_real qd_fabs(casadi_real x) { return QD_REAL_IS_FLOAT ? (casadi_real)fabsf((float)x) : (casadi_real)fabs((double)x); }
+
 #ifndef casadi_real
 #define casadi_real double
 #endif
@@ -76,7 +87,7 @@ static const casadi_int casadi_s2[3] = {13, 13, 1};
  *   0             success
  *   QD_NONFINITE  an output is NaN or inf: coincident or collinear stance feet (the trunk
  *                 motion is undetermined), the trunk pitched +-90 deg (the roll row of two
- *                 stance feet has tan(pitch)), a zero quaternion, or a non-finite input;
+ *                 stance feet has qd_tan(pitch)), a zero quaternion, or a non-finite input;
  *   QD_SINGULAR   (qd_fd_r_* only) M_r is singular to working precision: a pivot of its LU
  *                 factorisation (partial pivoting) is below QD_SINGULAR_RTOL * max|M_r|,
  *                 e.g. two stance feet with the trunk pitched within ~1e-12 rad of 90 deg.
@@ -129,7 +140,7 @@ static inline int qd_fd_r_solve(int n, qd_eval_fn M_r, qd_eval_fn CG_r, const ca
   if (flag) return flag;
   casadi_real scale = 0, sum = 0; /* a NaN or inf anywhere makes the sum non-finite */
   for (int i = 0; i < n * n; ++i) {
-    scale = fabs(M[i]) > scale ? fabs(M[i]) : scale;
+    scale = qd_fabs(M[i]) > scale ? qd_fabs(M[i]) : scale;
     sum += M[i];
   }
   for (int i = 0; i < n; ++i) {
@@ -140,8 +151,8 @@ static inline int qd_fd_r_solve(int n, qd_eval_fn M_r, qd_eval_fn CG_r, const ca
   for (int k = 0; k < n; ++k) { /* M[i + n j] = M_ij */
     casadi_real* col = M + n * k;
     int p = k;
-    for (int i = k + 1; i < n; ++i) p = fabs(col[i]) > fabs(col[p]) ? i : p;
-    if (!(fabs(col[p]) > QD_SINGULAR_RTOL * scale)) return QD_SINGULAR;
+    for (int i = k + 1; i < n; ++i) p = qd_fabs(col[i]) > qd_fabs(col[p]) ? i : p;
+    if (!(qd_fabs(col[p]) > QD_SINGULAR_RTOL * scale)) return QD_SINGULAR;
     if (p != k) {
       for (int j = 0; j < n; ++j) {
         casadi_real t = M[k + n * j];
@@ -190,15 +201,15 @@ static int casadi_f0(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   casadi_real a144, a145, a146, a147, a148, a149, a150, a151, a152, a153, a154, a155;
   casadi_real a156, a157, a158, a159, a160, a161, a162, a163, a164;
   a000=arg[0]? arg[0][0] : 0;
-  a001=cos(a000);
+  a001=qd_cos(a000);
   a002=5.0000000000000000e-01;
   a003=7.3642708333333355e-03;
   a004=1.0126562500000001e-03;
   a005=9.9578125000000014e-04;
   a006=arg[0]? arg[0][2] : 0;
-  a007=cos(a006);
+  a007=qd_cos(a006);
   a008=casadi_sq(a007);
-  a006=sin(a006);
+  a006=qd_sin(a006);
   a009=casadi_sq(a006);
   a008=(a008-a009);
   a008=(a005*a008);
@@ -221,12 +232,12 @@ static int casadi_f0(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a017=(a010-a008);
   a017=(a002*a017);
   a018=arg[0]? arg[0][1] : 0;
-  a019=cos(a018);
-  a020=(2.*a019);
-  a018=sin(a018);
+  a019=qd_cos(a018);
+  a020=(2*a019);
+  a018=qd_sin(a018);
   a020=(a020*a018);
   a021=(a017*a020);
-  a022=(2.*a007);
+  a022=(2*a007);
   a022=(a022*a006);
   a022=(a005*a022);
   a023=(a015*a006);
@@ -261,14 +272,14 @@ static int casadi_f0(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a038=(a038+a039);
   a039=-1.9000000000000000e-01;
   a040=arg[0]? arg[0][7] : 0;
-  a041=sin(a040);
+  a041=qd_sin(a040);
   a042=(a037*a041);
   a042=(a039+a042);
-  a040=cos(a040);
+  a040=qd_cos(a040);
   a043=arg[0]? arg[0][8] : 0;
-  a044=sin(a043);
+  a044=qd_sin(a043);
   a045=(a040*a044);
-  a043=cos(a043);
+  a043=qd_cos(a043);
   a046=(a041*a043);
   a045=(a045+a046);
   a045=(a037*a045);
@@ -289,7 +300,7 @@ static int casadi_f0(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a052=(a037*a052);
   a051=(a051+a052);
   a052=arg[0]? arg[0][6] : 0;
-  a054=cos(a052);
+  a054=qd_cos(a052);
   a055=(a054*a040);
   a056=(a037*a055);
   a056=(a049+a056);
@@ -304,7 +315,7 @@ static int casadi_f0(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a059=(a051-a057);
   a060=casadi_sq(a059);
   a061=(a048+a060);
-  a000=sin(a000);
+  a000=qd_sin(a000);
   a062=(a000*a018);
   a063=(a062*a006);
   a064=(a000*a019);
@@ -313,7 +324,7 @@ static int casadi_f0(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a063=(a037*a063);
   a065=(a037*a064);
   a063=(a063-a065);
-  a052=sin(a052);
+  a052=qd_sin(a052);
   a065=(a052*a041);
   a066=(a065*a044);
   a067=(a052*a040);
@@ -511,17 +522,17 @@ static int casadi_f0(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a090=1.0000000000000002e+01;
   a023=(a090*a079);
   a070=arg[0]? arg[0][3] : 0;
-  a084=sin(a070);
+  a084=qd_sin(a070);
   a082=arg[0]? arg[0][4] : 0;
-  a061=cos(a082);
+  a061=qd_cos(a082);
   a097=arg[0]? arg[0][5] : 0;
-  a098=cos(a097);
+  a098=qd_cos(a097);
   a099=(a027*a098);
   a100=(a099+a029);
   a100=(a026+a100);
   a101=(a061*a100);
-  a082=sin(a082);
-  a097=sin(a097);
+  a082=qd_sin(a082);
+  a097=qd_sin(a097);
   a102=(a027*a097);
   a103=(a082*a102);
   a101=(a101-a103);
@@ -537,17 +548,17 @@ static int casadi_f0(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a111=(a052*a108);
   a105=(a105+a111);
   a112=arg[0]? arg[0][9] : 0;
-  a113=sin(a112);
+  a113=qd_sin(a112);
   a114=arg[0]? arg[0][10] : 0;
-  a115=cos(a114);
+  a115=qd_cos(a114);
   a116=arg[0]? arg[0][11] : 0;
-  a117=cos(a116);
+  a117=qd_cos(a116);
   a118=(a027*a117);
   a029=(a118+a029);
   a026=(a026+a029);
   a029=(a115*a026);
-  a114=sin(a114);
-  a116=sin(a116);
+  a114=qd_sin(a114);
+  a116=qd_sin(a116);
   a027=(a027*a116);
   a119=(a114*a027);
   a029=(a029-a119);
@@ -596,7 +607,7 @@ static int casadi_f0(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a129=(a129-a130);
   a130=8.0500000000000016e-02;
   a131=(a034+a130);
-  a070=cos(a070);
+  a070=qd_cos(a070);
   a132=(a070*a101);
   a133=-8.0500000000000016e-02;
   a134=(a132+a133);
@@ -604,7 +615,7 @@ static int casadi_f0(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a134=(a054*a108);
   a130=(a134+a130);
   a131=(a131+a130);
-  a112=cos(a112);
+  a112=qd_cos(a112);
   a130=(a112*a029);
   a133=(a130+a133);
   a131=(a131+a133);
@@ -634,7 +645,7 @@ static int casadi_f0(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a022=(a022-a140);
   a022=(a022-a140);
   a140=(a140+a020);
-  a140=(2.*a140);
+  a140=(2*a140);
   a022=(a022+a140);
   a138=(a138+a022);
   a022=casadi_sq(a098);
@@ -661,12 +672,12 @@ static int casadi_f0(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a022=(a022-a146);
   a146=(a141*a022);
   a145=(a145+a146);
-  a098=(2.*a098);
+  a098=(2*a098);
   a098=(a098*a097);
   a098=(a005*a098);
   a097=(a015*a097);
   a098=(a098+a097);
-  a097=(2.*a061);
+  a097=(2*a061);
   a097=(a097*a082);
   a146=(a098*a097);
   a145=(a145-a146);
@@ -678,7 +689,7 @@ static int casadi_f0(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a149=-7.0000000000000007e-02;
   a150=(a149*a132);
   a148=(a148+a150);
-  a148=(2.*a148);
+  a148=(2*a148);
   a147=(a147+a148);
   a138=(a138+a147);
   a147=casadi_sq(a043);
@@ -705,12 +716,12 @@ static int casadi_f0(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a147=(a147-a156);
   a156=(a151*a147);
   a155=(a155+a156);
-  a156=(2.*a043);
+  a156=(2*a043);
   a156=(a156*a044);
   a156=(a005*a156);
   a157=(a015*a044);
   a156=(a156+a157);
-  a157=(2.*a040);
+  a157=(2*a040);
   a157=(a157*a041);
   a158=(a156*a157);
   a155=(a155-a158);
@@ -721,7 +732,7 @@ static int casadi_f0(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a159=(a159-a160);
   a161=(a049*a134);
   a160=(a160+a161);
-  a160=(2.*a160);
+  a160=(2*a160);
   a159=(a159+a160);
   a138=(a138+a159);
   a159=casadi_sq(a117);
@@ -748,12 +759,12 @@ static int casadi_f0(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a013=(a013-a162);
   a162=(a009*a013);
   a159=(a159+a162);
-  a117=(2.*a117);
+  a117=(2*a117);
   a117=(a117*a116);
   a005=(a005*a117);
   a015=(a015*a116);
   a005=(a005+a015);
-  a015=(2.*a115);
+  a015=(2*a115);
   a015=(a015*a114);
   a116=(a005*a015);
   a159=(a159-a116);
@@ -764,7 +775,7 @@ static int casadi_f0(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a139=(a139-a117);
   a162=(a149*a130);
   a117=(a117+a162);
-  a117=(2.*a117);
+  a117=(2*a117);
   a139=(a139+a117);
   a138=(a138+a139);
   a139=(a138*a095);
@@ -910,24 +921,24 @@ static int casadi_f0(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a122=(a121*a085);
   a015=(a015+a122);
   a122=(a049*a094);
-  a014=(2.*a001);
+  a014=(2*a001);
   a014=(a014*a000);
   a010=(a010*a014);
   a122=(a122-a010);
   a010=(a149*a104);
-  a014=(2.*a070);
+  a014=(2*a070);
   a014=(a014*a084);
   a144=(a144*a014);
   a010=(a010-a144);
   a122=(a122+a010);
   a010=(a049*a111);
-  a144=(2.*a054);
+  a144=(2*a054);
   a144=(a144*a052);
   a154=(a154*a144);
   a010=(a010-a154);
   a122=(a122+a010);
   a010=(a149*a120);
-  a154=(2.*a112);
+  a154=(2*a112);
   a154=(a154*a113);
   a002=(a002*a154);
   a010=(a010-a002);
@@ -1379,7 +1390,7 @@ static int casadi_f0(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a088=(a112*a088);
   a128=(a128+a088);
   if (res[0]!=0) res[0][11]=a128;
-  a128=sqrt(a008);
+  a128=qd_sqrt(a008);
   a088=(a042/a128);
   a039=(a051*a136);
   a149=(a063*a023);
@@ -4181,28 +4192,28 @@ static int casadi_f1(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a001=1.9000000000000000e-01;
   a002=2.0000000000000001e-01;
   a003=arg[0]? arg[0][1] : 0;
-  a004=sin(a003);
+  a004=qd_sin(a003);
   a005=(a002*a004);
   a006=(a001+a005);
-  a003=cos(a003);
+  a003=qd_cos(a003);
   a007=arg[0]? arg[0][2] : 0;
-  a008=sin(a007);
+  a008=qd_sin(a007);
   a009=(a003*a008);
-  a007=cos(a007);
+  a007=qd_cos(a007);
   a010=(a004*a007);
   a009=(a009+a010);
   a009=(a002*a009);
   a006=(a006+a009);
   a010=-1.9000000000000000e-01;
   a011=arg[0]? arg[0][7] : 0;
-  a012=sin(a011);
+  a012=qd_sin(a011);
   a013=(a002*a012);
   a014=(a010+a013);
-  a011=cos(a011);
+  a011=qd_cos(a011);
   a015=arg[0]? arg[0][8] : 0;
-  a016=sin(a015);
+  a016=qd_sin(a015);
   a017=(a011*a016);
-  a015=cos(a015);
+  a015=qd_cos(a015);
   a018=(a012*a015);
   a017=(a017+a018);
   a017=(a002*a017);
@@ -4214,7 +4225,7 @@ static int casadi_f1(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a021=casadi_sq(a020);
   a022=7.0000000000000007e-02;
   a023=arg[0]? arg[0][0] : 0;
-  a024=cos(a023);
+  a024=qd_cos(a023);
   a025=(a024*a003);
   a026=(a002*a025);
   a027=(a022+a026);
@@ -4225,7 +4236,7 @@ static int casadi_f1(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a028=(a002*a028);
   a027=(a027+a028);
   a030=arg[0]? arg[0][6] : 0;
-  a031=cos(a030);
+  a031=qd_cos(a030);
   a032=(a031*a011);
   a033=(a002*a032);
   a034=(a022+a033);
@@ -4240,7 +4251,7 @@ static int casadi_f1(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a038=(a027-a037);
   a039=casadi_sq(a038);
   a040=(a021+a039);
-  a023=sin(a023);
+  a023=qd_sin(a023);
   a041=(a023*a004);
   a042=(a041*a008);
   a043=(a023*a003);
@@ -4249,7 +4260,7 @@ static int casadi_f1(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a045=(a002*a045);
   a046=(a002*a043);
   a045=(a045-a046);
-  a030=sin(a030);
+  a030=qd_sin(a030);
   a047=(a030*a012);
   a048=(a047*a016);
   a049=(a030*a011);
@@ -4552,7 +4563,7 @@ static int casadi_f1(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a062=(a118*a119);
   a069=(a089*a093);
   a062=(a062-a069);
-  a062=(2.*a062);
+  a062=(2*a062);
   a129=(a129+a062);
   a062=(a080*a091);
   a069=(a002*a074);
@@ -4602,7 +4613,7 @@ static int casadi_f1(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a073=(a089*a081);
   a119=(a071*a119);
   a073=(a073-a119);
-  a073=(2.*a073);
+  a073=(2*a073);
   a028=(a028+a073);
   a077=(a077-a075);
   a077=(a002*a077);
@@ -4664,7 +4675,7 @@ static int casadi_f1(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a042=(a118*a123);
   a092=(a089*a115);
   a042=(a042-a092);
-  a042=(2.*a042);
+  a042=(2*a042);
   a090=(a090+a042);
   a042=(a102*a113);
   a092=(a002*a096);
@@ -4714,7 +4725,7 @@ static int casadi_f1(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a077=(a089*a103);
   a123=(a071*a123);
   a077=(a077-a123);
-  a077=(2.*a077);
+  a077=(2*a077);
   a035=(a035+a077);
   a099=(a099-a097);
   a099=(a002*a099);
@@ -4776,9 +4787,9 @@ static int casadi_f1(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a099=(a099+a050);
   a099=(a099/a067);
   a050=(a059/a067);
-  a048=(2.*a064);
+  a048=(2*a064);
   a048=(a048*a112);
-  a112=(2.*a066);
+  a112=(2*a066);
   a114=(a068*a071);
   a106=(a064*a089);
   a114=(a114-a106);
@@ -4805,7 +4816,7 @@ static int casadi_f1(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a093=(a071*a093);
   a081=(a118*a081);
   a093=(a093-a081);
-  a093=(2.*a093);
+  a093=(2*a093);
   a125=(a125+a093);
   a093=(a007*a004);
   a081=(a008*a003);
@@ -4831,7 +4842,7 @@ static int casadi_f1(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a115=(a071*a115);
   a103=(a118*a103);
   a115=(a115-a103);
-  a115=(2.*a115);
+  a115=(2*a115);
   a044=(a044+a115);
   a115=(a015*a012);
   a103=(a016*a011);
@@ -5130,18 +5141,18 @@ static int casadi_f1(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a047=(a047+a064);
   a066=(a066+a047);
   a064=arg[0]? arg[0][3] : 0;
-  a059=cos(a064);
+  a059=qd_cos(a064);
   a008=arg[0]? arg[0][4] : 0;
-  a097=cos(a008);
+  a097=qd_cos(a008);
   a042=arg[0]? arg[0][5] : 0;
-  a065=cos(a042);
-  a042=sin(a042);
-  a008=sin(a008);
+  a065=qd_cos(a042);
+  a042=qd_sin(a042);
+  a008=qd_sin(a008);
   a125=arg[1]? arg[1][3] : 0;
   a044=(a089-a125);
   a084=(a008*a044);
   a092=(a059*a071);
-  a064=sin(a064);
+  a064=qd_sin(a064);
   a046=(a064*a118);
   a092=(a092-a046);
   a046=(a097*a092);
@@ -5443,18 +5454,18 @@ static int casadi_f1(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a106=(a106+a112);
   a066=(a066+a106);
   a112=arg[0]? arg[0][9] : 0;
-  a154=cos(a112);
+  a154=qd_cos(a112);
   a153=arg[0]? arg[0][10] : 0;
-  a163=cos(a153);
+  a163=qd_cos(a153);
   a164=arg[0]? arg[0][11] : 0;
-  a165=cos(a164);
-  a164=sin(a164);
-  a153=sin(a153);
+  a165=qd_cos(a164);
+  a164=qd_sin(a164);
+  a153=qd_sin(a153);
   a166=arg[1]? arg[1][9] : 0;
   a167=(a089-a166);
   a168=(a153*a167);
   a169=(a154*a071);
-  a112=sin(a112);
+  a112=qd_sin(a112);
   a170=(a112*a118);
   a169=(a169-a170);
   a170=(a163*a169);
@@ -6162,7 +6173,7 @@ static int casadi_f1(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   if (res[0]!=0) res[0][10]=a070;
   a062=(-a062);
   if (res[0]!=0) res[0][11]=a062;
-  a154=sqrt(a154);
+  a154=qd_sqrt(a154);
   a014=(a014/a154);
   a062=(a027*a098);
   a070=(a045*a066);
@@ -6275,12 +6286,12 @@ static int casadi_f2(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   casadi_real a72, a73, a74, a75, a76, a77, a78, a79, a80, a81, a82, a83;
   casadi_real a84, a85, a86, a87, a88, a89, a90, a91, a92, a93, a94;
   a00=arg[0]? arg[0][1] : 0;
-  a01=sin(a00);
+  a01=qd_sin(a00);
   a02=arg[0]? arg[0][2] : 0;
-  a03=sin(a02);
+  a03=qd_sin(a02);
   a04=1.4999999999999999e-02;
   a05=arg[0]? arg[0][0] : 0;
-  a06=sin(a05);
+  a06=qd_sin(a05);
   a07=-9.8100000000000005e+00;
   a08=2.;
   a09=arg[1]? arg[1][0] : 0;
@@ -6301,7 +6312,7 @@ static int casadi_f2(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a15=(a13*a15);
   a16=(a07*a15);
   a17=(a06*a16);
-  a05=cos(a05);
+  a05=qd_cos(a05);
   a18=1.;
   a10=(a13*a10);
   a18=(a18-a10);
@@ -6311,8 +6322,8 @@ static int casadi_f2(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a19=(a04*a17);
   a20=(a03*a19);
   a21=(a01*a20);
-  a00=cos(a00);
-  a02=cos(a02);
+  a00=qd_cos(a00);
+  a02=qd_cos(a02);
   a19=(a02*a19);
   a22=5.5000000000000007e-02;
   a23=(a22*a17);
@@ -6383,15 +6394,15 @@ static int casadi_f2(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a15=(a17*a15);
   a15=(a11-a15);
   a33=arg[0]? arg[0][3] : 0;
-  a34=cos(a33);
+  a34=qd_cos(a33);
   a35=arg[0]? arg[0][4] : 0;
-  a36=cos(a35);
+  a36=qd_cos(a35);
   a37=arg[0]? arg[0][5] : 0;
-  a38=sin(a37);
-  a37=cos(a37);
+  a38=qd_sin(a37);
+  a37=qd_cos(a37);
   a39=(a36*a07);
-  a35=sin(a35);
-  a33=sin(a33);
+  a35=qd_sin(a35);
+  a33=qd_sin(a33);
   a40=(a33*a10);
   a41=(a34*a16);
   a40=(a40-a41);
@@ -6436,15 +6447,15 @@ static int casadi_f2(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a40=(a40-a48);
   a15=(a15+a40);
   a48=arg[0]? arg[0][6] : 0;
-  a49=cos(a48);
+  a49=qd_cos(a48);
   a50=arg[0]? arg[0][7] : 0;
-  a51=cos(a50);
+  a51=qd_cos(a50);
   a52=arg[0]? arg[0][8] : 0;
-  a53=sin(a52);
-  a52=cos(a52);
+  a53=qd_sin(a52);
+  a52=qd_cos(a52);
   a54=(a51*a07);
-  a50=sin(a50);
-  a48=sin(a48);
+  a50=qd_sin(a50);
+  a48=qd_sin(a48);
   a55=(a48*a10);
   a56=(a49*a16);
   a55=(a55-a56);
@@ -6489,15 +6500,15 @@ static int casadi_f2(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a55=(a55-a63);
   a15=(a15+a55);
   a63=arg[0]? arg[0][9] : 0;
-  a64=cos(a63);
+  a64=qd_cos(a63);
   a65=arg[0]? arg[0][10] : 0;
-  a66=cos(a65);
+  a66=qd_cos(a65);
   a67=arg[0]? arg[0][11] : 0;
-  a68=sin(a67);
-  a67=cos(a67);
+  a68=qd_sin(a67);
+  a67=qd_cos(a67);
   a69=(a66*a07);
-  a65=sin(a65);
-  a63=sin(a63);
+  a65=qd_sin(a65);
+  a63=qd_sin(a63);
   a70=(a63*a10);
   a71=(a64*a16);
   a70=(a70-a71);
@@ -6986,7 +6997,7 @@ static int casadi_f2(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   if (res[0]!=0) res[0][10]=a22;
   a04=(-a04);
   if (res[0]!=0) res[0][11]=a04;
-  a64=sqrt(a64);
+  a64=qd_sqrt(a64);
   a79=(a79/a64);
   a04=(a30*a15);
   a22=(a87*a17);
@@ -7109,28 +7120,28 @@ static int casadi_f3(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a001=1.9000000000000000e-01;
   a002=2.0000000000000001e-01;
   a003=arg[0]? arg[0][1] : 0;
-  a004=sin(a003);
+  a004=qd_sin(a003);
   a005=(a002*a004);
   a006=(a001+a005);
-  a003=cos(a003);
+  a003=qd_cos(a003);
   a007=arg[0]? arg[0][2] : 0;
-  a008=sin(a007);
+  a008=qd_sin(a007);
   a009=(a003*a008);
-  a007=cos(a007);
+  a007=qd_cos(a007);
   a010=(a004*a007);
   a009=(a009+a010);
   a009=(a002*a009);
   a006=(a006+a009);
   a010=-1.9000000000000000e-01;
   a011=arg[0]? arg[0][7] : 0;
-  a012=sin(a011);
+  a012=qd_sin(a011);
   a013=(a002*a012);
   a014=(a010+a013);
-  a011=cos(a011);
+  a011=qd_cos(a011);
   a015=arg[0]? arg[0][8] : 0;
-  a016=sin(a015);
+  a016=qd_sin(a015);
   a017=(a011*a016);
-  a015=cos(a015);
+  a015=qd_cos(a015);
   a018=(a012*a015);
   a017=(a017+a018);
   a017=(a002*a017);
@@ -7142,7 +7153,7 @@ static int casadi_f3(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a021=casadi_sq(a020);
   a022=7.0000000000000007e-02;
   a023=arg[0]? arg[0][0] : 0;
-  a024=cos(a023);
+  a024=qd_cos(a023);
   a025=(a024*a003);
   a026=(a002*a025);
   a027=(a022+a026);
@@ -7153,7 +7164,7 @@ static int casadi_f3(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a028=(a002*a028);
   a027=(a027+a028);
   a030=arg[0]? arg[0][6] : 0;
-  a031=cos(a030);
+  a031=qd_cos(a030);
   a032=(a031*a011);
   a033=(a002*a032);
   a034=(a022+a033);
@@ -7168,7 +7179,7 @@ static int casadi_f3(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a038=(a027-a037);
   a039=casadi_sq(a038);
   a040=(a021+a039);
-  a023=sin(a023);
+  a023=qd_sin(a023);
   a041=(a023*a004);
   a042=(a041*a008);
   a043=(a023*a003);
@@ -7177,7 +7188,7 @@ static int casadi_f3(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a045=(a002*a045);
   a046=(a002*a043);
   a045=(a045-a046);
-  a030=sin(a030);
+  a030=qd_sin(a030);
   a047=(a030*a012);
   a048=(a047*a016);
   a049=(a030*a011);
@@ -7587,7 +7598,7 @@ static int casadi_f3(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a158=(a157*a159);
   a069=(a149*a150);
   a158=(a158-a069);
-  a158=(2.*a158);
+  a158=(2*a158);
   a021=(a021+a158);
   a158=(a145*a079);
   a069=(a002*a071);
@@ -7637,7 +7648,7 @@ static int casadi_f3(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a082=(a149*a146);
   a073=(a062*a159);
   a082=(a082-a073);
-  a082=(2.*a082);
+  a082=(2*a082);
   a028=(a028+a082);
   a074=(a074-a072);
   a074=(a002*a074);
@@ -7699,7 +7710,7 @@ static int casadi_f3(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a042=(a157*a161);
   a080=(a149*a156);
   a042=(a042-a080);
-  a042=(2.*a042);
+  a042=(2*a042);
   a078=(a078+a042);
   a042=(a151*a118);
   a080=(a002*a110);
@@ -7749,7 +7760,7 @@ static int casadi_f3(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a074=(a149*a152);
   a112=(a062*a161);
   a074=(a074-a112);
-  a074=(2.*a074);
+  a074=(2*a074);
   a035=(a035+a074);
   a113=(a113-a111);
   a113=(a002*a113);
@@ -7811,9 +7822,9 @@ static int casadi_f3(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a113=(a113+a050);
   a113=(a113/a067);
   a050=(a059/a067);
-  a048=(2.*a064);
+  a048=(2*a064);
   a048=(a048*a117);
-  a117=(2.*a066);
+  a117=(2*a066);
   a119=(a068*a062);
   a128=(a064*a149);
   a119=(a119-a128);
@@ -7840,7 +7851,7 @@ static int casadi_f3(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a071=(a062*a150);
   a067=(a157*a146);
   a071=(a071-a067);
-  a071=(2.*a071);
+  a071=(2*a071);
   a084=(a084+a071);
   a071=(a007*a004);
   a067=(a008*a003);
@@ -7866,7 +7877,7 @@ static int casadi_f3(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a110=(a062*a156);
   a005=(a157*a152);
   a110=(a110-a005);
-  a110=(2.*a110);
+  a110=(2*a110);
   a044=(a044+a110);
   a110=(a015*a012);
   a005=(a016*a011);
@@ -8450,18 +8461,18 @@ static int casadi_f3(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a126=(a126+a064);
   a066=(a066+a126);
   a064=arg[0]? arg[0][3] : 0;
-  a061=cos(a064);
+  a061=qd_cos(a064);
   a156=arg[0]? arg[0][4] : 0;
-  a042=cos(a156);
+  a042=qd_cos(a156);
   a070=arg[0]? arg[0][5] : 0;
-  a035=cos(a070);
-  a070=sin(a070);
-  a156=sin(a156);
+  a035=qd_cos(a070);
+  a070=qd_sin(a070);
+  a156=qd_sin(a156);
   a161=arg[1]? arg[1][3] : 0;
   a088=(a149-a161);
   a028=(a156*a088);
   a084=(a061*a062);
-  a064=sin(a064);
+  a064=qd_sin(a064);
   a044=(a064*a157);
   a084=(a084-a044);
   a044=(a042*a084);
@@ -8774,18 +8785,18 @@ static int casadi_f3(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a049=(a049+a128);
   a066=(a066+a049);
   a128=arg[0]? arg[0][9] : 0;
-  a069=cos(a128);
+  a069=qd_cos(a128);
   a155=arg[0]? arg[0][10] : 0;
-  a170=cos(a155);
+  a170=qd_cos(a155);
   a171=arg[0]? arg[0][11] : 0;
-  a172=cos(a171);
-  a171=sin(a171);
-  a155=sin(a155);
+  a172=qd_cos(a171);
+  a171=qd_sin(a171);
+  a155=qd_sin(a155);
   a173=arg[1]? arg[1][9] : 0;
   a174=(a149-a173);
   a175=(a155*a174);
   a176=(a069*a062);
-  a128=sin(a128);
+  a128=qd_sin(a128);
   a177=(a128*a157);
   a176=(a176-a177);
   a177=(a170*a176);
@@ -9503,7 +9514,7 @@ static int casadi_f3(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   if (res[0]!=0) res[0][10]=a083;
   a158=(-a158);
   if (res[0]!=0) res[0][11]=a158;
-  a069=sqrt(a069);
+  a069=qd_sqrt(a069);
   a014=(a014/a069);
   a158=(a027*a021);
   a083=(a045*a066);

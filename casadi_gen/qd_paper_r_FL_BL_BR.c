@@ -20,6 +20,17 @@ extern "C" {
 
 #include <math.h>
 
+/* quadruped_dyn: the elementary functions in casadi_real's precision. A float build
+ * (-Dcasadi_real=float) calls sinf, cosf, ... instead of promoting to double, so it does no
+ * double arithmetic (none on a single-precision FPU: -Wdouble-promotion clean); a double build
+ * calls sin, cos, ... exactly as before. */
+#define QD_REAL_IS_FLOAT (sizeof(casadi_real) == sizeof(float))
+static inline casadi_real qd_sin(casadi_real x) { return QD_REAL_IS_FLOAT ? (casadi_real)sinf((float)x) : (casadi_real)sin((double)x); }
+static inline casadi_real qd_cos(casadi_real x) { return QD_REAL_IS_FLOAT ? (casadi_real)cosf((float)x) : (casadi_real)cos((double)x); }
+static inline casadi_real qd_tan(casadi_real x) { return QD_REAL_IS_FLOAT ? (casadi_real)tanf((float)x) : (casadi_real)tan((double)x); }
+static inline casadi_real qd_sqrt(casadi_real x) { return QD_REAL_IS_FLOAT ? (casadi_real)sqrtf((float)x) : (casadi_real)sqrt((double)x); }
+static inline casadi_real qd_fabs(casadi_real x) { return QD_REAL_IS_FLOAT ? (casadi_real)fabsf((float)x) : (casadi_real)fabs((double)x); }
+
 #ifndef casadi_real
 #define casadi_real double
 #endif
@@ -76,7 +87,7 @@ static const casadi_int casadi_s2[3] = {12, 12, 1};
  *   0             success
  *   QD_NONFINITE  an output is NaN or inf: coincident or collinear stance feet (the trunk
  *                 motion is undetermined), the trunk pitched +-90 deg (the roll row of two
- *                 stance feet has tan(pitch)), a zero quaternion, or a non-finite input;
+ *                 stance feet has qd_tan(pitch)), a zero quaternion, or a non-finite input;
  *   QD_SINGULAR   (qd_fd_r_* only) M_r is singular to working precision: a pivot of its LU
  *                 factorisation (partial pivoting) is below QD_SINGULAR_RTOL * max|M_r|,
  *                 e.g. two stance feet with the trunk pitched within ~1e-12 rad of 90 deg.
@@ -129,7 +140,7 @@ static inline int qd_fd_r_solve(int n, qd_eval_fn M_r, qd_eval_fn CG_r, const ca
   if (flag) return flag;
   casadi_real scale = 0, sum = 0; /* a NaN or inf anywhere makes the sum non-finite */
   for (int i = 0; i < n * n; ++i) {
-    scale = fabs(M[i]) > scale ? fabs(M[i]) : scale;
+    scale = qd_fabs(M[i]) > scale ? qd_fabs(M[i]) : scale;
     sum += M[i];
   }
   for (int i = 0; i < n; ++i) {
@@ -140,8 +151,8 @@ static inline int qd_fd_r_solve(int n, qd_eval_fn M_r, qd_eval_fn CG_r, const ca
   for (int k = 0; k < n; ++k) { /* M[i + n j] = M_ij */
     casadi_real* col = M + n * k;
     int p = k;
-    for (int i = k + 1; i < n; ++i) p = fabs(col[i]) > fabs(col[p]) ? i : p;
-    if (!(fabs(col[p]) > QD_SINGULAR_RTOL * scale)) return QD_SINGULAR;
+    for (int i = k + 1; i < n; ++i) p = qd_fabs(col[i]) > qd_fabs(col[p]) ? i : p;
+    if (!(qd_fabs(col[p]) > QD_SINGULAR_RTOL * scale)) return QD_SINGULAR;
     if (p != k) {
       for (int j = 0; j < n; ++j) {
         casadi_real t = M[k + n * j];
@@ -191,15 +202,15 @@ static int casadi_f0(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   casadi_real a156, a157, a158, a159, a160, a161, a162, a163, a164, a165, a166, a167;
   casadi_real a168, a169, a170, a171, a172, a173, a174, a175, a176;
   a000=arg[0]? arg[0][0] : 0;
-  a001=cos(a000);
+  a001=qd_cos(a000);
   a002=5.0000000000000000e-01;
   a003=7.3642708333333355e-03;
   a004=1.0126562500000001e-03;
   a005=9.9578125000000014e-04;
   a006=arg[0]? arg[0][2] : 0;
-  a007=cos(a006);
+  a007=qd_cos(a006);
   a008=casadi_sq(a007);
-  a006=sin(a006);
+  a006=qd_sin(a006);
   a009=casadi_sq(a006);
   a008=(a008-a009);
   a008=(a005*a008);
@@ -222,12 +233,12 @@ static int casadi_f0(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a017=(a010-a008);
   a017=(a002*a017);
   a018=arg[0]? arg[0][1] : 0;
-  a019=cos(a018);
-  a020=(2.*a019);
-  a018=sin(a018);
+  a019=qd_cos(a018);
+  a020=(2*a019);
+  a018=qd_sin(a018);
   a020=(a020*a018);
   a021=(a017*a020);
-  a022=(2.*a007);
+  a022=(2*a007);
   a022=(a022*a006);
   a022=(a005*a022);
   a023=(a015*a006);
@@ -264,18 +275,18 @@ static int casadi_f0(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a041=(a038*a041);
   a040=(a040+a041);
   a041=arg[0]? arg[0][6] : 0;
-  a043=cos(a041);
+  a043=qd_cos(a041);
   a044=arg[0]? arg[0][7] : 0;
-  a045=cos(a044);
+  a045=qd_cos(a044);
   a046=(a043*a045);
   a047=(a038*a046);
   a047=(a037+a047);
   a048=arg[0]? arg[0][8] : 0;
-  a049=cos(a048);
+  a049=qd_cos(a048);
   a050=(a046*a049);
-  a044=sin(a044);
+  a044=qd_sin(a044);
   a051=(a043*a044);
-  a048=sin(a048);
+  a048=qd_sin(a048);
   a052=(a051*a048);
   a050=(a050-a052);
   a050=(a038*a050);
@@ -283,18 +294,18 @@ static int casadi_f0(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a050=(a040+a047);
   a052=-7.0000000000000007e-02;
   a053=arg[0]? arg[0][9] : 0;
-  a054=cos(a053);
+  a054=qd_cos(a053);
   a055=arg[0]? arg[0][10] : 0;
-  a056=cos(a055);
+  a056=qd_cos(a055);
   a057=(a054*a056);
   a058=(a038*a057);
   a058=(a052+a058);
   a059=arg[0]? arg[0][11] : 0;
-  a060=cos(a059);
+  a060=qd_cos(a059);
   a061=(a057*a060);
-  a055=sin(a055);
+  a055=qd_sin(a055);
   a062=(a054*a055);
-  a059=sin(a059);
+  a059=qd_sin(a059);
   a063=(a062*a059);
   a061=(a061-a063);
   a061=(a038*a061);
@@ -350,7 +361,7 @@ static int casadi_f0(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a086=(a084+a085);
   a083=(a083+a086);
   a087=(a072*a083);
-  a000=sin(a000);
+  a000=qd_sin(a000);
   a088=(a000*a018);
   a089=(a088*a006);
   a090=(a000*a019);
@@ -359,7 +370,7 @@ static int casadi_f0(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a089=(a038*a089);
   a091=(a038*a090);
   a089=(a089-a091);
-  a041=sin(a041);
+  a041=qd_sin(a041);
   a091=(a041*a044);
   a092=(a091*a048);
   a093=(a041*a045);
@@ -369,7 +380,7 @@ static int casadi_f0(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a094=(a038*a093);
   a092=(a092-a094);
   a094=(a089+a092);
-  a053=sin(a053);
+  a053=qd_sin(a053);
   a095=(a053*a055);
   a096=(a095*a059);
   a097=(a053*a056);
@@ -531,17 +542,17 @@ static int casadi_f0(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a110=1.0000000000000002e+01;
   a023=(a110*a080);
   a079=arg[0]? arg[0][3] : 0;
-  a108=sin(a079);
+  a108=qd_sin(a079);
   a103=arg[0]? arg[0][4] : 0;
-  a114=cos(a103);
+  a114=qd_cos(a103);
   a115=arg[0]? arg[0][5] : 0;
-  a116=cos(a115);
+  a116=qd_cos(a115);
   a117=(a027*a116);
   a118=(a117+a029);
   a118=(a026+a118);
   a119=(a114*a118);
-  a103=sin(a103);
-  a115=sin(a115);
+  a103=qd_sin(a103);
+  a115=qd_sin(a115);
   a120=(a027*a115);
   a121=(a103*a120);
   a119=(a119-a121);
@@ -595,7 +606,7 @@ static int casadi_f0(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a139=(a135*a080);
   a140=8.0500000000000016e-02;
   a141=(a034+a140);
-  a079=cos(a079);
+  a079=qd_cos(a079);
   a142=(a079*a119);
   a143=-8.0500000000000016e-02;
   a144=(a142+a143);
@@ -628,10 +639,10 @@ static int casadi_f0(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a145=(a013+a145);
   a149=(a146-a145);
   a149=(a002*a149);
-  a150=(2.*a114);
+  a150=(2*a114);
   a150=(a150*a103);
   a151=(a149*a150);
-  a116=(2.*a116);
+  a116=(2*a116);
   a116=(a116*a115);
   a116=(a005*a116);
   a115=(a015*a115);
@@ -662,10 +673,10 @@ static int casadi_f0(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a154=(a013+a154);
   a158=(a155-a154);
   a158=(a002*a158);
-  a159=(2.*a045);
+  a159=(2*a045);
   a159=(a159*a044);
   a160=(a158*a159);
-  a161=(2.*a049);
+  a161=(2*a049);
   a161=(a161*a048);
   a161=(a005*a161);
   a162=(a015*a048);
@@ -696,10 +707,10 @@ static int casadi_f0(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a013=(a013+a014);
   a014=(a009-a013);
   a014=(a002*a014);
-  a164=(2.*a056);
+  a164=(2*a056);
   a164=(a164*a055);
   a165=(a014*a164);
-  a166=(2.*a060);
+  a166=(2*a060);
   a166=(a166*a059);
   a005=(a005*a166);
   a015=(a015*a059);
@@ -724,7 +735,7 @@ static int casadi_f0(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a168=(a072+a012);
   a169=(a010-a168);
   a169=(a002*a169);
-  a170=(2.*a001);
+  a170=(2*a001);
   a170=(a170*a000);
   a170=(a169*a170);
   a167=(a167-a170);
@@ -742,7 +753,7 @@ static int casadi_f0(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a116=(a072+a147);
   a150=(a146-a116);
   a150=(a002*a150);
-  a149=(2.*a079);
+  a149=(2*a079);
   a149=(a149*a108);
   a149=(a150*a149);
   a170=(a170-a149);
@@ -761,7 +772,7 @@ static int casadi_f0(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a161=(a072+a156);
   a159=(a155-a161);
   a159=(a002*a159);
-  a158=(2.*a043);
+  a158=(2*a043);
   a158=(a158*a041);
   a158=(a159*a158);
   a170=(a170-a158);
@@ -780,7 +791,7 @@ static int casadi_f0(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a008=(a072+a003);
   a011=(a009-a008);
   a011=(a002*a011);
-  a005=(2.*a054);
+  a005=(2*a054);
   a005=(a005*a053);
   a005=(a011*a005);
   a170=(a170-a005);
@@ -800,7 +811,7 @@ static int casadi_f0(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a010=(a010+a169);
   a005=(a025*a133);
   a164=(a005+a020);
-  a164=(2.*a164);
+  a164=(2*a164);
   a010=(a010+a164);
   a170=(a170+a010);
   a146=(a146+a116);
@@ -815,7 +826,7 @@ static int casadi_f0(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a150=(a025*a136);
   a010=(a052*a142);
   a014=(a150+a010);
-  a014=(2.*a014);
+  a014=(2*a014);
   a146=(a146+a014);
   a170=(a170+a146);
   a155=(a155+a161);
@@ -830,7 +841,7 @@ static int casadi_f0(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a159=(a066*a134);
   a146=(a037*a144);
   a015=(a159+a146);
-  a015=(2.*a015);
+  a015=(2*a015);
   a155=(a155+a015);
   a170=(a170+a155);
   a009=(a009+a008);
@@ -845,7 +856,7 @@ static int casadi_f0(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a169=(a066*a138);
   a011=(a052*a140);
   a008=(a169+a011);
-  a008=(2.*a008);
+  a008=(2*a008);
   a009=(a009+a008);
   a170=(a170+a009);
   a009=(a170*a105);
@@ -860,7 +871,7 @@ static int casadi_f0(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a155=(a050*a009);
   a139=(a139+a155);
   a137=(a137-a139);
-  a155=(2.*a069);
+  a155=(2*a069);
   a155=(a155-a068);
   a137=(a137/a155);
   a158=(a104*a137);
@@ -941,7 +952,7 @@ static int casadi_f0(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a172=(a172+a174);
   a174=(a092*a137);
   a172=(a172+a174);
-  a139=(2.*a139);
+  a139=(2*a139);
   a023=(a068*a023);
   a139=(a139-a023);
   a139=(a139/a155);
@@ -1527,7 +1538,7 @@ static int casadi_f0(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a004=(a004+a113);
   a113=(a092*a149);
   a004=(a004+a113);
-  a062=(2.*a062);
+  a062=(2*a062);
   a139=(a068*a139);
   a062=(a062-a139);
   a062=(a062/a155);
@@ -1839,7 +1850,7 @@ static int casadi_f0(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a139=(a139+a004);
   a004=(a092*a099);
   a139=(a139+a004);
-  a009=(2.*a009);
+  a009=(2*a009);
   a143=(a068*a143);
   a009=(a009-a143);
   a009=(a009/a155);
@@ -2062,7 +2073,7 @@ static int casadi_f0(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a105=(a092*a060);
   a055=(a055+a105);
   a105=(-a152);
-  a105=(2.*a105);
+  a105=(2*a105);
   a062=(a068*a122);
   a105=(a105+a062);
   a105=(a105/a155);
@@ -2143,7 +2154,7 @@ static int casadi_f0(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a055=(a018-a055);
   a009=(a092*a105);
   a055=(a055-a009);
-  a097=(2.*a097);
+  a097=(2*a097);
   a009=(a068*a033);
   a097=(a097+a009);
   a097=(a097/a155);
@@ -2240,7 +2251,7 @@ static int casadi_f0(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a009=(a117-a009);
   a055=(a092*a147);
   a009=(a009-a055);
-  a062=(2.*a062);
+  a062=(2*a062);
   a055=(a068*a120);
   a062=(a062+a055);
   a062=(a062/a155);
@@ -2419,7 +2430,7 @@ static int casadi_f0(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a143=(a143+a139);
   a139=(a092*a105);
   a143=(a143+a139);
-  a095=(2.*a095);
+  a095=(2*a095);
   a145=(a068*a145);
   a095=(a095-a145);
   a095=(a095/a155);
@@ -2730,7 +2741,7 @@ static int casadi_f0(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a105=(a105+a059);
   a059=(a092*a071);
   a105=(a105+a059);
-  a147=(2.*a147);
+  a147=(2*a147);
   a062=(a068*a062);
   a147=(a147-a062);
   a147=(a147/a155);
@@ -3042,7 +3053,7 @@ static int casadi_f0(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a062=(a062+a105);
   a105=(a092*a101);
   a062=(a062+a105);
-  a064=(2.*a064);
+  a064=(2*a064);
   a060=(a068*a060);
   a064=(a064-a060);
   a064=(a064/a155);
@@ -3347,7 +3358,7 @@ static int casadi_f0(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a101=(a101+a148);
   a148=(a092*a073);
   a101=(a101+a148);
-  a143=(2.*a143);
+  a143=(2*a143);
   a064=(a068*a064);
   a143=(a143-a064);
   a143=(a143/a155);
@@ -3658,7 +3669,7 @@ static int casadi_f0(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a156=(a156+a073);
   a073=(a092*a062);
   a156=(a156+a073);
-  a147=(2.*a147);
+  a147=(2*a147);
   a097=(a068*a097);
   a147=(a147-a097);
   a147=(a147/a155);
@@ -3970,7 +3981,7 @@ static int casadi_f0(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a050=(a050+a089);
   a092=(a092*a069);
   a050=(a050+a092);
-  a112=(2.*a112);
+  a112=(2*a112);
   a068=(a068*a021);
   a112=(a112-a068);
   a112=(a112/a155);
@@ -4282,42 +4293,42 @@ static int casadi_f1(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a001=1.9000000000000000e-01;
   a002=2.0000000000000001e-01;
   a003=arg[0]? arg[0][1] : 0;
-  a004=sin(a003);
+  a004=qd_sin(a003);
   a005=(a002*a004);
   a006=(a001+a005);
-  a003=cos(a003);
+  a003=qd_cos(a003);
   a007=arg[0]? arg[0][2] : 0;
-  a008=sin(a007);
+  a008=qd_sin(a007);
   a009=(a003*a008);
-  a007=cos(a007);
+  a007=qd_cos(a007);
   a010=(a004*a007);
   a009=(a009+a010);
   a009=(a002*a009);
   a006=(a006+a009);
   a010=-1.9000000000000000e-01;
   a011=arg[0]? arg[0][7] : 0;
-  a012=sin(a011);
+  a012=qd_sin(a011);
   a013=(a002*a012);
   a014=(a010+a013);
-  a011=cos(a011);
+  a011=qd_cos(a011);
   a015=arg[0]? arg[0][8] : 0;
-  a016=sin(a015);
+  a016=qd_sin(a015);
   a017=(a011*a016);
-  a015=cos(a015);
+  a015=qd_cos(a015);
   a018=(a012*a015);
   a017=(a017+a018);
   a017=(a002*a017);
   a014=(a014+a017);
   a018=(a006+a014);
   a019=arg[0]? arg[0][10] : 0;
-  a020=sin(a019);
+  a020=qd_sin(a019);
   a021=(a002*a020);
   a022=(a010+a021);
-  a019=cos(a019);
+  a019=qd_cos(a019);
   a023=arg[0]? arg[0][11] : 0;
-  a024=sin(a023);
+  a024=qd_sin(a023);
   a025=(a019*a024);
-  a023=cos(a023);
+  a023=qd_cos(a023);
   a026=(a020*a023);
   a025=(a025+a026);
   a025=(a002*a025);
@@ -4329,7 +4340,7 @@ static int casadi_f1(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a029=casadi_sq(a028);
   a030=7.0000000000000007e-02;
   a031=arg[0]? arg[0][0] : 0;
-  a032=cos(a031);
+  a032=qd_cos(a031);
   a033=(a032*a003);
   a034=(a002*a033);
   a035=(a030+a034);
@@ -4340,7 +4351,7 @@ static int casadi_f1(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a036=(a002*a036);
   a035=(a035+a036);
   a038=arg[0]? arg[0][6] : 0;
-  a039=cos(a038);
+  a039=qd_cos(a038);
   a040=(a039*a011);
   a041=(a002*a040);
   a042=(a030+a041);
@@ -4353,7 +4364,7 @@ static int casadi_f1(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a045=(a035+a042);
   a046=-7.0000000000000007e-02;
   a047=arg[0]? arg[0][9] : 0;
-  a048=cos(a047);
+  a048=qd_cos(a047);
   a049=(a048*a019);
   a050=(a002*a049);
   a051=(a046+a050);
@@ -4368,7 +4379,7 @@ static int casadi_f1(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a055=(a035-a054);
   a056=casadi_sq(a055);
   a057=(a029+a056);
-  a031=sin(a031);
+  a031=qd_sin(a031);
   a058=(a031*a004);
   a059=(a058*a008);
   a060=(a031*a003);
@@ -4377,7 +4388,7 @@ static int casadi_f1(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a062=(a002*a062);
   a063=(a002*a060);
   a062=(a062-a063);
-  a038=sin(a038);
+  a038=qd_sin(a038);
   a064=(a038*a012);
   a065=(a064*a016);
   a066=(a038*a011);
@@ -4387,7 +4398,7 @@ static int casadi_f1(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a069=(a002*a066);
   a068=(a068-a069);
   a070=(a062+a068);
-  a047=sin(a047);
+  a047=qd_sin(a047);
   a071=(a047*a020);
   a072=(a071*a024);
   a073=(a047*a019);
@@ -4740,7 +4751,7 @@ static int casadi_f1(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a172=(a154*a029);
   a056=(a111*a115);
   a172=(a172-a056);
-  a172=(2.*a172);
+  a172=(2*a172);
   a095=(a095+a172);
   a172=(a102*a113);
   a056=(a002*a096);
@@ -4790,7 +4801,7 @@ static int casadi_f1(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a093=(a111*a103);
   a029=(a173*a029);
   a093=(a093-a029);
-  a093=(2.*a093);
+  a093=(2*a093);
   a036=(a036+a093);
   a099=(a099-a097);
   a099=(a002*a099);
@@ -4852,7 +4863,7 @@ static int casadi_f1(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a059=(a154*a164);
   a114=(a111*a137);
   a059=(a059-a114);
-  a059=(2.*a059);
+  a059=(2*a059);
   a112=(a112+a059);
   a059=(a124*a135);
   a114=(a002*a118);
@@ -4902,7 +4913,7 @@ static int casadi_f1(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a099=(a111*a125);
   a164=(a173*a164);
   a099=(a099-a164);
-  a099=(2.*a099);
+  a099=(2*a099);
   a043=(a043+a099);
   a121=(a121-a119);
   a121=(a002*a121);
@@ -4965,7 +4976,7 @@ static int casadi_f1(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a067=(a154*a167);
   a065=(a111*a158);
   a067=(a067-a065);
-  a067=(2.*a067);
+  a067=(2*a067);
   a121=(a121+a067);
   a067=(a145*a156);
   a065=(a002*a133);
@@ -5015,7 +5026,7 @@ static int casadi_f1(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a059=(a111*a146);
   a167=(a173*a167);
   a059=(a059-a167);
-  a059=(2.*a059);
+  a059=(2*a059);
   a052=(a052+a059);
   a142=(a142-a140);
   a142=(a002*a142);
@@ -5074,7 +5085,7 @@ static int casadi_f1(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a115=(a173*a115);
   a103=(a154*a103);
   a115=(a115-a103);
-  a115=(2.*a115);
+  a115=(2*a115);
   a169=(a169+a115);
   a115=(a007*a004);
   a103=(a008*a003);
@@ -5100,7 +5111,7 @@ static int casadi_f1(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a137=(a173*a137);
   a125=(a154*a125);
   a137=(a137-a125);
-  a137=(2.*a137);
+  a137=(2*a137);
   a061=(a061+a137);
   a137=(a015*a012);
   a125=(a016*a011);
@@ -5127,7 +5138,7 @@ static int casadi_f1(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a158=(a173*a158);
   a146=(a154*a146);
   a158=(a158-a146);
-  a158=(2.*a158);
+  a158=(2*a158);
   a134=(a134+a158);
   a158=(a023*a020);
   a146=(a024*a019);
@@ -5453,18 +5464,18 @@ static int casadi_f1(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a072=(a072+a071);
   a036=(a036+a072);
   a071=arg[0]? arg[0][3] : 0;
-  a078=cos(a071);
+  a078=qd_cos(a071);
   a008=arg[0]? arg[0][4] : 0;
-  a144=cos(a008);
+  a144=qd_cos(a008);
   a067=arg[0]? arg[0][5] : 0;
-  a092=cos(a067);
-  a067=sin(a067);
-  a008=sin(a008);
+  a092=qd_cos(a067);
+  a067=qd_sin(a067);
+  a008=qd_sin(a008);
   a112=arg[1]? arg[1][3] : 0;
   a073=(a111-a112);
   a147=(a008*a073);
   a076=(a078*a173);
-  a071=sin(a071);
+  a071=qd_sin(a071);
   a169=(a071*a154);
   a076=(a076-a169);
   a169=(a144*a076);
@@ -6253,7 +6264,7 @@ static int casadi_f1(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a045=(a045*a054);
   a094=(a094+a045);
   a086=(a086-a094);
-  a045=(2.*a022);
+  a045=(2*a022);
   a045=(a045-a018);
   a086=(a086/a045);
   a100=(a100*a086);
@@ -6325,7 +6336,7 @@ static int casadi_f1(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a050=(a050+a062);
   a068=(a068*a086);
   a050=(a050+a068);
-  a094=(2.*a094);
+  a094=(2*a094);
   a018=(a018*a036);
   a094=(a094-a018);
   a094=(a094/a045);
@@ -6553,12 +6564,12 @@ static int casadi_f2(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   casadi_real a60, a61, a62, a63, a64, a65, a66, a67, a68, a69, a70, a71;
   casadi_real a72, a73, a74, a75, a76, a77;
   a00=arg[0]? arg[0][1] : 0;
-  a01=sin(a00);
+  a01=qd_sin(a00);
   a02=arg[0]? arg[0][2] : 0;
-  a03=sin(a02);
+  a03=qd_sin(a02);
   a04=1.4999999999999999e-02;
   a05=arg[0]? arg[0][0] : 0;
-  a06=sin(a05);
+  a06=qd_sin(a05);
   a07=-9.8100000000000005e+00;
   a08=2.;
   a09=arg[1]? arg[1][0] : 0;
@@ -6579,7 +6590,7 @@ static int casadi_f2(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a13=(a08*a13);
   a15=(a07*a13);
   a16=(a06*a15);
-  a05=cos(a05);
+  a05=qd_cos(a05);
   a17=1.;
   a10=(a08*a10);
   a17=(a17-a10);
@@ -6589,8 +6600,8 @@ static int casadi_f2(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a18=(a04*a16);
   a19=(a03*a18);
   a20=(a01*a19);
-  a00=cos(a00);
-  a02=cos(a02);
+  a00=qd_cos(a00);
+  a02=qd_cos(a02);
   a18=(a02*a18);
   a21=5.5000000000000007e-02;
   a22=(a21*a16);
@@ -6611,14 +6622,14 @@ static int casadi_f2(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a24=(a24-a25);
   a25=-1.9000000000000000e-01;
   a26=arg[0]? arg[0][10] : 0;
-  a27=sin(a26);
+  a27=qd_sin(a26);
   a28=(a23*a27);
   a28=(a25+a28);
-  a26=cos(a26);
+  a26=qd_cos(a26);
   a29=arg[0]? arg[0][11] : 0;
-  a30=sin(a29);
+  a30=qd_sin(a29);
   a31=(a26*a30);
-  a29=cos(a29);
+  a29=qd_cos(a29);
   a32=(a27*a29);
   a31=(a31+a32);
   a31=(a23*a31);
@@ -6675,15 +6686,15 @@ static int casadi_f2(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a13=(a16*a13);
   a13=(a11-a13);
   a38=arg[0]? arg[0][3] : 0;
-  a39=cos(a38);
+  a39=qd_cos(a38);
   a40=arg[0]? arg[0][4] : 0;
-  a41=cos(a40);
+  a41=qd_cos(a40);
   a42=arg[0]? arg[0][5] : 0;
-  a43=sin(a42);
-  a42=cos(a42);
+  a43=qd_sin(a42);
+  a42=qd_cos(a42);
   a44=(a41*a07);
-  a40=sin(a40);
-  a38=sin(a38);
+  a40=qd_sin(a40);
+  a38=qd_sin(a38);
   a45=(a38*a10);
   a46=(a39*a15);
   a45=(a45-a46);
@@ -6728,15 +6739,15 @@ static int casadi_f2(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a45=(a45-a53);
   a13=(a13+a45);
   a53=arg[0]? arg[0][6] : 0;
-  a54=cos(a53);
+  a54=qd_cos(a53);
   a55=arg[0]? arg[0][7] : 0;
-  a56=cos(a55);
+  a56=qd_cos(a55);
   a57=arg[0]? arg[0][8] : 0;
-  a58=sin(a57);
-  a57=cos(a57);
+  a58=qd_sin(a57);
+  a57=qd_cos(a57);
   a59=(a56*a07);
-  a55=sin(a55);
-  a53=sin(a53);
+  a55=qd_sin(a55);
+  a53=qd_sin(a53);
   a60=(a53*a10);
   a61=(a54*a15);
   a60=(a60-a61);
@@ -6781,9 +6792,9 @@ static int casadi_f2(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a60=(a60-a68);
   a13=(a13+a60);
   a68=arg[0]? arg[0][9] : 0;
-  a69=cos(a68);
+  a69=qd_cos(a68);
   a70=(a26*a07);
-  a68=sin(a68);
+  a68=qd_sin(a68);
   a71=(a68*a10);
   a72=(a69*a15);
   a71=(a71-a72);
@@ -6972,7 +6983,7 @@ static int casadi_f2(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a21=(a21*a32);
   a34=(a34+a21);
   a36=(a36-a34);
-  a21=(2.*a28);
+  a21=(2*a28);
   a07=(a23*a01);
   a07=(a19+a07);
   a63=(a00*a03);
@@ -7098,7 +7109,7 @@ static int casadi_f2(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a12=(a12+a25);
   a66=(a66*a36);
   a12=(a12+a66);
-  a34=(2.*a34);
+  a34=(2*a34);
   a48=(a48*a13);
   a34=(a34-a48);
   a34=(a34/a21);
@@ -7428,42 +7439,42 @@ static int casadi_f3(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a001=1.9000000000000000e-01;
   a002=2.0000000000000001e-01;
   a003=arg[0]? arg[0][1] : 0;
-  a004=sin(a003);
+  a004=qd_sin(a003);
   a005=(a002*a004);
   a006=(a001+a005);
-  a003=cos(a003);
+  a003=qd_cos(a003);
   a007=arg[0]? arg[0][2] : 0;
-  a008=sin(a007);
+  a008=qd_sin(a007);
   a009=(a003*a008);
-  a007=cos(a007);
+  a007=qd_cos(a007);
   a010=(a004*a007);
   a009=(a009+a010);
   a009=(a002*a009);
   a006=(a006+a009);
   a010=-1.9000000000000000e-01;
   a011=arg[0]? arg[0][7] : 0;
-  a012=sin(a011);
+  a012=qd_sin(a011);
   a013=(a002*a012);
   a014=(a010+a013);
-  a011=cos(a011);
+  a011=qd_cos(a011);
   a015=arg[0]? arg[0][8] : 0;
-  a016=sin(a015);
+  a016=qd_sin(a015);
   a017=(a011*a016);
-  a015=cos(a015);
+  a015=qd_cos(a015);
   a018=(a012*a015);
   a017=(a017+a018);
   a017=(a002*a017);
   a014=(a014+a017);
   a018=(a006+a014);
   a019=arg[0]? arg[0][10] : 0;
-  a020=sin(a019);
+  a020=qd_sin(a019);
   a021=(a002*a020);
   a022=(a010+a021);
-  a019=cos(a019);
+  a019=qd_cos(a019);
   a023=arg[0]? arg[0][11] : 0;
-  a024=sin(a023);
+  a024=qd_sin(a023);
   a025=(a019*a024);
-  a023=cos(a023);
+  a023=qd_cos(a023);
   a026=(a020*a023);
   a025=(a025+a026);
   a025=(a002*a025);
@@ -7475,7 +7486,7 @@ static int casadi_f3(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a029=casadi_sq(a028);
   a030=7.0000000000000007e-02;
   a031=arg[0]? arg[0][0] : 0;
-  a032=cos(a031);
+  a032=qd_cos(a031);
   a033=(a032*a003);
   a034=(a002*a033);
   a035=(a030+a034);
@@ -7486,7 +7497,7 @@ static int casadi_f3(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a036=(a002*a036);
   a035=(a035+a036);
   a038=arg[0]? arg[0][6] : 0;
-  a039=cos(a038);
+  a039=qd_cos(a038);
   a040=(a039*a011);
   a041=(a002*a040);
   a042=(a030+a041);
@@ -7499,7 +7510,7 @@ static int casadi_f3(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a045=(a035+a042);
   a046=-7.0000000000000007e-02;
   a047=arg[0]? arg[0][9] : 0;
-  a048=cos(a047);
+  a048=qd_cos(a047);
   a049=(a048*a019);
   a050=(a002*a049);
   a051=(a046+a050);
@@ -7514,7 +7525,7 @@ static int casadi_f3(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a055=(a035-a054);
   a056=casadi_sq(a055);
   a057=(a029+a056);
-  a031=sin(a031);
+  a031=qd_sin(a031);
   a058=(a031*a004);
   a059=(a058*a008);
   a060=(a031*a003);
@@ -7523,7 +7534,7 @@ static int casadi_f3(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a062=(a002*a062);
   a063=(a002*a060);
   a062=(a062-a063);
-  a038=sin(a038);
+  a038=qd_sin(a038);
   a064=(a038*a012);
   a065=(a064*a016);
   a066=(a038*a011);
@@ -7533,7 +7544,7 @@ static int casadi_f3(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a069=(a002*a066);
   a068=(a068-a069);
   a070=(a062+a068);
-  a047=sin(a047);
+  a047=qd_sin(a047);
   a071=(a047*a020);
   a072=(a071*a024);
   a073=(a047*a019);
@@ -8035,7 +8046,7 @@ static int casadi_f3(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a214=(a212*a215);
   a084=(a201*a202);
   a214=(a214-a084);
-  a214=(2.*a214);
+  a214=(2*a214);
   a087=(a087+a214);
   a214=(a197*a101);
   a084=(a002*a093);
@@ -8085,7 +8096,7 @@ static int casadi_f3(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a106=(a201*a198);
   a095=(a216*a215);
   a106=(a106-a095);
-  a106=(2.*a106);
+  a106=(2*a106);
   a036=(a036+a106);
   a096=(a096-a094);
   a096=(a002*a096);
@@ -8147,7 +8158,7 @@ static int casadi_f3(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a059=(a212*a217);
   a102=(a201*a208);
   a059=(a059-a102);
-  a059=(2.*a059);
+  a059=(2*a059);
   a100=(a100+a059);
   a059=(a203*a139);
   a102=(a002*a131);
@@ -8197,7 +8208,7 @@ static int casadi_f3(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a096=(a201*a204);
   a133=(a216*a217);
   a096=(a096-a133);
-  a096=(2.*a096);
+  a096=(2*a096);
   a043=(a043+a096);
   a134=(a134-a132);
   a134=(a002*a134);
@@ -8260,7 +8271,7 @@ static int casadi_f3(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a067=(a212*a218);
   a065=(a201*a213);
   a067=(a067-a065);
-  a067=(2.*a067);
+  a067=(2*a067);
   a134=(a134+a067);
   a067=(a207*a172);
   a065=(a002*a164);
@@ -8310,7 +8321,7 @@ static int casadi_f3(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a059=(a201*a209);
   a166=(a216*a218);
   a059=(a059-a166);
-  a059=(2.*a059);
+  a059=(2*a059);
   a052=(a052+a059);
   a167=(a167-a165);
   a167=(a002*a167);
@@ -8369,7 +8380,7 @@ static int casadi_f3(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a093=(a216*a202);
   a167=(a212*a198);
   a093=(a093-a167);
-  a093=(2.*a093);
+  a093=(2*a093);
   a104=(a104+a093);
   a093=(a007*a004);
   a167=(a008*a003);
@@ -8395,7 +8406,7 @@ static int casadi_f3(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a131=(a216*a208);
   a005=(a212*a204);
   a131=(a131-a005);
-  a131=(2.*a131);
+  a131=(2*a131);
   a061=(a061+a131);
   a131=(a015*a012);
   a005=(a016*a011);
@@ -8422,7 +8433,7 @@ static int casadi_f3(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a164=(a216*a213);
   a085=(a212*a209);
   a164=(a164-a085);
-  a164=(2.*a164);
+  a164=(2*a164);
   a138=(a138+a164);
   a164=(a023*a020);
   a085=(a024*a019);
@@ -9116,18 +9127,18 @@ static int casadi_f3(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a171=(a171+a134);
   a198=(a198+a171);
   a134=arg[0]? arg[0][3] : 0;
-  a078=cos(a134);
+  a078=qd_cos(a134);
   a073=arg[0]? arg[0][4] : 0;
-  a067=cos(a073);
+  a067=qd_cos(a073);
   a089=arg[0]? arg[0][5] : 0;
-  a204=cos(a089);
-  a089=sin(a089);
-  a073=sin(a073);
+  a204=qd_cos(a089);
+  a089=qd_sin(a089);
+  a073=qd_sin(a073);
   a202=arg[1]? arg[1][3] : 0;
   a208=(a201-a202);
   a100=(a073*a208);
   a217=(a078*a216);
-  a134=sin(a134);
+  a134=qd_sin(a134);
   a218=(a134*a212);
   a217=(a217-a218);
   a218=(a067*a217);
@@ -9931,7 +9942,7 @@ static int casadi_f3(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a045=(a045*a099);
   a109=(a109+a045);
   a126=(a126-a109);
-  a045=(2.*a022);
+  a045=(2*a022);
   a045=(a045-a018);
   a126=(a126/a045);
   a097=(a097*a126);
@@ -10006,7 +10017,7 @@ static int casadi_f3(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a061=(a061+a062);
   a068=(a068*a126);
   a061=(a061+a068);
-  a109=(2.*a109);
+  a109=(2*a109);
   a018=(a018*a198);
   a109=(a109-a018);
   a109=(a109/a045);

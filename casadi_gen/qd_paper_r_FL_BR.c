@@ -20,6 +20,17 @@ extern "C" {
 
 #include <math.h>
 
+/* quadruped_dyn: the elementary functions in casadi_real's precision. A float build
+ * (-Dcasadi_real=float) calls sinf, cosf, ... instead of promoting to double, so it does no
+ * double arithmetic (none on a single-precision FPU: -Wdouble-promotion clean); a double build
+ * calls sin, cos, ... exactly as before. */
+#define QD_REAL_IS_FLOAT (sizeof(casadi_real) == sizeof(float))
+static inline casadi_real qd_sin(casadi_real x) { return QD_REAL_IS_FLOAT ? (casadi_real)sinf((float)x) : (casadi_real)sin((double)x); }
+static inline casadi_real qd_cos(casadi_real x) { return QD_REAL_IS_FLOAT ? (casadi_real)cosf((float)x) : (casadi_real)cos((double)x); }
+static inline casadi_real qd_tan(casadi_real x) { return QD_REAL_IS_FLOAT ? (casadi_real)tanf((float)x) : (casadi_real)tan((double)x); }
+static inline casadi_real qd_sqrt(casadi_real x) { return QD_REAL_IS_FLOAT ? (casadi_real)sqrtf((float)x) : (casadi_real)sqrt((double)x); }
+static inline casadi_real qd_fabs(casadi_real x) { return QD_REAL_IS_FLOAT ? (casadi_real)fabsf((float)x) : (casadi_real)fabs((double)x); }
+
 #ifndef casadi_real
 #define casadi_real double
 #endif
@@ -76,7 +87,7 @@ static const casadi_int casadi_s2[3] = {13, 13, 1};
  *   0             success
  *   QD_NONFINITE  an output is NaN or inf: coincident or collinear stance feet (the trunk
  *                 motion is undetermined), the trunk pitched +-90 deg (the roll row of two
- *                 stance feet has tan(pitch)), a zero quaternion, or a non-finite input;
+ *                 stance feet has qd_tan(pitch)), a zero quaternion, or a non-finite input;
  *   QD_SINGULAR   (qd_fd_r_* only) M_r is singular to working precision: a pivot of its LU
  *                 factorisation (partial pivoting) is below QD_SINGULAR_RTOL * max|M_r|,
  *                 e.g. two stance feet with the trunk pitched within ~1e-12 rad of 90 deg.
@@ -129,7 +140,7 @@ static inline int qd_fd_r_solve(int n, qd_eval_fn M_r, qd_eval_fn CG_r, const ca
   if (flag) return flag;
   casadi_real scale = 0, sum = 0; /* a NaN or inf anywhere makes the sum non-finite */
   for (int i = 0; i < n * n; ++i) {
-    scale = fabs(M[i]) > scale ? fabs(M[i]) : scale;
+    scale = qd_fabs(M[i]) > scale ? qd_fabs(M[i]) : scale;
     sum += M[i];
   }
   for (int i = 0; i < n; ++i) {
@@ -140,8 +151,8 @@ static inline int qd_fd_r_solve(int n, qd_eval_fn M_r, qd_eval_fn CG_r, const ca
   for (int k = 0; k < n; ++k) { /* M[i + n j] = M_ij */
     casadi_real* col = M + n * k;
     int p = k;
-    for (int i = k + 1; i < n; ++i) p = fabs(col[i]) > fabs(col[p]) ? i : p;
-    if (!(fabs(col[p]) > QD_SINGULAR_RTOL * scale)) return QD_SINGULAR;
+    for (int i = k + 1; i < n; ++i) p = qd_fabs(col[i]) > qd_fabs(col[p]) ? i : p;
+    if (!(qd_fabs(col[p]) > QD_SINGULAR_RTOL * scale)) return QD_SINGULAR;
     if (p != k) {
       for (int j = 0; j < n; ++j) {
         casadi_real t = M[k + n * j];
@@ -190,15 +201,15 @@ static int casadi_f0(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   casadi_real a144, a145, a146, a147, a148, a149, a150, a151, a152, a153, a154, a155;
   casadi_real a156, a157, a158, a159, a160, a161, a162, a163, a164;
   a000=arg[0]? arg[0][0] : 0;
-  a001=cos(a000);
+  a001=qd_cos(a000);
   a002=5.0000000000000000e-01;
   a003=7.3642708333333355e-03;
   a004=1.0126562500000001e-03;
   a005=9.9578125000000014e-04;
   a006=arg[0]? arg[0][2] : 0;
-  a007=cos(a006);
+  a007=qd_cos(a006);
   a008=casadi_sq(a007);
-  a006=sin(a006);
+  a006=qd_sin(a006);
   a009=casadi_sq(a006);
   a008=(a008-a009);
   a008=(a005*a008);
@@ -221,12 +232,12 @@ static int casadi_f0(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a017=(a010-a008);
   a017=(a002*a017);
   a018=arg[0]? arg[0][1] : 0;
-  a019=cos(a018);
-  a020=(2.*a019);
-  a018=sin(a018);
+  a019=qd_cos(a018);
+  a020=(2*a019);
+  a018=qd_sin(a018);
   a020=(a020*a018);
   a021=(a017*a020);
-  a022=(2.*a007);
+  a022=(2*a007);
   a022=(a022*a006);
   a022=(a005*a022);
   a023=(a015*a006);
@@ -261,14 +272,14 @@ static int casadi_f0(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a038=(a038+a039);
   a039=-1.9000000000000000e-01;
   a040=arg[0]? arg[0][10] : 0;
-  a041=sin(a040);
+  a041=qd_sin(a040);
   a042=(a037*a041);
   a042=(a039+a042);
-  a040=cos(a040);
+  a040=qd_cos(a040);
   a043=arg[0]? arg[0][11] : 0;
-  a044=sin(a043);
+  a044=qd_sin(a043);
   a045=(a040*a044);
-  a043=cos(a043);
+  a043=qd_cos(a043);
   a046=(a041*a043);
   a045=(a045+a046);
   a045=(a037*a045);
@@ -290,7 +301,7 @@ static int casadi_f0(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a051=(a051+a052);
   a052=-7.0000000000000007e-02;
   a054=arg[0]? arg[0][9] : 0;
-  a055=cos(a054);
+  a055=qd_cos(a054);
   a056=(a055*a040);
   a057=(a037*a056);
   a057=(a052+a057);
@@ -305,7 +316,7 @@ static int casadi_f0(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a060=(a051-a058);
   a061=casadi_sq(a060);
   a062=(a048+a061);
-  a000=sin(a000);
+  a000=qd_sin(a000);
   a063=(a000*a018);
   a064=(a063*a006);
   a065=(a000*a019);
@@ -314,7 +325,7 @@ static int casadi_f0(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a064=(a037*a064);
   a066=(a037*a065);
   a064=(a064-a066);
-  a054=sin(a054);
+  a054=qd_sin(a054);
   a066=(a054*a041);
   a067=(a066*a044);
   a068=(a054*a040);
@@ -512,34 +523,34 @@ static int casadi_f0(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a091=1.0000000000000002e+01;
   a023=(a091*a080);
   a071=arg[0]? arg[0][3] : 0;
-  a085=sin(a071);
+  a085=qd_sin(a071);
   a083=arg[0]? arg[0][4] : 0;
-  a062=cos(a083);
+  a062=qd_cos(a083);
   a098=arg[0]? arg[0][5] : 0;
-  a099=cos(a098);
+  a099=qd_cos(a098);
   a100=(a027*a099);
   a101=(a100+a029);
   a101=(a026+a101);
   a102=(a062*a101);
-  a083=sin(a083);
-  a098=sin(a098);
+  a083=qd_sin(a083);
+  a098=qd_sin(a098);
   a103=(a027*a098);
   a104=(a083*a103);
   a102=(a102-a104);
   a105=(a085*a102);
   a106=(a095+a105);
   a107=arg[0]? arg[0][6] : 0;
-  a108=sin(a107);
+  a108=qd_sin(a107);
   a109=arg[0]? arg[0][7] : 0;
-  a110=cos(a109);
+  a110=qd_cos(a109);
   a111=arg[0]? arg[0][8] : 0;
-  a112=cos(a111);
+  a112=qd_cos(a111);
   a113=(a027*a112);
   a114=(a113+a029);
   a114=(a026+a114);
   a115=(a110*a114);
-  a109=sin(a109);
-  a111=sin(a111);
+  a109=qd_sin(a109);
+  a111=qd_sin(a111);
   a116=(a027*a111);
   a117=(a109*a116);
   a115=(a115-a117);
@@ -597,12 +608,12 @@ static int casadi_f0(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a130=(a130-a131);
   a131=8.0500000000000016e-02;
   a132=(a034+a131);
-  a071=cos(a071);
+  a071=qd_cos(a071);
   a133=(a071*a102);
   a134=-8.0500000000000016e-02;
   a135=(a133+a134);
   a132=(a132+a135);
-  a107=cos(a107);
+  a107=qd_cos(a107);
   a135=(a107*a115);
   a131=(a135+a131);
   a132=(a132+a131);
@@ -635,7 +646,7 @@ static int casadi_f0(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a022=(a022-a141);
   a022=(a022-a141);
   a141=(a141+a020);
-  a141=(2.*a141);
+  a141=(2*a141);
   a022=(a022+a141);
   a139=(a139+a022);
   a022=casadi_sq(a099);
@@ -662,12 +673,12 @@ static int casadi_f0(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a022=(a022-a147);
   a147=(a142*a022);
   a146=(a146+a147);
-  a099=(2.*a099);
+  a099=(2*a099);
   a099=(a099*a098);
   a099=(a005*a099);
   a098=(a015*a098);
   a099=(a099+a098);
-  a098=(2.*a062);
+  a098=(2*a062);
   a098=(a098*a083);
   a147=(a099*a098);
   a146=(a146-a147);
@@ -678,7 +689,7 @@ static int casadi_f0(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a148=(a148-a149);
   a150=(a052*a133);
   a149=(a149+a150);
-  a149=(2.*a149);
+  a149=(2*a149);
   a148=(a148+a149);
   a139=(a139+a148);
   a148=casadi_sq(a112);
@@ -705,12 +716,12 @@ static int casadi_f0(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a148=(a148-a156);
   a156=(a151*a148);
   a155=(a155+a156);
-  a112=(2.*a112);
+  a112=(2*a112);
   a112=(a112*a111);
   a112=(a005*a112);
   a111=(a015*a111);
   a112=(a112+a111);
-  a111=(2.*a110);
+  a111=(2*a110);
   a111=(a111*a109);
   a156=(a112*a111);
   a155=(a155-a156);
@@ -721,7 +732,7 @@ static int casadi_f0(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a157=(a157-a158);
   a159=(a049*a135);
   a158=(a158+a159);
-  a158=(2.*a158);
+  a158=(2*a158);
   a157=(a157+a158);
   a139=(a139+a157);
   a157=casadi_sq(a043);
@@ -748,12 +759,12 @@ static int casadi_f0(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a013=(a013-a160);
   a160=(a009*a013);
   a157=(a157+a160);
-  a160=(2.*a043);
+  a160=(2*a043);
   a160=(a160*a044);
   a005=(a005*a160);
   a015=(a015*a044);
   a005=(a005+a015);
-  a015=(2.*a040);
+  a015=(2*a040);
   a015=(a015*a041);
   a160=(a005*a015);
   a157=(a157-a160);
@@ -764,7 +775,7 @@ static int casadi_f0(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a140=(a140-a161);
   a162=(a052*a131);
   a161=(a161+a162);
-  a161=(2.*a161);
+  a161=(2*a161);
   a140=(a140+a161);
   a139=(a139+a140);
   a140=(a139*a096);
@@ -910,24 +921,24 @@ static int casadi_f0(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a123=(a122*a086);
   a015=(a015+a123);
   a123=(a049*a095);
-  a014=(2.*a001);
+  a014=(2*a001);
   a014=(a014*a000);
   a010=(a010*a014);
   a123=(a123-a010);
   a010=(a052*a105);
-  a014=(2.*a071);
+  a014=(2*a071);
   a014=(a014*a085);
   a145=(a145*a014);
   a010=(a010-a145);
   a123=(a123+a010);
   a010=(a049*a118);
-  a145=(2.*a107);
+  a145=(2*a107);
   a145=(a145*a108);
   a154=(a154*a145);
   a010=(a010-a154);
   a123=(a123+a010);
   a010=(a052*a121);
-  a154=(2.*a055);
+  a154=(2*a055);
   a154=(a154*a054);
   a002=(a002*a154);
   a010=(a010-a002);
@@ -1379,7 +1390,7 @@ static int casadi_f0(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a158=(a158+a020);
   a129=(a129-a158);
   if (res[0]!=0) res[0][11]=a129;
-  a129=sqrt(a008);
+  a129=qd_sqrt(a008);
   a158=(a042/a129);
   a020=(a051*a137);
   a066=(a064*a023);
@@ -4181,28 +4192,28 @@ static int casadi_f1(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a001=1.9000000000000000e-01;
   a002=2.0000000000000001e-01;
   a003=arg[0]? arg[0][1] : 0;
-  a004=sin(a003);
+  a004=qd_sin(a003);
   a005=(a002*a004);
   a006=(a001+a005);
-  a003=cos(a003);
+  a003=qd_cos(a003);
   a007=arg[0]? arg[0][2] : 0;
-  a008=sin(a007);
+  a008=qd_sin(a007);
   a009=(a003*a008);
-  a007=cos(a007);
+  a007=qd_cos(a007);
   a010=(a004*a007);
   a009=(a009+a010);
   a009=(a002*a009);
   a006=(a006+a009);
   a010=-1.9000000000000000e-01;
   a011=arg[0]? arg[0][10] : 0;
-  a012=sin(a011);
+  a012=qd_sin(a011);
   a013=(a002*a012);
   a014=(a010+a013);
-  a011=cos(a011);
+  a011=qd_cos(a011);
   a015=arg[0]? arg[0][11] : 0;
-  a016=sin(a015);
+  a016=qd_sin(a015);
   a017=(a011*a016);
-  a015=cos(a015);
+  a015=qd_cos(a015);
   a018=(a012*a015);
   a017=(a017+a018);
   a017=(a002*a017);
@@ -4214,7 +4225,7 @@ static int casadi_f1(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a021=casadi_sq(a020);
   a022=7.0000000000000007e-02;
   a023=arg[0]? arg[0][0] : 0;
-  a024=cos(a023);
+  a024=qd_cos(a023);
   a025=(a024*a003);
   a026=(a002*a025);
   a027=(a022+a026);
@@ -4226,7 +4237,7 @@ static int casadi_f1(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a027=(a027+a028);
   a030=-7.0000000000000007e-02;
   a031=arg[0]? arg[0][9] : 0;
-  a032=cos(a031);
+  a032=qd_cos(a031);
   a033=(a032*a011);
   a034=(a002*a033);
   a035=(a030+a034);
@@ -4241,7 +4252,7 @@ static int casadi_f1(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a039=(a027-a038);
   a040=casadi_sq(a039);
   a041=(a021+a040);
-  a023=sin(a023);
+  a023=qd_sin(a023);
   a042=(a023*a004);
   a043=(a042*a008);
   a044=(a023*a003);
@@ -4250,7 +4261,7 @@ static int casadi_f1(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a046=(a002*a046);
   a047=(a002*a044);
   a046=(a046-a047);
-  a031=sin(a031);
+  a031=qd_sin(a031);
   a048=(a031*a012);
   a049=(a048*a016);
   a050=(a031*a011);
@@ -4553,7 +4564,7 @@ static int casadi_f1(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a063=(a119*a120);
   a070=(a090*a094);
   a063=(a063-a070);
-  a063=(2.*a063);
+  a063=(2*a063);
   a130=(a130+a063);
   a063=(a081*a092);
   a070=(a002*a075);
@@ -4603,7 +4614,7 @@ static int casadi_f1(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a074=(a090*a082);
   a120=(a072*a120);
   a074=(a074-a120);
-  a074=(2.*a074);
+  a074=(2*a074);
   a028=(a028+a074);
   a078=(a078-a076);
   a078=(a002*a078);
@@ -4665,7 +4676,7 @@ static int casadi_f1(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a043=(a119*a124);
   a093=(a090*a116);
   a043=(a043-a093);
-  a043=(2.*a043);
+  a043=(2*a043);
   a091=(a091+a043);
   a043=(a103*a114);
   a093=(a002*a097);
@@ -4715,7 +4726,7 @@ static int casadi_f1(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a078=(a090*a104);
   a124=(a072*a124);
   a078=(a078-a124);
-  a078=(2.*a078);
+  a078=(2*a078);
   a036=(a036+a078);
   a100=(a100-a098);
   a100=(a002*a100);
@@ -4777,9 +4788,9 @@ static int casadi_f1(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a100=(a100+a051);
   a100=(a100/a068);
   a051=(a060/a068);
-  a049=(2.*a065);
+  a049=(2*a065);
   a049=(a049*a113);
-  a113=(2.*a067);
+  a113=(2*a067);
   a115=(a069*a072);
   a107=(a065*a090);
   a115=(a115-a107);
@@ -4806,7 +4817,7 @@ static int casadi_f1(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a094=(a072*a094);
   a082=(a119*a082);
   a094=(a094-a082);
-  a094=(2.*a094);
+  a094=(2*a094);
   a126=(a126+a094);
   a094=(a007*a004);
   a082=(a008*a003);
@@ -4832,7 +4843,7 @@ static int casadi_f1(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a116=(a072*a116);
   a104=(a119*a104);
   a116=(a116-a104);
-  a116=(2.*a116);
+  a116=(2*a116);
   a045=(a045+a116);
   a116=(a015*a012);
   a104=(a016*a011);
@@ -5131,18 +5142,18 @@ static int casadi_f1(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a048=(a048+a065);
   a067=(a067+a048);
   a065=arg[0]? arg[0][3] : 0;
-  a060=cos(a065);
+  a060=qd_cos(a065);
   a008=arg[0]? arg[0][4] : 0;
-  a098=cos(a008);
+  a098=qd_cos(a008);
   a043=arg[0]? arg[0][5] : 0;
-  a066=cos(a043);
-  a043=sin(a043);
-  a008=sin(a008);
+  a066=qd_cos(a043);
+  a043=qd_sin(a043);
+  a008=qd_sin(a008);
   a126=arg[1]? arg[1][3] : 0;
   a045=(a090-a126);
   a085=(a008*a045);
   a093=(a060*a072);
-  a065=sin(a065);
+  a065=qd_sin(a065);
   a047=(a065*a119);
   a093=(a093-a047);
   a047=(a098*a093);
@@ -5293,18 +5304,18 @@ static int casadi_f1(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a050=(a050+a115);
   a067=(a067+a050);
   a115=arg[0]? arg[0][6] : 0;
-  a041=cos(a115);
+  a041=qd_cos(a115);
   a070=arg[0]? arg[0][7] : 0;
-  a140=cos(a070);
+  a140=qd_cos(a070);
   a141=arg[0]? arg[0][8] : 0;
-  a142=cos(a141);
-  a141=sin(a141);
-  a070=sin(a070);
+  a142=qd_cos(a141);
+  a141=qd_sin(a141);
+  a070=qd_sin(a070);
   a143=arg[1]? arg[1][6] : 0;
   a144=(a090-a143);
   a145=(a070*a144);
   a146=(a041*a072);
-  a115=sin(a115);
+  a115=qd_sin(a115);
   a147=(a115*a119);
   a146=(a146-a147);
   a147=(a140*a146);
@@ -6162,7 +6173,7 @@ static int casadi_f1(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a063=(a063+a125);
   a063=(-a063);
   if (res[0]!=0) res[0][11]=a063;
-  a032=sqrt(a032);
+  a032=qd_sqrt(a032);
   a014=(a014/a032);
   a063=(a027*a099);
   a125=(a046*a067);
@@ -6275,12 +6286,12 @@ static int casadi_f2(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   casadi_real a72, a73, a74, a75, a76, a77, a78, a79, a80, a81, a82, a83;
   casadi_real a84, a85, a86, a87, a88, a89, a90, a91, a92, a93, a94, a95;
   a00=arg[0]? arg[0][1] : 0;
-  a01=sin(a00);
+  a01=qd_sin(a00);
   a02=arg[0]? arg[0][2] : 0;
-  a03=sin(a02);
+  a03=qd_sin(a02);
   a04=1.4999999999999999e-02;
   a05=arg[0]? arg[0][0] : 0;
-  a06=sin(a05);
+  a06=qd_sin(a05);
   a07=-9.8100000000000005e+00;
   a08=2.;
   a09=arg[1]? arg[1][0] : 0;
@@ -6301,7 +6312,7 @@ static int casadi_f2(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a15=(a13*a15);
   a16=(a07*a15);
   a17=(a06*a16);
-  a05=cos(a05);
+  a05=qd_cos(a05);
   a18=1.;
   a10=(a13*a10);
   a18=(a18-a10);
@@ -6311,8 +6322,8 @@ static int casadi_f2(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a19=(a04*a17);
   a20=(a03*a19);
   a21=(a01*a20);
-  a00=cos(a00);
-  a02=cos(a02);
+  a00=qd_cos(a00);
+  a02=qd_cos(a02);
   a19=(a02*a19);
   a22=5.5000000000000007e-02;
   a23=(a22*a17);
@@ -6383,15 +6394,15 @@ static int casadi_f2(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a15=(a17*a15);
   a15=(a11-a15);
   a33=arg[0]? arg[0][3] : 0;
-  a34=cos(a33);
+  a34=qd_cos(a33);
   a35=arg[0]? arg[0][4] : 0;
-  a36=cos(a35);
+  a36=qd_cos(a35);
   a37=arg[0]? arg[0][5] : 0;
-  a38=sin(a37);
-  a37=cos(a37);
+  a38=qd_sin(a37);
+  a37=qd_cos(a37);
   a39=(a36*a07);
-  a35=sin(a35);
-  a33=sin(a33);
+  a35=qd_sin(a35);
+  a33=qd_sin(a33);
   a40=(a33*a10);
   a41=(a34*a16);
   a40=(a40-a41);
@@ -6436,15 +6447,15 @@ static int casadi_f2(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a40=(a40-a48);
   a15=(a15+a40);
   a48=arg[0]? arg[0][6] : 0;
-  a49=cos(a48);
+  a49=qd_cos(a48);
   a50=arg[0]? arg[0][7] : 0;
-  a51=cos(a50);
+  a51=qd_cos(a50);
   a52=arg[0]? arg[0][8] : 0;
-  a53=sin(a52);
-  a52=cos(a52);
+  a53=qd_sin(a52);
+  a52=qd_cos(a52);
   a54=(a51*a07);
-  a50=sin(a50);
-  a48=sin(a48);
+  a50=qd_sin(a50);
+  a48=qd_sin(a48);
   a55=(a48*a10);
   a56=(a49*a16);
   a55=(a55-a56);
@@ -6489,15 +6500,15 @@ static int casadi_f2(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a55=(a55-a63);
   a15=(a15+a55);
   a63=arg[0]? arg[0][9] : 0;
-  a64=cos(a63);
+  a64=qd_cos(a63);
   a65=arg[0]? arg[0][10] : 0;
-  a66=cos(a65);
+  a66=qd_cos(a65);
   a67=arg[0]? arg[0][11] : 0;
-  a68=sin(a67);
-  a67=cos(a67);
+  a68=qd_sin(a67);
+  a67=qd_cos(a67);
   a69=(a66*a07);
-  a65=sin(a65);
-  a63=sin(a63);
+  a65=qd_sin(a65);
+  a63=qd_sin(a63);
   a70=(a63*a10);
   a71=(a64*a16);
   a70=(a70-a71);
@@ -6986,7 +6997,7 @@ static int casadi_f2(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a04=(a04+a66);
   a04=(-a04);
   if (res[0]!=0) res[0][11]=a04;
-  a49=sqrt(a49);
+  a49=qd_sqrt(a49);
   a79=(a79/a49);
   a04=(a30*a15);
   a66=(a87*a17);
@@ -7109,28 +7120,28 @@ static int casadi_f3(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a001=1.9000000000000000e-01;
   a002=2.0000000000000001e-01;
   a003=arg[0]? arg[0][1] : 0;
-  a004=sin(a003);
+  a004=qd_sin(a003);
   a005=(a002*a004);
   a006=(a001+a005);
-  a003=cos(a003);
+  a003=qd_cos(a003);
   a007=arg[0]? arg[0][2] : 0;
-  a008=sin(a007);
+  a008=qd_sin(a007);
   a009=(a003*a008);
-  a007=cos(a007);
+  a007=qd_cos(a007);
   a010=(a004*a007);
   a009=(a009+a010);
   a009=(a002*a009);
   a006=(a006+a009);
   a010=-1.9000000000000000e-01;
   a011=arg[0]? arg[0][10] : 0;
-  a012=sin(a011);
+  a012=qd_sin(a011);
   a013=(a002*a012);
   a014=(a010+a013);
-  a011=cos(a011);
+  a011=qd_cos(a011);
   a015=arg[0]? arg[0][11] : 0;
-  a016=sin(a015);
+  a016=qd_sin(a015);
   a017=(a011*a016);
-  a015=cos(a015);
+  a015=qd_cos(a015);
   a018=(a012*a015);
   a017=(a017+a018);
   a017=(a002*a017);
@@ -7142,7 +7153,7 @@ static int casadi_f3(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a021=casadi_sq(a020);
   a022=7.0000000000000007e-02;
   a023=arg[0]? arg[0][0] : 0;
-  a024=cos(a023);
+  a024=qd_cos(a023);
   a025=(a024*a003);
   a026=(a002*a025);
   a027=(a022+a026);
@@ -7154,7 +7165,7 @@ static int casadi_f3(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a027=(a027+a028);
   a030=-7.0000000000000007e-02;
   a031=arg[0]? arg[0][9] : 0;
-  a032=cos(a031);
+  a032=qd_cos(a031);
   a033=(a032*a011);
   a034=(a002*a033);
   a035=(a030+a034);
@@ -7169,7 +7180,7 @@ static int casadi_f3(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a039=(a027-a038);
   a040=casadi_sq(a039);
   a041=(a021+a040);
-  a023=sin(a023);
+  a023=qd_sin(a023);
   a042=(a023*a004);
   a043=(a042*a008);
   a044=(a023*a003);
@@ -7178,7 +7189,7 @@ static int casadi_f3(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a046=(a002*a046);
   a047=(a002*a044);
   a046=(a046-a047);
-  a031=sin(a031);
+  a031=qd_sin(a031);
   a048=(a031*a012);
   a049=(a048*a016);
   a050=(a031*a011);
@@ -7588,7 +7599,7 @@ static int casadi_f3(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a159=(a158*a160);
   a070=(a150*a151);
   a159=(a159-a070);
-  a159=(2.*a159);
+  a159=(2*a159);
   a021=(a021+a159);
   a159=(a146*a080);
   a070=(a002*a072);
@@ -7638,7 +7649,7 @@ static int casadi_f3(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a083=(a150*a147);
   a074=(a063*a160);
   a083=(a083-a074);
-  a083=(2.*a083);
+  a083=(2*a083);
   a028=(a028+a083);
   a075=(a075-a073);
   a075=(a002*a075);
@@ -7700,7 +7711,7 @@ static int casadi_f3(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a043=(a158*a162);
   a081=(a150*a157);
   a043=(a043-a081);
-  a043=(2.*a043);
+  a043=(2*a043);
   a079=(a079+a043);
   a043=(a152*a119);
   a081=(a002*a111);
@@ -7750,7 +7761,7 @@ static int casadi_f3(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a075=(a150*a153);
   a113=(a063*a162);
   a075=(a075-a113);
-  a075=(2.*a075);
+  a075=(2*a075);
   a036=(a036+a075);
   a114=(a114-a112);
   a114=(a002*a114);
@@ -7812,9 +7823,9 @@ static int casadi_f3(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a114=(a114+a051);
   a114=(a114/a068);
   a051=(a060/a068);
-  a049=(2.*a065);
+  a049=(2*a065);
   a049=(a049*a118);
-  a118=(2.*a067);
+  a118=(2*a067);
   a120=(a069*a063);
   a129=(a065*a150);
   a120=(a120-a129);
@@ -7841,7 +7852,7 @@ static int casadi_f3(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a072=(a063*a151);
   a068=(a158*a147);
   a072=(a072-a068);
-  a072=(2.*a072);
+  a072=(2*a072);
   a085=(a085+a072);
   a072=(a007*a004);
   a068=(a008*a003);
@@ -7867,7 +7878,7 @@ static int casadi_f3(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a111=(a063*a157);
   a005=(a158*a153);
   a111=(a111-a005);
-  a111=(2.*a111);
+  a111=(2*a111);
   a045=(a045+a111);
   a111=(a015*a012);
   a005=(a016*a011);
@@ -8451,18 +8462,18 @@ static int casadi_f3(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a127=(a127+a065);
   a067=(a067+a127);
   a065=arg[0]? arg[0][3] : 0;
-  a062=cos(a065);
+  a062=qd_cos(a065);
   a157=arg[0]? arg[0][4] : 0;
-  a043=cos(a157);
+  a043=qd_cos(a157);
   a071=arg[0]? arg[0][5] : 0;
-  a036=cos(a071);
-  a071=sin(a071);
-  a157=sin(a157);
+  a036=qd_cos(a071);
+  a071=qd_sin(a071);
+  a157=qd_sin(a157);
   a162=arg[1]? arg[1][3] : 0;
   a089=(a150-a162);
   a028=(a157*a089);
   a085=(a062*a063);
-  a065=sin(a065);
+  a065=qd_sin(a065);
   a045=(a065*a158);
   a085=(a085-a045);
   a045=(a043*a085);
@@ -8620,18 +8631,18 @@ static int casadi_f3(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a053=(a053+a051);
   a067=(a067+a053);
   a051=arg[0]? arg[0][6] : 0;
-  a090=cos(a051);
+  a090=qd_cos(a051);
   a017=arg[0]? arg[0][7] : 0;
-  a096=cos(a017);
+  a096=qd_cos(a017);
   a081=arg[0]? arg[0][8] : 0;
-  a047=cos(a081);
-  a081=sin(a081);
-  a017=sin(a017);
+  a047=qd_cos(a081);
+  a081=qd_sin(a081);
+  a017=qd_sin(a017);
   a042=arg[1]? arg[1][6] : 0;
   a094=(a150-a042);
   a095=(a017*a094);
   a073=(a090*a063);
-  a051=sin(a051);
+  a051=qd_sin(a051);
   a077=(a051*a158);
   a073=(a073-a077);
   a077=(a096*a073);
@@ -9503,7 +9514,7 @@ static int casadi_f3(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a159=(a159+a136);
   a159=(-a159);
   if (res[0]!=0) res[0][11]=a159;
-  a032=sqrt(a032);
+  a032=qd_sqrt(a032);
   a014=(a014/a032);
   a159=(a027*a021);
   a136=(a046*a067);

@@ -20,6 +20,17 @@ extern "C" {
 
 #include <math.h>
 
+/* quadruped_dyn: the elementary functions in casadi_real's precision. A float build
+ * (-Dcasadi_real=float) calls sinf, cosf, ... instead of promoting to double, so it does no
+ * double arithmetic (none on a single-precision FPU: -Wdouble-promotion clean); a double build
+ * calls sin, cos, ... exactly as before. */
+#define QD_REAL_IS_FLOAT (sizeof(casadi_real) == sizeof(float))
+static inline casadi_real qd_sin(casadi_real x) { return QD_REAL_IS_FLOAT ? (casadi_real)sinf((float)x) : (casadi_real)sin((double)x); }
+static inline casadi_real qd_cos(casadi_real x) { return QD_REAL_IS_FLOAT ? (casadi_real)cosf((float)x) : (casadi_real)cos((double)x); }
+static inline casadi_real qd_tan(casadi_real x) { return QD_REAL_IS_FLOAT ? (casadi_real)tanf((float)x) : (casadi_real)tan((double)x); }
+static inline casadi_real qd_sqrt(casadi_real x) { return QD_REAL_IS_FLOAT ? (casadi_real)sqrtf((float)x) : (casadi_real)sqrt((double)x); }
+static inline casadi_real qd_fabs(casadi_real x) { return QD_REAL_IS_FLOAT ? (casadi_real)fabsf((float)x) : (casadi_real)fabs((double)x); }
+
 #ifndef casadi_real
 #define casadi_real double
 #endif
@@ -76,7 +87,7 @@ static const casadi_int casadi_s2[3] = {12, 12, 1};
  *   0             success
  *   QD_NONFINITE  an output is NaN or inf: coincident or collinear stance feet (the trunk
  *                 motion is undetermined), the trunk pitched +-90 deg (the roll row of two
- *                 stance feet has tan(pitch)), a zero quaternion, or a non-finite input;
+ *                 stance feet has qd_tan(pitch)), a zero quaternion, or a non-finite input;
  *   QD_SINGULAR   (qd_fd_r_* only) M_r is singular to working precision: a pivot of its LU
  *                 factorisation (partial pivoting) is below QD_SINGULAR_RTOL * max|M_r|,
  *                 e.g. two stance feet with the trunk pitched within ~1e-12 rad of 90 deg.
@@ -129,7 +140,7 @@ static inline int qd_fd_r_solve(int n, qd_eval_fn M_r, qd_eval_fn CG_r, const ca
   if (flag) return flag;
   casadi_real scale = 0, sum = 0; /* a NaN or inf anywhere makes the sum non-finite */
   for (int i = 0; i < n * n; ++i) {
-    scale = fabs(M[i]) > scale ? fabs(M[i]) : scale;
+    scale = qd_fabs(M[i]) > scale ? qd_fabs(M[i]) : scale;
     sum += M[i];
   }
   for (int i = 0; i < n; ++i) {
@@ -140,8 +151,8 @@ static inline int qd_fd_r_solve(int n, qd_eval_fn M_r, qd_eval_fn CG_r, const ca
   for (int k = 0; k < n; ++k) { /* M[i + n j] = M_ij */
     casadi_real* col = M + n * k;
     int p = k;
-    for (int i = k + 1; i < n; ++i) p = fabs(col[i]) > fabs(col[p]) ? i : p;
-    if (!(fabs(col[p]) > QD_SINGULAR_RTOL * scale)) return QD_SINGULAR;
+    for (int i = k + 1; i < n; ++i) p = qd_fabs(col[i]) > qd_fabs(col[p]) ? i : p;
+    if (!(qd_fabs(col[p]) > QD_SINGULAR_RTOL * scale)) return QD_SINGULAR;
     if (p != k) {
       for (int j = 0; j < n; ++j) {
         casadi_real t = M[k + n * j];
@@ -191,15 +202,15 @@ static int casadi_f0(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   casadi_real a156, a157, a158, a159, a160, a161, a162, a163, a164, a165, a166, a167;
   casadi_real a168, a169, a170, a171, a172, a173, a174;
   a000=arg[0]? arg[0][0] : 0;
-  a001=cos(a000);
+  a001=qd_cos(a000);
   a002=5.0000000000000000e-01;
   a003=7.3642708333333355e-03;
   a004=1.0126562500000001e-03;
   a005=9.9578125000000014e-04;
   a006=arg[0]? arg[0][2] : 0;
-  a007=cos(a006);
+  a007=qd_cos(a006);
   a008=casadi_sq(a007);
-  a006=sin(a006);
+  a006=qd_sin(a006);
   a009=casadi_sq(a006);
   a008=(a008-a009);
   a008=(a005*a008);
@@ -222,12 +233,12 @@ static int casadi_f0(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a017=(a010-a008);
   a017=(a002*a017);
   a018=arg[0]? arg[0][1] : 0;
-  a019=cos(a018);
-  a020=(2.*a019);
-  a018=sin(a018);
+  a019=qd_cos(a018);
+  a020=(2*a019);
+  a018=qd_sin(a018);
   a020=(a020*a018);
   a021=(a017*a020);
-  a022=(2.*a007);
+  a022=(2*a007);
   a022=(a022*a006);
   a022=(a005*a022);
   a023=(a015*a006);
@@ -265,36 +276,36 @@ static int casadi_f0(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a040=(a040+a041);
   a041=-7.0000000000000007e-02;
   a043=arg[0]? arg[0][3] : 0;
-  a044=cos(a043);
+  a044=qd_cos(a043);
   a045=arg[0]? arg[0][4] : 0;
-  a046=cos(a045);
+  a046=qd_cos(a045);
   a047=(a044*a046);
   a048=(a038*a047);
   a048=(a041+a048);
   a049=arg[0]? arg[0][5] : 0;
-  a050=cos(a049);
+  a050=qd_cos(a049);
   a051=(a047*a050);
-  a045=sin(a045);
+  a045=qd_sin(a045);
   a052=(a044*a045);
-  a049=sin(a049);
+  a049=qd_sin(a049);
   a053=(a052*a049);
   a051=(a051-a053);
   a051=(a038*a051);
   a048=(a048+a051);
   a051=(a040+a048);
   a053=arg[0]? arg[0][6] : 0;
-  a054=cos(a053);
+  a054=qd_cos(a053);
   a055=arg[0]? arg[0][7] : 0;
-  a056=cos(a055);
+  a056=qd_cos(a055);
   a057=(a054*a056);
   a058=(a038*a057);
   a058=(a037+a058);
   a059=arg[0]? arg[0][8] : 0;
-  a060=cos(a059);
+  a060=qd_cos(a059);
   a061=(a057*a060);
-  a055=sin(a055);
+  a055=qd_sin(a055);
   a062=(a054*a055);
-  a059=sin(a059);
+  a059=qd_sin(a059);
   a063=(a062*a059);
   a061=(a061-a063);
   a061=(a038*a061);
@@ -350,7 +361,7 @@ static int casadi_f0(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a085=(a083+a084);
   a082=(a082+a085);
   a086=(a071*a082);
-  a000=sin(a000);
+  a000=qd_sin(a000);
   a087=(a000*a018);
   a088=(a087*a006);
   a089=(a000*a019);
@@ -359,7 +370,7 @@ static int casadi_f0(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a088=(a038*a088);
   a090=(a038*a089);
   a088=(a088-a090);
-  a043=sin(a043);
+  a043=qd_sin(a043);
   a090=(a043*a045);
   a091=(a090*a049);
   a092=(a043*a046);
@@ -369,7 +380,7 @@ static int casadi_f0(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a093=(a038*a092);
   a091=(a091-a093);
   a093=(a088+a091);
-  a053=sin(a053);
+  a053=qd_sin(a053);
   a094=(a053*a055);
   a095=(a094*a059);
   a096=(a053*a056);
@@ -549,17 +560,17 @@ static int casadi_f0(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a122=(a053*a119);
   a116=(a116+a122);
   a123=arg[0]? arg[0][9] : 0;
-  a124=sin(a123);
+  a124=qd_sin(a123);
   a125=arg[0]? arg[0][10] : 0;
-  a126=cos(a125);
+  a126=qd_cos(a125);
   a127=arg[0]? arg[0][11] : 0;
-  a128=cos(a127);
+  a128=qd_cos(a127);
   a129=(a027*a128);
   a029=(a129+a029);
   a026=(a026+a029);
   a029=(a126*a026);
-  a125=sin(a125);
-  a127=sin(a127);
+  a125=qd_sin(a125);
+  a127=qd_sin(a127);
   a027=(a027*a127);
   a130=(a125*a027);
   a029=(a029-a130);
@@ -602,7 +613,7 @@ static int casadi_f0(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a143=(a054*a119);
   a139=(a143+a139);
   a140=(a140+a139);
-  a123=cos(a123);
+  a123=qd_cos(a123);
   a139=(a123*a029);
   a142=(a139+a142);
   a140=(a140+a142);
@@ -628,10 +639,10 @@ static int casadi_f0(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a144=(a013+a144);
   a148=(a145-a144);
   a148=(a002*a148);
-  a149=(2.*a046);
+  a149=(2*a046);
   a149=(a149*a045);
   a150=(a148*a149);
-  a151=(2.*a050);
+  a151=(2*a050);
   a151=(a151*a049);
   a151=(a005*a151);
   a152=(a015*a049);
@@ -662,10 +673,10 @@ static int casadi_f0(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a155=(a013+a155);
   a159=(a156-a155);
   a159=(a002*a159);
-  a160=(2.*a056);
+  a160=(2*a056);
   a160=(a160*a055);
   a161=(a159*a160);
-  a162=(2.*a060);
+  a162=(2*a060);
   a162=(a162*a059);
   a162=(a005*a162);
   a163=(a015*a059);
@@ -696,10 +707,10 @@ static int casadi_f0(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a013=(a013+a014);
   a014=(a009-a013);
   a014=(a002*a014);
-  a165=(2.*a126);
+  a165=(2*a126);
   a165=(a165*a125);
   a166=(a014*a165);
-  a128=(2.*a128);
+  a128=(2*a128);
   a128=(a128*a127);
   a005=(a005*a128);
   a015=(a015*a127);
@@ -724,7 +735,7 @@ static int casadi_f0(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a167=(a071+a012);
   a168=(a010-a167);
   a168=(a002*a168);
-  a169=(2.*a001);
+  a169=(2*a001);
   a169=(a169*a000);
   a169=(a168*a169);
   a128=(a128-a169);
@@ -742,7 +753,7 @@ static int casadi_f0(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a151=(a071+a146);
   a149=(a145-a151);
   a149=(a002*a149);
-  a148=(2.*a044);
+  a148=(2*a044);
   a148=(a148*a043);
   a148=(a149*a148);
   a169=(a169-a148);
@@ -761,7 +772,7 @@ static int casadi_f0(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a162=(a071+a157);
   a160=(a156-a162);
   a160=(a002*a160);
-  a159=(2.*a054);
+  a159=(2*a054);
   a159=(a159*a053);
   a159=(a160*a159);
   a169=(a169-a159);
@@ -780,7 +791,7 @@ static int casadi_f0(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a008=(a071+a003);
   a011=(a009-a008);
   a011=(a002*a011);
-  a005=(2.*a123);
+  a005=(2*a123);
   a005=(a005*a124);
   a005=(a011*a005);
   a169=(a169-a005);
@@ -800,7 +811,7 @@ static int casadi_f0(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a010=(a010+a168);
   a005=(a025*a132);
   a165=(a005+a020);
-  a165=(2.*a165);
+  a165=(2*a165);
   a010=(a010+a165);
   a169=(a169+a010);
   a145=(a145+a151);
@@ -815,7 +826,7 @@ static int casadi_f0(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a149=(a025*a135);
   a010=(a041*a141);
   a014=(a149+a010);
-  a014=(2.*a014);
+  a014=(2*a014);
   a145=(a145+a014);
   a169=(a169+a145);
   a156=(a156+a162);
@@ -830,7 +841,7 @@ static int casadi_f0(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a160=(a068*a133);
   a145=(a037*a143);
   a015=(a160+a145);
-  a015=(2.*a015);
+  a015=(2*a015);
   a156=(a156+a015);
   a169=(a169+a156);
   a009=(a009+a008);
@@ -845,7 +856,7 @@ static int casadi_f0(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a168=(a068*a137);
   a011=(a041*a139);
   a008=(a168+a011);
-  a008=(2.*a008);
+  a008=(2*a008);
   a009=(a009+a008);
   a169=(a169+a009);
   a009=(a169*a104);
@@ -860,7 +871,7 @@ static int casadi_f0(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a156=(a051*a009);
   a138=(a138+a156);
   a136=(a136-a138);
-  a156=(2.*a066);
+  a156=(2*a066);
   a159=(a065+a069);
   a156=(a156-a159);
   a136=(a136/a156);
@@ -940,7 +951,7 @@ static int casadi_f0(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a172=(a172-a017);
   a174=(a088*a136);
   a172=(a172+a174);
-  a138=(2.*a138);
+  a138=(2*a138);
   a023=(a159*a023);
   a138=(a138-a023);
   a138=(a138/a156);
@@ -1526,7 +1537,7 @@ static int casadi_f0(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a136=(a136+a162);
   a062=(a088*a068);
   a136=(a136+a062);
-  a129=(2.*a129);
+  a129=(2*a129);
   a079=(a159*a079);
   a129=(a129-a079);
   a129=(a129/a156);
@@ -1838,7 +1849,7 @@ static int casadi_f0(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a079=(a079+a167);
   a136=(a088*a098);
   a079=(a079+a136);
-  a004=(2.*a004);
+  a004=(2*a004);
   a041=(a159*a041);
   a004=(a004-a041);
   a004=(a004/a156);
@@ -2144,7 +2155,7 @@ static int casadi_f0(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a004=(a004-a010);
   a136=(a088*a132);
   a004=(a004+a136);
-  a068=(2.*a068);
+  a068=(2*a068);
   a112=(a159*a112);
   a068=(a068-a112);
   a068=(a068/a156);
@@ -2455,7 +2466,7 @@ static int casadi_f0(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a068=(a068+a006);
   a012=(a088*a130);
   a068=(a068+a012);
-  a079=(2.*a079);
+  a079=(2*a079);
   a059=(a159*a059);
   a079=(a079-a059);
   a079=(a079/a156);
@@ -2767,7 +2778,7 @@ static int casadi_f0(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a059=(a059+a022);
   a068=(a088*a100);
   a059=(a059+a068);
-  a070=(2.*a070);
+  a070=(2*a070);
   a104=(a159*a104);
   a070=(a070-a104);
   a070=(a070/a156);
@@ -3072,7 +3083,7 @@ static int casadi_f0(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a070=(a070-a145);
   a004=(a088*a144);
   a070=(a070+a004);
-  a130=(2.*a130);
+  a130=(2*a130);
   a064=(a159*a064);
   a130=(a130-a064);
   a130=(a130/a156);
@@ -3383,7 +3394,7 @@ static int casadi_f0(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a146=(a146+a174);
   a130=(a088*a132);
   a146=(a146+a130);
-  a059=(2.*a059);
+  a059=(2*a059);
   a147=(a159*a147);
   a059=(a059-a147);
   a059=(a059/a156);
@@ -3695,7 +3706,7 @@ static int casadi_f0(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a099=(a099+a049);
   a154=(a088*a111);
   a099=(a099+a154);
-  a017=(2.*a017);
+  a017=(2*a017);
   a021=(a159*a021);
   a017=(a017-a021);
   a017=(a017/a156);
@@ -3917,7 +3928,7 @@ static int casadi_f0(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a067=(a088*a063);
   a067=(a067-a011);
   a127=(-a127);
-  a127=(2.*a127);
+  a127=(2*a127);
   a131=(a159*a131);
   a127=(a127+a131);
   a127=(a127/a156);
@@ -3998,7 +4009,7 @@ static int casadi_f0(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a063=(a063/a156);
   a094=(a088*a063);
   a009=(a009-a094);
-  a084=(2.*a084);
+  a084=(2*a084);
   a121=(a159*a121);
   a084=(a084+a121);
   a084=(a084/a156);
@@ -4095,7 +4106,7 @@ static int casadi_f0(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a066=(a066/a156);
   a088=(a088*a066);
   a080=(a080-a088);
-  a123=(2.*a123);
+  a123=(2*a123);
   a159=(a159*a027);
   a123=(a123+a159);
   a123=(a123/a156);
@@ -4283,27 +4294,27 @@ static int casadi_f1(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a001=1.9000000000000000e-01;
   a002=2.0000000000000001e-01;
   a003=arg[0]? arg[0][1] : 0;
-  a004=sin(a003);
+  a004=qd_sin(a003);
   a005=(a002*a004);
   a006=(a001+a005);
-  a003=cos(a003);
+  a003=qd_cos(a003);
   a007=arg[0]? arg[0][2] : 0;
-  a008=sin(a007);
+  a008=qd_sin(a007);
   a009=(a003*a008);
-  a007=cos(a007);
+  a007=qd_cos(a007);
   a010=(a004*a007);
   a009=(a009+a010);
   a009=(a002*a009);
   a006=(a006+a009);
   a010=arg[0]? arg[0][4] : 0;
-  a011=sin(a010);
+  a011=qd_sin(a010);
   a012=(a002*a011);
   a013=(a001+a012);
-  a010=cos(a010);
+  a010=qd_cos(a010);
   a014=arg[0]? arg[0][5] : 0;
-  a015=sin(a014);
+  a015=qd_sin(a014);
   a016=(a010*a015);
-  a014=cos(a014);
+  a014=qd_cos(a014);
   a017=(a011*a014);
   a016=(a016+a017);
   a016=(a002*a016);
@@ -4311,14 +4322,14 @@ static int casadi_f1(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a017=(a006+a013);
   a018=-1.9000000000000000e-01;
   a019=arg[0]? arg[0][7] : 0;
-  a020=sin(a019);
+  a020=qd_sin(a019);
   a021=(a002*a020);
   a022=(a018+a021);
-  a019=cos(a019);
+  a019=qd_cos(a019);
   a023=arg[0]? arg[0][8] : 0;
-  a024=sin(a023);
+  a024=qd_sin(a023);
   a025=(a019*a024);
-  a023=cos(a023);
+  a023=qd_cos(a023);
   a026=(a020*a023);
   a025=(a025+a026);
   a025=(a002*a025);
@@ -4330,7 +4341,7 @@ static int casadi_f1(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a028=casadi_sq(a027);
   a029=7.0000000000000007e-02;
   a030=arg[0]? arg[0][0] : 0;
-  a031=cos(a030);
+  a031=qd_cos(a030);
   a032=(a031*a003);
   a033=(a002*a032);
   a034=(a029+a033);
@@ -4342,7 +4353,7 @@ static int casadi_f1(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a034=(a034+a035);
   a037=-7.0000000000000007e-02;
   a038=arg[0]? arg[0][3] : 0;
-  a039=cos(a038);
+  a039=qd_cos(a038);
   a040=(a039*a010);
   a041=(a002*a040);
   a042=(a037+a041);
@@ -4354,7 +4365,7 @@ static int casadi_f1(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a042=(a042+a043);
   a045=(a034+a042);
   a046=arg[0]? arg[0][6] : 0;
-  a047=cos(a046);
+  a047=qd_cos(a046);
   a048=(a047*a019);
   a049=(a002*a048);
   a050=(a029+a049);
@@ -4369,7 +4380,7 @@ static int casadi_f1(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a054=(a034-a053);
   a055=casadi_sq(a054);
   a056=(a028+a055);
-  a030=sin(a030);
+  a030=qd_sin(a030);
   a057=(a030*a004);
   a058=(a057*a008);
   a059=(a030*a003);
@@ -4378,7 +4389,7 @@ static int casadi_f1(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a061=(a002*a061);
   a062=(a002*a059);
   a061=(a061-a062);
-  a038=sin(a038);
+  a038=qd_sin(a038);
   a063=(a038*a011);
   a064=(a063*a015);
   a065=(a038*a010);
@@ -4388,7 +4399,7 @@ static int casadi_f1(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a068=(a002*a065);
   a067=(a067-a068);
   a069=(a061+a067);
-  a046=sin(a046);
+  a046=qd_sin(a046);
   a070=(a046*a020);
   a071=(a070*a024);
   a072=(a046*a019);
@@ -4741,7 +4752,7 @@ static int casadi_f1(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a171=(a153*a028);
   a055=(a110*a114);
   a171=(a171-a055);
-  a171=(2.*a171);
+  a171=(2*a171);
   a094=(a094+a171);
   a171=(a101*a112);
   a055=(a002*a095);
@@ -4791,7 +4802,7 @@ static int casadi_f1(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a092=(a110*a102);
   a028=(a172*a028);
   a092=(a092-a028);
-  a092=(2.*a092);
+  a092=(2*a092);
   a035=(a035+a092);
   a098=(a098-a096);
   a098=(a002*a098);
@@ -4853,7 +4864,7 @@ static int casadi_f1(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a058=(a153*a163);
   a113=(a110*a136);
   a058=(a058-a113);
-  a058=(2.*a058);
+  a058=(2*a058);
   a111=(a111+a058);
   a058=(a123*a134);
   a113=(a002*a117);
@@ -4903,7 +4914,7 @@ static int casadi_f1(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a098=(a110*a124);
   a163=(a172*a163);
   a098=(a098-a163);
-  a098=(2.*a098);
+  a098=(2*a098);
   a043=(a043+a098);
   a120=(a120-a118);
   a120=(a002*a120);
@@ -4966,7 +4977,7 @@ static int casadi_f1(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a066=(a153*a166);
   a064=(a110*a157);
   a066=(a066-a064);
-  a066=(2.*a066);
+  a066=(2*a066);
   a120=(a120+a066);
   a066=(a144*a155);
   a064=(a002*a132);
@@ -5016,7 +5027,7 @@ static int casadi_f1(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a058=(a110*a145);
   a166=(a172*a166);
   a058=(a058-a166);
-  a058=(2.*a058);
+  a058=(2*a058);
   a051=(a051+a058);
   a141=(a141-a139);
   a141=(a002*a141);
@@ -5075,7 +5086,7 @@ static int casadi_f1(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a114=(a172*a114);
   a102=(a153*a102);
   a114=(a114-a102);
-  a114=(2.*a114);
+  a114=(2*a114);
   a168=(a168+a114);
   a114=(a007*a004);
   a102=(a008*a003);
@@ -5101,7 +5112,7 @@ static int casadi_f1(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a136=(a172*a136);
   a124=(a153*a124);
   a136=(a136-a124);
-  a136=(2.*a136);
+  a136=(2*a136);
   a060=(a060+a136);
   a136=(a014*a011);
   a124=(a015*a010);
@@ -5128,7 +5139,7 @@ static int casadi_f1(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a157=(a172*a157);
   a145=(a153*a145);
   a157=(a157-a145);
-  a157=(2.*a157);
+  a157=(2*a157);
   a133=(a133+a157);
   a157=(a023*a020);
   a145=(a024*a019);
@@ -5754,18 +5765,18 @@ static int casadi_f1(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a141=(a141+a095);
   a035=(a035+a141);
   a095=arg[0]? arg[0][9] : 0;
-  a092=cos(a095);
+  a092=qd_cos(a095);
   a100=arg[0]? arg[0][10] : 0;
-  a088=cos(a100);
+  a088=qd_cos(a100);
   a174=arg[0]? arg[0][11] : 0;
-  a175=cos(a174);
-  a174=sin(a174);
-  a100=sin(a100);
+  a175=qd_cos(a174);
+  a174=qd_sin(a174);
+  a100=qd_sin(a100);
   a176=arg[1]? arg[1][9] : 0;
   a177=(a110-a176);
   a178=(a100*a177);
   a179=(a092*a172);
-  a095=sin(a095);
+  a095=qd_sin(a095);
   a180=(a095*a153);
   a179=(a179-a180);
   a180=(a088*a179);
@@ -6254,7 +6265,7 @@ static int casadi_f1(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a045=(a045*a053);
   a093=(a093+a045);
   a062=(a062-a093);
-  a045=(2.*a013);
+  a045=(2*a013);
   a026=(a006+a022);
   a045=(a045-a026);
   a062=(a062/a045);
@@ -6325,7 +6336,7 @@ static int casadi_f1(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a113=(a113+a037);
   a061=(a061*a062);
   a113=(a113+a061);
-  a093=(2.*a093);
+  a093=(2*a093);
   a026=(a026*a035);
   a093=(a093-a026);
   a093=(a093/a045);
@@ -6555,12 +6566,12 @@ static int casadi_f2(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   casadi_real a60, a61, a62, a63, a64, a65, a66, a67, a68, a69, a70, a71;
   casadi_real a72, a73, a74, a75, a76, a77;
   a00=arg[0]? arg[0][1] : 0;
-  a01=sin(a00);
+  a01=qd_sin(a00);
   a02=arg[0]? arg[0][2] : 0;
-  a03=sin(a02);
+  a03=qd_sin(a02);
   a04=1.4999999999999999e-02;
   a05=arg[0]? arg[0][0] : 0;
-  a06=sin(a05);
+  a06=qd_sin(a05);
   a07=-9.8100000000000005e+00;
   a08=2.;
   a09=arg[1]? arg[1][0] : 0;
@@ -6581,7 +6592,7 @@ static int casadi_f2(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a13=(a08*a13);
   a15=(a07*a13);
   a16=(a06*a15);
-  a05=cos(a05);
+  a05=qd_cos(a05);
   a17=1.;
   a10=(a08*a10);
   a17=(a17-a10);
@@ -6591,8 +6602,8 @@ static int casadi_f2(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a18=(a04*a16);
   a19=(a03*a18);
   a20=(a01*a19);
-  a00=cos(a00);
-  a02=cos(a02);
+  a00=qd_cos(a00);
+  a02=qd_cos(a02);
   a18=(a02*a18);
   a21=5.5000000000000007e-02;
   a22=(a21*a16);
@@ -6613,14 +6624,14 @@ static int casadi_f2(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a24=(a24-a25);
   a25=1.9000000000000000e-01;
   a26=arg[0]? arg[0][4] : 0;
-  a27=sin(a26);
+  a27=qd_sin(a26);
   a28=(a23*a27);
   a28=(a25+a28);
-  a26=cos(a26);
+  a26=qd_cos(a26);
   a29=arg[0]? arg[0][5] : 0;
-  a30=sin(a29);
+  a30=qd_sin(a29);
   a31=(a26*a30);
-  a29=cos(a29);
+  a29=qd_cos(a29);
   a32=(a27*a29);
   a31=(a31+a32);
   a31=(a23*a31);
@@ -6677,9 +6688,9 @@ static int casadi_f2(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a13=(a16*a13);
   a13=(a11-a13);
   a38=arg[0]? arg[0][3] : 0;
-  a39=cos(a38);
+  a39=qd_cos(a38);
   a40=(a26*a07);
-  a38=sin(a38);
+  a38=qd_sin(a38);
   a41=(a38*a10);
   a42=(a39*a15);
   a41=(a41-a42);
@@ -6724,15 +6735,15 @@ static int casadi_f2(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a41=(a41-a49);
   a13=(a13+a41);
   a49=arg[0]? arg[0][6] : 0;
-  a50=cos(a49);
+  a50=qd_cos(a49);
   a51=arg[0]? arg[0][7] : 0;
-  a52=cos(a51);
+  a52=qd_cos(a51);
   a53=arg[0]? arg[0][8] : 0;
-  a54=sin(a53);
-  a53=cos(a53);
+  a54=qd_sin(a53);
+  a53=qd_cos(a53);
   a55=(a52*a07);
-  a51=sin(a51);
-  a49=sin(a49);
+  a51=qd_sin(a51);
+  a49=qd_sin(a49);
   a56=(a49*a10);
   a57=(a50*a15);
   a56=(a56-a57);
@@ -6777,15 +6788,15 @@ static int casadi_f2(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a56=(a56-a64);
   a13=(a13+a56);
   a64=arg[0]? arg[0][9] : 0;
-  a65=cos(a64);
+  a65=qd_cos(a64);
   a66=arg[0]? arg[0][10] : 0;
-  a67=cos(a66);
+  a67=qd_cos(a66);
   a68=arg[0]? arg[0][11] : 0;
-  a69=sin(a68);
-  a68=cos(a68);
+  a69=qd_sin(a68);
+  a68=qd_cos(a68);
   a70=(a67*a07);
-  a66=sin(a66);
-  a64=sin(a64);
+  a66=qd_sin(a66);
+  a64=qd_sin(a64);
   a71=(a64*a10);
   a72=(a65*a15);
   a71=(a71-a72);
@@ -6974,7 +6985,7 @@ static int casadi_f2(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a15=(a15*a32);
   a34=(a34+a15);
   a36=(a36-a34);
-  a15=(2.*a28);
+  a15=(2*a28);
   a07=(a23*a01);
   a07=(a25+a07);
   a59=(a00*a03);
@@ -7098,7 +7109,7 @@ static int casadi_f2(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a12=(a12+a10);
   a45=(a45*a36);
   a12=(a12+a45);
-  a34=(2.*a34);
+  a34=(2*a34);
   a44=(a44*a13);
   a34=(a34-a44);
   a34=(a34/a15);
@@ -7430,27 +7441,27 @@ static int casadi_f3(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a001=1.9000000000000000e-01;
   a002=2.0000000000000001e-01;
   a003=arg[0]? arg[0][1] : 0;
-  a004=sin(a003);
+  a004=qd_sin(a003);
   a005=(a002*a004);
   a006=(a001+a005);
-  a003=cos(a003);
+  a003=qd_cos(a003);
   a007=arg[0]? arg[0][2] : 0;
-  a008=sin(a007);
+  a008=qd_sin(a007);
   a009=(a003*a008);
-  a007=cos(a007);
+  a007=qd_cos(a007);
   a010=(a004*a007);
   a009=(a009+a010);
   a009=(a002*a009);
   a006=(a006+a009);
   a010=arg[0]? arg[0][4] : 0;
-  a011=sin(a010);
+  a011=qd_sin(a010);
   a012=(a002*a011);
   a013=(a001+a012);
-  a010=cos(a010);
+  a010=qd_cos(a010);
   a014=arg[0]? arg[0][5] : 0;
-  a015=sin(a014);
+  a015=qd_sin(a014);
   a016=(a010*a015);
-  a014=cos(a014);
+  a014=qd_cos(a014);
   a017=(a011*a014);
   a016=(a016+a017);
   a016=(a002*a016);
@@ -7458,14 +7469,14 @@ static int casadi_f3(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a017=(a006+a013);
   a018=-1.9000000000000000e-01;
   a019=arg[0]? arg[0][7] : 0;
-  a020=sin(a019);
+  a020=qd_sin(a019);
   a021=(a002*a020);
   a022=(a018+a021);
-  a019=cos(a019);
+  a019=qd_cos(a019);
   a023=arg[0]? arg[0][8] : 0;
-  a024=sin(a023);
+  a024=qd_sin(a023);
   a025=(a019*a024);
-  a023=cos(a023);
+  a023=qd_cos(a023);
   a026=(a020*a023);
   a025=(a025+a026);
   a025=(a002*a025);
@@ -7477,7 +7488,7 @@ static int casadi_f3(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a028=casadi_sq(a027);
   a029=7.0000000000000007e-02;
   a030=arg[0]? arg[0][0] : 0;
-  a031=cos(a030);
+  a031=qd_cos(a030);
   a032=(a031*a003);
   a033=(a002*a032);
   a034=(a029+a033);
@@ -7489,7 +7500,7 @@ static int casadi_f3(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a034=(a034+a035);
   a037=-7.0000000000000007e-02;
   a038=arg[0]? arg[0][3] : 0;
-  a039=cos(a038);
+  a039=qd_cos(a038);
   a040=(a039*a010);
   a041=(a002*a040);
   a042=(a037+a041);
@@ -7501,7 +7512,7 @@ static int casadi_f3(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a042=(a042+a043);
   a045=(a034+a042);
   a046=arg[0]? arg[0][6] : 0;
-  a047=cos(a046);
+  a047=qd_cos(a046);
   a048=(a047*a019);
   a049=(a002*a048);
   a050=(a029+a049);
@@ -7516,7 +7527,7 @@ static int casadi_f3(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a054=(a034-a053);
   a055=casadi_sq(a054);
   a056=(a028+a055);
-  a030=sin(a030);
+  a030=qd_sin(a030);
   a057=(a030*a004);
   a058=(a057*a008);
   a059=(a030*a003);
@@ -7525,7 +7536,7 @@ static int casadi_f3(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a061=(a002*a061);
   a062=(a002*a059);
   a061=(a061-a062);
-  a038=sin(a038);
+  a038=qd_sin(a038);
   a063=(a038*a011);
   a064=(a063*a015);
   a065=(a038*a010);
@@ -7535,7 +7546,7 @@ static int casadi_f3(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a068=(a002*a065);
   a067=(a067-a068);
   a069=(a061+a067);
-  a046=sin(a046);
+  a046=qd_sin(a046);
   a070=(a046*a020);
   a071=(a070*a024);
   a072=(a046*a019);
@@ -8037,7 +8048,7 @@ static int casadi_f3(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a213=(a211*a214);
   a083=(a200*a201);
   a213=(a213-a083);
-  a213=(2.*a213);
+  a213=(2*a213);
   a086=(a086+a213);
   a213=(a196*a100);
   a083=(a002*a092);
@@ -8087,7 +8098,7 @@ static int casadi_f3(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a105=(a200*a197);
   a094=(a215*a214);
   a105=(a105-a094);
-  a105=(2.*a105);
+  a105=(2*a105);
   a035=(a035+a105);
   a095=(a095-a093);
   a095=(a002*a095);
@@ -8149,7 +8160,7 @@ static int casadi_f3(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a058=(a211*a216);
   a101=(a200*a207);
   a058=(a058-a101);
-  a058=(2.*a058);
+  a058=(2*a058);
   a099=(a099+a058);
   a058=(a202*a138);
   a101=(a002*a130);
@@ -8199,7 +8210,7 @@ static int casadi_f3(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a095=(a200*a203);
   a132=(a215*a216);
   a095=(a095-a132);
-  a095=(2.*a095);
+  a095=(2*a095);
   a043=(a043+a095);
   a133=(a133-a131);
   a133=(a002*a133);
@@ -8262,7 +8273,7 @@ static int casadi_f3(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a066=(a211*a217);
   a064=(a200*a212);
   a066=(a066-a064);
-  a066=(2.*a066);
+  a066=(2*a066);
   a133=(a133+a066);
   a066=(a206*a171);
   a064=(a002*a163);
@@ -8312,7 +8323,7 @@ static int casadi_f3(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a058=(a200*a208);
   a165=(a215*a217);
   a058=(a058-a165);
-  a058=(2.*a058);
+  a058=(2*a058);
   a051=(a051+a058);
   a166=(a166-a164);
   a166=(a002*a166);
@@ -8371,7 +8382,7 @@ static int casadi_f3(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a092=(a215*a201);
   a166=(a211*a197);
   a092=(a092-a166);
-  a092=(2.*a092);
+  a092=(2*a092);
   a103=(a103+a092);
   a092=(a007*a004);
   a166=(a008*a003);
@@ -8397,7 +8408,7 @@ static int casadi_f3(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a130=(a215*a207);
   a005=(a211*a203);
   a130=(a130-a005);
-  a130=(2.*a130);
+  a130=(2*a130);
   a060=(a060+a130);
   a130=(a014*a011);
   a005=(a015*a010);
@@ -8424,7 +8435,7 @@ static int casadi_f3(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a163=(a215*a212);
   a084=(a211*a208);
   a163=(a163-a084);
-  a163=(2.*a163);
+  a163=(2*a163);
   a137=(a137+a163);
   a163=(a023*a020);
   a084=(a024*a019);
@@ -9426,18 +9437,18 @@ static int casadi_f3(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a056=(a056+a106);
   a197=(a197+a056);
   a106=arg[0]? arg[0][9] : 0;
-  a191=cos(a106);
+  a191=qd_cos(a106);
   a089=arg[0]? arg[0][10] : 0;
-  a164=cos(a089);
+  a164=qd_cos(a089);
   a168=arg[0]? arg[0][11] : 0;
-  a058=cos(a168);
-  a168=sin(a168);
-  a089=sin(a089);
+  a058=qd_cos(a168);
+  a168=qd_sin(a168);
+  a089=qd_sin(a089);
   a165=arg[1]? arg[1][9] : 0;
   a150=(a200-a165);
   a048=(a089*a150);
   a049=(a191*a215);
-  a106=sin(a106);
+  a106=qd_sin(a106);
   a052=(a106*a211);
   a049=(a049-a052);
   a052=(a164*a049);
@@ -9933,7 +9944,7 @@ static int casadi_f3(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a045=(a045*a098);
   a108=(a108+a045);
   a121=(a121-a108);
-  a045=(2.*a013);
+  a045=(2*a013);
   a026=(a006+a022);
   a045=(a045-a026);
   a121=(a121/a045);
@@ -10007,7 +10018,7 @@ static int casadi_f3(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a112=(a112+a037);
   a061=(a061*a121);
   a112=(a112+a061);
-  a108=(2.*a108);
+  a108=(2*a108);
   a026=(a026*a197);
   a108=(a108-a026);
   a108=(a108/a045);

@@ -20,6 +20,17 @@ extern "C" {
 
 #include <math.h>
 
+/* quadruped_dyn: the elementary functions in casadi_real's precision. A float build
+ * (-Dcasadi_real=float) calls sinf, cosf, ... instead of promoting to double, so it does no
+ * double arithmetic (none on a single-precision FPU: -Wdouble-promotion clean); a double build
+ * calls sin, cos, ... exactly as before. */
+#define QD_REAL_IS_FLOAT (sizeof(casadi_real) == sizeof(float))
+static inline casadi_real qd_sin(casadi_real x) { return QD_REAL_IS_FLOAT ? (casadi_real)sinf((float)x) : (casadi_real)sin((double)x); }
+static inline casadi_real qd_cos(casadi_real x) { return QD_REAL_IS_FLOAT ? (casadi_real)cosf((float)x) : (casadi_real)cos((double)x); }
+static inline casadi_real qd_tan(casadi_real x) { return QD_REAL_IS_FLOAT ? (casadi_real)tanf((float)x) : (casadi_real)tan((double)x); }
+static inline casadi_real qd_sqrt(casadi_real x) { return QD_REAL_IS_FLOAT ? (casadi_real)sqrtf((float)x) : (casadi_real)sqrt((double)x); }
+static inline casadi_real qd_fabs(casadi_real x) { return QD_REAL_IS_FLOAT ? (casadi_real)fabsf((float)x) : (casadi_real)fabs((double)x); }
+
 #ifndef casadi_real
 #define casadi_real double
 #endif
@@ -76,7 +87,7 @@ static const casadi_int casadi_s2[3] = {12, 12, 1};
  *   0             success
  *   QD_NONFINITE  an output is NaN or inf: coincident or collinear stance feet (the trunk
  *                 motion is undetermined), the trunk pitched +-90 deg (the roll row of two
- *                 stance feet has tan(pitch)), a zero quaternion, or a non-finite input;
+ *                 stance feet has qd_tan(pitch)), a zero quaternion, or a non-finite input;
  *   QD_SINGULAR   (qd_fd_r_* only) M_r is singular to working precision: a pivot of its LU
  *                 factorisation (partial pivoting) is below QD_SINGULAR_RTOL * max|M_r|,
  *                 e.g. two stance feet with the trunk pitched within ~1e-12 rad of 90 deg.
@@ -129,7 +140,7 @@ static inline int qd_fd_r_solve(int n, qd_eval_fn M_r, qd_eval_fn CG_r, const ca
   if (flag) return flag;
   casadi_real scale = 0, sum = 0; /* a NaN or inf anywhere makes the sum non-finite */
   for (int i = 0; i < n * n; ++i) {
-    scale = fabs(M[i]) > scale ? fabs(M[i]) : scale;
+    scale = qd_fabs(M[i]) > scale ? qd_fabs(M[i]) : scale;
     sum += M[i];
   }
   for (int i = 0; i < n; ++i) {
@@ -140,8 +151,8 @@ static inline int qd_fd_r_solve(int n, qd_eval_fn M_r, qd_eval_fn CG_r, const ca
   for (int k = 0; k < n; ++k) { /* M[i + n j] = M_ij */
     casadi_real* col = M + n * k;
     int p = k;
-    for (int i = k + 1; i < n; ++i) p = fabs(col[i]) > fabs(col[p]) ? i : p;
-    if (!(fabs(col[p]) > QD_SINGULAR_RTOL * scale)) return QD_SINGULAR;
+    for (int i = k + 1; i < n; ++i) p = qd_fabs(col[i]) > qd_fabs(col[p]) ? i : p;
+    if (!(qd_fabs(col[p]) > QD_SINGULAR_RTOL * scale)) return QD_SINGULAR;
     if (p != k) {
       for (int j = 0; j < n; ++j) {
         casadi_real t = M[k + n * j];
@@ -192,15 +203,15 @@ static int casadi_f0(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   casadi_real a168, a169, a170, a171, a172, a173, a174, a175, a176, a177, a178, a179;
   casadi_real a180, a181, a182, a183, a184, a185, a186;
   a000=arg[0]? arg[0][0] : 0;
-  a001=cos(a000);
+  a001=qd_cos(a000);
   a002=5.0000000000000000e-01;
   a003=7.3642708333333355e-03;
   a004=1.0126562500000001e-03;
   a005=9.9578125000000014e-04;
   a006=arg[0]? arg[0][2] : 0;
-  a007=cos(a006);
+  a007=qd_cos(a006);
   a008=casadi_sq(a007);
-  a006=sin(a006);
+  a006=qd_sin(a006);
   a009=casadi_sq(a006);
   a008=(a008-a009);
   a008=(a005*a008);
@@ -223,12 +234,12 @@ static int casadi_f0(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a017=(a010-a008);
   a017=(a002*a017);
   a018=arg[0]? arg[0][1] : 0;
-  a019=cos(a018);
-  a020=(2.*a019);
-  a018=sin(a018);
+  a019=qd_cos(a018);
+  a020=(2*a019);
+  a018=qd_sin(a018);
   a020=(a020*a018);
   a021=(a017*a020);
-  a022=(2.*a007);
+  a022=(2*a007);
   a022=(a022*a006);
   a022=(a005*a022);
   a023=(a015*a006);
@@ -266,54 +277,54 @@ static int casadi_f0(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a040=(a040+a041);
   a041=-7.0000000000000007e-02;
   a043=arg[0]? arg[0][3] : 0;
-  a044=cos(a043);
+  a044=qd_cos(a043);
   a045=arg[0]? arg[0][4] : 0;
-  a046=cos(a045);
+  a046=qd_cos(a045);
   a047=(a044*a046);
   a048=(a038*a047);
   a048=(a041+a048);
   a049=arg[0]? arg[0][5] : 0;
-  a050=cos(a049);
+  a050=qd_cos(a049);
   a051=(a047*a050);
-  a045=sin(a045);
+  a045=qd_sin(a045);
   a052=(a044*a045);
-  a049=sin(a049);
+  a049=qd_sin(a049);
   a053=(a052*a049);
   a051=(a051-a053);
   a051=(a038*a051);
   a048=(a048+a051);
   a051=(a040+a048);
   a053=arg[0]? arg[0][6] : 0;
-  a054=cos(a053);
+  a054=qd_cos(a053);
   a055=arg[0]? arg[0][7] : 0;
-  a056=cos(a055);
+  a056=qd_cos(a055);
   a057=(a054*a056);
   a058=(a038*a057);
   a058=(a037+a058);
   a059=arg[0]? arg[0][8] : 0;
-  a060=cos(a059);
+  a060=qd_cos(a059);
   a061=(a057*a060);
-  a055=sin(a055);
+  a055=qd_sin(a055);
   a062=(a054*a055);
-  a059=sin(a059);
+  a059=qd_sin(a059);
   a063=(a062*a059);
   a061=(a061-a063);
   a061=(a038*a061);
   a058=(a058+a061);
   a051=(a051+a058);
   a061=arg[0]? arg[0][9] : 0;
-  a063=cos(a061);
+  a063=qd_cos(a061);
   a064=arg[0]? arg[0][10] : 0;
-  a065=cos(a064);
+  a065=qd_cos(a064);
   a066=(a063*a065);
   a067=(a038*a066);
   a067=(a041+a067);
   a068=arg[0]? arg[0][11] : 0;
-  a069=cos(a068);
+  a069=qd_cos(a068);
   a070=(a066*a069);
-  a064=sin(a064);
+  a064=qd_sin(a064);
   a071=(a063*a064);
-  a068=sin(a068);
+  a068=qd_sin(a068);
   a072=(a071*a068);
   a070=(a070-a072);
   a070=(a038*a070);
@@ -385,7 +396,7 @@ static int casadi_f0(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a101=(a099+a100);
   a095=(a095+a101);
   a102=(a082*a095);
-  a000=sin(a000);
+  a000=qd_sin(a000);
   a103=(a000*a018);
   a104=(a103*a006);
   a105=(a000*a019);
@@ -394,7 +405,7 @@ static int casadi_f0(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a104=(a038*a104);
   a106=(a038*a105);
   a104=(a104-a106);
-  a043=sin(a043);
+  a043=qd_sin(a043);
   a106=(a043*a045);
   a107=(a106*a049);
   a108=(a043*a046);
@@ -404,7 +415,7 @@ static int casadi_f0(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a109=(a038*a108);
   a107=(a107-a109);
   a109=(a104+a107);
-  a053=sin(a053);
+  a053=qd_sin(a053);
   a110=(a053*a055);
   a111=(a110*a059);
   a112=(a053*a056);
@@ -414,7 +425,7 @@ static int casadi_f0(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a113=(a038*a112);
   a111=(a111-a113);
   a109=(a109+a111);
-  a061=sin(a061);
+  a061=qd_sin(a061);
   a113=(a061*a064);
   a114=(a113*a068);
   a115=(a061*a065);
@@ -688,10 +699,10 @@ static int casadi_f0(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a152=(a013+a152);
   a156=(a153-a152);
   a156=(a002*a156);
-  a157=(2.*a046);
+  a157=(2*a046);
   a157=(a157*a045);
   a158=(a156*a157);
-  a159=(2.*a050);
+  a159=(2*a050);
   a159=(a159*a049);
   a159=(a005*a159);
   a160=(a015*a049);
@@ -722,10 +733,10 @@ static int casadi_f0(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a163=(a013+a163);
   a167=(a164-a163);
   a167=(a002*a167);
-  a168=(2.*a056);
+  a168=(2*a056);
   a168=(a168*a055);
   a169=(a167*a168);
-  a170=(2.*a060);
+  a170=(2*a060);
   a170=(a170*a059);
   a170=(a005*a170);
   a171=(a015*a059);
@@ -756,10 +767,10 @@ static int casadi_f0(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a013=(a013+a014);
   a014=(a009-a013);
   a014=(a002*a014);
-  a173=(2.*a065);
+  a173=(2*a065);
   a173=(a173*a064);
   a174=(a014*a173);
-  a175=(2.*a069);
+  a175=(2*a069);
   a175=(a175*a068);
   a005=(a005*a175);
   a015=(a015*a068);
@@ -784,7 +795,7 @@ static int casadi_f0(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a177=(a082+a012);
   a178=(a010-a177);
   a178=(a002*a178);
-  a179=(2.*a001);
+  a179=(2*a001);
   a179=(a179*a000);
   a179=(a178*a179);
   a176=(a176-a179);
@@ -802,7 +813,7 @@ static int casadi_f0(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a159=(a082+a154);
   a157=(a153-a159);
   a157=(a002*a157);
-  a156=(2.*a044);
+  a156=(2*a044);
   a156=(a156*a043);
   a156=(a157*a156);
   a179=(a179-a156);
@@ -821,7 +832,7 @@ static int casadi_f0(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a170=(a082+a165);
   a168=(a164-a170);
   a168=(a002*a168);
-  a167=(2.*a054);
+  a167=(2*a054);
   a167=(a167*a053);
   a167=(a168*a167);
   a179=(a179-a167);
@@ -840,7 +851,7 @@ static int casadi_f0(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a008=(a082+a003);
   a011=(a009-a008);
   a011=(a002*a011);
-  a005=(2.*a063);
+  a005=(2*a063);
   a005=(a005*a061);
   a005=(a011*a005);
   a179=(a179-a005);
@@ -860,7 +871,7 @@ static int casadi_f0(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a010=(a010+a178);
   a005=(a025*a139);
   a173=(a005+a020);
-  a173=(2.*a173);
+  a173=(2*a173);
   a010=(a010+a173);
   a179=(a179+a010);
   a153=(a153+a159);
@@ -875,7 +886,7 @@ static int casadi_f0(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a157=(a025*a142);
   a010=(a041*a148);
   a014=(a157+a010);
-  a014=(2.*a014);
+  a014=(2*a014);
   a153=(a153+a014);
   a179=(a179+a153);
   a164=(a164+a170);
@@ -890,7 +901,7 @@ static int casadi_f0(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a168=(a077*a140);
   a153=(a037*a150);
   a015=(a168+a153);
-  a015=(2.*a015);
+  a015=(2*a015);
   a164=(a164+a015);
   a179=(a179+a164);
   a009=(a009+a008);
@@ -905,7 +916,7 @@ static int casadi_f0(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a178=(a077*a144);
   a011=(a041*a146);
   a008=(a178+a011);
-  a008=(2.*a008);
+  a008=(2*a008);
   a009=(a009+a008);
   a179=(a179+a009);
   a009=(a179*a120);
@@ -5430,27 +5441,27 @@ static int casadi_f1(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a001=1.9000000000000000e-01;
   a002=2.0000000000000001e-01;
   a003=arg[0]? arg[0][1] : 0;
-  a004=sin(a003);
+  a004=qd_sin(a003);
   a005=(a002*a004);
   a006=(a001+a005);
-  a003=cos(a003);
+  a003=qd_cos(a003);
   a007=arg[0]? arg[0][2] : 0;
-  a008=sin(a007);
+  a008=qd_sin(a007);
   a009=(a003*a008);
-  a007=cos(a007);
+  a007=qd_cos(a007);
   a010=(a004*a007);
   a009=(a009+a010);
   a009=(a002*a009);
   a006=(a006+a009);
   a010=arg[0]? arg[0][4] : 0;
-  a011=sin(a010);
+  a011=qd_sin(a010);
   a012=(a002*a011);
   a013=(a001+a012);
-  a010=cos(a010);
+  a010=qd_cos(a010);
   a014=arg[0]? arg[0][5] : 0;
-  a015=sin(a014);
+  a015=qd_sin(a014);
   a016=(a010*a015);
-  a014=cos(a014);
+  a014=qd_cos(a014);
   a017=(a011*a014);
   a016=(a016+a017);
   a016=(a002*a016);
@@ -5458,28 +5469,28 @@ static int casadi_f1(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a017=(a006+a013);
   a018=-1.9000000000000000e-01;
   a019=arg[0]? arg[0][7] : 0;
-  a020=sin(a019);
+  a020=qd_sin(a019);
   a021=(a002*a020);
   a022=(a018+a021);
-  a019=cos(a019);
+  a019=qd_cos(a019);
   a023=arg[0]? arg[0][8] : 0;
-  a024=sin(a023);
+  a024=qd_sin(a023);
   a025=(a019*a024);
-  a023=cos(a023);
+  a023=qd_cos(a023);
   a026=(a020*a023);
   a025=(a025+a026);
   a025=(a002*a025);
   a022=(a022+a025);
   a017=(a017+a022);
   a026=arg[0]? arg[0][10] : 0;
-  a027=sin(a026);
+  a027=qd_sin(a026);
   a028=(a002*a027);
   a029=(a018+a028);
-  a026=cos(a026);
+  a026=qd_cos(a026);
   a030=arg[0]? arg[0][11] : 0;
-  a031=sin(a030);
+  a031=qd_sin(a030);
   a032=(a026*a031);
-  a030=cos(a030);
+  a030=qd_cos(a030);
   a033=(a027*a030);
   a032=(a032+a033);
   a032=(a002*a032);
@@ -5491,7 +5502,7 @@ static int casadi_f1(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a036=casadi_sq(a035);
   a037=7.0000000000000007e-02;
   a038=arg[0]? arg[0][0] : 0;
-  a039=cos(a038);
+  a039=qd_cos(a038);
   a040=(a039*a003);
   a041=(a002*a040);
   a042=(a037+a041);
@@ -5503,7 +5514,7 @@ static int casadi_f1(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a042=(a042+a043);
   a045=-7.0000000000000007e-02;
   a046=arg[0]? arg[0][3] : 0;
-  a047=cos(a046);
+  a047=qd_cos(a046);
   a048=(a047*a010);
   a049=(a002*a048);
   a050=(a045+a049);
@@ -5515,7 +5526,7 @@ static int casadi_f1(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a050=(a050+a051);
   a053=(a042+a050);
   a054=arg[0]? arg[0][6] : 0;
-  a055=cos(a054);
+  a055=qd_cos(a054);
   a056=(a055*a019);
   a057=(a002*a056);
   a058=(a037+a057);
@@ -5527,7 +5538,7 @@ static int casadi_f1(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a058=(a058+a059);
   a053=(a053+a058);
   a061=arg[0]? arg[0][9] : 0;
-  a062=cos(a061);
+  a062=qd_cos(a061);
   a063=(a062*a026);
   a064=(a002*a063);
   a065=(a045+a064);
@@ -5542,7 +5553,7 @@ static int casadi_f1(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a069=(a042-a068);
   a070=casadi_sq(a069);
   a071=(a036+a070);
-  a038=sin(a038);
+  a038=qd_sin(a038);
   a072=(a038*a004);
   a073=(a072*a008);
   a074=(a038*a003);
@@ -5551,7 +5562,7 @@ static int casadi_f1(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a076=(a002*a076);
   a077=(a002*a074);
   a076=(a076-a077);
-  a046=sin(a046);
+  a046=qd_sin(a046);
   a078=(a046*a011);
   a079=(a078*a015);
   a080=(a046*a010);
@@ -5561,7 +5572,7 @@ static int casadi_f1(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a083=(a002*a080);
   a082=(a082-a083);
   a084=(a076+a082);
-  a054=sin(a054);
+  a054=qd_sin(a054);
   a085=(a054*a020);
   a086=(a085*a024);
   a087=(a054*a019);
@@ -5571,7 +5582,7 @@ static int casadi_f1(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a090=(a002*a087);
   a089=(a089-a090);
   a084=(a084+a089);
-  a061=sin(a061);
+  a061=qd_sin(a061);
   a091=(a061*a027);
   a092=(a091*a031);
   a093=(a061*a026);
@@ -6023,7 +6034,7 @@ static int casadi_f1(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a219=(a200*a106);
   a070=(a136*a140);
   a219=(a219-a070);
-  a219=(2.*a219);
+  a219=(2*a219);
   a120=(a120+a219);
   a219=(a127*a138);
   a070=(a002*a121);
@@ -6073,7 +6084,7 @@ static int casadi_f1(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a115=(a136*a128);
   a106=(a220*a106);
   a115=(a115-a106);
-  a115=(2.*a115);
+  a115=(2*a115);
   a076=(a076+a115);
   a124=(a124-a122);
   a124=(a002*a124);
@@ -6135,7 +6146,7 @@ static int casadi_f1(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a073=(a200*a208);
   a139=(a136*a162);
   a073=(a073-a139);
-  a073=(2.*a073);
+  a073=(2*a073);
   a137=(a137+a073);
   a073=(a149*a160);
   a139=(a002*a143);
@@ -6185,7 +6196,7 @@ static int casadi_f1(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a124=(a136*a150);
   a208=(a220*a208);
   a124=(a124-a208);
-  a124=(2.*a124);
+  a124=(2*a124);
   a082=(a082+a124);
   a146=(a146-a144);
   a146=(a002*a146);
@@ -6248,7 +6259,7 @@ static int casadi_f1(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a081=(a200*a211);
   a079=(a136*a183);
   a081=(a081-a079);
-  a081=(2.*a081);
+  a081=(2*a081);
   a146=(a146+a081);
   a081=(a170*a181);
   a079=(a002*a158);
@@ -6298,7 +6309,7 @@ static int casadi_f1(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a073=(a136*a171);
   a211=(a220*a211);
   a073=(a073-a211);
-  a073=(2.*a073);
+  a073=(2*a073);
   a089=(a089+a073);
   a167=(a167-a165);
   a167=(a002*a167);
@@ -6361,7 +6372,7 @@ static int casadi_f1(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a088=(a200*a214);
   a086=(a136*a204);
   a088=(a088-a086);
-  a088=(2.*a088);
+  a088=(2*a088);
   a167=(a167+a088);
   a088=(a191*a202);
   a086=(a002*a179);
@@ -6411,7 +6422,7 @@ static int casadi_f1(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a081=(a136*a192);
   a214=(a220*a214);
   a081=(a081-a214);
-  a081=(2.*a081);
+  a081=(2*a081);
   a095=(a095+a081);
   a188=(a188-a186);
   a188=(a002*a188);
@@ -6470,7 +6481,7 @@ static int casadi_f1(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a140=(a220*a140);
   a128=(a200*a128);
   a140=(a140-a128);
-  a140=(2.*a140);
+  a140=(2*a140);
   a216=(a216+a140);
   a140=(a007*a004);
   a128=(a008*a003);
@@ -6496,7 +6507,7 @@ static int casadi_f1(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a162=(a220*a162);
   a150=(a200*a150);
   a162=(a162-a150);
-  a162=(2.*a162);
+  a162=(2*a162);
   a075=(a075+a162);
   a162=(a014*a011);
   a150=(a015*a010);
@@ -6523,7 +6534,7 @@ static int casadi_f1(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a183=(a220*a183);
   a171=(a200*a171);
   a183=(a183-a171);
-  a183=(2.*a183);
+  a183=(2*a183);
   a159=(a159+a183);
   a183=(a023*a020);
   a171=(a024*a019);
@@ -6550,7 +6561,7 @@ static int casadi_f1(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a204=(a220*a204);
   a192=(a200*a192);
   a204=(a204-a192);
-  a204=(2.*a204);
+  a204=(2*a204);
   a180=(a180+a204);
   a204=(a030*a027);
   a192=(a031*a026);
@@ -8046,12 +8057,12 @@ static int casadi_f2(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   casadi_real a84, a85, a86, a87, a88, a89, a90, a91, a92, a93, a94, a95;
   casadi_real a96, a97;
   a00=arg[0]? arg[0][1] : 0;
-  a01=sin(a00);
+  a01=qd_sin(a00);
   a02=arg[0]? arg[0][2] : 0;
-  a03=sin(a02);
+  a03=qd_sin(a02);
   a04=1.4999999999999999e-02;
   a05=arg[0]? arg[0][0] : 0;
-  a06=sin(a05);
+  a06=qd_sin(a05);
   a07=-9.8100000000000005e+00;
   a08=2.;
   a09=arg[1]? arg[1][0] : 0;
@@ -8072,7 +8083,7 @@ static int casadi_f2(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a13=(a08*a13);
   a15=(a07*a13);
   a16=(a06*a15);
-  a05=cos(a05);
+  a05=qd_cos(a05);
   a17=1.;
   a10=(a08*a10);
   a10=(a17-a10);
@@ -8082,8 +8093,8 @@ static int casadi_f2(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a19=(a04*a16);
   a20=(a03*a19);
   a21=(a01*a20);
-  a00=cos(a00);
-  a02=cos(a02);
+  a00=qd_cos(a00);
+  a02=qd_cos(a02);
   a19=(a02*a19);
   a22=5.5000000000000007e-02;
   a23=(a22*a16);
@@ -8154,15 +8165,15 @@ static int casadi_f2(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a13=(a16*a13);
   a13=(a11-a13);
   a33=arg[0]? arg[0][3] : 0;
-  a34=cos(a33);
+  a34=qd_cos(a33);
   a35=arg[0]? arg[0][4] : 0;
-  a36=cos(a35);
+  a36=qd_cos(a35);
   a37=arg[0]? arg[0][5] : 0;
-  a38=sin(a37);
-  a37=cos(a37);
+  a38=qd_sin(a37);
+  a37=qd_cos(a37);
   a39=(a36*a07);
-  a35=sin(a35);
-  a33=sin(a33);
+  a35=qd_sin(a35);
+  a33=qd_sin(a33);
   a40=(a33*a18);
   a41=(a34*a15);
   a40=(a40-a41);
@@ -8207,15 +8218,15 @@ static int casadi_f2(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a40=(a40-a48);
   a13=(a13+a40);
   a48=arg[0]? arg[0][6] : 0;
-  a49=cos(a48);
+  a49=qd_cos(a48);
   a50=arg[0]? arg[0][7] : 0;
-  a51=cos(a50);
+  a51=qd_cos(a50);
   a52=arg[0]? arg[0][8] : 0;
-  a53=sin(a52);
-  a52=cos(a52);
+  a53=qd_sin(a52);
+  a52=qd_cos(a52);
   a54=(a51*a07);
-  a50=sin(a50);
-  a48=sin(a48);
+  a50=qd_sin(a50);
+  a48=qd_sin(a48);
   a55=(a48*a18);
   a56=(a49*a15);
   a55=(a55-a56);
@@ -8260,15 +8271,15 @@ static int casadi_f2(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a55=(a55-a63);
   a13=(a13+a55);
   a63=arg[0]? arg[0][9] : 0;
-  a64=cos(a63);
+  a64=qd_cos(a63);
   a65=arg[0]? arg[0][10] : 0;
-  a66=cos(a65);
+  a66=qd_cos(a65);
   a67=arg[0]? arg[0][11] : 0;
-  a68=sin(a67);
-  a67=cos(a67);
+  a68=qd_sin(a67);
+  a67=qd_cos(a67);
   a69=(a66*a07);
-  a65=sin(a65);
-  a63=sin(a63);
+  a65=qd_sin(a65);
+  a63=qd_sin(a63);
   a70=(a63*a18);
   a71=(a64*a15);
   a70=(a70-a71);
@@ -9075,27 +9086,27 @@ static int casadi_f3(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a001=1.9000000000000000e-01;
   a002=2.0000000000000001e-01;
   a003=arg[0]? arg[0][1] : 0;
-  a004=sin(a003);
+  a004=qd_sin(a003);
   a005=(a002*a004);
   a006=(a001+a005);
-  a003=cos(a003);
+  a003=qd_cos(a003);
   a007=arg[0]? arg[0][2] : 0;
-  a008=sin(a007);
+  a008=qd_sin(a007);
   a009=(a003*a008);
-  a007=cos(a007);
+  a007=qd_cos(a007);
   a010=(a004*a007);
   a009=(a009+a010);
   a009=(a002*a009);
   a006=(a006+a009);
   a010=arg[0]? arg[0][4] : 0;
-  a011=sin(a010);
+  a011=qd_sin(a010);
   a012=(a002*a011);
   a013=(a001+a012);
-  a010=cos(a010);
+  a010=qd_cos(a010);
   a014=arg[0]? arg[0][5] : 0;
-  a015=sin(a014);
+  a015=qd_sin(a014);
   a016=(a010*a015);
-  a014=cos(a014);
+  a014=qd_cos(a014);
   a017=(a011*a014);
   a016=(a016+a017);
   a016=(a002*a016);
@@ -9103,28 +9114,28 @@ static int casadi_f3(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a017=(a006+a013);
   a018=-1.9000000000000000e-01;
   a019=arg[0]? arg[0][7] : 0;
-  a020=sin(a019);
+  a020=qd_sin(a019);
   a021=(a002*a020);
   a022=(a018+a021);
-  a019=cos(a019);
+  a019=qd_cos(a019);
   a023=arg[0]? arg[0][8] : 0;
-  a024=sin(a023);
+  a024=qd_sin(a023);
   a025=(a019*a024);
-  a023=cos(a023);
+  a023=qd_cos(a023);
   a026=(a020*a023);
   a025=(a025+a026);
   a025=(a002*a025);
   a022=(a022+a025);
   a017=(a017+a022);
   a026=arg[0]? arg[0][10] : 0;
-  a027=sin(a026);
+  a027=qd_sin(a026);
   a028=(a002*a027);
   a029=(a018+a028);
-  a026=cos(a026);
+  a026=qd_cos(a026);
   a030=arg[0]? arg[0][11] : 0;
-  a031=sin(a030);
+  a031=qd_sin(a030);
   a032=(a026*a031);
-  a030=cos(a030);
+  a030=qd_cos(a030);
   a033=(a027*a030);
   a032=(a032+a033);
   a032=(a002*a032);
@@ -9136,7 +9147,7 @@ static int casadi_f3(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a036=casadi_sq(a035);
   a037=7.0000000000000007e-02;
   a038=arg[0]? arg[0][0] : 0;
-  a039=cos(a038);
+  a039=qd_cos(a038);
   a040=(a039*a003);
   a041=(a002*a040);
   a042=(a037+a041);
@@ -9148,7 +9159,7 @@ static int casadi_f3(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a042=(a042+a043);
   a045=-7.0000000000000007e-02;
   a046=arg[0]? arg[0][3] : 0;
-  a047=cos(a046);
+  a047=qd_cos(a046);
   a048=(a047*a010);
   a049=(a002*a048);
   a050=(a045+a049);
@@ -9160,7 +9171,7 @@ static int casadi_f3(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a050=(a050+a051);
   a053=(a042+a050);
   a054=arg[0]? arg[0][6] : 0;
-  a055=cos(a054);
+  a055=qd_cos(a054);
   a056=(a055*a019);
   a057=(a002*a056);
   a058=(a037+a057);
@@ -9172,7 +9183,7 @@ static int casadi_f3(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a058=(a058+a059);
   a053=(a053+a058);
   a061=arg[0]? arg[0][9] : 0;
-  a062=cos(a061);
+  a062=qd_cos(a061);
   a063=(a062*a026);
   a064=(a002*a063);
   a065=(a045+a064);
@@ -9187,7 +9198,7 @@ static int casadi_f3(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a069=(a042-a068);
   a070=casadi_sq(a069);
   a071=(a036+a070);
-  a038=sin(a038);
+  a038=qd_sin(a038);
   a072=(a038*a004);
   a073=(a072*a008);
   a074=(a038*a003);
@@ -9196,7 +9207,7 @@ static int casadi_f3(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a076=(a002*a076);
   a077=(a002*a074);
   a076=(a076-a077);
-  a046=sin(a046);
+  a046=qd_sin(a046);
   a078=(a046*a011);
   a079=(a078*a015);
   a080=(a046*a010);
@@ -9206,7 +9217,7 @@ static int casadi_f3(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a083=(a002*a080);
   a082=(a082-a083);
   a084=(a076+a082);
-  a054=sin(a054);
+  a054=qd_sin(a054);
   a085=(a054*a020);
   a086=(a085*a024);
   a087=(a054*a019);
@@ -9216,7 +9227,7 @@ static int casadi_f3(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a090=(a002*a087);
   a089=(a089-a090);
   a084=(a084+a089);
-  a061=sin(a061);
+  a061=qd_sin(a061);
   a091=(a061*a027);
   a092=(a091*a031);
   a093=(a061*a026);
@@ -9867,7 +9878,7 @@ static int casadi_f3(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a275=(a273*a276);
   a110=(a257*a258);
   a275=(a275-a110);
-  a275=(2.*a275);
+  a275=(2*a275);
   a113=(a113+a275);
   a275=(a253*a126);
   a110=(a002*a115);
@@ -9917,7 +9928,7 @@ static int casadi_f3(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a131=(a257*a254);
   a043=(a277*a276);
   a131=(a131-a043);
-  a131=(2.*a131);
+  a131=(2*a131);
   a076=(a076+a131);
   a121=(a121-a119);
   a121=(a002*a121);
@@ -9979,7 +9990,7 @@ static int casadi_f3(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a073=(a273*a278);
   a127=(a257*a264);
   a073=(a073-a127);
-  a073=(2.*a073);
+  a073=(2*a073);
   a125=(a125+a073);
   a073=(a259*a162);
   a127=(a002*a154);
@@ -10029,7 +10040,7 @@ static int casadi_f3(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a121=(a257*a260);
   a051=(a277*a278);
   a121=(a121-a051);
-  a121=(2.*a121);
+  a121=(2*a121);
   a082=(a082+a121);
   a157=(a157-a155);
   a157=(a002*a157);
@@ -10092,7 +10103,7 @@ static int casadi_f3(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a081=(a273*a279);
   a079=(a257*a269);
   a081=(a081-a079);
-  a081=(2.*a081);
+  a081=(2*a081);
   a157=(a157+a081);
   a081=(a263*a195);
   a079=(a002*a187);
@@ -10142,7 +10153,7 @@ static int casadi_f3(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a073=(a257*a265);
   a059=(a277*a279);
   a073=(a073-a059);
-  a073=(2.*a073);
+  a073=(2*a073);
   a089=(a089+a073);
   a190=(a190-a188);
   a190=(a002*a190);
@@ -10205,7 +10216,7 @@ static int casadi_f3(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a088=(a273*a280);
   a086=(a257*a274);
   a088=(a088-a086);
-  a088=(2.*a088);
+  a088=(2*a088);
   a190=(a190+a088);
   a088=(a268*a228);
   a086=(a002*a220);
@@ -10255,7 +10266,7 @@ static int casadi_f3(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a081=(a257*a270);
   a066=(a277*a280);
   a081=(a081-a066);
-  a081=(2.*a081);
+  a081=(2*a081);
   a095=(a095+a081);
   a223=(a223-a221);
   a223=(a002*a223);
@@ -10314,7 +10325,7 @@ static int casadi_f3(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a115=(a277*a258);
   a223=(a273*a254);
   a115=(a115-a223);
-  a115=(2.*a115);
+  a115=(2*a115);
   a129=(a129+a115);
   a115=(a007*a004);
   a223=(a008*a003);
@@ -10340,7 +10351,7 @@ static int casadi_f3(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a154=(a277*a264);
   a005=(a273*a260);
   a154=(a154-a005);
-  a154=(2.*a154);
+  a154=(2*a154);
   a075=(a075+a154);
   a154=(a014*a011);
   a005=(a015*a010);
@@ -10367,7 +10378,7 @@ static int casadi_f3(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a187=(a277*a269);
   a105=(a273*a265);
   a187=(a187-a105);
-  a187=(2.*a187);
+  a187=(2*a187);
   a161=(a161+a187);
   a187=(a023*a020);
   a105=(a024*a019);
@@ -10394,7 +10405,7 @@ static int casadi_f3(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a220=(a277*a274);
   a111=(a273*a270);
   a220=(a220-a111);
-  a220=(2.*a220);
+  a220=(2*a220);
   a194=(a194+a220);
   a220=(a030*a027);
   a111=(a031*a026);

@@ -20,6 +20,17 @@ extern "C" {
 
 #include <math.h>
 
+/* quadruped_dyn: the elementary functions in casadi_real's precision. A float build
+ * (-Dcasadi_real=float) calls sinf, cosf, ... instead of promoting to double, so it does no
+ * double arithmetic (none on a single-precision FPU: -Wdouble-promotion clean); a double build
+ * calls sin, cos, ... exactly as before. */
+#define QD_REAL_IS_FLOAT (sizeof(casadi_real) == sizeof(float))
+static inline casadi_real qd_sin(casadi_real x) { return QD_REAL_IS_FLOAT ? (casadi_real)sinf((float)x) : (casadi_real)sin((double)x); }
+static inline casadi_real qd_cos(casadi_real x) { return QD_REAL_IS_FLOAT ? (casadi_real)cosf((float)x) : (casadi_real)cos((double)x); }
+static inline casadi_real qd_tan(casadi_real x) { return QD_REAL_IS_FLOAT ? (casadi_real)tanf((float)x) : (casadi_real)tan((double)x); }
+static inline casadi_real qd_sqrt(casadi_real x) { return QD_REAL_IS_FLOAT ? (casadi_real)sqrtf((float)x) : (casadi_real)sqrt((double)x); }
+static inline casadi_real qd_fabs(casadi_real x) { return QD_REAL_IS_FLOAT ? (casadi_real)fabsf((float)x) : (casadi_real)fabs((double)x); }
+
 #ifndef casadi_real
 #define casadi_real double
 #endif
@@ -76,7 +87,7 @@ static const casadi_int casadi_s2[3] = {12, 12, 1};
  *   0             success
  *   QD_NONFINITE  an output is NaN or inf: coincident or collinear stance feet (the trunk
  *                 motion is undetermined), the trunk pitched +-90 deg (the roll row of two
- *                 stance feet has tan(pitch)), a zero quaternion, or a non-finite input;
+ *                 stance feet has qd_tan(pitch)), a zero quaternion, or a non-finite input;
  *   QD_SINGULAR   (qd_fd_r_* only) M_r is singular to working precision: a pivot of its LU
  *                 factorisation (partial pivoting) is below QD_SINGULAR_RTOL * max|M_r|,
  *                 e.g. two stance feet with the trunk pitched within ~1e-12 rad of 90 deg.
@@ -129,7 +140,7 @@ static inline int qd_fd_r_solve(int n, qd_eval_fn M_r, qd_eval_fn CG_r, const ca
   if (flag) return flag;
   casadi_real scale = 0, sum = 0; /* a NaN or inf anywhere makes the sum non-finite */
   for (int i = 0; i < n * n; ++i) {
-    scale = fabs(M[i]) > scale ? fabs(M[i]) : scale;
+    scale = qd_fabs(M[i]) > scale ? qd_fabs(M[i]) : scale;
     sum += M[i];
   }
   for (int i = 0; i < n; ++i) {
@@ -140,8 +151,8 @@ static inline int qd_fd_r_solve(int n, qd_eval_fn M_r, qd_eval_fn CG_r, const ca
   for (int k = 0; k < n; ++k) { /* M[i + n j] = M_ij */
     casadi_real* col = M + n * k;
     int p = k;
-    for (int i = k + 1; i < n; ++i) p = fabs(col[i]) > fabs(col[p]) ? i : p;
-    if (!(fabs(col[p]) > QD_SINGULAR_RTOL * scale)) return QD_SINGULAR;
+    for (int i = k + 1; i < n; ++i) p = qd_fabs(col[i]) > qd_fabs(col[p]) ? i : p;
+    if (!(qd_fabs(col[p]) > QD_SINGULAR_RTOL * scale)) return QD_SINGULAR;
     if (p != k) {
       for (int j = 0; j < n; ++j) {
         casadi_real t = M[k + n * j];
@@ -191,15 +202,15 @@ static int casadi_f0(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   casadi_real a156, a157, a158, a159, a160, a161, a162, a163, a164, a165, a166, a167;
   casadi_real a168, a169, a170, a171, a172, a173, a174;
   a000=arg[0]? arg[0][0] : 0;
-  a001=cos(a000);
+  a001=qd_cos(a000);
   a002=5.0000000000000000e-01;
   a003=7.3642708333333355e-03;
   a004=1.0126562500000001e-03;
   a005=9.9578125000000014e-04;
   a006=arg[0]? arg[0][2] : 0;
-  a007=cos(a006);
+  a007=qd_cos(a006);
   a008=casadi_sq(a007);
-  a006=sin(a006);
+  a006=qd_sin(a006);
   a009=casadi_sq(a006);
   a008=(a008-a009);
   a008=(a005*a008);
@@ -222,12 +233,12 @@ static int casadi_f0(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a017=(a010-a008);
   a017=(a002*a017);
   a018=arg[0]? arg[0][1] : 0;
-  a019=cos(a018);
-  a020=(2.*a019);
-  a018=sin(a018);
+  a019=qd_cos(a018);
+  a020=(2*a019);
+  a018=qd_sin(a018);
   a020=(a020*a018);
   a021=(a017*a020);
-  a022=(2.*a007);
+  a022=(2*a007);
   a022=(a022*a006);
   a022=(a005*a022);
   a023=(a015*a006);
@@ -265,36 +276,36 @@ static int casadi_f0(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a040=(a040+a041);
   a041=-7.0000000000000007e-02;
   a043=arg[0]? arg[0][3] : 0;
-  a044=cos(a043);
+  a044=qd_cos(a043);
   a045=arg[0]? arg[0][4] : 0;
-  a046=cos(a045);
+  a046=qd_cos(a045);
   a047=(a044*a046);
   a048=(a038*a047);
   a048=(a041+a048);
   a049=arg[0]? arg[0][5] : 0;
-  a050=cos(a049);
+  a050=qd_cos(a049);
   a051=(a047*a050);
-  a045=sin(a045);
+  a045=qd_sin(a045);
   a052=(a044*a045);
-  a049=sin(a049);
+  a049=qd_sin(a049);
   a053=(a052*a049);
   a051=(a051-a053);
   a051=(a038*a051);
   a048=(a048+a051);
   a051=(a040+a048);
   a053=arg[0]? arg[0][9] : 0;
-  a054=cos(a053);
+  a054=qd_cos(a053);
   a055=arg[0]? arg[0][10] : 0;
-  a056=cos(a055);
+  a056=qd_cos(a055);
   a057=(a054*a056);
   a058=(a038*a057);
   a058=(a041+a058);
   a059=arg[0]? arg[0][11] : 0;
-  a060=cos(a059);
+  a060=qd_cos(a059);
   a061=(a057*a060);
-  a055=sin(a055);
+  a055=qd_sin(a055);
   a062=(a054*a055);
-  a059=sin(a059);
+  a059=qd_sin(a059);
   a063=(a062*a059);
   a061=(a061-a063);
   a061=(a038*a061);
@@ -350,7 +361,7 @@ static int casadi_f0(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a085=(a083+a084);
   a082=(a082+a085);
   a086=(a071*a082);
-  a000=sin(a000);
+  a000=qd_sin(a000);
   a087=(a000*a018);
   a088=(a087*a006);
   a089=(a000*a019);
@@ -359,7 +370,7 @@ static int casadi_f0(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a088=(a038*a088);
   a090=(a038*a089);
   a088=(a088-a090);
-  a043=sin(a043);
+  a043=qd_sin(a043);
   a090=(a043*a045);
   a091=(a090*a049);
   a092=(a043*a046);
@@ -369,7 +380,7 @@ static int casadi_f0(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a093=(a038*a092);
   a091=(a091-a093);
   a093=(a088+a091);
-  a053=sin(a053);
+  a053=qd_sin(a053);
   a094=(a053*a055);
   a095=(a094*a059);
   a096=(a053*a056);
@@ -543,13 +554,13 @@ static int casadi_f0(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a023=(a116+a023);
   a078=(a078+a023);
   a023=arg[0]? arg[0][7] : 0;
-  a117=cos(a023);
+  a117=qd_cos(a023);
   a118=arg[0]? arg[0][8] : 0;
-  a119=sin(a118);
+  a119=qd_sin(a118);
   a120=(a027*a119);
   a121=(a117*a120);
-  a023=sin(a023);
-  a118=cos(a118);
+  a023=qd_sin(a023);
+  a118=qd_cos(a118);
   a122=(a027*a118);
   a123=(a122+a029);
   a123=(a026+a123);
@@ -578,7 +589,7 @@ static int casadi_f0(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a134=(a132+a133);
   a131=(a131+a134);
   a134=arg[0]? arg[0][6] : 0;
-  a135=cos(a134);
+  a135=qd_cos(a134);
   a123=(a117*a123);
   a120=(a023*a120);
   a123=(a123-a120);
@@ -613,10 +624,10 @@ static int casadi_f0(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a137=(a013+a137);
   a141=(a138-a137);
   a141=(a002*a141);
-  a142=(2.*a046);
+  a142=(2*a046);
   a142=(a142*a045);
   a143=(a141*a142);
-  a144=(2.*a050);
+  a144=(2*a050);
   a144=(a144*a049);
   a144=(a005*a144);
   a145=(a015*a049);
@@ -631,7 +642,7 @@ static int casadi_f0(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a148=(a025*a147);
   a146=(a146+a148);
   a148=(a021+a146);
-  a134=sin(a134);
+  a134=qd_sin(a134);
   a149=casadi_sq(a118);
   a150=casadi_sq(a119);
   a149=(a149-a150);
@@ -649,10 +660,10 @@ static int casadi_f0(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a149=(a013+a149);
   a153=(a150-a149);
   a153=(a002*a153);
-  a154=(2.*a117);
+  a154=(2*a117);
   a154=(a154*a023);
   a155=(a153*a154);
-  a118=(2.*a118);
+  a118=(2*a118);
   a118=(a118*a119);
   a118=(a005*a118);
   a119=(a015*a119);
@@ -684,10 +695,10 @@ static int casadi_f0(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a013=(a013+a014);
   a014=(a009-a013);
   a014=(a002*a014);
-  a158=(2.*a056);
+  a158=(2*a056);
   a158=(a158*a055);
   a159=(a014*a158);
-  a160=(2.*a060);
+  a160=(2*a060);
   a160=(a160*a059);
   a005=(a005*a160);
   a015=(a015*a059);
@@ -713,7 +724,7 @@ static int casadi_f0(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a163=(a071+a012);
   a164=(a010-a163);
   a164=(a002*a164);
-  a165=(2.*a001);
+  a165=(2*a001);
   a165=(a165*a000);
   a165=(a164*a165);
   a162=(a162-a165);
@@ -731,7 +742,7 @@ static int casadi_f0(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a144=(a071+a139);
   a142=(a138-a144);
   a142=(a002*a142);
-  a141=(2.*a044);
+  a141=(2*a044);
   a141=(a141*a043);
   a141=(a142*a141);
   a165=(a165-a141);
@@ -750,7 +761,7 @@ static int casadi_f0(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a118=(a071+a151);
   a154=(a150-a118);
   a154=(a002*a154);
-  a153=(2.*a135);
+  a153=(2*a135);
   a153=(a153*a134);
   a153=(a154*a153);
   a165=(a165-a153);
@@ -769,7 +780,7 @@ static int casadi_f0(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a008=(a071+a003);
   a011=(a009-a008);
   a011=(a002*a011);
-  a005=(2.*a054);
+  a005=(2*a054);
   a005=(a005*a053);
   a005=(a011*a005);
   a165=(a165-a005);
@@ -789,7 +800,7 @@ static int casadi_f0(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a010=(a010+a164);
   a005=(a025*a109);
   a158=(a005+a020);
-  a158=(2.*a158);
+  a158=(2*a158);
   a010=(a010+a158);
   a165=(a165+a010);
   a138=(a138+a144);
@@ -804,7 +815,7 @@ static int casadi_f0(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a142=(a025*a116);
   a010=(a041*a132);
   a014=(a142+a010);
-  a014=(2.*a014);
+  a014=(2*a014);
   a138=(a138+a014);
   a165=(a165+a138);
   a150=(a150+a118);
@@ -819,7 +830,7 @@ static int casadi_f0(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a154=(a068*a125);
   a138=(a037*a136);
   a015=(a154+a138);
-  a015=(2.*a015);
+  a015=(2*a015);
   a150=(a150+a015);
   a165=(a165+a150);
   a009=(a009+a008);
@@ -834,7 +845,7 @@ static int casadi_f0(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a164=(a068*a129);
   a011=(a041*a130);
   a008=(a164+a011);
-  a008=(2.*a008);
+  a008=(2*a008);
   a009=(a009+a008);
   a165=(a165+a009);
   a009=(a165*a104);
@@ -852,7 +863,7 @@ static int casadi_f0(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a150=(a150/a061);
   a119=(a051*a150);
   a126=(a126+a119);
-  a119=(2.*a126);
+  a119=(2*a126);
   a141=(a066+a069);
   a145=(a009*a079);
   a166=(a153*a112);
@@ -862,7 +873,7 @@ static int casadi_f0(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a145=(a145-a111);
   a166=(a141*a145);
   a119=(a119-a166);
-  a166=(2.*a065);
+  a166=(2*a065);
   a166=(a166-a141);
   a119=(a119/a166);
   a167=(a103*a119);
@@ -1497,7 +1508,7 @@ static int casadi_f0(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a062=(a062/a061);
   a055=(a051*a062);
   a145=(a145+a055);
-  a055=(2.*a145);
+  a055=(2*a145);
   a104=(a009*a059);
   a068=(a153*a060);
   a104=(a104+a068);
@@ -1809,7 +1820,7 @@ static int casadi_f0(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a150=(a150/a061);
   a060=(a051*a150);
   a133=(a133+a060);
-  a060=(2.*a133);
+  a060=(2*a133);
   a094=(a009*a041);
   a059=(a153*a104);
   a094=(a094+a059);
@@ -2115,7 +2126,7 @@ static int casadi_f0(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a041=(a041/a061);
   a070=(a051*a041);
   a094=(a094+a070);
-  a070=(2.*a094);
+  a070=(2*a094);
   a059=(a009*a104);
   a133=(a153*a062);
   a059=(a059+a133);
@@ -2426,7 +2437,7 @@ static int casadi_f0(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a104=(a104/a061);
   a169=(a051*a104);
   a096=(a096+a169);
-  a169=(2.*a096);
+  a169=(2*a096);
   a137=(a009*a150);
   a094=(a153*a062);
   a137=(a137+a094);
@@ -2738,7 +2749,7 @@ static int casadi_f0(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a041=(a041/a061);
   a062=(a051*a041);
   a064=(a064+a062);
-  a062=(2.*a064);
+  a062=(2*a064);
   a059=(a009*a060);
   a150=(a153*a137);
   a059=(a059+a150);
@@ -2981,7 +2992,7 @@ static int casadi_f0(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a100=(a100-a041);
   if (res[0]!=0) res[0][71]=a100;
   a100=(-a156);
-  a100=(2.*a100);
+  a100=(2*a100);
   a041=(a141*a157);
   a100=(a100+a041);
   a100=(a100/a166);
@@ -3064,7 +3075,7 @@ static int casadi_f0(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a098=(a123/a061);
   a104=(a051*a098);
   a104=(a104-a092);
-  a100=(2.*a104);
+  a100=(2*a104);
   a041=(a141*a107);
   a100=(a100+a041);
   a100=(a100/a166);
@@ -3161,7 +3172,7 @@ static int casadi_f0(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a098=(a117/a061);
   a151=(a051*a098);
   a151=(a135+a151);
-  a137=(2.*a151);
+  a137=(2*a151);
   a104=(a141*a121);
   a137=(a137+a104);
   a137=(a137/a166);
@@ -3317,7 +3328,7 @@ static int casadi_f0(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a137=(a137/a061);
   a100=(a051*a137);
   a151=(a151+a100);
-  a100=(2.*a151);
+  a100=(2*a151);
   a072=(a009*a059);
   a060=(a153*a149);
   a072=(a072+a060);
@@ -3628,7 +3639,7 @@ static int casadi_f0(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a059=(a059/a061);
   a145=(a051*a059);
   a041=(a041+a145);
-  a145=(2.*a041);
+  a145=(2*a041);
   a071=(a009*a152);
   a151=(a153*a149);
   a071=(a071+a151);
@@ -3940,7 +3951,7 @@ static int casadi_f0(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a165=(a165/a061);
   a051=(a051*a165);
   a021=(a021+a051);
-  a051=(2.*a021);
+  a051=(2*a021);
   a061=(a009*a108);
   a097=(a153*a082);
   a061=(a061+a097);
@@ -4281,27 +4292,27 @@ static int casadi_f1(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a001=1.9000000000000000e-01;
   a002=2.0000000000000001e-01;
   a003=arg[0]? arg[0][1] : 0;
-  a004=sin(a003);
+  a004=qd_sin(a003);
   a005=(a002*a004);
   a006=(a001+a005);
-  a003=cos(a003);
+  a003=qd_cos(a003);
   a007=arg[0]? arg[0][2] : 0;
-  a008=sin(a007);
+  a008=qd_sin(a007);
   a009=(a003*a008);
-  a007=cos(a007);
+  a007=qd_cos(a007);
   a010=(a004*a007);
   a009=(a009+a010);
   a009=(a002*a009);
   a006=(a006+a009);
   a010=arg[0]? arg[0][4] : 0;
-  a011=sin(a010);
+  a011=qd_sin(a010);
   a012=(a002*a011);
   a013=(a001+a012);
-  a010=cos(a010);
+  a010=qd_cos(a010);
   a014=arg[0]? arg[0][5] : 0;
-  a015=sin(a014);
+  a015=qd_sin(a014);
   a016=(a010*a015);
-  a014=cos(a014);
+  a014=qd_cos(a014);
   a017=(a011*a014);
   a016=(a016+a017);
   a016=(a002*a016);
@@ -4309,14 +4320,14 @@ static int casadi_f1(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a017=(a006+a013);
   a018=-1.9000000000000000e-01;
   a019=arg[0]? arg[0][10] : 0;
-  a020=sin(a019);
+  a020=qd_sin(a019);
   a021=(a002*a020);
   a022=(a018+a021);
-  a019=cos(a019);
+  a019=qd_cos(a019);
   a023=arg[0]? arg[0][11] : 0;
-  a024=sin(a023);
+  a024=qd_sin(a023);
   a025=(a019*a024);
-  a023=cos(a023);
+  a023=qd_cos(a023);
   a026=(a020*a023);
   a025=(a025+a026);
   a025=(a002*a025);
@@ -4328,7 +4339,7 @@ static int casadi_f1(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a028=casadi_sq(a027);
   a029=7.0000000000000007e-02;
   a030=arg[0]? arg[0][0] : 0;
-  a031=cos(a030);
+  a031=qd_cos(a030);
   a032=(a031*a003);
   a033=(a002*a032);
   a034=(a029+a033);
@@ -4340,7 +4351,7 @@ static int casadi_f1(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a034=(a034+a035);
   a037=-7.0000000000000007e-02;
   a038=arg[0]? arg[0][3] : 0;
-  a039=cos(a038);
+  a039=qd_cos(a038);
   a040=(a039*a010);
   a041=(a002*a040);
   a042=(a037+a041);
@@ -4352,7 +4363,7 @@ static int casadi_f1(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a042=(a042+a043);
   a045=(a034+a042);
   a046=arg[0]? arg[0][9] : 0;
-  a047=cos(a046);
+  a047=qd_cos(a046);
   a048=(a047*a019);
   a049=(a002*a048);
   a050=(a037+a049);
@@ -4367,7 +4378,7 @@ static int casadi_f1(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a054=(a034-a053);
   a055=casadi_sq(a054);
   a056=(a028+a055);
-  a030=sin(a030);
+  a030=qd_sin(a030);
   a057=(a030*a004);
   a058=(a057*a008);
   a059=(a030*a003);
@@ -4376,7 +4387,7 @@ static int casadi_f1(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a061=(a002*a061);
   a062=(a002*a059);
   a061=(a061-a062);
-  a038=sin(a038);
+  a038=qd_sin(a038);
   a063=(a038*a011);
   a064=(a063*a015);
   a065=(a038*a010);
@@ -4386,7 +4397,7 @@ static int casadi_f1(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a068=(a002*a065);
   a067=(a067-a068);
   a069=(a061+a067);
-  a046=sin(a046);
+  a046=qd_sin(a046);
   a070=(a046*a020);
   a071=(a070*a024);
   a072=(a046*a019);
@@ -4739,7 +4750,7 @@ static int casadi_f1(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a171=(a153*a028);
   a055=(a110*a114);
   a171=(a171-a055);
-  a171=(2.*a171);
+  a171=(2*a171);
   a094=(a094+a171);
   a171=(a101*a112);
   a055=(a002*a095);
@@ -4789,7 +4800,7 @@ static int casadi_f1(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a092=(a110*a102);
   a028=(a172*a028);
   a092=(a092-a028);
-  a092=(2.*a092);
+  a092=(2*a092);
   a035=(a035+a092);
   a098=(a098-a096);
   a098=(a002*a098);
@@ -4851,7 +4862,7 @@ static int casadi_f1(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a058=(a153*a163);
   a113=(a110*a136);
   a058=(a058-a113);
-  a058=(2.*a058);
+  a058=(2*a058);
   a111=(a111+a058);
   a058=(a123*a134);
   a113=(a002*a117);
@@ -4901,7 +4912,7 @@ static int casadi_f1(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a098=(a110*a124);
   a163=(a172*a163);
   a098=(a098-a163);
-  a098=(2.*a098);
+  a098=(2*a098);
   a043=(a043+a098);
   a120=(a120-a118);
   a120=(a002*a120);
@@ -4964,7 +4975,7 @@ static int casadi_f1(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a066=(a153*a166);
   a064=(a110*a157);
   a066=(a066-a064);
-  a066=(2.*a066);
+  a066=(2*a066);
   a120=(a120+a066);
   a066=(a144*a155);
   a064=(a002*a132);
@@ -5014,7 +5025,7 @@ static int casadi_f1(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a058=(a110*a145);
   a166=(a172*a166);
   a058=(a058-a166);
-  a058=(2.*a058);
+  a058=(2*a058);
   a051=(a051+a058);
   a141=(a141-a139);
   a141=(a002*a141);
@@ -5073,7 +5084,7 @@ static int casadi_f1(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a114=(a172*a114);
   a102=(a153*a102);
   a114=(a114-a102);
-  a114=(2.*a114);
+  a114=(2*a114);
   a168=(a168+a114);
   a114=(a007*a004);
   a102=(a008*a003);
@@ -5099,7 +5110,7 @@ static int casadi_f1(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a136=(a172*a136);
   a124=(a153*a124);
   a136=(a136-a124);
-  a136=(2.*a136);
+  a136=(2*a136);
   a060=(a060+a136);
   a136=(a014*a011);
   a124=(a015*a010);
@@ -5126,7 +5137,7 @@ static int casadi_f1(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a157=(a172*a157);
   a145=(a153*a145);
   a157=(a157-a145);
-  a157=(2.*a157);
+  a157=(2*a157);
   a133=(a133+a157);
   a157=(a023*a020);
   a145=(a024*a019);
@@ -5747,8 +5758,8 @@ static int casadi_f1(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a076=(a076+a009);
   a035=(a035+a076);
   a076=arg[0]? arg[0][6] : 0;
-  a009=cos(a076);
-  a076=sin(a076);
+  a009=qd_cos(a076);
+  a076=qd_sin(a076);
   a117=(a076*a170);
   a014=(a009*a093);
   a117=(a117+a014);
@@ -5768,9 +5779,9 @@ static int casadi_f1(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a148=(a148+a166);
   a166=(a056*a117);
   a015=arg[0]? arg[0][7] : 0;
-  a081=cos(a015);
+  a081=qd_cos(a015);
   a016=(a081*a168);
-  a015=sin(a015);
+  a015=qd_sin(a015);
   a169=(a015*a014);
   a016=(a016-a169);
   a169=(a015*a168);
@@ -5784,9 +5795,9 @@ static int casadi_f1(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a166=(a166+a129);
   a129=(a171*a117);
   a143=arg[0]? arg[0][8] : 0;
-  a139=cos(a143);
+  a139=qd_cos(a143);
   a133=(a139*a016);
-  a143=sin(a143);
+  a143=qd_sin(a143);
   a052=(a143*a169);
   a133=(a133-a052);
   a052=(a143*a016);
@@ -6245,7 +6256,7 @@ static int casadi_f1(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a053=(a053/a026);
   a045=(a045*a053);
   a035=(a035+a045);
-  a045=(2.*a035);
+  a045=(2*a035);
   a026=(a013+a022);
   a156=(a060*a156);
   a156=(a156+a071);
@@ -6254,7 +6265,7 @@ static int casadi_f1(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a156=(a156+a111);
   a111=(a026*a156);
   a045=(a045-a111);
-  a111=(2.*a006);
+  a111=(2*a006);
   a111=(a111-a026);
   a045=(a045/a111);
   a099=(a099*a045);
@@ -6553,12 +6564,12 @@ static int casadi_f2(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   casadi_real a60, a61, a62, a63, a64, a65, a66, a67, a68, a69, a70, a71;
   casadi_real a72, a73, a74, a75, a76, a77, a78;
   a00=arg[0]? arg[0][1] : 0;
-  a01=sin(a00);
+  a01=qd_sin(a00);
   a02=arg[0]? arg[0][2] : 0;
-  a03=sin(a02);
+  a03=qd_sin(a02);
   a04=1.4999999999999999e-02;
   a05=arg[0]? arg[0][0] : 0;
-  a06=sin(a05);
+  a06=qd_sin(a05);
   a07=-9.8100000000000005e+00;
   a08=2.;
   a09=arg[1]? arg[1][0] : 0;
@@ -6579,7 +6590,7 @@ static int casadi_f2(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a13=(a08*a13);
   a15=(a07*a13);
   a16=(a06*a15);
-  a05=cos(a05);
+  a05=qd_cos(a05);
   a17=1.;
   a10=(a08*a10);
   a17=(a17-a10);
@@ -6589,8 +6600,8 @@ static int casadi_f2(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a18=(a04*a16);
   a19=(a03*a18);
   a20=(a01*a19);
-  a00=cos(a00);
-  a02=cos(a02);
+  a00=qd_cos(a00);
+  a02=qd_cos(a02);
   a18=(a02*a18);
   a21=5.5000000000000007e-02;
   a22=(a21*a16);
@@ -6681,21 +6692,21 @@ static int casadi_f2(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a16=(a16-a33);
   a30=(a30+a16);
   a16=arg[0]? arg[0][3] : 0;
-  a33=cos(a16);
+  a33=qd_cos(a16);
   a34=arg[0]? arg[0][5] : 0;
-  a35=cos(a34);
+  a35=qd_cos(a34);
   a36=arg[0]? arg[0][4] : 0;
-  a37=cos(a36);
+  a37=qd_cos(a36);
   a38=(a37*a07);
-  a36=sin(a36);
-  a16=sin(a16);
+  a36=qd_sin(a36);
+  a16=qd_sin(a16);
   a39=(a16*a10);
   a40=(a33*a15);
   a39=(a39-a40);
   a40=(a36*a39);
   a38=(a38+a40);
   a40=(a35*a38);
-  a34=sin(a34);
+  a34=qd_sin(a34);
   a41=(a37*a39);
   a42=(a36*a07);
   a41=(a41-a42);
@@ -6761,21 +6772,21 @@ static int casadi_f2(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a46=(a46+a47);
   a30=(a30+a46);
   a46=arg[0]? arg[0][6] : 0;
-  a47=cos(a46);
+  a47=qd_cos(a46);
   a40=arg[0]? arg[0][8] : 0;
-  a51=cos(a40);
+  a51=qd_cos(a40);
   a52=arg[0]? arg[0][7] : 0;
-  a53=cos(a52);
+  a53=qd_cos(a52);
   a54=(a53*a07);
-  a52=sin(a52);
-  a46=sin(a46);
+  a52=qd_sin(a52);
+  a46=qd_sin(a46);
   a55=(a46*a10);
   a56=(a47*a15);
   a55=(a55-a56);
   a56=(a52*a55);
   a54=(a54+a56);
   a56=(a51*a54);
-  a40=sin(a40);
+  a40=qd_sin(a40);
   a57=(a53*a55);
   a58=(a52*a07);
   a57=(a57-a58);
@@ -6841,21 +6852,21 @@ static int casadi_f2(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a62=(a62+a63);
   a30=(a30+a62);
   a62=arg[0]? arg[0][9] : 0;
-  a63=cos(a62);
+  a63=qd_cos(a62);
   a40=arg[0]? arg[0][11] : 0;
-  a51=cos(a40);
+  a51=qd_cos(a40);
   a60=arg[0]? arg[0][10] : 0;
-  a56=cos(a60);
+  a56=qd_cos(a60);
   a68=(a56*a07);
-  a60=sin(a60);
-  a62=sin(a62);
+  a60=qd_sin(a60);
+  a62=qd_sin(a62);
   a69=(a62*a10);
   a70=(a63*a15);
   a69=(a69-a70);
   a70=(a60*a69);
   a68=(a68+a70);
   a70=(a51*a68);
-  a40=sin(a40);
+  a40=qd_sin(a40);
   a71=(a56*a69);
   a07=(a60*a07);
   a71=(a71-a07);
@@ -6958,7 +6969,7 @@ static int casadi_f2(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a29=(a29/a74);
   a28=(a28*a29);
   a30=(a30+a28);
-  a28=(2.*a30);
+  a28=(2*a30);
   a74=(a23*a36);
   a74=(a19+a74);
   a61=(a37*a34);
@@ -6988,7 +6999,7 @@ static int casadi_f2(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a55=(a55+a39);
   a55=(a23*a55);
   a69=(a69+a55);
-  a55=(2.*a69);
+  a55=(2*a69);
   a55=(a55-a45);
   a28=(a28/a55);
   a24=(a24*a28);
@@ -7428,27 +7439,27 @@ static int casadi_f3(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a001=1.9000000000000000e-01;
   a002=2.0000000000000001e-01;
   a003=arg[0]? arg[0][1] : 0;
-  a004=sin(a003);
+  a004=qd_sin(a003);
   a005=(a002*a004);
   a006=(a001+a005);
-  a003=cos(a003);
+  a003=qd_cos(a003);
   a007=arg[0]? arg[0][2] : 0;
-  a008=sin(a007);
+  a008=qd_sin(a007);
   a009=(a003*a008);
-  a007=cos(a007);
+  a007=qd_cos(a007);
   a010=(a004*a007);
   a009=(a009+a010);
   a009=(a002*a009);
   a006=(a006+a009);
   a010=arg[0]? arg[0][4] : 0;
-  a011=sin(a010);
+  a011=qd_sin(a010);
   a012=(a002*a011);
   a013=(a001+a012);
-  a010=cos(a010);
+  a010=qd_cos(a010);
   a014=arg[0]? arg[0][5] : 0;
-  a015=sin(a014);
+  a015=qd_sin(a014);
   a016=(a010*a015);
-  a014=cos(a014);
+  a014=qd_cos(a014);
   a017=(a011*a014);
   a016=(a016+a017);
   a016=(a002*a016);
@@ -7456,14 +7467,14 @@ static int casadi_f3(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a017=(a006+a013);
   a018=-1.9000000000000000e-01;
   a019=arg[0]? arg[0][10] : 0;
-  a020=sin(a019);
+  a020=qd_sin(a019);
   a021=(a002*a020);
   a022=(a018+a021);
-  a019=cos(a019);
+  a019=qd_cos(a019);
   a023=arg[0]? arg[0][11] : 0;
-  a024=sin(a023);
+  a024=qd_sin(a023);
   a025=(a019*a024);
-  a023=cos(a023);
+  a023=qd_cos(a023);
   a026=(a020*a023);
   a025=(a025+a026);
   a025=(a002*a025);
@@ -7475,7 +7486,7 @@ static int casadi_f3(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a028=casadi_sq(a027);
   a029=7.0000000000000007e-02;
   a030=arg[0]? arg[0][0] : 0;
-  a031=cos(a030);
+  a031=qd_cos(a030);
   a032=(a031*a003);
   a033=(a002*a032);
   a034=(a029+a033);
@@ -7487,7 +7498,7 @@ static int casadi_f3(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a034=(a034+a035);
   a037=-7.0000000000000007e-02;
   a038=arg[0]? arg[0][3] : 0;
-  a039=cos(a038);
+  a039=qd_cos(a038);
   a040=(a039*a010);
   a041=(a002*a040);
   a042=(a037+a041);
@@ -7499,7 +7510,7 @@ static int casadi_f3(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a042=(a042+a043);
   a045=(a034+a042);
   a046=arg[0]? arg[0][9] : 0;
-  a047=cos(a046);
+  a047=qd_cos(a046);
   a048=(a047*a019);
   a049=(a002*a048);
   a050=(a037+a049);
@@ -7514,7 +7525,7 @@ static int casadi_f3(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a054=(a034-a053);
   a055=casadi_sq(a054);
   a056=(a028+a055);
-  a030=sin(a030);
+  a030=qd_sin(a030);
   a057=(a030*a004);
   a058=(a057*a008);
   a059=(a030*a003);
@@ -7523,7 +7534,7 @@ static int casadi_f3(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a061=(a002*a061);
   a062=(a002*a059);
   a061=(a061-a062);
-  a038=sin(a038);
+  a038=qd_sin(a038);
   a063=(a038*a011);
   a064=(a063*a015);
   a065=(a038*a010);
@@ -7533,7 +7544,7 @@ static int casadi_f3(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a068=(a002*a065);
   a067=(a067-a068);
   a069=(a061+a067);
-  a046=sin(a046);
+  a046=qd_sin(a046);
   a070=(a046*a020);
   a071=(a070*a024);
   a072=(a046*a019);
@@ -8035,7 +8046,7 @@ static int casadi_f3(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a213=(a211*a214);
   a083=(a200*a201);
   a213=(a213-a083);
-  a213=(2.*a213);
+  a213=(2*a213);
   a086=(a086+a213);
   a213=(a196*a100);
   a083=(a002*a092);
@@ -8085,7 +8096,7 @@ static int casadi_f3(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a105=(a200*a197);
   a094=(a215*a214);
   a105=(a105-a094);
-  a105=(2.*a105);
+  a105=(2*a105);
   a035=(a035+a105);
   a095=(a095-a093);
   a095=(a002*a095);
@@ -8147,7 +8158,7 @@ static int casadi_f3(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a058=(a211*a216);
   a101=(a200*a207);
   a058=(a058-a101);
-  a058=(2.*a058);
+  a058=(2*a058);
   a099=(a099+a058);
   a058=(a202*a138);
   a101=(a002*a130);
@@ -8197,7 +8208,7 @@ static int casadi_f3(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a095=(a200*a203);
   a132=(a215*a216);
   a095=(a095-a132);
-  a095=(2.*a095);
+  a095=(2*a095);
   a043=(a043+a095);
   a133=(a133-a131);
   a133=(a002*a133);
@@ -8260,7 +8271,7 @@ static int casadi_f3(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a066=(a211*a217);
   a064=(a200*a212);
   a066=(a066-a064);
-  a066=(2.*a066);
+  a066=(2*a066);
   a133=(a133+a066);
   a066=(a206*a171);
   a064=(a002*a163);
@@ -8310,7 +8321,7 @@ static int casadi_f3(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a058=(a200*a208);
   a165=(a215*a217);
   a058=(a058-a165);
-  a058=(2.*a058);
+  a058=(2*a058);
   a051=(a051+a058);
   a166=(a166-a164);
   a166=(a002*a166);
@@ -8369,7 +8380,7 @@ static int casadi_f3(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a092=(a215*a201);
   a166=(a211*a197);
   a092=(a092-a166);
-  a092=(2.*a092);
+  a092=(2*a092);
   a103=(a103+a092);
   a092=(a007*a004);
   a166=(a008*a003);
@@ -8395,7 +8406,7 @@ static int casadi_f3(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a130=(a215*a207);
   a005=(a211*a203);
   a130=(a130-a005);
-  a130=(2.*a130);
+  a130=(2*a130);
   a060=(a060+a130);
   a130=(a014*a011);
   a005=(a015*a010);
@@ -8422,7 +8433,7 @@ static int casadi_f3(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a163=(a215*a212);
   a084=(a211*a208);
   a163=(a163-a084);
-  a163=(2.*a163);
+  a163=(2*a163);
   a137=(a137+a163);
   a163=(a023*a020);
   a084=(a024*a019);
@@ -9415,8 +9426,8 @@ static int casadi_f3(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a053=(a053+a120);
   a197=(a197+a053);
   a053=arg[0]? arg[0][6] : 0;
-  a120=cos(a053);
-  a053=sin(a053);
+  a120=qd_cos(a053);
+  a053=qd_sin(a053);
   a212=(a053*a021);
   a014=(a120*a108);
   a212=(a212+a014);
@@ -9438,9 +9449,9 @@ static int casadi_f3(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a212=(a212-a070);
   a070=(a027*a212);
   a015=arg[0]? arg[0][7] : 0;
-  a091=cos(a015);
+  a091=qd_cos(a015);
   a079=(a091*a099);
-  a015=sin(a015);
+  a015=qd_sin(a015);
   a081=(a015*a014);
   a079=(a079-a081);
   a081=(a015*a099);
@@ -9456,9 +9467,9 @@ static int casadi_f3(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a204=(a212-a204);
   a185=(a213*a204);
   a183=arg[0]? arg[0][8] : 0;
-  a216=cos(a183);
+  a216=qd_cos(a183);
   a174=(a216*a079);
-  a183=sin(a183);
+  a183=qd_sin(a183);
   a054=(a183*a081);
   a174=(a174-a054);
   a054=(a183*a079);
@@ -9924,7 +9935,7 @@ static int casadi_f3(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a098=(a098/a026);
   a045=(a045*a098);
   a197=(a197+a045);
-  a045=(2.*a197);
+  a045=(2*a197);
   a026=(a013+a022);
   a073=(a130*a073);
   a073=(a073+a170);
@@ -9933,7 +9944,7 @@ static int casadi_f3(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a073=(a073+a127);
   a127=(a026*a073);
   a045=(a045-a127);
-  a127=(2.*a006);
+  a127=(2*a006);
   a127=(a127-a026);
   a045=(a045/a127);
   a096=(a096*a045);

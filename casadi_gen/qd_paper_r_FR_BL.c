@@ -20,6 +20,17 @@ extern "C" {
 
 #include <math.h>
 
+/* quadruped_dyn: the elementary functions in casadi_real's precision. A float build
+ * (-Dcasadi_real=float) calls sinf, cosf, ... instead of promoting to double, so it does no
+ * double arithmetic (none on a single-precision FPU: -Wdouble-promotion clean); a double build
+ * calls sin, cos, ... exactly as before. */
+#define QD_REAL_IS_FLOAT (sizeof(casadi_real) == sizeof(float))
+static inline casadi_real qd_sin(casadi_real x) { return QD_REAL_IS_FLOAT ? (casadi_real)sinf((float)x) : (casadi_real)sin((double)x); }
+static inline casadi_real qd_cos(casadi_real x) { return QD_REAL_IS_FLOAT ? (casadi_real)cosf((float)x) : (casadi_real)cos((double)x); }
+static inline casadi_real qd_tan(casadi_real x) { return QD_REAL_IS_FLOAT ? (casadi_real)tanf((float)x) : (casadi_real)tan((double)x); }
+static inline casadi_real qd_sqrt(casadi_real x) { return QD_REAL_IS_FLOAT ? (casadi_real)sqrtf((float)x) : (casadi_real)sqrt((double)x); }
+static inline casadi_real qd_fabs(casadi_real x) { return QD_REAL_IS_FLOAT ? (casadi_real)fabsf((float)x) : (casadi_real)fabs((double)x); }
+
 #ifndef casadi_real
 #define casadi_real double
 #endif
@@ -76,7 +87,7 @@ static const casadi_int casadi_s2[3] = {13, 13, 1};
  *   0             success
  *   QD_NONFINITE  an output is NaN or inf: coincident or collinear stance feet (the trunk
  *                 motion is undetermined), the trunk pitched +-90 deg (the roll row of two
- *                 stance feet has tan(pitch)), a zero quaternion, or a non-finite input;
+ *                 stance feet has qd_tan(pitch)), a zero quaternion, or a non-finite input;
  *   QD_SINGULAR   (qd_fd_r_* only) M_r is singular to working precision: a pivot of its LU
  *                 factorisation (partial pivoting) is below QD_SINGULAR_RTOL * max|M_r|,
  *                 e.g. two stance feet with the trunk pitched within ~1e-12 rad of 90 deg.
@@ -129,7 +140,7 @@ static inline int qd_fd_r_solve(int n, qd_eval_fn M_r, qd_eval_fn CG_r, const ca
   if (flag) return flag;
   casadi_real scale = 0, sum = 0; /* a NaN or inf anywhere makes the sum non-finite */
   for (int i = 0; i < n * n; ++i) {
-    scale = fabs(M[i]) > scale ? fabs(M[i]) : scale;
+    scale = qd_fabs(M[i]) > scale ? qd_fabs(M[i]) : scale;
     sum += M[i];
   }
   for (int i = 0; i < n; ++i) {
@@ -140,8 +151,8 @@ static inline int qd_fd_r_solve(int n, qd_eval_fn M_r, qd_eval_fn CG_r, const ca
   for (int k = 0; k < n; ++k) { /* M[i + n j] = M_ij */
     casadi_real* col = M + n * k;
     int p = k;
-    for (int i = k + 1; i < n; ++i) p = fabs(col[i]) > fabs(col[p]) ? i : p;
-    if (!(fabs(col[p]) > QD_SINGULAR_RTOL * scale)) return QD_SINGULAR;
+    for (int i = k + 1; i < n; ++i) p = qd_fabs(col[i]) > qd_fabs(col[p]) ? i : p;
+    if (!(qd_fabs(col[p]) > QD_SINGULAR_RTOL * scale)) return QD_SINGULAR;
     if (p != k) {
       for (int j = 0; j < n; ++j) {
         casadi_real t = M[k + n * j];
@@ -196,9 +207,9 @@ static int casadi_f0(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a003=1.0126562500000001e-03;
   a004=9.9578125000000014e-04;
   a005=arg[0]? arg[0][2] : 0;
-  a006=cos(a005);
+  a006=qd_cos(a005);
   a007=casadi_sq(a006);
-  a005=sin(a005);
+  a005=qd_sin(a005);
   a008=casadi_sq(a005);
   a007=(a007-a008);
   a007=(a004*a007);
@@ -223,19 +234,19 @@ static int casadi_f0(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a009=(a009-a007);
   a009=(a001*a009);
   a007=arg[0]? arg[0][1] : 0;
-  a018=cos(a007);
+  a018=qd_cos(a007);
   a019=casadi_sq(a018);
-  a007=sin(a007);
+  a007=qd_sin(a007);
   a020=casadi_sq(a007);
   a019=(a019-a020);
   a020=(a009*a019);
   a017=(a017+a020);
-  a020=(2.*a006);
+  a020=(2*a006);
   a020=(a020*a005);
   a020=(a004*a020);
   a021=(a014*a005);
   a020=(a020+a021);
-  a021=(2.*a018);
+  a021=(2*a018);
   a021=(a021*a007);
   a022=(a020*a021);
   a017=(a017-a022);
@@ -246,15 +257,15 @@ static int casadi_f0(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   if (res[0]!=0) res[0][2]=a023;
   a024=2.0000000000000001e-01;
   a025=arg[0]? arg[0][5] : 0;
-  a026=sin(a025);
+  a026=qd_sin(a025);
   a027=arg[0]? arg[0][4] : 0;
-  a028=sin(a027);
+  a028=qd_sin(a027);
   a029=arg[0]? arg[0][3] : 0;
-  a030=sin(a029);
+  a030=qd_sin(a029);
   a031=(a028*a030);
   a031=(a026*a031);
-  a025=cos(a025);
-  a027=cos(a027);
+  a025=qd_cos(a025);
+  a027=qd_cos(a027);
   a032=(a027*a030);
   a033=(a025*a032);
   a031=(a031-a033);
@@ -270,16 +281,16 @@ static int casadi_f0(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a035=(a024*a034);
   a033=(a033-a035);
   a035=arg[0]? arg[0][6] : 0;
-  a036=sin(a035);
+  a036=qd_sin(a035);
   a037=arg[0]? arg[0][7] : 0;
-  a038=sin(a037);
+  a038=qd_sin(a037);
   a039=(a036*a038);
   a040=arg[0]? arg[0][8] : 0;
-  a041=sin(a040);
+  a041=qd_sin(a040);
   a042=(a039*a041);
-  a037=cos(a037);
+  a037=qd_cos(a037);
   a043=(a036*a037);
-  a040=cos(a040);
+  a040=qd_cos(a040);
   a044=(a043*a040);
   a042=(a042-a044);
   a042=(a024*a042);
@@ -288,7 +299,7 @@ static int casadi_f0(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a044=(a033-a042);
   a045=7.0000000000000007e-02;
   a046=arg[0]? arg[0][0] : 0;
-  a047=cos(a046);
+  a047=qd_cos(a046);
   a048=5.5000000000000007e-02;
   a049=1.4999999999999999e-02;
   a006=(a049*a006);
@@ -320,7 +331,7 @@ static int casadi_f0(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a060=(a060+a061);
   a061=(a058-a060);
   a062=-7.0000000000000007e-02;
-  a029=cos(a029);
+  a029=qd_cos(a029);
   a063=(a029*a027);
   a064=(a024*a063);
   a064=(a062+a064);
@@ -330,7 +341,7 @@ static int casadi_f0(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a065=(a065-a067);
   a065=(a024*a065);
   a064=(a064+a065);
-  a035=cos(a035);
+  a035=qd_cos(a035);
   a065=(a035*a037);
   a067=(a024*a065);
   a067=(a045+a067);
@@ -350,7 +361,7 @@ static int casadi_f0(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a070=(a068*a021);
   a071=(a061*a056);
   a070=(a070-a071);
-  a046=sin(a046);
+  a046=qd_sin(a046);
   a009=(a046*a009);
   a071=(a046*a052);
   a072=(a057*a071);
@@ -558,7 +569,7 @@ static int casadi_f0(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   if (res[0]!=0) res[0][9]=a023;
   if (res[0]!=0) res[0][10]=a023;
   if (res[0]!=0) res[0][11]=a023;
-  a080=sqrt(a076);
+  a080=qd_sqrt(a076);
   a077=(a068/a080);
   a039=(a058*a054);
   a039=(a021-a039);
@@ -1053,10 +1064,10 @@ static int casadi_f0(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a119=(a012+a119);
   a113=(a116-a119);
   a113=(a001*a113);
-  a099=(2.*a027);
+  a099=(2*a027);
   a099=(a099*a028);
   a125=(a113*a099);
-  a126=(2.*a025);
+  a126=(2*a025);
   a126=(a126*a026);
   a126=(a004*a126);
   a127=(a014*a026);
@@ -1113,17 +1124,17 @@ static int casadi_f0(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a144=(a036*a141);
   a138=(a138+a144);
   a145=arg[0]? arg[0][9] : 0;
-  a146=sin(a145);
+  a146=qd_sin(a145);
   a147=arg[0]? arg[0][10] : 0;
-  a148=cos(a147);
+  a148=qd_cos(a147);
   a149=arg[0]? arg[0][11] : 0;
-  a150=cos(a149);
+  a150=qd_cos(a149);
   a151=(a049*a150);
   a050=(a151+a050);
   a048=(a048+a050);
   a050=(a148*a048);
-  a147=sin(a147);
-  a149=sin(a149);
+  a147=qd_sin(a147);
+  a149=qd_sin(a149);
   a049=(a049*a149);
   a152=(a147*a049);
   a050=(a050-a152);
@@ -1164,7 +1175,7 @@ static int casadi_f0(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a161=(a035*a141);
   a158=(a161+a158);
   a159=(a159+a158);
-  a145=cos(a145);
+  a145=qd_cos(a145);
   a158=(a145*a050);
   a160=(a158+a160);
   a159=(a159+a160);
@@ -1191,7 +1202,7 @@ static int casadi_f0(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a022=(a022-a166);
   a022=(a022-a166);
   a166=(a166+a055);
-  a166=(2.*a166);
+  a166=(2*a166);
   a022=(a022+a166);
   a164=(a164+a022);
   a126=(a126+a165);
@@ -1199,7 +1210,7 @@ static int casadi_f0(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a126=(a126-a022);
   a126=(a126-a022);
   a022=(a022+a099);
-  a022=(2.*a022);
+  a022=(2*a022);
   a126=(a126+a022);
   a164=(a164+a126);
   a126=casadi_sq(a040);
@@ -1226,12 +1237,12 @@ static int casadi_f0(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a126=(a126-a172);
   a172=(a167*a126);
   a171=(a171+a172);
-  a040=(2.*a040);
+  a040=(2*a040);
   a040=(a040*a041);
   a040=(a004*a040);
   a041=(a014*a041);
   a040=(a040+a041);
-  a041=(2.*a037);
+  a041=(2*a037);
   a041=(a041*a038);
   a172=(a040*a041);
   a171=(a171-a172);
@@ -1242,7 +1253,7 @@ static int casadi_f0(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a173=(a173-a174);
   a175=(a045*a161);
   a174=(a174+a175);
-  a174=(2.*a174);
+  a174=(2*a174);
   a173=(a173+a174);
   a164=(a164+a173);
   a173=casadi_sq(a150);
@@ -1269,12 +1280,12 @@ static int casadi_f0(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a012=(a012-a176);
   a176=(a008*a012);
   a173=(a173+a176);
-  a150=(2.*a150);
+  a150=(2*a150);
   a150=(a150*a149);
   a004=(a004*a150);
   a014=(a014*a149);
   a004=(a004+a014);
-  a014=(2.*a148);
+  a014=(2*a148);
   a014=(a014*a147);
   a149=(a004*a014);
   a173=(a173-a149);
@@ -1285,7 +1296,7 @@ static int casadi_f0(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a165=(a165-a150);
   a176=(a062*a158);
   a150=(a150+a176);
-  a150=(2.*a150);
+  a150=(2*a150);
   a165=(a165+a150);
   a164=(a164+a165);
   a165=(a164*a123);
@@ -1420,24 +1431,24 @@ static int casadi_f0(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a011=(a005*a115);
   a014=(a014+a011);
   a011=(a045*a071);
-  a047=(2.*a047);
+  a047=(2*a047);
   a047=(a047*a046);
   a016=(a016*a047);
   a011=(a011-a016);
   a016=(a062*a136);
-  a047=(2.*a029);
+  a047=(2*a029);
   a047=(a047*a030);
   a116=(a116*a047);
   a016=(a016-a116);
   a011=(a011+a016);
   a016=(a045*a144);
-  a116=(2.*a035);
+  a116=(2*a035);
   a116=(a116*a036);
   a170=(a170*a116);
   a016=(a016-a170);
   a011=(a011+a016);
   a016=(a062*a153);
-  a170=(2.*a145);
+  a170=(2*a145);
   a170=(a170*a146);
   a001=(a001*a170);
   a016=(a016-a001);
@@ -4181,28 +4192,28 @@ static int casadi_f1(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a001=1.9000000000000000e-01;
   a002=2.0000000000000001e-01;
   a003=arg[0]? arg[0][4] : 0;
-  a004=sin(a003);
+  a004=qd_sin(a003);
   a005=(a002*a004);
   a006=(a001+a005);
-  a003=cos(a003);
+  a003=qd_cos(a003);
   a007=arg[0]? arg[0][5] : 0;
-  a008=sin(a007);
+  a008=qd_sin(a007);
   a009=(a003*a008);
-  a007=cos(a007);
+  a007=qd_cos(a007);
   a010=(a004*a007);
   a009=(a009+a010);
   a009=(a002*a009);
   a006=(a006+a009);
   a010=-1.9000000000000000e-01;
   a011=arg[0]? arg[0][7] : 0;
-  a012=sin(a011);
+  a012=qd_sin(a011);
   a013=(a002*a012);
   a014=(a010+a013);
-  a011=cos(a011);
+  a011=qd_cos(a011);
   a015=arg[0]? arg[0][8] : 0;
-  a016=sin(a015);
+  a016=qd_sin(a015);
   a017=(a011*a016);
-  a015=cos(a015);
+  a015=qd_cos(a015);
   a018=(a012*a015);
   a017=(a017+a018);
   a017=(a002*a017);
@@ -4214,7 +4225,7 @@ static int casadi_f1(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a021=casadi_sq(a020);
   a022=-7.0000000000000007e-02;
   a023=arg[0]? arg[0][3] : 0;
-  a024=cos(a023);
+  a024=qd_cos(a023);
   a025=(a024*a003);
   a026=(a002*a025);
   a027=(a022+a026);
@@ -4226,7 +4237,7 @@ static int casadi_f1(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a027=(a027+a028);
   a030=7.0000000000000007e-02;
   a031=arg[0]? arg[0][6] : 0;
-  a032=cos(a031);
+  a032=qd_cos(a031);
   a033=(a032*a011);
   a034=(a002*a033);
   a035=(a030+a034);
@@ -4241,7 +4252,7 @@ static int casadi_f1(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a039=(a027-a038);
   a040=casadi_sq(a039);
   a041=(a021+a040);
-  a023=sin(a023);
+  a023=qd_sin(a023);
   a042=(a023*a004);
   a043=(a042*a008);
   a044=(a023*a003);
@@ -4250,7 +4261,7 @@ static int casadi_f1(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a046=(a002*a046);
   a047=(a002*a044);
   a046=(a046-a047);
-  a031=sin(a031);
+  a031=qd_sin(a031);
   a048=(a031*a012);
   a049=(a048*a016);
   a050=(a031*a011);
@@ -4553,7 +4564,7 @@ static int casadi_f1(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a063=(a119*a120);
   a070=(a090*a094);
   a063=(a063-a070);
-  a063=(2.*a063);
+  a063=(2*a063);
   a130=(a130+a063);
   a063=(a081*a092);
   a070=(a002*a075);
@@ -4603,7 +4614,7 @@ static int casadi_f1(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a074=(a090*a082);
   a120=(a072*a120);
   a074=(a074-a120);
-  a074=(2.*a074);
+  a074=(2*a074);
   a028=(a028+a074);
   a078=(a078-a076);
   a078=(a002*a078);
@@ -4665,7 +4676,7 @@ static int casadi_f1(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a043=(a119*a124);
   a093=(a090*a116);
   a043=(a043-a093);
-  a043=(2.*a043);
+  a043=(2*a043);
   a091=(a091+a043);
   a043=(a103*a114);
   a093=(a002*a097);
@@ -4715,7 +4726,7 @@ static int casadi_f1(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a078=(a090*a104);
   a124=(a072*a124);
   a078=(a078-a124);
-  a078=(2.*a078);
+  a078=(2*a078);
   a036=(a036+a078);
   a100=(a100-a098);
   a100=(a002*a100);
@@ -4777,9 +4788,9 @@ static int casadi_f1(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a100=(a100+a051);
   a100=(a100/a068);
   a051=(a060/a068);
-  a049=(2.*a065);
+  a049=(2*a065);
   a049=(a049*a113);
-  a113=(2.*a067);
+  a113=(2*a067);
   a115=(a069*a072);
   a107=(a065*a090);
   a115=(a115-a107);
@@ -4806,7 +4817,7 @@ static int casadi_f1(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a094=(a072*a094);
   a082=(a119*a082);
   a094=(a094-a082);
-  a094=(2.*a094);
+  a094=(2*a094);
   a126=(a126+a094);
   a094=(a007*a004);
   a082=(a008*a003);
@@ -4832,7 +4843,7 @@ static int casadi_f1(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a116=(a072*a116);
   a104=(a119*a104);
   a116=(a116-a104);
-  a116=(2.*a116);
+  a116=(2*a116);
   a045=(a045+a116);
   a116=(a015*a012);
   a104=(a016*a011);
@@ -4870,9 +4881,9 @@ static int casadi_f1(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a064=(a064/a112);
   a128=(a000*a064);
   a061=arg[0]? arg[0][0] : 0;
-  a100=cos(a061);
+  a100=qd_cos(a061);
   a059=(a100*a072);
-  a061=sin(a061);
+  a061=qd_sin(a061);
   a057=(a061*a119);
   a059=(a059-a057);
   a057=(a061*a072);
@@ -4885,10 +4896,10 @@ static int casadi_f1(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a071=(a071-a055);
   a071=(a128+a071);
   a055=arg[0]? arg[0][1] : 0;
-  a062=cos(a055);
+  a062=qd_cos(a055);
   a013=1.8642708333333339e-03;
   a116=(a062*a064);
-  a055=sin(a055);
+  a055=qd_sin(a055);
   a129=(a129*a043);
   a127=(a127*a063);
   a129=(a129-a127);
@@ -4926,10 +4937,10 @@ static int casadi_f1(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a017=(a017-a005);
   a043=(a043+a017);
   a017=arg[0]? arg[0][2] : 0;
-  a005=cos(a017);
+  a005=qd_cos(a017);
   a094=5.0843750000000010e-04;
   a009=(a005*a116);
-  a017=sin(a017);
+  a017=qd_sin(a017);
   a082=(a055*a064);
   a075=(a062*a056);
   a082=(a082+a075);
@@ -5521,18 +5532,18 @@ static int casadi_f1(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a124=(a124+a078);
   a047=(a047+a124);
   a078=arg[0]? arg[0][9] : 0;
-  a143=cos(a078);
+  a143=qd_cos(a078);
   a142=arg[0]? arg[0][10] : 0;
-  a152=cos(a142);
+  a152=qd_cos(a142);
   a153=arg[0]? arg[0][11] : 0;
-  a154=cos(a153);
-  a153=sin(a153);
-  a142=sin(a142);
+  a154=qd_cos(a153);
+  a153=qd_sin(a153);
+  a142=qd_sin(a142);
   a155=arg[1]? arg[1][9] : 0;
   a156=(a090-a155);
   a157=(a142*a156);
   a158=(a143*a072);
-  a078=sin(a078);
+  a078=qd_sin(a078);
   a159=(a078*a119);
   a158=(a158-a159);
   a159=(a152*a158);
@@ -6162,7 +6173,7 @@ static int casadi_f1(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   if (res[0]!=0) res[0][10]=a013;
   a094=(-a094);
   if (res[0]!=0) res[0][11]=a094;
-  a143=sqrt(a143);
+  a143=qd_sqrt(a143);
   a014=(a014/a143);
   a094=(a027*a139);
   a013=(a046*a047);
@@ -6275,12 +6286,12 @@ static int casadi_f2(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   casadi_real a72, a73, a74, a75, a76, a77, a78, a79, a80, a81, a82, a83;
   casadi_real a84, a85, a86, a87, a88, a89, a90, a91, a92, a93;
   a00=arg[0]? arg[0][1] : 0;
-  a01=sin(a00);
+  a01=qd_sin(a00);
   a02=arg[0]? arg[0][2] : 0;
-  a03=sin(a02);
+  a03=qd_sin(a02);
   a04=1.4999999999999999e-02;
   a05=arg[0]? arg[0][0] : 0;
-  a06=sin(a05);
+  a06=qd_sin(a05);
   a07=-9.8100000000000005e+00;
   a08=2.;
   a09=arg[1]? arg[1][0] : 0;
@@ -6301,7 +6312,7 @@ static int casadi_f2(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a15=(a13*a15);
   a16=(a07*a15);
   a17=(a06*a16);
-  a05=cos(a05);
+  a05=qd_cos(a05);
   a18=1.;
   a10=(a13*a10);
   a18=(a18-a10);
@@ -6311,8 +6322,8 @@ static int casadi_f2(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a19=(a04*a17);
   a20=(a03*a19);
   a21=(a01*a20);
-  a00=cos(a00);
-  a02=cos(a02);
+  a00=qd_cos(a00);
+  a02=qd_cos(a02);
   a19=(a02*a19);
   a22=5.5000000000000007e-02;
   a23=(a22*a17);
@@ -6361,20 +6372,20 @@ static int casadi_f2(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a24=(-a24);
   if (res[0]!=0) res[0][2]=a24;
   a24=arg[0]? arg[0][4] : 0;
-  a30=sin(a24);
+  a30=qd_sin(a24);
   a31=arg[0]? arg[0][5] : 0;
-  a32=sin(a31);
+  a32=qd_sin(a31);
   a33=arg[0]? arg[0][3] : 0;
-  a34=sin(a33);
+  a34=qd_sin(a33);
   a35=(a34*a16);
-  a33=cos(a33);
+  a33=qd_cos(a33);
   a36=(a33*a10);
   a35=(a35+a36);
   a36=(a04*a35);
   a37=(a32*a36);
   a38=(a30*a37);
-  a24=cos(a24);
-  a31=cos(a31);
+  a24=qd_cos(a24);
+  a31=qd_cos(a31);
   a36=(a31*a36);
   a39=(a22*a35);
   a36=(a36+a39);
@@ -6457,15 +6468,15 @@ static int casadi_f2(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a40=(a40-a35);
   a15=(a15+a40);
   a35=arg[0]? arg[0][6] : 0;
-  a47=cos(a35);
+  a47=qd_cos(a35);
   a48=arg[0]? arg[0][7] : 0;
-  a49=cos(a48);
+  a49=qd_cos(a48);
   a50=arg[0]? arg[0][8] : 0;
-  a51=sin(a50);
-  a50=cos(a50);
+  a51=qd_sin(a50);
+  a50=qd_cos(a50);
   a52=(a49*a07);
-  a48=sin(a48);
-  a35=sin(a35);
+  a48=qd_sin(a48);
+  a35=qd_sin(a35);
   a53=(a35*a10);
   a54=(a47*a16);
   a53=(a53-a54);
@@ -6510,15 +6521,15 @@ static int casadi_f2(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a53=(a53-a61);
   a15=(a15+a53);
   a61=arg[0]? arg[0][9] : 0;
-  a62=cos(a61);
+  a62=qd_cos(a61);
   a63=arg[0]? arg[0][10] : 0;
-  a64=cos(a63);
+  a64=qd_cos(a63);
   a65=arg[0]? arg[0][11] : 0;
-  a66=sin(a65);
-  a65=cos(a65);
+  a66=qd_sin(a65);
+  a65=qd_cos(a65);
   a67=(a64*a07);
-  a63=sin(a63);
-  a61=sin(a61);
+  a63=qd_sin(a63);
+  a61=qd_sin(a61);
   a68=(a61*a10);
   a69=(a62*a16);
   a68=(a68-a69);
@@ -6986,7 +6997,7 @@ static int casadi_f2(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   if (res[0]!=0) res[0][10]=a22;
   a04=(-a04);
   if (res[0]!=0) res[0][11]=a04;
-  a62=sqrt(a62);
+  a62=qd_sqrt(a62);
   a77=(a77/a62);
   a04=(a02*a15);
   a22=(a85*a17);
@@ -7108,28 +7119,28 @@ static int casadi_f3(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a001=1.9000000000000000e-01;
   a002=2.0000000000000001e-01;
   a003=arg[0]? arg[0][4] : 0;
-  a004=sin(a003);
+  a004=qd_sin(a003);
   a005=(a002*a004);
   a006=(a001+a005);
-  a003=cos(a003);
+  a003=qd_cos(a003);
   a007=arg[0]? arg[0][5] : 0;
-  a008=sin(a007);
+  a008=qd_sin(a007);
   a009=(a003*a008);
-  a007=cos(a007);
+  a007=qd_cos(a007);
   a010=(a004*a007);
   a009=(a009+a010);
   a009=(a002*a009);
   a006=(a006+a009);
   a010=-1.9000000000000000e-01;
   a011=arg[0]? arg[0][7] : 0;
-  a012=sin(a011);
+  a012=qd_sin(a011);
   a013=(a002*a012);
   a014=(a010+a013);
-  a011=cos(a011);
+  a011=qd_cos(a011);
   a015=arg[0]? arg[0][8] : 0;
-  a016=sin(a015);
+  a016=qd_sin(a015);
   a017=(a011*a016);
-  a015=cos(a015);
+  a015=qd_cos(a015);
   a018=(a012*a015);
   a017=(a017+a018);
   a017=(a002*a017);
@@ -7141,7 +7152,7 @@ static int casadi_f3(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a021=casadi_sq(a020);
   a022=-7.0000000000000007e-02;
   a023=arg[0]? arg[0][3] : 0;
-  a024=cos(a023);
+  a024=qd_cos(a023);
   a025=(a024*a003);
   a026=(a002*a025);
   a027=(a022+a026);
@@ -7153,7 +7164,7 @@ static int casadi_f3(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a027=(a027+a028);
   a030=7.0000000000000007e-02;
   a031=arg[0]? arg[0][6] : 0;
-  a032=cos(a031);
+  a032=qd_cos(a031);
   a033=(a032*a011);
   a034=(a002*a033);
   a035=(a030+a034);
@@ -7168,7 +7179,7 @@ static int casadi_f3(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a039=(a027-a038);
   a040=casadi_sq(a039);
   a041=(a021+a040);
-  a023=sin(a023);
+  a023=qd_sin(a023);
   a042=(a023*a004);
   a043=(a042*a008);
   a044=(a023*a003);
@@ -7177,7 +7188,7 @@ static int casadi_f3(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a046=(a002*a046);
   a047=(a002*a044);
   a046=(a046-a047);
-  a031=sin(a031);
+  a031=qd_sin(a031);
   a048=(a031*a012);
   a049=(a048*a016);
   a050=(a031*a011);
@@ -7587,7 +7598,7 @@ static int casadi_f3(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a159=(a158*a160);
   a070=(a150*a151);
   a159=(a159-a070);
-  a159=(2.*a159);
+  a159=(2*a159);
   a021=(a021+a159);
   a159=(a146*a080);
   a070=(a002*a072);
@@ -7637,7 +7648,7 @@ static int casadi_f3(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a083=(a150*a147);
   a074=(a063*a160);
   a083=(a083-a074);
-  a083=(2.*a083);
+  a083=(2*a083);
   a028=(a028+a083);
   a075=(a075-a073);
   a075=(a002*a075);
@@ -7699,7 +7710,7 @@ static int casadi_f3(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a043=(a158*a162);
   a081=(a150*a157);
   a043=(a043-a081);
-  a043=(2.*a043);
+  a043=(2*a043);
   a079=(a079+a043);
   a043=(a152*a119);
   a081=(a002*a111);
@@ -7749,7 +7760,7 @@ static int casadi_f3(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a075=(a150*a153);
   a113=(a063*a162);
   a075=(a075-a113);
-  a075=(2.*a075);
+  a075=(2*a075);
   a036=(a036+a075);
   a114=(a114-a112);
   a114=(a002*a114);
@@ -7811,9 +7822,9 @@ static int casadi_f3(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a114=(a114+a051);
   a114=(a114/a068);
   a051=(a060/a068);
-  a049=(2.*a065);
+  a049=(2*a065);
   a049=(a049*a118);
-  a118=(2.*a067);
+  a118=(2*a067);
   a120=(a069*a063);
   a129=(a065*a150);
   a120=(a120-a129);
@@ -7840,7 +7851,7 @@ static int casadi_f3(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a072=(a063*a151);
   a068=(a158*a147);
   a072=(a072-a068);
-  a072=(2.*a072);
+  a072=(2*a072);
   a085=(a085+a072);
   a072=(a007*a004);
   a068=(a008*a003);
@@ -7866,7 +7877,7 @@ static int casadi_f3(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a111=(a063*a157);
   a005=(a158*a153);
   a111=(a111-a005);
-  a111=(2.*a111);
+  a111=(2*a111);
   a045=(a045+a111);
   a111=(a015*a012);
   a005=(a016*a011);
@@ -7907,9 +7918,9 @@ static int casadi_f3(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a087=(a091-a087);
   a114=(a000*a087);
   a059=arg[0]? arg[0][0] : 0;
-  a057=cos(a059);
+  a057=qd_cos(a059);
   a020=(a057*a063);
-  a059=sin(a059);
+  a059=qd_sin(a059);
   a084=(a059*a158);
   a020=(a020-a084);
   a084=(a059*a063);
@@ -7922,10 +7933,10 @@ static int casadi_f3(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a062=(a062-a111);
   a114=(a114+a062);
   a062=arg[0]? arg[0][1] : 0;
-  a111=cos(a062);
+  a111=qd_cos(a062);
   a017=1.8642708333333339e-03;
   a005=(a111*a087);
-  a062=sin(a062);
+  a062=qd_sin(a062);
   a072=(a041*a086);
   a009=(a058*a078);
   a072=(a072-a009);
@@ -8073,10 +8084,10 @@ static int casadi_f3(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a140=(a140-a135);
   a043=(a043+a140);
   a140=arg[0]? arg[0][2] : 0;
-  a135=cos(a140);
+  a135=qd_cos(a140);
   a123=5.0843750000000010e-04;
   a122=(a135*a005);
-  a140=sin(a140);
+  a140=qd_sin(a140);
   a087=(a062*a087);
   a107=(a111*a056);
   a087=(a087+a107);
@@ -8852,18 +8863,18 @@ static int casadi_f3(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a044=(a044+a113);
   a047=(a047+a044);
   a113=arg[0]? arg[0][9] : 0;
-  a131=cos(a113);
+  a131=qd_cos(a113);
   a139=arg[0]? arg[0][10] : 0;
-  a074=cos(a139);
+  a074=qd_cos(a139);
   a161=arg[0]? arg[0][11] : 0;
-  a025=cos(a161);
-  a161=sin(a161);
-  a139=sin(a139);
+  a025=qd_cos(a161);
+  a161=qd_sin(a161);
+  a139=qd_sin(a139);
   a026=arg[1]? arg[1][9] : 0;
   a029=(a150-a026);
   a156=(a139*a029);
   a070=(a131*a063);
-  a113=sin(a113);
+  a113=qd_sin(a113);
   a163=(a113*a158);
   a070=(a070-a163);
   a163=(a074*a070);
@@ -9502,7 +9513,7 @@ static int casadi_f3(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   if (res[0]!=0) res[0][10]=a017;
   a123=(-a123);
   if (res[0]!=0) res[0][11]=a123;
-  a131=sqrt(a131);
+  a131=qd_sqrt(a131);
   a014=(a014/a131);
   a123=(a027*a061);
   a017=(a046*a047);

@@ -20,6 +20,17 @@ extern "C" {
 
 #include <math.h>
 
+/* quadruped_dyn: the elementary functions in casadi_real's precision. A float build
+ * (-Dcasadi_real=float) calls sinf, cosf, ... instead of promoting to double, so it does no
+ * double arithmetic (none on a single-precision FPU: -Wdouble-promotion clean); a double build
+ * calls sin, cos, ... exactly as before. */
+#define QD_REAL_IS_FLOAT (sizeof(casadi_real) == sizeof(float))
+static inline casadi_real qd_sin(casadi_real x) { return QD_REAL_IS_FLOAT ? (casadi_real)sinf((float)x) : (casadi_real)sin((double)x); }
+static inline casadi_real qd_cos(casadi_real x) { return QD_REAL_IS_FLOAT ? (casadi_real)cosf((float)x) : (casadi_real)cos((double)x); }
+static inline casadi_real qd_tan(casadi_real x) { return QD_REAL_IS_FLOAT ? (casadi_real)tanf((float)x) : (casadi_real)tan((double)x); }
+static inline casadi_real qd_sqrt(casadi_real x) { return QD_REAL_IS_FLOAT ? (casadi_real)sqrtf((float)x) : (casadi_real)sqrt((double)x); }
+static inline casadi_real qd_fabs(casadi_real x) { return QD_REAL_IS_FLOAT ? (casadi_real)fabsf((float)x) : (casadi_real)fabs((double)x); }
+
 #ifndef casadi_real
 #define casadi_real double
 #endif
@@ -76,7 +87,7 @@ static const casadi_int casadi_s2[3] = {12, 12, 1};
  *   0             success
  *   QD_NONFINITE  an output is NaN or inf: coincident or collinear stance feet (the trunk
  *                 motion is undetermined), the trunk pitched +-90 deg (the roll row of two
- *                 stance feet has tan(pitch)), a zero quaternion, or a non-finite input;
+ *                 stance feet has qd_tan(pitch)), a zero quaternion, or a non-finite input;
  *   QD_SINGULAR   (qd_fd_r_* only) M_r is singular to working precision: a pivot of its LU
  *                 factorisation (partial pivoting) is below QD_SINGULAR_RTOL * max|M_r|,
  *                 e.g. two stance feet with the trunk pitched within ~1e-12 rad of 90 deg.
@@ -129,7 +140,7 @@ static inline int qd_fd_r_solve(int n, qd_eval_fn M_r, qd_eval_fn CG_r, const ca
   if (flag) return flag;
   casadi_real scale = 0, sum = 0; /* a NaN or inf anywhere makes the sum non-finite */
   for (int i = 0; i < n * n; ++i) {
-    scale = fabs(M[i]) > scale ? fabs(M[i]) : scale;
+    scale = qd_fabs(M[i]) > scale ? qd_fabs(M[i]) : scale;
     sum += M[i];
   }
   for (int i = 0; i < n; ++i) {
@@ -140,8 +151,8 @@ static inline int qd_fd_r_solve(int n, qd_eval_fn M_r, qd_eval_fn CG_r, const ca
   for (int k = 0; k < n; ++k) { /* M[i + n j] = M_ij */
     casadi_real* col = M + n * k;
     int p = k;
-    for (int i = k + 1; i < n; ++i) p = fabs(col[i]) > fabs(col[p]) ? i : p;
-    if (!(fabs(col[p]) > QD_SINGULAR_RTOL * scale)) return QD_SINGULAR;
+    for (int i = k + 1; i < n; ++i) p = qd_fabs(col[i]) > qd_fabs(col[p]) ? i : p;
+    if (!(qd_fabs(col[p]) > QD_SINGULAR_RTOL * scale)) return QD_SINGULAR;
     if (p != k) {
       for (int j = 0; j < n; ++j) {
         casadi_real t = M[k + n * j];
@@ -197,9 +208,9 @@ static int casadi_f0(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a003=1.0126562500000001e-03;
   a004=9.9578125000000014e-04;
   a005=arg[0]? arg[0][2] : 0;
-  a006=cos(a005);
+  a006=qd_cos(a005);
   a007=casadi_sq(a006);
-  a005=sin(a005);
+  a005=qd_sin(a005);
   a008=casadi_sq(a005);
   a007=(a007-a008);
   a007=(a004*a007);
@@ -224,19 +235,19 @@ static int casadi_f0(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a009=(a009-a007);
   a009=(a001*a009);
   a007=arg[0]? arg[0][1] : 0;
-  a018=cos(a007);
+  a018=qd_cos(a007);
   a019=casadi_sq(a018);
-  a007=sin(a007);
+  a007=qd_sin(a007);
   a020=casadi_sq(a007);
   a019=(a019-a020);
   a020=(a009*a019);
   a017=(a017+a020);
-  a020=(2.*a006);
+  a020=(2*a006);
   a020=(a020*a005);
   a020=(a004*a020);
   a021=(a014*a005);
   a020=(a020+a021);
-  a021=(2.*a018);
+  a021=(2*a018);
   a021=(a021*a007);
   a022=(a020*a021);
   a017=(a017-a022);
@@ -247,15 +258,15 @@ static int casadi_f0(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   if (res[0]!=0) res[0][2]=a023;
   a024=2.0000000000000001e-01;
   a025=arg[0]? arg[0][5] : 0;
-  a026=sin(a025);
+  a026=qd_sin(a025);
   a027=arg[0]? arg[0][4] : 0;
-  a028=sin(a027);
+  a028=qd_sin(a027);
   a029=arg[0]? arg[0][3] : 0;
-  a030=sin(a029);
+  a030=qd_sin(a029);
   a031=(a028*a030);
   a031=(a026*a031);
-  a025=cos(a025);
-  a027=cos(a027);
+  a025=qd_cos(a025);
+  a027=qd_cos(a027);
   a032=(a027*a030);
   a033=(a025*a032);
   a031=(a031-a033);
@@ -263,7 +274,7 @@ static int casadi_f0(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a032=(a024*a032);
   a031=(a031-a032);
   a032=arg[0]? arg[0][0] : 0;
-  a033=sin(a032);
+  a033=qd_sin(a032);
   a009=(a009*a021);
   a020=(a020*a019);
   a009=(a009+a020);
@@ -284,21 +295,21 @@ static int casadi_f0(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a020=(a020+a040);
   a040=-1.9000000000000000e-01;
   a041=arg[0]? arg[0][7] : 0;
-  a042=sin(a041);
+  a042=qd_sin(a041);
   a043=(a024*a042);
   a043=(a040+a043);
-  a041=cos(a041);
+  a041=qd_cos(a041);
   a044=arg[0]? arg[0][8] : 0;
-  a045=sin(a044);
+  a045=qd_sin(a044);
   a046=(a041*a045);
-  a044=cos(a044);
+  a044=qd_cos(a044);
   a047=(a042*a044);
   a046=(a046+a047);
   a046=(a024*a046);
   a043=(a043+a046);
   a046=(a043*a039);
   a046=(a020-a046);
-  a047=(2.*a043);
+  a047=(2*a043);
   a048=(a024*a028);
   a048=(a019+a048);
   a049=(a027*a026);
@@ -307,14 +318,14 @@ static int casadi_f0(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a049=(a024*a049);
   a048=(a048+a049);
   a049=arg[0]? arg[0][10] : 0;
-  a050=sin(a049);
+  a050=qd_sin(a049);
   a051=(a024*a050);
   a051=(a040+a051);
-  a049=cos(a049);
+  a049=qd_cos(a049);
   a052=arg[0]? arg[0][11] : 0;
-  a053=sin(a052);
+  a053=qd_sin(a052);
   a054=(a049*a053);
-  a052=cos(a052);
+  a052=qd_cos(a052);
   a055=(a050*a052);
   a054=(a054+a055);
   a054=(a024*a054);
@@ -323,7 +334,7 @@ static int casadi_f0(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a047=(a047-a054);
   a046=(a046/a047);
   a055=(a031*a046);
-  a029=cos(a029);
+  a029=qd_cos(a029);
   a056=(a028*a029);
   a056=(a026*a056);
   a057=(a027*a029);
@@ -334,7 +345,7 @@ static int casadi_f0(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a056=(a056-a057);
   a057=-7.0000000000000007e-02;
   a058=arg[0]? arg[0][9] : 0;
-  a059=cos(a058);
+  a059=qd_cos(a058);
   a060=(a059*a049);
   a061=(a024*a060);
   a061=(a057+a061);
@@ -346,7 +357,7 @@ static int casadi_f0(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a061=(a061+a062);
   a062=7.0000000000000007e-02;
   a064=arg[0]? arg[0][6] : 0;
-  a065=cos(a064);
+  a065=qd_cos(a064);
   a066=(a065*a041);
   a067=(a024*a066);
   a067=(a062+a067);
@@ -357,7 +368,7 @@ static int casadi_f0(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a068=(a024*a068);
   a067=(a067+a068);
   a068=(a061-a067);
-  a032=cos(a032);
+  a032=qd_cos(a032);
   a009=(a032*a009);
   a070=(a032*a037);
   a071=(a019*a070);
@@ -380,7 +391,7 @@ static int casadi_f0(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a081=(a062*a070);
   a082=(a022+a081);
   a080=(a080-a082);
-  a064=sin(a064);
+  a064=qd_sin(a064);
   a083=(a064*a042);
   a084=(a083*a045);
   a085=(a064*a041);
@@ -390,13 +401,13 @@ static int casadi_f0(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a086=(a024*a085);
   a084=(a084-a086);
   a086=(-a020);
-  a086=(2.*a086);
+  a086=(2*a086);
   a087=(a054*a039);
   a086=(a086+a087);
   a086=(a086/a047);
   a087=(a084*a086);
   a080=(a080+a087);
-  a058=sin(a058);
+  a058=qd_sin(a058);
   a087=(a058*a050);
   a088=(a087*a053);
   a089=(a058*a049);
@@ -612,7 +623,7 @@ static int casadi_f0(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a105=(a105/a047);
   a111=(a078*a105);
   a111=(a104-a111);
-  a109=(2.*a109);
+  a109=(2*a109);
   a112=(a054*a089);
   a109=(a109+a112);
   a109=(a109/a047);
@@ -756,7 +767,7 @@ static int casadi_f0(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a105=(a105/a047);
   a006=(a078*a105);
   a006=(a119-a006);
-  a038=(2.*a038);
+  a038=(2*a038);
   a109=(a054*a007);
   a038=(a038+a109);
   a038=(a038/a047);
@@ -1033,10 +1044,10 @@ static int casadi_f0(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a139=(a012+a139);
   a134=(a105-a139);
   a134=(a001*a134);
-  a142=(2.*a027);
+  a142=(2*a027);
   a142=(a142*a028);
   a143=(a134*a142);
-  a144=(2.*a025);
+  a144=(2*a025);
   a144=(a144*a026);
   a144=(a004*a144);
   a145=(a014*a026);
@@ -1158,10 +1169,10 @@ static int casadi_f0(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a175=(a012+a175);
   a179=(a176-a175);
   a179=(a001*a179);
-  a180=(2.*a041);
+  a180=(2*a041);
   a180=(a180*a042);
   a181=(a179*a180);
-  a044=(2.*a044);
+  a044=(2*a044);
   a044=(a044*a045);
   a044=(a004*a044);
   a045=(a014*a045);
@@ -1192,10 +1203,10 @@ static int casadi_f0(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a012=(a012+a013);
   a013=(a008-a012);
   a013=(a001*a013);
-  a183=(2.*a049);
+  a183=(2*a049);
   a183=(a183*a050);
   a184=(a013*a183);
-  a052=(2.*a052);
+  a052=(2*a052);
   a052=(a052*a053);
   a004=(a004*a052);
   a014=(a014*a053);
@@ -1217,7 +1228,7 @@ static int casadi_f0(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a011=(a000+a011);
   a017=(a016-a011);
   a017=(a001*a017);
-  a185=(2.*a032);
+  a185=(2*a032);
   a185=(a185*a033);
   a185=(a017*a185);
   a052=(a052-a185);
@@ -1229,7 +1240,7 @@ static int casadi_f0(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a139=(a000+a038);
   a186=(a105-a139);
   a186=(a001*a186);
-  a187=(2.*a029);
+  a187=(2*a029);
   a187=(a187*a030);
   a187=(a186*a187);
   a185=(a185-a187);
@@ -1248,7 +1259,7 @@ static int casadi_f0(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a044=(a000+a177);
   a180=(a176-a044);
   a180=(a001*a180);
-  a179=(2.*a065);
+  a179=(2*a065);
   a179=(a179*a064);
   a179=(a180*a179);
   a185=(a185-a179);
@@ -1267,7 +1278,7 @@ static int casadi_f0(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a099=(a000+a002);
   a010=(a008-a099);
   a010=(a001*a010);
-  a004=(2.*a059);
+  a004=(2*a059);
   a004=(a004*a058);
   a004=(a010*a004);
   a185=(a185-a004);
@@ -1287,7 +1298,7 @@ static int casadi_f0(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a016=(a016+a017);
   a032=(a019*a005);
   a033=(a032+a081);
-  a033=(2.*a033);
+  a033=(2*a033);
   a016=(a016+a033);
   a185=(a185+a016);
   a105=(a105+a139);
@@ -1301,7 +1312,7 @@ static int casadi_f0(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a105=(a105+a017);
   a186=(a019*a167);
   a016=(a186+a142);
-  a016=(2.*a016);
+  a016=(2*a016);
   a105=(a105+a016);
   a185=(a185+a105);
   a176=(a176+a044);
@@ -1316,7 +1327,7 @@ static int casadi_f0(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a180=(a040*a036);
   a105=(a062*a174);
   a004=(a180+a105);
-  a004=(2.*a004);
+  a004=(2*a004);
   a176=(a176+a004);
   a185=(a185+a176);
   a008=(a008+a099);
@@ -1331,7 +1342,7 @@ static int casadi_f0(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a017=(a040*a169);
   a010=(a057*a171);
   a099=(a017+a010);
-  a099=(2.*a099);
+  a099=(2*a099);
   a008=(a008+a099);
   a185=(a185+a008);
   a008=(a185*a135);
@@ -1416,7 +1427,7 @@ static int casadi_f0(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a014=(a014-a134);
   a045=(a078*a168);
   a014=(a014+a045);
-  a170=(2.*a170);
+  a170=(2*a170);
   a145=(a054*a145);
   a170=(a170-a145);
   a170=(a170/a047);
@@ -1836,7 +1847,7 @@ static int casadi_f0(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a019=(a019+a001);
   a170=(a078*a003);
   a019=(a019+a170);
-  a141=(2.*a141);
+  a141=(2*a141);
   a183=(a054*a183);
   a141=(a141-a183);
   a141=(a141/a047);
@@ -2148,7 +2159,7 @@ static int casadi_f0(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a183=(a183+a025);
   a019=(a078*a008);
   a183=(a183+a019);
-  a057=(2.*a057);
+  a057=(2*a057);
   a130=(a054*a130);
   a057=(a057-a130);
   a057=(a057/a047);
@@ -2453,7 +2464,7 @@ static int casadi_f0(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a057=(a057-a105);
   a040=(a078*a164);
   a057=(a057+a040);
-  a140=(2.*a140);
+  a140=(2*a140);
   a091=(a054*a091);
   a140=(a140-a091);
   a140=(a140/a047);
@@ -2764,7 +2775,7 @@ static int casadi_f0(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a140=(a140+a013);
   a038=(a078*a003);
   a140=(a140+a038);
-  a008=(2.*a008);
+  a008=(2*a008);
   a183=(a054*a183);
   a008=(a008-a183);
   a008=(a008/a047);
@@ -3076,7 +3087,7 @@ static int casadi_f0(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a183=(a183+a157);
   a140=(a078*a137);
   a183=(a183+a140);
-  a121=(2.*a121);
+  a121=(2*a121);
   a132=(a054*a132);
   a121=(a121-a132);
   a121=(a121/a047);
@@ -3381,7 +3392,7 @@ static int casadi_f0(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a121=(a121-a010);
   a168=(a078*a057);
   a121=(a121+a168);
-  a135=(2.*a135);
+  a135=(2*a135);
   a067=(a054*a067);
   a135=(a135-a067);
   a135=(a135/a047);
@@ -3692,7 +3703,7 @@ static int casadi_f0(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a177=(a177+a145);
   a135=(a078*a003);
   a177=(a177+a135);
-  a137=(2.*a137);
+  a137=(2*a137);
   a183=(a054*a183);
   a137=(a137-a183);
   a137=(a137/a047);
@@ -4004,7 +4015,7 @@ static int casadi_f0(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a106=(a106+a122);
   a078=(a078*a043);
   a106=(a106+a078);
-  a154=(2.*a154);
+  a154=(2*a154);
   a054=(a054*a143);
   a154=(a154-a054);
   a154=(a154/a047);
@@ -4283,42 +4294,42 @@ static int casadi_f1(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a001=1.9000000000000000e-01;
   a002=2.0000000000000001e-01;
   a003=arg[0]? arg[0][4] : 0;
-  a004=sin(a003);
+  a004=qd_sin(a003);
   a005=(a002*a004);
   a006=(a001+a005);
-  a003=cos(a003);
+  a003=qd_cos(a003);
   a007=arg[0]? arg[0][5] : 0;
-  a008=sin(a007);
+  a008=qd_sin(a007);
   a009=(a003*a008);
-  a007=cos(a007);
+  a007=qd_cos(a007);
   a010=(a004*a007);
   a009=(a009+a010);
   a009=(a002*a009);
   a006=(a006+a009);
   a010=-1.9000000000000000e-01;
   a011=arg[0]? arg[0][7] : 0;
-  a012=sin(a011);
+  a012=qd_sin(a011);
   a013=(a002*a012);
   a014=(a010+a013);
-  a011=cos(a011);
+  a011=qd_cos(a011);
   a015=arg[0]? arg[0][8] : 0;
-  a016=sin(a015);
+  a016=qd_sin(a015);
   a017=(a011*a016);
-  a015=cos(a015);
+  a015=qd_cos(a015);
   a018=(a012*a015);
   a017=(a017+a018);
   a017=(a002*a017);
   a014=(a014+a017);
   a018=(a006+a014);
   a019=arg[0]? arg[0][10] : 0;
-  a020=sin(a019);
+  a020=qd_sin(a019);
   a021=(a002*a020);
   a022=(a010+a021);
-  a019=cos(a019);
+  a019=qd_cos(a019);
   a023=arg[0]? arg[0][11] : 0;
-  a024=sin(a023);
+  a024=qd_sin(a023);
   a025=(a019*a024);
-  a023=cos(a023);
+  a023=qd_cos(a023);
   a026=(a020*a023);
   a025=(a025+a026);
   a025=(a002*a025);
@@ -4330,7 +4341,7 @@ static int casadi_f1(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a028=casadi_sq(a027);
   a029=-7.0000000000000007e-02;
   a030=arg[0]? arg[0][3] : 0;
-  a031=cos(a030);
+  a031=qd_cos(a030);
   a032=(a031*a003);
   a033=(a002*a032);
   a034=(a029+a033);
@@ -4342,7 +4353,7 @@ static int casadi_f1(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a034=(a034+a035);
   a037=7.0000000000000007e-02;
   a038=arg[0]? arg[0][6] : 0;
-  a039=cos(a038);
+  a039=qd_cos(a038);
   a040=(a039*a011);
   a041=(a002*a040);
   a042=(a037+a041);
@@ -4354,7 +4365,7 @@ static int casadi_f1(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a042=(a042+a043);
   a045=(a034+a042);
   a046=arg[0]? arg[0][9] : 0;
-  a047=cos(a046);
+  a047=qd_cos(a046);
   a048=(a047*a019);
   a049=(a002*a048);
   a050=(a029+a049);
@@ -4369,7 +4380,7 @@ static int casadi_f1(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a054=(a034-a053);
   a055=casadi_sq(a054);
   a056=(a028+a055);
-  a030=sin(a030);
+  a030=qd_sin(a030);
   a057=(a030*a004);
   a058=(a057*a008);
   a059=(a030*a003);
@@ -4378,7 +4389,7 @@ static int casadi_f1(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a061=(a002*a061);
   a062=(a002*a059);
   a061=(a061-a062);
-  a038=sin(a038);
+  a038=qd_sin(a038);
   a063=(a038*a012);
   a064=(a063*a016);
   a065=(a038*a011);
@@ -4388,7 +4399,7 @@ static int casadi_f1(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a068=(a002*a065);
   a067=(a067-a068);
   a069=(a061+a067);
-  a046=sin(a046);
+  a046=qd_sin(a046);
   a070=(a046*a020);
   a071=(a070*a024);
   a072=(a046*a019);
@@ -4741,7 +4752,7 @@ static int casadi_f1(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a171=(a153*a028);
   a055=(a110*a114);
   a171=(a171-a055);
-  a171=(2.*a171);
+  a171=(2*a171);
   a094=(a094+a171);
   a171=(a101*a112);
   a055=(a002*a095);
@@ -4791,7 +4802,7 @@ static int casadi_f1(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a092=(a110*a102);
   a028=(a172*a028);
   a092=(a092-a028);
-  a092=(2.*a092);
+  a092=(2*a092);
   a035=(a035+a092);
   a098=(a098-a096);
   a098=(a002*a098);
@@ -4853,7 +4864,7 @@ static int casadi_f1(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a058=(a153*a163);
   a113=(a110*a136);
   a058=(a058-a113);
-  a058=(2.*a058);
+  a058=(2*a058);
   a111=(a111+a058);
   a058=(a123*a134);
   a113=(a002*a117);
@@ -4903,7 +4914,7 @@ static int casadi_f1(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a098=(a110*a124);
   a163=(a172*a163);
   a098=(a098-a163);
-  a098=(2.*a098);
+  a098=(2*a098);
   a043=(a043+a098);
   a120=(a120-a118);
   a120=(a002*a120);
@@ -4966,7 +4977,7 @@ static int casadi_f1(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a066=(a153*a166);
   a064=(a110*a157);
   a066=(a066-a064);
-  a066=(2.*a066);
+  a066=(2*a066);
   a120=(a120+a066);
   a066=(a144*a155);
   a064=(a002*a132);
@@ -5016,7 +5027,7 @@ static int casadi_f1(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a058=(a110*a145);
   a166=(a172*a166);
   a058=(a058-a166);
-  a058=(2.*a058);
+  a058=(2*a058);
   a051=(a051+a058);
   a141=(a141-a139);
   a141=(a002*a141);
@@ -5075,7 +5086,7 @@ static int casadi_f1(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a114=(a172*a114);
   a102=(a153*a102);
   a114=(a114-a102);
-  a114=(2.*a114);
+  a114=(2*a114);
   a168=(a168+a114);
   a114=(a007*a004);
   a102=(a008*a003);
@@ -5101,7 +5112,7 @@ static int casadi_f1(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a136=(a172*a136);
   a124=(a153*a124);
   a136=(a136-a124);
-  a136=(2.*a136);
+  a136=(2*a136);
   a060=(a060+a136);
   a136=(a015*a012);
   a124=(a016*a011);
@@ -5128,7 +5139,7 @@ static int casadi_f1(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a157=(a172*a157);
   a145=(a153*a145);
   a157=(a157-a145);
-  a157=(2.*a157);
+  a157=(2*a157);
   a133=(a133+a157);
   a157=(a023*a020);
   a145=(a024*a019);
@@ -5166,9 +5177,9 @@ static int casadi_f1(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a089=(a089/a169);
   a086=(a000*a089);
   a087=arg[0]? arg[0][0] : 0;
-  a082=cos(a087);
+  a082=qd_cos(a087);
   a081=(a082*a172);
-  a087=sin(a087);
+  a087=qd_sin(a087);
   a079=(a087*a153);
   a081=(a081-a079);
   a079=(a087*a172);
@@ -5181,10 +5192,10 @@ static int casadi_f1(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a056=(a056-a090);
   a056=(a086+a056);
   a090=arg[0]? arg[0][1] : 0;
-  a021=cos(a090);
+  a021=qd_cos(a090);
   a157=1.8642708333333339e-03;
   a025=(a021*a089);
-  a090=sin(a090);
+  a090=qd_sin(a090);
   a170=(a170*a171);
   a173=(a173*a066);
   a170=(a170+a173);
@@ -5222,10 +5233,10 @@ static int casadi_f1(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a145=(a145-a013);
   a066=(a066+a145);
   a145=arg[0]? arg[0][2] : 0;
-  a013=cos(a145);
+  a013=qd_cos(a145);
   a136=5.0843750000000010e-04;
   a017=(a013*a025);
-  a145=sin(a145);
+  a145=qd_sin(a145);
   a124=(a090*a089);
   a117=(a021*a078);
   a124=(a124+a117);
@@ -6268,7 +6279,7 @@ static int casadi_f1(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a045=(a045*a053);
   a093=(a093+a045);
   a035=(a035-a093);
-  a045=(2.*a014);
+  a045=(2*a014);
   a026=(a006+a022);
   a045=(a045-a026);
   a035=(a035/a045);
@@ -6331,7 +6342,7 @@ static int casadi_f1(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a041=(a041+a029);
   a061=(a061*a035);
   a041=(a041+a061);
-  a093=(2.*a093);
+  a093=(2*a093);
   a026=(a026*a068);
   a093=(a093-a026);
   a093=(a093/a045);
@@ -6555,12 +6566,12 @@ static int casadi_f2(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   casadi_real a60, a61, a62, a63, a64, a65, a66, a67, a68, a69, a70, a71;
   casadi_real a72, a73, a74;
   a00=arg[0]? arg[0][1] : 0;
-  a01=sin(a00);
+  a01=qd_sin(a00);
   a02=arg[0]? arg[0][2] : 0;
-  a03=sin(a02);
+  a03=qd_sin(a02);
   a04=1.4999999999999999e-02;
   a05=arg[0]? arg[0][0] : 0;
-  a06=sin(a05);
+  a06=qd_sin(a05);
   a07=-9.8100000000000005e+00;
   a08=2.;
   a09=arg[1]? arg[1][0] : 0;
@@ -6581,7 +6592,7 @@ static int casadi_f2(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a13=(a08*a13);
   a15=(a07*a13);
   a16=(a06*a15);
-  a05=cos(a05);
+  a05=qd_cos(a05);
   a17=1.;
   a10=(a08*a10);
   a17=(a17-a10);
@@ -6591,8 +6602,8 @@ static int casadi_f2(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a18=(a04*a16);
   a19=(a03*a18);
   a20=(a01*a19);
-  a00=cos(a00);
-  a02=cos(a02);
+  a00=qd_cos(a00);
+  a02=qd_cos(a02);
   a18=(a02*a18);
   a21=5.5000000000000007e-02;
   a22=(a21*a16);
@@ -6641,20 +6652,20 @@ static int casadi_f2(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a23=(-a23);
   if (res[0]!=0) res[0][2]=a23;
   a23=arg[0]? arg[0][4] : 0;
-  a29=sin(a23);
+  a29=qd_sin(a23);
   a30=arg[0]? arg[0][5] : 0;
-  a31=sin(a30);
+  a31=qd_sin(a30);
   a32=arg[0]? arg[0][3] : 0;
-  a33=sin(a32);
+  a33=qd_sin(a32);
   a34=(a33*a15);
-  a32=cos(a32);
+  a32=qd_cos(a32);
   a35=(a32*a10);
   a34=(a34+a35);
   a35=(a04*a34);
   a36=(a31*a35);
   a37=(a29*a36);
-  a23=cos(a23);
-  a30=cos(a30);
+  a23=qd_cos(a23);
+  a30=qd_cos(a30);
   a35=(a30*a35);
   a38=(a21*a34);
   a35=(a35+a38);
@@ -6672,14 +6683,14 @@ static int casadi_f2(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a38=(a38-a39);
   a39=-1.9000000000000000e-01;
   a40=arg[0]? arg[0][7] : 0;
-  a41=sin(a40);
+  a41=qd_sin(a40);
   a42=(a25*a41);
   a42=(a39+a42);
-  a40=cos(a40);
+  a40=qd_cos(a40);
   a43=arg[0]? arg[0][8] : 0;
-  a44=sin(a43);
+  a44=qd_sin(a43);
   a45=(a40*a44);
-  a43=cos(a43);
+  a43=qd_cos(a43);
   a46=(a41*a43);
   a45=(a45+a46);
   a45=(a25*a45);
@@ -6751,9 +6762,9 @@ static int casadi_f2(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a45=(a45-a34);
   a13=(a13+a45);
   a34=arg[0]? arg[0][6] : 0;
-  a52=cos(a34);
+  a52=qd_cos(a34);
   a53=(a40*a07);
-  a34=sin(a34);
+  a34=qd_sin(a34);
   a54=(a34*a10);
   a55=(a52*a15);
   a54=(a54-a55);
@@ -6798,15 +6809,15 @@ static int casadi_f2(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a54=(a54-a62);
   a13=(a13+a54);
   a62=arg[0]? arg[0][9] : 0;
-  a63=cos(a62);
+  a63=qd_cos(a62);
   a64=arg[0]? arg[0][10] : 0;
-  a65=cos(a64);
+  a65=qd_cos(a64);
   a66=arg[0]? arg[0][11] : 0;
-  a67=sin(a66);
-  a66=cos(a66);
+  a67=qd_sin(a66);
+  a66=qd_cos(a66);
   a68=(a65*a07);
-  a64=sin(a64);
-  a62=sin(a62);
+  a64=qd_sin(a64);
+  a62=qd_sin(a62);
   a69=(a62*a10);
   a70=(a63*a15);
   a69=(a69-a70);
@@ -6983,7 +6994,7 @@ static int casadi_f2(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a21=(a21*a00);
   a02=(a02+a21);
   a09=(a09-a02);
-  a21=(2.*a42);
+  a21=(2*a42);
   a07=(a25*a29);
   a07=(a19+a07);
   a57=(a23*a31);
@@ -7104,7 +7115,7 @@ static int casadi_f2(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a20=(a20+a36);
   a39=(a39*a09);
   a20=(a20+a39);
-  a02=(2.*a02);
+  a02=(2*a02);
   a48=(a48*a13);
   a02=(a02-a48);
   a02=(a02/a21);
@@ -7430,42 +7441,42 @@ static int casadi_f3(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a001=1.9000000000000000e-01;
   a002=2.0000000000000001e-01;
   a003=arg[0]? arg[0][4] : 0;
-  a004=sin(a003);
+  a004=qd_sin(a003);
   a005=(a002*a004);
   a006=(a001+a005);
-  a003=cos(a003);
+  a003=qd_cos(a003);
   a007=arg[0]? arg[0][5] : 0;
-  a008=sin(a007);
+  a008=qd_sin(a007);
   a009=(a003*a008);
-  a007=cos(a007);
+  a007=qd_cos(a007);
   a010=(a004*a007);
   a009=(a009+a010);
   a009=(a002*a009);
   a006=(a006+a009);
   a010=-1.9000000000000000e-01;
   a011=arg[0]? arg[0][7] : 0;
-  a012=sin(a011);
+  a012=qd_sin(a011);
   a013=(a002*a012);
   a014=(a010+a013);
-  a011=cos(a011);
+  a011=qd_cos(a011);
   a015=arg[0]? arg[0][8] : 0;
-  a016=sin(a015);
+  a016=qd_sin(a015);
   a017=(a011*a016);
-  a015=cos(a015);
+  a015=qd_cos(a015);
   a018=(a012*a015);
   a017=(a017+a018);
   a017=(a002*a017);
   a014=(a014+a017);
   a018=(a006+a014);
   a019=arg[0]? arg[0][10] : 0;
-  a020=sin(a019);
+  a020=qd_sin(a019);
   a021=(a002*a020);
   a022=(a010+a021);
-  a019=cos(a019);
+  a019=qd_cos(a019);
   a023=arg[0]? arg[0][11] : 0;
-  a024=sin(a023);
+  a024=qd_sin(a023);
   a025=(a019*a024);
-  a023=cos(a023);
+  a023=qd_cos(a023);
   a026=(a020*a023);
   a025=(a025+a026);
   a025=(a002*a025);
@@ -7477,7 +7488,7 @@ static int casadi_f3(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a028=casadi_sq(a027);
   a029=-7.0000000000000007e-02;
   a030=arg[0]? arg[0][3] : 0;
-  a031=cos(a030);
+  a031=qd_cos(a030);
   a032=(a031*a003);
   a033=(a002*a032);
   a034=(a029+a033);
@@ -7489,7 +7500,7 @@ static int casadi_f3(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a034=(a034+a035);
   a037=7.0000000000000007e-02;
   a038=arg[0]? arg[0][6] : 0;
-  a039=cos(a038);
+  a039=qd_cos(a038);
   a040=(a039*a011);
   a041=(a002*a040);
   a042=(a037+a041);
@@ -7501,7 +7512,7 @@ static int casadi_f3(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a042=(a042+a043);
   a045=(a034+a042);
   a046=arg[0]? arg[0][9] : 0;
-  a047=cos(a046);
+  a047=qd_cos(a046);
   a048=(a047*a019);
   a049=(a002*a048);
   a050=(a029+a049);
@@ -7516,7 +7527,7 @@ static int casadi_f3(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a054=(a034-a053);
   a055=casadi_sq(a054);
   a056=(a028+a055);
-  a030=sin(a030);
+  a030=qd_sin(a030);
   a057=(a030*a004);
   a058=(a057*a008);
   a059=(a030*a003);
@@ -7525,7 +7536,7 @@ static int casadi_f3(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a061=(a002*a061);
   a062=(a002*a059);
   a061=(a061-a062);
-  a038=sin(a038);
+  a038=qd_sin(a038);
   a063=(a038*a012);
   a064=(a063*a016);
   a065=(a038*a011);
@@ -7535,7 +7546,7 @@ static int casadi_f3(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a068=(a002*a065);
   a067=(a067-a068);
   a069=(a061+a067);
-  a046=sin(a046);
+  a046=qd_sin(a046);
   a070=(a046*a020);
   a071=(a070*a024);
   a072=(a046*a019);
@@ -8037,7 +8048,7 @@ static int casadi_f3(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a213=(a211*a214);
   a083=(a200*a201);
   a213=(a213-a083);
-  a213=(2.*a213);
+  a213=(2*a213);
   a086=(a086+a213);
   a213=(a196*a100);
   a083=(a002*a092);
@@ -8087,7 +8098,7 @@ static int casadi_f3(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a105=(a200*a197);
   a094=(a215*a214);
   a105=(a105-a094);
-  a105=(2.*a105);
+  a105=(2*a105);
   a035=(a035+a105);
   a095=(a095-a093);
   a095=(a002*a095);
@@ -8149,7 +8160,7 @@ static int casadi_f3(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a058=(a211*a216);
   a101=(a200*a207);
   a058=(a058-a101);
-  a058=(2.*a058);
+  a058=(2*a058);
   a099=(a099+a058);
   a058=(a202*a138);
   a101=(a002*a130);
@@ -8199,7 +8210,7 @@ static int casadi_f3(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a095=(a200*a203);
   a132=(a215*a216);
   a095=(a095-a132);
-  a095=(2.*a095);
+  a095=(2*a095);
   a043=(a043+a095);
   a133=(a133-a131);
   a133=(a002*a133);
@@ -8262,7 +8273,7 @@ static int casadi_f3(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a066=(a211*a217);
   a064=(a200*a212);
   a066=(a066-a064);
-  a066=(2.*a066);
+  a066=(2*a066);
   a133=(a133+a066);
   a066=(a206*a171);
   a064=(a002*a163);
@@ -8312,7 +8323,7 @@ static int casadi_f3(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a058=(a200*a208);
   a165=(a215*a217);
   a058=(a058-a165);
-  a058=(2.*a058);
+  a058=(2*a058);
   a051=(a051+a058);
   a166=(a166-a164);
   a166=(a002*a166);
@@ -8371,7 +8382,7 @@ static int casadi_f3(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a092=(a215*a201);
   a166=(a211*a197);
   a092=(a092-a166);
-  a092=(2.*a092);
+  a092=(2*a092);
   a103=(a103+a092);
   a092=(a007*a004);
   a166=(a008*a003);
@@ -8397,7 +8408,7 @@ static int casadi_f3(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a130=(a215*a207);
   a005=(a211*a203);
   a130=(a130-a005);
-  a130=(2.*a130);
+  a130=(2*a130);
   a060=(a060+a130);
   a130=(a015*a012);
   a005=(a016*a011);
@@ -8424,7 +8435,7 @@ static int casadi_f3(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a163=(a215*a212);
   a084=(a211*a208);
   a163=(a163-a084);
-  a163=(2.*a163);
+  a163=(2*a163);
   a137=(a137+a163);
   a163=(a023*a020);
   a084=(a024*a019);
@@ -8465,9 +8476,9 @@ static int casadi_f3(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a107=(a110-a107);
   a087=(a000*a107);
   a082=arg[0]? arg[0][0] : 0;
-  a081=cos(a082);
+  a081=qd_cos(a082);
   a079=(a081*a215);
-  a082=sin(a082);
+  a082=qd_sin(a082);
   a027=(a082*a211);
   a079=(a079-a027);
   a027=(a082*a215);
@@ -8480,10 +8491,10 @@ static int casadi_f3(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a077=(a077-a021);
   a087=(a087+a077);
   a077=arg[0]? arg[0][1] : 0;
-  a021=cos(a077);
+  a021=qd_cos(a077);
   a163=1.8642708333333339e-03;
   a025=(a021*a107);
-  a077=sin(a077);
+  a077=qd_sin(a077);
   a084=(a085*a098);
   a013=(a056*a106);
   a084=(a084+a013);
@@ -8665,10 +8676,10 @@ static int casadi_f3(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a193=(a193-a175);
   a066=(a066+a193);
   a193=arg[0]? arg[0][2] : 0;
-  a175=cos(a193);
+  a175=qd_cos(a193);
   a174=5.0843750000000010e-04;
   a161=(a175*a025);
-  a193=sin(a193);
+  a193=qd_sin(a193);
   a107=(a077*a107);
   a160=(a021*a078);
   a107=(a107+a160);
@@ -9948,7 +9959,7 @@ static int casadi_f3(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a045=(a045*a098);
   a108=(a108+a045);
   a153=(a153-a108);
-  a045=(2.*a014);
+  a045=(2*a014);
   a026=(a006+a022);
   a045=(a045-a026);
   a153=(a153/a045);
@@ -10013,7 +10024,7 @@ static int casadi_f3(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a169=(a169+a029);
   a061=(a061*a153);
   a169=(a169+a061);
-  a108=(2.*a108);
+  a108=(2*a108);
   a026=(a026*a049);
   a108=(a108-a026);
   a108=(a108/a045);

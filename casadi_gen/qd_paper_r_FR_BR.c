@@ -20,6 +20,17 @@ extern "C" {
 
 #include <math.h>
 
+/* quadruped_dyn: the elementary functions in casadi_real's precision. A float build
+ * (-Dcasadi_real=float) calls sinf, cosf, ... instead of promoting to double, so it does no
+ * double arithmetic (none on a single-precision FPU: -Wdouble-promotion clean); a double build
+ * calls sin, cos, ... exactly as before. */
+#define QD_REAL_IS_FLOAT (sizeof(casadi_real) == sizeof(float))
+static inline casadi_real qd_sin(casadi_real x) { return QD_REAL_IS_FLOAT ? (casadi_real)sinf((float)x) : (casadi_real)sin((double)x); }
+static inline casadi_real qd_cos(casadi_real x) { return QD_REAL_IS_FLOAT ? (casadi_real)cosf((float)x) : (casadi_real)cos((double)x); }
+static inline casadi_real qd_tan(casadi_real x) { return QD_REAL_IS_FLOAT ? (casadi_real)tanf((float)x) : (casadi_real)tan((double)x); }
+static inline casadi_real qd_sqrt(casadi_real x) { return QD_REAL_IS_FLOAT ? (casadi_real)sqrtf((float)x) : (casadi_real)sqrt((double)x); }
+static inline casadi_real qd_fabs(casadi_real x) { return QD_REAL_IS_FLOAT ? (casadi_real)fabsf((float)x) : (casadi_real)fabs((double)x); }
+
 #ifndef casadi_real
 #define casadi_real double
 #endif
@@ -76,7 +87,7 @@ static const casadi_int casadi_s2[3] = {13, 13, 1};
  *   0             success
  *   QD_NONFINITE  an output is NaN or inf: coincident or collinear stance feet (the trunk
  *                 motion is undetermined), the trunk pitched +-90 deg (the roll row of two
- *                 stance feet has tan(pitch)), a zero quaternion, or a non-finite input;
+ *                 stance feet has qd_tan(pitch)), a zero quaternion, or a non-finite input;
  *   QD_SINGULAR   (qd_fd_r_* only) M_r is singular to working precision: a pivot of its LU
  *                 factorisation (partial pivoting) is below QD_SINGULAR_RTOL * max|M_r|,
  *                 e.g. two stance feet with the trunk pitched within ~1e-12 rad of 90 deg.
@@ -129,7 +140,7 @@ static inline int qd_fd_r_solve(int n, qd_eval_fn M_r, qd_eval_fn CG_r, const ca
   if (flag) return flag;
   casadi_real scale = 0, sum = 0; /* a NaN or inf anywhere makes the sum non-finite */
   for (int i = 0; i < n * n; ++i) {
-    scale = fabs(M[i]) > scale ? fabs(M[i]) : scale;
+    scale = qd_fabs(M[i]) > scale ? qd_fabs(M[i]) : scale;
     sum += M[i];
   }
   for (int i = 0; i < n; ++i) {
@@ -140,8 +151,8 @@ static inline int qd_fd_r_solve(int n, qd_eval_fn M_r, qd_eval_fn CG_r, const ca
   for (int k = 0; k < n; ++k) { /* M[i + n j] = M_ij */
     casadi_real* col = M + n * k;
     int p = k;
-    for (int i = k + 1; i < n; ++i) p = fabs(col[i]) > fabs(col[p]) ? i : p;
-    if (!(fabs(col[p]) > QD_SINGULAR_RTOL * scale)) return QD_SINGULAR;
+    for (int i = k + 1; i < n; ++i) p = qd_fabs(col[i]) > qd_fabs(col[p]) ? i : p;
+    if (!(qd_fabs(col[p]) > QD_SINGULAR_RTOL * scale)) return QD_SINGULAR;
     if (p != k) {
       for (int j = 0; j < n; ++j) {
         casadi_real t = M[k + n * j];
@@ -196,9 +207,9 @@ static int casadi_f0(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a003=1.0126562500000001e-03;
   a004=9.9578125000000014e-04;
   a005=arg[0]? arg[0][2] : 0;
-  a006=cos(a005);
+  a006=qd_cos(a005);
   a007=casadi_sq(a006);
-  a005=sin(a005);
+  a005=qd_sin(a005);
   a008=casadi_sq(a005);
   a007=(a007-a008);
   a007=(a004*a007);
@@ -223,19 +234,19 @@ static int casadi_f0(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a009=(a009-a007);
   a009=(a001*a009);
   a007=arg[0]? arg[0][1] : 0;
-  a018=cos(a007);
+  a018=qd_cos(a007);
   a019=casadi_sq(a018);
-  a007=sin(a007);
+  a007=qd_sin(a007);
   a020=casadi_sq(a007);
   a019=(a019-a020);
   a020=(a009*a019);
   a017=(a017+a020);
-  a020=(2.*a006);
+  a020=(2*a006);
   a020=(a020*a005);
   a020=(a004*a020);
   a021=(a014*a005);
   a020=(a020+a021);
-  a021=(2.*a018);
+  a021=(2*a018);
   a021=(a021*a007);
   a022=(a020*a021);
   a017=(a017-a022);
@@ -246,15 +257,15 @@ static int casadi_f0(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   if (res[0]!=0) res[0][2]=a023;
   a024=2.0000000000000001e-01;
   a025=arg[0]? arg[0][5] : 0;
-  a026=sin(a025);
+  a026=qd_sin(a025);
   a027=arg[0]? arg[0][4] : 0;
-  a028=sin(a027);
+  a028=qd_sin(a027);
   a029=arg[0]? arg[0][3] : 0;
-  a030=sin(a029);
+  a030=qd_sin(a029);
   a031=(a028*a030);
   a031=(a026*a031);
-  a025=cos(a025);
-  a027=cos(a027);
+  a025=qd_cos(a025);
+  a027=qd_cos(a027);
   a032=(a027*a030);
   a033=(a025*a032);
   a031=(a031-a033);
@@ -270,16 +281,16 @@ static int casadi_f0(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a035=(a024*a034);
   a033=(a033-a035);
   a035=arg[0]? arg[0][9] : 0;
-  a036=sin(a035);
+  a036=qd_sin(a035);
   a037=arg[0]? arg[0][10] : 0;
-  a038=sin(a037);
+  a038=qd_sin(a037);
   a039=(a036*a038);
   a040=arg[0]? arg[0][11] : 0;
-  a041=sin(a040);
+  a041=qd_sin(a040);
   a042=(a039*a041);
-  a037=cos(a037);
+  a037=qd_cos(a037);
   a043=(a036*a037);
-  a040=cos(a040);
+  a040=qd_cos(a040);
   a044=(a043*a040);
   a042=(a042-a044);
   a042=(a024*a042);
@@ -288,7 +299,7 @@ static int casadi_f0(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a044=(a033-a042);
   a045=7.0000000000000007e-02;
   a046=arg[0]? arg[0][0] : 0;
-  a047=cos(a046);
+  a047=qd_cos(a046);
   a048=5.5000000000000007e-02;
   a049=1.4999999999999999e-02;
   a006=(a049*a006);
@@ -320,7 +331,7 @@ static int casadi_f0(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a060=(a060+a061);
   a061=(a058-a060);
   a062=-7.0000000000000007e-02;
-  a029=cos(a029);
+  a029=qd_cos(a029);
   a063=(a029*a027);
   a064=(a024*a063);
   a064=(a062+a064);
@@ -330,7 +341,7 @@ static int casadi_f0(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a065=(a065-a067);
   a065=(a024*a065);
   a064=(a064+a065);
-  a035=cos(a035);
+  a035=qd_cos(a035);
   a065=(a035*a037);
   a067=(a024*a065);
   a067=(a062+a067);
@@ -350,7 +361,7 @@ static int casadi_f0(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a070=(a068*a021);
   a071=(a061*a056);
   a070=(a070-a071);
-  a046=sin(a046);
+  a046=qd_sin(a046);
   a009=(a046*a009);
   a071=(a046*a052);
   a072=(a057*a071);
@@ -558,7 +569,7 @@ static int casadi_f0(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a080=(a080+a077);
   a080=(-a080);
   if (res[0]!=0) res[0][11]=a080;
-  a080=sqrt(a076);
+  a080=qd_sqrt(a076);
   a077=(a068/a080);
   a039=(a058*a054);
   a039=(a021-a039);
@@ -1053,10 +1064,10 @@ static int casadi_f0(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a119=(a012+a119);
   a113=(a116-a119);
   a113=(a001*a113);
-  a099=(2.*a027);
+  a099=(2*a027);
   a099=(a099*a028);
   a125=(a113*a099);
-  a126=(2.*a025);
+  a126=(2*a025);
   a126=(a126*a026);
   a126=(a004*a126);
   a127=(a014*a026);
@@ -1104,17 +1115,17 @@ static int casadi_f0(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a127=(a137*a110);
   a138=(a071+a136);
   a139=arg[0]? arg[0][6] : 0;
-  a140=sin(a139);
+  a140=qd_sin(a139);
   a141=arg[0]? arg[0][7] : 0;
-  a142=cos(a141);
+  a142=qd_cos(a141);
   a143=arg[0]? arg[0][8] : 0;
-  a144=cos(a143);
+  a144=qd_cos(a143);
   a145=(a049*a144);
   a146=(a145+a050);
   a146=(a048+a146);
   a147=(a142*a146);
-  a141=sin(a141);
-  a143=sin(a143);
+  a141=qd_sin(a141);
+  a143=qd_sin(a143);
   a148=(a049*a143);
   a149=(a141*a148);
   a147=(a147-a149);
@@ -1161,7 +1172,7 @@ static int casadi_f0(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a160=-8.0500000000000016e-02;
   a161=(a132+a160);
   a159=(a159+a161);
-  a139=cos(a139);
+  a139=qd_cos(a139);
   a161=(a139*a147);
   a158=(a161+a158);
   a159=(a159+a158);
@@ -1191,7 +1202,7 @@ static int casadi_f0(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a022=(a022-a166);
   a022=(a022-a166);
   a166=(a166+a055);
-  a166=(2.*a166);
+  a166=(2*a166);
   a022=(a022+a166);
   a164=(a164+a022);
   a126=(a126+a165);
@@ -1199,7 +1210,7 @@ static int casadi_f0(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a126=(a126-a022);
   a126=(a126-a022);
   a022=(a022+a099);
-  a022=(2.*a022);
+  a022=(2*a022);
   a126=(a126+a022);
   a164=(a164+a126);
   a126=casadi_sq(a144);
@@ -1226,12 +1237,12 @@ static int casadi_f0(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a126=(a126-a172);
   a172=(a167*a126);
   a171=(a171+a172);
-  a144=(2.*a144);
+  a144=(2*a144);
   a144=(a144*a143);
   a144=(a004*a144);
   a143=(a014*a143);
   a144=(a144+a143);
-  a143=(2.*a142);
+  a143=(2*a142);
   a143=(a143*a141);
   a172=(a144*a143);
   a171=(a171-a172);
@@ -1242,7 +1253,7 @@ static int casadi_f0(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a173=(a173-a174);
   a175=(a045*a161);
   a174=(a174+a175);
-  a174=(2.*a174);
+  a174=(2*a174);
   a173=(a173+a174);
   a164=(a164+a173);
   a173=casadi_sq(a040);
@@ -1269,12 +1280,12 @@ static int casadi_f0(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a012=(a012-a176);
   a176=(a008*a012);
   a173=(a173+a176);
-  a040=(2.*a040);
+  a040=(2*a040);
   a040=(a040*a041);
   a004=(a004*a040);
   a014=(a014*a041);
   a004=(a004+a014);
-  a014=(2.*a037);
+  a014=(2*a037);
   a014=(a014*a038);
   a041=(a004*a014);
   a173=(a173-a041);
@@ -1285,7 +1296,7 @@ static int casadi_f0(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a165=(a165-a040);
   a176=(a062*a158);
   a040=(a040+a176);
-  a040=(2.*a040);
+  a040=(2*a040);
   a165=(a165+a040);
   a164=(a164+a165);
   a165=(a164*a123);
@@ -1420,24 +1431,24 @@ static int casadi_f0(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a011=(a005*a115);
   a014=(a014+a011);
   a011=(a045*a071);
-  a047=(2.*a047);
+  a047=(2*a047);
   a047=(a047*a046);
   a016=(a016*a047);
   a011=(a011-a016);
   a016=(a062*a136);
-  a047=(2.*a029);
+  a047=(2*a029);
   a047=(a047*a030);
   a116=(a116*a047);
   a016=(a016-a116);
   a011=(a011+a016);
   a016=(a045*a150);
-  a116=(2.*a139);
+  a116=(2*a139);
   a116=(a116*a140);
   a170=(a170*a116);
   a016=(a016-a170);
   a011=(a011+a016);
   a016=(a062*a153);
-  a170=(2.*a035);
+  a170=(2*a035);
   a170=(a170*a036);
   a001=(a001*a170);
   a016=(a016-a001);
@@ -4181,28 +4192,28 @@ static int casadi_f1(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a001=1.9000000000000000e-01;
   a002=2.0000000000000001e-01;
   a003=arg[0]? arg[0][4] : 0;
-  a004=sin(a003);
+  a004=qd_sin(a003);
   a005=(a002*a004);
   a006=(a001+a005);
-  a003=cos(a003);
+  a003=qd_cos(a003);
   a007=arg[0]? arg[0][5] : 0;
-  a008=sin(a007);
+  a008=qd_sin(a007);
   a009=(a003*a008);
-  a007=cos(a007);
+  a007=qd_cos(a007);
   a010=(a004*a007);
   a009=(a009+a010);
   a009=(a002*a009);
   a006=(a006+a009);
   a010=-1.9000000000000000e-01;
   a011=arg[0]? arg[0][10] : 0;
-  a012=sin(a011);
+  a012=qd_sin(a011);
   a013=(a002*a012);
   a014=(a010+a013);
-  a011=cos(a011);
+  a011=qd_cos(a011);
   a015=arg[0]? arg[0][11] : 0;
-  a016=sin(a015);
+  a016=qd_sin(a015);
   a017=(a011*a016);
-  a015=cos(a015);
+  a015=qd_cos(a015);
   a018=(a012*a015);
   a017=(a017+a018);
   a017=(a002*a017);
@@ -4214,7 +4225,7 @@ static int casadi_f1(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a021=casadi_sq(a020);
   a022=-7.0000000000000007e-02;
   a023=arg[0]? arg[0][3] : 0;
-  a024=cos(a023);
+  a024=qd_cos(a023);
   a025=(a024*a003);
   a026=(a002*a025);
   a027=(a022+a026);
@@ -4225,7 +4236,7 @@ static int casadi_f1(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a028=(a002*a028);
   a027=(a027+a028);
   a030=arg[0]? arg[0][9] : 0;
-  a031=cos(a030);
+  a031=qd_cos(a030);
   a032=(a031*a011);
   a033=(a002*a032);
   a034=(a022+a033);
@@ -4240,7 +4251,7 @@ static int casadi_f1(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a038=(a027-a037);
   a039=casadi_sq(a038);
   a040=(a021+a039);
-  a023=sin(a023);
+  a023=qd_sin(a023);
   a041=(a023*a004);
   a042=(a041*a008);
   a043=(a023*a003);
@@ -4249,7 +4260,7 @@ static int casadi_f1(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a045=(a002*a045);
   a046=(a002*a043);
   a045=(a045-a046);
-  a030=sin(a030);
+  a030=qd_sin(a030);
   a047=(a030*a012);
   a048=(a047*a016);
   a049=(a030*a011);
@@ -4552,7 +4563,7 @@ static int casadi_f1(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a062=(a118*a119);
   a069=(a089*a093);
   a062=(a062-a069);
-  a062=(2.*a062);
+  a062=(2*a062);
   a129=(a129+a062);
   a062=(a080*a091);
   a069=(a002*a074);
@@ -4602,7 +4613,7 @@ static int casadi_f1(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a073=(a089*a081);
   a119=(a071*a119);
   a073=(a073-a119);
-  a073=(2.*a073);
+  a073=(2*a073);
   a028=(a028+a073);
   a077=(a077-a075);
   a077=(a002*a077);
@@ -4664,7 +4675,7 @@ static int casadi_f1(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a042=(a118*a123);
   a092=(a089*a115);
   a042=(a042-a092);
-  a042=(2.*a042);
+  a042=(2*a042);
   a090=(a090+a042);
   a042=(a102*a113);
   a092=(a002*a096);
@@ -4714,7 +4725,7 @@ static int casadi_f1(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a077=(a089*a103);
   a123=(a071*a123);
   a077=(a077-a123);
-  a077=(2.*a077);
+  a077=(2*a077);
   a035=(a035+a077);
   a099=(a099-a097);
   a099=(a002*a099);
@@ -4776,9 +4787,9 @@ static int casadi_f1(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a099=(a099+a050);
   a099=(a099/a067);
   a050=(a059/a067);
-  a048=(2.*a064);
+  a048=(2*a064);
   a048=(a048*a112);
-  a112=(2.*a066);
+  a112=(2*a066);
   a114=(a068*a071);
   a106=(a064*a089);
   a114=(a114-a106);
@@ -4805,7 +4816,7 @@ static int casadi_f1(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a093=(a071*a093);
   a081=(a118*a081);
   a093=(a093-a081);
-  a093=(2.*a093);
+  a093=(2*a093);
   a125=(a125+a093);
   a093=(a007*a004);
   a081=(a008*a003);
@@ -4831,7 +4842,7 @@ static int casadi_f1(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a115=(a071*a115);
   a103=(a118*a103);
   a115=(a115-a103);
-  a115=(2.*a115);
+  a115=(2*a115);
   a044=(a044+a115);
   a115=(a015*a012);
   a103=(a016*a011);
@@ -4869,9 +4880,9 @@ static int casadi_f1(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a063=(a063/a111);
   a127=(a000*a063);
   a060=arg[0]? arg[0][0] : 0;
-  a099=cos(a060);
+  a099=qd_cos(a060);
   a058=(a099*a071);
-  a060=sin(a060);
+  a060=qd_sin(a060);
   a056=(a060*a118);
   a058=(a058-a056);
   a056=(a060*a071);
@@ -4884,10 +4895,10 @@ static int casadi_f1(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a070=(a070-a054);
   a070=(a127+a070);
   a054=arg[0]? arg[0][1] : 0;
-  a061=cos(a054);
+  a061=qd_cos(a054);
   a013=1.8642708333333339e-03;
   a115=(a061*a063);
-  a054=sin(a054);
+  a054=qd_sin(a054);
   a128=(a128*a042);
   a126=(a126*a062);
   a128=(a128-a126);
@@ -4925,10 +4936,10 @@ static int casadi_f1(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a017=(a017-a005);
   a042=(a042+a017);
   a017=arg[0]? arg[0][2] : 0;
-  a005=cos(a017);
+  a005=qd_cos(a017);
   a093=5.0843750000000010e-04;
   a009=(a005*a115);
-  a017=sin(a017);
+  a017=qd_sin(a017);
   a081=(a054*a063);
   a074=(a061*a055);
   a081=(a081+a074);
@@ -5371,18 +5382,18 @@ static int casadi_f1(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a097=(a097+a136);
   a041=(a041+a097);
   a136=arg[0]? arg[0][6] : 0;
-  a105=cos(a136);
+  a105=qd_cos(a136);
   a064=arg[0]? arg[0][7] : 0;
-  a008=cos(a064);
+  a008=qd_cos(a064);
   a084=arg[0]? arg[0][8] : 0;
-  a115=cos(a084);
-  a084=sin(a084);
-  a064=sin(a064);
+  a115=qd_cos(a084);
+  a084=qd_sin(a084);
+  a064=qd_sin(a064);
   a073=arg[1]? arg[1][6] : 0;
   a132=(a089-a073);
   a092=(a064*a132);
   a035=(a105*a071);
-  a136=sin(a136);
+  a136=qd_sin(a136);
   a065=(a136*a118);
   a035=(a035-a065);
   a065=(a008*a035);
@@ -6162,7 +6173,7 @@ static int casadi_f1(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a093=(a093+a124);
   a093=(-a093);
   if (res[0]!=0) res[0][11]=a093;
-  a031=sqrt(a031);
+  a031=qd_sqrt(a031);
   a014=(a014/a031);
   a093=(a027*a139);
   a124=(a045*a041);
@@ -6275,12 +6286,12 @@ static int casadi_f2(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   casadi_real a72, a73, a74, a75, a76, a77, a78, a79, a80, a81, a82, a83;
   casadi_real a84, a85, a86, a87, a88, a89, a90, a91, a92;
   a00=arg[0]? arg[0][1] : 0;
-  a01=sin(a00);
+  a01=qd_sin(a00);
   a02=arg[0]? arg[0][2] : 0;
-  a03=sin(a02);
+  a03=qd_sin(a02);
   a04=1.4999999999999999e-02;
   a05=arg[0]? arg[0][0] : 0;
-  a06=sin(a05);
+  a06=qd_sin(a05);
   a07=-9.8100000000000005e+00;
   a08=2.;
   a09=arg[1]? arg[1][0] : 0;
@@ -6301,7 +6312,7 @@ static int casadi_f2(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a15=(a13*a15);
   a16=(a07*a15);
   a17=(a06*a16);
-  a05=cos(a05);
+  a05=qd_cos(a05);
   a18=1.;
   a10=(a13*a10);
   a18=(a18-a10);
@@ -6311,8 +6322,8 @@ static int casadi_f2(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a19=(a04*a17);
   a20=(a03*a19);
   a21=(a01*a20);
-  a00=cos(a00);
-  a02=cos(a02);
+  a00=qd_cos(a00);
+  a02=qd_cos(a02);
   a19=(a02*a19);
   a22=5.5000000000000007e-02;
   a23=(a22*a17);
@@ -6361,20 +6372,20 @@ static int casadi_f2(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a24=(-a24);
   if (res[0]!=0) res[0][2]=a24;
   a24=arg[0]? arg[0][4] : 0;
-  a30=sin(a24);
+  a30=qd_sin(a24);
   a31=arg[0]? arg[0][5] : 0;
-  a32=sin(a31);
+  a32=qd_sin(a31);
   a33=arg[0]? arg[0][3] : 0;
-  a34=sin(a33);
+  a34=qd_sin(a33);
   a35=(a34*a16);
-  a33=cos(a33);
+  a33=qd_cos(a33);
   a36=(a33*a10);
   a35=(a35+a36);
   a36=(a04*a35);
   a37=(a32*a36);
   a38=(a30*a37);
-  a24=cos(a24);
-  a31=cos(a31);
+  a24=qd_cos(a24);
+  a31=qd_cos(a31);
   a36=(a31*a36);
   a39=(a22*a35);
   a36=(a36+a39);
@@ -6457,15 +6468,15 @@ static int casadi_f2(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a40=(a40-a35);
   a15=(a15+a40);
   a35=arg[0]? arg[0][6] : 0;
-  a47=cos(a35);
+  a47=qd_cos(a35);
   a48=arg[0]? arg[0][7] : 0;
-  a49=cos(a48);
+  a49=qd_cos(a48);
   a50=arg[0]? arg[0][8] : 0;
-  a51=sin(a50);
-  a50=cos(a50);
+  a51=qd_sin(a50);
+  a50=qd_cos(a50);
   a52=(a49*a07);
-  a48=sin(a48);
-  a35=sin(a35);
+  a48=qd_sin(a48);
+  a35=qd_sin(a35);
   a53=(a35*a10);
   a54=(a47*a16);
   a53=(a53-a54);
@@ -6510,15 +6521,15 @@ static int casadi_f2(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a53=(a53-a61);
   a15=(a15+a53);
   a61=arg[0]? arg[0][9] : 0;
-  a62=cos(a61);
+  a62=qd_cos(a61);
   a63=arg[0]? arg[0][10] : 0;
-  a64=cos(a63);
+  a64=qd_cos(a63);
   a65=arg[0]? arg[0][11] : 0;
-  a66=sin(a65);
-  a65=cos(a65);
+  a66=qd_sin(a65);
+  a65=qd_cos(a65);
   a67=(a64*a07);
-  a63=sin(a63);
-  a61=sin(a61);
+  a63=qd_sin(a63);
+  a61=qd_sin(a61);
   a68=(a61*a10);
   a69=(a62*a16);
   a68=(a68-a69);
@@ -6986,7 +6997,7 @@ static int casadi_f2(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a04=(a04+a64);
   a04=(-a04);
   if (res[0]!=0) res[0][11]=a04;
-  a47=sqrt(a47);
+  a47=qd_sqrt(a47);
   a77=(a77/a47);
   a04=(a02*a15);
   a64=(a85*a17);
@@ -7108,28 +7119,28 @@ static int casadi_f3(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a001=1.9000000000000000e-01;
   a002=2.0000000000000001e-01;
   a003=arg[0]? arg[0][4] : 0;
-  a004=sin(a003);
+  a004=qd_sin(a003);
   a005=(a002*a004);
   a006=(a001+a005);
-  a003=cos(a003);
+  a003=qd_cos(a003);
   a007=arg[0]? arg[0][5] : 0;
-  a008=sin(a007);
+  a008=qd_sin(a007);
   a009=(a003*a008);
-  a007=cos(a007);
+  a007=qd_cos(a007);
   a010=(a004*a007);
   a009=(a009+a010);
   a009=(a002*a009);
   a006=(a006+a009);
   a010=-1.9000000000000000e-01;
   a011=arg[0]? arg[0][10] : 0;
-  a012=sin(a011);
+  a012=qd_sin(a011);
   a013=(a002*a012);
   a014=(a010+a013);
-  a011=cos(a011);
+  a011=qd_cos(a011);
   a015=arg[0]? arg[0][11] : 0;
-  a016=sin(a015);
+  a016=qd_sin(a015);
   a017=(a011*a016);
-  a015=cos(a015);
+  a015=qd_cos(a015);
   a018=(a012*a015);
   a017=(a017+a018);
   a017=(a002*a017);
@@ -7141,7 +7152,7 @@ static int casadi_f3(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a021=casadi_sq(a020);
   a022=-7.0000000000000007e-02;
   a023=arg[0]? arg[0][3] : 0;
-  a024=cos(a023);
+  a024=qd_cos(a023);
   a025=(a024*a003);
   a026=(a002*a025);
   a027=(a022+a026);
@@ -7152,7 +7163,7 @@ static int casadi_f3(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a028=(a002*a028);
   a027=(a027+a028);
   a030=arg[0]? arg[0][9] : 0;
-  a031=cos(a030);
+  a031=qd_cos(a030);
   a032=(a031*a011);
   a033=(a002*a032);
   a034=(a022+a033);
@@ -7167,7 +7178,7 @@ static int casadi_f3(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a038=(a027-a037);
   a039=casadi_sq(a038);
   a040=(a021+a039);
-  a023=sin(a023);
+  a023=qd_sin(a023);
   a041=(a023*a004);
   a042=(a041*a008);
   a043=(a023*a003);
@@ -7176,7 +7187,7 @@ static int casadi_f3(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a045=(a002*a045);
   a046=(a002*a043);
   a045=(a045-a046);
-  a030=sin(a030);
+  a030=qd_sin(a030);
   a047=(a030*a012);
   a048=(a047*a016);
   a049=(a030*a011);
@@ -7586,7 +7597,7 @@ static int casadi_f3(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a158=(a157*a159);
   a069=(a149*a150);
   a158=(a158-a069);
-  a158=(2.*a158);
+  a158=(2*a158);
   a021=(a021+a158);
   a158=(a145*a079);
   a069=(a002*a071);
@@ -7636,7 +7647,7 @@ static int casadi_f3(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a082=(a149*a146);
   a073=(a062*a159);
   a082=(a082-a073);
-  a082=(2.*a082);
+  a082=(2*a082);
   a028=(a028+a082);
   a074=(a074-a072);
   a074=(a002*a074);
@@ -7698,7 +7709,7 @@ static int casadi_f3(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a042=(a157*a161);
   a080=(a149*a156);
   a042=(a042-a080);
-  a042=(2.*a042);
+  a042=(2*a042);
   a078=(a078+a042);
   a042=(a151*a118);
   a080=(a002*a110);
@@ -7748,7 +7759,7 @@ static int casadi_f3(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a074=(a149*a152);
   a112=(a062*a161);
   a074=(a074-a112);
-  a074=(2.*a074);
+  a074=(2*a074);
   a035=(a035+a074);
   a113=(a113-a111);
   a113=(a002*a113);
@@ -7810,9 +7821,9 @@ static int casadi_f3(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a113=(a113+a050);
   a113=(a113/a067);
   a050=(a059/a067);
-  a048=(2.*a064);
+  a048=(2*a064);
   a048=(a048*a117);
-  a117=(2.*a066);
+  a117=(2*a066);
   a119=(a068*a062);
   a128=(a064*a149);
   a119=(a119-a128);
@@ -7839,7 +7850,7 @@ static int casadi_f3(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a071=(a062*a150);
   a067=(a157*a146);
   a071=(a071-a067);
-  a071=(2.*a071);
+  a071=(2*a071);
   a084=(a084+a071);
   a071=(a007*a004);
   a067=(a008*a003);
@@ -7865,7 +7876,7 @@ static int casadi_f3(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a110=(a062*a156);
   a005=(a157*a152);
   a110=(a110-a005);
-  a110=(2.*a110);
+  a110=(2*a110);
   a044=(a044+a110);
   a110=(a015*a012);
   a005=(a016*a011);
@@ -7906,9 +7917,9 @@ static int casadi_f3(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a086=(a090-a086);
   a113=(a000*a086);
   a058=arg[0]? arg[0][0] : 0;
-  a056=cos(a058);
+  a056=qd_cos(a058);
   a020=(a056*a062);
-  a058=sin(a058);
+  a058=qd_sin(a058);
   a083=(a058*a157);
   a020=(a020-a083);
   a083=(a058*a062);
@@ -7921,10 +7932,10 @@ static int casadi_f3(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a061=(a061-a110);
   a113=(a113+a061);
   a061=arg[0]? arg[0][1] : 0;
-  a110=cos(a061);
+  a110=qd_cos(a061);
   a017=1.8642708333333339e-03;
   a005=(a110*a086);
-  a061=sin(a061);
+  a061=qd_sin(a061);
   a071=(a040*a085);
   a009=(a057*a077);
   a071=(a071-a009);
@@ -8072,10 +8083,10 @@ static int casadi_f3(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a139=(a139-a134);
   a042=(a042+a139);
   a139=arg[0]? arg[0][2] : 0;
-  a134=cos(a139);
+  a134=qd_cos(a139);
   a122=5.0843750000000010e-04;
   a121=(a134*a005);
-  a139=sin(a139);
+  a139=qd_sin(a139);
   a086=(a061*a086);
   a106=(a110*a055);
   a086=(a086+a106);
@@ -8698,18 +8709,18 @@ static int casadi_f3(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a115=(a115+a067);
   a041=(a041+a115);
   a067=arg[0]? arg[0][6] : 0;
-  a126=cos(a067);
+  a126=qd_cos(a067);
   a008=arg[0]? arg[0][7] : 0;
-  a150=cos(a008);
+  a150=qd_cos(a008);
   a005=arg[0]? arg[0][8] : 0;
-  a084=cos(a005);
-  a005=sin(a005);
-  a008=sin(a008);
+  a084=qd_cos(a005);
+  a005=qd_sin(a005);
+  a008=qd_sin(a008);
   a119=arg[1]? arg[1][6] : 0;
   a064=(a149-a119);
   a156=(a008*a064);
   a081=(a126*a062);
-  a067=sin(a067);
+  a067=qd_sin(a067);
   a070=(a067*a157);
   a081=(a081-a070);
   a070=(a150*a081);
@@ -9502,7 +9513,7 @@ static int casadi_f3(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a122=(a122+a135);
   a122=(-a122);
   if (res[0]!=0) res[0][11]=a122;
-  a031=sqrt(a031);
+  a031=qd_sqrt(a031);
   a014=(a014/a031);
   a122=(a027*a060);
   a135=(a045*a041);

@@ -64,3 +64,46 @@ FORMULA_DISPLAY_REL_TOL = 1e-3
 #: physical: URDF numbers are printed with 6-7 significant digits (CAD exports), so a thin
 #: rod or a flat plate (A + B = C exactly) arrives broken by ~1e-7 relative.
 INERTIA_REL_TOL = 1e-6
+
+#: Derivatives of the dynamics (dynamics/derivatives.py) against Pinocchio's analytical
+#: derivatives (computeRNEADerivatives, computeABADerivatives). did_full is a sum of ~1e4
+#: products (measured <= 2e-15 relative); dfd_full goes through M^-1, which amplifies
+#: round-off by cond(M) ~3e3-3e4 on these robots (measured <= 3.1e-12, solo12). 1e-9 (the issue's bar)
+#: keeps a margin of ~300 over that and is far below any modelling or convention error
+#: (a wrong tangent convention is an O(1) error in the rotation columns).
+REL_TOL_DERIVATIVES = 1e-9
+
+#: The reduced model's and the GRF solve's derivatives (dfd_r, dgrf) against central finite
+#: differences of the Pinocchio-built reduced reference (and of Pinocchio's GRF SVD solve). The
+#: reference is a chain of least-squares solves, SVDs and M_r's solve, accurate to ~1e-11
+#: relative, so its differences carry a round-off of ~1e-11 / h; the truncation error is
+#: h^2 / 6 |f'''| (measured on the paper robot's four-foot dfd_r, the worst case: 1.6e-7 at
+#: h = 1e-3, 8e-8 at 1e-4, 1.2e-6 at 1e-5, 1.6e-5 at 1e-6: round-off wins below 1e-4). With
+#: h = 1e-4 (rad, rad/s, N m, m/s^2) both stay near 1e-7; 2e-6 relative keeps a margin of ~20,
+#: and a wrong term (a missing orientation dependence, a sign) is an O(1e-2 - 1) error.
+FD_STEP_DERIVATIVES = 1e-4
+REL_TOL_FD_DERIVATIVES = 2e-6
+
+#: The float build's fd_r against the double build, per unit of FLT_EPSILON * cond_1(M_r): a
+#: backward-stable LU solve loses ~cond digits, and M_r and C_r + G_r arrive with float rounding
+#: of their own. Measured (300 states near standing, docs/embedded.md): at most 0.26 on the paper
+#: robot; 1 leaves room for other robots. Stated in the generated header.
+FLOAT_FD_R_PER_COND = 1.0
+#: A float result with a larger error is not a result (the issue's 1 %). Measured: every float
+#: fd_r that returned 0 (not QD_SINGULAR) was within it (at most 1.1e-3 on the paper robot).
+FLOAT_USABLE_REL_ERR = 1e-2
+
+#: The tol_scale of a case in the generated C's reference header (a ratio of condition numbers,
+#: printed to 3 significant digits) on two machines: the CPU's round-off moves it by ~1e-15
+#: relative, which can flip its third printed digit (up to 1e-2 relative for 1.00 vs 1.01); 2e-2
+#: allows that and still catches any change of the state or the conditioning.
+REFERENCE_TOL_SCALE_REL_TOL = 2e-2
+
+#: The per-phase interpolant of the plan's reference torques (``experiment.torque_table``),
+#: checked at the midpoints between its nodes, relative to each signal's largest magnitude over
+#: the phase (joint angles, rates, accelerations, torques, each as a group). Measured on paper,
+#: solo12 and go2, trot and walk: degree 64 reaches 3e-15 to 7e-15 and degree 96 or 128 does not
+#: go lower -- that floor is the exact IK and id_r's own round-off (a few hundred operations,
+#: atan2 / acos), not interpolation error. 1e-14 accepts only an interpolant at that floor, far
+#: below DOP853's tolerance (1e-13).
+TABLE_REL_TOL = 1e-14

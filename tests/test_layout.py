@@ -8,6 +8,7 @@ catches a broken layer.
 from __future__ import annotations
 
 import importlib
+import importlib.util
 import pkgutil
 import subprocess
 import sys
@@ -17,7 +18,9 @@ import pytest
 
 import quadruped_dyn
 
-OPTIONAL = {"quadruped_dyn.references.mujoco": "mujoco", "quadruped_dyn.references.idyntree": "idyntree"}
+OPTIONAL = {"quadruped_dyn.references.mujoco": "mujoco", "quadruped_dyn.references.idyntree": "idyntree",
+            **{f"quadruped_dyn.control.{m}": "mujoco" for m in ("plant", "reference", "controllers", "run", "measures",
+                                                               "outputs", "closed_loop")}}
 MODULES = sorted(m.name for m in pkgutil.walk_packages(quadruped_dyn.__path__, "quadruped_dyn.")
                  if not m.name.endswith("__main__"))
 
@@ -43,3 +46,28 @@ def test_layer_contract() -> None:
     proc = subprocess.run([str(lint), "--no-cache", "--no-logo"], capture_output=True, text=True,
                           cwd=Path(__file__).resolve().parents[1])
     assert proc.returncode == 0, proc.stdout[-3000:]
+
+
+SUBPACKAGES = sorted(m.name for m in pkgutil.iter_modules(quadruped_dyn.__path__, "quadruped_dyn.") if m.ispkg)
+
+
+@pytest.mark.parametrize("name", SUBPACKAGES)
+def test_subpackage_exports_resolve(name: str) -> None:
+    """Every name in a subpackage's ``__all__`` is what its module defines (exports are lazy)."""
+    package = importlib.import_module(name)
+    assert package.__all__, f"{name} exports nothing"
+    for export in package.__all__:
+        module = next((m for m in OPTIONAL if m.startswith(name + ".") and export in _names_of(m)), None)
+        if module is not None and importlib.util.find_spec(OPTIONAL[module]) is None:
+            continue  # an optional library's adapter
+        assert getattr(package, export) is not None, (name, export)
+
+
+def _names_of(module: str) -> set[str]:
+    """Top-level names a module's source defines (without importing it)."""
+    import ast
+
+    path = Path(quadruped_dyn.__file__).parent.joinpath(*module.split(".")[1:]).with_suffix(".py")
+    tree = ast.parse(path.read_text())
+    names = {n.name for n in tree.body if isinstance(n, ast.FunctionDef | ast.ClassDef)}
+    return names | {t.id for n in tree.body if isinstance(n, ast.Assign) for t in n.targets if isinstance(t, ast.Name)}

@@ -1,1 +1,12 @@
 """Benchmarks: the generated C against Pinocchio and other libraries' generated code, same run."""
+
+from quadruped_dyn.exports import lazy_exports
+
+_MODULES: dict[str, tuple[str, ...]] = {
+    "peers": ("PEERS", "ADAM_PAIRS", "PeerEntry", "parse_peers", "adam_functions", "check_adam", "run_peers", "peers_table"),
+    "timing": (
+        "FD_R_TARGET", "PAIRS", "HARNESSES", "BenchEntry", "BenchReport", "arithmetic_operations", "PINOCCHIO_CXX_FLAGS",
+        "pinocchio_harness", "run_bench",
+    ),
+}
+__all__, __getattr__, __dir__ = lazy_exports(__name__, _MODULES)

@@ -4,7 +4,7 @@ adam (ami-iit/adam, PyPI ``adam-robotics``; 0.5.0 needs ``liecasadi``, undeclare
 mass matrix (CRBA) and bias force (RNEA, C + G), BODY_FIXED velocity representation (so M and
 C + G are Pinocchio's, base velocity (v_b, omega_b) in the trunk frame), joints in the project's
 order, g = (0, 0, -9.81). Each peer function is checked against Pinocchio's crba /
-nonLinearEffects at a random state before it is timed (InputError if it differs by more than
+nonLinearEffects at a random state before it is timed (NumericalError if it differs by more than
 REL_TOL_TERMS). adam takes the base pose as a 4 x 4 homogeneous matrix H; it is timed with its
 own inputs, as a user would generate it.
 
@@ -26,10 +26,12 @@ from pathlib import Path
 import casadi as ca
 import numpy as np
 
+from quadruped_dyn.bench.timing import HARNESSES, arithmetic_operations
 from quadruped_dyn.codegen.cache import cached_build
-from quadruped_dyn.codegen.emit import CODEGEN_FUNCTIONS, PREFIX, _silence_unused_parameters
-from quadruped_dyn.codegen.library import C_FLAGS, _compiler_version, run_tool
-from quadruped_dyn.errors import InputError
+from quadruped_dyn.codegen.emit import CODEGEN_FUNCTIONS, PREFIX, silence_unused_parameters
+from quadruped_dyn.codegen.library import C_FLAGS, compiler_version, run_tool
+from quadruped_dyn.errors import InputError, NumericalError
+from quadruped_dyn.math.compare import relative_error, within
 from quadruped_dyn.model.robot import Robot
 from quadruped_dyn.model.state import GRAVITY_W, random_state, rotation
 from quadruped_dyn.references.pinocchio import PinocchioReference
@@ -37,10 +39,11 @@ from quadruped_dyn.tolerances import REL_TOL_TERMS
 
 PEERS = ("adam",)
 
+#: The peers' timing program (c/): its source and the timing it shares with bench_qd.c.
+PEER_HARNESS = ("bench_peers.c", "bench_median.h")
+
 #: toolkit function -> the peer function it is timed against
 ADAM_PAIRS = {"M_full": "adam_M", "nle_full": "adam_nle"}
-
-HARNESSES = Path(__file__).resolve().parent / "c"
 
 
 @dataclass
@@ -107,14 +110,11 @@ def check_adam(robot: Robot, functions: list[ca.Function], seed: int = 0) -> flo
     H = np.eye(4)
     H[:3, :3], H[:3, 3] = rotation(s.q), s.q[:3]
     M, nle = functions
-    errors = []
     pairs = ((M(H, s.q[7:]), ref.mass_matrix(s.q)), (nle(H, s.q[7:], s.v[:6], s.v[6:]), ref.nonlinear_effects(s.q, s.v)))
-    for value, expected in pairs:
-        actual = np.asarray(value, dtype=float).reshape(np.shape(expected))
-        errors.append(float(np.abs(actual - expected).max() / np.abs(expected).max()))
-    worst = max(errors)
-    if not worst <= REL_TOL_TERMS:  # NaN fails too
-        raise InputError(f"adam's terms differ from Pinocchio's on {robot.name} by {worst:.2e} relative; "
+    worst = max(relative_error(np.asarray(value, dtype=float).reshape(np.shape(expected)), expected)
+                for value, expected in pairs)
+    if not within(worst, REL_TOL_TERMS):
+        raise NumericalError(f"adam's terms differ from Pinocchio's on {robot.name} by {worst:.2e} relative; "
                          f"expected <= {REL_TOL_TERMS:g} before timing them")
     return worst
 
@@ -127,12 +127,13 @@ def _harness(functions: list[ca.Function], flags: tuple[str, ...], cc: str) -> P
     listing = "".join(f"QD_FN({f.name()})\n" for f in functions)
     with tempfile.TemporaryDirectory() as tmp:
         cg.generate(tmp + "/")
-        source = _silence_unused_parameters((Path(tmp) / "qd_peers.c").read_text())
+        source = silence_unused_parameters((Path(tmp) / "qd_peers.c").read_text())
         (Path(tmp) / "qd_peers.c").write_text(source)
-        key = hashlib.sha256((source + listing + (HARNESSES / "bench_peers.c").read_text() + " ".join(flags)
-                              + _compiler_version(cc)).encode()).hexdigest()[:16]
+        harness = "".join((HARNESSES / name).read_text() for name in PEER_HARNESS)
+        key = hashlib.sha256((source + listing + harness + " ".join(flags) + compiler_version(cc)).encode()).hexdigest()[:16]
         (Path(tmp) / "qd_peers_list.h").write_text(listing)
-        shutil.copy(HARNESSES / "bench_peers.c", tmp)
+        for name in PEER_HARNESS:
+            shutil.copy(HARNESSES / name, tmp)
 
         def build(target: Path) -> None:
             run_tool([cc, *flags, "qd_peers.c", "bench_peers.c", "-lm", "-o", str(target)], cwd=tmp)
@@ -159,8 +160,6 @@ def run_peers(robot: Robot, peers: tuple[str, ...] = PEERS, native: bool = False
             name, ns = line.split()
             best[name] = min(float(ns), best.get(name, float("inf")))
     peer_by_name = {f.name()[len(PREFIX):]: f for f in theirs}
-    from quadruped_dyn.bench.timing import arithmetic_operations
-
     return [
         PeerEntry(robot.name, name, peer, best[PREFIX + name], best[PREFIX + peer], best[PREFIX + name] / best[PREFIX + peer],
                   arithmetic_operations(ours[name]), arithmetic_operations(peer_by_name[peer]), error)

@@ -7,7 +7,8 @@ load on a shared 2-core machine). Ratios generated / Pinocchio are what to read;
 times drift with the machine's load. The Pinocchio harness links
 the pin wheel's libraries (built for generic x86-64), so neither side uses -march=native.
 Pairs: M_full ~ crba, nle_full (C + G in one call) ~ nonLinearEffects, G_full ~
-computeGeneralizedGravity, id_full ~ rnea (id_full also applies 4 foot forces), fd_r_<feet> ~
+computeGeneralizedGravity, id_full ~ rnea (id_full also applies 4 foot forces), did_full ~ computeRNEADerivatives,
+dfd_full ~ computeABADerivatives, fd_r_<feet> ~
 constraintDynamics with those stance feet. The reduced terms M_r, CG_r, G_r, id_r are timed alone.
 """
 
@@ -28,8 +29,9 @@ import casadi as ca
 import numpy as np
 import pinocchio as pin
 
+from quadruped_dyn.checks.c_reference import generate_checked, reference_header_name
 from quadruped_dyn.codegen.cache import cache_dir, cached_build
-from quadruped_dyn.codegen.emit import PREFIX, codegen_functions, generate, work_sizes
+from quadruped_dyn.codegen.emit import PREFIX, codegen_functions, work_sizes
 from quadruped_dyn.codegen.library import C_FLAGS, CompiledFunction, CompiledLibrary, compile_sources, compiled_library, run_tool
 from quadruped_dyn.errors import InputError
 from quadruped_dyn.model.robot import Robot
@@ -47,6 +49,9 @@ PAIRS = {
     "nle_full": ("nonLinearEffects", 0.18),
     "G_full": ("computeGeneralizedGravity", 0.15),
     "id_full": ("rnea", 0.2),
+    # derivatives (docs/derivatives.md): d/dq, d/dv, d/da (= M) of rnea; d/dq, d/dv, d/dtau (= M^-1) of aba
+    "did_full": ("computeRNEADerivatives", 0.5),
+    "dfd_full": ("computeABADerivatives", 0.5),
 }
 
 HARNESSES = Path(__file__).resolve().parent / "c"
@@ -145,13 +150,14 @@ def run_bench(robot: Robot, calls: int = 20000, reps: int = 9, rounds: int = 3, 
     start = time.perf_counter()
     codegen_functions(robot)  # symbolic build + generation, timed apart from compilation
     with tempfile.TemporaryDirectory() as tmp:
-        paths = generate(robot, Path(tmp))
+        files = generate_checked(robot, Path(tmp))  # the check program's reference inputs drive the harness
         report.generation_s = time.perf_counter() - start
-        c_path, h_path, ref_path = paths[:3]
-        sources = [p for p in paths if p.suffix == ".c" and p.name.startswith(c_path.stem)]
+        c_path, h_path, ref_path = files.source, files.header, files.extra[reference_header_name(robot)]
+        sources = files.c_sources
         report.code_bytes = sum(p.stat().st_size for p in sources)
         report.work_bytes = max(8 * (iw + w) for iw, w in work_sizes(h_path.read_text()).values())
-        shutil.copy(HARNESSES / "bench_qd.c", tmp)
+        for name in ("bench_qd.c", "bench_median.h"):
+            shutil.copy(HARNESSES / name, tmp)
         exe, lib = Path(tmp) / "bench_qd", Path(tmp) / f"lib{c_path.stem}.so"
         start = time.perf_counter()
         compile_sources(sources, C_FLAGS, lib, cc)
@@ -191,7 +197,7 @@ def _python_call_times(robot: Robot, library: CompiledLibrary, number: int = 200
     s = random_state(robot.lower, robot.upper, np.random.default_rng(0))
     q, v, a = ref.pin_q(s.q), ref.pin_v(s.v), ref.pin_v(s.a)
     model, data = robot.model, ref.data
-    inputs = {"q": s.q, "v": s.v, "a": s.a, "f": s.f.ravel()}
+    inputs = {"q": s.q, "v": s.v, "a": s.a, "f": s.f.ravel(), "tau_full": 5.0 * s.a}
     out: dict[str, float] = {}
     for name in PAIRS:
         f = CompiledFunction(library, name)
@@ -202,6 +208,8 @@ def _python_call_times(robot: Robot, library: CompiledLibrary, number: int = 200
         "nonLinearEffects": lambda: pin.nonLinearEffects(model, data, q, v),
         "computeGeneralizedGravity": lambda: pin.computeGeneralizedGravity(model, data, q),
         "rnea": lambda: pin.rnea(model, data, q, v, a),
+        "computeRNEADerivatives": lambda: pin.computeRNEADerivatives(model, data, q, v, a),
+        "computeABADerivatives": lambda: pin.computeABADerivatives(model, data, q, v, 5.0 * a),
     }
     for algo, call in pin_calls.items():
         out[algo] = 1e6 * min(timeit.repeat(call, number=number, repeat=3)) / number

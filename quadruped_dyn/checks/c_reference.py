@@ -2,21 +2,28 @@
 
 from __future__ import annotations
 
+import re
 import tempfile
+from dataclasses import dataclass
 from pathlib import Path
 
 import casadi as ca
 import numpy as np
 import pinocchio as pin
 
-from quadruped_dyn.codegen.emit import PREFIX, generate, reduced_parts, stem
-from quadruped_dyn.math.rigid import skew as skew_np
+from quadruped_dyn.codegen.emit import PREFIX, GeneratedFiles, generate, reduced_parts, stem
+from quadruped_dyn.math.compare import relative_error, scale_of, within
 from quadruped_dyn.model.robot import Robot
 from quadruped_dyn.model.stance import StanceSet, stance_set
 from quadruped_dyn.model.state import NV_FULL, FullState, full_q, rotation
-from quadruped_dyn.references.pinocchio import PinocchioReference
-from quadruped_dyn.references.pinocchio import roll_rate_row as roll_rate_row_np
-from quadruped_dyn.tolerances import FLOAT_REL_TOL, GRF_COND_ASSUMED, MAP_COND_ASSUMED, REL_TOL_TERMS
+from quadruped_dyn.references.pinocchio import PinocchioDerivatives, PinocchioReference
+from quadruped_dyn.tolerances import (
+    FLOAT_REL_TOL,
+    GRF_COND_ASSUMED,
+    MAP_COND_ASSUMED,
+    REFERENCE_TOL_SCALE_REL_TOL,
+    REL_TOL_TERMS,
+)
 
 REFERENCE_DIGITS = 12  # significant digits of the reference header: 5e-13 relative, far below the 1e-10 check
 
@@ -40,8 +47,12 @@ def reduced_inputs(s: FullState) -> dict[str, np.ndarray]:
     return {"q_r": _rounded(np.append(s.q[7:], roll)), "qd_r": np.append(s.v[6:], s.v[3]),
             "qdd_r": np.append(s.a[6:], s.a[3]), "quat": s.q[3:7], "tau_ext": 10.0 * s.a[5:]}
 
+def reference_tau_full(s: FullState) -> np.ndarray:
+    """The generalized force (18,) dfd_full is checked at: 5 a (rounded like the state)."""
+    return _rounded(5.0 * s.a)
+
 def _reduced_reference(ref: PinocchioReference, kind: str, stance: StanceSet, s: FullState) -> np.ndarray:
-    """Pinocchio-built value (SPEC section 5's independent reference) of reduced function ``kind``."""
+    """Pinocchio-built value (docs/formulation.md §8's independent reference) of reduced function ``kind``."""
     n = 13 if len(stance.feet) == 2 else 12
     x = {k: v[:n] for k, v in reduced_inputs(s).items() if k != "quat"}
 
@@ -49,11 +60,11 @@ def _reduced_reference(ref: PinocchioReference, kind: str, stance: StanceSet, s:
         return ref.reduced_inverse_dynamics(stance.feet, stance.selection("paper"), x["q_r"], qd, qdd, s.q[3:7])
 
     zero = np.zeros(n)
-    G = id_r(zero, zero)  # id_r is affine in qdd: M_r's columns are differences
-    values = {"G_r": lambda: G, "CG_r": lambda: id_r(x["qd_r"], zero), "id_r": lambda: id_r(x["qd_r"], x["qdd_r"])}
+    values = {"G_r": lambda: id_r(zero, zero), "CG_r": lambda: id_r(x["qd_r"], zero),
+              "id_r": lambda: id_r(x["qd_r"], x["qdd_r"])}
     if kind in values:
         return values[kind]()
-    M = np.column_stack([id_r(zero, e) - G for e in np.eye(n)])
+    M = ref.reduced_mass_matrix(stance.feet, stance.selection("paper"), x["q_r"], s.q[3:7])
     return M if kind == "M_r" else np.linalg.solve(M, x["tau_ext"] - id_r(x["qd_r"], zero))
 
 def pinocchio_outputs(robot: Robot, ref: PinocchioReference, name: str, s: FullState) -> list[np.ndarray]:
@@ -73,6 +84,13 @@ def pinocchio_outputs(robot: Robot, ref: PinocchioReference, name: str, s: FullS
         R = rotation(s.q)
         full = ref.rnea(s.q, s.v, s.a) - ref.contact_jacobian(s.q, (0, 1, 2, 3)).T @ np.concatenate([R @ f for f in s.f])
         return [full[:6], full[6:]]
+    if name in ("did_full", "dfd_full", "dfd_full_parts"):
+        derivatives = PinocchioDerivatives(ref)
+        if name == "did_full":
+            return list(derivatives.rnea_derivatives(s.q, s.v, s.a))
+        if name == "dfd_full":
+            return list(derivatives.aba_derivatives(s.q, s.v, reference_tau_full(s)))
+        return [ref.mass_matrix(s.q), ref.nonlinear_effects(s.q, s.v)]
     if name.startswith("grf_"):
         stance = stance_set(name[4:].replace("_", "+"))
         r = ref.grf_solve(s.q, s.v, s.a, stance.feet, stance.selection("paper"))
@@ -88,6 +106,8 @@ def tolerance_scale(ref: PinocchioReference, name: str, s: FullState) -> float:
     velocity map), each at least 1, and for fd_r times cond(M_r) / GRF_COND_ASSUMED (the solve
     amplifies M_r's and C_r + G_r's errors by cond(M_r)). 1 otherwise."""
     reduced = reduced_parts(name)
+    if name == "dfd_full":  # M^-1 amplifies the errors of M and of d rnea by cond(M)
+        return max(1.0, float(np.linalg.cond(ref.mass_matrix(s.q))) / GRF_COND_ASSUMED)
     if not reduced:
         return 1.0
     kind, stance = reduced
@@ -95,11 +115,7 @@ def tolerance_scale(ref: PinocchioReference, name: str, s: FullState) -> float:
     q[7:] = reduced_inputs(s)["q_r"][:12]
     g = ref.grf_solve(q, v, a, stance.feet, stance.selection("paper"))
     scale = max(1.0, float(g.singular_values[0] / g.singular_values[g.rank - 1]) / GRF_COND_ASSUMED)
-    r = ref.foot_positions(q)
-    rows = [np.hstack([np.eye(3), -skew_np(r[i])]) for i in stance.feet]
-    if len(stance.feet) == 2:
-        rows.append(np.concatenate([np.zeros(3), roll_rate_row_np(rotation(q))])[None, :])
-    scale *= max(1.0, float(np.linalg.cond(np.vstack(rows))) / MAP_COND_ASSUMED)
+    scale *= max(1.0, float(np.linalg.cond(ref.velocity_map(q, stance.feet))) / MAP_COND_ASSUMED)
     if kind == "fd_r":  # the tolerances allow for ~GRF_COND_ASSUMED of amplification already
         scale *= max(1.0, float(np.linalg.cond(_reduced_reference(ref, "M_r", stance, s))) / GRF_COND_ASSUMED)
     return scale
@@ -116,11 +132,12 @@ def reference_header(robot: Robot, functions: list[ca.Function], work: dict[str,
     """C header: Pinocchio's values of every generated function at ``reference_state``."""
     ref = PinocchioReference(robot)
     s = reference_state(robot)
-    inputs = {"q": s.q, "v": s.v, "a": s.a, "f": s.f.ravel(), **reduced_inputs(s)}
+    inputs = {"q": s.q, "v": s.v, "a": s.a, "f": s.f.ravel(), "tau_full": reference_tau_full(s), **reduced_inputs(s)}
     inputs = {k: v for k, v in inputs.items() if any(k in f.name_in() for f in functions)}
     lines = [
         f"/* Reference values for the generated functions of '{robot.name}', computed by Pinocchio",
-        " * (crba, nonLinearEffects, computeGeneralizedGravity, rnea, contact Jacobians, SVD GRF)",
+        " * (crba, nonLinearEffects, computeGeneralizedGravity, rnea, contact Jacobians, SVD GRF,",
+        " * computeRNEADerivatives, computeABADerivatives)",
         " * at a fixed state near standing; 12 significant digits. Generated; do not edit. */",
         "typedef int (*qd_fn)(const casadi_real**, casadi_real**, casadi_int*, casadi_real*, int);",
         "typedef struct { const char* name; qd_fn fn; int n_in, n_out; const double* in[4]; int in_len[4];",
@@ -164,16 +181,123 @@ def reference_header(robot: Robot, functions: list[ca.Function], work: dict[str,
     ]
     return "\n".join(lines) + "\n"
 
-def generate_checked(robot: Robot, out_dir: Path, precision: str = "double") -> list[Path]:
-    """``codegen.emit.generate`` plus ``<stem>_reference.h``: the C package that checks itself
-    against Pinocchio (``make check``)."""
+def reference_header_name(robot: Robot) -> str:
+    """File name of the reference values beside the generated C: ``<stem>_reference.h``."""
+    return f"{stem(robot)}_reference.h"
+
+
+def generate_checked(robot: Robot, out_dir: Path, precision: str = "double") -> GeneratedFiles:
+    """``codegen.emit.generate`` plus ``<stem>_reference.h`` (in ``extra``, under
+    ``reference_header_name``): the C package that checks itself against Pinocchio (``make check``)."""
     return generate(robot, out_dir, precision,
-                    extra_files=lambda functions, work: {f"{stem(robot)}_reference.h": reference_header(robot, functions, work)})
+                    extra_files=lambda functions, work: {reference_header_name(robot): reference_header(robot, functions, work)})
 
 
-def differing_files(robot: Robot, directory: Path) -> list[str]:
-    """Names of the files in ``directory`` that a fresh generation would change (or add)."""
+#: A C array of the reference header: ``static const double <name>[<n>] = {<values>};``
+_ARRAY = re.compile(r"static const double (\w+)\[(\d+)\] = \{([^}]*)\};")
+#: A row of the case table: ``{"<name>", ..., {<output arrays>}, {<nnz>}, <tol_scale>},``
+_CASE = re.compile(r'^  \{"(\w+)", .*\{([\w, ]*)\}, \{[\d, ]*\}, ([-+.\deE]+|inf|nan)\},$', re.M)
+
+
+@dataclass(frozen=True)
+class ReferenceHeader:
+    """A ``<stem>_reference.h`` split into what must be reproduced byte for byte (``skeleton``: the
+    text with every value replaced by a placeholder: names, sizes, the case table's layout) and the
+    values Pinocchio computed (``arrays`` by C name; ``tol_scale`` and output arrays per case), whose
+    last digits depend on the CPU and the BLAS kernel."""
+
+    skeleton: str
+    arrays: dict[str, np.ndarray]
+    case_outputs: dict[str, tuple[str, ...]]
+    tol_scale: dict[str, float]
+    rel_tol: float
+
+
+def parse_reference_header(text: str) -> ReferenceHeader:
+    arrays = {m.group(1): np.array([float(x) for x in m.group(3).split(",")]) for m in _ARRAY.finditer(text)}
+    cases = {m.group(1): tuple(x.strip() for x in m.group(2).split(",")) for m in _CASE.finditer(text)}
+    scales = {m.group(1): float(m.group(3)) for m in _CASE.finditer(text)}
+    skeleton = _ARRAY.sub(lambda m: f"static const double {m.group(1)}[{m.group(2)}] = {{...}};", text)
+    skeleton = re.sub(r", ([-+.\deE]+|inf|nan)\},$", ", ...},", skeleton, flags=re.M)
+    tol = re.search(r"#define QD_REL_TOL_DOUBLE (\S+)", text)
+    return ReferenceHeader(skeleton, arrays, cases, scales, float(tol.group(1)) if tol else float("nan"))
+
+
+def reference_differences(committed: str, fresh: str) -> list[str]:
+    """How the reference values of ``committed`` differ from ``fresh`` beyond their tolerance, one
+    line per value that moved (empty if they agree): the structure must be identical; each case's
+    outputs must agree within the tolerance ``check_qd.c`` applies to the generated code
+    (QD_REL_TOL_DOUBLE x tol_scale, relative to the case's largest output), the inputs within
+    QD_REL_TOL_DOUBLE of their own scale, and each tol_scale within REFERENCE_TOL_SCALE_REL_TOL.
+    Two machines' Pinocchio differ by round-off (~1e-15 relative), far inside these."""
+    a, b = parse_reference_header(committed), parse_reference_header(fresh)
+    if a.skeleton != b.skeleton:
+        old, new = a.skeleton.splitlines(), b.skeleton.splitlines()
+        line = next((i for i, (x, y) in enumerate(zip(old, new)) if x != y), min(len(old), len(new)))
+        return [f"the structure differs (not only values) from line {line + 1}"]
+    moved = [f"{k} has {len(b.arrays[k])} values in one and {len(a.arrays[k])} in the other"
+             for k in b.arrays if len(a.arrays[k]) != len(b.arrays[k])]
+    if moved:
+        return moved
+    in_case = {name for outs in b.case_outputs.values() for name in outs}
+    groups = [(case, outs, b.rel_tol * b.tol_scale[case]) for case, outs in b.case_outputs.items()]
+    groups += [(name, (name,), b.rel_tol) for name in b.arrays if name not in in_case]
+    for _case, outs, tol in groups:
+        scale = scale_of(np.concatenate([b.arrays[o] for o in outs]))
+        for o in outs:
+            diff = np.abs(a.arrays[o] - b.arrays[o]) / scale
+            diff[~(np.isfinite(a.arrays[o]) & np.isfinite(b.arrays[o]))] = np.inf
+            for i in np.flatnonzero(~(diff <= tol)):
+                moved.append(f"{o}[{i}] {a.arrays[o][i]:.12g} -> {b.arrays[o][i]:.12g} "
+                             f"(moved {diff[i]:.1e} of the case's scale {scale:.3g}; tolerance {tol:.1e})")
+    for case in b.tol_scale:
+        x, y = a.tol_scale[case], b.tol_scale[case]
+        if not within(relative_error(x, y), REFERENCE_TOL_SCALE_REL_TOL):
+            moved.append(f"tol_scale of {case} {x:.3g} -> {y:.3g}")
+    return moved
+
+
+@dataclass(frozen=True)
+class GenerationDiff:
+    """How a directory differs from a fresh generation: ``sources`` (files that must be byte for
+    byte equal: the C, the header, the Makefile; missing files count) and ``references`` (one line
+    per reference value beyond its tolerance, ``reference_differences``)."""
+
+    sources: list[str]
+    references: list[str]
+
+    def __bool__(self) -> bool:
+        return bool(self.sources or self.references)
+
+    def summary(self) -> str:
+        parts = []
+        if self.sources:
+            parts.append(f"source differs from a fresh generation: {', '.join(self.sources)}")
+        if self.references:
+            more = f"; ... ({len(self.references)} in all)" if len(self.references) > 5 else ""
+            shown = "; ".join(self.references[:5]) + more
+            parts.append(f"reference values differ beyond tolerance: {shown}")
+        return "; ".join(parts) or "up to date"
+
+
+def compare_generation(robot: Robot, directory: Path, precision: str = "double") -> GenerationDiff:
+    """Compare ``directory`` with a fresh generation at ``precision``: every file byte for byte,
+    except ``<stem>_reference.h`` whose values are compared numerically (``reference_differences``)."""
+    sources, references = [], []
     with tempfile.TemporaryDirectory() as tmp:
-        fresh = generate_checked(robot, Path(tmp))
-        return [p.name for p in fresh if not (Path(directory) / p.name).is_file()
-                or (Path(directory) / p.name).read_bytes() != p.read_bytes()]
+        for p in generate_checked(robot, Path(tmp), precision).all():
+            old = Path(directory) / p.name
+            if not old.is_file():
+                sources.append(p.name)
+            elif p.name == reference_header_name(robot):
+                references += [f"{p.name}: {m}" for m in reference_differences(old.read_text(), p.read_text())]
+            elif old.read_bytes() != p.read_bytes():
+                sources.append(p.name)
+    return GenerationDiff(sources, references)
+
+
+def differing_files(robot: Robot, directory: Path, precision: str = "double") -> list[str]:
+    """Names of the files in ``directory`` that a fresh generation would change (or add); the
+    reference header only if its values moved beyond their tolerance."""
+    diff = compare_generation(robot, directory, precision)
+    return diff.sources + sorted({m.split(":", 1)[0] for m in diff.references})

@@ -9,7 +9,6 @@ either side is an infinite error (``compare``): it fails, and is null in the JSO
 from __future__ import annotations
 
 import itertools
-import math
 import time
 from collections.abc import Callable, Iterator
 from dataclasses import asdict, dataclass, field
@@ -17,16 +16,18 @@ from dataclasses import asdict, dataclass, field
 import numpy as np
 import pinocchio as pin
 
+from quadruped_dyn.dynamics.derivatives import full_derivatives
 from quadruped_dyn.dynamics.grf import grf_solve, grf_solves
 from quadruped_dyn.dynamics.kinematics import robot_kinematics
 from quadruped_dyn.dynamics.newton_euler import full_dynamics
 from quadruped_dyn.dynamics.reduced import reduced_model
+from quadruped_dyn.files.json import json_safe
 from quadruped_dyn.math.compare import max_abs_error, relative_error, scale_of, within
 from quadruped_dyn.model.robot import Robot
 from quadruped_dyn.model.stance import GRF_MODELS, STANCE_SETS
 from quadruped_dyn.model.state import FullState, random_state, rotation
-from quadruped_dyn.references.pinocchio import PinocchioReference
-from quadruped_dyn.tolerances import COND_ERR_FACTOR, REL_TOL_TERMS
+from quadruped_dyn.references.pinocchio import PinocchioDerivatives, PinocchioReference
+from quadruped_dyn.tolerances import COND_ERR_FACTOR, REL_TOL_DERIVATIVES, REL_TOL_TERMS
 
 
 @dataclass
@@ -80,20 +81,6 @@ class CheckReport:
         lines.append(f"{self.robot}: {len(self.terms)} terms on {self.samples} random states (seed {self.seed}), "
                      f"symbolic build {self.build_seconds:.2f} s: {verdict}")
         return "\n".join(lines)
-
-
-def json_safe(x: object) -> object:
-    if isinstance(x, dict):
-        return {k: json_safe(v) for k, v in x.items()}
-    if isinstance(x, list):
-        return [json_safe(v) for v in x]
-    if isinstance(x, bool | np.bool_):
-        return bool(x)
-    if isinstance(x, float | np.floating):
-        return float(x) if math.isfinite(x) else None
-    if isinstance(x, np.integer):
-        return int(x)
-    return x
 
 
 def _comparisons(robot: Robot, ref: PinocchioReference, s: FullState) -> Iterator[tuple[str, object, object]]:
@@ -181,11 +168,23 @@ def _reduced_comparisons(
         def reference(qd_: np.ndarray, qdd_: np.ndarray, feet=feet, P=P, q_r=q_r) -> np.ndarray:
             return ref.reduced_inverse_dynamics(feet, P, q_r, qd_, qdd_, quat)
 
-        G = reference(zero, zero)  # id_r is affine in qdd and gravity-free differences give C_r, M_r
+        G = reference(zero, zero)  # id_r is affine in qdd: the gravity-free difference gives C_r
         yield f"id_r {stance}", m.id_r(q_r, qd, qdd, quat), reference(qd, qdd)
-        yield f"M_r {stance}", m.M_r(q_r, quat), np.column_stack([reference(zero, e) - G for e in np.eye(m.n)])
+        yield f"M_r {stance}", m.M_r(q_r, quat), ref.reduced_mass_matrix(feet, P, q_r, quat)
         yield f"C_r {stance}", m.C_r(q_r, qd, quat), reference(qd, zero) - G
         yield f"G_r {stance}", m.G_r(q_r, quat), G
+
+
+def _derivative_comparisons(robot: Robot, ref: PinocchioReference, s: FullState,
+                            rng: np.random.Generator) -> Iterator[tuple[str, object, object]]:
+    """did_full and dfd_full (dynamics/derivatives.py; d/dq along pinocchio.integrate) against
+    Pinocchio's analytical derivatives, computeRNEADerivatives and computeABADerivatives."""
+    d, pd = full_derivatives(robot), PinocchioDerivatives(ref)
+    for k, (ours, theirs) in enumerate(zip(d.did_full(s.q, s.v, s.a), pd.rnea_derivatives(s.q, s.v, s.a))):
+        yield f"did_full {('dtau_dq', 'dtau_dv', 'dtau_da')[k]}", ours, theirs
+    tau = rng.normal(scale=10.0, size=18)
+    for k, (ours, theirs) in enumerate(zip(d.dfd_full(s.q, s.v, tau), pd.aba_derivatives(s.q, s.v, tau))):
+        yield f"dfd_full {('da_dq', 'da_dv', 'da_dtau')[k]}", ours, theirs
 
 
 def run_check(robot: Robot, samples: int = 20, seed: int = 0,
@@ -193,7 +192,7 @@ def run_check(robot: Robot, samples: int = 20, seed: int = 0,
     ref = PinocchioReference(robot)
     rng = np.random.default_rng(seed)
     start = time.perf_counter()
-    full_dynamics(robot), robot_kinematics(robot), grf_solves(robot)  # built once per robot and process
+    full_dynamics(robot), robot_kinematics(robot), grf_solves(robot), full_derivatives(robot)  # once per robot and process
     for stance in REDUCED_STANCES:
         reduced_model(robot, stance)
     report = CheckReport(robot.name, samples, seed, build_seconds=time.perf_counter() - start)
@@ -201,9 +200,11 @@ def run_check(robot: Robot, samples: int = 20, seed: int = 0,
     report.grf = [GrfResult(st.name, m, st.rank(m)) for st in STANCE_SETS for m in GRF_MODELS]
     for n in range(samples):
         s = random_state(robot.lower, robot.upper, rng)
-        comparisons = itertools.chain(_comparisons(robot, ref, s), _reduced_comparisons(robot, ref, s.q[7:], rng))
+        comparisons = itertools.chain(_comparisons(robot, ref, s), _reduced_comparisons(robot, ref, s.q[7:], rng),
+                                      _derivative_comparisons(robot, ref, s, rng))
         for name, ours, theirs in comparisons:
-            term = terms.setdefault(name, TermResult(name))
+            tol = REL_TOL_DERIVATIVES if name.startswith(("did_full", "dfd_full")) else REL_TOL_TERMS
+            term = terms.setdefault(name, TermResult(name, tol=tol))
             term.add([np.asarray(x, dtype=float) for x in ours] if isinstance(ours, list) else ours, theirs)
         for result in report.grf:
             _grf_sample(robot, ref, s, result)

@@ -1,8 +1,9 @@
-"""The ``quadruped-dyn`` group: exit codes (0 success, 1 a check failed, 2 bad input), one-line errors
+"""The ``quadruped-dyn`` group: exit codes (0 success, 1 a check or a computation failed, 2 bad input), one-line errors
 and warnings, progress on stderr. Each command lives in its own module of this package."""
 
 from __future__ import annotations
 
+import os
 import shutil
 import sys
 import warnings
@@ -10,35 +11,77 @@ from typing import Any
 
 import click
 
-from quadruped_dyn.errors import BuildError, InputError, UrdfWarning
+from quadruped_dyn.errors import BuildError, InputError, NumericalError, UrdfWarning
+from quadruped_dyn.files.names import printable
 
 EXIT_CHECK_FAILED = 1
 EXIT_BAD_INPUT = 2
 
 
 def _warn_one_line(message: Warning | str, category: type[Warning], *args: object, **kwargs: object) -> None:
-    click.echo(f"warning: {message}", err=True)
+    click.echo(f"warning: {printable(message)}", err=True)
+
+
+def _error(message: object, code: int) -> None:
+    """One line on stderr (control characters escaped: names from input may carry terminal
+    escape sequences), then exit with ``code``."""
+    try:
+        click.echo(f"error: {printable(message)}", err=True)
+    except OSError:
+        pass
+    sys.exit(code)
+
+
+def _flush_stdout() -> None:
+    """Flush stdout now, so that a write failure (``> /dev/full``, a closed pipe) is one line
+    here and not a traceback at interpreter exit."""
+    try:
+        sys.stdout.flush()
+    except OSError as e:
+        devnull = os.open(os.devnull, os.O_WRONLY)  # the interpreter's final flush must not fail again
+        os.dup2(devnull, sys.stdout.fileno())
+        _error(f"cannot write to standard output ({e.strerror}); expected a writable output", EXIT_BAD_INPUT)
 
 
 class _Group(click.Group):
-    """Maps InputError and click's usage errors to exit code 2 and BuildError to 1, with a one-line
-    message and no traceback; prints UrdfWarnings as one line each."""
+    """Maps InputError, click's usage errors and failed reads or writes to exit code 2 and
+    BuildError and NumericalError to 1, with a one-line message and no traceback; prints
+    UrdfWarnings as one line each."""
 
     def invoke(self, ctx: click.Context) -> Any:
         try:
             with warnings.catch_warnings():
                 warnings.simplefilter("always", UrdfWarning)
                 warnings.showwarning = _warn_one_line
-                return super().invoke(ctx)
+                result = super().invoke(ctx)
+            _flush_stdout()
+            return result
         except InputError as e:
-            click.echo(f"error: {e}", err=True)
-            sys.exit(EXIT_BAD_INPUT)
+            _error(e, EXIT_BAD_INPUT)
         except click.UsageError as e:
-            click.echo(f"error: {e.format_message()}", err=True)
-            sys.exit(EXIT_BAD_INPUT)
-        except BuildError as e:
-            click.echo(f"error: {e}", err=True)
-            sys.exit(EXIT_CHECK_FAILED)
+            _error(e.format_message(), EXIT_BAD_INPUT)
+        except (BuildError, NumericalError) as e:
+            _error(e, EXIT_CHECK_FAILED)
+        except OSError as e:  # a write to stdout or a file that failed (full disk, closed pipe)
+            where = f" '{e.filename}'" if e.filename else " to standard output"
+            _flush_stdout_quietly()
+            _error(f"cannot write{where} ({e.strerror or e}); expected a writable output", EXIT_BAD_INPUT)
+        except SystemExit:
+            _flush_stdout()
+            raise
+
+
+def _flush_stdout_quietly() -> None:
+    try:
+        sys.stdout.flush()
+    except OSError:
+        os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
+
+
+def echo(text: object) -> None:
+    """One line of a command's output, control characters escaped (names and paths from input
+    may carry terminal escape sequences)."""
+    click.echo(printable(text))
 
 
 def require_tools(*tools: str) -> None:
@@ -47,28 +90,12 @@ def require_tools(*tools: str) -> None:
         raise InputError(f"{', '.join(missing)} not found; expected on PATH (Debian: apt-get install gcc g++)")
 
 
-class _ProgressLines:
-    """Progress as one stderr line per ~10 % (click's bar draws nothing when stderr is not a terminal)."""
-
-    def __init__(self, label: str, length: int) -> None:
-        self.label, self.length, self.done = label, length, 0
-
-    def __enter__(self) -> _ProgressLines:
-        return self
-
-    def __exit__(self, *exc: object) -> None:
-        return None
-
-    def update(self, n: int) -> None:
-        self.done += n
-        if self.done % max(1, self.length // 10) == 0 or self.done == self.length:
-            click.echo(f"{self.label}: {self.done}/{self.length}", err=True)
-
-
 def progress(label: str, length: int) -> Any:
-    if sys.stderr.isatty():
-        return click.progressbar(length=length, label=label, file=sys.stderr)
-    return _ProgressLines(label, length)
+    """A counted step on stderr (``quadruped_dyn.progress.Bar``: a live bar on a terminal,
+    periodic lines otherwise)."""
+    from quadruped_dyn.progress import Bar
+
+    return Bar(label, length)
 
 
 @click.group(cls=_Group)

@@ -19,16 +19,19 @@ from quadruped_dyn.model.robot import load_robot
 @click.option("--against", default=None, metavar="LIBS",
               help="Also compare M, C + G, G and foot Jacobians with other libraries, after diagnosing what each does "
                    "to the URDF: comma-separated subset of mujoco,idyntree (pip install 'quadruped_dyn[xlib]').")
-def check(robot: str, samples: int, seed: int, as_json: bool, against: str | None) -> None:
+@click.option("--foot-frames", default=None, metavar="FL,FR,BL,BR",
+              help="The foot frame of each leg (comma-separated, leg order FL, FR, BL, BR) instead of the chosen ones.")
+def check(robot: str, samples: int, seed: int, as_json: bool, against: str | None, foot_frames: str | None) -> None:
     """Check every symbolic term of ROBOT against Pinocchio on random states (exit 1 on failure)."""
-    from quadruped_dyn.checks.terms import json_safe, run_check
+    from quadruped_dyn.checks.terms import run_check
+    from quadruped_dyn.files.json import json_safe
 
     libraries: tuple[str, ...] = ()
     if against is not None:
         from quadruped_dyn.checks.cross_library import parse_libraries
 
         libraries = parse_libraries(against)
-    r = load_robot(robot)
+    r = load_robot(robot, foot_frames=foot_frames)
     with progress(f"checking {r.name}", samples) as bar:
         report = run_check(r, samples, seed, progress=lambda n: bar.update(1))
     data, text, passed = report.as_dict(), report.table(), report.passed

@@ -6,8 +6,9 @@ import sys
 
 import click
 
-from quadruped_dyn.cli.app import EXIT_CHECK_FAILED
+from quadruped_dyn.cli.app import EXIT_CHECK_FAILED, echo
 from quadruped_dyn.errors import InputError
+from quadruped_dyn.files.names import printable
 from quadruped_dyn.files.paths import writable_dir
 from quadruped_dyn.model.robot import load_robot
 
@@ -18,18 +19,30 @@ from quadruped_dyn.model.robot import load_robot
 @click.option("--precision", type=click.Choice(["double", "float"]), default="double", show_default=True,
               help="Default casadi_real of the generated source (the Makefile builds both).")
 @click.option("--check", is_flag=True, help="Compare OUT with a fresh generation instead of writing (exit 1 if it differs).")
-def codegen(robot: str, out_dir: str, precision: str, check: bool) -> None:
+@click.option("--json", "as_json", is_flag=True,
+              help="Print a JSON summary instead of the file list: every function's caller memory, and its code size "
+                   "and worst-case stack on Cortex-M7 and Cortex-M4F at -Os and -O2 (cross builds: minutes, "
+                   "cached; docs/embedded.md).")
+def codegen(robot: str, out_dir: str, precision: str, check: bool, as_json: bool) -> None:
     """Generate standalone C for ROBOT's M, C, G, id and GRF solves, with a Makefile and a check program."""
     from pathlib import Path
 
-    from quadruped_dyn.checks.c_reference import differing_files, generate_checked
+    from quadruped_dyn.checks.c_reference import compare_generation, generate_checked
 
     r = load_robot(robot)
     if check:
         if not Path(out_dir).is_dir():
-            raise InputError(f"--out '{out_dir}' is not a directory; expected the directory to compare (--check)")
-        stale = differing_files(r, Path(out_dir))
-        click.echo(f"{out_dir}: " + (f"differs from a fresh generation: {', '.join(stale)}" if stale else "up to date"))
-        sys.exit(EXIT_CHECK_FAILED if stale else 0)
-    for path in generate_checked(r, writable_dir(out_dir, f"--out '{out_dir}'"), precision):
-        click.echo(f"wrote {path}")
+            raise InputError(f"--out '{printable(out_dir)}' is not a directory; expected the directory to compare (--check)")
+        diff = compare_generation(r, Path(out_dir), precision)  # the precision asked for, not always double
+        echo(f"{out_dir} ({precision}): {diff.summary()}")
+        sys.exit(EXIT_CHECK_FAILED if diff else 0)
+    paths = generate_checked(r, writable_dir(out_dir, f"--out '{out_dir}'"), precision).all()
+    if as_json:
+        import json
+
+        from quadruped_dyn.checks.embedded import embedded_summary
+
+        echo(json.dumps(embedded_summary(r, Path(out_dir)), indent=1))
+        return
+    for path in paths:
+        echo(f"wrote {path}")

@@ -7,7 +7,7 @@ import sys
 
 import click
 
-from quadruped_dyn.cli.app import EXIT_CHECK_FAILED
+from quadruped_dyn.cli.app import EXIT_CHECK_FAILED, echo
 from quadruped_dyn.model.robot import ROBOT_NAMES, load_robot
 from quadruped_dyn.model.robot_summary import robot_info
 
@@ -22,18 +22,20 @@ def robots() -> None:
 @click.command()
 @click.argument("robot")
 @click.option("--json", "as_json", is_flag=True, help="Print JSON instead of a table.")
-def info(robot: str, as_json: bool) -> None:
+@click.option("--foot-frames", default=None, metavar="FL,FR,BL,BR",
+              help="The foot frame of each leg (comma-separated, leg order FL, FR, BL, BR) instead of the chosen ones.")
+def info(robot: str, as_json: bool, foot_frames: str | None) -> None:
     """Legs, joints, link lengths, masses and standing foot positions of ROBOT (name or URDF path)."""
-    data = robot_info(load_robot(robot))
+    data = robot_info(load_robot(robot, foot_frames=foot_frames))
     if as_json:
         click.echo(json.dumps(data, indent=2))
         return
-    click.echo(f"{data['name']}  ({data['urdf']})")
-    click.echo(f"total mass {data['total_mass_kg']:.3f} kg, trunk {data['trunk_mass_kg']:.3f} kg")
-    click.echo(f"{'leg':<4}{'joints (HAA, HFE, KFE)':<48}{'thigh m':>8}{'shank m':>8}{'mass kg':>8}  foot at standing (b, m)")
+    echo(f"{data['name']}  ({data['urdf']})")
+    echo(f"total mass {data['total_mass_kg']:.3f} kg, trunk {data['trunk_mass_kg']:.3f} kg")
+    echo(f"{'leg':<4}{'joints (HAA, HFE, KFE)':<48}{'thigh m':>8}{'shank m':>8}{'mass kg':>8}  foot at standing (b, m)")
     for leg in data["legs"]:
         foot = " ".join(f"{x:+.3f}" for x in leg["foot_position_standing_m"])
-        click.echo(
+        echo(
             f"{leg['label']:<4}{', '.join(leg['joints']):<48}{leg['thigh_length_m']:>8.3f}"
             f"{leg['shank_length_m']:>8.3f}{sum(leg['link_masses_kg']):>8.3f}  {foot}"
         )

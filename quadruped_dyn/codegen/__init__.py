@@ -1,2 +1,21 @@
 """Standalone C from the CasADi graphs: emission, the verified build cache, the compiled
 libraries loaded back into Python, and the C templates (``c/``)."""
+
+from quadruped_dyn.exports import lazy_exports
+
+_MODULES: dict[str, tuple[str, ...]] = {
+    "cache": ("HASH_SUFFIX", "PARTIAL_MARK", "cache_dir", "file_sha256", "verified", "cached_build"),
+    "emit": (
+        "PREFIX", "CODEGEN_FUNCTIONS", "REDUCED_STANCE_SETS", "REDUCED_NAMES", "reduced_symbol", "reduced_functions",
+        "SIGNAL_DOCS", "codegen_functions", "reduced_parts", "header_doc", "work_sizes", "silence_unused_parameters",
+        "TEMPLATES", "stem", "casadi_c", "entry_point", "GeneratedFiles", "generate",
+    ),
+    "emit_derivatives": ("DERIVATIVE_NAMES", "derivative_functions", "derivative_source"),
+    "library": (
+        "C_FLAGS", "COMPILE_JOBS", "run_tool", "compiler_version", "CompiledLibrary", "compile_sources", "PACKAGE",
+        "generator_sources", "generation_key", "compiled_library", "load_external", "RETURN_CODES", "CompiledFunction",
+        "work_sizes_of",
+    ),
+    "reduced_library": ("CompiledReducedDynamics",),
+}
+__all__, __getattr__, __dir__ = lazy_exports(__name__, _MODULES)

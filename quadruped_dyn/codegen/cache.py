@@ -34,6 +34,8 @@ PARTIAL_MARK = ".partial-"  # in the name of a file being written; never trusted
 def cache_dir() -> Path:
     """$QUADRUPED_DYN_CACHE, else $XDG_CACHE_HOME/quadruped_dyn, else ~/.cache/quadruped_dyn."""
     if "QUADRUPED_DYN_CACHE" in os.environ:
+        if not os.environ["QUADRUPED_DYN_CACHE"].strip():  # Path("") would be the current directory
+            raise InputError("QUADRUPED_DYN_CACHE is set but empty; expected a directory (or unset it for the default)")
         return Path(os.environ["QUADRUPED_DYN_CACHE"])
     return Path(os.environ.get("XDG_CACHE_HOME", Path.home() / ".cache")) / "quadruped_dyn"
 

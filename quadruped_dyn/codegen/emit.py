@@ -1,4 +1,4 @@
-"""Standalone C code generation (SPEC section 7).
+"""Standalone C code generation (docs/formulation.md §11).
 
 ``CODEGEN_FUNCTIONS`` lists what is generated, one line per function. Each becomes a C
 function ``qd_<name>(const casadi_real** arg, casadi_real** res, casadi_int* iw,
@@ -17,14 +17,17 @@ import os
 import re
 import tempfile
 from collections.abc import Callable
+from dataclasses import dataclass
 from pathlib import Path
 
 import casadi as ca
 
+from quadruped_dyn.codegen.work_memory import memory_doc
 from quadruped_dyn.dynamics.grf import grf_solve
 from quadruped_dyn.dynamics.newton_euler import full_dynamics
 from quadruped_dyn.dynamics.reduced_projection import reduced_projection
 from quadruped_dyn.errors import InputError
+from quadruped_dyn.files.safe_write import output_path, write_text
 from quadruped_dyn.model.robot import Robot
 from quadruped_dyn.model.stance import STANCE_SETS, StanceSet, stance_set
 
@@ -44,7 +47,7 @@ CODEGEN_FUNCTIONS: dict[str, Callable[[Robot], ca.Function]] = {
     **{f"grf_{s.name.replace('+', '_')}": _grf_paper(s) for s in STANCE_SETS},
 }
 
-#: Stance sets with a reduced model (SPEC section 5): four feet, the four triples, the six pairs.
+#: Stance sets with a reduced model (docs/formulation.md §5-§6): four feet, the four triples, the six pairs.
 REDUCED_STANCE_SETS: tuple[StanceSet, ...] = tuple(st for st in STANCE_SETS if len(st.feet) >= 2)
 
 #: Reduced-model functions generated for every stance set in REDUCED_STANCE_SETS, as
@@ -112,6 +115,14 @@ SIGNAL_DOCS = {
     "tau_r": "12 joint torques [N m] with the paper's GRF model of the stance set; for two feet a 13th entry: "
     "the trunk moment about the foot-to-foot line (from foot 2 to foot 1) that the feet cannot produce [N m], "
     "0 for a motion the robot can make (the roll is unactuated)",
+    # derivatives (qd_<robot>_d.c, docs/derivatives.md): d/dq along pinocchio.integrate, 18 columns
+    "tau_full": "generalized force (18): trunk wrench (force [N], moment [N m], trunk frame), 12 joint torques [N m]",
+    "dtau_dq": "d rnea / dq (18x18): columns along the tangent dq = (dv_b, dw_b, dq_joints), body-frame increment",
+    "dtau_dv": "d rnea / dv (18x18)",
+    "dtau_da": "d rnea / da = M (18x18)",
+    "da_dq": "d a / dq (18x18, dense), a = M^-1 (tau_full - C - G); tangent columns as dtau_dq",
+    "da_dv": "d a / dv (18x18, dense)",
+    "da_dtau": "d a / d tau_full = M^-1 (18x18, dense)",
 }
 
 
@@ -143,6 +154,8 @@ def _note(name: str) -> str:
         stance = stance_set(name[4:].replace("_", "+"))
         return f"  [{stance.kind}, rank {stance.rank('paper')}]"
     reduced = reduced_parts(name)
+    if name == "dfd_full":
+        return "  [returns QD_NONFINITE / QD_SINGULAR]"
     return f"  [{reduced[1].kind}, returns QD_NONFINITE / QD_SINGULAR]" if reduced else ""
 
 
@@ -184,6 +197,16 @@ def header_doc(robot: Robot, functions: list[ca.Function], work: dict[str, tuple
         " * qdd_r is not written then. A stance leg stretched straight is not singular here: the reduced",
         " * model never inverts a leg's Jacobian (measured on the paper robot: cond(M_r) 1e3 -> 3e4).",
         " *",
+        " * Derivatives (qd_<robot>_d.c; quadruped_dyn/dynamics/derivatives.py, docs/derivatives.md). d/dq is",
+        " * along pinocchio.integrate(q, dq): dq (18) = (dv_b, dw_b, dq_joints), a body-frame (local) increment",
+        " * of the trunk pose (p -> p + R dv_b, R -> R Exp([dw_b]x)), as Pinocchio's analytical derivatives;",
+        " * no column is a derivative w.r.t. a quaternion entry, and the first three (position) are zero.",
+        " *   did_full(q, v, a)               d rnea/dq, d rnea/dv, d rnea/da = M (rnea: no foot forces);",
+        " *   dfd_full_parts(q, v)            M (dense) and C + G;",
+        " *   dfd_full(q, v, tau_full)        d a/dq, d a/dv, d a/dtau = M^-1 of a = M^-1 (tau_full - C - G):",
+        " *                                   Cholesky of M on the stack, -M^-1 d rnea/dx at a. Returns",
+        " *                                   QD_SINGULAR (2) if M is not positive definite to working precision.",
+        " *",
         " * Signals:",
         *[f" *   {name:<9}{SIGNAL_DOCS[name]}" for name in signals],
         " *",
@@ -194,6 +217,7 @@ def header_doc(robot: Robot, functions: list[ca.Function], work: dict[str, tuple
         outs = ", ".join(f"{f.name_out(i)}[{_shape(f.sparsity_out(i))}]" for i in range(f.n_out()))
         iw, w = work[f.name()]
         lines.append(f" *   {f.name()}({ins}) -> ({outs});  iw {iw}, w {w}{_note(f.name()[len(PREFIX):])}")
+    lines += memory_doc(functions, work)  # caller memory per function (docs/embedded.md)
     lines.append(" */")
     return "\n".join(lines) + "\n"
 
@@ -207,31 +231,63 @@ def work_sizes(casadi_header: str) -> dict[str, tuple[int, int]]:
 _UNUSED = "(void)arg; (void)res; (void)iw; (void)w; (void)mem;"
 
 
-def _silence_unused_parameters(c_source: str) -> str:
+def silence_unused_parameters(c_source: str) -> str:
     """CasADi's evaluation functions ignore some of their five parameters and its
     release hooks ignore ``mem``: cast them to void so -Wextra -Werror passes."""
     c_source = re.sub(r"(static int casadi_f\d+\([^)]*\) \{\n)", lambda m: m.group(1) + f"  {_UNUSED}\n", c_source)
     return re.sub(r"(void \w+_release\(int mem\) \{\n)", lambda m: m.group(1) + "  (void)mem;\n", c_source)
 
 
+#: Elementary functions the generated code calls, each routed through a wrapper in casadi_real's precision.
+_WRAPPED_MATH = ("sin", "cos", "tan", "sqrt", "fabs")
+_PRECISION_MATH = """
+/* quadruped_dyn: the elementary functions in casadi_real's precision. A float build
+ * (-Dcasadi_real=float) calls sinf, cosf, ... instead of promoting to double, so it does no
+ * double arithmetic (none on a single-precision FPU: -Wdouble-promotion clean); a double build
+ * calls sin, cos, ... exactly as before. */
+#define QD_REAL_IS_FLOAT (sizeof(casadi_real) == sizeof(float))
+""" + "".join(f"static inline casadi_real qd_{f}(casadi_real x) {{ return QD_REAL_IS_FLOAT ? (casadi_real){f}f((float)x) "
+              f": (casadi_real){f}((double)x); }}\n" for f in _WRAPPED_MATH)
+_MATH_CALL = re.compile(rf"(?<![\w.])({'|'.join(_WRAPPED_MATH)})\(")
+
+
+def _precision_math(c_source: str) -> str:
+    """Route the elementary functions through ``_PRECISION_MATH`` and write CasADi's double
+    literals in products and quotients as integers ((2.*a) -> (2*a), (1./a) -> (1/a): the same
+    value in double, no promotion in float)."""
+    unknown = set(re.findall(r"(?<![\w.])(atan2?|asin|acos|exp|log|pow|tanh|sinh|cosh|floor|ceil|fmin|fmax|erf)\(",
+                             c_source))
+    if unknown:
+        raise AssertionError(f"elementary functions {sorted(unknown)} have no precision wrapper in emit._WRAPPED_MATH")
+    used = bool(_MATH_CALL.search(c_source))
+    c_source = _MATH_CALL.sub(r"qd_\1(", c_source)  # before the wrappers go in: they call the real ones
+    c_source = c_source.replace("#include <math.h>\n", "#include <math.h>\n" + _PRECISION_MATH, 1) if used else c_source
+    c_source = re.sub(r"\((\d+)\.\*", r"(\1*", c_source)
+    return re.sub(r"\((\d+)\./", r"(\1/", c_source)
+
+
 TEMPLATES = Path(__file__).resolve().parent / "c"
+#: start-up and memory map of the check program on QEMU's MPS2 Cortex-M boards (the Makefile's cross builds)
+CORTEX_M_FILES = ("qd_cortex_m_startup.c", "qd_cortex_m.ld")
+#: the thread-safety check program (`make check-threads`)
+THREADS_FILE = "qd_threads.c"
 
 
 def stem(robot: Robot) -> str:
     return f"qd_{re.sub(r'[^A-Za-z0-9_]', '_', robot.name)}"
 
 
-def _casadi_c(file_stem: str, functions: list[ca.Function], precision: str) -> tuple[str, str]:
+def casadi_c(file_stem: str, functions: list[ca.Function], precision: str) -> tuple[str, str]:
     """(C source, CasADi's header) of ``functions`` generated into ``file_stem``.c."""
     cg = ca.CodeGenerator(f"{file_stem}.c", {"with_header": True, "casadi_real": precision})
     for f in functions:
         cg.add(f)
     with tempfile.TemporaryDirectory() as tmp:
         cg.generate(tmp + os.sep)
-        return _silence_unused_parameters((Path(tmp) / f"{file_stem}.c").read_text()), (Path(tmp) / f"{file_stem}.h").read_text()
+        return silence_unused_parameters((Path(tmp) / f"{file_stem}.c").read_text()), (Path(tmp) / f"{file_stem}.h").read_text()
 
 
-def _entry_point(name: str) -> str:
+def entry_point(name: str) -> str:
     return (rf"(CASADI_SYMBOL_EXPORT int {name}\(const casadi_real\*\* arg, casadi_real\*\* res, casadi_int\* iw, "
             rf"casadi_real\* w, int mem\)\{{\n)  return (casadi_f\d+)\(arg, res, iw, w, mem\);\n")
 
@@ -245,7 +301,7 @@ def _checked_reduced_c(c_text: str, casadi_header: str, functions: list[ca.Funct
     work = work_sizes(casadi_header)
     raw = {}  # entry point -> CasADi's static evaluation function
     for f in functions:
-        found = re.search(_entry_point(f.name()), c_text)
+        found = re.search(entry_point(f.name()), c_text)
         if not found:
             raise AssertionError(f"entry point of {f.name()} not found in CasADi's output")
         raw[f.name()] = found.group(2)
@@ -258,51 +314,86 @@ def _checked_reduced_c(c_text: str, casadi_header: str, functions: list[ca.Funct
         else:
             nnz = ", ".join(str(f.nnz_out(i)) for i in range(f.n_out()))
             body = rf"\1  return qd_finite(\2(arg, res, iw, w, mem), res, {f.n_out()}, (const casadi_int[]){{{nnz}}});\n"
-        c_text, count = re.subn(_entry_point(f.name()), body, c_text)
+        c_text, count = re.subn(entry_point(f.name()), body, c_text)
         if count != 1:
             raise AssertionError(f"entry point of {f.name()} not found in CasADi's output")
     return c_text
 
 
+@dataclass(frozen=True)
+class GeneratedFiles:
+    """The files ``generate`` wrote, by what they are (callers never rely on an order)."""
+
+    source: Path  # qd_<robot>.c: full-coordinate terms and GRF solves
+    header: Path  # qd_<robot>.h: one header for all, documentation first
+    extra: dict[str, Path]  # file name -> path of each of ``extra_files``' files (e.g. the reference values)
+    check_program: Path  # check_qd.c
+    makefile: Path
+    reduced: tuple[Path, ...]  # qd_<robot>_r_<feet>.c: the reduced model of each stance set of 2-4 feet
+    derivatives: tuple[Path, ...] = ()  # qd_<robot>_d.c: derivatives of the full dynamics (codegen/emit_derivatives.py)
+    embedded: tuple[Path, ...] = ()  # Cortex-M start-up and linker script, qd_threads.c (docs/embedded.md)
+
+    @property
+    def c_sources(self) -> list[Path]:
+        """The generated C files of the library (not the check program)."""
+        return [self.source, *self.reduced, *self.derivatives]
+
+    def all(self) -> list[Path]:
+        """Every file, in the order they were written."""
+        return [self.source, self.header, *self.extra.values(), self.check_program, *self.embedded, self.makefile,
+                *self.reduced, *self.derivatives]
+
+
 def generate(robot: Robot, out_dir: Path, precision: str = "double",
              extra_files: Callable[[list[ca.Function], dict[str, tuple[int, int]]], dict[str, str]] | None = None,
-             ) -> list[Path]:
+             ) -> GeneratedFiles:
     """Write into ``out_dir``: qd_<robot>.c (full-coordinate terms and GRF solves), qd_<robot>.h
     (one header for all), the files ``extra_files(functions, work sizes)`` returns (e.g. the
-    reference values of ``checks.c_reference``), check_qd.c, the Makefile, and qd_<robot>_r_<feet>.c (the reduced
-    model of each stance set of 2-4 feet). Returns the paths in that order."""
+    reference values of ``checks.c_reference``), check_qd.c, the Cortex-M start-up files and qd_threads.c
+    (docs/embedded.md), the Makefile, qd_<robot>_r_<feet>.c (the reduced model of each stance set
+    of 2-4 feet) and qd_<robot>_d.c (derivatives); returns them by role (``GeneratedFiles``)."""
     if precision not in ("double", "float"):
         raise InputError(f"precision '{precision}' is not supported; expected 'double' or 'float'")
     out_dir = Path(out_dir)
     out_dir.mkdir(parents=True, exist_ok=True)
     name = stem(robot)
     full = codegen_functions(robot)
-    c_full, casadi_header = _casadi_c(name, full, precision)
+    c_full, casadi_header = casadi_c(name, full, precision)
     sources = {f"{name}.c": c_full}
     functions = list(full)
     for stance in REDUCED_STANCE_SETS:
         reduced = reduced_functions(robot, stance)
         file_stem = f"{name}_r_{stance.name.replace('+', '_')}"
-        c_text, h_text = _casadi_c(file_stem, reduced, precision)
+        c_text, h_text = casadi_c(file_stem, reduced, precision)
         sources[f"{file_stem}.c"] = _checked_reduced_c(c_text, h_text, reduced)
         casadi_header += h_text
         functions += reduced
+    from quadruped_dyn.codegen.emit_derivatives import derivative_functions, derivative_source
+
+    derivatives = derivative_functions(robot)  # qd_<robot>_d.c: derivatives of the full dynamics
+    sources[f"{name}_d.c"], h_text = derivative_source(f"{name}_d", derivatives, precision)
+    casadi_header += h_text
+    functions += derivatives
     work = work_sizes(casadi_header)
+    extra = extra_files(functions, work) if extra_files else {}
+    sources = {file_name: _precision_math(text) for file_name, text in sources.items()}
     files = {
         f"{name}.c": c_full,
         f"{name}.h": header_doc(robot, functions, work) + casadi_header,
-        **(extra_files(functions, work) if extra_files else {}),
+        **extra,
         "check_qd.c": (TEMPLATES / "check_qd.c").read_text(),
+        **{f: (TEMPLATES / f).read_text() for f in (*CORTEX_M_FILES, THREADS_FILE)},  # docs/embedded.md
         "Makefile": (TEMPLATES / "Makefile").read_text().replace("ROBOT ?= paper", f"ROBOT ?= {name[3:]}"),
         **sources,
     }
-    paths = []
     for file_name, text in files.items():
-        (out_dir / file_name).write_text(text)
-        paths.append(out_dir / file_name)
-    return paths
+        write_text(output_path(out_dir, file_name), text)  # under out_dir, never through a link
+    return GeneratedFiles(source=out_dir / f"{name}.c", header=out_dir / f"{name}.h",
+                          extra={f: out_dir / f for f in extra}, check_program=out_dir / "check_qd.c",
+                          makefile=out_dir / "Makefile",
+                          reduced=tuple(out_dir / f for f in sources if f not in (f"{name}.c", f"{name}_d.c")),
+                          derivatives=(out_dir / f"{name}_d.c",),
+                          embedded=tuple(out_dir / f for f in (*CORTEX_M_FILES, THREADS_FILE)))
 
-
-# ----------------------------------------------------------------------------- reference values
 
 

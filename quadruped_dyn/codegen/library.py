@@ -24,7 +24,7 @@ import numpy as np
 
 from quadruped_dyn.codegen.cache import cached_build
 from quadruped_dyn.codegen.emit import PREFIX, TEMPLATES, generate, stem
-from quadruped_dyn.errors import BuildError, InputError
+from quadruped_dyn.errors import BuildError, InputError, NumericalError
 from quadruped_dyn.model.robot import Robot
 
 C_FLAGS = ("-std=c99", "-pedantic", "-Wall", "-Wextra", "-Werror", "-O3", "-fPIC")
@@ -44,7 +44,8 @@ def run_tool(cmd: list[str], cwd: str | Path | None = None) -> str:
     return proc.stdout
 
 
-def _compiler_version(cc: str) -> str:
+def compiler_version(cc: str) -> str:
+    """The first line of ``cc --version`` (part of every build cache key)."""
     return run_tool([cc, "--version"]).splitlines()[0]
 
 
@@ -95,12 +96,17 @@ def generator_sources() -> list[Path]:
 
 
 def generation_key(robot: Robot, precision: str, flags: tuple[str, ...], cc: str) -> str:
-    """Hash of everything the compiled library depends on: the URDF's bytes, the generator's
-    source (``generator_sources``), CasADi's version, precision, flags and compiler."""
-    h = hashlib.sha256(robot.name.encode() + Path(robot.urdf).read_bytes())
+    """Hash of everything the compiled library depends on: the bytes ``robot``'s model was parsed
+    from (``Robot.urdf_sha256``, recorded at load: not the file as it is now, which may have been
+    edited since) and the foot frames chosen, the generator's source (``generator_sources``),
+    CasADi's version, precision, flags and compiler."""
+    if not robot.urdf_sha256:
+        raise InputError(f"robot '{robot.name}' records no hash of its URDF; expected a Robot from load_robot")
+    feet = ",".join(leg.foot_frame for leg in robot.legs)
+    h = hashlib.sha256(f"{robot.name}\n{robot.urdf_sha256}\n{feet}\n".encode())
     for path in generator_sources():
         h.update(str(path.relative_to(PACKAGE)).encode() + path.read_bytes())
-    h.update(f"{ca.CasadiMeta.version()} {precision} {' '.join(flags)} {_compiler_version(cc)}".encode())
+    h.update(f"{ca.CasadiMeta.version()} {precision} {' '.join(flags)} {compiler_version(cc)}".encode())
     return h.hexdigest()[:16]
 
 
@@ -113,10 +119,9 @@ def compiled_library(robot: Robot, precision: str = "double", cc: str = "gcc") -
 
     def build(building: Path) -> None:
         with tempfile.TemporaryDirectory() as tmp:
-            paths = generate(robot, Path(tmp), precision)
-            sources = [p for p in paths if p.suffix == ".c" and p.name.startswith(stem(robot))]
-            compile_sources(sources, flags, building, cc)
-            for p in (*sources, paths[1]):  # for reading; the library is what is verified
+            files = generate(robot, Path(tmp), precision)
+            compile_sources(files.c_sources, flags, building, cc)
+            for p in (*files.c_sources, files.header):  # for reading; the library is what is verified
                 shutil.copy(p, building.parent / p.name)
 
     lib = cached_build(key, f"lib{stem(robot)}.so", build)
@@ -130,6 +135,7 @@ def load_external(library: CompiledLibrary, name: str) -> ca.Function:
 
 
 #: Return codes of the generated reduced functions (c/qd_reduced_solve.c) and what they mean.
+QD_NONFINITE, QD_SINGULAR = 1, 2
 RETURN_CODES = {
     1: "an output is not finite (coincident or collinear stance feet, the trunk pitched 90 deg with two "
     "stance feet, a zero quaternion, or a non-finite input); expected a stance the model can hold",
@@ -165,6 +171,18 @@ class CompiledFunction:
         self._iw = (ctypes.c_longlong * max(1, iw))()
         self._w = (ctypes.c_double * max(1, w))()
 
+    def raw(self, *args: np.ndarray) -> list[np.ndarray]:
+        """The hot path of a control loop: inputs (float64 arrays of the right sizes, not checked)
+        copied into the preallocated buffers, the C function called, its output buffers returned
+        (the nonzeros, column-major; overwritten by the next call). A non-zero return code
+        raises InputError as ``__call__`` does."""
+        for buf, x in zip(self._in, args):
+            buf[:] = x
+        flag = self._fn(self._arg, self._res, self._iw, self._w, 0)
+        if flag != 0:
+            raise InputError(f"{self.name}: {RETURN_CODES.get(flag, f'error code {flag}')}")
+        return self._out
+
     def __call__(self, *args: np.ndarray) -> list[np.ndarray]:
         if len(args) != len(self._in):
             raise InputError(f"{self.name} takes inputs {self.names_in}; got {len(args)} arrays")
@@ -174,8 +192,9 @@ class CompiledFunction:
                 raise InputError(f"{name} has {x.size} entries; {self.name} expects {buf.size}")
             buf[:] = x
         flag = self._fn(self._arg, self._res, self._iw, self._w, 0)
-        if flag != 0:
-            raise InputError(f"{self.name}: {RETURN_CODES.get(flag, f'error code {flag}')}")
+        if flag != 0:  # QD_SINGULAR is numerical; QD_NONFINITE cannot tell a bad input from a singular stance
+            error = NumericalError if flag == QD_SINGULAR else InputError
+            raise error(f"{self.name}: {RETURN_CODES.get(flag, f'error code {flag}')}")
         outs = []
         for buf, shape, index in zip(self._out, self._shapes, self._index):
             dense = np.zeros(shape[0] * shape[1])

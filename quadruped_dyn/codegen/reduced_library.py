@@ -4,7 +4,8 @@
 ``compiled``) the robot's shared library and calls its ``qd_id_r_<feet>`` / ``qd_fd_r_<feet>``
 through ctypes. Same inputs and conventions as ``reduced.ReducedModel``: q_r, qd_r, qdd_r,
 tau_ext (n,) with n = 12, or 13 for two stance feet (the 13th is the trunk roll), and quat the
-trunk orientation (x, y, z, w). A singular configuration raises InputError (the C return code).
+trunk orientation (x, y, z, w). M_r singular to working precision raises NumericalError, a non-finite
+output InputError (the C return codes: QD_SINGULAR, QD_NONFINITE).
 """
 
 from __future__ import annotations
@@ -30,7 +31,7 @@ class CompiledReducedDynamics:
     def _call(self, name: str, stance: StanceSet | str, inputs: dict[str, np.ndarray]) -> np.ndarray:
         """Checked call: the stance (a StanceSet or a name like 'FL+BR'), shapes, finiteness and a
         non-zero quaternion here; singular configurations by the C function's return code
-        (CompiledFunction raises InputError)."""
+        (CompiledFunction raises NumericalError or InputError)."""
         stance = stance_set(stance) if isinstance(stance, str) else stance
         k = len(stance.feet)
         if k not in (2, 3, 4):
@@ -51,5 +52,7 @@ class CompiledReducedDynamics:
     def fd_r(
         self, stance: StanceSet | str, q_r: np.ndarray, qd_r: np.ndarray, tau_ext: np.ndarray, quat: np.ndarray
     ) -> np.ndarray:
-        """qdd_r (n,) = M_r^-1 (tau_ext - C_r - G_r); InputError where M_r is singular."""
+        """qdd_r (n,) = M_r^-1 (tau_ext - C_r - G_r), the generated C's solve (c/qd_reduced_solve.c: the
+        definition of ``dynamics.reduced.solve_forward_dynamics``, LU with a pivot check, in C);
+        NumericalError where M_r is singular to working precision."""
         return self._call("fd_r", stance, {"q_r": q_r, "qd_r": qd_r, "tau_ext": tau_ext, "quat": quat})

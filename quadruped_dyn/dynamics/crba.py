@@ -23,9 +23,8 @@ from __future__ import annotations
 import casadi as ca
 import numpy as np
 
-from quadruped_dyn.math.rigid import LinkInertia
-from quadruped_dyn.math.rigid import skew as skew_np
-from quadruped_dyn.math.spatial import axis_rotation, dm, skew
+from quadruped_dyn.math.rigid import LinkInertia, axis_rotation, skew
+from quadruped_dyn.math.spatial import dm
 from quadruped_dyn.model.leg import Leg
 from quadruped_dyn.model.leg_frames import axis_aligned
 from quadruped_dyn.model.robot import Robot
@@ -68,7 +67,7 @@ def _rotate_symmetric(axis: np.ndarray, q: ca.SX, I: ca.SX) -> ca.SX:
 def _link(link: LinkInertia) -> Inertia:
     """(m, h, I_o) of a link in its joint frame (constants)."""
     c = np.asarray(link.com)
-    return link.mass, ca.SX(dm(link.mass * c)), ca.SX(dm(link.inertia - link.mass * skew_np(c) @ skew_np(c)))
+    return link.mass, ca.SX(dm(link.mass * c)), ca.SX(dm(link.inertia - link.mass * skew(c) @ skew(c)))
 
 
 def _to_parent(Y: Inertia, axis: np.ndarray, q: ca.SX, P: np.ndarray) -> Inertia:

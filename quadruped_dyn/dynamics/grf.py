@@ -1,4 +1,4 @@
-"""Ground reaction forces from the six body equations (SPEC section 4, paper section 4).
+"""Ground reaction forces from the six body equations (docs/formulation.md §3-§4, paper section 4).
 
 The body equations (paper eq. (3)-(4)) with the stance feet's forces f_i (trunk frame) as
 unknowns read  sum_i [I; [r_i]x] f_i = w_req,  where w_req (6,) = (force; moment about the
@@ -29,6 +29,7 @@ A+ = (A + U N^T)^-1 - N U^T, where A + U N^T is invertible; no solve on a singul
 
 from __future__ import annotations
 
+import numbers
 from dataclasses import dataclass
 from functools import cache
 
@@ -38,9 +39,10 @@ import numpy as np
 from quadruped_dyn.dynamics.guarded import guard_fields, guarded_call
 from quadruped_dyn.dynamics.kinematics import foot_position
 from quadruped_dyn.dynamics.newton_euler import inverse_dynamics
-from quadruped_dyn.errors import InputError
+from quadruped_dyn.errors import InputError, NumericalError
 from quadruped_dyn.math.linalg import least_squares, min_norm
-from quadruped_dyn.math.spatial import dm, quat_to_rotation, skew
+from quadruped_dyn.math.rigid import skew
+from quadruped_dyn.math.spatial import dm, quat_to_rotation
 from quadruped_dyn.model.robot import Robot
 from quadruped_dyn.model.stance import GRF_MODELS, STANCE_SETS, StanceSet, stance_set
 from quadruped_dyn.model.state import GRAVITY_W, NQ_FULL, NV_FULL, rotation
@@ -127,20 +129,28 @@ class GrfSolve:
     def __post_init__(self) -> None:
         guard_fields(self)  # numeric calls check shapes, finiteness, quaternions (dynamics/guarded.py)
 
-    def solve(self, q: np.ndarray, v: np.ndarray, a: np.ndarray, mu: float | None = None) -> GrfSolution:
-        """Numeric solve with checked inputs. Raises InputError where the stance feet are
-        coincident or collinear, so that A has less than its structural rank (the symbolic
-        solve, and the generated C, would return meaningless forces there)."""
-        if mu is not None:
-            check_friction_coefficient(mu)
+    def check_regular(self, q: np.ndarray) -> None:
+        """NumericalError where the body equations have less than their structural rank at ``q``
+        (coincident or collinear stance feet): there the symbolic solve, the generated C and
+        everything built on them (the reduced model) give finite nonsense."""
         (A,) = guarded_call(self.system, q)
         sv = np.linalg.svd(np.atleast_2d(A), compute_uv=False) if A.size else np.zeros(0)
-        numeric_rank = int(np.sum(sv > RANK_RTOL * sv[0])) if sv.size else 0
+        numeric_rank = int(np.sum(sv > RANK_RTOL * sv[0])) if sv.size and sv[0] > 0 else 0
         if numeric_rank < self.rank:
-            raise InputError(
+            smallest = sv[self.rank - 1] / sv[0] if sv.size >= self.rank and sv[0] > 0 else 0.0
+            raise NumericalError(
                 f"stance {self.stance.name}: the body equations have rank {numeric_rank} at this configuration, "
-                f"{self.rank} expected; the stance feet are coincident or collinear"
+                f"{self.rank} expected (smallest singular value {smallest:.1e} of the largest); the stance feet are "
+                "coincident or collinear"
             )
+
+    def solve(self, q: np.ndarray, v: np.ndarray, a: np.ndarray, mu: float | None = None) -> GrfSolution:
+        """Numeric solve with checked inputs (InputError). Raises NumericalError where the stance
+        feet are coincident or collinear, so that A has less than its structural rank (the symbolic
+        solve, and the generated C, would return meaningless forces there)."""
+        if mu is not None:
+            mu = check_friction_coefficient(mu)
+        self.check_regular(q)
         lam, f, residual, tau = guarded_call(self.function, q, v, a)
         feet = list(self.stance.feet)
         f_body = f.reshape(4, 3)[feet]
@@ -197,7 +207,11 @@ def grf_solves(robot: Robot) -> dict[tuple[str, str], GrfSolve]:
 
 
 def grf_solve(robot: Robot, stance: str | StanceSet, model: str = "paper") -> GrfSolve:
+    if not isinstance(robot, Robot):
+        raise InputError(f"robot is {type(robot).__name__}; expected a Robot (quadruped_dyn.load_robot)")
     s = stance if isinstance(stance, StanceSet) else stance_set(stance)
+    if not isinstance(model, str):
+        raise InputError(f"model is {type(model).__name__}; expected one of {GRF_MODELS}")
     s.selection(model)  # validates the model name
     return grf_solves(robot)[(s.name, model)]
 
@@ -208,17 +222,27 @@ def grf_solve(robot: Robot, stance: str | StanceSet, model: str = "paper") -> Gr
 def friction_cone(f_world: np.ndarray, mu: float) -> tuple[np.ndarray, np.ndarray]:
     """Per stance foot (k, 3 world-frame forces; flat ground, normal z_w): feasible flags
     (|f_t| <= mu f_z and f_z >= 0) and margins mu f_z - |f_t| (N; negative = slipping)."""
-    check_friction_coefficient(mu)
+    mu = check_friction_coefficient(mu)
     f = np.atleast_2d(np.asarray(f_world, dtype=float))
     margin = mu * f[:, 2] - np.hypot(f[:, 0], f[:, 1])
     return (margin >= 0) & (f[:, 2] >= 0), margin
 
 
-def check_friction_coefficient(mu: object) -> None:
-    """InputError unless mu is a finite number >= 0."""
+#: Larger than any friction coefficient (rubber on concrete ~1, adhesive contacts a few): beyond
+#: it mu f_z overflows no sooner, but the margins stop meaning anything; mu = 1e308 gave inf.
+MAX_FRICTION_COEFFICIENT = 1e3
+
+
+def check_friction_coefficient(mu: object) -> float:
+    """mu as a float, or an InputError unless it is a real number (not a string, not a bool) in
+    [0, MAX_FRICTION_COEFFICIENT]."""
+    if isinstance(mu, (str, bytes, bool, np.bool_)) or not isinstance(mu, (numbers.Real, np.ndarray)):
+        raise InputError(f"mu = {mu!r} is {type(mu).__name__}; expected a friction coefficient, a number >= 0")
     try:
         value = float(mu)  # type: ignore[arg-type]
     except (TypeError, ValueError) as e:
         raise InputError(f"mu = {mu!r} is not a number; expected a friction coefficient >= 0") from e
-    if not (np.isfinite(value) and value >= 0.0):
-        raise InputError(f"mu = {value} is not a friction coefficient; expected a finite number >= 0")
+    if not (np.isfinite(value) and 0.0 <= value <= MAX_FRICTION_COEFFICIENT):
+        raise InputError(f"mu = {value} is not a friction coefficient; expected a finite number in "
+                         f"[0, {MAX_FRICTION_COEFFICIENT:g}]")
+    return value

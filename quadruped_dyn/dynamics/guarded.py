@@ -7,7 +7,10 @@ refuses a non-finite result with a message saying what is singular.
 
 ``GuardedFunction`` is a CasADi Function whose numeric calls go through the same checks (the
 public API: ``full_dynamics(robot).M_full(q)`` and the like); called on SX/MX it is the plain
-Function, so it builds graphs and generates C as before.
+Function, so it builds graphs and generates C as before. A GuardedFunction may carry a
+``condition``: a check of the (checked) numeric inputs run before every numeric evaluation, for
+configurations where the outputs would be finite nonsense rather than NaN (a GRF system that has
+lost rank, an M_r with cond ~1e18): it raises an InputError saying what is singular.
 """
 
 from __future__ import annotations
@@ -58,9 +61,16 @@ def check_outputs(f: ca.Function, outs: list[np.ndarray]) -> None:
         )
 
 
+def _check_condition(f: ca.Function, values: list[np.ndarray]) -> None:
+    condition = getattr(f, "condition", None)
+    if condition is not None:
+        condition(values)
+
+
 def guarded_call(f: ca.Function, *args: object) -> list[np.ndarray]:
     """Evaluate ``f`` on numeric inputs; returns its outputs as dense arrays (vectors 1-D)."""
     values = check_inputs(f, args)
+    _check_condition(f, values)
     outs = [np.asarray(o.full()) for o in f.call([ca.DM(v) for v in values])]
     outs = [o.ravel() if o.shape[1] == 1 else o for o in outs]
     check_outputs(f, outs)
@@ -85,9 +95,18 @@ class GuardedFunction(ca.Function):
                 raise InputError(f"{self.name()} takes inputs {self.name_in()}; {missing} missing")
             outs = guarded_call(self, *[kwargs[n] for n in self.name_in()])
             return {self.name_out(i): ca.DM(o) for i, o in enumerate(outs)}
-        out = super().__call__(*check_inputs(self, args))
+        values = check_inputs(self, args)
+        _check_condition(self, values)
+        out = super().__call__(*values)
         check_outputs(self, [np.asarray(o) for o in (out if isinstance(out, tuple) else (out,))])
         return out
+
+
+def with_condition(f: ca.Function, condition: Any) -> GuardedFunction:
+    """``f`` as a GuardedFunction whose numeric calls first run ``condition(checked inputs)``."""
+    guarded = GuardedFunction(f)
+    guarded.condition = condition  # type: ignore[attr-defined]
+    return guarded
 
 
 def guard_fields(obj: object) -> None:

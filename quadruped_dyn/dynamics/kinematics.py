@@ -15,7 +15,8 @@ from functools import cache
 
 import casadi as ca
 
-from quadruped_dyn.math.spatial import axis_rotation, dm, placement_rt
+from quadruped_dyn.math.rigid import axis_rotation
+from quadruped_dyn.math.spatial import dm, placement_rt
 from quadruped_dyn.model.leg import Leg
 from quadruped_dyn.model.leg_frames import axis_aligned
 from quadruped_dyn.model.robot import Robot
@@ -76,3 +77,18 @@ def robot_kinematics(robot: Robot) -> tuple[LegKinematics, ...]:
 # ----------------------------------------------------------------------------- trunk pose from the feet
 
 
+
+
+@cache
+def robot_feet(robot: Robot) -> ca.Function:
+    """All four feet in one call (the simulations' hot path: one CasADi call instead of one per
+    leg): q (12,) -> r (3, 4), the foot positions (trunk frame, m), and J (3, 12), each leg's
+    ``foot_jacobian`` side by side. The same expressions as ``leg_kinematics``."""
+    q = ca.SX.sym("q", 12)
+    rs, Js = [], []
+    for i, leg in enumerate(robot.legs):
+        qi = q[3 * i : 3 * i + 3]
+        r = foot_position(leg, qi)
+        rs.append(r)
+        Js.append(ca.jacobian(r, qi))
+    return ca.Function("feet", [q], [ca.horzcat(*rs), ca.horzcat(*Js)], ["q"], ["r", "J"])

@@ -1,4 +1,4 @@
-"""The paper's recursive Newton-Euler (SPEC section 3), symbolic, in full coordinates.
+"""The paper's recursive Newton-Euler (docs/formulation.md §2-§3), symbolic, in full coordinates.
 
 Per leg (Craig's recursion, quantities in each link's own frame):
   outward  omega_i, omegadot_i, vdot_i (classical acceleration of the frame origin) from the
@@ -35,8 +35,8 @@ import casadi as ca
 from quadruped_dyn.dynamics.crba import generalized_gravity, mass_matrix_crba
 from quadruped_dyn.dynamics.guarded import guard_fields
 from quadruped_dyn.dynamics.kinematics import foot_position, joint_frames
+from quadruped_dyn.math.rigid import axis_rotation
 from quadruped_dyn.math.spatial import (
-    axis_rotation,
     dm,
     force_cross,
     force_cross_bar,

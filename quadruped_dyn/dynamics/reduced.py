@@ -1,4 +1,4 @@
-"""Reduced coordinates and forward dynamics (SPEC section 5, paper section 5), symbolic.
+"""Reduced coordinates and forward dynamics (docs/formulation.md §5-§6.1, paper section 5), symbolic.
 
 Coordinates q_r: the 12 joint angles (three or four stance feet: static walk, standing),
 plus the trunk roll phi for two stance feet (trot, pace): 13. The trunk motion is not a
@@ -28,20 +28,23 @@ two feet, the roll-rate row; it must agree with the stance (``pose`` reconstruct
 from __future__ import annotations
 
 import time
+from collections.abc import Callable
 from dataclasses import dataclass
 from functools import cache
 
 import casadi as ca
 import numpy as np
 
-from quadruped_dyn.dynamics.grf import grf_expressions
-from quadruped_dyn.dynamics.guarded import guard_fields, guarded_call
+from quadruped_dyn.dynamics.grf import GrfSolve, grf_expressions, grf_solve
+from quadruped_dyn.dynamics.guarded import guard_fields, guarded_call, with_condition
 from quadruped_dyn.dynamics.kinematics import foot_position
-from quadruped_dyn.errors import InputError
+from quadruped_dyn.errors import InputError, NumericalError
 from quadruped_dyn.math.linalg import least_squares
-from quadruped_dyn.math.spatial import quat_to_rotation, skew
+from quadruped_dyn.math.rigid import skew
+from quadruped_dyn.math.spatial import quat_to_rotation
 from quadruped_dyn.model.robot import Robot
 from quadruped_dyn.model.stance import StanceSet, stance_set
+from quadruped_dyn.model.state import check_array
 
 REDUCED_KINDS = {4: "stand", 3: "static walk", 2: "trot / pace"}
 
@@ -51,7 +54,8 @@ MAX_COND_M_R = 1e12
 
 def roll_rate_row(R: ca.SX) -> ca.SX:
     """e_phi with phid = e_phi . omega_b for R = Rz(psi) Ry(theta) Rx(phi), written with R's
-    entries (cos theta > 0): tan(theta) sin(phi) = -R20 R21 / (R21^2 + R22^2), etc."""
+    entries (cos theta > 0): tan(theta) sin(phi) = -R20 R21 / (R21^2 + R22^2), etc.
+    ``references.pinocchio.roll_rate_row`` is the reference's own, independent derivation."""
     c2 = R[2, 1] ** 2 + R[2, 2] ** 2
     return ca.vertcat(1, -R[2, 0] * R[2, 1] / c2, -R[2, 0] * R[2, 2] / c2)
 
@@ -127,25 +131,66 @@ class ReducedModel:
     G_r: ca.Function  # q_r, quat -> (n,)
     fd_r: ca.Function  # q_r, qd_r, tau_ext, quat -> qdd_r (n,)
     build_seconds: float
+    grf: GrfSolve | None = None  # the stance set's GRF solve: its rank is checked before numeric calls
 
     def __post_init__(self) -> None:
         guard_fields(self)  # numeric calls check shapes, finiteness, quaternions (dynamics/guarded.py)
+        # finite nonsense is not an answer: every numeric call first checks the GRF system's rank
+        # (collinear or coincident stance feet), fd_r also M_r's condition number
+        for name in ("maps", "id_r", "M_r", "M_r_ad", "C_r", "G_r"):
+            f = getattr(self, name)
+            object.__setattr__(self, name, with_condition(f, self._regular_at(f)))
+        object.__setattr__(self, "fd_r", with_condition(self.fd_r, self._solvable_at(self.fd_r)))
+
+    def _regular_at(self, f: ca.Function) -> Callable[[list[np.ndarray]], None]:
+        i_q, i_quat = f.name_in().index("q_r"), f.name_in().index("quat")
+
+        def check(values: list[np.ndarray]) -> None:
+            if self.grf is not None:
+                self.grf.check_regular(np.concatenate([np.zeros(3), values[i_quat], values[i_q][:12]]))
+
+        return check
+
+    def _solvable_at(self, f: ca.Function) -> Callable[[list[np.ndarray]], None]:
+        regular = self._regular_at(f)
+        i_q, i_quat = f.name_in().index("q_r"), f.name_in().index("quat")
+
+        def check(values: list[np.ndarray]) -> None:
+            regular(values)
+            (M,) = guarded_call(self.M_r, values[i_q], values[i_quat])
+            solve_forward_dynamics(self.stance, M, np.zeros(self.n))  # NumericalError where M_r is singular
+
+        return check
 
     def forward_dynamics(self, q_r: np.ndarray, qd_r: np.ndarray, tau_ext: np.ndarray,
                          quat: np.ndarray) -> tuple[np.ndarray, float]:
-        """(qdd_r, cond(M_r)) with checked inputs; InputError where M_r is numerically singular."""
+        """(qdd_r, cond(M_r)) by ``solve_forward_dynamics`` from this graph's M_r, C_r and G_r, with
+        checked inputs (InputError); NumericalError where M_r is numerically singular."""
         (M,) = guarded_call(self.M_r, q_r, quat)
-        cond = float(np.linalg.cond(M))
-        if not cond < MAX_COND_M_R:
-            raise InputError(f"M_r of {self.stance.name} has condition number {cond:.1e} here; the reduced "
-                             "model is singular (e.g. collinear stance feet, or two feet with the trunk pitched 90 deg)")
-        (qdd,) = guarded_call(self.fd_r, q_r, qd_r, tau_ext, quat)
-        return qdd, cond
+        (C,), (G,) = guarded_call(self.C_r, q_r, qd_r, quat), guarded_call(self.G_r, q_r, quat)
+        return solve_forward_dynamics(self.stance, M, check_array("tau_ext", tau_ext, (self.n,)) - C - G)
+
+
+def solve_forward_dynamics(stance: StanceSet, M_r: np.ndarray, rhs: np.ndarray) -> tuple[np.ndarray, float]:
+    """The reduced forward dynamics (paper eq. (5)), the one numeric definition: qdd_r = M_r^-1 rhs
+    with rhs = tau_ext - C_r - G_r, by LU, and cond(M_r); NumericalError where cond(M_r) is not below
+    MAX_COND_M_R. (The generated C's fd_r does the same solve in C, c/qd_reduced_solve.c.)"""
+    cond = float(np.linalg.cond(M_r))
+    if not cond < MAX_COND_M_R:
+        raise NumericalError(f"M_r of {stance.name} has condition number {cond:.1e} here; the reduced model is "
+                             "singular (e.g. collinear stance feet, or two feet with the trunk pitched 90 deg)")
+    return np.linalg.solve(M_r, rhs), cond
+
+
+def reduced_model(robot: Robot, stance_name: str) -> ReducedModel:
+    """Build the reduced model for a stance set of two, three or four feet (once per robot)."""
+    if not isinstance(robot, Robot):
+        raise InputError(f"robot is {type(robot).__name__}; expected a Robot (quadruped_dyn.load_robot)")
+    return _reduced_model(robot, stance_set(stance_name).name)  # checked before the cache hashes it
 
 
 @cache
-def reduced_model(robot: Robot, stance_name: str) -> ReducedModel:
-    """Build the reduced model for a stance set of two, three or four feet (once per robot)."""
+def _reduced_model(robot: Robot, stance_name: str) -> ReducedModel:
     stance = stance_set(stance_name)
     k = len(stance.feet)
     if k not in REDUCED_KINDS:
@@ -178,4 +223,5 @@ def reduced_model(robot: Robot, stance_name: str) -> ReducedModel:
         fd_r=ca.Function(f"fd_r_{name}", [q, qd, tau_ext, quat], [least_squares(M, tau_ext - C - G)],
                          ["q_r", "qd_r", "tau_ext", "quat"], ["qdd_r"], opts),
         build_seconds=time.perf_counter() - start,
+        grf=grf_solve(robot, stance, "paper"),
     )

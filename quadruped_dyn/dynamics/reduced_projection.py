@@ -1,4 +1,4 @@
-"""The reduced terms as projections of the full ones: the forms generated as C (SPEC sections 5, 7).
+"""The reduced terms as projections of the full ones: the forms generated as C (docs/formulation.md §6.2, §11).
 
 ``reduced`` follows the paper's recipe (id_r through the maps and the GRF solve; M_r column by
 column, Walker & Orin): that is the reference. The same quantities, written so that the work is
@@ -30,7 +30,8 @@ from quadruped_dyn.dynamics.crba import mass_matrix_crba
 from quadruped_dyn.dynamics.kinematics import foot_position
 from quadruped_dyn.dynamics.newton_euler import inverse_dynamics
 from quadruped_dyn.dynamics.reduced import roll_rate_row, roll_rate_row_dot
-from quadruped_dyn.math.spatial import dm, quat_to_rotation, skew
+from quadruped_dyn.math.rigid import skew
+from quadruped_dyn.math.spatial import dm, quat_to_rotation
 from quadruped_dyn.model.leg import LEG_LABELS
 from quadruped_dyn.model.robot import Robot
 from quadruped_dyn.model.stance import StanceSet

@@ -1,4 +1,4 @@
-"""Gait plans: which feet stand when, where the feet go, where the trunk goes (SPEC section 6).
+"""Gait plans: which feet stand when, where the feet go, where the trunk goes (docs/formulation.md §9.1).
 
 The experiment flows plan (this module) -> IK reference (``reference``) -> forward dynamics
 (``simulate``, ``rigid_contact``) -> comparison and report (``validation``).

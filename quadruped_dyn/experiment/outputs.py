@@ -4,37 +4,22 @@
 from __future__ import annotations
 
 import csv
-import json
-import math
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
-from quadruped_dyn.experiment.paper_experiment import BR_HFE, DEPARTURE_PCT, SIGNALS, Experiment, departure, joint_names
+from quadruped_dyn.experiment.paper_experiment import DEPARTURE_PCT, SIGNALS, Experiment, departure, joint_names
+from quadruped_dyn.files.safe_write import output_path, save_figure, text_writer
+from quadruped_dyn.model.leg import BR_HFE
 
 
 def output_paths(out_dir: Path, robot: str, gait: str) -> dict[str, Path]:
+    """The run's files, each a plain file name in ``out_dir`` (``files.safe_write.output_path``)."""
     stem = f"{robot}_{gait}"
-    return {"json": out_dir / f"{stem}_validation.json", "csv": out_dir / f"{stem}_timeseries.csv",
-            "plot": out_dir / f"{stem}_BR_HFE.png", "physics_plot": out_dir / f"{stem}_physics_check.png"}
-
-
-def _json_safe(x: Any) -> Any:
-    """NaN and inf are not JSON: they become None (and never appear as numbers)."""
-    if isinstance(x, dict):
-        return {k: _json_safe(v) for k, v in x.items()}
-    if isinstance(x, (list, tuple)):
-        return [_json_safe(v) for v in x]
-    if isinstance(x, (float, np.floating)):
-        return float(x) if math.isfinite(x) else None
-    if isinstance(x, np.integer):
-        return int(x)
-    return x
-
-
-def write_json(path: Path, data: dict[str, Any]) -> None:
-    path.write_text(json.dumps(_json_safe(data), indent=2, allow_nan=False))
+    names = {"json": f"{stem}_validation.json", "csv": f"{stem}_timeseries.csv", "plot": f"{stem}_BR_HFE.png",
+             "physics_plot": f"{stem}_physics_check.png"}
+    return {k: output_path(out_dir, name) for k, name in names.items()}
 
 
 def write_csv(path: Path, exp: Experiment) -> None:
@@ -43,7 +28,7 @@ def write_csv(path: Path, exp: Experiment) -> None:
     names = joint_names(exp.plan.robot)
     m = min(len(run.t), len(ref["t"]))
     header = ["t_s"] + [f"{n}_{s}_{w}" for n in names for s in SIGNALS for w in ("ik", "sim")]
-    with path.open("w", newline="") as f:
+    with text_writer(path) as f:
         w = csv.writer(f)
         w.writerow(header)
         for k in range(m):
@@ -84,7 +69,7 @@ def plot_br_hfe(path: Path, exp: Experiment) -> None:
     axes[0].legend(fontsize=8)
     axes[-1].set_xlabel("time (s)")
     fig.tight_layout()
-    fig.savefig(path, dpi=110)
+    save_figure(fig, path, dpi=110)
     plt.close(fig)
 
 
@@ -116,5 +101,43 @@ def plot_physics_check(path: Path, exp: Experiment) -> None:
     ax.grid(alpha=0.3, which="both")
     ax.legend(fontsize=7)
     fig.tight_layout()
-    fig.savefig(path, dpi=110)
+    save_figure(fig, path, dpi=110)
     plt.close(fig)
+
+
+def summary_text(data: dict[str, Any], names: list[str], written: list[Path]) -> str:
+    """The ``validate`` command's text summary of a validation JSON (``paper_experiment.report``'s
+    dict): percentage errors per joint, instability and error budget, static stability, runs that
+    left IK, the physics check, and the files ``written``."""
+    lines = [f"{data['gait']}, {data['robot']}: horizon {data['horizon_s']:g} s; {data['integrator']}",
+             "% error = max|sim - IK| / max|IK| x 100, reduced forward dynamics, 'paper' run (n/a: IK signal is zero)",
+             f"  {'':<6}" + " ".join(f"{n:>8}" for n in names)]
+    for s in SIGNALS:
+        cells = [data["max_pct_err"][n][s] for n in names]
+        lines.append(f"  {s:<6}" + " ".join(f"{'n/a':>8}" if c is None else f"{c:8.1e}" for c in cells))
+    inst = data["instability"]
+    rate = inst["growth_rate_per_s"]
+    lines.append(f"  instability: one ulp grows to {inst['one_ulp_grows_to_rad']:.1e} rad"
+                 + (f", growth rate {rate:.1f} /s" if rate is not None else ""))
+    for s, b in inst["error_budget"].items():
+        lines.append(f"    {s:<4} total {_pct(b['total_pct'])} %, amplified round-off {_pct(b['roundoff_pct'])} %, "
+                     f"truncation {_pct(b['truncation_pct'])} %")
+    st = data["static_stability"]
+    margin, at = st["min_com_margin_m"], st["min_com_margin_at_s"]
+    lines.append(f"  smallest f_z {st['min_fz_N']:.2f} N (at {st['min_fz_at_s']:.3f} s, weight {st['weight_N']:.1f} N)"
+                 + ("" if margin is None else f"; smallest CoM margin {margin * 100:.2f} cm (at {at:.3f} s)"))
+    for name, run in data["runs"].items():
+        if run["stopped_at_s"] is not None or run["departs_1pct_at_s"] is not None:
+            lines.append(f"  run {name}: 1 % off IK at {run['departs_1pct_at_s']} s, stopped (fell) at {run['stopped_at_s']} s")
+    for name, pc in data.get("physics_check", {}).items():
+        if isinstance(pc, dict):
+            rr = pc["rigid_vs_reduced"]
+            ik = pc["rigid_vs_ik"]
+            lines.append(f"  physics check, {name}: rigid-contact vs reduced max {rr['max_joint_angle_diff_rad']:.1e} rad, "
+                         f"1 % at {rr['time_to_1pct_s']} s; rigid vs IK max {ik['max_joint_angle_diff_rad']:.1e} rad")
+    lines.append("  wrote " + ", ".join(str(p) for p in written))
+    return "\n".join(lines)
+
+
+def _pct(x: float | None) -> str:
+    return "n/a" if x is None else f"{x:.1e}"

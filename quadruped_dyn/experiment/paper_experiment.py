@@ -1,4 +1,4 @@
-"""The paper's validation experiment, compared and reported (SPEC section 6, paper Figs. 5-7).
+"""The paper's validation experiment, compared and reported (docs/formulation.md §9-§10, paper Figs. 5-7).
 
 Plan (``gait``) -> IK reference (``reference``) -> id_r -> tau(t) -> reduced forward dynamics
 (``simulate``) -> compared with the IK reference, per joint:
@@ -36,9 +36,11 @@ from quadruped_dyn.dynamics.reduced import reduced_model
 from quadruped_dyn.experiment.gait import Gait, Plan, gait_plan, support_margin
 from quadruped_dyn.experiment.rigid_contact import simulate_rigid
 from quadruped_dyn.experiment.simulate import IDENTITY_QUAT, RTOL, IkTorques, ReducedDynamics, Run, TorqueLaw, simulate_reduced
+from quadruped_dyn.experiment.torque_table import IkTorqueTable
 from quadruped_dyn.model.leg import JOINT_ROLES
 from quadruped_dyn.model.robot import Robot
 from quadruped_dyn.model.stance import StanceSet
+from quadruped_dyn.model.state import GRAVITY_W
 
 #: A reference signal whose largest |value| is below this fraction of the largest joint's is
 #: treated as identically zero (IK round-off, ~1e-16 rad/s, would give absurd percentages).
@@ -56,8 +58,12 @@ STABILITY_DT = 5e-3
 #: The departure threshold, % of the reference's largest |joint angle|.
 DEPARTURE_PCT = 1.0
 
+#: A comparison needs at least this many samples: the first (t = 0) agrees with IK by
+#: construction (every run starts from the IK state), so a run that stopped on its first step
+#: compared one sample and would report 0 % error.
+MIN_COMPARED_SAMPLES = 2
+
 SIGNALS = ("q", "qd", "qdd")
-BR_HFE = 3 * 3 + 1
 
 
 @dataclass
@@ -78,9 +84,10 @@ def joint_names(robot: Robot) -> list[str]:
 
 def percent_errors(sim: np.ndarray, ref: np.ndarray) -> list[float | None]:
     """Per joint: max_t |sim - ref| / max_t |ref| x 100 over the rows both have; None for a
-    reference below ZERO_SIGNAL of the largest joint's, or for a run that produced nothing."""
+    reference below ZERO_SIGNAL of the largest joint's, or over fewer than MIN_COMPARED_SAMPLES
+    rows (a run that stopped on its first step: no comparison, not 0 %)."""
     m = min(len(sim), len(ref))
-    if m == 0:
+    if m < MIN_COMPARED_SAMPLES:
         return [None] * ref.shape[1]
     scale = np.abs(ref[:m]).max(axis=0)
     err = np.abs(sim[:m] - ref[:m]).max(axis=0)
@@ -146,7 +153,7 @@ def static_stability(plan: Plan, ik: IkTorques, horizon: float, dt: float = STAB
             if margin < min_margin:
                 min_margin, at_margin = margin, float(t)
     return {
-        "min_fz_N": min_fz, "min_fz_at_s": at_fz, "weight_N": robot.total_mass * 9.81,
+        "min_fz_N": min_fz, "min_fz_at_s": at_fz, "weight_N": float(robot.total_mass * -GRAVITY_W[2]),
         "min_com_margin_m": None if min_margin == np.inf else float(min_margin),
         "min_com_margin_at_s": None if min_margin == np.inf else at_margin,
     }
@@ -162,7 +169,7 @@ def run_experiment(robot: Robot, gait: Gait, dynamics: ReducedDynamics, horizon:
     """Every run ``validate`` reports (see the module docstring); ``progress`` gets the
     simulated seconds of each finished stretch."""
     plan = gait_plan(robot, gait)
-    ik = IkTorques(plan, dynamics)
+    ik = IkTorqueTable(plan, dynamics)  # the runs' reference torques; the compared reference stays exact
     done = [0.0]
 
     def tick(t: float) -> None:  # per-run progress -> total seconds simulated
@@ -191,8 +198,9 @@ def run_experiment(robot: Robot, gait: Gait, dynamics: ReducedDynamics, horizon:
             if law.name != "ik":
                 exp.runs[law.name] = reduced(law)
             exp.rigid[law.name] = simulate_rigid(plan, ik, law, horizon, dt, integrator, progress=tick)
-    grid = exp.runs["paper"].t if integrator == "rk4" else np.arange(int(np.floor(horizon / dt + 1e-9)) + 1) * dt
-    refs = [ik(float(t), plan.stance(float(t)))[0] for t in grid]
+    # the planned grid, also when the 'paper' run stopped early (its own times would shrink the reference)
+    grid = np.arange(int(np.floor(horizon / dt + 1e-9)) + 1) * dt
+    refs = [ik.exact(float(t), plan.stance(float(t)))[0] for t in grid]
     exp.reference = {"t": grid, "q": np.array([r.q_r for r in refs]), "qd": np.array([r.qd_r for r in refs]),
                      "qdd": np.array([r.qdd_r for r in refs])}
     return exp
@@ -218,13 +226,17 @@ def report(exp: Experiment, integrator: str, dt: float, backend: str, stability:
     budget = {}
     for s in SIGNALS:
         r = ref[s][:, :12]
+        m = min(len(twin.t), len(paper.t), len(r))  # runs that stopped early have fewer samples
         budget[s] = {"total_pct": _worst(errors[s]),
-                     "roundoff_pct": _worst(percent_errors(getattr(twin, s)[:, :12] - getattr(paper, s)[:, :12] + r, r)),
+                     "roundoff_pct": _worst(percent_errors(getattr(twin, s)[:m, :12] - getattr(paper, s)[:m, :12] + r[:m],
+                                                           r[:m])),
                      "truncation_pct": _worst(_refined_difference(refined, paper, s, r))}
     method = (f"DOP853 (scipy), rtol = atol = {RTOL:g}, sampled every {dt:g} s" if integrator == "dop853"
               else f"classical RK4, fixed step {dt:g} s")
     out: dict[str, Any] = {
         "robot": plan.robot.name, "gait": plan.gait.name, "horizon_s": horizon, "backend": backend,
+        "compared_samples": compared_samples(exp), "compared_until_s": float(ref["t"][compared_samples(exp) - 1])
+        if compared_samples(exp) else None,
         "integrator": method + "; restarted at every stance switch; state projected onto the stance closure after "
                       "every step",
         "max_pct_err": {n: {s: errors[s][j] for s in SIGNALS} for j, n in enumerate(names)},
@@ -240,12 +252,19 @@ def report(exp: Experiment, integrator: str, dt: float, backend: str, stability:
     return out
 
 
+def compared_samples(exp: Experiment) -> int:
+    """Samples over which the 'paper' run is compared with IK (fewer than MIN_COMPARED_SAMPLES:
+    no result)."""
+    return min(len(exp.runs["paper"].t), len(exp.reference["t"]))
+
+
 def _refined_difference(refined: Run, run: Run, signal: str, ref: np.ndarray) -> list[float | None]:
     """% difference between the refined run and the run, on the run's samples (an RK4 run at
     dt / 2 has twice the samples: every second one)."""
     step = max(1, round((len(refined.t) - 1) / max(len(run.t) - 1, 1)))
     a = getattr(refined, signal)[::step, :12]
-    return percent_errors(a - getattr(run, signal)[: len(a), :12] + ref[: len(a)], ref[: len(a)])
+    m = min(len(a), len(run.t), len(ref))  # runs that stopped early have fewer samples
+    return percent_errors(a[:m] - getattr(run, signal)[:m, :12] + ref[:m], ref[:m])
 
 
 def physics_check(exp: Experiment, scale: float) -> dict[str, Any]:

@@ -1,4 +1,4 @@
-"""The IK reference of a gait plan: joint angles, rates and accelerations (SPEC section 6).
+"""The IK reference of a gait plan: joint angles, rates and accelerations (docs/formulation.md §9.2).
 
 The trunk follows ``Plan.trunk`` with R = I, so each foot's position relative to the trunk,
 in the trunk frame, is r = P - p, with rate Pd - pd and classical acceleration Pdd - pdd. Leg
@@ -10,13 +10,14 @@ Then qd = J^-1 rd and qdd = J^-1 (rdd - Jdot qd).
 from __future__ import annotations
 
 from dataclasses import dataclass
+from functools import cache
 
 import numpy as np
 
 from quadruped_dyn.dynamics.kinematics import robot_kinematics
 from quadruped_dyn.experiment.gait import Plan, gait_posture
 from quadruped_dyn.experiment.ik import analytic_ik, numeric_ik
-from quadruped_dyn.model.paper_robot import dh_form
+from quadruped_dyn.model.paper_robot import PaperRobotParams, dh_form
 from quadruped_dyn.model.robot import Robot
 
 #: Newton steps after numeric IK has converged to IK_POSITION_TOL: each squares the relative
@@ -35,9 +36,16 @@ class ReferenceSample:
     stance: tuple[int, ...]
 
 
+@cache
+def leg_dh_forms(robot: Robot) -> tuple[PaperRobotParams | None, ...]:
+    """``dh_form`` of each leg, decided once per robot (it compares placements: far costlier
+    than the IK it selects, which runs at every right-hand-side evaluation)."""
+    return tuple(dh_form(leg) for leg in robot.legs)
+
+
 def leg_ik(robot: Robot, i: int, r: np.ndarray, guess: np.ndarray) -> np.ndarray:
     """Joint angles (3,) putting foot i at r (trunk frame, m)."""
-    params = dh_form(robot.legs[i])
+    params = leg_dh_forms(robot)[i]
     if params is not None:
         return analytic_ik(robot.legs[i].label, r, params)
     q = numeric_ik(robot, i, r, guess)

@@ -1,4 +1,4 @@
-"""Full-coordinate rigid-contact dynamics along a gait plan: the physics check (SPEC section 6).
+"""Full-coordinate rigid-contact dynamics along a gait plan: the physics check (docs/formulation.md §9.4).
 
 Nothing here uses the paper's model: the robot is Pinocchio's free-flyer model (q = (p, quat x
 y z w, 12 joints), v = (v_b, omega_b, qd), project order) with the stance feet as rigid point
@@ -17,7 +17,7 @@ from collections.abc import Callable
 
 import numpy as np
 
-from quadruped_dyn.errors import InputError
+from quadruped_dyn.errors import InputError, NumericalError
 from quadruped_dyn.experiment.gait import Plan
 from quadruped_dyn.experiment.simulate import FALLEN_TRUNK_M, RTOL, IkTorques, Progress, Run, TorqueLaw, integrate_phases
 from quadruped_dyn.model.state import rotation
@@ -39,6 +39,41 @@ def _impact(ref: PinocchioReference, q: np.ndarray, v: np.ndarray, stance: tuple
     Jc = ref.contact_jacobian(q, stance)
     MinvJt = np.linalg.solve(M, Jc.T)
     return v - MinvJt @ np.linalg.solve(Jc @ MinvJt, Jc @ v)
+
+
+def _kkt_accelerations(ref: PinocchioReference, q: np.ndarray, v: np.ndarray, tau: np.ndarray,
+                       stance: tuple[int, ...]) -> np.ndarray:
+    """a = vdot (18,) of ``PinocchioReference.constrained_forward_dynamics``: the same Pinocchio
+    calls in the same order on the same inputs (so the same values, bit for bit), with q and v
+    converted to Pinocchio's order once instead of once per quantity -- this runs at every
+    right-hand-side evaluation of the physics check."""
+    import pinocchio as pin
+
+    from quadruped_dyn.references.pinocchio import LWA
+
+    model, data, robot = ref.model, ref.data, ref.robot
+    qp, vp = ref.pin_q(q), ref.pin_v(v)
+    perm = ref.perm
+    M = np.asarray(pin.crba(model, data, qp))[np.ix_(perm, perm)]
+    h = np.asarray(pin.nonLinearEffects(model, data, qp, vp))[perm]
+    pin.computeJointJacobians(model, data, qp)
+    pin.framesForwardKinematics(model, data, qp)
+    ids = robot.foot_frame_ids
+    rows = [pin.getFrameJacobian(model, data, ids[i], LWA)[:3] for i in stance]
+    Jc = np.vstack(rows)[:, perm] if rows else np.zeros((0, 18))
+    if stance:
+        pin.forwardKinematics(model, data, qp, vp, np.zeros(model.nv))
+        pin.updateFramePlacements(model, data)
+        Rb = data.oMi[1].rotation
+        R = rotation(q)
+        drift = np.concatenate([R @ (Rb.T @ pin.getFrameClassicalAcceleration(model, data, ids[i], LWA).linear)
+                                for i in stance])
+    else:
+        drift = np.zeros(0)
+    k = Jc.shape[0]
+    K = np.block([[M, Jc.T], [Jc, np.zeros((k, k))]])
+    rhs = np.concatenate([np.concatenate([np.zeros(6), tau]) - h, -drift])
+    return np.linalg.solve(K, rhs)[:18]
 
 
 def simulate_rigid(plan: Plan, ik: IkTorques, law: TorqueLaw, horizon: float, dt: float,
@@ -67,9 +102,9 @@ def simulate_rigid(plan: Plan, ik: IkTorques, law: TorqueLaw, horizon: float, dt
         q, v = y[:19], y[19:]
         reference_t, tau_ik = ik(t, stance)
         tau = law.joints(reference_t, tau_ik, q[7:], v[6:])
-        a, _ = ref.constrained_forward_dynamics(q, v, tau, stance)
+        a = _kkt_accelerations(ref, q, v, tau, stance)
         if not np.all(np.isfinite(a)):
-            raise InputError(f"the rigid-contact dynamics are singular at t = {t:.4f} s")
+            raise NumericalError(f"the rigid-contact dynamics are singular at t = {t:.4f} s")
         return a
 
     def rhs(stance: tuple[int, ...], t: float, y: np.ndarray) -> np.ndarray:
@@ -95,7 +130,7 @@ def simulate_rigid(plan: Plan, ik: IkTorques, law: TorqueLaw, horizon: float, dt
 
     try:
         integrate_phases(plan, y, horizon, dt, integrator, rtol, rhs, record, switch=touch_down, progress=progress)
-    except (Fallen, InputError, np.linalg.LinAlgError):
+    except (Fallen, NumericalError, InputError, np.linalg.LinAlgError):
         stopped_at = float(out[-1][0]) if out else 0.0
     t = np.array([o[0] for o in out])
     Y = np.array([o[1] for o in out]).reshape(-1, 37)

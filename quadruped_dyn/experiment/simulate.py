@@ -1,4 +1,4 @@
-"""Forward simulation of the paper's reduced dynamics along a gait plan (SPEC sections 5-6).
+"""Forward simulation of the paper's reduced dynamics along a gait plan (docs/formulation.md §6, §9.3).
 
 State: the reduced coordinates q_r (12 joint angles in FL, FR, BL, BR x HAA, HFE, KFE order,
 + the trunk roll phi for a gait with two-feet phases) and their rates. The trunk orientation
@@ -36,9 +36,9 @@ import pinocchio as pin
 from scipy.integrate import DOP853
 
 from quadruped_dyn.dynamics.guarded import guarded_call
-from quadruped_dyn.dynamics.kinematics import robot_kinematics
-from quadruped_dyn.dynamics.reduced import MAX_COND_M_R, reduced_model
-from quadruped_dyn.errors import InputError
+from quadruped_dyn.dynamics.kinematics import robot_feet, robot_kinematics
+from quadruped_dyn.dynamics.reduced import reduced_model
+from quadruped_dyn.errors import InputError, NumericalError
 from quadruped_dyn.experiment.gait import Plan
 from quadruped_dyn.experiment.plan_ik import ReferenceSample, reference
 from quadruped_dyn.experiment.trunk_pose import pose_from_feet
@@ -70,7 +70,7 @@ class ReducedDynamics(Protocol):
 
     def fd_r(self, stance: StanceSet, q_r: np.ndarray, qd_r: np.ndarray, tau_ext: np.ndarray,
              quat: np.ndarray) -> np.ndarray:
-        """qdd_r (n,); InputError where M_r is singular."""
+        """qdd_r (n,); NumericalError where M_r is singular, InputError for bad input."""
         ...
 
 
@@ -86,13 +86,7 @@ class CasadiReducedDynamics:
 
     def fd_r(self, stance: StanceSet, q_r: np.ndarray, qd_r: np.ndarray, tau_ext: np.ndarray,
              quat: np.ndarray) -> np.ndarray:
-        m = reduced_model(self.robot, stance.name)
-        (M,) = guarded_call(m.M_r, q_r, quat)
-        (C,), (G,) = guarded_call(m.C_r, q_r, qd_r, quat), guarded_call(m.G_r, q_r, quat)
-        cond = np.linalg.cond(M)
-        if not cond < MAX_COND_M_R:
-            raise InputError(f"M_r of {stance.name} has condition number {cond:.1e} here; the reduced model is singular")
-        return np.linalg.solve(M, tau_ext - C - G)
+        return reduced_model(self.robot, stance.name).forward_dynamics(q_r, qd_r, tau_ext, quat)[0]
 
 
 BACKENDS = ("c", "casadi")
@@ -182,6 +176,7 @@ def simulate_reduced(plan: Plan, dynamics: ReducedDynamics, law: TorqueLaw, hori
     robot, gait = plan.robot, plan.gait
     ik = ik or IkTorques(plan, dynamics)
     kin = robot_kinematics(robot)
+    feet_of = robot_feet(robot)
     n = gait.n_coords
     pitch = [0.0]  # the previous pose's pitch picks between the two-feet pose solutions
     evaluations = [0]
@@ -190,7 +185,7 @@ def simulate_reduced(plan: Plan, dynamics: ReducedDynamics, law: TorqueLaw, hori
     current = [gait.stance(0.0)]
 
     def fit(q: np.ndarray, stance: tuple[int, ...]) -> tuple[np.ndarray, np.ndarray, float]:
-        feet = np.array([np.asarray(kin[i].foot_position(q[3 * i : 3 * i + 3])).ravel() for i in stance])
+        feet = np.asarray(feet_of(q[:12])[0]).T[list(stance)]
         roll = float(q[12]) if len(stance) == 2 else None
         R, p, closure = pose_from_feet(feet, np.array([footholds[i] for i in stance]), roll=roll, pitch_hint=pitch[0])
         pitch[0] = float(pin.rpy.matrixToRpy(R)[1])
@@ -247,7 +242,7 @@ def simulate_reduced(plan: Plan, dynamics: ReducedDynamics, law: TorqueLaw, hori
     try:
         integrate_phases(plan, y, horizon, dt, integrator, rtol, rhs, record, projection if project else None,
                          touch_down, progress)
-    except (_Fallen, InputError):
+    except (_Fallen, NumericalError, InputError):  # a run that falls apart can also end in a non-finite state
         stopped_at = float(out_t[-1]) if out_t else 0.0
     Y = np.array(out_y).reshape(-1, 2 * n)
     return Run(np.array(out_t), Y[:, :n], Y[:, n:], np.array(out_qdd).reshape(-1, n), np.array(out_closure),
@@ -281,7 +276,7 @@ def integrate_phases(plan: Plan, y: np.ndarray, horizon: float, dt: float, integ
         if integrator == "rk4":
             y = _rk4_segment(f, y, t0, t1, dt, inside, rec, proj)
         else:
-            y = _dop853_segment(f, y, t0, t1, rtol, inside, rec, proj)
+            y = _dop853_segment(f, y, t0, t1, rtol, inside, rec, proj, progress)
         if progress:
             progress(float(t1))
     return y
@@ -291,27 +286,29 @@ def project_on_stance(robot: Robot, stance: tuple[int, ...], holds: np.ndarray, 
                       pitch_hint: float = 0.0) -> np.ndarray:
     """The state y = (q_r, qd_r) moved onto the stance closure: the stance feet on their
     footholds ``holds`` (k, 3; world, m) for the trunk pose fitted to them (``pose_from_feet``; two Newton steps of each
-    stance leg's IK), and the stance legs' rates those of the trunk twist fitted to them (SPEC
-    section 5's velocity map, least squares, roll-rate row for two feet). The reduced coordinates
+    stance leg's IK), and the stance legs' rates those of the trunk twist fitted to them (docs/
+    formulation.md §5's velocity map, least squares, roll-rate row for two feet). The reduced coordinates
     are redundant -- 12 for 9 degrees of freedom with three feet, 13 for 12 with two -- and the
     paper's ODE does not keep the closure: its drift off it is the fastest-growing error. Right
     after a touch-down whose foot lands moving, the rate projection is a kinematic impact."""
-    from quadruped_dyn.references.pinocchio import roll_rate_row
+    from quadruped_dyn.references.pinocchio import roll_rate_row  # its rounding is the experiment's (issue 19 rewrites this)
 
-    kin = robot_kinematics(robot)
+    feet_of = robot_feet(robot)
     n = y.size // 2
     q, qd = y[:n].copy(), y[n:].copy()
     roll = float(q[12]) if len(stance) == 2 else None
     for _ in range(2):
-        feet = np.array([np.asarray(kin[i].foot_position(q[3 * i : 3 * i + 3])).ravel() for i in stance])
+        r_all, J_all = (np.asarray(x) for x in feet_of(q[:12]))
+        feet = r_all.T[list(stance)]
         R, p, _ = pose_from_feet(feet, holds, roll=roll, pitch_hint=pitch_hint)
         for j, i in enumerate(stance):
             s = slice(3 * i, 3 * i + 3)
-            q[s] += np.linalg.solve(np.asarray(kin[i].foot_jacobian(q[s])), R.T @ (holds[j] - p) - feet[j])
+            q[s] += np.linalg.solve(J_all[:, s], R.T @ (holds[j] - p) - feet[j])
     rows, rhs, legs = [], [], []
+    r_all, J_all = (np.asarray(x) for x in feet_of(q[:12]))
     for i in stance:
         s = slice(3 * i, 3 * i + 3)
-        r, J = np.asarray(kin[i].foot_position(q[s])).ravel(), np.asarray(kin[i].foot_jacobian(q[s]))
+        r, J = r_all[:, i].copy(), J_all[:, s]
         rows.append(np.hstack([np.eye(3), -skew(r)]))
         rhs.append(-J @ qd[s])
         legs.append((s, r, J))
@@ -347,10 +344,12 @@ def _rk4_segment(f: Callable[[float, np.ndarray], np.ndarray], y: np.ndarray, t0
 
 def _dop853_segment(f: Callable[[float, np.ndarray], np.ndarray], y: np.ndarray, t0: float, t1: float, rtol: float,
                     samples: np.ndarray, record: Callable[[float, np.ndarray], None],
-                    project: Callable[[float, np.ndarray], np.ndarray] | None = None) -> np.ndarray:
+                    project: Callable[[float, np.ndarray], np.ndarray] | None = None,
+                    progress: Progress | None = None) -> np.ndarray:
     """DOP853 over [t0, t1]; ``project`` (if given) maps the state back onto the constraint
     manifold after every accepted step (coordinate projection: the step's end value and its
-    stored derivative are replaced, so the next step starts on the manifold)."""
+    stored derivative are replaced, so the next step starts on the manifold); ``progress`` gets
+    the time reached after every step."""
     solver = DOP853(f, t0, y, t1, rtol=rtol, atol=rtol)
     pending = list(samples)
     while pending and pending[0] <= t0 + 1e-12:
@@ -358,7 +357,7 @@ def _dop853_segment(f: Callable[[float, np.ndarray], np.ndarray], y: np.ndarray,
     while solver.status == "running":
         message = solver.step()
         if solver.status == "failed":  # e.g. a run that is falling apart: the caller reports where it stopped
-            raise InputError(f"DOP853 failed at t = {solver.t:.4f} s: {message}")
+            raise NumericalError(f"DOP853 failed at t = {solver.t:.4f} s: {message}")
         if project is not None:
             solver.y = project(solver.t, solver.y)
             solver.f = f(solver.t, solver.y)  # scipy's RungeKutta keeps the end derivative here (FSAL)
@@ -366,4 +365,6 @@ def _dop853_segment(f: Callable[[float, np.ndarray], np.ndarray], y: np.ndarray,
         while pending and pending[0] <= solver.t + 1e-12:
             ts = pending.pop(0)
             record(ts, solver.y if abs(ts - solver.t) < 1e-12 else dense(ts))
+        if progress is not None:
+            progress(float(solver.t))
     return np.asarray(solver.y)

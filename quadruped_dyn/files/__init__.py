@@ -1,1 +1,12 @@
-"""Output files: directories proven writable before work starts."""
+"""Output files: directories proven writable before work starts, strict JSON, names derived from
+input made safe, and writes that stay under the output directory and never follow a link."""
+
+from quadruped_dyn.exports import lazy_exports
+
+_MODULES: dict[str, tuple[str, ...]] = {
+    "json": ("json_safe", "write_json"),
+    "names": ("MAX_NAME_CHARS", "is_safe_name", "safe_name", "printable"),
+    "paths": ("writable_dir",),
+    "safe_write": ("output_path", "output_dir", "write_bytes", "write_text", "text_writer", "save_figure"),
+}
+__all__, __getattr__, __dir__ = lazy_exports(__name__, _MODULES)

@@ -6,20 +6,24 @@ import tempfile
 from pathlib import Path
 
 from quadruped_dyn.errors import InputError
+from quadruped_dyn.files.names import printable
 
 
-def writable_dir(path: str | Path, what: str) -> Path:
+def writable_dir(path: str | Path, what: str, expected: str = "a writable directory") -> Path:
     """Create ``path`` (with its parents) and prove a file can be written in it; an InputError
-    naming ``what`` (e.g. "--out 'gen'") otherwise: a file in the way, /proc, a read-only directory."""
+    naming ``what`` (e.g. "--out 'gen'") and saying ``expected`` otherwise: a file in the way,
+    /proc, a read-only directory, an empty path (Path("") would be the current directory)."""
+    if str(path).strip() == "":
+        raise InputError(f"{printable(what)} is an empty path; expected a directory name")
     out = Path(path)
-    expected = "expected a writable directory"
+    expected = f"expected {expected}"
     for p in (out, *out.parents):
         if p.exists() and not p.is_dir():
-            raise InputError(f"{what}: '{p}' is a file; {expected}")
+            raise InputError(f"{printable(what)}: '{printable(p)}' is a file; {expected}")
     try:
         out.mkdir(parents=True, exist_ok=True)
         with tempfile.TemporaryFile(dir=out):
             pass
     except OSError as e:
-        raise InputError(f"{what} is not writable ({e.strerror}); {expected}") from e
+        raise InputError(f"{printable(what)} is not writable ({e.strerror}); {expected}") from e
     return out

@@ -1,4 +1,5 @@
-"""Rigid-body quantities, numeric: placements, link inertias, rotations about an axis, cross-product matrices.
+"""Rigid-body quantities: placements and link inertias (numeric), and the rotation about an axis
+and the cross-product matrix, each one formula for numbers (numpy) and symbols (CasADi).
 
 Frames: a ``Placement`` maps child-frame points into the parent frame (x_parent = R x_child + p).
 """
@@ -6,7 +7,9 @@ Frames: a ``Placement`` maps child-frame points into the parent frame (x_parent 
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import Any
 
+import casadi as ca
 import numpy as np
 
 
@@ -40,13 +43,25 @@ class LinkInertia:
     inertia: np.ndarray  # (3, 3) about the CoM, axes of the joint frame, kg m^2
 
 
-def axis_rotation(axis: np.ndarray, angle: float) -> np.ndarray:
-    """Rotation by ``angle`` (rad) about the unit ``axis`` (Rodrigues)."""
-    k = np.asarray(axis, dtype=float)
-    K = skew(k)
+def skew(w: Any) -> Any:
+    """Cross-product matrix: ``skew(w) @ x == w x x``. One formula for numbers and symbols: a numpy
+    (3, 3) for a numeric w, a CasADi matrix of w's type for an SX / MX / DM w."""
+    rows = ((0, -w[2], w[1]), (w[2], 0, -w[0]), (-w[1], w[0], 0))
+    if isinstance(w, ca.SX | ca.MX | ca.DM):
+        return ca.vertcat(*[ca.horzcat(*row) for row in rows])
+    return np.array(rows, dtype=float)
+
+
+def axis_rotation(axis: np.ndarray, angle: Any) -> Any:
+    """Rotation by ``angle`` (rad) about the constant unit ``axis`` (Rodrigues), a numpy (3, 3) for a
+    numeric angle, SX for a symbolic one. One formula, K = [a]x, K^2 = a a^T - I, in the arrangement
+    each side has always used: for SX cos (I - a a^T) + a a^T + sin K, so that for an axis-aligned
+    joint the constant entries stay exact 0 and 1 (a small graph, small generated C); for numbers
+    I + sin K + (1 - cos) K^2, whose rounding the numeric foot positions (and so the gait's
+    footholds and the experiment's round-off) are measured with."""
+    a = np.asarray(axis, dtype=float)
+    K = skew(a)
+    if isinstance(angle, ca.SX):
+        aaT = np.outer(a, a)
+        return ca.cos(angle) * ca.DM(np.eye(3) - aaT) + ca.DM(aaT) + ca.sin(angle) * ca.DM(K)
     return np.eye(3) + np.sin(angle) * K + (1.0 - np.cos(angle)) * (K @ K)
-
-
-def skew(w: np.ndarray) -> np.ndarray:
-    """Cross-product matrix: ``skew(w) @ x == np.cross(w, x)``."""
-    return np.array([[0.0, -w[2], w[1]], [w[2], 0.0, -w[0]], [-w[1], w[0], 0.0]])

@@ -1,4 +1,5 @@
-"""Small CasADi (SX) helpers: rotations, cross-product matrices, 6D spatial algebra.
+"""Small CasADi (SX) helpers: quaternion rotations, 6D spatial algebra (``skew`` and
+``axis_rotation``, for numbers and symbols alike, are in ``rigid``).
 
 Spatial vectors are ordered (linear, angular), as in Pinocchio: a motion V = (v, omega)
 and a force F = (f, n).
@@ -9,27 +10,7 @@ from __future__ import annotations
 import casadi as ca
 import numpy as np
 
-from quadruped_dyn.math.rigid import LinkInertia, Placement
-from quadruped_dyn.math.rigid import skew as skew_np
-
-
-def skew(w: ca.SX) -> ca.SX:
-    """[w]x such that skew(w) @ x = w x x."""
-    return ca.vertcat(
-        ca.horzcat(0, -w[2], w[1]),
-        ca.horzcat(w[2], 0, -w[0]),
-        ca.horzcat(-w[1], w[0], 0),
-    )
-
-
-def axis_rotation(axis: np.ndarray, angle: ca.SX) -> ca.SX:
-    """Rotation by ``angle`` about the constant unit ``axis``: cos (I - a a^T) + a a^T + sin [a]x
-    (Rodrigues). Written so that for an axis-aligned joint the constant entries stay exact
-    0 and 1, keeping the expression graph (and the generated C) small."""
-    a = np.asarray(axis, dtype=float)
-    aaT = np.outer(a, a)
-    return ca.cos(angle) * ca.DM(np.eye(3) - aaT) + ca.DM(aaT) + ca.sin(angle) * ca.DM(skew_np(a))
-
+from quadruped_dyn.math.rigid import LinkInertia, Placement, skew
 
 
 def quat_to_rotation(quat: ca.SX) -> ca.SX:

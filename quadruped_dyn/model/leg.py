@@ -20,6 +20,9 @@ from quadruped_dyn.math.rigid import LinkInertia, Placement, axis_rotation
 LEG_LABELS: tuple[str, ...] = ("FL", "FR", "BL", "BR")
 JOINT_ROLES: tuple[str, ...] = ("HAA", "HFE", "KFE")
 
+#: Project joint index (FL, FR, BL, BR x HAA, HFE, KFE) of BR HFE, the joint of the paper's Figs. 5-7.
+BR_HFE = 3 * LEG_LABELS.index("BR") + JOINT_ROLES.index("HFE")
+
 
 @dataclass(frozen=True)
 class LegJoint:

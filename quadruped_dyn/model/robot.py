@@ -11,14 +11,24 @@ URDF parser does this). Rotor armature is not part of the paper's model and is s
 Placement entries within ``SNAP_TOL`` of 0 or +-1 are snapped, in Pinocchio's model too.
 
 The URDF is validated (``urdf_validation``) before Pinocchio parses it. One robot, one
-identity: a file whose bytes are those of a built-in robot's URDF, reached by its name, by
-any path or as a copy, loads as that robot (its name, its standing posture).
+identity, and identity is content: a file whose bytes are those of a built-in robot's URDF,
+reached by its name, by any path or as a copy, loads as that robot (its name, its standing
+posture); any other file is named after its stem (``files.names.safe_name``: valid as a C
+identifier and a file name), with a hash of its content appended when the stem is a built-in's
+name (a user's ``paper.urdf`` is not the paper robot).
+
+A model never outlives its file's content: the bytes are read once, hashed
+(``Robot.urdf_sha256``) and parsed from memory, and the cache of loaded robots is keyed by
+path and that hash, so an edited URDF is loaded afresh, and everything derived from a Robot
+(e.g. the compiled library's key) hashes the bytes the model was built from.
 """
 
 from __future__ import annotations
 
 import hashlib
 import importlib.metadata
+import os
+import tempfile
 import warnings
 from dataclasses import dataclass
 from functools import cache
@@ -28,10 +38,11 @@ import numpy as np
 import pinocchio as pin
 
 from quadruped_dyn.errors import InputError, UrdfWarning
+from quadruped_dyn.files.names import printable, safe_name
 from quadruped_dyn.math.rigid import LinkInertia, Placement
 from quadruped_dyn.model.leg import LEG_LABELS, Leg, LegJoint
 from quadruped_dyn.model.paper_robot import STANDING_Q, URDF_PATH
-from quadruped_dyn.model.urdf_rules import inertia_problem, validate_urdf
+from quadruped_dyn.model.urdf_rules import check_urdf_size, inertia_problem, validate_urdf
 
 #: Built-in robots: the paper's (generated, package data) and six from example-robot-data.
 _ERD_FILES = {
@@ -71,7 +82,7 @@ def robot_path(name_or_path: str | Path) -> Path:
         return path.resolve()
     path = Path(key)
     if not path.is_file():
-        raise InputError(f"no such file: '{key}'; expected a URDF path or one of: {', '.join(ROBOT_NAMES)}")
+        raise InputError(f"no such file: '{printable(key)}'; expected a URDF path or one of: {', '.join(ROBOT_NAMES)}")
     return path.resolve()
 
 
@@ -85,9 +96,9 @@ def _digest(path: Path) -> str:
     return hashlib.sha256(path.read_bytes()).hexdigest()
 
 
-def builtin_name(path: Path) -> str | None:
-    """The built-in robot whose URDF has the same bytes as ``path``, or None."""
-    digest = _digest(path)
+def builtin_name(path: Path, digest: str | None = None) -> str | None:
+    """The built-in robot whose URDF has the same bytes as ``path`` (SHA-256 ``digest``), or None."""
+    digest = _digest(path) if digest is None else digest
     return next((name for name, d in _builtin_digests().items() if d == digest), None)
 
 
@@ -95,7 +106,7 @@ def builtin_name(path: Path) -> str | None:
 class Robot:
     """A quadruped: Pinocchio free-flyer model plus the project's view of it."""
 
-    name: str  # the built-in name if the URDF's bytes are a built-in's, else the file's stem
+    name: str  # the built-in name if the URDF's bytes are a built-in's, else from the file's stem (safe_name)
     urdf: Path  # absolute
     model: pin.Model  # free-flyer model; q = (p, quat xyzw, joints), v = (v_b, omega_b, qd)
     trunk: LinkInertia  # in the trunk frame b
@@ -105,6 +116,8 @@ class Robot:
     joint_nq: np.ndarray  # (12,) 1 for revolute, 2 for continuous ((cos, sin) in Pinocchio's q)
     foot_frame_ids: tuple[int, int, int, int]  # Pinocchio frame ids of the feet, project leg order
     standing_q: np.ndarray  # (12,) a standing posture: the paper's Fig. 1d, else neutral clipped to limits
+    urdf_sha256: str = ""  # SHA-256 of the bytes the model was parsed from
+    builtin: str | None = None  # the built-in robot whose URDF these bytes are, else None
 
     @property
     def joint_names(self) -> list[str]:
@@ -157,8 +170,27 @@ def _axis(joint: pin.JointModel) -> np.ndarray | None:
     return None
 
 
-def _foot_frame(model: pin.Model, knee: int) -> int:
-    """The leaf frame below the knee joint: prefer names containing 'foot', else the farthest."""
+#: Words in a frame's name that mark the contact point, and words that mark a frame that is not
+#: one (a force sensor or camera can sit nearer the knee than the toe).
+FOOT_WORDS = ("foot", "toe", "contact", "sole", "tip")
+NOT_FOOT_WORDS = ("sensor", "imu", "camera", "lidar", "cam")
+
+
+def _foot_frame(model: pin.Model, knee: int, label: str, wanted: str | None = None) -> int:
+    """The foot frame of the leg whose knee is ``knee``: ``wanted`` if the user named it (it must
+    hang from the knee's link), else among the leaf frames below the knee that are not named like
+    a sensor or camera (``NOT_FOOT_WORDS``), the farthest named like a foot (``FOOT_WORDS``), else
+    the farthest. With several candidates a UrdfWarning says which was chosen, why, and how to
+    name another."""
+    if wanted is not None:
+        if not model.existFrame(wanted):
+            raise InputError(f"foot frame '{printable(wanted)}' of leg {label} is not a frame of the URDF; "
+                             "expected a link or frame below that leg's knee")
+        fid = model.getFrameId(wanted)
+        if model.frames[fid].parentJoint != knee:
+            raise InputError(f"foot frame '{printable(wanted)}' of leg {label} does not hang from the knee joint "
+                             f"'{model.names[knee]}'; expected a frame rigidly attached to the last leg link")
+        return fid
     parents = {f.parentFrame for f in model.frames}
     leaves = [
         i
@@ -169,9 +201,23 @@ def _foot_frame(model: pin.Model, knee: int) -> int:
         raise InputError(
             f"no foot frame below joint '{model.names[knee]}'; expected a link attached to the last leg link (a foot)"
         )
-    footish = [i for i in leaves if "foot" in model.frames[i].name.lower()]
-    pool = footish or leaves
-    return max(pool, key=lambda i: np.linalg.norm(model.frames[i].placement.translation))
+
+    def dist(i: int) -> float:
+        return float(np.linalg.norm(model.frames[i].placement.translation))
+
+    def named(i: int, words: tuple[str, ...]) -> bool:
+        return any(w in model.frames[i].name.lower() for w in words)
+
+    pool = [i for i in leaves if not named(i, NOT_FOOT_WORDS)] or leaves
+    footish = [i for i in pool if named(i, FOOT_WORDS)]
+    chosen = max(footish or pool, key=dist)
+    if len(leaves) > 1:
+        why = "the farthest leaf frame named like a foot" if footish else "the farthest leaf frame (none is named like a foot)"
+        others = ", ".join(f"'{model.frames[i].name}' ({dist(i):.3f} m)" for i in leaves if i != chosen)
+        warnings.warn(f"leg {label}: foot frame '{model.frames[chosen].name}' at {dist(chosen):.3f} m from the knee, "
+                      f"{why}; other leaf frames below the knee: {others}; name the feet (load_robot(..., "
+                      "foot_frames=[...]), or --foot-frames) if another is the contact point", UrdfWarning, stacklevel=4)
+    return chosen
 
 
 def _chain(model: pin.Model, first: int) -> tuple[list[int], bool]:
@@ -203,32 +249,149 @@ def _snap(M: pin.SE3) -> pin.SE3:
     return pin.SE3(snap(M.rotation), snap(M.translation))
 
 
-def _parse_urdf(path: Path) -> pin.Model:
-    for message in validate_urdf(path):
-        warnings.warn(f"{path.name}: {message}", UrdfWarning, stacklevel=2)
+class _Stderr:
+    """Captures what C++ code writes to file descriptor 2 (urdfdom prints its own ``Error:``
+    lines before Pinocchio raises): the one-line error says it instead."""
+
+    def __enter__(self) -> _Stderr:
+        self._file = tempfile.TemporaryFile()
+        try:
+            import sys
+
+            sys.stderr.flush()
+        except (OSError, ValueError):
+            pass
+        self._saved = os.dup(2)
+        os.dup2(self._file.fileno(), 2)
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        os.dup2(self._saved, 2)
+        os.close(self._saved)
+        self._file.seek(0)
+        self.text = self._file.read().decode("utf-8", "replace")
+        self._file.close()
+
+
+def _parse_urdf(path: Path, data: bytes) -> pin.Model:
+    for message in validate_urdf(path, data):
+        warnings.warn(f"{printable(path.name)}: {message}", UrdfWarning, stacklevel=2)
+    capture = _Stderr()
     try:
-        return pin.buildModelFromUrdf(str(path), pin.JointModelFreeFlyer())
+        with capture:
+            return pin.buildModelFromXML(data.decode("utf-8", "replace"), pin.JointModelFreeFlyer())
     except Exception as e:  # Pinocchio raises plain ValueError/RuntimeError with the parser's text
-        raise InputError(f"Pinocchio cannot parse '{path}': {str(e).strip().splitlines()[0]}") from e
+        said = [line.strip() for line in capture.text.splitlines() if line.strip()]
+        reason = (said[:1] or str(e).strip().splitlines()[:1] or ["no reason given"])[0].removeprefix("Error:").strip()
+        raise InputError(f"Pinocchio cannot parse '{printable(path)}': {printable(reason)}") from e
 
 
-def load_robot(name_or_path: str, cached: bool = True) -> Robot:
-    """Load a built-in robot by name, or any quadruped URDF by path (cached per file unless
-    ``cached`` is False, e.g. for a temporary file)."""
+def load_robot(name_or_path: str, cached: bool = True, foot_frames: object = None) -> Robot:
+    """Load a built-in robot by name, or any quadruped URDF by path. Cached per path and
+    content (an edited file is loaded afresh) unless ``cached`` is False (e.g. a temporary file).
+    ``foot_frames``: the foot frame of each leg, as four frame names in the order FL, FR, BL, BR
+    or a mapping from leg label to name (default: chosen by ``_foot_frame``'s rule)."""
     path = robot_path(name_or_path)
-    return _load(path) if cached else _load.__wrapped__(path)
+    feet = _foot_frame_names(foot_frames)
+    data = _read_urdf(path)
+    digest = hashlib.sha256(data).hexdigest()
+    return _load(path, digest, feet) if cached else _load.__wrapped__(path, digest, feet, data)
+
+
+def _read_urdf(path: Path) -> bytes:
+    try:
+        check_urdf_size(path, None, path.stat().st_size)  # before reading a huge file
+        data = path.read_bytes()
+    except OSError as e:
+        raise InputError(f"cannot read '{printable(path)}' ({e.strerror}); expected a readable URDF file") from e
+    return data
+
+
+def _foot_frame_names(foot_frames: object) -> tuple[str, str, str, str] | None:
+    """``foot_frames`` as four names in leg order, or None; an InputError for anything else."""
+    if foot_frames is None:
+        return None
+    if isinstance(foot_frames, dict):
+        if set(foot_frames) != set(LEG_LABELS):
+            raise InputError(f"foot_frames has keys {sorted(map(str, foot_frames))}; expected {list(LEG_LABELS)}")
+        foot_frames = [foot_frames[label] for label in LEG_LABELS]
+    if isinstance(foot_frames, str):
+        foot_frames = foot_frames.split(",")
+    try:
+        names: tuple[object, ...] = tuple(foot_frames)  # type: ignore[arg-type]
+    except TypeError as e:
+        raise InputError(f"foot_frames is {type(foot_frames).__name__}; expected four frame names (FL, FR, BL, BR)") from e
+    if len(names) != 4 or not all(isinstance(n, str) and n for n in names):
+        raise InputError(f"foot_frames is {printable(names)}; expected four frame names in the order FL, FR, BL, BR")
+    return names  # type: ignore[return-value]
+
+
+def robot_name(path: Path) -> str:
+    """The name ``load_robot`` gives the URDF at ``path`` (without parsing it)."""
+    digest = hashlib.sha256(_read_urdf(path)).hexdigest()
+    return _name(path, builtin_name(path, digest), digest)
+
+
+def _name(path: Path, builtin: str | None, digest: str) -> str:
+    """The robot's name: the built-in's for a built-in's bytes; else the file's stem made safe, and
+    never a built-in's name (that name would bring the built-in's posture and output folder)."""
+    if builtin is not None:
+        return builtin
+    name = safe_name(path.stem)
+    if name in ROBOT_NAMES:
+        name = f"{name}_{digest[:8]}"
+    return name
 
 
 @cache
-def _load(path: Path) -> Robot:
-    model = _parse_urdf(path)
+def _load(path: Path, digest: str, foot_frames: tuple[str, str, str, str] | None = None,
+          data: bytes | None = None) -> Robot:
+    data = _read_urdf(path) if data is None else data
+    digest = hashlib.sha256(data).hexdigest()  # of the bytes parsed (the file may have changed since)
+    model = _prepared_model(path, data)
+    builtin = builtin_name(path, digest)
+    name = _name(path, builtin, digest)
+    wanted_feet = dict(zip(LEG_LABELS, foot_frames)) if foot_frames else {}
+    legs: dict[str, Leg] = {}
+    foot_ids: dict[str, int] = {}
+    for chain in _leg_chains(model, path):
+        leg, foot_ids[leg.label] = _leg(model, chain, taken=legs, wanted_feet=wanted_feet)
+        legs[leg.label] = leg
+    ordered = tuple(legs[label] for label in LEG_LABELS)
+    lower = np.array([j.lower for leg in ordered for j in leg.joints])
+    upper = np.array([j.upper for leg in ordered for j in leg.joints])
+    standing = np.tile(STANDING_Q, 4) if builtin == "paper" else np.clip(0.0, lower, upper)
+    ids = [model.getJointId(j.name) for leg in ordered for j in leg.joints]
+    return Robot(
+        name=name,
+        urdf=path,
+        model=model,
+        trunk=_inertia(model, 1, "the trunk"),
+        legs=ordered,  # type: ignore[arg-type]
+        idx_q=np.array([model.joints[j].idx_q for j in ids]),
+        idx_v=np.array([model.joints[j].idx_v for j in ids]),
+        joint_nq=np.array([model.joints[j].nq for j in ids]),
+        foot_frame_ids=tuple(foot_ids[label] for label in LEG_LABELS),  # type: ignore[arg-type]
+        standing_q=standing,
+        urdf_sha256=digest,
+        builtin=builtin,
+    )
+
+
+def _prepared_model(path: Path, data: bytes) -> pin.Model:
+    """Pinocchio's free-flyer model of the validated URDF (its bytes ``data``), without armature,
+    placements snapped."""
+    model = _parse_urdf(path, data)
     model.armature[:] = 0.0
     for j in range(1, model.njoints):
         model.jointPlacements[j] = _snap(model.jointPlacements[j])
     for frame in model.frames:
         frame.placement = _snap(frame.placement)
-    name = builtin_name(path) or path.stem
+    return model
 
+
+def _leg_chains(model: pin.Model, path: Path) -> list[list[int]]:
+    """The four joint chains hanging from the trunk, each of 3 revolute joints; InputError otherwise."""
     hips = [j for j in range(2, model.njoints) if model.parents[j] == 1]
     found = [_chain(model, h) for h in hips]
     chains = [c for c, _ in found]
@@ -244,58 +407,52 @@ def _load(path: Path) -> Robot:
                 raise InputError(
                     f"leg joint '{model.names[j]}' is {model.joints[j].shortname()}; expected revolute joints only"
                 )
+    return chains
 
-    legs: dict[str, Leg] = {}
-    foot_ids: dict[str, int] = {}
-    for chain in chains:
-        hip = model.jointPlacements[chain[0]].translation
-        if abs(hip[0]) < 1e-9 or abs(hip[1]) < 1e-9:
-            raise InputError(
-                f"hip '{model.names[chain[0]]}' at {np.round(hip, 4)} lies on a trunk axis; "
-                "expected hips with nonzero x (front/back) and y (left/right)"
-            )
-        label = ("F" if hip[0] > 0 else "B") + ("L" if hip[1] > 0 else "R")
-        if label in legs:
-            raise InputError(f"two legs have their hip in the {label} quadrant; expected one leg per quadrant")
-        joints = tuple(
-            LegJoint(
-                name=model.names[j],
-                placement=Placement(np.array(model.jointPlacements[j].rotation), np.array(model.jointPlacements[j].translation)),
-                axis=_axis(model.joints[j]),  # type: ignore[arg-type]
-                lower=_limit(model, j, lower=True),
-                upper=_limit(model, j, lower=False),
-            )
-            for j in chain
+
+def _leg(model: pin.Model, chain: list[int], taken: dict[str, Leg],
+         wanted_feet: dict[str, str] | None = None) -> tuple[Leg, int]:
+    """The leg of one joint chain, labelled by its hip's quadrant (not one of ``taken``), and the
+    Pinocchio id of its foot frame (``wanted_feet[label]`` if the user named it)."""
+    hip = model.jointPlacements[chain[0]].translation
+    if abs(hip[0]) < 1e-9 or abs(hip[1]) < 1e-9:
+        raise InputError(
+            f"hip '{model.names[chain[0]]}' at {np.round(hip, 4)} lies on a trunk axis; "
+            "expected hips with nonzero x (front/back) and y (left/right)"
         )
-        links = tuple(_inertia(model, j, f"the link moved by joint '{model.names[j]}'") for j in chain)
-        fid = foot_ids[label] = _foot_frame(model, chain[-1])
-        foot = model.frames[fid].placement
-        foot_placement = Placement(np.array(foot.rotation), np.array(foot.translation))
-        legs[label] = Leg(label, joints, links, foot_placement, model.frames[fid].name)  # type: ignore[arg-type]
-
-    ordered = tuple(legs[label] for label in LEG_LABELS)
-    lower = np.array([j.lower for leg in ordered for j in leg.joints])
-    upper = np.array([j.upper for leg in ordered for j in leg.joints])
-    standing = np.tile(STANDING_Q, 4) if name == "paper" else np.clip(0.0, lower, upper)
-    ids = [model.getJointId(j.name) for leg in ordered for j in leg.joints]
-    return Robot(
-        name=name,
-        urdf=path,
-        model=model,
-        trunk=_inertia(model, 1, "the trunk"),
-        legs=ordered,  # type: ignore[arg-type]
-        idx_q=np.array([model.joints[j].idx_q for j in ids]),
-        idx_v=np.array([model.joints[j].idx_v for j in ids]),
-        joint_nq=np.array([model.joints[j].nq for j in ids]),
-        foot_frame_ids=tuple(foot_ids[label] for label in LEG_LABELS),  # type: ignore[arg-type]
-        standing_q=standing,
+    label = ("F" if hip[0] > 0 else "B") + ("L" if hip[1] > 0 else "R")
+    if label in taken:
+        raise InputError(f"two legs have their hip in the {label} quadrant; expected one leg per quadrant")
+    joints = tuple(
+        LegJoint(
+            name=model.names[j],
+            placement=Placement(np.array(model.jointPlacements[j].rotation), np.array(model.jointPlacements[j].translation)),
+            axis=_axis(model.joints[j]),  # type: ignore[arg-type]
+            lower=_limit(model, j, lower=True),
+            upper=_limit(model, j, lower=False),
+        )
+        for j in chain
     )
+    links = tuple(_inertia(model, j, f"the link moved by joint '{model.names[j]}'") for j in chain)
+    fid = _foot_frame(model, chain[-1], label, (wanted_feet or {}).get(label))
+    foot = model.frames[fid].placement
+    foot_placement = Placement(np.array(foot.rotation), np.array(foot.translation))
+    return Leg(label, joints, links, foot_placement, model.frames[fid].name), fid  # type: ignore[arg-type]
 
 
 def _limit(model: pin.Model, j: int, lower: bool) -> float:
-    """Joint limit in rad, clipped to [-pi, pi] (URDFs often state +-10 rad or none)."""
+    """Joint limit in rad, clipped to [-pi, pi] (URDFs often state +-10 rad or none). A revolute
+    joint whose limits are equal (a ``<limit>`` without ``lower``/``upper`` reads as [0, 0]) gets
+    the continuous-joint rule, [-pi, pi], with a UrdfWarning: a leg joint that cannot move is no
+    range to sample or plan in."""
     joint = model.joints[j]
     if joint.nq != 1:
         return -np.pi if lower else np.pi
-    value = (model.lowerPositionLimit if lower else model.upperPositionLimit)[joint.idx_q]
+    lo, hi = model.lowerPositionLimit[joint.idx_q], model.upperPositionLimit[joint.idx_q]
+    if lo == hi:
+        if lower:
+            warnings.warn(f"joint '{model.names[j]}' has the limits [{lo:g}, {hi:g}] (no lower/upper in its <limit>?); "
+                          "using [-pi, pi] as for a continuous joint", UrdfWarning, stacklevel=4)
+        return -np.pi if lower else np.pi
+    value = lo if lower else hi
     return float(max(value, -np.pi)) if lower else float(min(value, np.pi))

@@ -1,4 +1,4 @@
-"""Stance sets: which feet are on the ground, and the paper's GRF parameterisation of each (docs/formulation.md#grf)."""
+"""Stance sets: which feet are on the ground, and the paper's GRF parameterisation of each (docs/formulation.md §4)."""
 
 from __future__ import annotations
 
@@ -73,6 +73,9 @@ STANCE_SETS: tuple[StanceSet, ...] = tuple(
 
 def stance_set(name: str) -> StanceSet:
     """Look up a stance set by name, e.g. 'FL+BR' (order-insensitive) or 'none'."""
+    if not isinstance(name, str):
+        raise InputError(f"stance set is {type(name).__name__} {name!r}; expected a name such as 'FL+BR' "
+                         "(feet joined by '+') or 'none'")
     wanted = sorted(name.split("+")) if name != "none" else []
     for s in STANCE_SETS:
         if sorted(LEG_LABELS[i] for i in s.feet) == wanted:

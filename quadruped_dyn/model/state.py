@@ -1,4 +1,4 @@
-"""The project's full-coordinate state and its conventions (SPEC section 2).
+"""The project's full-coordinate state and its conventions (docs/conventions.md §1-§3).
 
 Frames: world w (z up, gravity ``GRAVITY_W``), trunk/body b with pose (R, p), R maps b -> w.
 
@@ -26,6 +26,7 @@ import numpy as np
 import pinocchio as pin
 
 from quadruped_dyn.errors import InputError
+from quadruped_dyn.math.compare import max_abs_error, within
 from quadruped_dyn.tolerances import ORTHONORMAL_TOL
 
 GRAVITY_W = np.array([0.0, 0.0, -9.81])  # m/s^2, world frame
@@ -36,7 +37,7 @@ NV_FULL = 18
 def full_q(R: np.ndarray, p: np.ndarray, q_joints: np.ndarray) -> np.ndarray:
     """Pack (R, p, 12 joint angles) into the project's q (19,)."""
     R = check_array("R", R, (3, 3))
-    if np.abs(R.T @ R - np.eye(3)).max() > ORTHONORMAL_TOL or np.linalg.det(R) < 0:
+    if not within(max_abs_error(R.T @ R, np.eye(3)), ORTHONORMAL_TOL) or np.linalg.det(R) < 0:
         raise InputError("R is not a rotation matrix; expected R^T R = I and det R = +1")
     quat = pin.Quaternion(R).coeffs()  # (x, y, z, w)
     return np.concatenate([check_array("p", p, (3,)), quat, check_array("q_joints", q_joints, (12,))])
@@ -60,10 +61,20 @@ def classical_from_spatial(omega_b: np.ndarray, v_b: np.ndarray, vdot_b: np.ndar
 
 def check_array(name: str, x: object, shape: tuple[int, ...]) -> np.ndarray:
     """A float array of the given shape with finite entries, or a clear InputError."""
+    if isinstance(x, (str, bytes)):
+        raise InputError(f"{name} is a string; expected a numeric array of shape {shape}")
     try:
-        arr = np.asarray(x, dtype=float)
-    except (TypeError, ValueError) as e:
-        raise InputError(f"{name} is not numeric; expected an array of shape {shape}") from e
+        raw = np.asarray(x)  # an object's own __array__ may raise anything: that is bad input too
+        if np.iscomplexobj(raw):
+            raise InputError(f"{name} is complex; expected a real array of shape {shape} (the imaginary part would be lost)")
+        if raw.dtype.kind not in "biuf":
+            raise InputError(f"{name} has entries of type {raw.dtype}; expected a real numeric array of shape {shape}")
+        arr = np.asarray(raw, dtype=float)
+    except InputError:
+        raise
+    except Exception as e:
+        raise InputError(f"{name} is not numeric ({type(e).__name__}: {str(e)[:80]}); expected an array of shape "
+                         f"{shape}") from e
     if arr.shape != shape:
         raise InputError(f"{name} has shape {arr.shape}; expected {shape}")
     if not np.all(np.isfinite(arr)):

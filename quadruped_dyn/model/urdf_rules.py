@@ -1,4 +1,4 @@
-"""One validation pass over a URDF before anything is built from it (SPEC section 8).
+"""One validation pass over a URDF before anything is built from it (docs/reliability.md §2).
 
 Pinocchio's parser accepts numbers that make every later answer wrong (a zero joint axis,
 NaN or 1e300 masses, lower > upper limits, inertias no body can have) and ignores ``mimic``.
@@ -29,6 +29,7 @@ from pathlib import Path
 import numpy as np
 
 from quadruped_dyn.errors import InputError
+from quadruped_dyn.files.names import printable
 from quadruped_dyn.tolerances import INERTIA_REL_TOL
 
 #: Larger than any legged robot by two orders of magnitude: a length, mass or angle beyond
@@ -133,10 +134,36 @@ def _inertial(link: str, inertial: ET.Element, moved: bool, warnings: list[str])
     warnings.append(message + " (a fixed link: warned; the body it is merged into is checked)")
 
 
-def validate_urdf(path: Path) -> list[str]:
-    """Validate the URDF at ``path``; returns warnings (one line each), raises InputError."""
+#: Far beyond any legged robot's URDF (example-robot-data's largest is ~0.2 MB with ~100 links;
+#: meshes live in separate files): Pinocchio's parse grows roughly quadratically with the number of
+#: links (a 52 MB file with 377k links does not finish in minutes), so larger files are refused
+#: before any parsing.
+MAX_URDF_BYTES = 10_000_000
+MAX_URDF_LINKS = 5_000
+
+
+def check_urdf_size(path: Path, data: bytes | None, size: int | None = None) -> None:
+    """InputError if the URDF's bytes (``size`` of them; ``data`` when read) exceed MAX_URDF_BYTES
+    or it declares more than MAX_URDF_LINKS links or joints (counted in the raw bytes, before
+    parsing)."""
+    size = len(data) if size is None and data is not None else size
+    if size is not None and size > MAX_URDF_BYTES:
+        raise InputError(f"'{printable(path.name)}' is {size / 1e6:.1f} MB; expected a URDF of at most "
+                         f"{MAX_URDF_BYTES / 1e6:g} MB (a legged robot's is well under 1 MB)")
+    for tag in (b"<link", b"<joint"):
+        count = data.count(tag) if data is not None else 0
+        if count > MAX_URDF_LINKS:
+            raise InputError(f"'{printable(path.name)}' has {count} {tag.decode()}> elements; expected at most "
+                             f"{MAX_URDF_LINKS} (a quadruped has a few dozen)")
+
+
+def validate_urdf(path: Path, data: bytes | None = None) -> list[str]:
+    """Validate the URDF at ``path`` (whose bytes are ``data`` when given: what will be parsed);
+    returns warnings (one line each), raises InputError."""
+    data = Path(path).read_bytes() if data is None else data
+    check_urdf_size(Path(path), data)
     try:
-        root = ET.parse(path).getroot()
+        root = ET.fromstring(data)
     except ET.ParseError as e:
         raise InputError(f"'{path}' is not well-formed XML ({e}); expected a URDF file") from e
     if root.tag != "robot":

@@ -10,7 +10,7 @@ from typing import Any
 
 import numpy as np
 
-from quadruped_dyn.experiment.outputs import write_json
+from quadruped_dyn.files.json import write_json
 from quadruped_dyn.experiment.paper_experiment import joint_names, static_stability
 from quadruped_dyn.experiment.simulate import IkTorques, reduced_dynamics
 from quadruped_dyn.model.stance import StanceSet

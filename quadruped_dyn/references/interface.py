@@ -11,6 +11,7 @@ from typing import Protocol
 
 import numpy as np
 
+from quadruped_dyn.math.compare import relative_error
 from quadruped_dyn.model.robot import load_robot
 from quadruped_dyn.model.state import FullState
 from quadruped_dyn.references.pinocchio import PinocchioReference
@@ -29,22 +30,14 @@ def terms_at(src: Dynamics, s: FullState) -> dict[str, np.ndarray]:
     return {"M": src.mass_matrix(s.q), "C+G": src.nonlinear_effects(s.q, s.v), "G": src.gravity(s.q),
             "foot Jacobians": src.foot_jacobians(s.q)}
 
-def rel_err(x: np.ndarray, ref: np.ndarray) -> float:
-    """max |x - ref| / max |ref| (scale 1 if ref is zero); inf if either has a non-finite entry."""
-    x, ref = np.asarray(x, dtype=float), np.asarray(ref, dtype=float)
-    if x.shape != ref.shape:
-        raise AssertionError(f"shape {x.shape} vs reference {ref.shape}")
-    if not (np.all(np.isfinite(x)) and np.all(np.isfinite(ref))):
-        return float("inf")
-    return float(np.abs(x - ref).max()) / (float(np.abs(ref).max()) or 1.0)
-
 def max_rel_errors(src: Dynamics, ref: Dynamics, states: Sequence[FullState]) -> dict[str, float]:
-    """Per term, the largest ``rel_err`` of src against ref over the states."""
+    """Per term, the largest ``compare.relative_error`` of src against ref over the states
+    (max |src - ref| / max |ref|, absolute where ref is zero; inf for a non-finite value)."""
     out = dict.fromkeys(TERMS, 0.0)
     for s in states:
         ours, theirs = terms_at(src, s), terms_at(ref, s)
         for t in TERMS:
-            out[t] = max(out[t], rel_err(ours[t], theirs[t]))
+            out[t] = max(out[t], relative_error(ours[t], theirs[t]))
     return out
 
 def pinocchio_of(urdf_text: str) -> PinocchioReference:

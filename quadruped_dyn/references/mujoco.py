@@ -19,11 +19,13 @@ URDF's (MuJoCo's own choices are measured separately, in ``prepare``).
 
 from __future__ import annotations
 
+import os
 import xml.etree.ElementTree as ET
 from collections.abc import Sequence
 from dataclasses import dataclass
 
-import mujoco
+os.environ.setdefault("MUJOCO_GL", "egl")  # chosen at import: headless offscreen rendering (control/outputs.py)
+import mujoco  # noqa: E402
 import numpy as np
 
 from quadruped_dyn.model.robot import Robot
@@ -242,3 +244,16 @@ def _inertia_from_geometry(original: ET.Element, robot: Robot, states: Sequence[
                         f"with collision shapes kept, MuJoCo's default inertiafromgeom='auto' gives {names} {added:.2f} kg "
                         f"({meshes} mesh shapes not loaded{dropped}); the comparison keeps the URDF's inertias",
                         in_comparison=False, size=max_rel_errors(with_geometry, without, states))]
+
+
+def accepted_urdf(original: ET.Element) -> tuple[ET.Element, list[str]]:
+    """A copy of the URDF MuJoCo's compiler accepts, and what was changed (one line each): the
+    refused inertials merged into the links they are welded to (exact), any left that break
+    A + B >= C balanced as MuJoCo's ``balanceinertia`` would (principal moments -> their mean).
+    Used by the closed-loop plant; ``prepare`` measures what each change does to the terms."""
+    root = ET.fromstring(to_text(original))
+    changes = [f"inertial merged: {m}" for m in _merge_welded(root, (NOT_POSITIVE_DEFINITE, BREAKS_TRIANGLE))]
+    for link in [p.link for p in inertia_problems(root) if p.kind == BREAKS_TRIANGLE]:
+        balance_inertia(root, link)
+        changes.append(f"inertia balanced (A + B >= C): {link}")
+    return root, changes

@@ -144,7 +144,7 @@ class PinocchioReference:
     ) -> tuple[np.ndarray, np.ndarray]:
         """Stance feet as rigid point contacts (zero world acceleration).
 
-        Solves the KKT system [[M, Jc^T], [Jc, 0]] [a; -f] = [S^T tau - (C + G); -Jcdot v].
+        Solves the KKT system ``[[M, Jc^T], [Jc, 0]] [a; -f] = [S^T tau - (C + G); -Jcdot v]``.
         Returns a = vdot (18,) and the ground forces on the stance feet, world frame (k, 3), N.
         """
         tau = check_array("tau", tau, (12,))
@@ -179,22 +179,30 @@ class PinocchioReference:
 
 
     # ------------------------------------------------------------------ reduced coordinates
+    def velocity_map(self, q: np.ndarray, feet: tuple[int, ...]) -> np.ndarray:
+        """A_s (3k, 6), (7, 6) for two feet: the rows [I, -[r_i]x] of each stance foot's velocity
+        constraint v_b + omega_b x r_i + J_i qd_i = 0 (Pinocchio's foot positions r_i, trunk
+        frame) and, for two feet, the roll-rate row (0, e_phi) with phid = e_phi . omega_b."""
+        r = self.foot_positions(q)
+        rows = [np.hstack([np.eye(3), -skew(r[i])]) for i in feet]
+        if len(feet) == 2:
+            rows.append(np.concatenate([np.zeros(3), roll_rate_row(rotation(q))])[None, :])
+        return np.vstack(rows)
+
     def reduced_motion(
         self, feet: tuple[int, ...], q_r: np.ndarray, qd_r: np.ndarray, qdd_r: np.ndarray, quat: np.ndarray
     ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """(q, v, a = vdot) of the full robot from reduced coordinates (SPEC section 5), with
+        """(q, v, a = vdot) of the full robot from reduced coordinates (docs/formulation.md §5), with
         Pinocchio's foot positions, Jacobians and Jdot qdot and numpy least squares; the
         roll-rate row's derivative from the Euler-angle rates (an independent derivation)."""
         q = np.concatenate([np.zeros(3), quat, q_r[:12]])
         R = rotation(q)
         v_joints = np.concatenate([np.zeros(6), qd_r[:12]])
         r, J, bias = self.foot_positions(q), self.foot_jacobians(q), self.foot_bias_accelerations(q, v_joints)
-        rows = [np.hstack([np.eye(3), -skew(r[i])]) for i in feet]
+        A = self.velocity_map(q, feet)
         rhs_v = [-J[i] @ qd_r[3 * i : 3 * i + 3] for i in feet]
         if len(feet) == 2:
-            rows.append(np.concatenate([np.zeros(3), roll_rate_row(R)])[None, :])
             rhs_v.append(np.array([qd_r[12]]))
-        A = np.vstack(rows)
         xi = np.linalg.lstsq(A, np.concatenate(rhs_v), rcond=None)[0]
         v_b, omega = xi[:3], xi[3:]
         rhs_a = []
@@ -222,10 +230,23 @@ class PinocchioReference:
         e = (r1 - r2) / np.linalg.norm(r1 - r2)
         return np.concatenate([g.tau, [e @ (g.residual[3:] - np.cross(r1, g.residual[:3]))]])
 
+    def reduced_mass_matrix(
+        self, feet: tuple[int, ...], P: np.ndarray, q_r: np.ndarray, quat: np.ndarray
+    ) -> np.ndarray:
+        """M_r (n, n) column by column, Pinocchio quantities only: ``reduced_inverse_dynamics``
+        is affine in qdd_r, so column c is tau_r(qd = 0, qdd = e_c) - tau_r(qd = 0, qdd = 0)."""
+        zero = np.zeros(len(q_r))
+        base = self.reduced_inverse_dynamics(feet, P, q_r, zero, zero, quat)
+        return np.column_stack([self.reduced_inverse_dynamics(feet, P, q_r, zero, e, quat) - base for e in np.eye(len(q_r))])
+
 
 
 def roll_rate_row(R: np.ndarray) -> np.ndarray:
-    """e_phi with phid = e_phi . omega_b, from the Euler angles of R = Rz Ry Rx."""
+    """e_phi with phid = e_phi . omega_b, from the Euler angles of R = Rz Ry Rx.
+
+    The reference's own on purpose: ``dynamics.reduced.roll_rate_row`` (the code under test)
+    writes it with R's entries; this one goes through Pinocchio's Euler angles and sin/tan, an
+    independent derivation of the same row (do not merge them)."""
     roll, pitch, _ = pin.rpy.matrixToRpy(R)
     return np.array([1.0, np.sin(roll) * np.tan(pitch), np.cos(roll) * np.tan(pitch)])
 
@@ -242,3 +263,47 @@ def roll_rates(R: np.ndarray, omega: np.ndarray, alpha: np.ndarray) -> tuple[flo
                       np.cos(roll) * roll_rate * np.tan(pitch) + np.sin(roll) * sec2 * pitch_rate,
                       -np.sin(roll) * roll_rate * np.tan(pitch) + np.cos(roll) * sec2 * pitch_rate])
     return roll_rate, float(e @ alpha + e_dot @ omega)
+
+
+class PinocchioDerivatives:
+    """Pinocchio's analytical derivatives (Carpentier & Mansard 2018) in the project's order.
+
+    d/dq is along ``pinocchio.integrate(model, q, dq)`` (a body-frame increment of the free
+    flyer, dq (18,)); rows and columns are permuted from Pinocchio's ``idx_v`` order to the
+    project's (6 trunk + FL, FR, BL, BR x HAA, HFE, KFE). Symmetric matrices (M, M^-1), of
+    which Pinocchio fills the upper triangle, are returned symmetrised."""
+
+    def __init__(self, reference: PinocchioReference) -> None:
+        self.ref = reference
+        self.model = reference.model
+        self.data = self.model.createData()
+
+    def _m(self, X: np.ndarray) -> np.ndarray:
+        return self.ref.project_matrix(np.array(X))
+
+    @staticmethod
+    def _sym(X: np.ndarray) -> np.ndarray:
+        U = np.triu(X)
+        return U + np.triu(X, 1).T
+
+    def rnea_derivatives(self, q: np.ndarray, v: np.ndarray, a: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """(dtau_dq, dtau_dv, M) of rnea(q, v, a) by ``computeRNEADerivatives``."""
+        r = self.ref
+        dq, dv, da = pin.computeRNEADerivatives(self.model, self.data, r.pin_q(q), r.pin_v(v), r.pin_v(a, "a"))
+        return self._m(dq), self._m(dv), self._m(self._sym(np.array(da)))
+
+    def aba_derivatives(self, q: np.ndarray, v: np.ndarray, tau: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """(da_dq, da_dv, M^-1) of aba(q, v, tau) by ``computeABADerivatives``; tau (18,) = (trunk
+        wrench, body frame; joint torques)."""
+        r = self.ref
+        dq, dv, dtau = pin.computeABADerivatives(self.model, self.data, r.pin_q(q), r.pin_v(v), r.pin_v(tau, "tau"))
+        return self._m(dq), self._m(dv), self._m(self._sym(np.array(dtau)))
+
+    def aba(self, q: np.ndarray, v: np.ndarray, tau: np.ndarray) -> np.ndarray:
+        r = self.ref
+        return r.project_v(pin.aba(self.model, self.data, r.pin_q(q), r.pin_v(v), r.pin_v(tau, "tau")))
+
+    def integrate(self, q: np.ndarray, dq: np.ndarray) -> np.ndarray:
+        """``pinocchio.integrate(model, q, dq)`` in the project's coordinates (dq in project order)."""
+        r = self.ref
+        return r.project_q(pin.integrate(self.model, r.pin_q(q), r.pin_v(dq, "dq")))

@@ -13,77 +13,52 @@ trunk's spatial acceleration, as everywhere in the project.
 
 from __future__ import annotations
 
-import os
-import sys
-import time
 from collections.abc import Callable
 from dataclasses import dataclass
 from datetime import datetime, timezone
 from pathlib import Path
 from typing import Any
 
-from quadruped_dyn.errors import InputError
-from quadruped_dyn.model.robot import ROBOT_NAMES, robot_path
+from quadruped_dyn.files.paths import writable_dir
+from quadruped_dyn.files.safe_write import output_dir, output_path, write_text
+from quadruped_dyn.model.robot import Robot, robot_name, robot_path
+from quadruped_dyn.progress import Steps
 from quadruped_dyn.report.gather import (
     CHECK_SAMPLES,
     FRICTION_MU,
+    closed_loop,
+    cross_library,
+    embedded_footprint,
     experiment,
     generated_c,
     grf_posture,
     leg_points,
     load_with_warnings,
     notebooks,
+    optimal_trot,
     reduced_rows,
     robot_data,
     symbolic_data,
     versions,
 )
-from quadruped_dyn.report.gather import optimal_trot as gather_optimal_trot
-from quadruped_dyn.report.html import Section, figure, page
+from quadruped_dyn.report.html import Section, esc, figure, page
+
+Progress = Steps  # numbered steps with a bar inside a long one (quadruped_dyn.progress)
 
 
-class Progress:
-    """One line per step on stderr: ``[k/N] what ... 12.3 s``; on a terminal, a step with
-    a count (``count(n, total)``) shows it as it goes."""
-
-    def __init__(self, total: int, enabled: bool = True) -> None:
-        self.total, self.k, self.enabled = total, 0, enabled
-        self.line = ""
-        self.live = enabled and sys.stderr.isatty()
-
-    def step(self, what: str) -> Callable[[], None]:
-        self.k += 1
-        start = time.perf_counter()
-        self.line = f"[{self.k}/{self.total}] {what} ..."
-        if self.enabled:
-            print(self.line, end="", file=sys.stderr, flush=True)
-
-        def done() -> None:
-            if self.enabled:
-                again = f"\r{self.line}\x1b[K" if self.live else ""  # rewrite the line a count has extended
-                print(f"{again} {time.perf_counter() - start:.1f} s", file=sys.stderr, flush=True)
-
-        return done
-
-    def count(self, n: int, total: int) -> None:
-        if self.live:
-            print(f"\r{self.line} {n}/{total}", end="", file=sys.stderr, flush=True)
+#: Gait cycles of the report's closed loop (walk and trot, every controller): 2 keeps the main job
+#: short (7 controllers x 2 gaits x 2 cycles, ~25 s simulated); `quadruped-dyn control --cycles 10`
+#: and the slow tests run the 10-cycle study (docs/closed_loop.md).
+REPORT_CLOSED_LOOP_CYCLES = 2
 
 
 def prepare(robot_arg: str, out: str | Path) -> tuple[Path, Path]:
     """Validate the arguments before any work: (URDF path, the robot's output directory).
     InputError for an unknown robot or an output directory that cannot be written."""
     urdf = robot_path(robot_arg)
-    name = robot_arg if robot_arg in ROBOT_NAMES else urdf.stem  # as load_robot names it
-    target = Path(out) / name
-    try:
-        target.mkdir(parents=True, exist_ok=True)
-        probe = target / f".write-test-{os.getpid()}"
-        probe.write_text("")
-        probe.unlink()
-    except OSError as e:
-        raise InputError(f"cannot write to '{target}' ({e.strerror}); expected a writable --out directory") from e
-    return urdf, target
+    # as load_robot names it: a safe name, one path component; never a link out of --out
+    target = output_dir(writable_dir(out, f"--out '{out}'", "a writable --out directory"), robot_name(urdf))
+    return urdf, writable_dir(target, f"--out '{target}'", "a writable --out directory")
 
 
 # ----------------------------------------------------------------------------- gathering
@@ -111,7 +86,30 @@ class ReportResult:
 
 def _failed(key: str, title: str, e: Exception) -> Section:
     message = f"{type(e).__name__}: {str(e).strip().splitlines()[0] if str(e).strip() else ''}"
-    return Section(key, title, "FAIL", message[:160], f'<p class="warn">Could not build this section: {message}</p>')
+    return Section(key, title, "FAIL", message[:160], f'<p class="warn">Could not build this section: {esc(message)}</p>')
+
+
+@dataclass
+class _Job:
+    """What the sections of one report share: the robot, where its files go, the options, and the
+    term check's dict (the GRF section shows its rows too)."""
+
+    robot: Robot
+    urdf_warnings: list[str]
+    target: Path
+    fast: bool
+    samples: int
+    progress: Progress
+    check: dict[str, Any] | None = None
+
+
+def _attempt(key: str, title: str, build: Callable[[], Section]) -> Section:
+    """The section ``build`` returns, or a FAIL section with its message: one section failing must not
+    lose the others (it is reported on the page)."""
+    try:
+        return build()
+    except Exception as e:
+        return _failed(key, title, e)
 
 
 def build_report(robot_arg: str = "paper", out: str | Path = "results", fast: bool = False,
@@ -121,107 +119,118 @@ def build_report(robot_arg: str = "paper", out: str | Path = "results", fast: bo
     import matplotlib
 
     matplotlib.use("Agg")  # figures go into the page, never to a window
-    from quadruped_dyn.report import sections as rs
-    from quadruped_dyn.report.figures import footprint_figure, sparsity_figure, stick_figure
-
     _, target = prepare(robot_arg, out)
-    progress = Progress(9, show_progress)
-    sections: list[Section] = []
-
-    def attempt(key: str, title: str, build: Callable[[], Section]) -> None:
-        try:
-            sections.append(build())
-        except Exception as e:  # one section failing must not lose the others: it is reported on the page
-            sections.append(_failed(key, title, e))
-
+    progress = Progress(10, show_progress)  # loading, the steps of _steps, writing the page
     done = progress.step(f"loading {robot_arg}")
     robot, urdf_warnings = load_with_warnings(robot_arg)
-    from quadruped_dyn.experiment.gait import gait_posture
-
-    def robot_section() -> Section:
-        chains = leg_points(robot, robot.standing_q)
-        fig = figure(stick_figure(chains, f"{robot.name} at its standing posture"), "stick figure of the robot",
-                     "legs and feet at robot.standing_q, trunk level, lowest foot on the ground")
-        return rs.robot_section(robot_data(robot, urdf_warnings), fig)
-
-    attempt("robot", "The robot", robot_section)
+    job = _Job(robot, urdf_warnings, target, fast, samples, progress)
+    sections = [_attempt("robot", "The robot", lambda: _robot_section(job))]
     done()
-
-    done = progress.step(f"every term against Pinocchio ({samples} random states)")
-    check: dict[str, Any] | None = None
-    try:
-        from quadruped_dyn.checks.terms import run_check
-
-        check = run_check(robot, samples, 0, progress=lambda n: progress.count(n, samples)).as_dict()
-        sections.append(rs.terms_section(check))
-    except Exception as e:
-        sections.append(_failed("terms", "Every term against Pinocchio", e))
-    done()
-
-    done = progress.step("GRF systems")
-
-    def grf_section() -> Section:
-        posture, cases, feet = grf_posture(robot, gait_posture(robot), FRICTION_MU)
-        fig = figure(footprint_figure(feet, cases), "free and unbalanced directions on the footprint",
-                     "rank-5 systems of the paper's model at the gait posture: free and unbalanced directions")
-        return rs.grf_section(check, posture, fig)
-
-    attempt("grf", "Ground-reaction-force systems", grf_section)
-    done()
-
-    done = progress.step("reduced model of every stance set")
-    attempt("reduced", "Reduced model per stance set",
-            lambda: rs.reduced_section(reduced_rows(robot, gait_posture(robot)), "the gait posture"))
-    done()
-
-    done = progress.step("the paper's experiment: trot and static walk")
-    def experiment_section() -> Section:
-        from quadruped_dyn.experiment.paper_experiment import joint_names  # the labels the validation JSON is keyed by
-
-        validations, plots = experiment(robot, target)
-        return rs.experiment_section(validations, joint_names(robot), plots)
-
-    attempt("experiment", "The paper's experiment: trot and static walk", experiment_section)
-    done()
-
-    attempt("optimal_control", "A trot the robot can do", lambda: rs.optimal_control_section(*gather_optimal_trot(robot, target)))
-
-    done = progress.step("generated C" + ("" if fast else " and the benchmark"))
-
-    def c_section() -> Section:
-        gen = generated_c(robot, target)
-        if fast:
-            return rs.generated_c_section(gen, None, "skipped with --fast")
-        from quadruped_dyn.bench.timing import run_bench
-
-        return rs.generated_c_section(gen, run_bench(robot).as_dict())
-
-    attempt("c", "Generated C", c_section)
-    done()
-
-    done = progress.step("symbolic terms")
-
-    def symbolic_section() -> Section:
-        formulas, note, sizes, patterns = symbolic_data(robot)
-        fig = figure(sparsity_figure(patterns), "sparsity of every term",
-                     "structural nonzeros: matrix outputs as they are, vector outputs as their Jacobian w.r.t. all inputs")
-        return rs.symbolic_section(formulas, note, sizes, fig)
-
-    attempt("symbolic", "Symbolic terms", symbolic_section)
-    done()
-
-    done = progress.step("notebooks")
-    if with_notebooks:
-        attempt("notebooks", "Notebooks, executed", lambda: rs.notebooks_section(*notebooks(robot)))
-    else:
-        sections.append(rs.notebooks_section(None, "not executed for this page"))
-    done()
-
+    for label, key, title, build in _steps(job, with_notebooks):
+        done = progress.step(label)
+        sections.append(_attempt(key, title, build))
+        done()
     done = progress.step("versions, writing the page")
+    from quadruped_dyn.report import sections as rs
+
     sections.append(rs.versions_section(versions()))
     path = target / "report.html"
     subtitle = (f"{robot.urdf} — built {datetime.now(timezone.utc):%Y-%m-%d %H:%M} UTC by quadruped-dyn report"
                 + (" --fast" if fast else ""))
-    path.write_text(page(f"quadruped_dyn report: {robot.name}", subtitle, sections))
+    write_text(output_path(target, "report.html"), page(f"quadruped_dyn report: {robot.name}", subtitle, sections))
     done()
     return ReportResult(path, sections)
+
+
+def _steps(job: _Job, with_notebooks: bool) -> list[tuple[str, str, str, Callable[[], Section]]]:
+    """(progress line, key, title, builder) of every section after the robot's, in page order."""
+    from quadruped_dyn.report import sections as rs
+
+    notebooks_built: Callable[[], Section] = ((lambda: rs.notebooks_section(*notebooks(job.robot))) if with_notebooks
+                                              else (lambda: rs.notebooks_section(None, "not executed for this page")))
+    return [
+        (f"every term against Pinocchio ({job.samples} random states) and other libraries", "terms",
+         "Every term against Pinocchio", lambda: _terms_section(job)),
+        ("GRF systems", "grf", "Ground-reaction-force systems", lambda: _grf_section(job)),
+        ("reduced model of every stance set", "reduced", "Reduced model per stance set", lambda: _reduced_section(job)),
+        ("the paper's experiment: trot and static walk", "experiment", "The paper's experiment: trot and static walk",
+         lambda: _experiment_section(job)),
+        ("generated C" + ("" if job.fast else " and the benchmark"), "c", "Generated C", lambda: _c_section(job)),
+        ("symbolic terms", "symbolic", "Symbolic terms", lambda: _symbolic_section(job)),
+        ("a trot the robot can do", "optimal_control", "A trot the robot can do",
+         lambda: rs.optimal_control_section(*optimal_trot(job.robot, job.target))),
+        ("closed loop in MuJoCo", "closed_loop", "Closed loop in MuJoCo",
+         lambda: rs.closed_loop_section(closed_loop(job.robot, job.target, REPORT_CLOSED_LOOP_CYCLES))),
+        ("notebooks", "notebooks", "Notebooks, executed", notebooks_built),
+    ]
+
+
+def _robot_section(job: _Job) -> Section:
+    from quadruped_dyn.report import sections as rs
+    from quadruped_dyn.report.figures import stick_figure
+
+    robot = job.robot
+    chains = leg_points(robot, robot.standing_q)
+    fig = figure(stick_figure(chains, f"{robot.name} at its standing posture"), "stick figure of the robot",
+                 "legs and feet at robot.standing_q, trunk level, lowest foot on the ground")
+    return rs.robot_section(robot_data(robot, job.urdf_warnings), fig)
+
+
+def _terms_section(job: _Job) -> Section:
+    from quadruped_dyn.checks.terms import run_check
+    from quadruped_dyn.report import sections as rs
+
+    job.check = run_check(job.robot, job.samples, 0, progress=lambda n: job.progress.count(n, job.samples)).as_dict()
+    try:  # MuJoCo and iDynTree as references, when installed; a failure here is shown, the terms are kept
+        job.check = {**job.check, **cross_library(job.robot)}
+    except Exception as e:
+        job.check = {**job.check, "cross_library_passed": False, "cross_library_note": f"could not run: {type(e).__name__}: {e}"}
+    return rs.terms_section(job.check)
+
+
+def _grf_section(job: _Job) -> Section:
+    from quadruped_dyn.experiment.gait import gait_posture
+    from quadruped_dyn.report import sections as rs
+    from quadruped_dyn.report.figures import footprint_figure
+
+    posture, cases, feet = grf_posture(job.robot, gait_posture(job.robot), FRICTION_MU)
+    fig = figure(footprint_figure(feet, cases), "free and unbalanced directions on the footprint",
+                 "rank-5 systems of the paper's model at the gait posture: free and unbalanced directions")
+    return rs.grf_section(job.check, posture, fig)
+
+
+def _reduced_section(job: _Job) -> Section:
+    from quadruped_dyn.experiment.gait import gait_posture
+    from quadruped_dyn.report import sections as rs
+
+    return rs.reduced_section(reduced_rows(job.robot, gait_posture(job.robot)), "the gait posture")
+
+
+def _experiment_section(job: _Job) -> Section:
+    from quadruped_dyn.experiment.paper_experiment import joint_names  # the labels the validation JSON is keyed by
+    from quadruped_dyn.report import sections as rs
+
+    validations, plots = experiment(job.robot, job.target, job.progress)
+    return rs.experiment_section(validations, joint_names(job.robot), plots)
+
+
+def _c_section(job: _Job) -> Section:
+    from quadruped_dyn.report import sections as rs
+
+    gen = generated_c(job.robot, job.target)
+    if job.fast:
+        return rs.generated_c_section(gen, None, "skipped with --fast")
+    from quadruped_dyn.bench.timing import run_bench
+
+    gen["embedded"] = embedded_footprint(job.robot, Path(gen["directory"]))  # cross builds, cached (docs/embedded.md)
+    return rs.generated_c_section(gen, run_bench(job.robot).as_dict())
+
+
+def _symbolic_section(job: _Job) -> Section:
+    from quadruped_dyn.report import sections as rs
+    from quadruped_dyn.report.figures import sparsity_figure
+
+    formulas, note, sizes, patterns = symbolic_data(job.robot)
+    fig = figure(sparsity_figure(patterns), "sparsity of every term",
+                 "structural nonzeros: matrix outputs as they are, vector outputs as their Jacobian w.r.t. all inputs")
+    return rs.symbolic_section(formulas, note, sizes, fig)

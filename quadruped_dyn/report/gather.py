@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import importlib.metadata
 import json
+import math
 import os
 import platform
 import subprocess
@@ -16,7 +17,9 @@ from typing import Any
 
 import numpy as np
 
-from quadruped_dyn.errors import InputError
+from quadruped_dyn.errors import InputError, NumericalError
+from quadruped_dyn.files.safe_write import output_dir
+from quadruped_dyn.math.compare import relative_error, scale_of
 from quadruped_dyn.model.leg import JOINT_ROLES
 from quadruped_dyn.model.robot import Robot, load_robot
 from quadruped_dyn.report.html import png_image
@@ -124,35 +127,38 @@ def reduced_rows(robot: Robot, q_joints: np.ndarray) -> list[dict[str, Any]]:
             (M,) = guarded_call(m.M_r, q_r, quat)
             cond = float(np.linalg.cond(M))
             if not cond < MAX_COND_M_R:
-                raise InputError(f"cond(M_r) = {cond:.1e}, beyond {MAX_COND_M_R:.0e}: numerically singular")
-        except InputError as e:  # a result: e.g. a front or back pair, whose free pitch the roll cannot describe
+                raise NumericalError(f"cond(M_r) = {cond:.1e}, beyond {MAX_COND_M_R:.0e}: numerically singular")
+        except (InputError, NumericalError) as e:  # a result: e.g. a front or back pair (its free pitch is not the roll)
             rows.append({"stance": s.name, "kind": s.kind, "n": m.n, "cond": float("inf"), "asymmetry": None,
                          "err_vs_pinocchio": None, "tol": REL_TOL_TERMS, "singular": str(e)})
             continue
-        P, zero = s.selection("paper"), np.zeros(m.n)
-        base = ref.reduced_inverse_dynamics(s.feet, P, q_r, zero, zero, quat)
-        M_ref = np.column_stack([ref.reduced_inverse_dynamics(s.feet, P, q_r, zero, e, quat) - base for e in np.eye(m.n)])
-        scale = float(np.abs(M_ref).max())
+        M_ref = ref.reduced_mass_matrix(s.feet, s.selection("paper"), q_r, quat)
         rows.append({"stance": s.name, "kind": s.kind, "n": m.n, "cond": cond,
-                     "asymmetry": float(np.abs(M - M.T).max() / np.abs(M).max()),
-                     "err_vs_pinocchio": float(np.abs(M - M_ref).max() / scale), "tol": REL_TOL_TERMS})
+                     "asymmetry": relative_error(M, M.T, scale_of(M)),
+                     "err_vs_pinocchio": relative_error(M, M_ref), "tol": REL_TOL_TERMS})
     return rows
 
-def experiment(robot: Robot, out: Path) -> tuple[dict[str, dict[str, Any] | None], dict[str, str]]:
+def experiment(robot: Robot, out: Path, progress: Any = None) -> tuple[dict[str, dict[str, Any] | None], dict[str, str]]:
     """Both gaits' validation (two cycles each, DOP853 sampled every EXPERIMENT_DT, with the
     physics check): the JSON dicts and the BR HFE figures, written beside the report as
-    ``validate`` writes them."""
+    ``validate`` writes them. ``progress``: a ``quadruped_dyn.progress.Steps`` whose current
+    step gets a bar of the simulated seconds and runs."""
     from quadruped_dyn.experiment.gait import GAITS
-    from quadruped_dyn.experiment.outputs import output_paths, plot_br_hfe, plot_physics_check, write_json
+    from quadruped_dyn.experiment.outputs import output_paths, plot_br_hfe, plot_physics_check
     from quadruped_dyn.experiment.paper_experiment import report as validation_report
     from quadruped_dyn.experiment.paper_experiment import run_experiment, static_stability
     from quadruped_dyn.experiment.simulate import reduced_dynamics
+    from quadruped_dyn.files.json import write_json
 
     validations: dict[str, dict[str, Any] | None] = {}
     plots: dict[str, str] = {}
+    runs = {name: 3 + (gait.n_coords == 13) + 5 for name, gait in GAITS.items()}  # as run_experiment does them
+    bar = progress.bar(sum(n * 2 * GAITS[g].period for g, n in runs.items()), "s simulated",
+                       runs=None) if progress is not None else None
     for name, gait in GAITS.items():
         horizon = 2 * gait.period
-        exp = run_experiment(robot, gait, reduced_dynamics(robot, "c"), horizon, EXPERIMENT_DT)
+        exp = run_experiment(robot, gait, reduced_dynamics(robot, "c"), horizon, EXPERIMENT_DT,
+                             progress=bar.advance if bar is not None else None)
         data = validation_report(exp, "dop853", EXPERIMENT_DT, "c", static_stability(exp.plan, exp.ik, horizon))
         paths = output_paths(out, robot.name, name)
         write_json(paths["json"], data)
@@ -166,41 +172,73 @@ def experiment(robot: Robot, out: Path) -> tuple[dict[str, dict[str, Any] | None
     return validations, plots
 
 def generated_c(robot: Robot, out: Path) -> dict[str, Any]:
-    """Generate the C beside the report, compile (cached) and compare each function with
-    Pinocchio at the fixed reference state."""
-    from quadruped_dyn.checks.c_reference import generate_checked, pinocchio_outputs, reference_state
-    from quadruped_dyn.codegen.emit import PREFIX, codegen_functions, work_sizes
-    from quadruped_dyn.codegen.library import CompiledFunction, compiled_library
+    """Generate the C beside the report (every function: the full-coordinate terms, the GRF
+    solves and the reduced model of every stance set), compile (cached) and compare each
+    function with Pinocchio at the fixed reference state, as the generated ``check_qd`` does."""
+    import casadi as ca
+
+    from quadruped_dyn.checks.c_reference import reference_header, reference_header_name, reference_state
+    from quadruped_dyn.codegen.emit import generate
+    from quadruped_dyn.codegen.library import compiled_library
     from quadruped_dyn.dynamics.formulas import shapes
-    from quadruped_dyn.references.pinocchio import PinocchioReference
-    from quadruped_dyn.tolerances import REL_TOL_TERMS
 
-    directory = out / "c"
-    paths = generate_checked(robot, directory)
-    work = work_sizes(paths[1].read_text())
+    directory = out / "c"  # created by output_dir (never a link out of --out) when generated
+    generated: dict[str, Any] = {}
 
+    def reference_file(functions: list[ca.Function], work: dict[str, tuple[int, int]]) -> dict[str, str]:
+        generated.update(functions=functions, work=work)  # every generated Function, as generate() builds them
+        return {reference_header_name(robot): reference_header(robot, functions, work)}
+
+    paths = generate(robot, output_dir(out, "c"), extra_files=reference_file).all()
+    work = generated["work"]
     functions: list[dict[str, Any]] = [
         {"name": f.name(), "inputs": shapes(f), "outputs": shapes(f, outputs=True), "instructions": f.n_instructions(),
-         "iw": work[f.name()][0], "w": work[f.name()][1]} for f in codegen_functions(robot)]
+         "iw": work[f.name()][0], "w": work[f.name()][1]} for f in generated["functions"]]
     start = time.perf_counter()
     library = compiled_library(robot)
     compile_s = time.perf_counter() - start
-    ref, s = PinocchioReference(robot), reference_state(robot)
-    inputs = {"q": s.q, "v": s.v, "a": s.a, "f": s.f.ravel()}
-    checks = []
-    for f in functions:
-        name = f["name"][len(PREFIX):]
-        fn = CompiledFunction(library, name)
-        ours = fn(*[inputs[n] for n in fn.names_in])
-        expected = pinocchio_outputs(robot, ref, name, s)
-        ours_all = np.concatenate([np.asarray(o, dtype=float).ravel() for o in ours])
-        expected_all = np.concatenate([np.asarray(e, dtype=float).ravel() for e in expected])
-        # relative to the largest reference output: a residual that should be ~0 has no scale of its own
-        err = float(np.abs(ours_all - expected_all).max() / (np.abs(expected_all).max() or 1.0))
-        checks.append({"name": f["name"], "max_rel_err": err, "tol": REL_TOL_TERMS})
+    s = reference_state(robot)
+    checks = [c_function_check(robot, library, f, s) for f in generated["functions"]]
     return {"directory": str(directory), "files": [{"name": p.name, "bytes": p.stat().st_size} for p in paths],
             "functions": functions, "checks": checks, "compile_s": compile_s,
             "library_bytes": library.path.stat().st_size}
+
+#: A case whose scaled tolerance exceeds this could only fail on NaN: reported skipped (check_qd.c's QD_MAX_TOL).
+C_CHECK_MAX_TOL = 1e-2
+
+def c_function_check(robot: Robot, library: Any, f: Any, s: Any) -> dict[str, Any]:
+    """One compiled function at the reference state ``s`` against Pinocchio: the relative error
+    (to the largest reference output), its tolerance scaled by the state's conditioning
+    (``c_reference.tolerance_scale``), and pass / FAIL / skipped with the reason, as check_qd."""
+    from quadruped_dyn.checks.c_reference import pinocchio_outputs, reduced_inputs, tolerance_scale
+    from quadruped_dyn.codegen.emit import PREFIX
+    from quadruped_dyn.codegen.library import CompiledFunction
+    from quadruped_dyn.math.compare import relative_error, within
+    from quadruped_dyn.references.pinocchio import PinocchioReference
+    from quadruped_dyn.tolerances import REL_TOL_TERMS
+
+    name = f.name()[len(PREFIX):]
+    ref = PinocchioReference(robot)
+    inputs = {"q": s.q, "v": s.v, "a": s.a, "f": s.f.ravel(), **reduced_inputs(s)}
+    tol = REL_TOL_TERMS * tolerance_scale(ref, name, s)
+    row: dict[str, Any] = {"name": f.name(), "max_rel_err": None, "tol": tol, "status": "FAIL", "note": ""}
+    try:
+        ours = CompiledFunction(library, name)(*[inputs[f.name_in(i)][: f.nnz_in(i)] for i in range(f.n_in())])
+    except Exception as e:  # a return code (QD_NONFINITE, QD_SINGULAR): a skip only where < 2 digits are left
+        skipped = "singular" in str(e) and tol > C_CHECK_MAX_TOL
+        row.update(status="skipped" if skipped else "FAIL", note=str(e))
+        return row
+    expected = pinocchio_outputs(robot, ref, name, s)
+    ours_all = np.concatenate([np.asarray(o, dtype=float).ravel() for o in ours])
+    expected_all = np.concatenate([np.asarray(e, dtype=float).ravel() for e in expected])
+    # relative to the largest reference output: a residual that should be ~0 has no scale of its own
+    err = relative_error(ours_all, expected_all)
+    row["max_rel_err"] = err
+    if math.isfinite(err) and tol > C_CHECK_MAX_TOL:
+        row.update(status="skipped", note=f"cond x eps = {tol:.1e} leaves < 2 digits")
+    else:
+        row["status"] = "pass" if within(err, tol) else "FAIL"
+    return row
 
 def symbolic_data(robot: Robot) -> tuple[list[dict[str, Any]] | None, str, list[dict[str, Any]], list[tuple[str, np.ndarray]]]:
     """Formulas of the DH robot checked against Pinocchio at random joint angles; sizes and
@@ -227,7 +265,7 @@ def symbolic_data(robot: Robot) -> tuple[list[dict[str, Any]] | None, str, list[
             for qj in states:
                 expected = np.asarray(reference(full_q(np.eye(3), np.zeros(3), qj)))
                 got = formula.evaluate(qj[:3]).reshape(expected.shape)
-                err = max(err, float(np.abs(got - expected).max() / (np.abs(expected).max() or 1.0)))
+                err = max(err, relative_error(got, expected))
             formulas.append({"title": formula.title, "latex": formula.latex, "mathml": formula.mathml,
                              "max_err_vs_pinocchio": err, "tol": REL_TOL_TERMS})
         note = (f"Front-left leg of the DH robot, from the CasADi expressions (SX → SymPy, simplified). Trunk frame "
@@ -296,3 +334,52 @@ def optimal_trot(robot: Robot, out: Path) -> tuple[dict[str, Any], str]:
     plot = (f"<figure>{png_image(paths['plot'].read_bytes(), 'optimised trot')}<figcaption>the optimised trot against "
             "today's plan: joint angles, trunk, torques, and the open-loop rigid-contact replay</figcaption></figure>")
     return json.loads(paths["json"].read_text()), plot
+#: Random states of the cross-library comparison (``check --against``'s default).
+CROSS_LIBRARY_SAMPLES = 20
+
+def cross_library(robot: Robot) -> dict[str, Any]:
+    """MuJoCo and iDynTree as references, as ``check --against`` runs them, for each of them
+    that is installed (the ``xlib`` extra, which ``./run`` installs): ``cross_library`` rows,
+    ``model_changes``, ``cross_library_passed``; ``cross_library_note`` says what was not run."""
+    import importlib.util
+
+    from quadruped_dyn.checks.cross_library import INSTALL_HINT, LIBRARIES, run_cross_library
+    from quadruped_dyn.checks.terms import json_safe
+
+    installed = [n for n, (_, package) in LIBRARIES.items() if importlib.util.find_spec(package) is not None]
+    missing = [n for n in LIBRARIES if n not in installed]
+    note = f"not installed: {', '.join(missing)} ({INSTALL_HINT})" if missing else ""
+    if not installed:
+        return {"cross_library_note": note}
+    data = json_safe(run_cross_library(robot, installed, CROSS_LIBRARY_SAMPLES, 0).as_dict())
+    assert isinstance(data, dict)
+    return {**data, "cross_library_samples": CROSS_LIBRARY_SAMPLES, "cross_library_note": note}
+
+
+def embedded_footprint(robot: Robot, directory: Path) -> dict[str, Any]:
+    """Caller memory, code size and stack on Cortex-M of the generated C in ``directory``
+    (``checks.embedded``; the cross builds take minutes once, then are cached)."""
+    from quadruped_dyn.checks.embedded import embedded_summary
+
+    return embedded_summary(robot, directory)
+
+
+def closed_loop(robot: Robot, out: Path, cycles: int = 10) -> dict[str, Any]:
+    """The closed loop in MuJoCo (``quadruped-dyn control``), walk and trot, every controller:
+    per gait the JSON as ``control --json`` prints it, the plots (PNG bytes) and the animation
+    (GIF bytes, or why there is none); the files are written to ``out`` too."""
+    from quadruped_dyn.control.closed_loop import prepare, run_all
+    from quadruped_dyn.control.outputs import best_controller, rendering_available, write_all
+    from quadruped_dyn.control.run import LoopOptions
+
+    rendering, why = rendering_available()
+    gaits: dict[str, Any] = {}
+    for gait in ("walk", "trot"):
+        study = run_all(prepare(robot, gait, loop=LoopOptions(cycles=cycles)), keep_qpos=rendering)
+        data, paths = write_all(out, study, animation=rendering)
+        gif = paths["animation"]
+        gaits[gait] = {"data": data, "plot_png": paths["plot"].read_bytes(), "grf_png": paths["grf_plot"].read_bytes(),
+                       "gif": gif.read_bytes() if gif.exists() else None, "animated": best_controller(study.results),
+                       "animation_note": "" if gif.exists() else f"no animation: offscreen rendering unavailable ({why})"}
+    return {"cycles": cycles, "gaits": gaits}
+

@@ -1,5 +1,11 @@
 """The report page: HTML building blocks and the page skeleton.
 
+Escaping happens here, in one place: ``table`` escapes every header, caption and cell that is
+not an ``Html`` value, and ``Html`` values are made only by the building blocks of this module
+(``cell``, ``badge``, ...) from escaped parts. Text from input (robot, joint and frame names,
+error messages, paths) therefore reaches the page only as text, never as markup: a cell that
+merely starts with ``<td`` is text like any other.
+
 Self-contained by construction: the style sheet is inline, images are data: URIs (base64 PNG),
 formulas are MathML (rendered by the browser, no script); the page has no script and loads
 nothing from the network.
@@ -30,6 +36,10 @@ class Section:
     body: str  # HTML
 
 
+class Html(str):
+    """Markup made by this module's building blocks (a table cell, a badge): inserted as is."""
+
+
 def esc(x: object) -> str:
     return html.escape(str(x))
 
@@ -56,13 +66,14 @@ def grade(err: float | None, tol: float | None) -> str:
 
 def cell(content: str, cls: str = "") -> str:
     """A table cell of ready HTML, with an optional CSS class."""
-    return f'<td class="{cls}">{content}</td>' if cls else f"<td>{content}</td>"
+    return Html(f'<td class="{esc(cls)}">{content}</td>' if cls else f"<td>{content}</td>")
 
 
 def table(header: Sequence[str], rows: Sequence[Sequence[str]], caption: str = "", cls: str = "") -> str:
-    """Rows of cells: each cell either from ``cell`` or plain text (escaped here)."""
+    """Rows of cells: each cell either from ``cell`` (an ``Html`` value) or text (escaped here,
+    whatever it looks like)."""
     head = "".join(f"<th>{esc(h)}</th>" for h in header)
-    body = "".join("<tr>" + "".join(c if c.startswith("<td") else f"<td>{esc(c)}</td>" for c in row) + "</tr>"
+    body = "".join("<tr>" + "".join(c if isinstance(c, Html) else f"<td>{esc(c)}</td>" for c in row) + "</tr>"
                    for row in rows)
     cap = f"<caption>{esc(caption)}</caption>" if caption else ""
     attr = f' class="{cls}"' if cls else ""
@@ -70,7 +81,7 @@ def table(header: Sequence[str], rows: Sequence[Sequence[str]], caption: str = "
 
 
 def badge(verdict: str) -> str:
-    return f'<span class="verdict v-{verdict.replace(" ", "-").lower()}">{esc(verdict)}</span>'
+    return f'<span class="verdict v-{esc(verdict.replace(" ", "-").lower())}">{esc(verdict)}</span>'
 
 
 def png_image(data: bytes, alt: str, width: int | None = None) -> str:
@@ -125,10 +136,10 @@ def page(title: str, subtitle: str, sections: Sequence[Section]) -> str:
     """The whole report: title, the summary table (linking to each section), the sections."""
     summary = table(
         ["section", "result", "headline"],
-        [[f'<td><a href="#{s.key}">{esc(s.title)}</a></td>', cell(badge(s.verdict)), s.headline] for s in sections],
+        [[cell(f'<a href="#{esc(s.key)}">{esc(s.title)}</a>'), cell(badge(s.verdict)), s.headline] for s in sections],
         cls="summary",
     )
-    body = "\n".join(f'<section id="{s.key}"><h2>{esc(s.title)} {badge(s.verdict)}</h2>\n{s.body}\n</section>'
+    body = "\n".join(f'<section id="{esc(s.key)}"><h2>{esc(s.title)} {badge(s.verdict)}</h2>\n{s.body}\n</section>'
                      for s in sections)
     return (f'<!DOCTYPE html>\n<html lang="en"><head><meta charset="utf-8"><title>{esc(title)}</title>'
             f"<style>{_CSS}</style></head>\n<body><h1>{esc(title)}</h1><p class=\"sub\">{esc(subtitle)}</p>\n"

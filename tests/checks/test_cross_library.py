@@ -18,10 +18,10 @@ from quadruped_dyn.checks import cross_library
 from quadruped_dyn.checks.cross_library import run_cross_library
 from quadruped_dyn.cli import main
 from quadruped_dyn.errors import InputError
+from quadruped_dyn.math.compare import relative_error
 from quadruped_dyn.model import paper_robot
 from quadruped_dyn.model.robot import ROBOT_NAMES, load_robot
 from quadruped_dyn.model.state import random_state, rotation
-from quadruped_dyn.references import interface
 from quadruped_dyn.references.interface import ModelChange, Prepared, max_rel_errors
 from quadruped_dyn.references.pinocchio import PinocchioReference
 from quadruped_dyn.tolerances import REL_TOL_TERMS
@@ -71,9 +71,10 @@ def test_against_bad_library_list_is_exit_2_before_loading(against, expected):
 
 
 def test_rel_err_fails_on_non_finite():
-    assert interface.rel_err(np.array([np.nan]), np.array([1.0])) == np.inf
-    assert interface.rel_err(np.array([1.0]), np.array([np.inf])) == np.inf
-    assert interface.rel_err(np.array([1.0 + 1e-12]), np.array([1.0])) == pytest.approx(1e-12, rel=1e-3)
+    """The cross-library comparison's error (``interface.max_rel_errors``) is compare.relative_error."""
+    assert relative_error(np.array([np.nan]), np.array([1.0])) == np.inf
+    assert relative_error(np.array([1.0]), np.array([np.inf])) == np.inf
+    assert relative_error(np.array([1.0 + 1e-12]), np.array([1.0])) == pytest.approx(1e-12, rel=1e-3)
 
 
 # ---------------------------------------------------------------------------- every robot, both libraries
@@ -101,7 +102,7 @@ def test_other_quadrupeds_by_path(relative, erd):
 
 @needs_mujoco
 def test_anymal_c_diagnosis_names_every_change_with_its_size():
-    """SPEC section 9: cameras break A + B >= C, the hatch is singular, 'base' has no inertial."""
+    """docs/results.md, other libraries: cameras break A + B >= C, the hatch is singular, 'base' has no inertial."""
     report = run_cross_library(load_robot("anymal_c"), ("mujoco",), SAMPLES, seed=0)
     changes = {c.kind: c for c in report.changes}
     assert {"hatch", "depth_camera_front_camera"} <= set(changes["refused"].links)
@@ -250,14 +251,14 @@ def test_moving_link_breaking_triangle_is_balanced_as_mujoco_does(tmp_path, monk
     """No welded neighbour: the comparison carries MuJoCo's balanceinertia rule, written into the copy
     (principal moments -> their mean). MuJoCo with balanceinertia on the original equals Pinocchio on
     that copy, so the difference from the original is the named change, and it is large.
-    The toolkit itself refuses such a leg link (SPEC section 8, urdf_validation); the comparison is
+    The toolkit itself refuses such a leg link (docs/reliability.md §2, urdf_rules); the comparison is
     exercised with that validation bypassed."""
     import quadruped_dyn.model.robot
 
     path = _variant(tmp_path, "thigh", _thigh_breaks_triangle)
     with pytest.raises(InputError, match=r"link 'FL_thigh' .*triangle inequality"):
         load_robot(path)
-    monkeypatch.setattr(quadruped_dyn.model.robot, "validate_urdf", lambda path: [])
+    monkeypatch.setattr(quadruped_dyn.model.robot, "validate_urdf", lambda path, data=None: [])
     monkeypatch.setattr(quadruped_dyn.model.robot, "inertia_problem", lambda moments: None)  # the merged-body check
     robot = load_robot(path, cached=False)
     report = run_cross_library(robot, ("mujoco",), SAMPLES, seed=7)
@@ -347,3 +348,31 @@ def test_continuous_joints_and_json_report(tmp_path):
                                                              for t in cross_library.TERMS}
     assert all(e["passed"] and e["max_rel_err"] <= REL_TOL_TERMS for e in entries)
     assert data["passed"] and {c["kind"] for c in data["model_changes"]} >= {"fused_links"}
+
+
+@pytest.mark.parametrize("against", ["mujoco,idyntree", "mujoco", "idyntree,mujoco"])
+def test_a_library_asked_for_and_not_compared_fails(monkeypatch, paper, against):
+    """MuJoCo refusing the URDF and its edited copy compares nothing: the check fails (exit 1) and
+    says which library was not compared and why, in the table and the JSON; iDynTree's rows alone
+    are not a pass (#18 item 5)."""
+    import json
+
+    from quadruped_dyn.references import mujoco as mujoco_ref
+
+    def refuse(*args, **kwargs):
+        raise mujoco_ref.MuJoCoRefusal("Error: mass and inertia of moving bodies must be larger than mjMINVAL")
+
+    monkeypatch.setattr(mujoco_ref, "compile_model", refuse)
+    report = run_cross_library(paper, against.split(","), samples=2)
+    assert not report.passed and list(report.not_compared) == ["mujoco"]
+    assert "refuses the edited copy too" in report.not_compared["mujoco"]
+    assert "mujoco    (nothing)       not compared: MuJoCo refuses" in report.table()
+    assert "NOT COMPARED: mujoco" in report.table()
+    if against != "mujoco,idyntree":
+        return  # the command line once (it runs the whole term check first)
+    result = CliRunner().invoke(main, ["check", "paper", "--samples", "2", "--json", "--against", against])
+    assert result.exit_code == 1, result.output
+    data = json.loads(result.stdout)
+    assert data["cross_library_passed"] is False and data["passed"] is False
+    assert list(data["cross_library_not_compared"]) == ["mujoco"]
+    assert {e["library"] for e in data["cross_library"]} == {"idyntree"}

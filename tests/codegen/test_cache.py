@@ -1,4 +1,4 @@
-"""The build cache trusts nothing it cannot verify (SPEC section 8): faults are injected
+"""The build cache trusts nothing it cannot verify (docs/reliability.md §4): faults are injected
 into a temporary QUADRUPED_DYN_CACHE; a corrupted entry is rebuilt, never loaded."""
 
 from __future__ import annotations

@@ -12,7 +12,13 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from quadruped_dyn.checks.c_reference import differing_files, pinocchio_outputs, reference_state
+from quadruped_dyn.checks.c_reference import (
+    compare_generation,
+    parse_reference_header,
+    pinocchio_outputs,
+    reference_differences,
+    reference_state,
+)
 from quadruped_dyn.codegen.emit import (
     CODEGEN_FUNCTIONS,
     PREFIX,
@@ -21,6 +27,7 @@ from quadruped_dyn.codegen.emit import (
     codegen_functions,
     reduced_symbol,
 )
+from quadruped_dyn.codegen.emit_derivatives import DERIVATIVE_NAMES
 from quadruped_dyn.codegen.library import CompiledFunction, compiled_library, load_external
 from quadruped_dyn.math.compare import max_abs_error, scale_of
 from quadruped_dyn.model.robot import load_robot
@@ -41,8 +48,46 @@ def _function_scale_error(ours: list[np.ndarray], expected: list[np.ndarray]) ->
 
 
 def test_committed_code_is_reproducible():
-    stale = differing_files(load_robot("paper"), CASADI_GEN)
-    assert not stale, f"casadi_gen differs from a fresh generation in {stale}: run `quadruped-dyn codegen paper --out casadi_gen`"
+    """The C, header and Makefile byte for byte; the Pinocchio-computed reference values (their
+    last digits depend on the CPU and BLAS) within their tolerance, naming any that moved."""
+    diff = compare_generation(load_robot("paper"), CASADI_GEN)
+    assert not diff, f"casadi_gen: {diff.summary()}: run `quadruped-dyn codegen paper --out casadi_gen`"
+
+
+def _perturbed(text: str, array: str, index: int, factor: float) -> str:
+    """The reference header with entry ``index`` of C array ``array`` multiplied by ``factor``."""
+    head, rest = text.split(f"static const double {array}[", 1)
+    size, body = rest.split("] = {", 1)
+    values, tail = body.split("};", 1)
+    items = values.split(", ")
+    items[index] = repr(float(items[index]) * factor)
+    return f"{head}static const double {array}[{size}] = {{{', '.join(items)}}};{tail}"
+
+
+def test_reference_values_are_compared_numerically():
+    """Round-off of another CPU (a few ulps, a residual's tiny value tripled) is not a difference;
+    a value moved beyond the tolerance is reported by name, index and amount; a change of the
+    structure (an array's size, a case's name) is a difference whatever the values."""
+    text = (CASADI_GEN / "qd_paper_reference.h").read_text()
+    header = parse_reference_header(text)
+    assert len(header.case_outputs) == len(CODEGEN_FUNCTIONS) + len(REDUCED_NAMES) * len(REDUCED_STANCE_SETS)
+    assert header.rel_tol == REL_TOL_TERMS and all(np.isfinite(v).all() for v in header.arrays.values())
+    residual = "qd_grf_FL_FR_BL_out2"  # the GRF residual: values at the round-off level
+    assert reference_differences(text, text) == []
+    assert reference_differences(text, _perturbed(text, "qd_M_full_out0", 0, 1 + 1e-14)) == []
+    assert reference_differences(text, _perturbed(text, residual, 0, 3.0)) == []
+    assert reference_differences(text, _perturbed(text, "qd_ref_q", 7, 1 + 1e-13)) == []
+    moved = reference_differences(text, _perturbed(text, "qd_M_full_out0", 3, 1 + 1e-6))
+    assert len(moved) == 1 and moved[0].startswith("qd_M_full_out0[3] ") and "tolerance 1.0e-10" in moved[0], moved
+    moved = reference_differences(text, _perturbed(text, "qd_ref_v", 2, 2.0))
+    assert len(moved) == 1 and moved[0].startswith("qd_ref_v[2] "), moved
+    assert reference_differences(text, _perturbed(text, "qd_G_full_out0", 0, float("nan")))[0].startswith("qd_G_full_out0[0]")
+    longer = text.replace("qd_ref_f[12] = {", "qd_ref_f[12] = {1, ", 1)
+    assert "qd_ref_f has 13 values" in reference_differences(text, longer)[0]
+    renamed = text.replace('"qd_M_full", qd_M_full', '"qd_M_fulx", qd_M_full')
+    assert "structure differs" in reference_differences(text, renamed)[0]
+    resized = text.replace("qd_ref_f[12]", "qd_ref_f[13]")
+    assert "structure differs" in reference_differences(text, resized)[0]
 
 
 def test_c_program_builds_and_passes(tmp_path):
@@ -51,7 +96,7 @@ def test_c_program_builds_and_passes(tmp_path):
     shutil.copytree(CASADI_GEN, work, ignore=shutil.ignore_patterns("build"))
     proc = subprocess.run(["make", "-C", str(work), "-j2", "check"], capture_output=True, text=True, check=False)
     assert proc.returncode == 0, proc.stdout[-3000:] + proc.stderr[-3000:]
-    n = len(CODEGEN_FUNCTIONS) + len(REDUCED_NAMES) * len(REDUCED_STANCE_SETS)
+    n = len(CODEGEN_FUNCTIONS) + len(REDUCED_NAMES) * len(REDUCED_STANCE_SETS) + len(DERIVATIVE_NAMES)
     assert f"\n{n} passed, 0 failed\n" in proc.stdout, "double: every function checked and passing"
     skipped = re.findall(r"\n\d+ passed, 0 failed, (\d+) skipped\n", proc.stdout)
     assert proc.stdout.count(" 0 failed") == 2 and all(int(k) <= 2 for k in skipped), proc.stdout[-500:]
@@ -99,7 +144,7 @@ def test_cache_key_tracks_the_source(paper):
     assert compiled_library(load_robot("solo12")).key != a.key
 
 
-def _call_ctypes(lib: ctypes.CDLL, name: str, real: type, args: list[np.ndarray], sizes: list[int]) -> list[np.ndarray]:
+def call_ctypes(lib: ctypes.CDLL, name: str, real: type, args: list[np.ndarray], sizes: list[int]) -> list[np.ndarray]:
     fn = getattr(lib, PREFIX + name)
     arg_arrays = [np.ascontiguousarray(x, dtype=real) for x in args]
     res_arrays = [np.zeros(n, dtype=real) for n in sizes]
@@ -121,8 +166,8 @@ def test_float_build_matches_double_build(paper):
         f = graphs[PREFIX + name]
         args = [inputs[f.name_in(i)] for i in range(f.n_in())]
         sizes = [f.nnz_out(i) for i in range(f.n_out())]
-        d = _call_ctypes(double, name, np.float64, args, sizes)
-        x = _call_ctypes(single, name, np.float32, args, sizes)
+        d = call_ctypes(double, name, np.float64, args, sizes)
+        x = call_ctypes(single, name, np.float32, args, sizes)
         assert _function_scale_error(x, d) <= FLOAT_REL_TOL, name
 
 
@@ -156,3 +201,23 @@ def test_codegen_cli_bad_input(tmp_path):
     assert result.exit_code == 2 and "Traceback" not in result.output
     result = CliRunner().invoke(main, ["codegen", "paper", "--out", str(tmp_path), "--precision", "half"])
     assert result.exit_code == 2
+
+
+def test_codegen_check_compares_at_the_precision_asked_for(tmp_path):
+    """`codegen --precision float --check` compares with a float generation (it compared with a
+    double one and reported a false difference); the source and the reference values are
+    reported separately."""
+    from click.testing import CliRunner
+
+    from quadruped_dyn.checks.c_reference import generate_checked
+    from quadruped_dyn.cli import main
+
+    generate_checked(load_robot("paper"), tmp_path, "float")
+    ok = CliRunner().invoke(main, ["codegen", "paper", "--out", str(tmp_path), "--precision", "float", "--check"])
+    assert ok.exit_code == 0 and "(float): up to date" in ok.output, ok.output
+    (tmp_path / "qd_paper_reference.h").write_text(
+        _perturbed((tmp_path / "qd_paper_reference.h").read_text(), "qd_C_full_out0", 1, 1.01))
+    bad = CliRunner().invoke(main, ["codegen", "paper", "--out", str(tmp_path), "--check"])
+    assert bad.exit_code == 1, bad.output
+    assert "source differs from a fresh generation: qd_paper.c, qd_paper.h" in bad.output, bad.output
+    assert "reference values differ beyond tolerance: qd_paper_reference.h: qd_C_full_out0[1] " in bad.output

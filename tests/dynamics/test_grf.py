@@ -10,14 +10,14 @@ from hypothesis import strategies as st
 
 from quadruped_dyn.dynamics.grf import friction_cone, grf_solve, grf_solves
 from quadruped_dyn.dynamics.guarded import guarded_call
-from quadruped_dyn.errors import InputError
+from quadruped_dyn.errors import InputError, NumericalError
 from quadruped_dyn.math.linalg import least_squares, min_norm
 from quadruped_dyn.model.stance import GRF_MODELS, STANCE_SETS, stance_set
 from quadruped_dyn.model.state import FullState, full_q, random_state, rotation
 from quadruped_dyn.tolerances import COND_ERR_FACTOR, RANK_RTOL, REL_TOL_TERMS
 from tests.conftest import assert_close
 
-EXPECTED_RANK = {  # (number of feet, model) -> rank, SPEC section 4
+EXPECTED_RANK = {  # (number of feet, model) -> rank, docs/formulation.md §4
     (4, "paper"): 5, (3, "paper"): 6, (2, "paper"): 5, (1, "paper"): 3, (0, "paper"): 0,
     (4, "min_norm"): 6, (3, "min_norm"): 6, (2, "min_norm"): 5, (1, "min_norm"): 3, (0, "min_norm"): 0,
 }
@@ -153,9 +153,9 @@ def test_solve_refuses_coincident_or_collinear_feet(paper):
     qj = paper.standing_q.copy()
     qj[0:3], qj[3:6] = analytic_ik("FL", target), analytic_ik("FR", target)
     q, zero = full_q(np.eye(3), np.zeros(3), qj), np.zeros(18)
-    with pytest.raises(InputError, match="rank 3 at this configuration, 5 expected"):
+    with pytest.raises(NumericalError, match="rank 3 at this configuration, 5 expected"):
         grf_solve(paper, "FL+FR").solve(q, zero, zero)
-    with pytest.raises(InputError, match="rank 5 at this configuration, 6 expected"):
+    with pytest.raises(NumericalError, match="rank 5 at this configuration, 6 expected"):
         grf_solve(paper, "FL+FR+BL").solve(q, zero, zero)  # FL, FR coincide: three feet on a line
     assert grf_solve(paper, "FL+BR").solve(q, zero, zero).rank == 5  # still a proper pair
 
@@ -190,7 +190,7 @@ def test_minimum_norm_least_squares_optimality(paper, seed, stance, model):
     U, sv, Vt = np.linalg.svd(A)
     rank = int(np.sum(sv > RANK_RTOL * sv[0]))
     assume(rank == solve.rank and sv[0] / sv[rank - 1] < 1e6)  # skip near-singular draws
-    allowed = COND_ERR_FACTOR * (sv[0] / sv[rank - 1]) * np.finfo(float).eps  # relative, as in check.py
+    allowed = COND_ERR_FACTOR * (sv[0] / sv[rank - 1]) * np.finfo(float).eps  # relative, as in checks/terms.py
     scale = np.abs(A).max() * (np.abs(residual).max() + np.abs(A @ lam).max())
     assert np.abs(A.T @ residual).max() <= allowed * scale, "residual not orthogonal to range(A)"
     assert np.abs(Vt[rank:] @ lam).max(initial=0.0) <= allowed * np.abs(lam).max(), "lambda has a null-space part"

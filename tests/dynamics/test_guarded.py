@@ -1,6 +1,7 @@
 """Property test of the public API (the README's layer) on malformed numbers: NaN, inf, huge,
-tiny, wrong lengths, zero quaternions. Every call either raises InputError or returns finite
-numbers -- never another exception, a crash, or a NaN."""
+tiny, wrong lengths, zero quaternions. Every call either raises InputError (or NumericalError, for
+finite inputs where the model is singular) or returns finite numbers -- never another exception,
+a crash, or a NaN."""
 
 from __future__ import annotations
 
@@ -12,7 +13,7 @@ from hypothesis import strategies as st
 from quadruped_dyn.dynamics.grf import grf_solve
 from quadruped_dyn.dynamics.newton_euler import full_dynamics
 from quadruped_dyn.dynamics.reduced import reduced_model
-from quadruped_dyn.errors import InputError
+from quadruped_dyn.errors import InputError, NumericalError
 from quadruped_dyn.model.robot import load_robot
 from quadruped_dyn.model.state import full_q
 
@@ -43,7 +44,7 @@ def vectors(draw: st.DrawFn, n: int, quaternion_at: int | None = None) -> np.nda
 def _finite_or_input_error(call) -> None:
     try:
         out = call()
-    except InputError as e:
+    except (InputError, NumericalError) as e:
         assert "\n" not in str(e), "one line"
         return
     values = out.values() if isinstance(out, dict) else (out if isinstance(out, tuple | list) else [out])

@@ -1,4 +1,4 @@
-"""Reduced coordinates (SPEC section 5): id_r against a Pinocchio-built reference, Walker-Orin
+"""Reduced coordinates (docs/formulation.md §5-§6): id_r against a Pinocchio-built reference, Walker-Orin
 vs AD, id_r = M_r qdd + C_r + G_r, forward dynamics, and the physics check against
 Pinocchio-quantity constrained dynamics with the stance feet as rigid point contacts."""
 
@@ -10,7 +10,7 @@ import pytest
 
 from quadruped_dyn.dynamics.guarded import guarded_call
 from quadruped_dyn.dynamics.reduced import reduced_model
-from quadruped_dyn.errors import InputError
+from quadruped_dyn.errors import InputError, NumericalError
 from quadruped_dyn.model.robot import load_robot
 from quadruped_dyn.references.pinocchio import PinocchioReference, roll_rates
 from quadruped_dyn.tolerances import COND_ERR_FACTOR, REL_TOL_TERMS
@@ -115,7 +115,7 @@ def test_forward_dynamics_reports_condition_and_refuses_singular_stances(paper):
     coincident = q_r.copy()  # FL and FR feet on one point: three feet on a line, GRF rank 5
     target = np.array([0.19, 0.0, -0.25])
     coincident[0:3], coincident[3:6] = analytic_ik("FL", target), analytic_ik("FR", target)
-    with pytest.raises(InputError, match="singular"):
+    with pytest.raises(NumericalError, match="singular"):
         m.forward_dynamics(coincident, qd, tau_r, quat)
 
 

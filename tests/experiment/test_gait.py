@@ -26,7 +26,7 @@ REL_TOL_DIFF = 1e-5
 EPS = 1e-9
 C2_TOL = (2e-9, 2e-7, 2e-5)
 
-#: The walk's static-stability targets (SPEC section 6): the CoM at least this far inside the
+#: The walk's static-stability targets (docs/formulation.md §9.1): the CoM at least this far inside the
 #: support triangle (m) at all times, and no stance foot pulling on the ground.
 MIN_COM_MARGIN_M = 0.02
 #: Static-stability samples in the tests, s (the CLI uses 5 ms; 20 ms keeps the sweep short).

@@ -1,4 +1,4 @@
-"""A check never passes on NaN or inf (SPEC section 8): the one comparison module, the check
+"""A check never passes on NaN or inf (docs/reliability.md §1): the one comparison module, the check
 report built on it, and its JSON."""
 
 from __future__ import annotations

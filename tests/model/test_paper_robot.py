@@ -1,4 +1,4 @@
-"""The paper's robot: DH conventions of SPEC section 1 and a reproducible URDF."""
+"""The paper's robot: DH conventions of docs/formulation.md §1 and docs/conventions.md §8 and a reproducible URDF."""
 
 from __future__ import annotations
 

@@ -1,4 +1,4 @@
-"""URDF validation (SPEC section 8): variants of the paper's URDF, generated here, are rejected
+"""URDF validation (docs/reliability.md §2): variants of the paper's URDF, generated here, are rejected
 with one line naming the element and the value (exit 2), or load and give the right answers
 (continuous joints, an odd inertia on a fixed link, the same file by another path)."""
 

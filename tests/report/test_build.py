@@ -3,6 +3,7 @@ the written page opened in a real headless Chromium with every image loaded."""
 
 from __future__ import annotations
 
+import importlib.util
 import re
 import shutil
 import subprocess
@@ -112,6 +113,11 @@ def test_full_report_renders(tmp_path):
         assert f'<section id="{key}">' in html
     assert "v-fail" not in html.split("<h2>Summary</h2>")[1].split("</table>")[0]
     assert not re.search(r'(src|href)="https?:', html)
+    header = (Path(__file__).resolve().parents[2] / "casadi_gen" / "qd_paper.h").read_text()
+    for name in re.findall(r"^ \*   (qd_\w+)\(.*iw \d+, w \d+", header, flags=re.M):  # every generated function, checked
+        assert re.search(rf"<td>{name}</td>.*?v-pass", html), name
+    if importlib.util.find_spec("mujoco") and importlib.util.find_spec("idyntree"):  # the xlib extra: the comparison ran
+        assert "<th>vs quadruped_dyn</th>" in html
     loaded, images, laid_out, maths = open_in_chromium(path, tmp_path)
     assert images >= 8 and loaded == images
     assert maths >= 3 and laid_out == maths

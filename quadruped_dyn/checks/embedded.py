@@ -1,0 +1,27 @@
+"""Everything measured about a generated directory for embedding (docs/embedded.md): each
+function's caller memory (from the header), its code size and worst-case stack on Cortex-M7 and
+Cortex-M4F at -Os and -O2 (``codegen.footprint``, cross builds, cached), against the issue's
+budgets. ``codegen --json`` prints it; the report shows it."""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Any
+
+from quadruped_dyn.codegen.emit import REDUCED_STANCE_SETS, stem
+from quadruped_dyn.codegen.footprint import robot_footprint
+from quadruped_dyn.codegen.work_memory import header_work_memory
+from quadruped_dyn.model.robot import Robot
+
+
+def embedded_summary(robot: Robot, directory: Path, footprint: bool = True) -> dict[str, Any]:
+    """JSON-ready summary of ``directory`` (a ``codegen`` output of ``robot``)."""
+    name = stem(robot)
+    memory = header_work_memory((Path(directory) / f"{name}.h").read_text())
+    functions = [{"name": n, "sz_arg": m.sz_arg, "sz_res": m.sz_res, "sz_iw": m.sz_iw, "sz_w": m.sz_w,
+                  "in_reals": m.n_in, "out_reals": m.n_out, "caller_bytes_double": m.bytes(8),
+                  "caller_bytes_float": m.bytes(4)} for n, m in memory.items()]
+    stances = [s.name.replace("+", "_") for s in REDUCED_STANCE_SETS]
+    return {"robot": robot.name, "directory": str(directory), "functions": functions,
+            "footprint": robot_footprint(Path(directory), list(memory), name, stances) if footprint
+            else {"skipped": "not requested"}}

@@ -1,0 +1,71 @@
+"""``control``: the generated C controls the robot in MuJoCo along a gait (docs/closed_loop.md)."""
+
+from __future__ import annotations
+
+import json
+
+import click
+
+from quadruped_dyn.cli.app import progress
+from quadruped_dyn.files.paths import writable_dir
+from quadruped_dyn.model.robot import load_robot
+
+
+@click.command()
+@click.argument("robot")
+@click.option("--gait", "gait_name", default="walk", show_default=True, help="walk (static, 3 feet) or trot.")
+@click.option("--controller", "controllers", multiple=True, metavar="NAME",
+              help="pd, ff+pd, ct, id+pd, ff+pd+level, ct+level, ff+pd+step (repeatable) [default: all].")
+@click.option("--cycles", default=10, show_default=True, type=int, help="Gait cycles to simulate.")
+@click.option("--rate", "rate_hz", default=1000.0, show_default=True, type=float, help="Control rate, Hz.")
+@click.option("--timestep", default=0.0005, show_default=True, type=float, help="MuJoCo's step, s.")
+@click.option("--mu", default=0.8, show_default=True, type=float, help="Friction coefficient of feet and floor.")
+@click.option("--kp-per-kg", default=None, type=float, help="Joint PD stiffness, N m/rad per kg [default: 20].")
+@click.option("--kd-per-kg", default=None, type=float, help="Joint PD damping, N m s/rad per kg [default: 0.5].")
+@click.option("--out", "out_dir", default="results", show_default=True, type=click.Path(),
+              help="Directory for the JSON, CSV, plots and animation.")
+@click.option("--no-animation", is_flag=True, help="Skip the animation.")
+@click.option("--json", "as_json", is_flag=True, help="Print the result as JSON.")
+def control(robot: str, gait_name: str, controllers: tuple[str, ...], cycles: int, rate_hz: float, timestep: float,
+            mu: float, kp_per_kg: float | None, kd_per_kg: float | None, out_dir: str, no_animation: bool,
+            as_json: bool) -> None:
+    """Closed loop: each controller (on the generated C) walks or trots ROBOT in MuJoCo.
+    Reports falls, tracking, trunk drift, foot slip, MuJoCo's contact forces against the
+    paper's GRF model, torque saturation and the C calls' time per tick."""
+    from dataclasses import replace
+
+    from quadruped_dyn.control.closed_loop import prepare, run_all
+    from quadruped_dyn.control.controllers import Gains
+    from quadruped_dyn.control.outputs import write_all
+    from quadruped_dyn.control.plant import PlantOptions
+    from quadruped_dyn.control.run import LoopOptions
+
+    gains = Gains()
+    gains = replace(gains, **{k: v for k, v in (("kp_per_kg", kp_per_kg), ("kd_per_kg", kd_per_kg)) if v is not None})
+    out = writable_dir(out_dir, f"--out '{out_dir}'")
+    study = prepare(load_robot(robot), gait_name, controllers, gains, LoopOptions(rate_hz=rate_hz, cycles=cycles),
+                    PlantOptions(timestep=timestep, mu=mu))
+    total = study.loop.cycles * study.plan.gait.period * len(study.controllers)
+    with progress(f"{study.robot.name} {gait_name}: simulated ms", int(round(total * 1000))) as bar:
+        done = [0]
+
+        def tick(t: float) -> None:
+            ms = int(round(t * 1000))
+            bar.update(max(0, ms - done[0]))
+            done[0] = max(done[0], ms)
+
+        run_all(study, progress=tick, keep_qpos=not no_animation)
+    data, paths = write_all(out, study, animation=not no_animation)
+    if as_json:
+        click.echo(json.dumps(data, indent=2))
+        return
+    click.echo(f"{study.robot.name} {gait_name}, {study.loop.cycles} cycles of {study.plan.gait.period:g} s, "
+               f"{study.loop.rate_hz:g} Hz control, MuJoCo step {study.plant.options.timestep:g} s")
+    click.echo(f"{'controller':<9} {'cycles up':>9} {'RMS [rad]':>10} {'max [rad]':>10} {'slip [mm]':>9} "
+               f"{'sat [s]':>8} {'C med [us]':>10} {'tick [us]':>9}")
+    for name, r in data["controllers"].items():
+        slip = r["foot_slip"]["max_m"]
+        click.echo(f"{name:<9} {r['cycles_up']:>9.0f} {r['tracking']['rms_rad']:>10.4f} {r['tracking']['max_rad']:>10.3f} "
+                   f"{(slip or 0) * 1e3:>9.1f} {r['saturation']['time_s']:>8.3f} {r['compute']['c_calls_median_us']:>10.2f} "
+                   f"{r['compute']['tick_python_median_us']:>9.0f}" + (f"  {r['stopped']}" if r["stopped"] else ""))
+    click.echo(f"files: {', '.join(str(p) for p in paths.values() if p.exists())}")

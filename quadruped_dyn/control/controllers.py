@@ -1,0 +1,315 @@
+"""Controllers of the closed loop, built on the compiled, verified generated C.
+
+Every controller sees the same inputs at every tick: the reference (the gait's IK at t: q_ref,
+qd_ref, qdd_ref, 12 joints + the roll for a gait with two-feet phases, all from the plan), the
+plan's stance set, and the ``Measurement`` (joint q, qd; trunk orientation and angular rate,
+an IMU). Nothing else of the plant's state is used: no trunk position or linear velocity.
+All model-based terms come from the generated C of ``codegen`` (``CompiledFunction`` of the
+robot's ``compiled_library``: ``id_r``, ``M_r``, ``CG_r`` of the stance set), never from the
+CasADi graph.
+
+* ``pd``: tau = Kp (q_ref - q) + Kd (qd_ref - qd), the baseline.
+* ``ff+pd``: tau = id_r(q_ref, qd_ref, qdd_ref, R = I)[:12] + the same PD: the paper's
+  torques along the plan (its 13th entry, the roll moment the feet cannot produce, is
+  not applied: no joint actuates the roll).
+* ``ct``, ``id+pd`` and the ``+level`` variants take the stance set of their model from the plan
+  and the foot contact switches (``model_stance``): a foot the plan has in stance but which
+  is off the ground is a swing leg for the model (a lightly loaded foot that lifts early, a
+  late touch-down); pd and ff+pd use the plan's stance only.
+* ``ct``: computed torque on the reduced model at the **measured** state,
+  tau = the first 12 entries of M_r(q, R) (qdd_ref + Kp_a e + Kd_a edot) + CG_r(q, qd, R), e = q_ref - q.
+  With two stance feet the 13th coordinate is the trunk roll phi, measured by the IMU
+  (phi from R = Rz Ry Rx(phi), phid = e_phi . omega_b); its reference is 0, its commanded
+  acceleration -Kp_a phi - Kd_a phid, and the 13th row of the result -- the moment about
+  the foot-to-foot line it would take -- is dropped (unactuated), so the roll is only
+  influenced through the coupling of M_r's first 12 rows.
+* ``id+pd``: id_r at the **measured** state (joint q, qd; roll and roll rate from the IMU for
+  two feet; the trunk orientation) with the reference's accelerations, plus the same joint PD.
+* ``ff+pd+level`` and ``ct+level``: the same, tracking the reference levelled by the IMU
+  (``levelled``): trunk-attitude feedback through the legs -- the stance legs' targets tilt
+  the trunk back to level (their forces, through the ground, produce the correcting moment),
+  the swing feet land on the ground whatever the tilt. With two feet the moment about the
+  foot-to-foot line, which the paper's model leaves unbalanced and which rolls the trunk,
+  cannot be produced by the stance feet: what counters it is the swing pair, whose feet are
+  brought down to the ground on the side the trunk rolls towards and catch it at touch-down.
+
+* ``ff+pd+step``: ``ff+pd`` with capture-point foot placement of the swing feet (``FfPdStep``),
+  the trunk velocity estimated from encoders and IMU: what catches the trot's roll.
+
+Gains are per kg of robot (``Gains``): Kp = kp_per_kg m, Kd = kd_per_kg m for the joint PD
+(pd, ff+pd); the computed-torque controllers' gains are accelerations (1/s^2, 1/s), a
+natural frequency and damping ratio independent of the mass.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from dataclasses import dataclass
+from typing import Protocol
+
+import numpy as np
+import pinocchio as pin
+
+from quadruped_dyn.codegen.emit import reduced_symbol
+from quadruped_dyn.codegen.library import CompiledFunction, compiled_library
+from quadruped_dyn.control.plant import Command, Measurement
+from quadruped_dyn.control.reference import Reference
+from quadruped_dyn.errors import InputError
+from quadruped_dyn.experiment.plan_ik import ReferenceSample
+from quadruped_dyn.model.robot import Robot
+from quadruped_dyn.model.stance import StanceSet
+
+IDENTITY_QUAT = np.array([0.0, 0.0, 0.0, 1.0])
+
+#: Joint PD gains per kg of robot: the paper robot (10 kg) gets 200 N m/rad and 5 N m s/rad,
+#: run by the joint drivers at the plant's rate (``plant.Command``). Stiffer than the physics
+#: check's (3 and 0.15 per kg, rigid contacts): measured on the paper robot's walk under ff+pd
+#: on MuJoCo's soft contacts, 3 cycles: 5 and 0.2 per kg fall in the 2nd cycle, 10 and 0.3
+#: in the 3rd, 20 and 0.5 stay up with 0.005 rad RMS tracking. The walk's CoM margin is 2 cm.
+KP_PER_KG = 20.0  # N m / rad / kg
+KD_PER_KG = 0.5  # N m s / rad / kg
+
+#: Natural frequency (rad/s) and damping ratio of the computed-torque controllers' error
+#: dynamics: 20 rad/s (3.2 Hz) is well below the 1 kHz loop and the contact's ~50 Hz
+#: (MuJoCo's default solref time constant 0.02 s), and fast against a 0.3 s gait phase.
+CT_OMEGA = 20.0
+CT_ZETA = 1.0
+
+
+
+@dataclass(frozen=True)
+class Gains:
+    kp_per_kg: float = KP_PER_KG  # N m / rad / kg
+    kd_per_kg: float = KD_PER_KG  # N m s / rad / kg
+    ct_omega: float = CT_OMEGA  # rad/s
+    ct_zeta: float = CT_ZETA
+
+    def validate(self) -> None:
+        for name, value in vars(self).items():
+            if not (math.isfinite(value) and value >= 0):
+                raise InputError(f"gain {name} = {value}; expected a finite number >= 0")
+
+    def as_dict(self, robot: Robot) -> dict[str, float]:
+        m = robot.total_mass
+        return {**vars(self), "mass_kg": m, "kp_Nm_per_rad": self.kp_per_kg * m, "kd_Nms_per_rad": self.kd_per_kg * m,
+                "ct_kp_per_s2": self.ct_omega**2, "ct_kd_per_s": 2 * self.ct_zeta * self.ct_omega}
+
+
+class Controller(Protocol):
+    name: str
+
+    def command(self, ref: ReferenceSample, stance: StanceSet, meas: Measurement) -> Command:
+        """This tick's command to the joint drivers (feedforward torques, PD target and gains)."""
+        ...
+
+
+class GeneratedC:
+    """The robot's generated reduced functions, called through ctypes (``CompiledFunction.raw``:
+    preallocated buffers, no checks); ``ns`` accumulates the wall time of these calls (copying
+    the inputs in, the ctypes call and the C), for the per-tick cost."""
+
+    def __init__(self, robot: Robot) -> None:
+        self.library = compiled_library(robot)
+        self._functions: dict[str, tuple[CompiledFunction, int]] = {}
+        self.ns = 0
+
+    def __call__(self, name: str, stance: StanceSet, *args: np.ndarray) -> np.ndarray:
+        key = reduced_symbol(name, stance)
+        entry = self._functions.get(key)
+        if entry is None:
+            entry = self._functions[key] = (CompiledFunction(self.library, key), 13 if len(stance.feet) == 2 else 12)
+        f, n = entry
+        t0 = time.perf_counter_ns()
+        out = f.raw(*args)[0]
+        self.ns += time.perf_counter_ns() - t0
+        return out.reshape(n, n, order="F").copy() if out.size == n * n else out.copy()
+
+
+def imu_roll(meas: Measurement) -> tuple[float, float]:
+    """Trunk roll phi (R = Rz Ry Rx(phi)) and its rate phid = e_phi . omega_b, from the IMU."""
+    R = pin.Quaternion(meas.quat / np.linalg.norm(meas.quat)).toRotationMatrix()
+    roll, pitch, _ = pin.rpy.matrixToRpy(R)
+    e = np.array([1.0, math.sin(roll) * math.tan(pitch), math.cos(roll) * math.tan(pitch)])
+    return float(roll), float(e @ meas.omega_b)
+
+
+def _pad(x: np.ndarray, n: int) -> np.ndarray:
+    """The reference's first n coordinates (a roll entry of 0 appended if it has none)."""
+    return x[:n] if x.size >= n else np.append(x, np.zeros(n - x.size))
+
+
+class Pd:
+    name = "pd"
+
+    def __init__(self, robot: Robot, gains: Gains, c: GeneratedC) -> None:
+        self.kp, self.kd = gains.kp_per_kg * robot.total_mass, gains.kd_per_kg * robot.total_mass
+        self.c = c
+
+    def pd(self, ref: ReferenceSample, tau: np.ndarray) -> Command:
+        """The joint PD to the reference, run by the drivers, plus a feedforward ``tau``."""
+        return Command(tau, ref.q_r[:12], ref.qd_r[:12], self.kp, self.kd)
+
+    def command(self, ref: ReferenceSample, stance: StanceSet, meas: Measurement) -> Command:
+        return self.pd(ref, np.zeros(12))
+
+
+class FfPd(Pd):
+    name = "ff+pd"
+
+    def command(self, ref: ReferenceSample, stance: StanceSet, meas: Measurement) -> Command:
+        n = 13 if len(stance.feet) == 2 else 12
+        tau = self.c("id_r", stance, _pad(ref.q_r, n), _pad(ref.qd_r, n), _pad(ref.qdd_r, n), IDENTITY_QUAT)
+        return self.pd(ref, tau[:12])
+
+
+class MeasuredIdPd(Pd):
+    """id_r at the **measured** state with the reference's accelerations, plus the same joint PD
+    (run by the drivers): the model's torques where the robot is, not where the plan is."""
+
+    name = "id+pd"
+
+    def command(self, ref: ReferenceSample, stance: StanceSet, meas: Measurement) -> Command:
+        stance = model_stance(stance, meas)
+        qdd = ref.qdd_r[:12]
+        q, qd = meas.q, meas.qd
+        if len(stance.feet) == 2:
+            roll, roll_rate = imu_roll(meas)
+            q, qd, qdd = np.append(q, roll), np.append(qd, roll_rate), np.append(qdd, 0.0)
+        tau = self.c("id_r", stance, q, qd, qdd, meas.quat)
+        return self.pd(ref, tau[:12])
+
+
+def model_stance(stance: StanceSet, meas: Measurement) -> StanceSet:
+    """The stance set of the computed-torque controllers' model: the plan's stance feet that the
+    foot contact switches report on the ground (a foot that lifts early or lands late is a swing
+    leg for the model), the plan's set if fewer than two remain (the reduced model needs two)."""
+    feet = tuple(i for i in stance.feet if meas.touching[i])
+    return StanceSet(feet) if len(feet) >= 2 else stance
+
+
+class ComputedTorque:
+    name = "ct"
+
+    def __init__(self, robot: Robot, gains: Gains, c: GeneratedC) -> None:
+        self.kp, self.kd = gains.ct_omega**2, 2 * gains.ct_zeta * gains.ct_omega
+        self.c, self.robot = c, robot
+
+    def commanded(self, ref: ReferenceSample, stance: StanceSet, meas: Measurement) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """(q_r, qd_r, qdd_r commanded) at the measured state."""
+        qdd = ref.qdd_r[:12] + self.kp * (ref.q_r[:12] - meas.q) + self.kd * (ref.qd_r[:12] - meas.qd)
+        if len(stance.feet) != 2:
+            return meas.q, meas.qd, qdd
+        roll, roll_rate = imu_roll(meas)
+        return (np.append(meas.q, roll), np.append(meas.qd, roll_rate),
+                np.append(qdd, -self.kp * roll - self.kd * roll_rate))
+
+    def command(self, ref: ReferenceSample, stance: StanceSet, meas: Measurement) -> Command:
+        stance = model_stance(stance, meas)
+        q, qd, qdd = self.commanded(ref, stance, meas)
+        M = self.c("M_r", stance, q, meas.quat)
+        CG = self.c("CG_r", stance, q, qd, meas.quat)
+        return Command((M @ qdd + CG)[:12])
+
+
+def levelled(ref: Reference, meas: Measurement) -> Reference:
+    """The reference corrected for the measured trunk tilt: each foot's target moved in the trunk
+    frame by delta x r_i, delta = (roll, pitch, 0) from the IMU -- where the plan's foot (on
+    the ground, or on its swing path) is seen from a trunk tilted by delta, to first order --
+    so that the stance legs push the trunk back to level and the swing feet land on the ground
+    rather than above or below it; the rates likewise with (omega_x, omega_y, 0). Through the
+    inverse foot Jacobians at the reference (``Reference.J_inv``): no kinematics per tick."""
+    R = pin.Quaternion(meas.quat / np.linalg.norm(meas.quat)).toRotationMatrix()
+    roll, pitch, _ = pin.rpy.matrixToRpy(R)
+    delta = np.array([roll, pitch, 0.0])
+    rate = np.array([meas.omega_b[0], meas.omega_b[1], 0.0])
+    dq = np.einsum("ijk,ik->ij", ref.J_inv, np.cross(delta, ref.r_feet)).ravel()
+    dqd = np.einsum("ijk,ik->ij", ref.J_inv, np.cross(rate, ref.r_feet)).ravel()
+    q, qd = ref.q_r.copy(), ref.qd_r.copy()
+    q[:12] += dq
+    qd[:12] += dqd
+    return Reference(q, qd, ref.qdd_r, ref.stance, ref.r_feet, ref.J_inv, ref.J, ref.phase_s)
+
+
+class FfPdLevel(FfPd):
+    """``ff+pd`` tracking the IMU-levelled reference (``levelled``); the feedforward id_r stays
+    the plan's."""
+
+    name = "ff+pd+level"
+
+    def command(self, ref: ReferenceSample, stance: StanceSet, meas: Measurement) -> Command:
+        n = 13 if len(stance.feet) == 2 else 12
+        tau = self.c("id_r", stance, _pad(ref.q_r, n), _pad(ref.qd_r, n), _pad(ref.qdd_r, n), IDENTITY_QUAT)
+        assert isinstance(ref, Reference)
+        return self.pd(levelled(ref, meas), tau[:12])
+
+
+class FfPdStep(FfPd):
+    """``ff+pd`` with capture-point foot placement: the trunk's horizontal velocity relative to
+    the stance feet is estimated from the encoders and the IMU (v_b = -(omega_b x r_i + J_i qd_i),
+    averaged over the stance feet, kinematics at the reference), its error e_v against the
+    plan's, and each swing foot's target is moved horizontally (trunk frame) towards
+    sqrt(h / g) e_v at touch-down (h: the trunk's height above the feet; the capture point of a
+    linear inverted pendulum), ramped in with the swing's smoothstep; a foot keeps the offset it
+    landed with through its stance. This is what acts on the roll the paper's model leaves
+    unbalanced in the trot: the diagonal pair falling sideways is caught by the next pair
+    landing further out."""
+
+    name = "ff+pd+step"
+    gain = 1.0  # times the capture point's sqrt(h / g)
+
+    def __init__(self, robot: Robot, gains: Gains, c: GeneratedC) -> None:
+        super().__init__(robot, gains, c)
+        self.offsets = np.zeros((4, 3))  # trunk frame, m: where each foot landed relative to the plan
+        self.swing_from = np.zeros((4, 3))
+        self.was_stance = [True] * 4
+
+    def command(self, ref: ReferenceSample, stance: StanceSet, meas: Measurement) -> Command:
+        assert isinstance(ref, Reference)
+        base = super().command(ref, stance, meas)
+        feet = list(stance.feet)
+        Jqd = np.einsum("ijk,ik->ij", ref.J, meas.qd.reshape(4, 3))
+        Jqd_ref = np.einsum("ijk,ik->ij", ref.J, ref.qd_r[:12].reshape(4, 3))
+        v = -(np.cross(meas.omega_b, ref.r_feet[feet]) + Jqd[feet]).mean(axis=0)
+        v_plan = -Jqd_ref[feet].mean(axis=0)
+        h = -float(ref.r_feet[:, 2].mean())
+        target = np.zeros(3)
+        target[:2] = self.gain * math.sqrt(max(h, 0.0) / 9.81) * (v - v_plan)[:2]
+        s = ref.phase_s
+        ramp = 10 * s**3 - 15 * s**4 + 6 * s**5
+        q_des = np.array(base.q_des if base.q_des is not None else ref.q_r[:12], dtype=float)
+        for i in range(4):
+            if i in feet:
+                self.was_stance[i] = True
+            else:
+                if self.was_stance[i]:  # lift-off: ramp from the offset it stood with
+                    self.swing_from[i] = self.offsets[i].copy()
+                    self.was_stance[i] = False
+                self.offsets[i] = (1 - ramp) * self.swing_from[i] + ramp * target
+            q_des[3 * i : 3 * i + 3] += ref.J_inv[i] @ self.offsets[i]
+        return Command(base.tau, q_des, base.qd_des, base.kp, base.kd)
+
+
+class ComputedTorqueLevel(ComputedTorque):
+    """``ct`` tracking the IMU-levelled reference (``levelled``)."""
+
+    name = "ct+level"
+
+    def command(self, ref: ReferenceSample, stance: StanceSet, meas: Measurement) -> Command:
+        assert isinstance(ref, Reference)
+        return super().command(levelled(ref, meas), stance, meas)
+
+
+CONTROLLERS = {c.name: c for c in (Pd, FfPd, ComputedTorque, MeasuredIdPd, FfPdLevel, ComputedTorqueLevel, FfPdStep)}
+
+
+def parse_controllers(names: tuple[str, ...] | list[str]) -> list[str]:
+    """Validated controller names (all of them for an empty selection), in CONTROLLERS' order."""
+    unknown = [n for n in names if n not in CONTROLLERS]
+    if unknown:
+        raise InputError(f"unknown controller '{unknown[0]}'; expected one of {', '.join(CONTROLLERS)}")
+    return [n for n in CONTROLLERS if not names or n in names]
+
+
+def make_controller(name: str, robot: Robot, gains: Gains, c: GeneratedC) -> Controller:
+    return CONTROLLERS[name](robot, gains, c)

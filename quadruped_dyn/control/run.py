@@ -1,0 +1,226 @@
+"""The closed loop: a controller at a fixed rate on the MuJoCo plant, along a gait plan.
+
+Per control tick (period 1 / ``rate_hz``, default 1 kHz; it must be a whole number of plant
+steps): measure (joint q, qd; trunk orientation and angular rate -- ``Plant.measure``), take the
+reference and stance set of the plan at t, compute the torques (``controllers``), hold them for
+the tick's plant steps (zero-order hold). The stance set is the plan's: a foot is in the model's
+stance from the planned touch-down to the planned lift-off whatever MuJoCo's contacts say (a
+late touch-down is not detected; the joint feedback keeps driving the foot to the planned
+foothold, and the feet's actual contacts are recorded and compared, ``measures``).
+
+The reference is the gait's IK (``plan_ik.reference``) sampled at the control rate over one
+gait cycle and repeated: the feet relative to the trunk are periodic in the plan (footholds and
+trunk advance by speed x period per cycle), so the joint reference is too.
+
+Initial state: the IK at t = 0 with the trunk at the plan's pose and zero velocity is dropped
+onto the floor (the feet start exactly on it) and held for ``settle_s`` by joint PD plus the
+generated C's gravity torques of the four-feet stance (G_r at the measured state); then the
+velocities are set to the plan's at t = 0 (joint rates from IK, trunk twist from the stance legs,
+``PinocchioReference.reduced_motion``) and the clock starts. Every controller starts from that
+same settled state.
+
+A run stops when the robot has fallen: trunk origin below ``FALL_HEIGHT_FRACTION`` of its
+planned height above the floor, or trunk tilt (angle between its z axis and the world's)
+above ``FALL_TILT_RAD``; or when the controller fails (a generated function reports a
+singular configuration, or a non-finite torque).
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from collections.abc import Callable
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from quadruped_dyn.codegen.library import CompiledFunction
+from quadruped_dyn.control.controllers import Controller, Gains, GeneratedC, Pd, make_controller
+from quadruped_dyn.control.plant import Plant, PlantOptions
+from quadruped_dyn.control.reference import reference_cycle
+from quadruped_dyn.errors import InputError
+from quadruped_dyn.experiment.gait import Plan
+from quadruped_dyn.experiment.plan_ik import ReferenceSample
+from quadruped_dyn.model.stance import StanceSet
+from quadruped_dyn.model.state import rotation
+from quadruped_dyn.references.pinocchio import PinocchioReference
+
+#: Fallen: trunk origin below this fraction of its planned height above the floor, or the
+#: trunk tilted more than FALL_TILT_RAD (40 deg): no controller here recovers from either.
+FALL_HEIGHT_FRACTION = 0.5
+FALL_TILT_RAD = math.radians(40.0)
+
+Progress = Callable[[float], None]  # simulated time reached, s
+
+
+@dataclass(frozen=True)
+class LoopOptions:
+    rate_hz: float = 1000.0
+    cycles: int = 10
+    settle_s: float = 0.5
+    grf_every: int = 10  # control ticks between GRF comparison samples
+
+    def validate(self, plant: PlantOptions, period: float) -> int:
+        """Plant steps per control tick; InputError for a rate that does not divide the plant's step."""
+        if not isinstance(self.cycles, int) or self.cycles <= 0:
+            raise InputError(f"--cycles {self.cycles}; expected a whole number of gait cycles > 0")
+        if not (math.isfinite(self.rate_hz) and self.rate_hz > 0):
+            raise InputError(f"control rate {self.rate_hz} Hz; expected a positive number")
+        steps = 1.0 / self.rate_hz / plant.timestep
+        if abs(steps - round(steps)) > 1e-9 * steps or round(steps) < 1:
+            raise InputError(f"control period {1 / self.rate_hz:g} s is not a whole number of plant steps "
+                             f"({plant.timestep:g} s); expected e.g. {1 / plant.timestep / 2:g} Hz")
+        ticks = period * self.rate_hz
+        if abs(ticks - round(ticks)) > 1e-9 * ticks:
+            raise InputError(f"control period {1 / self.rate_hz:g} s does not divide the gait cycle of {period:g} s")
+        if not (math.isfinite(self.settle_s) and self.settle_s >= 0):
+            raise InputError(f"settle time {self.settle_s} s; expected >= 0")
+        return int(round(steps))
+
+
+@dataclass
+class Trace:
+    """One closed-loop run, sampled at every control tick (arrays (N, ...))."""
+
+    controller: str
+    t: np.ndarray
+    q: np.ndarray  # (N, 12) measured joint angles, rad
+    qd: np.ndarray
+    q_ref: np.ndarray  # (N, 12)
+    qd_ref: np.ndarray
+    tau: np.ndarray  # (N, 12) the drivers' torques at the tick's last plant step, N m (before the effort clamp)
+    trunk_p: np.ndarray  # (N, 3) world, m
+    trunk_R: np.ndarray  # (N, 3, 3)
+    feet: np.ndarray  # (N, 4, 3) foot frame origins, world, m
+    contact_f: np.ndarray  # (N, 4, 3) MuJoCo's ground force on each foot, world, N
+    touching: np.ndarray  # (N, 4) bool
+    stance: list[tuple[int, ...]]  # the plan's stance set per tick
+    c_ns: np.ndarray  # (N,) wall time of the controller's generated-C calls, ns
+    tick_ns: np.ndarray  # (N,) the whole controller tick in Python (measure + reference + torques), ns
+    step_ns: np.ndarray  # (N,) MuJoCo's steps of the tick, ns
+    grf: list[dict] = field(default_factory=list)  # samples of MuJoCo's forces vs the paper's GRF model
+    qpos: np.ndarray | None = None  # (N, nq) MuJoCo's qpos, for the animation
+    fell_at: float | None = None  # s
+    stopped: str | None = None  # why the run ended early
+
+
+class _Stop(Exception):
+    pass
+
+
+def settled_state(plant: Plant, plan: Plan, gains: Gains, c: GeneratedC, rate_hz: float, substeps: int,
+                  settle_s: float, grf_every: int = 10) -> tuple[tuple[np.ndarray, np.ndarray], list[dict]]:
+    """((q (19,), v (18,)), GRF samples): the initial state every run starts from (see the module
+    docstring), and MuJoCo's contact forces vs the paper's four-feet GRF model over the second
+    half of the settling (the robot standing: the only four-feet instants of the gaits)."""
+    ref0 = reference_cycle(plan, rate_hz)[0]
+    four = StanceSet((0, 1, 2, 3))
+    q0 = np.concatenate([plan.trunk(0.0)[0], [0.0, 0.0, 0.0, 1.0], ref0.q_r[:12]])
+    plant.set_state(q0, np.zeros(18))
+    pd = Pd(plant.robot, gains, c)
+    hold = ReferenceSample(ref0.q_r[:12], np.zeros(12), np.zeros(12), four.feet)
+    ticks = int(round(settle_s * rate_hz))
+    functions: dict[str, CompiledFunction] = {}
+    grf = []
+    for k in range(ticks):
+        meas = plant.measure()
+        sample = k >= ticks // 2 and k % grf_every == 0
+        if sample:
+            q_full, v_full = plant.full_state()
+        plant.step(pd.pd(hold, c("G_r", four, meas.q, meas.quat)), substeps)
+        if sample:
+            f, touch = plant.contact_forces()
+            grf.append(_grf_sample(plant, functions, c, k / rate_hz - settle_s, four, q_full, v_full, f, touch))
+    q, _ = plant.full_state()
+    stance0 = plan.stance(0.0)
+    _, v, _ = PinocchioReference(plant.robot).reduced_motion(stance0, ref0.q_r, ref0.qd_r, ref0.qdd_r, q[3:7])
+    return (q, v), grf
+
+
+def run_controller(plant: Plant, plan: Plan, name: str, gains: Gains, options: LoopOptions, substeps: int,
+                   initial: tuple[np.ndarray, np.ndarray], c: GeneratedC, progress: Progress | None = None,
+                   keep_qpos: bool = False) -> Trace:
+    """One controller on the plant from ``initial`` for ``options.cycles`` gait cycles."""
+    controller: Controller = make_controller(name, plant.robot, gains, c)
+    cycle = reference_cycle(plan, options.rate_hz)
+    dt = 1.0 / options.rate_hz
+    n = int(round(options.cycles * plan.gait.period * options.rate_hz))
+    plant.set_state(*initial)
+    grf_functions: dict[str, CompiledFunction] = {}
+    height0 = -plant.floor_z  # planned trunk height above the floor (the plan's trunk is at z = 0)
+    keys = ("t", "q", "qd", "q_ref", "qd_ref", "tau", "p", "R", "feet", "f", "touch", "c", "tick", "step", "qpos")
+    rec: dict[str, list] = {k: [] for k in keys}
+    stances: list[tuple[int, ...]] = []
+    grf: list[dict] = []
+    fell_at, stopped = None, None
+    every = max(1, n // 200)
+    try:
+        for k in range(n):
+            t = k * dt
+            t0 = time.perf_counter_ns()
+            c.ns = 0
+            meas = plant.measure()
+            ref = cycle[k % len(cycle)]
+            stance = StanceSet(ref.stance)
+            try:
+                command = controller.command(ref, stance, meas)
+            except InputError as e:
+                stopped = f"controller failed at t = {t:.3f} s: {e}"
+                raise _Stop from e
+            t1 = time.perf_counter_ns()
+            if not all(x is None or np.all(np.isfinite(x)) for x in (command.tau, command.q_des, command.qd_des)):
+                stopped = f"controller returned a non-finite torque at t = {t:.3f} s"
+                raise _Stop
+            sample = k % options.grf_every == 0
+            if sample:
+                q_full, v_full = plant.full_state()
+            p, R = plant.trunk_position(), plant.rotation()
+            feet = plant.foot_positions()
+            plant.step(command, substeps)
+            t2 = time.perf_counter_ns()
+            if plant.unstable():
+                stopped = f"MuJoCo reports the simulation unstable at t = {t:.3f} s (non-finite or huge accelerations)"
+                raise _Stop
+            tau = plant.joint_torques()
+            f, touch = plant.contact_forces()
+            for key, value in (("t", t), ("q", meas.q), ("qd", meas.qd), ("q_ref", ref.q_r[:12]), ("qd_ref", ref.qd_r[:12]),
+                               ("tau", tau), ("p", p), ("R", R), ("feet", feet), ("f", f), ("touch", touch),
+                               ("c", c.ns), ("tick", t1 - t0), ("step", t2 - t1)):
+                rec[key].append(value)
+            if keep_qpos:
+                rec["qpos"].append(plant.data.qpos.copy())
+            stances.append(ref.stance)
+            if sample:
+                grf.append(_grf_sample(plant, grf_functions, c, t, stance, q_full, v_full, f, touch))
+            z_axis = plant.rotation()[:, 2]
+            tilt = math.acos(max(-1.0, min(1.0, float(z_axis[2]))))
+            if plant.data.qpos[2] - plant.floor_z < FALL_HEIGHT_FRACTION * height0 or tilt > FALL_TILT_RAD:
+                fell_at = t + dt
+                stopped = f"fell at t = {fell_at:.3f} s (trunk height {plant.data.qpos[2] - plant.floor_z:.3f} m above " \
+                          f"the floor, tilt {math.degrees(tilt):.0f} deg)"
+                raise _Stop
+            if progress and (k + 1) % every == 0:
+                progress((k + 1) * dt)
+    except _Stop:
+        pass
+    arr = {k: np.array(v) for k, v in rec.items()}
+    return Trace(name, arr["t"], arr["q"].reshape(-1, 12), arr["qd"].reshape(-1, 12), arr["q_ref"].reshape(-1, 12),
+                 arr["qd_ref"].reshape(-1, 12), arr["tau"].reshape(-1, 12), arr["p"].reshape(-1, 3),
+                 arr["R"].reshape(-1, 3, 3), arr["feet"].reshape(-1, 4, 3), arr["f"].reshape(-1, 4, 3),
+                 arr["touch"].reshape(-1, 4), stances, arr["c"], arr["tick"], arr["step"], grf,
+                 arr["qpos"] if keep_qpos else None, fell_at, stopped)
+
+
+def _grf_sample(plant: Plant, functions: dict[str, CompiledFunction], c: GeneratedC, t: float, stance: StanceSet,
+                q: np.ndarray, v: np.ndarray, f_mj: np.ndarray, touch: np.ndarray) -> dict:
+    """MuJoCo's contact forces and the paper's GRF model (generated C ``grf_<stance>``) at the same
+    instant: the state before the step, MuJoCo's acceleration of that step."""
+    a = plant.acceleration()
+    symbol = f"grf_{stance.name.replace('+', '_')}"
+    if symbol not in functions:
+        functions[symbol] = CompiledFunction(c.library, symbol)
+    _, f_b, residual, _ = functions[symbol](q, v, a)
+    f_paper = f_b.reshape(4, 3) @ rotation(q).T
+    feet = list(stance.feet)
+    return {"t": t, "stance": stance.feet, "contacts_match": bool(np.array_equal(np.nonzero(touch)[0], np.array(feet))),
+            "mujoco": f_mj[feet], "paper": f_paper[feet], "residual": residual}

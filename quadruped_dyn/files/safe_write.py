@@ -1,0 +1,100 @@
+"""Writing output files: only under the output directory, never through an existing link, never
+half-written, and every failure one line.
+
+``output_path(out_dir, name)`` is ``out_dir / name`` for a plain file name (one component: no
+separator, not ``.``/``..``, no NUL), so it lies in ``out_dir`` itself (a link at that name is
+replaced by the write, not followed). ``write_bytes`` /
+``write_text`` create a new temporary file beside the target (``O_CREAT | O_EXCL``: never an
+existing file or link) and rename it over the target atomically: a symlink already at the target
+is replaced, not written through, and a reader never sees a partial file; anything else that is not
+a regular file (a directory, a device such as /dev/full, a FIFO) is refused, never replaced. An OSError (a full disk,
+a read-only directory, a directory in the way) is an ``InputError`` naming the file.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import io
+import os
+import tempfile
+from collections.abc import Iterator
+from pathlib import Path
+
+from quadruped_dyn.errors import InputError
+from quadruped_dyn.files.names import printable
+
+
+def output_path(out_dir: str | Path, name: str) -> Path:
+    """``out_dir / name``, or an InputError if ``name`` is not one plain file name or the result
+    does not lie under ``out_dir`` (resolved: a symlinked parent does not count as under it)."""
+    if (not name or name in (".", "..") or "/" in name or os.sep in name or "\0" in name
+            or (os.altsep is not None and os.altsep in name)):
+        raise InputError(f"output file name '{printable(name)}' is not a plain file name; expected one path component")
+    path = Path(out_dir) / name
+    if path.parent != Path(out_dir) or path.name != name:  # one component: the file lies in out_dir itself
+        raise InputError(f"output file '{printable(path)}' would not lie in '{printable(out_dir)}'; expected a file under --out")
+    return path
+
+
+def _umask() -> int:
+    mask = os.umask(0)
+    os.umask(mask)
+    return mask
+
+
+def write_bytes(path: str | Path, data: bytes) -> Path:
+    """Write ``data`` to ``path`` by create-new + atomic rename (see the module docstring)."""
+    path = Path(path)
+    if path.exists() and not path.is_symlink() and not path.is_file():  # a directory, a device, a FIFO
+        raise InputError(f"cannot write '{printable(path)}': it exists and is not a regular file; expected a file path")
+    try:
+        fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name[:100]}.", suffix=".partial")
+    except OSError as e:
+        raise InputError(f"cannot write '{printable(path)}' ({e.strerror}); expected a writable directory") from e
+    try:
+        with os.fdopen(fd, "wb") as f:
+            f.write(data)
+            f.flush()
+        os.chmod(tmp, 0o666 & ~_umask())
+        os.replace(tmp, path)  # replaces a link at ``path``; never follows it
+    except OSError as e:
+        raise InputError(f"cannot write '{printable(path)}' ({e.strerror}); expected a writable file path") from e
+    finally:
+        with contextlib.suppress(FileNotFoundError):
+            os.unlink(tmp)
+    return path
+
+
+def write_text(path: str | Path, text: str) -> Path:
+    return write_bytes(path, text.encode("utf-8"))
+
+
+@contextlib.contextmanager
+def text_writer(path: str | Path) -> Iterator[io.StringIO]:
+    """A text buffer written to ``path`` (``write_text``) when the block ends without an error."""
+    buf = io.StringIO(newline="")
+    yield buf
+    write_text(path, buf.getvalue())
+
+
+def save_figure(fig: object, path: str | Path, **savefig_kwargs: object) -> Path:
+    """A Matplotlib figure saved as PNG to ``path`` through ``write_bytes``."""
+    buf = io.BytesIO()
+    fig.savefig(buf, format="png", **savefig_kwargs)  # type: ignore[attr-defined]
+    return write_bytes(path, buf.getvalue())
+
+
+def output_dir(parent: str | Path, name: str) -> Path:
+    """The subdirectory ``parent / name`` (a plain name, ``output_path``), created if missing; an
+    InputError if a symlink or a file is in its place (writes must not leave ``parent``)."""
+    path = output_path(parent, name)
+    if path.is_symlink():
+        raise InputError(f"'{printable(path)}' is a symbolic link; expected a directory inside "
+                         f"'{printable(parent)}' (remove the link)")
+    try:
+        path.mkdir(exist_ok=True)
+    except OSError as e:
+        raise InputError(f"cannot create '{printable(path)}' ({e.strerror}); expected a writable directory") from e
+    if not path.is_dir():
+        raise InputError(f"'{printable(path)}' is a file; expected a directory")
+    return path

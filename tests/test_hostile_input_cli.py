@@ -1,0 +1,174 @@
+"""The third round of bad input (#18), at the command line: nothing written outside --out or
+through a link, hostile file names, bounded work, write failures, empty paths, non-results;
+each one line, exit 2 (bad input) or 1 (not a result), no traceback."""
+
+from __future__ import annotations
+
+import os
+import re
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+from click.testing import CliRunner
+
+from quadruped_dyn.checks import c_reference
+from quadruped_dyn.cli import main
+from quadruped_dyn.codegen import emit as codegen
+from quadruped_dyn.experiment import paper_experiment as validation
+from quadruped_dyn.files.names import is_safe_name
+from quadruped_dyn.model.paper_robot import URDF_PATH
+
+EDITED = URDF_PATH.read_text().replace('<mass value="5.4"/>', '<mass value="7.4"/>')  # not the paper robot
+
+
+def _one_line(result, code: int, expected: str) -> None:
+    assert result.exit_code == code, result.output
+    assert "Traceback" not in result.output and re.search(expected, result.stderr), result.stderr
+    assert result.stderr.count("\n") == 1, result.stderr
+
+
+@pytest.fixture
+def no_work(monkeypatch):
+    def tripwire(*args, **kwargs):
+        raise AssertionError("the work started before the arguments were checked")
+
+    monkeypatch.setattr(validation, "run_experiment", tripwire)
+    monkeypatch.setattr(codegen, "generate", tripwire)
+    monkeypatch.setattr(c_reference, "generate", tripwire)  # bound by name there: patched and restored too
+
+
+def _cli(*args: str, stdout: object = subprocess.PIPE, env: dict[str, str] | None = None) -> subprocess.CompletedProcess:
+    return subprocess.run([sys.executable, "-m", "quadruped_dyn.cli", *args], stdout=stdout, stderr=subprocess.PIPE,
+                          text=True, env={**os.environ, **(env or {})}, check=False)
+
+
+@pytest.mark.skipif(not Path("/dev/full").exists(), reason="needs /dev/full")
+@pytest.mark.parametrize("args", [["info", "paper", "--json"], ["info", "paper"], ["robots"]])
+def test_a_failed_write_to_stdout_is_one_line(args):
+    with open("/dev/full", "w") as full:
+        proc = _cli(*args, stdout=full)
+    assert proc.returncode == 2 and "Traceback" not in proc.stderr and "Exception" not in proc.stderr, proc.stderr
+    assert proc.stderr.strip().splitlines() == ["error: cannot write to standard output (No space left on device); "
+                                                "expected a writable output"]
+
+
+@pytest.mark.parametrize("args", [["codegen", "paper", "--out", ""], ["validate", "--out", ""], ["report", "--out", ""],
+                                  ["codegen", "paper", "--out", " "]])
+def test_an_empty_out_is_refused(args, no_work):
+    _one_line(CliRunner().invoke(main, args), 2, r"--out '\s*' is an empty path; expected a directory name")
+
+
+def test_an_empty_cache_variable_is_refused(tmp_path):
+    from quadruped_dyn.codegen.cache import cache_dir
+    from quadruped_dyn.errors import InputError
+
+    for value in ("", "  "):
+        with pytest.MonkeyPatch.context() as m:
+            m.setenv("QUADRUPED_DYN_CACHE", value)
+            with pytest.raises(InputError, match="QUADRUPED_DYN_CACHE is set but empty"):
+                cache_dir()
+            result = CliRunner().invoke(main, ["bench", "--calls", "1", "--reps", "1"], env={"QUADRUPED_DYN_CACHE": value})
+            _one_line(result, 2, "QUADRUPED_DYN_CACHE is set but empty")
+
+
+@pytest.mark.parametrize(("args", "expected"), [
+    (["--dt", "1e-12"], r"is 1\.2e\+12 samples per run; expected at most 200,000"),
+    (["--horizon", "1e9"], r"--horizon 1e\+09 s at --dt 0\.001 s is 1e\+12 samples"),
+    (["--dt", "1e-6"], r"is 1\.2e\+06 samples per run"),
+    (["--horizon", "1e300", "--dt", "1e-300"], r"samples per run; expected at most"),
+])
+def test_validate_bounds_the_work_up_front(args, expected, no_work, tmp_path):
+    _one_line(CliRunner().invoke(main, ["validate", "--out", str(tmp_path), *args]), 2, expected)
+
+
+@pytest.mark.parametrize("extra", [["--no-physics"], ["--json", "--no-physics"], []])
+def test_a_run_that_fell_on_its_first_step_is_not_a_result(extra, tmp_path):
+    """The static walk with RK4 at --dt 0.3 s (one step per phase) falls at once: exit 1, no
+    0 % error, no files."""
+    result = CliRunner().invoke(main, ["validate", "--integrator", "rk4", "--dt", "0.3", "--gait", "walk", *extra,
+                                       "--out", str(tmp_path)])
+    assert result.exit_code == 1, result.output
+    assert "run stopped at t = 0 s after 1 sample(s)" in result.stderr and "no result" in result.stderr
+    assert "0.0e+00" not in result.output and not list(tmp_path.glob("*_validation.json"))
+
+
+def test_percent_errors_need_two_samples():
+    import numpy as np
+
+    from quadruped_dyn.experiment.paper_experiment import percent_errors
+
+    ref = np.ones((5, 12))
+    assert percent_errors(ref[:1], ref) == [None] * 12
+    assert percent_errors(ref[:0], ref) == [None] * 12
+    assert percent_errors(2 * ref[:2], ref) == [100.0] * 12
+
+
+ESCAPE = "evil\x1b]0;owned\x07\x1b[31m"
+
+
+def test_terminal_escapes_in_names_are_not_echoed(tmp_path):
+    """An escape sequence in a file name reaches the terminal escaped, in errors and in info."""
+    missing = CliRunner().invoke(main, ["info", str(tmp_path / f"{ESCAPE}.urdf")])
+    _one_line(missing, 2, r"no such file: .*evil\\x1b\]0;owned\\x07\\x1b\[31m")
+    assert "\x1b" not in missing.output
+    (tmp_path / f"{ESCAPE}.urdf").write_text(EDITED)
+    shown = CliRunner().invoke(main, ["info", str(tmp_path / f"{ESCAPE}.urdf")])
+    assert shown.exit_code == 0 and "\x1b" not in shown.output and "\x07" not in shown.output, shown.output
+    (tmp_path / f"{ESCAPE}2.urdf").write_text("<robot><link/>")
+    bad = CliRunner().invoke(main, ["info", str(tmp_path / f"{ESCAPE}2.urdf")])
+    _one_line(bad, 2, "not well-formed XML")
+    assert "\x1b" not in bad.output
+
+
+def test_codegen_writes_only_under_out_and_never_through_a_link(tmp_path):
+    """A URDF named '...urdf' (stem '..', which put the report in the parent of --out) generates
+    under --out with a valid name (one generation; the other hostile stems are checked without
+    generating in tests/model/test_identity.py); a symlink already in --out (Makefile -> a file
+    elsewhere) is replaced, the file it pointed to is untouched."""
+    victim = tmp_path / "victim"
+    victim.write_text("keep me")
+    out = tmp_path / "out"
+    out.mkdir()
+    (out / "Makefile").symlink_to(victim)
+    (tmp_path / "...urdf").write_text(EDITED)
+    result = CliRunner().invoke(main, ["codegen", str(tmp_path / "...urdf"), "--out", str(out)])
+    assert result.exit_code == 0, result.output
+    written = [Path(line.removeprefix("wrote ")) for line in result.output.splitlines()]
+    assert written and all(p.parent == out and p.is_file() and not p.is_symlink() for p in written)
+    assert not (out / "Makefile").is_symlink() and victim.read_text() == "keep me"
+    robot = next(p.name for p in written if p.name.endswith("_reference.h")).removeprefix("qd_").removesuffix("_reference.h")
+    assert is_safe_name(robot) and robot.startswith("robot_"), robot
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["...urdf", "out", "victim"], "nothing written beside --out"
+    assert sorted(p.name for p in out.iterdir()) == sorted(p.name for p in written), "no partial files left"
+
+
+def test_output_paths_are_plain_names_under_out(tmp_path):
+    from quadruped_dyn.errors import InputError
+    from quadruped_dyn.experiment.outputs import output_paths
+    from quadruped_dyn.files.safe_write import output_dir, output_path, write_text
+
+    for bad in ("..", ".", "", "a/b", "../x", "x\0"):
+        with pytest.raises(InputError, match="not a plain file name"):
+            output_path(tmp_path, bad.replace("\\0", "\0"))
+    assert all(p.parent == tmp_path for p in output_paths(tmp_path, "..", "walk").values())
+    (tmp_path / "elsewhere").mkdir()
+    (tmp_path / "link").symlink_to(tmp_path / "elsewhere")
+    with pytest.raises(InputError, match="is a symbolic link"):
+        output_dir(tmp_path, "link")
+    target = tmp_path / "f.txt"
+    target.symlink_to(tmp_path / "elsewhere" / "g.txt")
+    write_text(output_path(tmp_path, "f.txt"), "new")
+    assert not target.is_symlink() and target.read_text() == "new" and not (tmp_path / "elsewhere" / "g.txt").exists()
+    (tmp_path / "d").mkdir()
+    os.mkfifo(tmp_path / "fifo")
+    for special in ("d", "fifo"):  # never replaced (nor a device such as /dev/full)
+        with pytest.raises(InputError, match="exists and is not a regular file"):
+            write_text(tmp_path / special, "x")
+    assert (tmp_path / "d").is_dir() and (tmp_path / "fifo").is_fifo()
+    (tmp_path / "ro").mkdir()
+    (tmp_path / "ro").chmod(0o500)
+    if not os.access(tmp_path / "ro", os.W_OK):  # root writes anyway
+        with pytest.raises(InputError, match="cannot write .*Permission denied"):
+            write_text(tmp_path / "ro" / "x.txt", "x")
