@@ -10,9 +10,9 @@ from typing import Any
 
 import numpy as np
 
-from quadruped_dyn.files.json import write_json
 from quadruped_dyn.experiment.paper_experiment import joint_names, static_stability
 from quadruped_dyn.experiment.simulate import IkTorques, reduced_dynamics
+from quadruped_dyn.files.json import write_json
 from quadruped_dyn.model.stance import StanceSet
 from quadruped_dyn.optimal_control.replay import OptimizedTrajectory, Replay
 from quadruped_dyn.optimal_control.solve import MAX_CONSTRAINT_VIOLATION, Solution
