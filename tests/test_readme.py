@@ -116,12 +116,15 @@ def _reduced() -> str:
 
 def _functions() -> str:
     from quadruped_dyn.codegen.emit import CODEGEN_FUNCTIONS, REDUCED_NAMES, REDUCED_STANCE_SETS
+    from quadruped_dyn.codegen.emit_derivatives import DERIVATIVE_NAMES
 
     full, reduced = len(CODEGEN_FUNCTIONS), len(REDUCED_STANCE_SETS) * len(REDUCED_NAMES)
+    derivatives = len(DERIVATIVE_NAMES)
     header = (CASADI_GEN / "qd_paper.h").read_text()
     documented = re.findall(r"^ \*   (qd_\w+)\(.*iw \d+, w \d+", header, flags=re.M)
-    assert len(documented) == full + reduced, "casadi_gen/ is not what the code generates: regenerate it"
-    return f"{full + reduced} = {full} full-coordinate and GRF + {reduced} reduced"
+    assert len(documented) == full + reduced + derivatives, "casadi_gen/ is not what the code generates: regenerate it"
+    return (f"{full + reduced + derivatives} = {full} full-coordinate and GRF + {reduced} reduced"
+            f" + {derivatives} derivatives")
 
 
 def _c_size() -> str:
