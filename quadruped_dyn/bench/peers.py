@@ -28,7 +28,8 @@ import numpy as np
 
 from quadruped_dyn.bench.timing import HARNESSES, arithmetic_operations
 from quadruped_dyn.codegen.cache import cached_build
-from quadruped_dyn.codegen.emit import CODEGEN_FUNCTIONS, PREFIX, silence_unused_parameters
+from quadruped_dyn.codegen.casadi_source import silence_unused_parameters
+from quadruped_dyn.codegen.emit import CODEGEN_FUNCTIONS, PREFIX
 from quadruped_dyn.codegen.library import C_FLAGS, compiler_version, run_tool
 from quadruped_dyn.errors import InputError, NumericalError
 from quadruped_dyn.math.compare import relative_error, within

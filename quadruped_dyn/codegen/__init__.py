@@ -5,10 +5,10 @@ from quadruped_dyn.exports import lazy_exports
 
 _MODULES: dict[str, tuple[str, ...]] = {
     "cache": ("HASH_SUFFIX", "PARTIAL_MARK", "cache_dir", "file_sha256", "verified", "cached_build"),
+    "casadi_source": ("PREFIX", "TEMPLATES", "work_sizes", "silence_unused_parameters", "casadi_c", "entry_point"),
     "emit": (
-        "PREFIX", "CODEGEN_FUNCTIONS", "REDUCED_STANCE_SETS", "REDUCED_NAMES", "reduced_symbol", "reduced_functions",
-        "SIGNAL_DOCS", "codegen_functions", "reduced_parts", "header_doc", "work_sizes", "silence_unused_parameters",
-        "TEMPLATES", "stem", "casadi_c", "entry_point", "GeneratedFiles", "generate",
+        "CODEGEN_FUNCTIONS", "REDUCED_STANCE_SETS", "REDUCED_NAMES", "reduced_symbol", "reduced_functions",
+        "SIGNAL_DOCS", "codegen_functions", "reduced_parts", "header_doc", "stem", "GeneratedFiles", "generate",
     ),
     "emit_derivatives": ("DERIVATIVE_NAMES", "derivative_functions", "derivative_source"),
     "library": (

@@ -13,15 +13,15 @@ units and frames, output sparsity, and work sizes. ``compiled`` builds and loads
 
 from __future__ import annotations
 
-import os
 import re
-import tempfile
 from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
 
 import casadi as ca
 
+from quadruped_dyn.codegen.casadi_source import PREFIX, TEMPLATES, casadi_c, entry_point, work_sizes
+from quadruped_dyn.codegen.emit_derivatives import derivative_functions, derivative_source
 from quadruped_dyn.codegen.work_memory import memory_doc
 from quadruped_dyn.dynamics.grf import grf_solve
 from quadruped_dyn.dynamics.newton_euler import full_dynamics
@@ -31,7 +31,6 @@ from quadruped_dyn.files.safe_write import output_path, write_text
 from quadruped_dyn.model.robot import Robot
 from quadruped_dyn.model.stance import STANCE_SETS, StanceSet, stance_set
 
-PREFIX = "qd_"
 
 def _grf_paper(stance: StanceSet) -> Callable[[Robot], ca.Function]:
     return lambda robot: grf_solve(robot, stance, "paper").function
@@ -222,22 +221,6 @@ def header_doc(robot: Robot, functions: list[ca.Function], work: dict[str, tuple
     return "\n".join(lines) + "\n"
 
 
-def work_sizes(casadi_header: str) -> dict[str, tuple[int, int]]:
-    sizes = dict(re.findall(r"#define (\w+_SZ_(?:IW|W)) (\d+)", casadi_header))
-    names = {k.rsplit("_SZ_", 1)[0] for k in sizes}
-    return {n: (int(sizes[f"{n}_SZ_IW"]), int(sizes[f"{n}_SZ_W"])) for n in names}
-
-
-_UNUSED = "(void)arg; (void)res; (void)iw; (void)w; (void)mem;"
-
-
-def silence_unused_parameters(c_source: str) -> str:
-    """CasADi's evaluation functions ignore some of their five parameters and its
-    release hooks ignore ``mem``: cast them to void so -Wextra -Werror passes."""
-    c_source = re.sub(r"(static int casadi_f\d+\([^)]*\) \{\n)", lambda m: m.group(1) + f"  {_UNUSED}\n", c_source)
-    return re.sub(r"(void \w+_release\(int mem\) \{\n)", lambda m: m.group(1) + "  (void)mem;\n", c_source)
-
-
 #: Elementary functions the generated code calls, each routed through a wrapper in casadi_real's precision.
 _WRAPPED_MATH = ("sin", "cos", "tan", "sqrt", "fabs")
 _PRECISION_MATH = """
@@ -266,7 +249,6 @@ def _precision_math(c_source: str) -> str:
     return re.sub(r"\((\d+)\./", r"(\1/", c_source)
 
 
-TEMPLATES = Path(__file__).resolve().parent / "c"
 #: start-up and memory map of the check program on QEMU's MPS2 Cortex-M boards (the Makefile's cross builds)
 CORTEX_M_FILES = ("qd_cortex_m_startup.c", "qd_cortex_m.ld")
 #: the thread-safety check program (`make check-threads`)
@@ -275,21 +257,6 @@ THREADS_FILE = "qd_threads.c"
 
 def stem(robot: Robot) -> str:
     return f"qd_{re.sub(r'[^A-Za-z0-9_]', '_', robot.name)}"
-
-
-def casadi_c(file_stem: str, functions: list[ca.Function], precision: str) -> tuple[str, str]:
-    """(C source, CasADi's header) of ``functions`` generated into ``file_stem``.c."""
-    cg = ca.CodeGenerator(f"{file_stem}.c", {"with_header": True, "casadi_real": precision})
-    for f in functions:
-        cg.add(f)
-    with tempfile.TemporaryDirectory() as tmp:
-        cg.generate(tmp + os.sep)
-        return silence_unused_parameters((Path(tmp) / f"{file_stem}.c").read_text()), (Path(tmp) / f"{file_stem}.h").read_text()
-
-
-def entry_point(name: str) -> str:
-    return (rf"(CASADI_SYMBOL_EXPORT int {name}\(const casadi_real\*\* arg, casadi_real\*\* res, casadi_int\* iw, "
-            rf"casadi_real\* w, int mem\)\{{\n)  return (casadi_f\d+)\(arg, res, iw, w, mem\);\n")
 
 
 def _checked_reduced_c(c_text: str, casadi_header: str, functions: list[ca.Function]) -> str:
@@ -368,8 +335,6 @@ def generate(robot: Robot, out_dir: Path, precision: str = "double",
         sources[f"{file_stem}.c"] = _checked_reduced_c(c_text, h_text, reduced)
         casadi_header += h_text
         functions += reduced
-    from quadruped_dyn.codegen.emit_derivatives import derivative_functions, derivative_source
-
     derivatives = derivative_functions(robot)  # qd_<robot>_d.c: derivatives of the full dynamics
     sources[f"{name}_d.c"], h_text = derivative_source(f"{name}_d", derivatives, precision)
     casadi_header += h_text
@@ -394,6 +359,5 @@ def generate(robot: Robot, out_dir: Path, precision: str = "double",
                           reduced=tuple(out_dir / f for f in sources if f not in (f"{name}.c", f"{name}_d.c")),
                           derivatives=(out_dir / f"{name}_d.c",),
                           embedded=tuple(out_dir / f for f in (*CORTEX_M_FILES, THREADS_FILE)))
-
 
 

@@ -21,7 +21,7 @@ import re
 
 import casadi as ca
 
-from quadruped_dyn.codegen.emit import PREFIX, TEMPLATES, casadi_c, entry_point, work_sizes
+from quadruped_dyn.codegen.casadi_source import PREFIX, TEMPLATES, casadi_c, entry_point, work_sizes
 from quadruped_dyn.dynamics.derivatives import full_derivatives
 from quadruped_dyn.dynamics.newton_euler import full_dynamics
 from quadruped_dyn.model.robot import Robot

@@ -18,12 +18,13 @@ import pytest
 
 from quadruped_dyn.checks.c_reference import generate_checked
 from quadruped_dyn.codegen.emit import CODEGEN_FUNCTIONS, REDUCED_NAMES, REDUCED_STANCE_SETS, stem
+from quadruped_dyn.codegen.emit_derivatives import DERIVATIVE_NAMES
 from quadruped_dyn.codegen.library import compiled_library
 from quadruped_dyn.codegen.targets import TARGETS, Target, make, run_check, skip_reason
 from quadruped_dyn.model.robot import load_robot
 
 CASADI_GEN = Path(__file__).resolve().parents[2] / "casadi_gen"
-N_FUNCTIONS = len(CODEGEN_FUNCTIONS) + len(REDUCED_NAMES) * len(REDUCED_STANCE_SETS)
+N_FUNCTIONS = len(CODEGEN_FUNCTIONS) + len(REDUCED_NAMES) * len(REDUCED_STANCE_SETS) + len(DERIVATIVE_NAMES)
 #: casadi_gen's check program reports at most this many float cases as skipped (cond x eps > 1e-2)
 MAX_FLOAT_SKIPPED = 2
 

@@ -1,0 +1,48 @@
+"""CasADi's C for a list of Functions: the source and CasADi's header text (unused parameters
+cast to void for -Wextra -Werror), the work sizes it states, the entry-point pattern, the C templates' folder.
+The one place ``codegen.emit`` and ``codegen.emit_derivatives`` both build on."""
+
+from __future__ import annotations
+
+import os
+import re
+import tempfile
+from pathlib import Path
+
+import casadi as ca
+
+PREFIX = "qd_"
+
+
+def work_sizes(casadi_header: str) -> dict[str, tuple[int, int]]:
+    sizes = dict(re.findall(r"#define (\w+_SZ_(?:IW|W)) (\d+)", casadi_header))
+    names = {k.rsplit("_SZ_", 1)[0] for k in sizes}
+    return {n: (int(sizes[f"{n}_SZ_IW"]), int(sizes[f"{n}_SZ_W"])) for n in names}
+
+
+_UNUSED = "(void)arg; (void)res; (void)iw; (void)w; (void)mem;"
+
+
+def silence_unused_parameters(c_source: str) -> str:
+    """CasADi's evaluation functions ignore some of their five parameters and its
+    release hooks ignore ``mem``: cast them to void so -Wextra -Werror passes."""
+    c_source = re.sub(r"(static int casadi_f\d+\([^)]*\) \{\n)", lambda m: m.group(1) + f"  {_UNUSED}\n", c_source)
+    return re.sub(r"(void \w+_release\(int mem\) \{\n)", lambda m: m.group(1) + "  (void)mem;\n", c_source)
+
+
+TEMPLATES = Path(__file__).resolve().parent / "c"
+
+
+def casadi_c(file_stem: str, functions: list[ca.Function], precision: str) -> tuple[str, str]:
+    """(C source, CasADi's header) of ``functions`` generated into ``file_stem``.c."""
+    cg = ca.CodeGenerator(f"{file_stem}.c", {"with_header": True, "casadi_real": precision})
+    for f in functions:
+        cg.add(f)
+    with tempfile.TemporaryDirectory() as tmp:
+        cg.generate(tmp + os.sep)
+        return silence_unused_parameters((Path(tmp) / f"{file_stem}.c").read_text()), (Path(tmp) / f"{file_stem}.h").read_text()
+
+
+def entry_point(name: str) -> str:
+    return (rf"(CASADI_SYMBOL_EXPORT int {name}\(const casadi_real\*\* arg, casadi_real\*\* res, casadi_int\* iw, "
+            rf"casadi_real\* w, int mem\)\{{\n)  return (casadi_f\d+)\(arg, res, iw, w, mem\);\n")
