@@ -20,6 +20,10 @@ extern "C" {
 
 #include <math.h>
 
+#ifndef casadi_real
+#define casadi_real double
+#endif
+
 /* quadruped_dyn: the elementary functions in casadi_real's precision. A float build
  * (-Dcasadi_real=float) calls sinf, cosf, ... instead of promoting to double, so it does no
  * double arithmetic (none on a single-precision FPU: -Wdouble-promotion clean); a double build
@@ -30,10 +34,6 @@ static inline casadi_real qd_cos(casadi_real x) { return QD_REAL_IS_FLOAT ? (cas
 static inline casadi_real qd_tan(casadi_real x) { return QD_REAL_IS_FLOAT ? (casadi_real)tanf((float)x) : (casadi_real)tan((double)x); }
 static inline casadi_real qd_sqrt(casadi_real x) { return QD_REAL_IS_FLOAT ? (casadi_real)sqrtf((float)x) : (casadi_real)sqrt((double)x); }
 static inline casadi_real qd_fabs(casadi_real x) { return QD_REAL_IS_FLOAT ? (casadi_real)fabsf((float)x) : (casadi_real)fabs((double)x); }
-
-#ifndef casadi_real
-#define casadi_real double
-#endif
 
 #ifndef casadi_int
 #define casadi_int long long int

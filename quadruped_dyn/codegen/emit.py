@@ -231,6 +231,9 @@ _PRECISION_MATH = """
 #define QD_REAL_IS_FLOAT (sizeof(casadi_real) == sizeof(float))
 """ + "".join(f"static inline casadi_real qd_{f}(casadi_real x) {{ return QD_REAL_IS_FLOAT ? (casadi_real){f}f((float)x) "
               f": (casadi_real){f}((double)x); }}\n" for f in _WRAPPED_MATH)
+#: CasADi's default precision block; the wrappers go right after it, so a build without
+#: -Dcasadi_real (double, the default) compiles.
+_CASADI_REAL_DEFAULT = "#ifndef casadi_real\n#define casadi_real double\n#endif\n"
 _MATH_CALL = re.compile(rf"(?<![\w.])({'|'.join(_WRAPPED_MATH)})\(")
 
 
@@ -244,7 +247,10 @@ def _precision_math(c_source: str) -> str:
         raise AssertionError(f"elementary functions {sorted(unknown)} have no precision wrapper in emit._WRAPPED_MATH")
     used = bool(_MATH_CALL.search(c_source))
     c_source = _MATH_CALL.sub(r"qd_\1(", c_source)  # before the wrappers go in: they call the real ones
-    c_source = c_source.replace("#include <math.h>\n", "#include <math.h>\n" + _PRECISION_MATH, 1) if used else c_source
+    if used:  # after CasADi's default of casadi_real, which the wrappers' signatures need
+        if _CASADI_REAL_DEFAULT not in c_source:
+            raise AssertionError("CasADi's '#ifndef casadi_real' default is not in the generated source")
+        c_source = c_source.replace(_CASADI_REAL_DEFAULT, _CASADI_REAL_DEFAULT + _PRECISION_MATH, 1)
     c_source = re.sub(r"\((\d+)\.\*", r"(\1*", c_source)
     return re.sub(r"\((\d+)\./", r"(\1/", c_source)
 

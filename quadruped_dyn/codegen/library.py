@@ -29,6 +29,8 @@ from quadruped_dyn.model.robot import Robot
 
 C_FLAGS = ("-std=c99", "-pedantic", "-Wall", "-Wextra", "-Werror", "-O3", "-fPIC")
 COMPILE_JOBS = 2  # this machine's cores
+#: A compiler's or linker's error line ("file.c:3:5: error: ...", "ld: ...: undefined reference").
+_DIAGNOSTIC = re.compile(r"(^|: )(fatal )?error:|undefined reference")
 
 
 def run_tool(cmd: list[str], cwd: str | Path | None = None) -> str:
@@ -39,8 +41,10 @@ def run_tool(cmd: list[str], cwd: str | Path | None = None) -> str:
     except FileNotFoundError as e:  # the environment, not a failed check: bad input (exit 2)
         raise InputError(f"'{cmd[0]}' not found; expected it on PATH (a C/C++ compiler is needed here)") from e
     if proc.returncode != 0:
-        tail = (proc.stderr or proc.stdout).strip().splitlines()[-1:] or ["no output"]
-        raise BuildError(f"'{Path(cmd[0]).name}' failed (exit {proc.returncode}): {tail[0][:300]}")
+        lines = (proc.stderr or proc.stdout).strip().splitlines() or ["no output"]
+        # the first diagnostic says what went wrong; the last is often only "cc1: all warnings being treated as errors"
+        first = next((line for line in lines if _DIAGNOSTIC.search(line)), lines[-1])
+        raise BuildError(f"'{Path(cmd[0]).name}' failed (exit {proc.returncode}): {first[:300]}")
     return proc.stdout
 
 

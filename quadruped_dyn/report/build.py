@@ -16,6 +16,7 @@ from __future__ import annotations
 from collections.abc import Callable
 from dataclasses import dataclass
 from datetime import datetime, timezone
+from functools import partial
 from pathlib import Path
 from typing import Any
 
@@ -120,15 +121,16 @@ def build_report(robot_arg: str = "paper", out: str | Path = "results", fast: bo
 
     matplotlib.use("Agg")  # figures go into the page, never to a window
     _, target = prepare(robot_arg, out)
-    progress = Progress(10, show_progress)  # loading, the steps of _steps, writing the page
+    steps = _steps(samples, fast, with_notebooks)
+    progress = Progress(len(steps) + 2, show_progress)  # loading, the steps, writing the page
     done = progress.step(f"loading {robot_arg}")
     robot, urdf_warnings = load_with_warnings(robot_arg)
     job = _Job(robot, urdf_warnings, target, fast, samples, progress)
     sections = [_attempt("robot", "The robot", lambda: _robot_section(job))]
     done()
-    for label, key, title, build in _steps(job, with_notebooks):
+    for label, key, title, build in steps:
         done = progress.step(label)
-        sections.append(_attempt(key, title, build))
+        sections.append(_attempt(key, title, partial(build, job)))
         done()
     done = progress.step("versions, writing the page")
     from quadruped_dyn.report import sections as rs
@@ -142,25 +144,26 @@ def build_report(robot_arg: str = "paper", out: str | Path = "results", fast: bo
     return ReportResult(path, sections)
 
 
-def _steps(job: _Job, with_notebooks: bool) -> list[tuple[str, str, str, Callable[[], Section]]]:
-    """(progress line, key, title, builder) of every section after the robot's, in page order."""
+def _steps(samples: int, fast: bool, with_notebooks: bool) -> list[tuple[str, str, str, Callable[[_Job], Section]]]:
+    """(progress line, key, title, builder of the job) of every section after the robot's, in page order."""
     from quadruped_dyn.report import sections as rs
 
-    notebooks_built: Callable[[], Section] = ((lambda: rs.notebooks_section(*notebooks(job.robot))) if with_notebooks
-                                              else (lambda: rs.notebooks_section(None, "not executed for this page")))
+    notebooks_built: Callable[[_Job], Section] = (
+        (lambda job: rs.notebooks_section(*notebooks(job.robot))) if with_notebooks
+        else (lambda job: rs.notebooks_section(None, "not executed for this page")))
     return [
-        (f"every term against Pinocchio ({job.samples} random states) and other libraries", "terms",
-         "Every term against Pinocchio", lambda: _terms_section(job)),
-        ("GRF systems", "grf", "Ground-reaction-force systems", lambda: _grf_section(job)),
-        ("reduced model of every stance set", "reduced", "Reduced model per stance set", lambda: _reduced_section(job)),
+        (f"every term against Pinocchio ({samples} random states) and other libraries", "terms",
+         "Every term against Pinocchio", _terms_section),
+        ("GRF systems", "grf", "Ground-reaction-force systems", _grf_section),
+        ("reduced model of every stance set", "reduced", "Reduced model per stance set", _reduced_section),
         ("the paper's experiment: trot and static walk", "experiment", "The paper's experiment: trot and static walk",
-         lambda: _experiment_section(job)),
-        ("generated C" + ("" if job.fast else " and the benchmark"), "c", "Generated C", lambda: _c_section(job)),
-        ("symbolic terms", "symbolic", "Symbolic terms", lambda: _symbolic_section(job)),
+         _experiment_section),
+        ("generated C" + ("" if fast else " and the benchmark"), "c", "Generated C", _c_section),
+        ("symbolic terms", "symbolic", "Symbolic terms", _symbolic_section),
         ("a trot the robot can do", "optimal_control", "A trot the robot can do",
-         lambda: rs.optimal_control_section(*optimal_trot(job.robot, job.target))),
+         lambda job: rs.optimal_control_section(*optimal_trot(job.robot, job.target))),
         ("closed loop in MuJoCo", "closed_loop", "Closed loop in MuJoCo",
-         lambda: rs.closed_loop_section(closed_loop(job.robot, job.target, REPORT_CLOSED_LOOP_CYCLES))),
+         lambda job: rs.closed_loop_section(closed_loop(job.robot, job.target, REPORT_CLOSED_LOOP_CYCLES))),
         ("notebooks", "notebooks", "Notebooks, executed", notebooks_built),
     ]
 

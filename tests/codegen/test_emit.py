@@ -104,6 +104,28 @@ def test_c_program_builds_and_passes(tmp_path):
     assert not [p.name for p in CASADI_GEN.glob("qd_paper*.c") if "malloc" in p.read_text()]
 
 
+@pytest.mark.parametrize("kind", ["qd_paper.c", "qd_paper_r_FL_BL.c", "qd_paper_d.c"])
+def test_generated_source_compiles_without_precision_flag(kind):
+    """A user's plain build (no -Dcasadi_real: double, CasADi's default) compiles every kind of
+    generated file with the project's warnings as errors (the precision wrappers need the default)."""
+    from quadruped_dyn.codegen.library import C_FLAGS
+
+    proc = subprocess.run(["gcc", *C_FLAGS, "-fsyntax-only", str(CASADI_GEN / kind)],
+                          capture_output=True, text=True, check=False)
+    assert proc.returncode == 0, proc.stderr[-2000:]
+
+
+def test_build_error_names_the_first_diagnostic(tmp_path):
+    """A failed compile says what failed, not gcc's closing 'all warnings being treated as errors'."""
+    from quadruped_dyn.codegen.library import C_FLAGS, run_tool
+    from quadruped_dyn.errors import BuildError
+
+    bad = tmp_path / "bad.c"
+    bad.write_text("int f(void) { int unused; return 0; }\n")
+    with pytest.raises(BuildError, match="unused variable"):
+        run_tool(["gcc", *C_FLAGS, "-c", str(bad), "-o", str(tmp_path / "bad.o")])
+
+
 def test_header_documents_every_function():
     header = (CASADI_GEN / "qd_paper.h").read_text()
     doc = header[: header.index("*/")]

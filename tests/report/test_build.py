@@ -121,3 +121,21 @@ def test_full_report_renders(tmp_path):
     loaded, images, laid_out, maths = open_in_chromium(path, tmp_path)
     assert images >= 8 and loaded == images
     assert maths >= 3 and laid_out == maths
+
+
+def test_steps_are_numbered_up_to_their_total(tmp_path, monkeypatch, capsys):
+    """Every progress line of the report is "[k/N]" with k running 1..N (no "[11/10]"), whatever
+    the sections do: here every gatherer fails at once, so only the numbering is exercised."""
+    from quadruped_dyn.report import build
+
+    def broken(*_args, **_kwargs):
+        raise RuntimeError("stubbed out")
+
+    for name in ("_terms_section", "_grf_section", "_reduced_section", "_experiment_section", "_c_section",
+                 "_symbolic_section", "optimal_trot", "closed_loop", "notebooks"):
+        monkeypatch.setattr(build, name, broken)
+    result = build.build_report("paper", tmp_path, with_notebooks=True)
+    starts = re.findall(r"^\[(\d+)/(\d+)\] .* \.\.\.$", capsys.readouterr().err, flags=re.M)
+    total = int(starts[0][1])
+    assert [(int(k), int(n)) for k, n in starts] == [(k, total) for k in range(1, total + 1)]
+    assert total == len(result.sections) and result.path.is_file()  # one step per section
