@@ -16,6 +16,7 @@ pytest.importorskip("mujoco", reason="MuJoCo is in the 'xlib' extra: pip install
 
 from quadruped_dyn.cli import EXIT_BAD_INPUT, main  # noqa: E402
 from quadruped_dyn.control.closed_loop import prepare, run_all  # noqa: E402
+from quadruped_dyn.control.controllers import CONTROLLERS  # noqa: E402
 from quadruped_dyn.control.reference import reference_cycle
 from quadruped_dyn.control.run import LoopOptions  # noqa: E402
 from quadruped_dyn.experiment.gait import GAITS, gait_plan  # noqa: E402
@@ -135,6 +136,6 @@ def test_walk_ten_cycles(name: str) -> None:
 @pytest.mark.parametrize("name", ["paper", "solo12", "go2"])
 def test_trot_outcome_of_every_controller(name: str) -> None:
     study = run_all(prepare(load_robot(name), "trot", loop=LoopOptions(cycles=10)))
-    assert set(study.results) == {"pd", "ff+pd", "ct", "id+pd", "ff+pd+level", "ct+level", "ff+pd+step"}
+    assert set(study.results) == set(CONTROLLERS)
     for r in study.results.values():
         assert r["simulated_s"] > 0 and (r["fell"] or r["cycles_up"] == 10)
