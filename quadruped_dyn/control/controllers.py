@@ -12,40 +12,56 @@ CasADi graph.
 * ``ff+pd``: tau = id_r(q_ref, qd_ref, qdd_ref, R = I)[:12] + the same PD: the paper's
   torques along the plan (its 13th entry, the roll moment the feet cannot produce, is
   not applied: no joint actuates the roll).
-* ``ct``, ``id+pd`` and the ``+level`` variants take the stance set of their model from the plan
-  and the foot contact switches (``model_stance``): a foot the plan has in stance but which
-  is off the ground is a swing leg for the model (a lightly loaded foot that lifts early, a
-  late touch-down); pd and ff+pd use the plan's stance only.
-* ``ct``: computed torque on the reduced model at the **measured** state,
-  tau = the first 12 entries of M_r(q, R) (qdd_ref + Kp_a e + Kd_a edot) + CG_r(q, qd, R), e = q_ref - q.
+* ``ct``, ``ct-diag`` and ``id+pd`` take the stance set of their model from the plan and the
+  foot contact switches (``model_stance``): a foot the plan has in stance but which is off the
+  ground is a swing leg for the model (a lightly loaded foot that lifts early, a late
+  touch-down); the other controllers use the plan's stance only.
+* ``ct``: computed torque on the reduced model at the **measured** state, the issue's law
+  tau = M_r (qdd_ref + Kp e + Kd edot) + C_r + G_r, e = q_ref - q, as ONE generated call:
+  id_r(q, qd, qdd_ref + Kp e + Kd edot, R), since id_r = M_r qdd + C_r + G_r exactly.
+  Kp = w^2, Kd = 2 zeta w per leg (``Gains``: w of the stance legs, w of the swing legs).
   With two stance feet the 13th coordinate is the trunk roll phi, measured by the IMU
   (phi from R = Rz Ry Rx(phi), phid = e_phi . omega_b); its reference is 0, its commanded
-  acceleration -Kp_a phi - Kd_a phid, and the 13th row of the result -- the moment about
-  the foot-to-foot line it would take -- is dropped (unactuated), so the roll is only
-  influenced through the coupling of M_r's first 12 rows.
+  acceleration -Kp phi - Kd phid with the stance legs' gains, and the 13th row of the result
+  -- the moment about the foot-to-foot line it would take -- is dropped (unactuated).
+  It falls on every robot: the feedback goes through M_r, whose rows of a stance leg carry
+  the trunk, and a stance foot that unloads (soft contact) leaves a leg of ~1/100 of that
+  inertia under that gain: the 1 kHz loop diverges within ~10 ticks (docs/closed_loop.md).
+* ``ct-diag``: the computed-torque law with the feedback's inertia replaced by a positive
+  diagonal estimate M_hat (``Reference.inertia``: the leg's own joint inertia plus, for a
+  stance leg, its share of the robot's mass carried at the hip, m / n_stance J_i^T J_i),
+  tau = id_r(q, qd, qdd_ref, R) + M_hat (Kp e + Kd edot) with the same per-leg Kp, Kd as
+  ``ct``: one generated call (the model's torques at the measured state), the feedback run
+  by the joint drivers at the plant's rate (per-joint gains M_hat w^2, 2 zeta w M_hat), so
+  that an unloaded leg meets a stiffness it can carry. Two feet: roll and roll rate from the
+  IMU in id_r, the roll's reference acceleration (0), the 13th row dropped.
+* ``pd-diag``: ``ct-diag``'s per-joint gains without the model: the "pd with the same gains".
+* ``ct-diag+roll``: ``ct-diag`` that, with two stance feet, balances the roll with the stance
+  legs through the 13th row of M_r (``DiagonalCtRoll``): what it does about the moment the
+  paper's model leaves unbalanced.
 * ``id+pd``: id_r at the **measured** state (joint q, qd; roll and roll rate from the IMU for
-  two feet; the trunk orientation) with the reference's accelerations, plus the same joint PD.
-* ``ff+pd+level`` and ``ct+level``: the same, tracking the reference levelled by the IMU
-  (``levelled``): trunk-attitude feedback through the legs -- the stance legs' targets tilt
-  the trunk back to level (their forces, through the ground, produce the correcting moment),
-  the swing feet land on the ground whatever the tilt. With two feet the moment about the
-  foot-to-foot line, which the paper's model leaves unbalanced and which rolls the trunk,
-  cannot be produced by the stance feet: what counters it is the swing pair, whose feet are
-  brought down to the ground on the side the trunk rolls towards and catch it at touch-down.
-
+  two feet; the trunk orientation) with the reference's accelerations, plus the joint PD of
+  ``pd`` (per-kg gains).
+* ``ff+pd+level``: ``ff+pd`` tracking the reference levelled by the IMU (``levelled``):
+  trunk-attitude feedback through the legs -- the stance legs' targets tilt the trunk back to
+  level (their forces, through the ground, produce the correcting moment), the swing feet land
+  on the ground whatever the tilt. With two feet the moment about the foot-to-foot line,
+  which the paper's model leaves unbalanced and which rolls the trunk, cannot be produced by
+  the stance feet: what counters it is the swing pair, whose feet are brought down to the
+  ground on the side the trunk rolls towards and catch it at touch-down.
 * ``ff+pd+step``: ``ff+pd`` with capture-point foot placement of the swing feet (``FfPdStep``),
   the trunk velocity estimated from encoders and IMU: what catches the trot's roll.
 
 Gains are per kg of robot (``Gains``): Kp = kp_per_kg m, Kd = kd_per_kg m for the joint PD
-(pd, ff+pd); the computed-torque controllers' gains are accelerations (1/s^2, 1/s), a
-natural frequency and damping ratio independent of the mass.
+(pd, ff+pd, id+pd and their variants); the computed-torque controllers' gains are natural
+frequencies per leg and a damping ratio, independent of the mass.
 """
 
 from __future__ import annotations
 
 import math
 import time
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from typing import Protocol
 
 import numpy as np
@@ -70,20 +86,39 @@ IDENTITY_QUAT = np.array([0.0, 0.0, 0.0, 1.0])
 KP_PER_KG = 20.0  # N m / rad / kg
 KD_PER_KG = 0.5  # N m s / rad / kg
 
-#: Natural frequency (rad/s) and damping ratio of the computed-torque controllers' error
-#: dynamics: 20 rad/s (3.2 Hz) is well below the 1 kHz loop and the contact's ~50 Hz
-#: (MuJoCo's default solref time constant 0.02 s), and fast against a 0.3 s gait phase.
-CT_OMEGA = 20.0
+#: Natural frequencies (rad/s) of the computed-torque controllers' joint error dynamics, per
+#: leg, and their damping ratio (critical). A swing leg is ~1/10-1/100 of a stance leg's
+#: inertia and is pushed around by the trunk's motion: it needs the higher bandwidth. Measured
+#: on the paper robot's walk, 2 cycles, ct-diag (stance, swing): (20, 100) rad/s joint RMS
+#: 0.0038 rad, (30, 150) 0.0019, (50, 250) 0.0011 (pd 0.029). 250 rad/s x the plant's 0.5 ms
+#: step = 0.125: well inside what the drivers' implicit PD integrates.
+CT_OMEGA_STANCE = 50.0
+CT_OMEGA_SWING = 250.0
 CT_ZETA = 1.0
 
+#: ct-diag+roll: natural frequency of the roll's wanted error dynamics (rad/s), above the
+#: inverted pendulum's sqrt(g / h) (5.9 rad/s for the paper robot's 0.28 m); measured on the
+#: paper robot's trot (10 cycles asked): 12 and 20 rad/s both fall at 2.7 s (4 cycles).
+CT_OMEGA_ROLL = 12.0
+#: Rate (rad/s, critically damped) at which a lifted leg's offset returns to the plan.
+RETURN_RAD_S = 5.0
 
 
 @dataclass(frozen=True)
 class Gains:
     kp_per_kg: float = KP_PER_KG  # N m / rad / kg
     kd_per_kg: float = KD_PER_KG  # N m s / rad / kg
-    ct_omega: float = CT_OMEGA  # rad/s
+    ct_omega_stance: float = CT_OMEGA_STANCE  # rad/s
+    ct_omega_swing: float = CT_OMEGA_SWING  # rad/s
     ct_zeta: float = CT_ZETA
+    ct_omega_roll: float = CT_OMEGA_ROLL  # rad/s
+
+    def ct_omega(self, stance: StanceSet) -> np.ndarray:
+        """(12,) natural frequency per joint: the stance legs' or the swing legs'."""
+        w = np.full(12, self.ct_omega_swing)
+        for i in stance.feet:
+            w[3 * i : 3 * i + 3] = self.ct_omega_stance
+        return w
 
     def validate(self) -> None:
         for name, value in vars(self).items():
@@ -92,8 +127,7 @@ class Gains:
 
     def as_dict(self, robot: Robot) -> dict[str, float]:
         m = robot.total_mass
-        return {**vars(self), "mass_kg": m, "kp_Nm_per_rad": self.kp_per_kg * m, "kd_Nms_per_rad": self.kd_per_kg * m,
-                "ct_kp_per_s2": self.ct_omega**2, "ct_kd_per_s": 2 * self.ct_zeta * self.ct_omega}
+        return {**vars(self), "mass_kg": m, "kp_Nm_per_rad": self.kp_per_kg * m, "kd_Nms_per_rad": self.kd_per_kg * m}
 
 
 class Controller(Protocol):
@@ -111,19 +145,19 @@ class GeneratedC:
 
     def __init__(self, robot: Robot) -> None:
         self.library = compiled_library(robot)
-        self._functions: dict[str, tuple[CompiledFunction, int]] = {}
+        self._functions: dict[tuple[str, tuple[int, ...]], CompiledFunction] = {}
         self.ns = 0
 
     def __call__(self, name: str, stance: StanceSet, *args: np.ndarray) -> np.ndarray:
-        key = reduced_symbol(name, stance)
-        entry = self._functions.get(key)
-        if entry is None:
-            entry = self._functions[key] = (CompiledFunction(self.library, key), 13 if len(stance.feet) == 2 else 12)
-        f, n = entry
+        """The first output of ``name`` of the stance set (a vector): a view of the function's
+        output buffer, valid until its next call."""
+        f = self._functions.get((name, stance.feet))
+        if f is None:
+            f = self._functions[(name, stance.feet)] = CompiledFunction(self.library, reduced_symbol(name, stance))
         t0 = time.perf_counter_ns()
         out = f.raw(*args)[0]
         self.ns += time.perf_counter_ns() - t0
-        return out.reshape(n, n, order="F").copy() if out.size == n * n else out.copy()
+        return out
 
 
 def imu_roll(meas: Measurement) -> tuple[float, float]:
@@ -160,7 +194,18 @@ class FfPd(Pd):
     def command(self, ref: ReferenceSample, stance: StanceSet, meas: Measurement) -> Command:
         n = 13 if len(stance.feet) == 2 else 12
         tau = self.c("id_r", stance, _pad(ref.q_r, n), _pad(ref.qd_r, n), _pad(ref.qdd_r, n), IDENTITY_QUAT)
-        return self.pd(ref, tau[:12])
+        return self.pd(ref, tau[:12].copy())
+
+
+def measured_state(ref: ReferenceSample, stance: StanceSet, meas: Measurement,
+                   qdd: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """(q_r, qd_r, qdd_r) of the reduced model at the measured state: the joints' q, qd and the
+    given joint accelerations (12,); with two stance feet the roll phi and its rate from the IMU
+    appended, and the roll's reference acceleration."""
+    if len(stance.feet) != 2:
+        return meas.q, meas.qd, qdd
+    roll, roll_rate = imu_roll(meas)
+    return np.append(meas.q, roll), np.append(meas.qd, roll_rate), np.append(qdd, _pad(ref.qdd_r, 13)[12])
 
 
 class MeasuredIdPd(Pd):
@@ -171,17 +216,12 @@ class MeasuredIdPd(Pd):
 
     def command(self, ref: ReferenceSample, stance: StanceSet, meas: Measurement) -> Command:
         stance = model_stance(stance, meas)
-        qdd = ref.qdd_r[:12]
-        q, qd = meas.q, meas.qd
-        if len(stance.feet) == 2:
-            roll, roll_rate = imu_roll(meas)
-            q, qd, qdd = np.append(q, roll), np.append(qd, roll_rate), np.append(qdd, 0.0)
-        tau = self.c("id_r", stance, q, qd, qdd, meas.quat)
-        return self.pd(ref, tau[:12])
+        tau = self.c("id_r", stance, *measured_state(ref, stance, meas, ref.qdd_r[:12]), meas.quat)
+        return self.pd(ref, tau[:12].copy())
 
 
 def model_stance(stance: StanceSet, meas: Measurement) -> StanceSet:
-    """The stance set of the computed-torque controllers' model: the plan's stance feet that the
+    """The stance set of the measured-state controllers' model: the plan's stance feet that the
     foot contact switches report on the ground (a foot that lifts early or lands late is a swing
     leg for the model), the plan's set if fewer than two remain (the reduced model needs two)."""
     feet = tuple(i for i in stance.feet if meas.touching[i])
@@ -192,24 +232,105 @@ class ComputedTorque:
     name = "ct"
 
     def __init__(self, robot: Robot, gains: Gains, c: GeneratedC) -> None:
-        self.kp, self.kd = gains.ct_omega**2, 2 * gains.ct_zeta * gains.ct_omega
-        self.c, self.robot = c, robot
-
-    def commanded(self, ref: ReferenceSample, stance: StanceSet, meas: Measurement) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """(q_r, qd_r, qdd_r commanded) at the measured state."""
-        qdd = ref.qdd_r[:12] + self.kp * (ref.q_r[:12] - meas.q) + self.kd * (ref.qd_r[:12] - meas.qd)
-        if len(stance.feet) != 2:
-            return meas.q, meas.qd, qdd
-        roll, roll_rate = imu_roll(meas)
-        return (np.append(meas.q, roll), np.append(meas.qd, roll_rate),
-                np.append(qdd, -self.kp * roll - self.kd * roll_rate))
+        self.gains, self.c = gains, c
 
     def command(self, ref: ReferenceSample, stance: StanceSet, meas: Measurement) -> Command:
         stance = model_stance(stance, meas)
-        q, qd, qdd = self.commanded(ref, stance, meas)
-        M = self.c("M_r", stance, q, meas.quat)
-        CG = self.c("CG_r", stance, q, qd, meas.quat)
-        return Command((M @ qdd + CG)[:12])
+        w, z = self.gains.ct_omega(stance), self.gains.ct_zeta
+        qdd = ref.qdd_r[:12] + w**2 * (ref.q_r[:12] - meas.q) + 2 * z * w * (ref.qd_r[:12] - meas.qd)
+        q, qd, qdd = measured_state(ref, stance, meas, qdd)
+        if len(stance.feet) == 2:  # the roll's feedback, stance gains, reference 0
+            ws = self.gains.ct_omega_stance
+            qdd[12] -= ws**2 * q[12] + 2 * z * ws * qd[12]
+        return Command(self.c("id_r", stance, q, qd, qdd, meas.quat)[:12].copy())
+
+
+class DiagonalPd(Pd):
+    """``pd-diag``: joint PD with ``ct-diag``'s per-joint gains, M_hat w^2 and 2 zeta w M_hat
+    (M_hat = ``Reference.inertia`` of the plan's stance), no model torques."""
+
+    name = "pd-diag"
+
+    def __init__(self, robot: Robot, gains: Gains, c: GeneratedC) -> None:
+        super().__init__(robot, gains, c)
+        self.gains = gains
+        self._cache: dict[int, tuple[np.ndarray, np.ndarray]] = {}
+
+    def diagonal_gains(self, ref: ReferenceSample, stance: StanceSet) -> tuple[np.ndarray, np.ndarray]:
+        """(Kp, Kd) per joint at this reference tick (computed once per tick of the cycle)."""
+        gains = self._cache.get(id(ref))
+        if gains is None:
+            assert isinstance(ref, Reference)
+            w, z = self.gains.ct_omega(stance), self.gains.ct_zeta
+            gains = self._cache[id(ref)] = (ref.inertia * w**2, ref.inertia * 2 * z * w)
+        return gains
+
+    def command(self, ref: ReferenceSample, stance: StanceSet, meas: Measurement) -> Command:
+        kp, kd = self.diagonal_gains(ref, stance)
+        return Command(np.zeros(12), ref.q_r[:12], ref.qd_r[:12], kp, kd)
+
+
+class DiagonalCt(DiagonalPd):
+    """``ct-diag`` (see the module docstring): id_r at the measured state with the reference's
+    accelerations, plus the drivers' PD with the per-joint gains of ``pd-diag``."""
+
+    name = "ct-diag"
+
+    def command(self, ref: ReferenceSample, stance: StanceSet, meas: Measurement) -> Command:
+        kp, kd = self.diagonal_gains(ref, stance)
+        model = model_stance(stance, meas)
+        tau = self.c("id_r", model, *measured_state(ref, model, meas, ref.qdd_r[:12]), meas.quat)
+        return Command(tau[:12].copy(), ref.q_r[:12], ref.qd_r[:12], kp, kd)
+
+
+class DiagonalCtRoll(DiagonalCt):
+    """``ct-diag+roll``: ``ct-diag`` that balances the roll of a two-feet stance with the stance
+    legs, through the 13th row of M_r -- the moment about the foot-to-foot line, which the
+    feet cannot produce and the paper's model leaves unbalanced. The row says how the stance
+    legs' joint accelerations move the roll with that moment zero (they shift the trunk across
+    the support line, the "hip strategy"): with the roll's wanted acceleration
+    phid_des = -w_r^2 phi - 2 zeta w_r phid (IMU), id_r at the measured state gives the moment
+    r that motion would need (its 13th entry), and the stance joints get the extra
+    acceleration delta = -r m / (m . m_t) along m_t, m the row's stance-joint entries
+    (M_r at the reference, ``Reference.M_r``) projected so that the feet keep their distance;
+    the torques get M_r delta. delta is integrated into the stance legs' PD targets; a leg
+    that lifts off returns its offset to the plan over its swing (critically damped at
+    ``RETURN_RAD_S``). Three or four feet: ``ct-diag``."""
+
+    name = "ct-diag+roll"
+
+    def __init__(self, robot: Robot, gains: Gains, c: GeneratedC) -> None:
+        super().__init__(robot, gains, c)
+        self.dq, self.dqd = np.zeros(12), np.zeros(12)  # rad, rad/s: the stance legs' offsets from the plan
+
+    def command(self, ref: ReferenceSample, stance: StanceSet, meas: Measurement) -> Command:
+        assert isinstance(ref, Reference)
+        kp, kd = self.diagonal_gains(ref, stance)
+        model = model_stance(stance, meas)
+        delta = np.zeros(12)
+        if len(stance.feet) == 2 and model.feet == stance.feet:
+            w, z = self.gains.ct_omega_roll, self.gains.ct_zeta
+            q, qd, qdd = measured_state(ref, model, meas, ref.qdd_r[:12])
+            qdd[12] = -(w**2) * q[12] - 2 * z * w * qd[12]
+            tau = self.c("id_r", model, q, qd, qdd, meas.quat)
+            i, j = stance.feet
+            legs = [3 * i, 3 * i + 1, 3 * i + 2, 3 * j, 3 * j + 1, 3 * j + 2]
+            d = ref.r_feet[i] - ref.r_feet[j]
+            closure = np.zeros(12)  # d|r_i - r_j|^2 / dq: a joint motion that changes the feet's distance
+            closure[legs[:3]], closure[legs[3:]] = ref.J[i].T @ d, -ref.J[j].T @ d
+            m = np.zeros(12)
+            m[legs] = ref.M_r[12, legs]
+            m_t = m - (m @ closure) / (closure @ closure) * closure
+            delta = -tau[12] * m_t / (m @ m_t)
+            tau12 = tau[:12] + ref.M_r[:12, :12] @ delta
+        else:
+            tau12 = self.c("id_r", model, *measured_state(ref, model, meas, ref.qdd_r[:12]), meas.quat)[:12].copy()
+        back = np.full(12, RETURN_RAD_S)
+        for f in stance.feet:
+            back[3 * f : 3 * f + 3] = 0.0
+        self.dqd += (delta - back**2 * self.dq - 2 * back * self.dqd) * ref.dt
+        self.dq += self.dqd * ref.dt
+        return Command(tau12, ref.q_r[:12] + self.dq, ref.qd_r[:12] + self.dqd, kp, kd)
 
 
 def levelled(ref: Reference, meas: Measurement) -> Reference:
@@ -228,7 +349,7 @@ def levelled(ref: Reference, meas: Measurement) -> Reference:
     q, qd = ref.q_r.copy(), ref.qd_r.copy()
     q[:12] += dq
     qd[:12] += dqd
-    return Reference(q, qd, ref.qdd_r, ref.stance, ref.r_feet, ref.J_inv, ref.J, ref.phase_s)
+    return replace(ref, q_r=q, qd_r=qd)
 
 
 class FfPdLevel(FfPd):
@@ -241,7 +362,7 @@ class FfPdLevel(FfPd):
         n = 13 if len(stance.feet) == 2 else 12
         tau = self.c("id_r", stance, _pad(ref.q_r, n), _pad(ref.qd_r, n), _pad(ref.qdd_r, n), IDENTITY_QUAT)
         assert isinstance(ref, Reference)
-        return self.pd(levelled(ref, meas), tau[:12])
+        return self.pd(levelled(ref, meas), tau[:12].copy())
 
 
 class FfPdStep(FfPd):
@@ -290,17 +411,8 @@ class FfPdStep(FfPd):
         return Command(base.tau, q_des, base.qd_des, base.kp, base.kd)
 
 
-class ComputedTorqueLevel(ComputedTorque):
-    """``ct`` tracking the IMU-levelled reference (``levelled``)."""
-
-    name = "ct+level"
-
-    def command(self, ref: ReferenceSample, stance: StanceSet, meas: Measurement) -> Command:
-        assert isinstance(ref, Reference)
-        return super().command(levelled(ref, meas), stance, meas)
-
-
-CONTROLLERS = {c.name: c for c in (Pd, FfPd, ComputedTorque, MeasuredIdPd, FfPdLevel, ComputedTorqueLevel, FfPdStep)}
+CONTROLLERS = {c.name: c for c in (Pd, FfPd, ComputedTorque, DiagonalCt, DiagonalPd, DiagonalCtRoll, MeasuredIdPd,
+                                    FfPdLevel, FfPdStep)}
 
 
 def parse_controllers(names: tuple[str, ...] | list[str]) -> list[str]:

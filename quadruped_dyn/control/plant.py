@@ -83,13 +83,14 @@ class PlantOptions:
 
 @dataclass(frozen=True)
 class Command:
-    """One control tick's command per joint (12,): feedforward torque (N m), PD target and gains."""
+    """One control tick's command per joint (12,): feedforward torque (N m), PD target and gains
+    (one gain for every joint, or one per joint)."""
 
     tau: np.ndarray
     q_des: np.ndarray | None = None
     qd_des: np.ndarray | None = None
-    kp: float = 0.0  # N m / rad
-    kd: float = 0.0  # N m s / rad
+    kp: float | np.ndarray = 0.0  # N m / rad
+    kd: float | np.ndarray = 0.0  # N m s / rad
 
 
 @dataclass(frozen=True)
@@ -122,7 +123,7 @@ class Plant:
         self.foot_geoms = np.array([m.geom(f"quadruped_dyn_foot_{leg.label}").id for leg in self.robot.legs])
         self.foot_sites = [m.site(f"quadruped_dyn_foot_{leg.label}").id for leg in self.robot.legs]
         self.floor_geom = m.geom("quadruped_dyn_floor").id
-        self._gains = (0.0, 0.0)
+        self._gains: tuple[object, object] = (None, None)  # the gains last set (identity: they are set again if new)
         self._warnings = 0
 
     # -------------------------------------------------------------------- state
@@ -175,9 +176,9 @@ class Plant:
         d.ctrl[:12] = command.tau
         d.ctrl[12:24] = command.q_des if command.q_des is not None else 0.0
         d.ctrl[24:36] = command.qd_des if command.qd_des is not None else 0.0
-        if command.kp != self._gains[0] or command.kd != self._gains[1]:
-            m.actuator_gainprm[12:24, 0], m.actuator_biasprm[12:24, 1] = command.kp, -command.kp
-            m.actuator_gainprm[24:36, 0], m.actuator_biasprm[24:36, 2] = command.kd, -command.kd
+        if command.kp is not self._gains[0] or command.kd is not self._gains[1]:
+            m.actuator_gainprm[12:24, 0], m.actuator_biasprm[12:24, 1] = command.kp, np.negative(command.kp)
+            m.actuator_gainprm[24:36, 0], m.actuator_biasprm[24:36, 2] = command.kd, np.negative(command.kd)
             self._gains = (command.kp, command.kd)
         mujoco.mj_step(m, d, substeps)
 

@@ -3,7 +3,8 @@
 The feet relative to the trunk are periodic in the plan (footholds and trunk advance by
 speed x period per cycle), so the joint reference is too: one cycle is computed and repeated.
 Each tick also carries the legs' kinematics at the reference (foot positions r_i in the trunk
-frame and the inverse foot Jacobians), for the attitude-levelling controllers.
+frame and the inverse foot Jacobians), for the attitude-levelling controllers, and a positive
+diagonal estimate of the joints' inertia for the computed-torque feedback (``inertia``).
 """
 
 from __future__ import annotations
@@ -13,9 +14,12 @@ from functools import cache
 
 import numpy as np
 
+from quadruped_dyn.codegen.emit import reduced_symbol
+from quadruped_dyn.codegen.library import CompiledFunction, compiled_library
 from quadruped_dyn.dynamics.kinematics import robot_kinematics
 from quadruped_dyn.experiment.gait import Plan
 from quadruped_dyn.experiment.plan_ik import ReferenceSample, reference
+from quadruped_dyn.model.stance import StanceSet
 
 
 @dataclass(frozen=True)
@@ -26,6 +30,22 @@ class Reference(ReferenceSample):
     J_inv: np.ndarray  # (4, 3, 3) inverse foot Jacobians d r_i / d q_i
     J: np.ndarray  # (4, 3, 3) foot Jacobians
     phase_s: float  # fraction [0, 1) of the current gait phase
+    inertia: np.ndarray  # (12,) positive diagonal joint inertia estimate, kg m^2 (``joint_inertia``)
+    M_r: np.ndarray  # (n, n) the generated M_r of the plan's stance at the reference, trunk level
+    dt: float  # s, the control period the cycle is sampled at
+
+
+def joint_inertia(M_legs: np.ndarray, J: np.ndarray, stance: tuple[int, ...], mass: float) -> np.ndarray:
+    """(12,) the diagonal of a positive definite joint-space inertia estimate: the legs' own
+    joint inertia (the joint block of M_full, ``M_legs`` (12, 12)) plus, for each stance leg, its
+    equal share of the robot's mass as a point mass at the hip moving with the foot fixed,
+    (m / n_stance) J_i^T J_i (J_i the foot Jacobian, trunk frame). Unlike M_r's diagonal (which
+    spreads over 0.002-1.1 kg m^2 on the paper robot and has a negative entry on go2) it is
+    positive and means the same for every stance set."""
+    m = np.diag(M_legs).copy()
+    for i in stance:
+        m[3 * i : 3 * i + 3] += mass / len(stance) * np.sum(J[i] ** 2, axis=0)
+    return m
 
 
 #: The IK reference is computed at knots this far apart (s) and interpolated at the control
@@ -52,6 +72,10 @@ def reference_cycle(plan: Plan, rate_hz: float) -> tuple[Reference, ...]:
     QDD = np.array([s.qdd_r for s in knots])
     out = []
     kin = robot_kinematics(plan.robot)
+    library = compiled_library(plan.robot)
+    M_full = CompiledFunction(library, "M_full")
+    M_r = {feet: CompiledFunction(library, reduced_symbol("M_r", StanceSet(feet))) for feet in set(plan.gait.phases)}
+    origin = np.array([0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 1.0])
     for k in range(int(round(period * rate_hz))):
         t = k / rate_hz
         j = min(int(t / h), m - 1)
@@ -63,5 +87,10 @@ def reference_cycle(plan: Plan, rate_hz: float) -> tuple[Reference, ...]:
         qdd = (1 - u) * QDD[j] + u * QDD[j + 1]
         r = np.array([np.asarray(kin[i].foot_position(q[3 * i : 3 * i + 3])).ravel() for i in range(4)])
         J = np.array([np.asarray(kin[i].foot_jacobian(q[3 * i : 3 * i + 3])) for i in range(4)])
-        out.append(Reference(q, qd, qdd, plan.stance(t), r, np.linalg.inv(J), J, plan.gait.phase(t)[1]))
+        stance = plan.stance(t)
+        M_legs = M_full(np.concatenate([origin, q[:12]]))[0][6:, 6:]
+        n = 13 if len(stance) == 2 else 12
+        out.append(Reference(q, qd, qdd, stance, r, np.linalg.inv(J), J, plan.gait.phase(t)[1],
+                             joint_inertia(M_legs, J, stance, plan.robot.total_mass),
+                             M_r[stance](q[:n], origin[3:])[0], 1.0 / rate_hz))
     return tuple(out)

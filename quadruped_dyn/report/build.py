@@ -48,7 +48,7 @@ Progress = Steps  # numbered steps with a bar inside a long one (quadruped_dyn.p
 
 
 #: Gait cycles of the report's closed loop (walk and trot, every controller): 2 keeps the main job
-#: short (7 controllers x 2 gaits x 2 cycles, ~25 s simulated); `quadruped-dyn control --cycles 10`
+#: short (9 controllers x 2 gaits x 2 cycles, ~32 s simulated); `quadruped-dyn control --cycles 10`
 #: and the slow tests run the 10-cycle study (docs/closed_loop.md).
 REPORT_CLOSED_LOOP_CYCLES = 2
 

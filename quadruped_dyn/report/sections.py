@@ -561,8 +561,10 @@ def closed_loop_section(loop: dict[str, Any] | None) -> Section:
     parts = ["<p>The generated C in the loop of a simulated robot whose contacts nobody here wrote: MuJoCo, soft, "
              "frictional, unilateral contacts, the robot built from the same URDF. Controllers at 1 kHz read joint q, "
              "q̇ and an IMU (trunk orientation, angular rate); the stance set is the plan's (the ct controllers also use "
-             "the foot contact switches). pd: joint PD; ff+pd: id_r at the plan + PD; ct: computed torque on M_r, CG_r at "
-             "the measured state; +level: the reference levelled by the IMU. See docs/closed_loop.md.</p>"]
+             "the foot contact switches). pd: joint PD; ff+pd: id_r at the plan + PD; ct: computed torque, id_r at the "
+             "measured state with the feedback inside (through M_r); ct-diag: id_r at the measured state + the feedback "
+             "with a positive diagonal inertia estimate, run by the drivers; pd-diag: the same gains without the model; "
+             "+level: the reference levelled by the IMU; +step: capture-point foot placement. See docs/closed_loop.md.</p>"]
     headlines = []
     for gait, g in loop["gaits"].items():
         d = g.get("data", {})
@@ -575,8 +577,10 @@ def closed_loop_section(loop: dict[str, Any] | None) -> Section:
                      f"({esc(plant.get('foot_radius_from'))}); joint PD "
                      f"{num(gains.get('kp_Nm_per_rad'), '.3g')} N m/rad, "
                      f"{num(gains.get('kd_Nms_per_rad'), '.3g')} N m s/rad ({num(gains.get('kp_per_kg'), 'g')}, "
-                     f"{num(gains.get('kd_per_kg'), 'g')} per kg); ct error dynamics "
-                     f"{num(gains.get('ct_omega'), 'g')} rad/s.</p>")
+                     f"{num(gains.get('kd_per_kg'), 'g')} per kg); ct, ct-diag error dynamics "
+                     f"{num(gains.get('ct_omega_stance'), 'g')} rad/s (stance legs), "
+                     f"{num(gains.get('ct_omega_swing'), 'g')} rad/s (swing legs), damping ratio "
+                     f"{num(gains.get('ct_zeta'), 'g')}.</p>")
         rows, grf_rows = [], []
         up = []
         for name, r in d.get("controllers", {}).items():
