@@ -3,10 +3,9 @@
 from quadruped_dyn.exports import lazy_exports
 
 _MODULES: dict[str, tuple[str, ...]] = {
+    "harnesses": ("HARNESSES", "PINOCCHIO_CXX_FLAGS", "NATIVE_CXX_FLAGS", "cmeel_prefix", "require_headers", "pinocchio_program"),
+    "cppadcg": ("PEER", "PeerTiming"),
     "peers": ("PEERS", "ADAM_PAIRS", "PeerEntry", "parse_peers", "adam_functions", "check_adam", "run_peers", "peers_table"),
-    "timing": (
-        "FD_R_TARGET", "PAIRS", "HARNESSES", "BenchEntry", "BenchReport", "arithmetic_operations", "PINOCCHIO_CXX_FLAGS",
-        "pinocchio_harness", "run_bench",
-    ),
+    "timing": ("FD_R_TARGET", "PAIRS", "BenchEntry", "BenchReport", "arithmetic_operations", "pinocchio_harness", "run_bench"),
 }
 __all__, __getattr__, __dir__ = lazy_exports(__name__, _MODULES)

@@ -1,4 +1,7 @@
-"""Other generated dynamics timed against the toolkit's in the same run (``bench --peers adam``).
+"""Other generated dynamics timed against the toolkit's in the same run (``bench --peers``).
+
+Pinocchio's CppADCodeGen code ("pinocchio-cppadcodegen", cppadcg.py) is timed inside
+``timing.run_bench``'s rounds; this module names the peers and times adam's.
 
 adam (ami-iit/adam, PyPI ``adam-robotics``; 0.5.0 needs ``liecasadi``, undeclared): its CasADi
 mass matrix (CRBA) and bias force (RNEA, C + G), BODY_FIXED velocity representation (so M and
@@ -26,7 +29,9 @@ from pathlib import Path
 import casadi as ca
 import numpy as np
 
-from quadruped_dyn.bench.timing import HARNESSES, arithmetic_operations
+from quadruped_dyn.bench import cppadcg
+from quadruped_dyn.bench.harnesses import HARNESSES
+from quadruped_dyn.bench.timing import arithmetic_operations
 from quadruped_dyn.codegen.cache import cached_build
 from quadruped_dyn.codegen.casadi_source import silence_unused_parameters
 from quadruped_dyn.codegen.emit import CODEGEN_FUNCTIONS, PREFIX
@@ -38,7 +43,7 @@ from quadruped_dyn.model.state import GRAVITY_W, random_state, rotation
 from quadruped_dyn.references.pinocchio import PinocchioReference
 from quadruped_dyn.tolerances import REL_TOL_TERMS
 
-PEERS = ("adam",)
+PEERS = (cppadcg.PEER, "adam")
 
 #: The peers' timing program (c/): its source and the timing it shares with bench_qd.c.
 PEER_HARNESS = ("bench_peers.c", "bench_median.h")
@@ -61,12 +66,15 @@ class PeerEntry:
 
 
 def parse_peers(text: str) -> tuple[str, ...]:
-    """Peer names from a comma-separated list (empty: none); InputError for an unknown one or a
+    """Peer names from a comma-separated list (empty or "none": none); InputError for an unknown one or a
     missing package, before any work."""
-    names = tuple(p.strip() for p in text.split(",") if p.strip())
+    names = tuple(p.strip() for p in text.split(",") if p.strip() and p.strip() != "none")
     unknown = [p for p in names if p not in PEERS]
     if unknown:
-        raise InputError(f"unknown peer(s) {', '.join(unknown)}; expected a comma-separated list of: {', '.join(PEERS)}")
+        raise InputError(f"unknown peer(s) {', '.join(unknown)}; expected a comma-separated list of: "
+                         f"{', '.join(PEERS)} (or none)")
+    if cppadcg.PEER in names and not cppadcg.available():
+        raise InputError(f"the peer {cppadcg.PEER} needs the CppADCodeGen headers; expected {cppadcg.INSTALL_HINT}")
     if "adam" in names:
         try:
             import adam.casadi  # noqa: F401
@@ -142,10 +150,10 @@ def _harness(functions: list[ca.Function], flags: tuple[str, ...], cc: str) -> P
         return cached_build(f"peers-{key}", "bench_peers", build)  # verified, atomic, locked
 
 
-def run_peers(robot: Robot, peers: tuple[str, ...] = PEERS, native: bool = False, calls: int = 20000, reps: int = 9,
+def run_peers(robot: Robot, native: bool = False, calls: int = 20000, reps: int = 9,
               rounds: int = 3, cc: str = "gcc") -> list[PeerEntry]:
-    """Time the toolkit's generated functions against each peer's, same file, flags and harness."""
-    parse_peers(",".join(peers))
+    """Time the toolkit's generated functions against adam's, same file, flags and harness."""
+    parse_peers("adam")
     ours = {}
     for name in ADAM_PAIRS:
         f = CODEGEN_FUNCTIONS[name](robot)

@@ -1,11 +1,12 @@
 """Benchmark of the generated C against Pinocchio's native C++, measured in the same run.
 
-Both sides are timed in compiled code (``c/bench_qd.c`` and ``c/bench_pinocchio.cpp``):
-the median over ``reps`` runs of ``calls`` calls each; the two harnesses alternate for
-``rounds`` rounds and each function keeps its best median (the least disturbed by other
-load on a shared 2-core machine). Ratios generated / Pinocchio are what to read; absolute
-times drift with the machine's load. The Pinocchio harness links
-the pin wheel's libraries (built for generic x86-64), so neither side uses -march=native.
+Both sides are timed in compiled code (``c/bench_qd.c`` and ``c/bench_pinocchio.cpp``, and
+with ``peer`` Pinocchio's CppADCodeGen code, ``cppadcg.py``): the median over ``reps`` runs of
+``calls`` calls each; the harnesses alternate for ``rounds`` rounds and each function keeps its
+best median (the least disturbed by other load on a shared 2-core machine). Ratios are what to
+read; absolute times drift with the machine's load. By default the Pinocchio harness links the pin
+wheel's libraries (built for generic x86-64) and the generated C is built with ``C_FLAGS``, so
+neither side uses -march=native; ``native`` builds every side for this machine (harnesses.py).
 Pairs: M_full ~ crba, nle_full (C + G in one call) ~ nonLinearEffects, G_full ~
 computeGeneralizedGravity, id_full ~ rnea (id_full also applies 4 foot forces), did_full ~ computeRNEADerivatives,
 dfd_full ~ computeABADerivatives, fd_r_<feet> ~
@@ -16,7 +17,6 @@ from __future__ import annotations
 
 import functools
 import hashlib
-import importlib.metadata
 import shutil
 import sys
 import tempfile
@@ -29,11 +29,12 @@ import casadi as ca
 import numpy as np
 import pinocchio as pin
 
+from quadruped_dyn.bench import cppadcg
+from quadruped_dyn.bench.harnesses import HARNESSES, NATIVE_CXX_FLAGS, PINOCCHIO_CXX_FLAGS, pinocchio_program, require_headers
 from quadruped_dyn.checks.c_reference import generate_checked, reference_header_name
 from quadruped_dyn.codegen.cache import cache_dir, cached_build
 from quadruped_dyn.codegen.emit import PREFIX, codegen_functions, work_sizes
 from quadruped_dyn.codegen.library import C_FLAGS, CompiledFunction, CompiledLibrary, compile_sources, compiled_library, run_tool
-from quadruped_dyn.errors import InputError
 from quadruped_dyn.model.robot import Robot
 from quadruped_dyn.model.state import random_state
 from quadruped_dyn.references.pinocchio import PinocchioReference
@@ -53,8 +54,6 @@ PAIRS = {
     "did_full": ("computeRNEADerivatives", 0.5),
     "dfd_full": ("computeABADerivatives", 0.5),
 }
-
-HARNESSES = Path(__file__).resolve().parent / "c"
 
 
 @dataclass
@@ -79,6 +78,10 @@ class BenchReport:
     generation_s: float = 0.0
     compile_s: float = 0.0
     pinocchio_version: str = pin.__version__
+    native: bool = False  # both sides built with -march=native (``bench --native``)
+    c_flags: list[str] = field(default_factory=list)  # of the generated C
+    pinocchio_flags: list[str] = field(default_factory=list)  # of the Pinocchio harness
+    peers: list[cppadcg.PeerTiming] = field(default_factory=list)  # Pinocchio's CppADCodeGen code, same rounds
 
     def as_dict(self) -> dict[str, object]:
         return asdict(self)
@@ -96,8 +99,19 @@ class BenchReport:
         lines.append(
             f"{self.robot}: C source {self.code_bytes / 1e3:.0f} kB, library {self.library_bytes / 1e3:.0f} kB, "
             f"max work memory {self.work_bytes} B, generation {self.generation_s:.1f} s, compile {self.compile_s:.1f} s "
-            f"(Pinocchio {self.pinocchio_version})"
+            f"(Pinocchio {self.pinocchio_version}; {' '.join(self.c_flags)})"
         )
+        if self.peers:
+            lines.append(f"{'peer function':<22}{'peer ns':>9}{'generated':>22}{'ratio':>7}{'target':>8}"
+                         f"{'Pinocchio native':>34}{'peer/native':>12}{'peer err':>9}")
+            for p in self.peers:
+                ours = f"{p.name} {p.generated_ns:.0f} ns" if p.name and p.generated_ns is not None else ""
+                ratio = f"{p.ratio:.2f}" if p.ratio is not None else ""
+                target = f"<={p.target:.2f}" if p.target is not None else ""
+                native = f"{p.pinocchio} {p.pinocchio_ns:.0f} ns"
+                lines.append(f"{p.peer_function:<22}{p.peer_ns:>9.0f}{ours:>22}{ratio:>7}{target:>8}"
+                             f"{native:>34}{p.peer_vs_pinocchio:>12.2f}{p.checked_rel_error:>9.0e}")
+            lines.append(f"peer: {self.peers[0].peer}, same flags as the generated C, timed in the same rounds")
         return "\n".join(lines)
 
 
@@ -108,35 +122,19 @@ def arithmetic_operations(f: ca.Function) -> int:
     return sum(f.instruction_id(k) not in skip for k in range(f.n_instructions()))
 
 
-def _cmeel_prefix() -> Path:
-    return Path(str(importlib.metadata.distribution("pin").locate_file("cmeel.prefix")))
-
-
-PINOCCHIO_CXX_FLAGS = (
-    "-O3", "-DNDEBUG", "-std=c++17", "-DPINOCCHIO_ENABLE_TEMPLATE_INSTANTIATION",
-    "-DBOOST_MPL_LIMIT_LIST_SIZE=30", "-DBOOST_MPL_LIMIT_VECTOR_SIZE=30",
-    "-DBOOST_MPL_CFG_NO_PREPROCESSED_HEADERS", "-DBOOST_FUSION_INVOKE_MAX_ARITY=12",
-)
-
-
-def pinocchio_harness(cxx: str = "g++") -> Path:
-    """The compiled Pinocchio benchmark, built once per (source, pin version, flags)."""
-    prefix = _cmeel_prefix()
-    for header in ("eigen3/Eigen/Core", "urdfdom_headers/urdf_model/model.h"):
-        if not (prefix / "include" / header).is_file():
-            raise InputError(f"missing {header} under {prefix}/include; expected the cmeel-eigen and "
-                             "cmeel-urdfdom-headers packages (pip install cmeel-eigen cmeel-urdfdom-headers)")
+def pinocchio_harness(native: bool = False, cxx: str = "g++") -> Path:
+    """The compiled Pinocchio benchmark, built once per (source, pin version, flags): linked with the
+    wheel's algorithms, or under ``native`` with them compiled in for this machine (harnesses.py)."""
+    require_headers(("eigen3/Eigen/Core", "urdfdom_headers/urdf_model/model.h"),
+                    "the cmeel-eigen and cmeel-urdfdom-headers packages (pip install cmeel-eigen cmeel-urdfdom-headers)")
     source = HARNESSES / "bench_pinocchio.cpp"
-    key = hashlib.sha256(source.read_bytes() + pin.__version__.encode() + " ".join(PINOCCHIO_CXX_FLAGS).encode()).hexdigest()[:16]
-    lib = prefix / "lib"
+    flags = NATIVE_CXX_FLAGS if native else PINOCCHIO_CXX_FLAGS
+    key = hashlib.sha256(source.read_bytes() + pin.__version__.encode() + " ".join(flags).encode()).hexdigest()[:16]
 
     def build(exe: Path) -> None:
-        print(f"building the Pinocchio benchmark harness once (about a minute) into {cache_dir()}", file=sys.stderr)
-        run_tool(
-            [cxx, *PINOCCHIO_CXX_FLAGS, f"-I{prefix / 'include'}", f"-I{prefix / 'include' / 'eigen3'}",
-             f"-I{prefix / 'include' / 'urdfdom_headers'}", str(source), f"-L{lib}", f"-Wl,-rpath,{lib}",
-             "-lpinocchio_default", "-lpinocchio_parsers", "-lurdfdom_model", "-lboost_serialization", "-o", str(exe)]
-        )
+        print(f"building the Pinocchio benchmark harness once ({'several minutes' if native else 'about a minute'}) "
+              f"into {cache_dir()}", file=sys.stderr)
+        run_tool(pinocchio_program([source], exe, flags, cxx))
 
     return cached_build(f"pinocchio-bench-{key}", "bench_pinocchio", build)
 
@@ -145,8 +143,14 @@ def _parse(output: str) -> dict[str, float]:
     return {name: float(value) for name, value in (line.split() for line in output.strip().splitlines())}
 
 
-def run_bench(robot: Robot, calls: int = 20000, reps: int = 9, rounds: int = 3, cc: str = "gcc") -> BenchReport:
-    report = BenchReport(robot.name)
+def run_bench(robot: Robot, calls: int = 20000, reps: int = 9, rounds: int = 3, cc: str = "gcc", native: bool = False,
+              peer: bool = False) -> BenchReport:
+    """Time every generated function and its Pinocchio counterpart in the same run; with ``peer``
+    also Pinocchio's CppADCodeGen code (cppadcg.py, checked against Pinocchio first). ``native``:
+    both sides built with -march=native."""
+    flags = (*C_FLAGS, "-march=native") if native else C_FLAGS
+    report = BenchReport(robot.name, native=native, c_flags=list(flags),
+                         pinocchio_flags=list(NATIVE_CXX_FLAGS if native else PINOCCHIO_CXX_FLAGS))
     start = time.perf_counter()
     codegen_functions(robot)  # symbolic build + generation, timed apart from compilation
     with tempfile.TemporaryDirectory() as tmp:
@@ -160,19 +164,26 @@ def run_bench(robot: Robot, calls: int = 20000, reps: int = 9, rounds: int = 3, 
             shutil.copy(HARNESSES / name, tmp)
         exe, lib = Path(tmp) / "bench_qd", Path(tmp) / f"lib{c_path.stem}.so"
         start = time.perf_counter()
-        compile_sources(sources, C_FLAGS, lib, cc)
+        compile_sources(sources, flags, lib, cc)
         report.compile_s = time.perf_counter() - start
-        run_tool([cc, *C_FLAGS, f"-DQD_HEADER=\"{h_path.name}\"", f"-DQD_REFERENCE=\"{ref_path.name}\"",
+        run_tool([cc, *flags, f"-DQD_HEADER=\"{h_path.name}\"", f"-DQD_REFERENCE=\"{ref_path.name}\"",
                   "bench_qd.c", lib.name, f"-Wl,-rpath,{tmp}", "-lm", "-o", exe.name], cwd=tmp)
-        harness = pinocchio_harness()
+        harness = pinocchio_harness(native)
         feet = [robot.model.frames[i].name for i in robot.foot_frame_ids]
-        generated: dict[str, float] = {}
-        pinocchio: dict[str, float] = {}
-        for _ in range(rounds):  # alternate the two harnesses; keep each function's best median
-            for out, cmd in ((generated, [str(exe), str(calls), str(reps)]),
-                             (pinocchio, [str(harness), str(robot.urdf), str(calls), str(reps), *feet])):
+        commands = {"generated": [str(exe), str(calls), str(reps)],
+                    "pinocchio": [str(harness), str(robot.urdf), str(calls), str(reps), *feet]}
+        if peer:
+            peer_exe = cppadcg.harness(robot, native, cc)
+            peer_errors = cppadcg.check(robot, peer_exe)  # NumericalError before any timing if it differs
+            commands["peer"] = cppadcg.time_command(robot, peer_exe, calls, reps)
+        best: dict[str, dict[str, float]] = {side: {} for side in commands}
+        for _ in range(rounds):  # alternate the harnesses; keep each function's best median
+            for side, cmd in commands.items():
                 for name, ns in _parse(run_tool(cmd)).items():
-                    out[name] = min(ns, out.get(name, ns))
+                    best[side][name] = min(ns, best[side].get(name, ns))
+    generated, pinocchio = best["generated"], best["pinocchio"]
+    if peer:
+        report.peers = cppadcg.timings({n[len(PREFIX):]: t for n, t in generated.items()}, best["peer"], pinocchio, peer_errors)
     library = compiled_library(robot, cc=cc)
     report.library_bytes = library.path.stat().st_size
     python_us = _python_call_times(robot, library)

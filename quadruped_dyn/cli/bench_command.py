@@ -16,25 +16,34 @@ from quadruped_dyn.model.robot import load_robot
 @click.option("--calls", default=20000, show_default=True, type=click.IntRange(min=1), help="Calls per timing run.")
 @click.option("--reps", default=9, show_default=True, type=click.IntRange(min=1), help="Timing runs (median).")
 @click.option("--json", "as_json", is_flag=True, help="Print JSON.")
-@click.option("--peers", default="", help="Also time other libraries' generated dynamics against the toolkit's, "
-              "same run, same flags (comma-separated): adam.")
-@click.option("--march-native", "native", is_flag=True, help="Build the --peers comparison (both sides) with -march=native.")
+@click.option("--peers", default="auto", show_default=True,
+              help="Other generated dynamics timed against the toolkit's, same run, same flags (comma-separated): "
+              "pinocchio-cppadcodegen (Pinocchio's CppADCodeGen code; the 'bench' extra), adam; none; auto: "
+              "pinocchio-cppadcodegen when its headers are installed.")
+@click.option("--native", "--march-native", "native", is_flag=True,
+              help="Build every side (the generated C, Pinocchio's harness, the peers) with -march=native.")
 def bench(robots: tuple[str, ...], calls: int, reps: int, as_json: bool, peers: str, native: bool) -> None:
     """Time the generated C against Pinocchio's native C++ in the same run (ratios < 1: generated is faster)."""
     from dataclasses import asdict
 
+    from quadruped_dyn.bench import cppadcg
     from quadruped_dyn.bench.peers import parse_peers, peers_table, run_peers
     from quadruped_dyn.bench.timing import run_bench
     from quadruped_dyn.codegen.cache import cache_dir
 
-    peer_names = parse_peers(peers)
+    if peers.strip() == "auto":
+        peer_names: tuple[str, ...] = (cppadcg.PEER,) if cppadcg.available() else ()
+        if not peer_names:
+            click.echo(f"note: {cppadcg.PEER} is not timed: its headers are not installed ({cppadcg.INSTALL_HINT})", err=True)
+    else:
+        peer_names = parse_peers(peers)
     require_tools("gcc", "g++")
     writable_dir(cache_dir(), f"the cache directory '{cache_dir()}' (QUADRUPED_DYN_CACHE)")
     loaded = [load_robot(r) for r in robots]  # every argument checked before minutes of work
-    reports = [run_bench(r, calls, reps) for r in loaded]
-    entries = [e for r in loaded for e in run_peers(r, peer_names, native, calls, reps)] if peer_names else []
+    reports = [run_bench(r, calls, reps, native=native, peer=cppadcg.PEER in peer_names) for r in loaded]
+    adam = [e for r in loaded for e in run_peers(r, native, calls, reps)] if "adam" in peer_names else []
     if as_json:
         out: object = [r.as_dict() for r in reports]
-        click.echo(json.dumps({"bench": out, "peers": [asdict(e) for e in entries]} if peer_names else out, indent=2))
+        click.echo(json.dumps({"bench": out, "peers": [asdict(e) for e in adam]} if adam else out, indent=2))
     else:
-        click.echo("\n\n".join([r.table() for r in reports] + ([peers_table(entries, native)] if entries else [])))
+        click.echo("\n\n".join([r.table() for r in reports] + ([peers_table(adam, native)] if adam else [])))

@@ -13,7 +13,8 @@ from quadruped_dyn.cli import main
 def test_unknown_peer_is_bad_input():
     result = CliRunner().invoke(main, ["bench", "--peers", "adam,pinocchio_cg"])
     assert result.exit_code == 2 and "Traceback" not in result.output
-    assert "unknown peer(s) pinocchio_cg; expected a comma-separated list of: adam" in result.stderr
+    assert ("unknown peer(s) pinocchio_cg; expected a comma-separated list of: pinocchio-cppadcodegen, adam (or none)"
+            in result.stderr)
 
 
 @pytest.mark.slow

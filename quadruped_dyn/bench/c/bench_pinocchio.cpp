@@ -1,7 +1,7 @@
 // Times Pinocchio's native C++ algorithms on a URDF with a free-flyer root, in the same run
 // as the generated code. Usage: bench_pinocchio URDF CALLS REPS [FOOT_FL FOOT_FR FOOT_BL FOOT_BR].
 // Prints one line per algorithm: "name median_ns". State: neutral + 0.1 * random,
-// velocities/accelerations/torques random. Also computeRNEADerivatives and computeABADerivatives. With the four foot frames (project order), also
+// velocities/accelerations/torques random. Also aba, computeRNEADerivatives and computeABADerivatives. With the four foot frames (project order), also
 // constraintDynamics with every set of 2, 3 or 4 stance feet as rigid 3-D point contacts
 // (LOCAL_WORLD_ALIGNED, proximal settings mu = 0, one iteration: the exact KKT solve), named
 // "constraintDynamics_<feet>" with the feet joined by '_' (e.g. constraintDynamics_FL_BR).
@@ -14,6 +14,7 @@
 
 #include <string>
 
+#include <pinocchio/algorithm/aba.hpp>
 #include <pinocchio/algorithm/constrained-dynamics.hpp>
 #include <pinocchio/algorithm/crba.hpp>
 #include <pinocchio/algorithm/joint-configuration.hpp>
@@ -65,6 +66,7 @@ int main(int argc, char** argv) {
   std::printf("rnea %.2f\n", median_ns([&] { sink = sink + pin::rnea(model, data, q, v, a)[0]; }, calls, reps));
   { // analytical derivatives (Carpentier & Mansard 2018), the peers of did_full and dfd_full
     Eigen::VectorXd tau = Eigen::VectorXd::Random(model.nv);
+    std::printf("aba %.2f\n", median_ns([&] { sink = sink + pin::aba(model, data, q, v, tau, pin::Convention::WORLD)[0]; }, calls, reps));
     std::printf("computeRNEADerivatives %.2f\n", median_ns([&] {
       pin::computeRNEADerivatives(model, data, q, v, a); sink = sink + data.dtau_dq(0, 0); }, calls, reps));
     std::printf("computeABADerivatives %.2f\n", median_ns([&] {

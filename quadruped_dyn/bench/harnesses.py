@@ -1,0 +1,57 @@
+"""The benchmark's C and C++ programs (``c/``) and how the C++ ones are built against the pin wheel.
+
+The pin wheel ships Pinocchio's headers and libraries under its cmeel prefix (with cmeel-eigen,
+cmeel-boost, cmeel-urdfdom-headers, and cmeel-cppad / cmeel-cppadcodegen when the ``bench`` extra is
+installed). A program built with ``PINOCCHIO_CXX_FLAGS`` links the wheel's libraries, whose
+algorithms for ``double`` are compiled for generic x86-64 (SSE2; no AVX or FMA instruction in
+``libpinocchio_default``); ``NATIVE_CXX_FLAGS`` instead instantiates every algorithm in the
+program, for the machine it is built on, with Eigen's alignment kept at the wheel's 16 bytes (the
+URDF parser of the wheel builds the Model the program then uses: the layouts must agree).
+"""
+
+from __future__ import annotations
+
+import importlib.metadata
+from pathlib import Path
+
+from quadruped_dyn.errors import InputError
+
+HARNESSES = Path(__file__).resolve().parent / "c"
+
+#: Flags of the C++ programs linked with the wheel's Pinocchio (its explicit template instantiations).
+PINOCCHIO_CXX_FLAGS = (
+    "-O3", "-DNDEBUG", "-std=c++17", "-DPINOCCHIO_ENABLE_TEMPLATE_INSTANTIATION",
+    "-DBOOST_MPL_LIMIT_LIST_SIZE=30", "-DBOOST_MPL_LIMIT_VECTOR_SIZE=30",
+    "-DBOOST_MPL_CFG_NO_PREPROCESSED_HEADERS", "-DBOOST_FUSION_INVOKE_MAX_ARITY=12",
+)
+
+#: ``bench --native``'s Pinocchio harness: the algorithms compiled in the program with -march=native.
+NATIVE_CXX_FLAGS = (
+    *(f for f in PINOCCHIO_CXX_FLAGS if f != "-DPINOCCHIO_ENABLE_TEMPLATE_INSTANTIATION"),
+    "-march=native", "-DEIGEN_MAX_ALIGN_BYTES=16", "-DEIGEN_MAX_STATIC_ALIGN_BYTES=16",
+)
+
+PINOCCHIO_LIBS = ("-lpinocchio_default", "-lpinocchio_parsers", "-lurdfdom_model", "-lboost_serialization")
+
+
+def cmeel_prefix() -> Path:
+    """The pin wheel's install prefix (include/, lib/)."""
+    return Path(str(importlib.metadata.distribution("pin").locate_file("cmeel.prefix")))
+
+
+def require_headers(headers: tuple[str, ...], packages: str) -> Path:
+    """The cmeel prefix, after checking that ``headers`` (relative to its include/) are there;
+    InputError naming ``packages`` (what to install) otherwise."""
+    prefix = cmeel_prefix()
+    for header in headers:
+        if not (prefix / "include" / header).is_file():
+            raise InputError(f"missing {header} under {prefix}/include; expected {packages}")
+    return prefix
+
+
+def pinocchio_program(sources: list[Path], exe: Path, flags: tuple[str, ...], cxx: str = "g++") -> list[str]:
+    """The command that builds ``sources`` into ``exe`` against the wheel's Pinocchio."""
+    prefix = cmeel_prefix()
+    include, lib = prefix / "include", prefix / "lib"
+    return [cxx, *flags, f"-I{include}", f"-I{include / 'eigen3'}", f"-I{include / 'urdfdom_headers'}",
+            *map(str, sources), f"-L{lib}", f"-Wl,-rpath,{lib}", *PINOCCHIO_LIBS, "-o", str(exe)]
