@@ -107,3 +107,16 @@ REFERENCE_TOL_SCALE_REL_TOL = 2e-2
 #: atan2 / acos), not interpolation error. 1e-14 accepts only an interpolant at that floor, far
 #: below DOP853's tolerance (1e-13).
 TABLE_REL_TOL = 1e-14
+
+#: The native runs (experiment/native_run.py) against the Python path they replace: the same
+#: method with the floating-point operations in another order (and, for rigid contacts, M and
+#: nle from the generated terms instead of Pinocchio's), so they differ by amplified round-off,
+#: which the one-ulp twin run samples once. One sample is not a bound: measured on the paper
+#: robot (0.3 s of trot and walk, 2026-12-01), native vs Python is 0.4-1.5x the twin difference
+#: for reduced runs and 1-6.5x for rigid-contact runs. A wrong term (a missing projection, a
+#: sign, a stage) moves a run by many orders of magnitude more than 10x that noise.
+NATIVE_TWIN_FACTOR = 10.0
+
+#: The C pose fit (Horn's quaternion, Jacobi eigenvector) against numpy's SVD (Kabsch) on the
+#: same feet, m and rad: both are backward stable, ~100 operations on coordinates of ~0.5 m.
+POSE_FIT_TOL = 1e-13

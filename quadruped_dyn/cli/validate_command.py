@@ -33,12 +33,14 @@ if TYPE_CHECKING:
               help="RK4 step, s; with DOP853 the sampling interval of the output.")
 @click.option("--backend", type=click.Choice(["c", "casadi"]), default="c", show_default=True,
               help="Evaluation of the reduced model: the generated C (built once, cached) or the CasADi graph.")
+@click.option("--engine", type=click.Choice(["native", "python"]), default="native", show_default=True,
+              help="DOP853 runs one gait phase per C call, or driven by scipy from Python (the reference).")
 @click.option("--no-physics", is_flag=True, help="Skip the physics check (rigid-contact dynamics).")
 @click.option("--out", "out_dir", default="results", show_default=True, type=click.Path(),
               help="Directory for the plots, the CSV and the JSON report.")
 @click.option("--json", "as_json", is_flag=True, help="Print the report as JSON.")
 def validate(robot: str, gait_name: str, horizon: float | None, integrator: str, dt: float, backend: str,
-             no_physics: bool, out_dir: str, as_json: bool) -> None:
+             engine: str, no_physics: bool, out_dir: str, as_json: bool) -> None:
     """The paper's experiment: IK -> id_r -> forward dynamics -> compare with IK (plots, CSV, JSON),
     with the instability, the error budget and the physics check against rigid-contact dynamics.
 
@@ -71,7 +73,7 @@ def validate(robot: str, gait_name: str, horizon: float | None, integrator: str,
 
     with Bar(f"simulating {r.name} {gait.name}", runs * horizon, "s simulated", runs=runs) as bar:
         exp = run_experiment(r, gait, dynamics, horizon, dt, integrator, physics=not no_physics,
-                             progress=bar.advance)
+                             progress=bar.advance, engine=engine)
     compared = compared_samples(exp)
     if compared < MIN_COMPARED_SAMPLES:
         stop = exp.runs["paper"].stopped_at

@@ -190,6 +190,19 @@ def reduced_model(robot: Robot, stance_name: str) -> ReducedModel:
 
 
 @cache
+def reduced_maps(robot: Robot, stance_name: str) -> ca.Function:
+    """``ReducedModel.maps`` alone (q_r, qd_r, qdd_r, quat -> v (18,), a = vdot (18,)), for
+    callers that need the full motion and not the dynamics: a small part of ``reduced_model``'s
+    build. The same expressions (``_maps``)."""
+    stance = stance_set(stance_name)
+    n = 13 if len(stance.feet) == 2 else 12
+    q, qd, qdd, quat = ca.SX.sym("q_r", n), ca.SX.sym("qd_r", n), ca.SX.sym("qdd_r", n), ca.SX.sym("quat", 4)
+    v, a = _maps(robot, stance, q, qd, qdd, quat_to_rotation(quat))
+    return ca.Function(f"maps_{stance.name.replace('+', '_')}", [q, qd, qdd, quat], [v, a],
+                       ["q_r", "qd_r", "qdd_r", "quat"], ["v", "a"], {"cse": True})
+
+
+@cache
 def _reduced_model(robot: Robot, stance_name: str) -> ReducedModel:
     stance = stance_set(stance_name)
     k = len(stance.feet)

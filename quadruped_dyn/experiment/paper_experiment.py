@@ -30,10 +30,14 @@ from typing import Any
 
 import numpy as np
 
-from quadruped_dyn.dynamics.grf import grf_solve
+from quadruped_dyn.codegen.emit import reduced_symbol
+from quadruped_dyn.codegen.library import CompiledFunction, compiled_library
+from quadruped_dyn.codegen.reduced_library import CompiledReducedDynamics
 from quadruped_dyn.dynamics.guarded import guarded_call
-from quadruped_dyn.dynamics.reduced import reduced_model
+from quadruped_dyn.dynamics.reduced import reduced_maps
+from quadruped_dyn.errors import InputError
 from quadruped_dyn.experiment.gait import Gait, Plan, gait_plan, support_margin
+from quadruped_dyn.experiment.native_run import NativeRuns
 from quadruped_dyn.experiment.rigid_contact import simulate_rigid
 from quadruped_dyn.experiment.simulate import IDENTITY_QUAT, RTOL, IkTorques, ReducedDynamics, Run, TorqueLaw, simulate_reduced
 from quadruped_dyn.experiment.torque_table import IkTorqueTable
@@ -75,6 +79,7 @@ class Experiment:
     reference: dict[str, np.ndarray]  # "t" -> (N,) grid, signal -> (N, n) IK values on it
     runs: dict[str, Run] = field(default_factory=dict)  # reduced model
     rigid: dict[str, Run] = field(default_factory=dict)  # rigid-contact dynamics, 12 joints
+    engines: set[str] = field(default_factory=set)  # how the DOP853 runs were integrated: "native", "python"
 
 
 def joint_names(robot: Robot) -> list[str]:
@@ -129,22 +134,29 @@ def _series(t: np.ndarray, d: np.ndarray, every: float = 0.1) -> list[list[float
 def static_stability(plan: Plan, ik: IkTorques, horizon: float, dt: float = STABILITY_DT) -> dict[str, Any]:
     """Along the reference: smallest f_z (N) of the paper's GRF model on any stance foot, and
     smallest CoM margin (m) inside the support triangle (three or more feet; Pinocchio's CoM),
-    sampled every ``dt`` (s)."""
+    sampled every ``dt`` (s). The forces come from the generated ``qd_grf_<stance>`` (the
+    paper's model; the trunk is level, so trunk frame = world), which does not check the foot
+    layout as ``GrfSolve.solve`` does: a plan's stance feet are never collinear."""
     import pinocchio as pin
 
     from quadruped_dyn.references.pinocchio import PinocchioReference
 
     robot = plan.robot
     pin_ref = PinocchioReference(robot)
+    library = compiled_library(robot)
+    grf: dict[str, CompiledFunction] = {}
     min_fz, min_margin = np.inf, np.inf
     at_fz = at_margin = 0.0
     for t in np.arange(0.0, horizon + 1e-9, dt):
         stance = plan.stance(float(t))
         ref, _ = ik(float(t), stance)
         name = StanceSet(stance).name
-        v, a = guarded_call(reduced_model(robot, name).maps, ref.q_r, ref.qd_r, ref.qdd_r, IDENTITY_QUAT)
+        v, a = guarded_call(reduced_maps(robot, name), ref.q_r, ref.qd_r, ref.qdd_r, IDENTITY_QUAT)
         q = np.concatenate([plan.trunk(float(t))[0], IDENTITY_QUAT, ref.q_r[:12]])
-        fz = float(grf_solve(robot, name).solve(q, v, a).f_world[:, 2].min())
+        if name not in grf:
+            grf[name] = CompiledFunction(library, reduced_symbol("grf", StanceSet(stance)))
+        f_body = grf[name](q, v, a)[1].reshape(4, 3)[list(stance)]
+        fz = float(f_body[:, 2].min())
         if fz < min_fz:
             min_fz, at_fz = fz, float(t)
         if len(stance) >= 3:
@@ -163,13 +175,24 @@ def pd_gains(robot: Robot) -> tuple[float, float]:
     return PD_KP_PER_KG * robot.total_mass, PD_KD_PER_KG * robot.total_mass
 
 
+ENGINES = ("native", "python")
+
+
 def run_experiment(robot: Robot, gait: Gait, dynamics: ReducedDynamics, horizon: float, dt: float,
                    integrator: str = "dop853", physics: bool = True,
-                   progress: Callable[[float], None] | None = None) -> Experiment:
+                   progress: Callable[[float], None] | None = None, engine: str = "native") -> Experiment:
     """Every run ``validate`` reports (see the module docstring); ``progress`` gets the
-    simulated seconds of each finished stretch."""
+    simulated seconds of each finished stretch. ``engine``: "native" integrates DOP853 runs of
+    the generated C backend one gait phase per C call (``native_run``), "python" through scipy
+    (the reference the native runs are tested against); RK4 runs and the CasADi backend always
+    take the Python path."""
+    if engine not in ENGINES:
+        raise InputError(f"unknown engine '{engine}'; expected one of {', '.join(ENGINES)}")
     plan = gait_plan(robot, gait)
     ik = IkTorqueTable(plan, dynamics)  # the runs' reference torques; the compared reference stays exact
+    native = None
+    if engine == "native" and integrator == "dop853" and isinstance(dynamics, CompiledReducedDynamics):
+        native = NativeRuns(robot)
     done = [0.0]
 
     def tick(t: float) -> None:  # per-run progress -> total seconds simulated
@@ -178,7 +201,14 @@ def run_experiment(robot: Robot, gait: Gait, dynamics: ReducedDynamics, horizon:
             done[0] = t if t < horizon - 1e-9 else 0.0
 
     def reduced(law: TorqueLaw, **kw: Any) -> Run:
-        return simulate_reduced(plan, dynamics, law, horizon, dt, integrator, ik=ik, progress=tick, **kw)
+        run = native.reduced(plan, ik, law, horizon, dt, progress=tick, **kw) if native else None
+        exp.engines.add("native" if run else "python")
+        return run or simulate_reduced(plan, dynamics, law, horizon, dt, integrator, ik=ik, progress=tick, **kw)
+
+    def rigid(law: TorqueLaw) -> Run:
+        run = native.rigid(plan, ik, law, horizon, dt, progress=tick) if native else None
+        exp.engines.add("native" if run else "python")
+        return run or simulate_rigid(plan, ik, law, horizon, dt, integrator, progress=tick)
 
     paper = TorqueLaw("paper", roll_applied=True)
     exp = Experiment(plan, ik, {})
@@ -197,7 +227,7 @@ def run_experiment(robot: Robot, gait: Gait, dynamics: ReducedDynamics, horizon:
         for law in laws:
             if law.name != "ik":
                 exp.runs[law.name] = reduced(law)
-            exp.rigid[law.name] = simulate_rigid(plan, ik, law, horizon, dt, integrator, progress=tick)
+            exp.rigid[law.name] = rigid(law)
     # the planned grid, also when the 'paper' run stopped early (its own times would shrink the reference)
     grid = np.arange(int(np.floor(horizon / dt + 1e-9)) + 1) * dt
     refs = [ik.exact(float(t), plan.stance(float(t)))[0] for t in grid]
@@ -231,10 +261,13 @@ def report(exp: Experiment, integrator: str, dt: float, backend: str, stability:
                      "roundoff_pct": _worst(percent_errors(getattr(twin, s)[:m, :12] - getattr(paper, s)[:m, :12] + r[:m],
                                                            r[:m])),
                      "truncation_pct": _worst(_refined_difference(refined, paper, s, r))}
-    method = (f"DOP853 (scipy), rtol = atol = {RTOL:g}, sampled every {dt:g} s" if integrator == "dop853"
+    dop853 = {"native": "DOP853 (scipy's coefficients and step control, in C)", "python": "DOP853 (scipy)"}
+    name = " / ".join(dop853[e] for e in sorted(exp.engines)) or dop853["python"]
+    method = (f"{name}, rtol = atol = {RTOL:g}, sampled every {dt:g} s" if integrator == "dop853"
               else f"classical RK4, fixed step {dt:g} s")
     out: dict[str, Any] = {
         "robot": plan.robot.name, "gait": plan.gait.name, "horizon_s": horizon, "backend": backend,
+        "engine": "+".join(sorted(exp.engines)),
         "compared_samples": compared_samples(exp), "compared_until_s": float(ref["t"][compared_samples(exp) - 1])
         if compared_samples(exp) else None,
         "integrator": method + "; restarted at every stance switch; state projected onto the stance closure after "

@@ -12,9 +12,10 @@ from __future__ import annotations
 from dataclasses import dataclass
 from functools import cache
 
+import casadi as ca
 import numpy as np
 
-from quadruped_dyn.dynamics.kinematics import robot_kinematics
+from quadruped_dyn.dynamics.kinematics import robot_feet, robot_kinematics
 from quadruped_dyn.experiment.gait import Plan, gait_posture
 from quadruped_dyn.experiment.ik import analytic_ik, numeric_ik
 from quadruped_dyn.model.paper_robot import PaperRobotParams, dh_form
@@ -55,20 +56,30 @@ def leg_ik(robot: Robot, i: int, r: np.ndarray, guess: np.ndarray) -> np.ndarray
     return q
 
 
+@cache
+def robot_bias_accelerations(robot: Robot) -> ca.Function:
+    """q, qd (12,) -> Jdot qd (3, 4): each leg's ``foot_bias_acceleration`` in one call."""
+    kin = robot_kinematics(robot)
+    q, qd = ca.SX.sym("q", 12), ca.SX.sym("qd", 12)
+    return ca.Function("bias", [q, qd], [ca.horzcat(*[kin[i].foot_bias_acceleration(q[3 * i : 3 * i + 3],
+                                                                                       qd[3 * i : 3 * i + 3])
+                                                      for i in range(4)])])
+
+
 def reference(plan: Plan, t: float, q_guess: np.ndarray | None = None) -> ReferenceSample:
     """IK of the plan at time t (``q_guess``: joint angles (12,) near the answer, for numeric IK)."""
     robot = plan.robot
-    kin = robot_kinematics(robot)
     guess = gait_posture(robot) if q_guess is None else q_guess
     p, pd, pdd = plan.trunk(t)
-    q, qd, qdd = np.zeros(12), np.zeros(12), np.zeros(12)
+    q = np.zeros(12)
+    rd, rdd = np.zeros((4, 3)), np.zeros((4, 3))
     for i in range(4):
         P, Pd, Pdd = plan.foot(i, t)
-        r, rd, rdd = P - p, Pd - pd, Pdd - pdd  # trunk frame = world orientation (R = I)
-        s = slice(3 * i, 3 * i + 3)
-        q[s] = leg_ik(robot, i, r, guess[s])
-        J = np.asarray(kin[i].foot_jacobian(q[s]))
-        qd[s] = np.linalg.solve(J, rd)
-        qdd[s] = np.linalg.solve(J, rdd - np.asarray(kin[i].foot_bias_acceleration(q[s], qd[s])).ravel())
+        rd[i], rdd[i] = Pd - pd, Pdd - pdd  # trunk frame = world orientation (R = I)
+        q[3 * i : 3 * i + 3] = leg_ik(robot, i, P - p, guess[3 * i : 3 * i + 3])
+    J = np.asarray(robot_feet(robot)(q)[1]).reshape(3, 4, 3).transpose(1, 0, 2)  # (leg, row, joint)
+    qd = np.linalg.solve(J, rd[:, :, None]).ravel()
+    bias = np.asarray(robot_bias_accelerations(robot)(q, qd)).T
+    qdd = np.linalg.solve(J, (rdd - bias)[:, :, None]).ravel()
     extra = np.zeros(plan.gait.n_coords - 12)  # roll, its rate and acceleration: 0 with R = I
     return ReferenceSample(np.append(q, extra), np.append(qd, extra), np.append(qdd, extra), plan.stance(t))

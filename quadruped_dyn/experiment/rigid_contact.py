@@ -14,6 +14,7 @@ no actuator here.
 from __future__ import annotations
 
 from collections.abc import Callable
+from functools import partial
 
 import numpy as np
 
@@ -39,6 +40,27 @@ def _impact(ref: PinocchioReference, q: np.ndarray, v: np.ndarray, stance: tuple
     Jc = ref.contact_jacobian(q, stance)
     MinvJt = np.linalg.solve(M, Jc.T)
     return v - MinvJt @ np.linalg.solve(Jc @ MinvJt, Jc @ v)
+
+
+def touch_down(ref: PinocchioReference, stance: tuple[int, ...], y: np.ndarray) -> np.ndarray:
+    """The state (q (19,), v (18,)) after a stance switch: the quaternion normalised, the
+    velocity after the plastic impact of the new stance (``_impact``)."""
+    q = y[:19].copy()
+    q[3:7] /= np.linalg.norm(q[3:7])
+    return np.concatenate([q, _impact(ref, q, y[19:], stance)])
+
+
+def initial_state(plan: Plan, ik: IkTorques, ref: PinocchioReference,
+                  initial: tuple[np.ndarray, np.ndarray] | None = None) -> np.ndarray:
+    """(q (19,), v (18,)) at t = 0: the IK state of the plan's first stance with the plan's
+    trunk position, or ``initial``."""
+    if initial is not None:
+        return np.concatenate([np.asarray(initial[0], dtype=float), np.asarray(initial[1], dtype=float)])
+    stance0 = plan.gait.stance(0.0)
+    ref0, _ = ik(0.0, stance0)
+    q0, v0, _ = ref.reduced_motion(stance0, ref0.q_r, ref0.qd_r, ref0.qdd_r, np.array([0.0, 0.0, 0.0, 1.0]))
+    q0[:3] = plan.trunk(0.0)[0]
+    return np.concatenate([q0, v0])
 
 
 def _kkt_accelerations(ref: PinocchioReference, q: np.ndarray, v: np.ndarray, tau: np.ndarray,
@@ -85,16 +107,9 @@ def simulate_rigid(plan: Plan, ik: IkTorques, law: TorqueLaw, horizon: float, dt
     trunk's distance from the plan's trunk position (m). ``initial`` = (q (19,), v (18,))
     replaces the IK state, ``trunk(t)`` (world position, m) the plan's trunk, for a reference
     that is not the plan's (e.g. an optimised gait with the plan's phases)."""
-    robot, gait = plan.robot, plan.gait
-    ref = PinocchioReference(robot)
-    ref0, _ = ik(0.0, gait.stance(0.0))
-    stance0 = gait.stance(0.0)
-    q0, v0, _ = ref.reduced_motion(stance0, ref0.q_r, ref0.qd_r, ref0.qdd_r, np.array([0.0, 0.0, 0.0, 1.0]))
-    q0[:3] = plan.trunk(0.0)[0]
-    if initial is not None:
-        q0, v0 = np.asarray(initial[0], dtype=float), np.asarray(initial[1], dtype=float)
+    ref = PinocchioReference(plan.robot)
+    y = initial_state(plan, ik, ref, initial)
     trunk_at = trunk if trunk is not None else (lambda t: plan.trunk(t)[0])
-    y = np.concatenate([q0, v0])
     evaluations = [0]
 
     def accel(t: float, y: np.ndarray, stance: tuple[int, ...]) -> np.ndarray:
@@ -123,13 +138,9 @@ def simulate_rigid(plan: Plan, ik: IkTorques, law: TorqueLaw, horizon: float, dt
         if off > FALLEN_TRUNK_M:
             raise Fallen
 
-    def touch_down(stance: tuple[int, ...], y: np.ndarray) -> np.ndarray:
-        q = y[:19].copy()
-        q[3:7] /= np.linalg.norm(q[3:7])
-        return np.concatenate([q, _impact(ref, q, y[19:], stance)])
-
     try:
-        integrate_phases(plan, y, horizon, dt, integrator, rtol, rhs, record, switch=touch_down, progress=progress)
+        integrate_phases(plan, y, horizon, dt, integrator, rtol, rhs, record, switch=partial(touch_down, ref),
+                         progress=progress)
     except (Fallen, NumericalError, InputError, np.linalg.LinAlgError):
         stopped_at = float(out[-1][0]) if out else 0.0
     t = np.array([o[0] for o in out])

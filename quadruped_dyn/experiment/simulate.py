@@ -175,7 +175,6 @@ def simulate_reduced(plan: Plan, dynamics: ReducedDynamics, law: TorqueLaw, hori
         raise InputError(f"unknown integrator '{integrator}'; expected dop853 or rk4")
     robot, gait = plan.robot, plan.gait
     ik = ik or IkTorques(plan, dynamics)
-    kin = robot_kinematics(robot)
     feet_of = robot_feet(robot)
     n = gait.n_coords
     pitch = [0.0]  # the previous pose's pitch picks between the two-feet pose solutions
@@ -198,11 +197,8 @@ def simulate_reduced(plan: Plan, dynamics: ReducedDynamics, law: TorqueLaw, hori
         return pin.Quaternion(R).coeffs(), closure
 
     def touch_down(stance: tuple[int, ...], y: np.ndarray) -> np.ndarray:
-        """A landing foot stands where the simulated motion puts it (on the planned foothold
-        to round-off while the run follows IK); the coordinates carry over unchanged."""
         R, p, _ = fit(y[:n], current[0])
-        for i in set(stance) - set(current[0]):
-            footholds[i] = R @ np.asarray(kin[i].foot_position(y[3 * i : 3 * i + 3])).ravel() + p
+        land(robot, footholds, current[0], stance, y, R, p)
         current[0] = stance
         return y
 
@@ -252,6 +248,29 @@ def simulate_reduced(plan: Plan, dynamics: ReducedDynamics, law: TorqueLaw, hori
 Stance = tuple[int, ...]
 
 
+def land(robot: Robot, footholds: dict[int, np.ndarray], before: Stance, after: Stance, y: np.ndarray,
+         R: np.ndarray, p: np.ndarray) -> None:
+    """At a stance switch: a landing foot stands where the simulated motion puts it (trunk pose
+    R, p fitted to the stance before; on the planned foothold to round-off while the run follows
+    IK). ``footholds`` (world, m) is updated; the coordinates carry over unchanged."""
+    kin = robot_kinematics(robot)
+    for i in set(after) - set(before):
+        footholds[i] = R @ np.asarray(kin[i].foot_position(y[3 * i : 3 * i + 3])).ravel() + p
+
+
+def phase_segments(plan: Plan, horizon: float, dt: float) -> list[tuple[float, float, Stance, np.ndarray]]:
+    """The stretches an integration restarts at: (t0, t1, stance, the sample times in [t0, t1),
+    or [t0, t1] for the last), the plan's phases up to ``horizon`` sampled every ``dt``."""
+    samples = _sample_times(horizon, dt)
+    bounds = np.concatenate([[0.0], plan.switch_times(horizon), [samples[-1]]])
+    out = []
+    for t0, t1 in zip(bounds[:-1], bounds[1:]):
+        last = t1 == bounds[-1]
+        inside = samples[(samples >= t0 - 1e-12) & ((samples < t1 - 1e-12) | last)]
+        out.append((float(t0), float(t1), plan.stance(0.5 * (t0 + t1)), inside))
+    return out
+
+
 def integrate_phases(plan: Plan, y: np.ndarray, horizon: float, dt: float, integrator: str, rtol: float,
                      rhs: Callable[[Stance, float, np.ndarray], np.ndarray],
                      record: Callable[[Stance, float, np.ndarray], None],
@@ -262,14 +281,9 @@ def integrate_phases(plan: Plan, y: np.ndarray, horizon: float, dt: float, integ
     at every stance switch (``switch`` maps the state across it, e.g. an impact), calling
     ``record`` on the samples every ``dt``; ``project`` after every step. Exceptions
     of the callbacks propagate: the caller decides what a failure means."""
-    samples = _sample_times(horizon, dt)
-    bounds = np.concatenate([[0.0], plan.switch_times(horizon), [samples[-1]]])
-    for t0, t1 in zip(bounds[:-1], bounds[1:]):
-        stance = plan.stance(0.5 * (t0 + t1))
+    for t0, t1, stance, inside in phase_segments(plan, horizon, dt):
         if switch is not None and t0 > 0:
             y = switch(stance, y)
-        last = t1 == bounds[-1]
-        inside = samples[(samples >= t0 - 1e-12) & ((samples < t1 - 1e-12) | last)]
         f = partial(rhs, stance)
         rec = partial(record, stance)
         proj = partial(project, stance) if project else None

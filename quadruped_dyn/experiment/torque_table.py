@@ -97,15 +97,19 @@ class IkTorqueTable(IkTorques):
             degree *= 2
         return None
 
+    def phase(self, k: int, stance: tuple[int, ...]) -> _Phase | None:
+        """The interpolant of the plan's phase k (None: it falls back to the exact evaluation)."""
+        key = (k, stance)
+        if key not in self._phases:
+            self._phases[key] = self._build(k, stance)
+        return self._phases[key]
+
     def __call__(self, t: float, stance: tuple[int, ...]) -> tuple[ReferenceSample, np.ndarray]:
         h = self.plan.gait.phase_duration
         k = int(np.floor(t / h + 1e-12))
         if k > 0 and abs(t - k * h) <= 1e-12 * max(1.0, t) and self.plan.stance(k * h + 0.5 * h) != stance:
             k -= 1  # a step that ends on a switch keeps its phase's stance
-        key = (k, stance)
-        if key not in self._phases:
-            self._phases[key] = self._build(k, stance)
-        phase = self._phases[key]
+        phase = self.phase(k, stance)
         if phase is None:
             return self.exact(t, stance)
         v = phase(t)
