@@ -24,6 +24,7 @@ from quadruped_dyn.files.paths import writable_dir
 from quadruped_dyn.files.safe_write import output_dir, output_path, write_text
 from quadruped_dyn.model.robot import Robot, robot_name, robot_path
 from quadruped_dyn.progress import Steps
+from quadruped_dyn.report import warm
 from quadruped_dyn.report.gather import (
     CHECK_SAMPLES,
     FRICTION_MU,
@@ -114,9 +115,11 @@ def _attempt(key: str, title: str, build: Callable[[], Section]) -> Section:
 
 
 def build_report(robot_arg: str = "paper", out: str | Path = "results", fast: bool = False,
-                 samples: int = CHECK_SAMPLES, with_notebooks: bool = True, show_progress: bool = True) -> ReportResult:
+                 samples: int = CHECK_SAMPLES, with_notebooks: bool = True, show_progress: bool = True,
+                 compile_ahead: bool = True) -> ReportResult:
     """Write ``<out>/<robot>/report.html`` (see the module docstring); ``fast`` skips the
-    benchmark. Arguments are validated (InputError) before any work."""
+    benchmark; ``compile_ahead`` compiles the later steps' C in a second process from the start
+    (``warm.py``). Arguments are validated (InputError) before any work."""
     import matplotlib
 
     matplotlib.use("Agg")  # figures go into the page, never to a window
@@ -126,12 +129,17 @@ def build_report(robot_arg: str = "paper", out: str | Path = "results", fast: bo
     done = progress.step(f"loading {robot_arg}")
     robot, urdf_warnings = load_with_warnings(robot_arg)
     job = _Job(robot, urdf_warnings, target, fast, samples, progress)
-    sections = [_attempt("robot", "The robot", lambda: _robot_section(job))]
-    done()
-    for label, key, title, build in steps:
-        done = progress.step(label)
-        sections.append(_attempt(key, title, partial(build, job)))
+    pool = warm.start(robot.urdf, with_benchmark=not fast)[0] if compile_ahead else None
+    try:
+        sections = [_attempt("robot", "The robot", lambda: _robot_section(job))]
         done()
+        for label, key, title, build in steps:
+            done = progress.step(label)
+            sections.append(_attempt(key, title, partial(build, job)))
+            done()
+    finally:
+        if pool is not None:
+            pool.shutdown(wait=True, cancel_futures=True)  # no process outlives the command
     done = progress.step("versions, writing the page")
     from quadruped_dyn.report import sections as rs
 

@@ -171,25 +171,34 @@ def experiment(robot: Robot, out: Path, progress: Any = None) -> tuple[dict[str,
                        "largest joint-angle difference: reduced model vs rigid contacts</figcaption></figure>")
     return validations, plots
 
-def generated_c(robot: Robot, out: Path) -> dict[str, Any]:
-    """Generate the C beside the report (every function: the full-coordinate terms, the GRF
-    solves and the reduced model of every stance set), compile (cached) and compare each
-    function with Pinocchio at the fixed reference state, as the generated ``check_qd`` does."""
+def generate_c_directory(robot: Robot, directory: Path) -> tuple[list[Path], dict[str, Any]]:
+    """``codegen``'s files and the reference header in ``directory``: (paths written, {"functions":
+    every generated Function, "work": their work sizes}). The same bytes for the same robot and
+    machine, so the builds keyed by them (the footprint's) are shared with the warm process."""
     import casadi as ca
 
-    from quadruped_dyn.checks.c_reference import reference_header, reference_header_name, reference_state
+    from quadruped_dyn.checks.c_reference import reference_header, reference_header_name
     from quadruped_dyn.codegen.emit import generate
-    from quadruped_dyn.codegen.library import compiled_library
-    from quadruped_dyn.dynamics.formulas import shapes
 
-    directory = out / "c"  # created by output_dir (never a link out of --out) when generated
     generated: dict[str, Any] = {}
 
     def reference_file(functions: list[ca.Function], work: dict[str, tuple[int, int]]) -> dict[str, str]:
         generated.update(functions=functions, work=work)  # every generated Function, as generate() builds them
         return {reference_header_name(robot): reference_header(robot, functions, work)}
 
-    paths = generate(robot, output_dir(out, "c"), extra_files=reference_file).all()
+    return generate(robot, directory, extra_files=reference_file).all(), generated
+
+
+def generated_c(robot: Robot, out: Path) -> dict[str, Any]:
+    """Generate the C beside the report (every function: the full-coordinate terms, the GRF
+    solves and the reduced model of every stance set), compile (cached) and compare each
+    function with Pinocchio at the fixed reference state, as the generated ``check_qd`` does."""
+    from quadruped_dyn.checks.c_reference import reference_state
+    from quadruped_dyn.codegen.library import compiled_library
+    from quadruped_dyn.dynamics.formulas import shapes
+
+    directory = out / "c"  # created by output_dir (never a link out of --out) when generated
+    paths, generated = generate_c_directory(robot, output_dir(out, "c"))
     work = generated["work"]
     functions: list[dict[str, Any]] = [
         {"name": f.name(), "inputs": shapes(f), "outputs": shapes(f, outputs=True), "instructions": f.n_instructions(),

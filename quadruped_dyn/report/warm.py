@@ -1,0 +1,52 @@
+"""Compile ahead, in a second process, what the report's later steps compile.
+
+The report's long steps are single-threaded Python (the term check, the experiment, the optimal
+control, the closed loop); its compilers (the robot's library, the experiment's native driver,
+the Cortex-M footprint builds, the Pinocchio benchmark harness) would otherwise run only when
+their step comes. ``start`` runs them at once in a spawned process, on the machine's other core.
+
+Nothing is handed over between the processes: every artefact goes through the verified build
+cache (``codegen/cache.py``), whose per-entry lock makes a step that needs an artefact still
+being built wait for it instead of building it again, and which verifies each artefact's hash
+before use. A warm build that fails is only a lost head start: the step builds it again itself
+and reports the failure in its section.
+"""
+
+from __future__ import annotations
+
+import multiprocessing
+import tempfile
+from concurrent.futures import Future, ProcessPoolExecutor
+from pathlib import Path
+
+
+def warm_caches(urdf: str, with_benchmark: bool) -> str:
+    """Build every cached artefact of the report for the robot at ``urdf``, in the order the
+    steps need them; "" on success, else the first error (one line)."""
+    try:
+        from quadruped_dyn.codegen.library import compiled_library
+        from quadruped_dyn.experiment.native_run import native_library
+        from quadruped_dyn.model.robot import load_robot
+
+        robot = load_robot(urdf)
+        compiled_library(robot)  # the reduced-model step, the experiment, the generated-C step
+        native_library(robot)  # the experiment's native driver
+        if with_benchmark:
+            from quadruped_dyn.bench.timing import pinocchio_harness
+            from quadruped_dyn.checks.embedded import embedded_summary
+            from quadruped_dyn.report.gather import generate_c_directory
+
+            with tempfile.TemporaryDirectory() as tmp:  # the report's own c/ has the same bytes: the same key
+                generate_c_directory(robot, Path(tmp))
+                embedded_summary(robot, Path(tmp))  # the Cortex-M builds, cached by content
+            pinocchio_harness()
+        return ""
+    except Exception as e:  # noqa: BLE001 -- reported by the step that needs the artefact
+        return f"{type(e).__name__}: {str(e).strip().splitlines()[0] if str(e).strip() else ''}"
+
+
+def start(urdf: Path, with_benchmark: bool) -> tuple[ProcessPoolExecutor, Future[str]]:
+    """The warm process, started (spawned: no state of this process is shared); shut the pool
+    down with ``wait=True`` when the report is written, so no process outlives the command."""
+    pool = ProcessPoolExecutor(max_workers=1, mp_context=multiprocessing.get_context("spawn"))
+    return pool, pool.submit(warm_caches, str(urdf), with_benchmark)
