@@ -42,13 +42,47 @@ static inline casadi_real qd_fabs(casadi_real x) { return QD_REAL_IS_FLOAT ? (ca
 /* Add prefix to internal symbols */
 #define casadi_f0 CASADI_PREFIX(f0)
 #define casadi_f1 CASADI_PREFIX(f1)
+#define casadi_f10 CASADI_PREFIX(f10)
+#define casadi_f11 CASADI_PREFIX(f11)
+#define casadi_f12 CASADI_PREFIX(f12)
+#define casadi_f13 CASADI_PREFIX(f13)
+#define casadi_f14 CASADI_PREFIX(f14)
+#define casadi_f15 CASADI_PREFIX(f15)
+#define casadi_f16 CASADI_PREFIX(f16)
+#define casadi_f17 CASADI_PREFIX(f17)
+#define casadi_f18 CASADI_PREFIX(f18)
+#define casadi_f19 CASADI_PREFIX(f19)
 #define casadi_f2 CASADI_PREFIX(f2)
+#define casadi_f20 CASADI_PREFIX(f20)
+#define casadi_f21 CASADI_PREFIX(f21)
+#define casadi_f22 CASADI_PREFIX(f22)
+#define casadi_f23 CASADI_PREFIX(f23)
+#define casadi_f24 CASADI_PREFIX(f24)
+#define casadi_f25 CASADI_PREFIX(f25)
+#define casadi_f26 CASADI_PREFIX(f26)
+#define casadi_f27 CASADI_PREFIX(f27)
+#define casadi_f28 CASADI_PREFIX(f28)
+#define casadi_f29 CASADI_PREFIX(f29)
+#define casadi_f3 CASADI_PREFIX(f3)
+#define casadi_f30 CASADI_PREFIX(f30)
+#define casadi_f31 CASADI_PREFIX(f31)
+#define casadi_f32 CASADI_PREFIX(f32)
+#define casadi_f4 CASADI_PREFIX(f4)
+#define casadi_f5 CASADI_PREFIX(f5)
+#define casadi_f6 CASADI_PREFIX(f6)
+#define casadi_f7 CASADI_PREFIX(f7)
+#define casadi_f8 CASADI_PREFIX(f8)
+#define casadi_f9 CASADI_PREFIX(f9)
 #define casadi_s0 CASADI_PREFIX(s0)
 #define casadi_s1 CASADI_PREFIX(s1)
 #define casadi_s2 CASADI_PREFIX(s2)
 #define casadi_s3 CASADI_PREFIX(s3)
 #define casadi_s4 CASADI_PREFIX(s4)
 #define casadi_s5 CASADI_PREFIX(s5)
+#define casadi_s6 CASADI_PREFIX(s6)
+#define casadi_s7 CASADI_PREFIX(s7)
+#define casadi_s8 CASADI_PREFIX(s8)
+#define casadi_s9 CASADI_PREFIX(s9)
 #define casadi_sq CASADI_PREFIX(sq)
 
 /* Symbol visibility in DLLs */
@@ -172,6 +206,10 @@ static const casadi_int casadi_s4[231] =
   3, 4, 5, 15, 16, 17, 0, 1,
   2, 3, 4, 5, 15, 16, 17};
 static const casadi_int casadi_s5[3] = {18, 18, 1};
+static const casadi_int casadi_s6[3] = {6, 1, 1};
+static const casadi_int casadi_s7[3] = {6, 18, 1};
+static const casadi_int casadi_s8[3] = {3, 1, 1};
+static const casadi_int casadi_s9[3] = {3, 18, 1};
 
 CASADI_SYMBOL_EXPORT const casadi_int* qd_did_full_sparsity_out(casadi_int i);
 
@@ -293,6 +331,86 @@ static int qd_dfd_full_solve(qd_d_eval_fn parts, qd_d_eval_fn did, const casadi_
     for (int i = 0; i < QD_NV * QD_NV; ++i) res[2][i] = Minv[i];
   }
   const casadi_int nnz[3] = {QD_NV * QD_NV, QD_NV * QD_NV, QD_NV * QD_NV};
+  return qd_d_finite(0, res, 3, nnz);
+}
+
+/* out (m x 18, column-major) = P D[0:6, :] for P (m x 6, column-major) and D (18 x 18) in CasADi's
+ * compressed-column format (sp, nz): the trunk rows of D only. */
+static void qd_d_trunk_product(int m, const casadi_real* P, const casadi_int* sp, const casadi_real* nz, casadi_real* out) {
+  const casadi_int nrow = sp[0], ncol = sp[1], dense = sp[2] == 1; /* CasADi writes a dense pattern as (nrow, ncol, 1) */
+  const casadi_int *colind = sp + 2, *row = sp + 2 + ncol + 1;
+  for (casadi_int j = 0; j < ncol; ++j) {
+    casadi_real* o = out + m * j;
+    for (int i = 0; i < m; ++i) o[i] = 0;
+    const casadi_int begin = dense ? nrow * j : colind[j], end = dense ? nrow * j + 6 : colind[j + 1];
+    for (casadi_int k = begin; k < end; ++k) { /* rows ascend within a column: stop after the trunk's */
+      const casadi_int r = dense ? k - nrow * j : row[k];
+      if (r >= 6) break;
+      const casadi_real* p = P + m * r;
+      const casadi_real d = nz[k];
+      for (int i = 0; i < m; ++i) o[i] += p[i] * d;
+    }
+  }
+}
+
+/* qd_dgrf_<feet>(q, v, a) -> (dlambda_dq, dlambda_dv, dlambda_da), m x 18 each, of the GRF solve's
+ * lambda = P(q) w_req(q, v, a), linear in the required trunk wrench w_req (the rnea's trunk rows):
+ *   w_req = M[0:6] a + nle[0:6] from the generated qd_dfd_full_parts; P column by column and d(P w)/dq one
+ *   joint direction at a time (the joints of the stance legs, bit i of legs for leg i; no other coordinate
+ *   enters P) from the generated qd_dgrf_dir_<feet> (dir: q, w, dq -> P w, d(P w)/dq dq); d w_req/dx from the
+ *   generated qd_did_full's trunk rows (sp_dq, sp_dv: its output patterns) and M:
+ *   dlambda/dq = P dtau_dq[0:6] + d(P w)/dq, dlambda/dv = P dtau_dv[0:6], dlambda/da = P M[0:6].
+ * d/dq along pinocchio.integrate as above. Return codes: 0, QD_NONFINITE. */
+static int qd_dgrf_solve(int m, int legs, qd_d_eval_fn parts, qd_d_eval_fn did, qd_d_eval_fn dir, const casadi_int* sp_dq,
+                         const casadi_int* sp_dv, const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w,
+                         int mem) {
+  casadi_real M[QD_NV * QD_NV], nle[QD_NV], wrench[6], seed[QD_NV], P[6 * 6], dPw[6 * QD_NV], Dq[QD_NV * QD_NV],
+      Dv[QD_NV * QD_NV];
+  casadi_real* p_res[2] = {M, nle};
+  int flag = parts(arg, p_res, iw, w, mem);
+  if (flag) return flag;
+  for (int i = 0; i < 6; ++i) {
+    wrench[i] = nle[i];
+    for (int j = 0; j < QD_NV; ++j) wrench[i] += M[i + QD_NV * j] * arg[2][j];
+  }
+  for (int i = 0; i < QD_NV; ++i) seed[i] = 0;
+  const casadi_real* g_arg[3] = {arg[0], seed, seed}; /* P e_k: the wrench e_k, no direction */
+  for (int k = 0; k < 6 && !flag; ++k) {
+    casadi_real* g_res[2] = {P + m * k, 0};
+    seed[k] = 1;
+    flag = dir(g_arg, g_res, iw, w, mem);
+    seed[k] = 0;
+  }
+  g_arg[1] = wrench; /* d(P w)/dq along each stance-leg joint, at w = w_req */
+  for (int j = 0; j < QD_NV; ++j) {
+    casadi_real* x = dPw + m * j;
+    for (int i = 0; i < m; ++i) x[i] = 0;
+    if (j < 6 || !(legs & (1 << ((j - 6) / 3))) || flag) continue;
+    casadi_real* g_res[2] = {0, x};
+    seed[j] = 1;
+    flag = dir(g_arg, g_res, iw, w, mem);
+    seed[j] = 0;
+  }
+  if (flag) return flag;
+  const casadi_real* d_arg[3] = {arg[0], arg[1], arg[2]};
+  casadi_real* d_res[3] = {Dq, Dv, 0};
+  flag = did(d_arg, d_res, iw, w, mem);
+  if (flag) return flag;
+  if (res[0]) {
+    qd_d_trunk_product(m, P, sp_dq, Dq, res[0]);
+    for (int i = 0; i < m * QD_NV; ++i) res[0][i] += dPw[i];
+  }
+  if (res[1]) qd_d_trunk_product(m, P, sp_dv, Dv, res[1]);
+  if (res[2]) { /* P M[0:6] (M dense) */
+    for (int j = 0; j < QD_NV; ++j) {
+      for (int i = 0; i < m; ++i) {
+        casadi_real s = 0;
+        for (int k = 0; k < 6; ++k) s += P[i + m * k] * M[k + QD_NV * j];
+        res[2][i + m * j] = s;
+      }
+    }
+  }
+  const casadi_int nnz[3] = {m * QD_NV, m * QD_NV, m * QD_NV};
   return qd_d_finite(0, res, 3, nnz);
 }
 
@@ -14509,6 +14627,15609 @@ CASADI_SYMBOL_EXPORT int qd_dfd_full_work(casadi_int *sz_arg, casadi_int* sz_res
 }
 
 CASADI_SYMBOL_EXPORT int qd_dfd_full_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz_iw, casadi_int *sz_w) {
+  if (sz_arg) *sz_arg = 3*sizeof(const casadi_real*);
+  if (sz_res) *sz_res = 3*sizeof(casadi_real*);
+  if (sz_iw) *sz_iw = 0*sizeof(casadi_int);
+  if (sz_w) *sz_w = 0*sizeof(casadi_real);
+  return 0;
+}
+
+/* qd_dgrf_dir_FL_FR_BL_BR:(q[19],w[6],dq[18])->(lambda_w[6],dlambda_w[6]) */
+static int casadi_f3(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem) {
+  (void)arg; (void)res; (void)iw; (void)w; (void)mem;
+  casadi_real a000, a001, a002, a003, a004, a005, a006, a007, a008, a009, a010, a011;
+  casadi_real a012, a013, a014, a015, a016, a017, a018, a019, a020, a021, a022, a023;
+  casadi_real a024, a025, a026, a027, a028, a029, a030, a031, a032, a033, a034, a035;
+  casadi_real a036, a037, a038, a039, a040, a041, a042, a043, a044, a045, a046, a047;
+  casadi_real a048, a049, a050, a051, a052, a053, a054, a055, a056, a057, a058, a059;
+  casadi_real a060, a061, a062, a063, a064, a065, a066, a067, a068, a069, a070, a071;
+  casadi_real a072, a073, a074, a075, a076, a077, a078, a079, a080, a081, a082, a083;
+  casadi_real a084, a085, a086, a087, a088, a089, a090, a091, a092, a093, a094, a095;
+  casadi_real a096, a097, a098, a099, a100, a101, a102, a103, a104, a105, a106, a107;
+  casadi_real a108, a109;
+  a000=7.0000000000000007e-02;
+  a001=2.0000000000000001e-01;
+  a002=arg[0]? arg[0][7] : 0;
+  a003=qd_cos(a002);
+  a004=arg[0]? arg[0][8] : 0;
+  a005=qd_cos(a004);
+  a006=(a003*a005);
+  a007=(a001*a006);
+  a007=(a000+a007);
+  a008=arg[0]? arg[0][9] : 0;
+  a009=qd_cos(a008);
+  a010=(a006*a009);
+  a004=qd_sin(a004);
+  a011=(a003*a004);
+  a008=qd_sin(a008);
+  a012=(a011*a008);
+  a010=(a010-a012);
+  a010=(a001*a010);
+  a007=(a007+a010);
+  a010=casadi_sq(a007);
+  a012=-7.0000000000000007e-02;
+  a013=arg[0]? arg[0][10] : 0;
+  a014=qd_cos(a013);
+  a015=arg[0]? arg[0][11] : 0;
+  a016=qd_cos(a015);
+  a017=(a014*a016);
+  a018=(a001*a017);
+  a018=(a012+a018);
+  a019=arg[0]? arg[0][12] : 0;
+  a020=qd_cos(a019);
+  a021=(a017*a020);
+  a015=qd_sin(a015);
+  a022=(a014*a015);
+  a019=qd_sin(a019);
+  a023=(a022*a019);
+  a021=(a021-a023);
+  a021=(a001*a021);
+  a018=(a018+a021);
+  a021=casadi_sq(a018);
+  a010=(a010+a021);
+  a021=arg[0]? arg[0][13] : 0;
+  a023=qd_cos(a021);
+  a024=arg[0]? arg[0][14] : 0;
+  a025=qd_cos(a024);
+  a026=(a023*a025);
+  a027=(a001*a026);
+  a000=(a000+a027);
+  a027=arg[0]? arg[0][15] : 0;
+  a028=qd_cos(a027);
+  a029=(a026*a028);
+  a024=qd_sin(a024);
+  a030=(a023*a024);
+  a027=qd_sin(a027);
+  a031=(a030*a027);
+  a029=(a029-a031);
+  a029=(a001*a029);
+  a000=(a000+a029);
+  a029=casadi_sq(a000);
+  a010=(a010+a029);
+  a029=arg[0]? arg[0][16] : 0;
+  a031=qd_cos(a029);
+  a032=arg[0]? arg[0][17] : 0;
+  a033=qd_cos(a032);
+  a034=(a031*a033);
+  a035=(a001*a034);
+  a012=(a012+a035);
+  a035=arg[0]? arg[0][18] : 0;
+  a036=qd_cos(a035);
+  a037=(a034*a036);
+  a032=qd_sin(a032);
+  a038=(a031*a032);
+  a035=qd_sin(a035);
+  a039=(a038*a035);
+  a037=(a037-a039);
+  a037=(a001*a037);
+  a012=(a012+a037);
+  a037=casadi_sq(a012);
+  a010=(a010+a037);
+  a037=1.9000000000000000e-01;
+  a039=(a001*a004);
+  a039=(a037+a039);
+  a040=(a005*a008);
+  a041=(a004*a009);
+  a040=(a040+a041);
+  a040=(a001*a040);
+  a039=(a039+a040);
+  a040=casadi_sq(a039);
+  a041=(a001*a015);
+  a037=(a037+a041);
+  a041=(a016*a019);
+  a042=(a015*a020);
+  a041=(a041+a042);
+  a041=(a001*a041);
+  a037=(a037+a041);
+  a041=casadi_sq(a037);
+  a040=(a040+a041);
+  a041=-1.9000000000000000e-01;
+  a042=(a001*a024);
+  a042=(a041+a042);
+  a043=(a025*a027);
+  a044=(a024*a028);
+  a043=(a043+a044);
+  a043=(a001*a043);
+  a042=(a042+a043);
+  a043=casadi_sq(a042);
+  a040=(a040+a043);
+  a043=(a001*a032);
+  a041=(a041+a043);
+  a043=(a033*a035);
+  a044=(a032*a036);
+  a043=(a043+a044);
+  a043=(a001*a043);
+  a041=(a041+a043);
+  a043=casadi_sq(a041);
+  a040=(a040+a043);
+  a043=(a010*a040);
+  a044=(a007*a039);
+  a045=(a018*a037);
+  a044=(a044+a045);
+  a045=(a000*a042);
+  a044=(a044+a045);
+  a045=(a012*a041);
+  a044=(a044+a045);
+  a045=(a039*a007);
+  a046=(a037*a018);
+  a045=(a045+a046);
+  a046=(a042*a000);
+  a045=(a045+a046);
+  a046=(a041*a012);
+  a045=(a045+a046);
+  a046=(a044*a045);
+  a043=(a043-a046);
+  a046=arg[1]? arg[1][2] : 0;
+  a047=(a043*a046);
+  a048=(a007+a018);
+  a048=(a048+a000);
+  a048=(a048+a012);
+  a049=(a048*a040);
+  a050=(a039+a037);
+  a050=(a050+a042);
+  a050=(a050+a041);
+  a051=(a050*a045);
+  a051=(a049-a051);
+  a052=arg[1]? arg[1][3] : 0;
+  a002=qd_sin(a002);
+  a053=(a002*a004);
+  a054=(a053*a008);
+  a055=(a002*a005);
+  a056=(a055*a009);
+  a054=(a054-a056);
+  a054=(a001*a054);
+  a056=(a001*a055);
+  a054=(a054-a056);
+  a013=qd_sin(a013);
+  a056=(a013*a015);
+  a057=(a056*a019);
+  a058=(a013*a016);
+  a059=(a058*a020);
+  a057=(a057-a059);
+  a057=(a001*a057);
+  a059=(a001*a058);
+  a057=(a057-a059);
+  a054=(a054+a057);
+  a021=qd_sin(a021);
+  a057=(a021*a024);
+  a059=(a057*a027);
+  a060=(a021*a025);
+  a061=(a060*a028);
+  a059=(a059-a061);
+  a059=(a001*a059);
+  a061=(a001*a060);
+  a059=(a059-a061);
+  a054=(a054+a059);
+  a029=qd_sin(a029);
+  a059=(a029*a032);
+  a061=(a059*a035);
+  a062=(a029*a033);
+  a063=(a062*a036);
+  a061=(a061-a063);
+  a061=(a001*a061);
+  a063=(a001*a062);
+  a061=(a061-a063);
+  a054=(a054+a061);
+  a061=arg[1]? arg[1][1] : 0;
+  a063=4.;
+  a064=(a050/a063);
+  a065=(a048/a063);
+  a066=arg[1]? arg[1][0] : 0;
+  a067=(a065*a066);
+  a068=(a064*a061);
+  a067=(a067-a068);
+  a068=arg[1]? arg[1][5] : 0;
+  a067=(a067+a068);
+  a068=1.;
+  a069=casadi_sq(a065);
+  a070=casadi_sq(a064);
+  a069=(a069+a070);
+  a068=(a068+a069);
+  a067=(a067/a068);
+  a069=(a064*a067);
+  a069=(a061+a069);
+  a069=(a069/a063);
+  a070=(a054*a069);
+  a052=(a052+a070);
+  a070=(a051*a052);
+  a047=(a047-a070);
+  a070=(a050*a010);
+  a071=(a048*a044);
+  a070=(a070-a071);
+  a071=arg[1]? arg[1][4] : 0;
+  a072=(a065*a067);
+  a072=(a066-a072);
+  a072=(a072/a063);
+  a073=(a054*a072);
+  a071=(a071-a073);
+  a073=(a070*a071);
+  a047=(a047+a073);
+  a043=(a063*a043);
+  a073=(a044*a050);
+  a049=(a049-a073);
+  a073=(a048*a049);
+  a043=(a043-a073);
+  a073=(a010*a050);
+  a074=(a048*a045);
+  a073=(a073-a074);
+  a074=(a050*a073);
+  a043=(a043-a074);
+  a047=(a047/a043);
+  a074=(a063*a040);
+  a075=casadi_sq(a050);
+  a074=(a074-a075);
+  a075=(a074*a052);
+  a076=(a049*a046);
+  a075=(a075-a076);
+  a076=(a050*a048);
+  a077=(a063*a044);
+  a076=(a076-a077);
+  a077=(a076*a071);
+  a075=(a075-a077);
+  a075=(a075/a043);
+  a077=(a007*a075);
+  a077=(a047+a077);
+  a078=(a073*a046);
+  a079=(a048*a050);
+  a080=(a063*a045);
+  a079=(a079-a080);
+  a080=(a079*a052);
+  a078=(a078-a080);
+  a080=(a063*a010);
+  a081=casadi_sq(a048);
+  a080=(a080-a081);
+  a081=(a080*a071);
+  a078=(a078+a081);
+  a078=(a078/a043);
+  a081=(a039*a078);
+  a077=(a077-a081);
+  if (res[0]!=0) res[0][0]=a077;
+  a077=(a018*a075);
+  a077=(a047+a077);
+  a081=(a037*a078);
+  a077=(a077-a081);
+  if (res[0]!=0) res[0][1]=a077;
+  a077=(a000*a075);
+  a077=(a047+a077);
+  a081=(a042*a078);
+  a077=(a077-a081);
+  if (res[0]!=0) res[0][2]=a077;
+  a077=(a012*a075);
+  a077=(a047+a077);
+  a081=(a041*a078);
+  a077=(a077-a081);
+  if (res[0]!=0) res[0][3]=a077;
+  a077=5.0000000000000000e-01;
+  a081=(a077*a072);
+  a082=2.5000000000000000e-01;
+  a083=(a082*a072);
+  a081=(a081+a083);
+  a081=(a081+a083);
+  if (res[0]!=0) res[0][4]=a081;
+  a077=(a077*a069);
+  a081=(a082*a069);
+  a077=(a077+a081);
+  a077=(a077+a081);
+  if (res[0]!=0) res[0][5]=a077;
+  a077=(2*a039);
+  a081=arg[2]? arg[2][7] : 0;
+  a083=(a005*a081);
+  a084=(a001*a083);
+  a085=arg[2]? arg[2][8] : 0;
+  a086=(a009*a085);
+  a087=(a005*a086);
+  a081=(a004*a081);
+  a088=(a008*a081);
+  a087=(a087-a088);
+  a088=(a009*a083);
+  a085=(a008*a085);
+  a089=(a004*a085);
+  a088=(a088-a089);
+  a087=(a087+a088);
+  a087=(a001*a087);
+  a084=(a084+a087);
+  a077=(a077*a084);
+  a087=(2*a037);
+  a088=arg[2]? arg[2][10] : 0;
+  a089=(a016*a088);
+  a090=(a001*a089);
+  a091=arg[2]? arg[2][11] : 0;
+  a092=(a020*a091);
+  a093=(a016*a092);
+  a088=(a015*a088);
+  a094=(a019*a088);
+  a093=(a093-a094);
+  a094=(a020*a089);
+  a091=(a019*a091);
+  a095=(a015*a091);
+  a094=(a094-a095);
+  a093=(a093+a094);
+  a093=(a001*a093);
+  a090=(a090+a093);
+  a087=(a087*a090);
+  a077=(a077+a087);
+  a087=(2*a042);
+  a093=arg[2]? arg[2][13] : 0;
+  a094=(a025*a093);
+  a095=(a001*a094);
+  a096=arg[2]? arg[2][14] : 0;
+  a097=(a028*a096);
+  a098=(a025*a097);
+  a093=(a024*a093);
+  a099=(a027*a093);
+  a098=(a098-a099);
+  a099=(a028*a094);
+  a096=(a027*a096);
+  a100=(a024*a096);
+  a099=(a099-a100);
+  a098=(a098+a099);
+  a098=(a001*a098);
+  a095=(a095+a098);
+  a087=(a087*a095);
+  a077=(a077+a087);
+  a087=(2*a041);
+  a098=arg[2]? arg[2][16] : 0;
+  a099=(a033*a098);
+  a100=(a001*a099);
+  a101=arg[2]? arg[2][17] : 0;
+  a102=(a036*a101);
+  a103=(a033*a102);
+  a098=(a032*a098);
+  a104=(a035*a098);
+  a103=(a103-a104);
+  a104=(a036*a099);
+  a101=(a035*a101);
+  a105=(a032*a101);
+  a104=(a104-a105);
+  a103=(a103+a104);
+  a103=(a001*a103);
+  a100=(a100+a103);
+  a087=(a087*a100);
+  a077=(a077+a087);
+  a087=(a010*a077);
+  a103=(2*a007);
+  a104=arg[2]? arg[2][6] : 0;
+  a105=(a002*a104);
+  a106=(a005*a105);
+  a107=(a003*a081);
+  a106=(a106+a107);
+  a107=(a001*a106);
+  a106=(a009*a106);
+  a006=(a006*a085);
+  a106=(a106+a006);
+  a006=(a003*a083);
+  a105=(a004*a105);
+  a006=(a006-a105);
+  a006=(a008*a006);
+  a011=(a011*a086);
+  a006=(a006+a011);
+  a106=(a106+a006);
+  a106=(a001*a106);
+  a107=(a107+a106);
+  a103=(a103*a107);
+  a106=(2*a018);
+  a006=arg[2]? arg[2][9] : 0;
+  a011=(a013*a006);
+  a105=(a016*a011);
+  a108=(a014*a088);
+  a105=(a105+a108);
+  a108=(a001*a105);
+  a105=(a020*a105);
+  a017=(a017*a091);
+  a105=(a105+a017);
+  a017=(a014*a089);
+  a011=(a015*a011);
+  a017=(a017-a011);
+  a017=(a019*a017);
+  a022=(a022*a092);
+  a017=(a017+a022);
+  a105=(a105+a017);
+  a105=(a001*a105);
+  a108=(a108+a105);
+  a106=(a106*a108);
+  a103=(a103+a106);
+  a106=(2*a000);
+  a105=arg[2]? arg[2][12] : 0;
+  a017=(a021*a105);
+  a022=(a025*a017);
+  a011=(a023*a093);
+  a022=(a022+a011);
+  a011=(a001*a022);
+  a022=(a028*a022);
+  a026=(a026*a096);
+  a022=(a022+a026);
+  a026=(a023*a094);
+  a017=(a024*a017);
+  a026=(a026-a017);
+  a026=(a027*a026);
+  a030=(a030*a097);
+  a026=(a026+a030);
+  a022=(a022+a026);
+  a022=(a001*a022);
+  a011=(a011+a022);
+  a106=(a106*a011);
+  a103=(a103+a106);
+  a106=(2*a012);
+  a022=arg[2]? arg[2][15] : 0;
+  a026=(a029*a022);
+  a030=(a033*a026);
+  a017=(a031*a098);
+  a030=(a030+a017);
+  a017=(a001*a030);
+  a030=(a036*a030);
+  a034=(a034*a101);
+  a030=(a030+a034);
+  a034=(a031*a099);
+  a026=(a032*a026);
+  a034=(a034-a026);
+  a034=(a035*a034);
+  a038=(a038*a102);
+  a034=(a034+a038);
+  a030=(a030+a034);
+  a030=(a001*a030);
+  a017=(a017+a030);
+  a106=(a106*a017);
+  a103=(a103+a106);
+  a106=(a040*a103);
+  a087=(a087-a106);
+  a106=(a007*a084);
+  a030=(a039*a107);
+  a106=(a106-a030);
+  a030=(a018*a090);
+  a034=(a037*a108);
+  a030=(a030-a034);
+  a106=(a106+a030);
+  a030=(a000*a095);
+  a034=(a042*a011);
+  a030=(a030-a034);
+  a106=(a106+a030);
+  a030=(a012*a100);
+  a034=(a041*a017);
+  a030=(a030-a034);
+  a106=(a106+a030);
+  a030=(a045*a106);
+  a034=(a044*a106);
+  a030=(a030+a034);
+  a087=(a087-a030);
+  a030=(a046*a087);
+  a034=(a048*a077);
+  a038=(a107+a108);
+  a038=(a038+a011);
+  a038=(a038+a017);
+  a040=(a040*a038);
+  a034=(a034-a040);
+  a040=(a084+a090);
+  a040=(a040+a095);
+  a040=(a040+a100);
+  a026=(a045*a040);
+  a109=(a050*a106);
+  a026=(a026+a109);
+  a026=(a034-a026);
+  a026=(a052*a026);
+  a003=(a003*a104);
+  a004=(a004*a003);
+  a083=(a002*a083);
+  a004=(a004+a083);
+  a008=(a008*a004);
+  a053=(a053*a086);
+  a008=(a008+a053);
+  a005=(a005*a003);
+  a002=(a002*a081);
+  a005=(a005-a002);
+  a009=(a009*a005);
+  a055=(a055*a085);
+  a009=(a009-a055);
+  a008=(a008-a009);
+  a008=(a001*a008);
+  a005=(a001*a005);
+  a008=(a008-a005);
+  a014=(a014*a006);
+  a015=(a015*a014);
+  a089=(a013*a089);
+  a015=(a015+a089);
+  a019=(a019*a015);
+  a056=(a056*a092);
+  a019=(a019+a056);
+  a016=(a016*a014);
+  a013=(a013*a088);
+  a016=(a016-a013);
+  a020=(a020*a016);
+  a058=(a058*a091);
+  a020=(a020-a058);
+  a019=(a019-a020);
+  a019=(a001*a019);
+  a016=(a001*a016);
+  a019=(a019-a016);
+  a008=(a008+a019);
+  a023=(a023*a105);
+  a024=(a024*a023);
+  a094=(a021*a094);
+  a024=(a024+a094);
+  a027=(a027*a024);
+  a057=(a057*a097);
+  a027=(a027+a057);
+  a025=(a025*a023);
+  a021=(a021*a093);
+  a025=(a025-a021);
+  a028=(a028*a025);
+  a060=(a060*a096);
+  a028=(a028-a060);
+  a027=(a027-a028);
+  a027=(a001*a027);
+  a025=(a001*a025);
+  a027=(a027-a025);
+  a008=(a008+a027);
+  a031=(a031*a022);
+  a032=(a032*a031);
+  a099=(a029*a099);
+  a032=(a032+a099);
+  a035=(a035*a032);
+  a059=(a059*a102);
+  a035=(a035+a059);
+  a033=(a033*a031);
+  a029=(a029*a098);
+  a033=(a033-a029);
+  a036=(a036*a033);
+  a062=(a062*a101);
+  a036=(a036-a062);
+  a035=(a035-a036);
+  a035=(a001*a035);
+  a001=(a001*a033);
+  a035=(a035-a001);
+  a008=(a008+a035);
+  a069=(a069*a008);
+  a035=(a082*a040);
+  a001=(a067*a035);
+  a033=(a082*a038);
+  a066=(a066*a033);
+  a061=(a061*a035);
+  a066=(a066+a061);
+  a066=(a066/a068);
+  a068=(a067/a068);
+  a061=(2*a064);
+  a061=(a061*a035);
+  a035=(2*a065);
+  a035=(a035*a033);
+  a061=(a061-a035);
+  a068=(a068*a061);
+  a066=(a066+a068);
+  a064=(a064*a066);
+  a001=(a001-a064);
+  a064=(a082*a001);
+  a064=(a054*a064);
+  a069=(a069+a064);
+  a051=(a051*a069);
+  a026=(a026+a051);
+  a030=(a030-a026);
+  a010=(a010*a040);
+  a026=(a050*a103);
+  a010=(a010-a026);
+  a026=(a048*a106);
+  a051=(a044*a038);
+  a051=(a026-a051);
+  a051=(a010-a051);
+  a051=(a071*a051);
+  a072=(a072*a008);
+  a067=(a067*a033);
+  a065=(a065*a066);
+  a067=(a067+a065);
+  a082=(a082*a067);
+  a054=(a054*a082);
+  a072=(a072+a054);
+  a070=(a070*a072);
+  a051=(a051-a070);
+  a030=(a030+a051);
+  a030=(a030/a043);
+  a047=(a047/a043);
+  a087=(a063*a087);
+  a044=(a044*a040);
+  a109=(a109+a044);
+  a034=(a034-a109);
+  a109=(a048*a034);
+  a049=(a049*a038);
+  a109=(a109-a049);
+  a087=(a087-a109);
+  a073=(a073*a040);
+  a045=(a045*a038);
+  a026=(a026-a045);
+  a010=(a010-a026);
+  a026=(a050*a010);
+  a073=(a073+a026);
+  a087=(a087-a073);
+  a047=(a047*a087);
+  a030=(a030-a047);
+  a077=(a063*a077);
+  a047=(a050*a040);
+  a047=(2*a047);
+  a077=(a077-a047);
+  a077=(a052*a077);
+  a074=(a074*a069);
+  a077=(a077+a074);
+  a034=(a046*a034);
+  a077=(a077-a034);
+  a040=(a048*a040);
+  a050=(a050*a038);
+  a040=(a040-a050);
+  a106=(a063*a106);
+  a040=(a040-a106);
+  a106=(a071*a040);
+  a076=(a076*a072);
+  a106=(a106-a076);
+  a077=(a077-a106);
+  a077=(a077/a043);
+  a106=(a075/a043);
+  a106=(a106*a087);
+  a077=(a077-a106);
+  a007=(a007*a077);
+  a107=(a075*a107);
+  a007=(a007-a107);
+  a007=(a030+a007);
+  a084=(a078*a084);
+  a046=(a046*a010);
+  a052=(a052*a040);
+  a079=(a079*a069);
+  a052=(a052+a079);
+  a046=(a046-a052);
+  a048=(a048*a038);
+  a048=(2*a048);
+  a063=(a063*a103);
+  a048=(a048-a063);
+  a071=(a071*a048);
+  a080=(a080*a072);
+  a071=(a071-a080);
+  a046=(a046+a071);
+  a046=(a046/a043);
+  a043=(a078/a043);
+  a043=(a043*a087);
+  a046=(a046-a043);
+  a039=(a039*a046);
+  a084=(a084+a039);
+  a007=(a007-a084);
+  if (res[1]!=0) res[1][0]=a007;
+  a018=(a018*a077);
+  a108=(a075*a108);
+  a018=(a018-a108);
+  a018=(a030+a018);
+  a090=(a078*a090);
+  a037=(a037*a046);
+  a090=(a090+a037);
+  a018=(a018-a090);
+  if (res[1]!=0) res[1][1]=a018;
+  a000=(a000*a077);
+  a011=(a075*a011);
+  a000=(a000-a011);
+  a000=(a030+a000);
+  a095=(a078*a095);
+  a042=(a042*a046);
+  a095=(a095+a042);
+  a000=(a000-a095);
+  if (res[1]!=0) res[1][2]=a000;
+  a012=(a012*a077);
+  a075=(a075*a017);
+  a012=(a012-a075);
+  a030=(a030+a012);
+  a078=(a078*a100);
+  a041=(a041*a046);
+  a078=(a078+a041);
+  a030=(a030-a078);
+  if (res[1]!=0) res[1][3]=a030;
+  a030=1.2500000000000000e-01;
+  a078=(a030*a067);
+  a041=6.2500000000000000e-02;
+  a067=(a041*a067);
+  a078=(a078+a067);
+  a078=(a078+a067);
+  if (res[1]!=0) res[1][4]=a078;
+  a030=(a030*a001);
+  a041=(a041*a001);
+  a030=(a030+a041);
+  a030=(a030+a041);
+  if (res[1]!=0) res[1][5]=a030;
+  return 0;
+}
+
+CASADI_SYMBOL_EXPORT int qd_dgrf_dir_FL_FR_BL_BR(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem){
+  return qd_d_finite(casadi_f3(arg, res, iw, w, mem), res, 2, (const casadi_int[]){6, 6});
+}
+
+CASADI_SYMBOL_EXPORT int qd_dgrf_dir_FL_FR_BL_BR_checkout(void) {
+  return 0;
+}
+
+CASADI_SYMBOL_EXPORT void qd_dgrf_dir_FL_FR_BL_BR_release(int mem) {
+  (void)mem;
+}
+
+CASADI_SYMBOL_EXPORT void qd_dgrf_dir_FL_FR_BL_BR_incref(void) {
+}
+
+CASADI_SYMBOL_EXPORT void qd_dgrf_dir_FL_FR_BL_BR_decref(void) {
+}
+
+CASADI_SYMBOL_EXPORT casadi_int qd_dgrf_dir_FL_FR_BL_BR_n_in(void) { return 3;}
+
+CASADI_SYMBOL_EXPORT casadi_int qd_dgrf_dir_FL_FR_BL_BR_n_out(void) { return 2;}
+
+CASADI_SYMBOL_EXPORT casadi_real qd_dgrf_dir_FL_FR_BL_BR_default_in(casadi_int i) {
+  switch (i) {
+    default: return 0;
+  }
+}
+
+CASADI_SYMBOL_EXPORT const char* qd_dgrf_dir_FL_FR_BL_BR_name_in(casadi_int i) {
+  switch (i) {
+    case 0: return "q";
+    case 1: return "w";
+    case 2: return "dq";
+    default: return 0;
+  }
+}
+
+CASADI_SYMBOL_EXPORT const char* qd_dgrf_dir_FL_FR_BL_BR_name_out(casadi_int i) {
+  switch (i) {
+    case 0: return "lambda_w";
+    case 1: return "dlambda_w";
+    default: return 0;
+  }
+}
+
+CASADI_SYMBOL_EXPORT const casadi_int* qd_dgrf_dir_FL_FR_BL_BR_sparsity_in(casadi_int i) {
+  switch (i) {
+    case 0: return casadi_s0;
+    case 1: return casadi_s6;
+    case 2: return casadi_s1;
+    default: return 0;
+  }
+}
+
+CASADI_SYMBOL_EXPORT const casadi_int* qd_dgrf_dir_FL_FR_BL_BR_sparsity_out(casadi_int i) {
+  switch (i) {
+    case 0: return casadi_s6;
+    case 1: return casadi_s6;
+    default: return 0;
+  }
+}
+
+CASADI_SYMBOL_EXPORT int qd_dgrf_dir_FL_FR_BL_BR_work(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz_iw, casadi_int *sz_w) {
+  if (sz_arg) *sz_arg = 3;
+  if (sz_res) *sz_res = 2;
+  if (sz_iw) *sz_iw = 0;
+  if (sz_w) *sz_w = 0;
+  return 0;
+}
+
+CASADI_SYMBOL_EXPORT int qd_dgrf_dir_FL_FR_BL_BR_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz_iw, casadi_int *sz_w) {
+  if (sz_arg) *sz_arg = 3*sizeof(const casadi_real*);
+  if (sz_res) *sz_res = 2*sizeof(casadi_real*);
+  if (sz_iw) *sz_iw = 0*sizeof(casadi_int);
+  if (sz_w) *sz_w = 0*sizeof(casadi_real);
+  return 0;
+}
+
+/* qd_dgrf_FL_FR_BL_BR:(q[19],v[18],a[18])->(dlambda_dq[6x18],dlambda_dv[6x18],dlambda_da[6x18]) */
+static int casadi_f4(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem) {
+  (void)arg; (void)res; (void)iw; (void)w; (void)mem;
+  casadi_real a0, a1, a2;
+  a0=arg[0]? arg[0][0] : 0;
+  a1=arg[0]? arg[0][1] : 0;
+  a0=(a0+a1);
+  a1=arg[0]? arg[0][2] : 0;
+  a0=(a0+a1);
+  a1=arg[0]? arg[0][3] : 0;
+  a0=(a0+a1);
+  a1=arg[0]? arg[0][4] : 0;
+  a0=(a0+a1);
+  a1=arg[0]? arg[0][5] : 0;
+  a0=(a0+a1);
+  a1=arg[0]? arg[0][6] : 0;
+  a0=(a0+a1);
+  a1=arg[0]? arg[0][7] : 0;
+  a0=(a0+a1);
+  a1=arg[0]? arg[0][8] : 0;
+  a0=(a0+a1);
+  a1=arg[0]? arg[0][9] : 0;
+  a0=(a0+a1);
+  a1=arg[0]? arg[0][10] : 0;
+  a0=(a0+a1);
+  a1=arg[0]? arg[0][11] : 0;
+  a0=(a0+a1);
+  a1=arg[0]? arg[0][12] : 0;
+  a0=(a0+a1);
+  a1=arg[0]? arg[0][13] : 0;
+  a0=(a0+a1);
+  a1=arg[0]? arg[0][14] : 0;
+  a0=(a0+a1);
+  a1=arg[0]? arg[0][15] : 0;
+  a0=(a0+a1);
+  a1=arg[0]? arg[0][16] : 0;
+  a0=(a0+a1);
+  a1=arg[0]? arg[0][17] : 0;
+  a0=(a0+a1);
+  a1=arg[0]? arg[0][18] : 0;
+  a0=(a0+a1);
+  a1=arg[1]? arg[1][0] : 0;
+  a2=arg[1]? arg[1][1] : 0;
+  a1=(a1+a2);
+  a2=arg[1]? arg[1][2] : 0;
+  a1=(a1+a2);
+  a2=arg[1]? arg[1][3] : 0;
+  a1=(a1+a2);
+  a2=arg[1]? arg[1][4] : 0;
+  a1=(a1+a2);
+  a2=arg[1]? arg[1][5] : 0;
+  a1=(a1+a2);
+  a2=arg[1]? arg[1][6] : 0;
+  a1=(a1+a2);
+  a2=arg[1]? arg[1][7] : 0;
+  a1=(a1+a2);
+  a2=arg[1]? arg[1][8] : 0;
+  a1=(a1+a2);
+  a2=arg[1]? arg[1][9] : 0;
+  a1=(a1+a2);
+  a2=arg[1]? arg[1][10] : 0;
+  a1=(a1+a2);
+  a2=arg[1]? arg[1][11] : 0;
+  a1=(a1+a2);
+  a2=arg[1]? arg[1][12] : 0;
+  a1=(a1+a2);
+  a2=arg[1]? arg[1][13] : 0;
+  a1=(a1+a2);
+  a2=arg[1]? arg[1][14] : 0;
+  a1=(a1+a2);
+  a2=arg[1]? arg[1][15] : 0;
+  a1=(a1+a2);
+  a2=arg[1]? arg[1][16] : 0;
+  a1=(a1+a2);
+  a2=arg[1]? arg[1][17] : 0;
+  a1=(a1+a2);
+  a0=(a0+a1);
+  a1=arg[2]? arg[2][0] : 0;
+  a2=arg[2]? arg[2][1] : 0;
+  a1=(a1+a2);
+  a2=arg[2]? arg[2][2] : 0;
+  a1=(a1+a2);
+  a2=arg[2]? arg[2][3] : 0;
+  a1=(a1+a2);
+  a2=arg[2]? arg[2][4] : 0;
+  a1=(a1+a2);
+  a2=arg[2]? arg[2][5] : 0;
+  a1=(a1+a2);
+  a2=arg[2]? arg[2][6] : 0;
+  a1=(a1+a2);
+  a2=arg[2]? arg[2][7] : 0;
+  a1=(a1+a2);
+  a2=arg[2]? arg[2][8] : 0;
+  a1=(a1+a2);
+  a2=arg[2]? arg[2][9] : 0;
+  a1=(a1+a2);
+  a2=arg[2]? arg[2][10] : 0;
+  a1=(a1+a2);
+  a2=arg[2]? arg[2][11] : 0;
+  a1=(a1+a2);
+  a2=arg[2]? arg[2][12] : 0;
+  a1=(a1+a2);
+  a2=arg[2]? arg[2][13] : 0;
+  a1=(a1+a2);
+  a2=arg[2]? arg[2][14] : 0;
+  a1=(a1+a2);
+  a2=arg[2]? arg[2][15] : 0;
+  a1=(a1+a2);
+  a2=arg[2]? arg[2][16] : 0;
+  a1=(a1+a2);
+  a2=arg[2]? arg[2][17] : 0;
+  a1=(a1+a2);
+  a0=(a0+a1);
+  if (res[0]!=0) res[0][0]=a0;
+  if (res[0]!=0) res[0][1]=a0;
+  if (res[0]!=0) res[0][2]=a0;
+  if (res[0]!=0) res[0][3]=a0;
+  if (res[0]!=0) res[0][4]=a0;
+  if (res[0]!=0) res[0][5]=a0;
+  if (res[0]!=0) res[0][6]=a0;
+  if (res[0]!=0) res[0][7]=a0;
+  if (res[0]!=0) res[0][8]=a0;
+  if (res[0]!=0) res[0][9]=a0;
+  if (res[0]!=0) res[0][10]=a0;
+  if (res[0]!=0) res[0][11]=a0;
+  if (res[0]!=0) res[0][12]=a0;
+  if (res[0]!=0) res[0][13]=a0;
+  if (res[0]!=0) res[0][14]=a0;
+  if (res[0]!=0) res[0][15]=a0;
+  if (res[0]!=0) res[0][16]=a0;
+  if (res[0]!=0) res[0][17]=a0;
+  if (res[0]!=0) res[0][18]=a0;
+  if (res[0]!=0) res[0][19]=a0;
+  if (res[0]!=0) res[0][20]=a0;
+  if (res[0]!=0) res[0][21]=a0;
+  if (res[0]!=0) res[0][22]=a0;
+  if (res[0]!=0) res[0][23]=a0;
+  if (res[0]!=0) res[0][24]=a0;
+  if (res[0]!=0) res[0][25]=a0;
+  if (res[0]!=0) res[0][26]=a0;
+  if (res[0]!=0) res[0][27]=a0;
+  if (res[0]!=0) res[0][28]=a0;
+  if (res[0]!=0) res[0][29]=a0;
+  if (res[0]!=0) res[0][30]=a0;
+  if (res[0]!=0) res[0][31]=a0;
+  if (res[0]!=0) res[0][32]=a0;
+  if (res[0]!=0) res[0][33]=a0;
+  if (res[0]!=0) res[0][34]=a0;
+  if (res[0]!=0) res[0][35]=a0;
+  if (res[0]!=0) res[0][36]=a0;
+  if (res[0]!=0) res[0][37]=a0;
+  if (res[0]!=0) res[0][38]=a0;
+  if (res[0]!=0) res[0][39]=a0;
+  if (res[0]!=0) res[0][40]=a0;
+  if (res[0]!=0) res[0][41]=a0;
+  if (res[0]!=0) res[0][42]=a0;
+  if (res[0]!=0) res[0][43]=a0;
+  if (res[0]!=0) res[0][44]=a0;
+  if (res[0]!=0) res[0][45]=a0;
+  if (res[0]!=0) res[0][46]=a0;
+  if (res[0]!=0) res[0][47]=a0;
+  if (res[0]!=0) res[0][48]=a0;
+  if (res[0]!=0) res[0][49]=a0;
+  if (res[0]!=0) res[0][50]=a0;
+  if (res[0]!=0) res[0][51]=a0;
+  if (res[0]!=0) res[0][52]=a0;
+  if (res[0]!=0) res[0][53]=a0;
+  if (res[0]!=0) res[0][54]=a0;
+  if (res[0]!=0) res[0][55]=a0;
+  if (res[0]!=0) res[0][56]=a0;
+  if (res[0]!=0) res[0][57]=a0;
+  if (res[0]!=0) res[0][58]=a0;
+  if (res[0]!=0) res[0][59]=a0;
+  if (res[0]!=0) res[0][60]=a0;
+  if (res[0]!=0) res[0][61]=a0;
+  if (res[0]!=0) res[0][62]=a0;
+  if (res[0]!=0) res[0][63]=a0;
+  if (res[0]!=0) res[0][64]=a0;
+  if (res[0]!=0) res[0][65]=a0;
+  if (res[0]!=0) res[0][66]=a0;
+  if (res[0]!=0) res[0][67]=a0;
+  if (res[0]!=0) res[0][68]=a0;
+  if (res[0]!=0) res[0][69]=a0;
+  if (res[0]!=0) res[0][70]=a0;
+  if (res[0]!=0) res[0][71]=a0;
+  if (res[0]!=0) res[0][72]=a0;
+  if (res[0]!=0) res[0][73]=a0;
+  if (res[0]!=0) res[0][74]=a0;
+  if (res[0]!=0) res[0][75]=a0;
+  if (res[0]!=0) res[0][76]=a0;
+  if (res[0]!=0) res[0][77]=a0;
+  if (res[0]!=0) res[0][78]=a0;
+  if (res[0]!=0) res[0][79]=a0;
+  if (res[0]!=0) res[0][80]=a0;
+  if (res[0]!=0) res[0][81]=a0;
+  if (res[0]!=0) res[0][82]=a0;
+  if (res[0]!=0) res[0][83]=a0;
+  if (res[0]!=0) res[0][84]=a0;
+  if (res[0]!=0) res[0][85]=a0;
+  if (res[0]!=0) res[0][86]=a0;
+  if (res[0]!=0) res[0][87]=a0;
+  if (res[0]!=0) res[0][88]=a0;
+  if (res[0]!=0) res[0][89]=a0;
+  if (res[0]!=0) res[0][90]=a0;
+  if (res[0]!=0) res[0][91]=a0;
+  if (res[0]!=0) res[0][92]=a0;
+  if (res[0]!=0) res[0][93]=a0;
+  if (res[0]!=0) res[0][94]=a0;
+  if (res[0]!=0) res[0][95]=a0;
+  if (res[0]!=0) res[0][96]=a0;
+  if (res[0]!=0) res[0][97]=a0;
+  if (res[0]!=0) res[0][98]=a0;
+  if (res[0]!=0) res[0][99]=a0;
+  if (res[0]!=0) res[0][100]=a0;
+  if (res[0]!=0) res[0][101]=a0;
+  if (res[0]!=0) res[0][102]=a0;
+  if (res[0]!=0) res[0][103]=a0;
+  if (res[0]!=0) res[0][104]=a0;
+  if (res[0]!=0) res[0][105]=a0;
+  if (res[0]!=0) res[0][106]=a0;
+  if (res[0]!=0) res[0][107]=a0;
+  if (res[1]!=0) res[1][0]=a0;
+  if (res[1]!=0) res[1][1]=a0;
+  if (res[1]!=0) res[1][2]=a0;
+  if (res[1]!=0) res[1][3]=a0;
+  if (res[1]!=0) res[1][4]=a0;
+  if (res[1]!=0) res[1][5]=a0;
+  if (res[1]!=0) res[1][6]=a0;
+  if (res[1]!=0) res[1][7]=a0;
+  if (res[1]!=0) res[1][8]=a0;
+  if (res[1]!=0) res[1][9]=a0;
+  if (res[1]!=0) res[1][10]=a0;
+  if (res[1]!=0) res[1][11]=a0;
+  if (res[1]!=0) res[1][12]=a0;
+  if (res[1]!=0) res[1][13]=a0;
+  if (res[1]!=0) res[1][14]=a0;
+  if (res[1]!=0) res[1][15]=a0;
+  if (res[1]!=0) res[1][16]=a0;
+  if (res[1]!=0) res[1][17]=a0;
+  if (res[1]!=0) res[1][18]=a0;
+  if (res[1]!=0) res[1][19]=a0;
+  if (res[1]!=0) res[1][20]=a0;
+  if (res[1]!=0) res[1][21]=a0;
+  if (res[1]!=0) res[1][22]=a0;
+  if (res[1]!=0) res[1][23]=a0;
+  if (res[1]!=0) res[1][24]=a0;
+  if (res[1]!=0) res[1][25]=a0;
+  if (res[1]!=0) res[1][26]=a0;
+  if (res[1]!=0) res[1][27]=a0;
+  if (res[1]!=0) res[1][28]=a0;
+  if (res[1]!=0) res[1][29]=a0;
+  if (res[1]!=0) res[1][30]=a0;
+  if (res[1]!=0) res[1][31]=a0;
+  if (res[1]!=0) res[1][32]=a0;
+  if (res[1]!=0) res[1][33]=a0;
+  if (res[1]!=0) res[1][34]=a0;
+  if (res[1]!=0) res[1][35]=a0;
+  if (res[1]!=0) res[1][36]=a0;
+  if (res[1]!=0) res[1][37]=a0;
+  if (res[1]!=0) res[1][38]=a0;
+  if (res[1]!=0) res[1][39]=a0;
+  if (res[1]!=0) res[1][40]=a0;
+  if (res[1]!=0) res[1][41]=a0;
+  if (res[1]!=0) res[1][42]=a0;
+  if (res[1]!=0) res[1][43]=a0;
+  if (res[1]!=0) res[1][44]=a0;
+  if (res[1]!=0) res[1][45]=a0;
+  if (res[1]!=0) res[1][46]=a0;
+  if (res[1]!=0) res[1][47]=a0;
+  if (res[1]!=0) res[1][48]=a0;
+  if (res[1]!=0) res[1][49]=a0;
+  if (res[1]!=0) res[1][50]=a0;
+  if (res[1]!=0) res[1][51]=a0;
+  if (res[1]!=0) res[1][52]=a0;
+  if (res[1]!=0) res[1][53]=a0;
+  if (res[1]!=0) res[1][54]=a0;
+  if (res[1]!=0) res[1][55]=a0;
+  if (res[1]!=0) res[1][56]=a0;
+  if (res[1]!=0) res[1][57]=a0;
+  if (res[1]!=0) res[1][58]=a0;
+  if (res[1]!=0) res[1][59]=a0;
+  if (res[1]!=0) res[1][60]=a0;
+  if (res[1]!=0) res[1][61]=a0;
+  if (res[1]!=0) res[1][62]=a0;
+  if (res[1]!=0) res[1][63]=a0;
+  if (res[1]!=0) res[1][64]=a0;
+  if (res[1]!=0) res[1][65]=a0;
+  if (res[1]!=0) res[1][66]=a0;
+  if (res[1]!=0) res[1][67]=a0;
+  if (res[1]!=0) res[1][68]=a0;
+  if (res[1]!=0) res[1][69]=a0;
+  if (res[1]!=0) res[1][70]=a0;
+  if (res[1]!=0) res[1][71]=a0;
+  if (res[1]!=0) res[1][72]=a0;
+  if (res[1]!=0) res[1][73]=a0;
+  if (res[1]!=0) res[1][74]=a0;
+  if (res[1]!=0) res[1][75]=a0;
+  if (res[1]!=0) res[1][76]=a0;
+  if (res[1]!=0) res[1][77]=a0;
+  if (res[1]!=0) res[1][78]=a0;
+  if (res[1]!=0) res[1][79]=a0;
+  if (res[1]!=0) res[1][80]=a0;
+  if (res[1]!=0) res[1][81]=a0;
+  if (res[1]!=0) res[1][82]=a0;
+  if (res[1]!=0) res[1][83]=a0;
+  if (res[1]!=0) res[1][84]=a0;
+  if (res[1]!=0) res[1][85]=a0;
+  if (res[1]!=0) res[1][86]=a0;
+  if (res[1]!=0) res[1][87]=a0;
+  if (res[1]!=0) res[1][88]=a0;
+  if (res[1]!=0) res[1][89]=a0;
+  if (res[1]!=0) res[1][90]=a0;
+  if (res[1]!=0) res[1][91]=a0;
+  if (res[1]!=0) res[1][92]=a0;
+  if (res[1]!=0) res[1][93]=a0;
+  if (res[1]!=0) res[1][94]=a0;
+  if (res[1]!=0) res[1][95]=a0;
+  if (res[1]!=0) res[1][96]=a0;
+  if (res[1]!=0) res[1][97]=a0;
+  if (res[1]!=0) res[1][98]=a0;
+  if (res[1]!=0) res[1][99]=a0;
+  if (res[1]!=0) res[1][100]=a0;
+  if (res[1]!=0) res[1][101]=a0;
+  if (res[1]!=0) res[1][102]=a0;
+  if (res[1]!=0) res[1][103]=a0;
+  if (res[1]!=0) res[1][104]=a0;
+  if (res[1]!=0) res[1][105]=a0;
+  if (res[1]!=0) res[1][106]=a0;
+  if (res[1]!=0) res[1][107]=a0;
+  if (res[2]!=0) res[2][0]=a0;
+  if (res[2]!=0) res[2][1]=a0;
+  if (res[2]!=0) res[2][2]=a0;
+  if (res[2]!=0) res[2][3]=a0;
+  if (res[2]!=0) res[2][4]=a0;
+  if (res[2]!=0) res[2][5]=a0;
+  if (res[2]!=0) res[2][6]=a0;
+  if (res[2]!=0) res[2][7]=a0;
+  if (res[2]!=0) res[2][8]=a0;
+  if (res[2]!=0) res[2][9]=a0;
+  if (res[2]!=0) res[2][10]=a0;
+  if (res[2]!=0) res[2][11]=a0;
+  if (res[2]!=0) res[2][12]=a0;
+  if (res[2]!=0) res[2][13]=a0;
+  if (res[2]!=0) res[2][14]=a0;
+  if (res[2]!=0) res[2][15]=a0;
+  if (res[2]!=0) res[2][16]=a0;
+  if (res[2]!=0) res[2][17]=a0;
+  if (res[2]!=0) res[2][18]=a0;
+  if (res[2]!=0) res[2][19]=a0;
+  if (res[2]!=0) res[2][20]=a0;
+  if (res[2]!=0) res[2][21]=a0;
+  if (res[2]!=0) res[2][22]=a0;
+  if (res[2]!=0) res[2][23]=a0;
+  if (res[2]!=0) res[2][24]=a0;
+  if (res[2]!=0) res[2][25]=a0;
+  if (res[2]!=0) res[2][26]=a0;
+  if (res[2]!=0) res[2][27]=a0;
+  if (res[2]!=0) res[2][28]=a0;
+  if (res[2]!=0) res[2][29]=a0;
+  if (res[2]!=0) res[2][30]=a0;
+  if (res[2]!=0) res[2][31]=a0;
+  if (res[2]!=0) res[2][32]=a0;
+  if (res[2]!=0) res[2][33]=a0;
+  if (res[2]!=0) res[2][34]=a0;
+  if (res[2]!=0) res[2][35]=a0;
+  if (res[2]!=0) res[2][36]=a0;
+  if (res[2]!=0) res[2][37]=a0;
+  if (res[2]!=0) res[2][38]=a0;
+  if (res[2]!=0) res[2][39]=a0;
+  if (res[2]!=0) res[2][40]=a0;
+  if (res[2]!=0) res[2][41]=a0;
+  if (res[2]!=0) res[2][42]=a0;
+  if (res[2]!=0) res[2][43]=a0;
+  if (res[2]!=0) res[2][44]=a0;
+  if (res[2]!=0) res[2][45]=a0;
+  if (res[2]!=0) res[2][46]=a0;
+  if (res[2]!=0) res[2][47]=a0;
+  if (res[2]!=0) res[2][48]=a0;
+  if (res[2]!=0) res[2][49]=a0;
+  if (res[2]!=0) res[2][50]=a0;
+  if (res[2]!=0) res[2][51]=a0;
+  if (res[2]!=0) res[2][52]=a0;
+  if (res[2]!=0) res[2][53]=a0;
+  if (res[2]!=0) res[2][54]=a0;
+  if (res[2]!=0) res[2][55]=a0;
+  if (res[2]!=0) res[2][56]=a0;
+  if (res[2]!=0) res[2][57]=a0;
+  if (res[2]!=0) res[2][58]=a0;
+  if (res[2]!=0) res[2][59]=a0;
+  if (res[2]!=0) res[2][60]=a0;
+  if (res[2]!=0) res[2][61]=a0;
+  if (res[2]!=0) res[2][62]=a0;
+  if (res[2]!=0) res[2][63]=a0;
+  if (res[2]!=0) res[2][64]=a0;
+  if (res[2]!=0) res[2][65]=a0;
+  if (res[2]!=0) res[2][66]=a0;
+  if (res[2]!=0) res[2][67]=a0;
+  if (res[2]!=0) res[2][68]=a0;
+  if (res[2]!=0) res[2][69]=a0;
+  if (res[2]!=0) res[2][70]=a0;
+  if (res[2]!=0) res[2][71]=a0;
+  if (res[2]!=0) res[2][72]=a0;
+  if (res[2]!=0) res[2][73]=a0;
+  if (res[2]!=0) res[2][74]=a0;
+  if (res[2]!=0) res[2][75]=a0;
+  if (res[2]!=0) res[2][76]=a0;
+  if (res[2]!=0) res[2][77]=a0;
+  if (res[2]!=0) res[2][78]=a0;
+  if (res[2]!=0) res[2][79]=a0;
+  if (res[2]!=0) res[2][80]=a0;
+  if (res[2]!=0) res[2][81]=a0;
+  if (res[2]!=0) res[2][82]=a0;
+  if (res[2]!=0) res[2][83]=a0;
+  if (res[2]!=0) res[2][84]=a0;
+  if (res[2]!=0) res[2][85]=a0;
+  if (res[2]!=0) res[2][86]=a0;
+  if (res[2]!=0) res[2][87]=a0;
+  if (res[2]!=0) res[2][88]=a0;
+  if (res[2]!=0) res[2][89]=a0;
+  if (res[2]!=0) res[2][90]=a0;
+  if (res[2]!=0) res[2][91]=a0;
+  if (res[2]!=0) res[2][92]=a0;
+  if (res[2]!=0) res[2][93]=a0;
+  if (res[2]!=0) res[2][94]=a0;
+  if (res[2]!=0) res[2][95]=a0;
+  if (res[2]!=0) res[2][96]=a0;
+  if (res[2]!=0) res[2][97]=a0;
+  if (res[2]!=0) res[2][98]=a0;
+  if (res[2]!=0) res[2][99]=a0;
+  if (res[2]!=0) res[2][100]=a0;
+  if (res[2]!=0) res[2][101]=a0;
+  if (res[2]!=0) res[2][102]=a0;
+  if (res[2]!=0) res[2][103]=a0;
+  if (res[2]!=0) res[2][104]=a0;
+  if (res[2]!=0) res[2][105]=a0;
+  if (res[2]!=0) res[2][106]=a0;
+  if (res[2]!=0) res[2][107]=a0;
+  return 0;
+}
+
+CASADI_SYMBOL_EXPORT int qd_dgrf_FL_FR_BL_BR(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem){
+  (void)casadi_f4;
+  return qd_dgrf_solve(6, 15, casadi_f1, casadi_f0, casadi_f3, qd_did_full_sparsity_out(0), qd_did_full_sparsity_out(1), arg, res, iw, w, mem);
+}
+
+CASADI_SYMBOL_EXPORT int qd_dgrf_FL_FR_BL_BR_checkout(void) {
+  return 0;
+}
+
+CASADI_SYMBOL_EXPORT void qd_dgrf_FL_FR_BL_BR_release(int mem) {
+  (void)mem;
+}
+
+CASADI_SYMBOL_EXPORT void qd_dgrf_FL_FR_BL_BR_incref(void) {
+}
+
+CASADI_SYMBOL_EXPORT void qd_dgrf_FL_FR_BL_BR_decref(void) {
+}
+
+CASADI_SYMBOL_EXPORT casadi_int qd_dgrf_FL_FR_BL_BR_n_in(void) { return 3;}
+
+CASADI_SYMBOL_EXPORT casadi_int qd_dgrf_FL_FR_BL_BR_n_out(void) { return 3;}
+
+CASADI_SYMBOL_EXPORT casadi_real qd_dgrf_FL_FR_BL_BR_default_in(casadi_int i) {
+  switch (i) {
+    default: return 0;
+  }
+}
+
+CASADI_SYMBOL_EXPORT const char* qd_dgrf_FL_FR_BL_BR_name_in(casadi_int i) {
+  switch (i) {
+    case 0: return "q";
+    case 1: return "v";
+    case 2: return "a";
+    default: return 0;
+  }
+}
+
+CASADI_SYMBOL_EXPORT const char* qd_dgrf_FL_FR_BL_BR_name_out(casadi_int i) {
+  switch (i) {
+    case 0: return "dlambda_dq";
+    case 1: return "dlambda_dv";
+    case 2: return "dlambda_da";
+    default: return 0;
+  }
+}
+
+CASADI_SYMBOL_EXPORT const casadi_int* qd_dgrf_FL_FR_BL_BR_sparsity_in(casadi_int i) {
+  switch (i) {
+    case 0: return casadi_s0;
+    case 1: return casadi_s1;
+    case 2: return casadi_s1;
+    default: return 0;
+  }
+}
+
+CASADI_SYMBOL_EXPORT const casadi_int* qd_dgrf_FL_FR_BL_BR_sparsity_out(casadi_int i) {
+  switch (i) {
+    case 0: return casadi_s7;
+    case 1: return casadi_s7;
+    case 2: return casadi_s7;
+    default: return 0;
+  }
+}
+
+CASADI_SYMBOL_EXPORT int qd_dgrf_FL_FR_BL_BR_work(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz_iw, casadi_int *sz_w) {
+  if (sz_arg) *sz_arg = 3;
+  if (sz_res) *sz_res = 3;
+  if (sz_iw) *sz_iw = 0;
+  if (sz_w) *sz_w = 0;
+  return 0;
+}
+
+CASADI_SYMBOL_EXPORT int qd_dgrf_FL_FR_BL_BR_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz_iw, casadi_int *sz_w) {
+  if (sz_arg) *sz_arg = 3*sizeof(const casadi_real*);
+  if (sz_res) *sz_res = 3*sizeof(casadi_real*);
+  if (sz_iw) *sz_iw = 0*sizeof(casadi_int);
+  if (sz_w) *sz_w = 0*sizeof(casadi_real);
+  return 0;
+}
+
+/* qd_dgrf_dir_FL_FR_BL:(q[19],w[6],dq[18])->(lambda_w[6],dlambda_w[6]) */
+static int casadi_f5(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem) {
+  (void)arg; (void)res; (void)iw; (void)w; (void)mem;
+  casadi_real a00, a01, a02, a03, a04, a05, a06, a07, a08, a09, a10, a11;
+  casadi_real a12, a13, a14, a15, a16, a17, a18, a19, a20, a21, a22, a23;
+  casadi_real a24, a25, a26, a27, a28, a29, a30, a31, a32, a33, a34, a35;
+  casadi_real a36, a37, a38, a39, a40, a41, a42, a43, a44, a45, a46, a47;
+  casadi_real a48, a49, a50, a51, a52, a53, a54, a55, a56, a57, a58, a59;
+  casadi_real a60, a61, a62, a63, a64, a65, a66, a67, a68, a69, a70, a71;
+  casadi_real a72, a73, a74, a75, a76, a77;
+  a00=7.0000000000000007e-02;
+  a01=2.0000000000000001e-01;
+  a02=arg[0]? arg[0][13] : 0;
+  a03=qd_cos(a02);
+  a04=arg[0]? arg[0][14] : 0;
+  a05=qd_cos(a04);
+  a06=(a03*a05);
+  a07=(a01*a06);
+  a07=(a00+a07);
+  a08=arg[0]? arg[0][15] : 0;
+  a09=qd_cos(a08);
+  a10=(a06*a09);
+  a04=qd_sin(a04);
+  a11=(a03*a04);
+  a08=qd_sin(a08);
+  a12=(a11*a08);
+  a10=(a10-a12);
+  a10=(a01*a10);
+  a07=(a07+a10);
+  a10=1.9000000000000000e-01;
+  a12=arg[0]? arg[0][11] : 0;
+  a13=qd_sin(a12);
+  a14=(a01*a13);
+  a14=(a10+a14);
+  a12=qd_cos(a12);
+  a15=arg[0]? arg[0][12] : 0;
+  a16=qd_sin(a15);
+  a17=(a12*a16);
+  a15=qd_cos(a15);
+  a18=(a13*a15);
+  a17=(a17+a18);
+  a17=(a01*a17);
+  a14=(a14+a17);
+  a17=(a07*a14);
+  a18=-7.0000000000000007e-02;
+  a19=arg[0]? arg[0][10] : 0;
+  a20=qd_cos(a19);
+  a21=(a20*a12);
+  a22=(a01*a21);
+  a18=(a18+a22);
+  a22=(a21*a15);
+  a23=(a20*a13);
+  a24=(a23*a16);
+  a22=(a22-a24);
+  a22=(a01*a22);
+  a18=(a18+a22);
+  a22=-1.9000000000000000e-01;
+  a24=(a01*a04);
+  a22=(a22+a24);
+  a24=(a05*a08);
+  a25=(a04*a09);
+  a24=(a24+a25);
+  a24=(a01*a24);
+  a22=(a22+a24);
+  a24=(a18*a22);
+  a17=(a17-a24);
+  a24=arg[1]? arg[1][2] : 0;
+  a25=(a17*a24);
+  a26=(a14-a22);
+  a27=arg[1]? arg[1][3] : 0;
+  a28=arg[0]? arg[0][7] : 0;
+  a29=qd_sin(a28);
+  a30=arg[0]? arg[0][8] : 0;
+  a31=qd_sin(a30);
+  a32=(a29*a31);
+  a33=arg[0]? arg[0][9] : 0;
+  a34=qd_sin(a33);
+  a35=(a32*a34);
+  a30=qd_cos(a30);
+  a36=(a29*a30);
+  a33=qd_cos(a33);
+  a37=(a36*a33);
+  a35=(a35-a37);
+  a35=(a01*a35);
+  a37=(a01*a36);
+  a35=(a35-a37);
+  a37=arg[1]? arg[1][1] : 0;
+  a38=(a14*a37);
+  a39=arg[1]? arg[1][5] : 0;
+  a28=qd_cos(a28);
+  a40=(a28*a30);
+  a41=(a01*a40);
+  a00=(a00+a41);
+  a41=(a40*a33);
+  a42=(a28*a31);
+  a43=(a42*a34);
+  a41=(a41-a43);
+  a41=(a01*a41);
+  a00=(a00+a41);
+  a41=(a00+a18);
+  a41=(a41+a07);
+  a43=arg[1]? arg[1][0] : 0;
+  a44=3.;
+  a43=(a43/a44);
+  a41=(a41*a43);
+  a39=(a39+a41);
+  a38=(a38-a39);
+  a41=(2*a14);
+  a44=(a01*a31);
+  a10=(a10+a44);
+  a44=(a30*a34);
+  a45=(a31*a33);
+  a44=(a44+a45);
+  a44=(a01*a44);
+  a10=(a10+a44);
+  a44=(a10+a22);
+  a41=(a41-a44);
+  a38=(a38/a41);
+  a45=(a35*a38);
+  a27=(a27+a45);
+  a19=qd_sin(a19);
+  a45=(a19*a13);
+  a46=(a45*a16);
+  a47=(a19*a12);
+  a48=(a47*a15);
+  a46=(a46-a48);
+  a46=(a01*a46);
+  a48=(a01*a47);
+  a46=(a46-a48);
+  a39=(2*a39);
+  a44=(a44*a37);
+  a39=(a39-a44);
+  a39=(a39/a41);
+  a44=(a46*a39);
+  a27=(a27+a44);
+  a02=qd_sin(a02);
+  a44=(a02*a04);
+  a48=(a44*a08);
+  a49=(a02*a05);
+  a50=(a49*a09);
+  a48=(a48-a50);
+  a48=(a01*a48);
+  a50=(a01*a49);
+  a48=(a48-a50);
+  a50=(a48*a38);
+  a27=(a27+a50);
+  a50=(a26*a27);
+  a25=(a25-a50);
+  a50=(a07-a18);
+  a51=arg[1]? arg[1][4] : 0;
+  a52=(a35+a46);
+  a52=(a52+a48);
+  a52=(a52*a43);
+  a51=(a51-a52);
+  a52=(a50*a51);
+  a25=(a25+a52);
+  a52=(a07*a10);
+  a53=(a00*a22);
+  a52=(a52-a53);
+  a17=(a17-a52);
+  a53=(a18*a10);
+  a54=(a00*a14);
+  a53=(a53-a54);
+  a17=(a17+a53);
+  a25=(a25/a17);
+  if (res[0]!=0) res[0][0]=a25;
+  a54=(a10-a22);
+  a55=(a54*a27);
+  a52=(a52*a24);
+  a55=(a55-a52);
+  a52=(a07-a00);
+  a56=(a52*a51);
+  a55=(a55-a56);
+  a55=(a55/a17);
+  if (res[0]!=0) res[0][1]=a55;
+  a53=(a53*a24);
+  a56=(a10-a14);
+  a57=(a56*a27);
+  a53=(a53-a57);
+  a57=(a18-a00);
+  a58=(a57*a51);
+  a53=(a53+a58);
+  a53=(a53/a17);
+  if (res[0]!=0) res[0][2]=a53;
+  if (res[0]!=0) res[0][3]=a43;
+  if (res[0]!=0) res[0][4]=a39;
+  if (res[0]!=0) res[0][5]=a38;
+  a58=arg[2]? arg[2][10] : 0;
+  a59=(a12*a58);
+  a60=(a01*a59);
+  a61=arg[2]? arg[2][11] : 0;
+  a62=(a15*a61);
+  a63=(a12*a62);
+  a58=(a13*a58);
+  a64=(a16*a58);
+  a63=(a63-a64);
+  a64=(a15*a59);
+  a61=(a16*a61);
+  a65=(a13*a61);
+  a64=(a64-a65);
+  a63=(a63+a64);
+  a63=(a01*a63);
+  a60=(a60+a63);
+  a63=(a07*a60);
+  a64=arg[2]? arg[2][12] : 0;
+  a65=(a02*a64);
+  a66=(a05*a65);
+  a67=arg[2]? arg[2][13] : 0;
+  a68=(a04*a67);
+  a69=(a03*a68);
+  a66=(a66+a69);
+  a69=(a01*a66);
+  a66=(a09*a66);
+  a70=arg[2]? arg[2][14] : 0;
+  a71=(a08*a70);
+  a06=(a06*a71);
+  a66=(a66+a06);
+  a67=(a05*a67);
+  a06=(a03*a67);
+  a65=(a04*a65);
+  a06=(a06-a65);
+  a06=(a08*a06);
+  a70=(a09*a70);
+  a11=(a11*a70);
+  a06=(a06+a11);
+  a66=(a66+a06);
+  a66=(a01*a66);
+  a69=(a69+a66);
+  a66=(a14*a69);
+  a63=(a63-a66);
+  a66=(a01*a67);
+  a06=(a05*a70);
+  a11=(a08*a68);
+  a06=(a06-a11);
+  a11=(a09*a67);
+  a65=(a04*a71);
+  a11=(a11-a65);
+  a06=(a06+a11);
+  a06=(a01*a06);
+  a66=(a66+a06);
+  a06=(a18*a66);
+  a11=arg[2]? arg[2][9] : 0;
+  a65=(a19*a11);
+  a72=(a12*a65);
+  a73=(a20*a58);
+  a72=(a72+a73);
+  a73=(a01*a72);
+  a72=(a15*a72);
+  a21=(a21*a61);
+  a72=(a72+a21);
+  a21=(a20*a59);
+  a65=(a13*a65);
+  a21=(a21-a65);
+  a21=(a16*a21);
+  a23=(a23*a62);
+  a21=(a21+a23);
+  a72=(a72+a21);
+  a72=(a01*a72);
+  a73=(a73+a72);
+  a72=(a22*a73);
+  a06=(a06-a72);
+  a63=(a63-a06);
+  a06=(a24*a63);
+  a72=(a60-a66);
+  a72=(a27*a72);
+  a21=arg[2]? arg[2][6] : 0;
+  a23=(a28*a21);
+  a65=(a31*a23);
+  a74=arg[2]? arg[2][7] : 0;
+  a75=(a30*a74);
+  a76=(a29*a75);
+  a65=(a65+a76);
+  a65=(a34*a65);
+  a76=arg[2]? arg[2][8] : 0;
+  a77=(a33*a76);
+  a32=(a32*a77);
+  a65=(a65+a32);
+  a23=(a30*a23);
+  a74=(a31*a74);
+  a32=(a29*a74);
+  a23=(a23-a32);
+  a32=(a33*a23);
+  a76=(a34*a76);
+  a36=(a36*a76);
+  a32=(a32-a36);
+  a65=(a65-a32);
+  a65=(a01*a65);
+  a23=(a01*a23);
+  a65=(a65-a23);
+  a23=(a38*a65);
+  a32=(a37*a60);
+  a29=(a29*a21);
+  a21=(a30*a29);
+  a36=(a28*a74);
+  a21=(a21+a36);
+  a36=(a01*a21);
+  a21=(a33*a21);
+  a40=(a40*a76);
+  a21=(a21+a40);
+  a28=(a28*a75);
+  a29=(a31*a29);
+  a28=(a28-a29);
+  a28=(a34*a28);
+  a42=(a42*a77);
+  a28=(a28+a42);
+  a21=(a21+a28);
+  a21=(a01*a21);
+  a36=(a36+a21);
+  a21=(a36+a73);
+  a21=(a21+a69);
+  a21=(a43*a21);
+  a32=(a32+a21);
+  a32=(a32/a41);
+  a28=(a38/a41);
+  a42=(2*a60);
+  a29=(a01*a75);
+  a30=(a30*a77);
+  a34=(a34*a74);
+  a30=(a30-a34);
+  a33=(a33*a75);
+  a31=(a31*a76);
+  a33=(a33-a31);
+  a30=(a30+a33);
+  a30=(a01*a30);
+  a29=(a29+a30);
+  a30=(a29+a66);
+  a42=(a42-a30);
+  a28=(a28*a42);
+  a32=(a32-a28);
+  a35=(a35*a32);
+  a23=(a23+a35);
+  a20=(a20*a11);
+  a13=(a13*a20);
+  a59=(a19*a59);
+  a13=(a13+a59);
+  a16=(a16*a13);
+  a45=(a45*a62);
+  a16=(a16+a45);
+  a12=(a12*a20);
+  a19=(a19*a58);
+  a12=(a12-a19);
+  a15=(a15*a12);
+  a47=(a47*a61);
+  a15=(a15-a47);
+  a16=(a16-a15);
+  a16=(a01*a16);
+  a12=(a01*a12);
+  a16=(a16-a12);
+  a12=(a39*a16);
+  a21=(-a21);
+  a21=(2*a21);
+  a37=(a37*a30);
+  a21=(a21-a37);
+  a21=(a21/a41);
+  a39=(a39/a41);
+  a39=(a39*a42);
+  a21=(a21-a39);
+  a46=(a46*a21);
+  a12=(a12+a46);
+  a23=(a23+a12);
+  a03=(a03*a64);
+  a04=(a04*a03);
+  a67=(a02*a67);
+  a04=(a04+a67);
+  a08=(a08*a04);
+  a44=(a44*a70);
+  a08=(a08+a44);
+  a05=(a05*a03);
+  a02=(a02*a68);
+  a05=(a05-a02);
+  a09=(a09*a05);
+  a49=(a49*a71);
+  a09=(a09-a49);
+  a08=(a08-a09);
+  a08=(a01*a08);
+  a01=(a01*a05);
+  a08=(a08-a01);
+  a38=(a38*a08);
+  a48=(a48*a32);
+  a38=(a38+a48);
+  a23=(a23+a38);
+  a26=(a26*a23);
+  a72=(a72+a26);
+  a06=(a06-a72);
+  a72=(a73-a69);
+  a72=(a51*a72);
+  a65=(a65+a16);
+  a65=(a65+a08);
+  a43=(a43*a65);
+  a50=(a50*a43);
+  a72=(a72-a50);
+  a06=(a06+a72);
+  a06=(a06/a17);
+  a25=(a25/a17);
+  a07=(a07*a29);
+  a72=(a10*a69);
+  a07=(a07-a72);
+  a72=(a00*a66);
+  a22=(a22*a36);
+  a72=(a72-a22);
+  a07=(a07-a72);
+  a63=(a63-a07);
+  a18=(a18*a29);
+  a10=(a10*a73);
+  a18=(a18-a10);
+  a00=(a00*a60);
+  a14=(a14*a36);
+  a00=(a00-a14);
+  a18=(a18-a00);
+  a63=(a63+a18);
+  a25=(a25*a63);
+  a06=(a06-a25);
+  if (res[1]!=0) res[1][0]=a06;
+  a66=(a29-a66);
+  a66=(a27*a66);
+  a54=(a54*a23);
+  a66=(a66+a54);
+  a07=(a24*a07);
+  a66=(a66-a07);
+  a69=(a36-a69);
+  a69=(a51*a69);
+  a52=(a52*a43);
+  a69=(a69-a52);
+  a66=(a66-a69);
+  a66=(a66/a17);
+  a55=(a55/a17);
+  a55=(a55*a63);
+  a66=(a66-a55);
+  if (res[1]!=0) res[1][1]=a66;
+  a24=(a24*a18);
+  a29=(a29-a60);
+  a27=(a27*a29);
+  a56=(a56*a23);
+  a27=(a27+a56);
+  a24=(a24-a27);
+  a36=(a36-a73);
+  a51=(a51*a36);
+  a57=(a57*a43);
+  a51=(a51-a57);
+  a24=(a24+a51);
+  a24=(a24/a17);
+  a53=(a53/a17);
+  a53=(a53*a63);
+  a24=(a24-a53);
+  if (res[1]!=0) res[1][2]=a24;
+  a24=0.;
+  if (res[1]!=0) res[1][3]=a24;
+  if (res[1]!=0) res[1][4]=a21;
+  if (res[1]!=0) res[1][5]=a32;
+  return 0;
+}
+
+CASADI_SYMBOL_EXPORT int qd_dgrf_dir_FL_FR_BL(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem){
+  return qd_d_finite(casadi_f5(arg, res, iw, w, mem), res, 2, (const casadi_int[]){6, 6});
+}
+
+CASADI_SYMBOL_EXPORT int qd_dgrf_dir_FL_FR_BL_checkout(void) {
+  return 0;
+}
+
+CASADI_SYMBOL_EXPORT void qd_dgrf_dir_FL_FR_BL_release(int mem) {
+  (void)mem;
+}
+
+CASADI_SYMBOL_EXPORT void qd_dgrf_dir_FL_FR_BL_incref(void) {
+}
+
+CASADI_SYMBOL_EXPORT void qd_dgrf_dir_FL_FR_BL_decref(void) {
+}
+
+CASADI_SYMBOL_EXPORT casadi_int qd_dgrf_dir_FL_FR_BL_n_in(void) { return 3;}
+
+CASADI_SYMBOL_EXPORT casadi_int qd_dgrf_dir_FL_FR_BL_n_out(void) { return 2;}
+
+CASADI_SYMBOL_EXPORT casadi_real qd_dgrf_dir_FL_FR_BL_default_in(casadi_int i) {
+  switch (i) {
+    default: return 0;
+  }
+}
+
+CASADI_SYMBOL_EXPORT const char* qd_dgrf_dir_FL_FR_BL_name_in(casadi_int i) {
+  switch (i) {
+    case 0: return "q";
+    case 1: return "w";
+    case 2: return "dq";
+    default: return 0;
+  }
+}
+
+CASADI_SYMBOL_EXPORT const char* qd_dgrf_dir_FL_FR_BL_name_out(casadi_int i) {
+  switch (i) {
+    case 0: return "lambda_w";
+    case 1: return "dlambda_w";
+    default: return 0;
+  }
+}
+
+CASADI_SYMBOL_EXPORT const casadi_int* qd_dgrf_dir_FL_FR_BL_sparsity_in(casadi_int i) {
+  switch (i) {
+    case 0: return casadi_s0;
+    case 1: return casadi_s6;
+    case 2: return casadi_s1;
+    default: return 0;
+  }
+}
+
+CASADI_SYMBOL_EXPORT const casadi_int* qd_dgrf_dir_FL_FR_BL_sparsity_out(casadi_int i) {
+  switch (i) {
+    case 0: return casadi_s6;
+    case 1: return casadi_s6;
+    default: return 0;
+  }
+}
+
+CASADI_SYMBOL_EXPORT int qd_dgrf_dir_FL_FR_BL_work(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz_iw, casadi_int *sz_w) {
+  if (sz_arg) *sz_arg = 3;
+  if (sz_res) *sz_res = 2;
+  if (sz_iw) *sz_iw = 0;
+  if (sz_w) *sz_w = 0;
+  return 0;
+}
+
+CASADI_SYMBOL_EXPORT int qd_dgrf_dir_FL_FR_BL_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz_iw, casadi_int *sz_w) {
+  if (sz_arg) *sz_arg = 3*sizeof(const casadi_real*);
+  if (sz_res) *sz_res = 2*sizeof(casadi_real*);
+  if (sz_iw) *sz_iw = 0*sizeof(casadi_int);
+  if (sz_w) *sz_w = 0*sizeof(casadi_real);
+  return 0;
+}
+
+/* qd_dgrf_FL_FR_BL:(q[19],v[18],a[18])->(dlambda_dq[6x18],dlambda_dv[6x18],dlambda_da[6x18]) */
+static int casadi_f6(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem) {
+  (void)arg; (void)res; (void)iw; (void)w; (void)mem;
+  casadi_real a0, a1, a2;
+  a0=arg[0]? arg[0][0] : 0;
+  a1=arg[0]? arg[0][1] : 0;
+  a0=(a0+a1);
+  a1=arg[0]? arg[0][2] : 0;
+  a0=(a0+a1);
+  a1=arg[0]? arg[0][3] : 0;
+  a0=(a0+a1);
+  a1=arg[0]? arg[0][4] : 0;
+  a0=(a0+a1);
+  a1=arg[0]? arg[0][5] : 0;
+  a0=(a0+a1);
+  a1=arg[0]? arg[0][6] : 0;
+  a0=(a0+a1);
+  a1=arg[0]? arg[0][7] : 0;
+  a0=(a0+a1);
+  a1=arg[0]? arg[0][8] : 0;
+  a0=(a0+a1);
+  a1=arg[0]? arg[0][9] : 0;
+  a0=(a0+a1);
+  a1=arg[0]? arg[0][10] : 0;
+  a0=(a0+a1);
+  a1=arg[0]? arg[0][11] : 0;
+  a0=(a0+a1);
+  a1=arg[0]? arg[0][12] : 0;
+  a0=(a0+a1);
+  a1=arg[0]? arg[0][13] : 0;
+  a0=(a0+a1);
+  a1=arg[0]? arg[0][14] : 0;
+  a0=(a0+a1);
+  a1=arg[0]? arg[0][15] : 0;
+  a0=(a0+a1);
+  a1=arg[0]? arg[0][16] : 0;
+  a0=(a0+a1);
+  a1=arg[0]? arg[0][17] : 0;
+  a0=(a0+a1);
+  a1=arg[0]? arg[0][18] : 0;
+  a0=(a0+a1);
+  a1=arg[1]? arg[1][0] : 0;
+  a2=arg[1]? arg[1][1] : 0;
+  a1=(a1+a2);
+  a2=arg[1]? arg[1][2] : 0;
+  a1=(a1+a2);
+  a2=arg[1]? arg[1][3] : 0;
+  a1=(a1+a2);
+  a2=arg[1]? arg[1][4] : 0;
+  a1=(a1+a2);
+  a2=arg[1]? arg[1][5] : 0;
+  a1=(a1+a2);
+  a2=arg[1]? arg[1][6] : 0;
+  a1=(a1+a2);
+  a2=arg[1]? arg[1][7] : 0;
+  a1=(a1+a2);
+  a2=arg[1]? arg[1][8] : 0;
+  a1=(a1+a2);
+  a2=arg[1]? arg[1][9] : 0;
+  a1=(a1+a2);
+  a2=arg[1]? arg[1][10] : 0;
+  a1=(a1+a2);
+  a2=arg[1]? arg[1][11] : 0;
+  a1=(a1+a2);
+  a2=arg[1]? arg[1][12] : 0;
+  a1=(a1+a2);
+  a2=arg[1]? arg[1][13] : 0;
+  a1=(a1+a2);
+  a2=arg[1]? arg[1][14] : 0;
+  a1=(a1+a2);
+  a2=arg[1]? arg[1][15] : 0;
+  a1=(a1+a2);
+  a2=arg[1]? arg[1][16] : 0;
+  a1=(a1+a2);
+  a2=arg[1]? arg[1][17] : 0;
+  a1=(a1+a2);
+  a0=(a0+a1);
+  a1=arg[2]? arg[2][0] : 0;
+  a2=arg[2]? arg[2][1] : 0;
+  a1=(a1+a2);
+  a2=arg[2]? arg[2][2] : 0;
+  a1=(a1+a2);
+  a2=arg[2]? arg[2][3] : 0;
+  a1=(a1+a2);
+  a2=arg[2]? arg[2][4] : 0;
+  a1=(a1+a2);
+  a2=arg[2]? arg[2][5] : 0;
+  a1=(a1+a2);
+  a2=arg[2]? arg[2][6] : 0;
+  a1=(a1+a2);
+  a2=arg[2]? arg[2][7] : 0;
+  a1=(a1+a2);
+  a2=arg[2]? arg[2][8] : 0;
+  a1=(a1+a2);
+  a2=arg[2]? arg[2][9] : 0;
+  a1=(a1+a2);
+  a2=arg[2]? arg[2][10] : 0;
+  a1=(a1+a2);
+  a2=arg[2]? arg[2][11] : 0;
+  a1=(a1+a2);
+  a2=arg[2]? arg[2][12] : 0;
+  a1=(a1+a2);
+  a2=arg[2]? arg[2][13] : 0;
+  a1=(a1+a2);
+  a2=arg[2]? arg[2][14] : 0;
+  a1=(a1+a2);
+  a2=arg[2]? arg[2][15] : 0;
+  a1=(a1+a2);
+  a2=arg[2]? arg[2][16] : 0;
+  a1=(a1+a2);
+  a2=arg[2]? arg[2][17] : 0;
+  a1=(a1+a2);
+  a0=(a0+a1);
+  if (res[0]!=0) res[0][0]=a0;
+  if (res[0]!=0) res[0][1]=a0;
+  if (res[0]!=0) res[0][2]=a0;
+  if (res[0]!=0) res[0][3]=a0;
+  if (res[0]!=0) res[0][4]=a0;
+  if (res[0]!=0) res[0][5]=a0;
+  if (res[0]!=0) res[0][6]=a0;
+  if (res[0]!=0) res[0][7]=a0;
+  if (res[0]!=0) res[0][8]=a0;
+  if (res[0]!=0) res[0][9]=a0;
+  if (res[0]!=0) res[0][10]=a0;
+  if (res[0]!=0) res[0][11]=a0;
+  if (res[0]!=0) res[0][12]=a0;
+  if (res[0]!=0) res[0][13]=a0;
+  if (res[0]!=0) res[0][14]=a0;
+  if (res[0]!=0) res[0][15]=a0;
+  if (res[0]!=0) res[0][16]=a0;
+  if (res[0]!=0) res[0][17]=a0;
+  if (res[0]!=0) res[0][18]=a0;
+  if (res[0]!=0) res[0][19]=a0;
+  if (res[0]!=0) res[0][20]=a0;
+  if (res[0]!=0) res[0][21]=a0;
+  if (res[0]!=0) res[0][22]=a0;
+  if (res[0]!=0) res[0][23]=a0;
+  if (res[0]!=0) res[0][24]=a0;
+  if (res[0]!=0) res[0][25]=a0;
+  if (res[0]!=0) res[0][26]=a0;
+  if (res[0]!=0) res[0][27]=a0;
+  if (res[0]!=0) res[0][28]=a0;
+  if (res[0]!=0) res[0][29]=a0;
+  if (res[0]!=0) res[0][30]=a0;
+  if (res[0]!=0) res[0][31]=a0;
+  if (res[0]!=0) res[0][32]=a0;
+  if (res[0]!=0) res[0][33]=a0;
+  if (res[0]!=0) res[0][34]=a0;
+  if (res[0]!=0) res[0][35]=a0;
+  if (res[0]!=0) res[0][36]=a0;
+  if (res[0]!=0) res[0][37]=a0;
+  if (res[0]!=0) res[0][38]=a0;
+  if (res[0]!=0) res[0][39]=a0;
+  if (res[0]!=0) res[0][40]=a0;
+  if (res[0]!=0) res[0][41]=a0;
+  if (res[0]!=0) res[0][42]=a0;
+  if (res[0]!=0) res[0][43]=a0;
+  if (res[0]!=0) res[0][44]=a0;
+  if (res[0]!=0) res[0][45]=a0;
+  if (res[0]!=0) res[0][46]=a0;
+  if (res[0]!=0) res[0][47]=a0;
+  if (res[0]!=0) res[0][48]=a0;
+  if (res[0]!=0) res[0][49]=a0;
+  if (res[0]!=0) res[0][50]=a0;
+  if (res[0]!=0) res[0][51]=a0;
+  if (res[0]!=0) res[0][52]=a0;
+  if (res[0]!=0) res[0][53]=a0;
+  if (res[0]!=0) res[0][54]=a0;
+  if (res[0]!=0) res[0][55]=a0;
+  if (res[0]!=0) res[0][56]=a0;
+  if (res[0]!=0) res[0][57]=a0;
+  if (res[0]!=0) res[0][58]=a0;
+  if (res[0]!=0) res[0][59]=a0;
+  if (res[0]!=0) res[0][60]=a0;
+  if (res[0]!=0) res[0][61]=a0;
+  if (res[0]!=0) res[0][62]=a0;
+  if (res[0]!=0) res[0][63]=a0;
+  if (res[0]!=0) res[0][64]=a0;
+  if (res[0]!=0) res[0][65]=a0;
+  if (res[0]!=0) res[0][66]=a0;
+  if (res[0]!=0) res[0][67]=a0;
+  if (res[0]!=0) res[0][68]=a0;
+  if (res[0]!=0) res[0][69]=a0;
+  if (res[0]!=0) res[0][70]=a0;
+  if (res[0]!=0) res[0][71]=a0;
+  if (res[0]!=0) res[0][72]=a0;
+  if (res[0]!=0) res[0][73]=a0;
+  if (res[0]!=0) res[0][74]=a0;
+  if (res[0]!=0) res[0][75]=a0;
+  if (res[0]!=0) res[0][76]=a0;
+  if (res[0]!=0) res[0][77]=a0;
+  if (res[0]!=0) res[0][78]=a0;
+  if (res[0]!=0) res[0][79]=a0;
+  if (res[0]!=0) res[0][80]=a0;
+  if (res[0]!=0) res[0][81]=a0;
+  if (res[0]!=0) res[0][82]=a0;
+  if (res[0]!=0) res[0][83]=a0;
+  if (res[0]!=0) res[0][84]=a0;
+  if (res[0]!=0) res[0][85]=a0;
+  if (res[0]!=0) res[0][86]=a0;
+  if (res[0]!=0) res[0][87]=a0;
+  if (res[0]!=0) res[0][88]=a0;
+  if (res[0]!=0) res[0][89]=a0;
+  if (res[0]!=0) res[0][90]=a0;
+  if (res[0]!=0) res[0][91]=a0;
+  if (res[0]!=0) res[0][92]=a0;
+  if (res[0]!=0) res[0][93]=a0;
+  if (res[0]!=0) res[0][94]=a0;
+  if (res[0]!=0) res[0][95]=a0;
+  if (res[0]!=0) res[0][96]=a0;
+  if (res[0]!=0) res[0][97]=a0;
+  if (res[0]!=0) res[0][98]=a0;
+  if (res[0]!=0) res[0][99]=a0;
+  if (res[0]!=0) res[0][100]=a0;
+  if (res[0]!=0) res[0][101]=a0;
+  if (res[0]!=0) res[0][102]=a0;
+  if (res[0]!=0) res[0][103]=a0;
+  if (res[0]!=0) res[0][104]=a0;
+  if (res[0]!=0) res[0][105]=a0;
+  if (res[0]!=0) res[0][106]=a0;
+  if (res[0]!=0) res[0][107]=a0;
+  if (res[1]!=0) res[1][0]=a0;
+  if (res[1]!=0) res[1][1]=a0;
+  if (res[1]!=0) res[1][2]=a0;
+  if (res[1]!=0) res[1][3]=a0;
+  if (res[1]!=0) res[1][4]=a0;
+  if (res[1]!=0) res[1][5]=a0;
+  if (res[1]!=0) res[1][6]=a0;
+  if (res[1]!=0) res[1][7]=a0;
+  if (res[1]!=0) res[1][8]=a0;
+  if (res[1]!=0) res[1][9]=a0;
+  if (res[1]!=0) res[1][10]=a0;
+  if (res[1]!=0) res[1][11]=a0;
+  if (res[1]!=0) res[1][12]=a0;
+  if (res[1]!=0) res[1][13]=a0;
+  if (res[1]!=0) res[1][14]=a0;
+  if (res[1]!=0) res[1][15]=a0;
+  if (res[1]!=0) res[1][16]=a0;
+  if (res[1]!=0) res[1][17]=a0;
+  if (res[1]!=0) res[1][18]=a0;
+  if (res[1]!=0) res[1][19]=a0;
+  if (res[1]!=0) res[1][20]=a0;
+  if (res[1]!=0) res[1][21]=a0;
+  if (res[1]!=0) res[1][22]=a0;
+  if (res[1]!=0) res[1][23]=a0;
+  if (res[1]!=0) res[1][24]=a0;
+  if (res[1]!=0) res[1][25]=a0;
+  if (res[1]!=0) res[1][26]=a0;
+  if (res[1]!=0) res[1][27]=a0;
+  if (res[1]!=0) res[1][28]=a0;
+  if (res[1]!=0) res[1][29]=a0;
+  if (res[1]!=0) res[1][30]=a0;
+  if (res[1]!=0) res[1][31]=a0;
+  if (res[1]!=0) res[1][32]=a0;
+  if (res[1]!=0) res[1][33]=a0;
+  if (res[1]!=0) res[1][34]=a0;
+  if (res[1]!=0) res[1][35]=a0;
+  if (res[1]!=0) res[1][36]=a0;
+  if (res[1]!=0) res[1][37]=a0;
+  if (res[1]!=0) res[1][38]=a0;
+  if (res[1]!=0) res[1][39]=a0;
+  if (res[1]!=0) res[1][40]=a0;
+  if (res[1]!=0) res[1][41]=a0;
+  if (res[1]!=0) res[1][42]=a0;
+  if (res[1]!=0) res[1][43]=a0;
+  if (res[1]!=0) res[1][44]=a0;
+  if (res[1]!=0) res[1][45]=a0;
+  if (res[1]!=0) res[1][46]=a0;
+  if (res[1]!=0) res[1][47]=a0;
+  if (res[1]!=0) res[1][48]=a0;
+  if (res[1]!=0) res[1][49]=a0;
+  if (res[1]!=0) res[1][50]=a0;
+  if (res[1]!=0) res[1][51]=a0;
+  if (res[1]!=0) res[1][52]=a0;
+  if (res[1]!=0) res[1][53]=a0;
+  if (res[1]!=0) res[1][54]=a0;
+  if (res[1]!=0) res[1][55]=a0;
+  if (res[1]!=0) res[1][56]=a0;
+  if (res[1]!=0) res[1][57]=a0;
+  if (res[1]!=0) res[1][58]=a0;
+  if (res[1]!=0) res[1][59]=a0;
+  if (res[1]!=0) res[1][60]=a0;
+  if (res[1]!=0) res[1][61]=a0;
+  if (res[1]!=0) res[1][62]=a0;
+  if (res[1]!=0) res[1][63]=a0;
+  if (res[1]!=0) res[1][64]=a0;
+  if (res[1]!=0) res[1][65]=a0;
+  if (res[1]!=0) res[1][66]=a0;
+  if (res[1]!=0) res[1][67]=a0;
+  if (res[1]!=0) res[1][68]=a0;
+  if (res[1]!=0) res[1][69]=a0;
+  if (res[1]!=0) res[1][70]=a0;
+  if (res[1]!=0) res[1][71]=a0;
+  if (res[1]!=0) res[1][72]=a0;
+  if (res[1]!=0) res[1][73]=a0;
+  if (res[1]!=0) res[1][74]=a0;
+  if (res[1]!=0) res[1][75]=a0;
+  if (res[1]!=0) res[1][76]=a0;
+  if (res[1]!=0) res[1][77]=a0;
+  if (res[1]!=0) res[1][78]=a0;
+  if (res[1]!=0) res[1][79]=a0;
+  if (res[1]!=0) res[1][80]=a0;
+  if (res[1]!=0) res[1][81]=a0;
+  if (res[1]!=0) res[1][82]=a0;
+  if (res[1]!=0) res[1][83]=a0;
+  if (res[1]!=0) res[1][84]=a0;
+  if (res[1]!=0) res[1][85]=a0;
+  if (res[1]!=0) res[1][86]=a0;
+  if (res[1]!=0) res[1][87]=a0;
+  if (res[1]!=0) res[1][88]=a0;
+  if (res[1]!=0) res[1][89]=a0;
+  if (res[1]!=0) res[1][90]=a0;
+  if (res[1]!=0) res[1][91]=a0;
+  if (res[1]!=0) res[1][92]=a0;
+  if (res[1]!=0) res[1][93]=a0;
+  if (res[1]!=0) res[1][94]=a0;
+  if (res[1]!=0) res[1][95]=a0;
+  if (res[1]!=0) res[1][96]=a0;
+  if (res[1]!=0) res[1][97]=a0;
+  if (res[1]!=0) res[1][98]=a0;
+  if (res[1]!=0) res[1][99]=a0;
+  if (res[1]!=0) res[1][100]=a0;
+  if (res[1]!=0) res[1][101]=a0;
+  if (res[1]!=0) res[1][102]=a0;
+  if (res[1]!=0) res[1][103]=a0;
+  if (res[1]!=0) res[1][104]=a0;
+  if (res[1]!=0) res[1][105]=a0;
+  if (res[1]!=0) res[1][106]=a0;
+  if (res[1]!=0) res[1][107]=a0;
+  if (res[2]!=0) res[2][0]=a0;
+  if (res[2]!=0) res[2][1]=a0;
+  if (res[2]!=0) res[2][2]=a0;
+  if (res[2]!=0) res[2][3]=a0;
+  if (res[2]!=0) res[2][4]=a0;
+  if (res[2]!=0) res[2][5]=a0;
+  if (res[2]!=0) res[2][6]=a0;
+  if (res[2]!=0) res[2][7]=a0;
+  if (res[2]!=0) res[2][8]=a0;
+  if (res[2]!=0) res[2][9]=a0;
+  if (res[2]!=0) res[2][10]=a0;
+  if (res[2]!=0) res[2][11]=a0;
+  if (res[2]!=0) res[2][12]=a0;
+  if (res[2]!=0) res[2][13]=a0;
+  if (res[2]!=0) res[2][14]=a0;
+  if (res[2]!=0) res[2][15]=a0;
+  if (res[2]!=0) res[2][16]=a0;
+  if (res[2]!=0) res[2][17]=a0;
+  if (res[2]!=0) res[2][18]=a0;
+  if (res[2]!=0) res[2][19]=a0;
+  if (res[2]!=0) res[2][20]=a0;
+  if (res[2]!=0) res[2][21]=a0;
+  if (res[2]!=0) res[2][22]=a0;
+  if (res[2]!=0) res[2][23]=a0;
+  if (res[2]!=0) res[2][24]=a0;
+  if (res[2]!=0) res[2][25]=a0;
+  if (res[2]!=0) res[2][26]=a0;
+  if (res[2]!=0) res[2][27]=a0;
+  if (res[2]!=0) res[2][28]=a0;
+  if (res[2]!=0) res[2][29]=a0;
+  if (res[2]!=0) res[2][30]=a0;
+  if (res[2]!=0) res[2][31]=a0;
+  if (res[2]!=0) res[2][32]=a0;
+  if (res[2]!=0) res[2][33]=a0;
+  if (res[2]!=0) res[2][34]=a0;
+  if (res[2]!=0) res[2][35]=a0;
+  if (res[2]!=0) res[2][36]=a0;
+  if (res[2]!=0) res[2][37]=a0;
+  if (res[2]!=0) res[2][38]=a0;
+  if (res[2]!=0) res[2][39]=a0;
+  if (res[2]!=0) res[2][40]=a0;
+  if (res[2]!=0) res[2][41]=a0;
+  if (res[2]!=0) res[2][42]=a0;
+  if (res[2]!=0) res[2][43]=a0;
+  if (res[2]!=0) res[2][44]=a0;
+  if (res[2]!=0) res[2][45]=a0;
+  if (res[2]!=0) res[2][46]=a0;
+  if (res[2]!=0) res[2][47]=a0;
+  if (res[2]!=0) res[2][48]=a0;
+  if (res[2]!=0) res[2][49]=a0;
+  if (res[2]!=0) res[2][50]=a0;
+  if (res[2]!=0) res[2][51]=a0;
+  if (res[2]!=0) res[2][52]=a0;
+  if (res[2]!=0) res[2][53]=a0;
+  if (res[2]!=0) res[2][54]=a0;
+  if (res[2]!=0) res[2][55]=a0;
+  if (res[2]!=0) res[2][56]=a0;
+  if (res[2]!=0) res[2][57]=a0;
+  if (res[2]!=0) res[2][58]=a0;
+  if (res[2]!=0) res[2][59]=a0;
+  if (res[2]!=0) res[2][60]=a0;
+  if (res[2]!=0) res[2][61]=a0;
+  if (res[2]!=0) res[2][62]=a0;
+  if (res[2]!=0) res[2][63]=a0;
+  if (res[2]!=0) res[2][64]=a0;
+  if (res[2]!=0) res[2][65]=a0;
+  if (res[2]!=0) res[2][66]=a0;
+  if (res[2]!=0) res[2][67]=a0;
+  if (res[2]!=0) res[2][68]=a0;
+  if (res[2]!=0) res[2][69]=a0;
+  if (res[2]!=0) res[2][70]=a0;
+  if (res[2]!=0) res[2][71]=a0;
+  if (res[2]!=0) res[2][72]=a0;
+  if (res[2]!=0) res[2][73]=a0;
+  if (res[2]!=0) res[2][74]=a0;
+  if (res[2]!=0) res[2][75]=a0;
+  if (res[2]!=0) res[2][76]=a0;
+  if (res[2]!=0) res[2][77]=a0;
+  if (res[2]!=0) res[2][78]=a0;
+  if (res[2]!=0) res[2][79]=a0;
+  if (res[2]!=0) res[2][80]=a0;
+  if (res[2]!=0) res[2][81]=a0;
+  if (res[2]!=0) res[2][82]=a0;
+  if (res[2]!=0) res[2][83]=a0;
+  if (res[2]!=0) res[2][84]=a0;
+  if (res[2]!=0) res[2][85]=a0;
+  if (res[2]!=0) res[2][86]=a0;
+  if (res[2]!=0) res[2][87]=a0;
+  if (res[2]!=0) res[2][88]=a0;
+  if (res[2]!=0) res[2][89]=a0;
+  if (res[2]!=0) res[2][90]=a0;
+  if (res[2]!=0) res[2][91]=a0;
+  if (res[2]!=0) res[2][92]=a0;
+  if (res[2]!=0) res[2][93]=a0;
+  if (res[2]!=0) res[2][94]=a0;
+  if (res[2]!=0) res[2][95]=a0;
+  if (res[2]!=0) res[2][96]=a0;
+  if (res[2]!=0) res[2][97]=a0;
+  if (res[2]!=0) res[2][98]=a0;
+  if (res[2]!=0) res[2][99]=a0;
+  if (res[2]!=0) res[2][100]=a0;
+  if (res[2]!=0) res[2][101]=a0;
+  if (res[2]!=0) res[2][102]=a0;
+  if (res[2]!=0) res[2][103]=a0;
+  if (res[2]!=0) res[2][104]=a0;
+  if (res[2]!=0) res[2][105]=a0;
+  if (res[2]!=0) res[2][106]=a0;
+  if (res[2]!=0) res[2][107]=a0;
+  return 0;
+}
+
+CASADI_SYMBOL_EXPORT int qd_dgrf_FL_FR_BL(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem){
+  (void)casadi_f6;
+  return qd_dgrf_solve(6, 7, casadi_f1, casadi_f0, casadi_f5, qd_did_full_sparsity_out(0), qd_did_full_sparsity_out(1), arg, res, iw, w, mem);
+}
+
+CASADI_SYMBOL_EXPORT int qd_dgrf_FL_FR_BL_checkout(void) {
+  return 0;
+}
+
+CASADI_SYMBOL_EXPORT void qd_dgrf_FL_FR_BL_release(int mem) {
+  (void)mem;
+}
+
+CASADI_SYMBOL_EXPORT void qd_dgrf_FL_FR_BL_incref(void) {
+}
+
+CASADI_SYMBOL_EXPORT void qd_dgrf_FL_FR_BL_decref(void) {
+}
+
+CASADI_SYMBOL_EXPORT casadi_int qd_dgrf_FL_FR_BL_n_in(void) { return 3;}
+
+CASADI_SYMBOL_EXPORT casadi_int qd_dgrf_FL_FR_BL_n_out(void) { return 3;}
+
+CASADI_SYMBOL_EXPORT casadi_real qd_dgrf_FL_FR_BL_default_in(casadi_int i) {
+  switch (i) {
+    default: return 0;
+  }
+}
+
+CASADI_SYMBOL_EXPORT const char* qd_dgrf_FL_FR_BL_name_in(casadi_int i) {
+  switch (i) {
+    case 0: return "q";
+    case 1: return "v";
+    case 2: return "a";
+    default: return 0;
+  }
+}
+
+CASADI_SYMBOL_EXPORT const char* qd_dgrf_FL_FR_BL_name_out(casadi_int i) {
+  switch (i) {
+    case 0: return "dlambda_dq";
+    case 1: return "dlambda_dv";
+    case 2: return "dlambda_da";
+    default: return 0;
+  }
+}
+
+CASADI_SYMBOL_EXPORT const casadi_int* qd_dgrf_FL_FR_BL_sparsity_in(casadi_int i) {
+  switch (i) {
+    case 0: return casadi_s0;
+    case 1: return casadi_s1;
+    case 2: return casadi_s1;
+    default: return 0;
+  }
+}
+
+CASADI_SYMBOL_EXPORT const casadi_int* qd_dgrf_FL_FR_BL_sparsity_out(casadi_int i) {
+  switch (i) {
+    case 0: return casadi_s7;
+    case 1: return casadi_s7;
+    case 2: return casadi_s7;
+    default: return 0;
+  }
+}
+
+CASADI_SYMBOL_EXPORT int qd_dgrf_FL_FR_BL_work(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz_iw, casadi_int *sz_w) {
+  if (sz_arg) *sz_arg = 3;
+  if (sz_res) *sz_res = 3;
+  if (sz_iw) *sz_iw = 0;
+  if (sz_w) *sz_w = 0;
+  return 0;
+}
+
+CASADI_SYMBOL_EXPORT int qd_dgrf_FL_FR_BL_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz_iw, casadi_int *sz_w) {
+  if (sz_arg) *sz_arg = 3*sizeof(const casadi_real*);
+  if (sz_res) *sz_res = 3*sizeof(casadi_real*);
+  if (sz_iw) *sz_iw = 0*sizeof(casadi_int);
+  if (sz_w) *sz_w = 0*sizeof(casadi_real);
+  return 0;
+}
+
+/* qd_dgrf_dir_FL_FR_BR:(q[19],w[6],dq[18])->(lambda_w[6],dlambda_w[6]) */
+static int casadi_f7(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem) {
+  (void)arg; (void)res; (void)iw; (void)w; (void)mem;
+  casadi_real a00, a01, a02, a03, a04, a05, a06, a07, a08, a09, a10, a11;
+  casadi_real a12, a13, a14, a15, a16, a17, a18, a19, a20, a21, a22, a23;
+  casadi_real a24, a25, a26, a27, a28, a29, a30, a31, a32, a33, a34, a35;
+  casadi_real a36, a37, a38, a39, a40, a41, a42, a43, a44, a45, a46, a47;
+  casadi_real a48, a49, a50, a51, a52, a53, a54, a55, a56, a57, a58, a59;
+  casadi_real a60, a61, a62, a63, a64, a65, a66, a67, a68, a69, a70, a71;
+  casadi_real a72, a73, a74, a75, a76, a77;
+  a00=-7.0000000000000007e-02;
+  a01=2.0000000000000001e-01;
+  a02=arg[0]? arg[0][16] : 0;
+  a03=qd_cos(a02);
+  a04=arg[0]? arg[0][17] : 0;
+  a05=qd_cos(a04);
+  a06=(a03*a05);
+  a07=(a01*a06);
+  a07=(a00+a07);
+  a08=arg[0]? arg[0][18] : 0;
+  a09=qd_cos(a08);
+  a10=(a06*a09);
+  a04=qd_sin(a04);
+  a11=(a03*a04);
+  a08=qd_sin(a08);
+  a12=(a11*a08);
+  a10=(a10-a12);
+  a10=(a01*a10);
+  a07=(a07+a10);
+  a10=1.9000000000000000e-01;
+  a12=arg[0]? arg[0][11] : 0;
+  a13=qd_sin(a12);
+  a14=(a01*a13);
+  a14=(a10+a14);
+  a12=qd_cos(a12);
+  a15=arg[0]? arg[0][12] : 0;
+  a16=qd_sin(a15);
+  a17=(a12*a16);
+  a15=qd_cos(a15);
+  a18=(a13*a15);
+  a17=(a17+a18);
+  a17=(a01*a17);
+  a14=(a14+a17);
+  a17=(a07*a14);
+  a18=arg[0]? arg[0][10] : 0;
+  a19=qd_cos(a18);
+  a20=(a19*a12);
+  a21=(a01*a20);
+  a00=(a00+a21);
+  a21=(a20*a15);
+  a22=(a19*a13);
+  a23=(a22*a16);
+  a21=(a21-a23);
+  a21=(a01*a21);
+  a00=(a00+a21);
+  a21=-1.9000000000000000e-01;
+  a23=(a01*a04);
+  a21=(a21+a23);
+  a23=(a05*a08);
+  a24=(a04*a09);
+  a23=(a23+a24);
+  a23=(a01*a23);
+  a21=(a21+a23);
+  a23=(a00*a21);
+  a17=(a17-a23);
+  a23=arg[1]? arg[1][2] : 0;
+  a24=(a17*a23);
+  a25=(a14-a21);
+  a26=arg[1]? arg[1][3] : 0;
+  a27=arg[0]? arg[0][7] : 0;
+  a28=qd_sin(a27);
+  a29=arg[0]? arg[0][8] : 0;
+  a30=qd_sin(a29);
+  a31=(a28*a30);
+  a32=arg[0]? arg[0][9] : 0;
+  a33=qd_sin(a32);
+  a34=(a31*a33);
+  a29=qd_cos(a29);
+  a35=(a28*a29);
+  a32=qd_cos(a32);
+  a36=(a35*a32);
+  a34=(a34-a36);
+  a34=(a01*a34);
+  a36=(a01*a35);
+  a34=(a34-a36);
+  a36=arg[1]? arg[1][5] : 0;
+  a37=7.0000000000000007e-02;
+  a27=qd_cos(a27);
+  a38=(a27*a29);
+  a39=(a01*a38);
+  a37=(a37+a39);
+  a39=(a38*a32);
+  a40=(a27*a30);
+  a41=(a40*a33);
+  a39=(a39-a41);
+  a39=(a01*a39);
+  a37=(a37+a39);
+  a39=(a37+a00);
+  a39=(a39+a07);
+  a41=arg[1]? arg[1][0] : 0;
+  a42=3.;
+  a41=(a41/a42);
+  a39=(a39*a41);
+  a36=(a36+a39);
+  a39=(2*a36);
+  a42=(a14+a21);
+  a43=arg[1]? arg[1][1] : 0;
+  a44=(a42*a43);
+  a39=(a39-a44);
+  a44=(a01*a30);
+  a10=(a10+a44);
+  a44=(a29*a33);
+  a45=(a30*a32);
+  a44=(a44+a45);
+  a44=(a01*a44);
+  a10=(a10+a44);
+  a44=(2*a10);
+  a44=(a44-a42);
+  a39=(a39/a44);
+  a42=(a34*a39);
+  a26=(a26+a42);
+  a18=qd_sin(a18);
+  a42=(a18*a13);
+  a45=(a42*a16);
+  a46=(a18*a12);
+  a47=(a46*a15);
+  a45=(a45-a47);
+  a45=(a01*a45);
+  a47=(a01*a46);
+  a45=(a45-a47);
+  a47=(a10*a43);
+  a47=(a47-a36);
+  a47=(a47/a44);
+  a36=(a45*a47);
+  a26=(a26+a36);
+  a02=qd_sin(a02);
+  a36=(a02*a04);
+  a48=(a36*a08);
+  a49=(a02*a05);
+  a50=(a49*a09);
+  a48=(a48-a50);
+  a48=(a01*a48);
+  a50=(a01*a49);
+  a48=(a48-a50);
+  a50=(a48*a47);
+  a26=(a26+a50);
+  a50=(a25*a26);
+  a24=(a24-a50);
+  a50=(a07-a00);
+  a51=arg[1]? arg[1][4] : 0;
+  a52=(a34+a45);
+  a52=(a52+a48);
+  a52=(a52*a41);
+  a51=(a51-a52);
+  a52=(a50*a51);
+  a24=(a24+a52);
+  a52=(a07*a10);
+  a53=(a37*a21);
+  a52=(a52-a53);
+  a17=(a17-a52);
+  a53=(a00*a10);
+  a54=(a37*a14);
+  a53=(a53-a54);
+  a17=(a17+a53);
+  a24=(a24/a17);
+  if (res[0]!=0) res[0][0]=a24;
+  a54=(a10-a21);
+  a55=(a54*a26);
+  a52=(a52*a23);
+  a55=(a55-a52);
+  a52=(a07-a37);
+  a56=(a52*a51);
+  a55=(a55-a56);
+  a55=(a55/a17);
+  if (res[0]!=0) res[0][1]=a55;
+  a53=(a53*a23);
+  a56=(a10-a14);
+  a57=(a56*a26);
+  a53=(a53-a57);
+  a57=(a00-a37);
+  a58=(a57*a51);
+  a53=(a53+a58);
+  a53=(a53/a17);
+  if (res[0]!=0) res[0][2]=a53;
+  if (res[0]!=0) res[0][3]=a41;
+  if (res[0]!=0) res[0][4]=a39;
+  if (res[0]!=0) res[0][5]=a47;
+  a58=arg[2]? arg[2][10] : 0;
+  a59=(a12*a58);
+  a60=(a01*a59);
+  a61=arg[2]? arg[2][11] : 0;
+  a62=(a15*a61);
+  a63=(a12*a62);
+  a58=(a13*a58);
+  a64=(a16*a58);
+  a63=(a63-a64);
+  a64=(a15*a59);
+  a61=(a16*a61);
+  a65=(a13*a61);
+  a64=(a64-a65);
+  a63=(a63+a64);
+  a63=(a01*a63);
+  a60=(a60+a63);
+  a63=(a07*a60);
+  a64=arg[2]? arg[2][15] : 0;
+  a65=(a02*a64);
+  a66=(a05*a65);
+  a67=arg[2]? arg[2][16] : 0;
+  a68=(a04*a67);
+  a69=(a03*a68);
+  a66=(a66+a69);
+  a69=(a01*a66);
+  a66=(a09*a66);
+  a70=arg[2]? arg[2][17] : 0;
+  a71=(a08*a70);
+  a06=(a06*a71);
+  a66=(a66+a06);
+  a67=(a05*a67);
+  a06=(a03*a67);
+  a65=(a04*a65);
+  a06=(a06-a65);
+  a06=(a08*a06);
+  a70=(a09*a70);
+  a11=(a11*a70);
+  a06=(a06+a11);
+  a66=(a66+a06);
+  a66=(a01*a66);
+  a69=(a69+a66);
+  a66=(a14*a69);
+  a63=(a63-a66);
+  a66=(a01*a67);
+  a06=(a05*a70);
+  a11=(a08*a68);
+  a06=(a06-a11);
+  a11=(a09*a67);
+  a65=(a04*a71);
+  a11=(a11-a65);
+  a06=(a06+a11);
+  a06=(a01*a06);
+  a66=(a66+a06);
+  a06=(a00*a66);
+  a11=arg[2]? arg[2][9] : 0;
+  a65=(a18*a11);
+  a72=(a12*a65);
+  a73=(a19*a58);
+  a72=(a72+a73);
+  a73=(a01*a72);
+  a72=(a15*a72);
+  a20=(a20*a61);
+  a72=(a72+a20);
+  a20=(a19*a59);
+  a65=(a13*a65);
+  a20=(a20-a65);
+  a20=(a16*a20);
+  a22=(a22*a62);
+  a20=(a20+a22);
+  a72=(a72+a20);
+  a72=(a01*a72);
+  a73=(a73+a72);
+  a72=(a21*a73);
+  a06=(a06-a72);
+  a63=(a63-a06);
+  a06=(a23*a63);
+  a72=(a60-a66);
+  a72=(a26*a72);
+  a20=arg[2]? arg[2][6] : 0;
+  a22=(a27*a20);
+  a65=(a30*a22);
+  a74=arg[2]? arg[2][7] : 0;
+  a75=(a29*a74);
+  a76=(a28*a75);
+  a65=(a65+a76);
+  a65=(a33*a65);
+  a76=arg[2]? arg[2][8] : 0;
+  a77=(a32*a76);
+  a31=(a31*a77);
+  a65=(a65+a31);
+  a22=(a29*a22);
+  a74=(a30*a74);
+  a31=(a28*a74);
+  a22=(a22-a31);
+  a31=(a32*a22);
+  a76=(a33*a76);
+  a35=(a35*a76);
+  a31=(a31-a35);
+  a65=(a65-a31);
+  a65=(a01*a65);
+  a22=(a01*a22);
+  a65=(a65-a22);
+  a22=(a39*a65);
+  a28=(a28*a20);
+  a20=(a29*a28);
+  a31=(a27*a74);
+  a20=(a20+a31);
+  a31=(a01*a20);
+  a20=(a32*a20);
+  a38=(a38*a76);
+  a20=(a20+a38);
+  a27=(a27*a75);
+  a28=(a30*a28);
+  a27=(a27-a28);
+  a27=(a33*a27);
+  a40=(a40*a77);
+  a27=(a27+a40);
+  a20=(a20+a27);
+  a20=(a01*a20);
+  a31=(a31+a20);
+  a20=(a31+a73);
+  a20=(a20+a69);
+  a20=(a41*a20);
+  a27=(-a20);
+  a27=(2*a27);
+  a40=(a60+a66);
+  a28=(a43*a40);
+  a27=(a27-a28);
+  a27=(a27/a44);
+  a39=(a39/a44);
+  a28=(a01*a75);
+  a29=(a29*a77);
+  a33=(a33*a74);
+  a29=(a29-a33);
+  a32=(a32*a75);
+  a30=(a30*a76);
+  a32=(a32-a30);
+  a29=(a29+a32);
+  a29=(a01*a29);
+  a28=(a28+a29);
+  a29=(2*a28);
+  a29=(a29-a40);
+  a39=(a39*a29);
+  a27=(a27-a39);
+  a34=(a34*a27);
+  a22=(a22+a34);
+  a19=(a19*a11);
+  a13=(a13*a19);
+  a59=(a18*a59);
+  a13=(a13+a59);
+  a16=(a16*a13);
+  a42=(a42*a62);
+  a16=(a16+a42);
+  a12=(a12*a19);
+  a18=(a18*a58);
+  a12=(a12-a18);
+  a15=(a15*a12);
+  a46=(a46*a61);
+  a15=(a15-a46);
+  a16=(a16-a15);
+  a16=(a01*a16);
+  a12=(a01*a12);
+  a16=(a16-a12);
+  a12=(a47*a16);
+  a43=(a43*a28);
+  a43=(a43+a20);
+  a43=(a43/a44);
+  a44=(a47/a44);
+  a44=(a44*a29);
+  a43=(a43-a44);
+  a45=(a45*a43);
+  a12=(a12+a45);
+  a22=(a22+a12);
+  a03=(a03*a64);
+  a04=(a04*a03);
+  a67=(a02*a67);
+  a04=(a04+a67);
+  a08=(a08*a04);
+  a36=(a36*a70);
+  a08=(a08+a36);
+  a05=(a05*a03);
+  a02=(a02*a68);
+  a05=(a05-a02);
+  a09=(a09*a05);
+  a49=(a49*a71);
+  a09=(a09-a49);
+  a08=(a08-a09);
+  a08=(a01*a08);
+  a01=(a01*a05);
+  a08=(a08-a01);
+  a47=(a47*a08);
+  a48=(a48*a43);
+  a47=(a47+a48);
+  a22=(a22+a47);
+  a25=(a25*a22);
+  a72=(a72+a25);
+  a06=(a06-a72);
+  a72=(a73-a69);
+  a72=(a51*a72);
+  a65=(a65+a16);
+  a65=(a65+a08);
+  a41=(a41*a65);
+  a50=(a50*a41);
+  a72=(a72-a50);
+  a06=(a06+a72);
+  a06=(a06/a17);
+  a24=(a24/a17);
+  a07=(a07*a28);
+  a72=(a10*a69);
+  a07=(a07-a72);
+  a72=(a37*a66);
+  a21=(a21*a31);
+  a72=(a72-a21);
+  a07=(a07-a72);
+  a63=(a63-a07);
+  a00=(a00*a28);
+  a10=(a10*a73);
+  a00=(a00-a10);
+  a37=(a37*a60);
+  a14=(a14*a31);
+  a37=(a37-a14);
+  a00=(a00-a37);
+  a63=(a63+a00);
+  a24=(a24*a63);
+  a06=(a06-a24);
+  if (res[1]!=0) res[1][0]=a06;
+  a66=(a28-a66);
+  a66=(a26*a66);
+  a54=(a54*a22);
+  a66=(a66+a54);
+  a07=(a23*a07);
+  a66=(a66-a07);
+  a69=(a31-a69);
+  a69=(a51*a69);
+  a52=(a52*a41);
+  a69=(a69-a52);
+  a66=(a66-a69);
+  a66=(a66/a17);
+  a55=(a55/a17);
+  a55=(a55*a63);
+  a66=(a66-a55);
+  if (res[1]!=0) res[1][1]=a66;
+  a23=(a23*a00);
+  a28=(a28-a60);
+  a26=(a26*a28);
+  a56=(a56*a22);
+  a26=(a26+a56);
+  a23=(a23-a26);
+  a31=(a31-a73);
+  a51=(a51*a31);
+  a57=(a57*a41);
+  a51=(a51-a57);
+  a23=(a23+a51);
+  a23=(a23/a17);
+  a53=(a53/a17);
+  a53=(a53*a63);
+  a23=(a23-a53);
+  if (res[1]!=0) res[1][2]=a23;
+  a23=0.;
+  if (res[1]!=0) res[1][3]=a23;
+  if (res[1]!=0) res[1][4]=a27;
+  if (res[1]!=0) res[1][5]=a43;
+  return 0;
+}
+
+CASADI_SYMBOL_EXPORT int qd_dgrf_dir_FL_FR_BR(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem){
+  return qd_d_finite(casadi_f7(arg, res, iw, w, mem), res, 2, (const casadi_int[]){6, 6});
+}
+
+CASADI_SYMBOL_EXPORT int qd_dgrf_dir_FL_FR_BR_checkout(void) {
+  return 0;
+}
+
+CASADI_SYMBOL_EXPORT void qd_dgrf_dir_FL_FR_BR_release(int mem) {
+  (void)mem;
+}
+
+CASADI_SYMBOL_EXPORT void qd_dgrf_dir_FL_FR_BR_incref(void) {
+}
+
+CASADI_SYMBOL_EXPORT void qd_dgrf_dir_FL_FR_BR_decref(void) {
+}
+
+CASADI_SYMBOL_EXPORT casadi_int qd_dgrf_dir_FL_FR_BR_n_in(void) { return 3;}
+
+CASADI_SYMBOL_EXPORT casadi_int qd_dgrf_dir_FL_FR_BR_n_out(void) { return 2;}
+
+CASADI_SYMBOL_EXPORT casadi_real qd_dgrf_dir_FL_FR_BR_default_in(casadi_int i) {
+  switch (i) {
+    default: return 0;
+  }
+}
+
+CASADI_SYMBOL_EXPORT const char* qd_dgrf_dir_FL_FR_BR_name_in(casadi_int i) {
+  switch (i) {
+    case 0: return "q";
+    case 1: return "w";
+    case 2: return "dq";
+    default: return 0;
+  }
+}
+
+CASADI_SYMBOL_EXPORT const char* qd_dgrf_dir_FL_FR_BR_name_out(casadi_int i) {
+  switch (i) {
+    case 0: return "lambda_w";
+    case 1: return "dlambda_w";
+    default: return 0;
+  }
+}
+
+CASADI_SYMBOL_EXPORT const casadi_int* qd_dgrf_dir_FL_FR_BR_sparsity_in(casadi_int i) {
+  switch (i) {
+    case 0: return casadi_s0;
+    case 1: return casadi_s6;
+    case 2: return casadi_s1;
+    default: return 0;
+  }
+}
+
+CASADI_SYMBOL_EXPORT const casadi_int* qd_dgrf_dir_FL_FR_BR_sparsity_out(casadi_int i) {
+  switch (i) {
+    case 0: return casadi_s6;
+    case 1: return casadi_s6;
+    default: return 0;
+  }
+}
+
+CASADI_SYMBOL_EXPORT int qd_dgrf_dir_FL_FR_BR_work(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz_iw, casadi_int *sz_w) {
+  if (sz_arg) *sz_arg = 3;
+  if (sz_res) *sz_res = 2;
+  if (sz_iw) *sz_iw = 0;
+  if (sz_w) *sz_w = 0;
+  return 0;
+}
+
+CASADI_SYMBOL_EXPORT int qd_dgrf_dir_FL_FR_BR_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz_iw, casadi_int *sz_w) {
+  if (sz_arg) *sz_arg = 3*sizeof(const casadi_real*);
+  if (sz_res) *sz_res = 2*sizeof(casadi_real*);
+  if (sz_iw) *sz_iw = 0*sizeof(casadi_int);
+  if (sz_w) *sz_w = 0*sizeof(casadi_real);
+  return 0;
+}
+
+/* qd_dgrf_FL_FR_BR:(q[19],v[18],a[18])->(dlambda_dq[6x18],dlambda_dv[6x18],dlambda_da[6x18]) */
+static int casadi_f8(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem) {
+  (void)arg; (void)res; (void)iw; (void)w; (void)mem;
+  casadi_real a0, a1, a2;
+  a0=arg[0]? arg[0][0] : 0;
+  a1=arg[0]? arg[0][1] : 0;
+  a0=(a0+a1);
+  a1=arg[0]? arg[0][2] : 0;
+  a0=(a0+a1);
+  a1=arg[0]? arg[0][3] : 0;
+  a0=(a0+a1);
+  a1=arg[0]? arg[0][4] : 0;
+  a0=(a0+a1);
+  a1=arg[0]? arg[0][5] : 0;
+  a0=(a0+a1);
+  a1=arg[0]? arg[0][6] : 0;
+  a0=(a0+a1);
+  a1=arg[0]? arg[0][7] : 0;
+  a0=(a0+a1);
+  a1=arg[0]? arg[0][8] : 0;
+  a0=(a0+a1);
+  a1=arg[0]? arg[0][9] : 0;
+  a0=(a0+a1);
+  a1=arg[0]? arg[0][10] : 0;
+  a0=(a0+a1);
+  a1=arg[0]? arg[0][11] : 0;
+  a0=(a0+a1);
+  a1=arg[0]? arg[0][12] : 0;
+  a0=(a0+a1);
+  a1=arg[0]? arg[0][13] : 0;
+  a0=(a0+a1);
+  a1=arg[0]? arg[0][14] : 0;
+  a0=(a0+a1);
+  a1=arg[0]? arg[0][15] : 0;
+  a0=(a0+a1);
+  a1=arg[0]? arg[0][16] : 0;
+  a0=(a0+a1);
+  a1=arg[0]? arg[0][17] : 0;
+  a0=(a0+a1);
+  a1=arg[0]? arg[0][18] : 0;
+  a0=(a0+a1);
+  a1=arg[1]? arg[1][0] : 0;
+  a2=arg[1]? arg[1][1] : 0;
+  a1=(a1+a2);
+  a2=arg[1]? arg[1][2] : 0;
+  a1=(a1+a2);
+  a2=arg[1]? arg[1][3] : 0;
+  a1=(a1+a2);
+  a2=arg[1]? arg[1][4] : 0;
+  a1=(a1+a2);
+  a2=arg[1]? arg[1][5] : 0;
+  a1=(a1+a2);
+  a2=arg[1]? arg[1][6] : 0;
+  a1=(a1+a2);
+  a2=arg[1]? arg[1][7] : 0;
+  a1=(a1+a2);
+  a2=arg[1]? arg[1][8] : 0;
+  a1=(a1+a2);
+  a2=arg[1]? arg[1][9] : 0;
+  a1=(a1+a2);
+  a2=arg[1]? arg[1][10] : 0;
+  a1=(a1+a2);
+  a2=arg[1]? arg[1][11] : 0;
+  a1=(a1+a2);
+  a2=arg[1]? arg[1][12] : 0;
+  a1=(a1+a2);
+  a2=arg[1]? arg[1][13] : 0;
+  a1=(a1+a2);
+  a2=arg[1]? arg[1][14] : 0;
+  a1=(a1+a2);
+  a2=arg[1]? arg[1][15] : 0;
+  a1=(a1+a2);
+  a2=arg[1]? arg[1][16] : 0;
+  a1=(a1+a2);
+  a2=arg[1]? arg[1][17] : 0;
+  a1=(a1+a2);
+  a0=(a0+a1);
+  a1=arg[2]? arg[2][0] : 0;
+  a2=arg[2]? arg[2][1] : 0;
+  a1=(a1+a2);
+  a2=arg[2]? arg[2][2] : 0;
+  a1=(a1+a2);
+  a2=arg[2]? arg[2][3] : 0;
+  a1=(a1+a2);
+  a2=arg[2]? arg[2][4] : 0;
+  a1=(a1+a2);
+  a2=arg[2]? arg[2][5] : 0;
+  a1=(a1+a2);
+  a2=arg[2]? arg[2][6] : 0;
+  a1=(a1+a2);
+  a2=arg[2]? arg[2][7] : 0;
+  a1=(a1+a2);
+  a2=arg[2]? arg[2][8] : 0;
+  a1=(a1+a2);
+  a2=arg[2]? arg[2][9] : 0;
+  a1=(a1+a2);
+  a2=arg[2]? arg[2][10] : 0;
+  a1=(a1+a2);
+  a2=arg[2]? arg[2][11] : 0;
+  a1=(a1+a2);
+  a2=arg[2]? arg[2][12] : 0;
+  a1=(a1+a2);
+  a2=arg[2]? arg[2][13] : 0;
+  a1=(a1+a2);
+  a2=arg[2]? arg[2][14] : 0;
+  a1=(a1+a2);
+  a2=arg[2]? arg[2][15] : 0;
+  a1=(a1+a2);
+  a2=arg[2]? arg[2][16] : 0;
+  a1=(a1+a2);
+  a2=arg[2]? arg[2][17] : 0;
+  a1=(a1+a2);
+  a0=(a0+a1);
+  if (res[0]!=0) res[0][0]=a0;
+  if (res[0]!=0) res[0][1]=a0;
+  if (res[0]!=0) res[0][2]=a0;
+  if (res[0]!=0) res[0][3]=a0;
+  if (res[0]!=0) res[0][4]=a0;
+  if (res[0]!=0) res[0][5]=a0;
+  if (res[0]!=0) res[0][6]=a0;
+  if (res[0]!=0) res[0][7]=a0;
+  if (res[0]!=0) res[0][8]=a0;
+  if (res[0]!=0) res[0][9]=a0;
+  if (res[0]!=0) res[0][10]=a0;
+  if (res[0]!=0) res[0][11]=a0;
+  if (res[0]!=0) res[0][12]=a0;
+  if (res[0]!=0) res[0][13]=a0;
+  if (res[0]!=0) res[0][14]=a0;
+  if (res[0]!=0) res[0][15]=a0;
+  if (res[0]!=0) res[0][16]=a0;
+  if (res[0]!=0) res[0][17]=a0;
+  if (res[0]!=0) res[0][18]=a0;
+  if (res[0]!=0) res[0][19]=a0;
+  if (res[0]!=0) res[0][20]=a0;
+  if (res[0]!=0) res[0][21]=a0;
+  if (res[0]!=0) res[0][22]=a0;
+  if (res[0]!=0) res[0][23]=a0;
+  if (res[0]!=0) res[0][24]=a0;
+  if (res[0]!=0) res[0][25]=a0;
+  if (res[0]!=0) res[0][26]=a0;
+  if (res[0]!=0) res[0][27]=a0;
+  if (res[0]!=0) res[0][28]=a0;
+  if (res[0]!=0) res[0][29]=a0;
+  if (res[0]!=0) res[0][30]=a0;
+  if (res[0]!=0) res[0][31]=a0;
+  if (res[0]!=0) res[0][32]=a0;
+  if (res[0]!=0) res[0][33]=a0;
+  if (res[0]!=0) res[0][34]=a0;
+  if (res[0]!=0) res[0][35]=a0;
+  if (res[0]!=0) res[0][36]=a0;
+  if (res[0]!=0) res[0][37]=a0;
+  if (res[0]!=0) res[0][38]=a0;
+  if (res[0]!=0) res[0][39]=a0;
+  if (res[0]!=0) res[0][40]=a0;
+  if (res[0]!=0) res[0][41]=a0;
+  if (res[0]!=0) res[0][42]=a0;
+  if (res[0]!=0) res[0][43]=a0;
+  if (res[0]!=0) res[0][44]=a0;
+  if (res[0]!=0) res[0][45]=a0;
+  if (res[0]!=0) res[0][46]=a0;
+  if (res[0]!=0) res[0][47]=a0;
+  if (res[0]!=0) res[0][48]=a0;
+  if (res[0]!=0) res[0][49]=a0;
+  if (res[0]!=0) res[0][50]=a0;
+  if (res[0]!=0) res[0][51]=a0;
+  if (res[0]!=0) res[0][52]=a0;
+  if (res[0]!=0) res[0][53]=a0;
+  if (res[0]!=0) res[0][54]=a0;
+  if (res[0]!=0) res[0][55]=a0;
+  if (res[0]!=0) res[0][56]=a0;
+  if (res[0]!=0) res[0][57]=a0;
+  if (res[0]!=0) res[0][58]=a0;
+  if (res[0]!=0) res[0][59]=a0;
+  if (res[0]!=0) res[0][60]=a0;
+  if (res[0]!=0) res[0][61]=a0;
+  if (res[0]!=0) res[0][62]=a0;
+  if (res[0]!=0) res[0][63]=a0;
+  if (res[0]!=0) res[0][64]=a0;
+  if (res[0]!=0) res[0][65]=a0;
+  if (res[0]!=0) res[0][66]=a0;
+  if (res[0]!=0) res[0][67]=a0;
+  if (res[0]!=0) res[0][68]=a0;
+  if (res[0]!=0) res[0][69]=a0;
+  if (res[0]!=0) res[0][70]=a0;
+  if (res[0]!=0) res[0][71]=a0;
+  if (res[0]!=0) res[0][72]=a0;
+  if (res[0]!=0) res[0][73]=a0;
+  if (res[0]!=0) res[0][74]=a0;
+  if (res[0]!=0) res[0][75]=a0;
+  if (res[0]!=0) res[0][76]=a0;
+  if (res[0]!=0) res[0][77]=a0;
+  if (res[0]!=0) res[0][78]=a0;
+  if (res[0]!=0) res[0][79]=a0;
+  if (res[0]!=0) res[0][80]=a0;
+  if (res[0]!=0) res[0][81]=a0;
+  if (res[0]!=0) res[0][82]=a0;
+  if (res[0]!=0) res[0][83]=a0;
+  if (res[0]!=0) res[0][84]=a0;
+  if (res[0]!=0) res[0][85]=a0;
+  if (res[0]!=0) res[0][86]=a0;
+  if (res[0]!=0) res[0][87]=a0;
+  if (res[0]!=0) res[0][88]=a0;
+  if (res[0]!=0) res[0][89]=a0;
+  if (res[0]!=0) res[0][90]=a0;
+  if (res[0]!=0) res[0][91]=a0;
+  if (res[0]!=0) res[0][92]=a0;
+  if (res[0]!=0) res[0][93]=a0;
+  if (res[0]!=0) res[0][94]=a0;
+  if (res[0]!=0) res[0][95]=a0;
+  if (res[0]!=0) res[0][96]=a0;
+  if (res[0]!=0) res[0][97]=a0;
+  if (res[0]!=0) res[0][98]=a0;
+  if (res[0]!=0) res[0][99]=a0;
+  if (res[0]!=0) res[0][100]=a0;
+  if (res[0]!=0) res[0][101]=a0;
+  if (res[0]!=0) res[0][102]=a0;
+  if (res[0]!=0) res[0][103]=a0;
+  if (res[0]!=0) res[0][104]=a0;
+  if (res[0]!=0) res[0][105]=a0;
+  if (res[0]!=0) res[0][106]=a0;
+  if (res[0]!=0) res[0][107]=a0;
+  if (res[1]!=0) res[1][0]=a0;
+  if (res[1]!=0) res[1][1]=a0;
+  if (res[1]!=0) res[1][2]=a0;
+  if (res[1]!=0) res[1][3]=a0;
+  if (res[1]!=0) res[1][4]=a0;
+  if (res[1]!=0) res[1][5]=a0;
+  if (res[1]!=0) res[1][6]=a0;
+  if (res[1]!=0) res[1][7]=a0;
+  if (res[1]!=0) res[1][8]=a0;
+  if (res[1]!=0) res[1][9]=a0;
+  if (res[1]!=0) res[1][10]=a0;
+  if (res[1]!=0) res[1][11]=a0;
+  if (res[1]!=0) res[1][12]=a0;
+  if (res[1]!=0) res[1][13]=a0;
+  if (res[1]!=0) res[1][14]=a0;
+  if (res[1]!=0) res[1][15]=a0;
+  if (res[1]!=0) res[1][16]=a0;
+  if (res[1]!=0) res[1][17]=a0;
+  if (res[1]!=0) res[1][18]=a0;
+  if (res[1]!=0) res[1][19]=a0;
+  if (res[1]!=0) res[1][20]=a0;
+  if (res[1]!=0) res[1][21]=a0;
+  if (res[1]!=0) res[1][22]=a0;
+  if (res[1]!=0) res[1][23]=a0;
+  if (res[1]!=0) res[1][24]=a0;
+  if (res[1]!=0) res[1][25]=a0;
+  if (res[1]!=0) res[1][26]=a0;
+  if (res[1]!=0) res[1][27]=a0;
+  if (res[1]!=0) res[1][28]=a0;
+  if (res[1]!=0) res[1][29]=a0;
+  if (res[1]!=0) res[1][30]=a0;
+  if (res[1]!=0) res[1][31]=a0;
+  if (res[1]!=0) res[1][32]=a0;
+  if (res[1]!=0) res[1][33]=a0;
+  if (res[1]!=0) res[1][34]=a0;
+  if (res[1]!=0) res[1][35]=a0;
+  if (res[1]!=0) res[1][36]=a0;
+  if (res[1]!=0) res[1][37]=a0;
+  if (res[1]!=0) res[1][38]=a0;
+  if (res[1]!=0) res[1][39]=a0;
+  if (res[1]!=0) res[1][40]=a0;
+  if (res[1]!=0) res[1][41]=a0;
+  if (res[1]!=0) res[1][42]=a0;
+  if (res[1]!=0) res[1][43]=a0;
+  if (res[1]!=0) res[1][44]=a0;
+  if (res[1]!=0) res[1][45]=a0;
+  if (res[1]!=0) res[1][46]=a0;
+  if (res[1]!=0) res[1][47]=a0;
+  if (res[1]!=0) res[1][48]=a0;
+  if (res[1]!=0) res[1][49]=a0;
+  if (res[1]!=0) res[1][50]=a0;
+  if (res[1]!=0) res[1][51]=a0;
+  if (res[1]!=0) res[1][52]=a0;
+  if (res[1]!=0) res[1][53]=a0;
+  if (res[1]!=0) res[1][54]=a0;
+  if (res[1]!=0) res[1][55]=a0;
+  if (res[1]!=0) res[1][56]=a0;
+  if (res[1]!=0) res[1][57]=a0;
+  if (res[1]!=0) res[1][58]=a0;
+  if (res[1]!=0) res[1][59]=a0;
+  if (res[1]!=0) res[1][60]=a0;
+  if (res[1]!=0) res[1][61]=a0;
+  if (res[1]!=0) res[1][62]=a0;
+  if (res[1]!=0) res[1][63]=a0;
+  if (res[1]!=0) res[1][64]=a0;
+  if (res[1]!=0) res[1][65]=a0;
+  if (res[1]!=0) res[1][66]=a0;
+  if (res[1]!=0) res[1][67]=a0;
+  if (res[1]!=0) res[1][68]=a0;
+  if (res[1]!=0) res[1][69]=a0;
+  if (res[1]!=0) res[1][70]=a0;
+  if (res[1]!=0) res[1][71]=a0;
+  if (res[1]!=0) res[1][72]=a0;
+  if (res[1]!=0) res[1][73]=a0;
+  if (res[1]!=0) res[1][74]=a0;
+  if (res[1]!=0) res[1][75]=a0;
+  if (res[1]!=0) res[1][76]=a0;
+  if (res[1]!=0) res[1][77]=a0;
+  if (res[1]!=0) res[1][78]=a0;
+  if (res[1]!=0) res[1][79]=a0;
+  if (res[1]!=0) res[1][80]=a0;
+  if (res[1]!=0) res[1][81]=a0;
+  if (res[1]!=0) res[1][82]=a0;
+  if (res[1]!=0) res[1][83]=a0;
+  if (res[1]!=0) res[1][84]=a0;
+  if (res[1]!=0) res[1][85]=a0;
+  if (res[1]!=0) res[1][86]=a0;
+  if (res[1]!=0) res[1][87]=a0;
+  if (res[1]!=0) res[1][88]=a0;
+  if (res[1]!=0) res[1][89]=a0;
+  if (res[1]!=0) res[1][90]=a0;
+  if (res[1]!=0) res[1][91]=a0;
+  if (res[1]!=0) res[1][92]=a0;
+  if (res[1]!=0) res[1][93]=a0;
+  if (res[1]!=0) res[1][94]=a0;
+  if (res[1]!=0) res[1][95]=a0;
+  if (res[1]!=0) res[1][96]=a0;
+  if (res[1]!=0) res[1][97]=a0;
+  if (res[1]!=0) res[1][98]=a0;
+  if (res[1]!=0) res[1][99]=a0;
+  if (res[1]!=0) res[1][100]=a0;
+  if (res[1]!=0) res[1][101]=a0;
+  if (res[1]!=0) res[1][102]=a0;
+  if (res[1]!=0) res[1][103]=a0;
+  if (res[1]!=0) res[1][104]=a0;
+  if (res[1]!=0) res[1][105]=a0;
+  if (res[1]!=0) res[1][106]=a0;
+  if (res[1]!=0) res[1][107]=a0;
+  if (res[2]!=0) res[2][0]=a0;
+  if (res[2]!=0) res[2][1]=a0;
+  if (res[2]!=0) res[2][2]=a0;
+  if (res[2]!=0) res[2][3]=a0;
+  if (res[2]!=0) res[2][4]=a0;
+  if (res[2]!=0) res[2][5]=a0;
+  if (res[2]!=0) res[2][6]=a0;
+  if (res[2]!=0) res[2][7]=a0;
+  if (res[2]!=0) res[2][8]=a0;
+  if (res[2]!=0) res[2][9]=a0;
+  if (res[2]!=0) res[2][10]=a0;
+  if (res[2]!=0) res[2][11]=a0;
+  if (res[2]!=0) res[2][12]=a0;
+  if (res[2]!=0) res[2][13]=a0;
+  if (res[2]!=0) res[2][14]=a0;
+  if (res[2]!=0) res[2][15]=a0;
+  if (res[2]!=0) res[2][16]=a0;
+  if (res[2]!=0) res[2][17]=a0;
+  if (res[2]!=0) res[2][18]=a0;
+  if (res[2]!=0) res[2][19]=a0;
+  if (res[2]!=0) res[2][20]=a0;
+  if (res[2]!=0) res[2][21]=a0;
+  if (res[2]!=0) res[2][22]=a0;
+  if (res[2]!=0) res[2][23]=a0;
+  if (res[2]!=0) res[2][24]=a0;
+  if (res[2]!=0) res[2][25]=a0;
+  if (res[2]!=0) res[2][26]=a0;
+  if (res[2]!=0) res[2][27]=a0;
+  if (res[2]!=0) res[2][28]=a0;
+  if (res[2]!=0) res[2][29]=a0;
+  if (res[2]!=0) res[2][30]=a0;
+  if (res[2]!=0) res[2][31]=a0;
+  if (res[2]!=0) res[2][32]=a0;
+  if (res[2]!=0) res[2][33]=a0;
+  if (res[2]!=0) res[2][34]=a0;
+  if (res[2]!=0) res[2][35]=a0;
+  if (res[2]!=0) res[2][36]=a0;
+  if (res[2]!=0) res[2][37]=a0;
+  if (res[2]!=0) res[2][38]=a0;
+  if (res[2]!=0) res[2][39]=a0;
+  if (res[2]!=0) res[2][40]=a0;
+  if (res[2]!=0) res[2][41]=a0;
+  if (res[2]!=0) res[2][42]=a0;
+  if (res[2]!=0) res[2][43]=a0;
+  if (res[2]!=0) res[2][44]=a0;
+  if (res[2]!=0) res[2][45]=a0;
+  if (res[2]!=0) res[2][46]=a0;
+  if (res[2]!=0) res[2][47]=a0;
+  if (res[2]!=0) res[2][48]=a0;
+  if (res[2]!=0) res[2][49]=a0;
+  if (res[2]!=0) res[2][50]=a0;
+  if (res[2]!=0) res[2][51]=a0;
+  if (res[2]!=0) res[2][52]=a0;
+  if (res[2]!=0) res[2][53]=a0;
+  if (res[2]!=0) res[2][54]=a0;
+  if (res[2]!=0) res[2][55]=a0;
+  if (res[2]!=0) res[2][56]=a0;
+  if (res[2]!=0) res[2][57]=a0;
+  if (res[2]!=0) res[2][58]=a0;
+  if (res[2]!=0) res[2][59]=a0;
+  if (res[2]!=0) res[2][60]=a0;
+  if (res[2]!=0) res[2][61]=a0;
+  if (res[2]!=0) res[2][62]=a0;
+  if (res[2]!=0) res[2][63]=a0;
+  if (res[2]!=0) res[2][64]=a0;
+  if (res[2]!=0) res[2][65]=a0;
+  if (res[2]!=0) res[2][66]=a0;
+  if (res[2]!=0) res[2][67]=a0;
+  if (res[2]!=0) res[2][68]=a0;
+  if (res[2]!=0) res[2][69]=a0;
+  if (res[2]!=0) res[2][70]=a0;
+  if (res[2]!=0) res[2][71]=a0;
+  if (res[2]!=0) res[2][72]=a0;
+  if (res[2]!=0) res[2][73]=a0;
+  if (res[2]!=0) res[2][74]=a0;
+  if (res[2]!=0) res[2][75]=a0;
+  if (res[2]!=0) res[2][76]=a0;
+  if (res[2]!=0) res[2][77]=a0;
+  if (res[2]!=0) res[2][78]=a0;
+  if (res[2]!=0) res[2][79]=a0;
+  if (res[2]!=0) res[2][80]=a0;
+  if (res[2]!=0) res[2][81]=a0;
+  if (res[2]!=0) res[2][82]=a0;
+  if (res[2]!=0) res[2][83]=a0;
+  if (res[2]!=0) res[2][84]=a0;
+  if (res[2]!=0) res[2][85]=a0;
+  if (res[2]!=0) res[2][86]=a0;
+  if (res[2]!=0) res[2][87]=a0;
+  if (res[2]!=0) res[2][88]=a0;
+  if (res[2]!=0) res[2][89]=a0;
+  if (res[2]!=0) res[2][90]=a0;
+  if (res[2]!=0) res[2][91]=a0;
+  if (res[2]!=0) res[2][92]=a0;
+  if (res[2]!=0) res[2][93]=a0;
+  if (res[2]!=0) res[2][94]=a0;
+  if (res[2]!=0) res[2][95]=a0;
+  if (res[2]!=0) res[2][96]=a0;
+  if (res[2]!=0) res[2][97]=a0;
+  if (res[2]!=0) res[2][98]=a0;
+  if (res[2]!=0) res[2][99]=a0;
+  if (res[2]!=0) res[2][100]=a0;
+  if (res[2]!=0) res[2][101]=a0;
+  if (res[2]!=0) res[2][102]=a0;
+  if (res[2]!=0) res[2][103]=a0;
+  if (res[2]!=0) res[2][104]=a0;
+  if (res[2]!=0) res[2][105]=a0;
+  if (res[2]!=0) res[2][106]=a0;
+  if (res[2]!=0) res[2][107]=a0;
+  return 0;
+}
+
+CASADI_SYMBOL_EXPORT int qd_dgrf_FL_FR_BR(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem){
+  (void)casadi_f8;
+  return qd_dgrf_solve(6, 11, casadi_f1, casadi_f0, casadi_f7, qd_did_full_sparsity_out(0), qd_did_full_sparsity_out(1), arg, res, iw, w, mem);
+}
+
+CASADI_SYMBOL_EXPORT int qd_dgrf_FL_FR_BR_checkout(void) {
+  return 0;
+}
+
+CASADI_SYMBOL_EXPORT void qd_dgrf_FL_FR_BR_release(int mem) {
+  (void)mem;
+}
+
+CASADI_SYMBOL_EXPORT void qd_dgrf_FL_FR_BR_incref(void) {
+}
+
+CASADI_SYMBOL_EXPORT void qd_dgrf_FL_FR_BR_decref(void) {
+}
+
+CASADI_SYMBOL_EXPORT casadi_int qd_dgrf_FL_FR_BR_n_in(void) { return 3;}
+
+CASADI_SYMBOL_EXPORT casadi_int qd_dgrf_FL_FR_BR_n_out(void) { return 3;}
+
+CASADI_SYMBOL_EXPORT casadi_real qd_dgrf_FL_FR_BR_default_in(casadi_int i) {
+  switch (i) {
+    default: return 0;
+  }
+}
+
+CASADI_SYMBOL_EXPORT const char* qd_dgrf_FL_FR_BR_name_in(casadi_int i) {
+  switch (i) {
+    case 0: return "q";
+    case 1: return "v";
+    case 2: return "a";
+    default: return 0;
+  }
+}
+
+CASADI_SYMBOL_EXPORT const char* qd_dgrf_FL_FR_BR_name_out(casadi_int i) {
+  switch (i) {
+    case 0: return "dlambda_dq";
+    case 1: return "dlambda_dv";
+    case 2: return "dlambda_da";
+    default: return 0;
+  }
+}
+
+CASADI_SYMBOL_EXPORT const casadi_int* qd_dgrf_FL_FR_BR_sparsity_in(casadi_int i) {
+  switch (i) {
+    case 0: return casadi_s0;
+    case 1: return casadi_s1;
+    case 2: return casadi_s1;
+    default: return 0;
+  }
+}
+
+CASADI_SYMBOL_EXPORT const casadi_int* qd_dgrf_FL_FR_BR_sparsity_out(casadi_int i) {
+  switch (i) {
+    case 0: return casadi_s7;
+    case 1: return casadi_s7;
+    case 2: return casadi_s7;
+    default: return 0;
+  }
+}
+
+CASADI_SYMBOL_EXPORT int qd_dgrf_FL_FR_BR_work(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz_iw, casadi_int *sz_w) {
+  if (sz_arg) *sz_arg = 3;
+  if (sz_res) *sz_res = 3;
+  if (sz_iw) *sz_iw = 0;
+  if (sz_w) *sz_w = 0;
+  return 0;
+}
+
+CASADI_SYMBOL_EXPORT int qd_dgrf_FL_FR_BR_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz_iw, casadi_int *sz_w) {
+  if (sz_arg) *sz_arg = 3*sizeof(const casadi_real*);
+  if (sz_res) *sz_res = 3*sizeof(casadi_real*);
+  if (sz_iw) *sz_iw = 0*sizeof(casadi_int);
+  if (sz_w) *sz_w = 0*sizeof(casadi_real);
+  return 0;
+}
+
+/* qd_dgrf_dir_FL_BL_BR:(q[19],w[6],dq[18])->(lambda_w[6],dlambda_w[6]) */
+static int casadi_f9(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem) {
+  (void)arg; (void)res; (void)iw; (void)w; (void)mem;
+  casadi_real a00, a01, a02, a03, a04, a05, a06, a07, a08, a09, a10, a11;
+  casadi_real a12, a13, a14, a15, a16, a17, a18, a19, a20, a21, a22, a23;
+  casadi_real a24, a25, a26, a27, a28, a29, a30, a31, a32, a33, a34, a35;
+  casadi_real a36, a37, a38, a39, a40, a41, a42, a43, a44, a45, a46, a47;
+  casadi_real a48, a49, a50, a51, a52, a53, a54, a55, a56, a57, a58, a59;
+  casadi_real a60, a61, a62, a63, a64, a65, a66, a67, a68, a69, a70, a71;
+  casadi_real a72, a73, a74, a75, a76, a77;
+  a00=-7.0000000000000007e-02;
+  a01=2.0000000000000001e-01;
+  a02=arg[0]? arg[0][16] : 0;
+  a03=qd_cos(a02);
+  a04=arg[0]? arg[0][17] : 0;
+  a05=qd_cos(a04);
+  a06=(a03*a05);
+  a07=(a01*a06);
+  a00=(a00+a07);
+  a07=arg[0]? arg[0][18] : 0;
+  a08=qd_cos(a07);
+  a09=(a06*a08);
+  a04=qd_sin(a04);
+  a10=(a03*a04);
+  a07=qd_sin(a07);
+  a11=(a10*a07);
+  a09=(a09-a11);
+  a09=(a01*a09);
+  a00=(a00+a09);
+  a09=-1.9000000000000000e-01;
+  a11=arg[0]? arg[0][14] : 0;
+  a12=qd_sin(a11);
+  a13=(a01*a12);
+  a13=(a09+a13);
+  a11=qd_cos(a11);
+  a14=arg[0]? arg[0][15] : 0;
+  a15=qd_sin(a14);
+  a16=(a11*a15);
+  a14=qd_cos(a14);
+  a17=(a12*a14);
+  a16=(a16+a17);
+  a16=(a01*a16);
+  a13=(a13+a16);
+  a16=(a00*a13);
+  a17=7.0000000000000007e-02;
+  a18=arg[0]? arg[0][13] : 0;
+  a19=qd_cos(a18);
+  a20=(a19*a11);
+  a21=(a01*a20);
+  a21=(a17+a21);
+  a22=(a20*a14);
+  a23=(a19*a12);
+  a24=(a23*a15);
+  a22=(a22-a24);
+  a22=(a01*a22);
+  a21=(a21+a22);
+  a22=(a01*a04);
+  a09=(a09+a22);
+  a22=(a05*a07);
+  a24=(a04*a08);
+  a22=(a22+a24);
+  a22=(a01*a22);
+  a09=(a09+a22);
+  a22=(a21*a09);
+  a16=(a16-a22);
+  a22=arg[1]? arg[1][2] : 0;
+  a24=(a16*a22);
+  a25=(a13-a09);
+  a26=arg[1]? arg[1][3] : 0;
+  a27=arg[0]? arg[0][7] : 0;
+  a28=qd_sin(a27);
+  a29=arg[0]? arg[0][8] : 0;
+  a30=qd_sin(a29);
+  a31=(a28*a30);
+  a32=arg[0]? arg[0][9] : 0;
+  a33=qd_sin(a32);
+  a34=(a31*a33);
+  a29=qd_cos(a29);
+  a35=(a28*a29);
+  a32=qd_cos(a32);
+  a36=(a35*a32);
+  a34=(a34-a36);
+  a34=(a01*a34);
+  a36=(a01*a35);
+  a34=(a34-a36);
+  a36=arg[1]? arg[1][1] : 0;
+  a37=(a09*a36);
+  a38=arg[1]? arg[1][5] : 0;
+  a27=qd_cos(a27);
+  a39=(a27*a29);
+  a40=(a01*a39);
+  a17=(a17+a40);
+  a40=(a39*a32);
+  a41=(a27*a30);
+  a42=(a41*a33);
+  a40=(a40-a42);
+  a40=(a01*a40);
+  a17=(a17+a40);
+  a40=(a17+a21);
+  a40=(a40+a00);
+  a42=arg[1]? arg[1][0] : 0;
+  a43=3.;
+  a42=(a42/a43);
+  a40=(a40*a42);
+  a38=(a38+a40);
+  a37=(a37-a38);
+  a40=(2*a09);
+  a43=1.9000000000000000e-01;
+  a44=(a01*a30);
+  a43=(a43+a44);
+  a44=(a29*a33);
+  a45=(a30*a32);
+  a44=(a44+a45);
+  a44=(a01*a44);
+  a43=(a43+a44);
+  a44=(a43+a13);
+  a40=(a40-a44);
+  a37=(a37/a40);
+  a45=(a34*a37);
+  a26=(a26+a45);
+  a18=qd_sin(a18);
+  a45=(a18*a12);
+  a46=(a45*a15);
+  a47=(a18*a11);
+  a48=(a47*a14);
+  a46=(a46-a48);
+  a46=(a01*a46);
+  a48=(a01*a47);
+  a46=(a46-a48);
+  a48=(a46*a37);
+  a26=(a26+a48);
+  a02=qd_sin(a02);
+  a48=(a02*a04);
+  a49=(a48*a07);
+  a50=(a02*a05);
+  a51=(a50*a08);
+  a49=(a49-a51);
+  a49=(a01*a49);
+  a51=(a01*a50);
+  a49=(a49-a51);
+  a38=(2*a38);
+  a44=(a44*a36);
+  a38=(a38-a44);
+  a38=(a38/a40);
+  a44=(a49*a38);
+  a26=(a26+a44);
+  a44=(a25*a26);
+  a24=(a24-a44);
+  a44=(a00-a21);
+  a51=arg[1]? arg[1][4] : 0;
+  a52=(a34+a46);
+  a52=(a52+a49);
+  a52=(a52*a42);
+  a51=(a51-a52);
+  a52=(a44*a51);
+  a24=(a24+a52);
+  a52=(a00*a43);
+  a53=(a17*a09);
+  a52=(a52-a53);
+  a16=(a16-a52);
+  a53=(a21*a43);
+  a54=(a17*a13);
+  a53=(a53-a54);
+  a16=(a16+a53);
+  a24=(a24/a16);
+  if (res[0]!=0) res[0][0]=a24;
+  a54=(a43-a09);
+  a55=(a54*a26);
+  a52=(a52*a22);
+  a55=(a55-a52);
+  a52=(a00-a17);
+  a56=(a52*a51);
+  a55=(a55-a56);
+  a55=(a55/a16);
+  if (res[0]!=0) res[0][1]=a55;
+  a53=(a53*a22);
+  a56=(a43-a13);
+  a57=(a56*a26);
+  a53=(a53-a57);
+  a57=(a21-a17);
+  a58=(a57*a51);
+  a53=(a53+a58);
+  a53=(a53/a16);
+  if (res[0]!=0) res[0][2]=a53;
+  if (res[0]!=0) res[0][3]=a42;
+  if (res[0]!=0) res[0][4]=a38;
+  if (res[0]!=0) res[0][5]=a37;
+  a58=arg[2]? arg[2][13] : 0;
+  a59=(a11*a58);
+  a60=(a01*a59);
+  a61=arg[2]? arg[2][14] : 0;
+  a62=(a14*a61);
+  a63=(a11*a62);
+  a58=(a12*a58);
+  a64=(a15*a58);
+  a63=(a63-a64);
+  a64=(a14*a59);
+  a61=(a15*a61);
+  a65=(a12*a61);
+  a64=(a64-a65);
+  a63=(a63+a64);
+  a63=(a01*a63);
+  a60=(a60+a63);
+  a63=(a00*a60);
+  a64=arg[2]? arg[2][15] : 0;
+  a65=(a02*a64);
+  a66=(a05*a65);
+  a67=arg[2]? arg[2][16] : 0;
+  a68=(a04*a67);
+  a69=(a03*a68);
+  a66=(a66+a69);
+  a69=(a01*a66);
+  a66=(a08*a66);
+  a70=arg[2]? arg[2][17] : 0;
+  a71=(a07*a70);
+  a06=(a06*a71);
+  a66=(a66+a06);
+  a67=(a05*a67);
+  a06=(a03*a67);
+  a65=(a04*a65);
+  a06=(a06-a65);
+  a06=(a07*a06);
+  a70=(a08*a70);
+  a10=(a10*a70);
+  a06=(a06+a10);
+  a66=(a66+a06);
+  a66=(a01*a66);
+  a69=(a69+a66);
+  a66=(a13*a69);
+  a63=(a63-a66);
+  a66=(a01*a67);
+  a06=(a05*a70);
+  a10=(a07*a68);
+  a06=(a06-a10);
+  a10=(a08*a67);
+  a65=(a04*a71);
+  a10=(a10-a65);
+  a06=(a06+a10);
+  a06=(a01*a06);
+  a66=(a66+a06);
+  a06=(a21*a66);
+  a10=arg[2]? arg[2][12] : 0;
+  a65=(a18*a10);
+  a72=(a11*a65);
+  a73=(a19*a58);
+  a72=(a72+a73);
+  a73=(a01*a72);
+  a72=(a14*a72);
+  a20=(a20*a61);
+  a72=(a72+a20);
+  a20=(a19*a59);
+  a65=(a12*a65);
+  a20=(a20-a65);
+  a20=(a15*a20);
+  a23=(a23*a62);
+  a20=(a20+a23);
+  a72=(a72+a20);
+  a72=(a01*a72);
+  a73=(a73+a72);
+  a72=(a09*a73);
+  a06=(a06-a72);
+  a63=(a63-a06);
+  a06=(a22*a63);
+  a72=(a60-a66);
+  a72=(a26*a72);
+  a20=arg[2]? arg[2][6] : 0;
+  a23=(a27*a20);
+  a65=(a30*a23);
+  a74=arg[2]? arg[2][7] : 0;
+  a75=(a29*a74);
+  a76=(a28*a75);
+  a65=(a65+a76);
+  a65=(a33*a65);
+  a76=arg[2]? arg[2][8] : 0;
+  a77=(a32*a76);
+  a31=(a31*a77);
+  a65=(a65+a31);
+  a23=(a29*a23);
+  a74=(a30*a74);
+  a31=(a28*a74);
+  a23=(a23-a31);
+  a31=(a32*a23);
+  a76=(a33*a76);
+  a35=(a35*a76);
+  a31=(a31-a35);
+  a65=(a65-a31);
+  a65=(a01*a65);
+  a23=(a01*a23);
+  a65=(a65-a23);
+  a23=(a37*a65);
+  a31=(a36*a66);
+  a28=(a28*a20);
+  a20=(a29*a28);
+  a35=(a27*a74);
+  a20=(a20+a35);
+  a35=(a01*a20);
+  a20=(a32*a20);
+  a39=(a39*a76);
+  a20=(a20+a39);
+  a27=(a27*a75);
+  a28=(a30*a28);
+  a27=(a27-a28);
+  a27=(a33*a27);
+  a41=(a41*a77);
+  a27=(a27+a41);
+  a20=(a20+a27);
+  a20=(a01*a20);
+  a35=(a35+a20);
+  a20=(a35+a73);
+  a20=(a20+a69);
+  a20=(a42*a20);
+  a31=(a31+a20);
+  a31=(a31/a40);
+  a27=(a37/a40);
+  a41=(2*a66);
+  a28=(a01*a75);
+  a29=(a29*a77);
+  a33=(a33*a74);
+  a29=(a29-a33);
+  a32=(a32*a75);
+  a30=(a30*a76);
+  a32=(a32-a30);
+  a29=(a29+a32);
+  a29=(a01*a29);
+  a28=(a28+a29);
+  a29=(a28+a60);
+  a41=(a41-a29);
+  a27=(a27*a41);
+  a31=(a31-a27);
+  a34=(a34*a31);
+  a23=(a23+a34);
+  a19=(a19*a10);
+  a12=(a12*a19);
+  a59=(a18*a59);
+  a12=(a12+a59);
+  a15=(a15*a12);
+  a45=(a45*a62);
+  a15=(a15+a45);
+  a11=(a11*a19);
+  a18=(a18*a58);
+  a11=(a11-a18);
+  a14=(a14*a11);
+  a47=(a47*a61);
+  a14=(a14-a47);
+  a15=(a15-a14);
+  a15=(a01*a15);
+  a11=(a01*a11);
+  a15=(a15-a11);
+  a37=(a37*a15);
+  a46=(a46*a31);
+  a37=(a37+a46);
+  a23=(a23+a37);
+  a03=(a03*a64);
+  a04=(a04*a03);
+  a67=(a02*a67);
+  a04=(a04+a67);
+  a07=(a07*a04);
+  a48=(a48*a70);
+  a07=(a07+a48);
+  a05=(a05*a03);
+  a02=(a02*a68);
+  a05=(a05-a02);
+  a08=(a08*a05);
+  a50=(a50*a71);
+  a08=(a08-a50);
+  a07=(a07-a08);
+  a07=(a01*a07);
+  a01=(a01*a05);
+  a07=(a07-a01);
+  a01=(a38*a07);
+  a20=(-a20);
+  a20=(2*a20);
+  a36=(a36*a29);
+  a20=(a20-a36);
+  a20=(a20/a40);
+  a38=(a38/a40);
+  a38=(a38*a41);
+  a20=(a20-a38);
+  a49=(a49*a20);
+  a01=(a01+a49);
+  a23=(a23+a01);
+  a25=(a25*a23);
+  a72=(a72+a25);
+  a06=(a06-a72);
+  a72=(a73-a69);
+  a72=(a51*a72);
+  a65=(a65+a15);
+  a65=(a65+a07);
+  a42=(a42*a65);
+  a44=(a44*a42);
+  a72=(a72-a44);
+  a06=(a06+a72);
+  a06=(a06/a16);
+  a24=(a24/a16);
+  a00=(a00*a28);
+  a72=(a43*a69);
+  a00=(a00-a72);
+  a72=(a17*a66);
+  a09=(a09*a35);
+  a72=(a72-a09);
+  a00=(a00-a72);
+  a63=(a63-a00);
+  a21=(a21*a28);
+  a43=(a43*a73);
+  a21=(a21-a43);
+  a17=(a17*a60);
+  a13=(a13*a35);
+  a17=(a17-a13);
+  a21=(a21-a17);
+  a63=(a63+a21);
+  a24=(a24*a63);
+  a06=(a06-a24);
+  if (res[1]!=0) res[1][0]=a06;
+  a66=(a28-a66);
+  a66=(a26*a66);
+  a54=(a54*a23);
+  a66=(a66+a54);
+  a00=(a22*a00);
+  a66=(a66-a00);
+  a69=(a35-a69);
+  a69=(a51*a69);
+  a52=(a52*a42);
+  a69=(a69-a52);
+  a66=(a66-a69);
+  a66=(a66/a16);
+  a55=(a55/a16);
+  a55=(a55*a63);
+  a66=(a66-a55);
+  if (res[1]!=0) res[1][1]=a66;
+  a22=(a22*a21);
+  a28=(a28-a60);
+  a26=(a26*a28);
+  a56=(a56*a23);
+  a26=(a26+a56);
+  a22=(a22-a26);
+  a35=(a35-a73);
+  a51=(a51*a35);
+  a57=(a57*a42);
+  a51=(a51-a57);
+  a22=(a22+a51);
+  a22=(a22/a16);
+  a53=(a53/a16);
+  a53=(a53*a63);
+  a22=(a22-a53);
+  if (res[1]!=0) res[1][2]=a22;
+  a22=0.;
+  if (res[1]!=0) res[1][3]=a22;
+  if (res[1]!=0) res[1][4]=a20;
+  if (res[1]!=0) res[1][5]=a31;
+  return 0;
+}
+
+CASADI_SYMBOL_EXPORT int qd_dgrf_dir_FL_BL_BR(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem){
+  return qd_d_finite(casadi_f9(arg, res, iw, w, mem), res, 2, (const casadi_int[]){6, 6});
+}
+
+CASADI_SYMBOL_EXPORT int qd_dgrf_dir_FL_BL_BR_checkout(void) {
+  return 0;
+}
+
+CASADI_SYMBOL_EXPORT void qd_dgrf_dir_FL_BL_BR_release(int mem) {
+  (void)mem;
+}
+
+CASADI_SYMBOL_EXPORT void qd_dgrf_dir_FL_BL_BR_incref(void) {
+}
+
+CASADI_SYMBOL_EXPORT void qd_dgrf_dir_FL_BL_BR_decref(void) {
+}
+
+CASADI_SYMBOL_EXPORT casadi_int qd_dgrf_dir_FL_BL_BR_n_in(void) { return 3;}
+
+CASADI_SYMBOL_EXPORT casadi_int qd_dgrf_dir_FL_BL_BR_n_out(void) { return 2;}
+
+CASADI_SYMBOL_EXPORT casadi_real qd_dgrf_dir_FL_BL_BR_default_in(casadi_int i) {
+  switch (i) {
+    default: return 0;
+  }
+}
+
+CASADI_SYMBOL_EXPORT const char* qd_dgrf_dir_FL_BL_BR_name_in(casadi_int i) {
+  switch (i) {
+    case 0: return "q";
+    case 1: return "w";
+    case 2: return "dq";
+    default: return 0;
+  }
+}
+
+CASADI_SYMBOL_EXPORT const char* qd_dgrf_dir_FL_BL_BR_name_out(casadi_int i) {
+  switch (i) {
+    case 0: return "lambda_w";
+    case 1: return "dlambda_w";
+    default: return 0;
+  }
+}
+
+CASADI_SYMBOL_EXPORT const casadi_int* qd_dgrf_dir_FL_BL_BR_sparsity_in(casadi_int i) {
+  switch (i) {
+    case 0: return casadi_s0;
+    case 1: return casadi_s6;
+    case 2: return casadi_s1;
+    default: return 0;
+  }
+}
+
+CASADI_SYMBOL_EXPORT const casadi_int* qd_dgrf_dir_FL_BL_BR_sparsity_out(casadi_int i) {
+  switch (i) {
+    case 0: return casadi_s6;
+    case 1: return casadi_s6;
+    default: return 0;
+  }
+}
+
+CASADI_SYMBOL_EXPORT int qd_dgrf_dir_FL_BL_BR_work(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz_iw, casadi_int *sz_w) {
+  if (sz_arg) *sz_arg = 3;
+  if (sz_res) *sz_res = 2;
+  if (sz_iw) *sz_iw = 0;
+  if (sz_w) *sz_w = 0;
+  return 0;
+}
+
+CASADI_SYMBOL_EXPORT int qd_dgrf_dir_FL_BL_BR_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz_iw, casadi_int *sz_w) {
+  if (sz_arg) *sz_arg = 3*sizeof(const casadi_real*);
+  if (sz_res) *sz_res = 2*sizeof(casadi_real*);
+  if (sz_iw) *sz_iw = 0*sizeof(casadi_int);
+  if (sz_w) *sz_w = 0*sizeof(casadi_real);
+  return 0;
+}
+
+/* qd_dgrf_FL_BL_BR:(q[19],v[18],a[18])->(dlambda_dq[6x18],dlambda_dv[6x18],dlambda_da[6x18]) */
+static int casadi_f10(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem) {
+  (void)arg; (void)res; (void)iw; (void)w; (void)mem;
+  casadi_real a0, a1, a2;
+  a0=arg[0]? arg[0][0] : 0;
+  a1=arg[0]? arg[0][1] : 0;
+  a0=(a0+a1);
+  a1=arg[0]? arg[0][2] : 0;
+  a0=(a0+a1);
+  a1=arg[0]? arg[0][3] : 0;
+  a0=(a0+a1);
+  a1=arg[0]? arg[0][4] : 0;
+  a0=(a0+a1);
+  a1=arg[0]? arg[0][5] : 0;
+  a0=(a0+a1);
+  a1=arg[0]? arg[0][6] : 0;
+  a0=(a0+a1);
+  a1=arg[0]? arg[0][7] : 0;
+  a0=(a0+a1);
+  a1=arg[0]? arg[0][8] : 0;
+  a0=(a0+a1);
+  a1=arg[0]? arg[0][9] : 0;
+  a0=(a0+a1);
+  a1=arg[0]? arg[0][10] : 0;
+  a0=(a0+a1);
+  a1=arg[0]? arg[0][11] : 0;
+  a0=(a0+a1);
+  a1=arg[0]? arg[0][12] : 0;
+  a0=(a0+a1);
+  a1=arg[0]? arg[0][13] : 0;
+  a0=(a0+a1);
+  a1=arg[0]? arg[0][14] : 0;
+  a0=(a0+a1);
+  a1=arg[0]? arg[0][15] : 0;
+  a0=(a0+a1);
+  a1=arg[0]? arg[0][16] : 0;
+  a0=(a0+a1);
+  a1=arg[0]? arg[0][17] : 0;
+  a0=(a0+a1);
+  a1=arg[0]? arg[0][18] : 0;
+  a0=(a0+a1);
+  a1=arg[1]? arg[1][0] : 0;
+  a2=arg[1]? arg[1][1] : 0;
+  a1=(a1+a2);
+  a2=arg[1]? arg[1][2] : 0;
+  a1=(a1+a2);
+  a2=arg[1]? arg[1][3] : 0;
+  a1=(a1+a2);
+  a2=arg[1]? arg[1][4] : 0;
+  a1=(a1+a2);
+  a2=arg[1]? arg[1][5] : 0;
+  a1=(a1+a2);
+  a2=arg[1]? arg[1][6] : 0;
+  a1=(a1+a2);
+  a2=arg[1]? arg[1][7] : 0;
+  a1=(a1+a2);
+  a2=arg[1]? arg[1][8] : 0;
+  a1=(a1+a2);
+  a2=arg[1]? arg[1][9] : 0;
+  a1=(a1+a2);
+  a2=arg[1]? arg[1][10] : 0;
+  a1=(a1+a2);
+  a2=arg[1]? arg[1][11] : 0;
+  a1=(a1+a2);
+  a2=arg[1]? arg[1][12] : 0;
+  a1=(a1+a2);
+  a2=arg[1]? arg[1][13] : 0;
+  a1=(a1+a2);
+  a2=arg[1]? arg[1][14] : 0;
+  a1=(a1+a2);
+  a2=arg[1]? arg[1][15] : 0;
+  a1=(a1+a2);
+  a2=arg[1]? arg[1][16] : 0;
+  a1=(a1+a2);
+  a2=arg[1]? arg[1][17] : 0;
+  a1=(a1+a2);
+  a0=(a0+a1);
+  a1=arg[2]? arg[2][0] : 0;
+  a2=arg[2]? arg[2][1] : 0;
+  a1=(a1+a2);
+  a2=arg[2]? arg[2][2] : 0;
+  a1=(a1+a2);
+  a2=arg[2]? arg[2][3] : 0;
+  a1=(a1+a2);
+  a2=arg[2]? arg[2][4] : 0;
+  a1=(a1+a2);
+  a2=arg[2]? arg[2][5] : 0;
+  a1=(a1+a2);
+  a2=arg[2]? arg[2][6] : 0;
+  a1=(a1+a2);
+  a2=arg[2]? arg[2][7] : 0;
+  a1=(a1+a2);
+  a2=arg[2]? arg[2][8] : 0;
+  a1=(a1+a2);
+  a2=arg[2]? arg[2][9] : 0;
+  a1=(a1+a2);
+  a2=arg[2]? arg[2][10] : 0;
+  a1=(a1+a2);
+  a2=arg[2]? arg[2][11] : 0;
+  a1=(a1+a2);
+  a2=arg[2]? arg[2][12] : 0;
+  a1=(a1+a2);
+  a2=arg[2]? arg[2][13] : 0;
+  a1=(a1+a2);
+  a2=arg[2]? arg[2][14] : 0;
+  a1=(a1+a2);
+  a2=arg[2]? arg[2][15] : 0;
+  a1=(a1+a2);
+  a2=arg[2]? arg[2][16] : 0;
+  a1=(a1+a2);
+  a2=arg[2]? arg[2][17] : 0;
+  a1=(a1+a2);
+  a0=(a0+a1);
+  if (res[0]!=0) res[0][0]=a0;
+  if (res[0]!=0) res[0][1]=a0;
+  if (res[0]!=0) res[0][2]=a0;
+  if (res[0]!=0) res[0][3]=a0;
+  if (res[0]!=0) res[0][4]=a0;
+  if (res[0]!=0) res[0][5]=a0;
+  if (res[0]!=0) res[0][6]=a0;
+  if (res[0]!=0) res[0][7]=a0;
+  if (res[0]!=0) res[0][8]=a0;
+  if (res[0]!=0) res[0][9]=a0;
+  if (res[0]!=0) res[0][10]=a0;
+  if (res[0]!=0) res[0][11]=a0;
+  if (res[0]!=0) res[0][12]=a0;
+  if (res[0]!=0) res[0][13]=a0;
+  if (res[0]!=0) res[0][14]=a0;
+  if (res[0]!=0) res[0][15]=a0;
+  if (res[0]!=0) res[0][16]=a0;
+  if (res[0]!=0) res[0][17]=a0;
+  if (res[0]!=0) res[0][18]=a0;
+  if (res[0]!=0) res[0][19]=a0;
+  if (res[0]!=0) res[0][20]=a0;
+  if (res[0]!=0) res[0][21]=a0;
+  if (res[0]!=0) res[0][22]=a0;
+  if (res[0]!=0) res[0][23]=a0;
+  if (res[0]!=0) res[0][24]=a0;
+  if (res[0]!=0) res[0][25]=a0;
+  if (res[0]!=0) res[0][26]=a0;
+  if (res[0]!=0) res[0][27]=a0;
+  if (res[0]!=0) res[0][28]=a0;
+  if (res[0]!=0) res[0][29]=a0;
+  if (res[0]!=0) res[0][30]=a0;
+  if (res[0]!=0) res[0][31]=a0;
+  if (res[0]!=0) res[0][32]=a0;
+  if (res[0]!=0) res[0][33]=a0;
+  if (res[0]!=0) res[0][34]=a0;
+  if (res[0]!=0) res[0][35]=a0;
+  if (res[0]!=0) res[0][36]=a0;
+  if (res[0]!=0) res[0][37]=a0;
+  if (res[0]!=0) res[0][38]=a0;
+  if (res[0]!=0) res[0][39]=a0;
+  if (res[0]!=0) res[0][40]=a0;
+  if (res[0]!=0) res[0][41]=a0;
+  if (res[0]!=0) res[0][42]=a0;
+  if (res[0]!=0) res[0][43]=a0;
+  if (res[0]!=0) res[0][44]=a0;
+  if (res[0]!=0) res[0][45]=a0;
+  if (res[0]!=0) res[0][46]=a0;
+  if (res[0]!=0) res[0][47]=a0;
+  if (res[0]!=0) res[0][48]=a0;
+  if (res[0]!=0) res[0][49]=a0;
+  if (res[0]!=0) res[0][50]=a0;
+  if (res[0]!=0) res[0][51]=a0;
+  if (res[0]!=0) res[0][52]=a0;
+  if (res[0]!=0) res[0][53]=a0;
+  if (res[0]!=0) res[0][54]=a0;
+  if (res[0]!=0) res[0][55]=a0;
+  if (res[0]!=0) res[0][56]=a0;
+  if (res[0]!=0) res[0][57]=a0;
+  if (res[0]!=0) res[0][58]=a0;
+  if (res[0]!=0) res[0][59]=a0;
+  if (res[0]!=0) res[0][60]=a0;
+  if (res[0]!=0) res[0][61]=a0;
+  if (res[0]!=0) res[0][62]=a0;
+  if (res[0]!=0) res[0][63]=a0;
+  if (res[0]!=0) res[0][64]=a0;
+  if (res[0]!=0) res[0][65]=a0;
+  if (res[0]!=0) res[0][66]=a0;
+  if (res[0]!=0) res[0][67]=a0;
+  if (res[0]!=0) res[0][68]=a0;
+  if (res[0]!=0) res[0][69]=a0;
+  if (res[0]!=0) res[0][70]=a0;
+  if (res[0]!=0) res[0][71]=a0;
+  if (res[0]!=0) res[0][72]=a0;
+  if (res[0]!=0) res[0][73]=a0;
+  if (res[0]!=0) res[0][74]=a0;
+  if (res[0]!=0) res[0][75]=a0;
+  if (res[0]!=0) res[0][76]=a0;
+  if (res[0]!=0) res[0][77]=a0;
+  if (res[0]!=0) res[0][78]=a0;
+  if (res[0]!=0) res[0][79]=a0;
+  if (res[0]!=0) res[0][80]=a0;
+  if (res[0]!=0) res[0][81]=a0;
+  if (res[0]!=0) res[0][82]=a0;
+  if (res[0]!=0) res[0][83]=a0;
+  if (res[0]!=0) res[0][84]=a0;
+  if (res[0]!=0) res[0][85]=a0;
+  if (res[0]!=0) res[0][86]=a0;
+  if (res[0]!=0) res[0][87]=a0;
+  if (res[0]!=0) res[0][88]=a0;
+  if (res[0]!=0) res[0][89]=a0;
+  if (res[0]!=0) res[0][90]=a0;
+  if (res[0]!=0) res[0][91]=a0;
+  if (res[0]!=0) res[0][92]=a0;
+  if (res[0]!=0) res[0][93]=a0;
+  if (res[0]!=0) res[0][94]=a0;
+  if (res[0]!=0) res[0][95]=a0;
+  if (res[0]!=0) res[0][96]=a0;
+  if (res[0]!=0) res[0][97]=a0;
+  if (res[0]!=0) res[0][98]=a0;
+  if (res[0]!=0) res[0][99]=a0;
+  if (res[0]!=0) res[0][100]=a0;
+  if (res[0]!=0) res[0][101]=a0;
+  if (res[0]!=0) res[0][102]=a0;
+  if (res[0]!=0) res[0][103]=a0;
+  if (res[0]!=0) res[0][104]=a0;
+  if (res[0]!=0) res[0][105]=a0;
+  if (res[0]!=0) res[0][106]=a0;
+  if (res[0]!=0) res[0][107]=a0;
+  if (res[1]!=0) res[1][0]=a0;
+  if (res[1]!=0) res[1][1]=a0;
+  if (res[1]!=0) res[1][2]=a0;
+  if (res[1]!=0) res[1][3]=a0;
+  if (res[1]!=0) res[1][4]=a0;
+  if (res[1]!=0) res[1][5]=a0;
+  if (res[1]!=0) res[1][6]=a0;
+  if (res[1]!=0) res[1][7]=a0;
+  if (res[1]!=0) res[1][8]=a0;
+  if (res[1]!=0) res[1][9]=a0;
+  if (res[1]!=0) res[1][10]=a0;
+  if (res[1]!=0) res[1][11]=a0;
+  if (res[1]!=0) res[1][12]=a0;
+  if (res[1]!=0) res[1][13]=a0;
+  if (res[1]!=0) res[1][14]=a0;
+  if (res[1]!=0) res[1][15]=a0;
+  if (res[1]!=0) res[1][16]=a0;
+  if (res[1]!=0) res[1][17]=a0;
+  if (res[1]!=0) res[1][18]=a0;
+  if (res[1]!=0) res[1][19]=a0;
+  if (res[1]!=0) res[1][20]=a0;
+  if (res[1]!=0) res[1][21]=a0;
+  if (res[1]!=0) res[1][22]=a0;
+  if (res[1]!=0) res[1][23]=a0;
+  if (res[1]!=0) res[1][24]=a0;
+  if (res[1]!=0) res[1][25]=a0;
+  if (res[1]!=0) res[1][26]=a0;
+  if (res[1]!=0) res[1][27]=a0;
+  if (res[1]!=0) res[1][28]=a0;
+  if (res[1]!=0) res[1][29]=a0;
+  if (res[1]!=0) res[1][30]=a0;
+  if (res[1]!=0) res[1][31]=a0;
+  if (res[1]!=0) res[1][32]=a0;
+  if (res[1]!=0) res[1][33]=a0;
+  if (res[1]!=0) res[1][34]=a0;
+  if (res[1]!=0) res[1][35]=a0;
+  if (res[1]!=0) res[1][36]=a0;
+  if (res[1]!=0) res[1][37]=a0;
+  if (res[1]!=0) res[1][38]=a0;
+  if (res[1]!=0) res[1][39]=a0;
+  if (res[1]!=0) res[1][40]=a0;
+  if (res[1]!=0) res[1][41]=a0;
+  if (res[1]!=0) res[1][42]=a0;
+  if (res[1]!=0) res[1][43]=a0;
+  if (res[1]!=0) res[1][44]=a0;
+  if (res[1]!=0) res[1][45]=a0;
+  if (res[1]!=0) res[1][46]=a0;
+  if (res[1]!=0) res[1][47]=a0;
+  if (res[1]!=0) res[1][48]=a0;
+  if (res[1]!=0) res[1][49]=a0;
+  if (res[1]!=0) res[1][50]=a0;
+  if (res[1]!=0) res[1][51]=a0;
+  if (res[1]!=0) res[1][52]=a0;
+  if (res[1]!=0) res[1][53]=a0;
+  if (res[1]!=0) res[1][54]=a0;
+  if (res[1]!=0) res[1][55]=a0;
+  if (res[1]!=0) res[1][56]=a0;
+  if (res[1]!=0) res[1][57]=a0;
+  if (res[1]!=0) res[1][58]=a0;
+  if (res[1]!=0) res[1][59]=a0;
+  if (res[1]!=0) res[1][60]=a0;
+  if (res[1]!=0) res[1][61]=a0;
+  if (res[1]!=0) res[1][62]=a0;
+  if (res[1]!=0) res[1][63]=a0;
+  if (res[1]!=0) res[1][64]=a0;
+  if (res[1]!=0) res[1][65]=a0;
+  if (res[1]!=0) res[1][66]=a0;
+  if (res[1]!=0) res[1][67]=a0;
+  if (res[1]!=0) res[1][68]=a0;
+  if (res[1]!=0) res[1][69]=a0;
+  if (res[1]!=0) res[1][70]=a0;
+  if (res[1]!=0) res[1][71]=a0;
+  if (res[1]!=0) res[1][72]=a0;
+  if (res[1]!=0) res[1][73]=a0;
+  if (res[1]!=0) res[1][74]=a0;
+  if (res[1]!=0) res[1][75]=a0;
+  if (res[1]!=0) res[1][76]=a0;
+  if (res[1]!=0) res[1][77]=a0;
+  if (res[1]!=0) res[1][78]=a0;
+  if (res[1]!=0) res[1][79]=a0;
+  if (res[1]!=0) res[1][80]=a0;
+  if (res[1]!=0) res[1][81]=a0;
+  if (res[1]!=0) res[1][82]=a0;
+  if (res[1]!=0) res[1][83]=a0;
+  if (res[1]!=0) res[1][84]=a0;
+  if (res[1]!=0) res[1][85]=a0;
+  if (res[1]!=0) res[1][86]=a0;
+  if (res[1]!=0) res[1][87]=a0;
+  if (res[1]!=0) res[1][88]=a0;
+  if (res[1]!=0) res[1][89]=a0;
+  if (res[1]!=0) res[1][90]=a0;
+  if (res[1]!=0) res[1][91]=a0;
+  if (res[1]!=0) res[1][92]=a0;
+  if (res[1]!=0) res[1][93]=a0;
+  if (res[1]!=0) res[1][94]=a0;
+  if (res[1]!=0) res[1][95]=a0;
+  if (res[1]!=0) res[1][96]=a0;
+  if (res[1]!=0) res[1][97]=a0;
+  if (res[1]!=0) res[1][98]=a0;
+  if (res[1]!=0) res[1][99]=a0;
+  if (res[1]!=0) res[1][100]=a0;
+  if (res[1]!=0) res[1][101]=a0;
+  if (res[1]!=0) res[1][102]=a0;
+  if (res[1]!=0) res[1][103]=a0;
+  if (res[1]!=0) res[1][104]=a0;
+  if (res[1]!=0) res[1][105]=a0;
+  if (res[1]!=0) res[1][106]=a0;
+  if (res[1]!=0) res[1][107]=a0;
+  if (res[2]!=0) res[2][0]=a0;
+  if (res[2]!=0) res[2][1]=a0;
+  if (res[2]!=0) res[2][2]=a0;
+  if (res[2]!=0) res[2][3]=a0;
+  if (res[2]!=0) res[2][4]=a0;
+  if (res[2]!=0) res[2][5]=a0;
+  if (res[2]!=0) res[2][6]=a0;
+  if (res[2]!=0) res[2][7]=a0;
+  if (res[2]!=0) res[2][8]=a0;
+  if (res[2]!=0) res[2][9]=a0;
+  if (res[2]!=0) res[2][10]=a0;
+  if (res[2]!=0) res[2][11]=a0;
+  if (res[2]!=0) res[2][12]=a0;
+  if (res[2]!=0) res[2][13]=a0;
+  if (res[2]!=0) res[2][14]=a0;
+  if (res[2]!=0) res[2][15]=a0;
+  if (res[2]!=0) res[2][16]=a0;
+  if (res[2]!=0) res[2][17]=a0;
+  if (res[2]!=0) res[2][18]=a0;
+  if (res[2]!=0) res[2][19]=a0;
+  if (res[2]!=0) res[2][20]=a0;
+  if (res[2]!=0) res[2][21]=a0;
+  if (res[2]!=0) res[2][22]=a0;
+  if (res[2]!=0) res[2][23]=a0;
+  if (res[2]!=0) res[2][24]=a0;
+  if (res[2]!=0) res[2][25]=a0;
+  if (res[2]!=0) res[2][26]=a0;
+  if (res[2]!=0) res[2][27]=a0;
+  if (res[2]!=0) res[2][28]=a0;
+  if (res[2]!=0) res[2][29]=a0;
+  if (res[2]!=0) res[2][30]=a0;
+  if (res[2]!=0) res[2][31]=a0;
+  if (res[2]!=0) res[2][32]=a0;
+  if (res[2]!=0) res[2][33]=a0;
+  if (res[2]!=0) res[2][34]=a0;
+  if (res[2]!=0) res[2][35]=a0;
+  if (res[2]!=0) res[2][36]=a0;
+  if (res[2]!=0) res[2][37]=a0;
+  if (res[2]!=0) res[2][38]=a0;
+  if (res[2]!=0) res[2][39]=a0;
+  if (res[2]!=0) res[2][40]=a0;
+  if (res[2]!=0) res[2][41]=a0;
+  if (res[2]!=0) res[2][42]=a0;
+  if (res[2]!=0) res[2][43]=a0;
+  if (res[2]!=0) res[2][44]=a0;
+  if (res[2]!=0) res[2][45]=a0;
+  if (res[2]!=0) res[2][46]=a0;
+  if (res[2]!=0) res[2][47]=a0;
+  if (res[2]!=0) res[2][48]=a0;
+  if (res[2]!=0) res[2][49]=a0;
+  if (res[2]!=0) res[2][50]=a0;
+  if (res[2]!=0) res[2][51]=a0;
+  if (res[2]!=0) res[2][52]=a0;
+  if (res[2]!=0) res[2][53]=a0;
+  if (res[2]!=0) res[2][54]=a0;
+  if (res[2]!=0) res[2][55]=a0;
+  if (res[2]!=0) res[2][56]=a0;
+  if (res[2]!=0) res[2][57]=a0;
+  if (res[2]!=0) res[2][58]=a0;
+  if (res[2]!=0) res[2][59]=a0;
+  if (res[2]!=0) res[2][60]=a0;
+  if (res[2]!=0) res[2][61]=a0;
+  if (res[2]!=0) res[2][62]=a0;
+  if (res[2]!=0) res[2][63]=a0;
+  if (res[2]!=0) res[2][64]=a0;
+  if (res[2]!=0) res[2][65]=a0;
+  if (res[2]!=0) res[2][66]=a0;
+  if (res[2]!=0) res[2][67]=a0;
+  if (res[2]!=0) res[2][68]=a0;
+  if (res[2]!=0) res[2][69]=a0;
+  if (res[2]!=0) res[2][70]=a0;
+  if (res[2]!=0) res[2][71]=a0;
+  if (res[2]!=0) res[2][72]=a0;
+  if (res[2]!=0) res[2][73]=a0;
+  if (res[2]!=0) res[2][74]=a0;
+  if (res[2]!=0) res[2][75]=a0;
+  if (res[2]!=0) res[2][76]=a0;
+  if (res[2]!=0) res[2][77]=a0;
+  if (res[2]!=0) res[2][78]=a0;
+  if (res[2]!=0) res[2][79]=a0;
+  if (res[2]!=0) res[2][80]=a0;
+  if (res[2]!=0) res[2][81]=a0;
+  if (res[2]!=0) res[2][82]=a0;
+  if (res[2]!=0) res[2][83]=a0;
+  if (res[2]!=0) res[2][84]=a0;
+  if (res[2]!=0) res[2][85]=a0;
+  if (res[2]!=0) res[2][86]=a0;
+  if (res[2]!=0) res[2][87]=a0;
+  if (res[2]!=0) res[2][88]=a0;
+  if (res[2]!=0) res[2][89]=a0;
+  if (res[2]!=0) res[2][90]=a0;
+  if (res[2]!=0) res[2][91]=a0;
+  if (res[2]!=0) res[2][92]=a0;
+  if (res[2]!=0) res[2][93]=a0;
+  if (res[2]!=0) res[2][94]=a0;
+  if (res[2]!=0) res[2][95]=a0;
+  if (res[2]!=0) res[2][96]=a0;
+  if (res[2]!=0) res[2][97]=a0;
+  if (res[2]!=0) res[2][98]=a0;
+  if (res[2]!=0) res[2][99]=a0;
+  if (res[2]!=0) res[2][100]=a0;
+  if (res[2]!=0) res[2][101]=a0;
+  if (res[2]!=0) res[2][102]=a0;
+  if (res[2]!=0) res[2][103]=a0;
+  if (res[2]!=0) res[2][104]=a0;
+  if (res[2]!=0) res[2][105]=a0;
+  if (res[2]!=0) res[2][106]=a0;
+  if (res[2]!=0) res[2][107]=a0;
+  return 0;
+}
+
+CASADI_SYMBOL_EXPORT int qd_dgrf_FL_BL_BR(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem){
+  (void)casadi_f10;
+  return qd_dgrf_solve(6, 13, casadi_f1, casadi_f0, casadi_f9, qd_did_full_sparsity_out(0), qd_did_full_sparsity_out(1), arg, res, iw, w, mem);
+}
+
+CASADI_SYMBOL_EXPORT int qd_dgrf_FL_BL_BR_checkout(void) {
+  return 0;
+}
+
+CASADI_SYMBOL_EXPORT void qd_dgrf_FL_BL_BR_release(int mem) {
+  (void)mem;
+}
+
+CASADI_SYMBOL_EXPORT void qd_dgrf_FL_BL_BR_incref(void) {
+}
+
+CASADI_SYMBOL_EXPORT void qd_dgrf_FL_BL_BR_decref(void) {
+}
+
+CASADI_SYMBOL_EXPORT casadi_int qd_dgrf_FL_BL_BR_n_in(void) { return 3;}
+
+CASADI_SYMBOL_EXPORT casadi_int qd_dgrf_FL_BL_BR_n_out(void) { return 3;}
+
+CASADI_SYMBOL_EXPORT casadi_real qd_dgrf_FL_BL_BR_default_in(casadi_int i) {
+  switch (i) {
+    default: return 0;
+  }
+}
+
+CASADI_SYMBOL_EXPORT const char* qd_dgrf_FL_BL_BR_name_in(casadi_int i) {
+  switch (i) {
+    case 0: return "q";
+    case 1: return "v";
+    case 2: return "a";
+    default: return 0;
+  }
+}
+
+CASADI_SYMBOL_EXPORT const char* qd_dgrf_FL_BL_BR_name_out(casadi_int i) {
+  switch (i) {
+    case 0: return "dlambda_dq";
+    case 1: return "dlambda_dv";
+    case 2: return "dlambda_da";
+    default: return 0;
+  }
+}
+
+CASADI_SYMBOL_EXPORT const casadi_int* qd_dgrf_FL_BL_BR_sparsity_in(casadi_int i) {
+  switch (i) {
+    case 0: return casadi_s0;
+    case 1: return casadi_s1;
+    case 2: return casadi_s1;
+    default: return 0;
+  }
+}
+
+CASADI_SYMBOL_EXPORT const casadi_int* qd_dgrf_FL_BL_BR_sparsity_out(casadi_int i) {
+  switch (i) {
+    case 0: return casadi_s7;
+    case 1: return casadi_s7;
+    case 2: return casadi_s7;
+    default: return 0;
+  }
+}
+
+CASADI_SYMBOL_EXPORT int qd_dgrf_FL_BL_BR_work(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz_iw, casadi_int *sz_w) {
+  if (sz_arg) *sz_arg = 3;
+  if (sz_res) *sz_res = 3;
+  if (sz_iw) *sz_iw = 0;
+  if (sz_w) *sz_w = 0;
+  return 0;
+}
+
+CASADI_SYMBOL_EXPORT int qd_dgrf_FL_BL_BR_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz_iw, casadi_int *sz_w) {
+  if (sz_arg) *sz_arg = 3*sizeof(const casadi_real*);
+  if (sz_res) *sz_res = 3*sizeof(casadi_real*);
+  if (sz_iw) *sz_iw = 0*sizeof(casadi_int);
+  if (sz_w) *sz_w = 0*sizeof(casadi_real);
+  return 0;
+}
+
+/* qd_dgrf_dir_FR_BL_BR:(q[19],w[6],dq[18])->(lambda_w[6],dlambda_w[6]) */
+static int casadi_f11(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem) {
+  (void)arg; (void)res; (void)iw; (void)w; (void)mem;
+  casadi_real a00, a01, a02, a03, a04, a05, a06, a07, a08, a09, a10, a11;
+  casadi_real a12, a13, a14, a15, a16, a17, a18, a19, a20, a21, a22, a23;
+  casadi_real a24, a25, a26, a27, a28, a29, a30, a31, a32, a33, a34, a35;
+  casadi_real a36, a37, a38, a39, a40, a41, a42, a43, a44, a45, a46, a47;
+  casadi_real a48, a49, a50, a51, a52, a53, a54, a55, a56, a57, a58, a59;
+  casadi_real a60, a61, a62, a63, a64, a65, a66, a67, a68, a69, a70, a71;
+  casadi_real a72, a73, a74, a75, a76, a77;
+  a00=-7.0000000000000007e-02;
+  a01=2.0000000000000001e-01;
+  a02=arg[0]? arg[0][16] : 0;
+  a03=qd_cos(a02);
+  a04=arg[0]? arg[0][17] : 0;
+  a05=qd_cos(a04);
+  a06=(a03*a05);
+  a07=(a01*a06);
+  a07=(a00+a07);
+  a08=arg[0]? arg[0][18] : 0;
+  a09=qd_cos(a08);
+  a10=(a06*a09);
+  a04=qd_sin(a04);
+  a11=(a03*a04);
+  a08=qd_sin(a08);
+  a12=(a11*a08);
+  a10=(a10-a12);
+  a10=(a01*a10);
+  a07=(a07+a10);
+  a10=-1.9000000000000000e-01;
+  a12=arg[0]? arg[0][14] : 0;
+  a13=qd_sin(a12);
+  a14=(a01*a13);
+  a14=(a10+a14);
+  a12=qd_cos(a12);
+  a15=arg[0]? arg[0][15] : 0;
+  a16=qd_sin(a15);
+  a17=(a12*a16);
+  a15=qd_cos(a15);
+  a18=(a13*a15);
+  a17=(a17+a18);
+  a17=(a01*a17);
+  a14=(a14+a17);
+  a17=(a07*a14);
+  a18=7.0000000000000007e-02;
+  a19=arg[0]? arg[0][13] : 0;
+  a20=qd_cos(a19);
+  a21=(a20*a12);
+  a22=(a01*a21);
+  a18=(a18+a22);
+  a22=(a21*a15);
+  a23=(a20*a13);
+  a24=(a23*a16);
+  a22=(a22-a24);
+  a22=(a01*a22);
+  a18=(a18+a22);
+  a22=(a01*a04);
+  a10=(a10+a22);
+  a22=(a05*a08);
+  a24=(a04*a09);
+  a22=(a22+a24);
+  a22=(a01*a22);
+  a10=(a10+a22);
+  a22=(a18*a10);
+  a17=(a17-a22);
+  a22=arg[1]? arg[1][2] : 0;
+  a24=(a17*a22);
+  a25=(a14-a10);
+  a26=arg[1]? arg[1][3] : 0;
+  a27=arg[0]? arg[0][10] : 0;
+  a28=qd_sin(a27);
+  a29=arg[0]? arg[0][11] : 0;
+  a30=qd_sin(a29);
+  a31=(a28*a30);
+  a32=arg[0]? arg[0][12] : 0;
+  a33=qd_sin(a32);
+  a34=(a31*a33);
+  a29=qd_cos(a29);
+  a35=(a28*a29);
+  a32=qd_cos(a32);
+  a36=(a35*a32);
+  a34=(a34-a36);
+  a34=(a01*a34);
+  a36=(a01*a35);
+  a34=(a34-a36);
+  a36=arg[1]? arg[1][1] : 0;
+  a37=(a14*a36);
+  a38=arg[1]? arg[1][5] : 0;
+  a27=qd_cos(a27);
+  a39=(a27*a29);
+  a40=(a01*a39);
+  a00=(a00+a40);
+  a40=(a39*a32);
+  a41=(a27*a30);
+  a42=(a41*a33);
+  a40=(a40-a42);
+  a40=(a01*a40);
+  a00=(a00+a40);
+  a40=(a00+a18);
+  a40=(a40+a07);
+  a42=arg[1]? arg[1][0] : 0;
+  a43=3.;
+  a42=(a42/a43);
+  a40=(a40*a42);
+  a38=(a38+a40);
+  a37=(a37-a38);
+  a40=(2*a14);
+  a43=1.9000000000000000e-01;
+  a44=(a01*a30);
+  a43=(a43+a44);
+  a44=(a29*a33);
+  a45=(a30*a32);
+  a44=(a44+a45);
+  a44=(a01*a44);
+  a43=(a43+a44);
+  a44=(a43+a10);
+  a40=(a40-a44);
+  a37=(a37/a40);
+  a45=(a34*a37);
+  a26=(a26+a45);
+  a19=qd_sin(a19);
+  a45=(a19*a13);
+  a46=(a45*a16);
+  a47=(a19*a12);
+  a48=(a47*a15);
+  a46=(a46-a48);
+  a46=(a01*a46);
+  a48=(a01*a47);
+  a46=(a46-a48);
+  a38=(2*a38);
+  a44=(a44*a36);
+  a38=(a38-a44);
+  a38=(a38/a40);
+  a44=(a46*a38);
+  a26=(a26+a44);
+  a02=qd_sin(a02);
+  a44=(a02*a04);
+  a48=(a44*a08);
+  a49=(a02*a05);
+  a50=(a49*a09);
+  a48=(a48-a50);
+  a48=(a01*a48);
+  a50=(a01*a49);
+  a48=(a48-a50);
+  a50=(a48*a37);
+  a26=(a26+a50);
+  a50=(a25*a26);
+  a24=(a24-a50);
+  a50=(a07-a18);
+  a51=arg[1]? arg[1][4] : 0;
+  a52=(a34+a46);
+  a52=(a52+a48);
+  a52=(a52*a42);
+  a51=(a51-a52);
+  a52=(a50*a51);
+  a24=(a24+a52);
+  a52=(a07*a43);
+  a53=(a00*a10);
+  a52=(a52-a53);
+  a17=(a17-a52);
+  a53=(a18*a43);
+  a54=(a00*a14);
+  a53=(a53-a54);
+  a17=(a17+a53);
+  a24=(a24/a17);
+  if (res[0]!=0) res[0][0]=a24;
+  a54=(a43-a10);
+  a55=(a54*a26);
+  a52=(a52*a22);
+  a55=(a55-a52);
+  a52=(a07-a00);
+  a56=(a52*a51);
+  a55=(a55-a56);
+  a55=(a55/a17);
+  if (res[0]!=0) res[0][1]=a55;
+  a53=(a53*a22);
+  a56=(a43-a14);
+  a57=(a56*a26);
+  a53=(a53-a57);
+  a57=(a18-a00);
+  a58=(a57*a51);
+  a53=(a53+a58);
+  a53=(a53/a17);
+  if (res[0]!=0) res[0][2]=a53;
+  if (res[0]!=0) res[0][3]=a42;
+  if (res[0]!=0) res[0][4]=a38;
+  if (res[0]!=0) res[0][5]=a37;
+  a58=arg[2]? arg[2][13] : 0;
+  a59=(a12*a58);
+  a60=(a01*a59);
+  a61=arg[2]? arg[2][14] : 0;
+  a62=(a15*a61);
+  a63=(a12*a62);
+  a58=(a13*a58);
+  a64=(a16*a58);
+  a63=(a63-a64);
+  a64=(a15*a59);
+  a61=(a16*a61);
+  a65=(a13*a61);
+  a64=(a64-a65);
+  a63=(a63+a64);
+  a63=(a01*a63);
+  a60=(a60+a63);
+  a63=(a07*a60);
+  a64=arg[2]? arg[2][15] : 0;
+  a65=(a02*a64);
+  a66=(a05*a65);
+  a67=arg[2]? arg[2][16] : 0;
+  a68=(a04*a67);
+  a69=(a03*a68);
+  a66=(a66+a69);
+  a69=(a01*a66);
+  a66=(a09*a66);
+  a70=arg[2]? arg[2][17] : 0;
+  a71=(a08*a70);
+  a06=(a06*a71);
+  a66=(a66+a06);
+  a67=(a05*a67);
+  a06=(a03*a67);
+  a65=(a04*a65);
+  a06=(a06-a65);
+  a06=(a08*a06);
+  a70=(a09*a70);
+  a11=(a11*a70);
+  a06=(a06+a11);
+  a66=(a66+a06);
+  a66=(a01*a66);
+  a69=(a69+a66);
+  a66=(a14*a69);
+  a63=(a63-a66);
+  a66=(a01*a67);
+  a06=(a05*a70);
+  a11=(a08*a68);
+  a06=(a06-a11);
+  a11=(a09*a67);
+  a65=(a04*a71);
+  a11=(a11-a65);
+  a06=(a06+a11);
+  a06=(a01*a06);
+  a66=(a66+a06);
+  a06=(a18*a66);
+  a11=arg[2]? arg[2][12] : 0;
+  a65=(a19*a11);
+  a72=(a12*a65);
+  a73=(a20*a58);
+  a72=(a72+a73);
+  a73=(a01*a72);
+  a72=(a15*a72);
+  a21=(a21*a61);
+  a72=(a72+a21);
+  a21=(a20*a59);
+  a65=(a13*a65);
+  a21=(a21-a65);
+  a21=(a16*a21);
+  a23=(a23*a62);
+  a21=(a21+a23);
+  a72=(a72+a21);
+  a72=(a01*a72);
+  a73=(a73+a72);
+  a72=(a10*a73);
+  a06=(a06-a72);
+  a63=(a63-a06);
+  a06=(a22*a63);
+  a72=(a60-a66);
+  a72=(a26*a72);
+  a21=arg[2]? arg[2][9] : 0;
+  a23=(a27*a21);
+  a65=(a30*a23);
+  a74=arg[2]? arg[2][10] : 0;
+  a75=(a29*a74);
+  a76=(a28*a75);
+  a65=(a65+a76);
+  a65=(a33*a65);
+  a76=arg[2]? arg[2][11] : 0;
+  a77=(a32*a76);
+  a31=(a31*a77);
+  a65=(a65+a31);
+  a23=(a29*a23);
+  a74=(a30*a74);
+  a31=(a28*a74);
+  a23=(a23-a31);
+  a31=(a32*a23);
+  a76=(a33*a76);
+  a35=(a35*a76);
+  a31=(a31-a35);
+  a65=(a65-a31);
+  a65=(a01*a65);
+  a23=(a01*a23);
+  a65=(a65-a23);
+  a23=(a37*a65);
+  a31=(a36*a60);
+  a28=(a28*a21);
+  a21=(a29*a28);
+  a35=(a27*a74);
+  a21=(a21+a35);
+  a35=(a01*a21);
+  a21=(a32*a21);
+  a39=(a39*a76);
+  a21=(a21+a39);
+  a27=(a27*a75);
+  a28=(a30*a28);
+  a27=(a27-a28);
+  a27=(a33*a27);
+  a41=(a41*a77);
+  a27=(a27+a41);
+  a21=(a21+a27);
+  a21=(a01*a21);
+  a35=(a35+a21);
+  a21=(a35+a73);
+  a21=(a21+a69);
+  a21=(a42*a21);
+  a31=(a31+a21);
+  a31=(a31/a40);
+  a27=(a37/a40);
+  a41=(2*a60);
+  a28=(a01*a75);
+  a29=(a29*a77);
+  a33=(a33*a74);
+  a29=(a29-a33);
+  a32=(a32*a75);
+  a30=(a30*a76);
+  a32=(a32-a30);
+  a29=(a29+a32);
+  a29=(a01*a29);
+  a28=(a28+a29);
+  a29=(a28+a66);
+  a41=(a41-a29);
+  a27=(a27*a41);
+  a31=(a31-a27);
+  a34=(a34*a31);
+  a23=(a23+a34);
+  a20=(a20*a11);
+  a13=(a13*a20);
+  a59=(a19*a59);
+  a13=(a13+a59);
+  a16=(a16*a13);
+  a45=(a45*a62);
+  a16=(a16+a45);
+  a12=(a12*a20);
+  a19=(a19*a58);
+  a12=(a12-a19);
+  a15=(a15*a12);
+  a47=(a47*a61);
+  a15=(a15-a47);
+  a16=(a16-a15);
+  a16=(a01*a16);
+  a12=(a01*a12);
+  a16=(a16-a12);
+  a12=(a38*a16);
+  a21=(-a21);
+  a21=(2*a21);
+  a36=(a36*a29);
+  a21=(a21-a36);
+  a21=(a21/a40);
+  a38=(a38/a40);
+  a38=(a38*a41);
+  a21=(a21-a38);
+  a46=(a46*a21);
+  a12=(a12+a46);
+  a23=(a23+a12);
+  a03=(a03*a64);
+  a04=(a04*a03);
+  a67=(a02*a67);
+  a04=(a04+a67);
+  a08=(a08*a04);
+  a44=(a44*a70);
+  a08=(a08+a44);
+  a05=(a05*a03);
+  a02=(a02*a68);
+  a05=(a05-a02);
+  a09=(a09*a05);
+  a49=(a49*a71);
+  a09=(a09-a49);
+  a08=(a08-a09);
+  a08=(a01*a08);
+  a01=(a01*a05);
+  a08=(a08-a01);
+  a37=(a37*a08);
+  a48=(a48*a31);
+  a37=(a37+a48);
+  a23=(a23+a37);
+  a25=(a25*a23);
+  a72=(a72+a25);
+  a06=(a06-a72);
+  a72=(a73-a69);
+  a72=(a51*a72);
+  a65=(a65+a16);
+  a65=(a65+a08);
+  a42=(a42*a65);
+  a50=(a50*a42);
+  a72=(a72-a50);
+  a06=(a06+a72);
+  a06=(a06/a17);
+  a24=(a24/a17);
+  a07=(a07*a28);
+  a72=(a43*a69);
+  a07=(a07-a72);
+  a72=(a00*a66);
+  a10=(a10*a35);
+  a72=(a72-a10);
+  a07=(a07-a72);
+  a63=(a63-a07);
+  a18=(a18*a28);
+  a43=(a43*a73);
+  a18=(a18-a43);
+  a00=(a00*a60);
+  a14=(a14*a35);
+  a00=(a00-a14);
+  a18=(a18-a00);
+  a63=(a63+a18);
+  a24=(a24*a63);
+  a06=(a06-a24);
+  if (res[1]!=0) res[1][0]=a06;
+  a66=(a28-a66);
+  a66=(a26*a66);
+  a54=(a54*a23);
+  a66=(a66+a54);
+  a07=(a22*a07);
+  a66=(a66-a07);
+  a69=(a35-a69);
+  a69=(a51*a69);
+  a52=(a52*a42);
+  a69=(a69-a52);
+  a66=(a66-a69);
+  a66=(a66/a17);
+  a55=(a55/a17);
+  a55=(a55*a63);
+  a66=(a66-a55);
+  if (res[1]!=0) res[1][1]=a66;
+  a22=(a22*a18);
+  a28=(a28-a60);
+  a26=(a26*a28);
+  a56=(a56*a23);
+  a26=(a26+a56);
+  a22=(a22-a26);
+  a35=(a35-a73);
+  a51=(a51*a35);
+  a57=(a57*a42);
+  a51=(a51-a57);
+  a22=(a22+a51);
+  a22=(a22/a17);
+  a53=(a53/a17);
+  a53=(a53*a63);
+  a22=(a22-a53);
+  if (res[1]!=0) res[1][2]=a22;
+  a22=0.;
+  if (res[1]!=0) res[1][3]=a22;
+  if (res[1]!=0) res[1][4]=a21;
+  if (res[1]!=0) res[1][5]=a31;
+  return 0;
+}
+
+CASADI_SYMBOL_EXPORT int qd_dgrf_dir_FR_BL_BR(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem){
+  return qd_d_finite(casadi_f11(arg, res, iw, w, mem), res, 2, (const casadi_int[]){6, 6});
+}
+
+CASADI_SYMBOL_EXPORT int qd_dgrf_dir_FR_BL_BR_checkout(void) {
+  return 0;
+}
+
+CASADI_SYMBOL_EXPORT void qd_dgrf_dir_FR_BL_BR_release(int mem) {
+  (void)mem;
+}
+
+CASADI_SYMBOL_EXPORT void qd_dgrf_dir_FR_BL_BR_incref(void) {
+}
+
+CASADI_SYMBOL_EXPORT void qd_dgrf_dir_FR_BL_BR_decref(void) {
+}
+
+CASADI_SYMBOL_EXPORT casadi_int qd_dgrf_dir_FR_BL_BR_n_in(void) { return 3;}
+
+CASADI_SYMBOL_EXPORT casadi_int qd_dgrf_dir_FR_BL_BR_n_out(void) { return 2;}
+
+CASADI_SYMBOL_EXPORT casadi_real qd_dgrf_dir_FR_BL_BR_default_in(casadi_int i) {
+  switch (i) {
+    default: return 0;
+  }
+}
+
+CASADI_SYMBOL_EXPORT const char* qd_dgrf_dir_FR_BL_BR_name_in(casadi_int i) {
+  switch (i) {
+    case 0: return "q";
+    case 1: return "w";
+    case 2: return "dq";
+    default: return 0;
+  }
+}
+
+CASADI_SYMBOL_EXPORT const char* qd_dgrf_dir_FR_BL_BR_name_out(casadi_int i) {
+  switch (i) {
+    case 0: return "lambda_w";
+    case 1: return "dlambda_w";
+    default: return 0;
+  }
+}
+
+CASADI_SYMBOL_EXPORT const casadi_int* qd_dgrf_dir_FR_BL_BR_sparsity_in(casadi_int i) {
+  switch (i) {
+    case 0: return casadi_s0;
+    case 1: return casadi_s6;
+    case 2: return casadi_s1;
+    default: return 0;
+  }
+}
+
+CASADI_SYMBOL_EXPORT const casadi_int* qd_dgrf_dir_FR_BL_BR_sparsity_out(casadi_int i) {
+  switch (i) {
+    case 0: return casadi_s6;
+    case 1: return casadi_s6;
+    default: return 0;
+  }
+}
+
+CASADI_SYMBOL_EXPORT int qd_dgrf_dir_FR_BL_BR_work(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz_iw, casadi_int *sz_w) {
+  if (sz_arg) *sz_arg = 3;
+  if (sz_res) *sz_res = 2;
+  if (sz_iw) *sz_iw = 0;
+  if (sz_w) *sz_w = 0;
+  return 0;
+}
+
+CASADI_SYMBOL_EXPORT int qd_dgrf_dir_FR_BL_BR_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz_iw, casadi_int *sz_w) {
+  if (sz_arg) *sz_arg = 3*sizeof(const casadi_real*);
+  if (sz_res) *sz_res = 2*sizeof(casadi_real*);
+  if (sz_iw) *sz_iw = 0*sizeof(casadi_int);
+  if (sz_w) *sz_w = 0*sizeof(casadi_real);
+  return 0;
+}
+
+/* qd_dgrf_FR_BL_BR:(q[19],v[18],a[18])->(dlambda_dq[6x18],dlambda_dv[6x18],dlambda_da[6x18]) */
+static int casadi_f12(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem) {
+  (void)arg; (void)res; (void)iw; (void)w; (void)mem;
+  casadi_real a0, a1, a2;
+  a0=arg[0]? arg[0][0] : 0;
+  a1=arg[0]? arg[0][1] : 0;
+  a0=(a0+a1);
+  a1=arg[0]? arg[0][2] : 0;
+  a0=(a0+a1);
+  a1=arg[0]? arg[0][3] : 0;
+  a0=(a0+a1);
+  a1=arg[0]? arg[0][4] : 0;
+  a0=(a0+a1);
+  a1=arg[0]? arg[0][5] : 0;
+  a0=(a0+a1);
+  a1=arg[0]? arg[0][6] : 0;
+  a0=(a0+a1);
+  a1=arg[0]? arg[0][7] : 0;
+  a0=(a0+a1);
+  a1=arg[0]? arg[0][8] : 0;
+  a0=(a0+a1);
+  a1=arg[0]? arg[0][9] : 0;
+  a0=(a0+a1);
+  a1=arg[0]? arg[0][10] : 0;
+  a0=(a0+a1);
+  a1=arg[0]? arg[0][11] : 0;
+  a0=(a0+a1);
+  a1=arg[0]? arg[0][12] : 0;
+  a0=(a0+a1);
+  a1=arg[0]? arg[0][13] : 0;
+  a0=(a0+a1);
+  a1=arg[0]? arg[0][14] : 0;
+  a0=(a0+a1);
+  a1=arg[0]? arg[0][15] : 0;
+  a0=(a0+a1);
+  a1=arg[0]? arg[0][16] : 0;
+  a0=(a0+a1);
+  a1=arg[0]? arg[0][17] : 0;
+  a0=(a0+a1);
+  a1=arg[0]? arg[0][18] : 0;
+  a0=(a0+a1);
+  a1=arg[1]? arg[1][0] : 0;
+  a2=arg[1]? arg[1][1] : 0;
+  a1=(a1+a2);
+  a2=arg[1]? arg[1][2] : 0;
+  a1=(a1+a2);
+  a2=arg[1]? arg[1][3] : 0;
+  a1=(a1+a2);
+  a2=arg[1]? arg[1][4] : 0;
+  a1=(a1+a2);
+  a2=arg[1]? arg[1][5] : 0;
+  a1=(a1+a2);
+  a2=arg[1]? arg[1][6] : 0;
+  a1=(a1+a2);
+  a2=arg[1]? arg[1][7] : 0;
+  a1=(a1+a2);
+  a2=arg[1]? arg[1][8] : 0;
+  a1=(a1+a2);
+  a2=arg[1]? arg[1][9] : 0;
+  a1=(a1+a2);
+  a2=arg[1]? arg[1][10] : 0;
+  a1=(a1+a2);
+  a2=arg[1]? arg[1][11] : 0;
+  a1=(a1+a2);
+  a2=arg[1]? arg[1][12] : 0;
+  a1=(a1+a2);
+  a2=arg[1]? arg[1][13] : 0;
+  a1=(a1+a2);
+  a2=arg[1]? arg[1][14] : 0;
+  a1=(a1+a2);
+  a2=arg[1]? arg[1][15] : 0;
+  a1=(a1+a2);
+  a2=arg[1]? arg[1][16] : 0;
+  a1=(a1+a2);
+  a2=arg[1]? arg[1][17] : 0;
+  a1=(a1+a2);
+  a0=(a0+a1);
+  a1=arg[2]? arg[2][0] : 0;
+  a2=arg[2]? arg[2][1] : 0;
+  a1=(a1+a2);
+  a2=arg[2]? arg[2][2] : 0;
+  a1=(a1+a2);
+  a2=arg[2]? arg[2][3] : 0;
+  a1=(a1+a2);
+  a2=arg[2]? arg[2][4] : 0;
+  a1=(a1+a2);
+  a2=arg[2]? arg[2][5] : 0;
+  a1=(a1+a2);
+  a2=arg[2]? arg[2][6] : 0;
+  a1=(a1+a2);
+  a2=arg[2]? arg[2][7] : 0;
+  a1=(a1+a2);
+  a2=arg[2]? arg[2][8] : 0;
+  a1=(a1+a2);
+  a2=arg[2]? arg[2][9] : 0;
+  a1=(a1+a2);
+  a2=arg[2]? arg[2][10] : 0;
+  a1=(a1+a2);
+  a2=arg[2]? arg[2][11] : 0;
+  a1=(a1+a2);
+  a2=arg[2]? arg[2][12] : 0;
+  a1=(a1+a2);
+  a2=arg[2]? arg[2][13] : 0;
+  a1=(a1+a2);
+  a2=arg[2]? arg[2][14] : 0;
+  a1=(a1+a2);
+  a2=arg[2]? arg[2][15] : 0;
+  a1=(a1+a2);
+  a2=arg[2]? arg[2][16] : 0;
+  a1=(a1+a2);
+  a2=arg[2]? arg[2][17] : 0;
+  a1=(a1+a2);
+  a0=(a0+a1);
+  if (res[0]!=0) res[0][0]=a0;
+  if (res[0]!=0) res[0][1]=a0;
+  if (res[0]!=0) res[0][2]=a0;
+  if (res[0]!=0) res[0][3]=a0;
+  if (res[0]!=0) res[0][4]=a0;
+  if (res[0]!=0) res[0][5]=a0;
+  if (res[0]!=0) res[0][6]=a0;
+  if (res[0]!=0) res[0][7]=a0;
+  if (res[0]!=0) res[0][8]=a0;
+  if (res[0]!=0) res[0][9]=a0;
+  if (res[0]!=0) res[0][10]=a0;
+  if (res[0]!=0) res[0][11]=a0;
+  if (res[0]!=0) res[0][12]=a0;
+  if (res[0]!=0) res[0][13]=a0;
+  if (res[0]!=0) res[0][14]=a0;
+  if (res[0]!=0) res[0][15]=a0;
+  if (res[0]!=0) res[0][16]=a0;
+  if (res[0]!=0) res[0][17]=a0;
+  if (res[0]!=0) res[0][18]=a0;
+  if (res[0]!=0) res[0][19]=a0;
+  if (res[0]!=0) res[0][20]=a0;
+  if (res[0]!=0) res[0][21]=a0;
+  if (res[0]!=0) res[0][22]=a0;
+  if (res[0]!=0) res[0][23]=a0;
+  if (res[0]!=0) res[0][24]=a0;
+  if (res[0]!=0) res[0][25]=a0;
+  if (res[0]!=0) res[0][26]=a0;
+  if (res[0]!=0) res[0][27]=a0;
+  if (res[0]!=0) res[0][28]=a0;
+  if (res[0]!=0) res[0][29]=a0;
+  if (res[0]!=0) res[0][30]=a0;
+  if (res[0]!=0) res[0][31]=a0;
+  if (res[0]!=0) res[0][32]=a0;
+  if (res[0]!=0) res[0][33]=a0;
+  if (res[0]!=0) res[0][34]=a0;
+  if (res[0]!=0) res[0][35]=a0;
+  if (res[0]!=0) res[0][36]=a0;
+  if (res[0]!=0) res[0][37]=a0;
+  if (res[0]!=0) res[0][38]=a0;
+  if (res[0]!=0) res[0][39]=a0;
+  if (res[0]!=0) res[0][40]=a0;
+  if (res[0]!=0) res[0][41]=a0;
+  if (res[0]!=0) res[0][42]=a0;
+  if (res[0]!=0) res[0][43]=a0;
+  if (res[0]!=0) res[0][44]=a0;
+  if (res[0]!=0) res[0][45]=a0;
+  if (res[0]!=0) res[0][46]=a0;
+  if (res[0]!=0) res[0][47]=a0;
+  if (res[0]!=0) res[0][48]=a0;
+  if (res[0]!=0) res[0][49]=a0;
+  if (res[0]!=0) res[0][50]=a0;
+  if (res[0]!=0) res[0][51]=a0;
+  if (res[0]!=0) res[0][52]=a0;
+  if (res[0]!=0) res[0][53]=a0;
+  if (res[0]!=0) res[0][54]=a0;
+  if (res[0]!=0) res[0][55]=a0;
+  if (res[0]!=0) res[0][56]=a0;
+  if (res[0]!=0) res[0][57]=a0;
+  if (res[0]!=0) res[0][58]=a0;
+  if (res[0]!=0) res[0][59]=a0;
+  if (res[0]!=0) res[0][60]=a0;
+  if (res[0]!=0) res[0][61]=a0;
+  if (res[0]!=0) res[0][62]=a0;
+  if (res[0]!=0) res[0][63]=a0;
+  if (res[0]!=0) res[0][64]=a0;
+  if (res[0]!=0) res[0][65]=a0;
+  if (res[0]!=0) res[0][66]=a0;
+  if (res[0]!=0) res[0][67]=a0;
+  if (res[0]!=0) res[0][68]=a0;
+  if (res[0]!=0) res[0][69]=a0;
+  if (res[0]!=0) res[0][70]=a0;
+  if (res[0]!=0) res[0][71]=a0;
+  if (res[0]!=0) res[0][72]=a0;
+  if (res[0]!=0) res[0][73]=a0;
+  if (res[0]!=0) res[0][74]=a0;
+  if (res[0]!=0) res[0][75]=a0;
+  if (res[0]!=0) res[0][76]=a0;
+  if (res[0]!=0) res[0][77]=a0;
+  if (res[0]!=0) res[0][78]=a0;
+  if (res[0]!=0) res[0][79]=a0;
+  if (res[0]!=0) res[0][80]=a0;
+  if (res[0]!=0) res[0][81]=a0;
+  if (res[0]!=0) res[0][82]=a0;
+  if (res[0]!=0) res[0][83]=a0;
+  if (res[0]!=0) res[0][84]=a0;
+  if (res[0]!=0) res[0][85]=a0;
+  if (res[0]!=0) res[0][86]=a0;
+  if (res[0]!=0) res[0][87]=a0;
+  if (res[0]!=0) res[0][88]=a0;
+  if (res[0]!=0) res[0][89]=a0;
+  if (res[0]!=0) res[0][90]=a0;
+  if (res[0]!=0) res[0][91]=a0;
+  if (res[0]!=0) res[0][92]=a0;
+  if (res[0]!=0) res[0][93]=a0;
+  if (res[0]!=0) res[0][94]=a0;
+  if (res[0]!=0) res[0][95]=a0;
+  if (res[0]!=0) res[0][96]=a0;
+  if (res[0]!=0) res[0][97]=a0;
+  if (res[0]!=0) res[0][98]=a0;
+  if (res[0]!=0) res[0][99]=a0;
+  if (res[0]!=0) res[0][100]=a0;
+  if (res[0]!=0) res[0][101]=a0;
+  if (res[0]!=0) res[0][102]=a0;
+  if (res[0]!=0) res[0][103]=a0;
+  if (res[0]!=0) res[0][104]=a0;
+  if (res[0]!=0) res[0][105]=a0;
+  if (res[0]!=0) res[0][106]=a0;
+  if (res[0]!=0) res[0][107]=a0;
+  if (res[1]!=0) res[1][0]=a0;
+  if (res[1]!=0) res[1][1]=a0;
+  if (res[1]!=0) res[1][2]=a0;
+  if (res[1]!=0) res[1][3]=a0;
+  if (res[1]!=0) res[1][4]=a0;
+  if (res[1]!=0) res[1][5]=a0;
+  if (res[1]!=0) res[1][6]=a0;
+  if (res[1]!=0) res[1][7]=a0;
+  if (res[1]!=0) res[1][8]=a0;
+  if (res[1]!=0) res[1][9]=a0;
+  if (res[1]!=0) res[1][10]=a0;
+  if (res[1]!=0) res[1][11]=a0;
+  if (res[1]!=0) res[1][12]=a0;
+  if (res[1]!=0) res[1][13]=a0;
+  if (res[1]!=0) res[1][14]=a0;
+  if (res[1]!=0) res[1][15]=a0;
+  if (res[1]!=0) res[1][16]=a0;
+  if (res[1]!=0) res[1][17]=a0;
+  if (res[1]!=0) res[1][18]=a0;
+  if (res[1]!=0) res[1][19]=a0;
+  if (res[1]!=0) res[1][20]=a0;
+  if (res[1]!=0) res[1][21]=a0;
+  if (res[1]!=0) res[1][22]=a0;
+  if (res[1]!=0) res[1][23]=a0;
+  if (res[1]!=0) res[1][24]=a0;
+  if (res[1]!=0) res[1][25]=a0;
+  if (res[1]!=0) res[1][26]=a0;
+  if (res[1]!=0) res[1][27]=a0;
+  if (res[1]!=0) res[1][28]=a0;
+  if (res[1]!=0) res[1][29]=a0;
+  if (res[1]!=0) res[1][30]=a0;
+  if (res[1]!=0) res[1][31]=a0;
+  if (res[1]!=0) res[1][32]=a0;
+  if (res[1]!=0) res[1][33]=a0;
+  if (res[1]!=0) res[1][34]=a0;
+  if (res[1]!=0) res[1][35]=a0;
+  if (res[1]!=0) res[1][36]=a0;
+  if (res[1]!=0) res[1][37]=a0;
+  if (res[1]!=0) res[1][38]=a0;
+  if (res[1]!=0) res[1][39]=a0;
+  if (res[1]!=0) res[1][40]=a0;
+  if (res[1]!=0) res[1][41]=a0;
+  if (res[1]!=0) res[1][42]=a0;
+  if (res[1]!=0) res[1][43]=a0;
+  if (res[1]!=0) res[1][44]=a0;
+  if (res[1]!=0) res[1][45]=a0;
+  if (res[1]!=0) res[1][46]=a0;
+  if (res[1]!=0) res[1][47]=a0;
+  if (res[1]!=0) res[1][48]=a0;
+  if (res[1]!=0) res[1][49]=a0;
+  if (res[1]!=0) res[1][50]=a0;
+  if (res[1]!=0) res[1][51]=a0;
+  if (res[1]!=0) res[1][52]=a0;
+  if (res[1]!=0) res[1][53]=a0;
+  if (res[1]!=0) res[1][54]=a0;
+  if (res[1]!=0) res[1][55]=a0;
+  if (res[1]!=0) res[1][56]=a0;
+  if (res[1]!=0) res[1][57]=a0;
+  if (res[1]!=0) res[1][58]=a0;
+  if (res[1]!=0) res[1][59]=a0;
+  if (res[1]!=0) res[1][60]=a0;
+  if (res[1]!=0) res[1][61]=a0;
+  if (res[1]!=0) res[1][62]=a0;
+  if (res[1]!=0) res[1][63]=a0;
+  if (res[1]!=0) res[1][64]=a0;
+  if (res[1]!=0) res[1][65]=a0;
+  if (res[1]!=0) res[1][66]=a0;
+  if (res[1]!=0) res[1][67]=a0;
+  if (res[1]!=0) res[1][68]=a0;
+  if (res[1]!=0) res[1][69]=a0;
+  if (res[1]!=0) res[1][70]=a0;
+  if (res[1]!=0) res[1][71]=a0;
+  if (res[1]!=0) res[1][72]=a0;
+  if (res[1]!=0) res[1][73]=a0;
+  if (res[1]!=0) res[1][74]=a0;
+  if (res[1]!=0) res[1][75]=a0;
+  if (res[1]!=0) res[1][76]=a0;
+  if (res[1]!=0) res[1][77]=a0;
+  if (res[1]!=0) res[1][78]=a0;
+  if (res[1]!=0) res[1][79]=a0;
+  if (res[1]!=0) res[1][80]=a0;
+  if (res[1]!=0) res[1][81]=a0;
+  if (res[1]!=0) res[1][82]=a0;
+  if (res[1]!=0) res[1][83]=a0;
+  if (res[1]!=0) res[1][84]=a0;
+  if (res[1]!=0) res[1][85]=a0;
+  if (res[1]!=0) res[1][86]=a0;
+  if (res[1]!=0) res[1][87]=a0;
+  if (res[1]!=0) res[1][88]=a0;
+  if (res[1]!=0) res[1][89]=a0;
+  if (res[1]!=0) res[1][90]=a0;
+  if (res[1]!=0) res[1][91]=a0;
+  if (res[1]!=0) res[1][92]=a0;
+  if (res[1]!=0) res[1][93]=a0;
+  if (res[1]!=0) res[1][94]=a0;
+  if (res[1]!=0) res[1][95]=a0;
+  if (res[1]!=0) res[1][96]=a0;
+  if (res[1]!=0) res[1][97]=a0;
+  if (res[1]!=0) res[1][98]=a0;
+  if (res[1]!=0) res[1][99]=a0;
+  if (res[1]!=0) res[1][100]=a0;
+  if (res[1]!=0) res[1][101]=a0;
+  if (res[1]!=0) res[1][102]=a0;
+  if (res[1]!=0) res[1][103]=a0;
+  if (res[1]!=0) res[1][104]=a0;
+  if (res[1]!=0) res[1][105]=a0;
+  if (res[1]!=0) res[1][106]=a0;
+  if (res[1]!=0) res[1][107]=a0;
+  if (res[2]!=0) res[2][0]=a0;
+  if (res[2]!=0) res[2][1]=a0;
+  if (res[2]!=0) res[2][2]=a0;
+  if (res[2]!=0) res[2][3]=a0;
+  if (res[2]!=0) res[2][4]=a0;
+  if (res[2]!=0) res[2][5]=a0;
+  if (res[2]!=0) res[2][6]=a0;
+  if (res[2]!=0) res[2][7]=a0;
+  if (res[2]!=0) res[2][8]=a0;
+  if (res[2]!=0) res[2][9]=a0;
+  if (res[2]!=0) res[2][10]=a0;
+  if (res[2]!=0) res[2][11]=a0;
+  if (res[2]!=0) res[2][12]=a0;
+  if (res[2]!=0) res[2][13]=a0;
+  if (res[2]!=0) res[2][14]=a0;
+  if (res[2]!=0) res[2][15]=a0;
+  if (res[2]!=0) res[2][16]=a0;
+  if (res[2]!=0) res[2][17]=a0;
+  if (res[2]!=0) res[2][18]=a0;
+  if (res[2]!=0) res[2][19]=a0;
+  if (res[2]!=0) res[2][20]=a0;
+  if (res[2]!=0) res[2][21]=a0;
+  if (res[2]!=0) res[2][22]=a0;
+  if (res[2]!=0) res[2][23]=a0;
+  if (res[2]!=0) res[2][24]=a0;
+  if (res[2]!=0) res[2][25]=a0;
+  if (res[2]!=0) res[2][26]=a0;
+  if (res[2]!=0) res[2][27]=a0;
+  if (res[2]!=0) res[2][28]=a0;
+  if (res[2]!=0) res[2][29]=a0;
+  if (res[2]!=0) res[2][30]=a0;
+  if (res[2]!=0) res[2][31]=a0;
+  if (res[2]!=0) res[2][32]=a0;
+  if (res[2]!=0) res[2][33]=a0;
+  if (res[2]!=0) res[2][34]=a0;
+  if (res[2]!=0) res[2][35]=a0;
+  if (res[2]!=0) res[2][36]=a0;
+  if (res[2]!=0) res[2][37]=a0;
+  if (res[2]!=0) res[2][38]=a0;
+  if (res[2]!=0) res[2][39]=a0;
+  if (res[2]!=0) res[2][40]=a0;
+  if (res[2]!=0) res[2][41]=a0;
+  if (res[2]!=0) res[2][42]=a0;
+  if (res[2]!=0) res[2][43]=a0;
+  if (res[2]!=0) res[2][44]=a0;
+  if (res[2]!=0) res[2][45]=a0;
+  if (res[2]!=0) res[2][46]=a0;
+  if (res[2]!=0) res[2][47]=a0;
+  if (res[2]!=0) res[2][48]=a0;
+  if (res[2]!=0) res[2][49]=a0;
+  if (res[2]!=0) res[2][50]=a0;
+  if (res[2]!=0) res[2][51]=a0;
+  if (res[2]!=0) res[2][52]=a0;
+  if (res[2]!=0) res[2][53]=a0;
+  if (res[2]!=0) res[2][54]=a0;
+  if (res[2]!=0) res[2][55]=a0;
+  if (res[2]!=0) res[2][56]=a0;
+  if (res[2]!=0) res[2][57]=a0;
+  if (res[2]!=0) res[2][58]=a0;
+  if (res[2]!=0) res[2][59]=a0;
+  if (res[2]!=0) res[2][60]=a0;
+  if (res[2]!=0) res[2][61]=a0;
+  if (res[2]!=0) res[2][62]=a0;
+  if (res[2]!=0) res[2][63]=a0;
+  if (res[2]!=0) res[2][64]=a0;
+  if (res[2]!=0) res[2][65]=a0;
+  if (res[2]!=0) res[2][66]=a0;
+  if (res[2]!=0) res[2][67]=a0;
+  if (res[2]!=0) res[2][68]=a0;
+  if (res[2]!=0) res[2][69]=a0;
+  if (res[2]!=0) res[2][70]=a0;
+  if (res[2]!=0) res[2][71]=a0;
+  if (res[2]!=0) res[2][72]=a0;
+  if (res[2]!=0) res[2][73]=a0;
+  if (res[2]!=0) res[2][74]=a0;
+  if (res[2]!=0) res[2][75]=a0;
+  if (res[2]!=0) res[2][76]=a0;
+  if (res[2]!=0) res[2][77]=a0;
+  if (res[2]!=0) res[2][78]=a0;
+  if (res[2]!=0) res[2][79]=a0;
+  if (res[2]!=0) res[2][80]=a0;
+  if (res[2]!=0) res[2][81]=a0;
+  if (res[2]!=0) res[2][82]=a0;
+  if (res[2]!=0) res[2][83]=a0;
+  if (res[2]!=0) res[2][84]=a0;
+  if (res[2]!=0) res[2][85]=a0;
+  if (res[2]!=0) res[2][86]=a0;
+  if (res[2]!=0) res[2][87]=a0;
+  if (res[2]!=0) res[2][88]=a0;
+  if (res[2]!=0) res[2][89]=a0;
+  if (res[2]!=0) res[2][90]=a0;
+  if (res[2]!=0) res[2][91]=a0;
+  if (res[2]!=0) res[2][92]=a0;
+  if (res[2]!=0) res[2][93]=a0;
+  if (res[2]!=0) res[2][94]=a0;
+  if (res[2]!=0) res[2][95]=a0;
+  if (res[2]!=0) res[2][96]=a0;
+  if (res[2]!=0) res[2][97]=a0;
+  if (res[2]!=0) res[2][98]=a0;
+  if (res[2]!=0) res[2][99]=a0;
+  if (res[2]!=0) res[2][100]=a0;
+  if (res[2]!=0) res[2][101]=a0;
+  if (res[2]!=0) res[2][102]=a0;
+  if (res[2]!=0) res[2][103]=a0;
+  if (res[2]!=0) res[2][104]=a0;
+  if (res[2]!=0) res[2][105]=a0;
+  if (res[2]!=0) res[2][106]=a0;
+  if (res[2]!=0) res[2][107]=a0;
+  return 0;
+}
+
+CASADI_SYMBOL_EXPORT int qd_dgrf_FR_BL_BR(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem){
+  (void)casadi_f12;
+  return qd_dgrf_solve(6, 14, casadi_f1, casadi_f0, casadi_f11, qd_did_full_sparsity_out(0), qd_did_full_sparsity_out(1), arg, res, iw, w, mem);
+}
+
+CASADI_SYMBOL_EXPORT int qd_dgrf_FR_BL_BR_checkout(void) {
+  return 0;
+}
+
+CASADI_SYMBOL_EXPORT void qd_dgrf_FR_BL_BR_release(int mem) {
+  (void)mem;
+}
+
+CASADI_SYMBOL_EXPORT void qd_dgrf_FR_BL_BR_incref(void) {
+}
+
+CASADI_SYMBOL_EXPORT void qd_dgrf_FR_BL_BR_decref(void) {
+}
+
+CASADI_SYMBOL_EXPORT casadi_int qd_dgrf_FR_BL_BR_n_in(void) { return 3;}
+
+CASADI_SYMBOL_EXPORT casadi_int qd_dgrf_FR_BL_BR_n_out(void) { return 3;}
+
+CASADI_SYMBOL_EXPORT casadi_real qd_dgrf_FR_BL_BR_default_in(casadi_int i) {
+  switch (i) {
+    default: return 0;
+  }
+}
+
+CASADI_SYMBOL_EXPORT const char* qd_dgrf_FR_BL_BR_name_in(casadi_int i) {
+  switch (i) {
+    case 0: return "q";
+    case 1: return "v";
+    case 2: return "a";
+    default: return 0;
+  }
+}
+
+CASADI_SYMBOL_EXPORT const char* qd_dgrf_FR_BL_BR_name_out(casadi_int i) {
+  switch (i) {
+    case 0: return "dlambda_dq";
+    case 1: return "dlambda_dv";
+    case 2: return "dlambda_da";
+    default: return 0;
+  }
+}
+
+CASADI_SYMBOL_EXPORT const casadi_int* qd_dgrf_FR_BL_BR_sparsity_in(casadi_int i) {
+  switch (i) {
+    case 0: return casadi_s0;
+    case 1: return casadi_s1;
+    case 2: return casadi_s1;
+    default: return 0;
+  }
+}
+
+CASADI_SYMBOL_EXPORT const casadi_int* qd_dgrf_FR_BL_BR_sparsity_out(casadi_int i) {
+  switch (i) {
+    case 0: return casadi_s7;
+    case 1: return casadi_s7;
+    case 2: return casadi_s7;
+    default: return 0;
+  }
+}
+
+CASADI_SYMBOL_EXPORT int qd_dgrf_FR_BL_BR_work(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz_iw, casadi_int *sz_w) {
+  if (sz_arg) *sz_arg = 3;
+  if (sz_res) *sz_res = 3;
+  if (sz_iw) *sz_iw = 0;
+  if (sz_w) *sz_w = 0;
+  return 0;
+}
+
+CASADI_SYMBOL_EXPORT int qd_dgrf_FR_BL_BR_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz_iw, casadi_int *sz_w) {
+  if (sz_arg) *sz_arg = 3*sizeof(const casadi_real*);
+  if (sz_res) *sz_res = 3*sizeof(casadi_real*);
+  if (sz_iw) *sz_iw = 0*sizeof(casadi_int);
+  if (sz_w) *sz_w = 0*sizeof(casadi_real);
+  return 0;
+}
+
+/* qd_dgrf_dir_FL_FR:(q[19],w[6],dq[18])->(lambda_w[6],dlambda_w[6]) */
+static int casadi_f13(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem) {
+  (void)arg; (void)res; (void)iw; (void)w; (void)mem;
+  casadi_real a00, a01, a02, a03, a04, a05, a06, a07, a08, a09, a10, a11;
+  casadi_real a12, a13, a14, a15, a16, a17, a18, a19, a20, a21, a22, a23;
+  casadi_real a24, a25, a26, a27, a28, a29, a30, a31, a32, a33, a34, a35;
+  casadi_real a36, a37, a38, a39, a40, a41, a42, a43, a44, a45, a46, a47;
+  casadi_real a48, a49, a50, a51, a52, a53, a54, a55, a56, a57, a58, a59;
+  casadi_real a60, a61;
+  a00=arg[1]? arg[1][0] : 0;
+  a01=7.0000000000000007e-02;
+  a02=2.0000000000000001e-01;
+  a03=arg[0]? arg[0][7] : 0;
+  a04=qd_cos(a03);
+  a05=arg[0]? arg[0][8] : 0;
+  a06=qd_cos(a05);
+  a07=(a04*a06);
+  a08=(a02*a07);
+  a01=(a01+a08);
+  a08=arg[0]? arg[0][9] : 0;
+  a09=qd_cos(a08);
+  a10=(a07*a09);
+  a05=qd_sin(a05);
+  a11=(a04*a05);
+  a08=qd_sin(a08);
+  a12=(a11*a08);
+  a10=(a10-a12);
+  a10=(a02*a10);
+  a01=(a01+a10);
+  a03=qd_sin(a03);
+  a10=(a03*a05);
+  a12=(a10*a08);
+  a13=(a03*a06);
+  a14=(a13*a09);
+  a12=(a12-a14);
+  a12=(a02*a12);
+  a14=(a02*a13);
+  a12=(a12-a14);
+  a14=arg[0]? arg[0][10] : 0;
+  a15=qd_sin(a14);
+  a16=arg[0]? arg[0][11] : 0;
+  a17=qd_sin(a16);
+  a18=(a15*a17);
+  a19=arg[0]? arg[0][12] : 0;
+  a20=qd_sin(a19);
+  a21=(a18*a20);
+  a16=qd_cos(a16);
+  a22=(a15*a16);
+  a19=qd_cos(a19);
+  a23=(a22*a19);
+  a21=(a21-a23);
+  a21=(a02*a21);
+  a23=(a02*a22);
+  a21=(a21-a23);
+  a23=(a12-a21);
+  a24=(a01*a23);
+  a25=-7.0000000000000007e-02;
+  a14=qd_cos(a14);
+  a26=(a14*a16);
+  a27=(a02*a26);
+  a25=(a25+a27);
+  a27=(a26*a19);
+  a28=(a14*a17);
+  a29=(a28*a20);
+  a27=(a27-a29);
+  a27=(a02*a27);
+  a25=(a25+a27);
+  a27=(a01-a25);
+  a29=(a12*a27);
+  a24=(a24-a29);
+  a29=(a24*a00);
+  a30=1.9000000000000000e-01;
+  a31=(a02*a05);
+  a31=(a30+a31);
+  a32=(a06*a08);
+  a33=(a05*a09);
+  a32=(a32+a33);
+  a32=(a02*a32);
+  a31=(a31+a32);
+  a32=(a02*a17);
+  a30=(a30+a32);
+  a32=(a16*a20);
+  a33=(a17*a19);
+  a32=(a32+a33);
+  a32=(a02*a32);
+  a30=(a30+a32);
+  a32=(a31-a30);
+  a33=(a12*a32);
+  a34=(a31*a23);
+  a33=(a33-a34);
+  a34=arg[1]? arg[1][1] : 0;
+  a35=(a33*a34);
+  a29=(a29+a35);
+  a35=(a31*a27);
+  a36=(a01*a32);
+  a35=(a35-a36);
+  a36=arg[1]? arg[1][2] : 0;
+  a37=(a35*a36);
+  a29=(a29+a37);
+  a37=arg[1]? arg[1][3] : 0;
+  a38=(a32*a37);
+  a39=arg[1]? arg[1][4] : 0;
+  a40=(a27*a39);
+  a38=(a38+a40);
+  a40=arg[1]? arg[1][5] : 0;
+  a41=(a23*a40);
+  a38=(a38+a41);
+  a29=(a29+a38);
+  a38=casadi_sq(a24);
+  a41=casadi_sq(a33);
+  a38=(a38+a41);
+  a41=casadi_sq(a35);
+  a38=(a38+a41);
+  a41=casadi_sq(a32);
+  a42=casadi_sq(a27);
+  a41=(a41+a42);
+  a42=casadi_sq(a23);
+  a41=(a41+a42);
+  a38=(a38+a41);
+  a29=(a29/a38);
+  a42=(a24*a29);
+  a42=(a00-a42);
+  a43=2.;
+  a44=(a42/a43);
+  a45=(a27*a29);
+  a45=(a39-a45);
+  a21=(a12+a21);
+  a21=(a21/a43);
+  a46=(a21*a42);
+  a30=(a31+a30);
+  a30=(a30/a43);
+  a47=(a35*a29);
+  a47=(a36-a47);
+  a48=(a30*a47);
+  a46=(a46-a48);
+  a45=(a45-a46);
+  a46=(a23*a45);
+  a48=(a23*a29);
+  a48=(a40-a48);
+  a49=(a33*a29);
+  a49=(a34-a49);
+  a50=(a30*a49);
+  a25=(a01+a25);
+  a25=(a25/a43);
+  a51=(a25*a42);
+  a50=(a50-a51);
+  a48=(a48-a50);
+  a50=(a27*a48);
+  a46=(a46-a50);
+  a46=(a46/a41);
+  a50=(a44+a46);
+  if (res[0]!=0) res[0][0]=a50;
+  a50=(a49/a43);
+  a51=(a32*a48);
+  a52=(a32*a29);
+  a52=(a37-a52);
+  a53=(a25*a47);
+  a54=(a21*a49);
+  a53=(a53-a54);
+  a52=(a52-a53);
+  a53=(a23*a52);
+  a51=(a51-a53);
+  a51=(a51/a41);
+  a53=(a50+a51);
+  if (res[0]!=0) res[0][1]=a53;
+  a43=(a47/a43);
+  a53=(a27*a52);
+  a54=(a32*a45);
+  a53=(a53-a54);
+  a53=(a53/a41);
+  a54=(a43+a53);
+  if (res[0]!=0) res[0][2]=a54;
+  a44=(a44-a46);
+  if (res[0]!=0) res[0][3]=a44;
+  a50=(a50-a51);
+  if (res[0]!=0) res[0][4]=a50;
+  a43=(a43-a53);
+  if (res[0]!=0) res[0][5]=a43;
+  a43=arg[2]? arg[2][6] : 0;
+  a50=(a04*a43);
+  a44=(a05*a50);
+  a54=arg[2]? arg[2][7] : 0;
+  a55=(a06*a54);
+  a56=(a03*a55);
+  a44=(a44+a56);
+  a44=(a08*a44);
+  a56=arg[2]? arg[2][8] : 0;
+  a57=(a09*a56);
+  a10=(a10*a57);
+  a44=(a44+a10);
+  a50=(a06*a50);
+  a54=(a05*a54);
+  a10=(a03*a54);
+  a50=(a50-a10);
+  a10=(a09*a50);
+  a56=(a08*a56);
+  a13=(a13*a56);
+  a10=(a10-a13);
+  a44=(a44-a10);
+  a44=(a02*a44);
+  a50=(a02*a50);
+  a44=(a44-a50);
+  a50=arg[2]? arg[2][9] : 0;
+  a10=(a14*a50);
+  a13=(a17*a10);
+  a58=arg[2]? arg[2][10] : 0;
+  a59=(a16*a58);
+  a60=(a15*a59);
+  a13=(a13+a60);
+  a13=(a20*a13);
+  a60=arg[2]? arg[2][11] : 0;
+  a61=(a19*a60);
+  a18=(a18*a61);
+  a13=(a13+a18);
+  a10=(a16*a10);
+  a58=(a17*a58);
+  a18=(a15*a58);
+  a10=(a10-a18);
+  a18=(a19*a10);
+  a60=(a20*a60);
+  a22=(a22*a60);
+  a18=(a18-a22);
+  a13=(a13-a18);
+  a13=(a02*a13);
+  a10=(a02*a10);
+  a13=(a13-a10);
+  a10=(a44-a13);
+  a18=(a45*a10);
+  a15=(a15*a50);
+  a50=(a16*a15);
+  a22=(a14*a58);
+  a50=(a50+a22);
+  a22=(a02*a50);
+  a50=(a19*a50);
+  a26=(a26*a60);
+  a50=(a50+a26);
+  a14=(a14*a59);
+  a15=(a17*a15);
+  a14=(a14-a15);
+  a14=(a20*a14);
+  a28=(a28*a61);
+  a14=(a14+a28);
+  a50=(a50+a14);
+  a50=(a02*a50);
+  a22=(a22+a50);
+  a03=(a03*a43);
+  a43=(a06*a03);
+  a50=(a04*a54);
+  a43=(a43+a50);
+  a50=(a02*a43);
+  a43=(a09*a43);
+  a07=(a07*a56);
+  a43=(a43+a07);
+  a04=(a04*a55);
+  a03=(a05*a03);
+  a04=(a04-a03);
+  a04=(a08*a04);
+  a11=(a11*a57);
+  a04=(a04+a11);
+  a43=(a43+a04);
+  a43=(a02*a43);
+  a50=(a50+a43);
+  a43=(a22-a50);
+  a04=(a29*a43);
+  a11=(a01*a10);
+  a03=(a23*a50);
+  a11=(a11-a03);
+  a03=(a27*a44);
+  a07=(a12*a43);
+  a03=(a03+a07);
+  a11=(a11-a03);
+  a00=(a00*a11);
+  a03=(a32*a44);
+  a07=(a02*a55);
+  a06=(a06*a57);
+  a08=(a08*a54);
+  a06=(a06-a08);
+  a09=(a09*a55);
+  a05=(a05*a56);
+  a09=(a09-a05);
+  a06=(a06+a09);
+  a06=(a02*a06);
+  a07=(a07+a06);
+  a06=(a02*a59);
+  a16=(a16*a61);
+  a20=(a20*a58);
+  a16=(a16-a20);
+  a19=(a19*a59);
+  a17=(a17*a60);
+  a19=(a19-a17);
+  a16=(a16+a19);
+  a02=(a02*a16);
+  a06=(a06+a02);
+  a02=(a07-a06);
+  a12=(a12*a02);
+  a03=(a03+a12);
+  a12=(a23*a07);
+  a16=(a31*a10);
+  a12=(a12+a16);
+  a03=(a03-a12);
+  a34=(a34*a03);
+  a00=(a00+a34);
+  a34=(a27*a07);
+  a31=(a31*a43);
+  a34=(a34+a31);
+  a01=(a01*a02);
+  a31=(a32*a50);
+  a01=(a01-a31);
+  a34=(a34-a01);
+  a36=(a36*a34);
+  a00=(a00+a36);
+  a37=(a37*a02);
+  a39=(a39*a43);
+  a37=(a37+a39);
+  a40=(a40*a10);
+  a37=(a37+a40);
+  a00=(a00+a37);
+  a00=(a00/a38);
+  a38=(a29/a38);
+  a37=(2*a24);
+  a37=(a37*a11);
+  a40=(2*a33);
+  a40=(a40*a03);
+  a37=(a37+a40);
+  a40=(2*a35);
+  a40=(a40*a34);
+  a37=(a37+a40);
+  a40=(2*a32);
+  a40=(a40*a02);
+  a39=(2*a27);
+  a39=(a39*a43);
+  a40=(a40+a39);
+  a39=(2*a23);
+  a39=(a39*a10);
+  a40=(a40+a39);
+  a37=(a37+a40);
+  a38=(a38*a37);
+  a00=(a00-a38);
+  a38=(a27*a00);
+  a04=(a04+a38);
+  a38=5.0000000000000000e-01;
+  a44=(a44+a13);
+  a44=(a38*a44);
+  a13=(a42*a44);
+  a11=(a29*a11);
+  a24=(a24*a00);
+  a11=(a11+a24);
+  a24=(a21*a11);
+  a13=(a13-a24);
+  a07=(a07+a06);
+  a07=(a38*a07);
+  a06=(a47*a07);
+  a34=(a29*a34);
+  a35=(a35*a00);
+  a34=(a34+a35);
+  a35=(a30*a34);
+  a06=(a06-a35);
+  a13=(a13-a06);
+  a04=(a04+a13);
+  a13=(a23*a04);
+  a18=(a18-a13);
+  a13=(a48*a43);
+  a06=(a29*a10);
+  a35=(a23*a00);
+  a06=(a06+a35);
+  a07=(a49*a07);
+  a03=(a29*a03);
+  a33=(a33*a00);
+  a03=(a03+a33);
+  a30=(a30*a03);
+  a07=(a07-a30);
+  a50=(a50+a22);
+  a50=(a38*a50);
+  a42=(a42*a50);
+  a22=(a25*a11);
+  a42=(a42+a22);
+  a07=(a07+a42);
+  a06=(a06+a07);
+  a07=(a27*a06);
+  a13=(a13-a07);
+  a18=(a18-a13);
+  a18=(a18/a41);
+  a46=(a46/a41);
+  a46=(a46*a40);
+  a18=(a18-a46);
+  a11=(a38*a11);
+  a46=(a18-a11);
+  if (res[1]!=0) res[1][0]=a46;
+  a48=(a48*a02);
+  a06=(a32*a06);
+  a48=(a48-a06);
+  a10=(a52*a10);
+  a47=(a47*a50);
+  a25=(a25*a34);
+  a47=(a47+a25);
+  a49=(a49*a44);
+  a21=(a21*a03);
+  a49=(a49-a21);
+  a47=(a47+a49);
+  a29=(a29*a02);
+  a00=(a32*a00);
+  a29=(a29+a00);
+  a47=(a47-a29);
+  a23=(a23*a47);
+  a10=(a10+a23);
+  a48=(a48-a10);
+  a48=(a48/a41);
+  a51=(a51/a41);
+  a51=(a51*a40);
+  a48=(a48-a51);
+  a03=(a38*a03);
+  a51=(a48-a03);
+  if (res[1]!=0) res[1][1]=a51;
+  a52=(a52*a43);
+  a27=(a27*a47);
+  a52=(a52+a27);
+  a45=(a45*a02);
+  a32=(a32*a04);
+  a45=(a45-a32);
+  a52=(a52-a45);
+  a52=(a52/a41);
+  a53=(a53/a41);
+  a53=(a53*a40);
+  a52=(a52-a53);
+  a38=(a38*a34);
+  a34=(a52-a38);
+  if (res[1]!=0) res[1][2]=a34;
+  a11=(a11+a18);
+  a11=(-a11);
+  if (res[1]!=0) res[1][3]=a11;
+  a03=(a03+a48);
+  a03=(-a03);
+  if (res[1]!=0) res[1][4]=a03;
+  a38=(a38+a52);
+  a38=(-a38);
+  if (res[1]!=0) res[1][5]=a38;
+  return 0;
+}
+
+CASADI_SYMBOL_EXPORT int qd_dgrf_dir_FL_FR(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem){
+  return qd_d_finite(casadi_f13(arg, res, iw, w, mem), res, 2, (const casadi_int[]){6, 6});
+}
+
+CASADI_SYMBOL_EXPORT int qd_dgrf_dir_FL_FR_checkout(void) {
+  return 0;
+}
+
+CASADI_SYMBOL_EXPORT void qd_dgrf_dir_FL_FR_release(int mem) {
+  (void)mem;
+}
+
+CASADI_SYMBOL_EXPORT void qd_dgrf_dir_FL_FR_incref(void) {
+}
+
+CASADI_SYMBOL_EXPORT void qd_dgrf_dir_FL_FR_decref(void) {
+}
+
+CASADI_SYMBOL_EXPORT casadi_int qd_dgrf_dir_FL_FR_n_in(void) { return 3;}
+
+CASADI_SYMBOL_EXPORT casadi_int qd_dgrf_dir_FL_FR_n_out(void) { return 2;}
+
+CASADI_SYMBOL_EXPORT casadi_real qd_dgrf_dir_FL_FR_default_in(casadi_int i) {
+  switch (i) {
+    default: return 0;
+  }
+}
+
+CASADI_SYMBOL_EXPORT const char* qd_dgrf_dir_FL_FR_name_in(casadi_int i) {
+  switch (i) {
+    case 0: return "q";
+    case 1: return "w";
+    case 2: return "dq";
+    default: return 0;
+  }
+}
+
+CASADI_SYMBOL_EXPORT const char* qd_dgrf_dir_FL_FR_name_out(casadi_int i) {
+  switch (i) {
+    case 0: return "lambda_w";
+    case 1: return "dlambda_w";
+    default: return 0;
+  }
+}
+
+CASADI_SYMBOL_EXPORT const casadi_int* qd_dgrf_dir_FL_FR_sparsity_in(casadi_int i) {
+  switch (i) {
+    case 0: return casadi_s0;
+    case 1: return casadi_s6;
+    case 2: return casadi_s1;
+    default: return 0;
+  }
+}
+
+CASADI_SYMBOL_EXPORT const casadi_int* qd_dgrf_dir_FL_FR_sparsity_out(casadi_int i) {
+  switch (i) {
+    case 0: return casadi_s6;
+    case 1: return casadi_s6;
+    default: return 0;
+  }
+}
+
+CASADI_SYMBOL_EXPORT int qd_dgrf_dir_FL_FR_work(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz_iw, casadi_int *sz_w) {
+  if (sz_arg) *sz_arg = 3;
+  if (sz_res) *sz_res = 2;
+  if (sz_iw) *sz_iw = 0;
+  if (sz_w) *sz_w = 0;
+  return 0;
+}
+
+CASADI_SYMBOL_EXPORT int qd_dgrf_dir_FL_FR_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz_iw, casadi_int *sz_w) {
+  if (sz_arg) *sz_arg = 3*sizeof(const casadi_real*);
+  if (sz_res) *sz_res = 2*sizeof(casadi_real*);
+  if (sz_iw) *sz_iw = 0*sizeof(casadi_int);
+  if (sz_w) *sz_w = 0*sizeof(casadi_real);
+  return 0;
+}
+
+/* qd_dgrf_FL_FR:(q[19],v[18],a[18])->(dlambda_dq[6x18],dlambda_dv[6x18],dlambda_da[6x18]) */
+static int casadi_f14(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem) {
+  (void)arg; (void)res; (void)iw; (void)w; (void)mem;
+  casadi_real a0, a1, a2;
+  a0=arg[0]? arg[0][0] : 0;
+  a1=arg[0]? arg[0][1] : 0;
+  a0=(a0+a1);
+  a1=arg[0]? arg[0][2] : 0;
+  a0=(a0+a1);
+  a1=arg[0]? arg[0][3] : 0;
+  a0=(a0+a1);
+  a1=arg[0]? arg[0][4] : 0;
+  a0=(a0+a1);
+  a1=arg[0]? arg[0][5] : 0;
+  a0=(a0+a1);
+  a1=arg[0]? arg[0][6] : 0;
+  a0=(a0+a1);
+  a1=arg[0]? arg[0][7] : 0;
+  a0=(a0+a1);
+  a1=arg[0]? arg[0][8] : 0;
+  a0=(a0+a1);
+  a1=arg[0]? arg[0][9] : 0;
+  a0=(a0+a1);
+  a1=arg[0]? arg[0][10] : 0;
+  a0=(a0+a1);
+  a1=arg[0]? arg[0][11] : 0;
+  a0=(a0+a1);
+  a1=arg[0]? arg[0][12] : 0;
+  a0=(a0+a1);
+  a1=arg[0]? arg[0][13] : 0;
+  a0=(a0+a1);
+  a1=arg[0]? arg[0][14] : 0;
+  a0=(a0+a1);
+  a1=arg[0]? arg[0][15] : 0;
+  a0=(a0+a1);
+  a1=arg[0]? arg[0][16] : 0;
+  a0=(a0+a1);
+  a1=arg[0]? arg[0][17] : 0;
+  a0=(a0+a1);
+  a1=arg[0]? arg[0][18] : 0;
+  a0=(a0+a1);
+  a1=arg[1]? arg[1][0] : 0;
+  a2=arg[1]? arg[1][1] : 0;
+  a1=(a1+a2);
+  a2=arg[1]? arg[1][2] : 0;
+  a1=(a1+a2);
+  a2=arg[1]? arg[1][3] : 0;
+  a1=(a1+a2);
+  a2=arg[1]? arg[1][4] : 0;
+  a1=(a1+a2);
+  a2=arg[1]? arg[1][5] : 0;
+  a1=(a1+a2);
+  a2=arg[1]? arg[1][6] : 0;
+  a1=(a1+a2);
+  a2=arg[1]? arg[1][7] : 0;
+  a1=(a1+a2);
+  a2=arg[1]? arg[1][8] : 0;
+  a1=(a1+a2);
+  a2=arg[1]? arg[1][9] : 0;
+  a1=(a1+a2);
+  a2=arg[1]? arg[1][10] : 0;
+  a1=(a1+a2);
+  a2=arg[1]? arg[1][11] : 0;
+  a1=(a1+a2);
+  a2=arg[1]? arg[1][12] : 0;
+  a1=(a1+a2);
+  a2=arg[1]? arg[1][13] : 0;
+  a1=(a1+a2);
+  a2=arg[1]? arg[1][14] : 0;
+  a1=(a1+a2);
+  a2=arg[1]? arg[1][15] : 0;
+  a1=(a1+a2);
+  a2=arg[1]? arg[1][16] : 0;
+  a1=(a1+a2);
+  a2=arg[1]? arg[1][17] : 0;
+  a1=(a1+a2);
+  a0=(a0+a1);
+  a1=arg[2]? arg[2][0] : 0;
+  a2=arg[2]? arg[2][1] : 0;
+  a1=(a1+a2);
+  a2=arg[2]? arg[2][2] : 0;
+  a1=(a1+a2);
+  a2=arg[2]? arg[2][3] : 0;
+  a1=(a1+a2);
+  a2=arg[2]? arg[2][4] : 0;
+  a1=(a1+a2);
+  a2=arg[2]? arg[2][5] : 0;
+  a1=(a1+a2);
+  a2=arg[2]? arg[2][6] : 0;
+  a1=(a1+a2);
+  a2=arg[2]? arg[2][7] : 0;
+  a1=(a1+a2);
+  a2=arg[2]? arg[2][8] : 0;
+  a1=(a1+a2);
+  a2=arg[2]? arg[2][9] : 0;
+  a1=(a1+a2);
+  a2=arg[2]? arg[2][10] : 0;
+  a1=(a1+a2);
+  a2=arg[2]? arg[2][11] : 0;
+  a1=(a1+a2);
+  a2=arg[2]? arg[2][12] : 0;
+  a1=(a1+a2);
+  a2=arg[2]? arg[2][13] : 0;
+  a1=(a1+a2);
+  a2=arg[2]? arg[2][14] : 0;
+  a1=(a1+a2);
+  a2=arg[2]? arg[2][15] : 0;
+  a1=(a1+a2);
+  a2=arg[2]? arg[2][16] : 0;
+  a1=(a1+a2);
+  a2=arg[2]? arg[2][17] : 0;
+  a1=(a1+a2);
+  a0=(a0+a1);
+  if (res[0]!=0) res[0][0]=a0;
+  if (res[0]!=0) res[0][1]=a0;
+  if (res[0]!=0) res[0][2]=a0;
+  if (res[0]!=0) res[0][3]=a0;
+  if (res[0]!=0) res[0][4]=a0;
+  if (res[0]!=0) res[0][5]=a0;
+  if (res[0]!=0) res[0][6]=a0;
+  if (res[0]!=0) res[0][7]=a0;
+  if (res[0]!=0) res[0][8]=a0;
+  if (res[0]!=0) res[0][9]=a0;
+  if (res[0]!=0) res[0][10]=a0;
+  if (res[0]!=0) res[0][11]=a0;
+  if (res[0]!=0) res[0][12]=a0;
+  if (res[0]!=0) res[0][13]=a0;
+  if (res[0]!=0) res[0][14]=a0;
+  if (res[0]!=0) res[0][15]=a0;
+  if (res[0]!=0) res[0][16]=a0;
+  if (res[0]!=0) res[0][17]=a0;
+  if (res[0]!=0) res[0][18]=a0;
+  if (res[0]!=0) res[0][19]=a0;
+  if (res[0]!=0) res[0][20]=a0;
+  if (res[0]!=0) res[0][21]=a0;
+  if (res[0]!=0) res[0][22]=a0;
+  if (res[0]!=0) res[0][23]=a0;
+  if (res[0]!=0) res[0][24]=a0;
+  if (res[0]!=0) res[0][25]=a0;
+  if (res[0]!=0) res[0][26]=a0;
+  if (res[0]!=0) res[0][27]=a0;
+  if (res[0]!=0) res[0][28]=a0;
+  if (res[0]!=0) res[0][29]=a0;
+  if (res[0]!=0) res[0][30]=a0;
+  if (res[0]!=0) res[0][31]=a0;
+  if (res[0]!=0) res[0][32]=a0;
+  if (res[0]!=0) res[0][33]=a0;
+  if (res[0]!=0) res[0][34]=a0;
+  if (res[0]!=0) res[0][35]=a0;
+  if (res[0]!=0) res[0][36]=a0;
+  if (res[0]!=0) res[0][37]=a0;
+  if (res[0]!=0) res[0][38]=a0;
+  if (res[0]!=0) res[0][39]=a0;
+  if (res[0]!=0) res[0][40]=a0;
+  if (res[0]!=0) res[0][41]=a0;
+  if (res[0]!=0) res[0][42]=a0;
+  if (res[0]!=0) res[0][43]=a0;
+  if (res[0]!=0) res[0][44]=a0;
+  if (res[0]!=0) res[0][45]=a0;
+  if (res[0]!=0) res[0][46]=a0;
+  if (res[0]!=0) res[0][47]=a0;
+  if (res[0]!=0) res[0][48]=a0;
+  if (res[0]!=0) res[0][49]=a0;
+  if (res[0]!=0) res[0][50]=a0;
+  if (res[0]!=0) res[0][51]=a0;
+  if (res[0]!=0) res[0][52]=a0;
+  if (res[0]!=0) res[0][53]=a0;
+  if (res[0]!=0) res[0][54]=a0;
+  if (res[0]!=0) res[0][55]=a0;
+  if (res[0]!=0) res[0][56]=a0;
+  if (res[0]!=0) res[0][57]=a0;
+  if (res[0]!=0) res[0][58]=a0;
+  if (res[0]!=0) res[0][59]=a0;
+  if (res[0]!=0) res[0][60]=a0;
+  if (res[0]!=0) res[0][61]=a0;
+  if (res[0]!=0) res[0][62]=a0;
+  if (res[0]!=0) res[0][63]=a0;
+  if (res[0]!=0) res[0][64]=a0;
+  if (res[0]!=0) res[0][65]=a0;
+  if (res[0]!=0) res[0][66]=a0;
+  if (res[0]!=0) res[0][67]=a0;
+  if (res[0]!=0) res[0][68]=a0;
+  if (res[0]!=0) res[0][69]=a0;
+  if (res[0]!=0) res[0][70]=a0;
+  if (res[0]!=0) res[0][71]=a0;
+  if (res[0]!=0) res[0][72]=a0;
+  if (res[0]!=0) res[0][73]=a0;
+  if (res[0]!=0) res[0][74]=a0;
+  if (res[0]!=0) res[0][75]=a0;
+  if (res[0]!=0) res[0][76]=a0;
+  if (res[0]!=0) res[0][77]=a0;
+  if (res[0]!=0) res[0][78]=a0;
+  if (res[0]!=0) res[0][79]=a0;
+  if (res[0]!=0) res[0][80]=a0;
+  if (res[0]!=0) res[0][81]=a0;
+  if (res[0]!=0) res[0][82]=a0;
+  if (res[0]!=0) res[0][83]=a0;
+  if (res[0]!=0) res[0][84]=a0;
+  if (res[0]!=0) res[0][85]=a0;
+  if (res[0]!=0) res[0][86]=a0;
+  if (res[0]!=0) res[0][87]=a0;
+  if (res[0]!=0) res[0][88]=a0;
+  if (res[0]!=0) res[0][89]=a0;
+  if (res[0]!=0) res[0][90]=a0;
+  if (res[0]!=0) res[0][91]=a0;
+  if (res[0]!=0) res[0][92]=a0;
+  if (res[0]!=0) res[0][93]=a0;
+  if (res[0]!=0) res[0][94]=a0;
+  if (res[0]!=0) res[0][95]=a0;
+  if (res[0]!=0) res[0][96]=a0;
+  if (res[0]!=0) res[0][97]=a0;
+  if (res[0]!=0) res[0][98]=a0;
+  if (res[0]!=0) res[0][99]=a0;
+  if (res[0]!=0) res[0][100]=a0;
+  if (res[0]!=0) res[0][101]=a0;
+  if (res[0]!=0) res[0][102]=a0;
+  if (res[0]!=0) res[0][103]=a0;
+  if (res[0]!=0) res[0][104]=a0;
+  if (res[0]!=0) res[0][105]=a0;
+  if (res[0]!=0) res[0][106]=a0;
+  if (res[0]!=0) res[0][107]=a0;
+  if (res[1]!=0) res[1][0]=a0;
+  if (res[1]!=0) res[1][1]=a0;
+  if (res[1]!=0) res[1][2]=a0;
+  if (res[1]!=0) res[1][3]=a0;
+  if (res[1]!=0) res[1][4]=a0;
+  if (res[1]!=0) res[1][5]=a0;
+  if (res[1]!=0) res[1][6]=a0;
+  if (res[1]!=0) res[1][7]=a0;
+  if (res[1]!=0) res[1][8]=a0;
+  if (res[1]!=0) res[1][9]=a0;
+  if (res[1]!=0) res[1][10]=a0;
+  if (res[1]!=0) res[1][11]=a0;
+  if (res[1]!=0) res[1][12]=a0;
+  if (res[1]!=0) res[1][13]=a0;
+  if (res[1]!=0) res[1][14]=a0;
+  if (res[1]!=0) res[1][15]=a0;
+  if (res[1]!=0) res[1][16]=a0;
+  if (res[1]!=0) res[1][17]=a0;
+  if (res[1]!=0) res[1][18]=a0;
+  if (res[1]!=0) res[1][19]=a0;
+  if (res[1]!=0) res[1][20]=a0;
+  if (res[1]!=0) res[1][21]=a0;
+  if (res[1]!=0) res[1][22]=a0;
+  if (res[1]!=0) res[1][23]=a0;
+  if (res[1]!=0) res[1][24]=a0;
+  if (res[1]!=0) res[1][25]=a0;
+  if (res[1]!=0) res[1][26]=a0;
+  if (res[1]!=0) res[1][27]=a0;
+  if (res[1]!=0) res[1][28]=a0;
+  if (res[1]!=0) res[1][29]=a0;
+  if (res[1]!=0) res[1][30]=a0;
+  if (res[1]!=0) res[1][31]=a0;
+  if (res[1]!=0) res[1][32]=a0;
+  if (res[1]!=0) res[1][33]=a0;
+  if (res[1]!=0) res[1][34]=a0;
+  if (res[1]!=0) res[1][35]=a0;
+  if (res[1]!=0) res[1][36]=a0;
+  if (res[1]!=0) res[1][37]=a0;
+  if (res[1]!=0) res[1][38]=a0;
+  if (res[1]!=0) res[1][39]=a0;
+  if (res[1]!=0) res[1][40]=a0;
+  if (res[1]!=0) res[1][41]=a0;
+  if (res[1]!=0) res[1][42]=a0;
+  if (res[1]!=0) res[1][43]=a0;
+  if (res[1]!=0) res[1][44]=a0;
+  if (res[1]!=0) res[1][45]=a0;
+  if (res[1]!=0) res[1][46]=a0;
+  if (res[1]!=0) res[1][47]=a0;
+  if (res[1]!=0) res[1][48]=a0;
+  if (res[1]!=0) res[1][49]=a0;
+  if (res[1]!=0) res[1][50]=a0;
+  if (res[1]!=0) res[1][51]=a0;
+  if (res[1]!=0) res[1][52]=a0;
+  if (res[1]!=0) res[1][53]=a0;
+  if (res[1]!=0) res[1][54]=a0;
+  if (res[1]!=0) res[1][55]=a0;
+  if (res[1]!=0) res[1][56]=a0;
+  if (res[1]!=0) res[1][57]=a0;
+  if (res[1]!=0) res[1][58]=a0;
+  if (res[1]!=0) res[1][59]=a0;
+  if (res[1]!=0) res[1][60]=a0;
+  if (res[1]!=0) res[1][61]=a0;
+  if (res[1]!=0) res[1][62]=a0;
+  if (res[1]!=0) res[1][63]=a0;
+  if (res[1]!=0) res[1][64]=a0;
+  if (res[1]!=0) res[1][65]=a0;
+  if (res[1]!=0) res[1][66]=a0;
+  if (res[1]!=0) res[1][67]=a0;
+  if (res[1]!=0) res[1][68]=a0;
+  if (res[1]!=0) res[1][69]=a0;
+  if (res[1]!=0) res[1][70]=a0;
+  if (res[1]!=0) res[1][71]=a0;
+  if (res[1]!=0) res[1][72]=a0;
+  if (res[1]!=0) res[1][73]=a0;
+  if (res[1]!=0) res[1][74]=a0;
+  if (res[1]!=0) res[1][75]=a0;
+  if (res[1]!=0) res[1][76]=a0;
+  if (res[1]!=0) res[1][77]=a0;
+  if (res[1]!=0) res[1][78]=a0;
+  if (res[1]!=0) res[1][79]=a0;
+  if (res[1]!=0) res[1][80]=a0;
+  if (res[1]!=0) res[1][81]=a0;
+  if (res[1]!=0) res[1][82]=a0;
+  if (res[1]!=0) res[1][83]=a0;
+  if (res[1]!=0) res[1][84]=a0;
+  if (res[1]!=0) res[1][85]=a0;
+  if (res[1]!=0) res[1][86]=a0;
+  if (res[1]!=0) res[1][87]=a0;
+  if (res[1]!=0) res[1][88]=a0;
+  if (res[1]!=0) res[1][89]=a0;
+  if (res[1]!=0) res[1][90]=a0;
+  if (res[1]!=0) res[1][91]=a0;
+  if (res[1]!=0) res[1][92]=a0;
+  if (res[1]!=0) res[1][93]=a0;
+  if (res[1]!=0) res[1][94]=a0;
+  if (res[1]!=0) res[1][95]=a0;
+  if (res[1]!=0) res[1][96]=a0;
+  if (res[1]!=0) res[1][97]=a0;
+  if (res[1]!=0) res[1][98]=a0;
+  if (res[1]!=0) res[1][99]=a0;
+  if (res[1]!=0) res[1][100]=a0;
+  if (res[1]!=0) res[1][101]=a0;
+  if (res[1]!=0) res[1][102]=a0;
+  if (res[1]!=0) res[1][103]=a0;
+  if (res[1]!=0) res[1][104]=a0;
+  if (res[1]!=0) res[1][105]=a0;
+  if (res[1]!=0) res[1][106]=a0;
+  if (res[1]!=0) res[1][107]=a0;
+  if (res[2]!=0) res[2][0]=a0;
+  if (res[2]!=0) res[2][1]=a0;
+  if (res[2]!=0) res[2][2]=a0;
+  if (res[2]!=0) res[2][3]=a0;
+  if (res[2]!=0) res[2][4]=a0;
+  if (res[2]!=0) res[2][5]=a0;
+  if (res[2]!=0) res[2][6]=a0;
+  if (res[2]!=0) res[2][7]=a0;
+  if (res[2]!=0) res[2][8]=a0;
+  if (res[2]!=0) res[2][9]=a0;
+  if (res[2]!=0) res[2][10]=a0;
+  if (res[2]!=0) res[2][11]=a0;
+  if (res[2]!=0) res[2][12]=a0;
+  if (res[2]!=0) res[2][13]=a0;
+  if (res[2]!=0) res[2][14]=a0;
+  if (res[2]!=0) res[2][15]=a0;
+  if (res[2]!=0) res[2][16]=a0;
+  if (res[2]!=0) res[2][17]=a0;
+  if (res[2]!=0) res[2][18]=a0;
+  if (res[2]!=0) res[2][19]=a0;
+  if (res[2]!=0) res[2][20]=a0;
+  if (res[2]!=0) res[2][21]=a0;
+  if (res[2]!=0) res[2][22]=a0;
+  if (res[2]!=0) res[2][23]=a0;
+  if (res[2]!=0) res[2][24]=a0;
+  if (res[2]!=0) res[2][25]=a0;
+  if (res[2]!=0) res[2][26]=a0;
+  if (res[2]!=0) res[2][27]=a0;
+  if (res[2]!=0) res[2][28]=a0;
+  if (res[2]!=0) res[2][29]=a0;
+  if (res[2]!=0) res[2][30]=a0;
+  if (res[2]!=0) res[2][31]=a0;
+  if (res[2]!=0) res[2][32]=a0;
+  if (res[2]!=0) res[2][33]=a0;
+  if (res[2]!=0) res[2][34]=a0;
+  if (res[2]!=0) res[2][35]=a0;
+  if (res[2]!=0) res[2][36]=a0;
+  if (res[2]!=0) res[2][37]=a0;
+  if (res[2]!=0) res[2][38]=a0;
+  if (res[2]!=0) res[2][39]=a0;
+  if (res[2]!=0) res[2][40]=a0;
+  if (res[2]!=0) res[2][41]=a0;
+  if (res[2]!=0) res[2][42]=a0;
+  if (res[2]!=0) res[2][43]=a0;
+  if (res[2]!=0) res[2][44]=a0;
+  if (res[2]!=0) res[2][45]=a0;
+  if (res[2]!=0) res[2][46]=a0;
+  if (res[2]!=0) res[2][47]=a0;
+  if (res[2]!=0) res[2][48]=a0;
+  if (res[2]!=0) res[2][49]=a0;
+  if (res[2]!=0) res[2][50]=a0;
+  if (res[2]!=0) res[2][51]=a0;
+  if (res[2]!=0) res[2][52]=a0;
+  if (res[2]!=0) res[2][53]=a0;
+  if (res[2]!=0) res[2][54]=a0;
+  if (res[2]!=0) res[2][55]=a0;
+  if (res[2]!=0) res[2][56]=a0;
+  if (res[2]!=0) res[2][57]=a0;
+  if (res[2]!=0) res[2][58]=a0;
+  if (res[2]!=0) res[2][59]=a0;
+  if (res[2]!=0) res[2][60]=a0;
+  if (res[2]!=0) res[2][61]=a0;
+  if (res[2]!=0) res[2][62]=a0;
+  if (res[2]!=0) res[2][63]=a0;
+  if (res[2]!=0) res[2][64]=a0;
+  if (res[2]!=0) res[2][65]=a0;
+  if (res[2]!=0) res[2][66]=a0;
+  if (res[2]!=0) res[2][67]=a0;
+  if (res[2]!=0) res[2][68]=a0;
+  if (res[2]!=0) res[2][69]=a0;
+  if (res[2]!=0) res[2][70]=a0;
+  if (res[2]!=0) res[2][71]=a0;
+  if (res[2]!=0) res[2][72]=a0;
+  if (res[2]!=0) res[2][73]=a0;
+  if (res[2]!=0) res[2][74]=a0;
+  if (res[2]!=0) res[2][75]=a0;
+  if (res[2]!=0) res[2][76]=a0;
+  if (res[2]!=0) res[2][77]=a0;
+  if (res[2]!=0) res[2][78]=a0;
+  if (res[2]!=0) res[2][79]=a0;
+  if (res[2]!=0) res[2][80]=a0;
+  if (res[2]!=0) res[2][81]=a0;
+  if (res[2]!=0) res[2][82]=a0;
+  if (res[2]!=0) res[2][83]=a0;
+  if (res[2]!=0) res[2][84]=a0;
+  if (res[2]!=0) res[2][85]=a0;
+  if (res[2]!=0) res[2][86]=a0;
+  if (res[2]!=0) res[2][87]=a0;
+  if (res[2]!=0) res[2][88]=a0;
+  if (res[2]!=0) res[2][89]=a0;
+  if (res[2]!=0) res[2][90]=a0;
+  if (res[2]!=0) res[2][91]=a0;
+  if (res[2]!=0) res[2][92]=a0;
+  if (res[2]!=0) res[2][93]=a0;
+  if (res[2]!=0) res[2][94]=a0;
+  if (res[2]!=0) res[2][95]=a0;
+  if (res[2]!=0) res[2][96]=a0;
+  if (res[2]!=0) res[2][97]=a0;
+  if (res[2]!=0) res[2][98]=a0;
+  if (res[2]!=0) res[2][99]=a0;
+  if (res[2]!=0) res[2][100]=a0;
+  if (res[2]!=0) res[2][101]=a0;
+  if (res[2]!=0) res[2][102]=a0;
+  if (res[2]!=0) res[2][103]=a0;
+  if (res[2]!=0) res[2][104]=a0;
+  if (res[2]!=0) res[2][105]=a0;
+  if (res[2]!=0) res[2][106]=a0;
+  if (res[2]!=0) res[2][107]=a0;
+  return 0;
+}
+
+CASADI_SYMBOL_EXPORT int qd_dgrf_FL_FR(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem){
+  (void)casadi_f14;
+  return qd_dgrf_solve(6, 3, casadi_f1, casadi_f0, casadi_f13, qd_did_full_sparsity_out(0), qd_did_full_sparsity_out(1), arg, res, iw, w, mem);
+}
+
+CASADI_SYMBOL_EXPORT int qd_dgrf_FL_FR_checkout(void) {
+  return 0;
+}
+
+CASADI_SYMBOL_EXPORT void qd_dgrf_FL_FR_release(int mem) {
+  (void)mem;
+}
+
+CASADI_SYMBOL_EXPORT void qd_dgrf_FL_FR_incref(void) {
+}
+
+CASADI_SYMBOL_EXPORT void qd_dgrf_FL_FR_decref(void) {
+}
+
+CASADI_SYMBOL_EXPORT casadi_int qd_dgrf_FL_FR_n_in(void) { return 3;}
+
+CASADI_SYMBOL_EXPORT casadi_int qd_dgrf_FL_FR_n_out(void) { return 3;}
+
+CASADI_SYMBOL_EXPORT casadi_real qd_dgrf_FL_FR_default_in(casadi_int i) {
+  switch (i) {
+    default: return 0;
+  }
+}
+
+CASADI_SYMBOL_EXPORT const char* qd_dgrf_FL_FR_name_in(casadi_int i) {
+  switch (i) {
+    case 0: return "q";
+    case 1: return "v";
+    case 2: return "a";
+    default: return 0;
+  }
+}
+
+CASADI_SYMBOL_EXPORT const char* qd_dgrf_FL_FR_name_out(casadi_int i) {
+  switch (i) {
+    case 0: return "dlambda_dq";
+    case 1: return "dlambda_dv";
+    case 2: return "dlambda_da";
+    default: return 0;
+  }
+}
+
+CASADI_SYMBOL_EXPORT const casadi_int* qd_dgrf_FL_FR_sparsity_in(casadi_int i) {
+  switch (i) {
+    case 0: return casadi_s0;
+    case 1: return casadi_s1;
+    case 2: return casadi_s1;
+    default: return 0;
+  }
+}
+
+CASADI_SYMBOL_EXPORT const casadi_int* qd_dgrf_FL_FR_sparsity_out(casadi_int i) {
+  switch (i) {
+    case 0: return casadi_s7;
+    case 1: return casadi_s7;
+    case 2: return casadi_s7;
+    default: return 0;
+  }
+}
+
+CASADI_SYMBOL_EXPORT int qd_dgrf_FL_FR_work(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz_iw, casadi_int *sz_w) {
+  if (sz_arg) *sz_arg = 3;
+  if (sz_res) *sz_res = 3;
+  if (sz_iw) *sz_iw = 0;
+  if (sz_w) *sz_w = 0;
+  return 0;
+}
+
+CASADI_SYMBOL_EXPORT int qd_dgrf_FL_FR_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz_iw, casadi_int *sz_w) {
+  if (sz_arg) *sz_arg = 3*sizeof(const casadi_real*);
+  if (sz_res) *sz_res = 3*sizeof(casadi_real*);
+  if (sz_iw) *sz_iw = 0*sizeof(casadi_int);
+  if (sz_w) *sz_w = 0*sizeof(casadi_real);
+  return 0;
+}
+
+/* qd_dgrf_dir_FL_BL:(q[19],w[6],dq[18])->(lambda_w[6],dlambda_w[6]) */
+static int casadi_f15(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem) {
+  (void)arg; (void)res; (void)iw; (void)w; (void)mem;
+  casadi_real a00, a01, a02, a03, a04, a05, a06, a07, a08, a09, a10, a11;
+  casadi_real a12, a13, a14, a15, a16, a17, a18, a19, a20, a21, a22, a23;
+  casadi_real a24, a25, a26, a27, a28, a29, a30, a31, a32, a33, a34, a35;
+  casadi_real a36, a37, a38, a39, a40, a41, a42, a43, a44, a45, a46, a47;
+  casadi_real a48, a49, a50, a51, a52, a53, a54, a55, a56, a57, a58, a59;
+  casadi_real a60, a61;
+  a00=arg[1]? arg[1][0] : 0;
+  a01=7.0000000000000007e-02;
+  a02=2.0000000000000001e-01;
+  a03=arg[0]? arg[0][7] : 0;
+  a04=qd_cos(a03);
+  a05=arg[0]? arg[0][8] : 0;
+  a06=qd_cos(a05);
+  a07=(a04*a06);
+  a08=(a02*a07);
+  a08=(a01+a08);
+  a09=arg[0]? arg[0][9] : 0;
+  a10=qd_cos(a09);
+  a11=(a07*a10);
+  a05=qd_sin(a05);
+  a12=(a04*a05);
+  a09=qd_sin(a09);
+  a13=(a12*a09);
+  a11=(a11-a13);
+  a11=(a02*a11);
+  a08=(a08+a11);
+  a03=qd_sin(a03);
+  a11=(a03*a05);
+  a13=(a11*a09);
+  a14=(a03*a06);
+  a15=(a14*a10);
+  a13=(a13-a15);
+  a13=(a02*a13);
+  a15=(a02*a14);
+  a13=(a13-a15);
+  a15=arg[0]? arg[0][13] : 0;
+  a16=qd_sin(a15);
+  a17=arg[0]? arg[0][14] : 0;
+  a18=qd_sin(a17);
+  a19=(a16*a18);
+  a20=arg[0]? arg[0][15] : 0;
+  a21=qd_sin(a20);
+  a22=(a19*a21);
+  a17=qd_cos(a17);
+  a23=(a16*a17);
+  a20=qd_cos(a20);
+  a24=(a23*a20);
+  a22=(a22-a24);
+  a22=(a02*a22);
+  a24=(a02*a23);
+  a22=(a22-a24);
+  a24=(a13-a22);
+  a25=(a08*a24);
+  a15=qd_cos(a15);
+  a26=(a15*a17);
+  a27=(a02*a26);
+  a01=(a01+a27);
+  a27=(a26*a20);
+  a28=(a15*a18);
+  a29=(a28*a21);
+  a27=(a27-a29);
+  a27=(a02*a27);
+  a01=(a01+a27);
+  a27=(a08-a01);
+  a29=(a13*a27);
+  a25=(a25-a29);
+  a29=(a25*a00);
+  a30=1.9000000000000000e-01;
+  a31=(a02*a05);
+  a30=(a30+a31);
+  a31=(a06*a09);
+  a32=(a05*a10);
+  a31=(a31+a32);
+  a31=(a02*a31);
+  a30=(a30+a31);
+  a31=-1.9000000000000000e-01;
+  a32=(a02*a18);
+  a31=(a31+a32);
+  a32=(a17*a21);
+  a33=(a18*a20);
+  a32=(a32+a33);
+  a32=(a02*a32);
+  a31=(a31+a32);
+  a32=(a30-a31);
+  a33=(a13*a32);
+  a34=(a30*a24);
+  a33=(a33-a34);
+  a34=arg[1]? arg[1][1] : 0;
+  a35=(a33*a34);
+  a29=(a29+a35);
+  a35=(a30*a27);
+  a36=(a08*a32);
+  a35=(a35-a36);
+  a36=arg[1]? arg[1][2] : 0;
+  a37=(a35*a36);
+  a29=(a29+a37);
+  a37=arg[1]? arg[1][3] : 0;
+  a38=(a32*a37);
+  a39=arg[1]? arg[1][4] : 0;
+  a40=(a27*a39);
+  a38=(a38+a40);
+  a40=arg[1]? arg[1][5] : 0;
+  a41=(a24*a40);
+  a38=(a38+a41);
+  a29=(a29+a38);
+  a38=casadi_sq(a25);
+  a41=casadi_sq(a33);
+  a38=(a38+a41);
+  a41=casadi_sq(a35);
+  a38=(a38+a41);
+  a41=casadi_sq(a32);
+  a42=casadi_sq(a27);
+  a41=(a41+a42);
+  a42=casadi_sq(a24);
+  a41=(a41+a42);
+  a38=(a38+a41);
+  a29=(a29/a38);
+  a42=(a25*a29);
+  a42=(a00-a42);
+  a43=2.;
+  a44=(a42/a43);
+  a45=(a27*a29);
+  a45=(a39-a45);
+  a22=(a13+a22);
+  a22=(a22/a43);
+  a46=(a22*a42);
+  a31=(a30+a31);
+  a31=(a31/a43);
+  a47=(a35*a29);
+  a47=(a36-a47);
+  a48=(a31*a47);
+  a46=(a46-a48);
+  a45=(a45-a46);
+  a46=(a24*a45);
+  a48=(a24*a29);
+  a48=(a40-a48);
+  a49=(a33*a29);
+  a49=(a34-a49);
+  a50=(a31*a49);
+  a01=(a08+a01);
+  a01=(a01/a43);
+  a51=(a01*a42);
+  a50=(a50-a51);
+  a48=(a48-a50);
+  a50=(a27*a48);
+  a46=(a46-a50);
+  a46=(a46/a41);
+  a50=(a44+a46);
+  if (res[0]!=0) res[0][0]=a50;
+  a50=(a49/a43);
+  a51=(a32*a48);
+  a52=(a32*a29);
+  a52=(a37-a52);
+  a53=(a01*a47);
+  a54=(a22*a49);
+  a53=(a53-a54);
+  a52=(a52-a53);
+  a53=(a24*a52);
+  a51=(a51-a53);
+  a51=(a51/a41);
+  a53=(a50+a51);
+  if (res[0]!=0) res[0][1]=a53;
+  a43=(a47/a43);
+  a53=(a27*a52);
+  a54=(a32*a45);
+  a53=(a53-a54);
+  a53=(a53/a41);
+  a54=(a43+a53);
+  if (res[0]!=0) res[0][2]=a54;
+  a44=(a44-a46);
+  if (res[0]!=0) res[0][3]=a44;
+  a50=(a50-a51);
+  if (res[0]!=0) res[0][4]=a50;
+  a43=(a43-a53);
+  if (res[0]!=0) res[0][5]=a43;
+  a43=arg[2]? arg[2][6] : 0;
+  a50=(a04*a43);
+  a44=(a05*a50);
+  a54=arg[2]? arg[2][7] : 0;
+  a55=(a06*a54);
+  a56=(a03*a55);
+  a44=(a44+a56);
+  a44=(a09*a44);
+  a56=arg[2]? arg[2][8] : 0;
+  a57=(a10*a56);
+  a11=(a11*a57);
+  a44=(a44+a11);
+  a50=(a06*a50);
+  a54=(a05*a54);
+  a11=(a03*a54);
+  a50=(a50-a11);
+  a11=(a10*a50);
+  a56=(a09*a56);
+  a14=(a14*a56);
+  a11=(a11-a14);
+  a44=(a44-a11);
+  a44=(a02*a44);
+  a50=(a02*a50);
+  a44=(a44-a50);
+  a50=arg[2]? arg[2][12] : 0;
+  a11=(a15*a50);
+  a14=(a18*a11);
+  a58=arg[2]? arg[2][13] : 0;
+  a59=(a17*a58);
+  a60=(a16*a59);
+  a14=(a14+a60);
+  a14=(a21*a14);
+  a60=arg[2]? arg[2][14] : 0;
+  a61=(a20*a60);
+  a19=(a19*a61);
+  a14=(a14+a19);
+  a11=(a17*a11);
+  a58=(a18*a58);
+  a19=(a16*a58);
+  a11=(a11-a19);
+  a19=(a20*a11);
+  a60=(a21*a60);
+  a23=(a23*a60);
+  a19=(a19-a23);
+  a14=(a14-a19);
+  a14=(a02*a14);
+  a11=(a02*a11);
+  a14=(a14-a11);
+  a11=(a44-a14);
+  a19=(a45*a11);
+  a16=(a16*a50);
+  a50=(a17*a16);
+  a23=(a15*a58);
+  a50=(a50+a23);
+  a23=(a02*a50);
+  a50=(a20*a50);
+  a26=(a26*a60);
+  a50=(a50+a26);
+  a15=(a15*a59);
+  a16=(a18*a16);
+  a15=(a15-a16);
+  a15=(a21*a15);
+  a28=(a28*a61);
+  a15=(a15+a28);
+  a50=(a50+a15);
+  a50=(a02*a50);
+  a23=(a23+a50);
+  a03=(a03*a43);
+  a43=(a06*a03);
+  a50=(a04*a54);
+  a43=(a43+a50);
+  a50=(a02*a43);
+  a43=(a10*a43);
+  a07=(a07*a56);
+  a43=(a43+a07);
+  a04=(a04*a55);
+  a03=(a05*a03);
+  a04=(a04-a03);
+  a04=(a09*a04);
+  a12=(a12*a57);
+  a04=(a04+a12);
+  a43=(a43+a04);
+  a43=(a02*a43);
+  a50=(a50+a43);
+  a43=(a23-a50);
+  a04=(a29*a43);
+  a12=(a08*a11);
+  a03=(a24*a50);
+  a12=(a12-a03);
+  a03=(a27*a44);
+  a07=(a13*a43);
+  a03=(a03+a07);
+  a12=(a12-a03);
+  a00=(a00*a12);
+  a03=(a32*a44);
+  a07=(a02*a55);
+  a06=(a06*a57);
+  a09=(a09*a54);
+  a06=(a06-a09);
+  a10=(a10*a55);
+  a05=(a05*a56);
+  a10=(a10-a05);
+  a06=(a06+a10);
+  a06=(a02*a06);
+  a07=(a07+a06);
+  a06=(a02*a59);
+  a17=(a17*a61);
+  a21=(a21*a58);
+  a17=(a17-a21);
+  a20=(a20*a59);
+  a18=(a18*a60);
+  a20=(a20-a18);
+  a17=(a17+a20);
+  a02=(a02*a17);
+  a06=(a06+a02);
+  a02=(a07-a06);
+  a13=(a13*a02);
+  a03=(a03+a13);
+  a13=(a24*a07);
+  a17=(a30*a11);
+  a13=(a13+a17);
+  a03=(a03-a13);
+  a34=(a34*a03);
+  a00=(a00+a34);
+  a34=(a27*a07);
+  a30=(a30*a43);
+  a34=(a34+a30);
+  a08=(a08*a02);
+  a30=(a32*a50);
+  a08=(a08-a30);
+  a34=(a34-a08);
+  a36=(a36*a34);
+  a00=(a00+a36);
+  a37=(a37*a02);
+  a39=(a39*a43);
+  a37=(a37+a39);
+  a40=(a40*a11);
+  a37=(a37+a40);
+  a00=(a00+a37);
+  a00=(a00/a38);
+  a38=(a29/a38);
+  a37=(2*a25);
+  a37=(a37*a12);
+  a40=(2*a33);
+  a40=(a40*a03);
+  a37=(a37+a40);
+  a40=(2*a35);
+  a40=(a40*a34);
+  a37=(a37+a40);
+  a40=(2*a32);
+  a40=(a40*a02);
+  a39=(2*a27);
+  a39=(a39*a43);
+  a40=(a40+a39);
+  a39=(2*a24);
+  a39=(a39*a11);
+  a40=(a40+a39);
+  a37=(a37+a40);
+  a38=(a38*a37);
+  a00=(a00-a38);
+  a38=(a27*a00);
+  a04=(a04+a38);
+  a38=5.0000000000000000e-01;
+  a44=(a44+a14);
+  a44=(a38*a44);
+  a14=(a42*a44);
+  a12=(a29*a12);
+  a25=(a25*a00);
+  a12=(a12+a25);
+  a25=(a22*a12);
+  a14=(a14-a25);
+  a07=(a07+a06);
+  a07=(a38*a07);
+  a06=(a47*a07);
+  a34=(a29*a34);
+  a35=(a35*a00);
+  a34=(a34+a35);
+  a35=(a31*a34);
+  a06=(a06-a35);
+  a14=(a14-a06);
+  a04=(a04+a14);
+  a14=(a24*a04);
+  a19=(a19-a14);
+  a14=(a48*a43);
+  a06=(a29*a11);
+  a35=(a24*a00);
+  a06=(a06+a35);
+  a07=(a49*a07);
+  a03=(a29*a03);
+  a33=(a33*a00);
+  a03=(a03+a33);
+  a31=(a31*a03);
+  a07=(a07-a31);
+  a50=(a50+a23);
+  a50=(a38*a50);
+  a42=(a42*a50);
+  a23=(a01*a12);
+  a42=(a42+a23);
+  a07=(a07+a42);
+  a06=(a06+a07);
+  a07=(a27*a06);
+  a14=(a14-a07);
+  a19=(a19-a14);
+  a19=(a19/a41);
+  a46=(a46/a41);
+  a46=(a46*a40);
+  a19=(a19-a46);
+  a12=(a38*a12);
+  a46=(a19-a12);
+  if (res[1]!=0) res[1][0]=a46;
+  a48=(a48*a02);
+  a06=(a32*a06);
+  a48=(a48-a06);
+  a11=(a52*a11);
+  a47=(a47*a50);
+  a01=(a01*a34);
+  a47=(a47+a01);
+  a49=(a49*a44);
+  a22=(a22*a03);
+  a49=(a49-a22);
+  a47=(a47+a49);
+  a29=(a29*a02);
+  a00=(a32*a00);
+  a29=(a29+a00);
+  a47=(a47-a29);
+  a24=(a24*a47);
+  a11=(a11+a24);
+  a48=(a48-a11);
+  a48=(a48/a41);
+  a51=(a51/a41);
+  a51=(a51*a40);
+  a48=(a48-a51);
+  a03=(a38*a03);
+  a51=(a48-a03);
+  if (res[1]!=0) res[1][1]=a51;
+  a52=(a52*a43);
+  a27=(a27*a47);
+  a52=(a52+a27);
+  a45=(a45*a02);
+  a32=(a32*a04);
+  a45=(a45-a32);
+  a52=(a52-a45);
+  a52=(a52/a41);
+  a53=(a53/a41);
+  a53=(a53*a40);
+  a52=(a52-a53);
+  a38=(a38*a34);
+  a34=(a52-a38);
+  if (res[1]!=0) res[1][2]=a34;
+  a12=(a12+a19);
+  a12=(-a12);
+  if (res[1]!=0) res[1][3]=a12;
+  a03=(a03+a48);
+  a03=(-a03);
+  if (res[1]!=0) res[1][4]=a03;
+  a38=(a38+a52);
+  a38=(-a38);
+  if (res[1]!=0) res[1][5]=a38;
+  return 0;
+}
+
+CASADI_SYMBOL_EXPORT int qd_dgrf_dir_FL_BL(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem){
+  return qd_d_finite(casadi_f15(arg, res, iw, w, mem), res, 2, (const casadi_int[]){6, 6});
+}
+
+CASADI_SYMBOL_EXPORT int qd_dgrf_dir_FL_BL_checkout(void) {
+  return 0;
+}
+
+CASADI_SYMBOL_EXPORT void qd_dgrf_dir_FL_BL_release(int mem) {
+  (void)mem;
+}
+
+CASADI_SYMBOL_EXPORT void qd_dgrf_dir_FL_BL_incref(void) {
+}
+
+CASADI_SYMBOL_EXPORT void qd_dgrf_dir_FL_BL_decref(void) {
+}
+
+CASADI_SYMBOL_EXPORT casadi_int qd_dgrf_dir_FL_BL_n_in(void) { return 3;}
+
+CASADI_SYMBOL_EXPORT casadi_int qd_dgrf_dir_FL_BL_n_out(void) { return 2;}
+
+CASADI_SYMBOL_EXPORT casadi_real qd_dgrf_dir_FL_BL_default_in(casadi_int i) {
+  switch (i) {
+    default: return 0;
+  }
+}
+
+CASADI_SYMBOL_EXPORT const char* qd_dgrf_dir_FL_BL_name_in(casadi_int i) {
+  switch (i) {
+    case 0: return "q";
+    case 1: return "w";
+    case 2: return "dq";
+    default: return 0;
+  }
+}
+
+CASADI_SYMBOL_EXPORT const char* qd_dgrf_dir_FL_BL_name_out(casadi_int i) {
+  switch (i) {
+    case 0: return "lambda_w";
+    case 1: return "dlambda_w";
+    default: return 0;
+  }
+}
+
+CASADI_SYMBOL_EXPORT const casadi_int* qd_dgrf_dir_FL_BL_sparsity_in(casadi_int i) {
+  switch (i) {
+    case 0: return casadi_s0;
+    case 1: return casadi_s6;
+    case 2: return casadi_s1;
+    default: return 0;
+  }
+}
+
+CASADI_SYMBOL_EXPORT const casadi_int* qd_dgrf_dir_FL_BL_sparsity_out(casadi_int i) {
+  switch (i) {
+    case 0: return casadi_s6;
+    case 1: return casadi_s6;
+    default: return 0;
+  }
+}
+
+CASADI_SYMBOL_EXPORT int qd_dgrf_dir_FL_BL_work(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz_iw, casadi_int *sz_w) {
+  if (sz_arg) *sz_arg = 3;
+  if (sz_res) *sz_res = 2;
+  if (sz_iw) *sz_iw = 0;
+  if (sz_w) *sz_w = 0;
+  return 0;
+}
+
+CASADI_SYMBOL_EXPORT int qd_dgrf_dir_FL_BL_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz_iw, casadi_int *sz_w) {
+  if (sz_arg) *sz_arg = 3*sizeof(const casadi_real*);
+  if (sz_res) *sz_res = 2*sizeof(casadi_real*);
+  if (sz_iw) *sz_iw = 0*sizeof(casadi_int);
+  if (sz_w) *sz_w = 0*sizeof(casadi_real);
+  return 0;
+}
+
+/* qd_dgrf_FL_BL:(q[19],v[18],a[18])->(dlambda_dq[6x18],dlambda_dv[6x18],dlambda_da[6x18]) */
+static int casadi_f16(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem) {
+  (void)arg; (void)res; (void)iw; (void)w; (void)mem;
+  casadi_real a0, a1, a2;
+  a0=arg[0]? arg[0][0] : 0;
+  a1=arg[0]? arg[0][1] : 0;
+  a0=(a0+a1);
+  a1=arg[0]? arg[0][2] : 0;
+  a0=(a0+a1);
+  a1=arg[0]? arg[0][3] : 0;
+  a0=(a0+a1);
+  a1=arg[0]? arg[0][4] : 0;
+  a0=(a0+a1);
+  a1=arg[0]? arg[0][5] : 0;
+  a0=(a0+a1);
+  a1=arg[0]? arg[0][6] : 0;
+  a0=(a0+a1);
+  a1=arg[0]? arg[0][7] : 0;
+  a0=(a0+a1);
+  a1=arg[0]? arg[0][8] : 0;
+  a0=(a0+a1);
+  a1=arg[0]? arg[0][9] : 0;
+  a0=(a0+a1);
+  a1=arg[0]? arg[0][10] : 0;
+  a0=(a0+a1);
+  a1=arg[0]? arg[0][11] : 0;
+  a0=(a0+a1);
+  a1=arg[0]? arg[0][12] : 0;
+  a0=(a0+a1);
+  a1=arg[0]? arg[0][13] : 0;
+  a0=(a0+a1);
+  a1=arg[0]? arg[0][14] : 0;
+  a0=(a0+a1);
+  a1=arg[0]? arg[0][15] : 0;
+  a0=(a0+a1);
+  a1=arg[0]? arg[0][16] : 0;
+  a0=(a0+a1);
+  a1=arg[0]? arg[0][17] : 0;
+  a0=(a0+a1);
+  a1=arg[0]? arg[0][18] : 0;
+  a0=(a0+a1);
+  a1=arg[1]? arg[1][0] : 0;
+  a2=arg[1]? arg[1][1] : 0;
+  a1=(a1+a2);
+  a2=arg[1]? arg[1][2] : 0;
+  a1=(a1+a2);
+  a2=arg[1]? arg[1][3] : 0;
+  a1=(a1+a2);
+  a2=arg[1]? arg[1][4] : 0;
+  a1=(a1+a2);
+  a2=arg[1]? arg[1][5] : 0;
+  a1=(a1+a2);
+  a2=arg[1]? arg[1][6] : 0;
+  a1=(a1+a2);
+  a2=arg[1]? arg[1][7] : 0;
+  a1=(a1+a2);
+  a2=arg[1]? arg[1][8] : 0;
+  a1=(a1+a2);
+  a2=arg[1]? arg[1][9] : 0;
+  a1=(a1+a2);
+  a2=arg[1]? arg[1][10] : 0;
+  a1=(a1+a2);
+  a2=arg[1]? arg[1][11] : 0;
+  a1=(a1+a2);
+  a2=arg[1]? arg[1][12] : 0;
+  a1=(a1+a2);
+  a2=arg[1]? arg[1][13] : 0;
+  a1=(a1+a2);
+  a2=arg[1]? arg[1][14] : 0;
+  a1=(a1+a2);
+  a2=arg[1]? arg[1][15] : 0;
+  a1=(a1+a2);
+  a2=arg[1]? arg[1][16] : 0;
+  a1=(a1+a2);
+  a2=arg[1]? arg[1][17] : 0;
+  a1=(a1+a2);
+  a0=(a0+a1);
+  a1=arg[2]? arg[2][0] : 0;
+  a2=arg[2]? arg[2][1] : 0;
+  a1=(a1+a2);
+  a2=arg[2]? arg[2][2] : 0;
+  a1=(a1+a2);
+  a2=arg[2]? arg[2][3] : 0;
+  a1=(a1+a2);
+  a2=arg[2]? arg[2][4] : 0;
+  a1=(a1+a2);
+  a2=arg[2]? arg[2][5] : 0;
+  a1=(a1+a2);
+  a2=arg[2]? arg[2][6] : 0;
+  a1=(a1+a2);
+  a2=arg[2]? arg[2][7] : 0;
+  a1=(a1+a2);
+  a2=arg[2]? arg[2][8] : 0;
+  a1=(a1+a2);
+  a2=arg[2]? arg[2][9] : 0;
+  a1=(a1+a2);
+  a2=arg[2]? arg[2][10] : 0;
+  a1=(a1+a2);
+  a2=arg[2]? arg[2][11] : 0;
+  a1=(a1+a2);
+  a2=arg[2]? arg[2][12] : 0;
+  a1=(a1+a2);
+  a2=arg[2]? arg[2][13] : 0;
+  a1=(a1+a2);
+  a2=arg[2]? arg[2][14] : 0;
+  a1=(a1+a2);
+  a2=arg[2]? arg[2][15] : 0;
+  a1=(a1+a2);
+  a2=arg[2]? arg[2][16] : 0;
+  a1=(a1+a2);
+  a2=arg[2]? arg[2][17] : 0;
+  a1=(a1+a2);
+  a0=(a0+a1);
+  if (res[0]!=0) res[0][0]=a0;
+  if (res[0]!=0) res[0][1]=a0;
+  if (res[0]!=0) res[0][2]=a0;
+  if (res[0]!=0) res[0][3]=a0;
+  if (res[0]!=0) res[0][4]=a0;
+  if (res[0]!=0) res[0][5]=a0;
+  if (res[0]!=0) res[0][6]=a0;
+  if (res[0]!=0) res[0][7]=a0;
+  if (res[0]!=0) res[0][8]=a0;
+  if (res[0]!=0) res[0][9]=a0;
+  if (res[0]!=0) res[0][10]=a0;
+  if (res[0]!=0) res[0][11]=a0;
+  if (res[0]!=0) res[0][12]=a0;
+  if (res[0]!=0) res[0][13]=a0;
+  if (res[0]!=0) res[0][14]=a0;
+  if (res[0]!=0) res[0][15]=a0;
+  if (res[0]!=0) res[0][16]=a0;
+  if (res[0]!=0) res[0][17]=a0;
+  if (res[0]!=0) res[0][18]=a0;
+  if (res[0]!=0) res[0][19]=a0;
+  if (res[0]!=0) res[0][20]=a0;
+  if (res[0]!=0) res[0][21]=a0;
+  if (res[0]!=0) res[0][22]=a0;
+  if (res[0]!=0) res[0][23]=a0;
+  if (res[0]!=0) res[0][24]=a0;
+  if (res[0]!=0) res[0][25]=a0;
+  if (res[0]!=0) res[0][26]=a0;
+  if (res[0]!=0) res[0][27]=a0;
+  if (res[0]!=0) res[0][28]=a0;
+  if (res[0]!=0) res[0][29]=a0;
+  if (res[0]!=0) res[0][30]=a0;
+  if (res[0]!=0) res[0][31]=a0;
+  if (res[0]!=0) res[0][32]=a0;
+  if (res[0]!=0) res[0][33]=a0;
+  if (res[0]!=0) res[0][34]=a0;
+  if (res[0]!=0) res[0][35]=a0;
+  if (res[0]!=0) res[0][36]=a0;
+  if (res[0]!=0) res[0][37]=a0;
+  if (res[0]!=0) res[0][38]=a0;
+  if (res[0]!=0) res[0][39]=a0;
+  if (res[0]!=0) res[0][40]=a0;
+  if (res[0]!=0) res[0][41]=a0;
+  if (res[0]!=0) res[0][42]=a0;
+  if (res[0]!=0) res[0][43]=a0;
+  if (res[0]!=0) res[0][44]=a0;
+  if (res[0]!=0) res[0][45]=a0;
+  if (res[0]!=0) res[0][46]=a0;
+  if (res[0]!=0) res[0][47]=a0;
+  if (res[0]!=0) res[0][48]=a0;
+  if (res[0]!=0) res[0][49]=a0;
+  if (res[0]!=0) res[0][50]=a0;
+  if (res[0]!=0) res[0][51]=a0;
+  if (res[0]!=0) res[0][52]=a0;
+  if (res[0]!=0) res[0][53]=a0;
+  if (res[0]!=0) res[0][54]=a0;
+  if (res[0]!=0) res[0][55]=a0;
+  if (res[0]!=0) res[0][56]=a0;
+  if (res[0]!=0) res[0][57]=a0;
+  if (res[0]!=0) res[0][58]=a0;
+  if (res[0]!=0) res[0][59]=a0;
+  if (res[0]!=0) res[0][60]=a0;
+  if (res[0]!=0) res[0][61]=a0;
+  if (res[0]!=0) res[0][62]=a0;
+  if (res[0]!=0) res[0][63]=a0;
+  if (res[0]!=0) res[0][64]=a0;
+  if (res[0]!=0) res[0][65]=a0;
+  if (res[0]!=0) res[0][66]=a0;
+  if (res[0]!=0) res[0][67]=a0;
+  if (res[0]!=0) res[0][68]=a0;
+  if (res[0]!=0) res[0][69]=a0;
+  if (res[0]!=0) res[0][70]=a0;
+  if (res[0]!=0) res[0][71]=a0;
+  if (res[0]!=0) res[0][72]=a0;
+  if (res[0]!=0) res[0][73]=a0;
+  if (res[0]!=0) res[0][74]=a0;
+  if (res[0]!=0) res[0][75]=a0;
+  if (res[0]!=0) res[0][76]=a0;
+  if (res[0]!=0) res[0][77]=a0;
+  if (res[0]!=0) res[0][78]=a0;
+  if (res[0]!=0) res[0][79]=a0;
+  if (res[0]!=0) res[0][80]=a0;
+  if (res[0]!=0) res[0][81]=a0;
+  if (res[0]!=0) res[0][82]=a0;
+  if (res[0]!=0) res[0][83]=a0;
+  if (res[0]!=0) res[0][84]=a0;
+  if (res[0]!=0) res[0][85]=a0;
+  if (res[0]!=0) res[0][86]=a0;
+  if (res[0]!=0) res[0][87]=a0;
+  if (res[0]!=0) res[0][88]=a0;
+  if (res[0]!=0) res[0][89]=a0;
+  if (res[0]!=0) res[0][90]=a0;
+  if (res[0]!=0) res[0][91]=a0;
+  if (res[0]!=0) res[0][92]=a0;
+  if (res[0]!=0) res[0][93]=a0;
+  if (res[0]!=0) res[0][94]=a0;
+  if (res[0]!=0) res[0][95]=a0;
+  if (res[0]!=0) res[0][96]=a0;
+  if (res[0]!=0) res[0][97]=a0;
+  if (res[0]!=0) res[0][98]=a0;
+  if (res[0]!=0) res[0][99]=a0;
+  if (res[0]!=0) res[0][100]=a0;
+  if (res[0]!=0) res[0][101]=a0;
+  if (res[0]!=0) res[0][102]=a0;
+  if (res[0]!=0) res[0][103]=a0;
+  if (res[0]!=0) res[0][104]=a0;
+  if (res[0]!=0) res[0][105]=a0;
+  if (res[0]!=0) res[0][106]=a0;
+  if (res[0]!=0) res[0][107]=a0;
+  if (res[1]!=0) res[1][0]=a0;
+  if (res[1]!=0) res[1][1]=a0;
+  if (res[1]!=0) res[1][2]=a0;
+  if (res[1]!=0) res[1][3]=a0;
+  if (res[1]!=0) res[1][4]=a0;
+  if (res[1]!=0) res[1][5]=a0;
+  if (res[1]!=0) res[1][6]=a0;
+  if (res[1]!=0) res[1][7]=a0;
+  if (res[1]!=0) res[1][8]=a0;
+  if (res[1]!=0) res[1][9]=a0;
+  if (res[1]!=0) res[1][10]=a0;
+  if (res[1]!=0) res[1][11]=a0;
+  if (res[1]!=0) res[1][12]=a0;
+  if (res[1]!=0) res[1][13]=a0;
+  if (res[1]!=0) res[1][14]=a0;
+  if (res[1]!=0) res[1][15]=a0;
+  if (res[1]!=0) res[1][16]=a0;
+  if (res[1]!=0) res[1][17]=a0;
+  if (res[1]!=0) res[1][18]=a0;
+  if (res[1]!=0) res[1][19]=a0;
+  if (res[1]!=0) res[1][20]=a0;
+  if (res[1]!=0) res[1][21]=a0;
+  if (res[1]!=0) res[1][22]=a0;
+  if (res[1]!=0) res[1][23]=a0;
+  if (res[1]!=0) res[1][24]=a0;
+  if (res[1]!=0) res[1][25]=a0;
+  if (res[1]!=0) res[1][26]=a0;
+  if (res[1]!=0) res[1][27]=a0;
+  if (res[1]!=0) res[1][28]=a0;
+  if (res[1]!=0) res[1][29]=a0;
+  if (res[1]!=0) res[1][30]=a0;
+  if (res[1]!=0) res[1][31]=a0;
+  if (res[1]!=0) res[1][32]=a0;
+  if (res[1]!=0) res[1][33]=a0;
+  if (res[1]!=0) res[1][34]=a0;
+  if (res[1]!=0) res[1][35]=a0;
+  if (res[1]!=0) res[1][36]=a0;
+  if (res[1]!=0) res[1][37]=a0;
+  if (res[1]!=0) res[1][38]=a0;
+  if (res[1]!=0) res[1][39]=a0;
+  if (res[1]!=0) res[1][40]=a0;
+  if (res[1]!=0) res[1][41]=a0;
+  if (res[1]!=0) res[1][42]=a0;
+  if (res[1]!=0) res[1][43]=a0;
+  if (res[1]!=0) res[1][44]=a0;
+  if (res[1]!=0) res[1][45]=a0;
+  if (res[1]!=0) res[1][46]=a0;
+  if (res[1]!=0) res[1][47]=a0;
+  if (res[1]!=0) res[1][48]=a0;
+  if (res[1]!=0) res[1][49]=a0;
+  if (res[1]!=0) res[1][50]=a0;
+  if (res[1]!=0) res[1][51]=a0;
+  if (res[1]!=0) res[1][52]=a0;
+  if (res[1]!=0) res[1][53]=a0;
+  if (res[1]!=0) res[1][54]=a0;
+  if (res[1]!=0) res[1][55]=a0;
+  if (res[1]!=0) res[1][56]=a0;
+  if (res[1]!=0) res[1][57]=a0;
+  if (res[1]!=0) res[1][58]=a0;
+  if (res[1]!=0) res[1][59]=a0;
+  if (res[1]!=0) res[1][60]=a0;
+  if (res[1]!=0) res[1][61]=a0;
+  if (res[1]!=0) res[1][62]=a0;
+  if (res[1]!=0) res[1][63]=a0;
+  if (res[1]!=0) res[1][64]=a0;
+  if (res[1]!=0) res[1][65]=a0;
+  if (res[1]!=0) res[1][66]=a0;
+  if (res[1]!=0) res[1][67]=a0;
+  if (res[1]!=0) res[1][68]=a0;
+  if (res[1]!=0) res[1][69]=a0;
+  if (res[1]!=0) res[1][70]=a0;
+  if (res[1]!=0) res[1][71]=a0;
+  if (res[1]!=0) res[1][72]=a0;
+  if (res[1]!=0) res[1][73]=a0;
+  if (res[1]!=0) res[1][74]=a0;
+  if (res[1]!=0) res[1][75]=a0;
+  if (res[1]!=0) res[1][76]=a0;
+  if (res[1]!=0) res[1][77]=a0;
+  if (res[1]!=0) res[1][78]=a0;
+  if (res[1]!=0) res[1][79]=a0;
+  if (res[1]!=0) res[1][80]=a0;
+  if (res[1]!=0) res[1][81]=a0;
+  if (res[1]!=0) res[1][82]=a0;
+  if (res[1]!=0) res[1][83]=a0;
+  if (res[1]!=0) res[1][84]=a0;
+  if (res[1]!=0) res[1][85]=a0;
+  if (res[1]!=0) res[1][86]=a0;
+  if (res[1]!=0) res[1][87]=a0;
+  if (res[1]!=0) res[1][88]=a0;
+  if (res[1]!=0) res[1][89]=a0;
+  if (res[1]!=0) res[1][90]=a0;
+  if (res[1]!=0) res[1][91]=a0;
+  if (res[1]!=0) res[1][92]=a0;
+  if (res[1]!=0) res[1][93]=a0;
+  if (res[1]!=0) res[1][94]=a0;
+  if (res[1]!=0) res[1][95]=a0;
+  if (res[1]!=0) res[1][96]=a0;
+  if (res[1]!=0) res[1][97]=a0;
+  if (res[1]!=0) res[1][98]=a0;
+  if (res[1]!=0) res[1][99]=a0;
+  if (res[1]!=0) res[1][100]=a0;
+  if (res[1]!=0) res[1][101]=a0;
+  if (res[1]!=0) res[1][102]=a0;
+  if (res[1]!=0) res[1][103]=a0;
+  if (res[1]!=0) res[1][104]=a0;
+  if (res[1]!=0) res[1][105]=a0;
+  if (res[1]!=0) res[1][106]=a0;
+  if (res[1]!=0) res[1][107]=a0;
+  if (res[2]!=0) res[2][0]=a0;
+  if (res[2]!=0) res[2][1]=a0;
+  if (res[2]!=0) res[2][2]=a0;
+  if (res[2]!=0) res[2][3]=a0;
+  if (res[2]!=0) res[2][4]=a0;
+  if (res[2]!=0) res[2][5]=a0;
+  if (res[2]!=0) res[2][6]=a0;
+  if (res[2]!=0) res[2][7]=a0;
+  if (res[2]!=0) res[2][8]=a0;
+  if (res[2]!=0) res[2][9]=a0;
+  if (res[2]!=0) res[2][10]=a0;
+  if (res[2]!=0) res[2][11]=a0;
+  if (res[2]!=0) res[2][12]=a0;
+  if (res[2]!=0) res[2][13]=a0;
+  if (res[2]!=0) res[2][14]=a0;
+  if (res[2]!=0) res[2][15]=a0;
+  if (res[2]!=0) res[2][16]=a0;
+  if (res[2]!=0) res[2][17]=a0;
+  if (res[2]!=0) res[2][18]=a0;
+  if (res[2]!=0) res[2][19]=a0;
+  if (res[2]!=0) res[2][20]=a0;
+  if (res[2]!=0) res[2][21]=a0;
+  if (res[2]!=0) res[2][22]=a0;
+  if (res[2]!=0) res[2][23]=a0;
+  if (res[2]!=0) res[2][24]=a0;
+  if (res[2]!=0) res[2][25]=a0;
+  if (res[2]!=0) res[2][26]=a0;
+  if (res[2]!=0) res[2][27]=a0;
+  if (res[2]!=0) res[2][28]=a0;
+  if (res[2]!=0) res[2][29]=a0;
+  if (res[2]!=0) res[2][30]=a0;
+  if (res[2]!=0) res[2][31]=a0;
+  if (res[2]!=0) res[2][32]=a0;
+  if (res[2]!=0) res[2][33]=a0;
+  if (res[2]!=0) res[2][34]=a0;
+  if (res[2]!=0) res[2][35]=a0;
+  if (res[2]!=0) res[2][36]=a0;
+  if (res[2]!=0) res[2][37]=a0;
+  if (res[2]!=0) res[2][38]=a0;
+  if (res[2]!=0) res[2][39]=a0;
+  if (res[2]!=0) res[2][40]=a0;
+  if (res[2]!=0) res[2][41]=a0;
+  if (res[2]!=0) res[2][42]=a0;
+  if (res[2]!=0) res[2][43]=a0;
+  if (res[2]!=0) res[2][44]=a0;
+  if (res[2]!=0) res[2][45]=a0;
+  if (res[2]!=0) res[2][46]=a0;
+  if (res[2]!=0) res[2][47]=a0;
+  if (res[2]!=0) res[2][48]=a0;
+  if (res[2]!=0) res[2][49]=a0;
+  if (res[2]!=0) res[2][50]=a0;
+  if (res[2]!=0) res[2][51]=a0;
+  if (res[2]!=0) res[2][52]=a0;
+  if (res[2]!=0) res[2][53]=a0;
+  if (res[2]!=0) res[2][54]=a0;
+  if (res[2]!=0) res[2][55]=a0;
+  if (res[2]!=0) res[2][56]=a0;
+  if (res[2]!=0) res[2][57]=a0;
+  if (res[2]!=0) res[2][58]=a0;
+  if (res[2]!=0) res[2][59]=a0;
+  if (res[2]!=0) res[2][60]=a0;
+  if (res[2]!=0) res[2][61]=a0;
+  if (res[2]!=0) res[2][62]=a0;
+  if (res[2]!=0) res[2][63]=a0;
+  if (res[2]!=0) res[2][64]=a0;
+  if (res[2]!=0) res[2][65]=a0;
+  if (res[2]!=0) res[2][66]=a0;
+  if (res[2]!=0) res[2][67]=a0;
+  if (res[2]!=0) res[2][68]=a0;
+  if (res[2]!=0) res[2][69]=a0;
+  if (res[2]!=0) res[2][70]=a0;
+  if (res[2]!=0) res[2][71]=a0;
+  if (res[2]!=0) res[2][72]=a0;
+  if (res[2]!=0) res[2][73]=a0;
+  if (res[2]!=0) res[2][74]=a0;
+  if (res[2]!=0) res[2][75]=a0;
+  if (res[2]!=0) res[2][76]=a0;
+  if (res[2]!=0) res[2][77]=a0;
+  if (res[2]!=0) res[2][78]=a0;
+  if (res[2]!=0) res[2][79]=a0;
+  if (res[2]!=0) res[2][80]=a0;
+  if (res[2]!=0) res[2][81]=a0;
+  if (res[2]!=0) res[2][82]=a0;
+  if (res[2]!=0) res[2][83]=a0;
+  if (res[2]!=0) res[2][84]=a0;
+  if (res[2]!=0) res[2][85]=a0;
+  if (res[2]!=0) res[2][86]=a0;
+  if (res[2]!=0) res[2][87]=a0;
+  if (res[2]!=0) res[2][88]=a0;
+  if (res[2]!=0) res[2][89]=a0;
+  if (res[2]!=0) res[2][90]=a0;
+  if (res[2]!=0) res[2][91]=a0;
+  if (res[2]!=0) res[2][92]=a0;
+  if (res[2]!=0) res[2][93]=a0;
+  if (res[2]!=0) res[2][94]=a0;
+  if (res[2]!=0) res[2][95]=a0;
+  if (res[2]!=0) res[2][96]=a0;
+  if (res[2]!=0) res[2][97]=a0;
+  if (res[2]!=0) res[2][98]=a0;
+  if (res[2]!=0) res[2][99]=a0;
+  if (res[2]!=0) res[2][100]=a0;
+  if (res[2]!=0) res[2][101]=a0;
+  if (res[2]!=0) res[2][102]=a0;
+  if (res[2]!=0) res[2][103]=a0;
+  if (res[2]!=0) res[2][104]=a0;
+  if (res[2]!=0) res[2][105]=a0;
+  if (res[2]!=0) res[2][106]=a0;
+  if (res[2]!=0) res[2][107]=a0;
+  return 0;
+}
+
+CASADI_SYMBOL_EXPORT int qd_dgrf_FL_BL(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem){
+  (void)casadi_f16;
+  return qd_dgrf_solve(6, 5, casadi_f1, casadi_f0, casadi_f15, qd_did_full_sparsity_out(0), qd_did_full_sparsity_out(1), arg, res, iw, w, mem);
+}
+
+CASADI_SYMBOL_EXPORT int qd_dgrf_FL_BL_checkout(void) {
+  return 0;
+}
+
+CASADI_SYMBOL_EXPORT void qd_dgrf_FL_BL_release(int mem) {
+  (void)mem;
+}
+
+CASADI_SYMBOL_EXPORT void qd_dgrf_FL_BL_incref(void) {
+}
+
+CASADI_SYMBOL_EXPORT void qd_dgrf_FL_BL_decref(void) {
+}
+
+CASADI_SYMBOL_EXPORT casadi_int qd_dgrf_FL_BL_n_in(void) { return 3;}
+
+CASADI_SYMBOL_EXPORT casadi_int qd_dgrf_FL_BL_n_out(void) { return 3;}
+
+CASADI_SYMBOL_EXPORT casadi_real qd_dgrf_FL_BL_default_in(casadi_int i) {
+  switch (i) {
+    default: return 0;
+  }
+}
+
+CASADI_SYMBOL_EXPORT const char* qd_dgrf_FL_BL_name_in(casadi_int i) {
+  switch (i) {
+    case 0: return "q";
+    case 1: return "v";
+    case 2: return "a";
+    default: return 0;
+  }
+}
+
+CASADI_SYMBOL_EXPORT const char* qd_dgrf_FL_BL_name_out(casadi_int i) {
+  switch (i) {
+    case 0: return "dlambda_dq";
+    case 1: return "dlambda_dv";
+    case 2: return "dlambda_da";
+    default: return 0;
+  }
+}
+
+CASADI_SYMBOL_EXPORT const casadi_int* qd_dgrf_FL_BL_sparsity_in(casadi_int i) {
+  switch (i) {
+    case 0: return casadi_s0;
+    case 1: return casadi_s1;
+    case 2: return casadi_s1;
+    default: return 0;
+  }
+}
+
+CASADI_SYMBOL_EXPORT const casadi_int* qd_dgrf_FL_BL_sparsity_out(casadi_int i) {
+  switch (i) {
+    case 0: return casadi_s7;
+    case 1: return casadi_s7;
+    case 2: return casadi_s7;
+    default: return 0;
+  }
+}
+
+CASADI_SYMBOL_EXPORT int qd_dgrf_FL_BL_work(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz_iw, casadi_int *sz_w) {
+  if (sz_arg) *sz_arg = 3;
+  if (sz_res) *sz_res = 3;
+  if (sz_iw) *sz_iw = 0;
+  if (sz_w) *sz_w = 0;
+  return 0;
+}
+
+CASADI_SYMBOL_EXPORT int qd_dgrf_FL_BL_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz_iw, casadi_int *sz_w) {
+  if (sz_arg) *sz_arg = 3*sizeof(const casadi_real*);
+  if (sz_res) *sz_res = 3*sizeof(casadi_real*);
+  if (sz_iw) *sz_iw = 0*sizeof(casadi_int);
+  if (sz_w) *sz_w = 0*sizeof(casadi_real);
+  return 0;
+}
+
+/* qd_dgrf_dir_FL_BR:(q[19],w[6],dq[18])->(lambda_w[6],dlambda_w[6]) */
+static int casadi_f17(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem) {
+  (void)arg; (void)res; (void)iw; (void)w; (void)mem;
+  casadi_real a00, a01, a02, a03, a04, a05, a06, a07, a08, a09, a10, a11;
+  casadi_real a12, a13, a14, a15, a16, a17, a18, a19, a20, a21, a22, a23;
+  casadi_real a24, a25, a26, a27, a28, a29, a30, a31, a32, a33, a34, a35;
+  casadi_real a36, a37, a38, a39, a40, a41, a42, a43, a44, a45, a46, a47;
+  casadi_real a48, a49, a50, a51, a52, a53, a54, a55, a56, a57, a58, a59;
+  casadi_real a60, a61;
+  a00=arg[1]? arg[1][0] : 0;
+  a01=7.0000000000000007e-02;
+  a02=2.0000000000000001e-01;
+  a03=arg[0]? arg[0][7] : 0;
+  a04=qd_cos(a03);
+  a05=arg[0]? arg[0][8] : 0;
+  a06=qd_cos(a05);
+  a07=(a04*a06);
+  a08=(a02*a07);
+  a01=(a01+a08);
+  a08=arg[0]? arg[0][9] : 0;
+  a09=qd_cos(a08);
+  a10=(a07*a09);
+  a05=qd_sin(a05);
+  a11=(a04*a05);
+  a08=qd_sin(a08);
+  a12=(a11*a08);
+  a10=(a10-a12);
+  a10=(a02*a10);
+  a01=(a01+a10);
+  a03=qd_sin(a03);
+  a10=(a03*a05);
+  a12=(a10*a08);
+  a13=(a03*a06);
+  a14=(a13*a09);
+  a12=(a12-a14);
+  a12=(a02*a12);
+  a14=(a02*a13);
+  a12=(a12-a14);
+  a14=arg[0]? arg[0][16] : 0;
+  a15=qd_sin(a14);
+  a16=arg[0]? arg[0][17] : 0;
+  a17=qd_sin(a16);
+  a18=(a15*a17);
+  a19=arg[0]? arg[0][18] : 0;
+  a20=qd_sin(a19);
+  a21=(a18*a20);
+  a16=qd_cos(a16);
+  a22=(a15*a16);
+  a19=qd_cos(a19);
+  a23=(a22*a19);
+  a21=(a21-a23);
+  a21=(a02*a21);
+  a23=(a02*a22);
+  a21=(a21-a23);
+  a23=(a12-a21);
+  a24=(a01*a23);
+  a25=-7.0000000000000007e-02;
+  a14=qd_cos(a14);
+  a26=(a14*a16);
+  a27=(a02*a26);
+  a25=(a25+a27);
+  a27=(a26*a19);
+  a28=(a14*a17);
+  a29=(a28*a20);
+  a27=(a27-a29);
+  a27=(a02*a27);
+  a25=(a25+a27);
+  a27=(a01-a25);
+  a29=(a12*a27);
+  a24=(a24-a29);
+  a29=(a24*a00);
+  a30=1.9000000000000000e-01;
+  a31=(a02*a05);
+  a30=(a30+a31);
+  a31=(a06*a08);
+  a32=(a05*a09);
+  a31=(a31+a32);
+  a31=(a02*a31);
+  a30=(a30+a31);
+  a31=-1.9000000000000000e-01;
+  a32=(a02*a17);
+  a31=(a31+a32);
+  a32=(a16*a20);
+  a33=(a17*a19);
+  a32=(a32+a33);
+  a32=(a02*a32);
+  a31=(a31+a32);
+  a32=(a30-a31);
+  a33=(a12*a32);
+  a34=(a30*a23);
+  a33=(a33-a34);
+  a34=arg[1]? arg[1][1] : 0;
+  a35=(a33*a34);
+  a29=(a29+a35);
+  a35=(a30*a27);
+  a36=(a01*a32);
+  a35=(a35-a36);
+  a36=arg[1]? arg[1][2] : 0;
+  a37=(a35*a36);
+  a29=(a29+a37);
+  a37=arg[1]? arg[1][3] : 0;
+  a38=(a32*a37);
+  a39=arg[1]? arg[1][4] : 0;
+  a40=(a27*a39);
+  a38=(a38+a40);
+  a40=arg[1]? arg[1][5] : 0;
+  a41=(a23*a40);
+  a38=(a38+a41);
+  a29=(a29+a38);
+  a38=casadi_sq(a24);
+  a41=casadi_sq(a33);
+  a38=(a38+a41);
+  a41=casadi_sq(a35);
+  a38=(a38+a41);
+  a41=casadi_sq(a32);
+  a42=casadi_sq(a27);
+  a41=(a41+a42);
+  a42=casadi_sq(a23);
+  a41=(a41+a42);
+  a38=(a38+a41);
+  a29=(a29/a38);
+  a42=(a24*a29);
+  a42=(a00-a42);
+  a43=2.;
+  a44=(a42/a43);
+  a45=(a27*a29);
+  a45=(a39-a45);
+  a21=(a12+a21);
+  a21=(a21/a43);
+  a46=(a21*a42);
+  a31=(a30+a31);
+  a31=(a31/a43);
+  a47=(a35*a29);
+  a47=(a36-a47);
+  a48=(a31*a47);
+  a46=(a46-a48);
+  a45=(a45-a46);
+  a46=(a23*a45);
+  a48=(a23*a29);
+  a48=(a40-a48);
+  a49=(a33*a29);
+  a49=(a34-a49);
+  a50=(a31*a49);
+  a25=(a01+a25);
+  a25=(a25/a43);
+  a51=(a25*a42);
+  a50=(a50-a51);
+  a48=(a48-a50);
+  a50=(a27*a48);
+  a46=(a46-a50);
+  a46=(a46/a41);
+  a50=(a44+a46);
+  if (res[0]!=0) res[0][0]=a50;
+  a50=(a49/a43);
+  a51=(a32*a48);
+  a52=(a32*a29);
+  a52=(a37-a52);
+  a53=(a25*a47);
+  a54=(a21*a49);
+  a53=(a53-a54);
+  a52=(a52-a53);
+  a53=(a23*a52);
+  a51=(a51-a53);
+  a51=(a51/a41);
+  a53=(a50+a51);
+  if (res[0]!=0) res[0][1]=a53;
+  a43=(a47/a43);
+  a53=(a27*a52);
+  a54=(a32*a45);
+  a53=(a53-a54);
+  a53=(a53/a41);
+  a54=(a43+a53);
+  if (res[0]!=0) res[0][2]=a54;
+  a44=(a44-a46);
+  if (res[0]!=0) res[0][3]=a44;
+  a50=(a50-a51);
+  if (res[0]!=0) res[0][4]=a50;
+  a43=(a43-a53);
+  if (res[0]!=0) res[0][5]=a43;
+  a43=arg[2]? arg[2][6] : 0;
+  a50=(a04*a43);
+  a44=(a05*a50);
+  a54=arg[2]? arg[2][7] : 0;
+  a55=(a06*a54);
+  a56=(a03*a55);
+  a44=(a44+a56);
+  a44=(a08*a44);
+  a56=arg[2]? arg[2][8] : 0;
+  a57=(a09*a56);
+  a10=(a10*a57);
+  a44=(a44+a10);
+  a50=(a06*a50);
+  a54=(a05*a54);
+  a10=(a03*a54);
+  a50=(a50-a10);
+  a10=(a09*a50);
+  a56=(a08*a56);
+  a13=(a13*a56);
+  a10=(a10-a13);
+  a44=(a44-a10);
+  a44=(a02*a44);
+  a50=(a02*a50);
+  a44=(a44-a50);
+  a50=arg[2]? arg[2][15] : 0;
+  a10=(a14*a50);
+  a13=(a17*a10);
+  a58=arg[2]? arg[2][16] : 0;
+  a59=(a16*a58);
+  a60=(a15*a59);
+  a13=(a13+a60);
+  a13=(a20*a13);
+  a60=arg[2]? arg[2][17] : 0;
+  a61=(a19*a60);
+  a18=(a18*a61);
+  a13=(a13+a18);
+  a10=(a16*a10);
+  a58=(a17*a58);
+  a18=(a15*a58);
+  a10=(a10-a18);
+  a18=(a19*a10);
+  a60=(a20*a60);
+  a22=(a22*a60);
+  a18=(a18-a22);
+  a13=(a13-a18);
+  a13=(a02*a13);
+  a10=(a02*a10);
+  a13=(a13-a10);
+  a10=(a44-a13);
+  a18=(a45*a10);
+  a15=(a15*a50);
+  a50=(a16*a15);
+  a22=(a14*a58);
+  a50=(a50+a22);
+  a22=(a02*a50);
+  a50=(a19*a50);
+  a26=(a26*a60);
+  a50=(a50+a26);
+  a14=(a14*a59);
+  a15=(a17*a15);
+  a14=(a14-a15);
+  a14=(a20*a14);
+  a28=(a28*a61);
+  a14=(a14+a28);
+  a50=(a50+a14);
+  a50=(a02*a50);
+  a22=(a22+a50);
+  a03=(a03*a43);
+  a43=(a06*a03);
+  a50=(a04*a54);
+  a43=(a43+a50);
+  a50=(a02*a43);
+  a43=(a09*a43);
+  a07=(a07*a56);
+  a43=(a43+a07);
+  a04=(a04*a55);
+  a03=(a05*a03);
+  a04=(a04-a03);
+  a04=(a08*a04);
+  a11=(a11*a57);
+  a04=(a04+a11);
+  a43=(a43+a04);
+  a43=(a02*a43);
+  a50=(a50+a43);
+  a43=(a22-a50);
+  a04=(a29*a43);
+  a11=(a01*a10);
+  a03=(a23*a50);
+  a11=(a11-a03);
+  a03=(a27*a44);
+  a07=(a12*a43);
+  a03=(a03+a07);
+  a11=(a11-a03);
+  a00=(a00*a11);
+  a03=(a32*a44);
+  a07=(a02*a55);
+  a06=(a06*a57);
+  a08=(a08*a54);
+  a06=(a06-a08);
+  a09=(a09*a55);
+  a05=(a05*a56);
+  a09=(a09-a05);
+  a06=(a06+a09);
+  a06=(a02*a06);
+  a07=(a07+a06);
+  a06=(a02*a59);
+  a16=(a16*a61);
+  a20=(a20*a58);
+  a16=(a16-a20);
+  a19=(a19*a59);
+  a17=(a17*a60);
+  a19=(a19-a17);
+  a16=(a16+a19);
+  a02=(a02*a16);
+  a06=(a06+a02);
+  a02=(a07-a06);
+  a12=(a12*a02);
+  a03=(a03+a12);
+  a12=(a23*a07);
+  a16=(a30*a10);
+  a12=(a12+a16);
+  a03=(a03-a12);
+  a34=(a34*a03);
+  a00=(a00+a34);
+  a34=(a27*a07);
+  a30=(a30*a43);
+  a34=(a34+a30);
+  a01=(a01*a02);
+  a30=(a32*a50);
+  a01=(a01-a30);
+  a34=(a34-a01);
+  a36=(a36*a34);
+  a00=(a00+a36);
+  a37=(a37*a02);
+  a39=(a39*a43);
+  a37=(a37+a39);
+  a40=(a40*a10);
+  a37=(a37+a40);
+  a00=(a00+a37);
+  a00=(a00/a38);
+  a38=(a29/a38);
+  a37=(2*a24);
+  a37=(a37*a11);
+  a40=(2*a33);
+  a40=(a40*a03);
+  a37=(a37+a40);
+  a40=(2*a35);
+  a40=(a40*a34);
+  a37=(a37+a40);
+  a40=(2*a32);
+  a40=(a40*a02);
+  a39=(2*a27);
+  a39=(a39*a43);
+  a40=(a40+a39);
+  a39=(2*a23);
+  a39=(a39*a10);
+  a40=(a40+a39);
+  a37=(a37+a40);
+  a38=(a38*a37);
+  a00=(a00-a38);
+  a38=(a27*a00);
+  a04=(a04+a38);
+  a38=5.0000000000000000e-01;
+  a44=(a44+a13);
+  a44=(a38*a44);
+  a13=(a42*a44);
+  a11=(a29*a11);
+  a24=(a24*a00);
+  a11=(a11+a24);
+  a24=(a21*a11);
+  a13=(a13-a24);
+  a07=(a07+a06);
+  a07=(a38*a07);
+  a06=(a47*a07);
+  a34=(a29*a34);
+  a35=(a35*a00);
+  a34=(a34+a35);
+  a35=(a31*a34);
+  a06=(a06-a35);
+  a13=(a13-a06);
+  a04=(a04+a13);
+  a13=(a23*a04);
+  a18=(a18-a13);
+  a13=(a48*a43);
+  a06=(a29*a10);
+  a35=(a23*a00);
+  a06=(a06+a35);
+  a07=(a49*a07);
+  a03=(a29*a03);
+  a33=(a33*a00);
+  a03=(a03+a33);
+  a31=(a31*a03);
+  a07=(a07-a31);
+  a50=(a50+a22);
+  a50=(a38*a50);
+  a42=(a42*a50);
+  a22=(a25*a11);
+  a42=(a42+a22);
+  a07=(a07+a42);
+  a06=(a06+a07);
+  a07=(a27*a06);
+  a13=(a13-a07);
+  a18=(a18-a13);
+  a18=(a18/a41);
+  a46=(a46/a41);
+  a46=(a46*a40);
+  a18=(a18-a46);
+  a11=(a38*a11);
+  a46=(a18-a11);
+  if (res[1]!=0) res[1][0]=a46;
+  a48=(a48*a02);
+  a06=(a32*a06);
+  a48=(a48-a06);
+  a10=(a52*a10);
+  a47=(a47*a50);
+  a25=(a25*a34);
+  a47=(a47+a25);
+  a49=(a49*a44);
+  a21=(a21*a03);
+  a49=(a49-a21);
+  a47=(a47+a49);
+  a29=(a29*a02);
+  a00=(a32*a00);
+  a29=(a29+a00);
+  a47=(a47-a29);
+  a23=(a23*a47);
+  a10=(a10+a23);
+  a48=(a48-a10);
+  a48=(a48/a41);
+  a51=(a51/a41);
+  a51=(a51*a40);
+  a48=(a48-a51);
+  a03=(a38*a03);
+  a51=(a48-a03);
+  if (res[1]!=0) res[1][1]=a51;
+  a52=(a52*a43);
+  a27=(a27*a47);
+  a52=(a52+a27);
+  a45=(a45*a02);
+  a32=(a32*a04);
+  a45=(a45-a32);
+  a52=(a52-a45);
+  a52=(a52/a41);
+  a53=(a53/a41);
+  a53=(a53*a40);
+  a52=(a52-a53);
+  a38=(a38*a34);
+  a34=(a52-a38);
+  if (res[1]!=0) res[1][2]=a34;
+  a11=(a11+a18);
+  a11=(-a11);
+  if (res[1]!=0) res[1][3]=a11;
+  a03=(a03+a48);
+  a03=(-a03);
+  if (res[1]!=0) res[1][4]=a03;
+  a38=(a38+a52);
+  a38=(-a38);
+  if (res[1]!=0) res[1][5]=a38;
+  return 0;
+}
+
+CASADI_SYMBOL_EXPORT int qd_dgrf_dir_FL_BR(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem){
+  return qd_d_finite(casadi_f17(arg, res, iw, w, mem), res, 2, (const casadi_int[]){6, 6});
+}
+
+CASADI_SYMBOL_EXPORT int qd_dgrf_dir_FL_BR_checkout(void) {
+  return 0;
+}
+
+CASADI_SYMBOL_EXPORT void qd_dgrf_dir_FL_BR_release(int mem) {
+  (void)mem;
+}
+
+CASADI_SYMBOL_EXPORT void qd_dgrf_dir_FL_BR_incref(void) {
+}
+
+CASADI_SYMBOL_EXPORT void qd_dgrf_dir_FL_BR_decref(void) {
+}
+
+CASADI_SYMBOL_EXPORT casadi_int qd_dgrf_dir_FL_BR_n_in(void) { return 3;}
+
+CASADI_SYMBOL_EXPORT casadi_int qd_dgrf_dir_FL_BR_n_out(void) { return 2;}
+
+CASADI_SYMBOL_EXPORT casadi_real qd_dgrf_dir_FL_BR_default_in(casadi_int i) {
+  switch (i) {
+    default: return 0;
+  }
+}
+
+CASADI_SYMBOL_EXPORT const char* qd_dgrf_dir_FL_BR_name_in(casadi_int i) {
+  switch (i) {
+    case 0: return "q";
+    case 1: return "w";
+    case 2: return "dq";
+    default: return 0;
+  }
+}
+
+CASADI_SYMBOL_EXPORT const char* qd_dgrf_dir_FL_BR_name_out(casadi_int i) {
+  switch (i) {
+    case 0: return "lambda_w";
+    case 1: return "dlambda_w";
+    default: return 0;
+  }
+}
+
+CASADI_SYMBOL_EXPORT const casadi_int* qd_dgrf_dir_FL_BR_sparsity_in(casadi_int i) {
+  switch (i) {
+    case 0: return casadi_s0;
+    case 1: return casadi_s6;
+    case 2: return casadi_s1;
+    default: return 0;
+  }
+}
+
+CASADI_SYMBOL_EXPORT const casadi_int* qd_dgrf_dir_FL_BR_sparsity_out(casadi_int i) {
+  switch (i) {
+    case 0: return casadi_s6;
+    case 1: return casadi_s6;
+    default: return 0;
+  }
+}
+
+CASADI_SYMBOL_EXPORT int qd_dgrf_dir_FL_BR_work(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz_iw, casadi_int *sz_w) {
+  if (sz_arg) *sz_arg = 3;
+  if (sz_res) *sz_res = 2;
+  if (sz_iw) *sz_iw = 0;
+  if (sz_w) *sz_w = 0;
+  return 0;
+}
+
+CASADI_SYMBOL_EXPORT int qd_dgrf_dir_FL_BR_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz_iw, casadi_int *sz_w) {
+  if (sz_arg) *sz_arg = 3*sizeof(const casadi_real*);
+  if (sz_res) *sz_res = 2*sizeof(casadi_real*);
+  if (sz_iw) *sz_iw = 0*sizeof(casadi_int);
+  if (sz_w) *sz_w = 0*sizeof(casadi_real);
+  return 0;
+}
+
+/* qd_dgrf_FL_BR:(q[19],v[18],a[18])->(dlambda_dq[6x18],dlambda_dv[6x18],dlambda_da[6x18]) */
+static int casadi_f18(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem) {
+  (void)arg; (void)res; (void)iw; (void)w; (void)mem;
+  casadi_real a0, a1, a2;
+  a0=arg[0]? arg[0][0] : 0;
+  a1=arg[0]? arg[0][1] : 0;
+  a0=(a0+a1);
+  a1=arg[0]? arg[0][2] : 0;
+  a0=(a0+a1);
+  a1=arg[0]? arg[0][3] : 0;
+  a0=(a0+a1);
+  a1=arg[0]? arg[0][4] : 0;
+  a0=(a0+a1);
+  a1=arg[0]? arg[0][5] : 0;
+  a0=(a0+a1);
+  a1=arg[0]? arg[0][6] : 0;
+  a0=(a0+a1);
+  a1=arg[0]? arg[0][7] : 0;
+  a0=(a0+a1);
+  a1=arg[0]? arg[0][8] : 0;
+  a0=(a0+a1);
+  a1=arg[0]? arg[0][9] : 0;
+  a0=(a0+a1);
+  a1=arg[0]? arg[0][10] : 0;
+  a0=(a0+a1);
+  a1=arg[0]? arg[0][11] : 0;
+  a0=(a0+a1);
+  a1=arg[0]? arg[0][12] : 0;
+  a0=(a0+a1);
+  a1=arg[0]? arg[0][13] : 0;
+  a0=(a0+a1);
+  a1=arg[0]? arg[0][14] : 0;
+  a0=(a0+a1);
+  a1=arg[0]? arg[0][15] : 0;
+  a0=(a0+a1);
+  a1=arg[0]? arg[0][16] : 0;
+  a0=(a0+a1);
+  a1=arg[0]? arg[0][17] : 0;
+  a0=(a0+a1);
+  a1=arg[0]? arg[0][18] : 0;
+  a0=(a0+a1);
+  a1=arg[1]? arg[1][0] : 0;
+  a2=arg[1]? arg[1][1] : 0;
+  a1=(a1+a2);
+  a2=arg[1]? arg[1][2] : 0;
+  a1=(a1+a2);
+  a2=arg[1]? arg[1][3] : 0;
+  a1=(a1+a2);
+  a2=arg[1]? arg[1][4] : 0;
+  a1=(a1+a2);
+  a2=arg[1]? arg[1][5] : 0;
+  a1=(a1+a2);
+  a2=arg[1]? arg[1][6] : 0;
+  a1=(a1+a2);
+  a2=arg[1]? arg[1][7] : 0;
+  a1=(a1+a2);
+  a2=arg[1]? arg[1][8] : 0;
+  a1=(a1+a2);
+  a2=arg[1]? arg[1][9] : 0;
+  a1=(a1+a2);
+  a2=arg[1]? arg[1][10] : 0;
+  a1=(a1+a2);
+  a2=arg[1]? arg[1][11] : 0;
+  a1=(a1+a2);
+  a2=arg[1]? arg[1][12] : 0;
+  a1=(a1+a2);
+  a2=arg[1]? arg[1][13] : 0;
+  a1=(a1+a2);
+  a2=arg[1]? arg[1][14] : 0;
+  a1=(a1+a2);
+  a2=arg[1]? arg[1][15] : 0;
+  a1=(a1+a2);
+  a2=arg[1]? arg[1][16] : 0;
+  a1=(a1+a2);
+  a2=arg[1]? arg[1][17] : 0;
+  a1=(a1+a2);
+  a0=(a0+a1);
+  a1=arg[2]? arg[2][0] : 0;
+  a2=arg[2]? arg[2][1] : 0;
+  a1=(a1+a2);
+  a2=arg[2]? arg[2][2] : 0;
+  a1=(a1+a2);
+  a2=arg[2]? arg[2][3] : 0;
+  a1=(a1+a2);
+  a2=arg[2]? arg[2][4] : 0;
+  a1=(a1+a2);
+  a2=arg[2]? arg[2][5] : 0;
+  a1=(a1+a2);
+  a2=arg[2]? arg[2][6] : 0;
+  a1=(a1+a2);
+  a2=arg[2]? arg[2][7] : 0;
+  a1=(a1+a2);
+  a2=arg[2]? arg[2][8] : 0;
+  a1=(a1+a2);
+  a2=arg[2]? arg[2][9] : 0;
+  a1=(a1+a2);
+  a2=arg[2]? arg[2][10] : 0;
+  a1=(a1+a2);
+  a2=arg[2]? arg[2][11] : 0;
+  a1=(a1+a2);
+  a2=arg[2]? arg[2][12] : 0;
+  a1=(a1+a2);
+  a2=arg[2]? arg[2][13] : 0;
+  a1=(a1+a2);
+  a2=arg[2]? arg[2][14] : 0;
+  a1=(a1+a2);
+  a2=arg[2]? arg[2][15] : 0;
+  a1=(a1+a2);
+  a2=arg[2]? arg[2][16] : 0;
+  a1=(a1+a2);
+  a2=arg[2]? arg[2][17] : 0;
+  a1=(a1+a2);
+  a0=(a0+a1);
+  if (res[0]!=0) res[0][0]=a0;
+  if (res[0]!=0) res[0][1]=a0;
+  if (res[0]!=0) res[0][2]=a0;
+  if (res[0]!=0) res[0][3]=a0;
+  if (res[0]!=0) res[0][4]=a0;
+  if (res[0]!=0) res[0][5]=a0;
+  if (res[0]!=0) res[0][6]=a0;
+  if (res[0]!=0) res[0][7]=a0;
+  if (res[0]!=0) res[0][8]=a0;
+  if (res[0]!=0) res[0][9]=a0;
+  if (res[0]!=0) res[0][10]=a0;
+  if (res[0]!=0) res[0][11]=a0;
+  if (res[0]!=0) res[0][12]=a0;
+  if (res[0]!=0) res[0][13]=a0;
+  if (res[0]!=0) res[0][14]=a0;
+  if (res[0]!=0) res[0][15]=a0;
+  if (res[0]!=0) res[0][16]=a0;
+  if (res[0]!=0) res[0][17]=a0;
+  if (res[0]!=0) res[0][18]=a0;
+  if (res[0]!=0) res[0][19]=a0;
+  if (res[0]!=0) res[0][20]=a0;
+  if (res[0]!=0) res[0][21]=a0;
+  if (res[0]!=0) res[0][22]=a0;
+  if (res[0]!=0) res[0][23]=a0;
+  if (res[0]!=0) res[0][24]=a0;
+  if (res[0]!=0) res[0][25]=a0;
+  if (res[0]!=0) res[0][26]=a0;
+  if (res[0]!=0) res[0][27]=a0;
+  if (res[0]!=0) res[0][28]=a0;
+  if (res[0]!=0) res[0][29]=a0;
+  if (res[0]!=0) res[0][30]=a0;
+  if (res[0]!=0) res[0][31]=a0;
+  if (res[0]!=0) res[0][32]=a0;
+  if (res[0]!=0) res[0][33]=a0;
+  if (res[0]!=0) res[0][34]=a0;
+  if (res[0]!=0) res[0][35]=a0;
+  if (res[0]!=0) res[0][36]=a0;
+  if (res[0]!=0) res[0][37]=a0;
+  if (res[0]!=0) res[0][38]=a0;
+  if (res[0]!=0) res[0][39]=a0;
+  if (res[0]!=0) res[0][40]=a0;
+  if (res[0]!=0) res[0][41]=a0;
+  if (res[0]!=0) res[0][42]=a0;
+  if (res[0]!=0) res[0][43]=a0;
+  if (res[0]!=0) res[0][44]=a0;
+  if (res[0]!=0) res[0][45]=a0;
+  if (res[0]!=0) res[0][46]=a0;
+  if (res[0]!=0) res[0][47]=a0;
+  if (res[0]!=0) res[0][48]=a0;
+  if (res[0]!=0) res[0][49]=a0;
+  if (res[0]!=0) res[0][50]=a0;
+  if (res[0]!=0) res[0][51]=a0;
+  if (res[0]!=0) res[0][52]=a0;
+  if (res[0]!=0) res[0][53]=a0;
+  if (res[0]!=0) res[0][54]=a0;
+  if (res[0]!=0) res[0][55]=a0;
+  if (res[0]!=0) res[0][56]=a0;
+  if (res[0]!=0) res[0][57]=a0;
+  if (res[0]!=0) res[0][58]=a0;
+  if (res[0]!=0) res[0][59]=a0;
+  if (res[0]!=0) res[0][60]=a0;
+  if (res[0]!=0) res[0][61]=a0;
+  if (res[0]!=0) res[0][62]=a0;
+  if (res[0]!=0) res[0][63]=a0;
+  if (res[0]!=0) res[0][64]=a0;
+  if (res[0]!=0) res[0][65]=a0;
+  if (res[0]!=0) res[0][66]=a0;
+  if (res[0]!=0) res[0][67]=a0;
+  if (res[0]!=0) res[0][68]=a0;
+  if (res[0]!=0) res[0][69]=a0;
+  if (res[0]!=0) res[0][70]=a0;
+  if (res[0]!=0) res[0][71]=a0;
+  if (res[0]!=0) res[0][72]=a0;
+  if (res[0]!=0) res[0][73]=a0;
+  if (res[0]!=0) res[0][74]=a0;
+  if (res[0]!=0) res[0][75]=a0;
+  if (res[0]!=0) res[0][76]=a0;
+  if (res[0]!=0) res[0][77]=a0;
+  if (res[0]!=0) res[0][78]=a0;
+  if (res[0]!=0) res[0][79]=a0;
+  if (res[0]!=0) res[0][80]=a0;
+  if (res[0]!=0) res[0][81]=a0;
+  if (res[0]!=0) res[0][82]=a0;
+  if (res[0]!=0) res[0][83]=a0;
+  if (res[0]!=0) res[0][84]=a0;
+  if (res[0]!=0) res[0][85]=a0;
+  if (res[0]!=0) res[0][86]=a0;
+  if (res[0]!=0) res[0][87]=a0;
+  if (res[0]!=0) res[0][88]=a0;
+  if (res[0]!=0) res[0][89]=a0;
+  if (res[0]!=0) res[0][90]=a0;
+  if (res[0]!=0) res[0][91]=a0;
+  if (res[0]!=0) res[0][92]=a0;
+  if (res[0]!=0) res[0][93]=a0;
+  if (res[0]!=0) res[0][94]=a0;
+  if (res[0]!=0) res[0][95]=a0;
+  if (res[0]!=0) res[0][96]=a0;
+  if (res[0]!=0) res[0][97]=a0;
+  if (res[0]!=0) res[0][98]=a0;
+  if (res[0]!=0) res[0][99]=a0;
+  if (res[0]!=0) res[0][100]=a0;
+  if (res[0]!=0) res[0][101]=a0;
+  if (res[0]!=0) res[0][102]=a0;
+  if (res[0]!=0) res[0][103]=a0;
+  if (res[0]!=0) res[0][104]=a0;
+  if (res[0]!=0) res[0][105]=a0;
+  if (res[0]!=0) res[0][106]=a0;
+  if (res[0]!=0) res[0][107]=a0;
+  if (res[1]!=0) res[1][0]=a0;
+  if (res[1]!=0) res[1][1]=a0;
+  if (res[1]!=0) res[1][2]=a0;
+  if (res[1]!=0) res[1][3]=a0;
+  if (res[1]!=0) res[1][4]=a0;
+  if (res[1]!=0) res[1][5]=a0;
+  if (res[1]!=0) res[1][6]=a0;
+  if (res[1]!=0) res[1][7]=a0;
+  if (res[1]!=0) res[1][8]=a0;
+  if (res[1]!=0) res[1][9]=a0;
+  if (res[1]!=0) res[1][10]=a0;
+  if (res[1]!=0) res[1][11]=a0;
+  if (res[1]!=0) res[1][12]=a0;
+  if (res[1]!=0) res[1][13]=a0;
+  if (res[1]!=0) res[1][14]=a0;
+  if (res[1]!=0) res[1][15]=a0;
+  if (res[1]!=0) res[1][16]=a0;
+  if (res[1]!=0) res[1][17]=a0;
+  if (res[1]!=0) res[1][18]=a0;
+  if (res[1]!=0) res[1][19]=a0;
+  if (res[1]!=0) res[1][20]=a0;
+  if (res[1]!=0) res[1][21]=a0;
+  if (res[1]!=0) res[1][22]=a0;
+  if (res[1]!=0) res[1][23]=a0;
+  if (res[1]!=0) res[1][24]=a0;
+  if (res[1]!=0) res[1][25]=a0;
+  if (res[1]!=0) res[1][26]=a0;
+  if (res[1]!=0) res[1][27]=a0;
+  if (res[1]!=0) res[1][28]=a0;
+  if (res[1]!=0) res[1][29]=a0;
+  if (res[1]!=0) res[1][30]=a0;
+  if (res[1]!=0) res[1][31]=a0;
+  if (res[1]!=0) res[1][32]=a0;
+  if (res[1]!=0) res[1][33]=a0;
+  if (res[1]!=0) res[1][34]=a0;
+  if (res[1]!=0) res[1][35]=a0;
+  if (res[1]!=0) res[1][36]=a0;
+  if (res[1]!=0) res[1][37]=a0;
+  if (res[1]!=0) res[1][38]=a0;
+  if (res[1]!=0) res[1][39]=a0;
+  if (res[1]!=0) res[1][40]=a0;
+  if (res[1]!=0) res[1][41]=a0;
+  if (res[1]!=0) res[1][42]=a0;
+  if (res[1]!=0) res[1][43]=a0;
+  if (res[1]!=0) res[1][44]=a0;
+  if (res[1]!=0) res[1][45]=a0;
+  if (res[1]!=0) res[1][46]=a0;
+  if (res[1]!=0) res[1][47]=a0;
+  if (res[1]!=0) res[1][48]=a0;
+  if (res[1]!=0) res[1][49]=a0;
+  if (res[1]!=0) res[1][50]=a0;
+  if (res[1]!=0) res[1][51]=a0;
+  if (res[1]!=0) res[1][52]=a0;
+  if (res[1]!=0) res[1][53]=a0;
+  if (res[1]!=0) res[1][54]=a0;
+  if (res[1]!=0) res[1][55]=a0;
+  if (res[1]!=0) res[1][56]=a0;
+  if (res[1]!=0) res[1][57]=a0;
+  if (res[1]!=0) res[1][58]=a0;
+  if (res[1]!=0) res[1][59]=a0;
+  if (res[1]!=0) res[1][60]=a0;
+  if (res[1]!=0) res[1][61]=a0;
+  if (res[1]!=0) res[1][62]=a0;
+  if (res[1]!=0) res[1][63]=a0;
+  if (res[1]!=0) res[1][64]=a0;
+  if (res[1]!=0) res[1][65]=a0;
+  if (res[1]!=0) res[1][66]=a0;
+  if (res[1]!=0) res[1][67]=a0;
+  if (res[1]!=0) res[1][68]=a0;
+  if (res[1]!=0) res[1][69]=a0;
+  if (res[1]!=0) res[1][70]=a0;
+  if (res[1]!=0) res[1][71]=a0;
+  if (res[1]!=0) res[1][72]=a0;
+  if (res[1]!=0) res[1][73]=a0;
+  if (res[1]!=0) res[1][74]=a0;
+  if (res[1]!=0) res[1][75]=a0;
+  if (res[1]!=0) res[1][76]=a0;
+  if (res[1]!=0) res[1][77]=a0;
+  if (res[1]!=0) res[1][78]=a0;
+  if (res[1]!=0) res[1][79]=a0;
+  if (res[1]!=0) res[1][80]=a0;
+  if (res[1]!=0) res[1][81]=a0;
+  if (res[1]!=0) res[1][82]=a0;
+  if (res[1]!=0) res[1][83]=a0;
+  if (res[1]!=0) res[1][84]=a0;
+  if (res[1]!=0) res[1][85]=a0;
+  if (res[1]!=0) res[1][86]=a0;
+  if (res[1]!=0) res[1][87]=a0;
+  if (res[1]!=0) res[1][88]=a0;
+  if (res[1]!=0) res[1][89]=a0;
+  if (res[1]!=0) res[1][90]=a0;
+  if (res[1]!=0) res[1][91]=a0;
+  if (res[1]!=0) res[1][92]=a0;
+  if (res[1]!=0) res[1][93]=a0;
+  if (res[1]!=0) res[1][94]=a0;
+  if (res[1]!=0) res[1][95]=a0;
+  if (res[1]!=0) res[1][96]=a0;
+  if (res[1]!=0) res[1][97]=a0;
+  if (res[1]!=0) res[1][98]=a0;
+  if (res[1]!=0) res[1][99]=a0;
+  if (res[1]!=0) res[1][100]=a0;
+  if (res[1]!=0) res[1][101]=a0;
+  if (res[1]!=0) res[1][102]=a0;
+  if (res[1]!=0) res[1][103]=a0;
+  if (res[1]!=0) res[1][104]=a0;
+  if (res[1]!=0) res[1][105]=a0;
+  if (res[1]!=0) res[1][106]=a0;
+  if (res[1]!=0) res[1][107]=a0;
+  if (res[2]!=0) res[2][0]=a0;
+  if (res[2]!=0) res[2][1]=a0;
+  if (res[2]!=0) res[2][2]=a0;
+  if (res[2]!=0) res[2][3]=a0;
+  if (res[2]!=0) res[2][4]=a0;
+  if (res[2]!=0) res[2][5]=a0;
+  if (res[2]!=0) res[2][6]=a0;
+  if (res[2]!=0) res[2][7]=a0;
+  if (res[2]!=0) res[2][8]=a0;
+  if (res[2]!=0) res[2][9]=a0;
+  if (res[2]!=0) res[2][10]=a0;
+  if (res[2]!=0) res[2][11]=a0;
+  if (res[2]!=0) res[2][12]=a0;
+  if (res[2]!=0) res[2][13]=a0;
+  if (res[2]!=0) res[2][14]=a0;
+  if (res[2]!=0) res[2][15]=a0;
+  if (res[2]!=0) res[2][16]=a0;
+  if (res[2]!=0) res[2][17]=a0;
+  if (res[2]!=0) res[2][18]=a0;
+  if (res[2]!=0) res[2][19]=a0;
+  if (res[2]!=0) res[2][20]=a0;
+  if (res[2]!=0) res[2][21]=a0;
+  if (res[2]!=0) res[2][22]=a0;
+  if (res[2]!=0) res[2][23]=a0;
+  if (res[2]!=0) res[2][24]=a0;
+  if (res[2]!=0) res[2][25]=a0;
+  if (res[2]!=0) res[2][26]=a0;
+  if (res[2]!=0) res[2][27]=a0;
+  if (res[2]!=0) res[2][28]=a0;
+  if (res[2]!=0) res[2][29]=a0;
+  if (res[2]!=0) res[2][30]=a0;
+  if (res[2]!=0) res[2][31]=a0;
+  if (res[2]!=0) res[2][32]=a0;
+  if (res[2]!=0) res[2][33]=a0;
+  if (res[2]!=0) res[2][34]=a0;
+  if (res[2]!=0) res[2][35]=a0;
+  if (res[2]!=0) res[2][36]=a0;
+  if (res[2]!=0) res[2][37]=a0;
+  if (res[2]!=0) res[2][38]=a0;
+  if (res[2]!=0) res[2][39]=a0;
+  if (res[2]!=0) res[2][40]=a0;
+  if (res[2]!=0) res[2][41]=a0;
+  if (res[2]!=0) res[2][42]=a0;
+  if (res[2]!=0) res[2][43]=a0;
+  if (res[2]!=0) res[2][44]=a0;
+  if (res[2]!=0) res[2][45]=a0;
+  if (res[2]!=0) res[2][46]=a0;
+  if (res[2]!=0) res[2][47]=a0;
+  if (res[2]!=0) res[2][48]=a0;
+  if (res[2]!=0) res[2][49]=a0;
+  if (res[2]!=0) res[2][50]=a0;
+  if (res[2]!=0) res[2][51]=a0;
+  if (res[2]!=0) res[2][52]=a0;
+  if (res[2]!=0) res[2][53]=a0;
+  if (res[2]!=0) res[2][54]=a0;
+  if (res[2]!=0) res[2][55]=a0;
+  if (res[2]!=0) res[2][56]=a0;
+  if (res[2]!=0) res[2][57]=a0;
+  if (res[2]!=0) res[2][58]=a0;
+  if (res[2]!=0) res[2][59]=a0;
+  if (res[2]!=0) res[2][60]=a0;
+  if (res[2]!=0) res[2][61]=a0;
+  if (res[2]!=0) res[2][62]=a0;
+  if (res[2]!=0) res[2][63]=a0;
+  if (res[2]!=0) res[2][64]=a0;
+  if (res[2]!=0) res[2][65]=a0;
+  if (res[2]!=0) res[2][66]=a0;
+  if (res[2]!=0) res[2][67]=a0;
+  if (res[2]!=0) res[2][68]=a0;
+  if (res[2]!=0) res[2][69]=a0;
+  if (res[2]!=0) res[2][70]=a0;
+  if (res[2]!=0) res[2][71]=a0;
+  if (res[2]!=0) res[2][72]=a0;
+  if (res[2]!=0) res[2][73]=a0;
+  if (res[2]!=0) res[2][74]=a0;
+  if (res[2]!=0) res[2][75]=a0;
+  if (res[2]!=0) res[2][76]=a0;
+  if (res[2]!=0) res[2][77]=a0;
+  if (res[2]!=0) res[2][78]=a0;
+  if (res[2]!=0) res[2][79]=a0;
+  if (res[2]!=0) res[2][80]=a0;
+  if (res[2]!=0) res[2][81]=a0;
+  if (res[2]!=0) res[2][82]=a0;
+  if (res[2]!=0) res[2][83]=a0;
+  if (res[2]!=0) res[2][84]=a0;
+  if (res[2]!=0) res[2][85]=a0;
+  if (res[2]!=0) res[2][86]=a0;
+  if (res[2]!=0) res[2][87]=a0;
+  if (res[2]!=0) res[2][88]=a0;
+  if (res[2]!=0) res[2][89]=a0;
+  if (res[2]!=0) res[2][90]=a0;
+  if (res[2]!=0) res[2][91]=a0;
+  if (res[2]!=0) res[2][92]=a0;
+  if (res[2]!=0) res[2][93]=a0;
+  if (res[2]!=0) res[2][94]=a0;
+  if (res[2]!=0) res[2][95]=a0;
+  if (res[2]!=0) res[2][96]=a0;
+  if (res[2]!=0) res[2][97]=a0;
+  if (res[2]!=0) res[2][98]=a0;
+  if (res[2]!=0) res[2][99]=a0;
+  if (res[2]!=0) res[2][100]=a0;
+  if (res[2]!=0) res[2][101]=a0;
+  if (res[2]!=0) res[2][102]=a0;
+  if (res[2]!=0) res[2][103]=a0;
+  if (res[2]!=0) res[2][104]=a0;
+  if (res[2]!=0) res[2][105]=a0;
+  if (res[2]!=0) res[2][106]=a0;
+  if (res[2]!=0) res[2][107]=a0;
+  return 0;
+}
+
+CASADI_SYMBOL_EXPORT int qd_dgrf_FL_BR(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem){
+  (void)casadi_f18;
+  return qd_dgrf_solve(6, 9, casadi_f1, casadi_f0, casadi_f17, qd_did_full_sparsity_out(0), qd_did_full_sparsity_out(1), arg, res, iw, w, mem);
+}
+
+CASADI_SYMBOL_EXPORT int qd_dgrf_FL_BR_checkout(void) {
+  return 0;
+}
+
+CASADI_SYMBOL_EXPORT void qd_dgrf_FL_BR_release(int mem) {
+  (void)mem;
+}
+
+CASADI_SYMBOL_EXPORT void qd_dgrf_FL_BR_incref(void) {
+}
+
+CASADI_SYMBOL_EXPORT void qd_dgrf_FL_BR_decref(void) {
+}
+
+CASADI_SYMBOL_EXPORT casadi_int qd_dgrf_FL_BR_n_in(void) { return 3;}
+
+CASADI_SYMBOL_EXPORT casadi_int qd_dgrf_FL_BR_n_out(void) { return 3;}
+
+CASADI_SYMBOL_EXPORT casadi_real qd_dgrf_FL_BR_default_in(casadi_int i) {
+  switch (i) {
+    default: return 0;
+  }
+}
+
+CASADI_SYMBOL_EXPORT const char* qd_dgrf_FL_BR_name_in(casadi_int i) {
+  switch (i) {
+    case 0: return "q";
+    case 1: return "v";
+    case 2: return "a";
+    default: return 0;
+  }
+}
+
+CASADI_SYMBOL_EXPORT const char* qd_dgrf_FL_BR_name_out(casadi_int i) {
+  switch (i) {
+    case 0: return "dlambda_dq";
+    case 1: return "dlambda_dv";
+    case 2: return "dlambda_da";
+    default: return 0;
+  }
+}
+
+CASADI_SYMBOL_EXPORT const casadi_int* qd_dgrf_FL_BR_sparsity_in(casadi_int i) {
+  switch (i) {
+    case 0: return casadi_s0;
+    case 1: return casadi_s1;
+    case 2: return casadi_s1;
+    default: return 0;
+  }
+}
+
+CASADI_SYMBOL_EXPORT const casadi_int* qd_dgrf_FL_BR_sparsity_out(casadi_int i) {
+  switch (i) {
+    case 0: return casadi_s7;
+    case 1: return casadi_s7;
+    case 2: return casadi_s7;
+    default: return 0;
+  }
+}
+
+CASADI_SYMBOL_EXPORT int qd_dgrf_FL_BR_work(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz_iw, casadi_int *sz_w) {
+  if (sz_arg) *sz_arg = 3;
+  if (sz_res) *sz_res = 3;
+  if (sz_iw) *sz_iw = 0;
+  if (sz_w) *sz_w = 0;
+  return 0;
+}
+
+CASADI_SYMBOL_EXPORT int qd_dgrf_FL_BR_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz_iw, casadi_int *sz_w) {
+  if (sz_arg) *sz_arg = 3*sizeof(const casadi_real*);
+  if (sz_res) *sz_res = 3*sizeof(casadi_real*);
+  if (sz_iw) *sz_iw = 0*sizeof(casadi_int);
+  if (sz_w) *sz_w = 0*sizeof(casadi_real);
+  return 0;
+}
+
+/* qd_dgrf_dir_FR_BL:(q[19],w[6],dq[18])->(lambda_w[6],dlambda_w[6]) */
+static int casadi_f19(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem) {
+  (void)arg; (void)res; (void)iw; (void)w; (void)mem;
+  casadi_real a00, a01, a02, a03, a04, a05, a06, a07, a08, a09, a10, a11;
+  casadi_real a12, a13, a14, a15, a16, a17, a18, a19, a20, a21, a22, a23;
+  casadi_real a24, a25, a26, a27, a28, a29, a30, a31, a32, a33, a34, a35;
+  casadi_real a36, a37, a38, a39, a40, a41, a42, a43, a44, a45, a46, a47;
+  casadi_real a48, a49, a50, a51, a52, a53, a54, a55, a56, a57, a58, a59;
+  casadi_real a60, a61;
+  a00=arg[1]? arg[1][0] : 0;
+  a01=-7.0000000000000007e-02;
+  a02=2.0000000000000001e-01;
+  a03=arg[0]? arg[0][10] : 0;
+  a04=qd_cos(a03);
+  a05=arg[0]? arg[0][11] : 0;
+  a06=qd_cos(a05);
+  a07=(a04*a06);
+  a08=(a02*a07);
+  a01=(a01+a08);
+  a08=arg[0]? arg[0][12] : 0;
+  a09=qd_cos(a08);
+  a10=(a07*a09);
+  a05=qd_sin(a05);
+  a11=(a04*a05);
+  a08=qd_sin(a08);
+  a12=(a11*a08);
+  a10=(a10-a12);
+  a10=(a02*a10);
+  a01=(a01+a10);
+  a03=qd_sin(a03);
+  a10=(a03*a05);
+  a12=(a10*a08);
+  a13=(a03*a06);
+  a14=(a13*a09);
+  a12=(a12-a14);
+  a12=(a02*a12);
+  a14=(a02*a13);
+  a12=(a12-a14);
+  a14=arg[0]? arg[0][13] : 0;
+  a15=qd_sin(a14);
+  a16=arg[0]? arg[0][14] : 0;
+  a17=qd_sin(a16);
+  a18=(a15*a17);
+  a19=arg[0]? arg[0][15] : 0;
+  a20=qd_sin(a19);
+  a21=(a18*a20);
+  a16=qd_cos(a16);
+  a22=(a15*a16);
+  a19=qd_cos(a19);
+  a23=(a22*a19);
+  a21=(a21-a23);
+  a21=(a02*a21);
+  a23=(a02*a22);
+  a21=(a21-a23);
+  a23=(a12-a21);
+  a24=(a01*a23);
+  a25=7.0000000000000007e-02;
+  a14=qd_cos(a14);
+  a26=(a14*a16);
+  a27=(a02*a26);
+  a25=(a25+a27);
+  a27=(a26*a19);
+  a28=(a14*a17);
+  a29=(a28*a20);
+  a27=(a27-a29);
+  a27=(a02*a27);
+  a25=(a25+a27);
+  a27=(a01-a25);
+  a29=(a12*a27);
+  a24=(a24-a29);
+  a29=(a24*a00);
+  a30=1.9000000000000000e-01;
+  a31=(a02*a05);
+  a30=(a30+a31);
+  a31=(a06*a08);
+  a32=(a05*a09);
+  a31=(a31+a32);
+  a31=(a02*a31);
+  a30=(a30+a31);
+  a31=-1.9000000000000000e-01;
+  a32=(a02*a17);
+  a31=(a31+a32);
+  a32=(a16*a20);
+  a33=(a17*a19);
+  a32=(a32+a33);
+  a32=(a02*a32);
+  a31=(a31+a32);
+  a32=(a30-a31);
+  a33=(a12*a32);
+  a34=(a30*a23);
+  a33=(a33-a34);
+  a34=arg[1]? arg[1][1] : 0;
+  a35=(a33*a34);
+  a29=(a29+a35);
+  a35=(a30*a27);
+  a36=(a01*a32);
+  a35=(a35-a36);
+  a36=arg[1]? arg[1][2] : 0;
+  a37=(a35*a36);
+  a29=(a29+a37);
+  a37=arg[1]? arg[1][3] : 0;
+  a38=(a32*a37);
+  a39=arg[1]? arg[1][4] : 0;
+  a40=(a27*a39);
+  a38=(a38+a40);
+  a40=arg[1]? arg[1][5] : 0;
+  a41=(a23*a40);
+  a38=(a38+a41);
+  a29=(a29+a38);
+  a38=casadi_sq(a24);
+  a41=casadi_sq(a33);
+  a38=(a38+a41);
+  a41=casadi_sq(a35);
+  a38=(a38+a41);
+  a41=casadi_sq(a32);
+  a42=casadi_sq(a27);
+  a41=(a41+a42);
+  a42=casadi_sq(a23);
+  a41=(a41+a42);
+  a38=(a38+a41);
+  a29=(a29/a38);
+  a42=(a24*a29);
+  a42=(a00-a42);
+  a43=2.;
+  a44=(a42/a43);
+  a45=(a27*a29);
+  a45=(a39-a45);
+  a21=(a12+a21);
+  a21=(a21/a43);
+  a46=(a21*a42);
+  a31=(a30+a31);
+  a31=(a31/a43);
+  a47=(a35*a29);
+  a47=(a36-a47);
+  a48=(a31*a47);
+  a46=(a46-a48);
+  a45=(a45-a46);
+  a46=(a23*a45);
+  a48=(a23*a29);
+  a48=(a40-a48);
+  a49=(a33*a29);
+  a49=(a34-a49);
+  a50=(a31*a49);
+  a25=(a01+a25);
+  a25=(a25/a43);
+  a51=(a25*a42);
+  a50=(a50-a51);
+  a48=(a48-a50);
+  a50=(a27*a48);
+  a46=(a46-a50);
+  a46=(a46/a41);
+  a50=(a44+a46);
+  if (res[0]!=0) res[0][0]=a50;
+  a50=(a49/a43);
+  a51=(a32*a48);
+  a52=(a32*a29);
+  a52=(a37-a52);
+  a53=(a25*a47);
+  a54=(a21*a49);
+  a53=(a53-a54);
+  a52=(a52-a53);
+  a53=(a23*a52);
+  a51=(a51-a53);
+  a51=(a51/a41);
+  a53=(a50+a51);
+  if (res[0]!=0) res[0][1]=a53;
+  a43=(a47/a43);
+  a53=(a27*a52);
+  a54=(a32*a45);
+  a53=(a53-a54);
+  a53=(a53/a41);
+  a54=(a43+a53);
+  if (res[0]!=0) res[0][2]=a54;
+  a44=(a44-a46);
+  if (res[0]!=0) res[0][3]=a44;
+  a50=(a50-a51);
+  if (res[0]!=0) res[0][4]=a50;
+  a43=(a43-a53);
+  if (res[0]!=0) res[0][5]=a43;
+  a43=arg[2]? arg[2][9] : 0;
+  a50=(a04*a43);
+  a44=(a05*a50);
+  a54=arg[2]? arg[2][10] : 0;
+  a55=(a06*a54);
+  a56=(a03*a55);
+  a44=(a44+a56);
+  a44=(a08*a44);
+  a56=arg[2]? arg[2][11] : 0;
+  a57=(a09*a56);
+  a10=(a10*a57);
+  a44=(a44+a10);
+  a50=(a06*a50);
+  a54=(a05*a54);
+  a10=(a03*a54);
+  a50=(a50-a10);
+  a10=(a09*a50);
+  a56=(a08*a56);
+  a13=(a13*a56);
+  a10=(a10-a13);
+  a44=(a44-a10);
+  a44=(a02*a44);
+  a50=(a02*a50);
+  a44=(a44-a50);
+  a50=arg[2]? arg[2][12] : 0;
+  a10=(a14*a50);
+  a13=(a17*a10);
+  a58=arg[2]? arg[2][13] : 0;
+  a59=(a16*a58);
+  a60=(a15*a59);
+  a13=(a13+a60);
+  a13=(a20*a13);
+  a60=arg[2]? arg[2][14] : 0;
+  a61=(a19*a60);
+  a18=(a18*a61);
+  a13=(a13+a18);
+  a10=(a16*a10);
+  a58=(a17*a58);
+  a18=(a15*a58);
+  a10=(a10-a18);
+  a18=(a19*a10);
+  a60=(a20*a60);
+  a22=(a22*a60);
+  a18=(a18-a22);
+  a13=(a13-a18);
+  a13=(a02*a13);
+  a10=(a02*a10);
+  a13=(a13-a10);
+  a10=(a44-a13);
+  a18=(a45*a10);
+  a15=(a15*a50);
+  a50=(a16*a15);
+  a22=(a14*a58);
+  a50=(a50+a22);
+  a22=(a02*a50);
+  a50=(a19*a50);
+  a26=(a26*a60);
+  a50=(a50+a26);
+  a14=(a14*a59);
+  a15=(a17*a15);
+  a14=(a14-a15);
+  a14=(a20*a14);
+  a28=(a28*a61);
+  a14=(a14+a28);
+  a50=(a50+a14);
+  a50=(a02*a50);
+  a22=(a22+a50);
+  a03=(a03*a43);
+  a43=(a06*a03);
+  a50=(a04*a54);
+  a43=(a43+a50);
+  a50=(a02*a43);
+  a43=(a09*a43);
+  a07=(a07*a56);
+  a43=(a43+a07);
+  a04=(a04*a55);
+  a03=(a05*a03);
+  a04=(a04-a03);
+  a04=(a08*a04);
+  a11=(a11*a57);
+  a04=(a04+a11);
+  a43=(a43+a04);
+  a43=(a02*a43);
+  a50=(a50+a43);
+  a43=(a22-a50);
+  a04=(a29*a43);
+  a11=(a01*a10);
+  a03=(a23*a50);
+  a11=(a11-a03);
+  a03=(a27*a44);
+  a07=(a12*a43);
+  a03=(a03+a07);
+  a11=(a11-a03);
+  a00=(a00*a11);
+  a03=(a32*a44);
+  a07=(a02*a55);
+  a06=(a06*a57);
+  a08=(a08*a54);
+  a06=(a06-a08);
+  a09=(a09*a55);
+  a05=(a05*a56);
+  a09=(a09-a05);
+  a06=(a06+a09);
+  a06=(a02*a06);
+  a07=(a07+a06);
+  a06=(a02*a59);
+  a16=(a16*a61);
+  a20=(a20*a58);
+  a16=(a16-a20);
+  a19=(a19*a59);
+  a17=(a17*a60);
+  a19=(a19-a17);
+  a16=(a16+a19);
+  a02=(a02*a16);
+  a06=(a06+a02);
+  a02=(a07-a06);
+  a12=(a12*a02);
+  a03=(a03+a12);
+  a12=(a23*a07);
+  a16=(a30*a10);
+  a12=(a12+a16);
+  a03=(a03-a12);
+  a34=(a34*a03);
+  a00=(a00+a34);
+  a34=(a27*a07);
+  a30=(a30*a43);
+  a34=(a34+a30);
+  a01=(a01*a02);
+  a30=(a32*a50);
+  a01=(a01-a30);
+  a34=(a34-a01);
+  a36=(a36*a34);
+  a00=(a00+a36);
+  a37=(a37*a02);
+  a39=(a39*a43);
+  a37=(a37+a39);
+  a40=(a40*a10);
+  a37=(a37+a40);
+  a00=(a00+a37);
+  a00=(a00/a38);
+  a38=(a29/a38);
+  a37=(2*a24);
+  a37=(a37*a11);
+  a40=(2*a33);
+  a40=(a40*a03);
+  a37=(a37+a40);
+  a40=(2*a35);
+  a40=(a40*a34);
+  a37=(a37+a40);
+  a40=(2*a32);
+  a40=(a40*a02);
+  a39=(2*a27);
+  a39=(a39*a43);
+  a40=(a40+a39);
+  a39=(2*a23);
+  a39=(a39*a10);
+  a40=(a40+a39);
+  a37=(a37+a40);
+  a38=(a38*a37);
+  a00=(a00-a38);
+  a38=(a27*a00);
+  a04=(a04+a38);
+  a38=5.0000000000000000e-01;
+  a44=(a44+a13);
+  a44=(a38*a44);
+  a13=(a42*a44);
+  a11=(a29*a11);
+  a24=(a24*a00);
+  a11=(a11+a24);
+  a24=(a21*a11);
+  a13=(a13-a24);
+  a07=(a07+a06);
+  a07=(a38*a07);
+  a06=(a47*a07);
+  a34=(a29*a34);
+  a35=(a35*a00);
+  a34=(a34+a35);
+  a35=(a31*a34);
+  a06=(a06-a35);
+  a13=(a13-a06);
+  a04=(a04+a13);
+  a13=(a23*a04);
+  a18=(a18-a13);
+  a13=(a48*a43);
+  a06=(a29*a10);
+  a35=(a23*a00);
+  a06=(a06+a35);
+  a07=(a49*a07);
+  a03=(a29*a03);
+  a33=(a33*a00);
+  a03=(a03+a33);
+  a31=(a31*a03);
+  a07=(a07-a31);
+  a50=(a50+a22);
+  a50=(a38*a50);
+  a42=(a42*a50);
+  a22=(a25*a11);
+  a42=(a42+a22);
+  a07=(a07+a42);
+  a06=(a06+a07);
+  a07=(a27*a06);
+  a13=(a13-a07);
+  a18=(a18-a13);
+  a18=(a18/a41);
+  a46=(a46/a41);
+  a46=(a46*a40);
+  a18=(a18-a46);
+  a11=(a38*a11);
+  a46=(a18-a11);
+  if (res[1]!=0) res[1][0]=a46;
+  a48=(a48*a02);
+  a06=(a32*a06);
+  a48=(a48-a06);
+  a10=(a52*a10);
+  a47=(a47*a50);
+  a25=(a25*a34);
+  a47=(a47+a25);
+  a49=(a49*a44);
+  a21=(a21*a03);
+  a49=(a49-a21);
+  a47=(a47+a49);
+  a29=(a29*a02);
+  a00=(a32*a00);
+  a29=(a29+a00);
+  a47=(a47-a29);
+  a23=(a23*a47);
+  a10=(a10+a23);
+  a48=(a48-a10);
+  a48=(a48/a41);
+  a51=(a51/a41);
+  a51=(a51*a40);
+  a48=(a48-a51);
+  a03=(a38*a03);
+  a51=(a48-a03);
+  if (res[1]!=0) res[1][1]=a51;
+  a52=(a52*a43);
+  a27=(a27*a47);
+  a52=(a52+a27);
+  a45=(a45*a02);
+  a32=(a32*a04);
+  a45=(a45-a32);
+  a52=(a52-a45);
+  a52=(a52/a41);
+  a53=(a53/a41);
+  a53=(a53*a40);
+  a52=(a52-a53);
+  a38=(a38*a34);
+  a34=(a52-a38);
+  if (res[1]!=0) res[1][2]=a34;
+  a11=(a11+a18);
+  a11=(-a11);
+  if (res[1]!=0) res[1][3]=a11;
+  a03=(a03+a48);
+  a03=(-a03);
+  if (res[1]!=0) res[1][4]=a03;
+  a38=(a38+a52);
+  a38=(-a38);
+  if (res[1]!=0) res[1][5]=a38;
+  return 0;
+}
+
+CASADI_SYMBOL_EXPORT int qd_dgrf_dir_FR_BL(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem){
+  return qd_d_finite(casadi_f19(arg, res, iw, w, mem), res, 2, (const casadi_int[]){6, 6});
+}
+
+CASADI_SYMBOL_EXPORT int qd_dgrf_dir_FR_BL_checkout(void) {
+  return 0;
+}
+
+CASADI_SYMBOL_EXPORT void qd_dgrf_dir_FR_BL_release(int mem) {
+  (void)mem;
+}
+
+CASADI_SYMBOL_EXPORT void qd_dgrf_dir_FR_BL_incref(void) {
+}
+
+CASADI_SYMBOL_EXPORT void qd_dgrf_dir_FR_BL_decref(void) {
+}
+
+CASADI_SYMBOL_EXPORT casadi_int qd_dgrf_dir_FR_BL_n_in(void) { return 3;}
+
+CASADI_SYMBOL_EXPORT casadi_int qd_dgrf_dir_FR_BL_n_out(void) { return 2;}
+
+CASADI_SYMBOL_EXPORT casadi_real qd_dgrf_dir_FR_BL_default_in(casadi_int i) {
+  switch (i) {
+    default: return 0;
+  }
+}
+
+CASADI_SYMBOL_EXPORT const char* qd_dgrf_dir_FR_BL_name_in(casadi_int i) {
+  switch (i) {
+    case 0: return "q";
+    case 1: return "w";
+    case 2: return "dq";
+    default: return 0;
+  }
+}
+
+CASADI_SYMBOL_EXPORT const char* qd_dgrf_dir_FR_BL_name_out(casadi_int i) {
+  switch (i) {
+    case 0: return "lambda_w";
+    case 1: return "dlambda_w";
+    default: return 0;
+  }
+}
+
+CASADI_SYMBOL_EXPORT const casadi_int* qd_dgrf_dir_FR_BL_sparsity_in(casadi_int i) {
+  switch (i) {
+    case 0: return casadi_s0;
+    case 1: return casadi_s6;
+    case 2: return casadi_s1;
+    default: return 0;
+  }
+}
+
+CASADI_SYMBOL_EXPORT const casadi_int* qd_dgrf_dir_FR_BL_sparsity_out(casadi_int i) {
+  switch (i) {
+    case 0: return casadi_s6;
+    case 1: return casadi_s6;
+    default: return 0;
+  }
+}
+
+CASADI_SYMBOL_EXPORT int qd_dgrf_dir_FR_BL_work(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz_iw, casadi_int *sz_w) {
+  if (sz_arg) *sz_arg = 3;
+  if (sz_res) *sz_res = 2;
+  if (sz_iw) *sz_iw = 0;
+  if (sz_w) *sz_w = 0;
+  return 0;
+}
+
+CASADI_SYMBOL_EXPORT int qd_dgrf_dir_FR_BL_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz_iw, casadi_int *sz_w) {
+  if (sz_arg) *sz_arg = 3*sizeof(const casadi_real*);
+  if (sz_res) *sz_res = 2*sizeof(casadi_real*);
+  if (sz_iw) *sz_iw = 0*sizeof(casadi_int);
+  if (sz_w) *sz_w = 0*sizeof(casadi_real);
+  return 0;
+}
+
+/* qd_dgrf_FR_BL:(q[19],v[18],a[18])->(dlambda_dq[6x18],dlambda_dv[6x18],dlambda_da[6x18]) */
+static int casadi_f20(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem) {
+  (void)arg; (void)res; (void)iw; (void)w; (void)mem;
+  casadi_real a0, a1, a2;
+  a0=arg[0]? arg[0][0] : 0;
+  a1=arg[0]? arg[0][1] : 0;
+  a0=(a0+a1);
+  a1=arg[0]? arg[0][2] : 0;
+  a0=(a0+a1);
+  a1=arg[0]? arg[0][3] : 0;
+  a0=(a0+a1);
+  a1=arg[0]? arg[0][4] : 0;
+  a0=(a0+a1);
+  a1=arg[0]? arg[0][5] : 0;
+  a0=(a0+a1);
+  a1=arg[0]? arg[0][6] : 0;
+  a0=(a0+a1);
+  a1=arg[0]? arg[0][7] : 0;
+  a0=(a0+a1);
+  a1=arg[0]? arg[0][8] : 0;
+  a0=(a0+a1);
+  a1=arg[0]? arg[0][9] : 0;
+  a0=(a0+a1);
+  a1=arg[0]? arg[0][10] : 0;
+  a0=(a0+a1);
+  a1=arg[0]? arg[0][11] : 0;
+  a0=(a0+a1);
+  a1=arg[0]? arg[0][12] : 0;
+  a0=(a0+a1);
+  a1=arg[0]? arg[0][13] : 0;
+  a0=(a0+a1);
+  a1=arg[0]? arg[0][14] : 0;
+  a0=(a0+a1);
+  a1=arg[0]? arg[0][15] : 0;
+  a0=(a0+a1);
+  a1=arg[0]? arg[0][16] : 0;
+  a0=(a0+a1);
+  a1=arg[0]? arg[0][17] : 0;
+  a0=(a0+a1);
+  a1=arg[0]? arg[0][18] : 0;
+  a0=(a0+a1);
+  a1=arg[1]? arg[1][0] : 0;
+  a2=arg[1]? arg[1][1] : 0;
+  a1=(a1+a2);
+  a2=arg[1]? arg[1][2] : 0;
+  a1=(a1+a2);
+  a2=arg[1]? arg[1][3] : 0;
+  a1=(a1+a2);
+  a2=arg[1]? arg[1][4] : 0;
+  a1=(a1+a2);
+  a2=arg[1]? arg[1][5] : 0;
+  a1=(a1+a2);
+  a2=arg[1]? arg[1][6] : 0;
+  a1=(a1+a2);
+  a2=arg[1]? arg[1][7] : 0;
+  a1=(a1+a2);
+  a2=arg[1]? arg[1][8] : 0;
+  a1=(a1+a2);
+  a2=arg[1]? arg[1][9] : 0;
+  a1=(a1+a2);
+  a2=arg[1]? arg[1][10] : 0;
+  a1=(a1+a2);
+  a2=arg[1]? arg[1][11] : 0;
+  a1=(a1+a2);
+  a2=arg[1]? arg[1][12] : 0;
+  a1=(a1+a2);
+  a2=arg[1]? arg[1][13] : 0;
+  a1=(a1+a2);
+  a2=arg[1]? arg[1][14] : 0;
+  a1=(a1+a2);
+  a2=arg[1]? arg[1][15] : 0;
+  a1=(a1+a2);
+  a2=arg[1]? arg[1][16] : 0;
+  a1=(a1+a2);
+  a2=arg[1]? arg[1][17] : 0;
+  a1=(a1+a2);
+  a0=(a0+a1);
+  a1=arg[2]? arg[2][0] : 0;
+  a2=arg[2]? arg[2][1] : 0;
+  a1=(a1+a2);
+  a2=arg[2]? arg[2][2] : 0;
+  a1=(a1+a2);
+  a2=arg[2]? arg[2][3] : 0;
+  a1=(a1+a2);
+  a2=arg[2]? arg[2][4] : 0;
+  a1=(a1+a2);
+  a2=arg[2]? arg[2][5] : 0;
+  a1=(a1+a2);
+  a2=arg[2]? arg[2][6] : 0;
+  a1=(a1+a2);
+  a2=arg[2]? arg[2][7] : 0;
+  a1=(a1+a2);
+  a2=arg[2]? arg[2][8] : 0;
+  a1=(a1+a2);
+  a2=arg[2]? arg[2][9] : 0;
+  a1=(a1+a2);
+  a2=arg[2]? arg[2][10] : 0;
+  a1=(a1+a2);
+  a2=arg[2]? arg[2][11] : 0;
+  a1=(a1+a2);
+  a2=arg[2]? arg[2][12] : 0;
+  a1=(a1+a2);
+  a2=arg[2]? arg[2][13] : 0;
+  a1=(a1+a2);
+  a2=arg[2]? arg[2][14] : 0;
+  a1=(a1+a2);
+  a2=arg[2]? arg[2][15] : 0;
+  a1=(a1+a2);
+  a2=arg[2]? arg[2][16] : 0;
+  a1=(a1+a2);
+  a2=arg[2]? arg[2][17] : 0;
+  a1=(a1+a2);
+  a0=(a0+a1);
+  if (res[0]!=0) res[0][0]=a0;
+  if (res[0]!=0) res[0][1]=a0;
+  if (res[0]!=0) res[0][2]=a0;
+  if (res[0]!=0) res[0][3]=a0;
+  if (res[0]!=0) res[0][4]=a0;
+  if (res[0]!=0) res[0][5]=a0;
+  if (res[0]!=0) res[0][6]=a0;
+  if (res[0]!=0) res[0][7]=a0;
+  if (res[0]!=0) res[0][8]=a0;
+  if (res[0]!=0) res[0][9]=a0;
+  if (res[0]!=0) res[0][10]=a0;
+  if (res[0]!=0) res[0][11]=a0;
+  if (res[0]!=0) res[0][12]=a0;
+  if (res[0]!=0) res[0][13]=a0;
+  if (res[0]!=0) res[0][14]=a0;
+  if (res[0]!=0) res[0][15]=a0;
+  if (res[0]!=0) res[0][16]=a0;
+  if (res[0]!=0) res[0][17]=a0;
+  if (res[0]!=0) res[0][18]=a0;
+  if (res[0]!=0) res[0][19]=a0;
+  if (res[0]!=0) res[0][20]=a0;
+  if (res[0]!=0) res[0][21]=a0;
+  if (res[0]!=0) res[0][22]=a0;
+  if (res[0]!=0) res[0][23]=a0;
+  if (res[0]!=0) res[0][24]=a0;
+  if (res[0]!=0) res[0][25]=a0;
+  if (res[0]!=0) res[0][26]=a0;
+  if (res[0]!=0) res[0][27]=a0;
+  if (res[0]!=0) res[0][28]=a0;
+  if (res[0]!=0) res[0][29]=a0;
+  if (res[0]!=0) res[0][30]=a0;
+  if (res[0]!=0) res[0][31]=a0;
+  if (res[0]!=0) res[0][32]=a0;
+  if (res[0]!=0) res[0][33]=a0;
+  if (res[0]!=0) res[0][34]=a0;
+  if (res[0]!=0) res[0][35]=a0;
+  if (res[0]!=0) res[0][36]=a0;
+  if (res[0]!=0) res[0][37]=a0;
+  if (res[0]!=0) res[0][38]=a0;
+  if (res[0]!=0) res[0][39]=a0;
+  if (res[0]!=0) res[0][40]=a0;
+  if (res[0]!=0) res[0][41]=a0;
+  if (res[0]!=0) res[0][42]=a0;
+  if (res[0]!=0) res[0][43]=a0;
+  if (res[0]!=0) res[0][44]=a0;
+  if (res[0]!=0) res[0][45]=a0;
+  if (res[0]!=0) res[0][46]=a0;
+  if (res[0]!=0) res[0][47]=a0;
+  if (res[0]!=0) res[0][48]=a0;
+  if (res[0]!=0) res[0][49]=a0;
+  if (res[0]!=0) res[0][50]=a0;
+  if (res[0]!=0) res[0][51]=a0;
+  if (res[0]!=0) res[0][52]=a0;
+  if (res[0]!=0) res[0][53]=a0;
+  if (res[0]!=0) res[0][54]=a0;
+  if (res[0]!=0) res[0][55]=a0;
+  if (res[0]!=0) res[0][56]=a0;
+  if (res[0]!=0) res[0][57]=a0;
+  if (res[0]!=0) res[0][58]=a0;
+  if (res[0]!=0) res[0][59]=a0;
+  if (res[0]!=0) res[0][60]=a0;
+  if (res[0]!=0) res[0][61]=a0;
+  if (res[0]!=0) res[0][62]=a0;
+  if (res[0]!=0) res[0][63]=a0;
+  if (res[0]!=0) res[0][64]=a0;
+  if (res[0]!=0) res[0][65]=a0;
+  if (res[0]!=0) res[0][66]=a0;
+  if (res[0]!=0) res[0][67]=a0;
+  if (res[0]!=0) res[0][68]=a0;
+  if (res[0]!=0) res[0][69]=a0;
+  if (res[0]!=0) res[0][70]=a0;
+  if (res[0]!=0) res[0][71]=a0;
+  if (res[0]!=0) res[0][72]=a0;
+  if (res[0]!=0) res[0][73]=a0;
+  if (res[0]!=0) res[0][74]=a0;
+  if (res[0]!=0) res[0][75]=a0;
+  if (res[0]!=0) res[0][76]=a0;
+  if (res[0]!=0) res[0][77]=a0;
+  if (res[0]!=0) res[0][78]=a0;
+  if (res[0]!=0) res[0][79]=a0;
+  if (res[0]!=0) res[0][80]=a0;
+  if (res[0]!=0) res[0][81]=a0;
+  if (res[0]!=0) res[0][82]=a0;
+  if (res[0]!=0) res[0][83]=a0;
+  if (res[0]!=0) res[0][84]=a0;
+  if (res[0]!=0) res[0][85]=a0;
+  if (res[0]!=0) res[0][86]=a0;
+  if (res[0]!=0) res[0][87]=a0;
+  if (res[0]!=0) res[0][88]=a0;
+  if (res[0]!=0) res[0][89]=a0;
+  if (res[0]!=0) res[0][90]=a0;
+  if (res[0]!=0) res[0][91]=a0;
+  if (res[0]!=0) res[0][92]=a0;
+  if (res[0]!=0) res[0][93]=a0;
+  if (res[0]!=0) res[0][94]=a0;
+  if (res[0]!=0) res[0][95]=a0;
+  if (res[0]!=0) res[0][96]=a0;
+  if (res[0]!=0) res[0][97]=a0;
+  if (res[0]!=0) res[0][98]=a0;
+  if (res[0]!=0) res[0][99]=a0;
+  if (res[0]!=0) res[0][100]=a0;
+  if (res[0]!=0) res[0][101]=a0;
+  if (res[0]!=0) res[0][102]=a0;
+  if (res[0]!=0) res[0][103]=a0;
+  if (res[0]!=0) res[0][104]=a0;
+  if (res[0]!=0) res[0][105]=a0;
+  if (res[0]!=0) res[0][106]=a0;
+  if (res[0]!=0) res[0][107]=a0;
+  if (res[1]!=0) res[1][0]=a0;
+  if (res[1]!=0) res[1][1]=a0;
+  if (res[1]!=0) res[1][2]=a0;
+  if (res[1]!=0) res[1][3]=a0;
+  if (res[1]!=0) res[1][4]=a0;
+  if (res[1]!=0) res[1][5]=a0;
+  if (res[1]!=0) res[1][6]=a0;
+  if (res[1]!=0) res[1][7]=a0;
+  if (res[1]!=0) res[1][8]=a0;
+  if (res[1]!=0) res[1][9]=a0;
+  if (res[1]!=0) res[1][10]=a0;
+  if (res[1]!=0) res[1][11]=a0;
+  if (res[1]!=0) res[1][12]=a0;
+  if (res[1]!=0) res[1][13]=a0;
+  if (res[1]!=0) res[1][14]=a0;
+  if (res[1]!=0) res[1][15]=a0;
+  if (res[1]!=0) res[1][16]=a0;
+  if (res[1]!=0) res[1][17]=a0;
+  if (res[1]!=0) res[1][18]=a0;
+  if (res[1]!=0) res[1][19]=a0;
+  if (res[1]!=0) res[1][20]=a0;
+  if (res[1]!=0) res[1][21]=a0;
+  if (res[1]!=0) res[1][22]=a0;
+  if (res[1]!=0) res[1][23]=a0;
+  if (res[1]!=0) res[1][24]=a0;
+  if (res[1]!=0) res[1][25]=a0;
+  if (res[1]!=0) res[1][26]=a0;
+  if (res[1]!=0) res[1][27]=a0;
+  if (res[1]!=0) res[1][28]=a0;
+  if (res[1]!=0) res[1][29]=a0;
+  if (res[1]!=0) res[1][30]=a0;
+  if (res[1]!=0) res[1][31]=a0;
+  if (res[1]!=0) res[1][32]=a0;
+  if (res[1]!=0) res[1][33]=a0;
+  if (res[1]!=0) res[1][34]=a0;
+  if (res[1]!=0) res[1][35]=a0;
+  if (res[1]!=0) res[1][36]=a0;
+  if (res[1]!=0) res[1][37]=a0;
+  if (res[1]!=0) res[1][38]=a0;
+  if (res[1]!=0) res[1][39]=a0;
+  if (res[1]!=0) res[1][40]=a0;
+  if (res[1]!=0) res[1][41]=a0;
+  if (res[1]!=0) res[1][42]=a0;
+  if (res[1]!=0) res[1][43]=a0;
+  if (res[1]!=0) res[1][44]=a0;
+  if (res[1]!=0) res[1][45]=a0;
+  if (res[1]!=0) res[1][46]=a0;
+  if (res[1]!=0) res[1][47]=a0;
+  if (res[1]!=0) res[1][48]=a0;
+  if (res[1]!=0) res[1][49]=a0;
+  if (res[1]!=0) res[1][50]=a0;
+  if (res[1]!=0) res[1][51]=a0;
+  if (res[1]!=0) res[1][52]=a0;
+  if (res[1]!=0) res[1][53]=a0;
+  if (res[1]!=0) res[1][54]=a0;
+  if (res[1]!=0) res[1][55]=a0;
+  if (res[1]!=0) res[1][56]=a0;
+  if (res[1]!=0) res[1][57]=a0;
+  if (res[1]!=0) res[1][58]=a0;
+  if (res[1]!=0) res[1][59]=a0;
+  if (res[1]!=0) res[1][60]=a0;
+  if (res[1]!=0) res[1][61]=a0;
+  if (res[1]!=0) res[1][62]=a0;
+  if (res[1]!=0) res[1][63]=a0;
+  if (res[1]!=0) res[1][64]=a0;
+  if (res[1]!=0) res[1][65]=a0;
+  if (res[1]!=0) res[1][66]=a0;
+  if (res[1]!=0) res[1][67]=a0;
+  if (res[1]!=0) res[1][68]=a0;
+  if (res[1]!=0) res[1][69]=a0;
+  if (res[1]!=0) res[1][70]=a0;
+  if (res[1]!=0) res[1][71]=a0;
+  if (res[1]!=0) res[1][72]=a0;
+  if (res[1]!=0) res[1][73]=a0;
+  if (res[1]!=0) res[1][74]=a0;
+  if (res[1]!=0) res[1][75]=a0;
+  if (res[1]!=0) res[1][76]=a0;
+  if (res[1]!=0) res[1][77]=a0;
+  if (res[1]!=0) res[1][78]=a0;
+  if (res[1]!=0) res[1][79]=a0;
+  if (res[1]!=0) res[1][80]=a0;
+  if (res[1]!=0) res[1][81]=a0;
+  if (res[1]!=0) res[1][82]=a0;
+  if (res[1]!=0) res[1][83]=a0;
+  if (res[1]!=0) res[1][84]=a0;
+  if (res[1]!=0) res[1][85]=a0;
+  if (res[1]!=0) res[1][86]=a0;
+  if (res[1]!=0) res[1][87]=a0;
+  if (res[1]!=0) res[1][88]=a0;
+  if (res[1]!=0) res[1][89]=a0;
+  if (res[1]!=0) res[1][90]=a0;
+  if (res[1]!=0) res[1][91]=a0;
+  if (res[1]!=0) res[1][92]=a0;
+  if (res[1]!=0) res[1][93]=a0;
+  if (res[1]!=0) res[1][94]=a0;
+  if (res[1]!=0) res[1][95]=a0;
+  if (res[1]!=0) res[1][96]=a0;
+  if (res[1]!=0) res[1][97]=a0;
+  if (res[1]!=0) res[1][98]=a0;
+  if (res[1]!=0) res[1][99]=a0;
+  if (res[1]!=0) res[1][100]=a0;
+  if (res[1]!=0) res[1][101]=a0;
+  if (res[1]!=0) res[1][102]=a0;
+  if (res[1]!=0) res[1][103]=a0;
+  if (res[1]!=0) res[1][104]=a0;
+  if (res[1]!=0) res[1][105]=a0;
+  if (res[1]!=0) res[1][106]=a0;
+  if (res[1]!=0) res[1][107]=a0;
+  if (res[2]!=0) res[2][0]=a0;
+  if (res[2]!=0) res[2][1]=a0;
+  if (res[2]!=0) res[2][2]=a0;
+  if (res[2]!=0) res[2][3]=a0;
+  if (res[2]!=0) res[2][4]=a0;
+  if (res[2]!=0) res[2][5]=a0;
+  if (res[2]!=0) res[2][6]=a0;
+  if (res[2]!=0) res[2][7]=a0;
+  if (res[2]!=0) res[2][8]=a0;
+  if (res[2]!=0) res[2][9]=a0;
+  if (res[2]!=0) res[2][10]=a0;
+  if (res[2]!=0) res[2][11]=a0;
+  if (res[2]!=0) res[2][12]=a0;
+  if (res[2]!=0) res[2][13]=a0;
+  if (res[2]!=0) res[2][14]=a0;
+  if (res[2]!=0) res[2][15]=a0;
+  if (res[2]!=0) res[2][16]=a0;
+  if (res[2]!=0) res[2][17]=a0;
+  if (res[2]!=0) res[2][18]=a0;
+  if (res[2]!=0) res[2][19]=a0;
+  if (res[2]!=0) res[2][20]=a0;
+  if (res[2]!=0) res[2][21]=a0;
+  if (res[2]!=0) res[2][22]=a0;
+  if (res[2]!=0) res[2][23]=a0;
+  if (res[2]!=0) res[2][24]=a0;
+  if (res[2]!=0) res[2][25]=a0;
+  if (res[2]!=0) res[2][26]=a0;
+  if (res[2]!=0) res[2][27]=a0;
+  if (res[2]!=0) res[2][28]=a0;
+  if (res[2]!=0) res[2][29]=a0;
+  if (res[2]!=0) res[2][30]=a0;
+  if (res[2]!=0) res[2][31]=a0;
+  if (res[2]!=0) res[2][32]=a0;
+  if (res[2]!=0) res[2][33]=a0;
+  if (res[2]!=0) res[2][34]=a0;
+  if (res[2]!=0) res[2][35]=a0;
+  if (res[2]!=0) res[2][36]=a0;
+  if (res[2]!=0) res[2][37]=a0;
+  if (res[2]!=0) res[2][38]=a0;
+  if (res[2]!=0) res[2][39]=a0;
+  if (res[2]!=0) res[2][40]=a0;
+  if (res[2]!=0) res[2][41]=a0;
+  if (res[2]!=0) res[2][42]=a0;
+  if (res[2]!=0) res[2][43]=a0;
+  if (res[2]!=0) res[2][44]=a0;
+  if (res[2]!=0) res[2][45]=a0;
+  if (res[2]!=0) res[2][46]=a0;
+  if (res[2]!=0) res[2][47]=a0;
+  if (res[2]!=0) res[2][48]=a0;
+  if (res[2]!=0) res[2][49]=a0;
+  if (res[2]!=0) res[2][50]=a0;
+  if (res[2]!=0) res[2][51]=a0;
+  if (res[2]!=0) res[2][52]=a0;
+  if (res[2]!=0) res[2][53]=a0;
+  if (res[2]!=0) res[2][54]=a0;
+  if (res[2]!=0) res[2][55]=a0;
+  if (res[2]!=0) res[2][56]=a0;
+  if (res[2]!=0) res[2][57]=a0;
+  if (res[2]!=0) res[2][58]=a0;
+  if (res[2]!=0) res[2][59]=a0;
+  if (res[2]!=0) res[2][60]=a0;
+  if (res[2]!=0) res[2][61]=a0;
+  if (res[2]!=0) res[2][62]=a0;
+  if (res[2]!=0) res[2][63]=a0;
+  if (res[2]!=0) res[2][64]=a0;
+  if (res[2]!=0) res[2][65]=a0;
+  if (res[2]!=0) res[2][66]=a0;
+  if (res[2]!=0) res[2][67]=a0;
+  if (res[2]!=0) res[2][68]=a0;
+  if (res[2]!=0) res[2][69]=a0;
+  if (res[2]!=0) res[2][70]=a0;
+  if (res[2]!=0) res[2][71]=a0;
+  if (res[2]!=0) res[2][72]=a0;
+  if (res[2]!=0) res[2][73]=a0;
+  if (res[2]!=0) res[2][74]=a0;
+  if (res[2]!=0) res[2][75]=a0;
+  if (res[2]!=0) res[2][76]=a0;
+  if (res[2]!=0) res[2][77]=a0;
+  if (res[2]!=0) res[2][78]=a0;
+  if (res[2]!=0) res[2][79]=a0;
+  if (res[2]!=0) res[2][80]=a0;
+  if (res[2]!=0) res[2][81]=a0;
+  if (res[2]!=0) res[2][82]=a0;
+  if (res[2]!=0) res[2][83]=a0;
+  if (res[2]!=0) res[2][84]=a0;
+  if (res[2]!=0) res[2][85]=a0;
+  if (res[2]!=0) res[2][86]=a0;
+  if (res[2]!=0) res[2][87]=a0;
+  if (res[2]!=0) res[2][88]=a0;
+  if (res[2]!=0) res[2][89]=a0;
+  if (res[2]!=0) res[2][90]=a0;
+  if (res[2]!=0) res[2][91]=a0;
+  if (res[2]!=0) res[2][92]=a0;
+  if (res[2]!=0) res[2][93]=a0;
+  if (res[2]!=0) res[2][94]=a0;
+  if (res[2]!=0) res[2][95]=a0;
+  if (res[2]!=0) res[2][96]=a0;
+  if (res[2]!=0) res[2][97]=a0;
+  if (res[2]!=0) res[2][98]=a0;
+  if (res[2]!=0) res[2][99]=a0;
+  if (res[2]!=0) res[2][100]=a0;
+  if (res[2]!=0) res[2][101]=a0;
+  if (res[2]!=0) res[2][102]=a0;
+  if (res[2]!=0) res[2][103]=a0;
+  if (res[2]!=0) res[2][104]=a0;
+  if (res[2]!=0) res[2][105]=a0;
+  if (res[2]!=0) res[2][106]=a0;
+  if (res[2]!=0) res[2][107]=a0;
+  return 0;
+}
+
+CASADI_SYMBOL_EXPORT int qd_dgrf_FR_BL(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem){
+  (void)casadi_f20;
+  return qd_dgrf_solve(6, 6, casadi_f1, casadi_f0, casadi_f19, qd_did_full_sparsity_out(0), qd_did_full_sparsity_out(1), arg, res, iw, w, mem);
+}
+
+CASADI_SYMBOL_EXPORT int qd_dgrf_FR_BL_checkout(void) {
+  return 0;
+}
+
+CASADI_SYMBOL_EXPORT void qd_dgrf_FR_BL_release(int mem) {
+  (void)mem;
+}
+
+CASADI_SYMBOL_EXPORT void qd_dgrf_FR_BL_incref(void) {
+}
+
+CASADI_SYMBOL_EXPORT void qd_dgrf_FR_BL_decref(void) {
+}
+
+CASADI_SYMBOL_EXPORT casadi_int qd_dgrf_FR_BL_n_in(void) { return 3;}
+
+CASADI_SYMBOL_EXPORT casadi_int qd_dgrf_FR_BL_n_out(void) { return 3;}
+
+CASADI_SYMBOL_EXPORT casadi_real qd_dgrf_FR_BL_default_in(casadi_int i) {
+  switch (i) {
+    default: return 0;
+  }
+}
+
+CASADI_SYMBOL_EXPORT const char* qd_dgrf_FR_BL_name_in(casadi_int i) {
+  switch (i) {
+    case 0: return "q";
+    case 1: return "v";
+    case 2: return "a";
+    default: return 0;
+  }
+}
+
+CASADI_SYMBOL_EXPORT const char* qd_dgrf_FR_BL_name_out(casadi_int i) {
+  switch (i) {
+    case 0: return "dlambda_dq";
+    case 1: return "dlambda_dv";
+    case 2: return "dlambda_da";
+    default: return 0;
+  }
+}
+
+CASADI_SYMBOL_EXPORT const casadi_int* qd_dgrf_FR_BL_sparsity_in(casadi_int i) {
+  switch (i) {
+    case 0: return casadi_s0;
+    case 1: return casadi_s1;
+    case 2: return casadi_s1;
+    default: return 0;
+  }
+}
+
+CASADI_SYMBOL_EXPORT const casadi_int* qd_dgrf_FR_BL_sparsity_out(casadi_int i) {
+  switch (i) {
+    case 0: return casadi_s7;
+    case 1: return casadi_s7;
+    case 2: return casadi_s7;
+    default: return 0;
+  }
+}
+
+CASADI_SYMBOL_EXPORT int qd_dgrf_FR_BL_work(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz_iw, casadi_int *sz_w) {
+  if (sz_arg) *sz_arg = 3;
+  if (sz_res) *sz_res = 3;
+  if (sz_iw) *sz_iw = 0;
+  if (sz_w) *sz_w = 0;
+  return 0;
+}
+
+CASADI_SYMBOL_EXPORT int qd_dgrf_FR_BL_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz_iw, casadi_int *sz_w) {
+  if (sz_arg) *sz_arg = 3*sizeof(const casadi_real*);
+  if (sz_res) *sz_res = 3*sizeof(casadi_real*);
+  if (sz_iw) *sz_iw = 0*sizeof(casadi_int);
+  if (sz_w) *sz_w = 0*sizeof(casadi_real);
+  return 0;
+}
+
+/* qd_dgrf_dir_FR_BR:(q[19],w[6],dq[18])->(lambda_w[6],dlambda_w[6]) */
+static int casadi_f21(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem) {
+  (void)arg; (void)res; (void)iw; (void)w; (void)mem;
+  casadi_real a00, a01, a02, a03, a04, a05, a06, a07, a08, a09, a10, a11;
+  casadi_real a12, a13, a14, a15, a16, a17, a18, a19, a20, a21, a22, a23;
+  casadi_real a24, a25, a26, a27, a28, a29, a30, a31, a32, a33, a34, a35;
+  casadi_real a36, a37, a38, a39, a40, a41, a42, a43, a44, a45, a46, a47;
+  casadi_real a48, a49, a50, a51, a52, a53, a54, a55, a56, a57, a58, a59;
+  casadi_real a60, a61;
+  a00=arg[1]? arg[1][0] : 0;
+  a01=-7.0000000000000007e-02;
+  a02=2.0000000000000001e-01;
+  a03=arg[0]? arg[0][10] : 0;
+  a04=qd_cos(a03);
+  a05=arg[0]? arg[0][11] : 0;
+  a06=qd_cos(a05);
+  a07=(a04*a06);
+  a08=(a02*a07);
+  a08=(a01+a08);
+  a09=arg[0]? arg[0][12] : 0;
+  a10=qd_cos(a09);
+  a11=(a07*a10);
+  a05=qd_sin(a05);
+  a12=(a04*a05);
+  a09=qd_sin(a09);
+  a13=(a12*a09);
+  a11=(a11-a13);
+  a11=(a02*a11);
+  a08=(a08+a11);
+  a03=qd_sin(a03);
+  a11=(a03*a05);
+  a13=(a11*a09);
+  a14=(a03*a06);
+  a15=(a14*a10);
+  a13=(a13-a15);
+  a13=(a02*a13);
+  a15=(a02*a14);
+  a13=(a13-a15);
+  a15=arg[0]? arg[0][16] : 0;
+  a16=qd_sin(a15);
+  a17=arg[0]? arg[0][17] : 0;
+  a18=qd_sin(a17);
+  a19=(a16*a18);
+  a20=arg[0]? arg[0][18] : 0;
+  a21=qd_sin(a20);
+  a22=(a19*a21);
+  a17=qd_cos(a17);
+  a23=(a16*a17);
+  a20=qd_cos(a20);
+  a24=(a23*a20);
+  a22=(a22-a24);
+  a22=(a02*a22);
+  a24=(a02*a23);
+  a22=(a22-a24);
+  a24=(a13-a22);
+  a25=(a08*a24);
+  a15=qd_cos(a15);
+  a26=(a15*a17);
+  a27=(a02*a26);
+  a01=(a01+a27);
+  a27=(a26*a20);
+  a28=(a15*a18);
+  a29=(a28*a21);
+  a27=(a27-a29);
+  a27=(a02*a27);
+  a01=(a01+a27);
+  a27=(a08-a01);
+  a29=(a13*a27);
+  a25=(a25-a29);
+  a29=(a25*a00);
+  a30=1.9000000000000000e-01;
+  a31=(a02*a05);
+  a30=(a30+a31);
+  a31=(a06*a09);
+  a32=(a05*a10);
+  a31=(a31+a32);
+  a31=(a02*a31);
+  a30=(a30+a31);
+  a31=-1.9000000000000000e-01;
+  a32=(a02*a18);
+  a31=(a31+a32);
+  a32=(a17*a21);
+  a33=(a18*a20);
+  a32=(a32+a33);
+  a32=(a02*a32);
+  a31=(a31+a32);
+  a32=(a30-a31);
+  a33=(a13*a32);
+  a34=(a30*a24);
+  a33=(a33-a34);
+  a34=arg[1]? arg[1][1] : 0;
+  a35=(a33*a34);
+  a29=(a29+a35);
+  a35=(a30*a27);
+  a36=(a08*a32);
+  a35=(a35-a36);
+  a36=arg[1]? arg[1][2] : 0;
+  a37=(a35*a36);
+  a29=(a29+a37);
+  a37=arg[1]? arg[1][3] : 0;
+  a38=(a32*a37);
+  a39=arg[1]? arg[1][4] : 0;
+  a40=(a27*a39);
+  a38=(a38+a40);
+  a40=arg[1]? arg[1][5] : 0;
+  a41=(a24*a40);
+  a38=(a38+a41);
+  a29=(a29+a38);
+  a38=casadi_sq(a25);
+  a41=casadi_sq(a33);
+  a38=(a38+a41);
+  a41=casadi_sq(a35);
+  a38=(a38+a41);
+  a41=casadi_sq(a32);
+  a42=casadi_sq(a27);
+  a41=(a41+a42);
+  a42=casadi_sq(a24);
+  a41=(a41+a42);
+  a38=(a38+a41);
+  a29=(a29/a38);
+  a42=(a25*a29);
+  a42=(a00-a42);
+  a43=2.;
+  a44=(a42/a43);
+  a45=(a27*a29);
+  a45=(a39-a45);
+  a22=(a13+a22);
+  a22=(a22/a43);
+  a46=(a22*a42);
+  a31=(a30+a31);
+  a31=(a31/a43);
+  a47=(a35*a29);
+  a47=(a36-a47);
+  a48=(a31*a47);
+  a46=(a46-a48);
+  a45=(a45-a46);
+  a46=(a24*a45);
+  a48=(a24*a29);
+  a48=(a40-a48);
+  a49=(a33*a29);
+  a49=(a34-a49);
+  a50=(a31*a49);
+  a01=(a08+a01);
+  a01=(a01/a43);
+  a51=(a01*a42);
+  a50=(a50-a51);
+  a48=(a48-a50);
+  a50=(a27*a48);
+  a46=(a46-a50);
+  a46=(a46/a41);
+  a50=(a44+a46);
+  if (res[0]!=0) res[0][0]=a50;
+  a50=(a49/a43);
+  a51=(a32*a48);
+  a52=(a32*a29);
+  a52=(a37-a52);
+  a53=(a01*a47);
+  a54=(a22*a49);
+  a53=(a53-a54);
+  a52=(a52-a53);
+  a53=(a24*a52);
+  a51=(a51-a53);
+  a51=(a51/a41);
+  a53=(a50+a51);
+  if (res[0]!=0) res[0][1]=a53;
+  a43=(a47/a43);
+  a53=(a27*a52);
+  a54=(a32*a45);
+  a53=(a53-a54);
+  a53=(a53/a41);
+  a54=(a43+a53);
+  if (res[0]!=0) res[0][2]=a54;
+  a44=(a44-a46);
+  if (res[0]!=0) res[0][3]=a44;
+  a50=(a50-a51);
+  if (res[0]!=0) res[0][4]=a50;
+  a43=(a43-a53);
+  if (res[0]!=0) res[0][5]=a43;
+  a43=arg[2]? arg[2][9] : 0;
+  a50=(a04*a43);
+  a44=(a05*a50);
+  a54=arg[2]? arg[2][10] : 0;
+  a55=(a06*a54);
+  a56=(a03*a55);
+  a44=(a44+a56);
+  a44=(a09*a44);
+  a56=arg[2]? arg[2][11] : 0;
+  a57=(a10*a56);
+  a11=(a11*a57);
+  a44=(a44+a11);
+  a50=(a06*a50);
+  a54=(a05*a54);
+  a11=(a03*a54);
+  a50=(a50-a11);
+  a11=(a10*a50);
+  a56=(a09*a56);
+  a14=(a14*a56);
+  a11=(a11-a14);
+  a44=(a44-a11);
+  a44=(a02*a44);
+  a50=(a02*a50);
+  a44=(a44-a50);
+  a50=arg[2]? arg[2][15] : 0;
+  a11=(a15*a50);
+  a14=(a18*a11);
+  a58=arg[2]? arg[2][16] : 0;
+  a59=(a17*a58);
+  a60=(a16*a59);
+  a14=(a14+a60);
+  a14=(a21*a14);
+  a60=arg[2]? arg[2][17] : 0;
+  a61=(a20*a60);
+  a19=(a19*a61);
+  a14=(a14+a19);
+  a11=(a17*a11);
+  a58=(a18*a58);
+  a19=(a16*a58);
+  a11=(a11-a19);
+  a19=(a20*a11);
+  a60=(a21*a60);
+  a23=(a23*a60);
+  a19=(a19-a23);
+  a14=(a14-a19);
+  a14=(a02*a14);
+  a11=(a02*a11);
+  a14=(a14-a11);
+  a11=(a44-a14);
+  a19=(a45*a11);
+  a16=(a16*a50);
+  a50=(a17*a16);
+  a23=(a15*a58);
+  a50=(a50+a23);
+  a23=(a02*a50);
+  a50=(a20*a50);
+  a26=(a26*a60);
+  a50=(a50+a26);
+  a15=(a15*a59);
+  a16=(a18*a16);
+  a15=(a15-a16);
+  a15=(a21*a15);
+  a28=(a28*a61);
+  a15=(a15+a28);
+  a50=(a50+a15);
+  a50=(a02*a50);
+  a23=(a23+a50);
+  a03=(a03*a43);
+  a43=(a06*a03);
+  a50=(a04*a54);
+  a43=(a43+a50);
+  a50=(a02*a43);
+  a43=(a10*a43);
+  a07=(a07*a56);
+  a43=(a43+a07);
+  a04=(a04*a55);
+  a03=(a05*a03);
+  a04=(a04-a03);
+  a04=(a09*a04);
+  a12=(a12*a57);
+  a04=(a04+a12);
+  a43=(a43+a04);
+  a43=(a02*a43);
+  a50=(a50+a43);
+  a43=(a23-a50);
+  a04=(a29*a43);
+  a12=(a08*a11);
+  a03=(a24*a50);
+  a12=(a12-a03);
+  a03=(a27*a44);
+  a07=(a13*a43);
+  a03=(a03+a07);
+  a12=(a12-a03);
+  a00=(a00*a12);
+  a03=(a32*a44);
+  a07=(a02*a55);
+  a06=(a06*a57);
+  a09=(a09*a54);
+  a06=(a06-a09);
+  a10=(a10*a55);
+  a05=(a05*a56);
+  a10=(a10-a05);
+  a06=(a06+a10);
+  a06=(a02*a06);
+  a07=(a07+a06);
+  a06=(a02*a59);
+  a17=(a17*a61);
+  a21=(a21*a58);
+  a17=(a17-a21);
+  a20=(a20*a59);
+  a18=(a18*a60);
+  a20=(a20-a18);
+  a17=(a17+a20);
+  a02=(a02*a17);
+  a06=(a06+a02);
+  a02=(a07-a06);
+  a13=(a13*a02);
+  a03=(a03+a13);
+  a13=(a24*a07);
+  a17=(a30*a11);
+  a13=(a13+a17);
+  a03=(a03-a13);
+  a34=(a34*a03);
+  a00=(a00+a34);
+  a34=(a27*a07);
+  a30=(a30*a43);
+  a34=(a34+a30);
+  a08=(a08*a02);
+  a30=(a32*a50);
+  a08=(a08-a30);
+  a34=(a34-a08);
+  a36=(a36*a34);
+  a00=(a00+a36);
+  a37=(a37*a02);
+  a39=(a39*a43);
+  a37=(a37+a39);
+  a40=(a40*a11);
+  a37=(a37+a40);
+  a00=(a00+a37);
+  a00=(a00/a38);
+  a38=(a29/a38);
+  a37=(2*a25);
+  a37=(a37*a12);
+  a40=(2*a33);
+  a40=(a40*a03);
+  a37=(a37+a40);
+  a40=(2*a35);
+  a40=(a40*a34);
+  a37=(a37+a40);
+  a40=(2*a32);
+  a40=(a40*a02);
+  a39=(2*a27);
+  a39=(a39*a43);
+  a40=(a40+a39);
+  a39=(2*a24);
+  a39=(a39*a11);
+  a40=(a40+a39);
+  a37=(a37+a40);
+  a38=(a38*a37);
+  a00=(a00-a38);
+  a38=(a27*a00);
+  a04=(a04+a38);
+  a38=5.0000000000000000e-01;
+  a44=(a44+a14);
+  a44=(a38*a44);
+  a14=(a42*a44);
+  a12=(a29*a12);
+  a25=(a25*a00);
+  a12=(a12+a25);
+  a25=(a22*a12);
+  a14=(a14-a25);
+  a07=(a07+a06);
+  a07=(a38*a07);
+  a06=(a47*a07);
+  a34=(a29*a34);
+  a35=(a35*a00);
+  a34=(a34+a35);
+  a35=(a31*a34);
+  a06=(a06-a35);
+  a14=(a14-a06);
+  a04=(a04+a14);
+  a14=(a24*a04);
+  a19=(a19-a14);
+  a14=(a48*a43);
+  a06=(a29*a11);
+  a35=(a24*a00);
+  a06=(a06+a35);
+  a07=(a49*a07);
+  a03=(a29*a03);
+  a33=(a33*a00);
+  a03=(a03+a33);
+  a31=(a31*a03);
+  a07=(a07-a31);
+  a50=(a50+a23);
+  a50=(a38*a50);
+  a42=(a42*a50);
+  a23=(a01*a12);
+  a42=(a42+a23);
+  a07=(a07+a42);
+  a06=(a06+a07);
+  a07=(a27*a06);
+  a14=(a14-a07);
+  a19=(a19-a14);
+  a19=(a19/a41);
+  a46=(a46/a41);
+  a46=(a46*a40);
+  a19=(a19-a46);
+  a12=(a38*a12);
+  a46=(a19-a12);
+  if (res[1]!=0) res[1][0]=a46;
+  a48=(a48*a02);
+  a06=(a32*a06);
+  a48=(a48-a06);
+  a11=(a52*a11);
+  a47=(a47*a50);
+  a01=(a01*a34);
+  a47=(a47+a01);
+  a49=(a49*a44);
+  a22=(a22*a03);
+  a49=(a49-a22);
+  a47=(a47+a49);
+  a29=(a29*a02);
+  a00=(a32*a00);
+  a29=(a29+a00);
+  a47=(a47-a29);
+  a24=(a24*a47);
+  a11=(a11+a24);
+  a48=(a48-a11);
+  a48=(a48/a41);
+  a51=(a51/a41);
+  a51=(a51*a40);
+  a48=(a48-a51);
+  a03=(a38*a03);
+  a51=(a48-a03);
+  if (res[1]!=0) res[1][1]=a51;
+  a52=(a52*a43);
+  a27=(a27*a47);
+  a52=(a52+a27);
+  a45=(a45*a02);
+  a32=(a32*a04);
+  a45=(a45-a32);
+  a52=(a52-a45);
+  a52=(a52/a41);
+  a53=(a53/a41);
+  a53=(a53*a40);
+  a52=(a52-a53);
+  a38=(a38*a34);
+  a34=(a52-a38);
+  if (res[1]!=0) res[1][2]=a34;
+  a12=(a12+a19);
+  a12=(-a12);
+  if (res[1]!=0) res[1][3]=a12;
+  a03=(a03+a48);
+  a03=(-a03);
+  if (res[1]!=0) res[1][4]=a03;
+  a38=(a38+a52);
+  a38=(-a38);
+  if (res[1]!=0) res[1][5]=a38;
+  return 0;
+}
+
+CASADI_SYMBOL_EXPORT int qd_dgrf_dir_FR_BR(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem){
+  return qd_d_finite(casadi_f21(arg, res, iw, w, mem), res, 2, (const casadi_int[]){6, 6});
+}
+
+CASADI_SYMBOL_EXPORT int qd_dgrf_dir_FR_BR_checkout(void) {
+  return 0;
+}
+
+CASADI_SYMBOL_EXPORT void qd_dgrf_dir_FR_BR_release(int mem) {
+  (void)mem;
+}
+
+CASADI_SYMBOL_EXPORT void qd_dgrf_dir_FR_BR_incref(void) {
+}
+
+CASADI_SYMBOL_EXPORT void qd_dgrf_dir_FR_BR_decref(void) {
+}
+
+CASADI_SYMBOL_EXPORT casadi_int qd_dgrf_dir_FR_BR_n_in(void) { return 3;}
+
+CASADI_SYMBOL_EXPORT casadi_int qd_dgrf_dir_FR_BR_n_out(void) { return 2;}
+
+CASADI_SYMBOL_EXPORT casadi_real qd_dgrf_dir_FR_BR_default_in(casadi_int i) {
+  switch (i) {
+    default: return 0;
+  }
+}
+
+CASADI_SYMBOL_EXPORT const char* qd_dgrf_dir_FR_BR_name_in(casadi_int i) {
+  switch (i) {
+    case 0: return "q";
+    case 1: return "w";
+    case 2: return "dq";
+    default: return 0;
+  }
+}
+
+CASADI_SYMBOL_EXPORT const char* qd_dgrf_dir_FR_BR_name_out(casadi_int i) {
+  switch (i) {
+    case 0: return "lambda_w";
+    case 1: return "dlambda_w";
+    default: return 0;
+  }
+}
+
+CASADI_SYMBOL_EXPORT const casadi_int* qd_dgrf_dir_FR_BR_sparsity_in(casadi_int i) {
+  switch (i) {
+    case 0: return casadi_s0;
+    case 1: return casadi_s6;
+    case 2: return casadi_s1;
+    default: return 0;
+  }
+}
+
+CASADI_SYMBOL_EXPORT const casadi_int* qd_dgrf_dir_FR_BR_sparsity_out(casadi_int i) {
+  switch (i) {
+    case 0: return casadi_s6;
+    case 1: return casadi_s6;
+    default: return 0;
+  }
+}
+
+CASADI_SYMBOL_EXPORT int qd_dgrf_dir_FR_BR_work(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz_iw, casadi_int *sz_w) {
+  if (sz_arg) *sz_arg = 3;
+  if (sz_res) *sz_res = 2;
+  if (sz_iw) *sz_iw = 0;
+  if (sz_w) *sz_w = 0;
+  return 0;
+}
+
+CASADI_SYMBOL_EXPORT int qd_dgrf_dir_FR_BR_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz_iw, casadi_int *sz_w) {
+  if (sz_arg) *sz_arg = 3*sizeof(const casadi_real*);
+  if (sz_res) *sz_res = 2*sizeof(casadi_real*);
+  if (sz_iw) *sz_iw = 0*sizeof(casadi_int);
+  if (sz_w) *sz_w = 0*sizeof(casadi_real);
+  return 0;
+}
+
+/* qd_dgrf_FR_BR:(q[19],v[18],a[18])->(dlambda_dq[6x18],dlambda_dv[6x18],dlambda_da[6x18]) */
+static int casadi_f22(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem) {
+  (void)arg; (void)res; (void)iw; (void)w; (void)mem;
+  casadi_real a0, a1, a2;
+  a0=arg[0]? arg[0][0] : 0;
+  a1=arg[0]? arg[0][1] : 0;
+  a0=(a0+a1);
+  a1=arg[0]? arg[0][2] : 0;
+  a0=(a0+a1);
+  a1=arg[0]? arg[0][3] : 0;
+  a0=(a0+a1);
+  a1=arg[0]? arg[0][4] : 0;
+  a0=(a0+a1);
+  a1=arg[0]? arg[0][5] : 0;
+  a0=(a0+a1);
+  a1=arg[0]? arg[0][6] : 0;
+  a0=(a0+a1);
+  a1=arg[0]? arg[0][7] : 0;
+  a0=(a0+a1);
+  a1=arg[0]? arg[0][8] : 0;
+  a0=(a0+a1);
+  a1=arg[0]? arg[0][9] : 0;
+  a0=(a0+a1);
+  a1=arg[0]? arg[0][10] : 0;
+  a0=(a0+a1);
+  a1=arg[0]? arg[0][11] : 0;
+  a0=(a0+a1);
+  a1=arg[0]? arg[0][12] : 0;
+  a0=(a0+a1);
+  a1=arg[0]? arg[0][13] : 0;
+  a0=(a0+a1);
+  a1=arg[0]? arg[0][14] : 0;
+  a0=(a0+a1);
+  a1=arg[0]? arg[0][15] : 0;
+  a0=(a0+a1);
+  a1=arg[0]? arg[0][16] : 0;
+  a0=(a0+a1);
+  a1=arg[0]? arg[0][17] : 0;
+  a0=(a0+a1);
+  a1=arg[0]? arg[0][18] : 0;
+  a0=(a0+a1);
+  a1=arg[1]? arg[1][0] : 0;
+  a2=arg[1]? arg[1][1] : 0;
+  a1=(a1+a2);
+  a2=arg[1]? arg[1][2] : 0;
+  a1=(a1+a2);
+  a2=arg[1]? arg[1][3] : 0;
+  a1=(a1+a2);
+  a2=arg[1]? arg[1][4] : 0;
+  a1=(a1+a2);
+  a2=arg[1]? arg[1][5] : 0;
+  a1=(a1+a2);
+  a2=arg[1]? arg[1][6] : 0;
+  a1=(a1+a2);
+  a2=arg[1]? arg[1][7] : 0;
+  a1=(a1+a2);
+  a2=arg[1]? arg[1][8] : 0;
+  a1=(a1+a2);
+  a2=arg[1]? arg[1][9] : 0;
+  a1=(a1+a2);
+  a2=arg[1]? arg[1][10] : 0;
+  a1=(a1+a2);
+  a2=arg[1]? arg[1][11] : 0;
+  a1=(a1+a2);
+  a2=arg[1]? arg[1][12] : 0;
+  a1=(a1+a2);
+  a2=arg[1]? arg[1][13] : 0;
+  a1=(a1+a2);
+  a2=arg[1]? arg[1][14] : 0;
+  a1=(a1+a2);
+  a2=arg[1]? arg[1][15] : 0;
+  a1=(a1+a2);
+  a2=arg[1]? arg[1][16] : 0;
+  a1=(a1+a2);
+  a2=arg[1]? arg[1][17] : 0;
+  a1=(a1+a2);
+  a0=(a0+a1);
+  a1=arg[2]? arg[2][0] : 0;
+  a2=arg[2]? arg[2][1] : 0;
+  a1=(a1+a2);
+  a2=arg[2]? arg[2][2] : 0;
+  a1=(a1+a2);
+  a2=arg[2]? arg[2][3] : 0;
+  a1=(a1+a2);
+  a2=arg[2]? arg[2][4] : 0;
+  a1=(a1+a2);
+  a2=arg[2]? arg[2][5] : 0;
+  a1=(a1+a2);
+  a2=arg[2]? arg[2][6] : 0;
+  a1=(a1+a2);
+  a2=arg[2]? arg[2][7] : 0;
+  a1=(a1+a2);
+  a2=arg[2]? arg[2][8] : 0;
+  a1=(a1+a2);
+  a2=arg[2]? arg[2][9] : 0;
+  a1=(a1+a2);
+  a2=arg[2]? arg[2][10] : 0;
+  a1=(a1+a2);
+  a2=arg[2]? arg[2][11] : 0;
+  a1=(a1+a2);
+  a2=arg[2]? arg[2][12] : 0;
+  a1=(a1+a2);
+  a2=arg[2]? arg[2][13] : 0;
+  a1=(a1+a2);
+  a2=arg[2]? arg[2][14] : 0;
+  a1=(a1+a2);
+  a2=arg[2]? arg[2][15] : 0;
+  a1=(a1+a2);
+  a2=arg[2]? arg[2][16] : 0;
+  a1=(a1+a2);
+  a2=arg[2]? arg[2][17] : 0;
+  a1=(a1+a2);
+  a0=(a0+a1);
+  if (res[0]!=0) res[0][0]=a0;
+  if (res[0]!=0) res[0][1]=a0;
+  if (res[0]!=0) res[0][2]=a0;
+  if (res[0]!=0) res[0][3]=a0;
+  if (res[0]!=0) res[0][4]=a0;
+  if (res[0]!=0) res[0][5]=a0;
+  if (res[0]!=0) res[0][6]=a0;
+  if (res[0]!=0) res[0][7]=a0;
+  if (res[0]!=0) res[0][8]=a0;
+  if (res[0]!=0) res[0][9]=a0;
+  if (res[0]!=0) res[0][10]=a0;
+  if (res[0]!=0) res[0][11]=a0;
+  if (res[0]!=0) res[0][12]=a0;
+  if (res[0]!=0) res[0][13]=a0;
+  if (res[0]!=0) res[0][14]=a0;
+  if (res[0]!=0) res[0][15]=a0;
+  if (res[0]!=0) res[0][16]=a0;
+  if (res[0]!=0) res[0][17]=a0;
+  if (res[0]!=0) res[0][18]=a0;
+  if (res[0]!=0) res[0][19]=a0;
+  if (res[0]!=0) res[0][20]=a0;
+  if (res[0]!=0) res[0][21]=a0;
+  if (res[0]!=0) res[0][22]=a0;
+  if (res[0]!=0) res[0][23]=a0;
+  if (res[0]!=0) res[0][24]=a0;
+  if (res[0]!=0) res[0][25]=a0;
+  if (res[0]!=0) res[0][26]=a0;
+  if (res[0]!=0) res[0][27]=a0;
+  if (res[0]!=0) res[0][28]=a0;
+  if (res[0]!=0) res[0][29]=a0;
+  if (res[0]!=0) res[0][30]=a0;
+  if (res[0]!=0) res[0][31]=a0;
+  if (res[0]!=0) res[0][32]=a0;
+  if (res[0]!=0) res[0][33]=a0;
+  if (res[0]!=0) res[0][34]=a0;
+  if (res[0]!=0) res[0][35]=a0;
+  if (res[0]!=0) res[0][36]=a0;
+  if (res[0]!=0) res[0][37]=a0;
+  if (res[0]!=0) res[0][38]=a0;
+  if (res[0]!=0) res[0][39]=a0;
+  if (res[0]!=0) res[0][40]=a0;
+  if (res[0]!=0) res[0][41]=a0;
+  if (res[0]!=0) res[0][42]=a0;
+  if (res[0]!=0) res[0][43]=a0;
+  if (res[0]!=0) res[0][44]=a0;
+  if (res[0]!=0) res[0][45]=a0;
+  if (res[0]!=0) res[0][46]=a0;
+  if (res[0]!=0) res[0][47]=a0;
+  if (res[0]!=0) res[0][48]=a0;
+  if (res[0]!=0) res[0][49]=a0;
+  if (res[0]!=0) res[0][50]=a0;
+  if (res[0]!=0) res[0][51]=a0;
+  if (res[0]!=0) res[0][52]=a0;
+  if (res[0]!=0) res[0][53]=a0;
+  if (res[0]!=0) res[0][54]=a0;
+  if (res[0]!=0) res[0][55]=a0;
+  if (res[0]!=0) res[0][56]=a0;
+  if (res[0]!=0) res[0][57]=a0;
+  if (res[0]!=0) res[0][58]=a0;
+  if (res[0]!=0) res[0][59]=a0;
+  if (res[0]!=0) res[0][60]=a0;
+  if (res[0]!=0) res[0][61]=a0;
+  if (res[0]!=0) res[0][62]=a0;
+  if (res[0]!=0) res[0][63]=a0;
+  if (res[0]!=0) res[0][64]=a0;
+  if (res[0]!=0) res[0][65]=a0;
+  if (res[0]!=0) res[0][66]=a0;
+  if (res[0]!=0) res[0][67]=a0;
+  if (res[0]!=0) res[0][68]=a0;
+  if (res[0]!=0) res[0][69]=a0;
+  if (res[0]!=0) res[0][70]=a0;
+  if (res[0]!=0) res[0][71]=a0;
+  if (res[0]!=0) res[0][72]=a0;
+  if (res[0]!=0) res[0][73]=a0;
+  if (res[0]!=0) res[0][74]=a0;
+  if (res[0]!=0) res[0][75]=a0;
+  if (res[0]!=0) res[0][76]=a0;
+  if (res[0]!=0) res[0][77]=a0;
+  if (res[0]!=0) res[0][78]=a0;
+  if (res[0]!=0) res[0][79]=a0;
+  if (res[0]!=0) res[0][80]=a0;
+  if (res[0]!=0) res[0][81]=a0;
+  if (res[0]!=0) res[0][82]=a0;
+  if (res[0]!=0) res[0][83]=a0;
+  if (res[0]!=0) res[0][84]=a0;
+  if (res[0]!=0) res[0][85]=a0;
+  if (res[0]!=0) res[0][86]=a0;
+  if (res[0]!=0) res[0][87]=a0;
+  if (res[0]!=0) res[0][88]=a0;
+  if (res[0]!=0) res[0][89]=a0;
+  if (res[0]!=0) res[0][90]=a0;
+  if (res[0]!=0) res[0][91]=a0;
+  if (res[0]!=0) res[0][92]=a0;
+  if (res[0]!=0) res[0][93]=a0;
+  if (res[0]!=0) res[0][94]=a0;
+  if (res[0]!=0) res[0][95]=a0;
+  if (res[0]!=0) res[0][96]=a0;
+  if (res[0]!=0) res[0][97]=a0;
+  if (res[0]!=0) res[0][98]=a0;
+  if (res[0]!=0) res[0][99]=a0;
+  if (res[0]!=0) res[0][100]=a0;
+  if (res[0]!=0) res[0][101]=a0;
+  if (res[0]!=0) res[0][102]=a0;
+  if (res[0]!=0) res[0][103]=a0;
+  if (res[0]!=0) res[0][104]=a0;
+  if (res[0]!=0) res[0][105]=a0;
+  if (res[0]!=0) res[0][106]=a0;
+  if (res[0]!=0) res[0][107]=a0;
+  if (res[1]!=0) res[1][0]=a0;
+  if (res[1]!=0) res[1][1]=a0;
+  if (res[1]!=0) res[1][2]=a0;
+  if (res[1]!=0) res[1][3]=a0;
+  if (res[1]!=0) res[1][4]=a0;
+  if (res[1]!=0) res[1][5]=a0;
+  if (res[1]!=0) res[1][6]=a0;
+  if (res[1]!=0) res[1][7]=a0;
+  if (res[1]!=0) res[1][8]=a0;
+  if (res[1]!=0) res[1][9]=a0;
+  if (res[1]!=0) res[1][10]=a0;
+  if (res[1]!=0) res[1][11]=a0;
+  if (res[1]!=0) res[1][12]=a0;
+  if (res[1]!=0) res[1][13]=a0;
+  if (res[1]!=0) res[1][14]=a0;
+  if (res[1]!=0) res[1][15]=a0;
+  if (res[1]!=0) res[1][16]=a0;
+  if (res[1]!=0) res[1][17]=a0;
+  if (res[1]!=0) res[1][18]=a0;
+  if (res[1]!=0) res[1][19]=a0;
+  if (res[1]!=0) res[1][20]=a0;
+  if (res[1]!=0) res[1][21]=a0;
+  if (res[1]!=0) res[1][22]=a0;
+  if (res[1]!=0) res[1][23]=a0;
+  if (res[1]!=0) res[1][24]=a0;
+  if (res[1]!=0) res[1][25]=a0;
+  if (res[1]!=0) res[1][26]=a0;
+  if (res[1]!=0) res[1][27]=a0;
+  if (res[1]!=0) res[1][28]=a0;
+  if (res[1]!=0) res[1][29]=a0;
+  if (res[1]!=0) res[1][30]=a0;
+  if (res[1]!=0) res[1][31]=a0;
+  if (res[1]!=0) res[1][32]=a0;
+  if (res[1]!=0) res[1][33]=a0;
+  if (res[1]!=0) res[1][34]=a0;
+  if (res[1]!=0) res[1][35]=a0;
+  if (res[1]!=0) res[1][36]=a0;
+  if (res[1]!=0) res[1][37]=a0;
+  if (res[1]!=0) res[1][38]=a0;
+  if (res[1]!=0) res[1][39]=a0;
+  if (res[1]!=0) res[1][40]=a0;
+  if (res[1]!=0) res[1][41]=a0;
+  if (res[1]!=0) res[1][42]=a0;
+  if (res[1]!=0) res[1][43]=a0;
+  if (res[1]!=0) res[1][44]=a0;
+  if (res[1]!=0) res[1][45]=a0;
+  if (res[1]!=0) res[1][46]=a0;
+  if (res[1]!=0) res[1][47]=a0;
+  if (res[1]!=0) res[1][48]=a0;
+  if (res[1]!=0) res[1][49]=a0;
+  if (res[1]!=0) res[1][50]=a0;
+  if (res[1]!=0) res[1][51]=a0;
+  if (res[1]!=0) res[1][52]=a0;
+  if (res[1]!=0) res[1][53]=a0;
+  if (res[1]!=0) res[1][54]=a0;
+  if (res[1]!=0) res[1][55]=a0;
+  if (res[1]!=0) res[1][56]=a0;
+  if (res[1]!=0) res[1][57]=a0;
+  if (res[1]!=0) res[1][58]=a0;
+  if (res[1]!=0) res[1][59]=a0;
+  if (res[1]!=0) res[1][60]=a0;
+  if (res[1]!=0) res[1][61]=a0;
+  if (res[1]!=0) res[1][62]=a0;
+  if (res[1]!=0) res[1][63]=a0;
+  if (res[1]!=0) res[1][64]=a0;
+  if (res[1]!=0) res[1][65]=a0;
+  if (res[1]!=0) res[1][66]=a0;
+  if (res[1]!=0) res[1][67]=a0;
+  if (res[1]!=0) res[1][68]=a0;
+  if (res[1]!=0) res[1][69]=a0;
+  if (res[1]!=0) res[1][70]=a0;
+  if (res[1]!=0) res[1][71]=a0;
+  if (res[1]!=0) res[1][72]=a0;
+  if (res[1]!=0) res[1][73]=a0;
+  if (res[1]!=0) res[1][74]=a0;
+  if (res[1]!=0) res[1][75]=a0;
+  if (res[1]!=0) res[1][76]=a0;
+  if (res[1]!=0) res[1][77]=a0;
+  if (res[1]!=0) res[1][78]=a0;
+  if (res[1]!=0) res[1][79]=a0;
+  if (res[1]!=0) res[1][80]=a0;
+  if (res[1]!=0) res[1][81]=a0;
+  if (res[1]!=0) res[1][82]=a0;
+  if (res[1]!=0) res[1][83]=a0;
+  if (res[1]!=0) res[1][84]=a0;
+  if (res[1]!=0) res[1][85]=a0;
+  if (res[1]!=0) res[1][86]=a0;
+  if (res[1]!=0) res[1][87]=a0;
+  if (res[1]!=0) res[1][88]=a0;
+  if (res[1]!=0) res[1][89]=a0;
+  if (res[1]!=0) res[1][90]=a0;
+  if (res[1]!=0) res[1][91]=a0;
+  if (res[1]!=0) res[1][92]=a0;
+  if (res[1]!=0) res[1][93]=a0;
+  if (res[1]!=0) res[1][94]=a0;
+  if (res[1]!=0) res[1][95]=a0;
+  if (res[1]!=0) res[1][96]=a0;
+  if (res[1]!=0) res[1][97]=a0;
+  if (res[1]!=0) res[1][98]=a0;
+  if (res[1]!=0) res[1][99]=a0;
+  if (res[1]!=0) res[1][100]=a0;
+  if (res[1]!=0) res[1][101]=a0;
+  if (res[1]!=0) res[1][102]=a0;
+  if (res[1]!=0) res[1][103]=a0;
+  if (res[1]!=0) res[1][104]=a0;
+  if (res[1]!=0) res[1][105]=a0;
+  if (res[1]!=0) res[1][106]=a0;
+  if (res[1]!=0) res[1][107]=a0;
+  if (res[2]!=0) res[2][0]=a0;
+  if (res[2]!=0) res[2][1]=a0;
+  if (res[2]!=0) res[2][2]=a0;
+  if (res[2]!=0) res[2][3]=a0;
+  if (res[2]!=0) res[2][4]=a0;
+  if (res[2]!=0) res[2][5]=a0;
+  if (res[2]!=0) res[2][6]=a0;
+  if (res[2]!=0) res[2][7]=a0;
+  if (res[2]!=0) res[2][8]=a0;
+  if (res[2]!=0) res[2][9]=a0;
+  if (res[2]!=0) res[2][10]=a0;
+  if (res[2]!=0) res[2][11]=a0;
+  if (res[2]!=0) res[2][12]=a0;
+  if (res[2]!=0) res[2][13]=a0;
+  if (res[2]!=0) res[2][14]=a0;
+  if (res[2]!=0) res[2][15]=a0;
+  if (res[2]!=0) res[2][16]=a0;
+  if (res[2]!=0) res[2][17]=a0;
+  if (res[2]!=0) res[2][18]=a0;
+  if (res[2]!=0) res[2][19]=a0;
+  if (res[2]!=0) res[2][20]=a0;
+  if (res[2]!=0) res[2][21]=a0;
+  if (res[2]!=0) res[2][22]=a0;
+  if (res[2]!=0) res[2][23]=a0;
+  if (res[2]!=0) res[2][24]=a0;
+  if (res[2]!=0) res[2][25]=a0;
+  if (res[2]!=0) res[2][26]=a0;
+  if (res[2]!=0) res[2][27]=a0;
+  if (res[2]!=0) res[2][28]=a0;
+  if (res[2]!=0) res[2][29]=a0;
+  if (res[2]!=0) res[2][30]=a0;
+  if (res[2]!=0) res[2][31]=a0;
+  if (res[2]!=0) res[2][32]=a0;
+  if (res[2]!=0) res[2][33]=a0;
+  if (res[2]!=0) res[2][34]=a0;
+  if (res[2]!=0) res[2][35]=a0;
+  if (res[2]!=0) res[2][36]=a0;
+  if (res[2]!=0) res[2][37]=a0;
+  if (res[2]!=0) res[2][38]=a0;
+  if (res[2]!=0) res[2][39]=a0;
+  if (res[2]!=0) res[2][40]=a0;
+  if (res[2]!=0) res[2][41]=a0;
+  if (res[2]!=0) res[2][42]=a0;
+  if (res[2]!=0) res[2][43]=a0;
+  if (res[2]!=0) res[2][44]=a0;
+  if (res[2]!=0) res[2][45]=a0;
+  if (res[2]!=0) res[2][46]=a0;
+  if (res[2]!=0) res[2][47]=a0;
+  if (res[2]!=0) res[2][48]=a0;
+  if (res[2]!=0) res[2][49]=a0;
+  if (res[2]!=0) res[2][50]=a0;
+  if (res[2]!=0) res[2][51]=a0;
+  if (res[2]!=0) res[2][52]=a0;
+  if (res[2]!=0) res[2][53]=a0;
+  if (res[2]!=0) res[2][54]=a0;
+  if (res[2]!=0) res[2][55]=a0;
+  if (res[2]!=0) res[2][56]=a0;
+  if (res[2]!=0) res[2][57]=a0;
+  if (res[2]!=0) res[2][58]=a0;
+  if (res[2]!=0) res[2][59]=a0;
+  if (res[2]!=0) res[2][60]=a0;
+  if (res[2]!=0) res[2][61]=a0;
+  if (res[2]!=0) res[2][62]=a0;
+  if (res[2]!=0) res[2][63]=a0;
+  if (res[2]!=0) res[2][64]=a0;
+  if (res[2]!=0) res[2][65]=a0;
+  if (res[2]!=0) res[2][66]=a0;
+  if (res[2]!=0) res[2][67]=a0;
+  if (res[2]!=0) res[2][68]=a0;
+  if (res[2]!=0) res[2][69]=a0;
+  if (res[2]!=0) res[2][70]=a0;
+  if (res[2]!=0) res[2][71]=a0;
+  if (res[2]!=0) res[2][72]=a0;
+  if (res[2]!=0) res[2][73]=a0;
+  if (res[2]!=0) res[2][74]=a0;
+  if (res[2]!=0) res[2][75]=a0;
+  if (res[2]!=0) res[2][76]=a0;
+  if (res[2]!=0) res[2][77]=a0;
+  if (res[2]!=0) res[2][78]=a0;
+  if (res[2]!=0) res[2][79]=a0;
+  if (res[2]!=0) res[2][80]=a0;
+  if (res[2]!=0) res[2][81]=a0;
+  if (res[2]!=0) res[2][82]=a0;
+  if (res[2]!=0) res[2][83]=a0;
+  if (res[2]!=0) res[2][84]=a0;
+  if (res[2]!=0) res[2][85]=a0;
+  if (res[2]!=0) res[2][86]=a0;
+  if (res[2]!=0) res[2][87]=a0;
+  if (res[2]!=0) res[2][88]=a0;
+  if (res[2]!=0) res[2][89]=a0;
+  if (res[2]!=0) res[2][90]=a0;
+  if (res[2]!=0) res[2][91]=a0;
+  if (res[2]!=0) res[2][92]=a0;
+  if (res[2]!=0) res[2][93]=a0;
+  if (res[2]!=0) res[2][94]=a0;
+  if (res[2]!=0) res[2][95]=a0;
+  if (res[2]!=0) res[2][96]=a0;
+  if (res[2]!=0) res[2][97]=a0;
+  if (res[2]!=0) res[2][98]=a0;
+  if (res[2]!=0) res[2][99]=a0;
+  if (res[2]!=0) res[2][100]=a0;
+  if (res[2]!=0) res[2][101]=a0;
+  if (res[2]!=0) res[2][102]=a0;
+  if (res[2]!=0) res[2][103]=a0;
+  if (res[2]!=0) res[2][104]=a0;
+  if (res[2]!=0) res[2][105]=a0;
+  if (res[2]!=0) res[2][106]=a0;
+  if (res[2]!=0) res[2][107]=a0;
+  return 0;
+}
+
+CASADI_SYMBOL_EXPORT int qd_dgrf_FR_BR(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem){
+  (void)casadi_f22;
+  return qd_dgrf_solve(6, 10, casadi_f1, casadi_f0, casadi_f21, qd_did_full_sparsity_out(0), qd_did_full_sparsity_out(1), arg, res, iw, w, mem);
+}
+
+CASADI_SYMBOL_EXPORT int qd_dgrf_FR_BR_checkout(void) {
+  return 0;
+}
+
+CASADI_SYMBOL_EXPORT void qd_dgrf_FR_BR_release(int mem) {
+  (void)mem;
+}
+
+CASADI_SYMBOL_EXPORT void qd_dgrf_FR_BR_incref(void) {
+}
+
+CASADI_SYMBOL_EXPORT void qd_dgrf_FR_BR_decref(void) {
+}
+
+CASADI_SYMBOL_EXPORT casadi_int qd_dgrf_FR_BR_n_in(void) { return 3;}
+
+CASADI_SYMBOL_EXPORT casadi_int qd_dgrf_FR_BR_n_out(void) { return 3;}
+
+CASADI_SYMBOL_EXPORT casadi_real qd_dgrf_FR_BR_default_in(casadi_int i) {
+  switch (i) {
+    default: return 0;
+  }
+}
+
+CASADI_SYMBOL_EXPORT const char* qd_dgrf_FR_BR_name_in(casadi_int i) {
+  switch (i) {
+    case 0: return "q";
+    case 1: return "v";
+    case 2: return "a";
+    default: return 0;
+  }
+}
+
+CASADI_SYMBOL_EXPORT const char* qd_dgrf_FR_BR_name_out(casadi_int i) {
+  switch (i) {
+    case 0: return "dlambda_dq";
+    case 1: return "dlambda_dv";
+    case 2: return "dlambda_da";
+    default: return 0;
+  }
+}
+
+CASADI_SYMBOL_EXPORT const casadi_int* qd_dgrf_FR_BR_sparsity_in(casadi_int i) {
+  switch (i) {
+    case 0: return casadi_s0;
+    case 1: return casadi_s1;
+    case 2: return casadi_s1;
+    default: return 0;
+  }
+}
+
+CASADI_SYMBOL_EXPORT const casadi_int* qd_dgrf_FR_BR_sparsity_out(casadi_int i) {
+  switch (i) {
+    case 0: return casadi_s7;
+    case 1: return casadi_s7;
+    case 2: return casadi_s7;
+    default: return 0;
+  }
+}
+
+CASADI_SYMBOL_EXPORT int qd_dgrf_FR_BR_work(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz_iw, casadi_int *sz_w) {
+  if (sz_arg) *sz_arg = 3;
+  if (sz_res) *sz_res = 3;
+  if (sz_iw) *sz_iw = 0;
+  if (sz_w) *sz_w = 0;
+  return 0;
+}
+
+CASADI_SYMBOL_EXPORT int qd_dgrf_FR_BR_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz_iw, casadi_int *sz_w) {
+  if (sz_arg) *sz_arg = 3*sizeof(const casadi_real*);
+  if (sz_res) *sz_res = 3*sizeof(casadi_real*);
+  if (sz_iw) *sz_iw = 0*sizeof(casadi_int);
+  if (sz_w) *sz_w = 0*sizeof(casadi_real);
+  return 0;
+}
+
+/* qd_dgrf_dir_BL_BR:(q[19],w[6],dq[18])->(lambda_w[6],dlambda_w[6]) */
+static int casadi_f23(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem) {
+  (void)arg; (void)res; (void)iw; (void)w; (void)mem;
+  casadi_real a00, a01, a02, a03, a04, a05, a06, a07, a08, a09, a10, a11;
+  casadi_real a12, a13, a14, a15, a16, a17, a18, a19, a20, a21, a22, a23;
+  casadi_real a24, a25, a26, a27, a28, a29, a30, a31, a32, a33, a34, a35;
+  casadi_real a36, a37, a38, a39, a40, a41, a42, a43, a44, a45, a46, a47;
+  casadi_real a48, a49, a50, a51, a52, a53, a54, a55, a56, a57, a58, a59;
+  casadi_real a60, a61;
+  a00=arg[1]? arg[1][0] : 0;
+  a01=7.0000000000000007e-02;
+  a02=2.0000000000000001e-01;
+  a03=arg[0]? arg[0][13] : 0;
+  a04=qd_cos(a03);
+  a05=arg[0]? arg[0][14] : 0;
+  a06=qd_cos(a05);
+  a07=(a04*a06);
+  a08=(a02*a07);
+  a01=(a01+a08);
+  a08=arg[0]? arg[0][15] : 0;
+  a09=qd_cos(a08);
+  a10=(a07*a09);
+  a05=qd_sin(a05);
+  a11=(a04*a05);
+  a08=qd_sin(a08);
+  a12=(a11*a08);
+  a10=(a10-a12);
+  a10=(a02*a10);
+  a01=(a01+a10);
+  a03=qd_sin(a03);
+  a10=(a03*a05);
+  a12=(a10*a08);
+  a13=(a03*a06);
+  a14=(a13*a09);
+  a12=(a12-a14);
+  a12=(a02*a12);
+  a14=(a02*a13);
+  a12=(a12-a14);
+  a14=arg[0]? arg[0][16] : 0;
+  a15=qd_sin(a14);
+  a16=arg[0]? arg[0][17] : 0;
+  a17=qd_sin(a16);
+  a18=(a15*a17);
+  a19=arg[0]? arg[0][18] : 0;
+  a20=qd_sin(a19);
+  a21=(a18*a20);
+  a16=qd_cos(a16);
+  a22=(a15*a16);
+  a19=qd_cos(a19);
+  a23=(a22*a19);
+  a21=(a21-a23);
+  a21=(a02*a21);
+  a23=(a02*a22);
+  a21=(a21-a23);
+  a23=(a12-a21);
+  a24=(a01*a23);
+  a25=-7.0000000000000007e-02;
+  a14=qd_cos(a14);
+  a26=(a14*a16);
+  a27=(a02*a26);
+  a25=(a25+a27);
+  a27=(a26*a19);
+  a28=(a14*a17);
+  a29=(a28*a20);
+  a27=(a27-a29);
+  a27=(a02*a27);
+  a25=(a25+a27);
+  a27=(a01-a25);
+  a29=(a12*a27);
+  a24=(a24-a29);
+  a29=(a24*a00);
+  a30=-1.9000000000000000e-01;
+  a31=(a02*a05);
+  a31=(a30+a31);
+  a32=(a06*a08);
+  a33=(a05*a09);
+  a32=(a32+a33);
+  a32=(a02*a32);
+  a31=(a31+a32);
+  a32=(a02*a17);
+  a30=(a30+a32);
+  a32=(a16*a20);
+  a33=(a17*a19);
+  a32=(a32+a33);
+  a32=(a02*a32);
+  a30=(a30+a32);
+  a32=(a31-a30);
+  a33=(a12*a32);
+  a34=(a31*a23);
+  a33=(a33-a34);
+  a34=arg[1]? arg[1][1] : 0;
+  a35=(a33*a34);
+  a29=(a29+a35);
+  a35=(a31*a27);
+  a36=(a01*a32);
+  a35=(a35-a36);
+  a36=arg[1]? arg[1][2] : 0;
+  a37=(a35*a36);
+  a29=(a29+a37);
+  a37=arg[1]? arg[1][3] : 0;
+  a38=(a32*a37);
+  a39=arg[1]? arg[1][4] : 0;
+  a40=(a27*a39);
+  a38=(a38+a40);
+  a40=arg[1]? arg[1][5] : 0;
+  a41=(a23*a40);
+  a38=(a38+a41);
+  a29=(a29+a38);
+  a38=casadi_sq(a24);
+  a41=casadi_sq(a33);
+  a38=(a38+a41);
+  a41=casadi_sq(a35);
+  a38=(a38+a41);
+  a41=casadi_sq(a32);
+  a42=casadi_sq(a27);
+  a41=(a41+a42);
+  a42=casadi_sq(a23);
+  a41=(a41+a42);
+  a38=(a38+a41);
+  a29=(a29/a38);
+  a42=(a24*a29);
+  a42=(a00-a42);
+  a43=2.;
+  a44=(a42/a43);
+  a45=(a27*a29);
+  a45=(a39-a45);
+  a21=(a12+a21);
+  a21=(a21/a43);
+  a46=(a21*a42);
+  a30=(a31+a30);
+  a30=(a30/a43);
+  a47=(a35*a29);
+  a47=(a36-a47);
+  a48=(a30*a47);
+  a46=(a46-a48);
+  a45=(a45-a46);
+  a46=(a23*a45);
+  a48=(a23*a29);
+  a48=(a40-a48);
+  a49=(a33*a29);
+  a49=(a34-a49);
+  a50=(a30*a49);
+  a25=(a01+a25);
+  a25=(a25/a43);
+  a51=(a25*a42);
+  a50=(a50-a51);
+  a48=(a48-a50);
+  a50=(a27*a48);
+  a46=(a46-a50);
+  a46=(a46/a41);
+  a50=(a44+a46);
+  if (res[0]!=0) res[0][0]=a50;
+  a50=(a49/a43);
+  a51=(a32*a48);
+  a52=(a32*a29);
+  a52=(a37-a52);
+  a53=(a25*a47);
+  a54=(a21*a49);
+  a53=(a53-a54);
+  a52=(a52-a53);
+  a53=(a23*a52);
+  a51=(a51-a53);
+  a51=(a51/a41);
+  a53=(a50+a51);
+  if (res[0]!=0) res[0][1]=a53;
+  a43=(a47/a43);
+  a53=(a27*a52);
+  a54=(a32*a45);
+  a53=(a53-a54);
+  a53=(a53/a41);
+  a54=(a43+a53);
+  if (res[0]!=0) res[0][2]=a54;
+  a44=(a44-a46);
+  if (res[0]!=0) res[0][3]=a44;
+  a50=(a50-a51);
+  if (res[0]!=0) res[0][4]=a50;
+  a43=(a43-a53);
+  if (res[0]!=0) res[0][5]=a43;
+  a43=arg[2]? arg[2][12] : 0;
+  a50=(a04*a43);
+  a44=(a05*a50);
+  a54=arg[2]? arg[2][13] : 0;
+  a55=(a06*a54);
+  a56=(a03*a55);
+  a44=(a44+a56);
+  a44=(a08*a44);
+  a56=arg[2]? arg[2][14] : 0;
+  a57=(a09*a56);
+  a10=(a10*a57);
+  a44=(a44+a10);
+  a50=(a06*a50);
+  a54=(a05*a54);
+  a10=(a03*a54);
+  a50=(a50-a10);
+  a10=(a09*a50);
+  a56=(a08*a56);
+  a13=(a13*a56);
+  a10=(a10-a13);
+  a44=(a44-a10);
+  a44=(a02*a44);
+  a50=(a02*a50);
+  a44=(a44-a50);
+  a50=arg[2]? arg[2][15] : 0;
+  a10=(a14*a50);
+  a13=(a17*a10);
+  a58=arg[2]? arg[2][16] : 0;
+  a59=(a16*a58);
+  a60=(a15*a59);
+  a13=(a13+a60);
+  a13=(a20*a13);
+  a60=arg[2]? arg[2][17] : 0;
+  a61=(a19*a60);
+  a18=(a18*a61);
+  a13=(a13+a18);
+  a10=(a16*a10);
+  a58=(a17*a58);
+  a18=(a15*a58);
+  a10=(a10-a18);
+  a18=(a19*a10);
+  a60=(a20*a60);
+  a22=(a22*a60);
+  a18=(a18-a22);
+  a13=(a13-a18);
+  a13=(a02*a13);
+  a10=(a02*a10);
+  a13=(a13-a10);
+  a10=(a44-a13);
+  a18=(a45*a10);
+  a15=(a15*a50);
+  a50=(a16*a15);
+  a22=(a14*a58);
+  a50=(a50+a22);
+  a22=(a02*a50);
+  a50=(a19*a50);
+  a26=(a26*a60);
+  a50=(a50+a26);
+  a14=(a14*a59);
+  a15=(a17*a15);
+  a14=(a14-a15);
+  a14=(a20*a14);
+  a28=(a28*a61);
+  a14=(a14+a28);
+  a50=(a50+a14);
+  a50=(a02*a50);
+  a22=(a22+a50);
+  a03=(a03*a43);
+  a43=(a06*a03);
+  a50=(a04*a54);
+  a43=(a43+a50);
+  a50=(a02*a43);
+  a43=(a09*a43);
+  a07=(a07*a56);
+  a43=(a43+a07);
+  a04=(a04*a55);
+  a03=(a05*a03);
+  a04=(a04-a03);
+  a04=(a08*a04);
+  a11=(a11*a57);
+  a04=(a04+a11);
+  a43=(a43+a04);
+  a43=(a02*a43);
+  a50=(a50+a43);
+  a43=(a22-a50);
+  a04=(a29*a43);
+  a11=(a01*a10);
+  a03=(a23*a50);
+  a11=(a11-a03);
+  a03=(a27*a44);
+  a07=(a12*a43);
+  a03=(a03+a07);
+  a11=(a11-a03);
+  a00=(a00*a11);
+  a03=(a32*a44);
+  a07=(a02*a55);
+  a06=(a06*a57);
+  a08=(a08*a54);
+  a06=(a06-a08);
+  a09=(a09*a55);
+  a05=(a05*a56);
+  a09=(a09-a05);
+  a06=(a06+a09);
+  a06=(a02*a06);
+  a07=(a07+a06);
+  a06=(a02*a59);
+  a16=(a16*a61);
+  a20=(a20*a58);
+  a16=(a16-a20);
+  a19=(a19*a59);
+  a17=(a17*a60);
+  a19=(a19-a17);
+  a16=(a16+a19);
+  a02=(a02*a16);
+  a06=(a06+a02);
+  a02=(a07-a06);
+  a12=(a12*a02);
+  a03=(a03+a12);
+  a12=(a23*a07);
+  a16=(a31*a10);
+  a12=(a12+a16);
+  a03=(a03-a12);
+  a34=(a34*a03);
+  a00=(a00+a34);
+  a34=(a27*a07);
+  a31=(a31*a43);
+  a34=(a34+a31);
+  a01=(a01*a02);
+  a31=(a32*a50);
+  a01=(a01-a31);
+  a34=(a34-a01);
+  a36=(a36*a34);
+  a00=(a00+a36);
+  a37=(a37*a02);
+  a39=(a39*a43);
+  a37=(a37+a39);
+  a40=(a40*a10);
+  a37=(a37+a40);
+  a00=(a00+a37);
+  a00=(a00/a38);
+  a38=(a29/a38);
+  a37=(2*a24);
+  a37=(a37*a11);
+  a40=(2*a33);
+  a40=(a40*a03);
+  a37=(a37+a40);
+  a40=(2*a35);
+  a40=(a40*a34);
+  a37=(a37+a40);
+  a40=(2*a32);
+  a40=(a40*a02);
+  a39=(2*a27);
+  a39=(a39*a43);
+  a40=(a40+a39);
+  a39=(2*a23);
+  a39=(a39*a10);
+  a40=(a40+a39);
+  a37=(a37+a40);
+  a38=(a38*a37);
+  a00=(a00-a38);
+  a38=(a27*a00);
+  a04=(a04+a38);
+  a38=5.0000000000000000e-01;
+  a44=(a44+a13);
+  a44=(a38*a44);
+  a13=(a42*a44);
+  a11=(a29*a11);
+  a24=(a24*a00);
+  a11=(a11+a24);
+  a24=(a21*a11);
+  a13=(a13-a24);
+  a07=(a07+a06);
+  a07=(a38*a07);
+  a06=(a47*a07);
+  a34=(a29*a34);
+  a35=(a35*a00);
+  a34=(a34+a35);
+  a35=(a30*a34);
+  a06=(a06-a35);
+  a13=(a13-a06);
+  a04=(a04+a13);
+  a13=(a23*a04);
+  a18=(a18-a13);
+  a13=(a48*a43);
+  a06=(a29*a10);
+  a35=(a23*a00);
+  a06=(a06+a35);
+  a07=(a49*a07);
+  a03=(a29*a03);
+  a33=(a33*a00);
+  a03=(a03+a33);
+  a30=(a30*a03);
+  a07=(a07-a30);
+  a50=(a50+a22);
+  a50=(a38*a50);
+  a42=(a42*a50);
+  a22=(a25*a11);
+  a42=(a42+a22);
+  a07=(a07+a42);
+  a06=(a06+a07);
+  a07=(a27*a06);
+  a13=(a13-a07);
+  a18=(a18-a13);
+  a18=(a18/a41);
+  a46=(a46/a41);
+  a46=(a46*a40);
+  a18=(a18-a46);
+  a11=(a38*a11);
+  a46=(a18-a11);
+  if (res[1]!=0) res[1][0]=a46;
+  a48=(a48*a02);
+  a06=(a32*a06);
+  a48=(a48-a06);
+  a10=(a52*a10);
+  a47=(a47*a50);
+  a25=(a25*a34);
+  a47=(a47+a25);
+  a49=(a49*a44);
+  a21=(a21*a03);
+  a49=(a49-a21);
+  a47=(a47+a49);
+  a29=(a29*a02);
+  a00=(a32*a00);
+  a29=(a29+a00);
+  a47=(a47-a29);
+  a23=(a23*a47);
+  a10=(a10+a23);
+  a48=(a48-a10);
+  a48=(a48/a41);
+  a51=(a51/a41);
+  a51=(a51*a40);
+  a48=(a48-a51);
+  a03=(a38*a03);
+  a51=(a48-a03);
+  if (res[1]!=0) res[1][1]=a51;
+  a52=(a52*a43);
+  a27=(a27*a47);
+  a52=(a52+a27);
+  a45=(a45*a02);
+  a32=(a32*a04);
+  a45=(a45-a32);
+  a52=(a52-a45);
+  a52=(a52/a41);
+  a53=(a53/a41);
+  a53=(a53*a40);
+  a52=(a52-a53);
+  a38=(a38*a34);
+  a34=(a52-a38);
+  if (res[1]!=0) res[1][2]=a34;
+  a11=(a11+a18);
+  a11=(-a11);
+  if (res[1]!=0) res[1][3]=a11;
+  a03=(a03+a48);
+  a03=(-a03);
+  if (res[1]!=0) res[1][4]=a03;
+  a38=(a38+a52);
+  a38=(-a38);
+  if (res[1]!=0) res[1][5]=a38;
+  return 0;
+}
+
+CASADI_SYMBOL_EXPORT int qd_dgrf_dir_BL_BR(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem){
+  return qd_d_finite(casadi_f23(arg, res, iw, w, mem), res, 2, (const casadi_int[]){6, 6});
+}
+
+CASADI_SYMBOL_EXPORT int qd_dgrf_dir_BL_BR_checkout(void) {
+  return 0;
+}
+
+CASADI_SYMBOL_EXPORT void qd_dgrf_dir_BL_BR_release(int mem) {
+  (void)mem;
+}
+
+CASADI_SYMBOL_EXPORT void qd_dgrf_dir_BL_BR_incref(void) {
+}
+
+CASADI_SYMBOL_EXPORT void qd_dgrf_dir_BL_BR_decref(void) {
+}
+
+CASADI_SYMBOL_EXPORT casadi_int qd_dgrf_dir_BL_BR_n_in(void) { return 3;}
+
+CASADI_SYMBOL_EXPORT casadi_int qd_dgrf_dir_BL_BR_n_out(void) { return 2;}
+
+CASADI_SYMBOL_EXPORT casadi_real qd_dgrf_dir_BL_BR_default_in(casadi_int i) {
+  switch (i) {
+    default: return 0;
+  }
+}
+
+CASADI_SYMBOL_EXPORT const char* qd_dgrf_dir_BL_BR_name_in(casadi_int i) {
+  switch (i) {
+    case 0: return "q";
+    case 1: return "w";
+    case 2: return "dq";
+    default: return 0;
+  }
+}
+
+CASADI_SYMBOL_EXPORT const char* qd_dgrf_dir_BL_BR_name_out(casadi_int i) {
+  switch (i) {
+    case 0: return "lambda_w";
+    case 1: return "dlambda_w";
+    default: return 0;
+  }
+}
+
+CASADI_SYMBOL_EXPORT const casadi_int* qd_dgrf_dir_BL_BR_sparsity_in(casadi_int i) {
+  switch (i) {
+    case 0: return casadi_s0;
+    case 1: return casadi_s6;
+    case 2: return casadi_s1;
+    default: return 0;
+  }
+}
+
+CASADI_SYMBOL_EXPORT const casadi_int* qd_dgrf_dir_BL_BR_sparsity_out(casadi_int i) {
+  switch (i) {
+    case 0: return casadi_s6;
+    case 1: return casadi_s6;
+    default: return 0;
+  }
+}
+
+CASADI_SYMBOL_EXPORT int qd_dgrf_dir_BL_BR_work(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz_iw, casadi_int *sz_w) {
+  if (sz_arg) *sz_arg = 3;
+  if (sz_res) *sz_res = 2;
+  if (sz_iw) *sz_iw = 0;
+  if (sz_w) *sz_w = 0;
+  return 0;
+}
+
+CASADI_SYMBOL_EXPORT int qd_dgrf_dir_BL_BR_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz_iw, casadi_int *sz_w) {
+  if (sz_arg) *sz_arg = 3*sizeof(const casadi_real*);
+  if (sz_res) *sz_res = 2*sizeof(casadi_real*);
+  if (sz_iw) *sz_iw = 0*sizeof(casadi_int);
+  if (sz_w) *sz_w = 0*sizeof(casadi_real);
+  return 0;
+}
+
+/* qd_dgrf_BL_BR:(q[19],v[18],a[18])->(dlambda_dq[6x18],dlambda_dv[6x18],dlambda_da[6x18]) */
+static int casadi_f24(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem) {
+  (void)arg; (void)res; (void)iw; (void)w; (void)mem;
+  casadi_real a0, a1, a2;
+  a0=arg[0]? arg[0][0] : 0;
+  a1=arg[0]? arg[0][1] : 0;
+  a0=(a0+a1);
+  a1=arg[0]? arg[0][2] : 0;
+  a0=(a0+a1);
+  a1=arg[0]? arg[0][3] : 0;
+  a0=(a0+a1);
+  a1=arg[0]? arg[0][4] : 0;
+  a0=(a0+a1);
+  a1=arg[0]? arg[0][5] : 0;
+  a0=(a0+a1);
+  a1=arg[0]? arg[0][6] : 0;
+  a0=(a0+a1);
+  a1=arg[0]? arg[0][7] : 0;
+  a0=(a0+a1);
+  a1=arg[0]? arg[0][8] : 0;
+  a0=(a0+a1);
+  a1=arg[0]? arg[0][9] : 0;
+  a0=(a0+a1);
+  a1=arg[0]? arg[0][10] : 0;
+  a0=(a0+a1);
+  a1=arg[0]? arg[0][11] : 0;
+  a0=(a0+a1);
+  a1=arg[0]? arg[0][12] : 0;
+  a0=(a0+a1);
+  a1=arg[0]? arg[0][13] : 0;
+  a0=(a0+a1);
+  a1=arg[0]? arg[0][14] : 0;
+  a0=(a0+a1);
+  a1=arg[0]? arg[0][15] : 0;
+  a0=(a0+a1);
+  a1=arg[0]? arg[0][16] : 0;
+  a0=(a0+a1);
+  a1=arg[0]? arg[0][17] : 0;
+  a0=(a0+a1);
+  a1=arg[0]? arg[0][18] : 0;
+  a0=(a0+a1);
+  a1=arg[1]? arg[1][0] : 0;
+  a2=arg[1]? arg[1][1] : 0;
+  a1=(a1+a2);
+  a2=arg[1]? arg[1][2] : 0;
+  a1=(a1+a2);
+  a2=arg[1]? arg[1][3] : 0;
+  a1=(a1+a2);
+  a2=arg[1]? arg[1][4] : 0;
+  a1=(a1+a2);
+  a2=arg[1]? arg[1][5] : 0;
+  a1=(a1+a2);
+  a2=arg[1]? arg[1][6] : 0;
+  a1=(a1+a2);
+  a2=arg[1]? arg[1][7] : 0;
+  a1=(a1+a2);
+  a2=arg[1]? arg[1][8] : 0;
+  a1=(a1+a2);
+  a2=arg[1]? arg[1][9] : 0;
+  a1=(a1+a2);
+  a2=arg[1]? arg[1][10] : 0;
+  a1=(a1+a2);
+  a2=arg[1]? arg[1][11] : 0;
+  a1=(a1+a2);
+  a2=arg[1]? arg[1][12] : 0;
+  a1=(a1+a2);
+  a2=arg[1]? arg[1][13] : 0;
+  a1=(a1+a2);
+  a2=arg[1]? arg[1][14] : 0;
+  a1=(a1+a2);
+  a2=arg[1]? arg[1][15] : 0;
+  a1=(a1+a2);
+  a2=arg[1]? arg[1][16] : 0;
+  a1=(a1+a2);
+  a2=arg[1]? arg[1][17] : 0;
+  a1=(a1+a2);
+  a0=(a0+a1);
+  a1=arg[2]? arg[2][0] : 0;
+  a2=arg[2]? arg[2][1] : 0;
+  a1=(a1+a2);
+  a2=arg[2]? arg[2][2] : 0;
+  a1=(a1+a2);
+  a2=arg[2]? arg[2][3] : 0;
+  a1=(a1+a2);
+  a2=arg[2]? arg[2][4] : 0;
+  a1=(a1+a2);
+  a2=arg[2]? arg[2][5] : 0;
+  a1=(a1+a2);
+  a2=arg[2]? arg[2][6] : 0;
+  a1=(a1+a2);
+  a2=arg[2]? arg[2][7] : 0;
+  a1=(a1+a2);
+  a2=arg[2]? arg[2][8] : 0;
+  a1=(a1+a2);
+  a2=arg[2]? arg[2][9] : 0;
+  a1=(a1+a2);
+  a2=arg[2]? arg[2][10] : 0;
+  a1=(a1+a2);
+  a2=arg[2]? arg[2][11] : 0;
+  a1=(a1+a2);
+  a2=arg[2]? arg[2][12] : 0;
+  a1=(a1+a2);
+  a2=arg[2]? arg[2][13] : 0;
+  a1=(a1+a2);
+  a2=arg[2]? arg[2][14] : 0;
+  a1=(a1+a2);
+  a2=arg[2]? arg[2][15] : 0;
+  a1=(a1+a2);
+  a2=arg[2]? arg[2][16] : 0;
+  a1=(a1+a2);
+  a2=arg[2]? arg[2][17] : 0;
+  a1=(a1+a2);
+  a0=(a0+a1);
+  if (res[0]!=0) res[0][0]=a0;
+  if (res[0]!=0) res[0][1]=a0;
+  if (res[0]!=0) res[0][2]=a0;
+  if (res[0]!=0) res[0][3]=a0;
+  if (res[0]!=0) res[0][4]=a0;
+  if (res[0]!=0) res[0][5]=a0;
+  if (res[0]!=0) res[0][6]=a0;
+  if (res[0]!=0) res[0][7]=a0;
+  if (res[0]!=0) res[0][8]=a0;
+  if (res[0]!=0) res[0][9]=a0;
+  if (res[0]!=0) res[0][10]=a0;
+  if (res[0]!=0) res[0][11]=a0;
+  if (res[0]!=0) res[0][12]=a0;
+  if (res[0]!=0) res[0][13]=a0;
+  if (res[0]!=0) res[0][14]=a0;
+  if (res[0]!=0) res[0][15]=a0;
+  if (res[0]!=0) res[0][16]=a0;
+  if (res[0]!=0) res[0][17]=a0;
+  if (res[0]!=0) res[0][18]=a0;
+  if (res[0]!=0) res[0][19]=a0;
+  if (res[0]!=0) res[0][20]=a0;
+  if (res[0]!=0) res[0][21]=a0;
+  if (res[0]!=0) res[0][22]=a0;
+  if (res[0]!=0) res[0][23]=a0;
+  if (res[0]!=0) res[0][24]=a0;
+  if (res[0]!=0) res[0][25]=a0;
+  if (res[0]!=0) res[0][26]=a0;
+  if (res[0]!=0) res[0][27]=a0;
+  if (res[0]!=0) res[0][28]=a0;
+  if (res[0]!=0) res[0][29]=a0;
+  if (res[0]!=0) res[0][30]=a0;
+  if (res[0]!=0) res[0][31]=a0;
+  if (res[0]!=0) res[0][32]=a0;
+  if (res[0]!=0) res[0][33]=a0;
+  if (res[0]!=0) res[0][34]=a0;
+  if (res[0]!=0) res[0][35]=a0;
+  if (res[0]!=0) res[0][36]=a0;
+  if (res[0]!=0) res[0][37]=a0;
+  if (res[0]!=0) res[0][38]=a0;
+  if (res[0]!=0) res[0][39]=a0;
+  if (res[0]!=0) res[0][40]=a0;
+  if (res[0]!=0) res[0][41]=a0;
+  if (res[0]!=0) res[0][42]=a0;
+  if (res[0]!=0) res[0][43]=a0;
+  if (res[0]!=0) res[0][44]=a0;
+  if (res[0]!=0) res[0][45]=a0;
+  if (res[0]!=0) res[0][46]=a0;
+  if (res[0]!=0) res[0][47]=a0;
+  if (res[0]!=0) res[0][48]=a0;
+  if (res[0]!=0) res[0][49]=a0;
+  if (res[0]!=0) res[0][50]=a0;
+  if (res[0]!=0) res[0][51]=a0;
+  if (res[0]!=0) res[0][52]=a0;
+  if (res[0]!=0) res[0][53]=a0;
+  if (res[0]!=0) res[0][54]=a0;
+  if (res[0]!=0) res[0][55]=a0;
+  if (res[0]!=0) res[0][56]=a0;
+  if (res[0]!=0) res[0][57]=a0;
+  if (res[0]!=0) res[0][58]=a0;
+  if (res[0]!=0) res[0][59]=a0;
+  if (res[0]!=0) res[0][60]=a0;
+  if (res[0]!=0) res[0][61]=a0;
+  if (res[0]!=0) res[0][62]=a0;
+  if (res[0]!=0) res[0][63]=a0;
+  if (res[0]!=0) res[0][64]=a0;
+  if (res[0]!=0) res[0][65]=a0;
+  if (res[0]!=0) res[0][66]=a0;
+  if (res[0]!=0) res[0][67]=a0;
+  if (res[0]!=0) res[0][68]=a0;
+  if (res[0]!=0) res[0][69]=a0;
+  if (res[0]!=0) res[0][70]=a0;
+  if (res[0]!=0) res[0][71]=a0;
+  if (res[0]!=0) res[0][72]=a0;
+  if (res[0]!=0) res[0][73]=a0;
+  if (res[0]!=0) res[0][74]=a0;
+  if (res[0]!=0) res[0][75]=a0;
+  if (res[0]!=0) res[0][76]=a0;
+  if (res[0]!=0) res[0][77]=a0;
+  if (res[0]!=0) res[0][78]=a0;
+  if (res[0]!=0) res[0][79]=a0;
+  if (res[0]!=0) res[0][80]=a0;
+  if (res[0]!=0) res[0][81]=a0;
+  if (res[0]!=0) res[0][82]=a0;
+  if (res[0]!=0) res[0][83]=a0;
+  if (res[0]!=0) res[0][84]=a0;
+  if (res[0]!=0) res[0][85]=a0;
+  if (res[0]!=0) res[0][86]=a0;
+  if (res[0]!=0) res[0][87]=a0;
+  if (res[0]!=0) res[0][88]=a0;
+  if (res[0]!=0) res[0][89]=a0;
+  if (res[0]!=0) res[0][90]=a0;
+  if (res[0]!=0) res[0][91]=a0;
+  if (res[0]!=0) res[0][92]=a0;
+  if (res[0]!=0) res[0][93]=a0;
+  if (res[0]!=0) res[0][94]=a0;
+  if (res[0]!=0) res[0][95]=a0;
+  if (res[0]!=0) res[0][96]=a0;
+  if (res[0]!=0) res[0][97]=a0;
+  if (res[0]!=0) res[0][98]=a0;
+  if (res[0]!=0) res[0][99]=a0;
+  if (res[0]!=0) res[0][100]=a0;
+  if (res[0]!=0) res[0][101]=a0;
+  if (res[0]!=0) res[0][102]=a0;
+  if (res[0]!=0) res[0][103]=a0;
+  if (res[0]!=0) res[0][104]=a0;
+  if (res[0]!=0) res[0][105]=a0;
+  if (res[0]!=0) res[0][106]=a0;
+  if (res[0]!=0) res[0][107]=a0;
+  if (res[1]!=0) res[1][0]=a0;
+  if (res[1]!=0) res[1][1]=a0;
+  if (res[1]!=0) res[1][2]=a0;
+  if (res[1]!=0) res[1][3]=a0;
+  if (res[1]!=0) res[1][4]=a0;
+  if (res[1]!=0) res[1][5]=a0;
+  if (res[1]!=0) res[1][6]=a0;
+  if (res[1]!=0) res[1][7]=a0;
+  if (res[1]!=0) res[1][8]=a0;
+  if (res[1]!=0) res[1][9]=a0;
+  if (res[1]!=0) res[1][10]=a0;
+  if (res[1]!=0) res[1][11]=a0;
+  if (res[1]!=0) res[1][12]=a0;
+  if (res[1]!=0) res[1][13]=a0;
+  if (res[1]!=0) res[1][14]=a0;
+  if (res[1]!=0) res[1][15]=a0;
+  if (res[1]!=0) res[1][16]=a0;
+  if (res[1]!=0) res[1][17]=a0;
+  if (res[1]!=0) res[1][18]=a0;
+  if (res[1]!=0) res[1][19]=a0;
+  if (res[1]!=0) res[1][20]=a0;
+  if (res[1]!=0) res[1][21]=a0;
+  if (res[1]!=0) res[1][22]=a0;
+  if (res[1]!=0) res[1][23]=a0;
+  if (res[1]!=0) res[1][24]=a0;
+  if (res[1]!=0) res[1][25]=a0;
+  if (res[1]!=0) res[1][26]=a0;
+  if (res[1]!=0) res[1][27]=a0;
+  if (res[1]!=0) res[1][28]=a0;
+  if (res[1]!=0) res[1][29]=a0;
+  if (res[1]!=0) res[1][30]=a0;
+  if (res[1]!=0) res[1][31]=a0;
+  if (res[1]!=0) res[1][32]=a0;
+  if (res[1]!=0) res[1][33]=a0;
+  if (res[1]!=0) res[1][34]=a0;
+  if (res[1]!=0) res[1][35]=a0;
+  if (res[1]!=0) res[1][36]=a0;
+  if (res[1]!=0) res[1][37]=a0;
+  if (res[1]!=0) res[1][38]=a0;
+  if (res[1]!=0) res[1][39]=a0;
+  if (res[1]!=0) res[1][40]=a0;
+  if (res[1]!=0) res[1][41]=a0;
+  if (res[1]!=0) res[1][42]=a0;
+  if (res[1]!=0) res[1][43]=a0;
+  if (res[1]!=0) res[1][44]=a0;
+  if (res[1]!=0) res[1][45]=a0;
+  if (res[1]!=0) res[1][46]=a0;
+  if (res[1]!=0) res[1][47]=a0;
+  if (res[1]!=0) res[1][48]=a0;
+  if (res[1]!=0) res[1][49]=a0;
+  if (res[1]!=0) res[1][50]=a0;
+  if (res[1]!=0) res[1][51]=a0;
+  if (res[1]!=0) res[1][52]=a0;
+  if (res[1]!=0) res[1][53]=a0;
+  if (res[1]!=0) res[1][54]=a0;
+  if (res[1]!=0) res[1][55]=a0;
+  if (res[1]!=0) res[1][56]=a0;
+  if (res[1]!=0) res[1][57]=a0;
+  if (res[1]!=0) res[1][58]=a0;
+  if (res[1]!=0) res[1][59]=a0;
+  if (res[1]!=0) res[1][60]=a0;
+  if (res[1]!=0) res[1][61]=a0;
+  if (res[1]!=0) res[1][62]=a0;
+  if (res[1]!=0) res[1][63]=a0;
+  if (res[1]!=0) res[1][64]=a0;
+  if (res[1]!=0) res[1][65]=a0;
+  if (res[1]!=0) res[1][66]=a0;
+  if (res[1]!=0) res[1][67]=a0;
+  if (res[1]!=0) res[1][68]=a0;
+  if (res[1]!=0) res[1][69]=a0;
+  if (res[1]!=0) res[1][70]=a0;
+  if (res[1]!=0) res[1][71]=a0;
+  if (res[1]!=0) res[1][72]=a0;
+  if (res[1]!=0) res[1][73]=a0;
+  if (res[1]!=0) res[1][74]=a0;
+  if (res[1]!=0) res[1][75]=a0;
+  if (res[1]!=0) res[1][76]=a0;
+  if (res[1]!=0) res[1][77]=a0;
+  if (res[1]!=0) res[1][78]=a0;
+  if (res[1]!=0) res[1][79]=a0;
+  if (res[1]!=0) res[1][80]=a0;
+  if (res[1]!=0) res[1][81]=a0;
+  if (res[1]!=0) res[1][82]=a0;
+  if (res[1]!=0) res[1][83]=a0;
+  if (res[1]!=0) res[1][84]=a0;
+  if (res[1]!=0) res[1][85]=a0;
+  if (res[1]!=0) res[1][86]=a0;
+  if (res[1]!=0) res[1][87]=a0;
+  if (res[1]!=0) res[1][88]=a0;
+  if (res[1]!=0) res[1][89]=a0;
+  if (res[1]!=0) res[1][90]=a0;
+  if (res[1]!=0) res[1][91]=a0;
+  if (res[1]!=0) res[1][92]=a0;
+  if (res[1]!=0) res[1][93]=a0;
+  if (res[1]!=0) res[1][94]=a0;
+  if (res[1]!=0) res[1][95]=a0;
+  if (res[1]!=0) res[1][96]=a0;
+  if (res[1]!=0) res[1][97]=a0;
+  if (res[1]!=0) res[1][98]=a0;
+  if (res[1]!=0) res[1][99]=a0;
+  if (res[1]!=0) res[1][100]=a0;
+  if (res[1]!=0) res[1][101]=a0;
+  if (res[1]!=0) res[1][102]=a0;
+  if (res[1]!=0) res[1][103]=a0;
+  if (res[1]!=0) res[1][104]=a0;
+  if (res[1]!=0) res[1][105]=a0;
+  if (res[1]!=0) res[1][106]=a0;
+  if (res[1]!=0) res[1][107]=a0;
+  if (res[2]!=0) res[2][0]=a0;
+  if (res[2]!=0) res[2][1]=a0;
+  if (res[2]!=0) res[2][2]=a0;
+  if (res[2]!=0) res[2][3]=a0;
+  if (res[2]!=0) res[2][4]=a0;
+  if (res[2]!=0) res[2][5]=a0;
+  if (res[2]!=0) res[2][6]=a0;
+  if (res[2]!=0) res[2][7]=a0;
+  if (res[2]!=0) res[2][8]=a0;
+  if (res[2]!=0) res[2][9]=a0;
+  if (res[2]!=0) res[2][10]=a0;
+  if (res[2]!=0) res[2][11]=a0;
+  if (res[2]!=0) res[2][12]=a0;
+  if (res[2]!=0) res[2][13]=a0;
+  if (res[2]!=0) res[2][14]=a0;
+  if (res[2]!=0) res[2][15]=a0;
+  if (res[2]!=0) res[2][16]=a0;
+  if (res[2]!=0) res[2][17]=a0;
+  if (res[2]!=0) res[2][18]=a0;
+  if (res[2]!=0) res[2][19]=a0;
+  if (res[2]!=0) res[2][20]=a0;
+  if (res[2]!=0) res[2][21]=a0;
+  if (res[2]!=0) res[2][22]=a0;
+  if (res[2]!=0) res[2][23]=a0;
+  if (res[2]!=0) res[2][24]=a0;
+  if (res[2]!=0) res[2][25]=a0;
+  if (res[2]!=0) res[2][26]=a0;
+  if (res[2]!=0) res[2][27]=a0;
+  if (res[2]!=0) res[2][28]=a0;
+  if (res[2]!=0) res[2][29]=a0;
+  if (res[2]!=0) res[2][30]=a0;
+  if (res[2]!=0) res[2][31]=a0;
+  if (res[2]!=0) res[2][32]=a0;
+  if (res[2]!=0) res[2][33]=a0;
+  if (res[2]!=0) res[2][34]=a0;
+  if (res[2]!=0) res[2][35]=a0;
+  if (res[2]!=0) res[2][36]=a0;
+  if (res[2]!=0) res[2][37]=a0;
+  if (res[2]!=0) res[2][38]=a0;
+  if (res[2]!=0) res[2][39]=a0;
+  if (res[2]!=0) res[2][40]=a0;
+  if (res[2]!=0) res[2][41]=a0;
+  if (res[2]!=0) res[2][42]=a0;
+  if (res[2]!=0) res[2][43]=a0;
+  if (res[2]!=0) res[2][44]=a0;
+  if (res[2]!=0) res[2][45]=a0;
+  if (res[2]!=0) res[2][46]=a0;
+  if (res[2]!=0) res[2][47]=a0;
+  if (res[2]!=0) res[2][48]=a0;
+  if (res[2]!=0) res[2][49]=a0;
+  if (res[2]!=0) res[2][50]=a0;
+  if (res[2]!=0) res[2][51]=a0;
+  if (res[2]!=0) res[2][52]=a0;
+  if (res[2]!=0) res[2][53]=a0;
+  if (res[2]!=0) res[2][54]=a0;
+  if (res[2]!=0) res[2][55]=a0;
+  if (res[2]!=0) res[2][56]=a0;
+  if (res[2]!=0) res[2][57]=a0;
+  if (res[2]!=0) res[2][58]=a0;
+  if (res[2]!=0) res[2][59]=a0;
+  if (res[2]!=0) res[2][60]=a0;
+  if (res[2]!=0) res[2][61]=a0;
+  if (res[2]!=0) res[2][62]=a0;
+  if (res[2]!=0) res[2][63]=a0;
+  if (res[2]!=0) res[2][64]=a0;
+  if (res[2]!=0) res[2][65]=a0;
+  if (res[2]!=0) res[2][66]=a0;
+  if (res[2]!=0) res[2][67]=a0;
+  if (res[2]!=0) res[2][68]=a0;
+  if (res[2]!=0) res[2][69]=a0;
+  if (res[2]!=0) res[2][70]=a0;
+  if (res[2]!=0) res[2][71]=a0;
+  if (res[2]!=0) res[2][72]=a0;
+  if (res[2]!=0) res[2][73]=a0;
+  if (res[2]!=0) res[2][74]=a0;
+  if (res[2]!=0) res[2][75]=a0;
+  if (res[2]!=0) res[2][76]=a0;
+  if (res[2]!=0) res[2][77]=a0;
+  if (res[2]!=0) res[2][78]=a0;
+  if (res[2]!=0) res[2][79]=a0;
+  if (res[2]!=0) res[2][80]=a0;
+  if (res[2]!=0) res[2][81]=a0;
+  if (res[2]!=0) res[2][82]=a0;
+  if (res[2]!=0) res[2][83]=a0;
+  if (res[2]!=0) res[2][84]=a0;
+  if (res[2]!=0) res[2][85]=a0;
+  if (res[2]!=0) res[2][86]=a0;
+  if (res[2]!=0) res[2][87]=a0;
+  if (res[2]!=0) res[2][88]=a0;
+  if (res[2]!=0) res[2][89]=a0;
+  if (res[2]!=0) res[2][90]=a0;
+  if (res[2]!=0) res[2][91]=a0;
+  if (res[2]!=0) res[2][92]=a0;
+  if (res[2]!=0) res[2][93]=a0;
+  if (res[2]!=0) res[2][94]=a0;
+  if (res[2]!=0) res[2][95]=a0;
+  if (res[2]!=0) res[2][96]=a0;
+  if (res[2]!=0) res[2][97]=a0;
+  if (res[2]!=0) res[2][98]=a0;
+  if (res[2]!=0) res[2][99]=a0;
+  if (res[2]!=0) res[2][100]=a0;
+  if (res[2]!=0) res[2][101]=a0;
+  if (res[2]!=0) res[2][102]=a0;
+  if (res[2]!=0) res[2][103]=a0;
+  if (res[2]!=0) res[2][104]=a0;
+  if (res[2]!=0) res[2][105]=a0;
+  if (res[2]!=0) res[2][106]=a0;
+  if (res[2]!=0) res[2][107]=a0;
+  return 0;
+}
+
+CASADI_SYMBOL_EXPORT int qd_dgrf_BL_BR(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem){
+  (void)casadi_f24;
+  return qd_dgrf_solve(6, 12, casadi_f1, casadi_f0, casadi_f23, qd_did_full_sparsity_out(0), qd_did_full_sparsity_out(1), arg, res, iw, w, mem);
+}
+
+CASADI_SYMBOL_EXPORT int qd_dgrf_BL_BR_checkout(void) {
+  return 0;
+}
+
+CASADI_SYMBOL_EXPORT void qd_dgrf_BL_BR_release(int mem) {
+  (void)mem;
+}
+
+CASADI_SYMBOL_EXPORT void qd_dgrf_BL_BR_incref(void) {
+}
+
+CASADI_SYMBOL_EXPORT void qd_dgrf_BL_BR_decref(void) {
+}
+
+CASADI_SYMBOL_EXPORT casadi_int qd_dgrf_BL_BR_n_in(void) { return 3;}
+
+CASADI_SYMBOL_EXPORT casadi_int qd_dgrf_BL_BR_n_out(void) { return 3;}
+
+CASADI_SYMBOL_EXPORT casadi_real qd_dgrf_BL_BR_default_in(casadi_int i) {
+  switch (i) {
+    default: return 0;
+  }
+}
+
+CASADI_SYMBOL_EXPORT const char* qd_dgrf_BL_BR_name_in(casadi_int i) {
+  switch (i) {
+    case 0: return "q";
+    case 1: return "v";
+    case 2: return "a";
+    default: return 0;
+  }
+}
+
+CASADI_SYMBOL_EXPORT const char* qd_dgrf_BL_BR_name_out(casadi_int i) {
+  switch (i) {
+    case 0: return "dlambda_dq";
+    case 1: return "dlambda_dv";
+    case 2: return "dlambda_da";
+    default: return 0;
+  }
+}
+
+CASADI_SYMBOL_EXPORT const casadi_int* qd_dgrf_BL_BR_sparsity_in(casadi_int i) {
+  switch (i) {
+    case 0: return casadi_s0;
+    case 1: return casadi_s1;
+    case 2: return casadi_s1;
+    default: return 0;
+  }
+}
+
+CASADI_SYMBOL_EXPORT const casadi_int* qd_dgrf_BL_BR_sparsity_out(casadi_int i) {
+  switch (i) {
+    case 0: return casadi_s7;
+    case 1: return casadi_s7;
+    case 2: return casadi_s7;
+    default: return 0;
+  }
+}
+
+CASADI_SYMBOL_EXPORT int qd_dgrf_BL_BR_work(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz_iw, casadi_int *sz_w) {
+  if (sz_arg) *sz_arg = 3;
+  if (sz_res) *sz_res = 3;
+  if (sz_iw) *sz_iw = 0;
+  if (sz_w) *sz_w = 0;
+  return 0;
+}
+
+CASADI_SYMBOL_EXPORT int qd_dgrf_BL_BR_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz_iw, casadi_int *sz_w) {
+  if (sz_arg) *sz_arg = 3*sizeof(const casadi_real*);
+  if (sz_res) *sz_res = 3*sizeof(casadi_real*);
+  if (sz_iw) *sz_iw = 0*sizeof(casadi_int);
+  if (sz_w) *sz_w = 0*sizeof(casadi_real);
+  return 0;
+}
+
+/* qd_dgrf_dir_FL:(q[19],w[6],dq[18])->(lambda_w[3],dlambda_w[3]) */
+static int casadi_f25(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem) {
+  (void)arg; (void)res; (void)iw; (void)w; (void)mem;
+  casadi_real a00, a01, a02, a03, a04, a05, a06, a07, a08, a09, a10, a11;
+  casadi_real a12, a13, a14, a15, a16, a17, a18, a19, a20, a21, a22, a23;
+  casadi_real a24, a25, a26, a27, a28, a29, a30, a31, a32, a33, a34, a35;
+  casadi_real a36, a37, a38, a39, a40, a41, a42, a43, a44, a45, a46, a47;
+  casadi_real a48, a49, a50, a51, a52, a53, a54, a55, a56, a57, a58, a59;
+  casadi_real a60, a61, a62, a63, a64, a65, a66, a67, a68, a69, a70, a71;
+  casadi_real a72, a73, a74, a75, a76, a77, a78, a79, a80, a81, a82, a83;
+  casadi_real a84, a85;
+  a00=arg[1]? arg[1][0] : 0;
+  a01=1.;
+  a02=2.0000000000000001e-01;
+  a03=arg[0]? arg[0][7] : 0;
+  a04=qd_sin(a03);
+  a05=arg[0]? arg[0][8] : 0;
+  a06=qd_sin(a05);
+  a07=(a04*a06);
+  a08=arg[0]? arg[0][9] : 0;
+  a09=qd_sin(a08);
+  a10=(a07*a09);
+  a05=qd_cos(a05);
+  a11=(a04*a05);
+  a08=qd_cos(a08);
+  a12=(a11*a08);
+  a10=(a10-a12);
+  a10=(a02*a10);
+  a12=(a02*a11);
+  a10=(a10-a12);
+  a12=casadi_sq(a10);
+  a13=(a01+a12);
+  a14=7.0000000000000007e-02;
+  a03=qd_cos(a03);
+  a15=(a03*a05);
+  a16=(a02*a15);
+  a14=(a14+a16);
+  a16=(a15*a08);
+  a17=(a03*a06);
+  a18=(a17*a09);
+  a16=(a16-a18);
+  a16=(a02*a16);
+  a14=(a14+a16);
+  a16=casadi_sq(a14);
+  a18=(a13+a16);
+  a18=qd_sqrt(a18);
+  a19=(a01+a18);
+  a20=casadi_sq(a19);
+  a20=(a20+a12);
+  a20=(a20+a16);
+  a20=qd_sqrt(a20);
+  a16=(a19/a20);
+  a21=(2*a16);
+  a22=(a16*a00);
+  a23=(a10/a20);
+  a24=arg[1]? arg[1][4] : 0;
+  a25=(a23*a24);
+  a22=(a22+a25);
+  a25=(a14/a20);
+  a26=arg[1]? arg[1][5] : 0;
+  a27=(a25*a26);
+  a22=(a22-a27);
+  a27=(a21*a22);
+  a27=(a00-a27);
+  a28=1.9000000000000000e-01;
+  a29=(a02*a06);
+  a28=(a28+a29);
+  a29=(a05*a09);
+  a30=(a06*a08);
+  a29=(a29+a30);
+  a29=(a02*a29);
+  a28=(a28+a29);
+  a29=(a25*a28);
+  a30=(a21*a29);
+  a31=arg[1]? arg[1][1] : 0;
+  a32=(2*a23);
+  a33=(a32*a29);
+  a34=casadi_sq(a33);
+  a13=(a13+a34);
+  a35=(-a25);
+  a35=(2*a35);
+  a36=(a35*a29);
+  a36=(a28+a36);
+  a37=casadi_sq(a36);
+  a13=(a13+a37);
+  a13=qd_sqrt(a13);
+  a38=(a01+a13);
+  a39=casadi_sq(a38);
+  a39=(a39+a12);
+  a39=(a39+a34);
+  a39=(a39+a37);
+  a39=qd_sqrt(a39);
+  a37=(a38/a39);
+  a34=(2*a37);
+  a12=(a37*a31);
+  a40=(a10/a39);
+  a41=arg[1]? arg[1][3] : 0;
+  a42=(a40*a41);
+  a12=(a12-a42);
+  a42=(a33/a39);
+  a43=(a32*a22);
+  a43=(a24-a43);
+  a44=(a42*a43);
+  a12=(a12+a44);
+  a44=(a36/a39);
+  a45=(a35*a22);
+  a45=(a26-a45);
+  a46=(a44*a45);
+  a12=(a12+a46);
+  a46=(a34*a12);
+  a46=(a31-a46);
+  a47=(a23*a28);
+  a48=(a32*a47);
+  a48=(a48-a28);
+  a49=(a42*a48);
+  a50=(a40*a14);
+  a49=(a49-a50);
+  a50=(a35*a47);
+  a51=(a44*a50);
+  a49=(a49+a51);
+  a51=(a34*a49);
+  a52=arg[1]? arg[1][2] : 0;
+  a53=(-a40);
+  a53=(2*a53);
+  a54=(a53*a49);
+  a54=(a14-a54);
+  a55=casadi_sq(a54);
+  a56=(a01+a55);
+  a57=(2*a42);
+  a58=(a57*a49);
+  a58=(a48-a58);
+  a59=casadi_sq(a58);
+  a56=(a56+a59);
+  a60=(2*a44);
+  a61=(a60*a49);
+  a61=(a50-a61);
+  a62=casadi_sq(a61);
+  a56=(a56+a62);
+  a56=qd_sqrt(a56);
+  a63=(a01+a56);
+  a64=casadi_sq(a63);
+  a64=(a64+a55);
+  a64=(a64+a59);
+  a64=(a64+a62);
+  a64=qd_sqrt(a64);
+  a62=(a63/a64);
+  a59=(2*a62);
+  a55=(a62*a52);
+  a65=(a54/a64);
+  a66=(a53*a12);
+  a66=(a41-a66);
+  a67=(a65*a66);
+  a55=(a55+a67);
+  a67=(a58/a64);
+  a68=(a57*a12);
+  a68=(a43-a68);
+  a69=(a67*a68);
+  a55=(a55+a69);
+  a69=(a61/a64);
+  a70=(a60*a12);
+  a70=(a45-a70);
+  a71=(a69*a70);
+  a55=(a55+a71);
+  a71=(a59*a55);
+  a71=(a52-a71);
+  a72=(a65*a54);
+  a72=(a62+a72);
+  a73=(a67*a58);
+  a72=(a72+a73);
+  a73=(a69*a61);
+  a72=(a72+a73);
+  a73=(a59*a72);
+  a73=(a01-a73);
+  a71=(a71/a73);
+  a74=(a51*a71);
+  a46=(a46+a74);
+  a74=(a40*a10);
+  a74=(a37+a74);
+  a75=(a42*a33);
+  a74=(a74+a75);
+  a75=(a44*a36);
+  a74=(a74+a75);
+  a75=(a34*a74);
+  a75=(a01-a75);
+  a46=(a46/a75);
+  a76=(a30*a46);
+  a77=(a21*a47);
+  a78=(a77*a71);
+  a76=(a76+a78);
+  a27=(a27-a76);
+  a76=(a23*a10);
+  a76=(a16+a76);
+  a78=(a25*a14);
+  a76=(a76+a78);
+  a78=(a21*a76);
+  a01=(a01-a78);
+  a27=(a27/a01);
+  if (res[0]!=0) res[0][0]=a27;
+  if (res[0]!=0) res[0][1]=a46;
+  if (res[0]!=0) res[0][2]=a71;
+  a27=(a27/a01);
+  a78=(2*a10);
+  a79=arg[2]? arg[2][6] : 0;
+  a80=(a03*a79);
+  a81=(a06*a80);
+  a82=arg[2]? arg[2][7] : 0;
+  a83=(a05*a82);
+  a84=(a04*a83);
+  a81=(a81+a84);
+  a81=(a09*a81);
+  a84=arg[2]? arg[2][8] : 0;
+  a85=(a08*a84);
+  a07=(a07*a85);
+  a81=(a81+a07);
+  a80=(a05*a80);
+  a82=(a06*a82);
+  a07=(a04*a82);
+  a80=(a80-a07);
+  a07=(a08*a80);
+  a84=(a09*a84);
+  a11=(a11*a84);
+  a07=(a07-a11);
+  a81=(a81-a07);
+  a81=(a02*a81);
+  a80=(a02*a80);
+  a81=(a81-a80);
+  a78=(a78*a81);
+  a80=(2*a14);
+  a04=(a04*a79);
+  a79=(a05*a04);
+  a07=(a03*a82);
+  a79=(a79+a07);
+  a07=(a02*a79);
+  a79=(a08*a79);
+  a15=(a15*a84);
+  a79=(a79+a15);
+  a03=(a03*a83);
+  a04=(a06*a04);
+  a03=(a03-a04);
+  a03=(a09*a03);
+  a17=(a17*a85);
+  a03=(a03+a17);
+  a79=(a79+a03);
+  a79=(a02*a79);
+  a07=(a07+a79);
+  a80=(a80*a07);
+  a79=(a78-a80);
+  a18=(2*a18);
+  a79=(a79/a18);
+  a18=(a79/a20);
+  a16=(a16/a20);
+  a19=(2*a19);
+  a19=(a19*a79);
+  a19=(a19+a78);
+  a19=(a19-a80);
+  a80=(2*a20);
+  a19=(a19/a80);
+  a16=(a16*a19);
+  a18=(a18-a16);
+  a16=(2*a18);
+  a76=(a76*a16);
+  a80=(a81/a20);
+  a79=(a23/a20);
+  a79=(a79*a19);
+  a80=(a80-a79);
+  a79=(a10*a80);
+  a03=(a23*a81);
+  a79=(a79+a03);
+  a79=(a18+a79);
+  a03=(a07/a20);
+  a20=(a25/a20);
+  a20=(a20*a19);
+  a03=(a03+a20);
+  a20=(a14*a03);
+  a19=(a25*a07);
+  a20=(a20+a19);
+  a79=(a79-a20);
+  a79=(a21*a79);
+  a76=(a76+a79);
+  a27=(a27*a76);
+  a76=(a22*a16);
+  a00=(a00*a18);
+  a24=(a24*a80);
+  a00=(a00+a24);
+  a26=(a26*a03);
+  a00=(a00+a26);
+  a26=(a21*a00);
+  a76=(a76+a26);
+  a26=(a29*a16);
+  a24=(a02*a83);
+  a05=(a05*a85);
+  a09=(a09*a82);
+  a05=(a05-a09);
+  a08=(a08*a83);
+  a06=(a06*a84);
+  a08=(a08-a06);
+  a05=(a05+a08);
+  a02=(a02*a05);
+  a24=(a24+a02);
+  a25=(a25*a24);
+  a02=(a28*a03);
+  a25=(a25-a02);
+  a02=(a21*a25);
+  a26=(a26+a02);
+  a26=(a46*a26);
+  a02=(2*a33);
+  a05=(2*a80);
+  a08=(a29*a05);
+  a06=(a32*a25);
+  a08=(a08+a06);
+  a02=(a02*a08);
+  a06=(a78+a02);
+  a84=(2*a36);
+  a03=(2*a03);
+  a29=(a29*a03);
+  a25=(a35*a25);
+  a29=(a29+a25);
+  a29=(a24+a29);
+  a84=(a84*a29);
+  a06=(a06+a84);
+  a13=(2*a13);
+  a06=(a06/a13);
+  a13=(a06/a39);
+  a37=(a37/a39);
+  a38=(2*a38);
+  a38=(a38*a06);
+  a38=(a38+a78);
+  a38=(a38+a02);
+  a38=(a38+a84);
+  a84=(2*a39);
+  a38=(a38/a84);
+  a37=(a37*a38);
+  a13=(a13-a37);
+  a37=(2*a13);
+  a84=(a49*a37);
+  a02=(a08/a39);
+  a78=(a42/a39);
+  a78=(a78*a38);
+  a02=(a02-a78);
+  a48=(a48*a02);
+  a78=(a47*a05);
+  a28=(a28*a80);
+  a23=(a23*a24);
+  a28=(a28+a23);
+  a23=(a32*a28);
+  a78=(a78+a23);
+  a78=(a78-a24);
+  a24=(a42*a78);
+  a48=(a48+a24);
+  a24=(a81/a39);
+  a23=(a40/a39);
+  a23=(a23*a38);
+  a24=(a24-a23);
+  a14=(a14*a24);
+  a23=(a40*a07);
+  a14=(a14-a23);
+  a48=(a48-a14);
+  a14=(a29/a39);
+  a39=(a44/a39);
+  a39=(a39*a38);
+  a14=(a14-a39);
+  a50=(a50*a14);
+  a39=(a47*a03);
+  a38=(a35*a28);
+  a39=(a39+a38);
+  a38=(a44*a39);
+  a50=(a50+a38);
+  a48=(a48+a50);
+  a50=(a34*a48);
+  a84=(a84+a50);
+  a84=(a71*a84);
+  a50=(a71/a73);
+  a38=(2*a58);
+  a23=(2*a02);
+  a80=(a49*a23);
+  a06=(a57*a48);
+  a80=(a80+a06);
+  a78=(a78-a80);
+  a38=(a38*a78);
+  a80=(2*a54);
+  a06=(-a24);
+  a06=(2*a06);
+  a25=(a49*a06);
+  a83=(a53*a48);
+  a25=(a25+a83);
+  a07=(a07+a25);
+  a80=(a80*a07);
+  a25=(a38-a80);
+  a83=(2*a61);
+  a09=(2*a14);
+  a49=(a49*a09);
+  a48=(a60*a48);
+  a49=(a49+a48);
+  a39=(a39-a49);
+  a83=(a83*a39);
+  a25=(a25+a83);
+  a56=(2*a56);
+  a25=(a25/a56);
+  a56=(a25/a64);
+  a62=(a62/a64);
+  a63=(2*a63);
+  a63=(a63*a25);
+  a63=(a63-a80);
+  a63=(a63+a38);
+  a63=(a63+a83);
+  a83=(2*a64);
+  a63=(a63/a83);
+  a62=(a62*a63);
+  a56=(a56-a62);
+  a62=(2*a56);
+  a72=(a72*a62);
+  a83=(a07/a64);
+  a38=(a65/a64);
+  a38=(a38*a63);
+  a83=(a83+a38);
+  a54=(a54*a83);
+  a07=(a65*a07);
+  a54=(a54+a07);
+  a54=(a56-a54);
+  a07=(a78/a64);
+  a38=(a67/a64);
+  a38=(a38*a63);
+  a07=(a07-a38);
+  a58=(a58*a07);
+  a78=(a67*a78);
+  a58=(a58+a78);
+  a54=(a54+a58);
+  a58=(a39/a64);
+  a64=(a69/a64);
+  a64=(a64*a63);
+  a58=(a58-a64);
+  a61=(a61*a58);
+  a39=(a69*a39);
+  a61=(a61+a39);
+  a54=(a54+a61);
+  a54=(a59*a54);
+  a72=(a72+a54);
+  a50=(a50*a72);
+  a55=(a55*a62);
+  a52=(a52*a56);
+  a66=(a66*a83);
+  a06=(a12*a06);
+  a31=(a31*a13);
+  a41=(a41*a24);
+  a31=(a31-a41);
+  a43=(a43*a02);
+  a05=(a22*a05);
+  a32=(a32*a00);
+  a05=(a05+a32);
+  a32=(a42*a05);
+  a43=(a43-a32);
+  a31=(a31+a43);
+  a45=(a45*a14);
+  a22=(a22*a03);
+  a35=(a35*a00);
+  a22=(a22+a35);
+  a35=(a44*a22);
+  a45=(a45-a35);
+  a31=(a31+a45);
+  a53=(a53*a31);
+  a06=(a06+a53);
+  a65=(a65*a06);
+  a66=(a66+a65);
+  a52=(a52-a66);
+  a68=(a68*a07);
+  a23=(a12*a23);
+  a57=(a57*a31);
+  a23=(a23+a57);
+  a05=(a05+a23);
+  a67=(a67*a05);
+  a68=(a68-a67);
+  a52=(a52+a68);
+  a70=(a70*a58);
+  a09=(a12*a09);
+  a60=(a60*a31);
+  a09=(a09+a60);
+  a22=(a22+a09);
+  a69=(a69*a22);
+  a70=(a70-a69);
+  a52=(a52+a70);
+  a59=(a59*a52);
+  a55=(a55+a59);
+  a55=(a55/a73);
+  a50=(a50-a55);
+  a51=(a51*a50);
+  a84=(a84+a51);
+  a12=(a12*a37);
+  a31=(a34*a31);
+  a12=(a12+a31);
+  a84=(a84-a12);
+  a84=(a84/a75);
+  a46=(a46/a75);
+  a74=(a74*a37);
+  a10=(a10*a24);
+  a40=(a40*a81);
+  a10=(a10+a40);
+  a13=(a13+a10);
+  a33=(a33*a02);
+  a42=(a42*a08);
+  a33=(a33+a42);
+  a13=(a13+a33);
+  a36=(a36*a14);
+  a44=(a44*a29);
+  a36=(a36+a44);
+  a13=(a13+a36);
+  a34=(a34*a13);
+  a74=(a74+a34);
+  a46=(a46*a74);
+  a84=(a84+a46);
+  a30=(a30*a84);
+  a26=(a26+a30);
+  a47=(a47*a16);
+  a21=(a21*a28);
+  a47=(a47+a21);
+  a71=(a71*a47);
+  a77=(a77*a50);
+  a71=(a71+a77);
+  a26=(a26+a71);
+  a76=(a76+a26);
+  a76=(a76/a01);
+  a27=(a27-a76);
+  if (res[1]!=0) res[1][0]=a27;
+  if (res[1]!=0) res[1][1]=a84;
+  if (res[1]!=0) res[1][2]=a50;
+  return 0;
+}
+
+CASADI_SYMBOL_EXPORT int qd_dgrf_dir_FL(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem){
+  return qd_d_finite(casadi_f25(arg, res, iw, w, mem), res, 2, (const casadi_int[]){3, 3});
+}
+
+CASADI_SYMBOL_EXPORT int qd_dgrf_dir_FL_checkout(void) {
+  return 0;
+}
+
+CASADI_SYMBOL_EXPORT void qd_dgrf_dir_FL_release(int mem) {
+  (void)mem;
+}
+
+CASADI_SYMBOL_EXPORT void qd_dgrf_dir_FL_incref(void) {
+}
+
+CASADI_SYMBOL_EXPORT void qd_dgrf_dir_FL_decref(void) {
+}
+
+CASADI_SYMBOL_EXPORT casadi_int qd_dgrf_dir_FL_n_in(void) { return 3;}
+
+CASADI_SYMBOL_EXPORT casadi_int qd_dgrf_dir_FL_n_out(void) { return 2;}
+
+CASADI_SYMBOL_EXPORT casadi_real qd_dgrf_dir_FL_default_in(casadi_int i) {
+  switch (i) {
+    default: return 0;
+  }
+}
+
+CASADI_SYMBOL_EXPORT const char* qd_dgrf_dir_FL_name_in(casadi_int i) {
+  switch (i) {
+    case 0: return "q";
+    case 1: return "w";
+    case 2: return "dq";
+    default: return 0;
+  }
+}
+
+CASADI_SYMBOL_EXPORT const char* qd_dgrf_dir_FL_name_out(casadi_int i) {
+  switch (i) {
+    case 0: return "lambda_w";
+    case 1: return "dlambda_w";
+    default: return 0;
+  }
+}
+
+CASADI_SYMBOL_EXPORT const casadi_int* qd_dgrf_dir_FL_sparsity_in(casadi_int i) {
+  switch (i) {
+    case 0: return casadi_s0;
+    case 1: return casadi_s6;
+    case 2: return casadi_s1;
+    default: return 0;
+  }
+}
+
+CASADI_SYMBOL_EXPORT const casadi_int* qd_dgrf_dir_FL_sparsity_out(casadi_int i) {
+  switch (i) {
+    case 0: return casadi_s8;
+    case 1: return casadi_s8;
+    default: return 0;
+  }
+}
+
+CASADI_SYMBOL_EXPORT int qd_dgrf_dir_FL_work(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz_iw, casadi_int *sz_w) {
+  if (sz_arg) *sz_arg = 3;
+  if (sz_res) *sz_res = 2;
+  if (sz_iw) *sz_iw = 0;
+  if (sz_w) *sz_w = 0;
+  return 0;
+}
+
+CASADI_SYMBOL_EXPORT int qd_dgrf_dir_FL_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz_iw, casadi_int *sz_w) {
+  if (sz_arg) *sz_arg = 3*sizeof(const casadi_real*);
+  if (sz_res) *sz_res = 2*sizeof(casadi_real*);
+  if (sz_iw) *sz_iw = 0*sizeof(casadi_int);
+  if (sz_w) *sz_w = 0*sizeof(casadi_real);
+  return 0;
+}
+
+/* qd_dgrf_FL:(q[19],v[18],a[18])->(dlambda_dq[3x18],dlambda_dv[3x18],dlambda_da[3x18]) */
+static int casadi_f26(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem) {
+  (void)arg; (void)res; (void)iw; (void)w; (void)mem;
+  casadi_real a0, a1, a2;
+  a0=arg[0]? arg[0][0] : 0;
+  a1=arg[0]? arg[0][1] : 0;
+  a0=(a0+a1);
+  a1=arg[0]? arg[0][2] : 0;
+  a0=(a0+a1);
+  a1=arg[0]? arg[0][3] : 0;
+  a0=(a0+a1);
+  a1=arg[0]? arg[0][4] : 0;
+  a0=(a0+a1);
+  a1=arg[0]? arg[0][5] : 0;
+  a0=(a0+a1);
+  a1=arg[0]? arg[0][6] : 0;
+  a0=(a0+a1);
+  a1=arg[0]? arg[0][7] : 0;
+  a0=(a0+a1);
+  a1=arg[0]? arg[0][8] : 0;
+  a0=(a0+a1);
+  a1=arg[0]? arg[0][9] : 0;
+  a0=(a0+a1);
+  a1=arg[0]? arg[0][10] : 0;
+  a0=(a0+a1);
+  a1=arg[0]? arg[0][11] : 0;
+  a0=(a0+a1);
+  a1=arg[0]? arg[0][12] : 0;
+  a0=(a0+a1);
+  a1=arg[0]? arg[0][13] : 0;
+  a0=(a0+a1);
+  a1=arg[0]? arg[0][14] : 0;
+  a0=(a0+a1);
+  a1=arg[0]? arg[0][15] : 0;
+  a0=(a0+a1);
+  a1=arg[0]? arg[0][16] : 0;
+  a0=(a0+a1);
+  a1=arg[0]? arg[0][17] : 0;
+  a0=(a0+a1);
+  a1=arg[0]? arg[0][18] : 0;
+  a0=(a0+a1);
+  a1=arg[1]? arg[1][0] : 0;
+  a2=arg[1]? arg[1][1] : 0;
+  a1=(a1+a2);
+  a2=arg[1]? arg[1][2] : 0;
+  a1=(a1+a2);
+  a2=arg[1]? arg[1][3] : 0;
+  a1=(a1+a2);
+  a2=arg[1]? arg[1][4] : 0;
+  a1=(a1+a2);
+  a2=arg[1]? arg[1][5] : 0;
+  a1=(a1+a2);
+  a2=arg[1]? arg[1][6] : 0;
+  a1=(a1+a2);
+  a2=arg[1]? arg[1][7] : 0;
+  a1=(a1+a2);
+  a2=arg[1]? arg[1][8] : 0;
+  a1=(a1+a2);
+  a2=arg[1]? arg[1][9] : 0;
+  a1=(a1+a2);
+  a2=arg[1]? arg[1][10] : 0;
+  a1=(a1+a2);
+  a2=arg[1]? arg[1][11] : 0;
+  a1=(a1+a2);
+  a2=arg[1]? arg[1][12] : 0;
+  a1=(a1+a2);
+  a2=arg[1]? arg[1][13] : 0;
+  a1=(a1+a2);
+  a2=arg[1]? arg[1][14] : 0;
+  a1=(a1+a2);
+  a2=arg[1]? arg[1][15] : 0;
+  a1=(a1+a2);
+  a2=arg[1]? arg[1][16] : 0;
+  a1=(a1+a2);
+  a2=arg[1]? arg[1][17] : 0;
+  a1=(a1+a2);
+  a0=(a0+a1);
+  a1=arg[2]? arg[2][0] : 0;
+  a2=arg[2]? arg[2][1] : 0;
+  a1=(a1+a2);
+  a2=arg[2]? arg[2][2] : 0;
+  a1=(a1+a2);
+  a2=arg[2]? arg[2][3] : 0;
+  a1=(a1+a2);
+  a2=arg[2]? arg[2][4] : 0;
+  a1=(a1+a2);
+  a2=arg[2]? arg[2][5] : 0;
+  a1=(a1+a2);
+  a2=arg[2]? arg[2][6] : 0;
+  a1=(a1+a2);
+  a2=arg[2]? arg[2][7] : 0;
+  a1=(a1+a2);
+  a2=arg[2]? arg[2][8] : 0;
+  a1=(a1+a2);
+  a2=arg[2]? arg[2][9] : 0;
+  a1=(a1+a2);
+  a2=arg[2]? arg[2][10] : 0;
+  a1=(a1+a2);
+  a2=arg[2]? arg[2][11] : 0;
+  a1=(a1+a2);
+  a2=arg[2]? arg[2][12] : 0;
+  a1=(a1+a2);
+  a2=arg[2]? arg[2][13] : 0;
+  a1=(a1+a2);
+  a2=arg[2]? arg[2][14] : 0;
+  a1=(a1+a2);
+  a2=arg[2]? arg[2][15] : 0;
+  a1=(a1+a2);
+  a2=arg[2]? arg[2][16] : 0;
+  a1=(a1+a2);
+  a2=arg[2]? arg[2][17] : 0;
+  a1=(a1+a2);
+  a0=(a0+a1);
+  if (res[0]!=0) res[0][0]=a0;
+  if (res[0]!=0) res[0][1]=a0;
+  if (res[0]!=0) res[0][2]=a0;
+  if (res[0]!=0) res[0][3]=a0;
+  if (res[0]!=0) res[0][4]=a0;
+  if (res[0]!=0) res[0][5]=a0;
+  if (res[0]!=0) res[0][6]=a0;
+  if (res[0]!=0) res[0][7]=a0;
+  if (res[0]!=0) res[0][8]=a0;
+  if (res[0]!=0) res[0][9]=a0;
+  if (res[0]!=0) res[0][10]=a0;
+  if (res[0]!=0) res[0][11]=a0;
+  if (res[0]!=0) res[0][12]=a0;
+  if (res[0]!=0) res[0][13]=a0;
+  if (res[0]!=0) res[0][14]=a0;
+  if (res[0]!=0) res[0][15]=a0;
+  if (res[0]!=0) res[0][16]=a0;
+  if (res[0]!=0) res[0][17]=a0;
+  if (res[0]!=0) res[0][18]=a0;
+  if (res[0]!=0) res[0][19]=a0;
+  if (res[0]!=0) res[0][20]=a0;
+  if (res[0]!=0) res[0][21]=a0;
+  if (res[0]!=0) res[0][22]=a0;
+  if (res[0]!=0) res[0][23]=a0;
+  if (res[0]!=0) res[0][24]=a0;
+  if (res[0]!=0) res[0][25]=a0;
+  if (res[0]!=0) res[0][26]=a0;
+  if (res[0]!=0) res[0][27]=a0;
+  if (res[0]!=0) res[0][28]=a0;
+  if (res[0]!=0) res[0][29]=a0;
+  if (res[0]!=0) res[0][30]=a0;
+  if (res[0]!=0) res[0][31]=a0;
+  if (res[0]!=0) res[0][32]=a0;
+  if (res[0]!=0) res[0][33]=a0;
+  if (res[0]!=0) res[0][34]=a0;
+  if (res[0]!=0) res[0][35]=a0;
+  if (res[0]!=0) res[0][36]=a0;
+  if (res[0]!=0) res[0][37]=a0;
+  if (res[0]!=0) res[0][38]=a0;
+  if (res[0]!=0) res[0][39]=a0;
+  if (res[0]!=0) res[0][40]=a0;
+  if (res[0]!=0) res[0][41]=a0;
+  if (res[0]!=0) res[0][42]=a0;
+  if (res[0]!=0) res[0][43]=a0;
+  if (res[0]!=0) res[0][44]=a0;
+  if (res[0]!=0) res[0][45]=a0;
+  if (res[0]!=0) res[0][46]=a0;
+  if (res[0]!=0) res[0][47]=a0;
+  if (res[0]!=0) res[0][48]=a0;
+  if (res[0]!=0) res[0][49]=a0;
+  if (res[0]!=0) res[0][50]=a0;
+  if (res[0]!=0) res[0][51]=a0;
+  if (res[0]!=0) res[0][52]=a0;
+  if (res[0]!=0) res[0][53]=a0;
+  if (res[1]!=0) res[1][0]=a0;
+  if (res[1]!=0) res[1][1]=a0;
+  if (res[1]!=0) res[1][2]=a0;
+  if (res[1]!=0) res[1][3]=a0;
+  if (res[1]!=0) res[1][4]=a0;
+  if (res[1]!=0) res[1][5]=a0;
+  if (res[1]!=0) res[1][6]=a0;
+  if (res[1]!=0) res[1][7]=a0;
+  if (res[1]!=0) res[1][8]=a0;
+  if (res[1]!=0) res[1][9]=a0;
+  if (res[1]!=0) res[1][10]=a0;
+  if (res[1]!=0) res[1][11]=a0;
+  if (res[1]!=0) res[1][12]=a0;
+  if (res[1]!=0) res[1][13]=a0;
+  if (res[1]!=0) res[1][14]=a0;
+  if (res[1]!=0) res[1][15]=a0;
+  if (res[1]!=0) res[1][16]=a0;
+  if (res[1]!=0) res[1][17]=a0;
+  if (res[1]!=0) res[1][18]=a0;
+  if (res[1]!=0) res[1][19]=a0;
+  if (res[1]!=0) res[1][20]=a0;
+  if (res[1]!=0) res[1][21]=a0;
+  if (res[1]!=0) res[1][22]=a0;
+  if (res[1]!=0) res[1][23]=a0;
+  if (res[1]!=0) res[1][24]=a0;
+  if (res[1]!=0) res[1][25]=a0;
+  if (res[1]!=0) res[1][26]=a0;
+  if (res[1]!=0) res[1][27]=a0;
+  if (res[1]!=0) res[1][28]=a0;
+  if (res[1]!=0) res[1][29]=a0;
+  if (res[1]!=0) res[1][30]=a0;
+  if (res[1]!=0) res[1][31]=a0;
+  if (res[1]!=0) res[1][32]=a0;
+  if (res[1]!=0) res[1][33]=a0;
+  if (res[1]!=0) res[1][34]=a0;
+  if (res[1]!=0) res[1][35]=a0;
+  if (res[1]!=0) res[1][36]=a0;
+  if (res[1]!=0) res[1][37]=a0;
+  if (res[1]!=0) res[1][38]=a0;
+  if (res[1]!=0) res[1][39]=a0;
+  if (res[1]!=0) res[1][40]=a0;
+  if (res[1]!=0) res[1][41]=a0;
+  if (res[1]!=0) res[1][42]=a0;
+  if (res[1]!=0) res[1][43]=a0;
+  if (res[1]!=0) res[1][44]=a0;
+  if (res[1]!=0) res[1][45]=a0;
+  if (res[1]!=0) res[1][46]=a0;
+  if (res[1]!=0) res[1][47]=a0;
+  if (res[1]!=0) res[1][48]=a0;
+  if (res[1]!=0) res[1][49]=a0;
+  if (res[1]!=0) res[1][50]=a0;
+  if (res[1]!=0) res[1][51]=a0;
+  if (res[1]!=0) res[1][52]=a0;
+  if (res[1]!=0) res[1][53]=a0;
+  if (res[2]!=0) res[2][0]=a0;
+  if (res[2]!=0) res[2][1]=a0;
+  if (res[2]!=0) res[2][2]=a0;
+  if (res[2]!=0) res[2][3]=a0;
+  if (res[2]!=0) res[2][4]=a0;
+  if (res[2]!=0) res[2][5]=a0;
+  if (res[2]!=0) res[2][6]=a0;
+  if (res[2]!=0) res[2][7]=a0;
+  if (res[2]!=0) res[2][8]=a0;
+  if (res[2]!=0) res[2][9]=a0;
+  if (res[2]!=0) res[2][10]=a0;
+  if (res[2]!=0) res[2][11]=a0;
+  if (res[2]!=0) res[2][12]=a0;
+  if (res[2]!=0) res[2][13]=a0;
+  if (res[2]!=0) res[2][14]=a0;
+  if (res[2]!=0) res[2][15]=a0;
+  if (res[2]!=0) res[2][16]=a0;
+  if (res[2]!=0) res[2][17]=a0;
+  if (res[2]!=0) res[2][18]=a0;
+  if (res[2]!=0) res[2][19]=a0;
+  if (res[2]!=0) res[2][20]=a0;
+  if (res[2]!=0) res[2][21]=a0;
+  if (res[2]!=0) res[2][22]=a0;
+  if (res[2]!=0) res[2][23]=a0;
+  if (res[2]!=0) res[2][24]=a0;
+  if (res[2]!=0) res[2][25]=a0;
+  if (res[2]!=0) res[2][26]=a0;
+  if (res[2]!=0) res[2][27]=a0;
+  if (res[2]!=0) res[2][28]=a0;
+  if (res[2]!=0) res[2][29]=a0;
+  if (res[2]!=0) res[2][30]=a0;
+  if (res[2]!=0) res[2][31]=a0;
+  if (res[2]!=0) res[2][32]=a0;
+  if (res[2]!=0) res[2][33]=a0;
+  if (res[2]!=0) res[2][34]=a0;
+  if (res[2]!=0) res[2][35]=a0;
+  if (res[2]!=0) res[2][36]=a0;
+  if (res[2]!=0) res[2][37]=a0;
+  if (res[2]!=0) res[2][38]=a0;
+  if (res[2]!=0) res[2][39]=a0;
+  if (res[2]!=0) res[2][40]=a0;
+  if (res[2]!=0) res[2][41]=a0;
+  if (res[2]!=0) res[2][42]=a0;
+  if (res[2]!=0) res[2][43]=a0;
+  if (res[2]!=0) res[2][44]=a0;
+  if (res[2]!=0) res[2][45]=a0;
+  if (res[2]!=0) res[2][46]=a0;
+  if (res[2]!=0) res[2][47]=a0;
+  if (res[2]!=0) res[2][48]=a0;
+  if (res[2]!=0) res[2][49]=a0;
+  if (res[2]!=0) res[2][50]=a0;
+  if (res[2]!=0) res[2][51]=a0;
+  if (res[2]!=0) res[2][52]=a0;
+  if (res[2]!=0) res[2][53]=a0;
+  return 0;
+}
+
+CASADI_SYMBOL_EXPORT int qd_dgrf_FL(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem){
+  (void)casadi_f26;
+  return qd_dgrf_solve(3, 1, casadi_f1, casadi_f0, casadi_f25, qd_did_full_sparsity_out(0), qd_did_full_sparsity_out(1), arg, res, iw, w, mem);
+}
+
+CASADI_SYMBOL_EXPORT int qd_dgrf_FL_checkout(void) {
+  return 0;
+}
+
+CASADI_SYMBOL_EXPORT void qd_dgrf_FL_release(int mem) {
+  (void)mem;
+}
+
+CASADI_SYMBOL_EXPORT void qd_dgrf_FL_incref(void) {
+}
+
+CASADI_SYMBOL_EXPORT void qd_dgrf_FL_decref(void) {
+}
+
+CASADI_SYMBOL_EXPORT casadi_int qd_dgrf_FL_n_in(void) { return 3;}
+
+CASADI_SYMBOL_EXPORT casadi_int qd_dgrf_FL_n_out(void) { return 3;}
+
+CASADI_SYMBOL_EXPORT casadi_real qd_dgrf_FL_default_in(casadi_int i) {
+  switch (i) {
+    default: return 0;
+  }
+}
+
+CASADI_SYMBOL_EXPORT const char* qd_dgrf_FL_name_in(casadi_int i) {
+  switch (i) {
+    case 0: return "q";
+    case 1: return "v";
+    case 2: return "a";
+    default: return 0;
+  }
+}
+
+CASADI_SYMBOL_EXPORT const char* qd_dgrf_FL_name_out(casadi_int i) {
+  switch (i) {
+    case 0: return "dlambda_dq";
+    case 1: return "dlambda_dv";
+    case 2: return "dlambda_da";
+    default: return 0;
+  }
+}
+
+CASADI_SYMBOL_EXPORT const casadi_int* qd_dgrf_FL_sparsity_in(casadi_int i) {
+  switch (i) {
+    case 0: return casadi_s0;
+    case 1: return casadi_s1;
+    case 2: return casadi_s1;
+    default: return 0;
+  }
+}
+
+CASADI_SYMBOL_EXPORT const casadi_int* qd_dgrf_FL_sparsity_out(casadi_int i) {
+  switch (i) {
+    case 0: return casadi_s9;
+    case 1: return casadi_s9;
+    case 2: return casadi_s9;
+    default: return 0;
+  }
+}
+
+CASADI_SYMBOL_EXPORT int qd_dgrf_FL_work(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz_iw, casadi_int *sz_w) {
+  if (sz_arg) *sz_arg = 3;
+  if (sz_res) *sz_res = 3;
+  if (sz_iw) *sz_iw = 0;
+  if (sz_w) *sz_w = 0;
+  return 0;
+}
+
+CASADI_SYMBOL_EXPORT int qd_dgrf_FL_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz_iw, casadi_int *sz_w) {
+  if (sz_arg) *sz_arg = 3*sizeof(const casadi_real*);
+  if (sz_res) *sz_res = 3*sizeof(casadi_real*);
+  if (sz_iw) *sz_iw = 0*sizeof(casadi_int);
+  if (sz_w) *sz_w = 0*sizeof(casadi_real);
+  return 0;
+}
+
+/* qd_dgrf_dir_FR:(q[19],w[6],dq[18])->(lambda_w[3],dlambda_w[3]) */
+static int casadi_f27(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem) {
+  (void)arg; (void)res; (void)iw; (void)w; (void)mem;
+  casadi_real a00, a01, a02, a03, a04, a05, a06, a07, a08, a09, a10, a11;
+  casadi_real a12, a13, a14, a15, a16, a17, a18, a19, a20, a21, a22, a23;
+  casadi_real a24, a25, a26, a27, a28, a29, a30, a31, a32, a33, a34, a35;
+  casadi_real a36, a37, a38, a39, a40, a41, a42, a43, a44, a45, a46, a47;
+  casadi_real a48, a49, a50, a51, a52, a53, a54, a55, a56, a57, a58, a59;
+  casadi_real a60, a61, a62, a63, a64, a65, a66, a67, a68, a69, a70, a71;
+  casadi_real a72, a73, a74, a75, a76, a77, a78, a79, a80, a81, a82, a83;
+  casadi_real a84, a85;
+  a00=arg[1]? arg[1][0] : 0;
+  a01=1.;
+  a02=2.0000000000000001e-01;
+  a03=arg[0]? arg[0][10] : 0;
+  a04=qd_sin(a03);
+  a05=arg[0]? arg[0][11] : 0;
+  a06=qd_sin(a05);
+  a07=(a04*a06);
+  a08=arg[0]? arg[0][12] : 0;
+  a09=qd_sin(a08);
+  a10=(a07*a09);
+  a05=qd_cos(a05);
+  a11=(a04*a05);
+  a08=qd_cos(a08);
+  a12=(a11*a08);
+  a10=(a10-a12);
+  a10=(a02*a10);
+  a12=(a02*a11);
+  a10=(a10-a12);
+  a12=casadi_sq(a10);
+  a13=(a01+a12);
+  a14=-7.0000000000000007e-02;
+  a03=qd_cos(a03);
+  a15=(a03*a05);
+  a16=(a02*a15);
+  a14=(a14+a16);
+  a16=(a15*a08);
+  a17=(a03*a06);
+  a18=(a17*a09);
+  a16=(a16-a18);
+  a16=(a02*a16);
+  a14=(a14+a16);
+  a16=casadi_sq(a14);
+  a18=(a13+a16);
+  a18=qd_sqrt(a18);
+  a19=(a01+a18);
+  a20=casadi_sq(a19);
+  a20=(a20+a12);
+  a20=(a20+a16);
+  a20=qd_sqrt(a20);
+  a16=(a19/a20);
+  a21=(2*a16);
+  a22=(a16*a00);
+  a23=(a10/a20);
+  a24=arg[1]? arg[1][4] : 0;
+  a25=(a23*a24);
+  a22=(a22+a25);
+  a25=(a14/a20);
+  a26=arg[1]? arg[1][5] : 0;
+  a27=(a25*a26);
+  a22=(a22-a27);
+  a27=(a21*a22);
+  a27=(a00-a27);
+  a28=1.9000000000000000e-01;
+  a29=(a02*a06);
+  a28=(a28+a29);
+  a29=(a05*a09);
+  a30=(a06*a08);
+  a29=(a29+a30);
+  a29=(a02*a29);
+  a28=(a28+a29);
+  a29=(a25*a28);
+  a30=(a21*a29);
+  a31=arg[1]? arg[1][1] : 0;
+  a32=(2*a23);
+  a33=(a32*a29);
+  a34=casadi_sq(a33);
+  a13=(a13+a34);
+  a35=(-a25);
+  a35=(2*a35);
+  a36=(a35*a29);
+  a36=(a28+a36);
+  a37=casadi_sq(a36);
+  a13=(a13+a37);
+  a13=qd_sqrt(a13);
+  a38=(a01+a13);
+  a39=casadi_sq(a38);
+  a39=(a39+a12);
+  a39=(a39+a34);
+  a39=(a39+a37);
+  a39=qd_sqrt(a39);
+  a37=(a38/a39);
+  a34=(2*a37);
+  a12=(a37*a31);
+  a40=(a10/a39);
+  a41=arg[1]? arg[1][3] : 0;
+  a42=(a40*a41);
+  a12=(a12-a42);
+  a42=(a33/a39);
+  a43=(a32*a22);
+  a43=(a24-a43);
+  a44=(a42*a43);
+  a12=(a12+a44);
+  a44=(a36/a39);
+  a45=(a35*a22);
+  a45=(a26-a45);
+  a46=(a44*a45);
+  a12=(a12+a46);
+  a46=(a34*a12);
+  a46=(a31-a46);
+  a47=(a23*a28);
+  a48=(a32*a47);
+  a48=(a48-a28);
+  a49=(a42*a48);
+  a50=(a40*a14);
+  a49=(a49-a50);
+  a50=(a35*a47);
+  a51=(a44*a50);
+  a49=(a49+a51);
+  a51=(a34*a49);
+  a52=arg[1]? arg[1][2] : 0;
+  a53=(-a40);
+  a53=(2*a53);
+  a54=(a53*a49);
+  a54=(a14-a54);
+  a55=casadi_sq(a54);
+  a56=(a01+a55);
+  a57=(2*a42);
+  a58=(a57*a49);
+  a58=(a48-a58);
+  a59=casadi_sq(a58);
+  a56=(a56+a59);
+  a60=(2*a44);
+  a61=(a60*a49);
+  a61=(a50-a61);
+  a62=casadi_sq(a61);
+  a56=(a56+a62);
+  a56=qd_sqrt(a56);
+  a63=(a01+a56);
+  a64=casadi_sq(a63);
+  a64=(a64+a55);
+  a64=(a64+a59);
+  a64=(a64+a62);
+  a64=qd_sqrt(a64);
+  a62=(a63/a64);
+  a59=(2*a62);
+  a55=(a62*a52);
+  a65=(a54/a64);
+  a66=(a53*a12);
+  a66=(a41-a66);
+  a67=(a65*a66);
+  a55=(a55+a67);
+  a67=(a58/a64);
+  a68=(a57*a12);
+  a68=(a43-a68);
+  a69=(a67*a68);
+  a55=(a55+a69);
+  a69=(a61/a64);
+  a70=(a60*a12);
+  a70=(a45-a70);
+  a71=(a69*a70);
+  a55=(a55+a71);
+  a71=(a59*a55);
+  a71=(a52-a71);
+  a72=(a65*a54);
+  a72=(a62+a72);
+  a73=(a67*a58);
+  a72=(a72+a73);
+  a73=(a69*a61);
+  a72=(a72+a73);
+  a73=(a59*a72);
+  a73=(a01-a73);
+  a71=(a71/a73);
+  a74=(a51*a71);
+  a46=(a46+a74);
+  a74=(a40*a10);
+  a74=(a37+a74);
+  a75=(a42*a33);
+  a74=(a74+a75);
+  a75=(a44*a36);
+  a74=(a74+a75);
+  a75=(a34*a74);
+  a75=(a01-a75);
+  a46=(a46/a75);
+  a76=(a30*a46);
+  a77=(a21*a47);
+  a78=(a77*a71);
+  a76=(a76+a78);
+  a27=(a27-a76);
+  a76=(a23*a10);
+  a76=(a16+a76);
+  a78=(a25*a14);
+  a76=(a76+a78);
+  a78=(a21*a76);
+  a01=(a01-a78);
+  a27=(a27/a01);
+  if (res[0]!=0) res[0][0]=a27;
+  if (res[0]!=0) res[0][1]=a46;
+  if (res[0]!=0) res[0][2]=a71;
+  a27=(a27/a01);
+  a78=(2*a10);
+  a79=arg[2]? arg[2][9] : 0;
+  a80=(a03*a79);
+  a81=(a06*a80);
+  a82=arg[2]? arg[2][10] : 0;
+  a83=(a05*a82);
+  a84=(a04*a83);
+  a81=(a81+a84);
+  a81=(a09*a81);
+  a84=arg[2]? arg[2][11] : 0;
+  a85=(a08*a84);
+  a07=(a07*a85);
+  a81=(a81+a07);
+  a80=(a05*a80);
+  a82=(a06*a82);
+  a07=(a04*a82);
+  a80=(a80-a07);
+  a07=(a08*a80);
+  a84=(a09*a84);
+  a11=(a11*a84);
+  a07=(a07-a11);
+  a81=(a81-a07);
+  a81=(a02*a81);
+  a80=(a02*a80);
+  a81=(a81-a80);
+  a78=(a78*a81);
+  a80=(2*a14);
+  a04=(a04*a79);
+  a79=(a05*a04);
+  a07=(a03*a82);
+  a79=(a79+a07);
+  a07=(a02*a79);
+  a79=(a08*a79);
+  a15=(a15*a84);
+  a79=(a79+a15);
+  a03=(a03*a83);
+  a04=(a06*a04);
+  a03=(a03-a04);
+  a03=(a09*a03);
+  a17=(a17*a85);
+  a03=(a03+a17);
+  a79=(a79+a03);
+  a79=(a02*a79);
+  a07=(a07+a79);
+  a80=(a80*a07);
+  a79=(a78-a80);
+  a18=(2*a18);
+  a79=(a79/a18);
+  a18=(a79/a20);
+  a16=(a16/a20);
+  a19=(2*a19);
+  a19=(a19*a79);
+  a19=(a19+a78);
+  a19=(a19-a80);
+  a80=(2*a20);
+  a19=(a19/a80);
+  a16=(a16*a19);
+  a18=(a18-a16);
+  a16=(2*a18);
+  a76=(a76*a16);
+  a80=(a81/a20);
+  a79=(a23/a20);
+  a79=(a79*a19);
+  a80=(a80-a79);
+  a79=(a10*a80);
+  a03=(a23*a81);
+  a79=(a79+a03);
+  a79=(a18+a79);
+  a03=(a07/a20);
+  a20=(a25/a20);
+  a20=(a20*a19);
+  a03=(a03+a20);
+  a20=(a14*a03);
+  a19=(a25*a07);
+  a20=(a20+a19);
+  a79=(a79-a20);
+  a79=(a21*a79);
+  a76=(a76+a79);
+  a27=(a27*a76);
+  a76=(a22*a16);
+  a00=(a00*a18);
+  a24=(a24*a80);
+  a00=(a00+a24);
+  a26=(a26*a03);
+  a00=(a00+a26);
+  a26=(a21*a00);
+  a76=(a76+a26);
+  a26=(a29*a16);
+  a24=(a02*a83);
+  a05=(a05*a85);
+  a09=(a09*a82);
+  a05=(a05-a09);
+  a08=(a08*a83);
+  a06=(a06*a84);
+  a08=(a08-a06);
+  a05=(a05+a08);
+  a02=(a02*a05);
+  a24=(a24+a02);
+  a25=(a25*a24);
+  a02=(a28*a03);
+  a25=(a25-a02);
+  a02=(a21*a25);
+  a26=(a26+a02);
+  a26=(a46*a26);
+  a02=(2*a33);
+  a05=(2*a80);
+  a08=(a29*a05);
+  a06=(a32*a25);
+  a08=(a08+a06);
+  a02=(a02*a08);
+  a06=(a78+a02);
+  a84=(2*a36);
+  a03=(2*a03);
+  a29=(a29*a03);
+  a25=(a35*a25);
+  a29=(a29+a25);
+  a29=(a24+a29);
+  a84=(a84*a29);
+  a06=(a06+a84);
+  a13=(2*a13);
+  a06=(a06/a13);
+  a13=(a06/a39);
+  a37=(a37/a39);
+  a38=(2*a38);
+  a38=(a38*a06);
+  a38=(a38+a78);
+  a38=(a38+a02);
+  a38=(a38+a84);
+  a84=(2*a39);
+  a38=(a38/a84);
+  a37=(a37*a38);
+  a13=(a13-a37);
+  a37=(2*a13);
+  a84=(a49*a37);
+  a02=(a08/a39);
+  a78=(a42/a39);
+  a78=(a78*a38);
+  a02=(a02-a78);
+  a48=(a48*a02);
+  a78=(a47*a05);
+  a28=(a28*a80);
+  a23=(a23*a24);
+  a28=(a28+a23);
+  a23=(a32*a28);
+  a78=(a78+a23);
+  a78=(a78-a24);
+  a24=(a42*a78);
+  a48=(a48+a24);
+  a24=(a81/a39);
+  a23=(a40/a39);
+  a23=(a23*a38);
+  a24=(a24-a23);
+  a14=(a14*a24);
+  a23=(a40*a07);
+  a14=(a14-a23);
+  a48=(a48-a14);
+  a14=(a29/a39);
+  a39=(a44/a39);
+  a39=(a39*a38);
+  a14=(a14-a39);
+  a50=(a50*a14);
+  a39=(a47*a03);
+  a38=(a35*a28);
+  a39=(a39+a38);
+  a38=(a44*a39);
+  a50=(a50+a38);
+  a48=(a48+a50);
+  a50=(a34*a48);
+  a84=(a84+a50);
+  a84=(a71*a84);
+  a50=(a71/a73);
+  a38=(2*a58);
+  a23=(2*a02);
+  a80=(a49*a23);
+  a06=(a57*a48);
+  a80=(a80+a06);
+  a78=(a78-a80);
+  a38=(a38*a78);
+  a80=(2*a54);
+  a06=(-a24);
+  a06=(2*a06);
+  a25=(a49*a06);
+  a83=(a53*a48);
+  a25=(a25+a83);
+  a07=(a07+a25);
+  a80=(a80*a07);
+  a25=(a38-a80);
+  a83=(2*a61);
+  a09=(2*a14);
+  a49=(a49*a09);
+  a48=(a60*a48);
+  a49=(a49+a48);
+  a39=(a39-a49);
+  a83=(a83*a39);
+  a25=(a25+a83);
+  a56=(2*a56);
+  a25=(a25/a56);
+  a56=(a25/a64);
+  a62=(a62/a64);
+  a63=(2*a63);
+  a63=(a63*a25);
+  a63=(a63-a80);
+  a63=(a63+a38);
+  a63=(a63+a83);
+  a83=(2*a64);
+  a63=(a63/a83);
+  a62=(a62*a63);
+  a56=(a56-a62);
+  a62=(2*a56);
+  a72=(a72*a62);
+  a83=(a07/a64);
+  a38=(a65/a64);
+  a38=(a38*a63);
+  a83=(a83+a38);
+  a54=(a54*a83);
+  a07=(a65*a07);
+  a54=(a54+a07);
+  a54=(a56-a54);
+  a07=(a78/a64);
+  a38=(a67/a64);
+  a38=(a38*a63);
+  a07=(a07-a38);
+  a58=(a58*a07);
+  a78=(a67*a78);
+  a58=(a58+a78);
+  a54=(a54+a58);
+  a58=(a39/a64);
+  a64=(a69/a64);
+  a64=(a64*a63);
+  a58=(a58-a64);
+  a61=(a61*a58);
+  a39=(a69*a39);
+  a61=(a61+a39);
+  a54=(a54+a61);
+  a54=(a59*a54);
+  a72=(a72+a54);
+  a50=(a50*a72);
+  a55=(a55*a62);
+  a52=(a52*a56);
+  a66=(a66*a83);
+  a06=(a12*a06);
+  a31=(a31*a13);
+  a41=(a41*a24);
+  a31=(a31-a41);
+  a43=(a43*a02);
+  a05=(a22*a05);
+  a32=(a32*a00);
+  a05=(a05+a32);
+  a32=(a42*a05);
+  a43=(a43-a32);
+  a31=(a31+a43);
+  a45=(a45*a14);
+  a22=(a22*a03);
+  a35=(a35*a00);
+  a22=(a22+a35);
+  a35=(a44*a22);
+  a45=(a45-a35);
+  a31=(a31+a45);
+  a53=(a53*a31);
+  a06=(a06+a53);
+  a65=(a65*a06);
+  a66=(a66+a65);
+  a52=(a52-a66);
+  a68=(a68*a07);
+  a23=(a12*a23);
+  a57=(a57*a31);
+  a23=(a23+a57);
+  a05=(a05+a23);
+  a67=(a67*a05);
+  a68=(a68-a67);
+  a52=(a52+a68);
+  a70=(a70*a58);
+  a09=(a12*a09);
+  a60=(a60*a31);
+  a09=(a09+a60);
+  a22=(a22+a09);
+  a69=(a69*a22);
+  a70=(a70-a69);
+  a52=(a52+a70);
+  a59=(a59*a52);
+  a55=(a55+a59);
+  a55=(a55/a73);
+  a50=(a50-a55);
+  a51=(a51*a50);
+  a84=(a84+a51);
+  a12=(a12*a37);
+  a31=(a34*a31);
+  a12=(a12+a31);
+  a84=(a84-a12);
+  a84=(a84/a75);
+  a46=(a46/a75);
+  a74=(a74*a37);
+  a10=(a10*a24);
+  a40=(a40*a81);
+  a10=(a10+a40);
+  a13=(a13+a10);
+  a33=(a33*a02);
+  a42=(a42*a08);
+  a33=(a33+a42);
+  a13=(a13+a33);
+  a36=(a36*a14);
+  a44=(a44*a29);
+  a36=(a36+a44);
+  a13=(a13+a36);
+  a34=(a34*a13);
+  a74=(a74+a34);
+  a46=(a46*a74);
+  a84=(a84+a46);
+  a30=(a30*a84);
+  a26=(a26+a30);
+  a47=(a47*a16);
+  a21=(a21*a28);
+  a47=(a47+a21);
+  a71=(a71*a47);
+  a77=(a77*a50);
+  a71=(a71+a77);
+  a26=(a26+a71);
+  a76=(a76+a26);
+  a76=(a76/a01);
+  a27=(a27-a76);
+  if (res[1]!=0) res[1][0]=a27;
+  if (res[1]!=0) res[1][1]=a84;
+  if (res[1]!=0) res[1][2]=a50;
+  return 0;
+}
+
+CASADI_SYMBOL_EXPORT int qd_dgrf_dir_FR(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem){
+  return qd_d_finite(casadi_f27(arg, res, iw, w, mem), res, 2, (const casadi_int[]){3, 3});
+}
+
+CASADI_SYMBOL_EXPORT int qd_dgrf_dir_FR_checkout(void) {
+  return 0;
+}
+
+CASADI_SYMBOL_EXPORT void qd_dgrf_dir_FR_release(int mem) {
+  (void)mem;
+}
+
+CASADI_SYMBOL_EXPORT void qd_dgrf_dir_FR_incref(void) {
+}
+
+CASADI_SYMBOL_EXPORT void qd_dgrf_dir_FR_decref(void) {
+}
+
+CASADI_SYMBOL_EXPORT casadi_int qd_dgrf_dir_FR_n_in(void) { return 3;}
+
+CASADI_SYMBOL_EXPORT casadi_int qd_dgrf_dir_FR_n_out(void) { return 2;}
+
+CASADI_SYMBOL_EXPORT casadi_real qd_dgrf_dir_FR_default_in(casadi_int i) {
+  switch (i) {
+    default: return 0;
+  }
+}
+
+CASADI_SYMBOL_EXPORT const char* qd_dgrf_dir_FR_name_in(casadi_int i) {
+  switch (i) {
+    case 0: return "q";
+    case 1: return "w";
+    case 2: return "dq";
+    default: return 0;
+  }
+}
+
+CASADI_SYMBOL_EXPORT const char* qd_dgrf_dir_FR_name_out(casadi_int i) {
+  switch (i) {
+    case 0: return "lambda_w";
+    case 1: return "dlambda_w";
+    default: return 0;
+  }
+}
+
+CASADI_SYMBOL_EXPORT const casadi_int* qd_dgrf_dir_FR_sparsity_in(casadi_int i) {
+  switch (i) {
+    case 0: return casadi_s0;
+    case 1: return casadi_s6;
+    case 2: return casadi_s1;
+    default: return 0;
+  }
+}
+
+CASADI_SYMBOL_EXPORT const casadi_int* qd_dgrf_dir_FR_sparsity_out(casadi_int i) {
+  switch (i) {
+    case 0: return casadi_s8;
+    case 1: return casadi_s8;
+    default: return 0;
+  }
+}
+
+CASADI_SYMBOL_EXPORT int qd_dgrf_dir_FR_work(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz_iw, casadi_int *sz_w) {
+  if (sz_arg) *sz_arg = 3;
+  if (sz_res) *sz_res = 2;
+  if (sz_iw) *sz_iw = 0;
+  if (sz_w) *sz_w = 0;
+  return 0;
+}
+
+CASADI_SYMBOL_EXPORT int qd_dgrf_dir_FR_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz_iw, casadi_int *sz_w) {
+  if (sz_arg) *sz_arg = 3*sizeof(const casadi_real*);
+  if (sz_res) *sz_res = 2*sizeof(casadi_real*);
+  if (sz_iw) *sz_iw = 0*sizeof(casadi_int);
+  if (sz_w) *sz_w = 0*sizeof(casadi_real);
+  return 0;
+}
+
+/* qd_dgrf_FR:(q[19],v[18],a[18])->(dlambda_dq[3x18],dlambda_dv[3x18],dlambda_da[3x18]) */
+static int casadi_f28(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem) {
+  (void)arg; (void)res; (void)iw; (void)w; (void)mem;
+  casadi_real a0, a1, a2;
+  a0=arg[0]? arg[0][0] : 0;
+  a1=arg[0]? arg[0][1] : 0;
+  a0=(a0+a1);
+  a1=arg[0]? arg[0][2] : 0;
+  a0=(a0+a1);
+  a1=arg[0]? arg[0][3] : 0;
+  a0=(a0+a1);
+  a1=arg[0]? arg[0][4] : 0;
+  a0=(a0+a1);
+  a1=arg[0]? arg[0][5] : 0;
+  a0=(a0+a1);
+  a1=arg[0]? arg[0][6] : 0;
+  a0=(a0+a1);
+  a1=arg[0]? arg[0][7] : 0;
+  a0=(a0+a1);
+  a1=arg[0]? arg[0][8] : 0;
+  a0=(a0+a1);
+  a1=arg[0]? arg[0][9] : 0;
+  a0=(a0+a1);
+  a1=arg[0]? arg[0][10] : 0;
+  a0=(a0+a1);
+  a1=arg[0]? arg[0][11] : 0;
+  a0=(a0+a1);
+  a1=arg[0]? arg[0][12] : 0;
+  a0=(a0+a1);
+  a1=arg[0]? arg[0][13] : 0;
+  a0=(a0+a1);
+  a1=arg[0]? arg[0][14] : 0;
+  a0=(a0+a1);
+  a1=arg[0]? arg[0][15] : 0;
+  a0=(a0+a1);
+  a1=arg[0]? arg[0][16] : 0;
+  a0=(a0+a1);
+  a1=arg[0]? arg[0][17] : 0;
+  a0=(a0+a1);
+  a1=arg[0]? arg[0][18] : 0;
+  a0=(a0+a1);
+  a1=arg[1]? arg[1][0] : 0;
+  a2=arg[1]? arg[1][1] : 0;
+  a1=(a1+a2);
+  a2=arg[1]? arg[1][2] : 0;
+  a1=(a1+a2);
+  a2=arg[1]? arg[1][3] : 0;
+  a1=(a1+a2);
+  a2=arg[1]? arg[1][4] : 0;
+  a1=(a1+a2);
+  a2=arg[1]? arg[1][5] : 0;
+  a1=(a1+a2);
+  a2=arg[1]? arg[1][6] : 0;
+  a1=(a1+a2);
+  a2=arg[1]? arg[1][7] : 0;
+  a1=(a1+a2);
+  a2=arg[1]? arg[1][8] : 0;
+  a1=(a1+a2);
+  a2=arg[1]? arg[1][9] : 0;
+  a1=(a1+a2);
+  a2=arg[1]? arg[1][10] : 0;
+  a1=(a1+a2);
+  a2=arg[1]? arg[1][11] : 0;
+  a1=(a1+a2);
+  a2=arg[1]? arg[1][12] : 0;
+  a1=(a1+a2);
+  a2=arg[1]? arg[1][13] : 0;
+  a1=(a1+a2);
+  a2=arg[1]? arg[1][14] : 0;
+  a1=(a1+a2);
+  a2=arg[1]? arg[1][15] : 0;
+  a1=(a1+a2);
+  a2=arg[1]? arg[1][16] : 0;
+  a1=(a1+a2);
+  a2=arg[1]? arg[1][17] : 0;
+  a1=(a1+a2);
+  a0=(a0+a1);
+  a1=arg[2]? arg[2][0] : 0;
+  a2=arg[2]? arg[2][1] : 0;
+  a1=(a1+a2);
+  a2=arg[2]? arg[2][2] : 0;
+  a1=(a1+a2);
+  a2=arg[2]? arg[2][3] : 0;
+  a1=(a1+a2);
+  a2=arg[2]? arg[2][4] : 0;
+  a1=(a1+a2);
+  a2=arg[2]? arg[2][5] : 0;
+  a1=(a1+a2);
+  a2=arg[2]? arg[2][6] : 0;
+  a1=(a1+a2);
+  a2=arg[2]? arg[2][7] : 0;
+  a1=(a1+a2);
+  a2=arg[2]? arg[2][8] : 0;
+  a1=(a1+a2);
+  a2=arg[2]? arg[2][9] : 0;
+  a1=(a1+a2);
+  a2=arg[2]? arg[2][10] : 0;
+  a1=(a1+a2);
+  a2=arg[2]? arg[2][11] : 0;
+  a1=(a1+a2);
+  a2=arg[2]? arg[2][12] : 0;
+  a1=(a1+a2);
+  a2=arg[2]? arg[2][13] : 0;
+  a1=(a1+a2);
+  a2=arg[2]? arg[2][14] : 0;
+  a1=(a1+a2);
+  a2=arg[2]? arg[2][15] : 0;
+  a1=(a1+a2);
+  a2=arg[2]? arg[2][16] : 0;
+  a1=(a1+a2);
+  a2=arg[2]? arg[2][17] : 0;
+  a1=(a1+a2);
+  a0=(a0+a1);
+  if (res[0]!=0) res[0][0]=a0;
+  if (res[0]!=0) res[0][1]=a0;
+  if (res[0]!=0) res[0][2]=a0;
+  if (res[0]!=0) res[0][3]=a0;
+  if (res[0]!=0) res[0][4]=a0;
+  if (res[0]!=0) res[0][5]=a0;
+  if (res[0]!=0) res[0][6]=a0;
+  if (res[0]!=0) res[0][7]=a0;
+  if (res[0]!=0) res[0][8]=a0;
+  if (res[0]!=0) res[0][9]=a0;
+  if (res[0]!=0) res[0][10]=a0;
+  if (res[0]!=0) res[0][11]=a0;
+  if (res[0]!=0) res[0][12]=a0;
+  if (res[0]!=0) res[0][13]=a0;
+  if (res[0]!=0) res[0][14]=a0;
+  if (res[0]!=0) res[0][15]=a0;
+  if (res[0]!=0) res[0][16]=a0;
+  if (res[0]!=0) res[0][17]=a0;
+  if (res[0]!=0) res[0][18]=a0;
+  if (res[0]!=0) res[0][19]=a0;
+  if (res[0]!=0) res[0][20]=a0;
+  if (res[0]!=0) res[0][21]=a0;
+  if (res[0]!=0) res[0][22]=a0;
+  if (res[0]!=0) res[0][23]=a0;
+  if (res[0]!=0) res[0][24]=a0;
+  if (res[0]!=0) res[0][25]=a0;
+  if (res[0]!=0) res[0][26]=a0;
+  if (res[0]!=0) res[0][27]=a0;
+  if (res[0]!=0) res[0][28]=a0;
+  if (res[0]!=0) res[0][29]=a0;
+  if (res[0]!=0) res[0][30]=a0;
+  if (res[0]!=0) res[0][31]=a0;
+  if (res[0]!=0) res[0][32]=a0;
+  if (res[0]!=0) res[0][33]=a0;
+  if (res[0]!=0) res[0][34]=a0;
+  if (res[0]!=0) res[0][35]=a0;
+  if (res[0]!=0) res[0][36]=a0;
+  if (res[0]!=0) res[0][37]=a0;
+  if (res[0]!=0) res[0][38]=a0;
+  if (res[0]!=0) res[0][39]=a0;
+  if (res[0]!=0) res[0][40]=a0;
+  if (res[0]!=0) res[0][41]=a0;
+  if (res[0]!=0) res[0][42]=a0;
+  if (res[0]!=0) res[0][43]=a0;
+  if (res[0]!=0) res[0][44]=a0;
+  if (res[0]!=0) res[0][45]=a0;
+  if (res[0]!=0) res[0][46]=a0;
+  if (res[0]!=0) res[0][47]=a0;
+  if (res[0]!=0) res[0][48]=a0;
+  if (res[0]!=0) res[0][49]=a0;
+  if (res[0]!=0) res[0][50]=a0;
+  if (res[0]!=0) res[0][51]=a0;
+  if (res[0]!=0) res[0][52]=a0;
+  if (res[0]!=0) res[0][53]=a0;
+  if (res[1]!=0) res[1][0]=a0;
+  if (res[1]!=0) res[1][1]=a0;
+  if (res[1]!=0) res[1][2]=a0;
+  if (res[1]!=0) res[1][3]=a0;
+  if (res[1]!=0) res[1][4]=a0;
+  if (res[1]!=0) res[1][5]=a0;
+  if (res[1]!=0) res[1][6]=a0;
+  if (res[1]!=0) res[1][7]=a0;
+  if (res[1]!=0) res[1][8]=a0;
+  if (res[1]!=0) res[1][9]=a0;
+  if (res[1]!=0) res[1][10]=a0;
+  if (res[1]!=0) res[1][11]=a0;
+  if (res[1]!=0) res[1][12]=a0;
+  if (res[1]!=0) res[1][13]=a0;
+  if (res[1]!=0) res[1][14]=a0;
+  if (res[1]!=0) res[1][15]=a0;
+  if (res[1]!=0) res[1][16]=a0;
+  if (res[1]!=0) res[1][17]=a0;
+  if (res[1]!=0) res[1][18]=a0;
+  if (res[1]!=0) res[1][19]=a0;
+  if (res[1]!=0) res[1][20]=a0;
+  if (res[1]!=0) res[1][21]=a0;
+  if (res[1]!=0) res[1][22]=a0;
+  if (res[1]!=0) res[1][23]=a0;
+  if (res[1]!=0) res[1][24]=a0;
+  if (res[1]!=0) res[1][25]=a0;
+  if (res[1]!=0) res[1][26]=a0;
+  if (res[1]!=0) res[1][27]=a0;
+  if (res[1]!=0) res[1][28]=a0;
+  if (res[1]!=0) res[1][29]=a0;
+  if (res[1]!=0) res[1][30]=a0;
+  if (res[1]!=0) res[1][31]=a0;
+  if (res[1]!=0) res[1][32]=a0;
+  if (res[1]!=0) res[1][33]=a0;
+  if (res[1]!=0) res[1][34]=a0;
+  if (res[1]!=0) res[1][35]=a0;
+  if (res[1]!=0) res[1][36]=a0;
+  if (res[1]!=0) res[1][37]=a0;
+  if (res[1]!=0) res[1][38]=a0;
+  if (res[1]!=0) res[1][39]=a0;
+  if (res[1]!=0) res[1][40]=a0;
+  if (res[1]!=0) res[1][41]=a0;
+  if (res[1]!=0) res[1][42]=a0;
+  if (res[1]!=0) res[1][43]=a0;
+  if (res[1]!=0) res[1][44]=a0;
+  if (res[1]!=0) res[1][45]=a0;
+  if (res[1]!=0) res[1][46]=a0;
+  if (res[1]!=0) res[1][47]=a0;
+  if (res[1]!=0) res[1][48]=a0;
+  if (res[1]!=0) res[1][49]=a0;
+  if (res[1]!=0) res[1][50]=a0;
+  if (res[1]!=0) res[1][51]=a0;
+  if (res[1]!=0) res[1][52]=a0;
+  if (res[1]!=0) res[1][53]=a0;
+  if (res[2]!=0) res[2][0]=a0;
+  if (res[2]!=0) res[2][1]=a0;
+  if (res[2]!=0) res[2][2]=a0;
+  if (res[2]!=0) res[2][3]=a0;
+  if (res[2]!=0) res[2][4]=a0;
+  if (res[2]!=0) res[2][5]=a0;
+  if (res[2]!=0) res[2][6]=a0;
+  if (res[2]!=0) res[2][7]=a0;
+  if (res[2]!=0) res[2][8]=a0;
+  if (res[2]!=0) res[2][9]=a0;
+  if (res[2]!=0) res[2][10]=a0;
+  if (res[2]!=0) res[2][11]=a0;
+  if (res[2]!=0) res[2][12]=a0;
+  if (res[2]!=0) res[2][13]=a0;
+  if (res[2]!=0) res[2][14]=a0;
+  if (res[2]!=0) res[2][15]=a0;
+  if (res[2]!=0) res[2][16]=a0;
+  if (res[2]!=0) res[2][17]=a0;
+  if (res[2]!=0) res[2][18]=a0;
+  if (res[2]!=0) res[2][19]=a0;
+  if (res[2]!=0) res[2][20]=a0;
+  if (res[2]!=0) res[2][21]=a0;
+  if (res[2]!=0) res[2][22]=a0;
+  if (res[2]!=0) res[2][23]=a0;
+  if (res[2]!=0) res[2][24]=a0;
+  if (res[2]!=0) res[2][25]=a0;
+  if (res[2]!=0) res[2][26]=a0;
+  if (res[2]!=0) res[2][27]=a0;
+  if (res[2]!=0) res[2][28]=a0;
+  if (res[2]!=0) res[2][29]=a0;
+  if (res[2]!=0) res[2][30]=a0;
+  if (res[2]!=0) res[2][31]=a0;
+  if (res[2]!=0) res[2][32]=a0;
+  if (res[2]!=0) res[2][33]=a0;
+  if (res[2]!=0) res[2][34]=a0;
+  if (res[2]!=0) res[2][35]=a0;
+  if (res[2]!=0) res[2][36]=a0;
+  if (res[2]!=0) res[2][37]=a0;
+  if (res[2]!=0) res[2][38]=a0;
+  if (res[2]!=0) res[2][39]=a0;
+  if (res[2]!=0) res[2][40]=a0;
+  if (res[2]!=0) res[2][41]=a0;
+  if (res[2]!=0) res[2][42]=a0;
+  if (res[2]!=0) res[2][43]=a0;
+  if (res[2]!=0) res[2][44]=a0;
+  if (res[2]!=0) res[2][45]=a0;
+  if (res[2]!=0) res[2][46]=a0;
+  if (res[2]!=0) res[2][47]=a0;
+  if (res[2]!=0) res[2][48]=a0;
+  if (res[2]!=0) res[2][49]=a0;
+  if (res[2]!=0) res[2][50]=a0;
+  if (res[2]!=0) res[2][51]=a0;
+  if (res[2]!=0) res[2][52]=a0;
+  if (res[2]!=0) res[2][53]=a0;
+  return 0;
+}
+
+CASADI_SYMBOL_EXPORT int qd_dgrf_FR(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem){
+  (void)casadi_f28;
+  return qd_dgrf_solve(3, 2, casadi_f1, casadi_f0, casadi_f27, qd_did_full_sparsity_out(0), qd_did_full_sparsity_out(1), arg, res, iw, w, mem);
+}
+
+CASADI_SYMBOL_EXPORT int qd_dgrf_FR_checkout(void) {
+  return 0;
+}
+
+CASADI_SYMBOL_EXPORT void qd_dgrf_FR_release(int mem) {
+  (void)mem;
+}
+
+CASADI_SYMBOL_EXPORT void qd_dgrf_FR_incref(void) {
+}
+
+CASADI_SYMBOL_EXPORT void qd_dgrf_FR_decref(void) {
+}
+
+CASADI_SYMBOL_EXPORT casadi_int qd_dgrf_FR_n_in(void) { return 3;}
+
+CASADI_SYMBOL_EXPORT casadi_int qd_dgrf_FR_n_out(void) { return 3;}
+
+CASADI_SYMBOL_EXPORT casadi_real qd_dgrf_FR_default_in(casadi_int i) {
+  switch (i) {
+    default: return 0;
+  }
+}
+
+CASADI_SYMBOL_EXPORT const char* qd_dgrf_FR_name_in(casadi_int i) {
+  switch (i) {
+    case 0: return "q";
+    case 1: return "v";
+    case 2: return "a";
+    default: return 0;
+  }
+}
+
+CASADI_SYMBOL_EXPORT const char* qd_dgrf_FR_name_out(casadi_int i) {
+  switch (i) {
+    case 0: return "dlambda_dq";
+    case 1: return "dlambda_dv";
+    case 2: return "dlambda_da";
+    default: return 0;
+  }
+}
+
+CASADI_SYMBOL_EXPORT const casadi_int* qd_dgrf_FR_sparsity_in(casadi_int i) {
+  switch (i) {
+    case 0: return casadi_s0;
+    case 1: return casadi_s1;
+    case 2: return casadi_s1;
+    default: return 0;
+  }
+}
+
+CASADI_SYMBOL_EXPORT const casadi_int* qd_dgrf_FR_sparsity_out(casadi_int i) {
+  switch (i) {
+    case 0: return casadi_s9;
+    case 1: return casadi_s9;
+    case 2: return casadi_s9;
+    default: return 0;
+  }
+}
+
+CASADI_SYMBOL_EXPORT int qd_dgrf_FR_work(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz_iw, casadi_int *sz_w) {
+  if (sz_arg) *sz_arg = 3;
+  if (sz_res) *sz_res = 3;
+  if (sz_iw) *sz_iw = 0;
+  if (sz_w) *sz_w = 0;
+  return 0;
+}
+
+CASADI_SYMBOL_EXPORT int qd_dgrf_FR_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz_iw, casadi_int *sz_w) {
+  if (sz_arg) *sz_arg = 3*sizeof(const casadi_real*);
+  if (sz_res) *sz_res = 3*sizeof(casadi_real*);
+  if (sz_iw) *sz_iw = 0*sizeof(casadi_int);
+  if (sz_w) *sz_w = 0*sizeof(casadi_real);
+  return 0;
+}
+
+/* qd_dgrf_dir_BL:(q[19],w[6],dq[18])->(lambda_w[3],dlambda_w[3]) */
+static int casadi_f29(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem) {
+  (void)arg; (void)res; (void)iw; (void)w; (void)mem;
+  casadi_real a00, a01, a02, a03, a04, a05, a06, a07, a08, a09, a10, a11;
+  casadi_real a12, a13, a14, a15, a16, a17, a18, a19, a20, a21, a22, a23;
+  casadi_real a24, a25, a26, a27, a28, a29, a30, a31, a32, a33, a34, a35;
+  casadi_real a36, a37, a38, a39, a40, a41, a42, a43, a44, a45, a46, a47;
+  casadi_real a48, a49, a50, a51, a52, a53, a54, a55, a56, a57, a58, a59;
+  casadi_real a60, a61, a62, a63, a64, a65, a66, a67, a68, a69, a70, a71;
+  casadi_real a72, a73, a74, a75, a76, a77, a78, a79, a80, a81, a82, a83;
+  casadi_real a84, a85;
+  a00=arg[1]? arg[1][0] : 0;
+  a01=1.;
+  a02=2.0000000000000001e-01;
+  a03=arg[0]? arg[0][13] : 0;
+  a04=qd_sin(a03);
+  a05=arg[0]? arg[0][14] : 0;
+  a06=qd_sin(a05);
+  a07=(a04*a06);
+  a08=arg[0]? arg[0][15] : 0;
+  a09=qd_sin(a08);
+  a10=(a07*a09);
+  a05=qd_cos(a05);
+  a11=(a04*a05);
+  a08=qd_cos(a08);
+  a12=(a11*a08);
+  a10=(a10-a12);
+  a10=(a02*a10);
+  a12=(a02*a11);
+  a10=(a10-a12);
+  a12=casadi_sq(a10);
+  a13=(a01+a12);
+  a14=7.0000000000000007e-02;
+  a03=qd_cos(a03);
+  a15=(a03*a05);
+  a16=(a02*a15);
+  a14=(a14+a16);
+  a16=(a15*a08);
+  a17=(a03*a06);
+  a18=(a17*a09);
+  a16=(a16-a18);
+  a16=(a02*a16);
+  a14=(a14+a16);
+  a16=casadi_sq(a14);
+  a18=(a13+a16);
+  a18=qd_sqrt(a18);
+  a19=(a01+a18);
+  a20=casadi_sq(a19);
+  a20=(a20+a12);
+  a20=(a20+a16);
+  a20=qd_sqrt(a20);
+  a16=(a19/a20);
+  a21=(2*a16);
+  a22=(a16*a00);
+  a23=(a10/a20);
+  a24=arg[1]? arg[1][4] : 0;
+  a25=(a23*a24);
+  a22=(a22+a25);
+  a25=(a14/a20);
+  a26=arg[1]? arg[1][5] : 0;
+  a27=(a25*a26);
+  a22=(a22-a27);
+  a27=(a21*a22);
+  a27=(a00-a27);
+  a28=-1.9000000000000000e-01;
+  a29=(a02*a06);
+  a28=(a28+a29);
+  a29=(a05*a09);
+  a30=(a06*a08);
+  a29=(a29+a30);
+  a29=(a02*a29);
+  a28=(a28+a29);
+  a29=(a25*a28);
+  a30=(a21*a29);
+  a31=arg[1]? arg[1][1] : 0;
+  a32=(2*a23);
+  a33=(a32*a29);
+  a34=casadi_sq(a33);
+  a13=(a13+a34);
+  a35=(-a25);
+  a35=(2*a35);
+  a36=(a35*a29);
+  a36=(a28+a36);
+  a37=casadi_sq(a36);
+  a13=(a13+a37);
+  a13=qd_sqrt(a13);
+  a38=(a01+a13);
+  a39=casadi_sq(a38);
+  a39=(a39+a12);
+  a39=(a39+a34);
+  a39=(a39+a37);
+  a39=qd_sqrt(a39);
+  a37=(a38/a39);
+  a34=(2*a37);
+  a12=(a37*a31);
+  a40=(a10/a39);
+  a41=arg[1]? arg[1][3] : 0;
+  a42=(a40*a41);
+  a12=(a12-a42);
+  a42=(a33/a39);
+  a43=(a32*a22);
+  a43=(a24-a43);
+  a44=(a42*a43);
+  a12=(a12+a44);
+  a44=(a36/a39);
+  a45=(a35*a22);
+  a45=(a26-a45);
+  a46=(a44*a45);
+  a12=(a12+a46);
+  a46=(a34*a12);
+  a46=(a31-a46);
+  a47=(a23*a28);
+  a48=(a32*a47);
+  a48=(a48-a28);
+  a49=(a42*a48);
+  a50=(a40*a14);
+  a49=(a49-a50);
+  a50=(a35*a47);
+  a51=(a44*a50);
+  a49=(a49+a51);
+  a51=(a34*a49);
+  a52=arg[1]? arg[1][2] : 0;
+  a53=(-a40);
+  a53=(2*a53);
+  a54=(a53*a49);
+  a54=(a14-a54);
+  a55=casadi_sq(a54);
+  a56=(a01+a55);
+  a57=(2*a42);
+  a58=(a57*a49);
+  a58=(a48-a58);
+  a59=casadi_sq(a58);
+  a56=(a56+a59);
+  a60=(2*a44);
+  a61=(a60*a49);
+  a61=(a50-a61);
+  a62=casadi_sq(a61);
+  a56=(a56+a62);
+  a56=qd_sqrt(a56);
+  a63=(a01+a56);
+  a64=casadi_sq(a63);
+  a64=(a64+a55);
+  a64=(a64+a59);
+  a64=(a64+a62);
+  a64=qd_sqrt(a64);
+  a62=(a63/a64);
+  a59=(2*a62);
+  a55=(a62*a52);
+  a65=(a54/a64);
+  a66=(a53*a12);
+  a66=(a41-a66);
+  a67=(a65*a66);
+  a55=(a55+a67);
+  a67=(a58/a64);
+  a68=(a57*a12);
+  a68=(a43-a68);
+  a69=(a67*a68);
+  a55=(a55+a69);
+  a69=(a61/a64);
+  a70=(a60*a12);
+  a70=(a45-a70);
+  a71=(a69*a70);
+  a55=(a55+a71);
+  a71=(a59*a55);
+  a71=(a52-a71);
+  a72=(a65*a54);
+  a72=(a62+a72);
+  a73=(a67*a58);
+  a72=(a72+a73);
+  a73=(a69*a61);
+  a72=(a72+a73);
+  a73=(a59*a72);
+  a73=(a01-a73);
+  a71=(a71/a73);
+  a74=(a51*a71);
+  a46=(a46+a74);
+  a74=(a40*a10);
+  a74=(a37+a74);
+  a75=(a42*a33);
+  a74=(a74+a75);
+  a75=(a44*a36);
+  a74=(a74+a75);
+  a75=(a34*a74);
+  a75=(a01-a75);
+  a46=(a46/a75);
+  a76=(a30*a46);
+  a77=(a21*a47);
+  a78=(a77*a71);
+  a76=(a76+a78);
+  a27=(a27-a76);
+  a76=(a23*a10);
+  a76=(a16+a76);
+  a78=(a25*a14);
+  a76=(a76+a78);
+  a78=(a21*a76);
+  a01=(a01-a78);
+  a27=(a27/a01);
+  if (res[0]!=0) res[0][0]=a27;
+  if (res[0]!=0) res[0][1]=a46;
+  if (res[0]!=0) res[0][2]=a71;
+  a27=(a27/a01);
+  a78=(2*a10);
+  a79=arg[2]? arg[2][12] : 0;
+  a80=(a03*a79);
+  a81=(a06*a80);
+  a82=arg[2]? arg[2][13] : 0;
+  a83=(a05*a82);
+  a84=(a04*a83);
+  a81=(a81+a84);
+  a81=(a09*a81);
+  a84=arg[2]? arg[2][14] : 0;
+  a85=(a08*a84);
+  a07=(a07*a85);
+  a81=(a81+a07);
+  a80=(a05*a80);
+  a82=(a06*a82);
+  a07=(a04*a82);
+  a80=(a80-a07);
+  a07=(a08*a80);
+  a84=(a09*a84);
+  a11=(a11*a84);
+  a07=(a07-a11);
+  a81=(a81-a07);
+  a81=(a02*a81);
+  a80=(a02*a80);
+  a81=(a81-a80);
+  a78=(a78*a81);
+  a80=(2*a14);
+  a04=(a04*a79);
+  a79=(a05*a04);
+  a07=(a03*a82);
+  a79=(a79+a07);
+  a07=(a02*a79);
+  a79=(a08*a79);
+  a15=(a15*a84);
+  a79=(a79+a15);
+  a03=(a03*a83);
+  a04=(a06*a04);
+  a03=(a03-a04);
+  a03=(a09*a03);
+  a17=(a17*a85);
+  a03=(a03+a17);
+  a79=(a79+a03);
+  a79=(a02*a79);
+  a07=(a07+a79);
+  a80=(a80*a07);
+  a79=(a78-a80);
+  a18=(2*a18);
+  a79=(a79/a18);
+  a18=(a79/a20);
+  a16=(a16/a20);
+  a19=(2*a19);
+  a19=(a19*a79);
+  a19=(a19+a78);
+  a19=(a19-a80);
+  a80=(2*a20);
+  a19=(a19/a80);
+  a16=(a16*a19);
+  a18=(a18-a16);
+  a16=(2*a18);
+  a76=(a76*a16);
+  a80=(a81/a20);
+  a79=(a23/a20);
+  a79=(a79*a19);
+  a80=(a80-a79);
+  a79=(a10*a80);
+  a03=(a23*a81);
+  a79=(a79+a03);
+  a79=(a18+a79);
+  a03=(a07/a20);
+  a20=(a25/a20);
+  a20=(a20*a19);
+  a03=(a03+a20);
+  a20=(a14*a03);
+  a19=(a25*a07);
+  a20=(a20+a19);
+  a79=(a79-a20);
+  a79=(a21*a79);
+  a76=(a76+a79);
+  a27=(a27*a76);
+  a76=(a22*a16);
+  a00=(a00*a18);
+  a24=(a24*a80);
+  a00=(a00+a24);
+  a26=(a26*a03);
+  a00=(a00+a26);
+  a26=(a21*a00);
+  a76=(a76+a26);
+  a26=(a29*a16);
+  a24=(a02*a83);
+  a05=(a05*a85);
+  a09=(a09*a82);
+  a05=(a05-a09);
+  a08=(a08*a83);
+  a06=(a06*a84);
+  a08=(a08-a06);
+  a05=(a05+a08);
+  a02=(a02*a05);
+  a24=(a24+a02);
+  a25=(a25*a24);
+  a02=(a28*a03);
+  a25=(a25-a02);
+  a02=(a21*a25);
+  a26=(a26+a02);
+  a26=(a46*a26);
+  a02=(2*a33);
+  a05=(2*a80);
+  a08=(a29*a05);
+  a06=(a32*a25);
+  a08=(a08+a06);
+  a02=(a02*a08);
+  a06=(a78+a02);
+  a84=(2*a36);
+  a03=(2*a03);
+  a29=(a29*a03);
+  a25=(a35*a25);
+  a29=(a29+a25);
+  a29=(a24+a29);
+  a84=(a84*a29);
+  a06=(a06+a84);
+  a13=(2*a13);
+  a06=(a06/a13);
+  a13=(a06/a39);
+  a37=(a37/a39);
+  a38=(2*a38);
+  a38=(a38*a06);
+  a38=(a38+a78);
+  a38=(a38+a02);
+  a38=(a38+a84);
+  a84=(2*a39);
+  a38=(a38/a84);
+  a37=(a37*a38);
+  a13=(a13-a37);
+  a37=(2*a13);
+  a84=(a49*a37);
+  a02=(a08/a39);
+  a78=(a42/a39);
+  a78=(a78*a38);
+  a02=(a02-a78);
+  a48=(a48*a02);
+  a78=(a47*a05);
+  a28=(a28*a80);
+  a23=(a23*a24);
+  a28=(a28+a23);
+  a23=(a32*a28);
+  a78=(a78+a23);
+  a78=(a78-a24);
+  a24=(a42*a78);
+  a48=(a48+a24);
+  a24=(a81/a39);
+  a23=(a40/a39);
+  a23=(a23*a38);
+  a24=(a24-a23);
+  a14=(a14*a24);
+  a23=(a40*a07);
+  a14=(a14-a23);
+  a48=(a48-a14);
+  a14=(a29/a39);
+  a39=(a44/a39);
+  a39=(a39*a38);
+  a14=(a14-a39);
+  a50=(a50*a14);
+  a39=(a47*a03);
+  a38=(a35*a28);
+  a39=(a39+a38);
+  a38=(a44*a39);
+  a50=(a50+a38);
+  a48=(a48+a50);
+  a50=(a34*a48);
+  a84=(a84+a50);
+  a84=(a71*a84);
+  a50=(a71/a73);
+  a38=(2*a58);
+  a23=(2*a02);
+  a80=(a49*a23);
+  a06=(a57*a48);
+  a80=(a80+a06);
+  a78=(a78-a80);
+  a38=(a38*a78);
+  a80=(2*a54);
+  a06=(-a24);
+  a06=(2*a06);
+  a25=(a49*a06);
+  a83=(a53*a48);
+  a25=(a25+a83);
+  a07=(a07+a25);
+  a80=(a80*a07);
+  a25=(a38-a80);
+  a83=(2*a61);
+  a09=(2*a14);
+  a49=(a49*a09);
+  a48=(a60*a48);
+  a49=(a49+a48);
+  a39=(a39-a49);
+  a83=(a83*a39);
+  a25=(a25+a83);
+  a56=(2*a56);
+  a25=(a25/a56);
+  a56=(a25/a64);
+  a62=(a62/a64);
+  a63=(2*a63);
+  a63=(a63*a25);
+  a63=(a63-a80);
+  a63=(a63+a38);
+  a63=(a63+a83);
+  a83=(2*a64);
+  a63=(a63/a83);
+  a62=(a62*a63);
+  a56=(a56-a62);
+  a62=(2*a56);
+  a72=(a72*a62);
+  a83=(a07/a64);
+  a38=(a65/a64);
+  a38=(a38*a63);
+  a83=(a83+a38);
+  a54=(a54*a83);
+  a07=(a65*a07);
+  a54=(a54+a07);
+  a54=(a56-a54);
+  a07=(a78/a64);
+  a38=(a67/a64);
+  a38=(a38*a63);
+  a07=(a07-a38);
+  a58=(a58*a07);
+  a78=(a67*a78);
+  a58=(a58+a78);
+  a54=(a54+a58);
+  a58=(a39/a64);
+  a64=(a69/a64);
+  a64=(a64*a63);
+  a58=(a58-a64);
+  a61=(a61*a58);
+  a39=(a69*a39);
+  a61=(a61+a39);
+  a54=(a54+a61);
+  a54=(a59*a54);
+  a72=(a72+a54);
+  a50=(a50*a72);
+  a55=(a55*a62);
+  a52=(a52*a56);
+  a66=(a66*a83);
+  a06=(a12*a06);
+  a31=(a31*a13);
+  a41=(a41*a24);
+  a31=(a31-a41);
+  a43=(a43*a02);
+  a05=(a22*a05);
+  a32=(a32*a00);
+  a05=(a05+a32);
+  a32=(a42*a05);
+  a43=(a43-a32);
+  a31=(a31+a43);
+  a45=(a45*a14);
+  a22=(a22*a03);
+  a35=(a35*a00);
+  a22=(a22+a35);
+  a35=(a44*a22);
+  a45=(a45-a35);
+  a31=(a31+a45);
+  a53=(a53*a31);
+  a06=(a06+a53);
+  a65=(a65*a06);
+  a66=(a66+a65);
+  a52=(a52-a66);
+  a68=(a68*a07);
+  a23=(a12*a23);
+  a57=(a57*a31);
+  a23=(a23+a57);
+  a05=(a05+a23);
+  a67=(a67*a05);
+  a68=(a68-a67);
+  a52=(a52+a68);
+  a70=(a70*a58);
+  a09=(a12*a09);
+  a60=(a60*a31);
+  a09=(a09+a60);
+  a22=(a22+a09);
+  a69=(a69*a22);
+  a70=(a70-a69);
+  a52=(a52+a70);
+  a59=(a59*a52);
+  a55=(a55+a59);
+  a55=(a55/a73);
+  a50=(a50-a55);
+  a51=(a51*a50);
+  a84=(a84+a51);
+  a12=(a12*a37);
+  a31=(a34*a31);
+  a12=(a12+a31);
+  a84=(a84-a12);
+  a84=(a84/a75);
+  a46=(a46/a75);
+  a74=(a74*a37);
+  a10=(a10*a24);
+  a40=(a40*a81);
+  a10=(a10+a40);
+  a13=(a13+a10);
+  a33=(a33*a02);
+  a42=(a42*a08);
+  a33=(a33+a42);
+  a13=(a13+a33);
+  a36=(a36*a14);
+  a44=(a44*a29);
+  a36=(a36+a44);
+  a13=(a13+a36);
+  a34=(a34*a13);
+  a74=(a74+a34);
+  a46=(a46*a74);
+  a84=(a84+a46);
+  a30=(a30*a84);
+  a26=(a26+a30);
+  a47=(a47*a16);
+  a21=(a21*a28);
+  a47=(a47+a21);
+  a71=(a71*a47);
+  a77=(a77*a50);
+  a71=(a71+a77);
+  a26=(a26+a71);
+  a76=(a76+a26);
+  a76=(a76/a01);
+  a27=(a27-a76);
+  if (res[1]!=0) res[1][0]=a27;
+  if (res[1]!=0) res[1][1]=a84;
+  if (res[1]!=0) res[1][2]=a50;
+  return 0;
+}
+
+CASADI_SYMBOL_EXPORT int qd_dgrf_dir_BL(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem){
+  return qd_d_finite(casadi_f29(arg, res, iw, w, mem), res, 2, (const casadi_int[]){3, 3});
+}
+
+CASADI_SYMBOL_EXPORT int qd_dgrf_dir_BL_checkout(void) {
+  return 0;
+}
+
+CASADI_SYMBOL_EXPORT void qd_dgrf_dir_BL_release(int mem) {
+  (void)mem;
+}
+
+CASADI_SYMBOL_EXPORT void qd_dgrf_dir_BL_incref(void) {
+}
+
+CASADI_SYMBOL_EXPORT void qd_dgrf_dir_BL_decref(void) {
+}
+
+CASADI_SYMBOL_EXPORT casadi_int qd_dgrf_dir_BL_n_in(void) { return 3;}
+
+CASADI_SYMBOL_EXPORT casadi_int qd_dgrf_dir_BL_n_out(void) { return 2;}
+
+CASADI_SYMBOL_EXPORT casadi_real qd_dgrf_dir_BL_default_in(casadi_int i) {
+  switch (i) {
+    default: return 0;
+  }
+}
+
+CASADI_SYMBOL_EXPORT const char* qd_dgrf_dir_BL_name_in(casadi_int i) {
+  switch (i) {
+    case 0: return "q";
+    case 1: return "w";
+    case 2: return "dq";
+    default: return 0;
+  }
+}
+
+CASADI_SYMBOL_EXPORT const char* qd_dgrf_dir_BL_name_out(casadi_int i) {
+  switch (i) {
+    case 0: return "lambda_w";
+    case 1: return "dlambda_w";
+    default: return 0;
+  }
+}
+
+CASADI_SYMBOL_EXPORT const casadi_int* qd_dgrf_dir_BL_sparsity_in(casadi_int i) {
+  switch (i) {
+    case 0: return casadi_s0;
+    case 1: return casadi_s6;
+    case 2: return casadi_s1;
+    default: return 0;
+  }
+}
+
+CASADI_SYMBOL_EXPORT const casadi_int* qd_dgrf_dir_BL_sparsity_out(casadi_int i) {
+  switch (i) {
+    case 0: return casadi_s8;
+    case 1: return casadi_s8;
+    default: return 0;
+  }
+}
+
+CASADI_SYMBOL_EXPORT int qd_dgrf_dir_BL_work(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz_iw, casadi_int *sz_w) {
+  if (sz_arg) *sz_arg = 3;
+  if (sz_res) *sz_res = 2;
+  if (sz_iw) *sz_iw = 0;
+  if (sz_w) *sz_w = 0;
+  return 0;
+}
+
+CASADI_SYMBOL_EXPORT int qd_dgrf_dir_BL_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz_iw, casadi_int *sz_w) {
+  if (sz_arg) *sz_arg = 3*sizeof(const casadi_real*);
+  if (sz_res) *sz_res = 2*sizeof(casadi_real*);
+  if (sz_iw) *sz_iw = 0*sizeof(casadi_int);
+  if (sz_w) *sz_w = 0*sizeof(casadi_real);
+  return 0;
+}
+
+/* qd_dgrf_BL:(q[19],v[18],a[18])->(dlambda_dq[3x18],dlambda_dv[3x18],dlambda_da[3x18]) */
+static int casadi_f30(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem) {
+  (void)arg; (void)res; (void)iw; (void)w; (void)mem;
+  casadi_real a0, a1, a2;
+  a0=arg[0]? arg[0][0] : 0;
+  a1=arg[0]? arg[0][1] : 0;
+  a0=(a0+a1);
+  a1=arg[0]? arg[0][2] : 0;
+  a0=(a0+a1);
+  a1=arg[0]? arg[0][3] : 0;
+  a0=(a0+a1);
+  a1=arg[0]? arg[0][4] : 0;
+  a0=(a0+a1);
+  a1=arg[0]? arg[0][5] : 0;
+  a0=(a0+a1);
+  a1=arg[0]? arg[0][6] : 0;
+  a0=(a0+a1);
+  a1=arg[0]? arg[0][7] : 0;
+  a0=(a0+a1);
+  a1=arg[0]? arg[0][8] : 0;
+  a0=(a0+a1);
+  a1=arg[0]? arg[0][9] : 0;
+  a0=(a0+a1);
+  a1=arg[0]? arg[0][10] : 0;
+  a0=(a0+a1);
+  a1=arg[0]? arg[0][11] : 0;
+  a0=(a0+a1);
+  a1=arg[0]? arg[0][12] : 0;
+  a0=(a0+a1);
+  a1=arg[0]? arg[0][13] : 0;
+  a0=(a0+a1);
+  a1=arg[0]? arg[0][14] : 0;
+  a0=(a0+a1);
+  a1=arg[0]? arg[0][15] : 0;
+  a0=(a0+a1);
+  a1=arg[0]? arg[0][16] : 0;
+  a0=(a0+a1);
+  a1=arg[0]? arg[0][17] : 0;
+  a0=(a0+a1);
+  a1=arg[0]? arg[0][18] : 0;
+  a0=(a0+a1);
+  a1=arg[1]? arg[1][0] : 0;
+  a2=arg[1]? arg[1][1] : 0;
+  a1=(a1+a2);
+  a2=arg[1]? arg[1][2] : 0;
+  a1=(a1+a2);
+  a2=arg[1]? arg[1][3] : 0;
+  a1=(a1+a2);
+  a2=arg[1]? arg[1][4] : 0;
+  a1=(a1+a2);
+  a2=arg[1]? arg[1][5] : 0;
+  a1=(a1+a2);
+  a2=arg[1]? arg[1][6] : 0;
+  a1=(a1+a2);
+  a2=arg[1]? arg[1][7] : 0;
+  a1=(a1+a2);
+  a2=arg[1]? arg[1][8] : 0;
+  a1=(a1+a2);
+  a2=arg[1]? arg[1][9] : 0;
+  a1=(a1+a2);
+  a2=arg[1]? arg[1][10] : 0;
+  a1=(a1+a2);
+  a2=arg[1]? arg[1][11] : 0;
+  a1=(a1+a2);
+  a2=arg[1]? arg[1][12] : 0;
+  a1=(a1+a2);
+  a2=arg[1]? arg[1][13] : 0;
+  a1=(a1+a2);
+  a2=arg[1]? arg[1][14] : 0;
+  a1=(a1+a2);
+  a2=arg[1]? arg[1][15] : 0;
+  a1=(a1+a2);
+  a2=arg[1]? arg[1][16] : 0;
+  a1=(a1+a2);
+  a2=arg[1]? arg[1][17] : 0;
+  a1=(a1+a2);
+  a0=(a0+a1);
+  a1=arg[2]? arg[2][0] : 0;
+  a2=arg[2]? arg[2][1] : 0;
+  a1=(a1+a2);
+  a2=arg[2]? arg[2][2] : 0;
+  a1=(a1+a2);
+  a2=arg[2]? arg[2][3] : 0;
+  a1=(a1+a2);
+  a2=arg[2]? arg[2][4] : 0;
+  a1=(a1+a2);
+  a2=arg[2]? arg[2][5] : 0;
+  a1=(a1+a2);
+  a2=arg[2]? arg[2][6] : 0;
+  a1=(a1+a2);
+  a2=arg[2]? arg[2][7] : 0;
+  a1=(a1+a2);
+  a2=arg[2]? arg[2][8] : 0;
+  a1=(a1+a2);
+  a2=arg[2]? arg[2][9] : 0;
+  a1=(a1+a2);
+  a2=arg[2]? arg[2][10] : 0;
+  a1=(a1+a2);
+  a2=arg[2]? arg[2][11] : 0;
+  a1=(a1+a2);
+  a2=arg[2]? arg[2][12] : 0;
+  a1=(a1+a2);
+  a2=arg[2]? arg[2][13] : 0;
+  a1=(a1+a2);
+  a2=arg[2]? arg[2][14] : 0;
+  a1=(a1+a2);
+  a2=arg[2]? arg[2][15] : 0;
+  a1=(a1+a2);
+  a2=arg[2]? arg[2][16] : 0;
+  a1=(a1+a2);
+  a2=arg[2]? arg[2][17] : 0;
+  a1=(a1+a2);
+  a0=(a0+a1);
+  if (res[0]!=0) res[0][0]=a0;
+  if (res[0]!=0) res[0][1]=a0;
+  if (res[0]!=0) res[0][2]=a0;
+  if (res[0]!=0) res[0][3]=a0;
+  if (res[0]!=0) res[0][4]=a0;
+  if (res[0]!=0) res[0][5]=a0;
+  if (res[0]!=0) res[0][6]=a0;
+  if (res[0]!=0) res[0][7]=a0;
+  if (res[0]!=0) res[0][8]=a0;
+  if (res[0]!=0) res[0][9]=a0;
+  if (res[0]!=0) res[0][10]=a0;
+  if (res[0]!=0) res[0][11]=a0;
+  if (res[0]!=0) res[0][12]=a0;
+  if (res[0]!=0) res[0][13]=a0;
+  if (res[0]!=0) res[0][14]=a0;
+  if (res[0]!=0) res[0][15]=a0;
+  if (res[0]!=0) res[0][16]=a0;
+  if (res[0]!=0) res[0][17]=a0;
+  if (res[0]!=0) res[0][18]=a0;
+  if (res[0]!=0) res[0][19]=a0;
+  if (res[0]!=0) res[0][20]=a0;
+  if (res[0]!=0) res[0][21]=a0;
+  if (res[0]!=0) res[0][22]=a0;
+  if (res[0]!=0) res[0][23]=a0;
+  if (res[0]!=0) res[0][24]=a0;
+  if (res[0]!=0) res[0][25]=a0;
+  if (res[0]!=0) res[0][26]=a0;
+  if (res[0]!=0) res[0][27]=a0;
+  if (res[0]!=0) res[0][28]=a0;
+  if (res[0]!=0) res[0][29]=a0;
+  if (res[0]!=0) res[0][30]=a0;
+  if (res[0]!=0) res[0][31]=a0;
+  if (res[0]!=0) res[0][32]=a0;
+  if (res[0]!=0) res[0][33]=a0;
+  if (res[0]!=0) res[0][34]=a0;
+  if (res[0]!=0) res[0][35]=a0;
+  if (res[0]!=0) res[0][36]=a0;
+  if (res[0]!=0) res[0][37]=a0;
+  if (res[0]!=0) res[0][38]=a0;
+  if (res[0]!=0) res[0][39]=a0;
+  if (res[0]!=0) res[0][40]=a0;
+  if (res[0]!=0) res[0][41]=a0;
+  if (res[0]!=0) res[0][42]=a0;
+  if (res[0]!=0) res[0][43]=a0;
+  if (res[0]!=0) res[0][44]=a0;
+  if (res[0]!=0) res[0][45]=a0;
+  if (res[0]!=0) res[0][46]=a0;
+  if (res[0]!=0) res[0][47]=a0;
+  if (res[0]!=0) res[0][48]=a0;
+  if (res[0]!=0) res[0][49]=a0;
+  if (res[0]!=0) res[0][50]=a0;
+  if (res[0]!=0) res[0][51]=a0;
+  if (res[0]!=0) res[0][52]=a0;
+  if (res[0]!=0) res[0][53]=a0;
+  if (res[1]!=0) res[1][0]=a0;
+  if (res[1]!=0) res[1][1]=a0;
+  if (res[1]!=0) res[1][2]=a0;
+  if (res[1]!=0) res[1][3]=a0;
+  if (res[1]!=0) res[1][4]=a0;
+  if (res[1]!=0) res[1][5]=a0;
+  if (res[1]!=0) res[1][6]=a0;
+  if (res[1]!=0) res[1][7]=a0;
+  if (res[1]!=0) res[1][8]=a0;
+  if (res[1]!=0) res[1][9]=a0;
+  if (res[1]!=0) res[1][10]=a0;
+  if (res[1]!=0) res[1][11]=a0;
+  if (res[1]!=0) res[1][12]=a0;
+  if (res[1]!=0) res[1][13]=a0;
+  if (res[1]!=0) res[1][14]=a0;
+  if (res[1]!=0) res[1][15]=a0;
+  if (res[1]!=0) res[1][16]=a0;
+  if (res[1]!=0) res[1][17]=a0;
+  if (res[1]!=0) res[1][18]=a0;
+  if (res[1]!=0) res[1][19]=a0;
+  if (res[1]!=0) res[1][20]=a0;
+  if (res[1]!=0) res[1][21]=a0;
+  if (res[1]!=0) res[1][22]=a0;
+  if (res[1]!=0) res[1][23]=a0;
+  if (res[1]!=0) res[1][24]=a0;
+  if (res[1]!=0) res[1][25]=a0;
+  if (res[1]!=0) res[1][26]=a0;
+  if (res[1]!=0) res[1][27]=a0;
+  if (res[1]!=0) res[1][28]=a0;
+  if (res[1]!=0) res[1][29]=a0;
+  if (res[1]!=0) res[1][30]=a0;
+  if (res[1]!=0) res[1][31]=a0;
+  if (res[1]!=0) res[1][32]=a0;
+  if (res[1]!=0) res[1][33]=a0;
+  if (res[1]!=0) res[1][34]=a0;
+  if (res[1]!=0) res[1][35]=a0;
+  if (res[1]!=0) res[1][36]=a0;
+  if (res[1]!=0) res[1][37]=a0;
+  if (res[1]!=0) res[1][38]=a0;
+  if (res[1]!=0) res[1][39]=a0;
+  if (res[1]!=0) res[1][40]=a0;
+  if (res[1]!=0) res[1][41]=a0;
+  if (res[1]!=0) res[1][42]=a0;
+  if (res[1]!=0) res[1][43]=a0;
+  if (res[1]!=0) res[1][44]=a0;
+  if (res[1]!=0) res[1][45]=a0;
+  if (res[1]!=0) res[1][46]=a0;
+  if (res[1]!=0) res[1][47]=a0;
+  if (res[1]!=0) res[1][48]=a0;
+  if (res[1]!=0) res[1][49]=a0;
+  if (res[1]!=0) res[1][50]=a0;
+  if (res[1]!=0) res[1][51]=a0;
+  if (res[1]!=0) res[1][52]=a0;
+  if (res[1]!=0) res[1][53]=a0;
+  if (res[2]!=0) res[2][0]=a0;
+  if (res[2]!=0) res[2][1]=a0;
+  if (res[2]!=0) res[2][2]=a0;
+  if (res[2]!=0) res[2][3]=a0;
+  if (res[2]!=0) res[2][4]=a0;
+  if (res[2]!=0) res[2][5]=a0;
+  if (res[2]!=0) res[2][6]=a0;
+  if (res[2]!=0) res[2][7]=a0;
+  if (res[2]!=0) res[2][8]=a0;
+  if (res[2]!=0) res[2][9]=a0;
+  if (res[2]!=0) res[2][10]=a0;
+  if (res[2]!=0) res[2][11]=a0;
+  if (res[2]!=0) res[2][12]=a0;
+  if (res[2]!=0) res[2][13]=a0;
+  if (res[2]!=0) res[2][14]=a0;
+  if (res[2]!=0) res[2][15]=a0;
+  if (res[2]!=0) res[2][16]=a0;
+  if (res[2]!=0) res[2][17]=a0;
+  if (res[2]!=0) res[2][18]=a0;
+  if (res[2]!=0) res[2][19]=a0;
+  if (res[2]!=0) res[2][20]=a0;
+  if (res[2]!=0) res[2][21]=a0;
+  if (res[2]!=0) res[2][22]=a0;
+  if (res[2]!=0) res[2][23]=a0;
+  if (res[2]!=0) res[2][24]=a0;
+  if (res[2]!=0) res[2][25]=a0;
+  if (res[2]!=0) res[2][26]=a0;
+  if (res[2]!=0) res[2][27]=a0;
+  if (res[2]!=0) res[2][28]=a0;
+  if (res[2]!=0) res[2][29]=a0;
+  if (res[2]!=0) res[2][30]=a0;
+  if (res[2]!=0) res[2][31]=a0;
+  if (res[2]!=0) res[2][32]=a0;
+  if (res[2]!=0) res[2][33]=a0;
+  if (res[2]!=0) res[2][34]=a0;
+  if (res[2]!=0) res[2][35]=a0;
+  if (res[2]!=0) res[2][36]=a0;
+  if (res[2]!=0) res[2][37]=a0;
+  if (res[2]!=0) res[2][38]=a0;
+  if (res[2]!=0) res[2][39]=a0;
+  if (res[2]!=0) res[2][40]=a0;
+  if (res[2]!=0) res[2][41]=a0;
+  if (res[2]!=0) res[2][42]=a0;
+  if (res[2]!=0) res[2][43]=a0;
+  if (res[2]!=0) res[2][44]=a0;
+  if (res[2]!=0) res[2][45]=a0;
+  if (res[2]!=0) res[2][46]=a0;
+  if (res[2]!=0) res[2][47]=a0;
+  if (res[2]!=0) res[2][48]=a0;
+  if (res[2]!=0) res[2][49]=a0;
+  if (res[2]!=0) res[2][50]=a0;
+  if (res[2]!=0) res[2][51]=a0;
+  if (res[2]!=0) res[2][52]=a0;
+  if (res[2]!=0) res[2][53]=a0;
+  return 0;
+}
+
+CASADI_SYMBOL_EXPORT int qd_dgrf_BL(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem){
+  (void)casadi_f30;
+  return qd_dgrf_solve(3, 4, casadi_f1, casadi_f0, casadi_f29, qd_did_full_sparsity_out(0), qd_did_full_sparsity_out(1), arg, res, iw, w, mem);
+}
+
+CASADI_SYMBOL_EXPORT int qd_dgrf_BL_checkout(void) {
+  return 0;
+}
+
+CASADI_SYMBOL_EXPORT void qd_dgrf_BL_release(int mem) {
+  (void)mem;
+}
+
+CASADI_SYMBOL_EXPORT void qd_dgrf_BL_incref(void) {
+}
+
+CASADI_SYMBOL_EXPORT void qd_dgrf_BL_decref(void) {
+}
+
+CASADI_SYMBOL_EXPORT casadi_int qd_dgrf_BL_n_in(void) { return 3;}
+
+CASADI_SYMBOL_EXPORT casadi_int qd_dgrf_BL_n_out(void) { return 3;}
+
+CASADI_SYMBOL_EXPORT casadi_real qd_dgrf_BL_default_in(casadi_int i) {
+  switch (i) {
+    default: return 0;
+  }
+}
+
+CASADI_SYMBOL_EXPORT const char* qd_dgrf_BL_name_in(casadi_int i) {
+  switch (i) {
+    case 0: return "q";
+    case 1: return "v";
+    case 2: return "a";
+    default: return 0;
+  }
+}
+
+CASADI_SYMBOL_EXPORT const char* qd_dgrf_BL_name_out(casadi_int i) {
+  switch (i) {
+    case 0: return "dlambda_dq";
+    case 1: return "dlambda_dv";
+    case 2: return "dlambda_da";
+    default: return 0;
+  }
+}
+
+CASADI_SYMBOL_EXPORT const casadi_int* qd_dgrf_BL_sparsity_in(casadi_int i) {
+  switch (i) {
+    case 0: return casadi_s0;
+    case 1: return casadi_s1;
+    case 2: return casadi_s1;
+    default: return 0;
+  }
+}
+
+CASADI_SYMBOL_EXPORT const casadi_int* qd_dgrf_BL_sparsity_out(casadi_int i) {
+  switch (i) {
+    case 0: return casadi_s9;
+    case 1: return casadi_s9;
+    case 2: return casadi_s9;
+    default: return 0;
+  }
+}
+
+CASADI_SYMBOL_EXPORT int qd_dgrf_BL_work(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz_iw, casadi_int *sz_w) {
+  if (sz_arg) *sz_arg = 3;
+  if (sz_res) *sz_res = 3;
+  if (sz_iw) *sz_iw = 0;
+  if (sz_w) *sz_w = 0;
+  return 0;
+}
+
+CASADI_SYMBOL_EXPORT int qd_dgrf_BL_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz_iw, casadi_int *sz_w) {
+  if (sz_arg) *sz_arg = 3*sizeof(const casadi_real*);
+  if (sz_res) *sz_res = 3*sizeof(casadi_real*);
+  if (sz_iw) *sz_iw = 0*sizeof(casadi_int);
+  if (sz_w) *sz_w = 0*sizeof(casadi_real);
+  return 0;
+}
+
+/* qd_dgrf_dir_BR:(q[19],w[6],dq[18])->(lambda_w[3],dlambda_w[3]) */
+static int casadi_f31(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem) {
+  (void)arg; (void)res; (void)iw; (void)w; (void)mem;
+  casadi_real a00, a01, a02, a03, a04, a05, a06, a07, a08, a09, a10, a11;
+  casadi_real a12, a13, a14, a15, a16, a17, a18, a19, a20, a21, a22, a23;
+  casadi_real a24, a25, a26, a27, a28, a29, a30, a31, a32, a33, a34, a35;
+  casadi_real a36, a37, a38, a39, a40, a41, a42, a43, a44, a45, a46, a47;
+  casadi_real a48, a49, a50, a51, a52, a53, a54, a55, a56, a57, a58, a59;
+  casadi_real a60, a61, a62, a63, a64, a65, a66, a67, a68, a69, a70, a71;
+  casadi_real a72, a73, a74, a75, a76, a77, a78, a79, a80, a81, a82, a83;
+  casadi_real a84, a85;
+  a00=arg[1]? arg[1][0] : 0;
+  a01=1.;
+  a02=2.0000000000000001e-01;
+  a03=arg[0]? arg[0][16] : 0;
+  a04=qd_sin(a03);
+  a05=arg[0]? arg[0][17] : 0;
+  a06=qd_sin(a05);
+  a07=(a04*a06);
+  a08=arg[0]? arg[0][18] : 0;
+  a09=qd_sin(a08);
+  a10=(a07*a09);
+  a05=qd_cos(a05);
+  a11=(a04*a05);
+  a08=qd_cos(a08);
+  a12=(a11*a08);
+  a10=(a10-a12);
+  a10=(a02*a10);
+  a12=(a02*a11);
+  a10=(a10-a12);
+  a12=casadi_sq(a10);
+  a13=(a01+a12);
+  a14=-7.0000000000000007e-02;
+  a03=qd_cos(a03);
+  a15=(a03*a05);
+  a16=(a02*a15);
+  a14=(a14+a16);
+  a16=(a15*a08);
+  a17=(a03*a06);
+  a18=(a17*a09);
+  a16=(a16-a18);
+  a16=(a02*a16);
+  a14=(a14+a16);
+  a16=casadi_sq(a14);
+  a18=(a13+a16);
+  a18=qd_sqrt(a18);
+  a19=(a01+a18);
+  a20=casadi_sq(a19);
+  a20=(a20+a12);
+  a20=(a20+a16);
+  a20=qd_sqrt(a20);
+  a16=(a19/a20);
+  a21=(2*a16);
+  a22=(a16*a00);
+  a23=(a10/a20);
+  a24=arg[1]? arg[1][4] : 0;
+  a25=(a23*a24);
+  a22=(a22+a25);
+  a25=(a14/a20);
+  a26=arg[1]? arg[1][5] : 0;
+  a27=(a25*a26);
+  a22=(a22-a27);
+  a27=(a21*a22);
+  a27=(a00-a27);
+  a28=-1.9000000000000000e-01;
+  a29=(a02*a06);
+  a28=(a28+a29);
+  a29=(a05*a09);
+  a30=(a06*a08);
+  a29=(a29+a30);
+  a29=(a02*a29);
+  a28=(a28+a29);
+  a29=(a25*a28);
+  a30=(a21*a29);
+  a31=arg[1]? arg[1][1] : 0;
+  a32=(2*a23);
+  a33=(a32*a29);
+  a34=casadi_sq(a33);
+  a13=(a13+a34);
+  a35=(-a25);
+  a35=(2*a35);
+  a36=(a35*a29);
+  a36=(a28+a36);
+  a37=casadi_sq(a36);
+  a13=(a13+a37);
+  a13=qd_sqrt(a13);
+  a38=(a01+a13);
+  a39=casadi_sq(a38);
+  a39=(a39+a12);
+  a39=(a39+a34);
+  a39=(a39+a37);
+  a39=qd_sqrt(a39);
+  a37=(a38/a39);
+  a34=(2*a37);
+  a12=(a37*a31);
+  a40=(a10/a39);
+  a41=arg[1]? arg[1][3] : 0;
+  a42=(a40*a41);
+  a12=(a12-a42);
+  a42=(a33/a39);
+  a43=(a32*a22);
+  a43=(a24-a43);
+  a44=(a42*a43);
+  a12=(a12+a44);
+  a44=(a36/a39);
+  a45=(a35*a22);
+  a45=(a26-a45);
+  a46=(a44*a45);
+  a12=(a12+a46);
+  a46=(a34*a12);
+  a46=(a31-a46);
+  a47=(a23*a28);
+  a48=(a32*a47);
+  a48=(a48-a28);
+  a49=(a42*a48);
+  a50=(a40*a14);
+  a49=(a49-a50);
+  a50=(a35*a47);
+  a51=(a44*a50);
+  a49=(a49+a51);
+  a51=(a34*a49);
+  a52=arg[1]? arg[1][2] : 0;
+  a53=(-a40);
+  a53=(2*a53);
+  a54=(a53*a49);
+  a54=(a14-a54);
+  a55=casadi_sq(a54);
+  a56=(a01+a55);
+  a57=(2*a42);
+  a58=(a57*a49);
+  a58=(a48-a58);
+  a59=casadi_sq(a58);
+  a56=(a56+a59);
+  a60=(2*a44);
+  a61=(a60*a49);
+  a61=(a50-a61);
+  a62=casadi_sq(a61);
+  a56=(a56+a62);
+  a56=qd_sqrt(a56);
+  a63=(a01+a56);
+  a64=casadi_sq(a63);
+  a64=(a64+a55);
+  a64=(a64+a59);
+  a64=(a64+a62);
+  a64=qd_sqrt(a64);
+  a62=(a63/a64);
+  a59=(2*a62);
+  a55=(a62*a52);
+  a65=(a54/a64);
+  a66=(a53*a12);
+  a66=(a41-a66);
+  a67=(a65*a66);
+  a55=(a55+a67);
+  a67=(a58/a64);
+  a68=(a57*a12);
+  a68=(a43-a68);
+  a69=(a67*a68);
+  a55=(a55+a69);
+  a69=(a61/a64);
+  a70=(a60*a12);
+  a70=(a45-a70);
+  a71=(a69*a70);
+  a55=(a55+a71);
+  a71=(a59*a55);
+  a71=(a52-a71);
+  a72=(a65*a54);
+  a72=(a62+a72);
+  a73=(a67*a58);
+  a72=(a72+a73);
+  a73=(a69*a61);
+  a72=(a72+a73);
+  a73=(a59*a72);
+  a73=(a01-a73);
+  a71=(a71/a73);
+  a74=(a51*a71);
+  a46=(a46+a74);
+  a74=(a40*a10);
+  a74=(a37+a74);
+  a75=(a42*a33);
+  a74=(a74+a75);
+  a75=(a44*a36);
+  a74=(a74+a75);
+  a75=(a34*a74);
+  a75=(a01-a75);
+  a46=(a46/a75);
+  a76=(a30*a46);
+  a77=(a21*a47);
+  a78=(a77*a71);
+  a76=(a76+a78);
+  a27=(a27-a76);
+  a76=(a23*a10);
+  a76=(a16+a76);
+  a78=(a25*a14);
+  a76=(a76+a78);
+  a78=(a21*a76);
+  a01=(a01-a78);
+  a27=(a27/a01);
+  if (res[0]!=0) res[0][0]=a27;
+  if (res[0]!=0) res[0][1]=a46;
+  if (res[0]!=0) res[0][2]=a71;
+  a27=(a27/a01);
+  a78=(2*a10);
+  a79=arg[2]? arg[2][15] : 0;
+  a80=(a03*a79);
+  a81=(a06*a80);
+  a82=arg[2]? arg[2][16] : 0;
+  a83=(a05*a82);
+  a84=(a04*a83);
+  a81=(a81+a84);
+  a81=(a09*a81);
+  a84=arg[2]? arg[2][17] : 0;
+  a85=(a08*a84);
+  a07=(a07*a85);
+  a81=(a81+a07);
+  a80=(a05*a80);
+  a82=(a06*a82);
+  a07=(a04*a82);
+  a80=(a80-a07);
+  a07=(a08*a80);
+  a84=(a09*a84);
+  a11=(a11*a84);
+  a07=(a07-a11);
+  a81=(a81-a07);
+  a81=(a02*a81);
+  a80=(a02*a80);
+  a81=(a81-a80);
+  a78=(a78*a81);
+  a80=(2*a14);
+  a04=(a04*a79);
+  a79=(a05*a04);
+  a07=(a03*a82);
+  a79=(a79+a07);
+  a07=(a02*a79);
+  a79=(a08*a79);
+  a15=(a15*a84);
+  a79=(a79+a15);
+  a03=(a03*a83);
+  a04=(a06*a04);
+  a03=(a03-a04);
+  a03=(a09*a03);
+  a17=(a17*a85);
+  a03=(a03+a17);
+  a79=(a79+a03);
+  a79=(a02*a79);
+  a07=(a07+a79);
+  a80=(a80*a07);
+  a79=(a78-a80);
+  a18=(2*a18);
+  a79=(a79/a18);
+  a18=(a79/a20);
+  a16=(a16/a20);
+  a19=(2*a19);
+  a19=(a19*a79);
+  a19=(a19+a78);
+  a19=(a19-a80);
+  a80=(2*a20);
+  a19=(a19/a80);
+  a16=(a16*a19);
+  a18=(a18-a16);
+  a16=(2*a18);
+  a76=(a76*a16);
+  a80=(a81/a20);
+  a79=(a23/a20);
+  a79=(a79*a19);
+  a80=(a80-a79);
+  a79=(a10*a80);
+  a03=(a23*a81);
+  a79=(a79+a03);
+  a79=(a18+a79);
+  a03=(a07/a20);
+  a20=(a25/a20);
+  a20=(a20*a19);
+  a03=(a03+a20);
+  a20=(a14*a03);
+  a19=(a25*a07);
+  a20=(a20+a19);
+  a79=(a79-a20);
+  a79=(a21*a79);
+  a76=(a76+a79);
+  a27=(a27*a76);
+  a76=(a22*a16);
+  a00=(a00*a18);
+  a24=(a24*a80);
+  a00=(a00+a24);
+  a26=(a26*a03);
+  a00=(a00+a26);
+  a26=(a21*a00);
+  a76=(a76+a26);
+  a26=(a29*a16);
+  a24=(a02*a83);
+  a05=(a05*a85);
+  a09=(a09*a82);
+  a05=(a05-a09);
+  a08=(a08*a83);
+  a06=(a06*a84);
+  a08=(a08-a06);
+  a05=(a05+a08);
+  a02=(a02*a05);
+  a24=(a24+a02);
+  a25=(a25*a24);
+  a02=(a28*a03);
+  a25=(a25-a02);
+  a02=(a21*a25);
+  a26=(a26+a02);
+  a26=(a46*a26);
+  a02=(2*a33);
+  a05=(2*a80);
+  a08=(a29*a05);
+  a06=(a32*a25);
+  a08=(a08+a06);
+  a02=(a02*a08);
+  a06=(a78+a02);
+  a84=(2*a36);
+  a03=(2*a03);
+  a29=(a29*a03);
+  a25=(a35*a25);
+  a29=(a29+a25);
+  a29=(a24+a29);
+  a84=(a84*a29);
+  a06=(a06+a84);
+  a13=(2*a13);
+  a06=(a06/a13);
+  a13=(a06/a39);
+  a37=(a37/a39);
+  a38=(2*a38);
+  a38=(a38*a06);
+  a38=(a38+a78);
+  a38=(a38+a02);
+  a38=(a38+a84);
+  a84=(2*a39);
+  a38=(a38/a84);
+  a37=(a37*a38);
+  a13=(a13-a37);
+  a37=(2*a13);
+  a84=(a49*a37);
+  a02=(a08/a39);
+  a78=(a42/a39);
+  a78=(a78*a38);
+  a02=(a02-a78);
+  a48=(a48*a02);
+  a78=(a47*a05);
+  a28=(a28*a80);
+  a23=(a23*a24);
+  a28=(a28+a23);
+  a23=(a32*a28);
+  a78=(a78+a23);
+  a78=(a78-a24);
+  a24=(a42*a78);
+  a48=(a48+a24);
+  a24=(a81/a39);
+  a23=(a40/a39);
+  a23=(a23*a38);
+  a24=(a24-a23);
+  a14=(a14*a24);
+  a23=(a40*a07);
+  a14=(a14-a23);
+  a48=(a48-a14);
+  a14=(a29/a39);
+  a39=(a44/a39);
+  a39=(a39*a38);
+  a14=(a14-a39);
+  a50=(a50*a14);
+  a39=(a47*a03);
+  a38=(a35*a28);
+  a39=(a39+a38);
+  a38=(a44*a39);
+  a50=(a50+a38);
+  a48=(a48+a50);
+  a50=(a34*a48);
+  a84=(a84+a50);
+  a84=(a71*a84);
+  a50=(a71/a73);
+  a38=(2*a58);
+  a23=(2*a02);
+  a80=(a49*a23);
+  a06=(a57*a48);
+  a80=(a80+a06);
+  a78=(a78-a80);
+  a38=(a38*a78);
+  a80=(2*a54);
+  a06=(-a24);
+  a06=(2*a06);
+  a25=(a49*a06);
+  a83=(a53*a48);
+  a25=(a25+a83);
+  a07=(a07+a25);
+  a80=(a80*a07);
+  a25=(a38-a80);
+  a83=(2*a61);
+  a09=(2*a14);
+  a49=(a49*a09);
+  a48=(a60*a48);
+  a49=(a49+a48);
+  a39=(a39-a49);
+  a83=(a83*a39);
+  a25=(a25+a83);
+  a56=(2*a56);
+  a25=(a25/a56);
+  a56=(a25/a64);
+  a62=(a62/a64);
+  a63=(2*a63);
+  a63=(a63*a25);
+  a63=(a63-a80);
+  a63=(a63+a38);
+  a63=(a63+a83);
+  a83=(2*a64);
+  a63=(a63/a83);
+  a62=(a62*a63);
+  a56=(a56-a62);
+  a62=(2*a56);
+  a72=(a72*a62);
+  a83=(a07/a64);
+  a38=(a65/a64);
+  a38=(a38*a63);
+  a83=(a83+a38);
+  a54=(a54*a83);
+  a07=(a65*a07);
+  a54=(a54+a07);
+  a54=(a56-a54);
+  a07=(a78/a64);
+  a38=(a67/a64);
+  a38=(a38*a63);
+  a07=(a07-a38);
+  a58=(a58*a07);
+  a78=(a67*a78);
+  a58=(a58+a78);
+  a54=(a54+a58);
+  a58=(a39/a64);
+  a64=(a69/a64);
+  a64=(a64*a63);
+  a58=(a58-a64);
+  a61=(a61*a58);
+  a39=(a69*a39);
+  a61=(a61+a39);
+  a54=(a54+a61);
+  a54=(a59*a54);
+  a72=(a72+a54);
+  a50=(a50*a72);
+  a55=(a55*a62);
+  a52=(a52*a56);
+  a66=(a66*a83);
+  a06=(a12*a06);
+  a31=(a31*a13);
+  a41=(a41*a24);
+  a31=(a31-a41);
+  a43=(a43*a02);
+  a05=(a22*a05);
+  a32=(a32*a00);
+  a05=(a05+a32);
+  a32=(a42*a05);
+  a43=(a43-a32);
+  a31=(a31+a43);
+  a45=(a45*a14);
+  a22=(a22*a03);
+  a35=(a35*a00);
+  a22=(a22+a35);
+  a35=(a44*a22);
+  a45=(a45-a35);
+  a31=(a31+a45);
+  a53=(a53*a31);
+  a06=(a06+a53);
+  a65=(a65*a06);
+  a66=(a66+a65);
+  a52=(a52-a66);
+  a68=(a68*a07);
+  a23=(a12*a23);
+  a57=(a57*a31);
+  a23=(a23+a57);
+  a05=(a05+a23);
+  a67=(a67*a05);
+  a68=(a68-a67);
+  a52=(a52+a68);
+  a70=(a70*a58);
+  a09=(a12*a09);
+  a60=(a60*a31);
+  a09=(a09+a60);
+  a22=(a22+a09);
+  a69=(a69*a22);
+  a70=(a70-a69);
+  a52=(a52+a70);
+  a59=(a59*a52);
+  a55=(a55+a59);
+  a55=(a55/a73);
+  a50=(a50-a55);
+  a51=(a51*a50);
+  a84=(a84+a51);
+  a12=(a12*a37);
+  a31=(a34*a31);
+  a12=(a12+a31);
+  a84=(a84-a12);
+  a84=(a84/a75);
+  a46=(a46/a75);
+  a74=(a74*a37);
+  a10=(a10*a24);
+  a40=(a40*a81);
+  a10=(a10+a40);
+  a13=(a13+a10);
+  a33=(a33*a02);
+  a42=(a42*a08);
+  a33=(a33+a42);
+  a13=(a13+a33);
+  a36=(a36*a14);
+  a44=(a44*a29);
+  a36=(a36+a44);
+  a13=(a13+a36);
+  a34=(a34*a13);
+  a74=(a74+a34);
+  a46=(a46*a74);
+  a84=(a84+a46);
+  a30=(a30*a84);
+  a26=(a26+a30);
+  a47=(a47*a16);
+  a21=(a21*a28);
+  a47=(a47+a21);
+  a71=(a71*a47);
+  a77=(a77*a50);
+  a71=(a71+a77);
+  a26=(a26+a71);
+  a76=(a76+a26);
+  a76=(a76/a01);
+  a27=(a27-a76);
+  if (res[1]!=0) res[1][0]=a27;
+  if (res[1]!=0) res[1][1]=a84;
+  if (res[1]!=0) res[1][2]=a50;
+  return 0;
+}
+
+CASADI_SYMBOL_EXPORT int qd_dgrf_dir_BR(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem){
+  return qd_d_finite(casadi_f31(arg, res, iw, w, mem), res, 2, (const casadi_int[]){3, 3});
+}
+
+CASADI_SYMBOL_EXPORT int qd_dgrf_dir_BR_checkout(void) {
+  return 0;
+}
+
+CASADI_SYMBOL_EXPORT void qd_dgrf_dir_BR_release(int mem) {
+  (void)mem;
+}
+
+CASADI_SYMBOL_EXPORT void qd_dgrf_dir_BR_incref(void) {
+}
+
+CASADI_SYMBOL_EXPORT void qd_dgrf_dir_BR_decref(void) {
+}
+
+CASADI_SYMBOL_EXPORT casadi_int qd_dgrf_dir_BR_n_in(void) { return 3;}
+
+CASADI_SYMBOL_EXPORT casadi_int qd_dgrf_dir_BR_n_out(void) { return 2;}
+
+CASADI_SYMBOL_EXPORT casadi_real qd_dgrf_dir_BR_default_in(casadi_int i) {
+  switch (i) {
+    default: return 0;
+  }
+}
+
+CASADI_SYMBOL_EXPORT const char* qd_dgrf_dir_BR_name_in(casadi_int i) {
+  switch (i) {
+    case 0: return "q";
+    case 1: return "w";
+    case 2: return "dq";
+    default: return 0;
+  }
+}
+
+CASADI_SYMBOL_EXPORT const char* qd_dgrf_dir_BR_name_out(casadi_int i) {
+  switch (i) {
+    case 0: return "lambda_w";
+    case 1: return "dlambda_w";
+    default: return 0;
+  }
+}
+
+CASADI_SYMBOL_EXPORT const casadi_int* qd_dgrf_dir_BR_sparsity_in(casadi_int i) {
+  switch (i) {
+    case 0: return casadi_s0;
+    case 1: return casadi_s6;
+    case 2: return casadi_s1;
+    default: return 0;
+  }
+}
+
+CASADI_SYMBOL_EXPORT const casadi_int* qd_dgrf_dir_BR_sparsity_out(casadi_int i) {
+  switch (i) {
+    case 0: return casadi_s8;
+    case 1: return casadi_s8;
+    default: return 0;
+  }
+}
+
+CASADI_SYMBOL_EXPORT int qd_dgrf_dir_BR_work(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz_iw, casadi_int *sz_w) {
+  if (sz_arg) *sz_arg = 3;
+  if (sz_res) *sz_res = 2;
+  if (sz_iw) *sz_iw = 0;
+  if (sz_w) *sz_w = 0;
+  return 0;
+}
+
+CASADI_SYMBOL_EXPORT int qd_dgrf_dir_BR_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz_iw, casadi_int *sz_w) {
+  if (sz_arg) *sz_arg = 3*sizeof(const casadi_real*);
+  if (sz_res) *sz_res = 2*sizeof(casadi_real*);
+  if (sz_iw) *sz_iw = 0*sizeof(casadi_int);
+  if (sz_w) *sz_w = 0*sizeof(casadi_real);
+  return 0;
+}
+
+/* qd_dgrf_BR:(q[19],v[18],a[18])->(dlambda_dq[3x18],dlambda_dv[3x18],dlambda_da[3x18]) */
+static int casadi_f32(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem) {
+  (void)arg; (void)res; (void)iw; (void)w; (void)mem;
+  casadi_real a0, a1, a2;
+  a0=arg[0]? arg[0][0] : 0;
+  a1=arg[0]? arg[0][1] : 0;
+  a0=(a0+a1);
+  a1=arg[0]? arg[0][2] : 0;
+  a0=(a0+a1);
+  a1=arg[0]? arg[0][3] : 0;
+  a0=(a0+a1);
+  a1=arg[0]? arg[0][4] : 0;
+  a0=(a0+a1);
+  a1=arg[0]? arg[0][5] : 0;
+  a0=(a0+a1);
+  a1=arg[0]? arg[0][6] : 0;
+  a0=(a0+a1);
+  a1=arg[0]? arg[0][7] : 0;
+  a0=(a0+a1);
+  a1=arg[0]? arg[0][8] : 0;
+  a0=(a0+a1);
+  a1=arg[0]? arg[0][9] : 0;
+  a0=(a0+a1);
+  a1=arg[0]? arg[0][10] : 0;
+  a0=(a0+a1);
+  a1=arg[0]? arg[0][11] : 0;
+  a0=(a0+a1);
+  a1=arg[0]? arg[0][12] : 0;
+  a0=(a0+a1);
+  a1=arg[0]? arg[0][13] : 0;
+  a0=(a0+a1);
+  a1=arg[0]? arg[0][14] : 0;
+  a0=(a0+a1);
+  a1=arg[0]? arg[0][15] : 0;
+  a0=(a0+a1);
+  a1=arg[0]? arg[0][16] : 0;
+  a0=(a0+a1);
+  a1=arg[0]? arg[0][17] : 0;
+  a0=(a0+a1);
+  a1=arg[0]? arg[0][18] : 0;
+  a0=(a0+a1);
+  a1=arg[1]? arg[1][0] : 0;
+  a2=arg[1]? arg[1][1] : 0;
+  a1=(a1+a2);
+  a2=arg[1]? arg[1][2] : 0;
+  a1=(a1+a2);
+  a2=arg[1]? arg[1][3] : 0;
+  a1=(a1+a2);
+  a2=arg[1]? arg[1][4] : 0;
+  a1=(a1+a2);
+  a2=arg[1]? arg[1][5] : 0;
+  a1=(a1+a2);
+  a2=arg[1]? arg[1][6] : 0;
+  a1=(a1+a2);
+  a2=arg[1]? arg[1][7] : 0;
+  a1=(a1+a2);
+  a2=arg[1]? arg[1][8] : 0;
+  a1=(a1+a2);
+  a2=arg[1]? arg[1][9] : 0;
+  a1=(a1+a2);
+  a2=arg[1]? arg[1][10] : 0;
+  a1=(a1+a2);
+  a2=arg[1]? arg[1][11] : 0;
+  a1=(a1+a2);
+  a2=arg[1]? arg[1][12] : 0;
+  a1=(a1+a2);
+  a2=arg[1]? arg[1][13] : 0;
+  a1=(a1+a2);
+  a2=arg[1]? arg[1][14] : 0;
+  a1=(a1+a2);
+  a2=arg[1]? arg[1][15] : 0;
+  a1=(a1+a2);
+  a2=arg[1]? arg[1][16] : 0;
+  a1=(a1+a2);
+  a2=arg[1]? arg[1][17] : 0;
+  a1=(a1+a2);
+  a0=(a0+a1);
+  a1=arg[2]? arg[2][0] : 0;
+  a2=arg[2]? arg[2][1] : 0;
+  a1=(a1+a2);
+  a2=arg[2]? arg[2][2] : 0;
+  a1=(a1+a2);
+  a2=arg[2]? arg[2][3] : 0;
+  a1=(a1+a2);
+  a2=arg[2]? arg[2][4] : 0;
+  a1=(a1+a2);
+  a2=arg[2]? arg[2][5] : 0;
+  a1=(a1+a2);
+  a2=arg[2]? arg[2][6] : 0;
+  a1=(a1+a2);
+  a2=arg[2]? arg[2][7] : 0;
+  a1=(a1+a2);
+  a2=arg[2]? arg[2][8] : 0;
+  a1=(a1+a2);
+  a2=arg[2]? arg[2][9] : 0;
+  a1=(a1+a2);
+  a2=arg[2]? arg[2][10] : 0;
+  a1=(a1+a2);
+  a2=arg[2]? arg[2][11] : 0;
+  a1=(a1+a2);
+  a2=arg[2]? arg[2][12] : 0;
+  a1=(a1+a2);
+  a2=arg[2]? arg[2][13] : 0;
+  a1=(a1+a2);
+  a2=arg[2]? arg[2][14] : 0;
+  a1=(a1+a2);
+  a2=arg[2]? arg[2][15] : 0;
+  a1=(a1+a2);
+  a2=arg[2]? arg[2][16] : 0;
+  a1=(a1+a2);
+  a2=arg[2]? arg[2][17] : 0;
+  a1=(a1+a2);
+  a0=(a0+a1);
+  if (res[0]!=0) res[0][0]=a0;
+  if (res[0]!=0) res[0][1]=a0;
+  if (res[0]!=0) res[0][2]=a0;
+  if (res[0]!=0) res[0][3]=a0;
+  if (res[0]!=0) res[0][4]=a0;
+  if (res[0]!=0) res[0][5]=a0;
+  if (res[0]!=0) res[0][6]=a0;
+  if (res[0]!=0) res[0][7]=a0;
+  if (res[0]!=0) res[0][8]=a0;
+  if (res[0]!=0) res[0][9]=a0;
+  if (res[0]!=0) res[0][10]=a0;
+  if (res[0]!=0) res[0][11]=a0;
+  if (res[0]!=0) res[0][12]=a0;
+  if (res[0]!=0) res[0][13]=a0;
+  if (res[0]!=0) res[0][14]=a0;
+  if (res[0]!=0) res[0][15]=a0;
+  if (res[0]!=0) res[0][16]=a0;
+  if (res[0]!=0) res[0][17]=a0;
+  if (res[0]!=0) res[0][18]=a0;
+  if (res[0]!=0) res[0][19]=a0;
+  if (res[0]!=0) res[0][20]=a0;
+  if (res[0]!=0) res[0][21]=a0;
+  if (res[0]!=0) res[0][22]=a0;
+  if (res[0]!=0) res[0][23]=a0;
+  if (res[0]!=0) res[0][24]=a0;
+  if (res[0]!=0) res[0][25]=a0;
+  if (res[0]!=0) res[0][26]=a0;
+  if (res[0]!=0) res[0][27]=a0;
+  if (res[0]!=0) res[0][28]=a0;
+  if (res[0]!=0) res[0][29]=a0;
+  if (res[0]!=0) res[0][30]=a0;
+  if (res[0]!=0) res[0][31]=a0;
+  if (res[0]!=0) res[0][32]=a0;
+  if (res[0]!=0) res[0][33]=a0;
+  if (res[0]!=0) res[0][34]=a0;
+  if (res[0]!=0) res[0][35]=a0;
+  if (res[0]!=0) res[0][36]=a0;
+  if (res[0]!=0) res[0][37]=a0;
+  if (res[0]!=0) res[0][38]=a0;
+  if (res[0]!=0) res[0][39]=a0;
+  if (res[0]!=0) res[0][40]=a0;
+  if (res[0]!=0) res[0][41]=a0;
+  if (res[0]!=0) res[0][42]=a0;
+  if (res[0]!=0) res[0][43]=a0;
+  if (res[0]!=0) res[0][44]=a0;
+  if (res[0]!=0) res[0][45]=a0;
+  if (res[0]!=0) res[0][46]=a0;
+  if (res[0]!=0) res[0][47]=a0;
+  if (res[0]!=0) res[0][48]=a0;
+  if (res[0]!=0) res[0][49]=a0;
+  if (res[0]!=0) res[0][50]=a0;
+  if (res[0]!=0) res[0][51]=a0;
+  if (res[0]!=0) res[0][52]=a0;
+  if (res[0]!=0) res[0][53]=a0;
+  if (res[1]!=0) res[1][0]=a0;
+  if (res[1]!=0) res[1][1]=a0;
+  if (res[1]!=0) res[1][2]=a0;
+  if (res[1]!=0) res[1][3]=a0;
+  if (res[1]!=0) res[1][4]=a0;
+  if (res[1]!=0) res[1][5]=a0;
+  if (res[1]!=0) res[1][6]=a0;
+  if (res[1]!=0) res[1][7]=a0;
+  if (res[1]!=0) res[1][8]=a0;
+  if (res[1]!=0) res[1][9]=a0;
+  if (res[1]!=0) res[1][10]=a0;
+  if (res[1]!=0) res[1][11]=a0;
+  if (res[1]!=0) res[1][12]=a0;
+  if (res[1]!=0) res[1][13]=a0;
+  if (res[1]!=0) res[1][14]=a0;
+  if (res[1]!=0) res[1][15]=a0;
+  if (res[1]!=0) res[1][16]=a0;
+  if (res[1]!=0) res[1][17]=a0;
+  if (res[1]!=0) res[1][18]=a0;
+  if (res[1]!=0) res[1][19]=a0;
+  if (res[1]!=0) res[1][20]=a0;
+  if (res[1]!=0) res[1][21]=a0;
+  if (res[1]!=0) res[1][22]=a0;
+  if (res[1]!=0) res[1][23]=a0;
+  if (res[1]!=0) res[1][24]=a0;
+  if (res[1]!=0) res[1][25]=a0;
+  if (res[1]!=0) res[1][26]=a0;
+  if (res[1]!=0) res[1][27]=a0;
+  if (res[1]!=0) res[1][28]=a0;
+  if (res[1]!=0) res[1][29]=a0;
+  if (res[1]!=0) res[1][30]=a0;
+  if (res[1]!=0) res[1][31]=a0;
+  if (res[1]!=0) res[1][32]=a0;
+  if (res[1]!=0) res[1][33]=a0;
+  if (res[1]!=0) res[1][34]=a0;
+  if (res[1]!=0) res[1][35]=a0;
+  if (res[1]!=0) res[1][36]=a0;
+  if (res[1]!=0) res[1][37]=a0;
+  if (res[1]!=0) res[1][38]=a0;
+  if (res[1]!=0) res[1][39]=a0;
+  if (res[1]!=0) res[1][40]=a0;
+  if (res[1]!=0) res[1][41]=a0;
+  if (res[1]!=0) res[1][42]=a0;
+  if (res[1]!=0) res[1][43]=a0;
+  if (res[1]!=0) res[1][44]=a0;
+  if (res[1]!=0) res[1][45]=a0;
+  if (res[1]!=0) res[1][46]=a0;
+  if (res[1]!=0) res[1][47]=a0;
+  if (res[1]!=0) res[1][48]=a0;
+  if (res[1]!=0) res[1][49]=a0;
+  if (res[1]!=0) res[1][50]=a0;
+  if (res[1]!=0) res[1][51]=a0;
+  if (res[1]!=0) res[1][52]=a0;
+  if (res[1]!=0) res[1][53]=a0;
+  if (res[2]!=0) res[2][0]=a0;
+  if (res[2]!=0) res[2][1]=a0;
+  if (res[2]!=0) res[2][2]=a0;
+  if (res[2]!=0) res[2][3]=a0;
+  if (res[2]!=0) res[2][4]=a0;
+  if (res[2]!=0) res[2][5]=a0;
+  if (res[2]!=0) res[2][6]=a0;
+  if (res[2]!=0) res[2][7]=a0;
+  if (res[2]!=0) res[2][8]=a0;
+  if (res[2]!=0) res[2][9]=a0;
+  if (res[2]!=0) res[2][10]=a0;
+  if (res[2]!=0) res[2][11]=a0;
+  if (res[2]!=0) res[2][12]=a0;
+  if (res[2]!=0) res[2][13]=a0;
+  if (res[2]!=0) res[2][14]=a0;
+  if (res[2]!=0) res[2][15]=a0;
+  if (res[2]!=0) res[2][16]=a0;
+  if (res[2]!=0) res[2][17]=a0;
+  if (res[2]!=0) res[2][18]=a0;
+  if (res[2]!=0) res[2][19]=a0;
+  if (res[2]!=0) res[2][20]=a0;
+  if (res[2]!=0) res[2][21]=a0;
+  if (res[2]!=0) res[2][22]=a0;
+  if (res[2]!=0) res[2][23]=a0;
+  if (res[2]!=0) res[2][24]=a0;
+  if (res[2]!=0) res[2][25]=a0;
+  if (res[2]!=0) res[2][26]=a0;
+  if (res[2]!=0) res[2][27]=a0;
+  if (res[2]!=0) res[2][28]=a0;
+  if (res[2]!=0) res[2][29]=a0;
+  if (res[2]!=0) res[2][30]=a0;
+  if (res[2]!=0) res[2][31]=a0;
+  if (res[2]!=0) res[2][32]=a0;
+  if (res[2]!=0) res[2][33]=a0;
+  if (res[2]!=0) res[2][34]=a0;
+  if (res[2]!=0) res[2][35]=a0;
+  if (res[2]!=0) res[2][36]=a0;
+  if (res[2]!=0) res[2][37]=a0;
+  if (res[2]!=0) res[2][38]=a0;
+  if (res[2]!=0) res[2][39]=a0;
+  if (res[2]!=0) res[2][40]=a0;
+  if (res[2]!=0) res[2][41]=a0;
+  if (res[2]!=0) res[2][42]=a0;
+  if (res[2]!=0) res[2][43]=a0;
+  if (res[2]!=0) res[2][44]=a0;
+  if (res[2]!=0) res[2][45]=a0;
+  if (res[2]!=0) res[2][46]=a0;
+  if (res[2]!=0) res[2][47]=a0;
+  if (res[2]!=0) res[2][48]=a0;
+  if (res[2]!=0) res[2][49]=a0;
+  if (res[2]!=0) res[2][50]=a0;
+  if (res[2]!=0) res[2][51]=a0;
+  if (res[2]!=0) res[2][52]=a0;
+  if (res[2]!=0) res[2][53]=a0;
+  return 0;
+}
+
+CASADI_SYMBOL_EXPORT int qd_dgrf_BR(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem){
+  (void)casadi_f32;
+  return qd_dgrf_solve(3, 8, casadi_f1, casadi_f0, casadi_f31, qd_did_full_sparsity_out(0), qd_did_full_sparsity_out(1), arg, res, iw, w, mem);
+}
+
+CASADI_SYMBOL_EXPORT int qd_dgrf_BR_checkout(void) {
+  return 0;
+}
+
+CASADI_SYMBOL_EXPORT void qd_dgrf_BR_release(int mem) {
+  (void)mem;
+}
+
+CASADI_SYMBOL_EXPORT void qd_dgrf_BR_incref(void) {
+}
+
+CASADI_SYMBOL_EXPORT void qd_dgrf_BR_decref(void) {
+}
+
+CASADI_SYMBOL_EXPORT casadi_int qd_dgrf_BR_n_in(void) { return 3;}
+
+CASADI_SYMBOL_EXPORT casadi_int qd_dgrf_BR_n_out(void) { return 3;}
+
+CASADI_SYMBOL_EXPORT casadi_real qd_dgrf_BR_default_in(casadi_int i) {
+  switch (i) {
+    default: return 0;
+  }
+}
+
+CASADI_SYMBOL_EXPORT const char* qd_dgrf_BR_name_in(casadi_int i) {
+  switch (i) {
+    case 0: return "q";
+    case 1: return "v";
+    case 2: return "a";
+    default: return 0;
+  }
+}
+
+CASADI_SYMBOL_EXPORT const char* qd_dgrf_BR_name_out(casadi_int i) {
+  switch (i) {
+    case 0: return "dlambda_dq";
+    case 1: return "dlambda_dv";
+    case 2: return "dlambda_da";
+    default: return 0;
+  }
+}
+
+CASADI_SYMBOL_EXPORT const casadi_int* qd_dgrf_BR_sparsity_in(casadi_int i) {
+  switch (i) {
+    case 0: return casadi_s0;
+    case 1: return casadi_s1;
+    case 2: return casadi_s1;
+    default: return 0;
+  }
+}
+
+CASADI_SYMBOL_EXPORT const casadi_int* qd_dgrf_BR_sparsity_out(casadi_int i) {
+  switch (i) {
+    case 0: return casadi_s9;
+    case 1: return casadi_s9;
+    case 2: return casadi_s9;
+    default: return 0;
+  }
+}
+
+CASADI_SYMBOL_EXPORT int qd_dgrf_BR_work(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz_iw, casadi_int *sz_w) {
+  if (sz_arg) *sz_arg = 3;
+  if (sz_res) *sz_res = 3;
+  if (sz_iw) *sz_iw = 0;
+  if (sz_w) *sz_w = 0;
+  return 0;
+}
+
+CASADI_SYMBOL_EXPORT int qd_dgrf_BR_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz_iw, casadi_int *sz_w) {
   if (sz_arg) *sz_arg = 3*sizeof(const casadi_real*);
   if (sz_res) *sz_res = 3*sizeof(casadi_real*);
   if (sz_iw) *sz_iw = 0*sizeof(casadi_int);

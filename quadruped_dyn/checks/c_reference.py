@@ -11,7 +11,9 @@ import casadi as ca
 import numpy as np
 import pinocchio as pin
 
+from quadruped_dyn.checks.derivative_reference import ReducedReference, grf_derivatives_reference, grf_wrench_reference
 from quadruped_dyn.codegen.emit import PREFIX, GeneratedFiles, generate, reduced_parts, stem
+from quadruped_dyn.codegen.emit_derivatives import REDUCED_DERIVATIVE_NAMES
 from quadruped_dyn.math.compare import relative_error, scale_of, within
 from quadruped_dyn.model.robot import Robot
 from quadruped_dyn.model.stance import StanceSet, stance_set
@@ -22,6 +24,7 @@ from quadruped_dyn.tolerances import (
     GRF_COND_ASSUMED,
     MAP_COND_ASSUMED,
     REFERENCE_TOL_SCALE_REL_TOL,
+    REL_TOL_FD_DERIVATIVES,
     REL_TOL_TERMS,
 )
 
@@ -44,8 +47,16 @@ def reduced_inputs(s: FullState) -> dict[str, np.ndarray]:
     derived from a full state: its joints and trunk roll, joint rates and accelerations (+ one
     body component for the roll's), orientation, and torques from its accelerations."""
     roll = pin.rpy.matrixToRpy(rotation(s.q))[0]
+    qdd_r = np.append(s.a[6:], s.a[3])
     return {"q_r": _rounded(np.append(s.q[7:], roll)), "qd_r": np.append(s.v[6:], s.v[3]),
-            "qdd_r": np.append(s.a[6:], s.a[3]), "quat": s.q[3:7], "tau_ext": 10.0 * s.a[5:]}
+            "qdd_r": qdd_r, "quat": s.q[3:7], "tau_ext": 10.0 * s.a[5:],
+            # a direction for did_r_dir (the roll entry of dq_r has no effect: the roll is read from quat)
+            "dq_r": _rounded(0.1 * qdd_r), "dqd_r": qdd_r, "dtheta": _rounded(0.1 * s.a[:3])}
+
+
+def wrench_inputs(s: FullState) -> dict[str, np.ndarray]:
+    """Inputs of dgrf_dir: a trunk wrench (from the state's accelerations) and a tangent direction of q."""
+    return {"w": _rounded(20.0 * s.a[:6]), "dq": s.v}
 
 def reference_tau_full(s: FullState) -> np.ndarray:
     """The generalized force (18,) dfd_full is checked at: 5 a (rounded like the state)."""
@@ -67,8 +78,31 @@ def _reduced_reference(ref: PinocchioReference, kind: str, stance: StanceSet, s:
     M = ref.reduced_mass_matrix(stance.feet, stance.selection("paper"), x["q_r"], s.q[3:7])
     return M if kind == "M_r" else np.linalg.solve(M, x["tau_ext"] - id_r(x["qd_r"], zero))
 
+def _derivative_reference(ref: PinocchioReference, name: str, s: FullState) -> list[np.ndarray] | None:
+    """Central differences of the Pinocchio-built references (``checks.derivative_reference``) for the
+    reduced model's and the GRF solve's derivatives; None for any other function."""
+    reduced = reduced_parts(name)
+    if reduced and reduced[0] in REDUCED_DERIVATIVE_NAMES:
+        kind, stance = reduced
+        n = 13 if len(stance.feet) == 2 else 12
+        x = {k: v[:n] for k, v in reduced_inputs(s).items()}
+        model = ReducedReference(ref, stance)
+        if kind == "dfd_r":
+            return list(model.dfd_r(x["q_r"], x["qd_r"], x["tau_ext"], s.q[3:7]))
+        return [model.did_r_dir(x["q_r"], x["qd_r"], x["qdd_r"], s.q[3:7], x["dq_r"], x["dqd_r"], x["dtheta"])]
+    if name.startswith("dgrf_dir_"):
+        w = wrench_inputs(s)
+        return list(grf_wrench_reference(ref, stance_set(name[9:].replace("_", "+")), s.q, w["w"], w["dq"]))
+    if name.startswith("dgrf_"):
+        return list(grf_derivatives_reference(ref, stance_set(name[5:].replace("_", "+")), s.q, s.v, s.a))
+    return None
+
+
 def pinocchio_outputs(robot: Robot, ref: PinocchioReference, name: str, s: FullState) -> list[np.ndarray]:
     """Pinocchio's values of generated function ``name`` (without prefix) at state s."""
+    derivative = _derivative_reference(ref, name, s)
+    if derivative is not None:
+        return derivative
     reduced = reduced_parts(name)
     if reduced:
         return [_reduced_reference(ref, *reduced, s)]
@@ -116,9 +150,20 @@ def tolerance_scale(ref: PinocchioReference, name: str, s: FullState) -> float:
     g = ref.grf_solve(q, v, a, stance.feet, stance.selection("paper"))
     scale = max(1.0, float(g.singular_values[0] / g.singular_values[g.rank - 1]) / GRF_COND_ASSUMED)
     scale *= max(1.0, float(np.linalg.cond(ref.velocity_map(q, stance.feet))) / MAP_COND_ASSUMED)
-    if kind == "fd_r":  # the tolerances allow for ~GRF_COND_ASSUMED of amplification already
+    if kind in ("fd_r", "dfd_r"):  # the tolerances allow for ~GRF_COND_ASSUMED of amplification already
         scale *= max(1.0, float(np.linalg.cond(_reduced_reference(ref, "M_r", stance, s))) / GRF_COND_ASSUMED)
     return scale
+
+def tolerance_floor(name: str) -> float:
+    """The least relative tolerance of generated function ``name`` in either precision: the accuracy of
+    its reference. The derivatives of the reduced model and of the GRF solve are checked against central
+    differences (``checks.derivative_reference``; REL_TOL_FD_DERIVATIVES); 0 for the others. Like the
+    tolerances, it is multiplied by ``tolerance_scale``: the differences' round-off grows with the
+    conditioning as the generated code's does."""
+    reduced = reduced_parts(name)
+    fd = (reduced is not None and reduced[0] in REDUCED_DERIVATIVE_NAMES) or name.startswith("dgrf_")
+    return REL_TOL_FD_DERIVATIVES if fd else 0.0
+
 
 def _nonzeros(dense: np.ndarray, sp: ca.Sparsity) -> np.ndarray:
     rows, cols = sp.get_triplet()
@@ -132,7 +177,8 @@ def reference_header(robot: Robot, functions: list[ca.Function], work: dict[str,
     """C header: Pinocchio's values of every generated function at ``reference_state``."""
     ref = PinocchioReference(robot)
     s = reference_state(robot)
-    inputs = {"q": s.q, "v": s.v, "a": s.a, "f": s.f.ravel(), "tau_full": reference_tau_full(s), **reduced_inputs(s)}
+    inputs = {"q": s.q, "v": s.v, "a": s.a, "f": s.f.ravel(), "tau_full": reference_tau_full(s), **reduced_inputs(s),
+              **wrench_inputs(s)}
     inputs = {k: v for k, v in inputs.items() if any(k in f.name_in() for f in functions)}
     lines = [
         f"/* Reference values for the generated functions of '{robot.name}', computed by Pinocchio",
@@ -140,9 +186,12 @@ def reference_header(robot: Robot, functions: list[ca.Function], work: dict[str,
         " * computeRNEADerivatives, computeABADerivatives)",
         " * at a fixed state near standing; 12 significant digits. Generated; do not edit. */",
         "typedef int (*qd_fn)(const casadi_real**, casadi_real**, casadi_int*, casadi_real*, int);",
-        "typedef struct { const char* name; qd_fn fn; int n_in, n_out; const double* in[4]; int in_len[4];",
-        "                 const double* out[4]; int out_nnz[4]; double tol_scale; } qd_case;",
-        "/* tol_scale: the conditioning beyond what the tolerances assume (codegen.tolerance_scale) */",
+        f"#define QD_MAX_N_IN {max(f.n_in() for f in functions)}",
+        "typedef struct { const char* name; qd_fn fn; int n_in, n_out; const double* in[QD_MAX_N_IN];",
+        "                 int in_len[QD_MAX_N_IN]; const double* out[4]; int out_nnz[4]; double tol_scale, tol_floor; } qd_case;",
+        "/* tol_scale: the conditioning beyond what the tolerances assume (codegen.tolerance_scale); tol_floor:",
+        " * the reference's own accuracy (finite differences: c_reference.tolerance_floor); the relative tolerance",
+        " * is max(QD_REL_TOL_<precision>, tol_floor) * tol_scale */",
         f"#define QD_REL_TOL_DOUBLE {REL_TOL_TERMS:g}",
         f"#define QD_REL_TOL_FLOAT {FLOAT_REL_TOL:g}",
         f"#define QD_MAX_SZ_IW {max(iw for iw, _ in work.values())}",
@@ -165,12 +214,12 @@ def reference_header(robot: Robot, functions: list[ca.Function], work: dict[str,
         cases.append(
             f'  {{"{f.name()}", {f.name()}, {f.n_in()}, {f.n_out()}, {{{", ".join(n for n, _ in ins)}}}, '
             f'{{{", ".join(str(k) for _, k in ins)}}}, {{{", ".join(n for n, _ in outs)}}}, '
-            f'{{{", ".join(str(k) for _, k in outs)}}}, {tol_scale:.3g}}},'
+            f'{{{", ".join(str(k) for _, k in outs)}}}, {tol_scale:.3g}, {tolerance_floor(name):g}}},'
         )
     lines += ["static const qd_case QD_CASES[] = {", *cases, "};", f"#define QD_N_CASES {len(functions)}"]
     lines += [
         "/* Point arg/res of case k at in/out, filled with its reference inputs in casadi_real. */",
-        "static void qd_case_args(const qd_case* k, casadi_real in[4][QD_MAX_IN], const casadi_real* arg[4],",
+        "static void qd_case_args(const qd_case* k, casadi_real in[QD_MAX_N_IN][QD_MAX_IN], const casadi_real* arg[QD_MAX_N_IN],",
         "                         casadi_real out[4][QD_MAX_OUT], casadi_real* res[4]) {",
         "  for (int i = 0; i < k->n_in; ++i) {",
         "    for (int j = 0; j < k->in_len[i]; ++j) in[i][j] = (casadi_real)k->in[i][j];",
@@ -196,20 +245,21 @@ def generate_checked(robot: Robot, out_dir: Path, precision: str = "double") -> 
 #: A C array of the reference header: ``static const double <name>[<n>] = {<values>};``
 _ARRAY = re.compile(r"static const double (\w+)\[(\d+)\] = \{([^}]*)\};")
 #: A row of the case table: ``{"<name>", ..., {<output arrays>}, {<nnz>}, <tol_scale>},``
-_CASE = re.compile(r'^  \{"(\w+)", .*\{([\w, ]*)\}, \{[\d, ]*\}, ([-+.\deE]+|inf|nan)\},$', re.M)
+_CASE = re.compile(r'^  \{"(\w+)", .*\{([\w, ]*)\}, \{[\d, ]*\}, ([-+.\deE]+|inf|nan), ([-+.\deE]+)\},$', re.M)
 
 
 @dataclass(frozen=True)
 class ReferenceHeader:
     """A ``<stem>_reference.h`` split into what must be reproduced byte for byte (``skeleton``: the
     text with every value replaced by a placeholder: names, sizes, the case table's layout) and the
-    values Pinocchio computed (``arrays`` by C name; ``tol_scale`` and output arrays per case), whose
+    values Pinocchio computed (``arrays`` by C name; ``tol_scale``, ``tol_floor`` and output arrays per case), whose
     last digits depend on the CPU and the BLAS kernel."""
 
     skeleton: str
     arrays: dict[str, np.ndarray]
     case_outputs: dict[str, tuple[str, ...]]
     tol_scale: dict[str, float]
+    tol_floor: dict[str, float]
     rel_tol: float
 
 
@@ -217,17 +267,18 @@ def parse_reference_header(text: str) -> ReferenceHeader:
     arrays = {m.group(1): np.array([float(x) for x in m.group(3).split(",")]) for m in _ARRAY.finditer(text)}
     cases = {m.group(1): tuple(x.strip() for x in m.group(2).split(",")) for m in _CASE.finditer(text)}
     scales = {m.group(1): float(m.group(3)) for m in _CASE.finditer(text)}
+    floors = {m.group(1): float(m.group(4)) for m in _CASE.finditer(text)}
     skeleton = _ARRAY.sub(lambda m: f"static const double {m.group(1)}[{m.group(2)}] = {{...}};", text)
-    skeleton = re.sub(r", ([-+.\deE]+|inf|nan)\},$", ", ...},", skeleton, flags=re.M)
+    skeleton = re.sub(r", ([-+.\deE]+|inf|nan)(, [-+.\deE]+)\},$", r", ...\2},", skeleton, flags=re.M)
     tol = re.search(r"#define QD_REL_TOL_DOUBLE (\S+)", text)
-    return ReferenceHeader(skeleton, arrays, cases, scales, float(tol.group(1)) if tol else float("nan"))
+    return ReferenceHeader(skeleton, arrays, cases, scales, floors, float(tol.group(1)) if tol else float("nan"))
 
 
 def reference_differences(committed: str, fresh: str) -> list[str]:
     """How the reference values of ``committed`` differ from ``fresh`` beyond their tolerance, one
     line per value that moved (empty if they agree): the structure must be identical; each case's
     outputs must agree within the tolerance ``check_qd.c`` applies to the generated code
-    (QD_REL_TOL_DOUBLE x tol_scale, relative to the case's largest output), the inputs within
+    (max(QD_REL_TOL_DOUBLE, tol_floor) x tol_scale, relative to the case's largest output), the inputs within
     QD_REL_TOL_DOUBLE of their own scale, and each tol_scale within REFERENCE_TOL_SCALE_REL_TOL.
     Two machines' Pinocchio differ by round-off (~1e-15 relative), far inside these."""
     a, b = parse_reference_header(committed), parse_reference_header(fresh)
@@ -240,7 +291,7 @@ def reference_differences(committed: str, fresh: str) -> list[str]:
     if moved:
         return moved
     in_case = {name for outs in b.case_outputs.values() for name in outs}
-    groups = [(case, outs, b.rel_tol * b.tol_scale[case]) for case, outs in b.case_outputs.items()]
+    groups = [(case, outs, max(b.rel_tol, b.tol_floor[case]) * b.tol_scale[case]) for case, outs in b.case_outputs.items()]
     groups += [(name, (name,), b.rel_tol) for name in b.arrays if name not in in_case]
     for _case, outs, tol in groups:
         scale = scale_of(np.concatenate([b.arrays[o] for o in outs]))

@@ -21,7 +21,15 @@ from pathlib import Path
 import casadi as ca
 
 from quadruped_dyn.codegen.casadi_source import PREFIX, TEMPLATES, casadi_c, entry_point, work_sizes
-from quadruped_dyn.codegen.emit_derivatives import derivative_functions, derivative_source
+from quadruped_dyn.codegen.emit_derivatives import (
+    DERIVATIVE_NAMES,
+    GRF_DERIVATIVE_NAMES,
+    GRF_DERIVATIVE_STANCE_SETS,
+    REDUCED_DERIVATIVE_NAMES,
+    derivative_functions,
+    derivative_source,
+    reduced_derivative_functions,
+)
 from quadruped_dyn.codegen.work_memory import memory_doc
 from quadruped_dyn.dynamics.grf import grf_solve
 from quadruped_dyn.dynamics.newton_euler import full_dynamics
@@ -54,6 +62,12 @@ REDUCED_STANCE_SETS: tuple[StanceSet, ...] = tuple(st for st in STANCE_SETS if l
 REDUCED_NAMES = ("M_r", "CG_r", "G_r", "id_r", "fd_r")
 
 
+#: How many derivative functions ``generate`` writes: the full ones and the GRF ones in qd_<robot>_d.c, the
+#: reduced ones in each reduced file (codegen/emit_derivatives.py).
+N_DERIVATIVE_FUNCTIONS = (len(DERIVATIVE_NAMES) + len(GRF_DERIVATIVE_NAMES) * len(GRF_DERIVATIVE_STANCE_SETS)
+                          + len(REDUCED_DERIVATIVE_NAMES) * len(REDUCED_STANCE_SETS))
+
+
 def reduced_symbol(name: str, stance: StanceSet) -> str:
     """C name (without prefix) of reduced function ``name`` of a stance set, e.g. 'fd_r_FL_BR'."""
     return f"{name}_{stance.name.replace('+', '_')}"
@@ -61,8 +75,9 @@ def reduced_symbol(name: str, stance: StanceSet) -> str:
 
 def reduced_functions(robot: Robot, stance: StanceSet) -> list[ca.Function]:
     """The generated reduced functions of one stance set (``reduced_projection``'s forms),
-    named with the C prefix. ``fd_r`` is a signature only (qdd_r = tau_ext): its generated body
-    is replaced by the hand-written solve of ``c/qd_reduced_solve.c``."""
+    named with the C prefix, then its derivatives (``emit_derivatives.reduced_derivative_functions``).
+    ``fd_r`` is a signature only (qdd_r = tau_ext): its generated body is replaced by the
+    hand-written solve of ``c/qd_reduced_solve.c`` (and dfd_r's by ``c/qd_reduced_derivatives.c``)."""
     n = 13 if len(stance.feet) == 2 else 12
     q_r, qd_r, qdd_r = ca.SX.sym("q_r", n), ca.SX.sym("qd_r", n), ca.SX.sym("qdd_r", n)
     quat, tau_ext = ca.SX.sym("quat", 4), ca.SX.sym("tau_ext", n)
@@ -80,6 +95,7 @@ def reduced_functions(robot: Robot, stance: StanceSet) -> list[ca.Function]:
         function("id_r", {"q_r": q_r, "qd_r": qd_r, "qdd_r": qdd_r, "quat": quat},
                  {"tau_r": ca.densify(p.inverse_dynamics(qd_r, qdd_r))}),
         function("fd_r", {"q_r": q_r, "qd_r": qd_r, "tau_ext": tau_ext, "quat": quat}, {"qdd_r": tau_ext}),
+        *reduced_derivative_functions(robot, stance),
     ]
 
 
@@ -122,6 +138,22 @@ SIGNAL_DOCS = {
     "da_dq": "d a / dq (18x18, dense), a = M^-1 (tau_full - C - G); tangent columns as dtau_dq",
     "da_dv": "d a / dv (18x18, dense)",
     "da_dtau": "d a / d tau_full = M^-1 (18x18, dense)",
+    "dq_r": "direction of q_r (n); its 13th entry (the roll) has no effect: the roll is read from quat",
+    "dqd_r": "direction of qd_r (n)",
+    "dtheta": "direction of the trunk orientation: body-frame rotation increment, quat -> quat (x) exp(dtheta / 2) [rad]",
+    "dtau_r": "directional derivative of tau_r along (dq_r, dqd_r, dtheta) at fixed qdd_r (n)",
+    "dqdd_dq": "d qdd_r / d q_r (n x n, dense) at fixed quat; its 13th column (the roll) is 0",
+    "dqdd_dqd": "d qdd_r / d qd_r (n x n, dense)",
+    "dqdd_dtau": "d qdd_r / d tau_ext = M_r^-1 (n x n, dense)",
+    "dqdd_dtheta": "d qdd_r / d theta (n x 3, dense), theta as dtheta (total derivative along the stance: "
+    "dqdd_dq + dqdd_dtheta W, W = d omega_b / d qd_r)",
+    "w": "a trunk wrench (force [N], moment about the trunk origin [N m], trunk frame) for the GRF solve",
+    "dq": "direction of q in the tangent (18): (dv_b, dw_b, dq_joints) as dtau_dq's columns",
+    "lambda_w": "the GRF model's unknowns balancing the wrench w: P(q) w (minimum norm, as lambda)",
+    "dlambda_w": "directional derivative of P(q) w along dq at fixed w (only the stance legs' joints enter)",
+    "dlambda_dq": "d lambda / dq (m x 18, dense), tangent columns as dtau_dq",
+    "dlambda_dv": "d lambda / dv (m x 18, dense)",
+    "dlambda_da": "d lambda / da (m x 18, dense)",
 }
 
 
@@ -142,7 +174,7 @@ def _shape(sp: ca.Sparsity) -> str:
 
 def reduced_parts(name: str) -> tuple[str, StanceSet] | None:
     """('fd_r', stance) for 'fd_r_FL_BR'; None for a full-coordinate or GRF function."""
-    for kind in REDUCED_NAMES:
+    for kind in REDUCED_NAMES + REDUCED_DERIVATIVE_NAMES:
         if name.startswith(kind + "_"):
             return kind, stance_set(name[len(kind) + 1 :].replace("_", "+"))
     return None
@@ -155,6 +187,8 @@ def _note(name: str) -> str:
     reduced = reduced_parts(name)
     if name == "dfd_full":
         return "  [returns QD_NONFINITE / QD_SINGULAR]"
+    if name.startswith("dgrf_") and not name.startswith("dgrf_parts_"):
+        return "  [returns QD_NONFINITE]"
     return f"  [{reduced[1].kind}, returns QD_NONFINITE / QD_SINGULAR]" if reduced else ""
 
 
@@ -205,6 +239,16 @@ def header_doc(robot: Robot, functions: list[ca.Function], work: dict[str, tuple
         " *   dfd_full(q, v, tau_full)        d a/dq, d a/dv, d a/dtau = M^-1 of a = M^-1 (tau_full - C - G):",
         " *                                   Cholesky of M on the stack, -M^-1 d rnea/dx at a. Returns",
         " *                                   QD_SINGULAR (2) if M is not positive definite to working precision.",
+        " *   dgrf_dir_<feet>(q, w, dq)       the GRF solve for a trunk wrench w, P(q) w, and its derivative along dq;",
+        " *   dgrf_<feet>(q, v, a)            d lambda/dq, d lambda/dv, d lambda/da of the GRF solve (1-4 feet):",
+        " *                                   lambda = P(q) w_req is linear in w_req (rnea's trunk rows), so",
+        " *                                   d lambda = P d w_req (did_full's trunk rows) + d(P w)/dq dq.",
+        " * In each reduced file (the trunk orientation is the input quat: d/dq_r at fixed quat, the roll's",
+        " * column 0; d/dtheta along quat -> quat (x) exp(dtheta/2), a body-frame increment):",
+        " *   did_r_dir_<feet>(q_r, qd_r, qdd_r, quat, dq_r, dqd_r, dtheta)  directional derivative of id_r;",
+        " *   dfd_r_<feet>(q_r, qd_r, tau_ext, quat)  d qdd_r/dq_r, d qdd_r/dqd_r, d qdd_r/dtau_ext = M_r^-1,",
+        " *                                   d qdd_r/dtheta: did_r_dir per direction, -M_r^-1 by fd_r's LU;",
+        " *                                   return codes as fd_r.",
         " *",
         " * Signals:",
         *[f" *   {name:<9}{SIGNAL_DOCS[name]}" for name in signals],
@@ -270,7 +314,8 @@ def _checked_reduced_c(c_text: str, casadi_header: str, functions: list[ca.Funct
     returns QD_NONFINITE for a non-finite output; fd_r evaluates M_r and CG_r (CasADi's own
     evaluation functions, checked once in the solve) and solves M_r qdd_r = tau_ext - CG_r."""
     first = c_text.index(f"\n/* {functions[0].name()}:")
-    c_text = c_text[:first] + "\n" + (TEMPLATES / "qd_reduced_solve.c").read_text() + c_text[first:]
+    templates = "\n".join((TEMPLATES / t).read_text() for t in ("qd_reduced_solve.c", "qd_reduced_derivatives.c"))
+    c_text = c_text[:first] + "\n" + templates + c_text[first:]
     work = work_sizes(casadi_header)
     raw = {}  # entry point -> CasADi's static evaluation function
     for f in functions:
@@ -281,9 +326,13 @@ def _checked_reduced_c(c_text: str, casadi_header: str, functions: list[ca.Funct
     for f in functions:
         if f.sz_arg() != f.n_in() or work[f.name()] != (0, 0):
             raise AssertionError(f"{f.name()} needs work memory; qd_fd_r_solve assumes it does not")
+        m_r, cg_r, direction = (raw[g.name()] for g in functions
+                                if g.name().startswith((PREFIX + "M_r_", PREFIX + "CG_r_", PREFIX + "did_r_dir_")))
         if f.name().startswith(PREFIX + "fd_r_"):
-            m_r, cg_r = (raw[g.name()] for g in functions if g.name().startswith((PREFIX + "M_r_", PREFIX + "CG_r_")))
             body = rf"\1  (void)\2;\n  return qd_fd_r_solve({f.nnz_out(0)}, {m_r}, {cg_r}, arg, res, iw, w, mem);\n"
+        elif f.name().startswith(PREFIX + "dfd_r_"):  # the roll q_r[12] does not enter id_r: 12 q directions
+            body = (rf"\1  (void)\2;\n  return qd_dfd_r_solve({f.size1_out(0)}, 12, {m_r}, {cg_r}, {direction}, "
+                    rf"arg, res, iw, w, mem);\n")
         else:
             nnz = ", ".join(str(f.nnz_out(i)) for i in range(f.n_out()))
             body = rf"\1  return qd_finite(\2(arg, res, iw, w, mem), res, {f.n_out()}, (const casadi_int[]){{{nnz}}});\n"

@@ -1,18 +1,31 @@
-"""Generated C of the derivatives of the full dynamics: ``qd_<robot>_d.c`` (docs/derivatives.md).
+"""Generated C of the derivatives of the dynamics (docs/derivatives.md).
 
-Functions (prefix ``qd_``), in one file beside the others, compiled into the same library:
+In ``qd_<robot>_d.c`` (prefix ``qd_``), compiled into the same library as the others:
 
 * ``did_full(q, v, a) -> (dtau_dq, dtau_dv, dtau_da)``: CasADi's Jacobians of the full inverse
   dynamics (``dynamics/derivatives.py``), sparse outputs (leg rows do not depend on other legs);
 * ``dfd_full_parts(q, v) -> (M, nle)``: M (dense) and C + G, what the forward-dynamics derivative needs;
 * ``dfd_full(q, v, tau_full) -> (da_dq, da_dv, da_dtau)``: a signature only; its body is
-  ``c/qd_derivatives_solve.c`` (Cholesky of M in plain C, then -M^-1 dtau/dx at a = fd).
+  ``c/qd_derivatives_solve.c`` (Cholesky of M in plain C, then -M^-1 dtau/dx at a = fd);
+* per stance set of 1-4 feet, ``dgrf_dir_<feet>(q, w, dq) -> (lambda_w, dlambda_w)``: the GRF
+  solve for a given trunk wrench w, lambda_w = P(q) w (linear in w), and its forward-mode
+  directional derivative along dq at fixed w; and ``dgrf_<feet>(q, v, a)``, a signature whose body
+  (``c/qd_derivatives_solve.c``) applies the chain rule to lambda = P(q) w_req(q, v, a), w_req the
+  rnea's trunk rows: d lambda / dx = P d w_req / dx (``did_full``'s trunk rows) + d(P w)/dq for x = q,
+  P column by column and d(P w)/dq one stance-leg joint direction at a time from dgrf_dir.
 
+In each reduced file ``qd_<robot>_r_<feet>.c`` (``reduced_derivative_functions``):
+
+* ``did_r_dir_<feet>(q_r, qd_r, qdd_r, quat, dq_r, dqd_r, dtheta) -> dtau_r``: the forward-mode
+  directional derivative of id_r (``ca.jtimes``; ~2.8x id_r's operations), theta a body-frame
+  rotation increment;
+* ``dfd_r_<feet>(q_r, qd_r, tau_ext, quat)``: a signature whose body (``c/qd_reduced_derivatives.c``)
+  assembles d id_r / d(q_r, qd_r, theta) one direction at a time and applies -M_r^-1 with the LU of
+  ``c/qd_reduced_solve.c``.
+
+Why directions and a chain rule, not CasADi's Jacobians: those take 48-97k operations per reduced
+stance set and 18-21k per GRF solve (~20 bytes of C each), beyond the 6 MB budget of a robot's C.
 d/dq is along ``pinocchio.integrate`` (a body-frame increment of the trunk pose; 18 columns).
-The reduced model's and the GRF solve's derivatives are not generated: CasADi's Jacobians of one
-stance set's id_r take 48-78k operations and of one GRF solve 18-21k (~20 bytes of C each), which
-for the 10 reduced and 15 GRF stance sets would exceed the 6 MB budget of a robot's generated C;
-they are Python/CasADi functions (``dynamics/derivatives.py``).
 """
 
 from __future__ import annotations
@@ -22,12 +35,66 @@ import re
 import casadi as ca
 
 from quadruped_dyn.codegen.casadi_source import PREFIX, TEMPLATES, casadi_c, entry_point, work_sizes
-from quadruped_dyn.dynamics.derivatives import full_derivatives
+from quadruped_dyn.dynamics.derivatives import configuration_tangent, full_derivatives, quaternion_tangent
+from quadruped_dyn.dynamics.grf import solve_lambda
+from quadruped_dyn.dynamics.kinematics import foot_position
 from quadruped_dyn.dynamics.newton_euler import full_dynamics
+from quadruped_dyn.dynamics.reduced_projection import reduced_projection, stance_forces
 from quadruped_dyn.model.robot import Robot
+from quadruped_dyn.model.stance import STANCE_SETS, StanceSet, stance_set
 from quadruped_dyn.model.state import NQ_FULL, NV_FULL
 
 DERIVATIVE_NAMES = ("did_full", "dfd_full_parts", "dfd_full")
+#: Stance sets with a GRF derivative (every set with a foot), as dgrf_parts_<feet> and dgrf_<feet> in qd_<robot>_d.c.
+GRF_DERIVATIVE_STANCE_SETS: tuple[StanceSet, ...] = tuple(st for st in STANCE_SETS if st.feet)
+GRF_DERIVATIVE_NAMES = ("dgrf_dir", "dgrf")
+#: Generated in each reduced stance set's file, as <name>_<feet>.
+REDUCED_DERIVATIVE_NAMES = ("did_r_dir", "dfd_r")
+
+
+def feet_suffix(stance: StanceSet) -> str:
+    return stance.name.replace("+", "_")
+
+
+def grf_derivative_functions(robot: Robot, stance: StanceSet) -> list[ca.Function]:
+    """dgrf_dir_<feet> and the signature of dgrf_<feet> (module docstring), with the C prefix."""
+    q, w, dq = ca.SX.sym("q", NQ_FULL), ca.SX.sym("w", 6), ca.SX.sym("dq", NV_FULL)
+    v, a = ca.SX.sym("v", NV_FULL), ca.SX.sym("a", NV_FULL)
+    r = [foot_position(robot.legs[i], q[7 + 3 * i : 10 + 3 * i]) for i in stance.feet]
+    if len(r) >= 2:  # the closed forms, ~3x fewer operations than the generic solve: lambda = P^+ f, P's columns disjoint
+        P = stance.selection("paper")
+        lam = ca.DM(P.T / P.sum(axis=0)[:, None]) @ stance_forces(stance, r, w[:3], w[3:])
+    else:
+        lam, _ = solve_lambda(stance, "paper", r, w)
+    if ca.depends_on(lam, q[:7]):
+        raise AssertionError("the GRF solve depends on the trunk pose; qd_dgrf_solve assumes it does not")
+    direction = ca.jtimes(lam, q, configuration_tangent(q) @ dq)
+    suffix, m, opts = feet_suffix(stance), lam.shape[0], {"cse": True}
+    grf_dir = ca.Function(f"{PREFIX}dgrf_dir_{suffix}", [q, w, dq], [ca.densify(lam), ca.densify(direction)],
+                          ["q", "w", "dq"], ["lambda_w", "dlambda_w"], opts)
+    placeholder = ca.repmat(ca.sum1(q) + ca.sum1(v) + ca.sum1(a), m, NV_FULL)  # dense m x 18, depends on every input
+    dgrf = ca.Function(f"{PREFIX}dgrf_{suffix}", [q, v, a], [placeholder] * 3, ["q", "v", "a"],
+                       ["dlambda_dq", "dlambda_dv", "dlambda_da"], opts)
+    return [grf_dir, dgrf]
+
+
+def reduced_derivative_functions(robot: Robot, stance: StanceSet) -> list[ca.Function]:
+    """did_r_dir_<feet> and the signature of dfd_r_<feet> (module docstring), with the C prefix."""
+    n = 13 if len(stance.feet) == 2 else 12
+    q_r, qd_r, qdd_r, tau_ext = (ca.SX.sym(s, n) for s in ("q_r", "qd_r", "qdd_r", "tau_ext"))
+    quat, dq_r, dqd_r, dtheta = ca.SX.sym("quat", 4), ca.SX.sym("dq_r", n), ca.SX.sym("dqd_r", n), ca.SX.sym("dtheta", 3)
+    idr = reduced_projection(robot, stance, q_r, quat).inverse_dynamics(qd_r, qdd_r)
+    if ca.depends_on(idr, q_r[12:]):
+        raise AssertionError("id_r reads the roll q_r[12]; qd_dfd_r_solve assumes it takes the roll from quat")
+    direction = ca.jtimes(idr, ca.vertcat(q_r, qd_r, quat), ca.vertcat(dq_r, dqd_r, quaternion_tangent(quat) @ dtheta))
+    suffix, opts = feet_suffix(stance), {"cse": True}
+    did = ca.Function(f"{PREFIX}did_r_dir_{suffix}", [q_r, qd_r, qdd_r, quat, dq_r, dqd_r, dtheta], [ca.densify(direction)],
+                      ["q_r", "qd_r", "qdd_r", "quat", "dq_r", "dqd_r", "dtheta"], ["dtau_r"], opts)
+    placeholder = ca.sum1(q_r) + ca.sum1(qd_r) + ca.sum1(tau_ext) + ca.sum1(quat)  # dense, depends on every input
+    dfd = ca.Function(f"{PREFIX}dfd_r_{suffix}", [q_r, qd_r, tau_ext, quat],
+                      [ca.repmat(placeholder, n, k) for k in (n, n, n, 3)], ["q_r", "qd_r", "tau_ext", "quat"],
+                      ["dqdd_dq", "dqdd_dqd", "dqdd_dtau", "dqdd_dtheta"], opts)
+    return [did, dfd]
 
 
 def derivative_functions(robot: Robot) -> list[ca.Function]:
@@ -42,7 +109,7 @@ def derivative_functions(robot: Robot) -> list[ca.Function]:
     placeholder = ca.repmat(tau, 1, NV_FULL) + ca.sum1(q) + ca.sum1(v)  # dense 18 x 18, depends on every input
     dfd = ca.Function(PREFIX + "dfd_full", [q, v, tau], [placeholder] * 3, ["q", "v", "tau_full"],
                       ["da_dq", "da_dv", "da_dtau"], opts)
-    return [did, parts, dfd]
+    return [did, parts, dfd, *(f for st in GRF_DERIVATIVE_STANCE_SETS for f in grf_derivative_functions(robot, st))]
 
 
 def derivative_source(file_stem: str, functions: list[ca.Function], precision: str) -> tuple[str, str]:
@@ -63,6 +130,12 @@ def derivative_source(file_stem: str, functions: list[ca.Function], precision: s
             did, parts = raw[PREFIX + "did_full"], raw[PREFIX + "dfd_full_parts"]
             body = (rf"\1  (void)\2;\n  return qd_dfd_full_solve({parts}, {did}, {PREFIX}did_full_sparsity_out(0), "
                     rf"{PREFIX}did_full_sparsity_out(1), arg, res, iw, w, mem);\n")
+        elif f.name().startswith(PREFIX + "dgrf_") and not f.name().startswith(PREFIX + "dgrf_dir_"):
+            suffix = f.name()[len(PREFIX + "dgrf_"):]
+            did, parts, direction = (raw[PREFIX + n] for n in ("did_full", "dfd_full_parts", f"dgrf_dir_{suffix}"))
+            legs = sum(1 << i for i in stance_set(suffix.replace("_", "+")).feet)  # the joints lambda reads
+            body = (rf"\1  (void)\2;\n  return qd_dgrf_solve({f.size1_out(0)}, {legs}, {parts}, {did}, {direction}, "
+                    rf"{PREFIX}did_full_sparsity_out(0), {PREFIX}did_full_sparsity_out(1), arg, res, iw, w, mem);\n")
         else:
             nnz = ", ".join(str(f.nnz_out(i)) for i in range(f.n_out()))
             body = rf"\1  return qd_d_finite(\2(arg, res, iw, w, mem), res, {f.n_out()}, (const casadi_int[]){{{nnz}}});\n"

@@ -126,6 +126,15 @@ def _four_feet_forces(r: list[ca.SX], force: ca.SX, moment: ca.SX) -> ca.SX:
     return ca.vertcat(*[ca.vertcat(fx, fy, fz[j, :]) for j in range(4)])
 
 
+def stance_forces(stance: StanceSet, r: list[ca.SX], force: ca.SX, moment: ca.SX) -> ca.SX:
+    """The paper's GRF of 2, 3 or 4 stance feet at r (trunk frame) in closed form: the stacked
+    stance-foot forces (3k, m), trunk frame, for the required trunk force and moment (3, m each,
+    moment about the trunk origin); equal to ``grf.solve_lambda``'s forces P lambda (tested)."""
+    forces = {2: lambda: _two_feet_forces(r, force, moment), 3: lambda: _three_feet_forces(stance, r, force, moment),
+              4: lambda: _four_feet_forces(r, force, moment)}
+    return forces[len(r)]()
+
+
 @dataclass(frozen=True)
 class ReducedProjection:
     """Symbolic pieces of one stance set's reduced model (n = 12 or 13 coordinates)."""
@@ -165,12 +174,7 @@ class ReducedProjection:
 
     def project(self, F: ca.SX) -> ca.SX:
         """tau_r (n, m) = S F for full generalized forces F (18, m) (module docstring)."""
-        if len(self.r) == 2:
-            f = _two_feet_forces(self.r, F[:3, :], F[3:6, :])
-        elif len(self.r) == 3:
-            f = _three_feet_forces(self.stance, self.r, F[:3, :], F[3:6, :])
-        else:
-            f = _four_feet_forces(self.r, F[:3, :], F[3:6, :])
+        f = stance_forces(self.stance, self.r, F[:3, :], F[3:6, :])
         tau = ca.SX(F[6:, :])
         for j, i in enumerate(self.stance.feet):
             J = ca.jacobian(self.r[j], self.q_r[3 * i : 3 * i + 3])

@@ -17,16 +17,18 @@ from pathlib import Path
 import pytest
 
 from quadruped_dyn.checks.c_reference import generate_checked
-from quadruped_dyn.codegen.emit import CODEGEN_FUNCTIONS, REDUCED_NAMES, REDUCED_STANCE_SETS, stem
-from quadruped_dyn.codegen.emit_derivatives import DERIVATIVE_NAMES
+from quadruped_dyn.codegen.emit import CODEGEN_FUNCTIONS, N_DERIVATIVE_FUNCTIONS, REDUCED_NAMES, REDUCED_STANCE_SETS, stem
 from quadruped_dyn.codegen.library import compiled_library
 from quadruped_dyn.codegen.targets import TARGETS, Target, make, run_check, skip_reason
 from quadruped_dyn.model.robot import load_robot
 
 CASADI_GEN = Path(__file__).resolve().parents[2] / "casadi_gen"
-N_FUNCTIONS = len(CODEGEN_FUNCTIONS) + len(REDUCED_NAMES) * len(REDUCED_STANCE_SETS) + len(DERIVATIVE_NAMES)
+N_FUNCTIONS = len(CODEGEN_FUNCTIONS) + len(REDUCED_NAMES) * len(REDUCED_STANCE_SETS) + N_DERIVATIVE_FUNCTIONS
 #: casadi_gen's check program reports at most this many float cases as skipped (cond x eps > 1e-2)
 MAX_FLOAT_SKIPPED = 2
+#: ... and in double at most this many: dfd_r of the back pair, whose conditioning at the reference state
+#: times its finite-difference reference's accuracy (REL_TOL_FD_DERIVATIVES) exceeds 1e-2
+MAX_DOUBLE_SKIPPED = 1
 
 
 def _require(target: Target) -> None:
@@ -36,14 +38,14 @@ def _require(target: Target) -> None:
 
 
 def _assert_check_passed(proc: subprocess.CompletedProcess[str], precision: str, what: str) -> None:
-    """Every function checked: all pass in double; in float at most MAX_FLOAT_SKIPPED skipped."""
+    """Every function checked: all pass, at most MAX_DOUBLE_SKIPPED / MAX_FLOAT_SKIPPED skipped."""
     out = proc.stdout
     assert proc.returncode == 0, f"{what}: exit {proc.returncode}\n{out[-3000:]}\n{proc.stderr[-2000:]}"
     summary = re.search(r"\n(\d+) passed, (\d+) failed(?:, (\d+) skipped)?\n", "\n" + out)
     assert summary, f"{what}: no summary line\n{out[-2000:]}"
     passed, failed, skipped = (int(g or 0) for g in summary.groups())
     assert failed == 0 and passed + skipped == N_FUNCTIONS, f"{what}: {summary.group(0).strip()}"
-    assert skipped <= (MAX_FLOAT_SKIPPED if precision == "float" else 0), f"{what}: {summary.group(0).strip()}"
+    assert skipped <= (MAX_FLOAT_SKIPPED if precision == "float" else MAX_DOUBLE_SKIPPED), f"{what}: {summary.group(0).strip()}"
     assert "FAIL" not in out and "returned" not in out
 
 

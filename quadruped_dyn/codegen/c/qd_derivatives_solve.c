@@ -118,3 +118,83 @@ static int qd_dfd_full_solve(qd_d_eval_fn parts, qd_d_eval_fn did, const casadi_
   const casadi_int nnz[3] = {QD_NV * QD_NV, QD_NV * QD_NV, QD_NV * QD_NV};
   return qd_d_finite(0, res, 3, nnz);
 }
+
+/* out (m x 18, column-major) = P D[0:6, :] for P (m x 6, column-major) and D (18 x 18) in CasADi's
+ * compressed-column format (sp, nz): the trunk rows of D only. */
+static void qd_d_trunk_product(int m, const casadi_real* P, const casadi_int* sp, const casadi_real* nz, casadi_real* out) {
+  const casadi_int nrow = sp[0], ncol = sp[1], dense = sp[2] == 1; /* CasADi writes a dense pattern as (nrow, ncol, 1) */
+  const casadi_int *colind = sp + 2, *row = sp + 2 + ncol + 1;
+  for (casadi_int j = 0; j < ncol; ++j) {
+    casadi_real* o = out + m * j;
+    for (int i = 0; i < m; ++i) o[i] = 0;
+    const casadi_int begin = dense ? nrow * j : colind[j], end = dense ? nrow * j + 6 : colind[j + 1];
+    for (casadi_int k = begin; k < end; ++k) { /* rows ascend within a column: stop after the trunk's */
+      const casadi_int r = dense ? k - nrow * j : row[k];
+      if (r >= 6) break;
+      const casadi_real* p = P + m * r;
+      const casadi_real d = nz[k];
+      for (int i = 0; i < m; ++i) o[i] += p[i] * d;
+    }
+  }
+}
+
+/* qd_dgrf_<feet>(q, v, a) -> (dlambda_dq, dlambda_dv, dlambda_da), m x 18 each, of the GRF solve's
+ * lambda = P(q) w_req(q, v, a), linear in the required trunk wrench w_req (the rnea's trunk rows):
+ *   w_req = M[0:6] a + nle[0:6] from the generated qd_dfd_full_parts; P column by column and d(P w)/dq one
+ *   joint direction at a time (the joints of the stance legs, bit i of legs for leg i; no other coordinate
+ *   enters P) from the generated qd_dgrf_dir_<feet> (dir: q, w, dq -> P w, d(P w)/dq dq); d w_req/dx from the
+ *   generated qd_did_full's trunk rows (sp_dq, sp_dv: its output patterns) and M:
+ *   dlambda/dq = P dtau_dq[0:6] + d(P w)/dq, dlambda/dv = P dtau_dv[0:6], dlambda/da = P M[0:6].
+ * d/dq along pinocchio.integrate as above. Return codes: 0, QD_NONFINITE. */
+static int qd_dgrf_solve(int m, int legs, qd_d_eval_fn parts, qd_d_eval_fn did, qd_d_eval_fn dir, const casadi_int* sp_dq,
+                         const casadi_int* sp_dv, const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w,
+                         int mem) {
+  casadi_real M[QD_NV * QD_NV], nle[QD_NV], wrench[6], seed[QD_NV], P[6 * 6], dPw[6 * QD_NV], Dq[QD_NV * QD_NV],
+      Dv[QD_NV * QD_NV];
+  casadi_real* p_res[2] = {M, nle};
+  int flag = parts(arg, p_res, iw, w, mem);
+  if (flag) return flag;
+  for (int i = 0; i < 6; ++i) {
+    wrench[i] = nle[i];
+    for (int j = 0; j < QD_NV; ++j) wrench[i] += M[i + QD_NV * j] * arg[2][j];
+  }
+  for (int i = 0; i < QD_NV; ++i) seed[i] = 0;
+  const casadi_real* g_arg[3] = {arg[0], seed, seed}; /* P e_k: the wrench e_k, no direction */
+  for (int k = 0; k < 6 && !flag; ++k) {
+    casadi_real* g_res[2] = {P + m * k, 0};
+    seed[k] = 1;
+    flag = dir(g_arg, g_res, iw, w, mem);
+    seed[k] = 0;
+  }
+  g_arg[1] = wrench; /* d(P w)/dq along each stance-leg joint, at w = w_req */
+  for (int j = 0; j < QD_NV; ++j) {
+    casadi_real* x = dPw + m * j;
+    for (int i = 0; i < m; ++i) x[i] = 0;
+    if (j < 6 || !(legs & (1 << ((j - 6) / 3))) || flag) continue;
+    casadi_real* g_res[2] = {0, x};
+    seed[j] = 1;
+    flag = dir(g_arg, g_res, iw, w, mem);
+    seed[j] = 0;
+  }
+  if (flag) return flag;
+  const casadi_real* d_arg[3] = {arg[0], arg[1], arg[2]};
+  casadi_real* d_res[3] = {Dq, Dv, 0};
+  flag = did(d_arg, d_res, iw, w, mem);
+  if (flag) return flag;
+  if (res[0]) {
+    qd_d_trunk_product(m, P, sp_dq, Dq, res[0]);
+    for (int i = 0; i < m * QD_NV; ++i) res[0][i] += dPw[i];
+  }
+  if (res[1]) qd_d_trunk_product(m, P, sp_dv, Dv, res[1]);
+  if (res[2]) { /* P M[0:6] (M dense) */
+    for (int j = 0; j < QD_NV; ++j) {
+      for (int i = 0; i < m; ++i) {
+        casadi_real s = 0;
+        for (int k = 0; k < 6; ++k) s += P[i + m * k] * M[k + QD_NV * j];
+        res[2][i + m * j] = s;
+      }
+    }
+  }
+  const casadi_int nnz[3] = {m * QD_NV, m * QD_NV, m * QD_NV};
+  return qd_d_finite(0, res, 3, nnz);
+}

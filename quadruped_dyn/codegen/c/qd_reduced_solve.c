@@ -41,14 +41,56 @@ static int qd_finite(int flag, casadi_real** res, int n_out, const casadi_int* n
   return 0;
 }
 
-/* qdd_r = M_r^-1 (tau_ext - (C_r + G_r)): arg = (q_r, qd_r, tau_ext, quat), res = (qdd_r).
- * M_r and C_r + G_r from the generated evaluations (checked here in one pass), then a dense LU with partial
- * pivoting, column-oriented (M_r is column-major: the inner loops run down contiguous
- * columns); no heap, all temporaries on the stack (n <= QD_N_MAX). Each generated file calls
- * it once with a constant n, so the compiler can specialise it. */
-static inline int qd_fd_r_solve(int n, qd_eval_fn M_r, qd_eval_fn CG_r, const casadi_real** arg, casadi_real** res,
-                                casadi_int* iw, casadi_real* w, int mem) {
-  casadi_real M[QD_N_MAX * QD_N_MAX], b[QD_N_MAX];
+/* LU factorisation with partial pivoting of M (n x n, column-major, in place: the multipliers of
+ * L below the diagonal, U on and above it; piv[k] the row swapped with k at step k), column-oriented
+ * (the inner loops run down contiguous columns). 0, or QD_SINGULAR when a pivot is below
+ * QD_SINGULAR_RTOL * scale (scale = max|M|). Shared by qd_fd_r_solve and the reduced derivatives. */
+static int qd_lu_factor(int n, casadi_real* M, int* piv, casadi_real scale) {
+  for (int k = 0; k < n; ++k) { /* M[i + n j] = M_ij */
+    casadi_real* col = M + n * k;
+    int p = k;
+    for (int i = k + 1; i < n; ++i) p = fabs(col[i]) > fabs(col[p]) ? i : p;
+    if (!(fabs(col[p]) > QD_SINGULAR_RTOL * scale)) return QD_SINGULAR;
+    piv[k] = p;
+    if (p != k) {
+      for (int j = 0; j < n; ++j) {
+        casadi_real t = M[k + n * j];
+        M[k + n * j] = M[p + n * j];
+        M[p + n * j] = t;
+      }
+    }
+    casadi_real inv = 1 / col[k];
+    for (int i = k + 1; i < n; ++i) col[i] *= inv; /* the multipliers, L below the diagonal */
+    for (int j = k + 1; j < n; ++j) {
+      casadi_real* cj = M + n * j;
+      casadi_real u = cj[k];
+      for (int i = k + 1; i < n; ++i) cj[i] -= col[i] * u;
+    }
+  }
+  return 0;
+}
+
+/* x <- M^-1 x with the factors of qd_lu_factor: the row swaps, L y = P x, U x = y. */
+static void qd_lu_solve(int n, const casadi_real* LU, const int* piv, casadi_real* x) {
+  for (int k = 0; k < n; ++k) {
+    casadi_real t = x[k];
+    x[k] = x[piv[k]];
+    x[piv[k]] = t;
+  }
+  for (int k = 0; k < n; ++k) {
+    const casadi_real* col = LU + n * k;
+    for (int i = k + 1; i < n; ++i) x[i] -= col[i] * x[k];
+  }
+  for (int j = n - 1; j >= 0; --j) { /* U x = y, column by column */
+    x[j] /= LU[j + n * j];
+    for (int i = 0; i < j; ++i) x[i] -= LU[i + n * j] * x[j];
+  }
+}
+
+/* M_r (factorised: qd_lu_factor) and b = tau_ext - (C_r + G_r) at arg = (q_r, qd_r, tau_ext, quat), from the
+ * generated evaluations, checked here in one pass. 0, QD_NONFINITE or QD_SINGULAR (nothing usable then). */
+static int qd_fd_r_factor(int n, qd_eval_fn M_r, qd_eval_fn CG_r, const casadi_real** arg, casadi_real* M, int* piv,
+                          casadi_real* b, casadi_int* iw, casadi_real* w, int mem) {
   const casadi_real* m_arg[2] = {arg[0], arg[3]};
   const casadi_real* cg_arg[3] = {arg[0], arg[1], arg[3]};
   casadi_real* m_res[1] = {M};
@@ -66,34 +108,20 @@ static inline int qd_fd_r_solve(int n, qd_eval_fn M_r, qd_eval_fn CG_r, const ca
     sum += b[i];
   }
   if (!isfinite(sum)) return QD_NONFINITE;
-  for (int k = 0; k < n; ++k) { /* M[i + n j] = M_ij */
-    casadi_real* col = M + n * k;
-    int p = k;
-    for (int i = k + 1; i < n; ++i) p = fabs(col[i]) > fabs(col[p]) ? i : p;
-    if (!(fabs(col[p]) > QD_SINGULAR_RTOL * scale)) return QD_SINGULAR;
-    if (p != k) {
-      for (int j = 0; j < n; ++j) {
-        casadi_real t = M[k + n * j];
-        M[k + n * j] = M[p + n * j];
-        M[p + n * j] = t;
-      }
-      casadi_real t = b[k];
-      b[k] = b[p];
-      b[p] = t;
-    }
-    casadi_real inv = 1 / col[k];
-    for (int i = k + 1; i < n; ++i) col[i] *= inv; /* the multipliers, L below the diagonal */
-    for (int j = k + 1; j < n; ++j) {
-      casadi_real* cj = M + n * j;
-      casadi_real u = cj[k];
-      for (int i = k + 1; i < n; ++i) cj[i] -= col[i] * u;
-    }
-    for (int i = k + 1; i < n; ++i) b[i] -= col[i] * b[k];
-  }
-  for (int j = n - 1; j >= 0; --j) { /* U x = b, column by column */
-    b[j] /= M[j + n * j];
-    for (int i = 0; i < j; ++i) b[i] -= M[i + n * j] * b[j];
-  }
+  return qd_lu_factor(n, M, piv, scale);
+}
+
+/* qdd_r = M_r^-1 (tau_ext - (C_r + G_r)): arg = (q_r, qd_r, tau_ext, quat), res = (qdd_r).
+ * M_r and C_r + G_r from the generated evaluations (qd_fd_r_factor), then the LU solve; no heap,
+ * all temporaries on the stack (n <= QD_N_MAX). Each generated file calls it once with a constant
+ * n, so the compiler can specialise it. */
+static inline int qd_fd_r_solve(int n, qd_eval_fn M_r, qd_eval_fn CG_r, const casadi_real** arg, casadi_real** res,
+                                casadi_int* iw, casadi_real* w, int mem) {
+  casadi_real M[QD_N_MAX * QD_N_MAX], b[QD_N_MAX];
+  int piv[QD_N_MAX];
+  int flag = qd_fd_r_factor(n, M_r, CG_r, arg, M, piv, b, iw, w, mem);
+  if (flag) return flag;
+  qd_lu_solve(n, M, piv, b);
   if (res[0]) {
     for (int i = 0; i < n; ++i) res[0][i] = b[i];
   }
