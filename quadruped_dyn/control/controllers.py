@@ -5,14 +5,15 @@ qd_ref, qdd_ref, 12 joints + the roll for a gait with two-feet phases, all from 
 plan's stance set, and the ``Measurement`` (joint q, qd; trunk orientation and angular rate,
 an IMU). Nothing else of the plant's state is used: no trunk position or linear velocity.
 All model-based terms come from the generated C of ``codegen`` (``CompiledFunction`` of the
-robot's ``compiled_library``: ``id_r``, ``M_r``, ``CG_r`` of the stance set), never from the
-CasADi graph.
+robot's ``compiled_library``: ``id_r`` of the stance set, one call per tick; ``G_r`` while the
+robot settles; ``M_full`` along the reference for the inertia estimate), never from the CasADi
+graph.
 
 * ``pd``: tau = Kp (q_ref - q) + Kd (qd_ref - qd), the baseline.
 * ``ff+pd``: tau = id_r(q_ref, qd_ref, qdd_ref, R = I)[:12] + the same PD: the paper's
   torques along the plan (its 13th entry, the roll moment the feet cannot produce, is
   not applied: no joint actuates the roll).
-* ``ct``, ``ct-diag`` and ``id+pd`` take the stance set of their model from the plan and the
+* ``ct``, ``ct-diag``, ``ct-diag+land`` and ``id+pd`` take the stance set of their model from the plan and the
   foot contact switches (``model_stance``): a foot the plan has in stance but which is off the
   ground is a swing leg for the model (a lightly loaded foot that lifts early, a late
   touch-down); the other controllers use the plan's stance only.
