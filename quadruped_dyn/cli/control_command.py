@@ -15,7 +15,7 @@ from quadruped_dyn.model.robot import load_robot
 @click.argument("robot")
 @click.option("--gait", "gait_name", default="walk", show_default=True, help="walk (static, 3 feet) or trot.")
 @click.option("--controller", "controllers", multiple=True, metavar="NAME",
-              help="pd, ff+pd, ct, ct-diag, pd-diag, ct-diag+roll, id+pd, ff+pd+level, ff+pd+step (repeatable) [default: all].")
+              help="pd, ff+pd, ct, ct-diag, pd-diag, ct-diag+land, id+pd, ff+pd+level, ff+pd+step (repeatable) [default: all].")
 @click.option("--cycles", default=10, show_default=True, type=int, help="Gait cycles to simulate.")
 @click.option("--rate", "rate_hz", default=1000.0, show_default=True, type=float, help="Control rate, Hz.")
 @click.option("--timestep", default=0.0005, show_default=True, type=float, help="MuJoCo's step, s.")

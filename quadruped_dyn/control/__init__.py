@@ -15,8 +15,8 @@ os.environ.setdefault("MUJOCO_GL", "egl")
 _MODULES: dict[str, tuple[str, ...]] = {
     "plant": ("DEFAULT_FOOT_RADIUS", "PlantOptions", "Command", "Measurement", "Plant", "build_plant"),
     "reference": ("REFERENCE_KNOT_S", "Reference", "joint_inertia", "reference_cycle"),
-    "controllers": ("KP_PER_KG", "KD_PER_KG", "CT_OMEGA_STANCE", "CT_OMEGA_SWING", "CT_ZETA", "CT_OMEGA_ROLL",
-                    "RETURN_RAD_S", "Gains", "GeneratedC",
+    "controllers": ("KP_PER_KG", "KD_PER_KG", "CT_OMEGA_STANCE", "CT_OMEGA_SWING", "CT_ZETA", "LANDING_DROP_M",
+                    "Gains", "GeneratedC",
                     "CONTROLLERS", "parse_controllers", "make_controller", "levelled", "model_stance", "measured_state"),
     "run": ("FALL_HEIGHT_FRACTION", "FALL_TILT_RAD", "LoopOptions", "Trace", "settled_state", "run_controller"),
     "measures": ("tracking", "trunk_drift", "foot_slip", "grf_comparison", "saturation", "compute_time", "summary"),

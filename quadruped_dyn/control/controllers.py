@@ -5,14 +5,15 @@ qd_ref, qdd_ref, 12 joints + the roll for a gait with two-feet phases, all from 
 plan's stance set, and the ``Measurement`` (joint q, qd; trunk orientation and angular rate,
 an IMU). Nothing else of the plant's state is used: no trunk position or linear velocity.
 All model-based terms come from the generated C of ``codegen`` (``CompiledFunction`` of the
-robot's ``compiled_library``: ``id_r``, ``M_r``, ``CG_r`` of the stance set), never from the
-CasADi graph.
+robot's ``compiled_library``: ``id_r`` of the stance set, one call per tick; ``G_r`` while the
+robot settles; ``M_full`` along the reference for the inertia estimate), never from the CasADi
+graph.
 
 * ``pd``: tau = Kp (q_ref - q) + Kd (qd_ref - qd), the baseline.
 * ``ff+pd``: tau = id_r(q_ref, qd_ref, qdd_ref, R = I)[:12] + the same PD: the paper's
   torques along the plan (its 13th entry, the roll moment the feet cannot produce, is
   not applied: no joint actuates the roll).
-* ``ct``, ``ct-diag`` and ``id+pd`` take the stance set of their model from the plan and the
+* ``ct``, ``ct-diag``, ``ct-diag+land`` and ``id+pd`` take the stance set of their model from the plan and the
   foot contact switches (``model_stance``): a foot the plan has in stance but which is off the
   ground is a swing leg for the model (a lightly loaded foot that lifts early, a late
   touch-down); the other controllers use the plan's stance only.
@@ -36,9 +37,9 @@ CasADi graph.
   that an unloaded leg meets a stiffness it can carry. Two feet: roll and roll rate from the
   IMU in id_r, the roll's reference acceleration (0), the 13th row dropped.
 * ``pd-diag``: ``ct-diag``'s per-joint gains without the model: the "pd with the same gains".
-* ``ct-diag+roll``: ``ct-diag`` that, with two stance feet, balances the roll with the stance
-  legs through the 13th row of M_r (``DiagonalCtRoll``): what it does about the moment the
-  paper's model leaves unbalanced.
+* ``ct-diag+land``: ``ct-diag`` whose swing feet aim a few mm below the plan's touch-down
+  (``DiagonalCtLand``): what it does about the trot's roll moment the paper's model leaves
+  unbalanced.
 * ``id+pd``: id_r at the **measured** state (joint q, qd; roll and roll rate from the IMU for
   two feet; the trunk orientation) with the reference's accelerations, plus the joint PD of
   ``pd`` (per-kg gains).
@@ -96,12 +97,10 @@ CT_OMEGA_STANCE = 50.0
 CT_OMEGA_SWING = 250.0
 CT_ZETA = 1.0
 
-#: ct-diag+roll: natural frequency of the roll's wanted error dynamics (rad/s), above the
-#: inverted pendulum's sqrt(g / h) (5.9 rad/s for the paper robot's 0.28 m); measured on the
-#: paper robot's trot (10 cycles asked): 12 and 20 rad/s both fall at 2.7 s (4 cycles).
-CT_OMEGA_ROLL = 12.0
-#: Rate (rad/s, critically damped) at which a lifted leg's offset returns to the plan.
-RETURN_RAD_S = 5.0
+#: ct-diag+land: how far below the plan's touch-down point the swing feet aim (m). Measured on
+#: the paper robot's trot, 10 cycles asked: 3 mm falls at 2.2 s, 5 mm trots 10 cycles, 10 mm
+#: falls at 1.95 s; 5 mm trots solo12 and go2 10 cycles. A narrow window, not a tuned margin.
+LANDING_DROP_M = 0.005
 
 
 @dataclass(frozen=True)
@@ -111,7 +110,6 @@ class Gains:
     ct_omega_stance: float = CT_OMEGA_STANCE  # rad/s
     ct_omega_swing: float = CT_OMEGA_SWING  # rad/s
     ct_zeta: float = CT_ZETA
-    ct_omega_roll: float = CT_OMEGA_ROLL  # rad/s
 
     def ct_omega(self, stance: StanceSet) -> np.ndarray:
         """(12,) natural frequency per joint: the stance legs' or the swing legs'."""
@@ -283,54 +281,25 @@ class DiagonalCt(DiagonalPd):
         return Command(tau[:12].copy(), ref.q_r[:12], ref.qd_r[:12], kp, kd)
 
 
-class DiagonalCtRoll(DiagonalCt):
-    """``ct-diag+roll``: ``ct-diag`` that balances the roll of a two-feet stance with the stance
-    legs, through the 13th row of M_r -- the moment about the foot-to-foot line, which the
-    feet cannot produce and the paper's model leaves unbalanced. The row says how the stance
-    legs' joint accelerations move the roll with that moment zero (they shift the trunk across
-    the support line, the "hip strategy"): with the roll's wanted acceleration
-    phid_des = -w_r^2 phi - 2 zeta w_r phid (IMU), id_r at the measured state gives the moment
-    r that motion would need (its 13th entry), and the stance joints get the extra
-    acceleration delta = -r m / (m . m_t) along m_t, m the row's stance-joint entries
-    (M_r at the reference, ``Reference.M_r``) projected so that the feet keep their distance;
-    the torques get M_r delta. delta is integrated into the stance legs' PD targets; a leg
-    that lifts off returns its offset to the plan over its swing (critically damped at
-    ``RETURN_RAD_S``). Three or four feet: ``ct-diag``."""
+class DiagonalCtLand(DiagonalCt):
+    """``ct-diag+land``: ``ct-diag`` whose swing feet aim ``LANDING_DROP_M`` below the plan's
+    touch-down point (in the trunk frame, ramped in with the swing's smoothstep, through the
+    inverse foot Jacobians at the reference): the landing pair meets the ground a little before
+    the plan's switch and is loaded when it comes. What it does about the trot's unbalanced
+    roll moment: nothing within a phase; the roll it builds over a phase is caught at each
+    switch by a pair already on the ground."""
 
-    name = "ct-diag+roll"
-
-    def __init__(self, robot: Robot, gains: Gains, c: GeneratedC) -> None:
-        super().__init__(robot, gains, c)
-        self.dq, self.dqd = np.zeros(12), np.zeros(12)  # rad, rad/s: the stance legs' offsets from the plan
+    name = "ct-diag+land"
 
     def command(self, ref: ReferenceSample, stance: StanceSet, meas: Measurement) -> Command:
         assert isinstance(ref, Reference)
-        kp, kd = self.diagonal_gains(ref, stance)
-        model = model_stance(stance, meas)
-        delta = np.zeros(12)
-        if len(stance.feet) == 2 and model.feet == stance.feet:
-            w, z = self.gains.ct_omega_roll, self.gains.ct_zeta
-            q, qd, qdd = measured_state(ref, model, meas, ref.qdd_r[:12])
-            qdd[12] = -(w**2) * q[12] - 2 * z * w * qd[12]
-            tau = self.c("id_r", model, q, qd, qdd, meas.quat)
-            i, j = stance.feet
-            legs = [3 * i, 3 * i + 1, 3 * i + 2, 3 * j, 3 * j + 1, 3 * j + 2]
-            d = ref.r_feet[i] - ref.r_feet[j]
-            closure = np.zeros(12)  # d|r_i - r_j|^2 / dq: a joint motion that changes the feet's distance
-            closure[legs[:3]], closure[legs[3:]] = ref.J[i].T @ d, -ref.J[j].T @ d
-            m = np.zeros(12)
-            m[legs] = ref.M_r[12, legs]
-            m_t = m - (m @ closure) / (closure @ closure) * closure
-            delta = -tau[12] * m_t / (m @ m_t)
-            tau12 = tau[:12] + ref.M_r[:12, :12] @ delta
-        else:
-            tau12 = self.c("id_r", model, *measured_state(ref, model, meas, ref.qdd_r[:12]), meas.quat)[:12].copy()
-        back = np.full(12, RETURN_RAD_S)
-        for f in stance.feet:
-            back[3 * f : 3 * f + 3] = 0.0
-        self.dqd += (delta - back**2 * self.dq - 2 * back * self.dqd) * ref.dt
-        self.dq += self.dqd * ref.dt
-        return Command(tau12, ref.q_r[:12] + self.dq, ref.qd_r[:12] + self.dqd, kp, kd)
+        base = super().command(ref, stance, meas)
+        s = ref.phase_s
+        drop = np.array([0.0, 0.0, -LANDING_DROP_M * (10 * s**3 - 15 * s**4 + 6 * s**5)])
+        q_des = ref.q_r[:12].copy()
+        for i in set(range(4)) - set(stance.feet):
+            q_des[3 * i : 3 * i + 3] += ref.J_inv[i] @ drop
+        return Command(base.tau, q_des, base.qd_des, base.kp, base.kd)
 
 
 def levelled(ref: Reference, meas: Measurement) -> Reference:
@@ -411,7 +380,7 @@ class FfPdStep(FfPd):
         return Command(base.tau, q_des, base.qd_des, base.kp, base.kd)
 
 
-CONTROLLERS = {c.name: c for c in (Pd, FfPd, ComputedTorque, DiagonalCt, DiagonalPd, DiagonalCtRoll, MeasuredIdPd,
+CONTROLLERS = {c.name: c for c in (Pd, FfPd, ComputedTorque, DiagonalCt, DiagonalPd, DiagonalCtLand, MeasuredIdPd,
                                     FfPdLevel, FfPdStep)}
 
 

@@ -14,12 +14,10 @@ from functools import cache
 
 import numpy as np
 
-from quadruped_dyn.codegen.emit import reduced_symbol
 from quadruped_dyn.codegen.library import CompiledFunction, compiled_library
 from quadruped_dyn.dynamics.kinematics import robot_kinematics
 from quadruped_dyn.experiment.gait import Plan
 from quadruped_dyn.experiment.plan_ik import ReferenceSample, reference
-from quadruped_dyn.model.stance import StanceSet
 
 
 @dataclass(frozen=True)
@@ -31,8 +29,6 @@ class Reference(ReferenceSample):
     J: np.ndarray  # (4, 3, 3) foot Jacobians
     phase_s: float  # fraction [0, 1) of the current gait phase
     inertia: np.ndarray  # (12,) positive diagonal joint inertia estimate, kg m^2 (``joint_inertia``)
-    M_r: np.ndarray  # (n, n) the generated M_r of the plan's stance at the reference, trunk level
-    dt: float  # s, the control period the cycle is sampled at
 
 
 def joint_inertia(M_legs: np.ndarray, J: np.ndarray, stance: tuple[int, ...], mass: float) -> np.ndarray:
@@ -72,9 +68,7 @@ def reference_cycle(plan: Plan, rate_hz: float) -> tuple[Reference, ...]:
     QDD = np.array([s.qdd_r for s in knots])
     out = []
     kin = robot_kinematics(plan.robot)
-    library = compiled_library(plan.robot)
-    M_full = CompiledFunction(library, "M_full")
-    M_r = {feet: CompiledFunction(library, reduced_symbol("M_r", StanceSet(feet))) for feet in set(plan.gait.phases)}
+    M_full = CompiledFunction(compiled_library(plan.robot), "M_full")
     origin = np.array([0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 1.0])
     for k in range(int(round(period * rate_hz))):
         t = k / rate_hz
@@ -89,8 +83,6 @@ def reference_cycle(plan: Plan, rate_hz: float) -> tuple[Reference, ...]:
         J = np.array([np.asarray(kin[i].foot_jacobian(q[3 * i : 3 * i + 3])) for i in range(4)])
         stance = plan.stance(t)
         M_legs = M_full(np.concatenate([origin, q[:12]]))[0][6:, 6:]
-        n = 13 if len(stance) == 2 else 12
         out.append(Reference(q, qd, qdd, stance, r, np.linalg.inv(J), J, plan.gait.phase(t)[1],
-                             joint_inertia(M_legs, J, stance, plan.robot.total_mass),
-                             M_r[stance](q[:n], origin[3:])[0], 1.0 / rate_hz))
+                             joint_inertia(M_legs, J, stance, plan.robot.total_mass)))
     return tuple(out)

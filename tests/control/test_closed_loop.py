@@ -159,6 +159,17 @@ def test_walk_ten_cycles(name: str) -> None:
 
 @pytest.mark.slow
 @pytest.mark.parametrize("name", ["paper", "solo12", "go2"])
+def test_trot_ten_cycles_with_the_generated_c(name: str) -> None:
+    """Trot: ct-diag+land (id_r at the measured state, swing feet landing 5 mm low) trots 10
+    cycles on the paper robot, solo12 and go2 (docs/closed_loop.md: a narrow window on the paper
+    robot -- 3 and 10 mm fall)."""
+    study = run_all(prepare(load_robot(name), "trot", ["ct-diag+land"], loop=LoopOptions(cycles=10)))
+    r = study.results["ct-diag+land"]
+    assert not r["fell"] and r["cycles_up"] == 10, r["stopped"]
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("name", ["paper", "solo12", "go2"])
 def test_trot_outcome_of_every_controller(name: str) -> None:
     study = run_all(prepare(load_robot(name), "trot", loop=LoopOptions(cycles=10)))
     assert set(study.results) == set(CONTROLLERS)
