@@ -148,7 +148,7 @@ def run_bench(robot: Robot, calls: int = 20000, reps: int = 9, rounds: int = 3, 
     """Time every generated function and its Pinocchio counterpart in the same run; with ``peer``
     also Pinocchio's CppADCodeGen code (cppadcg.py, checked against Pinocchio first). ``native``:
     both sides built with -march=native."""
-    flags = (*C_FLAGS, "-march=native") if native else C_FLAGS
+    flags = (*C_FLAGS, "-Dcasadi_real=double", *(("-march=native",) if native else ()))  # as library.compiled_library
     report = BenchReport(robot.name, native=native, c_flags=list(flags),
                          pinocchio_flags=list(NATIVE_CXX_FLAGS if native else PINOCCHIO_CXX_FLAGS))
     start = time.perf_counter()
