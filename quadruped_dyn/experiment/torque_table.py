@@ -12,7 +12,9 @@ by barycentric interpolation (forward stable on these points), in a few microsec
 The interpolant is accepted for a phase only after it has been checked at the midpoints between
 its nodes (independent of the nodes, where the interpolation error of a Chebyshev interpolant
 peaks): every component within ``TABLE_REL_TOL`` of that signal's largest magnitude over the
-phase. A phase that fails at ``CHEB_MAX_DEGREE`` falls back to the exact evaluation. At the
+phase, or -- where the exact evaluation's own round-off is above that -- a difference that no
+longer shrinks when the degree doubles (``NOISE_FLOOR_RATIO``) and is within ``TABLE_NOISE_TOL``.
+A phase that fails at ``CHEB_MAX_DEGREE`` falls back to the exact evaluation. At the
 nodes (t = a phase's start included) the exact values are returned.
 """
 
@@ -23,11 +25,16 @@ import numpy as np
 from quadruped_dyn.experiment.gait import Plan
 from quadruped_dyn.experiment.plan_ik import ReferenceSample
 from quadruped_dyn.experiment.simulate import IkTorques, ReducedDynamics
-from quadruped_dyn.tolerances import TABLE_REL_TOL
+from quadruped_dyn.tolerances import TABLE_NOISE_TOL, TABLE_REL_TOL
 
 #: Polynomial degree per phase to start with, doubled until the check passes.
 CHEB_DEGREE = 64
 CHEB_MAX_DEGREE = 256
+
+#: Doubling the degree shrinks a Chebyshev interpolant's error of a smooth signal by orders of
+#: magnitude; a midpoint difference that shrinks by less than this factor is the exact
+#: evaluation's own round-off (see ``TABLE_NOISE_TOL``).
+NOISE_FLOOR_RATIO = 0.5
 
 
 class _Phase:
@@ -79,6 +86,7 @@ class IkTorqueTable(IkTorques):
         h = self.plan.gait.phase_duration
         t0, t1 = k * h, (k + 1) * h
         degree = CHEB_DEGREE
+        previous = np.inf
         while degree <= CHEB_MAX_DEGREE:
             nodes = lobatto(t0, t1, degree)
             values = np.array([self._stack(float(t), stance) for t in nodes])
@@ -90,10 +98,12 @@ class IkTorqueTable(IkTorques):
             signal_scale = np.concatenate([np.full(self.n, scale[i * self.n : (i + 1) * self.n].max())
                                            for i in range(3)] + [np.full(len(scale) - 3 * self.n, scale[3 * self.n :].max())])
             rel = float((np.abs(approx - exact) / np.where(signal_scale > 0, signal_scale, 1.0)).max())
-            if rel <= TABLE_REL_TOL:
+            at_noise_floor = rel > NOISE_FLOOR_RATIO * previous and rel <= TABLE_NOISE_TOL
+            if rel <= TABLE_REL_TOL or at_noise_floor:
                 self.max_rel_error = max(self.max_rel_error, rel)
                 self.degrees.append(degree)
                 return phase
+            previous = rel
             degree *= 2
         return None
 

@@ -9,7 +9,7 @@ import pinocchio as pin
 import pytest
 
 from quadruped_dyn.dynamics.guarded import guarded_call
-from quadruped_dyn.dynamics.reduced import reduced_model
+from quadruped_dyn.dynamics.reduced import reduced_maps, reduced_model
 from quadruped_dyn.errors import InputError, NumericalError
 from quadruped_dyn.model.robot import load_robot
 from quadruped_dyn.references.pinocchio import PinocchioReference, roll_rates
@@ -44,6 +44,21 @@ def test_id_r_against_pinocchio_reference(name, stance):
     ours = guarded_call(m.id_r, q_r, qd, qdd, quat)[0]
     theirs = PinocchioReference(robot).reduced_inverse_dynamics(m.stance.feet, m.stance.selection("paper"), q_r, qd, qdd, quat)
     assert_close(ours, theirs, what=f"id_r {stance}")
+
+
+@pytest.mark.parametrize("stance", STANCES)
+def test_maps_alone_against_pinocchio_reference(paper, stance):
+    """``reduced_maps`` (the maps without the dynamics' graph) gives Pinocchio's v and a."""
+    rng = np.random.default_rng(3)
+    qj, R, quat = _near_standing(paper, rng)
+    n = 13 if stance.count("+") == 1 else 12
+    q_r = np.concatenate([qj, [pin.rpy.matrixToRpy(R)[0]]])[:n]
+    qd, qdd = rng.normal(size=n), rng.normal(size=n)
+    v, a = guarded_call(reduced_maps(paper, stance), q_r, qd, qdd, quat)
+    feet = tuple(["FL", "FR", "BL", "BR"].index(x) for x in stance.split("+"))
+    _, v_ref, a_ref = PinocchioReference(paper).reduced_motion(feet, q_r, qd, qdd, quat)
+    assert_close(v, v_ref, what=f"v {stance}")
+    assert_close(a, a_ref, what=f"a {stance}")
 
 
 @pytest.mark.parametrize("stance", STANCES)
