@@ -19,7 +19,7 @@ from quadruped_dyn.model.robot import load_robot
 @click.argument("robot", default="paper")
 @click.option("--gait", "gait_name", type=click.Choice(["trot", "walk"]), default="trot", show_default=True,
               help="Trot (roll unactuated) or statically stable walk.")
-@click.option("--nodes", default=None, type=int, help="Collocation nodes per phase [default: 8].")
+@click.option("--nodes", default=None, type=int, help="Collocation nodes per phase [default: 4].")
 @click.option("--mu", default=None, type=float, help="Friction coefficient of the cone [default: 0.6].")
 @click.option("--speed", default=None, type=float, help="Forward speed, m/s [default: the gait's].")
 @click.option("--hessian", type=click.Choice(["exact", "limited-memory"]), default="exact", show_default=True,

@@ -107,7 +107,8 @@ def report(sol: Solution, replay: Replay | None, extra: dict[str, Any] | None = 
         "max_constraint_violation_allowed": MAX_CONSTRAINT_VIOLATION, "hessian": sol.hessian,
         "formulation": {
             "method": "direct collocation in inverse-dynamics form on a quintic spline (C^3 within a phase, C^2 at "
-                      "switches); dynamics at every node and interval midpoint",
+                      "switches); dynamics at every node and at the interior points of every interval",
+            "interior_points": list(o.interior_points),
             "nodes_per_phase": o.nodes_per_phase, "nodes": tr.n_nodes, "variables": int(tr.lbw.size),
             "constraints": int(tr.lbg.size), "period_s": tr.gait.period, "speed_m_s": tr.speed,
             "mu": o.mu, "fz_min_N": o.fz_min_fraction * tr.robot.total_mass * 9.81,

@@ -93,12 +93,13 @@ class Replay:
     growth_rate_per_s: float | None
     max_roll_defect_Nm: float
     horizon_s: float
+    threshold_rad: float  # DEPARTURE_PCT % of the largest |optimised joint angle|
 
     def summary(self) -> dict[str, Any]:
         return {"horizon_s": self.horizon_s, "time_to_1pct_s": self.time_to_1pct_s,
                 "growth_rate_per_s": self.growth_rate_per_s, "stopped_at_s": self.run.stopped_at,
                 "max_joint_angle_diff_rad": float(self.departure_rad.max()) if self.departure_rad.size else None,
-                "max_roll_defect_Nm": self.max_roll_defect_Nm,
+                "departure_threshold_rad": self.threshold_rad, "max_roll_defect_Nm": self.max_roll_defect_Nm,
                 "departure_threshold_pct_of_max_joint_angle": DEPARTURE_PCT}
 
 
@@ -120,7 +121,7 @@ def replay_rigid(solution: Solution, cycles: float = 2.0, dt: float = REPLAY_DT)
     ref_q = np.array([traj.state(float(t))[0][:12] for t in run.t]).reshape(-1, 12)
     scale = float(np.abs(ref_q).max()) if ref_q.size else 1.0
     d, t1 = departure(run.t, run.q, ref_q, scale)
-    return Replay(run, ref_q, d, t1, growth_rate(run.t[: len(d)], d), torques.max_roll, horizon)
+    return Replay(run, ref_q, d, t1, growth_rate(run.t[: len(d)], d), torques.max_roll, horizon, DEPARTURE_PCT / 100 * scale)
 
 
 def node_count(solution: Solution) -> int:

@@ -15,6 +15,7 @@ from typing import Any
 import casadi as ca
 import numpy as np
 
+from quadruped_dyn.optimal_control.blocks import derivative_functions
 from quadruped_dyn.optimal_control.transcription import Transcription
 
 #: The issue's acceptance: constraint violation (max over g and the bounds, in the NLP's units:
@@ -55,32 +56,7 @@ def constraint_violation(tr: Transcription, w: np.ndarray, g: np.ndarray) -> flo
     return float(max(gv.max(initial=0.0), wv.max(initial=0.0)))
 
 
-def block_hessian(tr: Transcription) -> ca.Function:
-    """IPOPT's Hessian of the Lagrangian, assembled from each block's own: sum_i A_i^T H_i(A_i w + b_i) A_i
-    with H_i the SX Hessian of (sigma * W_EFFORT * weight_dt * effort_i + lam_i . g_i) -- one per distinct
-    block Function, built in well under a second, where CasADi's Hessian of the whole MX graph takes a minute."""
-    from quadruped_dyn.optimal_control.transcription import W_EFFORT
-
-    nw = tr.lbw.size
-    w, lam_f, lam_g = ca.MX.sym("w", nw), ca.MX.sym("lam_f"), ca.MX.sym("lam_g", tr.lbg.size)
-    hess: dict[str, ca.Function] = {}
-    assert tr.quadratic_hessian is not None
-    total = lam_f * tr.quadratic_hessian
-    for piece in tr.pieces:
-        name = piece.fun.name()
-        if name not in hess:
-            z = ca.SX.sym("z", piece.fun.size1_in(0))
-            out = piece.fun(z)
-            lam, sigma = ca.SX.sym("lam", out[0].shape[0]), ca.SX.sym("sigma")
-            L = sigma * out[1] + ca.dot(lam, out[0])
-            hess[name] = ca.Function(f"hess_{name}", [z, lam, sigma], [ca.hessian(L, z)[0]])
-        Hi = hess[name](piece.A @ w + piece.b, lam_g[piece.start : piece.stop], lam_f * W_EFFORT * piece.weight_dt)
-        total = total + ca.mtimes([piece.A.T, Hi, piece.A])
-    return ca.Function("nlp_hess_l", [w, ca.MX.sym("p", 0), lam_f, lam_g], [ca.triu(total)],
-                       ["x", "p", "lam_f", "lam_g"], ["triu_hess_gamma_x_x"])
-
-
-def solve(tr: Transcription, hessian: str = "exact", expand: bool = True, w0: np.ndarray | None = None,
+def solve(tr: Transcription, hessian: str = "exact", expand: bool = False, w0: np.ndarray | None = None,
           verbose: bool = False) -> Solution:
     """IPOPT from the plan (``tr.w0``) or ``w0``."""
     opts = dict(IPOPT_OPTIONS)
@@ -89,9 +65,10 @@ def solve(tr: Transcription, hessian: str = "exact", expand: bool = True, w0: np
     if verbose:
         opts["print_level"] = 5
     start = time.perf_counter()
-    nlp_opts: dict[str, Any] = {"ipopt": opts, "expand": expand, "print_time": False}
+    jac_g, hess_lag = derivative_functions(tr)
+    nlp_opts: dict[str, Any] = {"ipopt": opts, "expand": expand, "print_time": False, "jac_g": jac_g}
     if hessian == "exact":
-        nlp_opts["hess_lag"] = block_hessian(tr)
+        nlp_opts["hess_lag"] = hess_lag
     solver = ca.nlpsol("gait_cycle", "ipopt", tr.nlp, nlp_opts)
     build = time.perf_counter() - start
     start = time.perf_counter()

@@ -74,14 +74,16 @@ W_SMOOTH = 1e-2
 #: Fewest nodes per phase: below this the collocation points are too sparse for the swing's bump.
 MIN_NODES_PER_PHASE = 3
 #: Collocation points inside each interval (fractions), besides the nodes: the roll moment and the
-#: effort limits are imposed there too. Nodes and midpoints leave the interpolant a cubic
-#: acceleration mode s (1 - 2 s)(1 - s) that none of them sees (measured on the paper trot, 8 nodes
-#: per phase: a +-0.18 N m roll moment at the quarter points, alternating interval by interval;
-#: the plan needs 1.7 N m). Quarter points as well remove it but the solve then took > 14 min on the
-#: loaded machine (not finished): left for later (docs/optimal_control.md).
-INTERIOR_POINTS = (0.5,)
-#: Default nodes per phase.
-NODES_PER_PHASE = 8
+#: effort limits are imposed there too. Nodes and midpoints alone leave the interpolant a cubic
+#: acceleration mode s (1 - 2 s)(1 - s) that none of them sees (paper trot, 8 nodes per phase: a
+#: +-0.18 N m roll moment at the quarter points, the plan needs 1.7 N m; replayed open loop it left
+#: 1 % after 0.29 s). With the quarter points too, the largest roll moment sampled anywhere is
+#: 7e-4 N m at 4 nodes per phase and the replay stays within 1 % for two cycles on paper, solo12
+#: and go2 (docs/optimal_control.md).
+INTERIOR_POINTS = (0.25, 0.5, 0.75)
+#: Default nodes per phase: with the quarter points, 4 hold the roll defect below 1e-3 N m (8 cost
+#: twice as much and did not converge within 500 iterations on solo12).
+NODES_PER_PHASE = 4
 #: A step (speed x period) longer than this fraction of the leg's length is beyond what the legs reach.
 MAX_STEP_FRACTION = 0.6
 #: Position scale of the trunk's closeness term, m.
@@ -155,7 +157,8 @@ class Transcription:
     groups: dict[str, list[tuple[int, int, int]]] = field(default_factory=dict)  # name -> (node, start, stop) of g
     outputs: ca.Function | None = None  # w -> tau (12, P (N + 1)), roll, effort, ...
     x_plan: np.ndarray | None = None  # (18, K) the plan's coordinates at the nodes (the warm start)
-    pieces: list[Piece] = field(default_factory=list)  # the blocks of g (and of the effort), for the Hessian
+    pieces: list[Piece] = field(default_factory=list)  # the nonlinear blocks of g (and of the effort), for the derivatives
+    linear: tuple[ca.DM, int] | None = None  # (A, start): g[start:] = A w + b, the spline's continuity rows
     quadratic_hessian: ca.DM | None = None  # of the objective's quadratic part (closeness, smoothness)
     build_seconds: float = 0.0
 
@@ -355,6 +358,7 @@ def transcribe(robot: Robot, gait: Gait, options: Options = Options()) -> Transc
     # it (linear rows; without them the node accelerations are free to make the interpolant ring
     # between collocation points). At a switch, where the contacts change, C^2 as in the plan.
     ends0, ends1 = weights(0.0, h, 5)[3:], weights(1.0, h, 5)[3:]
+    linear_start, linear_rows = size[0], []
 
     def blocks(k0: int) -> tuple[list[np.ndarray], list[np.ndarray]]:
         (A0, b0), (A1, b1) = node_map(k0), node_map(k0 + 1)
@@ -368,6 +372,7 @@ def transcribe(robot: Robot, gait: Gait, options: Options = Options()) -> Transc
         for m in range(1):  # jerk (C^3); snap continuity too over-determines the pinned stance feet
             A = sum(ends1[m, j] * left[j] - ends0[m, j] * right[j] for j in range(6))
             b = sum(ends1[m, j] * lb[j] - ends0[m, j] * rb[j] for j in range(6))
+            linear_rows.append(A)
             g.append(ca.mtimes(ca.sparsify(ca.DM(A)), w) + b)
             lbg.append(np.zeros(N_X))
             ubg.append(np.zeros(N_X))
@@ -408,7 +413,8 @@ def transcribe(robot: Robot, gait: Gait, options: Options = Options()) -> Transc
                           ["w"], ["tau", "roll", "effort", "closeness"])
     nlp = {"x": w, "f": objective, "g": ca.vertcat(*g)}
     return Transcription(robot, gait, plan, options, speed, h, K, nlp, lbw, ubw, np.concatenate(lbg), np.concatenate(ubg),
-                         w0, groups, outputs, Xp, pieces, Q, time.perf_counter() - started)
+                         w0, groups, outputs, Xp, pieces, (ca.sparsify(ca.DM(np.vstack(linear_rows))), linear_start), Q,
+                         time.perf_counter() - started)
 
 
 def stance_name(stance: tuple[int, ...]) -> str:

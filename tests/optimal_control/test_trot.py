@@ -15,8 +15,8 @@ from quadruped_dyn.optimal_control.solve import MAX_CONSTRAINT_VIOLATION, Soluti
 from quadruped_dyn.optimal_control.transcription import Options, transcribe
 from quadruped_dyn.references.pinocchio import PinocchioReference
 
-#: Coarse: 4 nodes per phase (8 per cycle), with midpoints; converges in ~20 IPOPT iterations.
-COARSE = Options(nodes_per_phase=4)
+#: Coarse: 3 nodes per phase (6 per cycle), collocated at the quarter points too (the default).
+COARSE = Options(nodes_per_phase=3)
 
 #: Pinocchio's reduced inverse dynamics and ours are different derivations: they agree to the
 #: round-off of ~1e3 operations on torques of ~10 N m, and on the roll moment.
