@@ -10,7 +10,9 @@ neither side uses -march=native; ``native`` builds every side for this machine (
 Pairs: M_full ~ crba, nle_full (C + G in one call) ~ nonLinearEffects, G_full ~
 computeGeneralizedGravity, id_full ~ rnea (id_full also applies 4 foot forces), did_full ~ computeRNEADerivatives,
 dfd_full ~ computeABADerivatives, fd_r_<feet> ~
-constraintDynamics with those stance feet. The reduced terms M_r, CG_r, G_r, id_r are timed alone.
+constraintDynamics with those stance feet, dfd_r_<feet> ~ constraintDynamics + computeConstraintDynamicsDerivatives
+with those feet (the analytical derivatives need the forward dynamics first; dfd_r also computes qdd_r).
+The reduced terms M_r, CG_r, G_r, id_r are timed alone.
 """
 
 from __future__ import annotations
@@ -43,6 +45,8 @@ from quadruped_dyn.references.pinocchio import PinocchioReference
 #: point contacts (different physics: the paper's GRF model vs rigid contacts; the same job, a
 #: forward dynamics step of a robot on those feet). Target ratio generated / Pinocchio.
 FD_R_TARGET = 0.3
+#: dfd_r_<feet> against constraintDynamics + computeConstraintDynamicsDerivatives with the same feet (docs/derivatives.md)
+DFD_R_TARGET = 0.5
 
 #: generated function -> (Pinocchio algorithm, target ratio generated / Pinocchio)
 PAIRS = {
@@ -189,8 +193,10 @@ def run_bench(robot: Robot, calls: int = 20000, reps: int = 9, rounds: int = 3, 
     python_us = _python_call_times(robot, library)
     for name, ns in ((n[len(PREFIX):], t) for n, t in generated.items()):
         entry = BenchEntry(name, ns, python_generated_us=python_us.get(name))
-        if name in PAIRS or name.startswith("fd_r_"):
-            algo, target = PAIRS.get(name) or (f"constraintDynamics_{name[len('fd_r_'):]}", FD_R_TARGET)
+        if name in PAIRS or name.startswith(("fd_r_", "dfd_r_")):
+            algo, target = PAIRS.get(name) or (
+                (f"constraintDynamics_{name[len('fd_r_'):]}", FD_R_TARGET) if name.startswith("fd_r_")
+                else (f"constraintDynamicsDerivatives_{name[len('dfd_r_'):]}", DFD_R_TARGET))
             entry.pinocchio, entry.pinocchio_ns, entry.target = algo, pinocchio[algo], target
             entry.ratio = ns / pinocchio[algo]
             entry.python_pinocchio_us = python_us.get(algo)

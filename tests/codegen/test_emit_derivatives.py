@@ -1,5 +1,6 @@
-"""Generated C of the derivatives (qd_<robot>_d.c) against Pinocchio's analytical derivatives,
-in double and float, and its return codes on bad input and a singular M."""
+"""Generated C of the derivatives against Pinocchio's analytical derivatives (did_full, dfd_full) and
+central differences of the Pinocchio-built references (dfd_r, dgrf), in double and float, and the
+return codes on bad input and a singular M."""
 
 from __future__ import annotations
 
@@ -8,14 +9,20 @@ import subprocess
 import numpy as np
 import pytest
 
-from quadruped_dyn.codegen.emit import TEMPLATES
+from quadruped_dyn.checks.derivative_reference import ReducedReference, grf_derivatives_reference
+from quadruped_dyn.codegen.emit import REDUCED_STANCE_SETS, TEMPLATES, reduced_symbol
+from quadruped_dyn.codegen.emit_derivatives import GRF_DERIVATIVE_STANCE_SETS
 from quadruped_dyn.codegen.library import C_FLAGS, CompiledFunction, compiled_library
 from quadruped_dyn.errors import InputError
+from quadruped_dyn.math.compare import relative_error
+from quadruped_dyn.model.robot import ROBOT_NAMES, load_robot
+from quadruped_dyn.model.stance import stance_set
 from quadruped_dyn.model.state import random_state
 from quadruped_dyn.references.pinocchio import PinocchioDerivatives, PinocchioReference
-from quadruped_dyn.tolerances import FLOAT_REL_TOL, REL_TOL_DERIVATIVES
+from quadruped_dyn.tolerances import FLOAT_REL_TOL, REL_TOL_DERIVATIVES, REL_TOL_FD_DERIVATIVES
 from tests.codegen.test_emit import call_ctypes
 from tests.conftest import assert_close
+from tests.dynamics.test_derivatives import grf_point, reduced_point
 
 
 def test_compiled_derivatives_match_pinocchio(paper):
@@ -82,6 +89,7 @@ int main(void) {{
   const casadi_real* arg[3] = {{q, v, tau}};
   casadi_real* res[3] = {{out[0], out[1], out[2]}};
   static const casadi_int sp[2 + 19 + 1] = {{18, 18}};
+  (void)qd_dgrf_solve; /* the GRF derivative's driver, not exercised here */
   printf("%d\\n", qd_dfd_full_solve(parts, did, sp, sp, arg, res, 0, 0, 0));
   return 0;
 }}
@@ -89,3 +97,74 @@ int main(void) {{
     exe = tmp_path / "singular"
     subprocess.run(["gcc", *[f for f in C_FLAGS if f != "-fPIC"], str(program), "-lm", "-o", str(exe)], check=True)
     assert subprocess.run([str(exe)], capture_output=True, text=True, check=True).stdout.strip() == "2"
+
+
+# ----------------------------------------------------------------------------- reduced model and GRF solve
+
+
+def _check_compiled_reduced(robot, library, stance_name, seed=0) -> float:
+    """The C dfd_r_<feet> against central differences of the Pinocchio-built reduced forward dynamics;
+    the largest relative error over its four outputs."""
+    stance = stance_set(stance_name)
+    n = 13 if len(stance.feet) == 2 else 12
+    q_r, qd, tau, quat = reduced_point(robot, n, np.random.default_rng(seed))
+    ours = CompiledFunction(library, reduced_symbol("dfd_r", stance))(q_r, qd, tau, quat)
+    expected = ReducedReference(PinocchioReference(robot), stance).dfd_r(q_r, qd, tau, quat)
+    assert np.all(np.asarray(ours[0])[:, 12:] == 0.0)  # the roll is read from quat
+    for name, o, e in zip(("dqdd_dq", "dqdd_dqd", "dqdd_dtau", "dqdd_dtheta"), ours, expected):
+        assert_close(o, e, REL_TOL_FD_DERIVATIVES, f"{robot.name} C dfd_r_{stance_name} {name}")
+    return max(relative_error(np.asarray(o), e) for o, e in zip(ours, expected))
+
+
+def _check_compiled_grf(robot, library, stance_name, seed=0) -> float:
+    """The C dgrf_<feet> against central differences of Pinocchio's GRF solve (q along integrate)."""
+    stance = stance_set(stance_name)
+    q, v, a = grf_point(robot, np.random.default_rng(seed))
+    ours = CompiledFunction(library, f"dgrf_{stance_name.replace('+', '_')}")(q, v, a)
+    expected = grf_derivatives_reference(PinocchioReference(robot), stance, q, v, a)
+    for name, o, e in zip(("dlambda_dq", "dlambda_dv", "dlambda_da"), ours, expected):
+        assert_close(o, e, REL_TOL_FD_DERIVATIVES, f"{robot.name} C dgrf_{stance_name} {name}")
+    return max(relative_error(np.asarray(o), e) for o, e in zip(ours, expected))
+
+
+@pytest.mark.parametrize("stance", ["FR+BL+BR", "FL+BR"])
+def test_compiled_reduced_derivatives_match_reference_differences(paper, stance):
+    _check_compiled_reduced(paper, compiled_library(paper), stance)
+
+
+@pytest.mark.parametrize("stance", ["FL+FR+BL+BR", "FR+BL+BR", "FL+BR", "FL"])
+def test_compiled_grf_derivatives_match_reference_differences(paper, stance):
+    _check_compiled_grf(paper, compiled_library(paper), stance)
+
+
+def _every_stance_set(robot) -> dict[str, float]:
+    library = compiled_library(robot)
+    worst = {st.name: _check_compiled_reduced(robot, library, st.name) for st in REDUCED_STANCE_SETS}
+    worst.update({f"grf {st.name}": _check_compiled_grf(robot, library, st.name) for st in GRF_DERIVATIVE_STANCE_SETS})
+    print(f"{robot.name}: dfd_r max rel err {max(v for k, v in worst.items() if not k.startswith('grf')):.1e}, "
+          f"dgrf {max(v for k, v in worst.items() if k.startswith('grf')):.1e}")
+    return worst
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("name", ROBOT_NAMES)
+def test_compiled_reduced_and_grf_derivatives_every_robot(name):
+    """Every reduced stance set's dfd_r and every GRF stance set's dgrf, compiled, on every built-in robot."""
+    _every_stance_set(load_robot(name))
+
+
+@pytest.mark.slow
+def test_compiled_reduced_and_grf_derivatives_b1_by_path(erd):
+    _every_stance_set(load_robot(str(erd / "b1_description/urdf/b1.urdf")))
+
+
+def test_compiled_reduced_derivatives_bad_input(paper):
+    """A NaN input or a zero quaternion: QD_NONFINITE, an InputError; a wrong length: InputError first."""
+    stance = stance_set("FL+BR")
+    dfd = CompiledFunction(compiled_library(paper), reduced_symbol("dfd_r", stance))
+    q_r, qd, tau, quat = reduced_point(paper, 13, np.random.default_rng(0))
+    for args in ((q_r, np.full(13, np.nan), tau, quat), (q_r, qd, tau, np.zeros(4))):
+        with pytest.raises(InputError, match="not finite"):
+            dfd(*args)
+    with pytest.raises(InputError, match="entries"):
+        dfd(q_r[:12], qd, tau, quat)

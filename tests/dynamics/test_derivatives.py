@@ -7,12 +7,14 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
+from quadruped_dyn.checks.derivative_reference import ReducedReference, central, grf_derivatives_reference
 from quadruped_dyn.dynamics.derivatives import full_derivatives, grf_derivatives, reduced_derivatives
 from quadruped_dyn.errors import InputError
 from quadruped_dyn.model.robot import ROBOT_NAMES, load_robot
+from quadruped_dyn.model.stance import stance_set
 from quadruped_dyn.model.state import random_state, rotation
 from quadruped_dyn.references.pinocchio import PinocchioDerivatives, PinocchioReference
-from quadruped_dyn.tolerances import FD_STEP_DERIVATIVES, REL_TOL_DERIVATIVES, REL_TOL_FD_DERIVATIVES
+from quadruped_dyn.tolerances import REL_TOL_DERIVATIVES, REL_TOL_FD_DERIVATIVES
 from tests.conftest import SEEDS, assert_close
 
 FAST_ROBOTS = ["paper", "solo12"]
@@ -56,9 +58,7 @@ def test_q_derivative_is_along_pinocchio_integrate(paper):
     d = full_derivatives(paper)
     s = random_state(paper.lower, paper.upper, np.random.default_rng(3))
     dq = np.array(d.did_full(s.q, s.v, s.a)[0])
-    h = FD_STEP_DERIVATIVES
-    fd = np.column_stack([(ref.rnea(pd.integrate(s.q, h * e), s.v, s.a) - ref.rnea(pd.integrate(s.q, -h * e), s.v, s.a))
-                          / (2 * h) for e in np.eye(18)])
+    fd = central(lambda x: ref.rnea(pd.integrate(s.q, x), s.v, s.a), np.zeros(18))
     assert_close(dq, fd, REL_TOL_FD_DERIVATIVES, "did_full dtau_dq vs differences along integrate")
     assert np.all(dq[:, :3] == 0.0)  # no dependence on the trunk position
     # a world-frame rotation increment (R -> exp([dw]x) R) gives other columns: the convention matters
@@ -86,25 +86,7 @@ def test_bad_input_is_input_error(paper, bad):
 
 # ----------------------------------------------------------------------------- reduced model, GRF
 
-def _central(f, x0: np.ndarray, h: float = FD_STEP_DERIVATIVES) -> np.ndarray:
-    return np.column_stack([(f(x0 + h * e) - f(x0 - h * e)) / (2 * h) for e in np.eye(x0.size)])
-
-
-def _reference_fd_r(ref, stance, q_r, qd, tau, quat):
-    """qdd_r of the Pinocchio-built reduced reference (docs/formulation.md section 5), and its M_r."""
-    n = q_r.size
-    P = stance.selection("paper")
-
-    def idr(qd_, qdd_):
-        return ref.reduced_inverse_dynamics(stance.feet, P, q_r, qd_, qdd_, quat)
-
-    z = np.zeros(n)
-    G = idr(z, z)
-    M = np.column_stack([idr(z, e) - G for e in np.eye(n)])
-    return np.linalg.solve(M, tau - idr(qd, z)), M
-
-
-def _reduced_point(robot, n, rng):
+def reduced_point(robot, n, rng):
     import pinocchio as pin
 
     qj = np.clip(robot.standing_q + rng.normal(scale=0.05, size=12), robot.lower, robot.upper)
@@ -115,25 +97,14 @@ def _reduced_point(robot, n, rng):
 
 
 def _check_reduced(robot, stance_name, seed=0):
-    import pinocchio as pin
-
     d = reduced_derivatives(robot, stance_name)
-    ref = PinocchioReference(robot)
-    q_r, qd, tau, quat = _reduced_point(robot, d.n, np.random.default_rng(seed))
-    dq, dqd, dtau, dth = d.dfd_r(q_r, qd, tau, quat)
-    ref_fd = lambda *x: _reference_fd_r(ref, d.stance, *x)[0]  # noqa: E731
-    tail = q_r[12:]
-    assert_close(dq[:, :12], _central(lambda x: ref_fd(np.append(x, tail), qd, tau, quat), q_r[:12]),
-                 REL_TOL_FD_DERIVATIVES, f"{robot.name} {stance_name} dqdd_dq")
-    assert np.all(dq[:, 12:] == 0.0)  # the roll is read from quat
-    assert_close(dqd, _central(lambda x: ref_fd(q_r, x, tau, quat), qd), REL_TOL_FD_DERIVATIVES, "dqdd_dqd")
-    assert_close(dtau, np.linalg.inv(_reference_fd_r(ref, d.stance, q_r, qd, tau, quat)[1]), REL_TOL_DERIVATIVES, "M_r^-1")
-
-    def rotated(th):
-        return (pin.Quaternion(quat) * pin.Quaternion(pin.exp3(th))).coeffs()  # body-frame increment
-
-    assert_close(dth, _central(lambda th: ref_fd(q_r, qd, tau, rotated(th)), np.zeros(3)), REL_TOL_FD_DERIVATIVES,
-                 f"{robot.name} {stance_name} dqdd_dtheta")
+    q_r, qd, tau, quat = reduced_point(robot, d.n, np.random.default_rng(seed))
+    ours = d.dfd_r(q_r, qd, tau, quat)
+    expected = ReducedReference(PinocchioReference(robot), d.stance).dfd_r(q_r, qd, tau, quat)
+    assert np.all(ours[0][:, 12:] == 0.0)  # the roll is read from quat
+    for name, o, e, tol in zip(("dqdd_dq", "dqdd_dqd", "M_r^-1", "dqdd_dtheta"), ours, expected,
+                               (REL_TOL_FD_DERIVATIVES, REL_TOL_FD_DERIVATIVES, REL_TOL_DERIVATIVES, REL_TOL_FD_DERIVATIVES)):
+        assert_close(o, e, tol, f"{robot.name} {stance_name} {name}")
 
 
 @pytest.mark.parametrize("stance", ["FR+BL+BR", "FL+BR"])
@@ -141,25 +112,18 @@ def test_reduced_derivatives_match_reference_differences(paper, stance):
     _check_reduced(paper, stance)
 
 
-def _check_grf(robot, stance_name, seed=0):
-    g = grf_derivatives(robot, stance_name)
-    ref = PinocchioReference(robot)
-    pd = PinocchioDerivatives(ref)
-    from quadruped_dyn.model.stance import stance_set
-
-    st = stance_set(stance_name)
-    P = st.selection("paper")
-    rng = np.random.default_rng(seed)
+def grf_point(robot, rng):
+    """A random state with the joints near standing (every GRF system well conditioned)."""
     s = random_state(robot.lower, robot.upper, rng)
     q = s.q.copy()
     q[7:] = np.clip(robot.standing_q + rng.normal(scale=0.05, size=12), robot.lower, robot.upper)
-    ours = [np.array(x) for x in g(q, s.v, s.a)]
+    return q, s.v, s.a
 
-    def lam(q_, v_, a_):
-        return ref.grf_solve(q_, v_, a_, st.feet, P).lam
 
-    expected = [_central(lambda x: lam(pd.integrate(q, x), s.v, s.a), np.zeros(18)),
-                _central(lambda x: lam(q, x, s.a), s.v), _central(lambda x: lam(q, s.v, x), s.a)]
+def _check_grf(robot, stance_name, seed=0):
+    q, v, a = grf_point(robot, np.random.default_rng(seed))
+    ours = [np.array(x) for x in grf_derivatives(robot, stance_name)(q, v, a)]
+    expected = grf_derivatives_reference(PinocchioReference(robot), stance_set(stance_name), q, v, a)
     for name, o, e in zip(("dlambda_dq", "dlambda_dv", "dlambda_da"), ours, expected):
         assert_close(o, e, REL_TOL_FD_DERIVATIVES, f"{robot.name} dgrf_{stance_name} {name}")
 
@@ -180,7 +144,7 @@ def test_reduced_and_grf_derivatives_every_robot(name):
 
 def test_reduced_derivatives_bad_input(paper):
     d = reduced_derivatives(paper, "FL+BR")
-    q_r, qd, tau, quat = _reduced_point(paper, 13, np.random.default_rng(0))
+    q_r, qd, tau, quat = reduced_point(paper, 13, np.random.default_rng(0))
     with pytest.raises(InputError):
         d.dfd_r(q_r[:12], qd, tau, quat)
     with pytest.raises(InputError):

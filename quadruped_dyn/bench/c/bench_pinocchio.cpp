@@ -4,7 +4,10 @@
 // velocities/accelerations/torques random. Also aba, computeRNEADerivatives and computeABADerivatives. With the four foot frames (project order), also
 // constraintDynamics with every set of 2, 3 or 4 stance feet as rigid 3-D point contacts
 // (LOCAL_WORLD_ALIGNED, proximal settings mu = 0, one iteration: the exact KKT solve), named
-// "constraintDynamics_<feet>" with the feet joined by '_' (e.g. constraintDynamics_FL_BR).
+// "constraintDynamics_<feet>" with the feet joined by '_' (e.g. constraintDynamics_FL_BR), and
+// constraintDynamics followed by computeConstraintDynamicsDerivatives (the analytical derivatives of the
+// accelerations and contact forces w.r.t. q, v, tau; they need constraintDynamics' factorisation), named
+// "constraintDynamicsDerivatives_<feet>".
 #include <algorithm>
 #include <ctime>
 #include <cstdio>
@@ -16,6 +19,7 @@
 
 #include <pinocchio/algorithm/aba.hpp>
 #include <pinocchio/algorithm/constrained-dynamics.hpp>
+#include <pinocchio/algorithm/constrained-dynamics-derivatives.hpp>
 #include <pinocchio/algorithm/crba.hpp>
 #include <pinocchio/algorithm/joint-configuration.hpp>
 #include <pinocchio/algorithm/rnea.hpp>
@@ -92,6 +96,11 @@ int main(int argc, char** argv) {
       pin::ProximalSettings prox(1e-12, 0.0, 1);
       std::printf("%s %.2f\n", name.c_str(), median_ns([&] {
         sink = sink + pin::constraintDynamics(model, data, q, v, tau, contacts, datas, prox)[0]; }, calls, reps));
+      std::string derivatives = "constraintDynamicsDerivatives" + name.substr(std::string("constraintDynamics").size());
+      std::printf("%s %.2f\n", derivatives.c_str(), median_ns([&] {
+        pin::constraintDynamics(model, data, q, v, tau, contacts, datas, prox);
+        pin::computeConstraintDynamicsDerivatives(model, data, contacts, datas, prox);
+        sink = sink + data.ddq_dq(0, 0); }, calls, reps));
     }
   }
   return 0;

@@ -17,8 +17,8 @@ int main(int argc, char** argv) {
   double* t = malloc(sizeof(double) * (size_t)reps); /* the harness may allocate; the functions do not */
   for (int c = 0; c < QD_N_CASES; ++c) {
     const qd_case* k = &QD_CASES[c];
-    casadi_real in[4][QD_MAX_IN], out[4][QD_MAX_OUT];
-    const casadi_real* arg[4];
+    casadi_real in[QD_MAX_N_IN][QD_MAX_IN], out[4][QD_MAX_OUT];
+    const casadi_real* arg[QD_MAX_N_IN];
     casadi_real* res[4];
     qd_case_args(k, in, arg, out, res);
     printf("%s %.2f\n", k->name, qd_median_ns(k->fn, arg, res, iw, w, &in[0][7], calls, reps, t));
