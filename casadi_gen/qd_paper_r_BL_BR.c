@@ -86,19 +86,162 @@ static const casadi_int casadi_s2[3] = {13, 13, 1};
 static const casadi_int casadi_s3[3] = {3, 1, 1};
 static const casadi_int casadi_s4[3] = {13, 3, 1};
 
+#define QD_REGULARITY_MIN ((casadi_real)1e-18) /* quadruped_dyn.tolerances.REGULARITY_MIN */
+static int qd_regularity(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem) {
+  (void)arg; (void)res; (void)iw; (void)w; (void)mem;
+  casadi_real a00, a01, a02, a03, a04, a05, a06, a07, a08, a09, a10, a11;
+  casadi_real a12, a13, a14, a15, a16, a17, a18, a19, a20, a21, a22, a23;
+  a00=-1.9000000000000000e-01;
+  a01=2.0000000000000001e-01;
+  a02=arg[0]? arg[0][7] : 0;
+  a03=qd_sin(a02);
+  a04=(a01*a03);
+  a04=(a00+a04);
+  a02=qd_cos(a02);
+  a05=arg[0]? arg[0][8] : 0;
+  a06=qd_sin(a05);
+  a07=(a02*a06);
+  a05=qd_cos(a05);
+  a08=(a03*a05);
+  a07=(a07+a08);
+  a07=(a01*a07);
+  a04=(a04+a07);
+  a07=arg[0]? arg[0][10] : 0;
+  a08=qd_sin(a07);
+  a09=(a01*a08);
+  a00=(a00+a09);
+  a07=qd_cos(a07);
+  a09=arg[0]? arg[0][11] : 0;
+  a10=qd_sin(a09);
+  a11=(a07*a10);
+  a09=qd_cos(a09);
+  a12=(a08*a09);
+  a11=(a11+a12);
+  a11=(a01*a11);
+  a00=(a00+a11);
+  a11=(a04-a00);
+  a12=2.;
+  a13=arg[1]? arg[1][0] : 0;
+  a14=casadi_sq(a13);
+  a15=arg[1]? arg[1][1] : 0;
+  a16=casadi_sq(a15);
+  a14=(a14+a16);
+  a16=arg[1]? arg[1][2] : 0;
+  a17=casadi_sq(a16);
+  a17=(a14+a17);
+  a18=arg[1]? arg[1][3] : 0;
+  a19=casadi_sq(a18);
+  a17=(a17+a19);
+  a12=(a12/a17);
+  a17=(a13*a16);
+  a19=(a15*a18);
+  a17=(a17-a19);
+  a17=(a12*a17);
+  a15=(a15*a16);
+  a13=(a13*a18);
+  a15=(a15+a13);
+  a15=(a12*a15);
+  a13=(a17*a15);
+  a15=casadi_sq(a15);
+  a18=1.;
+  a12=(a12*a14);
+  a12=(a18-a12);
+  a14=casadi_sq(a12);
+  a15=(a15+a14);
+  a13=(a13/a15);
+  a14=7.0000000000000007e-02;
+  a16=arg[0]? arg[0][6] : 0;
+  a19=qd_cos(a16);
+  a20=(a19*a02);
+  a21=(a01*a20);
+  a14=(a14+a21);
+  a20=(a20*a05);
+  a19=(a19*a03);
+  a19=(a19*a06);
+  a20=(a20-a19);
+  a20=(a01*a20);
+  a14=(a14+a20);
+  a20=-7.0000000000000007e-02;
+  a19=arg[0]? arg[0][9] : 0;
+  a21=qd_cos(a19);
+  a22=(a21*a07);
+  a23=(a01*a22);
+  a20=(a20+a23);
+  a22=(a22*a09);
+  a21=(a21*a08);
+  a21=(a21*a10);
+  a22=(a22-a21);
+  a22=(a01*a22);
+  a20=(a20+a22);
+  a22=(a14-a20);
+  a22=(a13*a22);
+  a11=(a11-a22);
+  a17=(a17*a12);
+  a17=(a17/a15);
+  a16=qd_sin(a16);
+  a03=(a16*a03);
+  a03=(a03*a06);
+  a16=(a16*a02);
+  a05=(a16*a05);
+  a03=(a03-a05);
+  a03=(a01*a03);
+  a16=(a01*a16);
+  a03=(a03-a16);
+  a19=qd_sin(a19);
+  a08=(a19*a08);
+  a08=(a08*a10);
+  a19=(a19*a07);
+  a09=(a19*a09);
+  a08=(a08-a09);
+  a08=(a01*a08);
+  a01=(a01*a19);
+  a08=(a08-a01);
+  a01=(a03-a08);
+  a01=(a17*a01);
+  a11=(a11-a01);
+  a11=casadi_sq(a11);
+  a13=casadi_sq(a13);
+  a18=(a18+a13);
+  a17=casadi_sq(a17);
+  a18=(a18+a17);
+  a18=(2*a18);
+  a04=casadi_sq(a04);
+  a14=casadi_sq(a14);
+  a04=(a04+a14);
+  a03=casadi_sq(a03);
+  a04=(a04+a03);
+  a00=casadi_sq(a00);
+  a20=casadi_sq(a20);
+  a00=(a00+a20);
+  a08=casadi_sq(a08);
+  a00=(a00+a08);
+  a04=(a04+a00);
+  a18=(a18*a04);
+  a11=(a11/a18);
+  if (res[0]!=0) res[0][0]=a11;
+  return 0;
+}
+
 /* quadruped_dyn: checks and the forward-dynamics solve of the reduced model (hand-written,
- * inserted into each generated qd_<robot>_r_<stance>.c; see quadruped_dyn/codegen.py).
+ * inserted into each generated qd_<robot>_r_<stance>.c; see quadruped_dyn/codegen/emit.py).
+ * Before it the generator writes QD_REGULARITY_MIN (quadruped_dyn.tolerances.REGULARITY_MIN) and
+ * qd_regularity, the stance's regularity (q_r, quat) -> [0, 1] of
+ * quadruped_dyn/dynamics/stance_regularity.py, the expression the Python model checks.
  *
  * Return codes of the reduced functions (qd_M_r_*, qd_CG_r_*, qd_G_r_*, qd_id_r_*, qd_fd_r_*):
- *   0             success
- *   QD_NONFINITE  an output is NaN or inf: coincident or collinear stance feet (the trunk
- *                 motion is undetermined), the trunk pitched +-90 deg (the roll row of two
- *                 stance feet has qd_tan(pitch)), a zero quaternion, or a non-finite input;
- *   QD_SINGULAR   (qd_fd_r_* only) M_r is singular to working precision: a pivot of its LU
- *                 factorisation (partial pivoting) is below QD_SINGULAR_RTOL * max|M_r|,
- *                 e.g. two stance feet with the trunk pitched within ~1e-12 rad of 90 deg.
- *                 The output is not written then. (A stance leg stretched straight is not
- *                 singular: the reduced model never inverts a leg's Jacobian.) */
+ *   0              success
+ *   QD_NONFINITE   an output is NaN or inf: the trunk pitched +-90 deg (the roll row of two
+ *                  stance feet has qd_tan(pitch)), a zero quaternion, or a non-finite input;
+ *   QD_SINGULAR    (qd_fd_r_* only) M_r is singular to working precision: a pivot of its LU
+ *                  factorisation (partial pivoting) is below QD_SINGULAR_RTOL * max|M_r|,
+ *                  e.g. two stance feet with the trunk pitched within ~1e-12 rad of 90 deg.
+ *                  (A stance leg stretched straight is not singular: the reduced model never
+ *                  inverts a leg's Jacobian.)
+ *   QD_DEGENERATE  the stance is degenerate: regularity <= QD_REGULARITY_MIN (coincident or
+ *                  collinear stance feet, or two feet whose line is perpendicular to the roll
+ *                  axis: the front or back pair with zero pitch or roll). Checked first, by
+ *                  every function; the model is undefined there (it would return ~1e15).
+ * No output is written when the code is QD_SINGULAR or QD_DEGENERATE. */
 #include <float.h>
 #include <math.h>
 
@@ -106,6 +249,7 @@ static const casadi_int casadi_s4[3] = {13, 3, 1};
 #define QD_NONFINITE 1
 #define QD_SINGULAR 2
 #endif
+#define QD_DEGENERATE 3
 
 /* Machine epsilon of casadi_real (float, double or long double builds). */
 #define QD_EPS (sizeof(casadi_real) == sizeof(float) ? (casadi_real)FLT_EPSILON \
@@ -114,6 +258,9 @@ static const casadi_int casadi_s4[3] = {13, 3, 1};
  * (condition number beyond ~1 / (QD_SINGULAR_RTOL)): 1e-13 in double, 5e-5 in float. */
 #define QD_SINGULAR_RTOL (450 * QD_EPS)
 #define QD_N_MAX 13
+/* Regularity is the square of a relative singular value of the feet's layout; computed from
+ * foot positions rounded at eps, it cannot resolve values below ~(64 eps)^2 (float: 6e-11). */
+#define QD_REGULARITY_FLOOR ((64 * QD_EPS) * (64 * QD_EPS))
 
 typedef int (*qd_eval_fn)(const casadi_real**, casadi_real**, casadi_int*, casadi_real*, int);
 
@@ -127,6 +274,24 @@ static int qd_finite(int flag, casadi_real** res, int n_out, const casadi_int* n
     }
   }
   return 0;
+}
+
+/* 0 where the stance is regular at (q_r = arg[0], quat = arg[i_quat]); QD_DEGENERATE or QD_NONFINITE. */
+static int qd_regular(const casadi_real** arg, int i_quat, casadi_int* iw, casadi_real* w, int mem) {
+  casadi_real m = 0;
+  const casadi_real* m_arg[2] = {arg[0], arg[i_quat]};
+  casadi_real* m_res[1] = {&m};
+  int flag = qd_regularity(m_arg, m_res, iw, w, mem);
+  if (flag || !isfinite(m)) return flag ? flag : QD_NONFINITE;
+  return m > QD_REGULARITY_MIN && m > QD_REGULARITY_FLOOR ? 0 : QD_DEGENERATE;
+}
+
+/* The checked call of a generated reduced function f with quat at arg[i_quat]: the stance's
+ * regularity first, then f, then its outputs' finiteness. */
+static int qd_checked(qd_eval_fn f, int i_quat, int n_out, const casadi_int* nnz, const casadi_real** arg,
+                      casadi_real** res, casadi_int* iw, casadi_real* w, int mem) {
+  int flag = qd_regular(arg, i_quat, iw, w, mem);
+  return qd_finite(flag ? flag : f(arg, res, iw, w, mem), res, n_out, nnz);
 }
 
 /* LU factorisation with partial pivoting of M (n x n, column-major, in place: the multipliers of
@@ -183,7 +348,8 @@ static int qd_fd_r_factor(int n, qd_eval_fn M_r, qd_eval_fn CG_r, const casadi_r
   const casadi_real* cg_arg[3] = {arg[0], arg[1], arg[3]};
   casadi_real* m_res[1] = {M};
   casadi_real* cg_res[1] = {b};
-  int flag = M_r(m_arg, m_res, iw, w, mem);
+  int flag = qd_regular(arg, 3, iw, w, mem);
+  if (!flag) flag = M_r(m_arg, m_res, iw, w, mem);
   if (!flag) flag = CG_r(cg_arg, cg_res, iw, w, mem);
   if (flag) return flag;
   casadi_real scale = 0, sum = 0; /* a NaN or inf anywhere makes the sum non-finite */
@@ -4190,7 +4356,7 @@ static int casadi_f0(const casadi_real** arg, casadi_real** res, casadi_int* iw,
 }
 
 CASADI_SYMBOL_EXPORT int qd_M_r_BL_BR(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem){
-  return qd_finite(casadi_f0(arg, res, iw, w, mem), res, 1, (const casadi_int[]){169});
+  return qd_checked(casadi_f0, 1, 1, (const casadi_int[]){169}, arg, res, iw, w, mem);
 }
 
 CASADI_SYMBOL_EXPORT int qd_M_r_BL_BR_checkout(void) {
@@ -6292,7 +6458,7 @@ static int casadi_f1(const casadi_real** arg, casadi_real** res, casadi_int* iw,
 }
 
 CASADI_SYMBOL_EXPORT int qd_CG_r_BL_BR(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem){
-  return qd_finite(casadi_f1(arg, res, iw, w, mem), res, 1, (const casadi_int[]){13});
+  return qd_checked(casadi_f1, 2, 1, (const casadi_int[]){13}, arg, res, iw, w, mem);
 }
 
 CASADI_SYMBOL_EXPORT int qd_CG_r_BL_BR_checkout(void) {
@@ -7116,7 +7282,7 @@ static int casadi_f2(const casadi_real** arg, casadi_real** res, casadi_int* iw,
 }
 
 CASADI_SYMBOL_EXPORT int qd_G_r_BL_BR(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem){
-  return qd_finite(casadi_f2(arg, res, iw, w, mem), res, 1, (const casadi_int[]){13});
+  return qd_checked(casadi_f2, 1, 1, (const casadi_int[]){13}, arg, res, iw, w, mem);
 }
 
 CASADI_SYMBOL_EXPORT int qd_G_r_BL_BR_checkout(void) {
@@ -9631,7 +9797,7 @@ static int casadi_f3(const casadi_real** arg, casadi_real** res, casadi_int* iw,
 }
 
 CASADI_SYMBOL_EXPORT int qd_id_r_BL_BR(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem){
-  return qd_finite(casadi_f3(arg, res, iw, w, mem), res, 1, (const casadi_int[]){13});
+  return qd_checked(casadi_f3, 3, 1, (const casadi_int[]){13}, arg, res, iw, w, mem);
 }
 
 CASADI_SYMBOL_EXPORT int qd_id_r_BL_BR_checkout(void) {
@@ -16439,7 +16605,7 @@ static int casadi_f5(const casadi_real** arg, casadi_real** res, casadi_int* iw,
 }
 
 CASADI_SYMBOL_EXPORT int qd_did_r_dir_BL_BR(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem){
-  return qd_finite(casadi_f5(arg, res, iw, w, mem), res, 1, (const casadi_int[]){13});
+  return qd_checked(casadi_f5, 3, 1, (const casadi_int[]){13}, arg, res, iw, w, mem);
 }
 
 CASADI_SYMBOL_EXPORT int qd_did_r_dir_BL_BR_checkout(void) {

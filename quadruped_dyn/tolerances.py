@@ -23,6 +23,13 @@ REL_TOL_FD = 1e-6
 #: paper's systems stay above ~1e-4 relative for any foot layout a leg can reach.
 RANK_RTOL = 1e-9
 
+#: A reduced model's stance is regular where ``dynamics.stance_regularity.regularity`` (the square
+#: of a relative singular value of the stance feet's layout) exceeds this: the GRF rank test's
+#: relative singular value, squared. Measured at the walk's and trot's states of every built-in
+#: robot and b1: at least 6.5e-2 (docs/reliability.md §7). The generated C compares with the
+#: same number (QD_REGULARITY_MIN, written by codegen.emit; in float at least (64 FLT_EPSILON)^2).
+REGULARITY_MIN = RANK_RTOL**2
+
 #: Two backward-stable solves of the same linear system agree to about cond(A) * eps in
 #: relative terms; a GRF solution is compared with the SVD reference within
 #: max(REL_TOL_TERMS, COND_ERR_FACTOR * cond(A) * eps), the factor covering the ~100

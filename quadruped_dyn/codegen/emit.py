@@ -33,11 +33,13 @@ from quadruped_dyn.codegen.emit_derivatives import (
 from quadruped_dyn.codegen.work_memory import memory_doc
 from quadruped_dyn.dynamics.grf import grf_solve
 from quadruped_dyn.dynamics.newton_euler import full_dynamics
+from quadruped_dyn.dynamics.reduced import regularity_function
 from quadruped_dyn.dynamics.reduced_projection import reduced_projection
 from quadruped_dyn.errors import InputError
 from quadruped_dyn.files.safe_write import output_path, write_text
 from quadruped_dyn.model.robot import Robot
 from quadruped_dyn.model.stance import STANCE_SETS, StanceSet, stance_set
+from quadruped_dyn.tolerances import REGULARITY_MIN
 
 
 def _grf_paper(stance: StanceSet) -> Callable[[Robot], ca.Function]:
@@ -189,7 +191,7 @@ def _note(name: str) -> str:
         return "  [returns QD_NONFINITE / QD_SINGULAR]"
     if name.startswith("dgrf_") and not name.startswith("dgrf_parts_"):
         return "  [returns QD_NONFINITE]"
-    return f"  [{reduced[1].kind}, returns QD_NONFINITE / QD_SINGULAR]" if reduced else ""
+    return f"  [{reduced[1].kind}, returns QD_NONFINITE / QD_SINGULAR / QD_DEGENERATE]" if reduced else ""
 
 
 def header_doc(robot: Robot, functions: list[ca.Function], work: dict[str, tuple[int, int]]) -> str:
@@ -223,11 +225,15 @@ def header_doc(robot: Robot, functions: list[ca.Function], work: dict[str, tuple
         " *   id_r(q_r, qd_r, qdd_r, quat)    tau_r = M_r qdd_r + C_r + G_r (paper's GRF model);",
         " *   fd_r(q_r, qd_r, tau_ext, quat)  qdd_r = M_r^-1 (tau_ext - C_r - G_r) (paper eq. (5)), by LU",
         " *                                   with partial pivoting on the stack (no work memory needed).",
-        " * Return codes: 0 ok; QD_NONFINITE (1) an output is NaN/inf: coincident or collinear stance feet,",
-        " * the trunk pitched +-90 deg (two feet: the roll row has tan(pitch)), a zero quaternion or a",
-        " * non-finite input; QD_SINGULAR (2, fd_r only) M_r singular to working precision (an LU pivot",
-        " * below QD_SINGULAR_RTOL max|M_r|, e.g. two feet, the trunk pitched within ~1e-12 rad of 90 deg);",
-        " * qdd_r is not written then. A stance leg stretched straight is not singular here: the reduced",
+        " * Return codes: 0 ok; QD_NONFINITE (1) an output is NaN/inf: the trunk pitched +-90 deg (two feet:",
+        " * the roll row has tan(pitch)), a zero quaternion or a non-finite input; QD_SINGULAR (2, fd_r only) M_r",
+        " * singular to working precision (an LU pivot below QD_SINGULAR_RTOL max|M_r|, e.g. two feet, the trunk",
+        " * pitched within ~1e-12 rad of 90 deg); QD_DEGENERATE (3) the stance is degenerate, checked first by",
+        " * every reduced function: its regularity (quadruped_dyn/dynamics/stance_regularity.py, in [0, 1]) is",
+        " * at most QD_REGULARITY_MIN (coincident or collinear stance feet, or two feet whose line is",
+        " * perpendicular to the roll axis: the front or back pair at zero pitch or roll), where the model",
+        " * is undefined and would return ~1e15. The outputs are not written on QD_SINGULAR or QD_DEGENERATE.",
+        " * A stance leg stretched straight is not singular here: the reduced",
         " * model never inverts a leg's Jacobian (measured on the paper robot: cond(M_r) 1e3 -> 3e4).",
         " *",
         " * Derivatives (qd_<robot>_d.c; quadruped_dyn/dynamics/derivatives.py, docs/derivatives.md). d/dq is",
@@ -309,13 +315,27 @@ def stem(robot: Robot) -> str:
     return f"qd_{re.sub(r'[^A-Za-z0-9_]', '_', robot.name)}"
 
 
-def _checked_reduced_c(c_text: str, casadi_header: str, functions: list[ca.Function]) -> str:
-    """Insert ``c/qd_reduced_solve.c`` and route the entry points through it: every function
-    returns QD_NONFINITE for a non-finite output; fd_r evaluates M_r and CG_r (CasADi's own
-    evaluation functions, checked once in the solve) and solves M_r qdd_r = tau_ext - CG_r."""
+def _regularity_c(robot: Robot, stance: StanceSet, precision: str) -> str:
+    """QD_REGULARITY_MIN and ``qd_regularity``, the stance's regularity (q_r, quat) -> (regularity)
+    (``dynamics.reduced.regularity_function``) as a static C function: CasADi's evaluation body alone."""
+    f = regularity_function(robot, stance)
+    c_text, h_text = casadi_c("qd_regularity", [f], precision)
+    body = re.search(r"static int casadi_f0\(.*?\n\}\n", c_text, re.S)
+    if not body or work_sizes(h_text)[f.name()] != (0, 0) or set(re.findall(r"casadi_\w+", body.group(0))) - {
+            "casadi_f0", "casadi_real", "casadi_int", "casadi_sq"}:
+        raise AssertionError(f"{f.name()}: CasADi's body is not self-contained; qd_reduced_solve.c needs it to be")
+    return (f"#define QD_REGULARITY_MIN ((casadi_real){REGULARITY_MIN!r}) /* quadruped_dyn.tolerances.REGULARITY_MIN */\n"
+            + body.group(0).replace("casadi_f0", "qd_regularity"))
+
+
+def _checked_reduced_c(c_text: str, casadi_header: str, functions: list[ca.Function], regularity_c: str) -> str:
+    """Insert ``regularity_c`` (``_regularity_c``) and ``c/qd_reduced_solve.c`` and route the entry
+    points through them: every function returns QD_DEGENERATE at a degenerate stance and
+    QD_NONFINITE for a non-finite output; fd_r evaluates M_r and CG_r (CasADi's own evaluation
+    functions, checked once in the solve) and solves M_r qdd_r = tau_ext - CG_r."""
     first = c_text.index(f"\n/* {functions[0].name()}:")
     templates = "\n".join((TEMPLATES / t).read_text() for t in ("qd_reduced_solve.c", "qd_reduced_derivatives.c"))
-    c_text = c_text[:first] + "\n" + templates + c_text[first:]
+    c_text = c_text[:first] + "\n" + regularity_c + "\n" + templates + c_text[first:]
     work = work_sizes(casadi_header)
     raw = {}  # entry point -> CasADi's static evaluation function
     for f in functions:
@@ -335,7 +355,8 @@ def _checked_reduced_c(c_text: str, casadi_header: str, functions: list[ca.Funct
                     rf"arg, res, iw, w, mem);\n")
         else:
             nnz = ", ".join(str(f.nnz_out(i)) for i in range(f.n_out()))
-            body = rf"\1  return qd_finite(\2(arg, res, iw, w, mem), res, {f.n_out()}, (const casadi_int[]){{{nnz}}});\n"
+            body = (rf"\1  return qd_checked(\2, {f.index_in('quat')}, {f.n_out()}, (const casadi_int[]){{{nnz}}}, "
+                    r"arg, res, iw, w, mem);\n")
         c_text, count = re.subn(entry_point(f.name()), body, c_text)
         if count != 1:
             raise AssertionError(f"entry point of {f.name()} not found in CasADi's output")
@@ -387,7 +408,7 @@ def generate(robot: Robot, out_dir: Path, precision: str = "double",
         reduced = reduced_functions(robot, stance)
         file_stem = f"{name}_r_{stance.name.replace('+', '_')}"
         c_text, h_text = casadi_c(file_stem, reduced, precision)
-        sources[f"{file_stem}.c"] = _checked_reduced_c(c_text, h_text, reduced)
+        sources[f"{file_stem}.c"] = _checked_reduced_c(c_text, h_text, reduced, _regularity_c(robot, stance, precision))
         casadi_header += h_text
         functions += reduced
     derivatives = derivative_functions(robot)  # qd_<robot>_d.c: derivatives of the full dynamics

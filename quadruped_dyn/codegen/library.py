@@ -139,12 +139,15 @@ def load_external(library: CompiledLibrary, name: str) -> ca.Function:
 
 
 #: Return codes of the generated reduced functions (c/qd_reduced_solve.c) and what they mean.
-QD_NONFINITE, QD_SINGULAR = 1, 2
+QD_NONFINITE, QD_SINGULAR, QD_DEGENERATE = 1, 2, 3
 RETURN_CODES = {
-    1: "an output is not finite (coincident or collinear stance feet, the trunk pitched 90 deg with two "
-    "stance feet, a zero quaternion, or a non-finite input); expected a stance the model can hold",
+    1: "an output is not finite (the trunk pitched 90 deg with two stance feet, a zero quaternion, or a "
+    "non-finite input); expected a stance the model can hold",
     2: "M_r is singular to working precision here (e.g. two stance feet with the trunk pitched to within "
     "~1e-12 rad of 90 deg); expected a configuration where the reduced model is regular",
+    3: "the stance is degenerate here (coincident or collinear stance feet, or two feet whose line is "
+    "perpendicular to the roll axis: the front or back pair at zero pitch or roll; regularity at most "
+    "QD_REGULARITY_MIN); the reduced model is undefined",
 }
 
 
@@ -196,8 +199,8 @@ class CompiledFunction:
                 raise InputError(f"{name} has {x.size} entries; {self.name} expects {buf.size}")
             buf[:] = x
         flag = self._fn(self._arg, self._res, self._iw, self._w, 0)
-        if flag != 0:  # QD_SINGULAR is numerical; QD_NONFINITE cannot tell a bad input from a singular stance
-            error = NumericalError if flag == QD_SINGULAR else InputError
+        if flag != 0:  # QD_SINGULAR, QD_DEGENERATE are numerical; QD_NONFINITE cannot tell a bad input from a singular stance
+            error = NumericalError if flag in (QD_SINGULAR, QD_DEGENERATE) else InputError
             raise error(f"{self.name}: {RETURN_CODES.get(flag, f'error code {flag}')}")
         outs = []
         for buf, shape, index in zip(self._out, self._shapes, self._index):

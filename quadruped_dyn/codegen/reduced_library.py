@@ -4,8 +4,9 @@
 ``compiled``) the robot's shared library and calls its ``qd_id_r_<feet>`` / ``qd_fd_r_<feet>``
 through ctypes. Same inputs and conventions as ``reduced.ReducedModel``: q_r, qd_r, qdd_r,
 tau_ext (n,) with n = 12, or 13 for two stance feet (the 13th is the trunk roll), and quat the
-trunk orientation (x, y, z, w). M_r singular to working precision raises NumericalError, a non-finite
-output InputError (the C return codes: QD_SINGULAR, QD_NONFINITE).
+trunk orientation (x, y, z, w). A degenerate stance (collinear feet, the front or back pair at zero pitch
+or roll) and M_r singular to working precision raise NumericalError, a non-finite output InputError (the C
+return codes: QD_DEGENERATE, QD_SINGULAR, QD_NONFINITE).
 """
 
 from __future__ import annotations

@@ -38,6 +38,7 @@ import numpy as np
 from quadruped_dyn.dynamics.grf import GrfSolve, grf_expressions, grf_solve
 from quadruped_dyn.dynamics.guarded import guard_fields, guarded_call, with_condition
 from quadruped_dyn.dynamics.kinematics import foot_position
+from quadruped_dyn.dynamics.stance_regularity import regularity
 from quadruped_dyn.errors import InputError, NumericalError
 from quadruped_dyn.math.linalg import least_squares
 from quadruped_dyn.math.rigid import skew
@@ -45,6 +46,7 @@ from quadruped_dyn.math.spatial import quat_to_rotation
 from quadruped_dyn.model.robot import Robot
 from quadruped_dyn.model.stance import StanceSet, stance_set
 from quadruped_dyn.model.state import check_array
+from quadruped_dyn.tolerances import REGULARITY_MIN
 
 REDUCED_KINDS = {4: "stand", 3: "static walk", 2: "trot / pace"}
 
@@ -114,6 +116,27 @@ def reduced_inverse_dynamics(
     return ca.vertcat(g.tau, ca.dot(e, g.residual[3:] - ca.cross(r1, g.residual[:3])))
 
 
+def regularity_function(robot: Robot, stance: StanceSet) -> ca.Function:
+    """q_r (n,), quat (4,) -> the stance's regularity (``stance_regularity``), dimensionless: the
+    one expression ``ReducedModel`` checks and the generated C evaluates."""
+    n = 13 if len(stance.feet) == 2 else 12
+    q, quat = ca.SX.sym("q_r", n), ca.SX.sym("quat", 4)
+    r = [foot_position(robot.legs[i], q[3 * i : 3 * i + 3]) for i in stance.feet]
+    e_phi = roll_rate_row(quat_to_rotation(quat)) if len(stance.feet) == 2 else None
+    return ca.Function(f"regularity_{stance.name.replace('+', '_')}", [q, quat], [regularity(stance, r, e_phi)],
+                       ["q_r", "quat"], ["regularity"], {"cse": True})
+
+
+def check_regularity(stance: StanceSet, value: float) -> None:
+    """NumericalError unless the stance's regularity ``value`` exceeds REGULARITY_MIN."""
+    if not value > REGULARITY_MIN:
+        raise NumericalError(
+            f"stance {stance.name} is degenerate here (regularity {value:.1e}, at most {REGULARITY_MIN:.0e}): "
+            "coincident or collinear stance feet, or two feet whose line is perpendicular to the roll axis "
+            "(the front or back pair with zero pitch or roll); the reduced model is undefined"
+        )
+
+
 @dataclass(frozen=True)
 class ReducedModel:
     """Named Functions of the reduced model of one stance set; n = 12 or 13 coordinates.
@@ -132,6 +155,7 @@ class ReducedModel:
     fd_r: ca.Function  # q_r, qd_r, tau_ext, quat -> qdd_r (n,)
     build_seconds: float
     grf: GrfSolve | None = None  # the stance set's GRF solve: its rank is checked before numeric calls
+    regularity: ca.Function | None = None  # q_r, quat -> the stance's regularity, checked before numeric calls
 
     def __post_init__(self) -> None:
         guard_fields(self)  # numeric calls check shapes, finiteness, quaternions (dynamics/guarded.py)
@@ -148,6 +172,8 @@ class ReducedModel:
         def check(values: list[np.ndarray]) -> None:
             if self.grf is not None:
                 self.grf.check_regular(np.concatenate([np.zeros(3), values[i_quat], values[i_q][:12]]))
+            if self.regularity is not None:
+                check_regularity(self.stance, guarded_call(self.regularity, values[i_q], values[i_quat])[0].item())
 
         return check
 
@@ -237,4 +263,5 @@ def _reduced_model(robot: Robot, stance_name: str) -> ReducedModel:
                          ["q_r", "qd_r", "tau_ext", "quat"], ["qdd_r"], opts),
         build_seconds=time.perf_counter() - start,
         grf=grf_solve(robot, stance, "paper"),
+        regularity=regularity_function(robot, stance),
     )

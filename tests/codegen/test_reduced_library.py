@@ -6,6 +6,7 @@ are reported by the return code; the float build agrees with the double one."""
 from __future__ import annotations
 
 import ctypes
+import re
 
 import numpy as np
 import pinocchio as pin
@@ -13,13 +14,17 @@ import pytest
 
 from quadruped_dyn.checks.c_reference import pinocchio_outputs, reduced_inputs, reference_state, tolerance_scale
 from quadruped_dyn.codegen.emit import REDUCED_NAMES, REDUCED_STANCE_SETS, reduced_functions, reduced_symbol
-from quadruped_dyn.codegen.library import CompiledFunction, compiled_library
+from quadruped_dyn.codegen.library import QD_DEGENERATE, RETURN_CODES, CompiledFunction, compiled_library
 from quadruped_dyn.codegen.reduced_library import CompiledReducedDynamics
+from quadruped_dyn.dynamics.reduced import reduced_model
 from quadruped_dyn.errors import InputError, NumericalError
+from quadruped_dyn.experiment.gait import GAITS, gait_plan
+from quadruped_dyn.experiment.plan_ik import reference
 from quadruped_dyn.model.stance import stance_set
 from quadruped_dyn.tolerances import FLOAT_REL_TOL, REL_TOL_TERMS
 from tests.codegen.test_emit import REL_TOL_GRAPH
 from tests.conftest import assert_close
+from tests.dynamics.test_singular_and_types import QUAT, _collinear_joints
 
 #: fd_r's backward error: the LU solve with partial pivoting leaves a residual of a few
 #: n * eps relative to |M_r| |qdd_r| + |rhs| (n = 13): far below 1e-12.
@@ -89,6 +94,52 @@ def test_singular_configurations_are_reported(paper):
     q[3 * 3 + 2] = 0.0  # BR knee straight
     qdd = CompiledReducedDynamics(paper).fd_r(stance, q, x["qd_r"], x["tau_ext"], x["quat"])
     assert np.all(np.isfinite(qdd))
+
+
+def test_degenerate_stances_are_reported_by_every_function(paper):
+    """QD_DEGENERATE (issue 18 item 4) from every generated reduced function where the Python model
+    raises too: three collinear stance feet (put on a line by Pinocchio IK) and the front pair at zero
+    pitch and roll (roll axis perpendicular to the feet's line); without it they return ~1e15 with
+    code 0. A regular state of the same stance set next door still gets an answer."""
+    library = compiled_library(paper)
+    compiled = CompiledReducedDynamics(paper)
+    cases = [("FL+FR+BL", _collinear_joints(paper, 1, (0, 2))), ("FR+BL+BR", _collinear_joints(paper, 2, (1, 3))),
+             ("FL+FR", np.r_[paper.standing_q, 0.0])]
+    for name, q in cases:
+        stance, n = stance_set(name), q.size
+        x = {"q_r": q, "qd_r": np.ones(n), "qdd_r": np.ones(n), "tau_ext": np.ones(n), "quat": QUAT}
+        code = re.escape(RETURN_CODES[QD_DEGENERATE])
+        for kind in REDUCED_NAMES:
+            f = CompiledFunction(library, reduced_symbol(kind, stance))
+            with pytest.raises(NumericalError, match=code):
+                f(*[x[k] for k in f.names_in])
+                pytest.fail(f"{kind} of {name} returned at a degenerate stance")
+        ones = np.ones(n)
+        calls = {"compiled id_r": (compiled.id_r, stance), "compiled fd_r": (compiled.fd_r, stance),
+                 "Python id_r": (reduced_model(paper, name).id_r,)}  # the Python model agrees
+        for what, (method, *first) in calls.items():
+            with pytest.raises(NumericalError):
+                method(*first, q, ones, ones, QUAT)
+                pytest.fail(f"{what} of {name} returned at a degenerate stance")
+        regular, quat = paper.standing_q, QUAT
+        if n == 13:  # the front pair with the trunk rolled and pitched by 0.1 rad
+            regular, quat = np.r_[paper.standing_q, 0.1], pin.Quaternion(pin.rpy.rpyToMatrix(0.1, 0.1, 0.0)).coeffs()
+        assert np.all(np.isfinite(compiled.fd_r(stance, regular, x["qd_r"], x["tau_ext"], quat)))
+
+
+def test_gait_states_are_regular(paper):
+    """No return code at the walk's and the trot's reference states (every stance set they use):
+    the regularity is >= 6e-2 there on every built-in robot and b1, 10^16.8 above QD_REGULARITY_MIN."""
+    compiled = CompiledReducedDynamics(paper)
+    for gait in GAITS.values():
+        plan = gait_plan(paper, gait)
+        for t in np.linspace(0.0, gait.period, 25)[:-1]:
+            s = reference(plan, t)
+            stance = stance_set("+".join(("FL", "FR", "BL", "BR")[i] for i in s.stance))
+            n = 13 if len(stance.feet) == 2 else 12
+            q, qd, qdd = s.q_r[:n], s.qd_r[:n], s.qdd_r[:n]
+            tau = compiled.id_r(stance, q, qd, qdd, QUAT)
+            assert np.all(np.isfinite(tau)) and np.all(np.isfinite(compiled.fd_r(stance, q, qd, tau, QUAT)))
 
 
 def test_python_layer_checks_its_inputs(paper):

@@ -1,8 +1,8 @@
 """Finite nonsense is not an answer, and the Python API takes only what it can use (#18 items 4, 19).
 
 At collinear stance feet the GRF system loses rank and the symbolic reduced model returns finite
-values of ~1e15; with two front feet at zero pitch and roll M_r has cond ~1e19: every numeric call
-of the reduced model reports it (NumericalError naming the cause). Arguments of the wrong kind
+values of ~1e15; with two front feet at zero pitch and roll the stance's regularity is 0 (M_r has
+cond ~1e19): every numeric call of the reduced model reports it (NumericalError naming the cause). Arguments of the wrong kind
 (complex, strings, None, lists for names, an __array__ that raises, absurd mu) are InputErrors."""
 
 from __future__ import annotations
@@ -66,17 +66,33 @@ def test_collinear_stance_feet_are_reported_by_every_numeric_call(paper, stance,
     assert np.all(np.isfinite(np.asarray(tau)))
 
 
-def test_a_singular_M_r_is_reported_by_fd_r(paper):
-    """Two front feet, zero pitch and roll: M_r has cond ~1e19 (the roll row cannot fix the pitch)."""
+def test_a_degenerate_pair_is_reported_by_every_numeric_call(paper):
+    """Two front feet, zero pitch and roll: the roll axis is perpendicular to the feet's line, so the
+    roll row cannot fix the rotation about it (M_r has cond ~1e19): the stance's regularity is 0."""
     m = reduced_model(paper, "FL+FR")
     q = np.r_[paper.standing_q, 0.0]
     z = np.zeros(13)
     for call in (lambda: m.fd_r(q, z, z, QUAT), lambda: guarded_call(m.fd_r, q, z, z, QUAT),
-                 lambda: m.forward_dynamics(q, z, z, QUAT)):
-        with pytest.raises(NumericalError, match="M_r of FL\\+FR has condition number .*e\\+1[5-9]"):
+                 lambda: m.forward_dynamics(q, z, z, QUAT), lambda: m.id_r(q, z, z, QUAT), lambda: m.M_r(q, QUAT),
+                 lambda: m.G_r(q, QUAT)):
+        with pytest.raises(NumericalError, match="stance FL\\+FR is degenerate here .* perpendicular to the roll axis"):
             call()
     diagonal = reduced_model(paper, "FL+BR")  # the trot's pair at the same posture: regular
     assert np.all(np.isfinite(np.asarray(diagonal.fd_r(q, z, z, QUAT))))
+
+
+def test_a_singular_M_r_is_reported_by_fd_r(paper):
+    """The trot's pair with the trunk pitched to within 1e-13 rad of 90 deg and the feet at different
+    heights: the stance is regular (the roll axis, now nearly the trunk's z, is not perpendicular to the
+    feet's line) but the roll row has tan(pitch) ~ 1e13, so M_r has cond beyond 1e12: fd_r reports it."""
+    m = reduced_model(paper, "FL+BR")
+    q = np.r_[paper.standing_q, 0.0]
+    q[2] += 0.2  # FL knee: the FL foot higher than the BR one
+    z = np.zeros(13)
+    pitched = np.array([0.0, np.sin((np.pi / 2 - 1e-13) / 2), 0.0, np.cos((np.pi / 2 - 1e-13) / 2)])
+    m.id_r(q, z, z, pitched)  # regular stance: an answer
+    with pytest.raises(NumericalError, match="M_r of FL\\+BR has condition number .*e\\+1[2-9]"):
+        m.fd_r(q, z, z, pitched)
 
 
 class _Raises:

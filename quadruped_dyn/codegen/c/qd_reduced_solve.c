@@ -1,16 +1,23 @@
 /* quadruped_dyn: checks and the forward-dynamics solve of the reduced model (hand-written,
- * inserted into each generated qd_<robot>_r_<stance>.c; see quadruped_dyn/codegen.py).
+ * inserted into each generated qd_<robot>_r_<stance>.c; see quadruped_dyn/codegen/emit.py).
+ * Before it the generator writes QD_REGULARITY_MIN (quadruped_dyn.tolerances.REGULARITY_MIN) and
+ * qd_regularity, the stance's regularity (q_r, quat) -> [0, 1] of
+ * quadruped_dyn/dynamics/stance_regularity.py, the expression the Python model checks.
  *
  * Return codes of the reduced functions (qd_M_r_*, qd_CG_r_*, qd_G_r_*, qd_id_r_*, qd_fd_r_*):
- *   0             success
- *   QD_NONFINITE  an output is NaN or inf: coincident or collinear stance feet (the trunk
- *                 motion is undetermined), the trunk pitched +-90 deg (the roll row of two
- *                 stance feet has tan(pitch)), a zero quaternion, or a non-finite input;
- *   QD_SINGULAR   (qd_fd_r_* only) M_r is singular to working precision: a pivot of its LU
- *                 factorisation (partial pivoting) is below QD_SINGULAR_RTOL * max|M_r|,
- *                 e.g. two stance feet with the trunk pitched within ~1e-12 rad of 90 deg.
- *                 The output is not written then. (A stance leg stretched straight is not
- *                 singular: the reduced model never inverts a leg's Jacobian.) */
+ *   0              success
+ *   QD_NONFINITE   an output is NaN or inf: the trunk pitched +-90 deg (the roll row of two
+ *                  stance feet has tan(pitch)), a zero quaternion, or a non-finite input;
+ *   QD_SINGULAR    (qd_fd_r_* only) M_r is singular to working precision: a pivot of its LU
+ *                  factorisation (partial pivoting) is below QD_SINGULAR_RTOL * max|M_r|,
+ *                  e.g. two stance feet with the trunk pitched within ~1e-12 rad of 90 deg.
+ *                  (A stance leg stretched straight is not singular: the reduced model never
+ *                  inverts a leg's Jacobian.)
+ *   QD_DEGENERATE  the stance is degenerate: regularity <= QD_REGULARITY_MIN (coincident or
+ *                  collinear stance feet, or two feet whose line is perpendicular to the roll
+ *                  axis: the front or back pair with zero pitch or roll). Checked first, by
+ *                  every function; the model is undefined there (it would return ~1e15).
+ * No output is written when the code is QD_SINGULAR or QD_DEGENERATE. */
 #include <float.h>
 #include <math.h>
 
@@ -18,6 +25,7 @@
 #define QD_NONFINITE 1
 #define QD_SINGULAR 2
 #endif
+#define QD_DEGENERATE 3
 
 /* Machine epsilon of casadi_real (float, double or long double builds). */
 #define QD_EPS (sizeof(casadi_real) == sizeof(float) ? (casadi_real)FLT_EPSILON \
@@ -26,6 +34,9 @@
  * (condition number beyond ~1 / (QD_SINGULAR_RTOL)): 1e-13 in double, 5e-5 in float. */
 #define QD_SINGULAR_RTOL (450 * QD_EPS)
 #define QD_N_MAX 13
+/* Regularity is the square of a relative singular value of the feet's layout; computed from
+ * foot positions rounded at eps, it cannot resolve values below ~(64 eps)^2 (float: 6e-11). */
+#define QD_REGULARITY_FLOOR ((64 * QD_EPS) * (64 * QD_EPS))
 
 typedef int (*qd_eval_fn)(const casadi_real**, casadi_real**, casadi_int*, casadi_real*, int);
 
@@ -39,6 +50,24 @@ static int qd_finite(int flag, casadi_real** res, int n_out, const casadi_int* n
     }
   }
   return 0;
+}
+
+/* 0 where the stance is regular at (q_r = arg[0], quat = arg[i_quat]); QD_DEGENERATE or QD_NONFINITE. */
+static int qd_regular(const casadi_real** arg, int i_quat, casadi_int* iw, casadi_real* w, int mem) {
+  casadi_real m = 0;
+  const casadi_real* m_arg[2] = {arg[0], arg[i_quat]};
+  casadi_real* m_res[1] = {&m};
+  int flag = qd_regularity(m_arg, m_res, iw, w, mem);
+  if (flag || !isfinite(m)) return flag ? flag : QD_NONFINITE;
+  return m > QD_REGULARITY_MIN && m > QD_REGULARITY_FLOOR ? 0 : QD_DEGENERATE;
+}
+
+/* The checked call of a generated reduced function f with quat at arg[i_quat]: the stance's
+ * regularity first, then f, then its outputs' finiteness. */
+static int qd_checked(qd_eval_fn f, int i_quat, int n_out, const casadi_int* nnz, const casadi_real** arg,
+                      casadi_real** res, casadi_int* iw, casadi_real* w, int mem) {
+  int flag = qd_regular(arg, i_quat, iw, w, mem);
+  return qd_finite(flag ? flag : f(arg, res, iw, w, mem), res, n_out, nnz);
 }
 
 /* LU factorisation with partial pivoting of M (n x n, column-major, in place: the multipliers of
@@ -95,7 +124,8 @@ static int qd_fd_r_factor(int n, qd_eval_fn M_r, qd_eval_fn CG_r, const casadi_r
   const casadi_real* cg_arg[3] = {arg[0], arg[1], arg[3]};
   casadi_real* m_res[1] = {M};
   casadi_real* cg_res[1] = {b};
-  int flag = M_r(m_arg, m_res, iw, w, mem);
+  int flag = qd_regular(arg, 3, iw, w, mem);
+  if (!flag) flag = M_r(m_arg, m_res, iw, w, mem);
   if (!flag) flag = CG_r(cg_arg, cg_res, iw, w, mem);
   if (flag) return flag;
   casadi_real scale = 0, sum = 0; /* a NaN or inf anywhere makes the sum non-finite */
