@@ -98,6 +98,27 @@ class _Rigid(ctypes.Structure):
                 ("out_y", _dbl), ("out_a", _dbl), ("out_off", _dbl), ("recorded", ctypes.c_int)]
 
 
+Buffers = tuple[np.ndarray, ...]
+
+
+def _integrate(segments: list[tuple[float, float, Stance, np.ndarray]], tables: list[_Table],
+               phase: Callable[[float, float, Stance, np.ndarray, _Table], tuple[Buffers, int]],
+               progress: Progress | None, widths: list[tuple[int, ...]]) -> tuple[list[np.ndarray], float | None]:
+    """``phase`` on every gait phase until one returns a stop code: the samples it recorded,
+    concatenated (arrays of the given row shapes), and where the run stopped (its last sample;
+    None: the full horizon)."""
+    out: list[Buffers] = [tuple(np.zeros((0, *w)) for w in widths)]
+    for (t0, t1, stance, inside), tb in zip(segments, tables):
+        bufs, code = phase(t0, t1, stance, np.ascontiguousarray(inside, dtype=float), tb)
+        out.append(bufs)
+        if code:
+            t = np.concatenate([o[0] for o in out])
+            return [np.concatenate(parts) for parts in zip(*out)], float(t[-1]) if t.size else 0.0
+        if progress:
+            progress(t1)
+    return [np.concatenate(parts) for parts in zip(*out)], None
+
+
 def _ptr(a: np.ndarray) -> ctypes._Pointer:  # type: ignore[type-arg]
     return a.ctypes.data_as(_int if a.dtype == np.int64 else _dbl)
 
@@ -151,7 +172,7 @@ class NativeRuns:
             raise BuildError("scipy's DOP853 coefficients do not have the shapes c/qdx_native_run.c expects")
         self._dop = _Dop853(*[_ptr(a) for a in self._coef])
         self._main = ctypes.CDLL(str(compiled_library(robot).path))
-        self._tables: dict[tuple[int, Stance], tuple[np.ndarray, ...]] = {}
+        self._interpolants: dict[tuple[int, Stance], tuple[np.ndarray, ...]] = {}
         graph = ca.external(PREFIX + "M_full", str(compiled_library(robot).path))
         rows, cols = (np.ascontiguousarray(x, dtype=np.int64) for x in graph.sparsity_out(0).get_triplet())
         pairs = set(zip(rows.tolist(), cols.tolist()))
@@ -174,18 +195,24 @@ class NativeRuns:
     def _address(self, symbol: str) -> int:
         return ctypes.cast(getattr(self._main, PREFIX + symbol), ctypes.c_void_p).value or 0
 
+    def _tables(self, table: IkTorqueTable, plan: Plan,
+                segments: list[tuple[float, float, Stance, np.ndarray]]) -> list[_Table] | None:
+        """Every phase's interpolant, or None if one of them falls back to the exact evaluation."""
+        tables = [self._table(table, plan, t0, stance) for t0, _, stance, _ in segments]
+        return [tb for tb in tables if tb is not None] if all(tb is not None for tb in tables) else None
+
     def _table(self, table: IkTorqueTable, plan: Plan, t0: float, stance: Stance) -> _Table | None:
         """The phase's interpolant (nodes, weights, values | the plan's trunk position), kept alive here."""
         k = int(np.floor(t0 / plan.gait.phase_duration + 1e-12))
         key = (k, stance)
-        if key not in self._tables:
+        if key not in self._interpolants:
             phase = table.phase(k, stance)
             if phase is None:
                 return None
             trunk = np.array([plan.trunk(float(t))[0] for t in phase.nodes])
-            self._tables[key] = tuple(np.ascontiguousarray(a, dtype=float) for a in
+            self._interpolants[key] = tuple(np.ascontiguousarray(a, dtype=float) for a in
                                       (phase.nodes, phase.weights, np.hstack([phase.values, trunk])))
-        nodes, weights, values = self._tables[key]
+        nodes, weights, values = self._interpolants[key]
         return _Table(nodes.size, values.shape[1], _ptr(nodes), _ptr(weights), _ptr(values))
 
     def reduced(self, plan: Plan, table: IkTorqueTable, law: TorqueLaw, horizon: float, dt: float,
@@ -196,8 +223,8 @@ class NativeRuns:
         robot, gait = plan.robot, plan.gait
         n = gait.n_coords
         segments = phase_segments(plan, horizon, dt)
-        tables = [self._table(table, plan, t0, stance) for t0, _, stance, _ in segments]
-        if any(tb is None for tb in tables):
+        tables = self._tables(table, plan, segments)
+        if tables is None:
             return None
         footholds = {i: plan.foot(i, 0.0)[0] for i in range(4)}
         ref0, _ = table(0.0, gait.stance(0.0))
@@ -207,34 +234,29 @@ class NativeRuns:
         y = np.ascontiguousarray(y)
         cfg = _Reduced(law=_Law(law.scale, law.kp, law.kd, int(law.roll_applied)), n=n, project=int(project),
                        fallen_closure=FALLEN_CLOSURE_M, fallen_trunk=FALLEN_TRUNK_M, pitch=0.0, evaluations=0)
-        out: list[tuple[np.ndarray, ...]] = []
-        stopped_at, current = None, gait.stance(0.0)
-        for (t0, t1, stance, inside), tb in zip(segments, tables):
+        current = [gait.stance(0.0)]
+
+        def phase(t0: float, t1: float, stance: Stance, inside: np.ndarray, tb: _Table) -> tuple[Buffers, int]:
             if t0 > 0:
-                feet = np.asarray(robot_feet(robot)(y[:12])[0]).T[list(current)]
-                roll = float(y[12]) if len(current) == 2 else None
-                R, p, _ = pose_from_feet(feet, np.array([footholds[i] for i in current]), roll=roll,
+                before = current[0]
+                feet = np.asarray(robot_feet(robot)(y[:12])[0]).T[list(before)]
+                roll = float(y[12]) if len(before) == 2 else None
+                R, p, _ = pose_from_feet(feet, np.array([footholds[i] for i in before]), roll=roll,
                                          pitch_hint=cfg.pitch)
                 cfg.pitch = float(np.arctan2(-R[2, 0], np.hypot(R[2, 1], R[2, 2])))
-                land(robot, footholds, current, stance, y, R, p)
-                current = stance
+                land(robot, footholds, before, stance, y, R, p)
+                current[0] = stance
             m = len(inside)
             bufs = (np.zeros(m), np.zeros((m, 2 * n)), np.zeros((m, n)), np.zeros(m))
             cfg.table, cfg.k, cfg.fd_r = tb, len(stance), self._address(reduced_symbol("fd_r", StanceSet(stance)))
             cfg.legs[:] = [*stance, *[0] * (4 - len(stance))]
             cfg.holds[:] = [*np.concatenate([footholds[i] for i in stance]), *[0.0] * (12 - 3 * len(stance))]
             cfg.out_t, cfg.out_y, cfg.out_qdd, cfg.out_closure = (_ptr(b) for b in bufs)
-            samples = np.ascontiguousarray(inside, dtype=float)
             code = self._lib.qdx_reduced_phase(ctypes.byref(self._dop), ctypes.byref(cfg), t0, t1, rtol, _ptr(y),
-                                               _ptr(samples), m)
-            out.append(tuple(b[: cfg.recorded] for b in bufs))
-            if code:
-                done = [o[0] for o in out if o[0].size]
-                stopped_at = float(done[-1][-1]) if done else 0.0
-                break
-            if progress:
-                progress(t1)
-        t, Y, qdd, closure = (np.concatenate(parts) for parts in zip(*out))
+                                               _ptr(inside), m)
+            return tuple(b[: cfg.recorded] for b in bufs), code
+
+        (t, Y, qdd, closure), stopped_at = _integrate(segments, tables, phase, progress, [(), (2 * n,), (n,), ()])
         return Run(t, Y[:, :n], Y[:, n:], qdd, closure, stopped_at, int(cfg.evaluations))
 
     def rigid(self, plan: Plan, table: IkTorqueTable, law: TorqueLaw, horizon: float, dt: float,
@@ -245,8 +267,8 @@ class NativeRuns:
         when a phase has no table."""
         ref = PinocchioReference(plan.robot)
         segments = phase_segments(plan, horizon, dt)
-        tables = [self._table(table, plan, t0, stance) for t0, _, stance, _ in segments]
-        if any(tb is None for tb in tables):
+        tables = self._tables(table, plan, segments)
+        if tables is None:
             return None
         y = np.ascontiguousarray(initial_state(plan, table, ref, initial))
         trunk_at = trunk if trunk is not None else (lambda t: plan.trunk(t)[0])
@@ -254,31 +276,23 @@ class NativeRuns:
         cfg = _Rigid(law=_Law(law.scale, law.kp, law.kd, 0), M_full=self._address("M_full"),
                      nle_full=self._address("nle_full"), M_rows=_ptr(rows), M_cols=_ptr(cols), M_nnz=rows.size,
                      M_mirror=mirror, iw=_ptr(self._iw), w=_ptr(self._w), fallen_trunk=FALLEN_TRUNK_M, evaluations=0)
-        out: list[tuple[np.ndarray, ...]] = []
-        stopped_at = None
-        for (t0, t1, stance, inside), tb in zip(segments, tables):
-            if t0 > 0:
-                try:
-                    y = np.ascontiguousarray(touch_down(ref, stance, y))
-                except np.linalg.LinAlgError:  # as the Python path: a run that falls apart stops
-                    done = [o[0] for o in out if o[0].size]
-                    stopped_at = float(done[-1][-1]) if done else 0.0
-                    break
+        state = [y]
+
+        def phase(t0: float, t1: float, stance: Stance, inside: np.ndarray, tb: _Table) -> tuple[Buffers, int]:
             m = len(inside)
             bufs = (np.zeros(m), np.zeros((m, 37)), np.zeros((m, 18)), np.zeros(m))
+            if t0 > 0:
+                try:
+                    state[0] = np.ascontiguousarray(touch_down(ref, stance, state[0]))
+                except np.linalg.LinAlgError:  # as the Python path: a run that falls apart stops
+                    return tuple(b[:0] for b in bufs), SINGULAR
             trunk_s = np.ascontiguousarray([trunk_at(float(t)) for t in inside], dtype=float).reshape(m, 3)
             cfg.table, cfg.k, cfg.trunk = tb, len(stance), _ptr(trunk_s)
             cfg.legs[:] = [*stance, *[0] * (4 - len(stance))]
             cfg.out_t, cfg.out_y, cfg.out_a, cfg.out_off = (_ptr(b) for b in bufs)
-            samples = np.ascontiguousarray(inside, dtype=float)
-            code = self._lib.qdx_rigid_phase(ctypes.byref(self._dop), ctypes.byref(cfg), t0, t1, rtol, _ptr(y),
-                                             _ptr(samples), m)
-            out.append(tuple(b[: cfg.recorded] for b in bufs))
-            if code:
-                done = [o[0] for o in out if o[0].size]
-                stopped_at = float(done[-1][-1]) if done else 0.0
-                break
-            if progress:
-                progress(t1)
-        t, Y, A, off = (np.concatenate(parts) for parts in zip(*out))
+            code = self._lib.qdx_rigid_phase(ctypes.byref(self._dop), ctypes.byref(cfg), t0, t1, rtol, _ptr(state[0]),
+                                             _ptr(inside), m)
+            return tuple(b[: cfg.recorded] for b in bufs), code
+
+        (t, Y, A, off), stopped_at = _integrate(segments, tables, phase, progress, [(), (37,), (18,), ()])
         return Run(t, Y[:, 7:19], Y[:, 25:], A[:, 6:], off, stopped_at, int(cfg.evaluations))
