@@ -5,6 +5,7 @@ rigid-contact replay) and plots against today's plan."""
 from __future__ import annotations
 
 import csv
+import os
 from pathlib import Path
 from typing import Any
 
@@ -101,7 +102,8 @@ def report(sol: Solution, replay: Replay | None, extra: dict[str, Any] | None = 
     o = tr.options
     data: dict[str, Any] = {
         "robot": tr.robot.name, "gait": tr.gait.name, "status": sol.status, "converged": sol.converged,
-        "iterations": sol.iterations, "solve_seconds": sol.solve_seconds, "build_seconds": sol.build_seconds,
+        "iterations": sol.iterations, "solve_seconds": sol.solve_seconds, "solve_cpu_seconds": sol.solve_cpu_seconds,
+        "load_average_1min": os.getloadavg()[0], "build_seconds": sol.build_seconds,
         "transcribe_seconds": sol.transcribe_seconds,
         "objective": sol.objective, "constraint_violation": sol.constraint_violation,
         "max_constraint_violation_allowed": MAX_CONSTRAINT_VIOLATION, "hessian": sol.hessian,

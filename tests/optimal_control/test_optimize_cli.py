@@ -20,3 +20,15 @@ def test_bad_input_is_exit_2_one_line(tmp_path, args, message) -> None:
     assert result.exit_code == 2, result.output
     lines = [line for line in result.output.splitlines() if line.strip()]
     assert len(lines) == 1 and message in lines[0] and lines[0].startswith("error:")
+
+
+def test_no_convergence_is_exit_1_with_ipopt_status(tmp_path, monkeypatch) -> None:
+    """IPOPT stopped after 2 iterations: exit 1, one error line with its status, no result written."""
+    from quadruped_dyn.optimal_control import solve
+
+    monkeypatch.setitem(solve.IPOPT_OPTIONS, "max_iter", 2)
+    result = CliRunner().invoke(main, ["optimize", "paper", "--nodes", "3", "--cycles", "0", "--out", str(tmp_path)])
+    assert result.exit_code == 1, result.output
+    errors = [line for line in result.output.splitlines() if line.startswith("error:")]
+    assert len(errors) == 1 and "Maximum_Iterations_Exceeded" in errors[0]
+    assert not list(tmp_path.iterdir())
