@@ -30,8 +30,8 @@ typedef struct {
 /* Evaluate case c with the worker's own work memory into out; its return code. */
 static int qd_eval(int c, casadi_int* iw, casadi_real* w, casadi_real out[4][QD_MAX_OUT]) {
   const qd_case* k = &QD_CASES[c];
-  casadi_real in[4][QD_MAX_IN];
-  const casadi_real* arg[4];
+  casadi_real in[QD_MAX_N_IN][QD_MAX_IN];
+  const casadi_real* arg[QD_MAX_N_IN];
   casadi_real* res[4];
   qd_case_args(k, in, arg, out, res);
   memset(out, 0, 4 * sizeof out[0]); /* also the rows a function does not use: compared whole */
