@@ -84,10 +84,13 @@ REL_TOL_DERIVATIVES = 1e-9
 #: differences of the Pinocchio-built reduced reference (and of Pinocchio's GRF SVD solve). The
 #: reference is a chain of least-squares solves, SVDs and M_r's solve, accurate to ~1e-11
 #: relative, so its differences carry a round-off of ~1e-11 / h; the truncation error is
-#: h^2 / 6 |f'''| (measured on the paper robot's four-foot dfd_r, the worst case: 1.6e-7 at
-#: h = 1e-3, 8e-8 at 1e-4, 1.2e-6 at 1e-5, 1.6e-5 at 1e-6: round-off wins below 1e-4). With
-#: h = 1e-4 (rad, rad/s, N m, m/s^2) both stay near 1e-7; 2e-6 relative keeps a margin of ~20,
-#: and a wrong term (a missing orientation dependence, a sign) is an O(1e-2 - 1) error.
+#: h^2 / 6 |f'''| for second-order differences (measured on the paper robot's four-foot dfd_r: 1.6e-7
+#: at h = 1e-3, 8e-8 at 1e-4, 1.2e-6 at 1e-5, 1.6e-5 at 1e-6: round-off wins below 1e-4), but on
+#: solo12 (light legs, large accelerations) the walk triple FL+FR+BR's truncation is 2.6e-5 at 1e-4.
+#: So the references are fourth-order differences (``checks.derivative_reference.central``): there
+#: 2.6e-9 at h = 1e-4 (3.2e-9 at 1e-5, round-off). With h = 1e-4 (rad, rad/s, N m, m/s^2) 2e-6
+#: relative keeps a margin of ~20 over the paper robot's second-order figures and more over the
+#: fourth-order ones, and a wrong term (a missing orientation dependence, a sign) is an O(1e-2 - 1) error.
 FD_STEP_DERIVATIVES = 1e-4
 REL_TOL_FD_DERIVATIVES = 2e-6
 

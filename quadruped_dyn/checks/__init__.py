@@ -13,6 +13,7 @@ _MODULES: dict[str, tuple[str, ...]] = {
         "LIBRARIES", "EXACT_CHANGES", "INSTALL_HINT", "parse_libraries", "ToolkitDynamics", "CrossLibraryResult",
         "CrossLibraryReport", "run_cross_library",
     ),
+    "derivative_reference": ("central", "rotated", "ReducedReference", "grf_derivatives_reference", "grf_wrench_reference"),
     "terms": ("TermResult", "CheckReport", "GrfResult", "REDUCED_STANCES", "run_check"),
 }
 __all__, __getattr__, __dir__ = lazy_exports(__name__, _MODULES)

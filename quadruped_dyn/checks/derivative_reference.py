@@ -1,6 +1,6 @@
 """Finite-difference references of the reduced model's and the GRF solve's derivatives (docs/derivatives.md).
 
-Central differences (step ``FD_STEP_DERIVATIVES``) of the Pinocchio-built references: the reduced
+Fourth-order central differences (step ``FD_STEP_DERIVATIVES``) of the Pinocchio-built references: the reduced
 forward dynamics of ``PinocchioReference.reduced_inverse_dynamics`` (its M_r column by column, then a
 numpy solve) and Pinocchio's GRF solve (SVD). Nothing here calls the project's CasADi code. The
 conventions are those of ``dynamics/derivatives.py``: the trunk orientation of the reduced model is the
@@ -22,8 +22,13 @@ from quadruped_dyn.tolerances import FD_STEP_DERIVATIVES
 
 
 def central(f: Callable[[np.ndarray], np.ndarray], x0: np.ndarray, h: float = FD_STEP_DERIVATIVES) -> np.ndarray:
-    """(rows, x0.size): central differences of f at x0, one column per entry of x0."""
-    return np.column_stack([(f(x0 + h * e) - f(x0 - h * e)) / (2 * h) for e in np.eye(x0.size)])
+    """(rows, x0.size): fourth-order central differences of f at x0, one column per entry of x0,
+    (8 (f(x + h) - f(x - h)) - (f(x + 2h) - f(x - 2h))) / 12h: truncation O(h^4) (``FD_STEP_DERIVATIVES``)."""
+
+    def column(e: np.ndarray) -> np.ndarray:
+        return (8 * (f(x0 + h * e) - f(x0 - h * e)) - (f(x0 + 2 * h * e) - f(x0 - 2 * h * e))) / (12 * h)
+
+    return np.column_stack([column(e) for e in np.eye(x0.size)])
 
 
 def rotated(quat: np.ndarray, dtheta: np.ndarray) -> np.ndarray:

@@ -10,7 +10,9 @@ _MODULES: dict[str, tuple[str, ...]] = {
         "CODEGEN_FUNCTIONS", "REDUCED_STANCE_SETS", "REDUCED_NAMES", "reduced_symbol", "reduced_functions",
         "SIGNAL_DOCS", "codegen_functions", "reduced_parts", "header_doc", "stem", "GeneratedFiles", "generate",
     ),
-    "emit_derivatives": ("DERIVATIVE_NAMES", "derivative_functions", "derivative_source"),
+    "emit_derivatives": ("DERIVATIVE_NAMES", "GRF_DERIVATIVE_NAMES", "GRF_DERIVATIVE_STANCE_SETS", "REDUCED_DERIVATIVE_NAMES",
+                         "derivative_functions", "derivative_source", "grf_derivative_functions",
+                         "reduced_derivative_functions"),
     "library": (
         "C_FLAGS", "COMPILE_JOBS", "run_tool", "compiler_version", "CompiledLibrary", "compile_sources", "PACKAGE",
         "generator_sources", "generation_key", "compiled_library", "load_external", "RETURN_CODES", "CompiledFunction",
