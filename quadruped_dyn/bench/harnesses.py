@@ -4,9 +4,9 @@ The pin wheel ships Pinocchio's headers and libraries under its cmeel prefix (wi
 cmeel-boost, cmeel-urdfdom-headers, and cmeel-cppad / cmeel-cppadcodegen when the ``bench`` extra is
 installed). A program built with ``PINOCCHIO_CXX_FLAGS`` links the wheel's libraries, whose
 algorithms for ``double`` are compiled for generic x86-64 (SSE2; no AVX or FMA instruction in
-``libpinocchio_default``); ``NATIVE_CXX_FLAGS`` instead instantiates every algorithm in the
-program, for the machine it is built on, with Eigen's alignment kept at the wheel's 16 bytes (the
-URDF parser of the wheel builds the Model the program then uses: the layouts must agree).
+``libpinocchio_default``). ``bench --native`` keeps it so: compiling the algorithms into the
+harness with -march=native (header-only, Eigen's alignment held at the wheel's 16 bytes) built,
+but crashed on the Model the wheel's URDF parser had built (the layouts differ).
 """
 
 from __future__ import annotations
@@ -23,12 +23,6 @@ PINOCCHIO_CXX_FLAGS = (
     "-O3", "-DNDEBUG", "-std=c++17", "-DPINOCCHIO_ENABLE_TEMPLATE_INSTANTIATION",
     "-DBOOST_MPL_LIMIT_LIST_SIZE=30", "-DBOOST_MPL_LIMIT_VECTOR_SIZE=30",
     "-DBOOST_MPL_CFG_NO_PREPROCESSED_HEADERS", "-DBOOST_FUSION_INVOKE_MAX_ARITY=12",
-)
-
-#: ``bench --native``'s Pinocchio harness: the algorithms compiled in the program with -march=native.
-NATIVE_CXX_FLAGS = (
-    *(f for f in PINOCCHIO_CXX_FLAGS if f != "-DPINOCCHIO_ENABLE_TEMPLATE_INSTANTIATION"),
-    "-march=native", "-DEIGEN_MAX_ALIGN_BYTES=16", "-DEIGEN_MAX_STATIC_ALIGN_BYTES=16",
 )
 
 PINOCCHIO_LIBS = ("-lpinocchio_default", "-lpinocchio_parsers", "-lurdfdom_model", "-lboost_serialization")

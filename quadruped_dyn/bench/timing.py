@@ -6,7 +6,8 @@ with ``peer`` Pinocchio's CppADCodeGen code, ``cppadcg.py``): the median over ``
 best median (the least disturbed by other load on a shared 2-core machine). Ratios are what to
 read; absolute times drift with the machine's load. By default the Pinocchio harness links the pin
 wheel's libraries (built for generic x86-64) and the generated C is built with ``C_FLAGS``, so
-neither side uses -march=native; ``native`` builds every side for this machine (harnesses.py).
+neither side uses -march=native; ``native`` builds the generated C and the peer for this machine
+(Pinocchio native stays the wheel's build: harnesses.py says why).
 Pairs: M_full ~ crba, nle_full (C + G in one call) ~ nonLinearEffects, G_full ~
 computeGeneralizedGravity, id_full ~ rnea (id_full also applies 4 foot forces), did_full ~ computeRNEADerivatives,
 dfd_full ~ computeABADerivatives, fd_r_<feet> ~
@@ -32,7 +33,7 @@ import numpy as np
 import pinocchio as pin
 
 from quadruped_dyn.bench import cppadcg
-from quadruped_dyn.bench.harnesses import HARNESSES, NATIVE_CXX_FLAGS, PINOCCHIO_CXX_FLAGS, pinocchio_program, require_headers
+from quadruped_dyn.bench.harnesses import HARNESSES, PINOCCHIO_CXX_FLAGS, pinocchio_program, require_headers
 from quadruped_dyn.checks.c_reference import generate_checked, reference_header_name
 from quadruped_dyn.codegen.cache import cache_dir, cached_build
 from quadruped_dyn.codegen.emit import PREFIX, codegen_functions, work_sizes
@@ -126,18 +127,17 @@ def arithmetic_operations(f: ca.Function) -> int:
     return sum(f.instruction_id(k) not in skip for k in range(f.n_instructions()))
 
 
-def pinocchio_harness(native: bool = False, cxx: str = "g++") -> Path:
-    """The compiled Pinocchio benchmark, built once per (source, pin version, flags): linked with the
-    wheel's algorithms, or under ``native`` with them compiled in for this machine (harnesses.py)."""
+def pinocchio_harness(cxx: str = "g++") -> Path:
+    """The compiled Pinocchio benchmark, built once per (source, pin version, flags), linked with the
+    wheel's algorithms (harnesses.py)."""
     require_headers(("eigen3/Eigen/Core", "urdfdom_headers/urdf_model/model.h"),
                     "the cmeel-eigen and cmeel-urdfdom-headers packages (pip install cmeel-eigen cmeel-urdfdom-headers)")
     source = HARNESSES / "bench_pinocchio.cpp"
-    flags = NATIVE_CXX_FLAGS if native else PINOCCHIO_CXX_FLAGS
+    flags = PINOCCHIO_CXX_FLAGS
     key = hashlib.sha256(source.read_bytes() + pin.__version__.encode() + " ".join(flags).encode()).hexdigest()[:16]
 
     def build(exe: Path) -> None:
-        print(f"building the Pinocchio benchmark harness once ({'several minutes' if native else 'about a minute'}) "
-              f"into {cache_dir()}", file=sys.stderr)
+        print(f"building the Pinocchio benchmark harness once (about a minute) into {cache_dir()}", file=sys.stderr)
         run_tool(pinocchio_program([source], exe, flags, cxx))
 
     return cached_build(f"pinocchio-bench-{key}", "bench_pinocchio", build)
@@ -151,10 +151,10 @@ def run_bench(robot: Robot, calls: int = 20000, reps: int = 9, rounds: int = 3, 
               peer: bool = False) -> BenchReport:
     """Time every generated function and its Pinocchio counterpart in the same run; with ``peer``
     also Pinocchio's CppADCodeGen code (cppadcg.py, checked against Pinocchio first). ``native``:
-    both sides built with -march=native."""
+    the generated C and the peer built with -march=native (Pinocchio native stays the wheel's)."""
     flags = (*C_FLAGS, "-Dcasadi_real=double", *(("-march=native",) if native else ()))  # as library.compiled_library
     report = BenchReport(robot.name, native=native, c_flags=list(flags),
-                         pinocchio_flags=list(NATIVE_CXX_FLAGS if native else PINOCCHIO_CXX_FLAGS))
+                         pinocchio_flags=list(PINOCCHIO_CXX_FLAGS))  # the wheel's algorithms, --native or not
     start = time.perf_counter()
     codegen_functions(robot)  # symbolic build + generation, timed apart from compilation
     with tempfile.TemporaryDirectory() as tmp:
@@ -172,7 +172,7 @@ def run_bench(robot: Robot, calls: int = 20000, reps: int = 9, rounds: int = 3, 
         report.compile_s = time.perf_counter() - start
         run_tool([cc, *flags, f"-DQD_HEADER=\"{h_path.name}\"", f"-DQD_REFERENCE=\"{ref_path.name}\"",
                   "bench_qd.c", lib.name, f"-Wl,-rpath,{tmp}", "-lm", "-o", exe.name], cwd=tmp)
-        harness = pinocchio_harness(native)
+        harness = pinocchio_harness()
         feet = [robot.model.frames[i].name for i in robot.foot_frame_ids]
         commands = {"generated": [str(exe), str(calls), str(reps)],
                     "pinocchio": [str(harness), str(robot.urdf), str(calls), str(reps), *feet]}

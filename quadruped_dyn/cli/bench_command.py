@@ -21,7 +21,7 @@ from quadruped_dyn.model.robot import load_robot
               "pinocchio-cppadcodegen (Pinocchio's CppADCodeGen code; the 'bench' extra), adam; none; auto: "
               "pinocchio-cppadcodegen when its headers are installed.")
 @click.option("--native", "--march-native", "native", is_flag=True,
-              help="Build every side (the generated C, Pinocchio's harness, the peers) with -march=native.")
+              help="Build the generated C and the peers with -march=native (Pinocchio native stays the pin wheel's build).")
 def bench(robots: tuple[str, ...], calls: int, reps: int, as_json: bool, peers: str, native: bool) -> None:
     """Time the generated C against Pinocchio's native C++ in the same run (ratios < 1: generated is faster)."""
     from dataclasses import asdict
