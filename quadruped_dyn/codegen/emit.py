@@ -283,7 +283,7 @@ _PRECISION_MATH = """
               f": (casadi_real){f}((double)x); }}\n" for f in _WRAPPED_MATH)
 #: CasADi's default precision block; the wrappers go right after it, so a build without
 #: -Dcasadi_real (double, the default) compiles.
-_CASADI_REAL_DEFAULT = "#ifndef casadi_real\n#define casadi_real double\n#endif\n"
+_CASADI_REAL_DEFAULT = re.compile(r"#ifndef casadi_real\n#define casadi_real [\w ]+\n#endif\n")  # double or float
 _MATH_CALL = re.compile(rf"(?<![\w.])({'|'.join(_WRAPPED_MATH)})\(")
 
 
@@ -298,9 +298,10 @@ def _precision_math(c_source: str) -> str:
     used = bool(_MATH_CALL.search(c_source))
     c_source = _MATH_CALL.sub(r"qd_\1(", c_source)  # before the wrappers go in: they call the real ones
     if used:  # after CasADi's default of casadi_real, which the wrappers' signatures need
-        if _CASADI_REAL_DEFAULT not in c_source:
+        default = _CASADI_REAL_DEFAULT.search(c_source)
+        if not default:
             raise AssertionError("CasADi's '#ifndef casadi_real' default is not in the generated source")
-        c_source = c_source.replace(_CASADI_REAL_DEFAULT, _CASADI_REAL_DEFAULT + _PRECISION_MATH, 1)
+        c_source = c_source[:default.end()] + _PRECISION_MATH + c_source[default.end():]
     c_source = re.sub(r"\((\d+)\.\*", r"(\1*", c_source)
     return re.sub(r"\((\d+)\./", r"(\1/", c_source)
 

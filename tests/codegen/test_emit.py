@@ -119,6 +119,20 @@ def test_generated_source_compiles_without_precision_flag(kind):
     assert proc.returncode == 0, proc.stderr[-2000:]
 
 
+@pytest.mark.parametrize("precision", ["double", "float"])
+def test_precision_wrappers_follow_the_casadi_real_default(precision):
+    """In both precisions' generation (CasADi writes its own default of casadi_real, double or
+    float) the wrappers come after that default, so their signatures compile."""
+    import casadi as ca
+
+    from quadruped_dyn.codegen.casadi_source import casadi_c
+    from quadruped_dyn.codegen.emit import _precision_math
+
+    x = ca.SX.sym("x")
+    c_text = _precision_math(casadi_c("qd_t", [ca.Function("qd_t", [x], [ca.sin(x)])], precision)[0])
+    assert c_text.index(f"#define casadi_real {precision}") < c_text.index("static inline casadi_real qd_sin(")
+
+
 def test_build_error_names_the_first_diagnostic(tmp_path):
     """A failed compile says what failed, not gcc's closing 'all warnings being treated as errors'."""
     from quadruped_dyn.codegen.library import C_FLAGS, run_tool
