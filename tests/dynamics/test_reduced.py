@@ -147,7 +147,7 @@ def test_projection_forms_equal_walker_orin(name):
     rng = np.random.default_rng(5)
     for stance in REDUCED_STANCE_SETS:
         m, q_r, qd, qdd, quat = _reduced(robot, stance.name, rng)
-        M_r, CG_r, G_r, id_r, _ = reduced_functions(robot, stance)
+        M_r, CG_r, G_r, id_r, *_ = reduced_functions(robot, stance)  # fd_r, did_r_dir follow
         (M,) = guarded_call(m.M_r, q_r, quat)
         assert_close(np.array(M_r(q_r, quat)), M, what=f"M_r {stance.name}")
         expected = guarded_call(m.C_r, q_r, qd, quat)[0] + guarded_call(m.G_r, q_r, quat)[0]
