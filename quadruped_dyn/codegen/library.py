@@ -58,6 +58,7 @@ class CompiledLibrary:
     path: Path  # shared library
     source: Path  # the C file it was built from
     key: str  # hash of the C source, header, flags and compiler: a stale library is never reused
+    precision: str = "double"  # casadi_real of the build: "double" or "float"
 
 
 def compile_sources(sources: list[Path], flags: tuple[str, ...], output: Path, cc: str = "gcc") -> None:
@@ -129,7 +130,7 @@ def compiled_library(robot: Robot, precision: str = "double", cc: str = "gcc") -
                 shutil.copy(p, building.parent / p.name)
 
     lib = cached_build(key, f"lib{stem(robot)}.so", build)
-    return CompiledLibrary(lib, lib.parent / f"{stem(robot)}.c", key)
+    return CompiledLibrary(lib, lib.parent / f"{stem(robot)}.c", key, precision)
 
 
 def load_external(library: CompiledLibrary, name: str) -> ca.Function:
@@ -152,19 +153,20 @@ RETURN_CODES = {
 
 
 class CompiledFunction:
-    """A generated function of a double-precision library, called through ctypes with
-    preallocated buffers: a few microseconds per call from Python, against ~20 us through
-    ``casadi.external``. Inputs are checked for shape; outputs are fresh dense arrays
-    (vectors 1-D, matrices 2-D)."""
+    """A generated function of a library, called through ctypes in the library's precision with
+    preallocated buffers (every input and output, the work arrays its ``_work`` entry asks for):
+    a few microseconds per call from Python, against ~20 us through ``casadi.external``. Inputs
+    are checked for shape; outputs are fresh dense float64 arrays (vectors 1-D, matrices 2-D)."""
 
     def __init__(self, library: CompiledLibrary, name: str) -> None:
         self._lib = ctypes.CDLL(str(library.path))
         self.name = PREFIX + name
         self._fn = getattr(self._lib, self.name)
         graph = ca.external(self.name, str(library.path))  # only to read names and sparsity
-        dbl = ctypes.POINTER(ctypes.c_double)
-        self._in = [np.zeros(graph.nnz_in(i)) for i in range(graph.n_in())]
-        self._out = [np.zeros(graph.nnz_out(i)) for i in range(graph.n_out())]
+        real, c_real = {"double": (np.float64, ctypes.c_double), "float": (np.float32, ctypes.c_float)}[library.precision]
+        dbl = ctypes.POINTER(c_real)
+        self._in = [np.zeros(graph.nnz_in(i), dtype=real) for i in range(graph.n_in())]
+        self._out = [np.zeros(graph.nnz_out(i), dtype=real) for i in range(graph.n_out())]
         self._shapes = [(graph.size1_out(i), graph.size2_out(i)) for i in range(graph.n_out())]
         self._index = [
             np.ravel_multi_index(tuple(np.asarray(x, dtype=np.intp) for x in graph.sparsity_out(i).get_triplet()),
@@ -176,11 +178,11 @@ class CompiledFunction:
         self._res = (dbl * max(1, len(self._out)))(*[r.ctypes.data_as(dbl) for r in self._out])
         iw, w = work_sizes_of(self._lib, self.name)
         self._iw = (ctypes.c_longlong * max(1, iw))()
-        self._w = (ctypes.c_double * max(1, w))()
+        self._w = (c_real * max(1, w))()
 
     def raw(self, *args: np.ndarray) -> list[np.ndarray]:
-        """The hot path of a control loop: inputs (float64 arrays of the right sizes, not checked)
-        copied into the preallocated buffers, the C function called, its output buffers returned
+        """The hot path of a control loop: inputs (arrays of the right sizes, not checked) copied
+        into the preallocated buffers (in the library's precision), the C function called, its output buffers returned
         (the nonzeros, column-major; overwritten by the next call). A non-zero return code
         raises InputError as ``__call__`` does."""
         for buf, x in zip(self._in, args):

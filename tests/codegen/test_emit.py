@@ -3,7 +3,6 @@ to Pinocchio when compiled and loaded back (double), and to the double build (fl
 
 from __future__ import annotations
 
-import ctypes
 import re
 import shutil
 import subprocess
@@ -185,31 +184,14 @@ def test_cache_key_tracks_the_source(paper):
     assert compiled_library(load_robot("solo12")).key != a.key
 
 
-def call_ctypes(lib: ctypes.CDLL, name: str, real: type, args: list[np.ndarray], sizes: list[int]) -> list[np.ndarray]:
-    fn = getattr(lib, PREFIX + name)
-    arg_arrays = [np.ascontiguousarray(x, dtype=real) for x in args]
-    res_arrays = [np.zeros(n, dtype=real) for n in sizes]
-    ptr = ctypes.POINTER(ctypes.c_float if real is np.float32 else ctypes.c_double)
-    arg = (ptr * len(args))(*[a.ctypes.data_as(ptr) for a in arg_arrays])
-    res = (ptr * len(sizes))(*[r.ctypes.data_as(ptr) for r in res_arrays])
-    work = np.zeros(4096, dtype=real)
-    assert fn(arg, res, None, work.ctypes.data_as(ptr), 0) == 0
-    return res_arrays
-
-
 def test_float_build_matches_double_build(paper):
-    double = ctypes.CDLL(str(compiled_library(paper, "double").path))
-    single = ctypes.CDLL(str(compiled_library(paper, "float").path))
-    graphs = {f.name(): f for f in codegen_functions(paper)}
+    double, single = compiled_library(paper, "double"), compiled_library(paper, "float")
     s = random_state(paper.lower, paper.upper, np.random.default_rng(3))
     inputs = {"q": s.q, "v": s.v, "a": s.a, "f": s.f.ravel()}
     for name in CODEGEN_FUNCTIONS:
-        f = graphs[PREFIX + name]
-        args = [inputs[f.name_in(i)] for i in range(f.n_in())]
-        sizes = [f.nnz_out(i) for i in range(f.n_out())]
-        d = call_ctypes(double, name, np.float64, args, sizes)
-        x = call_ctypes(single, name, np.float32, args, sizes)
-        assert _function_scale_error(x, d) <= FLOAT_REL_TOL, name
+        d, x = CompiledFunction(double, name), CompiledFunction(single, name)
+        args = [inputs[k] for k in d.names_in]
+        assert _function_scale_error(x(*args), d(*args)) <= FLOAT_REL_TOL, name
 
 
 @pytest.mark.slow

@@ -20,7 +20,6 @@ from quadruped_dyn.model.stance import stance_set
 from quadruped_dyn.model.state import random_state
 from quadruped_dyn.references.pinocchio import PinocchioDerivatives, PinocchioReference
 from quadruped_dyn.tolerances import FLOAT_REL_TOL, REL_TOL_DERIVATIVES, REL_TOL_FD_DERIVATIVES
-from tests.codegen.test_emit import call_ctypes
 from tests.conftest import assert_close
 from tests.dynamics.test_derivatives import grf_point, reduced_point
 
@@ -40,14 +39,10 @@ def test_compiled_derivatives_match_pinocchio(paper):
 
 
 def test_float_derivatives_match_double(paper):
-    double = compiled_library(paper, "double")
-    single = compiled_library(paper, "float")
-    import ctypes
-
     s = random_state(paper.lower, paper.upper, np.random.default_rng(5))
     tau = 5.0 * s.a
-    d = call_ctypes(ctypes.CDLL(str(double.path)), "dfd_full", np.float64, [s.q, s.v, tau], [324] * 3)
-    x = call_ctypes(ctypes.CDLL(str(single.path)), "dfd_full", np.float32, [s.q, s.v, tau], [324] * 3)
+    d = CompiledFunction(compiled_library(paper, "double"), "dfd_full")(s.q, s.v, tau)
+    x = CompiledFunction(compiled_library(paper, "float"), "dfd_full")(s.q, s.v, tau)
     cond = np.linalg.cond(PinocchioReference(paper).mass_matrix(s.q))
     for a, b in zip(x, d):  # M^-1 amplifies float's rounding by up to cond(M)
         assert_close(a, b, FLOAT_REL_TOL * max(1.0, cond / 100.0), "float dfd_full")

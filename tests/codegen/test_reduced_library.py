@@ -5,7 +5,6 @@ are reported by the return code; the float build agrees with the double one."""
 
 from __future__ import annotations
 
-import ctypes
 import re
 
 import numpy as np
@@ -157,26 +156,22 @@ def test_python_layer_checks_its_inputs(paper):
 
 
 def test_float_build_matches_pinocchio(paper):
-    """Every reduced function of the float build against Pinocchio's values, within the float
-    tolerance scaled by the conditioning (tolerance_scale)."""
+    """Every reduced term of the float build (REDUCED_NAMES; the derivatives are checked in
+    tests/codegen/test_emit_derivatives.py) against Pinocchio's values, within the float tolerance
+    scaled by the conditioning (tolerance_scale)."""
     from quadruped_dyn.references.pinocchio import PinocchioReference
 
-    lib = ctypes.CDLL(str(compiled_library(paper, "float").path))
+    library = compiled_library(paper, "float")
     ref = PinocchioReference(paper)
     s = reference_state(paper)
     for stance in REDUCED_STANCE_SETS:
-        n = 13 if len(stance.feet) == 2 else 12
-        x = _inputs(s, n)
-        for f in reduced_functions(paper, stance):
-            name = f.name()[3:]
-            args = [np.ascontiguousarray(x[f.name_in(i)], dtype=np.float32) for i in range(f.n_in())]
-            out = np.zeros(f.nnz_out(0), dtype=np.float32)
-            ptr = ctypes.POINTER(ctypes.c_float)
-            arg = (ptr * len(args))(*[a.ctypes.data_as(ptr) for a in args])
-            res = (ptr * 1)(out.ctypes.data_as(ptr))
-            assert getattr(lib, f.name())(arg, res, None, None, 0) == 0, name
+        x = _inputs(s, 13 if len(stance.feet) == 2 else 12)
+        for kind in REDUCED_NAMES:
+            name = reduced_symbol(kind, stance)
+            f = CompiledFunction(library, name)
+            (out,) = f(*[x[k] for k in f.names_in])
             tol = FLOAT_REL_TOL * tolerance_scale(ref, name, s)
             if tol > FLOAT_MAX_TOL:  # fd_r of BL+BR: cond(M_r) ~5e5 leaves float no digits to check
                 continue
-            expected = np.ravel(pinocchio_outputs(paper, ref, name, s)[0], order="F")
-            assert_close(out.astype(float), expected, rel=tol, what=name)
+            expected = pinocchio_outputs(paper, ref, name, s)[0]
+            assert_close(out, expected, rel=tol, what=name)
