@@ -14,6 +14,20 @@ from quadruped_dyn.tolerances import REL_TOL_TERMS
 
 SEEDS = (0, 1)
 
+#: Robots whose whole generated C is compiled in the default suite (the ``library`` fixture): the
+#: bundled robot and one of another size and geometry. Compiling a robot's C takes ~2 min cold on
+#: two cores; the other robots' compiled C is checked in the slow suite, their symbolic terms (which
+#: CasADi prints to C the same way for every robot) in the default one (tests/dynamics/).
+COMPILED_IN_DEFAULT = ("paper", "solo12")
+
+
+@pytest.hookimpl(tryfirst=True)  # before -m deselects by marker
+def pytest_collection_modifyitems(items: list[pytest.Item]) -> None:
+    for item in items:
+        params = getattr(item, "callspec", None)
+        if "library" in getattr(item, "fixturenames", ()) and params and params.params.get("robot") not in COMPILED_IN_DEFAULT:
+            item.add_marker(pytest.mark.slow)
+
 
 @pytest.fixture(scope="session", params=ROBOT_NAMES)
 def robot(request: pytest.FixtureRequest) -> Robot:

@@ -28,6 +28,7 @@ def _eval(exe, q, v, a, tau) -> dict[str, np.ndarray]:
             for name, *values in (line.split() for line in run_tool([str(exe), "eval", *args]).strip().splitlines())}
 
 
+@pytest.mark.slow  # builds the CppADCodeGen generator: ~10 min cold (cc1plus, 4.4 GB)
 @needs_headers
 def test_peer_computes_pinocchio_crba_and_rnea():
     """On the paper robot, in Pinocchio's own order (no mapping of the module under test): the peer's
@@ -51,6 +52,7 @@ def test_peer_computes_pinocchio_crba_and_rnea():
     assert set(errors) == set(cppadcg.PAIRS) and all(e <= REL_TOL_TERMS for e in errors.values())
 
 
+@pytest.mark.slow  # builds the CppADCodeGen generator: ~10 min cold (cc1plus, 4.4 GB)
 @needs_headers
 def test_check_rejects_a_peer_that_computes_something_else(monkeypatch):
     """One output entry moved by 1e-6 relative: NumericalError naming the function, before any timing."""
