@@ -14,6 +14,8 @@ trunk's spatial acceleration, as everywhere in the project.
 from __future__ import annotations
 
 from collections.abc import Callable
+from concurrent.futures import Future
+from concurrent.futures.process import BrokenProcessPool
 from dataclasses import dataclass
 from datetime import datetime, timezone
 from functools import partial
@@ -31,12 +33,13 @@ from quadruped_dyn.report.gather import (
     closed_loop,
     cross_library,
     embedded_footprint,
+    executed_notebook,
     experiment,
     generated_c,
     grf_posture,
     leg_points,
     load_with_warnings,
-    notebooks,
+    notebook_list,
     optimal_trot,
     reduced_rows,
     robot_data,
@@ -103,6 +106,7 @@ class _Job:
     samples: int
     progress: Progress
     check: dict[str, Any] | None = None
+    notebooks_ahead: list[Future[dict[str, Any]]] | None = None  # executed by the warm process (warm.py)
 
 
 def _attempt(key: str, title: str, build: Callable[[], Section]) -> Section:
@@ -129,7 +133,10 @@ def build_report(robot_arg: str = "paper", out: str | Path = "results", fast: bo
     done = progress.step(f"loading {robot_arg}")
     robot, urdf_warnings = load_with_warnings(robot_arg)
     job = _Job(robot, urdf_warnings, target, fast, samples, progress)
-    pool = warm.start(robot.urdf, with_benchmark=not fast)[0] if compile_ahead else None
+    pool = None
+    if compile_ahead:
+        ahead = notebook_list(robot)[0] if with_notebooks else []
+        pool, _, job.notebooks_ahead = warm.start(robot.urdf, with_benchmark=not fast, notebooks=ahead)
     try:
         sections = [_attempt("robot", "The robot", lambda: _robot_section(job))]
         done()
@@ -157,8 +164,7 @@ def _steps(samples: int, fast: bool, with_notebooks: bool) -> list[tuple[str, st
     from quadruped_dyn.report import sections as rs
 
     notebooks_built: Callable[[_Job], Section] = (
-        (lambda job: rs.notebooks_section(*notebooks(job.robot))) if with_notebooks
-        else (lambda job: rs.notebooks_section(None, "not executed for this page")))
+        _notebooks_section if with_notebooks else (lambda job: rs.notebooks_section(None, "not executed for this page")))
     return [
         (f"every term against Pinocchio ({samples} random states) and other libraries", "terms",
          "Every term against Pinocchio", _terms_section),
@@ -245,3 +251,22 @@ def _symbolic_section(job: _Job) -> Section:
     fig = figure(sparsity_figure(patterns), "sparsity of every term",
                  "structural nonzeros: matrix outputs as they are, vector outputs as their Jacobian w.r.t. all inputs")
     return rs.symbolic_section(formulas, note, sizes, fig)
+
+
+def _notebooks_section(job: _Job) -> Section:
+    """The notebooks, executed by the warm process while the steps before ran (or here, without
+    it, or if it died); a bar counts them."""
+    from quadruped_dyn.report import sections as rs
+
+    paths, note = notebook_list(job.robot)
+    if not paths:
+        return rs.notebooks_section(None, note)
+    bar = job.progress.bar(len(paths), "notebooks")
+    rendered = []
+    for k, path in enumerate(paths):
+        try:
+            rendered.append(job.notebooks_ahead[k].result() if job.notebooks_ahead else executed_notebook(path))
+        except BrokenProcessPool:  # the warm process died (its work was only a head start)
+            rendered.append(executed_notebook(path))
+        bar.advance(1)
+    return rs.notebooks_section(rendered, "")

@@ -311,19 +311,22 @@ def _first_line(cmd: list[str]) -> str:
     except (OSError, IndexError):
         return "not found"
 
-def notebooks(robot: Robot) -> tuple[list[dict[str, Any]] | None, str]:
-    from quadruped_dyn.report.notebooks import error_count, execute, notebook_paths, render
+def notebook_list(robot: Robot) -> tuple[list[Path], str]:
+    """The notebooks the report executes for ``robot``, or none and why."""
+    from quadruped_dyn.report.notebooks import notebook_paths
 
     if robot.name != "paper":
-        return None, "The notebooks are written for the paper's robot: see the report of `paper`."
+        return [], "The notebooks are written for the paper's robot: see the report of `paper`."
     paths = notebook_paths()
-    if not paths:
-        return None, "The notebooks are part of a source checkout, not of an installed package."
-    rendered = []
-    for path in paths:
-        nb, seconds = execute(path)
-        rendered.append({"name": path.name, "seconds": seconds, "errors": error_count(nb), "html": render(nb)})
-    return rendered, ""
+    return paths, "" if paths else "The notebooks are part of a source checkout, not of an installed package."
+
+
+def executed_notebook(path: Path) -> dict[str, Any]:
+    """One notebook executed top to bottom and rendered: name, seconds, errors (cells that raised), html."""
+    from quadruped_dyn.report.notebooks import error_count, execute, render
+
+    nb, seconds = execute(path)
+    return {"name": path.name, "seconds": seconds, "errors": error_count(nb), "html": render(nb)}
 
 
 def optimal_trot(robot: Robot, out: Path) -> tuple[dict[str, Any], str]:
@@ -367,10 +370,12 @@ def cross_library(robot: Robot) -> dict[str, Any]:
 
 def embedded_footprint(robot: Robot, directory: Path) -> dict[str, Any]:
     """Caller memory, code size and stack on Cortex-M of the generated C in ``directory``
-    (``checks.embedded``; the cross builds take minutes once, then are cached)."""
+    (``checks.embedded``), one cross build per target at -Os (``footprint.SIZE_BUILDS``; -O2
+    too: ``codegen --json``); the builds take minutes once, then are cached."""
     from quadruped_dyn.checks.embedded import embedded_summary
+    from quadruped_dyn.codegen.footprint import SIZE_BUILDS
 
-    return embedded_summary(robot, directory)
+    return embedded_summary(robot, directory, builds=SIZE_BUILDS)
 
 
 def closed_loop(robot: Robot, out: Path, cycles: int = 10) -> dict[str, Any]:

@@ -132,7 +132,7 @@ def test_steps_are_numbered_up_to_their_total(tmp_path, monkeypatch, capsys):
         raise RuntimeError("stubbed out")
 
     for name in ("_terms_section", "_grf_section", "_reduced_section", "_experiment_section", "_c_section",
-                 "_symbolic_section", "optimal_trot", "closed_loop", "notebooks"):
+                 "_symbolic_section", "optimal_trot", "closed_loop", "_notebooks_section"):
         monkeypatch.setattr(build, name, broken)
     result = build.build_report("paper", tmp_path, with_notebooks=True, compile_ahead=False)
     starts = re.findall(r"^\[(\d+)/(\d+)\] .* \.\.\.$", capsys.readouterr().err, flags=re.M)
