@@ -194,10 +194,12 @@ def _robot_section(job: _Job) -> Section:
 
 
 def _terms_section(job: _Job) -> Section:
-    from quadruped_dyn.checks.terms import run_check
+    from quadruped_dyn.checks.terms import N_MODELS, run_check
     from quadruped_dyn.report import sections as rs
 
-    job.check = run_check(job.robot, job.samples, 0, progress=lambda n: job.progress.count(n, job.samples)).as_dict()
+    total = N_MODELS + job.samples  # one bar: the symbolic models built, then the states checked
+    job.check = run_check(job.robot, job.samples, 0, progress=lambda n: job.progress.count(N_MODELS + n, total),
+                          building=lambda k: job.progress.count(k, total)).as_dict()
     try:  # MuJoCo and iDynTree as references, when installed; a failure here is shown, the terms are kept
         job.check = {**job.check, **cross_library(job.robot)}
     except Exception as e:
@@ -220,7 +222,7 @@ def _reduced_section(job: _Job) -> Section:
     from quadruped_dyn.experiment.gait import gait_posture
     from quadruped_dyn.report import sections as rs
 
-    return rs.reduced_section(reduced_rows(job.robot, gait_posture(job.robot)), "the gait posture")
+    return rs.reduced_section(reduced_rows(job.robot, gait_posture(job.robot), job.progress.count), "the gait posture")
 
 
 def _experiment_section(job: _Job) -> Section:
@@ -234,7 +236,7 @@ def _experiment_section(job: _Job) -> Section:
 def _c_section(job: _Job) -> Section:
     from quadruped_dyn.report import sections as rs
 
-    gen = generated_c(job.robot, job.target)
+    gen = generated_c(job.robot, job.target, job.progress.count)
     if job.fast:
         return rs.generated_c_section(gen, None, "skipped with --fast")
     from quadruped_dyn.bench.timing import run_bench

@@ -108,9 +108,10 @@ def grf_posture(robot: Robot, q_joints: np.ndarray, mu: float) -> tuple[dict[str
             cases.append({"name": s.name, "stance": s.feet, "f_free": (P @ Vt[-1]).reshape(-1, 3)})
     return {"mu": mu, "stances": stances}, cases, feet
 
-def reduced_rows(robot: Robot, q_joints: np.ndarray) -> list[dict[str, Any]]:
+def reduced_rows(robot: Robot, q_joints: np.ndarray, progress: Any = None) -> list[dict[str, Any]]:
     """cond(M_r), asymmetry and M_r against the Pinocchio-built reduced reference, for every
-    stance set of 2, 3 or 4 feet, at ``q_joints``, trunk level (roll 0), still."""
+    stance set of 2, 3 or 4 feet, at ``q_joints``, trunk level (roll 0), still; ``progress(k, n)``
+    after the k-th of n stance sets (each a symbolic model built: seconds)."""
     from quadruped_dyn.dynamics.guarded import guarded_call
     from quadruped_dyn.dynamics.reduced import MAX_COND_M_R, REDUCED_KINDS, reduced_model
     from quadruped_dyn.model.stance import STANCE_SETS
@@ -119,10 +120,11 @@ def reduced_rows(robot: Robot, q_joints: np.ndarray) -> list[dict[str, Any]]:
 
     ref = PinocchioReference(robot)
     quat = np.array([0.0, 0.0, 0.0, 1.0])
-    rows = []
-    for s in STANCE_SETS:
-        if len(s.feet) not in REDUCED_KINDS:
-            continue
+    rows: list[dict[str, Any]] = []
+    stances = [s for s in STANCE_SETS if len(s.feet) in REDUCED_KINDS]
+    for s in stances:
+        if progress is not None:
+            progress(len(rows), len(stances))
         m = reduced_model(robot, s.name)
         q_r = np.append(q_joints, np.zeros(m.n - 12))
         try:
@@ -191,10 +193,11 @@ def generate_c_directory(robot: Robot, directory: Path) -> tuple[list[Path], dic
     return generate(robot, directory, extra_files=reference_file).all(), generated
 
 
-def generated_c(robot: Robot, out: Path) -> dict[str, Any]:
+def generated_c(robot: Robot, out: Path, progress: Any = None) -> dict[str, Any]:
     """Generate the C beside the report (every function: the full-coordinate terms, the GRF
     solves and the reduced model of every stance set), compile (cached) and compare each
-    function with Pinocchio at the fixed reference state, as the generated ``check_qd`` does."""
+    function with Pinocchio at the fixed reference state, as the generated ``check_qd`` does;
+    ``progress(k, n)`` after the k-th of n functions checked."""
     from quadruped_dyn.checks.c_reference import reference_state
     from quadruped_dyn.codegen.library import compiled_library
     from quadruped_dyn.dynamics.formulas import shapes
@@ -209,7 +212,11 @@ def generated_c(robot: Robot, out: Path) -> dict[str, Any]:
     library = compiled_library(robot)
     compile_s = time.perf_counter() - start
     s = reference_state(robot)
-    checks = [c_function_check(robot, library, f, s) for f in generated["functions"]]
+    checks = []
+    for f in generated["functions"]:
+        checks.append(c_function_check(robot, library, f, s))
+        if progress is not None:
+            progress(len(checks), len(generated["functions"]))
     return {"directory": str(directory), "files": [{"name": p.name, "bytes": p.stat().st_size} for p in paths],
             "functions": functions, "checks": checks, "compile_s": compile_s,
             "library_bytes": library.path.stat().st_size}
