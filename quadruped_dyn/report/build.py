@@ -256,8 +256,9 @@ def _symbolic_section(job: _Job) -> Section:
 
 
 def _notebooks_section(job: _Job) -> Section:
-    """The notebooks, executed by the warm process while the steps before ran (or here, without
-    it, or if it died); a bar counts them."""
+    """The notebooks, each executed by whichever process gets to it first: the warm process, after
+    its builds, while the steps before ran; here, one it has not started (its task cancelled), all
+    without it, or if it died. A bar counts them."""
     from quadruped_dyn.report import sections as rs
 
     paths, note = notebook_list(job.robot)
@@ -266,8 +267,9 @@ def _notebooks_section(job: _Job) -> Section:
     bar = job.progress.bar(len(paths), "notebooks")
     rendered = []
     for k, path in enumerate(paths):
+        ahead = job.notebooks_ahead[k] if job.notebooks_ahead else None
         try:
-            rendered.append(job.notebooks_ahead[k].result() if job.notebooks_ahead else executed_notebook(path))
+            rendered.append(executed_notebook(path) if ahead is None or ahead.cancel() else ahead.result())
         except BrokenProcessPool:  # the warm process died (its work was only a head start)
             rendered.append(executed_notebook(path))
         bar.advance(1)
