@@ -57,6 +57,12 @@ Progress = Steps  # numbered steps with a bar inside a long one (quadruped_dyn.p
 REPORT_CLOSED_LOOP_CYCLES = 2
 
 
+#: Steps run after the others (the page keeps its order): the generated-C step waits for the
+#: Cortex-M builds and the benchmark harness of the warm process (warm.py), the notebooks step for
+#: its notebooks; the steps that need neither run meanwhile.
+RUN_LATE = ("c", "notebooks")
+
+
 def prepare(robot_arg: str, out: str | Path) -> tuple[Path, Path]:
     """Validate the arguments before any work: (URDF path, the robot's output directory).
     InputError for an unknown robot or an output directory that cannot be written."""
@@ -140,10 +146,12 @@ def build_report(robot_arg: str = "paper", out: str | Path = "results", fast: bo
     try:
         sections = [_attempt("robot", "The robot", lambda: _robot_section(job))]
         done()
-        for label, key, title, build in steps:
+        built: dict[str, Section] = {}
+        for label, key, title, build in sorted(steps, key=lambda step: step[1] in RUN_LATE):
             done = progress.step(label)
-            sections.append(_attempt(key, title, partial(build, job)))
+            built[key] = _attempt(key, title, partial(build, job))
             done()
+        sections += [built[key] for _, key, _, _ in steps]  # page order
     finally:
         if pool is not None:
             pool.shutdown(wait=True, cancel_futures=True)  # no process outlives the command

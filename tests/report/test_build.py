@@ -135,7 +135,13 @@ def test_steps_are_numbered_up_to_their_total(tmp_path, monkeypatch, capsys):
                  "_symbolic_section", "optimal_trot", "closed_loop", "_notebooks_section"):
         monkeypatch.setattr(build, name, broken)
     result = build.build_report("paper", tmp_path, with_notebooks=True, compile_ahead=False)
-    starts = re.findall(r"^\[(\d+)/(\d+)\] .* \.\.\.$", capsys.readouterr().err, flags=re.M)
+    err = capsys.readouterr().err
+    starts = re.findall(r"^\[(\d+)/(\d+)\] .* \.\.\.$", err, flags=re.M)
     total = int(starts[0][1])
     assert [(int(k), int(n)) for k, n in starts] == [(k, total) for k in range(1, total + 1)]
     assert total == len(result.sections) and result.path.is_file()  # one step per section
+    # the generated-C step runs after the closed loop (it waits for the warm process), the page keeps its order
+    labels = re.findall(r"^\[\d+/\d+\] (.*) \.\.\.$", err, flags=re.M)
+    assert labels[-3:] == ["generated C and the benchmark", "notebooks", "versions, writing the page"]
+    assert [s.key for s in result.sections] == ["robot", "terms", "grf", "reduced", "experiment", "c", "symbolic",
+                                                "optimal_control", "closed_loop", "notebooks", "versions"]
