@@ -57,10 +57,11 @@ Progress = Steps  # numbered steps with a bar inside a long one (quadruped_dyn.p
 REPORT_CLOSED_LOOP_CYCLES = 2
 
 
-#: Steps run after the others (the page keeps its order): the generated-C step waits for the
-#: Cortex-M builds and the benchmark harness of the warm process (warm.py), the notebooks step for
-#: its notebooks; the steps that need neither run meanwhile.
-RUN_LATE = ("c", "notebooks")
+#: Steps run after the others, in this order (the page keeps its own): the generated-C step waits
+#: for the Cortex-M builds and the benchmark harness of the warm process (warm.py), so it comes
+#: last; before it the notebooks, which this process executes itself unless the warm process got to
+#: them first (a warm cache); the steps that need neither run meanwhile.
+RUN_LATE = ("notebooks", "c")
 
 
 def prepare(robot_arg: str, out: str | Path) -> tuple[Path, Path]:
@@ -147,7 +148,7 @@ def build_report(robot_arg: str = "paper", out: str | Path = "results", fast: bo
         sections = [_attempt("robot", "The robot", lambda: _robot_section(job))]
         done()
         built: dict[str, Section] = {}
-        for label, key, title, build in sorted(steps, key=lambda step: step[1] in RUN_LATE):
+        for label, key, title, build in sorted(steps, key=lambda step: RUN_LATE.index(step[1]) + 1 if step[1] in RUN_LATE else 0):
             done = progress.step(label)
             built[key] = _attempt(key, title, partial(build, job))
             done()

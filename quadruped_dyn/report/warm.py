@@ -19,7 +19,7 @@ from __future__ import annotations
 import multiprocessing
 import tempfile
 from collections.abc import Sequence
-from concurrent.futures import Future, ProcessPoolExecutor
+from concurrent.futures import Future, ProcessPoolExecutor, ThreadPoolExecutor
 from pathlib import Path
 from typing import Any
 
@@ -39,10 +39,12 @@ def warm_caches(urdf: str, with_benchmark: bool) -> str:
             from quadruped_dyn.bench.timing import pinocchio_harness
             from quadruped_dyn.report.gather import embedded_footprint, generate_c_directory
 
-            with tempfile.TemporaryDirectory() as tmp:  # the report's own c/ has the same bytes: the same key
-                generate_c_directory(robot, Path(tmp))
-                embedded_footprint(robot, Path(tmp))  # the Cortex-M builds, cached by content
-            pinocchio_harness()
+            with ThreadPoolExecutor(max_workers=1) as beside:  # one C++ compiler beside the Cortex-M builds' make -j2
+                harness = beside.submit(pinocchio_harness)
+                with tempfile.TemporaryDirectory() as tmp:  # the report's own c/ has the same bytes: the same key
+                    generate_c_directory(robot, Path(tmp))
+                    embedded_footprint(robot, Path(tmp))  # the Cortex-M builds, cached by content
+                harness.result()
         return ""
     except Exception as e:  # noqa: BLE001 -- reported by the step that needs the artefact
         return f"{type(e).__name__}: {str(e).strip().splitlines()[0] if str(e).strip() else ''}"

@@ -140,8 +140,8 @@ def test_steps_are_numbered_up_to_their_total(tmp_path, monkeypatch, capsys):
     total = int(starts[0][1])
     assert [(int(k), int(n)) for k, n in starts] == [(k, total) for k in range(1, total + 1)]
     assert total == len(result.sections) and result.path.is_file()  # one step per section
-    # the generated-C step runs after the closed loop (it waits for the warm process), the page keeps its order
+    # the notebooks, then the generated-C step (it waits for the warm process) run last; the page keeps its order
     labels = re.findall(r"^\[\d+/\d+\] (.*) \.\.\.$", err, flags=re.M)
-    assert labels[-3:] == ["generated C and the benchmark", "notebooks", "versions, writing the page"]
+    assert labels[-3:] == ["notebooks", "generated C and the benchmark", "versions, writing the page"]
     assert [s.key for s in result.sections] == ["robot", "terms", "grf", "reduced", "experiment", "c", "symbolic",
                                                 "optimal_control", "closed_loop", "notebooks", "versions"]
