@@ -228,7 +228,14 @@ def c_function_check(robot: Robot, library: Any, f: Any, s: Any) -> dict[str, An
     """One compiled function at the reference state ``s`` against Pinocchio: the relative error
     (to the largest reference output), its tolerance scaled by the state's conditioning
     (``c_reference.tolerance_scale``), and pass / FAIL / skipped with the reason, as check_qd."""
-    from quadruped_dyn.checks.c_reference import pinocchio_outputs, reduced_inputs, tolerance_scale
+    from quadruped_dyn.checks.c_reference import (
+        pinocchio_outputs,
+        reduced_inputs,
+        reference_tau_full,
+        tolerance_floor,
+        tolerance_scale,
+        wrench_inputs,
+    )
     from quadruped_dyn.codegen.emit import PREFIX
     from quadruped_dyn.codegen.library import CompiledFunction
     from quadruped_dyn.math.compare import relative_error, within
@@ -237,8 +244,11 @@ def c_function_check(robot: Robot, library: Any, f: Any, s: Any) -> dict[str, An
 
     name = f.name()[len(PREFIX):]
     ref = PinocchioReference(robot)
-    inputs = {"q": s.q, "v": s.v, "a": s.a, "f": s.f.ravel(), **reduced_inputs(s)}
-    tol = REL_TOL_TERMS * tolerance_scale(ref, name, s)
+    # the inputs and the tolerance of check_qd's case (c_reference.reference_header): the derivatives
+    # take tau_full, w and dq too, and a finite-difference reference has its own accuracy (tol_floor)
+    inputs = {"q": s.q, "v": s.v, "a": s.a, "f": s.f.ravel(), "tau_full": reference_tau_full(s), **reduced_inputs(s),
+              **wrench_inputs(s)}
+    tol = max(REL_TOL_TERMS, tolerance_floor(name)) * tolerance_scale(ref, name, s)
     row: dict[str, Any] = {"name": f.name(), "max_rel_err": None, "tol": tol, "status": "FAIL", "note": ""}
     try:
         ours = CompiledFunction(library, name)(*[inputs[f.name_in(i)][: f.nnz_in(i)] for i in range(f.n_in())])
