@@ -2,8 +2,9 @@
 
 Both sides are timed in compiled code (``c/bench_qd.c`` and ``c/bench_pinocchio.cpp``, and
 with ``peer`` Pinocchio's CppADCodeGen code, ``cppadcg.py``): the median over ``reps`` runs of
-``calls`` calls each; the harnesses alternate for ``rounds`` rounds and each function keeps its
-best median (the least disturbed by other load on a shared 2-core machine). Ratios are what to
+``calls`` calls each, fewer for a function slower than 2 ms / ``calls`` (every harness stops a run
+at about 2 ms: ``c/bench_median.h``, QD_RUN_BUDGET_NS); the harnesses alternate for ``rounds``
+rounds and each function keeps its best median (the least disturbed by other load on a shared 2-core machine). Ratios are what to
 read; absolute times drift with the machine's load. By default the Pinocchio harness links the pin
 wheel's libraries (built for generic x86-64) and the generated C is built with ``C_FLAGS``, so
 neither side uses -march=native; ``native`` builds the generated C and the peer for this machine
@@ -78,10 +79,12 @@ class BenchReport:
     robot: str
     entries: list[BenchEntry] = field(default_factory=list)
     code_bytes: int = 0  # generated C source
+    source_files: int = 0  # generated C files
     library_bytes: int = 0  # compiled shared library (-O3)
     work_bytes: int = 0  # largest caller-provided work memory (iw + w) of any function; temporaries are locals
     generation_s: float = 0.0
-    compile_s: float = 0.0
+    compile_s: float = 0.0  # compiling the objects not in the build cache (``compiled_objects``) and linking
+    compiled_objects: int = 0  # of the generated C's files; the others had been compiled with these flags before
     pinocchio_version: str = pin.__version__
     native: bool = False  # both sides built with -march=native (``bench --native``)
     c_flags: list[str] = field(default_factory=list)  # of the generated C
@@ -162,13 +165,13 @@ def run_bench(robot: Robot, calls: int = 20000, reps: int = 9, rounds: int = 3, 
         report.generation_s = time.perf_counter() - start
         c_path, h_path, ref_path = files.source, files.header, files.extra[reference_header_name(robot)]
         sources = files.c_sources
-        report.code_bytes = sum(p.stat().st_size for p in sources)
+        report.code_bytes, report.source_files = sum(p.stat().st_size for p in sources), len(sources)
         report.work_bytes = max(8 * (iw + w) for iw, w in work_sizes(h_path.read_text()).values())
         for name in ("bench_qd.c", "bench_median.h"):
             shutil.copy(HARNESSES / name, tmp)
         exe, lib = Path(tmp) / "bench_qd", Path(tmp) / f"lib{c_path.stem}.so"
         start = time.perf_counter()
-        compile_sources(sources, flags, lib, cc)
+        report.compiled_objects = compile_sources(sources, flags, lib, cc)  # the library's objects, when cached
         report.compile_s = time.perf_counter() - start
         run_tool([cc, *flags, f"-DQD_HEADER=\"{h_path.name}\"", f"-DQD_REFERENCE=\"{ref_path.name}\"",
                   "bench_qd.c", lib.name, f"-Wl,-rpath,{tmp}", "-lm", "-o", exe.name], cwd=tmp)

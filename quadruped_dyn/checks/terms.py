@@ -8,6 +8,7 @@ either side is an infinite error (``compare``): it fails, and is null in the JSO
 
 from __future__ import annotations
 
+import functools
 import itertools
 import time
 from collections.abc import Callable, Iterator
@@ -187,14 +188,25 @@ def _derivative_comparisons(robot: Robot, ref: PinocchioReference, s: FullState,
         yield f"dfd_full {('da_dq', 'da_dv', 'da_dtau')[k]}", ours, theirs
 
 
-def run_check(robot: Robot, samples: int = 20, seed: int = 0,
-              progress: Callable[[int], None] | None = None) -> CheckReport:
+#: Symbolic models the check builds before its first sample (``run_check``'s ``building`` counts them).
+N_MODELS = 4 + len(REDUCED_STANCES)
+
+
+def run_check(robot: Robot, samples: int = 20, seed: int = 0, progress: Callable[[int], None] | None = None,
+              building: Callable[[int], None] | None = None) -> CheckReport:
+    """Every term against Pinocchio on ``samples`` random states; ``progress(n)`` after the n-th
+    state, ``building(k)`` after the k-th of the N_MODELS symbolic models is built (minutes on a
+    cold process: built once per robot and process)."""
     ref = PinocchioReference(robot)
     rng = np.random.default_rng(seed)
     start = time.perf_counter()
-    full_dynamics(robot), robot_kinematics(robot), grf_solves(robot), full_derivatives(robot)  # once per robot and process
-    for stance in REDUCED_STANCES:
-        reduced_model(robot, stance)
+    builds: list[Callable[[], object]] = [lambda: full_dynamics(robot), lambda: robot_kinematics(robot),
+                                          lambda: grf_solves(robot), lambda: full_derivatives(robot)]
+    builds += [functools.partial(reduced_model, robot, stance) for stance in REDUCED_STANCES]
+    for k, build in enumerate(builds):
+        build()
+        if building:
+            building(k + 1)
     report = CheckReport(robot.name, samples, seed, build_seconds=time.perf_counter() - start)
     terms: dict[str, TermResult] = {}
     report.grf = [GrfResult(st.name, m, st.rank(m)) for st in STANCE_SETS for m in GRF_MODELS]

@@ -7,6 +7,7 @@ import sys
 import click
 
 from quadruped_dyn.cli.app import EXIT_CHECK_FAILED
+from quadruped_dyn.report.gather import CHECK_SAMPLES
 
 
 @click.command()
@@ -14,11 +15,13 @@ from quadruped_dyn.cli.app import EXIT_CHECK_FAILED
 @click.option("--out", "out_dir", default="results", show_default=True,
               help="The page goes to OUT/<robot>/report.html, its files beside it.")
 @click.option("--fast", is_flag=True, help="Skip the benchmark (its first run compiles a C++ harness for minutes).")
-def report(robot: str, out_dir: str, fast: bool) -> None:
+@click.option("--samples", type=click.IntRange(min=1), default=CHECK_SAMPLES, show_default=True,
+              help="Random states of the term check against Pinocchio (`check --samples` runs it alone).")
+def report(robot: str, out_dir: str, fast: bool, samples: int) -> None:
     """One self-contained HTML page of everything the toolkit knows about ROBOT (exit 1 if a check fails)."""
     from quadruped_dyn.report.build import build_report, prepare
 
     prepare(robot, out_dir)  # bad input is reported before any work
-    result = build_report(robot, out_dir, fast)
+    result = build_report(robot, out_dir, fast, samples)
     click.echo(result.summary())
     sys.exit(0 if result.passed else EXIT_CHECK_FAILED)

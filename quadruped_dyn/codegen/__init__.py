@@ -14,7 +14,8 @@ _MODULES: dict[str, tuple[str, ...]] = {
                          "derivative_functions", "derivative_source", "grf_derivative_functions",
                          "reduced_derivative_functions"),
     "library": (
-        "C_FLAGS", "COMPILE_JOBS", "run_tool", "compiler_version", "CompiledLibrary", "compile_sources", "PACKAGE",
+        "C_FLAGS", "COMPILE_JOBS", "run_tool", "compiler_version", "CompiledLibrary", "cached_object", "compile_sources",
+        "PACKAGE",
         "generator_sources", "generation_key", "compiled_library", "load_external", "RETURN_CODES", "CompiledFunction",
         "work_sizes_of",
     ),

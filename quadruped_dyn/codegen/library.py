@@ -10,6 +10,7 @@ through ctypes (~2-4 us).
 from __future__ import annotations
 
 import ctypes
+import functools
 import hashlib
 import re
 import shutil
@@ -48,6 +49,7 @@ def run_tool(cmd: list[str], cwd: str | Path | None = None) -> str:
     return proc.stdout
 
 
+@functools.cache
 def compiler_version(cc: str) -> str:
     """The first line of ``cc --version`` (part of every build cache key)."""
     return run_tool([cc, "--version"]).splitlines()[0]
@@ -61,15 +63,38 @@ class CompiledLibrary:
     precision: str = "double"  # casadi_real of the build: "double" or "float"
 
 
-def compile_sources(sources: list[Path], flags: tuple[str, ...], output: Path, cc: str = "gcc") -> None:
-    """Compile C sources into one shared library: one object per source, two compilers at a
-    time (the generated files are large; this machine has two cores)."""
-    objects = [output.parent / f"{output.name}.{i}.o" for i in range(len(sources))]
+#: A ``#include "file"`` (or of a macro): the object would depend on bytes outside the source.
+_LOCAL_INCLUDE = re.compile(rb'^[ \t]*#[ \t]*include[ \t]*[^<\s]', re.M)
+
+
+def cached_object(source: Path, flags: tuple[str, ...], cc: str = "gcc") -> tuple[Path, bool]:
+    """``source`` compiled with ``flags`` (``-c``), from the build cache: the key is the source's
+    bytes, the flags and the compiler, so the same file compiled the same way by the library, the
+    benchmark or another robot's build is compiled once: (object path, True if compiled now).
+    BuildError for a source with a local include (the key would miss the included bytes)."""
+    text = source.read_bytes()
+    if _LOCAL_INCLUDE.search(text):
+        raise BuildError(f"'{source.name}' includes a local file; the object cache takes self-contained C "
+                         "sources (only <system> headers)")
+    key = hashlib.sha256(text + "\0".join((cc, compiler_version(cc), *flags)).encode()).hexdigest()[:20]
+    compiled = []
+
+    def build(building: Path) -> None:
+        run_tool([cc, *flags, "-c", str(source), "-o", str(building)])
+        compiled.append(True)
+
+    return cached_build(f"object-{key}", f"{source.stem}.o", build), bool(compiled)
+
+
+def compile_sources(sources: list[Path], flags: tuple[str, ...], output: Path, cc: str = "gcc") -> int:
+    """Compile C sources into one shared library: one object per source (``cached_object``:
+    a file already compiled with the same flags is not compiled again), two compilers at a time
+    (the generated files are large; this machine has two cores). Returns how many objects were
+    compiled (the others came from the cache)."""
     with ThreadPoolExecutor(max_workers=COMPILE_JOBS) as pool:
-        list(pool.map(lambda so: run_tool([cc, *flags, "-c", str(so[0]), "-o", str(so[1])]), zip(sources, objects)))
-    run_tool([cc, "-shared", *map(str, objects), "-o", str(output), "-lm"])
-    for o in objects:
-        o.unlink()
+        objects = list(pool.map(lambda source: cached_object(source, flags, cc), sources))
+    run_tool([cc, "-shared", *(str(o) for o, _ in objects), "-o", str(output), "-lm"])
+    return sum(compiled for _, compiled in objects)
 
 
 PACKAGE = Path(__file__).resolve().parents[1]

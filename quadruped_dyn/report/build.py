@@ -14,6 +14,8 @@ trunk's spatial acceleration, as everywhere in the project.
 from __future__ import annotations
 
 from collections.abc import Callable
+from concurrent.futures import Future
+from concurrent.futures.process import BrokenProcessPool
 from dataclasses import dataclass
 from datetime import datetime, timezone
 from functools import partial
@@ -31,12 +33,13 @@ from quadruped_dyn.report.gather import (
     closed_loop,
     cross_library,
     embedded_footprint,
+    executed_notebook,
     experiment,
     generated_c,
     grf_posture,
     leg_points,
     load_with_warnings,
-    notebooks,
+    notebook_list,
     optimal_trot,
     reduced_rows,
     robot_data,
@@ -52,6 +55,13 @@ Progress = Steps  # numbered steps with a bar inside a long one (quadruped_dyn.p
 #: short (9 controllers x 2 gaits x 2 cycles, ~32 s simulated); `quadruped-dyn control --cycles 10`
 #: and the slow tests run the 10-cycle study (docs/closed_loop.md).
 REPORT_CLOSED_LOOP_CYCLES = 2
+
+
+#: Steps run after the others, in this order (the page keeps its own): the generated-C step waits
+#: for the Cortex-M builds and the benchmark harness of the warm process (warm.py), so it comes
+#: last; before it the notebooks, which this process executes itself unless the warm process got to
+#: them first (a warm cache); the steps that need neither run meanwhile.
+RUN_LATE = ("notebooks", "c")
 
 
 def prepare(robot_arg: str, out: str | Path) -> tuple[Path, Path]:
@@ -103,6 +113,7 @@ class _Job:
     samples: int
     progress: Progress
     check: dict[str, Any] | None = None
+    notebooks_ahead: list[Future[dict[str, Any]]] | None = None  # executed by the warm process (warm.py)
 
 
 def _attempt(key: str, title: str, build: Callable[[], Section]) -> Section:
@@ -129,14 +140,19 @@ def build_report(robot_arg: str = "paper", out: str | Path = "results", fast: bo
     done = progress.step(f"loading {robot_arg}")
     robot, urdf_warnings = load_with_warnings(robot_arg)
     job = _Job(robot, urdf_warnings, target, fast, samples, progress)
-    pool = warm.start(robot.urdf, with_benchmark=not fast)[0] if compile_ahead else None
+    pool = None
+    if compile_ahead:
+        ahead = notebook_list(robot)[0] if with_notebooks else []
+        pool, _, job.notebooks_ahead = warm.start(robot.urdf, with_benchmark=not fast, notebooks=ahead)
     try:
         sections = [_attempt("robot", "The robot", lambda: _robot_section(job))]
         done()
-        for label, key, title, build in steps:
+        built: dict[str, Section] = {}
+        for label, key, title, build in sorted(steps, key=lambda step: RUN_LATE.index(step[1]) + 1 if step[1] in RUN_LATE else 0):
             done = progress.step(label)
-            sections.append(_attempt(key, title, partial(build, job)))
+            built[key] = _attempt(key, title, partial(build, job))
             done()
+        sections += [built[key] for _, key, _, _ in steps]  # page order
     finally:
         if pool is not None:
             pool.shutdown(wait=True, cancel_futures=True)  # no process outlives the command
@@ -157,8 +173,7 @@ def _steps(samples: int, fast: bool, with_notebooks: bool) -> list[tuple[str, st
     from quadruped_dyn.report import sections as rs
 
     notebooks_built: Callable[[_Job], Section] = (
-        (lambda job: rs.notebooks_section(*notebooks(job.robot))) if with_notebooks
-        else (lambda job: rs.notebooks_section(None, "not executed for this page")))
+        _notebooks_section if with_notebooks else (lambda job: rs.notebooks_section(None, "not executed for this page")))
     return [
         (f"every term against Pinocchio ({samples} random states) and other libraries", "terms",
          "Every term against Pinocchio", _terms_section),
@@ -188,10 +203,12 @@ def _robot_section(job: _Job) -> Section:
 
 
 def _terms_section(job: _Job) -> Section:
-    from quadruped_dyn.checks.terms import run_check
+    from quadruped_dyn.checks.terms import N_MODELS, run_check
     from quadruped_dyn.report import sections as rs
 
-    job.check = run_check(job.robot, job.samples, 0, progress=lambda n: job.progress.count(n, job.samples)).as_dict()
+    total = N_MODELS + job.samples  # one bar: the symbolic models built, then the states checked
+    job.check = run_check(job.robot, job.samples, 0, progress=lambda n: job.progress.count(N_MODELS + n, total),
+                          building=lambda k: job.progress.count(k, total)).as_dict()
     try:  # MuJoCo and iDynTree as references, when installed; a failure here is shown, the terms are kept
         job.check = {**job.check, **cross_library(job.robot)}
     except Exception as e:
@@ -214,7 +231,7 @@ def _reduced_section(job: _Job) -> Section:
     from quadruped_dyn.experiment.gait import gait_posture
     from quadruped_dyn.report import sections as rs
 
-    return rs.reduced_section(reduced_rows(job.robot, gait_posture(job.robot)), "the gait posture")
+    return rs.reduced_section(reduced_rows(job.robot, gait_posture(job.robot), job.progress.count), "the gait posture")
 
 
 def _experiment_section(job: _Job) -> Section:
@@ -228,7 +245,7 @@ def _experiment_section(job: _Job) -> Section:
 def _c_section(job: _Job) -> Section:
     from quadruped_dyn.report import sections as rs
 
-    gen = generated_c(job.robot, job.target)
+    gen = generated_c(job.robot, job.target, job.progress.count)
     if job.fast:
         return rs.generated_c_section(gen, None, "skipped with --fast")
     from quadruped_dyn.bench.timing import run_bench
@@ -245,3 +262,24 @@ def _symbolic_section(job: _Job) -> Section:
     fig = figure(sparsity_figure(patterns), "sparsity of every term",
                  "structural nonzeros: matrix outputs as they are, vector outputs as their Jacobian w.r.t. all inputs")
     return rs.symbolic_section(formulas, note, sizes, fig)
+
+
+def _notebooks_section(job: _Job) -> Section:
+    """The notebooks, each executed by whichever process gets to it first: the warm process, after
+    its builds, while the steps before ran; here, one it has not started (its task cancelled), all
+    without it, or if it died. A bar counts them."""
+    from quadruped_dyn.report import sections as rs
+
+    paths, note = notebook_list(job.robot)
+    if not paths:
+        return rs.notebooks_section(None, note)
+    bar = job.progress.bar(len(paths), "notebooks")
+    rendered = []
+    for k, path in enumerate(paths):
+        ahead = job.notebooks_ahead[k] if job.notebooks_ahead else None
+        try:
+            rendered.append(executed_notebook(path) if ahead is None or ahead.cancel() else ahead.result())
+        except BrokenProcessPool:  # the warm process died (its work was only a head start)
+            rendered.append(executed_notebook(path))
+        bar.advance(1)
+    return rs.notebooks_section(rendered, "")

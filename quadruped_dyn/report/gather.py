@@ -24,8 +24,10 @@ from quadruped_dyn.model.leg import JOINT_ROLES
 from quadruped_dyn.model.robot import Robot, load_robot
 from quadruped_dyn.report.html import png_image
 
-#: Random states of the check (the README's numbers use 200).
-CHECK_SAMPLES = 200
+#: Random states of the report's term check (``report --samples``): ~1 s each on this 2-core machine
+#: (the Pinocchio-built reduced reference of four stance sets), so 50 keep the step near a minute;
+#: the README's numbers are ``check paper --samples 200``.
+CHECK_SAMPLES = 50
 
 #: Friction coefficient of the friction-cone column (rubber foot on a hard floor).
 FRICTION_MU = 0.6
@@ -106,9 +108,10 @@ def grf_posture(robot: Robot, q_joints: np.ndarray, mu: float) -> tuple[dict[str
             cases.append({"name": s.name, "stance": s.feet, "f_free": (P @ Vt[-1]).reshape(-1, 3)})
     return {"mu": mu, "stances": stances}, cases, feet
 
-def reduced_rows(robot: Robot, q_joints: np.ndarray) -> list[dict[str, Any]]:
+def reduced_rows(robot: Robot, q_joints: np.ndarray, progress: Any = None) -> list[dict[str, Any]]:
     """cond(M_r), asymmetry and M_r against the Pinocchio-built reduced reference, for every
-    stance set of 2, 3 or 4 feet, at ``q_joints``, trunk level (roll 0), still."""
+    stance set of 2, 3 or 4 feet, at ``q_joints``, trunk level (roll 0), still; ``progress(k, n)``
+    after the k-th of n stance sets (each a symbolic model built: seconds)."""
     from quadruped_dyn.dynamics.guarded import guarded_call
     from quadruped_dyn.dynamics.reduced import MAX_COND_M_R, REDUCED_KINDS, reduced_model
     from quadruped_dyn.model.stance import STANCE_SETS
@@ -117,10 +120,11 @@ def reduced_rows(robot: Robot, q_joints: np.ndarray) -> list[dict[str, Any]]:
 
     ref = PinocchioReference(robot)
     quat = np.array([0.0, 0.0, 0.0, 1.0])
-    rows = []
-    for s in STANCE_SETS:
-        if len(s.feet) not in REDUCED_KINDS:
-            continue
+    rows: list[dict[str, Any]] = []
+    stances = [s for s in STANCE_SETS if len(s.feet) in REDUCED_KINDS]
+    for s in stances:
+        if progress is not None:
+            progress(len(rows), len(stances))
         m = reduced_model(robot, s.name)
         q_r = np.append(q_joints, np.zeros(m.n - 12))
         try:
@@ -189,10 +193,11 @@ def generate_c_directory(robot: Robot, directory: Path) -> tuple[list[Path], dic
     return generate(robot, directory, extra_files=reference_file).all(), generated
 
 
-def generated_c(robot: Robot, out: Path) -> dict[str, Any]:
+def generated_c(robot: Robot, out: Path, progress: Any = None) -> dict[str, Any]:
     """Generate the C beside the report (every function: the full-coordinate terms, the GRF
     solves and the reduced model of every stance set), compile (cached) and compare each
-    function with Pinocchio at the fixed reference state, as the generated ``check_qd`` does."""
+    function with Pinocchio at the fixed reference state, as the generated ``check_qd`` does;
+    ``progress(k, n)`` after the k-th of n functions checked."""
     from quadruped_dyn.checks.c_reference import reference_state
     from quadruped_dyn.codegen.library import compiled_library
     from quadruped_dyn.dynamics.formulas import shapes
@@ -207,7 +212,11 @@ def generated_c(robot: Robot, out: Path) -> dict[str, Any]:
     library = compiled_library(robot)
     compile_s = time.perf_counter() - start
     s = reference_state(robot)
-    checks = [c_function_check(robot, library, f, s) for f in generated["functions"]]
+    checks = []
+    for f in generated["functions"]:
+        checks.append(c_function_check(robot, library, f, s))
+        if progress is not None:
+            progress(len(checks), len(generated["functions"]))
     return {"directory": str(directory), "files": [{"name": p.name, "bytes": p.stat().st_size} for p in paths],
             "functions": functions, "checks": checks, "compile_s": compile_s,
             "library_bytes": library.path.stat().st_size}
@@ -219,7 +228,14 @@ def c_function_check(robot: Robot, library: Any, f: Any, s: Any) -> dict[str, An
     """One compiled function at the reference state ``s`` against Pinocchio: the relative error
     (to the largest reference output), its tolerance scaled by the state's conditioning
     (``c_reference.tolerance_scale``), and pass / FAIL / skipped with the reason, as check_qd."""
-    from quadruped_dyn.checks.c_reference import pinocchio_outputs, reduced_inputs, tolerance_scale
+    from quadruped_dyn.checks.c_reference import (
+        pinocchio_outputs,
+        reduced_inputs,
+        reference_tau_full,
+        tolerance_floor,
+        tolerance_scale,
+        wrench_inputs,
+    )
     from quadruped_dyn.codegen.emit import PREFIX
     from quadruped_dyn.codegen.library import CompiledFunction
     from quadruped_dyn.math.compare import relative_error, within
@@ -228,8 +244,11 @@ def c_function_check(robot: Robot, library: Any, f: Any, s: Any) -> dict[str, An
 
     name = f.name()[len(PREFIX):]
     ref = PinocchioReference(robot)
-    inputs = {"q": s.q, "v": s.v, "a": s.a, "f": s.f.ravel(), **reduced_inputs(s)}
-    tol = REL_TOL_TERMS * tolerance_scale(ref, name, s)
+    # the inputs and the tolerance of check_qd's case (c_reference.reference_header): the derivatives
+    # take tau_full, w and dq too, and a finite-difference reference has its own accuracy (tol_floor)
+    inputs = {"q": s.q, "v": s.v, "a": s.a, "f": s.f.ravel(), "tau_full": reference_tau_full(s), **reduced_inputs(s),
+              **wrench_inputs(s)}
+    tol = max(REL_TOL_TERMS, tolerance_floor(name)) * tolerance_scale(ref, name, s)
     row: dict[str, Any] = {"name": f.name(), "max_rel_err": None, "tol": tol, "status": "FAIL", "note": ""}
     try:
         ours = CompiledFunction(library, name)(*[inputs[f.name_in(i)][: f.nnz_in(i)] for i in range(f.n_in())])
@@ -311,19 +330,22 @@ def _first_line(cmd: list[str]) -> str:
     except (OSError, IndexError):
         return "not found"
 
-def notebooks(robot: Robot) -> tuple[list[dict[str, Any]] | None, str]:
-    from quadruped_dyn.report.notebooks import error_count, execute, notebook_paths, render
+def notebook_list(robot: Robot) -> tuple[list[Path], str]:
+    """The notebooks the report executes for ``robot``, or none and why."""
+    from quadruped_dyn.report.notebooks import notebook_paths
 
     if robot.name != "paper":
-        return None, "The notebooks are written for the paper's robot: see the report of `paper`."
+        return [], "The notebooks are written for the paper's robot: see the report of `paper`."
     paths = notebook_paths()
-    if not paths:
-        return None, "The notebooks are part of a source checkout, not of an installed package."
-    rendered = []
-    for path in paths:
-        nb, seconds = execute(path)
-        rendered.append({"name": path.name, "seconds": seconds, "errors": error_count(nb), "html": render(nb)})
-    return rendered, ""
+    return paths, "" if paths else "The notebooks are part of a source checkout, not of an installed package."
+
+
+def executed_notebook(path: Path) -> dict[str, Any]:
+    """One notebook executed top to bottom and rendered: name, seconds, errors (cells that raised), html."""
+    from quadruped_dyn.report.notebooks import error_count, execute, render
+
+    nb, seconds = execute(path)
+    return {"name": path.name, "seconds": seconds, "errors": error_count(nb), "html": render(nb)}
 
 
 def optimal_trot(robot: Robot, out: Path) -> tuple[dict[str, Any], str]:
@@ -367,10 +389,12 @@ def cross_library(robot: Robot) -> dict[str, Any]:
 
 def embedded_footprint(robot: Robot, directory: Path) -> dict[str, Any]:
     """Caller memory, code size and stack on Cortex-M of the generated C in ``directory``
-    (``checks.embedded``; the cross builds take minutes once, then are cached)."""
+    (``checks.embedded``), one cross build per target at -Os (``footprint.SIZE_BUILDS``; -O2
+    too: ``codegen --json``); the builds take minutes once, then are cached."""
     from quadruped_dyn.checks.embedded import embedded_summary
+    from quadruped_dyn.codegen.footprint import SIZE_BUILDS
 
-    return embedded_summary(robot, directory)
+    return embedded_summary(robot, directory, builds=SIZE_BUILDS)
 
 
 def closed_loop(robot: Robot, out: Path, cycles: int = 10) -> dict[str, Any]:

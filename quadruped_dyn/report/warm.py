@@ -1,9 +1,11 @@
-"""Compile ahead, in a second process, what the report's later steps compile.
+"""Work ahead, in a second process, for the report's later steps: compiling, then the notebooks.
 
 The report's long steps are single-threaded Python (the term check, the experiment, the optimal
 control, the closed loop); its compilers (the robot's library, the experiment's native driver,
 the Cortex-M footprint builds, the Pinocchio benchmark harness) would otherwise run only when
-their step comes. ``start`` runs them at once in a spawned process, on the machine's other core.
+their step comes. ``start`` runs them at once in a spawned process, on the machine's other core,
+and then executes the notebooks there, one task each (each notebook's kernel is a process of its
+own: nothing of the report's process is shared), whose pages the notebooks step collects.
 
 Nothing is handed over between the processes: every artefact goes through the verified build
 cache (``codegen/cache.py``), whose per-entry lock makes a step that needs an artefact still
@@ -16,8 +18,10 @@ from __future__ import annotations
 
 import multiprocessing
 import tempfile
-from concurrent.futures import Future, ProcessPoolExecutor
+from collections.abc import Sequence
+from concurrent.futures import Future, ProcessPoolExecutor, ThreadPoolExecutor
 from pathlib import Path
+from typing import Any
 
 
 def warm_caches(urdf: str, with_benchmark: bool) -> str:
@@ -33,20 +37,26 @@ def warm_caches(urdf: str, with_benchmark: bool) -> str:
         native_library(robot)  # the experiment's native driver
         if with_benchmark:
             from quadruped_dyn.bench.timing import pinocchio_harness
-            from quadruped_dyn.checks.embedded import embedded_summary
-            from quadruped_dyn.report.gather import generate_c_directory
+            from quadruped_dyn.report.gather import embedded_footprint, generate_c_directory
 
-            with tempfile.TemporaryDirectory() as tmp:  # the report's own c/ has the same bytes: the same key
-                generate_c_directory(robot, Path(tmp))
-                embedded_summary(robot, Path(tmp))  # the Cortex-M builds, cached by content
-            pinocchio_harness()
+            with ThreadPoolExecutor(max_workers=1) as beside:  # one C++ compiler beside the Cortex-M builds' make -j2
+                harness = beside.submit(pinocchio_harness)
+                with tempfile.TemporaryDirectory() as tmp:  # the report's own c/ has the same bytes: the same key
+                    generate_c_directory(robot, Path(tmp))
+                    embedded_footprint(robot, Path(tmp))  # the Cortex-M builds, cached by content
+                harness.result()
         return ""
     except Exception as e:  # noqa: BLE001 -- reported by the step that needs the artefact
         return f"{type(e).__name__}: {str(e).strip().splitlines()[0] if str(e).strip() else ''}"
 
 
-def start(urdf: Path, with_benchmark: bool) -> tuple[ProcessPoolExecutor, Future[str]]:
-    """The warm process, started (spawned: no state of this process is shared); shut the pool
-    down with ``wait=True`` when the report is written, so no process outlives the command."""
+def start(urdf: Path, with_benchmark: bool, notebooks: Sequence[Path] = ()) -> tuple[
+        ProcessPoolExecutor, Future[str], list[Future[dict[str, Any]]]]:
+    """The warm process, started (spawned: no state of this process is shared): ``warm_caches``,
+    then each of ``notebooks`` executed and rendered (``gather.executed_notebook``), in that order.
+    Shut the pool down with ``wait=True`` when the report is written, so no process outlives the command."""
+    from quadruped_dyn.report.gather import executed_notebook
+
     pool = ProcessPoolExecutor(max_workers=1, mp_context=multiprocessing.get_context("spawn"))
-    return pool, pool.submit(warm_caches, str(urdf), with_benchmark)
+    warmed = pool.submit(warm_caches, str(urdf), with_benchmark)
+    return pool, warmed, [pool.submit(executed_notebook, path) for path in notebooks]

@@ -224,3 +224,30 @@ def test_truncated_generated_library_is_rebuilt_without_a_signal(paper, tmp_path
     assert proc.returncode == 0, proc.stderr
     assert "rebuilding" in proc.stderr
     assert float(proc.stdout.split()[-1]) <= REL_TOL_TERMS
+
+
+def test_objects_are_compiled_once_per_source_and_flags(cache, tmp_path):
+    """``compile_sources`` takes an object from the cache only for the same bytes and flags: the
+    second library of the same source compiles nothing, a changed constant or flag compiles again,
+    and each library answers with its own source's value."""
+    from quadruped_dyn.codegen.library import C_FLAGS, compile_sources
+
+    source = tmp_path / "probe.c"
+    source.write_text(SOURCE)
+    assert compile_sources([source], C_FLAGS, tmp_path / "a.so") == 1
+    assert compile_sources([source], C_FLAGS, tmp_path / "b.so") == 0
+    assert _probe(tmp_path / "b.so") == EXPECTED
+    source.write_text(SOURCE.replace("2.5", "3.5"))
+    assert compile_sources([source], C_FLAGS, tmp_path / "c.so") == 1
+    assert _probe(tmp_path / "c.so") == 3.5
+    assert compile_sources([source], (*C_FLAGS, "-DQD_OTHER"), tmp_path / "d.so") == 1
+
+
+def test_a_source_with_a_local_include_is_not_cached(cache, tmp_path):
+    from quadruped_dyn.codegen.library import C_FLAGS, compile_sources
+    from quadruped_dyn.errors import BuildError
+
+    source = tmp_path / "probe.c"
+    source.write_text('#include "other.h"\n' + SOURCE)
+    with pytest.raises(BuildError, match="includes a local file"):
+        compile_sources([source], C_FLAGS, tmp_path / "a.so")

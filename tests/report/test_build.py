@@ -132,10 +132,16 @@ def test_steps_are_numbered_up_to_their_total(tmp_path, monkeypatch, capsys):
         raise RuntimeError("stubbed out")
 
     for name in ("_terms_section", "_grf_section", "_reduced_section", "_experiment_section", "_c_section",
-                 "_symbolic_section", "optimal_trot", "closed_loop", "notebooks"):
+                 "_symbolic_section", "optimal_trot", "closed_loop", "_notebooks_section"):
         monkeypatch.setattr(build, name, broken)
     result = build.build_report("paper", tmp_path, with_notebooks=True, compile_ahead=False)
-    starts = re.findall(r"^\[(\d+)/(\d+)\] .* \.\.\.$", capsys.readouterr().err, flags=re.M)
+    err = capsys.readouterr().err
+    starts = re.findall(r"^\[(\d+)/(\d+)\] .* \.\.\.$", err, flags=re.M)
     total = int(starts[0][1])
     assert [(int(k), int(n)) for k, n in starts] == [(k, total) for k in range(1, total + 1)]
     assert total == len(result.sections) and result.path.is_file()  # one step per section
+    # the notebooks, then the generated-C step (it waits for the warm process) run last; the page keeps its order
+    labels = re.findall(r"^\[\d+/\d+\] (.*) \.\.\.$", err, flags=re.M)
+    assert labels[-3:] == ["notebooks", "generated C and the benchmark", "versions, writing the page"]
+    assert [s.key for s in result.sections] == ["robot", "terms", "grf", "reduced", "experiment", "c", "symbolic",
+                                                "optimal_control", "closed_loop", "notebooks", "versions"]

@@ -3,6 +3,8 @@
 
 from __future__ import annotations
 
+import pytest
+
 from quadruped_dyn.report import warm
 
 
@@ -12,7 +14,27 @@ def test_a_failed_warm_build_is_one_line(tmp_path):
 
 
 def test_the_warm_process_ends_with_its_pool(tmp_path):
-    pool, future = warm.start(tmp_path / "missing.urdf", with_benchmark=False)
+    pool, future, _ = warm.start(tmp_path / "missing.urdf", with_benchmark=False)
     pool.shutdown(wait=True)
     assert future.done() and future.result().startswith("InputError: ")
     assert not [p for p in (pool._processes or {}).values() if p.is_alive()]
+
+
+@pytest.mark.slow  # a spawned process and a Jupyter kernel: ~20 s on the loaded 2-core machine
+def test_notebooks_run_in_the_warm_process_after_it(tmp_path):
+    """A notebook handed to ``start`` is executed and rendered there, after the warm builds (here
+    failing at once), and comes back as the notebooks step shows it."""
+    import nbformat
+
+    nb = nbformat.v4.new_notebook(cells=[nbformat.v4.new_code_cell("print(6 * 7)"),
+                                         nbformat.v4.new_code_cell("1 / 0")])
+    path = tmp_path / "probe.ipynb"
+    nbformat.write(nb, path)
+    pool, warmed, notebooks = warm.start(tmp_path / "missing.urdf", with_benchmark=False, notebooks=[path])
+    try:
+        page = notebooks[0].result(timeout=120)
+    finally:
+        pool.shutdown(wait=True)
+    assert warmed.result().startswith("InputError: ")
+    assert page["name"] == "probe.ipynb" and page["errors"] == 1
+    assert "42" in page["html"] and "ZeroDivisionError" in page["html"]

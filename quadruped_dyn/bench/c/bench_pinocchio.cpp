@@ -38,8 +38,24 @@ static double cpu_ns() {
   return 1e9 * double(t.tv_sec) + double(t.tv_nsec);
 }
 
+// A run stops adding calls once it lasts about this long (ns): bench_median.h's QD_RUN_BUDGET_NS.
+static const double run_budget_ns = 2e6;
+
+static int calls_in_budget(double one_call_ns, int calls) {
+  double fit = run_budget_ns / std::max(one_call_ns, 1.0);
+  return fit < 1.0 ? 1 : fit < double(calls) ? int(fit) : calls;
+}
+
+// Median ns per call over REPS runs of CALLS calls (fewer for a slow function: calls_in_budget),
+// after a warm-up of CALLS / 10 + 1 calls within the budget, as bench_median.h.
 static double median_ns(const std::function<void()>& f, int calls, int reps) {
   std::vector<double> t;
+  double t0 = cpu_ns();
+  f();
+  const int warm = calls_in_budget(cpu_ns() - t0, calls / 10 + 1);
+  t0 = cpu_ns();
+  for (int k = 0; k < warm; ++k) f();
+  calls = calls_in_budget((cpu_ns() - t0) / warm, calls);
   for (int r = 0; r < reps; ++r) {
     double t0 = cpu_ns();
     for (int k = 0; k < calls; ++k) f();
