@@ -91,9 +91,6 @@ REL_TOL_DERIVATIVES = 1e-9
 #: 2.6e-9 at h = 1e-4 (3.2e-9 at 1e-5, round-off). With h = 1e-4 (rad, rad/s, N m, m/s^2) 2e-6
 #: relative keeps a margin of ~20 over the paper robot's second-order figures and more over the
 #: fourth-order ones, and a wrong term (a missing orientation dependence, a sign) is an O(1e-2 - 1) error.
-#: dfd_r's reference differences id_r at fixed qdd and applies -M_r^-1 (the implicit-function rule,
-#: checks.derivative_reference): against the symbolic dfd_r (paper, four feet) 1.5e-11 / 9.1e-9 / 3.5e-9
-#: for q_r / qd_r / theta, where differences of fd_r itself gave 2.1e-9 / 7.9e-9 / 2.7e-7.
 FD_STEP_DERIVATIVES = 1e-4
 REL_TOL_FD_DERIVATIVES = 2e-6
 
