@@ -43,6 +43,17 @@ def casadi_c(file_stem: str, functions: list[ca.Function], precision: str) -> tu
         return silence_unused_parameters((Path(tmp) / f"{file_stem}.c").read_text()), (Path(tmp) / f"{file_stem}.h").read_text()
 
 
+def drop_evaluation(c_text: str, raw: str) -> str:
+    """Remove CasADi's evaluation function ``raw`` (``casadi_fN``: its #define, the comment naming it
+    and its definition). For a signature-only Function whose entry point calls a hand-written
+    template instead, its body (a placeholder filling every output) is dead code: ~0.4 MB per robot."""
+    c_text, defines = re.subn(rf"#define {raw} CASADI_PREFIX\(f\d+\)\n", "", c_text)
+    c_text, bodies = re.subn(rf"/\* [^\n]* \*/\nstatic int {raw}\(.*?\n\}}\n\n", "", c_text, count=1, flags=re.S)
+    if (defines, bodies) != (1, 1) or re.search(rf"\b{raw}\b", c_text):
+        raise AssertionError(f"{raw}: CasADi's evaluation function not found once, or still referenced")
+    return c_text
+
+
 def entry_point(name: str) -> str:
     return (rf"(CASADI_SYMBOL_EXPORT int {name}\(const casadi_real\*\* arg, casadi_real\*\* res, casadi_int\* iw, "
             rf"casadi_real\* w, int mem\)\{{\n)  return (casadi_f\d+)\(arg, res, iw, w, mem\);\n")

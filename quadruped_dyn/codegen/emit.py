@@ -20,7 +20,7 @@ from pathlib import Path
 
 import casadi as ca
 
-from quadruped_dyn.codegen.casadi_source import PREFIX, TEMPLATES, casadi_c, entry_point, work_sizes
+from quadruped_dyn.codegen.casadi_source import PREFIX, TEMPLATES, casadi_c, drop_evaluation, entry_point, work_sizes
 from quadruped_dyn.codegen.emit_derivatives import (
     DERIVATIVE_NAMES,
     GRF_DERIVATIVE_NAMES,
@@ -350,9 +350,9 @@ def _checked_reduced_c(c_text: str, casadi_header: str, functions: list[ca.Funct
         m_r, cg_r, direction = (raw[g.name()] for g in functions
                                 if g.name().startswith((PREFIX + "M_r_", PREFIX + "CG_r_", PREFIX + "did_r_dir_")))
         if f.name().startswith(PREFIX + "fd_r_"):
-            body = rf"\1  (void)\2;\n  return qd_fd_r_solve({f.nnz_out(0)}, {m_r}, {cg_r}, arg, res, iw, w, mem);\n"
+            body = rf"\1  return qd_fd_r_solve({f.nnz_out(0)}, {m_r}, {cg_r}, arg, res, iw, w, mem);\n"
         elif f.name().startswith(PREFIX + "dfd_r_"):  # the roll q_r[12] does not enter id_r: 12 q directions
-            body = (rf"\1  (void)\2;\n  return qd_dfd_r_solve({f.size1_out(0)}, 12, {m_r}, {cg_r}, {direction}, "
+            body = (rf"\1  return qd_dfd_r_solve({f.size1_out(0)}, 12, {m_r}, {cg_r}, {direction}, "
                     rf"arg, res, iw, w, mem);\n")
         else:
             nnz = ", ".join(str(f.nnz_out(i)) for i in range(f.n_out()))
@@ -361,6 +361,8 @@ def _checked_reduced_c(c_text: str, casadi_header: str, functions: list[ca.Funct
         c_text, count = re.subn(entry_point(f.name()), body, c_text)
         if count != 1:
             raise AssertionError(f"entry point of {f.name()} not found in CasADi's output")
+        if f.name().startswith((PREFIX + "fd_r_", PREFIX + "dfd_r_")):  # signatures: the templates solve
+            c_text = drop_evaluation(c_text, raw[f.name()])
     return c_text
 
 

@@ -34,7 +34,7 @@ import re
 
 import casadi as ca
 
-from quadruped_dyn.codegen.casadi_source import PREFIX, TEMPLATES, casadi_c, entry_point, work_sizes
+from quadruped_dyn.codegen.casadi_source import PREFIX, TEMPLATES, casadi_c, drop_evaluation, entry_point, work_sizes
 from quadruped_dyn.dynamics.derivatives import configuration_tangent, full_derivatives, quaternion_tangent
 from quadruped_dyn.dynamics.grf import solve_lambda
 from quadruped_dyn.dynamics.kinematics import foot_position
@@ -126,15 +126,17 @@ def derivative_source(file_stem: str, functions: list[ca.Function], precision: s
             raise AssertionError(f"entry point of {f.name()} not found, or it needs work memory")
         raw[f.name()] = found.group(2)
     for f in functions:
+        signature = f.name() == PREFIX + "dfd_full" or (f.name().startswith(PREFIX + "dgrf_")
+                                                         and not f.name().startswith(PREFIX + "dgrf_dir_"))
         if f.name() == PREFIX + "dfd_full":
             did, parts = raw[PREFIX + "did_full"], raw[PREFIX + "dfd_full_parts"]
-            body = (rf"\1  (void)\2;\n  return qd_dfd_full_solve({parts}, {did}, {PREFIX}did_full_sparsity_out(0), "
+            body = (rf"\1  return qd_dfd_full_solve({parts}, {did}, {PREFIX}did_full_sparsity_out(0), "
                     rf"{PREFIX}did_full_sparsity_out(1), arg, res, iw, w, mem);\n")
-        elif f.name().startswith(PREFIX + "dgrf_") and not f.name().startswith(PREFIX + "dgrf_dir_"):
+        elif signature:  # dgrf_<feet>
             suffix = f.name()[len(PREFIX + "dgrf_"):]
             did, parts, direction = (raw[PREFIX + n] for n in ("did_full", "dfd_full_parts", f"dgrf_dir_{suffix}"))
             legs = sum(1 << i for i in stance_set(suffix.replace("_", "+")).feet)  # the joints lambda reads
-            body = (rf"\1  (void)\2;\n  return qd_dgrf_solve({f.size1_out(0)}, {legs}, {parts}, {did}, {direction}, "
+            body = (rf"\1  return qd_dgrf_solve({f.size1_out(0)}, {legs}, {parts}, {did}, {direction}, "
                     rf"{PREFIX}did_full_sparsity_out(0), {PREFIX}did_full_sparsity_out(1), arg, res, iw, w, mem);\n")
         else:
             nnz = ", ".join(str(f.nnz_out(i)) for i in range(f.n_out()))
@@ -142,6 +144,8 @@ def derivative_source(file_stem: str, functions: list[ca.Function], precision: s
         c_text, count = re.subn(entry_point(f.name()), body, c_text)
         if count != 1:
             raise AssertionError(f"entry point of {f.name()} not found in CasADi's output")
+        if signature:  # its CasADi body is a placeholder: the template solves
+            c_text = drop_evaluation(c_text, raw[f.name()])
     # dfd_full calls qd_did_full_sparsity_out, defined further down: declare it first
     declaration = f"CASADI_SYMBOL_EXPORT const casadi_int* {PREFIX}did_full_sparsity_out(casadi_int i);\n"
     first = c_text.index("\n/* quadruped_dyn: derivatives")
