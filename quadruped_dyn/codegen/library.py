@@ -189,7 +189,7 @@ class CompiledFunction:
         self._fn = getattr(self._lib, self.name)
         graph = ca.external(self.name, str(library.path))  # only to read names and sparsity
         real, c_real = {"double": (np.float64, ctypes.c_double), "float": (np.float32, ctypes.c_float)}[library.precision]
-        dbl = ctypes.POINTER(c_real)
+        ptr = ctypes.POINTER(c_real)
         self._in = [np.zeros(graph.nnz_in(i), dtype=real) for i in range(graph.n_in())]
         self._out = [np.zeros(graph.nnz_out(i), dtype=real) for i in range(graph.n_out())]
         self._shapes = [(graph.size1_out(i), graph.size2_out(i)) for i in range(graph.n_out())]
@@ -199,8 +199,8 @@ class CompiledFunction:
             for i in range(graph.n_out())
         ]
         self.names_in = graph.name_in()
-        self._arg = (dbl * max(1, len(self._in)))(*[a.ctypes.data_as(dbl) for a in self._in])
-        self._res = (dbl * max(1, len(self._out)))(*[r.ctypes.data_as(dbl) for r in self._out])
+        self._arg = (ptr * max(1, len(self._in)))(*[a.ctypes.data_as(ptr) for a in self._in])
+        self._res = (ptr * max(1, len(self._out)))(*[r.ctypes.data_as(ptr) for r in self._out])
         iw, w = work_sizes_of(self._lib, self.name)
         self._iw = (ctypes.c_longlong * max(1, iw))()
         self._w = (c_real * max(1, w))()
