@@ -18,7 +18,8 @@ _MODULES: dict[str, tuple[str, ...]] = {
     "plan_ik": ("POLISH_STEPS", "ReferenceSample", "leg_ik", "reference"),
     "rigid_contact": ("simulate_rigid",),
     "simulate": (
-        "FALLEN_CLOSURE_M", "FALLEN_TRUNK_M", "RTOL", "IDENTITY_QUAT", "ReducedDynamics", "CasadiReducedDynamics", "BACKENDS",
+        "FALLEN_CLOSURE_M", "FALLEN_TRUNK_M", "RTOL", "TRUNCATION_RTOL_FACTOR", "IDENTITY_QUAT", "ReducedDynamics",
+        "CasadiReducedDynamics", "BACKENDS",
         "reduced_dynamics", "IkTorques", "TorqueLaw", "Run", "simulate_reduced", "integrate_phases", "project_on_stance",
     ),
     "trunk_pose": ("pose_from_feet",),

@@ -9,12 +9,13 @@ Runs of the reduced model (all from the IK state at t = 0, on the stance closure
 * ``paper``: tau_ext = all of id_r (for two feet the roll moment too, as if actuated): the
   paper's check, the inverse/forward pair against itself;
 * ``physical`` (gaits with a roll coordinate): the roll unactuated, as on a robot;
-* a twin of ``paper`` with every initial coordinate one ulp up, and a run with a tighter
-  tolerance (DOP853) or half the step (RK4): the instability and the error budget.
-  ``growth_rate_per_s`` is the slope of ln |twin - paper| (largest joint angle, running
-  maximum) over the second half of the run; ``roundoff_pct`` = % difference twin vs paper (what
-  one ulp of noise grows to), ``truncation_pct`` = % difference refined vs paper (the
-  integrator's own error; when it is not above ``roundoff_pct`` it is hidden by round-off).
+* a twin of ``paper`` with every initial coordinate one ulp up, and a ``coarse`` run at
+  ``TRUNCATION_RTOL_FACTOR`` x the tolerance (DOP853) or a ``refined`` run at half the step (RK4):
+  the instability and the error budget. ``growth_rate_per_s`` is the slope of ln |twin - paper|
+  (largest joint angle, running maximum) over the second half of the run; ``roundoff_pct`` =
+  % difference twin vs paper (what one ulp of noise grows to), ``truncation_pct`` = the
+  integrator's own error: % difference coarse vs paper / (factor - 1) (DOP853's error is
+  proportional to its tolerance, ``simulate.TRUNCATION_RTOL_FACTOR``), refined vs paper (RK4).
 
 Physics check (``rigid_contact``): the same torque laws drive the full-coordinate rigid-contact
 dynamics and the reduced model with the roll unactuated: IK torques, IK torques + 1 %, and
@@ -39,7 +40,16 @@ from quadruped_dyn.errors import InputError
 from quadruped_dyn.experiment.gait import Gait, Plan, gait_plan, support_margin
 from quadruped_dyn.experiment.native_run import NativeRuns
 from quadruped_dyn.experiment.rigid_contact import simulate_rigid
-from quadruped_dyn.experiment.simulate import IDENTITY_QUAT, RTOL, IkTorques, ReducedDynamics, Run, TorqueLaw, simulate_reduced
+from quadruped_dyn.experiment.simulate import (
+    IDENTITY_QUAT,
+    RTOL,
+    TRUNCATION_RTOL_FACTOR,
+    IkTorques,
+    ReducedDynamics,
+    Run,
+    TorqueLaw,
+    simulate_reduced,
+)
 from quadruped_dyn.experiment.torque_table import IkTorqueTable
 from quadruped_dyn.model.leg import JOINT_ROLES
 from quadruped_dyn.model.robot import Robot
@@ -217,7 +227,7 @@ def run_experiment(robot: Robot, gait: Gait, dynamics: ReducedDynamics, horizon:
     if integrator == "rk4":
         exp.runs["refined"] = simulate_reduced(plan, dynamics, paper, horizon, dt / 2, "rk4", ik=ik, progress=tick)
     else:
-        exp.runs["refined"] = reduced(paper, rtol=max(RTOL / 10, 100 * np.finfo(float).eps))
+        exp.runs["coarse"] = reduced(paper, rtol=TRUNCATION_RTOL_FACTOR * RTOL)
     unactuated = TorqueLaw("ik")
     if gait.n_coords == 13:
         exp.runs["physical"] = reduced(unactuated)
@@ -250,7 +260,7 @@ def report(exp: Experiment, integrator: str, dt: float, backend: str, stability:
     names = joint_names(plan.robot)
     horizon = float(ref["t"][-1])
     scale = float(np.abs(ref["q"][:, :12]).max())
-    paper, twin, refined = exp.runs["paper"], exp.runs["twin"], exp.runs["refined"]
+    paper, twin = exp.runs["paper"], exp.runs["twin"]
     errors = {s: percent_errors(getattr(paper, s)[:, :12], ref[s][:, :12]) for s in SIGNALS}
     d_twin, _ = departure(paper.t, paper.q, twin.q, scale)
     budget = {}
@@ -260,7 +270,7 @@ def report(exp: Experiment, integrator: str, dt: float, backend: str, stability:
         budget[s] = {"total_pct": _worst(errors[s]),
                      "roundoff_pct": _worst(percent_errors(getattr(twin, s)[:m, :12] - getattr(paper, s)[:m, :12] + r[:m],
                                                            r[:m])),
-                     "truncation_pct": _worst(_refined_difference(refined, paper, s, r))}
+                     "truncation_pct": _worst(truncation(exp, s, r))}
     dop853 = {"native": "DOP853 (scipy's coefficients and step control, in C)", "python": "DOP853 (scipy)"}
     name = " / ".join(dop853[e] for e in sorted(exp.engines)) or dop853["python"]
     method = (f"{name}, rtol = atol = {RTOL:g}, sampled every {dt:g} s" if integrator == "dop853"
@@ -291,11 +301,21 @@ def compared_samples(exp: Experiment) -> int:
     return min(len(exp.runs["paper"].t), len(exp.reference["t"]))
 
 
-def _refined_difference(refined: Run, run: Run, signal: str, ref: np.ndarray) -> list[float | None]:
-    """% difference between the refined run and the run, on the run's samples (an RK4 run at
+def truncation(exp: Experiment, signal: str, ref: np.ndarray) -> list[float | None]:
+    """The 'paper' run's truncation error per joint, % (module docstring): from the ``coarse``
+    run (DOP853) or the ``refined`` one (RK4)."""
+    paper = exp.runs["paper"]
+    if "coarse" in exp.runs:
+        return [None if x is None else x / (TRUNCATION_RTOL_FACTOR - 1)
+                for x in _difference(exp.runs["coarse"], paper, signal, ref)]
+    return _difference(exp.runs["refined"], paper, signal, ref)
+
+
+def _difference(other: Run, run: Run, signal: str, ref: np.ndarray) -> list[float | None]:
+    """% difference between another run and the run, on the run's samples (an RK4 run at
     dt / 2 has twice the samples: every second one)."""
-    step = max(1, round((len(refined.t) - 1) / max(len(run.t) - 1, 1)))
-    a = getattr(refined, signal)[::step, :12]
+    step = max(1, round((len(other.t) - 1) / max(len(run.t) - 1, 1)))
+    a = getattr(other, signal)[::step, :12]
     m = min(len(a), len(run.t), len(ref))  # runs that stopped early have fewer samples
     return percent_errors(a[:m] - getattr(run, signal)[:m, :12] + ref[:m], ref[:m])
 

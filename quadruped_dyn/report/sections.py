@@ -268,7 +268,8 @@ def _rest(data: dict[str, Any], shown: Sequence[str]) -> str:
 
 #: What each run of the experiment is (experiment.paper_experiment's runs).
 RUN_NOTES = {"paper": "id_r's torques, roll moment applied (the paper's check)", "physical": "roll unactuated",
-             "twin": "paper, initial state one ulp up", "refined": "paper, tighter tolerance or half the step",
+             "twin": "paper, initial state one ulp up", "coarse": "paper, 10 × looser tolerance (truncation estimate)",
+             "refined": "paper, half the step (RK4's truncation estimate)",
              "plus_1pct": "1.01 × id_r's torques, roll unactuated (physics check)",
              "pd": "1.01 × id_r's torques + joint PD, roll unactuated (physics check)"}
 
@@ -300,8 +301,8 @@ def instability_html(inst: dict[str, Any]) -> str:
            "end (docs/formulation.md §10).</p>")
     if rows:
         out += table(["signal", "total %", "round-off %", "truncation %"], rows,
-                     "error budget, worst joint: round-off = the one-ulp twin's % difference, truncation = the refined "
-                     "run's (when it is not above round-off it is hidden by it)")
+                     "error budget, worst joint: round-off = the one-ulp twin's % difference, truncation = the "
+                     "coarse run's difference / 9 (DOP853) or the half-step run's (RK4)")
     return out + _rest(inst, ("growth_rate_per_s", "one_ulp_grows_to_rad", "error_budget"))
 
 
