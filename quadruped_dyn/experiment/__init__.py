@@ -9,6 +9,7 @@ _MODULES: dict[str, tuple[str, ...]] = {
         "Plan", "gait_plan",
     ),
     "ik": ("analytic_ik", "IK_POSITION_TOL", "numeric_ik"),
+    "linearised_growth": ("PROJECTION_FD_STEP", "STEP", "linearised_departure", "linearised_growth_rate"),
     "outputs": ("output_paths", "write_csv", "plot_br_hfe", "plot_physics_check", "summary_text"),
     "paper_experiment": (
         "ZERO_SIGNAL", "PD_KP_PER_KG", "PD_KD_PER_KG", "STABILITY_DT", "DEPARTURE_PCT", "SIGNALS", "Experiment", "joint_names",
