@@ -11,50 +11,18 @@ measurements by the tests.
 
 from __future__ import annotations
 
-import ctypes
 from dataclasses import dataclass, field
 
 import numpy as np
 import pinocchio as pin
 
-from quadruped_dyn.codegen.emit import CODEGEN_FUNCTIONS, PREFIX, REDUCED_NAMES, REDUCED_STANCE_SETS, reduced_symbol
-from quadruped_dyn.codegen.library import compiled_library
+from quadruped_dyn.codegen.emit import CODEGEN_FUNCTIONS, REDUCED_NAMES, REDUCED_STANCE_SETS, reduced_parts, reduced_symbol
+from quadruped_dyn.codegen.library import CompiledFunction, compiled_library
+from quadruped_dyn.errors import InputError, NumericalError
 from quadruped_dyn.model.robot import Robot
 from quadruped_dyn.model.state import NV_FULL, full_q
 
 EPS_FLOAT = float(np.finfo(np.float32).eps)
-
-
-class _Caller:
-    """One generated function of a library, called through ctypes in its precision."""
-
-    def __init__(self, lib: ctypes.CDLL, name: str, real: type) -> None:
-        self.real = real
-        self.ctype = ctypes.c_float if real is np.float32 else ctypes.c_double
-        self.fn = getattr(lib, PREFIX + name)
-        sp = ctypes.POINTER(ctypes.c_longlong)
-
-        def nnz(kind: str, i: int) -> int:
-            f = getattr(lib, f"{PREFIX}{name}_sparsity_{kind}")
-            f.restype = sp
-            s = f(i)
-            # compressed column: nrow, ncol, colind[ncol + 1], row[nnz]; CasADi's compact form of a
-            # dense pattern is nrow, ncol, 1 (a real colind starts at 0)
-            return int(s[0] * s[1]) if s[2] == 1 else int(s[2 + int(s[1])])
-
-        n_in, n_out = getattr(lib, f"{PREFIX}{name}_n_in")(), getattr(lib, f"{PREFIX}{name}_n_out")()
-        self.nnz_in = [nnz("in", i) for i in range(n_in)]
-        self.nnz_out = [nnz("out", i) for i in range(n_out)]
-        self.work: np.ndarray = np.zeros(4096, dtype=real)
-
-    def __call__(self, args: list[np.ndarray]) -> tuple[int, np.ndarray]:
-        ptr = ctypes.POINTER(self.ctype)
-        ins: list[np.ndarray] = [np.ascontiguousarray(a[:n], dtype=self.real) for a, n in zip(args, self.nnz_in)]
-        outs: list[np.ndarray] = [np.zeros(n, dtype=self.real) for n in self.nnz_out]
-        arg = (ptr * len(ins))(*[a.ctypes.data_as(ptr) for a in ins])
-        res = (ptr * len(outs))(*[o.ctypes.data_as(ptr) for o in outs])
-        flag = self.fn(arg, res, None, self.work.ctypes.data_as(ptr), 0)
-        return flag, np.concatenate(outs).astype(float)
 
 
 def function_names() -> list[str]:
@@ -73,17 +41,15 @@ def near_standing_inputs(robot: Robot, rng: np.random.Generator) -> dict[str, np
             "qd_r": np.append(v[6:], v[3]), "qdd_r": np.append(a[6:], a[3]), "quat": q[3:7], "tau_ext": 10.0 * a[5:]}
 
 
-#: The signal names of each function's inputs, in order (the header's signatures).
-_SIGNATURES = {"M_full": ("q",), "C_full": ("q", "v"), "G_full": ("q",), "nle_full": ("q", "v"),
-               "id_full": ("q", "v", "a", "f"), "grf": ("q", "v", "a"), "M_r": ("q_r", "quat"),
-               "CG_r": ("q_r", "qd_r", "quat"), "G_r": ("q_r", "quat"), "id_r": ("q_r", "qd_r", "qdd_r", "quat"),
-               "fd_r": ("q_r", "qd_r", "tau_ext", "quat")}
-
-
-def _kind(name: str) -> str:
-    if name.startswith("grf_"):
-        return "grf"
-    return next((k for k in REDUCED_NAMES if name.startswith(k + "_")), name)
+def _outputs(f: CompiledFunction, x: dict[str, np.ndarray]) -> np.ndarray | None:
+    """f's outputs at the inputs x (by input name, the first entries of each: q_r has 13, a
+    three-feet function takes 12), all in one float64 vector (column-major); None where the C
+    function returned a non-zero code."""
+    try:
+        outs = f(*[x[name][:size] for name, size in zip(f.names_in, f.sizes_in)])
+    except (InputError, NumericalError):
+        return None
+    return np.concatenate([o.ravel(order="F") for o in outs])
 
 
 @dataclass
@@ -98,28 +64,27 @@ class FloatAccuracy:
 
 
 def measure(robot: Robot, n_states: int = 300, seed: int = 0) -> FloatAccuracy:
-    double = ctypes.CDLL(str(compiled_library(robot, "double").path))
-    single = ctypes.CDLL(str(compiled_library(robot, "float").path))
+    double, single = compiled_library(robot, "double"), compiled_library(robot, "float")
     names = function_names()
-    callers = {n: (_Caller(double, n, np.float64), _Caller(single, n, np.float32)) for n in names}
+    functions = {n: (CompiledFunction(double, n), CompiledFunction(single, n)) for n in names}
     rng = np.random.default_rng(seed)
     out = FloatAccuracy(n_states)
     for _ in range(n_states):
         x = near_standing_inputs(robot, rng)
-        m_r: dict[str, np.ndarray] = {}
+        m_r: dict[str, np.ndarray] = {}  # stance name -> M_r (double build)
         for name in names:
-            d_call, f_call = callers[name]
-            args = [x[s] for s in _SIGNATURES[_kind(name)]]
-            (fd, d), (ff, f) = d_call(args), f_call(args)
-            if _kind(name) == "M_r":
-                m_r[name[len("M_r_"):]] = d
-            if fd != 0 or ff != 0:
+            parts = reduced_parts(name)
+            kind, stance = (parts[0], parts[1].name) if parts else (name, "")
+            d, f = (_outputs(g, x) for g in functions[name])
+            if kind == "M_r" and d is not None:
+                m_r[stance] = d
+            if d is None or f is None:
                 out.flagged[name] = out.flagged.get(name, 0) + 1
                 continue
             err = float(np.abs(f - d).max() / (np.abs(d).max() or 1.0))
             out.max_error[name] = max(out.max_error.get(name, 0.0), err)
-            if _kind(name) == "fd_r":
-                M = m_r[name[len("fd_r_"):]]
+            if kind == "fd_r" and stance in m_r:
+                M = m_r[stance]
                 n = int(round(np.sqrt(M.size)))
                 cond = float(np.linalg.cond(M.reshape(n, n, order="F"), 1))
                 out.per_cond[name] = max(out.per_cond.get(name, 0.0), err / (EPS_FLOAT * cond))

@@ -199,6 +199,7 @@ class CompiledFunction:
             for i in range(graph.n_out())
         ]
         self.names_in = graph.name_in()
+        self.sizes_in = [x.size for x in self._in]
         self._arg = (ptr * max(1, len(self._in)))(*[a.ctypes.data_as(ptr) for a in self._in])
         self._res = (ptr * max(1, len(self._out)))(*[r.ctypes.data_as(ptr) for r in self._out])
         iw, w = work_sizes_of(self._lib, self.name)
