@@ -200,9 +200,9 @@ class CompiledFunction:
         ]
         self.names_in = graph.name_in()
         self.sizes_in = [x.size for x in self._in]
-        self._arg = (ptr * max(1, len(self._in)))(*[a.ctypes.data_as(ptr) for a in self._in])
-        self._res = (ptr * max(1, len(self._out)))(*[r.ctypes.data_as(ptr) for r in self._out])
-        iw, w = work_sizes_of(self._lib, self.name)
+        n_arg, n_res, iw, w = work_sizes_of(self._lib, self.name)
+        self._arg = (ptr * max(1, n_arg, len(self._in)))(*[a.ctypes.data_as(ptr) for a in self._in])
+        self._res = (ptr * max(1, n_res, len(self._out)))(*[r.ctypes.data_as(ptr) for r in self._out])
         self._iw = (ctypes.c_longlong * max(1, iw))()
         self._w = (c_real * max(1, w))()
 
@@ -238,8 +238,12 @@ class CompiledFunction:
         return outs
 
 
-def work_sizes_of(lib: ctypes.CDLL, name: str) -> tuple[int, int]:
-    """(iw, w) work sizes a compiled function asks for, from its ``_work`` entry point."""
+def work_sizes_of(lib: ctypes.CDLL, name: str) -> tuple[int, int, int, int]:
+    """(arg, res, iw, w): what a call of compiled function ``name`` needs from its caller, from its
+    ``_work`` entry point. The arg and res arrays hold at least that many pointers -- CasADi uses
+    the entries past the function's own inputs and outputs for the calls it makes --, iw and w at
+    least that many entries."""
     sizes = [ctypes.c_longlong() for _ in range(4)]
     getattr(lib, f"{name}_work")(*[ctypes.byref(x) for x in sizes])
-    return sizes[2].value, sizes[3].value
+    n_arg, n_res, n_iw, n_w = (x.value for x in sizes)
+    return n_arg, n_res, n_iw, n_w

@@ -37,7 +37,7 @@ from scipy.integrate._ivp import dop853_coefficients as dop
 
 from quadruped_dyn.codegen.cache import cached_build
 from quadruped_dyn.codegen.casadi_source import casadi_c
-from quadruped_dyn.codegen.emit import PREFIX, reduced_symbol
+from quadruped_dyn.codegen.emit import PREFIX, REDUCED_STANCE_SETS, reduced_symbol
 from quadruped_dyn.codegen.library import C_FLAGS, compile_sources, compiled_library, compiler_version, work_sizes_of
 from quadruped_dyn.dynamics.kinematics import robot_feet
 from quadruped_dyn.errors import BuildError, NumericalError
@@ -82,8 +82,15 @@ class _Law(ctypes.Structure):
                 ("roll_applied", ctypes.c_int)]
 
 
+class _Frame(ctypes.Structure):
+    """c/qdx_native_run.c's qdx_frame: the arg, res, iw and w arrays of a call of a generated function."""
+
+    _fields_ = [("arg", ctypes.POINTER(_dbl)), ("res", ctypes.POINTER(_dbl)), ("iw", _int), ("w", _dbl)]
+
+
 class _Reduced(ctypes.Structure):
-    _fields_ = [("table", _Table), ("law", _Law), ("fd_r", ctypes.c_void_p), ("n", ctypes.c_int), ("k", ctypes.c_int),
+    _fields_ = [("table", _Table), ("law", _Law), ("fd_r", ctypes.c_void_p), ("frame", _Frame),
+                ("n", ctypes.c_int), ("k", ctypes.c_int),
                 ("project", ctypes.c_int), ("legs", ctypes.c_int * 4), ("holds", ctypes.c_double * 12),
                 ("fallen_closure", ctypes.c_double), ("fallen_trunk", ctypes.c_double), ("pitch", ctypes.c_double),
                 ("evaluations", ctypes.c_longlong), ("out_t", _dbl), ("out_y", _dbl), ("out_qdd", _dbl),
@@ -93,7 +100,7 @@ class _Reduced(ctypes.Structure):
 class _Rigid(ctypes.Structure):
     _fields_ = [("table", _Table), ("law", _Law), ("M_full", ctypes.c_void_p), ("nle_full", ctypes.c_void_p),
                 ("M_rows", _int), ("M_cols", _int), ("M_nnz", ctypes.c_int), ("M_mirror", ctypes.c_int),
-                ("iw", _int), ("w", _dbl), ("k", ctypes.c_int), ("legs", ctypes.c_int * 4), ("trunk", _dbl),
+                ("frame", _Frame), ("k", ctypes.c_int), ("legs", ctypes.c_int * 4), ("trunk", _dbl),
                 ("fallen_trunk", ctypes.c_double), ("evaluations", ctypes.c_longlong), ("out_t", _dbl),
                 ("out_y", _dbl), ("out_a", _dbl), ("out_off", _dbl), ("recorded", ctypes.c_int)]
 
@@ -159,9 +166,10 @@ class NativeRuns:
     def __init__(self, robot: Robot) -> None:
         self.robot = robot
         self._lib = ctypes.CDLL(str(native_library(robot)))
-        for name in ("qdx_feet", "qdx_feet_rates"):
-            if any(work_sizes_of(self._lib, name)):
-                raise BuildError(f"{name} asks for work memory; c/qdx_native_run.c passes none")
+        for name, n_arg, n_res in (("qdx_feet", 1, 2), ("qdx_feet_rates", 2, 3)):
+            if any(x > limit for x, limit in zip(work_sizes_of(self._lib, name), (n_arg, n_res, 0, 0))):
+                raise BuildError(f"{name} asks for more than its own {n_arg} inputs and {n_res} outputs; "
+                                 "c/qdx_native_run.c's feet_of passes no more")
         self._lib.qdx_reduced_phase.argtypes = [ctypes.POINTER(_Dop853), ctypes.POINTER(_Reduced), ctypes.c_double,
                                                 ctypes.c_double, ctypes.c_double, _dbl, _dbl, ctypes.c_int]
         self._lib.qdx_rigid_phase.argtypes = [ctypes.POINTER(_Dop853), ctypes.POINTER(_Rigid), ctypes.c_double,
@@ -177,9 +185,11 @@ class NativeRuns:
         rows, cols = (np.ascontiguousarray(x, dtype=np.int64) for x in graph.sparsity_out(0).get_triplet())
         pairs = set(zip(rows.tolist(), cols.tolist()))
         self._M = (rows, cols, int(any((c, r) not in pairs for r, c in pairs)))
-        iw = max(work_sizes_of(self._main, PREFIX + name)[0] for name in ("M_full", "nle_full"))
-        w = max(work_sizes_of(self._main, PREFIX + name)[1] for name in ("M_full", "nle_full"))
-        self._iw, self._w = np.zeros(max(iw, 1), dtype=np.int64), np.zeros(max(w, 1))
+        called = [PREFIX + reduced_symbol("fd_r", s) for s in REDUCED_STANCE_SETS] + [PREFIX + "M_full", PREFIX + "nle_full"]
+        sizes = [work_sizes_of(self._main, name) for name in called] + [work_sizes_of(self._lib, "qdx_feet_rates")]
+        n_arg, n_res, n_iw, n_w = (max(1, *column) for column in zip(*sizes))
+        self._work = (np.zeros(n_iw, dtype=np.int64), np.zeros(n_w))  # kept alive with the frame
+        self._frame = _Frame((_dbl * n_arg)(), (_dbl * n_res)(), _ptr(self._work[0]), _ptr(self._work[1]))
 
     def pose(self, r_b: np.ndarray, P_w: np.ndarray, roll: float | None = None,
              pitch_hint: float = 0.0) -> tuple[np.ndarray, np.ndarray, float]:
@@ -232,7 +242,7 @@ class NativeRuns:
         for _ in range(initial_ulps):
             y = np.nextafter(y, np.inf)
         y = np.ascontiguousarray(y)
-        cfg = _Reduced(law=_Law(law.scale, law.kp, law.kd, int(law.roll_applied)), n=n, project=int(project),
+        cfg = _Reduced(law=_Law(law.scale, law.kp, law.kd, int(law.roll_applied)), frame=self._frame, n=n, project=int(project),
                        fallen_closure=FALLEN_CLOSURE_M, fallen_trunk=FALLEN_TRUNK_M, pitch=0.0, evaluations=0)
         current = [gait.stance(0.0)]
 
@@ -275,7 +285,7 @@ class NativeRuns:
         rows, cols, mirror = self._M
         cfg = _Rigid(law=_Law(law.scale, law.kp, law.kd, 0), M_full=self._address("M_full"),
                      nle_full=self._address("nle_full"), M_rows=_ptr(rows), M_cols=_ptr(cols), M_nnz=rows.size,
-                     M_mirror=mirror, iw=_ptr(self._iw), w=_ptr(self._w), fallen_trunk=FALLEN_TRUNK_M, evaluations=0)
+                     M_mirror=mirror, frame=self._frame, fallen_trunk=FALLEN_TRUNK_M, evaluations=0)
         state = [y]
 
         def phase(t0: float, t1: float, stance: Stance, inside: np.ndarray, tb: _Table) -> tuple[Buffers, int]:

@@ -25,6 +25,16 @@
 typedef long long qdx_int;
 typedef int (*qdx_fn)(const double **arg, double **res, qdx_int *iw, double *w, int mem);
 
+/* What a call of a generated function needs from its caller, sized in Python from every called
+ * function's _work entry: arg and res hold at least sz_arg / sz_res pointers (CasADi uses the
+ * entries past a function's own inputs and outputs for the calls it makes), iw and w sz_iw / sz_w. */
+typedef struct {
+    const double **arg;
+    double **res;
+    qdx_int *iw;
+    double *w;
+} qdx_frame;
+
 int qdx_feet(const double **arg, double **res, qdx_int *iw, double *w, int mem);
 int qdx_feet_rates(const double **arg, double **res, qdx_int *iw, double *w, int mem);
 
@@ -501,6 +511,7 @@ typedef struct {
     qdx_table table;         /* width 4 n + 3: q_r, qd_r, qdd_r, id_r (n each), the plan's trunk position */
     qdx_law law;
     qdx_fn fd_r;             /* the stance's generated fd_r: (q_r, qd_r, tau_ext, quat) -> qdd_r */
+    qdx_frame frame;         /* for fd_r */
     int n, k, project;       /* coordinates (12, 13); stance feet; project onto the closure */
     int legs[4];             /* the stance legs (0..3) */
     double holds[12];        /* their footholds (k, 3), world, m */
@@ -531,8 +542,8 @@ static int reduced_qdd(qdx_reduced *c, double t, const double *y, double *qdd, d
     const double *q = y, *qd = y + n;
     double v[4 * 13 + 3], tau[13], r[12], J[36], rb[12], R[9], p[3], quat[4], roll, pitch, dx, dy, dz;
     const double *ref_q, *ref_qd, *tau_ik, *trunk;
-    const double *arg[4];
-    double *res[1];
+    const double **arg = c->frame.arg;
+    double **res = c->frame.res;
     int i, a;
     c->evaluations++;
     table_at(&c->table, t, v);
@@ -559,7 +570,7 @@ static int reduced_qdd(qdx_reduced *c, double t, const double *y, double *qdd, d
     arg[2] = tau;
     arg[3] = quat;
     res[0] = qdd;
-    if (c->fd_r(arg, res, 0, 0, 0)) return QDX_SINGULAR;
+    if (c->fd_r(arg, res, c->frame.iw, c->frame.w, 0)) return QDX_SINGULAR;
     return 0;
 }
 
@@ -669,8 +680,7 @@ typedef struct {
     qdx_fn M_full, nle_full; /* the robot's generated full-coordinate terms */
     const qdx_int *M_rows, *M_cols; /* M_full's nonzeros (row, column) */
     int M_nnz, M_mirror; /* mirror: only one triangle is stored */
-    qdx_int *iw;
-    double *w;           /* work of M_full and nle_full */
+    qdx_frame frame;     /* for M_full and nle_full */
     int k;
     int legs[4];
     const double *trunk; /* the trunk position to compare with at every sample (samples, 3) */
@@ -690,8 +700,8 @@ typedef struct {
 static int rigid_accel(qdx_rigid *c, double t, const double *y, double *acc) {
     const double *q = y, *v = y + 19;
     double vals[4 * 13 + 3], Mnz[18 * 18], h[18], K[30 * 30], rhs[30], r[12], J[36], Jdqd[12], tau[12];
-    const double *arg[2];
-    double *res[3];
+    const double **arg = c->frame.arg;
+    double **res = c->frame.res;
     const int n = (c->table.width - 3) / 4, m = 18 + 3 * c->k; /* n: the gait's reduced coordinates */
     int i, j, a;
     c->evaluations++;
@@ -700,10 +710,10 @@ static int rigid_accel(qdx_rigid *c, double t, const double *y, double *acc) {
         tau[i] = c->law.scale * vals[3 * n + i] + c->law.kp * (vals[i] - q[7 + i]) + c->law.kd * (vals[n + i] - v[6 + i]);
     arg[0] = q;
     res[0] = Mnz;
-    if (c->M_full(arg, res, c->iw, c->w, 0)) return QDX_SINGULAR;
+    if (c->M_full(arg, res, c->frame.iw, c->frame.w, 0)) return QDX_SINGULAR;
     arg[1] = v;
     res[0] = h;
-    if (c->nle_full(arg, res, c->iw, c->w, 0)) return QDX_SINGULAR;
+    if (c->nle_full(arg, res, c->frame.iw, c->frame.w, 0)) return QDX_SINGULAR;
     memset(K, 0, sizeof(double) * m * m);
     for (i = 0; i < c->M_nnz; ++i) {
         K[c->M_rows[i] * m + c->M_cols[i]] = Mnz[i];
