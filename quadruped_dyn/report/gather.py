@@ -191,8 +191,8 @@ def generate_c_directory(robot: Robot, directory: Path) -> tuple[GeneratedFiles,
     generated: dict[str, Any] = {}
 
     def reference_file(functions: list[ca.Function], work: dict[str, tuple[int, int]]) -> dict[str, str]:
-        generated.update(functions=functions, work=work)  # every generated Function, as generate() builds them
-        return {reference_header_name(robot): reference_header(robot, functions, work)}
+        generated.update(functions=functions, work=work, expected={})  # every generated Function, as generate() builds them
+        return {reference_header_name(robot): reference_header(robot, functions, work, generated["expected"])}
 
     return generate(robot, directory, extra_files=reference_file), generated
 
@@ -203,6 +203,7 @@ def generated_c(robot: Robot, out: Path, progress: Any = None) -> tuple[dict[str
     function with Pinocchio at the fixed reference state, as the generated ``check_qd`` does;
     ``progress(k, n)`` after the k-th of n functions checked. (The section's data, the files.)"""
     from quadruped_dyn.checks.c_reference import reference_state
+    from quadruped_dyn.codegen.emit import PREFIX
     from quadruped_dyn.codegen.library import compiled_library
     from quadruped_dyn.dynamics.formulas import shapes
 
@@ -219,7 +220,7 @@ def generated_c(robot: Robot, out: Path, progress: Any = None) -> tuple[dict[str
     s = reference_state(robot)
     checks = []
     for f in generated["functions"]:
-        checks.append(c_function_check(robot, library, f, s))
+        checks.append(c_function_check(robot, library, f, s, generated["expected"].get(f.name()[len(PREFIX):])))
         if progress is not None:
             progress(len(checks), len(generated["functions"]))
     return {"directory": str(directory), "files": [{"name": p.name, "bytes": p.stat().st_size} for p in paths],
@@ -229,10 +230,11 @@ def generated_c(robot: Robot, out: Path, progress: Any = None) -> tuple[dict[str
 #: A case whose scaled tolerance exceeds this could only fail on NaN: reported skipped (check_qd.c's QD_MAX_TOL).
 C_CHECK_MAX_TOL = 1e-2
 
-def c_function_check(robot: Robot, library: Any, f: Any, s: Any) -> dict[str, Any]:
+def c_function_check(robot: Robot, library: Any, f: Any, s: Any, expected: list[np.ndarray] | None = None) -> dict[str, Any]:
     """One compiled function at the reference state ``s`` against Pinocchio: the relative error
     (to the largest reference output), its tolerance scaled by the state's conditioning
-    (``c_reference.tolerance_scale``), and pass / FAIL / skipped with the reason, as check_qd."""
+    (``c_reference.tolerance_scale``), and pass / FAIL / skipped with the reason, as check_qd.
+    ``expected``: Pinocchio's outputs at ``s`` if already computed (``reference_header``'s)."""
     from quadruped_dyn.checks.c_reference import (
         pinocchio_outputs,
         reduced_inputs,
@@ -261,7 +263,8 @@ def c_function_check(robot: Robot, library: Any, f: Any, s: Any) -> dict[str, An
         skipped = "singular" in str(e) and tol > C_CHECK_MAX_TOL
         row.update(status="skipped" if skipped else "FAIL", note=str(e))
         return row
-    expected = pinocchio_outputs(robot, ref, name, s)
+    if expected is None:
+        expected = pinocchio_outputs(robot, ref, name, s)
     ours_all = np.concatenate([np.asarray(o, dtype=float).ravel() for o in ours])
     expected_all = np.concatenate([np.asarray(e, dtype=float).ravel() for e in expected])
     # relative to the largest reference output: a residual that should be ~0 has no scale of its own
