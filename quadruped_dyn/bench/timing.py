@@ -179,8 +179,9 @@ def run_bench(robot: Robot, calls: int = 20000, reps: int = 9, rounds: int = 3, 
         start = time.perf_counter()
         report.compiled_objects = compile_sources(sources, flags, lib, cc)  # the library's objects, when cached
         report.compile_s = time.perf_counter() - start
-        run_tool([cc, *flags, f"-I{h_path.parent}", f"-DQD_HEADER=\"{h_path.name}\"", f"-DQD_REFERENCE=\"{ref_path.name}\"",
-                  "bench_qd.c", lib.name, f"-Wl,-rpath,{tmp}", "-lm", "-o", exe.name], cwd=tmp)
+        run_tool([cc, *flags, f"-I{h_path.parent.resolve()}",  # the headers beside the generated C (cwd is tmp)
+                  f"-DQD_HEADER=\"{h_path.name}\"", f"-DQD_REFERENCE=\"{ref_path.name}\"", "bench_qd.c",
+                  lib.name, f"-Wl,-rpath,{tmp}", "-lm", "-o", exe.name], cwd=tmp)
         harness = pinocchio_harness()
         feet = [robot.model.frames[i].name for i in robot.foot_frame_ids]
         commands = {"generated": [str(exe), str(calls), str(reps)],

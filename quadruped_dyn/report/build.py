@@ -270,20 +270,28 @@ def _symbolic_section(job: _Job) -> Section:
 
 def _notebooks_section(job: _Job) -> Section:
     """The notebooks, each executed by whichever process gets to it first: the warm process, after
-    its builds, while the steps before ran; here, one it has not started (its task cancelled), all
-    without it, or if it died. A bar counts them."""
+    its builds, while the steps before ran; here, every one it has not started when this step
+    begins (their tasks cancelled), all without it, or if it died. A bar counts them."""
     from quadruped_dyn.report import sections as rs
 
     paths, note = notebook_list(job.robot)
     if not paths:
         return rs.notebooks_section(None, note)
     bar = job.progress.bar(len(paths), "notebooks")
-    rendered = []
-    for k, path in enumerate(paths):
-        ahead = job.notebooks_ahead[k] if job.notebooks_ahead else None
-        try:
-            rendered.append(executed_notebook(path) if ahead is None or ahead.cancel() else ahead.result())
-        except BrokenProcessPool:  # the warm process died (its work was only a head start)
-            rendered.append(executed_notebook(path))
+    ahead: list[Future[dict[str, Any]] | None] = [*job.notebooks_ahead] if job.notebooks_ahead else [None] * len(paths)
+    # every notebook the warm process has not started is this process's now (both cores execute
+    # notebooks while the warm process finishes what it is on); then the warm process's results
+    mine = {k for k, future in enumerate(ahead) if future is None or future.cancel()}
+    rendered: dict[int, dict[str, Any]] = {}
+    for k in sorted(mine):
+        rendered[k] = executed_notebook(paths[k])
         bar.advance(1)
-    return rs.notebooks_section(rendered, "")
+    for k, future in enumerate(ahead):
+        if k in mine or future is None:
+            continue
+        try:
+            rendered[k] = future.result()
+        except BrokenProcessPool:  # the warm process died (its work was only a head start)
+            rendered[k] = executed_notebook(paths[k])
+        bar.advance(1)
+    return rs.notebooks_section([rendered[k] for k in range(len(paths))], "")
