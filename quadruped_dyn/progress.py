@@ -6,7 +6,8 @@ then one every ``LINE_PERIOD_S`` seconds and one at the end, so a log shows that
 moving. ``Bar(label, total, unit)`` counts in any unit (samples checked, seconds simulated);
 ``runs`` (optional) turns a simulated-time total into "run k of N" as well, every run being
 ``total / runs`` long. ``Steps(n)`` numbers the steps of a job ("[k/N] what ... 12.3 s"), and
-``Steps.bar`` gives a step its own bar.
+``Steps.bar`` gives a step its own bar; a step's last line has its wall time and this process's
+CPU time (on a shared machine the wall time is mostly waiting: the CPU time is the work).
 """
 
 from __future__ import annotations
@@ -85,7 +86,8 @@ class Bar:
 
 class Steps:
     """Numbered steps of one job: ``done = steps.step(what)`` prints "[k/N] what ...", ``done()``
-    appends the seconds it took; ``steps.bar(total, unit)`` counts inside the current step."""
+    appends the seconds it took (wall, and this process's CPU); ``steps.bar(total, unit)`` counts
+    inside the current step."""
 
     def __init__(self, total: int, enabled: bool = True, stream: TextIO | None = None) -> None:
         self.total, self.k, self.enabled = total, 0, enabled
@@ -95,7 +97,7 @@ class Steps:
 
     def step(self, what: str) -> Callable[[], None]:
         self.k += 1
-        start = time.monotonic()
+        start, cpu = time.monotonic(), time.process_time()
         self.line = f"[{self.k}/{self.total}] {what}"
         if self.enabled:
             print(f"{self.line} ...", file=self.stream, flush=True)
@@ -105,7 +107,8 @@ class Steps:
                 self._bar.__exit__(None, None, None)
                 self._bar = None
             if self.enabled:
-                print(f"{self.line}: {time.monotonic() - start:.1f} s", file=self.stream, flush=True)
+                print(f"{self.line}: {time.monotonic() - start:.1f} s ({time.process_time() - cpu:.1f} s CPU)",
+                      file=self.stream, flush=True)
 
         return done
 

@@ -61,8 +61,8 @@ def test_an_empty_out_is_refused(args, no_work):
 
 
 def test_an_empty_cache_variable_is_refused(tmp_path):
-    from quadruped_dyn.codegen.cache import cache_dir
     from quadruped_dyn.errors import InputError
+    from quadruped_dyn.files.cache import cache_dir
 
     for value in ("", "  "):
         with pytest.MonkeyPatch.context() as m:

@@ -34,9 +34,9 @@ import numpy as np
 import pinocchio as pin
 
 from quadruped_dyn.bench.harnesses import HARNESSES, PINOCCHIO_CXX_FLAGS, pinocchio_program, require_headers
-from quadruped_dyn.codegen.cache import cache_dir, cached_build
 from quadruped_dyn.codegen.library import C_FLAGS, compiler_version, run_tool
 from quadruped_dyn.errors import InputError, NumericalError
+from quadruped_dyn.files.cache import cache_dir, cached_build
 from quadruped_dyn.math.compare import relative_error, within
 from quadruped_dyn.model.robot import Robot
 from quadruped_dyn.model.state import random_state

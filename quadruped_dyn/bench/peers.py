@@ -32,11 +32,11 @@ import numpy as np
 from quadruped_dyn.bench import cppadcg
 from quadruped_dyn.bench.harnesses import HARNESSES
 from quadruped_dyn.bench.timing import arithmetic_operations
-from quadruped_dyn.codegen.cache import cached_build
 from quadruped_dyn.codegen.casadi_source import silence_unused_parameters
 from quadruped_dyn.codegen.emit import CODEGEN_FUNCTIONS, PREFIX
 from quadruped_dyn.codegen.library import C_FLAGS, compiler_version, run_tool
 from quadruped_dyn.errors import InputError, NumericalError
+from quadruped_dyn.files.cache import cached_build
 from quadruped_dyn.math.compare import relative_error, within
 from quadruped_dyn.model.robot import Robot
 from quadruped_dyn.model.state import GRAVITY_W, random_state, rotation

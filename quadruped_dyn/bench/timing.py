@@ -36,9 +36,9 @@ import pinocchio as pin
 from quadruped_dyn.bench import cppadcg
 from quadruped_dyn.bench.harnesses import HARNESSES, PINOCCHIO_CXX_FLAGS, pinocchio_program, require_headers
 from quadruped_dyn.checks.c_reference import generate_checked, reference_header_name
-from quadruped_dyn.codegen.cache import cache_dir, cached_build
-from quadruped_dyn.codegen.emit import PREFIX, codegen_functions, work_sizes
+from quadruped_dyn.codegen.emit import PREFIX, GeneratedFiles, codegen_functions, work_sizes
 from quadruped_dyn.codegen.library import C_FLAGS, CompiledFunction, CompiledLibrary, compile_sources, compiled_library, run_tool
+from quadruped_dyn.files.cache import cache_dir, cached_build
 from quadruped_dyn.model.robot import Robot
 from quadruped_dyn.model.state import random_state
 from quadruped_dyn.references.pinocchio import PinocchioReference
@@ -82,7 +82,7 @@ class BenchReport:
     source_files: int = 0  # generated C files
     library_bytes: int = 0  # compiled shared library (-O3)
     work_bytes: int = 0  # largest caller-provided work memory (iw + w) of any function; temporaries are locals
-    generation_s: float = 0.0
+    generation_s: float | None = None  # None: the caller generated the C (``run_bench(checked_c=...)``)
     compile_s: float = 0.0  # compiling the objects not in the build cache (``compiled_objects``) and linking
     compiled_objects: int = 0  # of the generated C's files; the others had been compiled with these flags before
     pinocchio_version: str = pin.__version__
@@ -106,7 +106,9 @@ class BenchReport:
             lines.append(f"{e.name:<22}{e.generated_ns:>13.1f}{pin_txt:>36}{ratio:>8}{target:>8}{py:>11}{pp:>11}")
         lines.append(
             f"{self.robot}: C source {self.code_bytes / 1e3:.0f} kB, library {self.library_bytes / 1e3:.0f} kB, "
-            f"max work memory {self.work_bytes} B, generation {self.generation_s:.1f} s, compile {self.compile_s:.1f} s "
+            f"max work memory {self.work_bytes} B, "
+            + (f"generation {self.generation_s:.1f} s, " if self.generation_s is not None else "")
+            + f"compile {self.compile_s:.1f} s "
             f"(Pinocchio {self.pinocchio_version}; {' '.join(self.c_flags)})"
         )
         if self.peers:
@@ -151,18 +153,22 @@ def _parse(output: str) -> dict[str, float]:
 
 
 def run_bench(robot: Robot, calls: int = 20000, reps: int = 9, rounds: int = 3, cc: str = "gcc", native: bool = False,
-              peer: bool = False) -> BenchReport:
+              peer: bool = False, checked_c: GeneratedFiles | None = None) -> BenchReport:
     """Time every generated function and its Pinocchio counterpart in the same run; with ``peer``
     also Pinocchio's CppADCodeGen code (cppadcg.py, checked against Pinocchio first). ``native``:
-    the generated C and the peer built with -march=native (Pinocchio native stays the wheel's)."""
+    the generated C and the peer built with -march=native (Pinocchio native stays the wheel's).
+    ``checked_c``: ``generate_checked``'s files of ``robot`` (double), already written (the
+    report's own c/), timed as they are instead of generated again (``generation_s`` is then None)."""
     flags = (*C_FLAGS, "-Dcasadi_real=double", *(("-march=native",) if native else ()))  # as library.compiled_library
     report = BenchReport(robot.name, native=native, c_flags=list(flags),
                          pinocchio_flags=list(PINOCCHIO_CXX_FLAGS))  # the wheel's algorithms, --native or not
-    start = time.perf_counter()
-    codegen_functions(robot)  # symbolic build + generation, timed apart from compilation
     with tempfile.TemporaryDirectory() as tmp:
-        files = generate_checked(robot, Path(tmp))  # the check program's reference inputs drive the harness
-        report.generation_s = time.perf_counter() - start
+        files = checked_c
+        if files is None or reference_header_name(robot) not in files.extra:
+            start = time.perf_counter()
+            codegen_functions(robot)  # symbolic build + generation, timed apart from compilation
+            files = generate_checked(robot, Path(tmp))  # the check program's reference inputs drive the harness
+            report.generation_s = time.perf_counter() - start
         c_path, h_path, ref_path = files.source, files.header, files.extra[reference_header_name(robot)]
         sources = files.c_sources
         report.code_bytes, report.source_files = sum(p.stat().st_size for p in sources), len(sources)
@@ -173,8 +179,9 @@ def run_bench(robot: Robot, calls: int = 20000, reps: int = 9, rounds: int = 3, 
         start = time.perf_counter()
         report.compiled_objects = compile_sources(sources, flags, lib, cc)  # the library's objects, when cached
         report.compile_s = time.perf_counter() - start
-        run_tool([cc, *flags, f"-DQD_HEADER=\"{h_path.name}\"", f"-DQD_REFERENCE=\"{ref_path.name}\"",
-                  "bench_qd.c", lib.name, f"-Wl,-rpath,{tmp}", "-lm", "-o", exe.name], cwd=tmp)
+        run_tool([cc, *flags, f"-I{h_path.parent.resolve()}",  # the headers beside the generated C (cwd is tmp)
+                  f"-DQD_HEADER=\"{h_path.name}\"", f"-DQD_REFERENCE=\"{ref_path.name}\"", "bench_qd.c",
+                  lib.name, f"-Wl,-rpath,{tmp}", "-lm", "-o", exe.name], cwd=tmp)
         harness = pinocchio_harness()
         feet = [robot.model.frames[i].name for i in robot.foot_frame_ids]
         commands = {"generated": [str(exe), str(calls), str(reps)],

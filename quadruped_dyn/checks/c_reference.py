@@ -173,8 +173,11 @@ def _c_array(name: str, values: np.ndarray) -> str:
     body = ", ".join(f"{float(x):.{REFERENCE_DIGITS}g}" for x in values) if len(values) else "0"
     return f"static const double {name}[{max(len(values), 1)}] = {{{body}}};"
 
-def reference_header(robot: Robot, functions: list[ca.Function], work: dict[str, tuple[int, int]]) -> str:
-    """C header: Pinocchio's values of every generated function at ``reference_state``."""
+def reference_header(robot: Robot, functions: list[ca.Function], work: dict[str, tuple[int, int]],
+                     outputs: dict[str, list[np.ndarray]] | None = None) -> str:
+    """C header: Pinocchio's values of every generated function at ``reference_state``; ``outputs``
+    (if given) receives them at full precision, by function name without prefix (the report checks
+    its compiled library against them instead of computing them again)."""
     ref = PinocchioReference(robot)
     s = reference_state(robot)
     inputs = {"q": s.q, "v": s.v, "a": s.a, "f": s.f.ravel(), "tau_full": reference_tau_full(s), **reduced_inputs(s),
@@ -204,6 +207,8 @@ def reference_header(robot: Robot, functions: list[ca.Function], work: dict[str,
     for f in functions:
         name = f.name()[len(PREFIX):]
         expected = pinocchio_outputs(robot, ref, name, s)
+        if outputs is not None:
+            outputs[name] = expected
         tol_scale = tolerance_scale(ref, name, s)
         outs = []
         for i, dense in enumerate(expected):

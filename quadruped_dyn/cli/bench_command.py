@@ -29,7 +29,7 @@ def bench(robots: tuple[str, ...], calls: int, reps: int, as_json: bool, peers: 
     from quadruped_dyn.bench import cppadcg
     from quadruped_dyn.bench.peers import parse_peers, peers_table, run_peers
     from quadruped_dyn.bench.timing import run_bench
-    from quadruped_dyn.codegen.cache import cache_dir
+    from quadruped_dyn.files.cache import cache_dir
 
     if peers.strip() == "auto":
         peer_names: tuple[str, ...] = (cppadcg.PEER,) if cppadcg.available() else ()

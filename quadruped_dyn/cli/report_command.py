@@ -17,11 +17,13 @@ from quadruped_dyn.report.gather import CHECK_SAMPLES
 @click.option("--fast", is_flag=True, help="Skip the benchmark (its first run compiles a C++ harness for minutes).")
 @click.option("--samples", type=click.IntRange(min=1), default=CHECK_SAMPLES, show_default=True,
               help="Random states of the term check against Pinocchio (`check --samples` runs it alone).")
-def report(robot: str, out_dir: str, fast: bool, samples: int) -> None:
+@click.option("--footprint", is_flag=True,
+              help="Add the Cortex-M footprint (code size, stack): two cross builds, minutes on a cold cache.")
+def report(robot: str, out_dir: str, fast: bool, samples: int, footprint: bool) -> None:
     """One self-contained HTML page of everything the toolkit knows about ROBOT (exit 1 if a check fails)."""
     from quadruped_dyn.report.build import build_report, prepare
 
     prepare(robot, out_dir)  # bad input is reported before any work
-    result = build_report(robot, out_dir, fast, samples)
+    result = build_report(robot, out_dir, fast, samples, footprint=footprint)
     click.echo(result.summary())
     sys.exit(0 if result.passed else EXIT_CHECK_FAILED)

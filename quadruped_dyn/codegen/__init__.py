@@ -1,10 +1,9 @@
-"""Standalone C from the CasADi graphs: emission, the verified build cache, the compiled
-libraries loaded back into Python, and the C templates (``c/``)."""
+"""Standalone C from the CasADi graphs: emission, the compiled libraries loaded back into Python,
+and the C templates (``c/``); they are cached in the verified build cache (``files/cache.py``)."""
 
 from quadruped_dyn.exports import lazy_exports
 
 _MODULES: dict[str, tuple[str, ...]] = {
-    "cache": ("HASH_SUFFIX", "PARTIAL_MARK", "cache_dir", "file_sha256", "verified", "cached_build"),
     "casadi_source": ("PREFIX", "TEMPLATES", "work_sizes", "silence_unused_parameters", "casadi_c", "entry_point"),
     "emit": (
         "CODEGEN_FUNCTIONS", "REDUCED_STANCE_SETS", "REDUCED_NAMES", "reduced_symbol", "reduced_functions",

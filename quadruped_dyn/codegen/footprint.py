@@ -30,9 +30,9 @@ from collections.abc import Iterable
 from dataclasses import asdict, dataclass, field
 from pathlib import Path
 
-from quadruped_dyn.codegen.cache import cached_build
 from quadruped_dyn.codegen.targets import TARGETS, Target, make, skip_reason
 from quadruped_dyn.codegen.work_memory import WorkMemory, work_memory  # noqa: F401 -- re-exported
+from quadruped_dyn.files.cache import cached_build
 
 #: Targets of the issue's budget (docs/embedded.md), bytes.
 BUDGET_FULL_CODE = 64 * 1024  # M_full + nle_full (C + G) + id_full at -Os

@@ -23,9 +23,9 @@ from pathlib import Path
 import casadi as ca
 import numpy as np
 
-from quadruped_dyn.codegen.cache import cached_build
 from quadruped_dyn.codegen.emit import PREFIX, TEMPLATES, generate, stem
 from quadruped_dyn.errors import BuildError, InputError, NumericalError
+from quadruped_dyn.files.cache import cached_build
 from quadruped_dyn.model.robot import Robot
 
 C_FLAGS = ("-std=c99", "-pedantic", "-Wall", "-Wextra", "-Werror", "-O3", "-fPIC")

@@ -39,6 +39,7 @@ import numpy as np
 from quadruped_dyn.dynamics.guarded import guard_fields, guarded_call
 from quadruped_dyn.dynamics.kinematics import foot_position
 from quadruped_dyn.dynamics.newton_euler import inverse_dynamics
+from quadruped_dyn.dynamics.stored import stored_functions
 from quadruped_dyn.errors import InputError, NumericalError
 from quadruped_dyn.math.linalg import least_squares, min_norm
 from quadruped_dyn.math.rigid import skew
@@ -190,20 +191,28 @@ def grf_expressions(
     return GrfExpressions(lam, f, residual, tau, A)
 
 
-def _grf_solve(robot: Robot, stance: StanceSet, model: str) -> GrfSolve:
+def _grf_functions(robot: Robot, stance: StanceSet, model: str) -> tuple[ca.Function, ca.Function]:
+    """(the solve, the body-equation matrix) of ``GrfSolve``, built from the symbols."""
     q, v, a = ca.SX.sym("q", NQ_FULL), ca.SX.sym("v", NV_FULL), ca.SX.sym("a", NV_FULL)
     e = grf_expressions(robot, stance, model, q, v, a)
     name = f"grf_{stance.name.replace('+', '_')}_{model}"
     outputs = ["lambda", "f", "residual", "tau"]
     fun = ca.Function(name, [q, v, a], [e.lam, e.f, e.residual, e.tau], ["q", "v", "a"], outputs, {"cse": True})
-    system = ca.Function(f"{name}_A", [q], [ca.densify(e.A)], ["q"], ["A"])
-    return GrfSolve(stance, model, stance.rank(model), fun, system)
+    return fun, ca.Function(f"{name}_A", [q], [ca.densify(e.A)], ["q"], ["A"])
 
 
 @cache
 def grf_solves(robot: Robot) -> dict[tuple[str, str], GrfSolve]:
-    """All (stance name, model) solves of a robot, built once."""
-    return {(s.name, m): _grf_solve(robot, s, m) for s in STANCE_SETS for m in GRF_MODELS}
+    """All (stance name, model) solves of a robot, built once (and stored: ``stored.py``)."""
+    cases = [(s, m) for s in STANCE_SETS for m in GRF_MODELS]
+    names = tuple(f"{s.name} {m} {part}" for s, m in cases for part in ("solve", "system"))
+
+    def build() -> dict[str, ca.Function]:
+        return dict(zip(names, [f for s, m in cases for f in _grf_functions(robot, s, m)]))
+
+    functions = stored_functions(robot, "GRF solves", names, build)
+    return {(s.name, m): GrfSolve(s, m, s.rank(m), functions[f"{s.name} {m} solve"], functions[f"{s.name} {m} system"])
+            for s, m in cases}
 
 
 def grf_solve(robot: Robot, stance: str | StanceSet, model: str = "paper") -> GrfSolve:

@@ -39,6 +39,7 @@ from quadruped_dyn.dynamics.grf import GrfSolve, grf_expressions, grf_solve
 from quadruped_dyn.dynamics.guarded import guard_fields, guarded_call, with_condition
 from quadruped_dyn.dynamics.kinematics import foot_position
 from quadruped_dyn.dynamics.stance_regularity import regularity
+from quadruped_dyn.dynamics.stored import stored_functions
 from quadruped_dyn.errors import InputError, NumericalError
 from quadruped_dyn.math.linalg import least_squares
 from quadruped_dyn.math.rigid import skew
@@ -228,6 +229,10 @@ def reduced_maps(robot: Robot, stance_name: str) -> ca.Function:
                        ["q_r", "qd_r", "qdd_r", "quat"], ["v", "a"], {"cse": True})
 
 
+#: The Functions of a ReducedModel, in the order they are stored (``stored.py``).
+MODEL_FUNCTIONS = ("maps", "id_r", "M_r", "M_r_ad", "C_r", "G_r", "fd_r", "regularity")
+
+
 @cache
 def _reduced_model(robot: Robot, stance_name: str) -> ReducedModel:
     stance = stance_set(stance_name)
@@ -235,7 +240,15 @@ def _reduced_model(robot: Robot, stance_name: str) -> ReducedModel:
     if k not in REDUCED_KINDS:
         raise InputError(f"stance {stance.name} has {k} feet; the reduced model needs 2, 3 or 4 stance feet")
     start = time.perf_counter()
-    n = 13 if k == 2 else 12
+    functions = stored_functions(robot, f"reduced model {stance.name}", MODEL_FUNCTIONS,
+                                 lambda: _model_functions(robot, stance))
+    return ReducedModel(stance=stance, n=13 if k == 2 else 12, **functions, build_seconds=time.perf_counter() - start,
+                        grf=grf_solve(robot, stance, "paper"))
+
+
+def _model_functions(robot: Robot, stance: StanceSet) -> dict[str, ca.Function]:
+    """The Functions of the reduced model of ``stance`` (MODEL_FUNCTIONS), built from the symbols."""
+    n = 13 if len(stance.feet) == 2 else 12
     q, qd, qdd = ca.SX.sym("q_r", n), ca.SX.sym("qd_r", n), ca.SX.sym("qdd_r", n)
     quat, tau_ext = ca.SX.sym("quat", 4), ca.SX.sym("tau_ext", n)
     zero = ca.SX.zeros(n)
@@ -250,18 +263,14 @@ def _reduced_model(robot: Robot, stance_name: str) -> ReducedModel:
     name = stance.name.replace("+", "_")
     v, a = _maps(robot, stance, q, qd, qdd, quat_to_rotation(quat))
     tau_r = idr(qd, qdd, gravity=True)
-    return ReducedModel(
-        stance=stance,
-        n=n,
-        maps=ca.Function(f"maps_{name}", [q, qd, qdd, quat], [v, a], ["q_r", "qd_r", "qdd_r", "quat"], ["v", "a"], opts),
-        id_r=ca.Function(f"id_r_{name}", [q, qd, qdd, quat], [tau_r], ["q_r", "qd_r", "qdd_r", "quat"], ["tau_r"], opts),
-        M_r=ca.Function(f"M_r_{name}", [q, quat], [M], ["q_r", "quat"], ["M_r"], opts),
-        M_r_ad=ca.Function(f"M_r_ad_{name}", [q, quat], [ca.jacobian(tau_r, qdd)], ["q_r", "quat"], ["M_r"], opts),
-        C_r=ca.Function(f"C_r_{name}", [q, qd, quat], [C], ["q_r", "qd_r", "quat"], ["C_r"], opts),
-        G_r=ca.Function(f"G_r_{name}", [q, quat], [G], ["q_r", "quat"], ["G_r"], opts),
-        fd_r=ca.Function(f"fd_r_{name}", [q, qd, tau_ext, quat], [least_squares(M, tau_ext - C - G)],
-                         ["q_r", "qd_r", "tau_ext", "quat"], ["qdd_r"], opts),
-        build_seconds=time.perf_counter() - start,
-        grf=grf_solve(robot, stance, "paper"),
-        regularity=regularity_function(robot, stance),
-    )
+    return {
+        "maps": ca.Function(f"maps_{name}", [q, qd, qdd, quat], [v, a], ["q_r", "qd_r", "qdd_r", "quat"], ["v", "a"], opts),
+        "id_r": ca.Function(f"id_r_{name}", [q, qd, qdd, quat], [tau_r], ["q_r", "qd_r", "qdd_r", "quat"], ["tau_r"], opts),
+        "M_r": ca.Function(f"M_r_{name}", [q, quat], [M], ["q_r", "quat"], ["M_r"], opts),
+        "M_r_ad": ca.Function(f"M_r_ad_{name}", [q, quat], [ca.jacobian(tau_r, qdd)], ["q_r", "quat"], ["M_r"], opts),
+        "C_r": ca.Function(f"C_r_{name}", [q, qd, quat], [C], ["q_r", "qd_r", "quat"], ["C_r"], opts),
+        "G_r": ca.Function(f"G_r_{name}", [q, quat], [G], ["q_r", "quat"], ["G_r"], opts),
+        "fd_r": ca.Function(f"fd_r_{name}", [q, qd, tau_ext, quat], [least_squares(M, tau_ext - C - G)],
+                            ["q_r", "qd_r", "tau_ext", "quat"], ["qdd_r"], opts),
+        "regularity": regularity_function(robot, stance),
+    }

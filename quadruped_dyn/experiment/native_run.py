@@ -35,7 +35,6 @@ import casadi as ca
 import numpy as np
 from scipy.integrate._ivp import dop853_coefficients as dop
 
-from quadruped_dyn.codegen.cache import cached_build
 from quadruped_dyn.codegen.casadi_source import casadi_c
 from quadruped_dyn.codegen.emit import PREFIX, REDUCED_STANCE_SETS, reduced_symbol
 from quadruped_dyn.codegen.library import C_FLAGS, compile_sources, compiled_library, compiler_version, work_sizes_of
@@ -56,6 +55,7 @@ from quadruped_dyn.experiment.simulate import (
 )
 from quadruped_dyn.experiment.torque_table import IkTorqueTable
 from quadruped_dyn.experiment.trunk_pose import pose_from_feet
+from quadruped_dyn.files.cache import cached_build
 from quadruped_dyn.model.robot import Robot
 from quadruped_dyn.model.stance import StanceSet
 from quadruped_dyn.references.pinocchio import PinocchioReference

@@ -1,9 +1,11 @@
 """Output files: directories proven writable before work starts, strict JSON, names derived from
-input made safe, and writes that stay under the output directory and never follow a link."""
+input made safe, writes that stay under the output directory and never follow a link, and the
+verified cache of built artefacts (compiled libraries, harnesses, stored symbolic models)."""
 
 from quadruped_dyn.exports import lazy_exports
 
 _MODULES: dict[str, tuple[str, ...]] = {
+    "cache": ("HASH_SUFFIX", "PARTIAL_MARK", "cache_dir", "file_sha256", "verified", "cached_build"),
     "json": ("json_safe", "write_json"),
     "names": ("MAX_NAME_CHARS", "is_safe_name", "safe_name", "printable"),
     "paths": ("writable_dir",),

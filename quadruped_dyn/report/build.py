@@ -111,6 +111,7 @@ class _Job:
     target: Path
     fast: bool
     samples: int
+    footprint: bool
     progress: Progress
     check: dict[str, Any] | None = None
     notebooks_ahead: list[Future[dict[str, Any]]] | None = None  # executed by the warm process (warm.py)
@@ -127,9 +128,10 @@ def _attempt(key: str, title: str, build: Callable[[], Section]) -> Section:
 
 def build_report(robot_arg: str = "paper", out: str | Path = "results", fast: bool = False,
                  samples: int = CHECK_SAMPLES, with_notebooks: bool = True, show_progress: bool = True,
-                 compile_ahead: bool = True) -> ReportResult:
+                 compile_ahead: bool = True, footprint: bool = False) -> ReportResult:
     """Write ``<out>/<robot>/report.html`` (see the module docstring); ``fast`` skips the
-    benchmark; ``compile_ahead`` compiles the later steps' C in a second process from the start
+    benchmark; ``footprint`` adds the Cortex-M cross builds (code size and stack; minutes on a
+    cold cache); ``compile_ahead`` compiles the later steps' C in a second process from the start
     (``warm.py``). Arguments are validated (InputError) before any work."""
     import matplotlib
 
@@ -139,11 +141,12 @@ def build_report(robot_arg: str = "paper", out: str | Path = "results", fast: bo
     progress = Progress(len(steps) + 2, show_progress)  # loading, the steps, writing the page
     done = progress.step(f"loading {robot_arg}")
     robot, urdf_warnings = load_with_warnings(robot_arg)
-    job = _Job(robot, urdf_warnings, target, fast, samples, progress)
+    job = _Job(robot, urdf_warnings, target, fast, samples, footprint, progress)
     pool = None
     if compile_ahead:
         ahead = notebook_list(robot)[0] if with_notebooks else []
-        pool, _, job.notebooks_ahead = warm.start(robot.urdf, with_benchmark=not fast, notebooks=ahead)
+        pool, _, job.notebooks_ahead = warm.start(robot.urdf, with_benchmark=not fast,
+                                                            with_footprint=footprint and not fast, notebooks=ahead)
     try:
         sections = [_attempt("robot", "The robot", lambda: _robot_section(job))]
         done()
@@ -162,7 +165,7 @@ def build_report(robot_arg: str = "paper", out: str | Path = "results", fast: bo
     sections.append(rs.versions_section(versions()))
     path = target / "report.html"
     subtitle = (f"{robot.urdf} — built {datetime.now(timezone.utc):%Y-%m-%d %H:%M} UTC by quadruped-dyn report"
-                + (" --fast" if fast else ""))
+                + (" --fast" if fast else "") + (" --footprint" if footprint and not fast else ""))
     write_text(output_path(target, "report.html"), page(f"quadruped_dyn report: {robot.name}", subtitle, sections))
     done()
     return ReportResult(path, sections)
@@ -245,13 +248,14 @@ def _experiment_section(job: _Job) -> Section:
 def _c_section(job: _Job) -> Section:
     from quadruped_dyn.report import sections as rs
 
-    gen = generated_c(job.robot, job.target, job.progress.count)
+    gen, files = generated_c(job.robot, job.target, job.progress.count)
     if job.fast:
         return rs.generated_c_section(gen, None, "skipped with --fast")
     from quadruped_dyn.bench.timing import run_bench
 
-    gen["embedded"] = embedded_footprint(job.robot, Path(gen["directory"]))  # cross builds, cached (docs/embedded.md)
-    return rs.generated_c_section(gen, run_bench(job.robot).as_dict())
+    # the cross builds (cached; docs/embedded.md) only with --footprint: minutes of compiling on a cold cache
+    gen["embedded"] = embedded_footprint(job.robot, Path(gen["directory"]), measure=job.footprint)
+    return rs.generated_c_section(gen, run_bench(job.robot, checked_c=files).as_dict())  # the files just checked
 
 
 def _symbolic_section(job: _Job) -> Section:
@@ -266,20 +270,28 @@ def _symbolic_section(job: _Job) -> Section:
 
 def _notebooks_section(job: _Job) -> Section:
     """The notebooks, each executed by whichever process gets to it first: the warm process, after
-    its builds, while the steps before ran; here, one it has not started (its task cancelled), all
-    without it, or if it died. A bar counts them."""
+    its builds, while the steps before ran; here, every one it has not started when this step
+    begins (their tasks cancelled), all without it, or if it died. A bar counts them."""
     from quadruped_dyn.report import sections as rs
 
     paths, note = notebook_list(job.robot)
     if not paths:
         return rs.notebooks_section(None, note)
     bar = job.progress.bar(len(paths), "notebooks")
-    rendered = []
-    for k, path in enumerate(paths):
-        ahead = job.notebooks_ahead[k] if job.notebooks_ahead else None
-        try:
-            rendered.append(executed_notebook(path) if ahead is None or ahead.cancel() else ahead.result())
-        except BrokenProcessPool:  # the warm process died (its work was only a head start)
-            rendered.append(executed_notebook(path))
+    ahead: list[Future[dict[str, Any]] | None] = [*job.notebooks_ahead] if job.notebooks_ahead else [None] * len(paths)
+    # every notebook the warm process has not started is this process's now (both cores execute
+    # notebooks while the warm process finishes what it is on); then the warm process's results
+    mine = {k for k, future in enumerate(ahead) if future is None or future.cancel()}
+    rendered: dict[int, dict[str, Any]] = {}
+    for k in sorted(mine):
+        rendered[k] = executed_notebook(paths[k])
         bar.advance(1)
-    return rs.notebooks_section(rendered, "")
+    for k, future in enumerate(ahead):
+        if k in mine or future is None:
+            continue
+        try:
+            rendered[k] = future.result()
+        except BrokenProcessPool:  # the warm process died (its work was only a head start)
+            rendered[k] = executed_notebook(paths[k])
+        bar.advance(1)
+    return rs.notebooks_section([rendered[k] for k in range(len(paths))], "")

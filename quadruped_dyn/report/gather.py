@@ -13,7 +13,7 @@ import time
 import warnings
 from datetime import datetime, timezone
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
@@ -23,6 +23,9 @@ from quadruped_dyn.math.compare import relative_error, scale_of
 from quadruped_dyn.model.leg import JOINT_ROLES
 from quadruped_dyn.model.robot import Robot, load_robot
 from quadruped_dyn.report.html import png_image
+
+if TYPE_CHECKING:
+    from quadruped_dyn.codegen.emit import GeneratedFiles
 
 #: Random states of the report's term check (``report --samples``): ~1 s each on this 2-core machine
 #: (the Pinocchio-built reduced reference of four stance sets), so 50 keep the step near a minute;
@@ -175,10 +178,11 @@ def experiment(robot: Robot, out: Path, progress: Any = None) -> tuple[dict[str,
                        "largest joint-angle difference: reduced model vs rigid contacts</figcaption></figure>")
     return validations, plots
 
-def generate_c_directory(robot: Robot, directory: Path) -> tuple[list[Path], dict[str, Any]]:
-    """``codegen``'s files and the reference header in ``directory``: (paths written, {"functions":
-    every generated Function, "work": their work sizes}). The same bytes for the same robot and
-    machine, so the builds keyed by them (the footprint's) are shared with the warm process."""
+def generate_c_directory(robot: Robot, directory: Path) -> tuple[GeneratedFiles, dict[str, Any]]:
+    """``codegen``'s files and the reference header in ``directory`` (``generate_checked``'s): (the
+    files written, {"functions": every generated Function, "work": their work sizes}). The same
+    bytes for the same robot and machine, so the builds keyed by them (the footprint's) are shared
+    with the warm process, and the benchmark times these files (``run_bench(checked_c=...)``)."""
     import casadi as ca
 
     from quadruped_dyn.checks.c_reference import reference_header, reference_header_name
@@ -187,23 +191,25 @@ def generate_c_directory(robot: Robot, directory: Path) -> tuple[list[Path], dic
     generated: dict[str, Any] = {}
 
     def reference_file(functions: list[ca.Function], work: dict[str, tuple[int, int]]) -> dict[str, str]:
-        generated.update(functions=functions, work=work)  # every generated Function, as generate() builds them
-        return {reference_header_name(robot): reference_header(robot, functions, work)}
+        generated.update(functions=functions, work=work, expected={})  # every generated Function, as generate() builds them
+        return {reference_header_name(robot): reference_header(robot, functions, work, generated["expected"])}
 
-    return generate(robot, directory, extra_files=reference_file).all(), generated
+    return generate(robot, directory, extra_files=reference_file), generated
 
 
-def generated_c(robot: Robot, out: Path, progress: Any = None) -> dict[str, Any]:
+def generated_c(robot: Robot, out: Path, progress: Any = None) -> tuple[dict[str, Any], GeneratedFiles]:
     """Generate the C beside the report (every function: the full-coordinate terms, the GRF
     solves and the reduced model of every stance set), compile (cached) and compare each
     function with Pinocchio at the fixed reference state, as the generated ``check_qd`` does;
-    ``progress(k, n)`` after the k-th of n functions checked."""
+    ``progress(k, n)`` after the k-th of n functions checked. (The section's data, the files.)"""
     from quadruped_dyn.checks.c_reference import reference_state
+    from quadruped_dyn.codegen.emit import PREFIX
     from quadruped_dyn.codegen.library import compiled_library
     from quadruped_dyn.dynamics.formulas import shapes
 
     directory = out / "c"  # created by output_dir (never a link out of --out) when generated
-    paths, generated = generate_c_directory(robot, output_dir(out, "c"))
+    files, generated = generate_c_directory(robot, output_dir(out, "c"))
+    paths = files.all()
     work = generated["work"]
     functions: list[dict[str, Any]] = [
         {"name": f.name(), "inputs": shapes(f), "outputs": shapes(f, outputs=True), "instructions": f.n_instructions(),
@@ -214,20 +220,21 @@ def generated_c(robot: Robot, out: Path, progress: Any = None) -> dict[str, Any]
     s = reference_state(robot)
     checks = []
     for f in generated["functions"]:
-        checks.append(c_function_check(robot, library, f, s))
+        checks.append(c_function_check(robot, library, f, s, generated["expected"].get(f.name()[len(PREFIX):])))
         if progress is not None:
             progress(len(checks), len(generated["functions"]))
     return {"directory": str(directory), "files": [{"name": p.name, "bytes": p.stat().st_size} for p in paths],
             "functions": functions, "checks": checks, "compile_s": compile_s,
-            "library_bytes": library.path.stat().st_size}
+            "library_bytes": library.path.stat().st_size}, files
 
 #: A case whose scaled tolerance exceeds this could only fail on NaN: reported skipped (check_qd.c's QD_MAX_TOL).
 C_CHECK_MAX_TOL = 1e-2
 
-def c_function_check(robot: Robot, library: Any, f: Any, s: Any) -> dict[str, Any]:
+def c_function_check(robot: Robot, library: Any, f: Any, s: Any, expected: list[np.ndarray] | None = None) -> dict[str, Any]:
     """One compiled function at the reference state ``s`` against Pinocchio: the relative error
     (to the largest reference output), its tolerance scaled by the state's conditioning
-    (``c_reference.tolerance_scale``), and pass / FAIL / skipped with the reason, as check_qd."""
+    (``c_reference.tolerance_scale``), and pass / FAIL / skipped with the reason, as check_qd.
+    ``expected``: Pinocchio's outputs at ``s`` if already computed (``reference_header``'s)."""
     from quadruped_dyn.checks.c_reference import (
         pinocchio_outputs,
         reduced_inputs,
@@ -256,7 +263,8 @@ def c_function_check(robot: Robot, library: Any, f: Any, s: Any) -> dict[str, An
         skipped = "singular" in str(e) and tol > C_CHECK_MAX_TOL
         row.update(status="skipped" if skipped else "FAIL", note=str(e))
         return row
-    expected = pinocchio_outputs(robot, ref, name, s)
+    if expected is None:
+        expected = pinocchio_outputs(robot, ref, name, s)
     ours_all = np.concatenate([np.asarray(o, dtype=float).ravel() for o in ours])
     expected_all = np.concatenate([np.asarray(e, dtype=float).ravel() for e in expected])
     # relative to the largest reference output: a residual that should be ~0 has no scale of its own
@@ -387,14 +395,23 @@ def cross_library(robot: Robot) -> dict[str, Any]:
     return {**data, "cross_library_samples": CROSS_LIBRARY_SAMPLES, "cross_library_note": note}
 
 
-def embedded_footprint(robot: Robot, directory: Path) -> dict[str, Any]:
+def embedded_footprint(robot: Robot, directory: Path, measure: bool = True) -> dict[str, Any]:
     """Caller memory, code size and stack on Cortex-M of the generated C in ``directory``
     (``checks.embedded``), one cross build per target at -Os (``footprint.SIZE_BUILDS``; -O2
-    too: ``codegen --json``); the builds take minutes once, then are cached."""
+    too: ``codegen --json``); the builds take minutes once, then are cached. Without ``measure``
+    only the caller memory (no cross build: ``report --footprint`` asks for them)."""
     from quadruped_dyn.checks.embedded import embedded_summary
     from quadruped_dyn.codegen.footprint import SIZE_BUILDS
 
-    return embedded_summary(robot, directory, builds=SIZE_BUILDS)
+    summary = embedded_summary(robot, directory, footprint=measure, builds=SIZE_BUILDS)
+    if not measure:
+        summary["footprint"] = {"skipped": FOOTPRINT_NOT_MEASURED}
+    return summary
+
+
+#: What the page says when the report ran without ``--footprint``.
+FOOTPRINT_NOT_MEASURED = ("not measured in this run: pass --footprint (two Cortex-M cross builds, minutes on a "
+                          "cold cache), or run codegen --json; the tests check it")
 
 
 def closed_loop(robot: Robot, out: Path, cycles: int = 10) -> dict[str, Any]:

@@ -8,7 +8,7 @@ and then executes the notebooks there, one task each (each notebook's kernel is 
 own: nothing of the report's process is shared), whose pages the notebooks step collects.
 
 Nothing is handed over between the processes: every artefact goes through the verified build
-cache (``codegen/cache.py``), whose per-entry lock makes a step that needs an artefact still
+cache (``files/cache.py``), whose per-entry lock makes a step that needs an artefact still
 being built wait for it instead of building it again, and which verifies each artefact's hash
 before use. A warm build that fails is only a lost head start: the step builds it again itself
 and reports the failure in its section.
@@ -24,9 +24,10 @@ from pathlib import Path
 from typing import Any
 
 
-def warm_caches(urdf: str, with_benchmark: bool) -> str:
+def warm_caches(urdf: str, with_benchmark: bool, with_footprint: bool = False) -> str:
     """Build every cached artefact of the report for the robot at ``urdf``, in the order the
-    steps need them; "" on success, else the first error (one line)."""
+    steps need them (the Cortex-M builds only ``with_footprint``); "" on success, else the first
+    error (one line)."""
     try:
         from quadruped_dyn.codegen.library import compiled_library
         from quadruped_dyn.experiment.native_run import native_library
@@ -37,20 +38,22 @@ def warm_caches(urdf: str, with_benchmark: bool) -> str:
         native_library(robot)  # the experiment's native driver
         if with_benchmark:
             from quadruped_dyn.bench.timing import pinocchio_harness
-            from quadruped_dyn.report.gather import embedded_footprint, generate_c_directory
 
             with ThreadPoolExecutor(max_workers=1) as beside:  # one C++ compiler beside the Cortex-M builds' make -j2
                 harness = beside.submit(pinocchio_harness)
-                with tempfile.TemporaryDirectory() as tmp:  # the report's own c/ has the same bytes: the same key
-                    generate_c_directory(robot, Path(tmp))
-                    embedded_footprint(robot, Path(tmp))  # the Cortex-M builds, cached by content
+                if with_footprint:
+                    from quadruped_dyn.report.gather import embedded_footprint, generate_c_directory
+
+                    with tempfile.TemporaryDirectory() as tmp:  # the report's own c/ has the same bytes: the same key
+                        generate_c_directory(robot, Path(tmp))
+                        embedded_footprint(robot, Path(tmp))  # the Cortex-M builds, cached by content
                 harness.result()
         return ""
     except Exception as e:  # noqa: BLE001 -- reported by the step that needs the artefact
         return f"{type(e).__name__}: {str(e).strip().splitlines()[0] if str(e).strip() else ''}"
 
 
-def start(urdf: Path, with_benchmark: bool, notebooks: Sequence[Path] = ()) -> tuple[
+def start(urdf: Path, with_benchmark: bool, notebooks: Sequence[Path] = (), with_footprint: bool = False) -> tuple[
         ProcessPoolExecutor, Future[str], list[Future[dict[str, Any]]]]:
     """The warm process, started (spawned: no state of this process is shared): ``warm_caches``,
     then each of ``notebooks`` executed and rendered (``gather.executed_notebook``), in that order.
@@ -58,5 +61,5 @@ def start(urdf: Path, with_benchmark: bool, notebooks: Sequence[Path] = ()) -> t
     from quadruped_dyn.report.gather import executed_notebook
 
     pool = ProcessPoolExecutor(max_workers=1, mp_context=multiprocessing.get_context("spawn"))
-    warmed = pool.submit(warm_caches, str(urdf), with_benchmark)
+    warmed = pool.submit(warm_caches, str(urdf), with_benchmark, with_footprint)
     return pool, warmed, [pool.submit(executed_notebook, path) for path in notebooks]

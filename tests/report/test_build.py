@@ -145,3 +145,31 @@ def test_steps_are_numbered_up_to_their_total(tmp_path, monkeypatch, capsys):
     assert labels[-3:] == ["notebooks", "generated C and the benchmark", "versions, writing the page"]
     assert [s.key for s in result.sections] == ["robot", "terms", "grf", "reduced", "experiment", "c", "symbolic",
                                                 "optimal_control", "closed_loop", "notebooks", "versions"]
+
+
+def test_notebooks_not_started_by_the_warm_process_run_here_at_once(monkeypatch):
+    """The notebooks step takes over every notebook the warm process has not started (so both cores
+    execute notebooks), keeps the one it is running, and shows them in their own order."""
+    from concurrent.futures import Future
+
+    from quadruped_dyn.progress import Steps
+    from quadruped_dyn.report import build
+
+    paths = [Path(f"n{k}.ipynb") for k in range(4)]
+    monkeypatch.setattr(build, "notebook_list", lambda robot: (paths, ""))
+    order: list[str] = []
+
+    def here(path):
+        order.append(path.name)
+        return {"name": path.name, "seconds": 0.0, "errors": 0, "html": f"<p>{path.name} here</p>"}
+
+    monkeypatch.setattr(build, "executed_notebook", here)
+    running: Future = Future()
+    running.set_running_or_notify_cancel()  # the warm process is executing this one: it cannot be cancelled
+    queued = [Future() for _ in range(3)]
+    job = build._Job(None, [], Path("."), False, 1, False, Steps(1, enabled=False), notebooks_ahead=[running, *queued])
+    running.set_result({"name": "n0.ipynb", "seconds": 0.0, "errors": 0, "html": "<p>n0.ipynb warm</p>"})
+    section = build._notebooks_section(job)
+    assert order == ["n1.ipynb", "n2.ipynb", "n3.ipynb"] and all(f.cancelled() for f in queued)
+    body = section.body
+    assert body.index("n0.ipynb warm") < body.index("n1.ipynb here") < body.index("n3.ipynb here")

@@ -158,3 +158,16 @@ def test_generated_function_check_against_pinocchio(paper, name):
     row = c_function_check(paper, library, f, reference_state(paper))
     assert row["status"] == "pass", row
     assert np.isfinite(row["max_rel_err"]) and row["max_rel_err"] <= row["tol"]
+
+
+def test_a_footprint_not_measured_says_how_to_get_it(tmp_path):
+    """Without ``report --footprint`` there is no cross build: the page says so and how to ask for it
+    (caller memory is still listed)."""
+    from click.testing import CliRunner
+
+    from quadruped_dyn.cli import main
+    from quadruped_dyn.report.gather import FOOTPRINT_NOT_MEASURED
+
+    html = rs.embedded_html({"footprint": {"skipped": FOOTPRINT_NOT_MEASURED}})
+    assert "not measured in this run: pass --footprint" in html
+    assert "--footprint" in CliRunner().invoke(main, ["report", "--help"]).output

@@ -13,8 +13,8 @@ from pathlib import Path
 
 import pytest
 
-from quadruped_dyn.codegen.cache import HASH_SUFFIX, PARTIAL_MARK, cached_build, verified
 from quadruped_dyn.errors import InputError
+from quadruped_dyn.files.cache import HASH_SUFFIX, PARTIAL_MARK, cached_build, verified
 from quadruped_dyn.tolerances import REL_TOL_TERMS
 
 #: A library small enough to compile in a fraction of a second; its constant is what an
