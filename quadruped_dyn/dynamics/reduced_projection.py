@@ -195,6 +195,17 @@ class ReducedProjection:
         """M_r = S M_full T (n, n)."""
         return self.project(mass_matrix_crba(self.robot, self.q_joints) @ self.T)
 
+    def mass_matrix_factors(self) -> tuple[ca.SX, ca.SX, ca.SX]:
+        """(S_b (n, 6), T_b (6, n), M_full (18, 18)) with M_r = S M_full T, S = [S_b, I_12] (the
+        13th row, two feet, has no joint part) and T = [T_b; I_12] (the 13th column has none): what
+        the generated C multiplies in loops (codegen/c/qd_reduced_solve.c, qd_M_r_project)."""
+        x = ca.SX.sym("x", NV_FULL)
+        S = ca.jacobian(self.project(x), x)  # project is linear in F: S exactly
+        joint_rows = ca.DM.eye(self.n)[:, :12]
+        if not (ca.is_equal(ca.simplify(S[:, 6:]), ca.SX(joint_rows)) and ca.is_equal(self.T[6:, :], ca.SX(joint_rows.T))):
+            raise AssertionError("S or T has a joint part other than the identity; qd_M_r_project assumes it")
+        return S[:, :6], self.T[:6, :], mass_matrix_crba(self.robot, self.q_joints)
+
     def coriolis_gravity(self, qd_r: ca.SX) -> ca.SX:
         """C_r + G_r (n,) in one Newton-Euler pass."""
         v, k = self.velocity_and_bias(qd_r)
