@@ -2425,21 +2425,19 @@ static int qd_checked(qd_eval_fn f, int i_quat, int n_out, const casadi_int* nnz
  * in a few hundred bytes of code instead of ~60 kB of straight-line C per stance set. */
 static int qd_M_r_project(int n, qd_eval_fn parts, const casadi_real** arg, casadi_real** res, casadi_int* iw,
                           casadi_real* w, int mem) {
-  casadi_real S_b[QD_N_MAX * 6], T_b[6 * QD_N_MAX], M[18 * 18], MT[18 * QD_N_MAX];
+  casadi_real S_b[QD_N_MAX * 6], T_b[6 * QD_N_MAX], M[18 * 18], mt[18];
   casadi_real* p_res[3] = {S_b, T_b, M};
   int flag = parts(arg, p_res, iw, w, mem);
   if (flag || !res[0]) return flag;
-  for (int j = 0; j < n; ++j) { /* MT = M T */
-    for (int i = 0; i < 18; ++i) MT[i + 18 * j] = j < 12 ? M[i + 18 * (6 + j)] : 0;
+  for (int j = 0; j < n; ++j) { /* column j: mt = M T e_j, then S mt */
+    for (int i = 0; i < 18; ++i) mt[i] = j < 12 ? M[i + 18 * (6 + j)] : 0;
     for (int k = 0; k < 6; ++k) {
-      for (int i = 0; i < 18; ++i) MT[i + 18 * j] += M[i + 18 * k] * T_b[k + 6 * j];
+      for (int i = 0; i < 18; ++i) mt[i] += M[i + 18 * k] * T_b[k + 6 * j];
     }
-  }
-  for (int j = 0; j < n; ++j) { /* M_r = S MT */
     casadi_real* col = res[0] + n * j;
-    for (int i = 0; i < n; ++i) col[i] = i < 12 ? MT[6 + i + 18 * j] : 0;
+    for (int i = 0; i < n; ++i) col[i] = i < 12 ? mt[6 + i] : 0;
     for (int k = 0; k < 6; ++k) {
-      for (int i = 0; i < n; ++i) col[i] += S_b[i + n * k] * MT[k + 18 * j];
+      for (int i = 0; i < n; ++i) col[i] += S_b[i + n * k] * mt[k];
     }
   }
   return 0;
