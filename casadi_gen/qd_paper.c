@@ -127,26 +127,28 @@ static const casadi_int casadi_s4[3] = {6, 1, 1};
 static const casadi_int casadi_s5[3] = {3, 1, 1};
 static const casadi_int casadi_s6[3] = {0, 1, 1};
 
+static int casadi_f4(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem);
+#define QD_ID_FULL_EVAL casadi_f4
 /* quadruped_dyn: the GRF solves of qd_<robot>.c (hand-written, inserted by quadruped_dyn/codegen/emit.py).
  * qd_grf_<feet>(q, v, a) -> (lambda, f, residual, tau): the required trunk wrench w_req and the joint
- * torques without foot forces from the generated id_full (f = 0), then the generated per-stance-set
- * balance (q, w_req) -> (lambda, f, residual, tau_f), tau_f = -J_i^T f_i the torques the foot forces add
- * (quadruped_dyn/dynamics/grf.py, grf_balance); tau = tau_0 + tau_f. One Newton-Euler pass (id_full's)
- * serves every stance set instead of one unrolled copy per set. A null res[i] skips output i. */
-typedef int (*qd_grf_fn)(const casadi_real**, casadi_real**, casadi_int*, casadi_real*, int);
-
-static int qd_grf_solve(qd_grf_fn id_full, qd_grf_fn balance, const casadi_real** arg, casadi_real** res,
-                        casadi_int* iw, casadi_real* w, int mem) {
-  casadi_real no_force[12] = {0}, w_req[6], tau_0[12], tau_f[12];
+ * torques without foot forces tau_0 from the generated id_full (f = 0, qd_grf_begin), then the generated
+ * per-stance-set balance (q, w_req) -> (lambda, f, residual, tau_f), tau_f = -J_i^T f_i the torques the
+ * foot forces add (quadruped_dyn/dynamics/grf.py, grf_balance), then tau = tau_0 + tau_f (qd_grf_end).
+ * One Newton-Euler pass (id_full's) serves every stance set instead of one unrolled copy per set. Direct
+ * calls only (no function pointers), so the Cortex-M stack walk stays bounded. A null res[i] skips output i.
+ * Before this text the generator defines QD_ID_FULL_EVAL, id_full's evaluation. */
+static int qd_grf_begin(const casadi_real** arg, casadi_real* w_req, casadi_real* tau_0, casadi_int* iw, casadi_real* w,
+                        int mem) {
+  const casadi_real no_force[12] = {0};
   const casadi_real* id_arg[4] = {arg[0], arg[1], arg[2], no_force};
   casadi_real* id_res[2] = {w_req, tau_0};
-  int flag = id_full(id_arg, id_res, iw, w, mem);
-  if (flag) return flag;
-  const casadi_real* b_arg[2] = {arg[0], w_req};
-  casadi_real* b_res[4] = {res[0], res[1], res[2], tau_f};
-  flag = balance(b_arg, b_res, iw, w, mem);
-  if (flag || !res[3]) return flag;
-  for (int i = 0; i < 12; ++i) res[3][i] = tau_0[i] + tau_f[i];
+  return QD_ID_FULL_EVAL(id_arg, id_res, iw, w, mem);
+}
+
+static int qd_grf_end(casadi_real** res, const casadi_real* tau_0, const casadi_real* tau_f) {
+  if (res[3]) {
+    for (int i = 0; i < 12; ++i) res[3][i] = tau_0[i] + tau_f[i];
+  }
   return 0;
 }
 
@@ -16620,7 +16622,12 @@ CASADI_SYMBOL_EXPORT int qd_id_full_work_bytes(casadi_int *sz_arg, casadi_int* s
 }
 
 CASADI_SYMBOL_EXPORT int qd_grf_FL_FR_BL_BR(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem){
-  return qd_grf_solve(casadi_f4, qd_grf_balance_FL_FR_BL_BR, arg, res, iw, w, mem);
+  casadi_real w_req[6], tau_0[12], tau_f[12];
+  const casadi_real* b_arg[2] = {arg[0], w_req};
+  casadi_real* b_res[4] = {res[0], res[1], res[2], tau_f};
+  int flag = qd_grf_begin(arg, w_req, tau_0, iw, w, mem);
+  if (!flag) flag = qd_grf_balance_FL_FR_BL_BR(b_arg, b_res, iw, w, mem);
+  return flag ? flag : qd_grf_end(res, tau_0, tau_f);
 }
 
 CASADI_SYMBOL_EXPORT int qd_grf_FL_FR_BL_BR_checkout(void) {
@@ -16702,7 +16709,12 @@ CASADI_SYMBOL_EXPORT int qd_grf_FL_FR_BL_BR_work_bytes(casadi_int *sz_arg, casad
 }
 
 CASADI_SYMBOL_EXPORT int qd_grf_FL_FR_BL(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem){
-  return qd_grf_solve(casadi_f4, qd_grf_balance_FL_FR_BL, arg, res, iw, w, mem);
+  casadi_real w_req[6], tau_0[12], tau_f[12];
+  const casadi_real* b_arg[2] = {arg[0], w_req};
+  casadi_real* b_res[4] = {res[0], res[1], res[2], tau_f};
+  int flag = qd_grf_begin(arg, w_req, tau_0, iw, w, mem);
+  if (!flag) flag = qd_grf_balance_FL_FR_BL(b_arg, b_res, iw, w, mem);
+  return flag ? flag : qd_grf_end(res, tau_0, tau_f);
 }
 
 CASADI_SYMBOL_EXPORT int qd_grf_FL_FR_BL_checkout(void) {
@@ -16784,7 +16796,12 @@ CASADI_SYMBOL_EXPORT int qd_grf_FL_FR_BL_work_bytes(casadi_int *sz_arg, casadi_i
 }
 
 CASADI_SYMBOL_EXPORT int qd_grf_FL_FR_BR(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem){
-  return qd_grf_solve(casadi_f4, qd_grf_balance_FL_FR_BR, arg, res, iw, w, mem);
+  casadi_real w_req[6], tau_0[12], tau_f[12];
+  const casadi_real* b_arg[2] = {arg[0], w_req};
+  casadi_real* b_res[4] = {res[0], res[1], res[2], tau_f};
+  int flag = qd_grf_begin(arg, w_req, tau_0, iw, w, mem);
+  if (!flag) flag = qd_grf_balance_FL_FR_BR(b_arg, b_res, iw, w, mem);
+  return flag ? flag : qd_grf_end(res, tau_0, tau_f);
 }
 
 CASADI_SYMBOL_EXPORT int qd_grf_FL_FR_BR_checkout(void) {
@@ -16866,7 +16883,12 @@ CASADI_SYMBOL_EXPORT int qd_grf_FL_FR_BR_work_bytes(casadi_int *sz_arg, casadi_i
 }
 
 CASADI_SYMBOL_EXPORT int qd_grf_FL_BL_BR(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem){
-  return qd_grf_solve(casadi_f4, qd_grf_balance_FL_BL_BR, arg, res, iw, w, mem);
+  casadi_real w_req[6], tau_0[12], tau_f[12];
+  const casadi_real* b_arg[2] = {arg[0], w_req};
+  casadi_real* b_res[4] = {res[0], res[1], res[2], tau_f};
+  int flag = qd_grf_begin(arg, w_req, tau_0, iw, w, mem);
+  if (!flag) flag = qd_grf_balance_FL_BL_BR(b_arg, b_res, iw, w, mem);
+  return flag ? flag : qd_grf_end(res, tau_0, tau_f);
 }
 
 CASADI_SYMBOL_EXPORT int qd_grf_FL_BL_BR_checkout(void) {
@@ -16948,7 +16970,12 @@ CASADI_SYMBOL_EXPORT int qd_grf_FL_BL_BR_work_bytes(casadi_int *sz_arg, casadi_i
 }
 
 CASADI_SYMBOL_EXPORT int qd_grf_FR_BL_BR(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem){
-  return qd_grf_solve(casadi_f4, qd_grf_balance_FR_BL_BR, arg, res, iw, w, mem);
+  casadi_real w_req[6], tau_0[12], tau_f[12];
+  const casadi_real* b_arg[2] = {arg[0], w_req};
+  casadi_real* b_res[4] = {res[0], res[1], res[2], tau_f};
+  int flag = qd_grf_begin(arg, w_req, tau_0, iw, w, mem);
+  if (!flag) flag = qd_grf_balance_FR_BL_BR(b_arg, b_res, iw, w, mem);
+  return flag ? flag : qd_grf_end(res, tau_0, tau_f);
 }
 
 CASADI_SYMBOL_EXPORT int qd_grf_FR_BL_BR_checkout(void) {
@@ -17030,7 +17057,12 @@ CASADI_SYMBOL_EXPORT int qd_grf_FR_BL_BR_work_bytes(casadi_int *sz_arg, casadi_i
 }
 
 CASADI_SYMBOL_EXPORT int qd_grf_FL_FR(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem){
-  return qd_grf_solve(casadi_f4, qd_grf_balance_FL_FR, arg, res, iw, w, mem);
+  casadi_real w_req[6], tau_0[12], tau_f[12];
+  const casadi_real* b_arg[2] = {arg[0], w_req};
+  casadi_real* b_res[4] = {res[0], res[1], res[2], tau_f};
+  int flag = qd_grf_begin(arg, w_req, tau_0, iw, w, mem);
+  if (!flag) flag = qd_grf_balance_FL_FR(b_arg, b_res, iw, w, mem);
+  return flag ? flag : qd_grf_end(res, tau_0, tau_f);
 }
 
 CASADI_SYMBOL_EXPORT int qd_grf_FL_FR_checkout(void) {
@@ -17112,7 +17144,12 @@ CASADI_SYMBOL_EXPORT int qd_grf_FL_FR_work_bytes(casadi_int *sz_arg, casadi_int*
 }
 
 CASADI_SYMBOL_EXPORT int qd_grf_FL_BL(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem){
-  return qd_grf_solve(casadi_f4, qd_grf_balance_FL_BL, arg, res, iw, w, mem);
+  casadi_real w_req[6], tau_0[12], tau_f[12];
+  const casadi_real* b_arg[2] = {arg[0], w_req};
+  casadi_real* b_res[4] = {res[0], res[1], res[2], tau_f};
+  int flag = qd_grf_begin(arg, w_req, tau_0, iw, w, mem);
+  if (!flag) flag = qd_grf_balance_FL_BL(b_arg, b_res, iw, w, mem);
+  return flag ? flag : qd_grf_end(res, tau_0, tau_f);
 }
 
 CASADI_SYMBOL_EXPORT int qd_grf_FL_BL_checkout(void) {
@@ -17194,7 +17231,12 @@ CASADI_SYMBOL_EXPORT int qd_grf_FL_BL_work_bytes(casadi_int *sz_arg, casadi_int*
 }
 
 CASADI_SYMBOL_EXPORT int qd_grf_FL_BR(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem){
-  return qd_grf_solve(casadi_f4, qd_grf_balance_FL_BR, arg, res, iw, w, mem);
+  casadi_real w_req[6], tau_0[12], tau_f[12];
+  const casadi_real* b_arg[2] = {arg[0], w_req};
+  casadi_real* b_res[4] = {res[0], res[1], res[2], tau_f};
+  int flag = qd_grf_begin(arg, w_req, tau_0, iw, w, mem);
+  if (!flag) flag = qd_grf_balance_FL_BR(b_arg, b_res, iw, w, mem);
+  return flag ? flag : qd_grf_end(res, tau_0, tau_f);
 }
 
 CASADI_SYMBOL_EXPORT int qd_grf_FL_BR_checkout(void) {
@@ -17276,7 +17318,12 @@ CASADI_SYMBOL_EXPORT int qd_grf_FL_BR_work_bytes(casadi_int *sz_arg, casadi_int*
 }
 
 CASADI_SYMBOL_EXPORT int qd_grf_FR_BL(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem){
-  return qd_grf_solve(casadi_f4, qd_grf_balance_FR_BL, arg, res, iw, w, mem);
+  casadi_real w_req[6], tau_0[12], tau_f[12];
+  const casadi_real* b_arg[2] = {arg[0], w_req};
+  casadi_real* b_res[4] = {res[0], res[1], res[2], tau_f};
+  int flag = qd_grf_begin(arg, w_req, tau_0, iw, w, mem);
+  if (!flag) flag = qd_grf_balance_FR_BL(b_arg, b_res, iw, w, mem);
+  return flag ? flag : qd_grf_end(res, tau_0, tau_f);
 }
 
 CASADI_SYMBOL_EXPORT int qd_grf_FR_BL_checkout(void) {
@@ -17358,7 +17405,12 @@ CASADI_SYMBOL_EXPORT int qd_grf_FR_BL_work_bytes(casadi_int *sz_arg, casadi_int*
 }
 
 CASADI_SYMBOL_EXPORT int qd_grf_FR_BR(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem){
-  return qd_grf_solve(casadi_f4, qd_grf_balance_FR_BR, arg, res, iw, w, mem);
+  casadi_real w_req[6], tau_0[12], tau_f[12];
+  const casadi_real* b_arg[2] = {arg[0], w_req};
+  casadi_real* b_res[4] = {res[0], res[1], res[2], tau_f};
+  int flag = qd_grf_begin(arg, w_req, tau_0, iw, w, mem);
+  if (!flag) flag = qd_grf_balance_FR_BR(b_arg, b_res, iw, w, mem);
+  return flag ? flag : qd_grf_end(res, tau_0, tau_f);
 }
 
 CASADI_SYMBOL_EXPORT int qd_grf_FR_BR_checkout(void) {
@@ -17440,7 +17492,12 @@ CASADI_SYMBOL_EXPORT int qd_grf_FR_BR_work_bytes(casadi_int *sz_arg, casadi_int*
 }
 
 CASADI_SYMBOL_EXPORT int qd_grf_BL_BR(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem){
-  return qd_grf_solve(casadi_f4, qd_grf_balance_BL_BR, arg, res, iw, w, mem);
+  casadi_real w_req[6], tau_0[12], tau_f[12];
+  const casadi_real* b_arg[2] = {arg[0], w_req};
+  casadi_real* b_res[4] = {res[0], res[1], res[2], tau_f};
+  int flag = qd_grf_begin(arg, w_req, tau_0, iw, w, mem);
+  if (!flag) flag = qd_grf_balance_BL_BR(b_arg, b_res, iw, w, mem);
+  return flag ? flag : qd_grf_end(res, tau_0, tau_f);
 }
 
 CASADI_SYMBOL_EXPORT int qd_grf_BL_BR_checkout(void) {
@@ -17522,7 +17579,12 @@ CASADI_SYMBOL_EXPORT int qd_grf_BL_BR_work_bytes(casadi_int *sz_arg, casadi_int*
 }
 
 CASADI_SYMBOL_EXPORT int qd_grf_FL(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem){
-  return qd_grf_solve(casadi_f4, qd_grf_balance_FL, arg, res, iw, w, mem);
+  casadi_real w_req[6], tau_0[12], tau_f[12];
+  const casadi_real* b_arg[2] = {arg[0], w_req};
+  casadi_real* b_res[4] = {res[0], res[1], res[2], tau_f};
+  int flag = qd_grf_begin(arg, w_req, tau_0, iw, w, mem);
+  if (!flag) flag = qd_grf_balance_FL(b_arg, b_res, iw, w, mem);
+  return flag ? flag : qd_grf_end(res, tau_0, tau_f);
 }
 
 CASADI_SYMBOL_EXPORT int qd_grf_FL_checkout(void) {
@@ -17604,7 +17666,12 @@ CASADI_SYMBOL_EXPORT int qd_grf_FL_work_bytes(casadi_int *sz_arg, casadi_int* sz
 }
 
 CASADI_SYMBOL_EXPORT int qd_grf_FR(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem){
-  return qd_grf_solve(casadi_f4, qd_grf_balance_FR, arg, res, iw, w, mem);
+  casadi_real w_req[6], tau_0[12], tau_f[12];
+  const casadi_real* b_arg[2] = {arg[0], w_req};
+  casadi_real* b_res[4] = {res[0], res[1], res[2], tau_f};
+  int flag = qd_grf_begin(arg, w_req, tau_0, iw, w, mem);
+  if (!flag) flag = qd_grf_balance_FR(b_arg, b_res, iw, w, mem);
+  return flag ? flag : qd_grf_end(res, tau_0, tau_f);
 }
 
 CASADI_SYMBOL_EXPORT int qd_grf_FR_checkout(void) {
@@ -17686,7 +17753,12 @@ CASADI_SYMBOL_EXPORT int qd_grf_FR_work_bytes(casadi_int *sz_arg, casadi_int* sz
 }
 
 CASADI_SYMBOL_EXPORT int qd_grf_BL(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem){
-  return qd_grf_solve(casadi_f4, qd_grf_balance_BL, arg, res, iw, w, mem);
+  casadi_real w_req[6], tau_0[12], tau_f[12];
+  const casadi_real* b_arg[2] = {arg[0], w_req};
+  casadi_real* b_res[4] = {res[0], res[1], res[2], tau_f};
+  int flag = qd_grf_begin(arg, w_req, tau_0, iw, w, mem);
+  if (!flag) flag = qd_grf_balance_BL(b_arg, b_res, iw, w, mem);
+  return flag ? flag : qd_grf_end(res, tau_0, tau_f);
 }
 
 CASADI_SYMBOL_EXPORT int qd_grf_BL_checkout(void) {
@@ -17768,7 +17840,12 @@ CASADI_SYMBOL_EXPORT int qd_grf_BL_work_bytes(casadi_int *sz_arg, casadi_int* sz
 }
 
 CASADI_SYMBOL_EXPORT int qd_grf_BR(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem){
-  return qd_grf_solve(casadi_f4, qd_grf_balance_BR, arg, res, iw, w, mem);
+  casadi_real w_req[6], tau_0[12], tau_f[12];
+  const casadi_real* b_arg[2] = {arg[0], w_req};
+  casadi_real* b_res[4] = {res[0], res[1], res[2], tau_f};
+  int flag = qd_grf_begin(arg, w_req, tau_0, iw, w, mem);
+  if (!flag) flag = qd_grf_balance_BR(b_arg, b_res, iw, w, mem);
+  return flag ? flag : qd_grf_end(res, tau_0, tau_f);
 }
 
 CASADI_SYMBOL_EXPORT int qd_grf_BR_checkout(void) {
@@ -17850,7 +17927,12 @@ CASADI_SYMBOL_EXPORT int qd_grf_BR_work_bytes(casadi_int *sz_arg, casadi_int* sz
 }
 
 CASADI_SYMBOL_EXPORT int qd_grf_none(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem){
-  return qd_grf_solve(casadi_f4, qd_grf_balance_none, arg, res, iw, w, mem);
+  casadi_real w_req[6], tau_0[12], tau_f[12];
+  const casadi_real* b_arg[2] = {arg[0], w_req};
+  casadi_real* b_res[4] = {res[0], res[1], res[2], tau_f};
+  int flag = qd_grf_begin(arg, w_req, tau_0, iw, w, mem);
+  if (!flag) flag = qd_grf_balance_none(b_arg, b_res, iw, w, mem);
+  return flag ? flag : qd_grf_end(res, tau_0, tau_f);
 }
 
 CASADI_SYMBOL_EXPORT int qd_grf_none_checkout(void) {

@@ -357,7 +357,7 @@ def _checked_reduced_c(c_text: str, casadi_header: str, functions: list[ca.Funct
             raise AssertionError(f"entry point of {f.name()} not found in CasADi's output")
         raw[f.name()] = found.group(2)
     m_r_eval = ("static int qd_M_r_eval(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, "
-                f"int mem) {{\n  return qd_M_r_project({functions[0].size1_out(0)}, qd_M_r_parts, arg, res, iw, w, mem);\n}}\n")
+                f"int mem) {{\n  return qd_M_r_project({functions[0].size1_out(0)}, arg, res, iw, w, mem);\n}}\n")
     c_text = c_text[:first] + "\n" + helpers_c + "\n" + templates + "\n" + m_r_eval + c_text[first:]
     work = work_sizes(casadi_header)
     m_r, cg_r, direction = ["qd_M_r_eval"] + [raw[g.name()] for g in functions
@@ -398,7 +398,9 @@ def _grf_through_id_full(robot: Robot, c_text: str, functions: list[ca.Function]
         raise AssertionError("qd_grf_solve calls id_full as (q, v, a, f) -> (w_res, tau) with no work memory")
     q, w_req = ca.SX.sym("q", NQ_FULL), ca.SX.sym("w_req", 6)
     host_helpers = frozenset(re.findall(r"\n(?:static )?casadi_real (casadi_\w+)\(", c_text))  # e.g. casadi_fabs
-    helpers = [(TEMPLATES / "qd_grf_solve.c").read_text()]
+    signature = "(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem)"
+    helpers = [f"static int {raw[id_full.name()]}{signature};\n#define QD_ID_FULL_EVAL {raw[id_full.name()]}\n"
+               + (TEMPLATES / "qd_grf_solve.c").read_text()]
     for f in functions:
         if not f.name().startswith(PREFIX + "grf_"):
             continue
@@ -408,7 +410,12 @@ def _grf_through_id_full(robot: Robot, c_text: str, functions: list[ca.Function]
         if [balance.sparsity_out(i) for i in range(3)] != [f.sparsity_out(i) for i in range(3)]:
             raise AssertionError(f"{f.name()}: the balance's outputs are not the GRF function's")
         helpers.append(_static_c(f"qd_grf_balance_{suffix}", balance, precision, host_helpers))
-        body = rf"\1  return qd_grf_solve({raw[id_full.name()]}, qd_grf_balance_{suffix}, arg, res, iw, w, mem);\n"
+        body = (r"\1  casadi_real w_req[6], tau_0[12], tau_f[12];\n"
+                r"  const casadi_real* b_arg[2] = {arg[0], w_req};\n"
+                r"  casadi_real* b_res[4] = {res[0], res[1], res[2], tau_f};\n"
+                r"  int flag = qd_grf_begin(arg, w_req, tau_0, iw, w, mem);\n"
+                rf"  if (!flag) flag = qd_grf_balance_{suffix}(b_arg, b_res, iw, w, mem);\n"
+                r"  return flag ? flag : qd_grf_end(res, tau_0, tau_f);\n")
         c_text, count = re.subn(entry_point(f.name()), body, c_text)
         if count != 1:
             raise AssertionError(f"entry point of {f.name()} not found in CasADi's output")

@@ -71,15 +71,15 @@ static int qd_checked(qd_eval_fn f, int i_quat, int n_out, const casadi_int* nnz
 }
 
 /* M_r = S M T (n x n, column-major, into res[0]; quadruped_dyn/dynamics/reduced_projection.py,
- * mass_matrix_factors): the generated parts(q_r, quat) gives S_b (n x 6), T_b (6 x n) and M (18 x 18, the
+ * mass_matrix_factors): the generated qd_M_r_parts(q_r, quat) (written before this text; called directly,
+ * not through a pointer, so the Cortex-M stack walk stays bounded) gives S_b (n x 6), T_b (6 x n) and M (18 x 18, the
  * full inertia matrix), all column-major, with S = [S_b, I_12] (row 12, two feet: no joint part) and
  * T = [T_b; I_12] (column 12: no joint part). The products in loops, not unrolled: ~2,200 multiply-adds
  * in a few hundred bytes of code instead of ~60 kB of straight-line C per stance set. */
-static int qd_M_r_project(int n, qd_eval_fn parts, const casadi_real** arg, casadi_real** res, casadi_int* iw,
-                          casadi_real* w, int mem) {
+static int qd_M_r_project(int n, const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem) {
   casadi_real S_b[QD_N_MAX * 6], T_b[6 * QD_N_MAX], M[18 * 18], mt[18];
   casadi_real* p_res[3] = {S_b, T_b, M};
-  int flag = parts(arg, p_res, iw, w, mem);
+  int flag = qd_M_r_parts(arg, p_res, iw, w, mem);
   if (flag || !res[0]) return flag;
   for (int j = 0; j < n; ++j) { /* column j: mt = M T e_j, then S mt */
     for (int i = 0; i < 18; ++i) mt[i] = j < 12 ? M[i + 18 * (6 + j)] : 0;
