@@ -31,7 +31,7 @@ from quadruped_dyn.codegen.emit_derivatives import (
     reduced_derivative_functions,
 )
 from quadruped_dyn.codegen.work_memory import memory_doc
-from quadruped_dyn.dynamics.grf import grf_solve
+from quadruped_dyn.dynamics.grf import grf_balance, grf_solve
 from quadruped_dyn.dynamics.newton_euler import full_dynamics
 from quadruped_dyn.dynamics.reduced import regularity_function
 from quadruped_dyn.dynamics.reduced_projection import reduced_projection
@@ -39,6 +39,7 @@ from quadruped_dyn.errors import InputError
 from quadruped_dyn.files.safe_write import output_path, write_text
 from quadruped_dyn.model.robot import Robot
 from quadruped_dyn.model.stance import STANCE_SETS, StanceSet, stance_set
+from quadruped_dyn.model.state import NQ_FULL
 from quadruped_dyn.tolerances import REGULARITY_MIN
 
 
@@ -316,39 +317,54 @@ def stem(robot: Robot) -> str:
     return f"qd_{re.sub(r'[^A-Za-z0-9_]', '_', robot.name)}"
 
 
-def _regularity_c(robot: Robot, stance: StanceSet, precision: str) -> str:
-    """QD_REGULARITY_MIN and ``qd_regularity``, the stance's regularity (q_r, quat) -> (regularity)
-    (``dynamics.reduced.regularity_function``) as a static C function: CasADi's evaluation body alone."""
-    f = regularity_function(robot, stance)
-    c_text, h_text = casadi_c("qd_regularity", [f], precision)
+def _static_c(c_name: str, f: ca.Function, precision: str, host_helpers: frozenset[str] = frozenset()) -> str:
+    """``f`` as the static C function ``c_name`` (arg, res, iw, w, mem): CasADi's evaluation body alone,
+    checked to need no work memory (the templates call it with none) and no helper but casadi_sq and
+    ``host_helpers`` (CasADi helpers the file it goes into defines)."""
+    c_text, h_text = casadi_c(c_name, [f], precision)
     body = re.search(r"static int casadi_f0\(.*?\n\}\n", c_text, re.S)
     if not body or work_sizes(h_text)[f.name()] != (0, 0) or set(re.findall(r"casadi_\w+", body.group(0))) - {
-            "casadi_f0", "casadi_real", "casadi_int", "casadi_sq"}:
-        raise AssertionError(f"{f.name()}: CasADi's body is not self-contained; qd_reduced_solve.c needs it to be")
+            "casadi_f0", "casadi_real", "casadi_int", "casadi_sq", *host_helpers}:
+        raise AssertionError(f"{f.name()}: CasADi's body is not self-contained; the templates need it to be")
+    return body.group(0).replace("casadi_f0", c_name)
+
+
+def _reduced_helpers_c(robot: Robot, stance: StanceSet, precision: str) -> str:
+    """QD_REGULARITY_MIN, ``qd_regularity`` (the stance's regularity (q_r, quat) -> (regularity),
+    ``dynamics.reduced.regularity_function``) and ``qd_M_r_parts`` ((q_r, quat) -> (S_b, T_b, M_full),
+    ``ReducedProjection.mass_matrix_factors``), the generated pieces the templates call."""
+    n = 13 if len(stance.feet) == 2 else 12
+    q_r, quat = ca.SX.sym("q_r", n), ca.SX.sym("quat", 4)
+    parts = ca.Function("M_r_parts", [q_r, quat], [ca.densify(x) for x in reduced_projection(
+        robot, stance, q_r, quat).mass_matrix_factors()], {"cse": True})
     return (f"#define QD_REGULARITY_MIN ((casadi_real){REGULARITY_MIN!r}) /* quadruped_dyn.tolerances.REGULARITY_MIN */\n"
-            + body.group(0).replace("casadi_f0", "qd_regularity"))
+            + _static_c("qd_regularity", regularity_function(robot, stance), precision) + "\n"
+            + _static_c("qd_M_r_parts", parts, precision))
 
 
-def _checked_reduced_c(c_text: str, casadi_header: str, functions: list[ca.Function], regularity_c: str) -> str:
-    """Insert ``regularity_c`` (``_regularity_c``) and ``c/qd_reduced_solve.c`` and route the entry
+def _checked_reduced_c(c_text: str, casadi_header: str, functions: list[ca.Function], helpers_c: str) -> str:
+    """Insert ``helpers_c`` (``_reduced_helpers_c``) and ``c/qd_reduced_solve.c`` and route the entry
     points through them: every function returns QD_DEGENERATE at a degenerate stance and
-    QD_NONFINITE for a non-finite output; fd_r evaluates M_r and CG_r (CasADi's own evaluation
-    functions, checked once in the solve) and solves M_r qdd_r = tau_ext - CG_r."""
+    QD_NONFINITE for a non-finite output; M_r is the product of its factors (qd_M_r_project: CasADi's
+    unrolled M_r is dropped, ~50 kB per stance set, and M_r is faster); fd_r evaluates M_r and CG_r
+    (checked once in the solve) and solves M_r qdd_r = tau_ext - CG_r."""
     first = c_text.index(f"\n/* {functions[0].name()}:")
     templates = "\n".join((TEMPLATES / t).read_text() for t in ("qd_reduced_solve.c", "qd_reduced_derivatives.c"))
-    c_text = c_text[:first] + "\n" + regularity_c + "\n" + templates + c_text[first:]
-    work = work_sizes(casadi_header)
     raw = {}  # entry point -> CasADi's static evaluation function
     for f in functions:
         found = re.search(entry_point(f.name()), c_text)
         if not found:
             raise AssertionError(f"entry point of {f.name()} not found in CasADi's output")
         raw[f.name()] = found.group(2)
+    m_r_eval = ("static int qd_M_r_eval(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, "
+                f"int mem) {{\n  return qd_M_r_project({functions[0].size1_out(0)}, arg, res, iw, w, mem);\n}}\n")
+    c_text = c_text[:first] + "\n" + helpers_c + "\n" + templates + "\n" + m_r_eval + c_text[first:]
+    work = work_sizes(casadi_header)
+    m_r, cg_r, direction = ["qd_M_r_eval"] + [raw[g.name()] for g in functions
+                                              if g.name().startswith((PREFIX + "CG_r_", PREFIX + "did_r_dir_"))]
     for f in functions:
         if f.sz_arg() != f.n_in() or work[f.name()] != (0, 0):
             raise AssertionError(f"{f.name()} needs work memory; qd_fd_r_solve assumes it does not")
-        m_r, cg_r, direction = (raw[g.name()] for g in functions
-                                if g.name().startswith((PREFIX + "M_r_", PREFIX + "CG_r_", PREFIX + "did_r_dir_")))
         if f.name().startswith(PREFIX + "fd_r_"):
             body = rf"\1  return qd_fd_r_solve({f.nnz_out(0)}, {m_r}, {cg_r}, arg, res, iw, w, mem);\n"
         elif f.name().startswith(PREFIX + "dfd_r_"):  # the roll q_r[12] does not enter id_r: 12 q directions
@@ -356,14 +372,56 @@ def _checked_reduced_c(c_text: str, casadi_header: str, functions: list[ca.Funct
                     rf"arg, res, iw, w, mem);\n")
         else:
             nnz = ", ".join(str(f.nnz_out(i)) for i in range(f.n_out()))
-            body = (rf"\1  return qd_checked(\2, {f.index_in('quat')}, {f.n_out()}, (const casadi_int[]){{{nnz}}}, "
-                    r"arg, res, iw, w, mem);\n")
+            evaluation = m_r if f.name().startswith(PREFIX + "M_r_") else r"\2"
+            body = (rf"\1  return qd_checked({evaluation}, {f.index_in('quat')}, {f.n_out()}, "
+                    rf"(const casadi_int[]){{{nnz}}}, arg, res, iw, w, mem);\n")
         c_text, count = re.subn(entry_point(f.name()), body, c_text)
         if count != 1:
             raise AssertionError(f"entry point of {f.name()} not found in CasADi's output")
-        if f.name().startswith((PREFIX + "fd_r_", PREFIX + "dfd_r_")):  # signatures: the templates solve
+        if f.name().startswith((PREFIX + "M_r_", PREFIX + "fd_r_", PREFIX + "dfd_r_")):  # evaluated above
             c_text = drop_evaluation(c_text, raw[f.name()])
     return c_text
+
+
+def _grf_through_id_full(robot: Robot, c_text: str, functions: list[ca.Function], precision: str) -> str:
+    """Route every qd_grf_<feet> of qd_<robot>.c through ``c/qd_grf_solve.c``: id_full's evaluation (one
+    Newton-Euler pass) and a generated static qd_grf_balance_<feet> (``grf.grf_balance``), instead of
+    CasADi's unrolled graph, which repeats the recursion in each of the 15 (dropped: ~0.4 MB per robot)."""
+    raw = {}
+    for f in functions:
+        found = re.search(entry_point(f.name()), c_text)
+        if not found:
+            raise AssertionError(f"entry point of {f.name()} not found in CasADi's output")
+        raw[f.name()] = found.group(2)
+    id_full = next(f for f in functions if f.name() == PREFIX + "id_full")
+    if id_full.name_in() != ["q", "v", "a", "f"] or id_full.name_out() != ["w_res", "tau"] or id_full.sz_arg() != 4:
+        raise AssertionError("qd_grf_solve calls id_full as (q, v, a, f) -> (w_res, tau) with no work memory")
+    q, w_req = ca.SX.sym("q", NQ_FULL), ca.SX.sym("w_req", 6)
+    host_helpers = frozenset(re.findall(r"\n(?:static )?casadi_real (casadi_\w+)\(", c_text))  # e.g. casadi_fabs
+    signature = "(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem)"
+    helpers = [f"static int {raw[id_full.name()]}{signature};\n#define QD_ID_FULL_EVAL {raw[id_full.name()]}\n"
+               + (TEMPLATES / "qd_grf_solve.c").read_text()]
+    for f in functions:
+        if not f.name().startswith(PREFIX + "grf_"):
+            continue
+        suffix = f.name()[len(PREFIX + "grf_"):]
+        b = grf_balance(robot, stance_set(suffix.replace("_", "+")), "paper", q[7:], w_req)
+        balance = ca.Function(f"grf_balance_{suffix}", [q, w_req], [b.lam, b.f, b.residual, b.tau], {"cse": True})
+        if [balance.sparsity_out(i) for i in range(3)] != [f.sparsity_out(i) for i in range(3)]:
+            raise AssertionError(f"{f.name()}: the balance's outputs are not the GRF function's")
+        helpers.append(_static_c(f"qd_grf_balance_{suffix}", balance, precision, host_helpers))
+        body = (r"\1  casadi_real w_req[6], tau_0[12], tau_f[12];\n"
+                r"  const casadi_real* b_arg[2] = {arg[0], w_req};\n"
+                r"  casadi_real* b_res[4] = {res[0], res[1], res[2], tau_f};\n"
+                r"  int flag = qd_grf_begin(arg, w_req, tau_0, iw, w, mem);\n"
+                rf"  if (!flag) flag = qd_grf_balance_{suffix}(b_arg, b_res, iw, w, mem);\n"
+                r"  return flag ? flag : qd_grf_end(res, tau_0, tau_f);\n")
+        c_text, count = re.subn(entry_point(f.name()), body, c_text)
+        if count != 1:
+            raise AssertionError(f"entry point of {f.name()} not found in CasADi's output")
+        c_text = drop_evaluation(c_text, raw[f.name()])
+    first = c_text.index(f"\n/* {functions[0].name()}:")
+    return c_text[:first] + "\n" + "\n".join(helpers) + c_text[first:]
 
 
 @dataclass(frozen=True)
@@ -405,13 +463,14 @@ def generate(robot: Robot, out_dir: Path, precision: str = "double",
     name = stem(robot)
     full = codegen_functions(robot)
     c_full, casadi_header = casadi_c(name, full, precision)
+    c_full = _grf_through_id_full(robot, c_full, full, precision)
     sources = {f"{name}.c": c_full}
     functions = list(full)
     for stance in REDUCED_STANCE_SETS:
         reduced = reduced_functions(robot, stance)
         file_stem = f"{name}_r_{stance.name.replace('+', '_')}"
         c_text, h_text = casadi_c(file_stem, reduced, precision)
-        sources[f"{file_stem}.c"] = _checked_reduced_c(c_text, h_text, reduced, _regularity_c(robot, stance, precision))
+        sources[f"{file_stem}.c"] = _checked_reduced_c(c_text, h_text, reduced, _reduced_helpers_c(robot, stance, precision))
         casadi_header += h_text
         functions += reduced
     derivatives = derivative_functions(robot)  # qd_<robot>_d.c: derivatives of the full dynamics

@@ -179,15 +179,25 @@ def grf_expressions(
     qj = q[7:]
     g_b = quat_to_rotation(q[3:7]).T @ dm(GRAVITY_W) if gravity else ca.SX.zeros(3)
     w_req = inverse_dynamics(robot, qj, g_b, v, a, ca.SX.zeros(12))[:6]
-    r = [foot_position(robot.legs[i], qj[3 * i : 3 * i + 3]) for i in stance.feet]
+    b = grf_balance(robot, stance, model, qj, w_req)
+    tau = inverse_dynamics(robot, qj, g_b, v, a, b.f)[6:]
+    return GrfExpressions(b.lam, b.f, b.residual, tau, b.A)
+
+
+def grf_balance(robot: Robot, stance: StanceSet, model: str, q_joints: ca.SX, w_req: ca.SX) -> GrfExpressions:
+    """The GRF solve for a given required trunk wrench w_req (6,) (force [N], moment about the trunk
+    origin [N m], trunk frame) at the joint angles q_joints (12,): lambda, f (12,), residual, and as
+    ``tau`` the joint torques the foot forces add, -J_i^T f_i per stance leg (paper eq. (1))."""
+    r = [foot_position(robot.legs[i], q_joints[3 * i : 3 * i + 3]) for i in stance.feet]
     P = stance.selection(model)
     lam, A = solve_lambda(stance, model, r, w_req)
     f_stance = dm(P) @ lam if P.size else ca.SX.zeros(0)
-    f = ca.SX.zeros(12)
+    f, tau = ca.SX.zeros(12), ca.SX.zeros(12)
     for j, i in enumerate(stance.feet):
-        f[3 * i : 3 * i + 3] = f_stance[3 * j : 3 * j + 3]
+        s = slice(3 * i, 3 * i + 3)
+        f[s] = f_stance[3 * j : 3 * j + 3]
+        tau[s] = -ca.jacobian(r[j], q_joints[s]).T @ f[s]
     residual = w_req - (A @ lam if P.size else 0)
-    tau = inverse_dynamics(robot, qj, g_b, v, a, f)[6:]
     return GrfExpressions(lam, f, residual, tau, A)
 
 

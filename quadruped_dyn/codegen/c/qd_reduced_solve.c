@@ -70,6 +70,31 @@ static int qd_checked(qd_eval_fn f, int i_quat, int n_out, const casadi_int* nnz
   return qd_finite(flag ? flag : f(arg, res, iw, w, mem), res, n_out, nnz);
 }
 
+/* M_r = S M T (n x n, column-major, into res[0]; quadruped_dyn/dynamics/reduced_projection.py,
+ * mass_matrix_factors): the generated qd_M_r_parts(q_r, quat) (written before this text; called directly,
+ * not through a pointer, so the Cortex-M stack walk stays bounded) gives S_b (n x 6), T_b (6 x n) and M (18 x 18, the
+ * full inertia matrix), all column-major, with S = [S_b, I_12] (row 12, two feet: no joint part) and
+ * T = [T_b; I_12] (column 12: no joint part). The products in loops, not unrolled: ~2,200 multiply-adds
+ * in a few hundred bytes of code instead of ~60 kB of straight-line C per stance set. */
+static int qd_M_r_project(int n, const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem) {
+  casadi_real S_b[QD_N_MAX * 6], T_b[6 * QD_N_MAX], M[18 * 18], mt[18];
+  casadi_real* p_res[3] = {S_b, T_b, M};
+  int flag = qd_M_r_parts(arg, p_res, iw, w, mem);
+  if (flag || !res[0]) return flag;
+  for (int j = 0; j < n; ++j) { /* column j: mt = M T e_j, then S mt */
+    for (int i = 0; i < 18; ++i) mt[i] = j < 12 ? M[i + 18 * (6 + j)] : 0;
+    for (int k = 0; k < 6; ++k) {
+      for (int i = 0; i < 18; ++i) mt[i] += M[i + 18 * k] * T_b[k + 6 * j];
+    }
+    casadi_real* col = res[0] + n * j;
+    for (int i = 0; i < n; ++i) col[i] = i < 12 ? mt[6 + i] : 0;
+    for (int k = 0; k < 6; ++k) {
+      for (int i = 0; i < n; ++i) col[i] += S_b[i + n * k] * mt[k];
+    }
+  }
+  return 0;
+}
+
 /* LU factorisation with partial pivoting of M (n x n, column-major, in place: the multipliers of
  * L below the diagonal, U on and above it; piv[k] the row swapped with k at step k), column-oriented
  * (the inner loops run down contiguous columns). 0, or QD_SINGULAR when a pivot is below
