@@ -228,6 +228,16 @@ CASADI_SYMBOL_EXPORT const casadi_int* qd_did_full_sparsity_out(casadi_int i);
 typedef int (*qd_d_eval_fn)(const casadi_real**, casadi_real**, casadi_int*, casadi_real*, int);
 
 /* flag, or QD_NONFINITE if any of the n_out outputs (nnz[i] entries each) is not finite. */
+/* Where a generated function is passed as a pointer, the template is inlined into its caller so the
+ * call becomes direct and a static stack walk (-fcallgraph-info, docs/embedded.md) can bound it. */
+#ifndef QD_INLINE
+#if defined(__GNUC__)
+#define QD_INLINE static inline __attribute__((always_inline))
+#else
+#define QD_INLINE static inline
+#endif
+#endif
+
 static int qd_d_finite(int flag, casadi_real** res, int n_out, const casadi_int* nnz) {
   if (flag) return flag;
   for (int i = 0; i < n_out; ++i) {
@@ -253,7 +263,7 @@ static void qd_d_neg_product(const casadi_real* Minv, const casadi_int* sp, cons
   }
 }
 
-static int qd_dfd_full_solve(qd_d_eval_fn parts, qd_d_eval_fn did, const casadi_int* sp_dq, const casadi_int* sp_dv,
+QD_INLINE int qd_dfd_full_solve(qd_d_eval_fn parts, qd_d_eval_fn did, const casadi_int* sp_dq, const casadi_int* sp_dv,
                              const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem) {
   casadi_real L[QD_NV * QD_NV], X[QD_NV * QD_NV], Minv[QD_NV * QD_NV], nle[QD_NV], a[QD_NV];
   casadi_real Dq[QD_NV * QD_NV], Dv[QD_NV * QD_NV];
@@ -345,7 +355,7 @@ static void qd_d_trunk_product(int m, const casadi_real* P, const casadi_int* sp
  *   generated qd_did_full's trunk rows (sp_dq, sp_dv: its output patterns) and M:
  *   dlambda/dq = P dtau_dq[0:6] + d(P w)/dq, dlambda/dv = P dtau_dv[0:6], dlambda/da = P M[0:6].
  * d/dq along pinocchio.integrate as above. Return codes: 0, QD_NONFINITE. */
-static int qd_dgrf_solve(int m, int legs, qd_d_eval_fn parts, qd_d_eval_fn did, qd_d_eval_fn dir, const casadi_int* sp_dq,
+QD_INLINE int qd_dgrf_solve(int m, int legs, qd_d_eval_fn parts, qd_d_eval_fn did, qd_d_eval_fn dir, const casadi_int* sp_dq,
                          const casadi_int* sp_dv, const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w,
                          int mem) {
   casadi_real M[QD_NV * QD_NV], nle[QD_NV], wrench[6], seed[QD_NV], P[6 * 6], dPw[6 * QD_NV], Dq[QD_NV * QD_NV],

@@ -2287,6 +2287,15 @@ static int qd_M_r_parts(const casadi_real** arg, casadi_real** res, casadi_int* 
  * foot positions rounded at eps, it cannot resolve values below ~(64 eps)^2 (float: 6e-11). */
 #define QD_REGULARITY_FLOOR ((64 * QD_EPS) * (64 * QD_EPS))
 
+/* Where a generated function is passed as a pointer, the template is inlined into its caller so the
+ * call becomes direct and a static stack walk (-fcallgraph-info, docs/embedded.md) can bound it. */
+#ifndef QD_INLINE
+#if defined(__GNUC__)
+#define QD_INLINE static inline __attribute__((always_inline))
+#else
+#define QD_INLINE static inline
+#endif
+#endif
 typedef int (*qd_eval_fn)(const casadi_real**, casadi_real**, casadi_int*, casadi_real*, int);
 
 /* flag, or QD_NONFINITE if any of the n_out outputs (nnz[i] entries each) is not finite. */
@@ -2313,7 +2322,7 @@ static int qd_regular(const casadi_real** arg, int i_quat, casadi_int* iw, casad
 
 /* The checked call of a generated reduced function f with quat at arg[i_quat]: the stance's
  * regularity first, then f, then its outputs' finiteness. */
-static int qd_checked(qd_eval_fn f, int i_quat, int n_out, const casadi_int* nnz, const casadi_real** arg,
+QD_INLINE int qd_checked(qd_eval_fn f, int i_quat, int n_out, const casadi_int* nnz, const casadi_real** arg,
                       casadi_real** res, casadi_int* iw, casadi_real* w, int mem) {
   int flag = qd_regular(arg, i_quat, iw, w, mem);
   return qd_finite(flag ? flag : f(arg, res, iw, w, mem), res, n_out, nnz);
@@ -2392,7 +2401,7 @@ static void qd_lu_solve(int n, const casadi_real* LU, const int* piv, casadi_rea
 
 /* M_r (factorised: qd_lu_factor) and b = tau_ext - (C_r + G_r) at arg = (q_r, qd_r, tau_ext, quat), from the
  * generated evaluations, checked here in one pass. 0, QD_NONFINITE or QD_SINGULAR (nothing usable then). */
-static int qd_fd_r_factor(int n, qd_eval_fn M_r, qd_eval_fn CG_r, const casadi_real** arg, casadi_real* M, int* piv,
+QD_INLINE int qd_fd_r_factor(int n, qd_eval_fn M_r, qd_eval_fn CG_r, const casadi_real** arg, casadi_real* M, int* piv,
                           casadi_real* b, casadi_int* iw, casadi_real* w, int mem) {
   const casadi_real* m_arg[2] = {arg[0], arg[3]};
   const casadi_real* cg_arg[3] = {arg[0], arg[1], arg[3]};
@@ -2419,7 +2428,7 @@ static int qd_fd_r_factor(int n, qd_eval_fn M_r, qd_eval_fn CG_r, const casadi_r
  * M_r and C_r + G_r from the generated evaluations (qd_fd_r_factor), then the LU solve; no heap,
  * all temporaries on the stack (n <= QD_N_MAX). Each generated file calls it once with a constant
  * n, so the compiler can specialise it. */
-static inline int qd_fd_r_solve(int n, qd_eval_fn M_r, qd_eval_fn CG_r, const casadi_real** arg, casadi_real** res,
+QD_INLINE int qd_fd_r_solve(int n, qd_eval_fn M_r, qd_eval_fn CG_r, const casadi_real** arg, casadi_real** res,
                                 casadi_int* iw, casadi_real* w, int mem) {
   casadi_real M[QD_N_MAX * QD_N_MAX], b[QD_N_MAX];
   int piv[QD_N_MAX];
@@ -2451,7 +2460,7 @@ static inline int qd_fd_r_solve(int n, qd_eval_fn M_r, qd_eval_fn CG_r, const ca
 
 /* n coordinates; nq of them (the first) are differentiated (the rest do not enter id_r: zero columns).
  * dir: the generated directional derivative (q_r, qd_r, qdd_r, quat, dq_r, dqd_r, dtheta) -> (dtau_r). */
-static int qd_dfd_r_solve(int n, int nq, qd_eval_fn M_r, qd_eval_fn CG_r, qd_eval_fn dir, const casadi_real** arg,
+QD_INLINE int qd_dfd_r_solve(int n, int nq, qd_eval_fn M_r, qd_eval_fn CG_r, qd_eval_fn dir, const casadi_real** arg,
                           casadi_real** res, casadi_int* iw, casadi_real* w, int mem) {
   casadi_real M[QD_N_MAX * QD_N_MAX], qdd[QD_N_MAX], X[QD_N_MAX * (3 * QD_N_MAX + 3)];
   casadi_real seed[2 * QD_N_MAX + 3];

@@ -16,7 +16,7 @@
 
 /* n coordinates; nq of them (the first) are differentiated (the rest do not enter id_r: zero columns).
  * dir: the generated directional derivative (q_r, qd_r, qdd_r, quat, dq_r, dqd_r, dtheta) -> (dtau_r). */
-static int qd_dfd_r_solve(int n, int nq, qd_eval_fn M_r, qd_eval_fn CG_r, qd_eval_fn dir, const casadi_real** arg,
+QD_INLINE int qd_dfd_r_solve(int n, int nq, qd_eval_fn M_r, qd_eval_fn CG_r, qd_eval_fn dir, const casadi_real** arg,
                           casadi_real** res, casadi_int* iw, casadi_real* w, int mem) {
   casadi_real M[QD_N_MAX * QD_N_MAX], qdd[QD_N_MAX], X[QD_N_MAX * (3 * QD_N_MAX + 3)];
   casadi_real seed[2 * QD_N_MAX + 3];
