@@ -57,3 +57,14 @@ def drop_evaluation(c_text: str, raw: str) -> str:
 def entry_point(name: str) -> str:
     return (rf"(CASADI_SYMBOL_EXPORT int {name}\(const casadi_real\*\* arg, casadi_real\*\* res, casadi_int\* iw, "
             rf"casadi_real\* w, int mem\)\{{\n)  return (casadi_f\d+)\(arg, res, iw, w, mem\);\n")
+
+
+def evaluations(c_text: str, names: list[str]) -> dict[str, str]:
+    """Entry point name -> the static evaluation function CasADi's entry point calls (casadi_fN)."""
+    out = {}
+    for name in names:
+        found = re.search(entry_point(name), c_text)
+        if not found:
+            raise AssertionError(f"entry point of {name} not found in CasADi's output")
+        out[name] = found.group(2)
+    return out

@@ -20,7 +20,15 @@ from pathlib import Path
 
 import casadi as ca
 
-from quadruped_dyn.codegen.casadi_source import PREFIX, TEMPLATES, casadi_c, drop_evaluation, entry_point, work_sizes
+from quadruped_dyn.codegen.casadi_source import (
+    PREFIX,
+    TEMPLATES,
+    casadi_c,
+    drop_evaluation,
+    entry_point,
+    evaluations,
+    work_sizes,
+)
 from quadruped_dyn.codegen.emit_derivatives import (
     DERIVATIVE_NAMES,
     GRF_DERIVATIVE_NAMES,
@@ -350,12 +358,7 @@ def _checked_reduced_c(c_text: str, casadi_header: str, functions: list[ca.Funct
     (checked once in the solve) and solves M_r qdd_r = tau_ext - CG_r."""
     first = c_text.index(f"\n/* {functions[0].name()}:")
     templates = "\n".join((TEMPLATES / t).read_text() for t in ("qd_reduced_solve.c", "qd_reduced_derivatives.c"))
-    raw = {}  # entry point -> CasADi's static evaluation function
-    for f in functions:
-        found = re.search(entry_point(f.name()), c_text)
-        if not found:
-            raise AssertionError(f"entry point of {f.name()} not found in CasADi's output")
-        raw[f.name()] = found.group(2)
+    raw = evaluations(c_text, [f.name() for f in functions])  # entry point -> CasADi's evaluation function
     m_r_eval = ("static int qd_M_r_eval(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, "
                 f"int mem) {{\n  return qd_M_r_project({functions[0].size1_out(0)}, arg, res, iw, w, mem);\n}}\n")
     c_text = c_text[:first] + "\n" + helpers_c + "\n" + templates + "\n" + m_r_eval + c_text[first:]
@@ -387,12 +390,7 @@ def _grf_through_id_full(robot: Robot, c_text: str, functions: list[ca.Function]
     """Route every qd_grf_<feet> of qd_<robot>.c through ``c/qd_grf_solve.c``: id_full's evaluation (one
     Newton-Euler pass) and a generated static qd_grf_balance_<feet> (``grf.grf_balance``), instead of
     CasADi's unrolled graph, which repeats the recursion in each of the 15 (dropped: ~0.4 MB per robot)."""
-    raw = {}
-    for f in functions:
-        found = re.search(entry_point(f.name()), c_text)
-        if not found:
-            raise AssertionError(f"entry point of {f.name()} not found in CasADi's output")
-        raw[f.name()] = found.group(2)
+    raw = evaluations(c_text, [f.name() for f in functions])
     id_full = next(f for f in functions if f.name() == PREFIX + "id_full")
     if id_full.name_in() != ["q", "v", "a", "f"] or id_full.name_out() != ["w_res", "tau"] or id_full.sz_arg() != 4:
         raise AssertionError("qd_grf_solve calls id_full as (q, v, a, f) -> (w_res, tau) with no work memory")

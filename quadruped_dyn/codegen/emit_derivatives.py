@@ -34,7 +34,7 @@ import re
 
 import casadi as ca
 
-from quadruped_dyn.codegen.casadi_source import PREFIX, TEMPLATES, casadi_c, drop_evaluation, entry_point, work_sizes
+from quadruped_dyn.codegen.casadi_source import PREFIX, TEMPLATES, casadi_c, drop_evaluation, entry_point, evaluations, work_sizes
 from quadruped_dyn.dynamics.derivatives import configuration_tangent, full_derivatives, quaternion_tangent
 from quadruped_dyn.dynamics.grf import solve_lambda
 from quadruped_dyn.dynamics.kinematics import foot_position
@@ -119,12 +119,9 @@ def derivative_source(file_stem: str, functions: list[ca.Function], precision: s
     first = c_text.index(f"\n/* {functions[0].name()}:")
     c_text = c_text[:first] + "\n" + (TEMPLATES / "qd_derivatives_solve.c").read_text() + c_text[first:]
     work = work_sizes(h_text)
-    raw = {}
-    for f in functions:
-        found = re.search(entry_point(f.name()), c_text)
-        if not found or work[f.name()] != (0, 0):
-            raise AssertionError(f"entry point of {f.name()} not found, or it needs work memory")
-        raw[f.name()] = found.group(2)
+    raw = evaluations(c_text, [f.name() for f in functions])
+    if any(work[f.name()] != (0, 0) for f in functions):
+        raise AssertionError("a derivative function needs work memory; qd_derivatives_solve.c passes none")
     for f in functions:
         signature = f.name() == PREFIX + "dfd_full" or (f.name().startswith(PREFIX + "dgrf_")
                                                          and not f.name().startswith(PREFIX + "dgrf_dir_"))
