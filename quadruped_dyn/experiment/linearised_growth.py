@@ -22,6 +22,7 @@ import numpy as np
 from scipy.linalg import expm
 
 from quadruped_dyn.dynamics.derivatives import ReducedDerivatives, reduced_derivatives
+from quadruped_dyn.errors import InputError
 from quadruped_dyn.experiment.gait import Gait, Plan, gait_plan
 from quadruped_dyn.experiment.paper_experiment import growth_rate
 from quadruped_dyn.experiment.plan_ik import ReferenceSample, reference
@@ -66,6 +67,8 @@ def linearised_departure(robot: Robot, gait: Gait, horizon: float, dt: float = S
     twin's one-ulp perturbation through the linearised, projected model (module docstring) in
     steps of ``dt`` s over ``horizon`` s -- what the experiment's twin run measures as its
     difference from the 'paper' run."""
+    if not (np.isfinite(horizon) and np.isfinite(dt) and 0 < dt <= horizon):
+        raise InputError(f"horizon {horizon!r} s and dt {dt!r} s: expected finite times with 0 < dt <= horizon")
     plan = gait_plan(robot, gait)
     ref0 = reference(plan, 0.0)
     y0 = np.concatenate([ref0.q_r, ref0.qd_r])

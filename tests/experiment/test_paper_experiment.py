@@ -127,6 +127,17 @@ def test_the_error_budget_accounts_for_the_walks_error(walk_reports, robot_name)
         assert b["total_pct"] <= BUDGET_SHORTFALL * (b["roundoff_pct"] + b["truncation_pct"]), (signal, b)
 
 
+@pytest.mark.parametrize("horizon, dt", [(float("nan"), 0.005), (1.0, 0.0), (1.0, -0.005), (0.001, 0.005)])
+def test_linearised_growth_rejects_bad_times(horizon, dt):
+    from quadruped_dyn.errors import InputError
+    from quadruped_dyn.experiment.gait import GAITS
+    from quadruped_dyn.experiment.linearised_growth import linearised_growth_rate
+    from quadruped_dyn.model.robot import load_robot
+
+    with pytest.raises(InputError, match="0 < dt <= horizon"):
+        linearised_growth_rate(load_robot("paper"), GAITS["walk"], horizon, dt)
+
+
 @pytest.mark.slow
 @pytest.mark.parametrize("robot_name", ["paper", "go2"])
 def test_the_derivatives_predict_the_measured_growth_rate(walk_reports, robot_name):
