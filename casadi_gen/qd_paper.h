@@ -50,10 +50,10 @@
  *                                   d lambda = P d w_req (did_full's trunk rows) + d(P w)/dq dq.
  * In each reduced file (the trunk orientation is the input quat: d/dq_r at fixed quat, the roll's
  * column 0; d/dtheta along quat -> quat (x) exp(dtheta/2), a body-frame increment):
- *   did_r_dir_<feet>(q_r, qd_r, qdd_r, quat, dq_r, dqd_r, dtheta)  directional derivative of id_r;
  *   dfd_r_<feet>(q_r, qd_r, tau_ext, quat)  d qdd_r/dq_r, d qdd_r/dqd_r, d qdd_r/dtau_ext = M_r^-1,
- *                                   d qdd_r/dtheta: did_r_dir per direction, -M_r^-1 by fd_r's LU;
- *                                   return codes as fd_r.
+ *                                   d qdd_r/dtheta: -M_r^-1 d id_r/dx by fd_r's LU, d id_r/dx by the chain
+ *                                   rule over did_full and id_full (id_r = S rnea(q, v, a)); needs caller
+ *                                   work memory w (its _work entry, _SZ_W); return codes as fd_r.
  *
  * Signals:
  *   q        p [m, world frame], quaternion (x, y, z, w) of R (trunk -> world, need not be unit), 12 joint angles [rad] in order FL, FR, BL, BR x (HAA, HFE, KFE)
@@ -84,10 +84,6 @@
  *   da_dq    d a / dq (18x18, dense), a = M^-1 (tau_full - C - G); tangent columns as dtau_dq
  *   da_dv    d a / dv (18x18, dense)
  *   da_dtau  d a / d tau_full = M^-1 (18x18, dense)
- *   dq_r     direction of q_r (n); its 13th entry (the roll) has no effect: the roll is read from quat
- *   dqd_r    direction of qd_r (n)
- *   dtheta   direction of the trunk orientation: body-frame rotation increment, quat -> quat (x) exp(dtheta / 2) [rad]
- *   dtau_r   directional derivative of tau_r along (dq_r, dqd_r, dtheta) at fixed qdd_r (n)
  *   dqdd_dq  d qdd_r / d q_r (n x n, dense) at fixed quat; its 13th column (the roll) is 0
  *   dqdd_dqd d qdd_r / d qd_r (n x n, dense)
  *   dqdd_dtaud qdd_r / d tau_ext = M_r^-1 (n x n, dense)
@@ -127,78 +123,67 @@
  *   qd_G_r_FL_FR_BL_BR(q_r[12], quat[4]) -> (G_r[12]);  iw 0, w 0  [stand, returns QD_NONFINITE / QD_SINGULAR / QD_DEGENERATE]
  *   qd_id_r_FL_FR_BL_BR(q_r[12], qd_r[12], qdd_r[12], quat[4]) -> (tau_r[12]);  iw 0, w 0  [stand, returns QD_NONFINITE / QD_SINGULAR / QD_DEGENERATE]
  *   qd_fd_r_FL_FR_BL_BR(q_r[12], qd_r[12], tau_ext[12], quat[4]) -> (qdd_r[12]);  iw 0, w 0  [stand, returns QD_NONFINITE / QD_SINGULAR / QD_DEGENERATE]
- *   qd_did_r_dir_FL_FR_BL_BR(q_r[12], qd_r[12], qdd_r[12], quat[4], dq_r[12], dqd_r[12], dtheta[3]) -> (dtau_r[12]);  iw 0, w 0  [stand, returns QD_NONFINITE / QD_SINGULAR / QD_DEGENERATE]
- *   qd_dfd_r_FL_FR_BL_BR(q_r[12], qd_r[12], tau_ext[12], quat[4]) -> (dqdd_dq[12x12], dqdd_dqd[12x12], dqdd_dtau[12x12], dqdd_dtheta[12x3]);  iw 0, w 0  [stand, returns QD_NONFINITE / QD_SINGULAR / QD_DEGENERATE]
+ *   qd_dfd_r_FL_FR_BL_BR(q_r[12], qd_r[12], tau_ext[12], quat[4]) -> (dqdd_dq[12x12], dqdd_dqd[12x12], dqdd_dtau[12x12], dqdd_dtheta[12x3]);  iw 0, w 1320  [stand, returns QD_NONFINITE / QD_SINGULAR / QD_DEGENERATE]
  *   qd_M_r_FL_FR_BL(q_r[12], quat[4]) -> (M_r[12x12]);  iw 0, w 0  [walk (lifted BR), returns QD_NONFINITE / QD_SINGULAR / QD_DEGENERATE]
  *   qd_CG_r_FL_FR_BL(q_r[12], qd_r[12], quat[4]) -> (CG_r[12]);  iw 0, w 0  [walk (lifted BR), returns QD_NONFINITE / QD_SINGULAR / QD_DEGENERATE]
  *   qd_G_r_FL_FR_BL(q_r[12], quat[4]) -> (G_r[12]);  iw 0, w 0  [walk (lifted BR), returns QD_NONFINITE / QD_SINGULAR / QD_DEGENERATE]
  *   qd_id_r_FL_FR_BL(q_r[12], qd_r[12], qdd_r[12], quat[4]) -> (tau_r[12]);  iw 0, w 0  [walk (lifted BR), returns QD_NONFINITE / QD_SINGULAR / QD_DEGENERATE]
  *   qd_fd_r_FL_FR_BL(q_r[12], qd_r[12], tau_ext[12], quat[4]) -> (qdd_r[12]);  iw 0, w 0  [walk (lifted BR), returns QD_NONFINITE / QD_SINGULAR / QD_DEGENERATE]
- *   qd_did_r_dir_FL_FR_BL(q_r[12], qd_r[12], qdd_r[12], quat[4], dq_r[12], dqd_r[12], dtheta[3]) -> (dtau_r[12]);  iw 0, w 0  [walk (lifted BR), returns QD_NONFINITE / QD_SINGULAR / QD_DEGENERATE]
- *   qd_dfd_r_FL_FR_BL(q_r[12], qd_r[12], tau_ext[12], quat[4]) -> (dqdd_dq[12x12], dqdd_dqd[12x12], dqdd_dtau[12x12], dqdd_dtheta[12x3]);  iw 0, w 0  [walk (lifted BR), returns QD_NONFINITE / QD_SINGULAR / QD_DEGENERATE]
+ *   qd_dfd_r_FL_FR_BL(q_r[12], qd_r[12], tau_ext[12], quat[4]) -> (dqdd_dq[12x12], dqdd_dqd[12x12], dqdd_dtau[12x12], dqdd_dtheta[12x3]);  iw 0, w 1320  [walk (lifted BR), returns QD_NONFINITE / QD_SINGULAR / QD_DEGENERATE]
  *   qd_M_r_FL_FR_BR(q_r[12], quat[4]) -> (M_r[12x12]);  iw 0, w 0  [walk (lifted BL), returns QD_NONFINITE / QD_SINGULAR / QD_DEGENERATE]
  *   qd_CG_r_FL_FR_BR(q_r[12], qd_r[12], quat[4]) -> (CG_r[12]);  iw 0, w 0  [walk (lifted BL), returns QD_NONFINITE / QD_SINGULAR / QD_DEGENERATE]
  *   qd_G_r_FL_FR_BR(q_r[12], quat[4]) -> (G_r[12]);  iw 0, w 0  [walk (lifted BL), returns QD_NONFINITE / QD_SINGULAR / QD_DEGENERATE]
  *   qd_id_r_FL_FR_BR(q_r[12], qd_r[12], qdd_r[12], quat[4]) -> (tau_r[12]);  iw 0, w 0  [walk (lifted BL), returns QD_NONFINITE / QD_SINGULAR / QD_DEGENERATE]
  *   qd_fd_r_FL_FR_BR(q_r[12], qd_r[12], tau_ext[12], quat[4]) -> (qdd_r[12]);  iw 0, w 0  [walk (lifted BL), returns QD_NONFINITE / QD_SINGULAR / QD_DEGENERATE]
- *   qd_did_r_dir_FL_FR_BR(q_r[12], qd_r[12], qdd_r[12], quat[4], dq_r[12], dqd_r[12], dtheta[3]) -> (dtau_r[12]);  iw 0, w 0  [walk (lifted BL), returns QD_NONFINITE / QD_SINGULAR / QD_DEGENERATE]
- *   qd_dfd_r_FL_FR_BR(q_r[12], qd_r[12], tau_ext[12], quat[4]) -> (dqdd_dq[12x12], dqdd_dqd[12x12], dqdd_dtau[12x12], dqdd_dtheta[12x3]);  iw 0, w 0  [walk (lifted BL), returns QD_NONFINITE / QD_SINGULAR / QD_DEGENERATE]
+ *   qd_dfd_r_FL_FR_BR(q_r[12], qd_r[12], tau_ext[12], quat[4]) -> (dqdd_dq[12x12], dqdd_dqd[12x12], dqdd_dtau[12x12], dqdd_dtheta[12x3]);  iw 0, w 1320  [walk (lifted BL), returns QD_NONFINITE / QD_SINGULAR / QD_DEGENERATE]
  *   qd_M_r_FL_BL_BR(q_r[12], quat[4]) -> (M_r[12x12]);  iw 0, w 0  [walk (lifted FR), returns QD_NONFINITE / QD_SINGULAR / QD_DEGENERATE]
  *   qd_CG_r_FL_BL_BR(q_r[12], qd_r[12], quat[4]) -> (CG_r[12]);  iw 0, w 0  [walk (lifted FR), returns QD_NONFINITE / QD_SINGULAR / QD_DEGENERATE]
  *   qd_G_r_FL_BL_BR(q_r[12], quat[4]) -> (G_r[12]);  iw 0, w 0  [walk (lifted FR), returns QD_NONFINITE / QD_SINGULAR / QD_DEGENERATE]
  *   qd_id_r_FL_BL_BR(q_r[12], qd_r[12], qdd_r[12], quat[4]) -> (tau_r[12]);  iw 0, w 0  [walk (lifted FR), returns QD_NONFINITE / QD_SINGULAR / QD_DEGENERATE]
  *   qd_fd_r_FL_BL_BR(q_r[12], qd_r[12], tau_ext[12], quat[4]) -> (qdd_r[12]);  iw 0, w 0  [walk (lifted FR), returns QD_NONFINITE / QD_SINGULAR / QD_DEGENERATE]
- *   qd_did_r_dir_FL_BL_BR(q_r[12], qd_r[12], qdd_r[12], quat[4], dq_r[12], dqd_r[12], dtheta[3]) -> (dtau_r[12]);  iw 0, w 0  [walk (lifted FR), returns QD_NONFINITE / QD_SINGULAR / QD_DEGENERATE]
- *   qd_dfd_r_FL_BL_BR(q_r[12], qd_r[12], tau_ext[12], quat[4]) -> (dqdd_dq[12x12], dqdd_dqd[12x12], dqdd_dtau[12x12], dqdd_dtheta[12x3]);  iw 0, w 0  [walk (lifted FR), returns QD_NONFINITE / QD_SINGULAR / QD_DEGENERATE]
+ *   qd_dfd_r_FL_BL_BR(q_r[12], qd_r[12], tau_ext[12], quat[4]) -> (dqdd_dq[12x12], dqdd_dqd[12x12], dqdd_dtau[12x12], dqdd_dtheta[12x3]);  iw 0, w 1320  [walk (lifted FR), returns QD_NONFINITE / QD_SINGULAR / QD_DEGENERATE]
  *   qd_M_r_FR_BL_BR(q_r[12], quat[4]) -> (M_r[12x12]);  iw 0, w 0  [walk (lifted FL), returns QD_NONFINITE / QD_SINGULAR / QD_DEGENERATE]
  *   qd_CG_r_FR_BL_BR(q_r[12], qd_r[12], quat[4]) -> (CG_r[12]);  iw 0, w 0  [walk (lifted FL), returns QD_NONFINITE / QD_SINGULAR / QD_DEGENERATE]
  *   qd_G_r_FR_BL_BR(q_r[12], quat[4]) -> (G_r[12]);  iw 0, w 0  [walk (lifted FL), returns QD_NONFINITE / QD_SINGULAR / QD_DEGENERATE]
  *   qd_id_r_FR_BL_BR(q_r[12], qd_r[12], qdd_r[12], quat[4]) -> (tau_r[12]);  iw 0, w 0  [walk (lifted FL), returns QD_NONFINITE / QD_SINGULAR / QD_DEGENERATE]
  *   qd_fd_r_FR_BL_BR(q_r[12], qd_r[12], tau_ext[12], quat[4]) -> (qdd_r[12]);  iw 0, w 0  [walk (lifted FL), returns QD_NONFINITE / QD_SINGULAR / QD_DEGENERATE]
- *   qd_did_r_dir_FR_BL_BR(q_r[12], qd_r[12], qdd_r[12], quat[4], dq_r[12], dqd_r[12], dtheta[3]) -> (dtau_r[12]);  iw 0, w 0  [walk (lifted FL), returns QD_NONFINITE / QD_SINGULAR / QD_DEGENERATE]
- *   qd_dfd_r_FR_BL_BR(q_r[12], qd_r[12], tau_ext[12], quat[4]) -> (dqdd_dq[12x12], dqdd_dqd[12x12], dqdd_dtau[12x12], dqdd_dtheta[12x3]);  iw 0, w 0  [walk (lifted FL), returns QD_NONFINITE / QD_SINGULAR / QD_DEGENERATE]
+ *   qd_dfd_r_FR_BL_BR(q_r[12], qd_r[12], tau_ext[12], quat[4]) -> (dqdd_dq[12x12], dqdd_dqd[12x12], dqdd_dtau[12x12], dqdd_dtheta[12x3]);  iw 0, w 1320  [walk (lifted FL), returns QD_NONFINITE / QD_SINGULAR / QD_DEGENERATE]
  *   qd_M_r_FL_FR(q_r[13], quat[4]) -> (M_r[13x13]);  iw 0, w 0  [front, returns QD_NONFINITE / QD_SINGULAR / QD_DEGENERATE]
  *   qd_CG_r_FL_FR(q_r[13], qd_r[13], quat[4]) -> (CG_r[13]);  iw 0, w 0  [front, returns QD_NONFINITE / QD_SINGULAR / QD_DEGENERATE]
  *   qd_G_r_FL_FR(q_r[13], quat[4]) -> (G_r[13]);  iw 0, w 0  [front, returns QD_NONFINITE / QD_SINGULAR / QD_DEGENERATE]
  *   qd_id_r_FL_FR(q_r[13], qd_r[13], qdd_r[13], quat[4]) -> (tau_r[13]);  iw 0, w 0  [front, returns QD_NONFINITE / QD_SINGULAR / QD_DEGENERATE]
  *   qd_fd_r_FL_FR(q_r[13], qd_r[13], tau_ext[13], quat[4]) -> (qdd_r[13]);  iw 0, w 0  [front, returns QD_NONFINITE / QD_SINGULAR / QD_DEGENERATE]
- *   qd_did_r_dir_FL_FR(q_r[13], qd_r[13], qdd_r[13], quat[4], dq_r[13], dqd_r[13], dtheta[3]) -> (dtau_r[13]);  iw 0, w 0  [front, returns QD_NONFINITE / QD_SINGULAR / QD_DEGENERATE]
- *   qd_dfd_r_FL_FR(q_r[13], qd_r[13], tau_ext[13], quat[4]) -> (dqdd_dq[13x13], dqdd_dqd[13x13], dqdd_dtau[13x13], dqdd_dtheta[13x3]);  iw 0, w 0  [front, returns QD_NONFINITE / QD_SINGULAR / QD_DEGENERATE]
+ *   qd_dfd_r_FL_FR(q_r[13], qd_r[13], tau_ext[13], quat[4]) -> (dqdd_dq[13x13], dqdd_dqd[13x13], dqdd_dtau[13x13], dqdd_dtheta[13x3]);  iw 0, w 1359  [front, returns QD_NONFINITE / QD_SINGULAR / QD_DEGENERATE]
  *   qd_M_r_FL_BL(q_r[13], quat[4]) -> (M_r[13x13]);  iw 0, w 0  [pace (lateral), returns QD_NONFINITE / QD_SINGULAR / QD_DEGENERATE]
  *   qd_CG_r_FL_BL(q_r[13], qd_r[13], quat[4]) -> (CG_r[13]);  iw 0, w 0  [pace (lateral), returns QD_NONFINITE / QD_SINGULAR / QD_DEGENERATE]
  *   qd_G_r_FL_BL(q_r[13], quat[4]) -> (G_r[13]);  iw 0, w 0  [pace (lateral), returns QD_NONFINITE / QD_SINGULAR / QD_DEGENERATE]
  *   qd_id_r_FL_BL(q_r[13], qd_r[13], qdd_r[13], quat[4]) -> (tau_r[13]);  iw 0, w 0  [pace (lateral), returns QD_NONFINITE / QD_SINGULAR / QD_DEGENERATE]
  *   qd_fd_r_FL_BL(q_r[13], qd_r[13], tau_ext[13], quat[4]) -> (qdd_r[13]);  iw 0, w 0  [pace (lateral), returns QD_NONFINITE / QD_SINGULAR / QD_DEGENERATE]
- *   qd_did_r_dir_FL_BL(q_r[13], qd_r[13], qdd_r[13], quat[4], dq_r[13], dqd_r[13], dtheta[3]) -> (dtau_r[13]);  iw 0, w 0  [pace (lateral), returns QD_NONFINITE / QD_SINGULAR / QD_DEGENERATE]
- *   qd_dfd_r_FL_BL(q_r[13], qd_r[13], tau_ext[13], quat[4]) -> (dqdd_dq[13x13], dqdd_dqd[13x13], dqdd_dtau[13x13], dqdd_dtheta[13x3]);  iw 0, w 0  [pace (lateral), returns QD_NONFINITE / QD_SINGULAR / QD_DEGENERATE]
+ *   qd_dfd_r_FL_BL(q_r[13], qd_r[13], tau_ext[13], quat[4]) -> (dqdd_dq[13x13], dqdd_dqd[13x13], dqdd_dtau[13x13], dqdd_dtheta[13x3]);  iw 0, w 1359  [pace (lateral), returns QD_NONFINITE / QD_SINGULAR / QD_DEGENERATE]
  *   qd_M_r_FL_BR(q_r[13], quat[4]) -> (M_r[13x13]);  iw 0, w 0  [trot (diagonal), returns QD_NONFINITE / QD_SINGULAR / QD_DEGENERATE]
  *   qd_CG_r_FL_BR(q_r[13], qd_r[13], quat[4]) -> (CG_r[13]);  iw 0, w 0  [trot (diagonal), returns QD_NONFINITE / QD_SINGULAR / QD_DEGENERATE]
  *   qd_G_r_FL_BR(q_r[13], quat[4]) -> (G_r[13]);  iw 0, w 0  [trot (diagonal), returns QD_NONFINITE / QD_SINGULAR / QD_DEGENERATE]
  *   qd_id_r_FL_BR(q_r[13], qd_r[13], qdd_r[13], quat[4]) -> (tau_r[13]);  iw 0, w 0  [trot (diagonal), returns QD_NONFINITE / QD_SINGULAR / QD_DEGENERATE]
  *   qd_fd_r_FL_BR(q_r[13], qd_r[13], tau_ext[13], quat[4]) -> (qdd_r[13]);  iw 0, w 0  [trot (diagonal), returns QD_NONFINITE / QD_SINGULAR / QD_DEGENERATE]
- *   qd_did_r_dir_FL_BR(q_r[13], qd_r[13], qdd_r[13], quat[4], dq_r[13], dqd_r[13], dtheta[3]) -> (dtau_r[13]);  iw 0, w 0  [trot (diagonal), returns QD_NONFINITE / QD_SINGULAR / QD_DEGENERATE]
- *   qd_dfd_r_FL_BR(q_r[13], qd_r[13], tau_ext[13], quat[4]) -> (dqdd_dq[13x13], dqdd_dqd[13x13], dqdd_dtau[13x13], dqdd_dtheta[13x3]);  iw 0, w 0  [trot (diagonal), returns QD_NONFINITE / QD_SINGULAR / QD_DEGENERATE]
+ *   qd_dfd_r_FL_BR(q_r[13], qd_r[13], tau_ext[13], quat[4]) -> (dqdd_dq[13x13], dqdd_dqd[13x13], dqdd_dtau[13x13], dqdd_dtheta[13x3]);  iw 0, w 1359  [trot (diagonal), returns QD_NONFINITE / QD_SINGULAR / QD_DEGENERATE]
  *   qd_M_r_FR_BL(q_r[13], quat[4]) -> (M_r[13x13]);  iw 0, w 0  [trot (diagonal), returns QD_NONFINITE / QD_SINGULAR / QD_DEGENERATE]
  *   qd_CG_r_FR_BL(q_r[13], qd_r[13], quat[4]) -> (CG_r[13]);  iw 0, w 0  [trot (diagonal), returns QD_NONFINITE / QD_SINGULAR / QD_DEGENERATE]
  *   qd_G_r_FR_BL(q_r[13], quat[4]) -> (G_r[13]);  iw 0, w 0  [trot (diagonal), returns QD_NONFINITE / QD_SINGULAR / QD_DEGENERATE]
  *   qd_id_r_FR_BL(q_r[13], qd_r[13], qdd_r[13], quat[4]) -> (tau_r[13]);  iw 0, w 0  [trot (diagonal), returns QD_NONFINITE / QD_SINGULAR / QD_DEGENERATE]
  *   qd_fd_r_FR_BL(q_r[13], qd_r[13], tau_ext[13], quat[4]) -> (qdd_r[13]);  iw 0, w 0  [trot (diagonal), returns QD_NONFINITE / QD_SINGULAR / QD_DEGENERATE]
- *   qd_did_r_dir_FR_BL(q_r[13], qd_r[13], qdd_r[13], quat[4], dq_r[13], dqd_r[13], dtheta[3]) -> (dtau_r[13]);  iw 0, w 0  [trot (diagonal), returns QD_NONFINITE / QD_SINGULAR / QD_DEGENERATE]
- *   qd_dfd_r_FR_BL(q_r[13], qd_r[13], tau_ext[13], quat[4]) -> (dqdd_dq[13x13], dqdd_dqd[13x13], dqdd_dtau[13x13], dqdd_dtheta[13x3]);  iw 0, w 0  [trot (diagonal), returns QD_NONFINITE / QD_SINGULAR / QD_DEGENERATE]
+ *   qd_dfd_r_FR_BL(q_r[13], qd_r[13], tau_ext[13], quat[4]) -> (dqdd_dq[13x13], dqdd_dqd[13x13], dqdd_dtau[13x13], dqdd_dtheta[13x3]);  iw 0, w 1359  [trot (diagonal), returns QD_NONFINITE / QD_SINGULAR / QD_DEGENERATE]
  *   qd_M_r_FR_BR(q_r[13], quat[4]) -> (M_r[13x13]);  iw 0, w 0  [pace (lateral), returns QD_NONFINITE / QD_SINGULAR / QD_DEGENERATE]
  *   qd_CG_r_FR_BR(q_r[13], qd_r[13], quat[4]) -> (CG_r[13]);  iw 0, w 0  [pace (lateral), returns QD_NONFINITE / QD_SINGULAR / QD_DEGENERATE]
  *   qd_G_r_FR_BR(q_r[13], quat[4]) -> (G_r[13]);  iw 0, w 0  [pace (lateral), returns QD_NONFINITE / QD_SINGULAR / QD_DEGENERATE]
  *   qd_id_r_FR_BR(q_r[13], qd_r[13], qdd_r[13], quat[4]) -> (tau_r[13]);  iw 0, w 0  [pace (lateral), returns QD_NONFINITE / QD_SINGULAR / QD_DEGENERATE]
  *   qd_fd_r_FR_BR(q_r[13], qd_r[13], tau_ext[13], quat[4]) -> (qdd_r[13]);  iw 0, w 0  [pace (lateral), returns QD_NONFINITE / QD_SINGULAR / QD_DEGENERATE]
- *   qd_did_r_dir_FR_BR(q_r[13], qd_r[13], qdd_r[13], quat[4], dq_r[13], dqd_r[13], dtheta[3]) -> (dtau_r[13]);  iw 0, w 0  [pace (lateral), returns QD_NONFINITE / QD_SINGULAR / QD_DEGENERATE]
- *   qd_dfd_r_FR_BR(q_r[13], qd_r[13], tau_ext[13], quat[4]) -> (dqdd_dq[13x13], dqdd_dqd[13x13], dqdd_dtau[13x13], dqdd_dtheta[13x3]);  iw 0, w 0  [pace (lateral), returns QD_NONFINITE / QD_SINGULAR / QD_DEGENERATE]
+ *   qd_dfd_r_FR_BR(q_r[13], qd_r[13], tau_ext[13], quat[4]) -> (dqdd_dq[13x13], dqdd_dqd[13x13], dqdd_dtau[13x13], dqdd_dtheta[13x3]);  iw 0, w 1359  [pace (lateral), returns QD_NONFINITE / QD_SINGULAR / QD_DEGENERATE]
  *   qd_M_r_BL_BR(q_r[13], quat[4]) -> (M_r[13x13]);  iw 0, w 0  [back, returns QD_NONFINITE / QD_SINGULAR / QD_DEGENERATE]
  *   qd_CG_r_BL_BR(q_r[13], qd_r[13], quat[4]) -> (CG_r[13]);  iw 0, w 0  [back, returns QD_NONFINITE / QD_SINGULAR / QD_DEGENERATE]
  *   qd_G_r_BL_BR(q_r[13], quat[4]) -> (G_r[13]);  iw 0, w 0  [back, returns QD_NONFINITE / QD_SINGULAR / QD_DEGENERATE]
  *   qd_id_r_BL_BR(q_r[13], qd_r[13], qdd_r[13], quat[4]) -> (tau_r[13]);  iw 0, w 0  [back, returns QD_NONFINITE / QD_SINGULAR / QD_DEGENERATE]
  *   qd_fd_r_BL_BR(q_r[13], qd_r[13], tau_ext[13], quat[4]) -> (qdd_r[13]);  iw 0, w 0  [back, returns QD_NONFINITE / QD_SINGULAR / QD_DEGENERATE]
- *   qd_did_r_dir_BL_BR(q_r[13], qd_r[13], qdd_r[13], quat[4], dq_r[13], dqd_r[13], dtheta[3]) -> (dtau_r[13]);  iw 0, w 0  [back, returns QD_NONFINITE / QD_SINGULAR / QD_DEGENERATE]
- *   qd_dfd_r_BL_BR(q_r[13], qd_r[13], tau_ext[13], quat[4]) -> (dqdd_dq[13x13], dqdd_dqd[13x13], dqdd_dtau[13x13], dqdd_dtheta[13x3]);  iw 0, w 0  [back, returns QD_NONFINITE / QD_SINGULAR / QD_DEGENERATE]
+ *   qd_dfd_r_BL_BR(q_r[13], qd_r[13], tau_ext[13], quat[4]) -> (dqdd_dq[13x13], dqdd_dqd[13x13], dqdd_dtau[13x13], dqdd_dtheta[13x3]);  iw 0, w 1359  [back, returns QD_NONFINITE / QD_SINGULAR / QD_DEGENERATE]
  *   qd_did_full(q[19], v[18], a[18]) -> (dtau_dq[18x18, 216 nonzeros], dtau_dv[18x18, 212 nonzeros], dtau_da[18x18, 210 nonzeros]);  iw 0, w 0
  *   qd_dfd_full_parts(q[19], v[18]) -> (M[18x18], nle[18]);  iw 0, w 0
  *   qd_dfd_full(q[19], v[18], tau_full[18]) -> (da_dq[18x18], da_dv[18x18], da_dtau[18x18]);  iw 0, w 0  [returns QD_NONFINITE / QD_SINGULAR]
@@ -255,39 +240,34 @@
  *   qd_grf_FR_BR 756/392; qd_grf_BL_BR 756/392; qd_grf_FL 732/380; qd_grf_FR 732/380;
  *   qd_grf_BL 732/380; qd_grf_BR 732/380; qd_grf_none 708/368; qd_M_r_FL_FR_BL_BR 1292/652;
  *   qd_CG_r_FL_FR_BL_BR 336/176; qd_G_r_FL_FR_BL_BR 236/124; qd_id_r_FL_FR_BL_BR 436/228;
- *   qd_fd_r_FL_FR_BL_BR 436/228; qd_did_r_dir_FL_FR_BL_BR 664/348; qd_dfd_r_FL_FR_BL_BR 4096/2064;
- *   qd_M_r_FL_FR_BL 1292/652; qd_CG_r_FL_FR_BL 336/176; qd_G_r_FL_FR_BL 236/124;
- *   qd_id_r_FL_FR_BL 436/228; qd_fd_r_FL_FR_BL 436/228; qd_did_r_dir_FL_FR_BL 664/348;
- *   qd_dfd_r_FL_FR_BL 4096/2064; qd_M_r_FL_FR_BR 1292/652; qd_CG_r_FL_FR_BR 336/176;
- *   qd_G_r_FL_FR_BR 236/124; qd_id_r_FL_FR_BR 436/228; qd_fd_r_FL_FR_BR 436/228;
- *   qd_did_r_dir_FL_FR_BR 664/348; qd_dfd_r_FL_FR_BR 4096/2064; qd_M_r_FL_BL_BR 1292/652;
+ *   qd_fd_r_FL_FR_BL_BR 436/228; qd_dfd_r_FL_FR_BL_BR 14656/7344; qd_M_r_FL_FR_BL 1292/652;
+ *   qd_CG_r_FL_FR_BL 336/176; qd_G_r_FL_FR_BL 236/124; qd_id_r_FL_FR_BL 436/228;
+ *   qd_fd_r_FL_FR_BL 436/228; qd_dfd_r_FL_FR_BL 14656/7344; qd_M_r_FL_FR_BR 1292/652;
+ *   qd_CG_r_FL_FR_BR 336/176; qd_G_r_FL_FR_BR 236/124; qd_id_r_FL_FR_BR 436/228;
+ *   qd_fd_r_FL_FR_BR 436/228; qd_dfd_r_FL_FR_BR 14656/7344; qd_M_r_FL_BL_BR 1292/652;
  *   qd_CG_r_FL_BL_BR 336/176; qd_G_r_FL_BL_BR 236/124; qd_id_r_FL_BL_BR 436/228;
- *   qd_fd_r_FL_BL_BR 436/228; qd_did_r_dir_FL_BL_BR 664/348; qd_dfd_r_FL_BL_BR 4096/2064;
- *   qd_M_r_FR_BL_BR 1292/652; qd_CG_r_FR_BL_BR 336/176; qd_G_r_FR_BL_BR 236/124;
- *   qd_id_r_FR_BL_BR 436/228; qd_fd_r_FR_BL_BR 436/228; qd_did_r_dir_FR_BL_BR 664/348;
- *   qd_dfd_r_FR_BL_BR 4096/2064; qd_M_r_FL_FR 1500/756; qd_CG_r_FL_FR 360/188;
- *   qd_G_r_FL_FR 252/132; qd_id_r_FL_FR 468/244; qd_fd_r_FL_FR 468/244; qd_did_r_dir_FL_FR 712/372;
- *   qd_dfd_r_FL_FR 4744/2388; qd_M_r_FL_BL 1500/756; qd_CG_r_FL_BL 360/188; qd_G_r_FL_BL 252/132;
- *   qd_id_r_FL_BL 468/244; qd_fd_r_FL_BL 468/244; qd_did_r_dir_FL_BL 712/372;
- *   qd_dfd_r_FL_BL 4744/2388; qd_M_r_FL_BR 1500/756; qd_CG_r_FL_BR 360/188; qd_G_r_FL_BR 252/132;
- *   qd_id_r_FL_BR 468/244; qd_fd_r_FL_BR 468/244; qd_did_r_dir_FL_BR 712/372;
- *   qd_dfd_r_FL_BR 4744/2388; qd_M_r_FR_BL 1500/756; qd_CG_r_FR_BL 360/188; qd_G_r_FR_BL 252/132;
- *   qd_id_r_FR_BL 468/244; qd_fd_r_FR_BL 468/244; qd_did_r_dir_FR_BL 712/372;
- *   qd_dfd_r_FR_BL 4744/2388; qd_M_r_FR_BR 1500/756; qd_CG_r_FR_BR 360/188; qd_G_r_FR_BR 252/132;
- *   qd_id_r_FR_BR 468/244; qd_fd_r_FR_BR 468/244; qd_did_r_dir_FR_BR 712/372;
- *   qd_dfd_r_FR_BR 4744/2388; qd_M_r_BL_BR 1500/756; qd_CG_r_BL_BR 360/188; qd_G_r_BL_BR 252/132;
- *   qd_id_r_BL_BR 468/244; qd_fd_r_BL_BR 468/244; qd_did_r_dir_BL_BR 712/372;
- *   qd_dfd_r_BL_BR 4744/2388; qd_did_full 5568/2796; qd_dfd_full_parts 3048/1532;
- *   qd_dfd_full 8240/4132; qd_dgrf_dir_FL_FR_BL_BR 460/240; qd_dgrf_FL_FR_BL_BR 3056/1540;
- *   qd_dgrf_dir_FL_FR_BL 460/240; qd_dgrf_FL_FR_BL 3056/1540; qd_dgrf_dir_FL_FR_BR 460/240;
- *   qd_dgrf_FL_FR_BR 3056/1540; qd_dgrf_dir_FL_BL_BR 460/240; qd_dgrf_FL_BL_BR 3056/1540;
- *   qd_dgrf_dir_FR_BL_BR 460/240; qd_dgrf_FR_BL_BR 3056/1540; qd_dgrf_dir_FL_FR 460/240;
- *   qd_dgrf_FL_FR 3056/1540; qd_dgrf_dir_FL_BL 460/240; qd_dgrf_FL_BL 3056/1540;
- *   qd_dgrf_dir_FL_BR 460/240; qd_dgrf_FL_BR 3056/1540; qd_dgrf_dir_FR_BL 460/240;
- *   qd_dgrf_FR_BL 3056/1540; qd_dgrf_dir_FR_BR 460/240; qd_dgrf_FR_BR 3056/1540;
- *   qd_dgrf_dir_BL_BR 460/240; qd_dgrf_BL_BR 3056/1540; qd_dgrf_dir_FL 412/216;
- *   qd_dgrf_FL 1760/892; qd_dgrf_dir_FR 412/216; qd_dgrf_FR 1760/892; qd_dgrf_dir_BL 412/216;
- *   qd_dgrf_BL 1760/892; qd_dgrf_dir_BR 412/216; qd_dgrf_BR 1760/892;
+ *   qd_fd_r_FL_BL_BR 436/228; qd_dfd_r_FL_BL_BR 14656/7344; qd_M_r_FR_BL_BR 1292/652;
+ *   qd_CG_r_FR_BL_BR 336/176; qd_G_r_FR_BL_BR 236/124; qd_id_r_FR_BL_BR 436/228;
+ *   qd_fd_r_FR_BL_BR 436/228; qd_dfd_r_FR_BL_BR 14656/7344; qd_M_r_FL_FR 1500/756;
+ *   qd_CG_r_FL_FR 360/188; qd_G_r_FL_FR 252/132; qd_id_r_FL_FR 468/244; qd_fd_r_FL_FR 468/244;
+ *   qd_dfd_r_FL_FR 15616/7824; qd_M_r_FL_BL 1500/756; qd_CG_r_FL_BL 360/188; qd_G_r_FL_BL 252/132;
+ *   qd_id_r_FL_BL 468/244; qd_fd_r_FL_BL 468/244; qd_dfd_r_FL_BL 15616/7824; qd_M_r_FL_BR 1500/756;
+ *   qd_CG_r_FL_BR 360/188; qd_G_r_FL_BR 252/132; qd_id_r_FL_BR 468/244; qd_fd_r_FL_BR 468/244;
+ *   qd_dfd_r_FL_BR 15616/7824; qd_M_r_FR_BL 1500/756; qd_CG_r_FR_BL 360/188; qd_G_r_FR_BL 252/132;
+ *   qd_id_r_FR_BL 468/244; qd_fd_r_FR_BL 468/244; qd_dfd_r_FR_BL 15616/7824; qd_M_r_FR_BR 1500/756;
+ *   qd_CG_r_FR_BR 360/188; qd_G_r_FR_BR 252/132; qd_id_r_FR_BR 468/244; qd_fd_r_FR_BR 468/244;
+ *   qd_dfd_r_FR_BR 15616/7824; qd_M_r_BL_BR 1500/756; qd_CG_r_BL_BR 360/188; qd_G_r_BL_BR 252/132;
+ *   qd_id_r_BL_BR 468/244; qd_fd_r_BL_BR 468/244; qd_dfd_r_BL_BR 15616/7824; qd_did_full 5568/2796;
+ *   qd_dfd_full_parts 3048/1532; qd_dfd_full 8240/4132; qd_dgrf_dir_FL_FR_BL_BR 460/240;
+ *   qd_dgrf_FL_FR_BL_BR 3056/1540; qd_dgrf_dir_FL_FR_BL 460/240; qd_dgrf_FL_FR_BL 3056/1540;
+ *   qd_dgrf_dir_FL_FR_BR 460/240; qd_dgrf_FL_FR_BR 3056/1540; qd_dgrf_dir_FL_BL_BR 460/240;
+ *   qd_dgrf_FL_BL_BR 3056/1540; qd_dgrf_dir_FR_BL_BR 460/240; qd_dgrf_FR_BL_BR 3056/1540;
+ *   qd_dgrf_dir_FL_FR 460/240; qd_dgrf_FL_FR 3056/1540; qd_dgrf_dir_FL_BL 460/240;
+ *   qd_dgrf_FL_BL 3056/1540; qd_dgrf_dir_FL_BR 460/240; qd_dgrf_FL_BR 3056/1540;
+ *   qd_dgrf_dir_FR_BL 460/240; qd_dgrf_FR_BL 3056/1540; qd_dgrf_dir_FR_BR 460/240;
+ *   qd_dgrf_FR_BR 3056/1540; qd_dgrf_dir_BL_BR 460/240; qd_dgrf_BL_BR 3056/1540;
+ *   qd_dgrf_dir_FL 412/216; qd_dgrf_FL 1760/892; qd_dgrf_dir_FR 412/216; qd_dgrf_FR 1760/892;
+ *   qd_dgrf_dir_BL 412/216; qd_dgrf_BL 1760/892; qd_dgrf_dir_BR 412/216; qd_dgrf_BR 1760/892;
  */
 /* This file was automatically generated by CasADi 3.8.2.
  *  It consists of: 
@@ -801,24 +781,6 @@ int qd_fd_r_FL_FR_BL_BR_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casad
 #define qd_fd_r_FL_FR_BL_BR_SZ_RES 1
 #define qd_fd_r_FL_FR_BL_BR_SZ_IW 0
 #define qd_fd_r_FL_FR_BL_BR_SZ_W 0
-int qd_did_r_dir_FL_FR_BL_BR(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem);
-int qd_did_r_dir_FL_FR_BL_BR_checkout(void);
-void qd_did_r_dir_FL_FR_BL_BR_release(int mem);
-void qd_did_r_dir_FL_FR_BL_BR_incref(void);
-void qd_did_r_dir_FL_FR_BL_BR_decref(void);
-casadi_int qd_did_r_dir_FL_FR_BL_BR_n_in(void);
-casadi_int qd_did_r_dir_FL_FR_BL_BR_n_out(void);
-casadi_real qd_did_r_dir_FL_FR_BL_BR_default_in(casadi_int i);
-const char* qd_did_r_dir_FL_FR_BL_BR_name_in(casadi_int i);
-const char* qd_did_r_dir_FL_FR_BL_BR_name_out(casadi_int i);
-const casadi_int* qd_did_r_dir_FL_FR_BL_BR_sparsity_in(casadi_int i);
-const casadi_int* qd_did_r_dir_FL_FR_BL_BR_sparsity_out(casadi_int i);
-int qd_did_r_dir_FL_FR_BL_BR_work(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz_iw, casadi_int *sz_w);
-int qd_did_r_dir_FL_FR_BL_BR_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz_iw, casadi_int *sz_w);
-#define qd_did_r_dir_FL_FR_BL_BR_SZ_ARG 7
-#define qd_did_r_dir_FL_FR_BL_BR_SZ_RES 1
-#define qd_did_r_dir_FL_FR_BL_BR_SZ_IW 0
-#define qd_did_r_dir_FL_FR_BL_BR_SZ_W 0
 int qd_dfd_r_FL_FR_BL_BR(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem);
 int qd_dfd_r_FL_FR_BL_BR_checkout(void);
 void qd_dfd_r_FL_FR_BL_BR_release(int mem);
@@ -836,7 +798,7 @@ int qd_dfd_r_FL_FR_BL_BR_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casa
 #define qd_dfd_r_FL_FR_BL_BR_SZ_ARG 4
 #define qd_dfd_r_FL_FR_BL_BR_SZ_RES 4
 #define qd_dfd_r_FL_FR_BL_BR_SZ_IW 0
-#define qd_dfd_r_FL_FR_BL_BR_SZ_W 0
+#define qd_dfd_r_FL_FR_BL_BR_SZ_W 1320
 void qd_paper_r_FL_FR_BL_BR_casadi_version(int* major, int* minor, int* patch);
 int qd_paper_r_FL_FR_BL_BR_casadi_int_size(void);
 int qd_paper_r_FL_FR_BL_BR_casadi_real_size(void);
@@ -952,24 +914,6 @@ int qd_fd_r_FL_FR_BL_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_i
 #define qd_fd_r_FL_FR_BL_SZ_RES 1
 #define qd_fd_r_FL_FR_BL_SZ_IW 0
 #define qd_fd_r_FL_FR_BL_SZ_W 0
-int qd_did_r_dir_FL_FR_BL(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem);
-int qd_did_r_dir_FL_FR_BL_checkout(void);
-void qd_did_r_dir_FL_FR_BL_release(int mem);
-void qd_did_r_dir_FL_FR_BL_incref(void);
-void qd_did_r_dir_FL_FR_BL_decref(void);
-casadi_int qd_did_r_dir_FL_FR_BL_n_in(void);
-casadi_int qd_did_r_dir_FL_FR_BL_n_out(void);
-casadi_real qd_did_r_dir_FL_FR_BL_default_in(casadi_int i);
-const char* qd_did_r_dir_FL_FR_BL_name_in(casadi_int i);
-const char* qd_did_r_dir_FL_FR_BL_name_out(casadi_int i);
-const casadi_int* qd_did_r_dir_FL_FR_BL_sparsity_in(casadi_int i);
-const casadi_int* qd_did_r_dir_FL_FR_BL_sparsity_out(casadi_int i);
-int qd_did_r_dir_FL_FR_BL_work(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz_iw, casadi_int *sz_w);
-int qd_did_r_dir_FL_FR_BL_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz_iw, casadi_int *sz_w);
-#define qd_did_r_dir_FL_FR_BL_SZ_ARG 7
-#define qd_did_r_dir_FL_FR_BL_SZ_RES 1
-#define qd_did_r_dir_FL_FR_BL_SZ_IW 0
-#define qd_did_r_dir_FL_FR_BL_SZ_W 0
 int qd_dfd_r_FL_FR_BL(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem);
 int qd_dfd_r_FL_FR_BL_checkout(void);
 void qd_dfd_r_FL_FR_BL_release(int mem);
@@ -987,7 +931,7 @@ int qd_dfd_r_FL_FR_BL_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_
 #define qd_dfd_r_FL_FR_BL_SZ_ARG 4
 #define qd_dfd_r_FL_FR_BL_SZ_RES 4
 #define qd_dfd_r_FL_FR_BL_SZ_IW 0
-#define qd_dfd_r_FL_FR_BL_SZ_W 0
+#define qd_dfd_r_FL_FR_BL_SZ_W 1320
 void qd_paper_r_FL_FR_BL_casadi_version(int* major, int* minor, int* patch);
 int qd_paper_r_FL_FR_BL_casadi_int_size(void);
 int qd_paper_r_FL_FR_BL_casadi_real_size(void);
@@ -1103,24 +1047,6 @@ int qd_fd_r_FL_FR_BR_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_i
 #define qd_fd_r_FL_FR_BR_SZ_RES 1
 #define qd_fd_r_FL_FR_BR_SZ_IW 0
 #define qd_fd_r_FL_FR_BR_SZ_W 0
-int qd_did_r_dir_FL_FR_BR(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem);
-int qd_did_r_dir_FL_FR_BR_checkout(void);
-void qd_did_r_dir_FL_FR_BR_release(int mem);
-void qd_did_r_dir_FL_FR_BR_incref(void);
-void qd_did_r_dir_FL_FR_BR_decref(void);
-casadi_int qd_did_r_dir_FL_FR_BR_n_in(void);
-casadi_int qd_did_r_dir_FL_FR_BR_n_out(void);
-casadi_real qd_did_r_dir_FL_FR_BR_default_in(casadi_int i);
-const char* qd_did_r_dir_FL_FR_BR_name_in(casadi_int i);
-const char* qd_did_r_dir_FL_FR_BR_name_out(casadi_int i);
-const casadi_int* qd_did_r_dir_FL_FR_BR_sparsity_in(casadi_int i);
-const casadi_int* qd_did_r_dir_FL_FR_BR_sparsity_out(casadi_int i);
-int qd_did_r_dir_FL_FR_BR_work(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz_iw, casadi_int *sz_w);
-int qd_did_r_dir_FL_FR_BR_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz_iw, casadi_int *sz_w);
-#define qd_did_r_dir_FL_FR_BR_SZ_ARG 7
-#define qd_did_r_dir_FL_FR_BR_SZ_RES 1
-#define qd_did_r_dir_FL_FR_BR_SZ_IW 0
-#define qd_did_r_dir_FL_FR_BR_SZ_W 0
 int qd_dfd_r_FL_FR_BR(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem);
 int qd_dfd_r_FL_FR_BR_checkout(void);
 void qd_dfd_r_FL_FR_BR_release(int mem);
@@ -1138,7 +1064,7 @@ int qd_dfd_r_FL_FR_BR_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_
 #define qd_dfd_r_FL_FR_BR_SZ_ARG 4
 #define qd_dfd_r_FL_FR_BR_SZ_RES 4
 #define qd_dfd_r_FL_FR_BR_SZ_IW 0
-#define qd_dfd_r_FL_FR_BR_SZ_W 0
+#define qd_dfd_r_FL_FR_BR_SZ_W 1320
 void qd_paper_r_FL_FR_BR_casadi_version(int* major, int* minor, int* patch);
 int qd_paper_r_FL_FR_BR_casadi_int_size(void);
 int qd_paper_r_FL_FR_BR_casadi_real_size(void);
@@ -1254,24 +1180,6 @@ int qd_fd_r_FL_BL_BR_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_i
 #define qd_fd_r_FL_BL_BR_SZ_RES 1
 #define qd_fd_r_FL_BL_BR_SZ_IW 0
 #define qd_fd_r_FL_BL_BR_SZ_W 0
-int qd_did_r_dir_FL_BL_BR(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem);
-int qd_did_r_dir_FL_BL_BR_checkout(void);
-void qd_did_r_dir_FL_BL_BR_release(int mem);
-void qd_did_r_dir_FL_BL_BR_incref(void);
-void qd_did_r_dir_FL_BL_BR_decref(void);
-casadi_int qd_did_r_dir_FL_BL_BR_n_in(void);
-casadi_int qd_did_r_dir_FL_BL_BR_n_out(void);
-casadi_real qd_did_r_dir_FL_BL_BR_default_in(casadi_int i);
-const char* qd_did_r_dir_FL_BL_BR_name_in(casadi_int i);
-const char* qd_did_r_dir_FL_BL_BR_name_out(casadi_int i);
-const casadi_int* qd_did_r_dir_FL_BL_BR_sparsity_in(casadi_int i);
-const casadi_int* qd_did_r_dir_FL_BL_BR_sparsity_out(casadi_int i);
-int qd_did_r_dir_FL_BL_BR_work(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz_iw, casadi_int *sz_w);
-int qd_did_r_dir_FL_BL_BR_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz_iw, casadi_int *sz_w);
-#define qd_did_r_dir_FL_BL_BR_SZ_ARG 7
-#define qd_did_r_dir_FL_BL_BR_SZ_RES 1
-#define qd_did_r_dir_FL_BL_BR_SZ_IW 0
-#define qd_did_r_dir_FL_BL_BR_SZ_W 0
 int qd_dfd_r_FL_BL_BR(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem);
 int qd_dfd_r_FL_BL_BR_checkout(void);
 void qd_dfd_r_FL_BL_BR_release(int mem);
@@ -1289,7 +1197,7 @@ int qd_dfd_r_FL_BL_BR_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_
 #define qd_dfd_r_FL_BL_BR_SZ_ARG 4
 #define qd_dfd_r_FL_BL_BR_SZ_RES 4
 #define qd_dfd_r_FL_BL_BR_SZ_IW 0
-#define qd_dfd_r_FL_BL_BR_SZ_W 0
+#define qd_dfd_r_FL_BL_BR_SZ_W 1320
 void qd_paper_r_FL_BL_BR_casadi_version(int* major, int* minor, int* patch);
 int qd_paper_r_FL_BL_BR_casadi_int_size(void);
 int qd_paper_r_FL_BL_BR_casadi_real_size(void);
@@ -1405,24 +1313,6 @@ int qd_fd_r_FR_BL_BR_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_i
 #define qd_fd_r_FR_BL_BR_SZ_RES 1
 #define qd_fd_r_FR_BL_BR_SZ_IW 0
 #define qd_fd_r_FR_BL_BR_SZ_W 0
-int qd_did_r_dir_FR_BL_BR(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem);
-int qd_did_r_dir_FR_BL_BR_checkout(void);
-void qd_did_r_dir_FR_BL_BR_release(int mem);
-void qd_did_r_dir_FR_BL_BR_incref(void);
-void qd_did_r_dir_FR_BL_BR_decref(void);
-casadi_int qd_did_r_dir_FR_BL_BR_n_in(void);
-casadi_int qd_did_r_dir_FR_BL_BR_n_out(void);
-casadi_real qd_did_r_dir_FR_BL_BR_default_in(casadi_int i);
-const char* qd_did_r_dir_FR_BL_BR_name_in(casadi_int i);
-const char* qd_did_r_dir_FR_BL_BR_name_out(casadi_int i);
-const casadi_int* qd_did_r_dir_FR_BL_BR_sparsity_in(casadi_int i);
-const casadi_int* qd_did_r_dir_FR_BL_BR_sparsity_out(casadi_int i);
-int qd_did_r_dir_FR_BL_BR_work(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz_iw, casadi_int *sz_w);
-int qd_did_r_dir_FR_BL_BR_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz_iw, casadi_int *sz_w);
-#define qd_did_r_dir_FR_BL_BR_SZ_ARG 7
-#define qd_did_r_dir_FR_BL_BR_SZ_RES 1
-#define qd_did_r_dir_FR_BL_BR_SZ_IW 0
-#define qd_did_r_dir_FR_BL_BR_SZ_W 0
 int qd_dfd_r_FR_BL_BR(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem);
 int qd_dfd_r_FR_BL_BR_checkout(void);
 void qd_dfd_r_FR_BL_BR_release(int mem);
@@ -1440,7 +1330,7 @@ int qd_dfd_r_FR_BL_BR_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_
 #define qd_dfd_r_FR_BL_BR_SZ_ARG 4
 #define qd_dfd_r_FR_BL_BR_SZ_RES 4
 #define qd_dfd_r_FR_BL_BR_SZ_IW 0
-#define qd_dfd_r_FR_BL_BR_SZ_W 0
+#define qd_dfd_r_FR_BL_BR_SZ_W 1320
 void qd_paper_r_FR_BL_BR_casadi_version(int* major, int* minor, int* patch);
 int qd_paper_r_FR_BL_BR_casadi_int_size(void);
 int qd_paper_r_FR_BL_BR_casadi_real_size(void);
@@ -1556,24 +1446,6 @@ int qd_fd_r_FL_FR_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_int 
 #define qd_fd_r_FL_FR_SZ_RES 1
 #define qd_fd_r_FL_FR_SZ_IW 0
 #define qd_fd_r_FL_FR_SZ_W 0
-int qd_did_r_dir_FL_FR(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem);
-int qd_did_r_dir_FL_FR_checkout(void);
-void qd_did_r_dir_FL_FR_release(int mem);
-void qd_did_r_dir_FL_FR_incref(void);
-void qd_did_r_dir_FL_FR_decref(void);
-casadi_int qd_did_r_dir_FL_FR_n_in(void);
-casadi_int qd_did_r_dir_FL_FR_n_out(void);
-casadi_real qd_did_r_dir_FL_FR_default_in(casadi_int i);
-const char* qd_did_r_dir_FL_FR_name_in(casadi_int i);
-const char* qd_did_r_dir_FL_FR_name_out(casadi_int i);
-const casadi_int* qd_did_r_dir_FL_FR_sparsity_in(casadi_int i);
-const casadi_int* qd_did_r_dir_FL_FR_sparsity_out(casadi_int i);
-int qd_did_r_dir_FL_FR_work(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz_iw, casadi_int *sz_w);
-int qd_did_r_dir_FL_FR_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz_iw, casadi_int *sz_w);
-#define qd_did_r_dir_FL_FR_SZ_ARG 7
-#define qd_did_r_dir_FL_FR_SZ_RES 1
-#define qd_did_r_dir_FL_FR_SZ_IW 0
-#define qd_did_r_dir_FL_FR_SZ_W 0
 int qd_dfd_r_FL_FR(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem);
 int qd_dfd_r_FL_FR_checkout(void);
 void qd_dfd_r_FL_FR_release(int mem);
@@ -1591,7 +1463,7 @@ int qd_dfd_r_FL_FR_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_int
 #define qd_dfd_r_FL_FR_SZ_ARG 4
 #define qd_dfd_r_FL_FR_SZ_RES 4
 #define qd_dfd_r_FL_FR_SZ_IW 0
-#define qd_dfd_r_FL_FR_SZ_W 0
+#define qd_dfd_r_FL_FR_SZ_W 1359
 void qd_paper_r_FL_FR_casadi_version(int* major, int* minor, int* patch);
 int qd_paper_r_FL_FR_casadi_int_size(void);
 int qd_paper_r_FL_FR_casadi_real_size(void);
@@ -1707,24 +1579,6 @@ int qd_fd_r_FL_BL_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_int 
 #define qd_fd_r_FL_BL_SZ_RES 1
 #define qd_fd_r_FL_BL_SZ_IW 0
 #define qd_fd_r_FL_BL_SZ_W 0
-int qd_did_r_dir_FL_BL(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem);
-int qd_did_r_dir_FL_BL_checkout(void);
-void qd_did_r_dir_FL_BL_release(int mem);
-void qd_did_r_dir_FL_BL_incref(void);
-void qd_did_r_dir_FL_BL_decref(void);
-casadi_int qd_did_r_dir_FL_BL_n_in(void);
-casadi_int qd_did_r_dir_FL_BL_n_out(void);
-casadi_real qd_did_r_dir_FL_BL_default_in(casadi_int i);
-const char* qd_did_r_dir_FL_BL_name_in(casadi_int i);
-const char* qd_did_r_dir_FL_BL_name_out(casadi_int i);
-const casadi_int* qd_did_r_dir_FL_BL_sparsity_in(casadi_int i);
-const casadi_int* qd_did_r_dir_FL_BL_sparsity_out(casadi_int i);
-int qd_did_r_dir_FL_BL_work(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz_iw, casadi_int *sz_w);
-int qd_did_r_dir_FL_BL_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz_iw, casadi_int *sz_w);
-#define qd_did_r_dir_FL_BL_SZ_ARG 7
-#define qd_did_r_dir_FL_BL_SZ_RES 1
-#define qd_did_r_dir_FL_BL_SZ_IW 0
-#define qd_did_r_dir_FL_BL_SZ_W 0
 int qd_dfd_r_FL_BL(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem);
 int qd_dfd_r_FL_BL_checkout(void);
 void qd_dfd_r_FL_BL_release(int mem);
@@ -1742,7 +1596,7 @@ int qd_dfd_r_FL_BL_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_int
 #define qd_dfd_r_FL_BL_SZ_ARG 4
 #define qd_dfd_r_FL_BL_SZ_RES 4
 #define qd_dfd_r_FL_BL_SZ_IW 0
-#define qd_dfd_r_FL_BL_SZ_W 0
+#define qd_dfd_r_FL_BL_SZ_W 1359
 void qd_paper_r_FL_BL_casadi_version(int* major, int* minor, int* patch);
 int qd_paper_r_FL_BL_casadi_int_size(void);
 int qd_paper_r_FL_BL_casadi_real_size(void);
@@ -1858,24 +1712,6 @@ int qd_fd_r_FL_BR_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_int 
 #define qd_fd_r_FL_BR_SZ_RES 1
 #define qd_fd_r_FL_BR_SZ_IW 0
 #define qd_fd_r_FL_BR_SZ_W 0
-int qd_did_r_dir_FL_BR(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem);
-int qd_did_r_dir_FL_BR_checkout(void);
-void qd_did_r_dir_FL_BR_release(int mem);
-void qd_did_r_dir_FL_BR_incref(void);
-void qd_did_r_dir_FL_BR_decref(void);
-casadi_int qd_did_r_dir_FL_BR_n_in(void);
-casadi_int qd_did_r_dir_FL_BR_n_out(void);
-casadi_real qd_did_r_dir_FL_BR_default_in(casadi_int i);
-const char* qd_did_r_dir_FL_BR_name_in(casadi_int i);
-const char* qd_did_r_dir_FL_BR_name_out(casadi_int i);
-const casadi_int* qd_did_r_dir_FL_BR_sparsity_in(casadi_int i);
-const casadi_int* qd_did_r_dir_FL_BR_sparsity_out(casadi_int i);
-int qd_did_r_dir_FL_BR_work(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz_iw, casadi_int *sz_w);
-int qd_did_r_dir_FL_BR_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz_iw, casadi_int *sz_w);
-#define qd_did_r_dir_FL_BR_SZ_ARG 7
-#define qd_did_r_dir_FL_BR_SZ_RES 1
-#define qd_did_r_dir_FL_BR_SZ_IW 0
-#define qd_did_r_dir_FL_BR_SZ_W 0
 int qd_dfd_r_FL_BR(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem);
 int qd_dfd_r_FL_BR_checkout(void);
 void qd_dfd_r_FL_BR_release(int mem);
@@ -1893,7 +1729,7 @@ int qd_dfd_r_FL_BR_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_int
 #define qd_dfd_r_FL_BR_SZ_ARG 4
 #define qd_dfd_r_FL_BR_SZ_RES 4
 #define qd_dfd_r_FL_BR_SZ_IW 0
-#define qd_dfd_r_FL_BR_SZ_W 0
+#define qd_dfd_r_FL_BR_SZ_W 1359
 void qd_paper_r_FL_BR_casadi_version(int* major, int* minor, int* patch);
 int qd_paper_r_FL_BR_casadi_int_size(void);
 int qd_paper_r_FL_BR_casadi_real_size(void);
@@ -2009,24 +1845,6 @@ int qd_fd_r_FR_BL_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_int 
 #define qd_fd_r_FR_BL_SZ_RES 1
 #define qd_fd_r_FR_BL_SZ_IW 0
 #define qd_fd_r_FR_BL_SZ_W 0
-int qd_did_r_dir_FR_BL(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem);
-int qd_did_r_dir_FR_BL_checkout(void);
-void qd_did_r_dir_FR_BL_release(int mem);
-void qd_did_r_dir_FR_BL_incref(void);
-void qd_did_r_dir_FR_BL_decref(void);
-casadi_int qd_did_r_dir_FR_BL_n_in(void);
-casadi_int qd_did_r_dir_FR_BL_n_out(void);
-casadi_real qd_did_r_dir_FR_BL_default_in(casadi_int i);
-const char* qd_did_r_dir_FR_BL_name_in(casadi_int i);
-const char* qd_did_r_dir_FR_BL_name_out(casadi_int i);
-const casadi_int* qd_did_r_dir_FR_BL_sparsity_in(casadi_int i);
-const casadi_int* qd_did_r_dir_FR_BL_sparsity_out(casadi_int i);
-int qd_did_r_dir_FR_BL_work(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz_iw, casadi_int *sz_w);
-int qd_did_r_dir_FR_BL_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz_iw, casadi_int *sz_w);
-#define qd_did_r_dir_FR_BL_SZ_ARG 7
-#define qd_did_r_dir_FR_BL_SZ_RES 1
-#define qd_did_r_dir_FR_BL_SZ_IW 0
-#define qd_did_r_dir_FR_BL_SZ_W 0
 int qd_dfd_r_FR_BL(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem);
 int qd_dfd_r_FR_BL_checkout(void);
 void qd_dfd_r_FR_BL_release(int mem);
@@ -2044,7 +1862,7 @@ int qd_dfd_r_FR_BL_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_int
 #define qd_dfd_r_FR_BL_SZ_ARG 4
 #define qd_dfd_r_FR_BL_SZ_RES 4
 #define qd_dfd_r_FR_BL_SZ_IW 0
-#define qd_dfd_r_FR_BL_SZ_W 0
+#define qd_dfd_r_FR_BL_SZ_W 1359
 void qd_paper_r_FR_BL_casadi_version(int* major, int* minor, int* patch);
 int qd_paper_r_FR_BL_casadi_int_size(void);
 int qd_paper_r_FR_BL_casadi_real_size(void);
@@ -2160,24 +1978,6 @@ int qd_fd_r_FR_BR_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_int 
 #define qd_fd_r_FR_BR_SZ_RES 1
 #define qd_fd_r_FR_BR_SZ_IW 0
 #define qd_fd_r_FR_BR_SZ_W 0
-int qd_did_r_dir_FR_BR(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem);
-int qd_did_r_dir_FR_BR_checkout(void);
-void qd_did_r_dir_FR_BR_release(int mem);
-void qd_did_r_dir_FR_BR_incref(void);
-void qd_did_r_dir_FR_BR_decref(void);
-casadi_int qd_did_r_dir_FR_BR_n_in(void);
-casadi_int qd_did_r_dir_FR_BR_n_out(void);
-casadi_real qd_did_r_dir_FR_BR_default_in(casadi_int i);
-const char* qd_did_r_dir_FR_BR_name_in(casadi_int i);
-const char* qd_did_r_dir_FR_BR_name_out(casadi_int i);
-const casadi_int* qd_did_r_dir_FR_BR_sparsity_in(casadi_int i);
-const casadi_int* qd_did_r_dir_FR_BR_sparsity_out(casadi_int i);
-int qd_did_r_dir_FR_BR_work(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz_iw, casadi_int *sz_w);
-int qd_did_r_dir_FR_BR_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz_iw, casadi_int *sz_w);
-#define qd_did_r_dir_FR_BR_SZ_ARG 7
-#define qd_did_r_dir_FR_BR_SZ_RES 1
-#define qd_did_r_dir_FR_BR_SZ_IW 0
-#define qd_did_r_dir_FR_BR_SZ_W 0
 int qd_dfd_r_FR_BR(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem);
 int qd_dfd_r_FR_BR_checkout(void);
 void qd_dfd_r_FR_BR_release(int mem);
@@ -2195,7 +1995,7 @@ int qd_dfd_r_FR_BR_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_int
 #define qd_dfd_r_FR_BR_SZ_ARG 4
 #define qd_dfd_r_FR_BR_SZ_RES 4
 #define qd_dfd_r_FR_BR_SZ_IW 0
-#define qd_dfd_r_FR_BR_SZ_W 0
+#define qd_dfd_r_FR_BR_SZ_W 1359
 void qd_paper_r_FR_BR_casadi_version(int* major, int* minor, int* patch);
 int qd_paper_r_FR_BR_casadi_int_size(void);
 int qd_paper_r_FR_BR_casadi_real_size(void);
@@ -2311,24 +2111,6 @@ int qd_fd_r_BL_BR_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_int 
 #define qd_fd_r_BL_BR_SZ_RES 1
 #define qd_fd_r_BL_BR_SZ_IW 0
 #define qd_fd_r_BL_BR_SZ_W 0
-int qd_did_r_dir_BL_BR(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem);
-int qd_did_r_dir_BL_BR_checkout(void);
-void qd_did_r_dir_BL_BR_release(int mem);
-void qd_did_r_dir_BL_BR_incref(void);
-void qd_did_r_dir_BL_BR_decref(void);
-casadi_int qd_did_r_dir_BL_BR_n_in(void);
-casadi_int qd_did_r_dir_BL_BR_n_out(void);
-casadi_real qd_did_r_dir_BL_BR_default_in(casadi_int i);
-const char* qd_did_r_dir_BL_BR_name_in(casadi_int i);
-const char* qd_did_r_dir_BL_BR_name_out(casadi_int i);
-const casadi_int* qd_did_r_dir_BL_BR_sparsity_in(casadi_int i);
-const casadi_int* qd_did_r_dir_BL_BR_sparsity_out(casadi_int i);
-int qd_did_r_dir_BL_BR_work(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz_iw, casadi_int *sz_w);
-int qd_did_r_dir_BL_BR_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz_iw, casadi_int *sz_w);
-#define qd_did_r_dir_BL_BR_SZ_ARG 7
-#define qd_did_r_dir_BL_BR_SZ_RES 1
-#define qd_did_r_dir_BL_BR_SZ_IW 0
-#define qd_did_r_dir_BL_BR_SZ_W 0
 int qd_dfd_r_BL_BR(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem);
 int qd_dfd_r_BL_BR_checkout(void);
 void qd_dfd_r_BL_BR_release(int mem);
@@ -2346,7 +2128,7 @@ int qd_dfd_r_BL_BR_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_int
 #define qd_dfd_r_BL_BR_SZ_ARG 4
 #define qd_dfd_r_BL_BR_SZ_RES 4
 #define qd_dfd_r_BL_BR_SZ_IW 0
-#define qd_dfd_r_BL_BR_SZ_W 0
+#define qd_dfd_r_BL_BR_SZ_W 1359
 void qd_paper_r_BL_BR_casadi_version(int* major, int* minor, int* patch);
 int qd_paper_r_BL_BR_casadi_int_size(void);
 int qd_paper_r_BL_BR_casadi_real_size(void);

@@ -49,9 +49,7 @@ def reduced_inputs(s: FullState) -> dict[str, np.ndarray]:
     roll = pin.rpy.matrixToRpy(rotation(s.q))[0]
     qdd_r = np.append(s.a[6:], s.a[3])
     return {"q_r": _rounded(np.append(s.q[7:], roll)), "qd_r": np.append(s.v[6:], s.v[3]),
-            "qdd_r": qdd_r, "quat": s.q[3:7], "tau_ext": 10.0 * s.a[5:],
-            # a direction for did_r_dir (the roll entry of dq_r has no effect: the roll is read from quat)
-            "dq_r": _rounded(0.1 * qdd_r), "dqd_r": qdd_r, "dtheta": _rounded(0.1 * s.a[:3])}
+            "qdd_r": qdd_r, "quat": s.q[3:7], "tau_ext": 10.0 * s.a[5:]}
 
 
 def wrench_inputs(s: FullState) -> dict[str, np.ndarray]:
@@ -83,13 +81,10 @@ def _derivative_reference(ref: PinocchioReference, name: str, s: FullState) -> l
     reduced model's and the GRF solve's derivatives; None for any other function."""
     reduced = reduced_parts(name)
     if reduced and reduced[0] in REDUCED_DERIVATIVE_NAMES:
-        kind, stance = reduced
+        _, stance = reduced
         n = 13 if len(stance.feet) == 2 else 12
         x = {k: v[:n] for k, v in reduced_inputs(s).items()}
-        model = ReducedReference(ref, stance)
-        if kind == "dfd_r":
-            return list(model.dfd_r(x["q_r"], x["qd_r"], x["tau_ext"], s.q[3:7]))
-        return [model.did_r_dir(x["q_r"], x["qd_r"], x["qdd_r"], s.q[3:7], x["dq_r"], x["dqd_r"], x["dtheta"])]
+        return list(ReducedReference(ref, stance).dfd_r(x["q_r"], x["qd_r"], x["tau_ext"], s.q[3:7]))
     if name.startswith("dgrf_dir_"):
         w = wrench_inputs(s)
         return list(grf_wrench_reference(ref, stance_set(name[9:].replace("_", "+")), s.q, w["w"], w["dq"]))

@@ -70,12 +70,6 @@ class ReducedReference:
         D_theta = central(lambda th: self.id_r(q_r, qd, qdd, rotated(quat, th)), np.zeros(3))
         return -Minv @ D_q, -Minv @ D_qd, Minv, -Minv @ D_theta
 
-    def did_r_dir(self, q_r: np.ndarray, qd: np.ndarray, qdd: np.ndarray, quat: np.ndarray, dq: np.ndarray,
-                  dqd: np.ndarray, dtheta: np.ndarray) -> np.ndarray:
-        """d/dt id_r(q_r + t dq, qd + t dqd, qdd, quat (x) exp(t dtheta / 2)) at t = 0, by central differences."""
-        return central(lambda t: self.id_r(q_r + t[0] * dq, qd + t[0] * dqd, qdd, rotated(quat, t[0] * dtheta)),
-                       np.zeros(1))[:, 0]
-
 
 def grf_derivatives_reference(ref: PinocchioReference, stance: StanceSet, q: np.ndarray, v: np.ndarray, a: np.ndarray
                               ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:

@@ -34,8 +34,12 @@ from quadruped_dyn.codegen.emit_derivatives import (
     GRF_DERIVATIVE_NAMES,
     GRF_DERIVATIVE_STANCE_SETS,
     REDUCED_DERIVATIVE_NAMES,
+    DfdRPieces,
+    declare_dfd_r_work,
     derivative_functions,
     derivative_source,
+    dfd_r_pieces,
+    dfd_r_work_reals,
     reduced_derivative_functions,
 )
 from quadruped_dyn.codegen.work_memory import memory_doc
@@ -260,10 +264,10 @@ def header_doc(robot: Robot, functions: list[ca.Function], work: dict[str, tuple
         " *                                   d lambda = P d w_req (did_full's trunk rows) + d(P w)/dq dq.",
         " * In each reduced file (the trunk orientation is the input quat: d/dq_r at fixed quat, the roll's",
         " * column 0; d/dtheta along quat -> quat (x) exp(dtheta/2), a body-frame increment):",
-        " *   did_r_dir_<feet>(q_r, qd_r, qdd_r, quat, dq_r, dqd_r, dtheta)  directional derivative of id_r;",
         " *   dfd_r_<feet>(q_r, qd_r, tau_ext, quat)  d qdd_r/dq_r, d qdd_r/dqd_r, d qdd_r/dtau_ext = M_r^-1,",
-        " *                                   d qdd_r/dtheta: did_r_dir per direction, -M_r^-1 by fd_r's LU;",
-        " *                                   return codes as fd_r.",
+        " *                                   d qdd_r/dtheta: -M_r^-1 d id_r/dx by fd_r's LU, d id_r/dx by the chain",
+        " *                                   rule over did_full and id_full (id_r = S rnea(q, v, a)); needs caller",
+        " *                                   work memory w (its _work entry, _SZ_W); return codes as fd_r.",
         " *",
         " * Signals:",
         *[f" *   {name:<9}{SIGNAL_DOCS[name]}" for name in signals],
@@ -337,25 +341,29 @@ def _static_c(c_name: str, f: ca.Function, precision: str, host_helpers: frozens
     return body.group(0).replace("casadi_f0", c_name)
 
 
-def _reduced_helpers_c(robot: Robot, stance: StanceSet, precision: str) -> str:
+def _reduced_helpers_c(robot: Robot, stance: StanceSet, dfd_r: DfdRPieces, precision: str) -> str:
     """QD_REGULARITY_MIN, ``qd_regularity`` (the stance's regularity (q_r, quat) -> (regularity),
-    ``dynamics.reduced.regularity_function``) and ``qd_M_r_parts`` ((q_r, quat) -> (S_b, T_b, M_full),
-    ``ReducedProjection.mass_matrix_factors``), the generated pieces the templates call."""
+    ``dynamics.reduced.regularity_function``), ``qd_M_r_parts`` ((q_r, quat) -> (S_b, T_b, M_full),
+    ``ReducedProjection.mass_matrix_factors``) and dfd_r's ``qd_dfd_r_lift``
+    (``emit_derivatives.dfd_r_pieces``), the generated pieces the templates call."""
     n = 13 if len(stance.feet) == 2 else 12
     q_r, quat = ca.SX.sym("q_r", n), ca.SX.sym("quat", 4)
     parts = ca.Function("M_r_parts", [q_r, quat], [ca.densify(x) for x in reduced_projection(
         robot, stance, q_r, quat).mass_matrix_factors()], {"cse": True})
     return (f"#define QD_REGULARITY_MIN ((casadi_real){REGULARITY_MIN!r}) /* quadruped_dyn.tolerances.REGULARITY_MIN */\n"
             + _static_c("qd_regularity", regularity_function(robot, stance), precision) + "\n"
-            + _static_c("qd_M_r_parts", parts, precision))
+            + _static_c("qd_M_r_parts", parts, precision) + "\n"
+            + _static_c("qd_dfd_r_lift", dfd_r.lift, precision))
 
 
-def _checked_reduced_c(c_text: str, casadi_header: str, functions: list[ca.Function], helpers_c: str) -> str:
+def _checked_reduced_c(c_text: str, casadi_header: str, functions: list[ca.Function], helpers_c: str,
+                       dfd_r: DfdRPieces) -> tuple[str, str]:
     """Insert ``helpers_c`` (``_reduced_helpers_c``) and ``c/qd_reduced_solve.c`` and route the entry
     points through them: every function returns QD_DEGENERATE at a degenerate stance and
     QD_NONFINITE for a non-finite output; M_r is the product of its factors (qd_M_r_project: CasADi's
     unrolled M_r is dropped, ~50 kB per stance set, and M_r is faster); fd_r evaluates M_r and CG_r
-    (checked once in the solve) and solves M_r qdd_r = tau_ext - CG_r."""
+    (checked once in the solve) and solves M_r qdd_r = tau_ext - CG_r; dfd_r by ``c/qd_reduced_derivatives.c``
+    over ``dfd_r``'s pieces, its caller work memory declared. Returns (C source, CasADi's header text)."""
     first = c_text.index(f"\n/* {functions[0].name()}:")
     templates = "\n".join((TEMPLATES / t).read_text() for t in ("qd_reduced_solve.c", "qd_reduced_derivatives.c"))
     raw = evaluations(c_text, [f.name() for f in functions])  # entry point -> CasADi's evaluation function
@@ -363,16 +371,17 @@ def _checked_reduced_c(c_text: str, casadi_header: str, functions: list[ca.Funct
                 f"int mem) {{\n  return qd_M_r_project({functions[0].size1_out(0)}, arg, res, iw, w, mem);\n}}\n")
     c_text = c_text[:first] + "\n" + helpers_c + "\n" + templates + "\n" + m_r_eval + c_text[first:]
     work = work_sizes(casadi_header)
-    m_r, cg_r, direction = ["qd_M_r_eval"] + [raw[g.name()] for g in functions
-                                              if g.name().startswith((PREFIX + "CG_r_", PREFIX + "did_r_dir_"))]
+    m_r, cg_r = "qd_M_r_eval", next(raw[g.name()] for g in functions if g.name().startswith(PREFIX + "CG_r_"))
     for f in functions:
         if f.sz_arg() != f.n_in() or work[f.name()] != (0, 0):
             raise AssertionError(f"{f.name()} needs work memory; qd_fd_r_solve assumes it does not")
         if f.name().startswith(PREFIX + "fd_r_"):
             body = rf"\1  return qd_fd_r_solve({f.nnz_out(0)}, {m_r}, {cg_r}, arg, res, iw, w, mem);\n"
-        elif f.name().startswith(PREFIX + "dfd_r_"):  # the roll q_r[12] does not enter id_r: 12 q directions
-            body = (rf"\1  return qd_dfd_r_solve({f.size1_out(0)}, 12, {m_r}, {cg_r}, {direction}, "
-                    rf"arg, res, iw, w, mem);\n")
+        elif f.name().startswith(PREFIX + "dfd_r_"):  # caller work memory: declare_dfd_r_work; size checked at compile time
+            n = f.size1_out(0)
+            body = (rf"\1  typedef char w_agrees[QD_DFD_R_W({n}) == {dfd_r_work_reals(n)} ? 1 : -1];\n"
+                    r"  (void)sizeof(w_agrees);\n"
+                    rf"  return qd_dfd_r_solve({n}, {dfd_r.legs}, {int(dfd_r.lift_reads_quat)}, {cg_r}, arg, res, iw, w, mem);\n")
         else:
             nnz = ", ".join(str(f.nnz_out(i)) for i in range(f.n_out()))
             evaluation = m_r if f.name().startswith(PREFIX + "M_r_") else r"\2"
@@ -383,7 +392,9 @@ def _checked_reduced_c(c_text: str, casadi_header: str, functions: list[ca.Funct
             raise AssertionError(f"entry point of {f.name()} not found in CasADi's output")
         if f.name().startswith((PREFIX + "M_r_", PREFIX + "fd_r_", PREFIX + "dfd_r_")):  # evaluated above
             c_text = drop_evaluation(c_text, raw[f.name()])
-    return c_text
+        if f.name().startswith(PREFIX + "dfd_r_"):
+            c_text, casadi_header = declare_dfd_r_work(c_text, casadi_header, f)
+    return c_text, casadi_header
 
 
 def _grf_through_id_full(robot: Robot, c_text: str, functions: list[ca.Function], precision: str) -> str:
@@ -468,7 +479,9 @@ def generate(robot: Robot, out_dir: Path, precision: str = "double",
         reduced = reduced_functions(robot, stance)
         file_stem = f"{name}_r_{stance.name.replace('+', '_')}"
         c_text, h_text = casadi_c(file_stem, reduced, precision)
-        sources[f"{file_stem}.c"] = _checked_reduced_c(c_text, h_text, reduced, _reduced_helpers_c(robot, stance, precision))
+        dfd_r = dfd_r_pieces(robot, stance)
+        sources[f"{file_stem}.c"], h_text = _checked_reduced_c(c_text, h_text, reduced,
+                                                               _reduced_helpers_c(robot, stance, dfd_r, precision), dfd_r)
         casadi_header += h_text
         functions += reduced
     derivatives = derivative_functions(robot)  # qd_<robot>_d.c: derivatives of the full dynamics
@@ -476,6 +489,8 @@ def generate(robot: Robot, out_dir: Path, precision: str = "double",
     casadi_header += h_text
     functions += derivatives
     work = work_sizes(casadi_header)
+    if any(work[PREFIX + g] != (0, 0) for g in ("id_full", "did_full")):
+        raise AssertionError("qd_dfd_r_solve calls id_full and did_full with no work memory of their own")
     extra = extra_files(functions, work) if extra_files else {}
     sources = {file_name: _precision_math(text) for file_name, text in sources.items()}
     files = {

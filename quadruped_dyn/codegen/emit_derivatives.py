@@ -14,14 +14,17 @@ In ``qd_<robot>_d.c`` (prefix ``qd_``), compiled into the same library as the ot
   rnea's trunk rows: d lambda / dx = P d w_req / dx (``did_full``'s trunk rows) + d(P w)/dq for x = q,
   P column by column and d(P w)/dq one stance-leg joint direction at a time from dgrf_dir.
 
-In each reduced file ``qd_<robot>_r_<feet>.c`` (``reduced_derivative_functions``):
+In each reduced file ``qd_<robot>_r_<feet>.c`` (``reduced_derivative_functions``, ``dfd_r_pieces``):
 
-* ``did_r_dir_<feet>(q_r, qd_r, qdd_r, quat, dq_r, dqd_r, dtheta) -> dtau_r``: the forward-mode
-  directional derivative of id_r (``ca.jtimes``; ~2.8x id_r's operations), theta a body-frame
-  rotation increment;
 * ``dfd_r_<feet>(q_r, qd_r, tau_ext, quat)``: a signature whose body (``c/qd_reduced_derivatives.c``)
-  assembles d id_r / d(q_r, qd_r, theta) one direction at a time and applies -M_r^-1 with the LU of
-  ``c/qd_reduced_solve.c``.
+  applies the chain rule over the full-coordinate derivatives: id_r = S F(q, v, a), F the full rnea, so
+  d id_r / dx = d(S_b F_b)/dx + S (dF/dq dq/dx + dF/dv dv/dx + M da/dx) with ``qd_did_full`` and ``qd_id_full``
+  (the same library) and S_b, T_b, M from ``qd_M_r_parts``; then -M_r^-1 with the LU of ``c/qd_reduced_solve.c``.
+  Per stance set only "the lift" is generated, the static ``qd_dfd_r_lift``: the trunk rows v_b, a_b of v and a
+  (``ReducedProjection.velocity_and_acceleration``, without forming T) and their forward-mode derivative along
+  one direction of (q_r, theta) and one of qd_r at once, with d(S_b F_b) along the q_r direction (2.8-4.3k
+  operations on the paper robot, called once per stance-leg joint: 7-13 calls). Its temporaries (~14 kB in
+  double) are the caller's w, declared by its _work entry (``declare_dfd_r_work``).
 
 Why directions and a chain rule, not CasADi's Jacobians: those take 48-97k operations per reduced
 stance set and 18-21k per GRF solve (~20 bytes of C each), beyond the 6 MB budget of a robot's C.
@@ -31,6 +34,7 @@ d/dq is along ``pinocchio.integrate`` (a body-frame increment of the trunk pose;
 from __future__ import annotations
 
 import re
+from dataclasses import dataclass
 
 import casadi as ca
 
@@ -49,7 +53,7 @@ DERIVATIVE_NAMES = ("did_full", "dfd_full_parts", "dfd_full")
 GRF_DERIVATIVE_STANCE_SETS: tuple[StanceSet, ...] = tuple(st for st in STANCE_SETS if st.feet)
 GRF_DERIVATIVE_NAMES = ("dgrf_dir", "dgrf")
 #: Generated in each reduced stance set's file, as <name>_<feet>.
-REDUCED_DERIVATIVE_NAMES = ("did_r_dir", "dfd_r")
+REDUCED_DERIVATIVE_NAMES = ("dfd_r",)
 
 
 def feet_suffix(stance: StanceSet) -> str:
@@ -78,23 +82,73 @@ def grf_derivative_functions(robot: Robot, stance: StanceSet) -> list[ca.Functio
     return [grf_dir, dgrf]
 
 
-def reduced_derivative_functions(robot: Robot, stance: StanceSet) -> list[ca.Function]:
-    """did_r_dir_<feet> and the signature of dfd_r_<feet> (module docstring), with the C prefix."""
+@dataclass(frozen=True)
+class DfdRPieces:
+    """What qd_dfd_r_<feet>'s template (``c/qd_reduced_derivatives.c``) calls and is told, for one stance set."""
+
+    #: dfd_r_lift (q_r, qd_r, qdd_r, quat, F_b, dq_r, dtheta, dqd_r) -> (v_b, a_b, dv_b, da_b (6 each), dSF (n),
+    #: da_qd (6)): the lift, its derivative along (dq_r, dtheta), d(S_b F_b) along dq_r, d a_b along dqd_r
+    lift: ca.Function
+    legs: int  # bit i set: leg i is a stance leg (the lift and S depend on its joints, not on the others')
+    lift_reads_quat: bool  # two feet: the roll row makes v_b, a_b depend on the trunk orientation
+
+
+def dfd_r_pieces(robot: Robot, stance: StanceSet) -> DfdRPieces:
+    """The per-stance generated piece of dfd_r (module docstring) as a Function for a static C helper.
+    id_r = S(q_r) F(q, v, a) with F the full rnea (no foot forces) at q = (0, quat, joints), v = (v_b, qd_j),
+    a = (a_b, qdd_j): only the trunk rows v_b, a_b ("the lift") depend on (q_r, qd_r, quat) other than by
+    identity, S only on the stance legs' joints and only through S_b (S = [S_b, I])."""
     n = 13 if len(stance.feet) == 2 else 12
-    q_r, qd_r, qdd_r, tau_ext = (ca.SX.sym(s, n) for s in ("q_r", "qd_r", "qdd_r", "tau_ext"))
-    quat, dq_r, dqd_r, dtheta = ca.SX.sym("quat", 4), ca.SX.sym("dq_r", n), ca.SX.sym("dqd_r", n), ca.SX.sym("dtheta", 3)
-    idr = reduced_projection(robot, stance, q_r, quat).inverse_dynamics(qd_r, qdd_r)
-    if ca.depends_on(idr, q_r[12:]):
-        raise AssertionError("id_r reads the roll q_r[12]; qd_dfd_r_solve assumes it takes the roll from quat")
-    direction = ca.jtimes(idr, ca.vertcat(q_r, qd_r, quat), ca.vertcat(dq_r, dqd_r, quaternion_tangent(quat) @ dtheta))
-    suffix, opts = feet_suffix(stance), {"cse": True}
-    did = ca.Function(f"{PREFIX}did_r_dir_{suffix}", [q_r, qd_r, qdd_r, quat, dq_r, dqd_r, dtheta], [ca.densify(direction)],
-                      ["q_r", "qd_r", "qdd_r", "quat", "dq_r", "dqd_r", "dtheta"], ["dtau_r"], opts)
+    q_r, qd_r, qdd_r, quat = (ca.SX.sym(s, k) for s, k in (("q_r", n), ("qd_r", n), ("qdd_r", n), ("quat", 4)))
+    dq_r, dtheta, dqd_r, F_b = ca.SX.sym("dq_r", n), ca.SX.sym("dtheta", 3), ca.SX.sym("dqd_r", n), ca.SX.sym("F_b", 6)
+    p = reduced_projection(robot, stance, q_r, quat)
+    v, a = p.velocity_and_acceleration(qd_r, qdd_r)
+    trunk = ca.vertcat(v[:6], a[:6])
+    SF = p.project(ca.vertcat(F_b, ca.SX.zeros(12)))
+    swing = [x[3 * i + j] for x in (q_r, qd_r) for i in range(4) if i not in stance.feet for j in range(3)]
+    swing += [q_r[k] for k in range(12, n)]
+    if any(ca.depends_on(ca.vertcat(trunk, SF), x) for x in swing) or ca.depends_on(SF, quat):
+        raise AssertionError("the lift or S reads a swing leg's joint or rate or the roll q_r[12], or S reads quat; "
+                             "qd_dfd_r_solve assumes neither")
+    lifted = ca.jtimes(trunk, ca.vertcat(q_r, quat), ca.vertcat(dq_r, quaternion_tangent(quat) @ dtheta))
+    lift = ca.Function("dfd_r_lift", [q_r, qd_r, qdd_r, quat, F_b, dq_r, dtheta, dqd_r],
+                       [v[:6], a[:6], lifted[:6], lifted[6:], ca.jtimes(SF, q_r, dq_r), ca.jtimes(a[:6], qd_r, dqd_r)],
+                       {"cse": True})
+    return DfdRPieces(lift, sum(1 << i for i in stance.feet), bool(ca.depends_on(trunk, quat)))
+
+
+def dfd_r_work_reals(n: int) -> int:
+    """Reals of caller work memory qd_dfd_r_<feet> uses (``QD_DFD_R_W`` of c/qd_reduced_derivatives.c, which
+    checks at compile time that the two agree): M_r's LU, qdd_r, S_b, T_b, M, d rnea/dq, d rnea/dv, F, one
+    full-coordinate column and one reduced column."""
+    return n * n + 14 * n + 3 * 18 * 18 + 36
+
+
+def reduced_derivative_functions(robot: Robot, stance: StanceSet) -> list[ca.Function]:
+    """The signature of dfd_r_<feet> (module docstring), with the C prefix: its body is the template's."""
+    n = 13 if len(stance.feet) == 2 else 12
+    q_r, qd_r, tau_ext, quat = ca.SX.sym("q_r", n), ca.SX.sym("qd_r", n), ca.SX.sym("tau_ext", n), ca.SX.sym("quat", 4)
     placeholder = ca.sum1(q_r) + ca.sum1(qd_r) + ca.sum1(tau_ext) + ca.sum1(quat)  # dense, depends on every input
-    dfd = ca.Function(f"{PREFIX}dfd_r_{suffix}", [q_r, qd_r, tau_ext, quat],
+    dfd = ca.Function(f"{PREFIX}dfd_r_{feet_suffix(stance)}", [q_r, qd_r, tau_ext, quat],
                       [ca.repmat(placeholder, n, k) for k in (n, n, n, 3)], ["q_r", "qd_r", "tau_ext", "quat"],
-                      ["dqdd_dq", "dqdd_dqd", "dqdd_dtau", "dqdd_dtheta"], opts)
-    return [did, dfd]
+                      ["dqdd_dq", "dqdd_dqd", "dqdd_dtau", "dqdd_dtheta"], {"cse": True})
+    return [dfd]
+
+
+def declare_dfd_r_work(c_text: str, h_text: str, f: ca.Function) -> tuple[str, str]:
+    """dfd_r_<feet>'s _work / _work_bytes entries and its header's _SZ_W state the caller's w it uses
+    (``dfd_r_work_reals``); CasADi's say 0 for the signature-only Function."""
+    name, reals = f.name(), dfd_r_work_reals(f.size1_out(0))
+    patterns = [(rf"(int {name}_work\(.*?if \(sz_w\) \*sz_w = )0;", rf"\g<1>{reals};"),
+                (rf"(int {name}_work_bytes\(.*?if \(sz_w\) \*sz_w = )0\*", rf"\g<1>{reals}*")]
+    for pattern, replacement in patterns:
+        c_text, count = re.subn(pattern, replacement, c_text, count=1, flags=re.S)
+        if count != 1:
+            raise AssertionError(f"{name}: CasADi's work entry not found")
+    h_text, count = re.subn(rf"#define {name}_SZ_W 0\n", f"#define {name}_SZ_W {reals}\n", h_text)
+    if count != 1:
+        raise AssertionError(f"{name}: CasADi's _SZ_W not found")
+    return c_text, h_text
 
 
 def derivative_functions(robot: Robot) -> list[ca.Function]:

@@ -156,22 +156,34 @@ class ReducedProjection:
     def velocity_and_bias(self, qd_r: ca.SX) -> tuple[ca.SX, ca.SX]:
         """(v (18,), k (18,)): the full velocity and the acceleration at qdd_r = 0 (a = vdot,
         spatial for the trunk: vdot_b = a_b - omega_b x v_b)."""
+        return self._motion(qd_r, None)
+
+    def velocity_and_acceleration(self, qd_r: ca.SX, qdd_r: ca.SX) -> tuple[ca.SX, ca.SX]:
+        """(v (18,), a (18,) = T qdd_r + k) without forming T: the stance rows are solved once for the
+        right-hand side of qdd_r and the bias together (``rigid_motion`` is linear in it). Fewer operations than
+        T @ qdd_r + k, and a cheaper derivative (dfd_r's lift, ``codegen/emit_derivatives.py``)."""
+        return self._motion(qd_r, qdd_r)
+
+    def _motion(self, qd_r: ca.SX, qdd_r: ca.SX | None) -> tuple[ca.SX, ca.SX]:
         feet = self.stance.feet
         qj, qdj = self.q_joints, qd_r[:12]
         J = [ca.jacobian(ri, qj[3 * i : 3 * i + 3]) for ri, i in zip(self.r, feet)]
         Jqd = [Ji @ qdj[3 * i : 3 * i + 3] for Ji, i in zip(J, feet)]
         e = roll_rate_row(quat_to_rotation(self.quat)) if len(feet) == 2 else None
         v_b, omega = rigid_motion(self.r, [-x for x in Jqd], e, qd_r[12] if e is not None else None)
-        bias = []
+        rhs = []
         for ri, Ji, x, i in zip(self.r, J, Jqd, feet):
             s = slice(3 * i, 3 * i + 3)
             Jdqd = ca.jacobian(Ji @ qdj[s], qj[s]) @ qdj[s]
-            bias.append(-(ca.cross(omega, ca.cross(omega, ri)) + 2 * ca.cross(omega, x) + Jdqd))
-        rate = -ca.dot(roll_rate_row_dot(quat_to_rotation(self.quat), omega), omega) if e is not None else None
-        a_b, alpha = rigid_motion(self.r, bias, e, rate)
+            bias = -(ca.cross(omega, ca.cross(omega, ri)) + 2 * ca.cross(omega, x) + Jdqd)
+            rhs.append(bias - Ji @ qdd_r[s] if qdd_r is not None else bias)
+        rate = None
+        if e is not None:
+            rate = -ca.dot(roll_rate_row_dot(quat_to_rotation(self.quat), omega), omega)
+            rate = rate + qdd_r[12] if qdd_r is not None else rate
+        a_b, alpha = rigid_motion(self.r, rhs, e, rate)
         v = ca.vertcat(v_b, omega, qdj)
-        k = ca.vertcat(a_b - ca.cross(omega, v_b), alpha, ca.SX.zeros(12))
-        return v, k
+        return v, ca.vertcat(a_b - ca.cross(omega, v_b), alpha, qdd_r[:12] if qdd_r is not None else ca.SX.zeros(12))
 
     def project(self, F: ca.SX) -> ca.SX:
         """tau_r (n, m) = S F for full generalized forces F (18, m) (module docstring)."""

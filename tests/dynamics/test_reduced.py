@@ -142,12 +142,13 @@ def test_projection_forms_equal_walker_orin(name):
     import casadi as ca
 
     from quadruped_dyn.codegen.emit import REDUCED_STANCE_SETS, reduced_functions
+    from quadruped_dyn.dynamics.reduced_projection import reduced_projection
 
     robot = load_robot(name)
     rng = np.random.default_rng(5)
     for stance in REDUCED_STANCE_SETS:
         m, q_r, qd, qdd, quat = _reduced(robot, stance.name, rng)
-        M_r, CG_r, G_r, id_r, *_ = reduced_functions(robot, stance)  # fd_r, did_r_dir follow
+        M_r, CG_r, G_r, id_r, *_ = reduced_functions(robot, stance)  # fd_r, dfd_r follow
         (M,) = guarded_call(m.M_r, q_r, quat)
         assert_close(np.array(M_r(q_r, quat)), M, what=f"M_r {stance.name}")
         expected = guarded_call(m.C_r, q_r, qd, quat)[0] + guarded_call(m.G_r, q_r, quat)[0]
@@ -157,3 +158,9 @@ def test_projection_forms_equal_walker_orin(name):
         assert_close(np.array(id_r(q_r, qd, qdd, quat)).ravel(), guarded_call(m.id_r, q_r, qd, qdd, quat)[0],
                      what=f"id_r {stance.name}")
         assert isinstance(M_r, ca.Function)
+        # dfd_r's lift: v and a = T qdd_r + k in one pass, against the paper's maps (Householder least squares)
+        syms = [ca.SX.sym(k, len(x)) for k, x in (("q_r", q_r), ("qd", qd), ("qdd", qdd), ("quat", quat))]
+        v, a = reduced_projection(robot, stance, syms[0], syms[3]).velocity_and_acceleration(syms[1], syms[2])
+        ours = ca.Function("motion", syms, [v, a])(q_r, qd, qdd, quat)
+        for name, o, e in zip(("v", "a"), ours, guarded_call(reduced_maps(robot, stance.name), q_r, qd, qdd, quat)):
+            assert_close(np.array(o).ravel(), e, what=f"{name} {stance.name}")

@@ -1,57 +1,157 @@
 /* quadruped_dyn: derivatives of the reduced forward dynamics (hand-written, inserted into each generated
- * qd_<robot>_r_<stance>.c after qd_reduced_solve.c, whose checks and LU it uses; see
+ * qd_<robot>_r_<stance>.c after qd_reduced_solve.c, whose checks, M_r product and LU it uses; see
  * quadruped_dyn/codegen/emit_derivatives.py and docs/derivatives.md).
  *
  * qd_dfd_r_<feet>(q_r, qd_r, tau_ext, quat) -> (dqdd_dq, dqdd_dqd, dqdd_dtau, dqdd_dtheta) of
- * qdd_r = M_r^-1 (tau_ext - C_r - G_r):
- *   M_r and C_r + G_r from the generated evaluations, M_r = LU (qd_fd_r_factor), qdd_r by the LU solve;
- *   then the columns D of d id_r / d(q_r, qd_r, theta) at (q_r, qd_r, qdd_r, quat), one forward-mode
- *   directional derivative (the generated qd_did_r_dir_<feet>) per unit direction, and
- *   d qdd_r / dx = -M_r^-1 D (x = q_r, qd_r, theta), d qdd_r / d tau_ext = M_r^-1, all by the same LU.
- * The trunk orientation is the separate input quat: dqdd_dq is the partial derivative at fixed quat
- * (its 13th column, the roll, is zero: the functions read the roll from quat, so that direction is not
- * evaluated), dqdd_dtheta (n x 3) the derivative along a body-frame increment quat -> quat (x) Exp(dtheta/2).
- * Outputs dense, column-major. Return codes as qd_fd_r_*: 0 ok, QD_NONFINITE, QD_SINGULAR (M_r singular to
- * working precision); no output is usable then. No heap; the temporaries (~6 kB in double) on the stack. */
+ * qdd_r = M_r^-1 (tau_ext - C_r - G_r), by the implicit-function rule d qdd_r/dx = -M_r^-1 d id_r/dx at
+ * qdd_r (x = q_r, qd_r, theta), d qdd_r / d tau_ext = M_r^-1, and the chain rule over the full-coordinate
+ * derivatives: id_r = S(q_r) F(q, v, a), F the full inverse dynamics (no foot forces) at q = (0, quat, q_j),
+ * v = (v_b, qd_j), a = (a_b, qdd_j), S = [S_b, I] (row 12 of two feet: S_b only), so
+ *   d id_r/dx = d(S_b F_b)/dx at fixed F + S (dF/dq dq/dx + dF/dv dv/dx + M da/dx),
+ * with dF/dq, dF/dv from qd_did_full and F from qd_id_full (qd_<robot>_d.c, qd_<robot>.c: same library),
+ * S_b, T_b and M from qd_M_r_parts. Only the trunk rows v_b, a_b ("the lift") depend on x other than by
+ * identity: their derivative along a joint angle or theta is the generated qd_dfd_r_lift (one forward-mode
+ * direction per call, only for the stance legs' joints and, for two feet, theta); along qd_r, dv_b = T_b and
+ * da_b from qd_dfd_r_parts, which also gives d(S_b F_b)/dq_r. The products in loops.
+ * The trunk orientation is the separate input quat: dqdd_dq is the partial derivative at fixed quat (its
+ * 13th column, the roll, is zero: the functions read the roll from quat), dqdd_dtheta (n x 3) the
+ * derivative along a body-frame increment quat -> quat (x) Exp(dtheta/2), Pinocchio's convention for
+ * did_full's rotation columns 3:6. Outputs dense, column-major. Return codes as qd_fd_r_*: 0 ok,
+ * QD_NONFINITE, QD_SINGULAR (M_r singular to working precision); no output is usable then. No heap; the
+ * temporaries in the caller's w (QD_DFD_R_W(n) reals, stated by the _work entry), ~1 kB on the stack. */
 
-/* n coordinates; nq of them (the first) are differentiated (the rest do not enter id_r: zero columns).
- * dir: the generated directional derivative (q_r, qd_r, qdd_r, quat, dq_r, dqd_r, dtheta) -> (dtau_r). */
-QD_INLINE int qd_dfd_r_solve(int n, int nq, qd_eval_fn M_r, qd_eval_fn CG_r, qd_eval_fn dir, const casadi_real** arg,
-                          casadi_real** res, casadi_int* iw, casadi_real* w, int mem) {
-  casadi_real M[QD_N_MAX * QD_N_MAX], qdd[QD_N_MAX], X[QD_N_MAX * (3 * QD_N_MAX + 3)];
-  casadi_real seed[2 * QD_N_MAX + 3];
-  int piv[QD_N_MAX];
-  int flag = qd_fd_r_factor(n, M_r, CG_r, arg, M, piv, qdd, iw, w, mem);
-  if (flag) return flag;
-  qd_lu_solve(n, M, piv, qdd);
-  /* X's columns: q_r (n), qd_r (n), theta (3), tau_ext (n); the directions' seeds in one array */
-  const int m = 2 * n + 3;
-  for (int j = 0; j < m; ++j) seed[j] = 0;
-  const casadi_real* d_arg[7] = {arg[0], arg[1], qdd, arg[3], seed, seed + n, seed + 2 * n};
-  for (int j = 0; j < m; ++j) {
-    casadi_real* x = X + n * j;
-    if (j >= nq && j < n) { /* a coordinate id_r does not read */
-      for (int i = 0; i < n; ++i) x[i] = 0;
-      continue;
+/* defined in qd_<robot>_d.c and qd_<robot>.c of the same library (no work memory: checked by the generator) */
+int qd_did_full(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem);
+const casadi_int* qd_did_full_sparsity_out(casadi_int i);
+int qd_id_full(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem);
+
+/* Reals of w qd_dfd_r_solve uses for n coordinates (the generator states the same number, checked below). */
+#define QD_DFD_R_W(n) ((n) * (n) + 14 * (n) + 3 * 18 * 18 + 36)
+
+/* x: the nonzeros of a CasADi sparsity sp (nrow, ncol, colind[ncol + 1], row[nnz]) -> the dense matrix,
+ * column-major, in place (x holds nrow * ncol reals). Backwards: a nonzero's dense index is >= its own. */
+static void qd_densify(const casadi_int* sp, casadi_real* x) {
+  const casadi_int nrow = sp[0], ncol = sp[1], *colind = sp + 2, *row = sp + 3 + ncol;
+  casadi_int next = nrow * ncol; /* entries from here on are final */
+  for (casadi_int j = ncol - 1; j >= 0; --j) {
+    for (casadi_int k = colind[j + 1] - 1; k >= colind[j]; --k) {
+      casadi_int d = row[k] + nrow * j;
+      casadi_real value = x[k];
+      for (casadi_int i = d + 1; i < next; ++i) x[i] = 0;
+      x[d] = value;
+      next = d;
     }
-    casadi_real* d_res[1] = {x};
-    seed[j] = 1;
-    flag = dir(d_arg, d_res, iw, w, mem);
-    seed[j] = 0;
-    if (flag) return flag;
-    for (int i = 0; i < n; ++i) x[i] = -x[i];
-    qd_lu_solve(n, M, piv, x);
   }
-  for (int j = 0; j < n; ++j) { /* M_r^-1, column by column */
-    casadi_real* x = X + n * (m + j);
-    for (int i = 0; i < n; ++i) x[i] = i == j;
-    qd_lu_solve(n, M, piv, x);
+  for (casadi_int i = 0; i < next; ++i) x[i] = 0;
+}
+
+/* col (n) = -(S y + extra), S y = S_b y_b + y_j (rows 0..11; row 12 has no joint part); extra may be NULL. */
+static void qd_dfd_r_column(int n, const casadi_real* S_b, const casadi_real* y, const casadi_real* extra, casadi_real* col) {
+  for (int i = 0; i < n; ++i) col[i] = i < 12 ? y[6 + i] : 0;
+  for (int k = 0; k < 6; ++k) {
+    for (int i = 0; i < n; ++i) col[i] += S_b[i + n * k] * y[k];
   }
-  const int first[4] = {0, n, 2 * n + 3, 2 * n}, count[4] = {n, n, n, 3}; /* output k: columns of X */
-  for (int k = 0; k < 4; ++k) {
-    if (!res[k]) continue;
-    const casadi_real* x = X + n * first[k];
-    for (int i = 0; i < n * count[k]; ++i) res[k][i] = x[i];
+  for (int i = 0; i < n; ++i) col[i] = -(col[i] + (extra ? extra[i] : 0));
+}
+
+/* y (18) += H[:, 0:6] dv + M[:, 0:6] da (18 x 18 column-major each): the trunk rows' change through F. */
+static void qd_dfd_r_through_trunk(const casadi_real* H, const casadi_real* M, const casadi_real* dv, const casadi_real* da,
+                                   casadi_real* y) {
+  for (int k = 0; k < 6; ++k) {
+    for (int i = 0; i < 18; ++i) y[i] += H[i + 18 * k] * dv[k] + M[i + 18 * k] * da[k];
+  }
+}
+
+/* the column j of output k (n x ncol, column-major), if that output is wanted */
+static void qd_dfd_r_store(int n, casadi_real** res, int k, int j, const casadi_real* col) {
+  if (!res[k]) return;
+  for (int i = 0; i < n; ++i) res[k][i + n * j] = col[i];
+}
+
+/* n coordinates; legs: bit i set for a stance leg i (the lift and S depend on its joints only);
+ * lift_quat: the lift depends on the trunk orientation (two feet). CG_r: the generated C_r + G_r. */
+QD_INLINE int qd_dfd_r_solve(int n, int legs, int lift_quat, qd_eval_fn CG_r, const casadi_real** arg, casadi_real** res,
+                             casadi_int* iw, casadi_real* w, int mem) {
+  casadi_real *M_r = w, *qdd = M_r + n * n, *S_b = qdd + n, *T_b = S_b + 6 * n, *M = T_b + 6 * n, *G = M + 18 * 18,
+              *H = G + 18 * 18, *F = H + 18 * 18, *y = F + 18, *col = y + 18;
+  casadi_real q[19] = {0}, v[18], a[18], f[12] = {0}, dv[6], da[6], dSF[QD_N_MAX], da_qd[6];
+  casadi_real dq[QD_N_MAX] = {0}, dqd[QD_N_MAX] = {0}, dtheta[3] = {0};
+  int piv[QD_N_MAX];
+  const casadi_real* m_arg[2] = {arg[0], arg[3]};
+  casadi_real* m_res[3] = {S_b, T_b, M};
+  int flag = qd_regular(arg, 3, iw, w, mem);
+  if (!flag) flag = qd_M_r_parts(m_arg, m_res, iw, w, mem);
+  if (flag) return flag;
+  qd_M_r_product(n, S_b, T_b, M, M_r);
+  flag = qd_fd_r_finish(n, CG_r, arg, M_r, piv, qdd, iw, w, mem);
+  if (flag) return flag;
+  qd_lu_solve(n, M_r, piv, qdd);
+  /* the lift at qdd_r (its directions unused yet: F zero), then F, dF/dq, dF/dv at (q, v, a) */
+  for (int i = 0; i < 18; ++i) F[i] = 0;
+  const casadi_real* l_arg[8] = {arg[0], arg[1], qdd, arg[3], F, dq, dtheta, dqd};
+  casadi_real* l_res[6] = {v, a, 0, 0, 0, 0};
+  flag = qd_dfd_r_lift(l_arg, l_res, iw, w, mem);
+  if (flag) return flag;
+  for (int i = 0; i < 4; ++i) q[3 + i] = arg[3][i];
+  for (int i = 0; i < 12; ++i) {
+    q[7 + i] = arg[0][i];
+    v[6 + i] = arg[1][i];
+    a[6 + i] = qdd[i];
+  }
+  const casadi_real* d_arg[4] = {q, v, a, f};
+  casadi_real* i_res[2] = {F, F + 6};
+  casadi_real* d_res[3] = {G, H, 0};
+  flag = qd_id_full(d_arg, i_res, iw, w, mem);
+  if (!flag) flag = qd_did_full(d_arg, d_res, iw, w, mem);
+  if (flag) return flag;
+  qd_densify(qd_did_full_sparsity_out(0), G);
+  qd_densify(qd_did_full_sparsity_out(1), H);
+  l_res[0] = l_res[1] = 0;
+  l_res[2] = dv;
+  l_res[3] = da;
+  l_res[4] = dSF;
+  l_res[5] = da_qd;
+  /* columns of -d id_r/dx, then M_r^-1 of each: the joint angle and rate j together (one lift call for a
+     stance leg's joint; the roll, read by no function, has a zero column; its rate moves the lift) */
+  for (int j = 0; j < n; ++j) {
+    int moves = j < 12 ? legs >> (j / 3) & 1 : 1;
+    if (moves) {
+      dq[j] = j < 12;
+      dqd[j] = 1;
+      flag = qd_dfd_r_lift(l_arg, l_res, iw, w, mem);
+      dq[j] = dqd[j] = 0;
+      if (flag) return flag;
+    }
+    for (int i = 0; i < 18; ++i) y[i] = j < 12 ? G[i + 18 * (6 + j)] : 0;
+    if (moves && j < 12) qd_dfd_r_through_trunk(H, M, dv, da, y);
+    qd_dfd_r_column(n, S_b, y, moves && j < 12 ? dSF : 0, col);
+    qd_lu_solve(n, M_r, piv, col);
+    qd_dfd_r_store(n, res, 0, j, col);
+    for (int i = 0; i < 18; ++i) y[i] = j < 12 ? H[i + 18 * (6 + j)] : 0;
+    if (moves) qd_dfd_r_through_trunk(H, M, T_b + 6 * j, da_qd, y); /* dv_b = T_b e_j */
+    qd_dfd_r_column(n, S_b, y, 0, col);
+    qd_lu_solve(n, M_r, piv, col);
+    qd_dfd_r_store(n, res, 1, j, col);
+  }
+  for (int k = 0; k < 3; ++k) { /* theta: gravity in the trunk frame (did_full's rotation columns), the lift for two feet */
+    for (int i = 0; i < 18; ++i) y[i] = G[i + 18 * (3 + k)];
+    if (lift_quat) {
+      dtheta[k] = 1;
+      flag = qd_dfd_r_lift(l_arg, l_res, iw, w, mem);
+      dtheta[k] = 0;
+      if (flag) return flag;
+      qd_dfd_r_through_trunk(H, M, dv, da, y);
+    }
+    qd_dfd_r_column(n, S_b, y, 0, col);
+    qd_lu_solve(n, M_r, piv, col);
+    qd_dfd_r_store(n, res, 3, k, col);
+  }
+  if (res[2]) {
+    for (int j = 0; j < n; ++j) { /* M_r^-1, column by column */
+      casadi_real* x = res[2] + n * j;
+      for (int i = 0; i < n; ++i) x[i] = i == j;
+      qd_lu_solve(n, M_r, piv, x);
+    }
   }
   const casadi_int nnz[4] = {n * n, n * n, n * n, 3 * n};
   return qd_finite(0, res, 4, nnz);

@@ -84,23 +84,29 @@ QD_INLINE int qd_checked(qd_eval_fn f, int i_quat, int n_out, const casadi_int* 
  * not through a pointer, so the Cortex-M stack walk stays bounded) gives S_b (n x 6), T_b (6 x n) and M (18 x 18, the
  * full inertia matrix), all column-major, with S = [S_b, I_12] (row 12, two feet: no joint part) and
  * T = [T_b; I_12] (column 12: no joint part). The products in loops, not unrolled: ~2,200 multiply-adds
- * in a few hundred bytes of code instead of ~60 kB of straight-line C per stance set. */
-static int qd_M_r_project(int n, const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem) {
-  casadi_real S_b[QD_N_MAX * 6], T_b[6 * QD_N_MAX], M[18 * 18], mt[18];
-  casadi_real* p_res[3] = {S_b, T_b, M};
-  int flag = qd_M_r_parts(arg, p_res, iw, w, mem);
-  if (flag || !res[0]) return flag;
+ * in a few hundred bytes of code instead of ~60 kB of straight-line C per stance set. qd_M_r_product
+ * multiplies given factors (the reduced derivatives reuse them). */
+static void qd_M_r_product(int n, const casadi_real* S_b, const casadi_real* T_b, const casadi_real* M, casadi_real* M_r) {
+  casadi_real mt[18];
   for (int j = 0; j < n; ++j) { /* column j: mt = M T e_j, then S mt */
     for (int i = 0; i < 18; ++i) mt[i] = j < 12 ? M[i + 18 * (6 + j)] : 0;
     for (int k = 0; k < 6; ++k) {
       for (int i = 0; i < 18; ++i) mt[i] += M[i + 18 * k] * T_b[k + 6 * j];
     }
-    casadi_real* col = res[0] + n * j;
+    casadi_real* col = M_r + n * j;
     for (int i = 0; i < n; ++i) col[i] = i < 12 ? mt[6 + i] : 0;
     for (int k = 0; k < 6; ++k) {
       for (int i = 0; i < n; ++i) col[i] += S_b[i + n * k] * mt[k];
     }
   }
+}
+
+static int qd_M_r_project(int n, const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem) {
+  casadi_real S_b[QD_N_MAX * 6], T_b[6 * QD_N_MAX], M[18 * 18];
+  casadi_real* p_res[3] = {S_b, T_b, M};
+  int flag = qd_M_r_parts(arg, p_res, iw, w, mem);
+  if (flag || !res[0]) return flag;
+  qd_M_r_product(n, S_b, T_b, M, res[0]);
   return 0;
 }
 
@@ -150,17 +156,13 @@ static void qd_lu_solve(int n, const casadi_real* LU, const int* piv, casadi_rea
   }
 }
 
-/* M_r (factorised: qd_lu_factor) and b = tau_ext - (C_r + G_r) at arg = (q_r, qd_r, tau_ext, quat), from the
- * generated evaluations, checked here in one pass. 0, QD_NONFINITE or QD_SINGULAR (nothing usable then). */
-QD_INLINE int qd_fd_r_factor(int n, qd_eval_fn M_r, qd_eval_fn CG_r, const casadi_real** arg, casadi_real* M, int* piv,
-                          casadi_real* b, casadi_int* iw, casadi_real* w, int mem) {
-  const casadi_real* m_arg[2] = {arg[0], arg[3]};
+/* M (= M_r, evaluated) factorised (qd_lu_factor) and b = tau_ext - (C_r + G_r) at arg = (q_r, qd_r, tau_ext, quat),
+ * C_r + G_r from the generated evaluation, checked here in one pass. 0, QD_NONFINITE or QD_SINGULAR. */
+QD_INLINE int qd_fd_r_finish(int n, qd_eval_fn CG_r, const casadi_real** arg, casadi_real* M, int* piv, casadi_real* b,
+                             casadi_int* iw, casadi_real* w, int mem) {
   const casadi_real* cg_arg[3] = {arg[0], arg[1], arg[3]};
-  casadi_real* m_res[1] = {M};
   casadi_real* cg_res[1] = {b};
-  int flag = qd_regular(arg, 3, iw, w, mem);
-  if (!flag) flag = M_r(m_arg, m_res, iw, w, mem);
-  if (!flag) flag = CG_r(cg_arg, cg_res, iw, w, mem);
+  int flag = CG_r(cg_arg, cg_res, iw, w, mem);
   if (flag) return flag;
   casadi_real scale = 0, sum = 0; /* a NaN or inf anywhere makes the sum non-finite */
   for (int i = 0; i < n * n; ++i) {
@@ -173,6 +175,17 @@ QD_INLINE int qd_fd_r_factor(int n, qd_eval_fn M_r, qd_eval_fn CG_r, const casad
   }
   if (!isfinite(sum)) return QD_NONFINITE;
   return qd_lu_factor(n, M, piv, scale);
+}
+
+/* M_r (factorised: qd_lu_factor) and b = tau_ext - (C_r + G_r) at arg = (q_r, qd_r, tau_ext, quat), from the
+ * generated evaluations (qd_fd_r_finish). 0, QD_NONFINITE or QD_SINGULAR (nothing usable then). */
+QD_INLINE int qd_fd_r_factor(int n, qd_eval_fn M_r, qd_eval_fn CG_r, const casadi_real** arg, casadi_real* M, int* piv,
+                          casadi_real* b, casadi_int* iw, casadi_real* w, int mem) {
+  const casadi_real* m_arg[2] = {arg[0], arg[3]};
+  casadi_real* m_res[1] = {M};
+  int flag = qd_regular(arg, 3, iw, w, mem);
+  if (!flag) flag = M_r(m_arg, m_res, iw, w, mem);
+  return flag ? flag : qd_fd_r_finish(n, CG_r, arg, M, piv, b, iw, w, mem);
 }
 
 /* qdd_r = M_r^-1 (tau_ext - (C_r + G_r)): arg = (q_r, qd_r, tau_ext, quat), res = (qdd_r).
