@@ -237,11 +237,16 @@ typedef int (*qd_d_eval_fn)(const casadi_real**, casadi_real**, casadi_int*, cas
 #define QD_DFD_FULL_SZ_W 1476 /* M, M^-1, dtau/dq, dtau/dv (18 x 18 each), nle, a (18), the blocks (4 * 9 + 4 * 18 + 36) */
 #define QD_DGRF_SZ_W 1158 /* M, dtau/dq, dtau/dv (18 x 18 each), nle, seed (18), wrench (6), P (6 x 6), d(P w)/dq (6 x 18) */
 
-/* 1 if any of x[0..n) is NaN or inf (x - x is 0 for every finite x; a branch-free reduction the compiler vectorises). */
+/* 1 if any of x[0..n) is NaN or inf: x * 0 is 0 for every finite x and NaN otherwise, summed in 8 independent
+ * lanes (a reduction the compiler vectorises; one running flag or sum is a serial chain, ~6x slower here). */
 static int qd_d_nonfinite(const casadi_real* restrict x, casadi_int n) {
-  int bad = 0;
-  for (casadi_int i = 0; i < n; ++i) bad |= !(x[i] - x[i] == 0);
-  return bad;
+  casadi_real s[8] = {0};
+  casadi_int i = 0;
+  for (; i + 8 <= n; i += 8) {
+    for (int j = 0; j < 8; ++j) s[j] += x[i + j] * 0;
+  }
+  for (; i < n; ++i) s[0] += x[i] * 0;
+  return !(s[0] + s[1] + s[2] + s[3] + s[4] + s[5] + s[6] + s[7] == 0);
 }
 
 /* flag, or QD_NONFINITE if any of the n_out outputs (nnz[i] entries each) is not finite. */
