@@ -39,10 +39,13 @@
  * along pinocchio.integrate(q, dq): dq (18) = (dv_b, dw_b, dq_joints), a body-frame (local) increment
  * of the trunk pose (p -> p + R dv_b, R -> R Exp([dw_b]x)), as Pinocchio's analytical derivatives;
  * no column is a derivative w.r.t. a quaternion entry, and the first three (position) are zero.
- *   did_full(q, v, a)               d rnea/dq, d rnea/dv, d rnea/da = M (rnea: no foot forces);
+ *   did_full(q, v, a)               d rnea/dq, d rnea/dv, d rnea/da = M (rnea: no foot forces); sparse:
+ *                                   d rnea/dq's position columns hold no entry (since 2026-12-02),
+ *                                   a leg's joint columns only the trunk's and that leg's rows;
  *   dfd_full_parts(q, v)            M (dense) and C + G;
  *   dfd_full(q, v, tau_full)        d a/dq, d a/dv, d a/dtau = M^-1 of a = M^-1 (tau_full - C - G):
- *                                   Cholesky of M on the stack, -M^-1 d rnea/dx at a. Returns
+ *                                   M^-1 by M's tree structure (legs' 3 x 3 blocks, then the trunk's
+ *                                   Schur complement), -M^-1 d rnea/dx at a; temporaries in w. Returns
  *                                   QD_SINGULAR (2) if M is not positive definite to working precision.
  *   dgrf_dir_<feet>(q, w, dq)       the GRF solve for a trunk wrench w, P(q) w, and its derivative along dq;
  *   dgrf_<feet>(q, v, a)            d lambda/dq, d lambda/dv, d lambda/da of the GRF solve (1-4 feet):
@@ -184,39 +187,39 @@
  *   qd_id_r_BL_BR(q_r[13], qd_r[13], qdd_r[13], quat[4]) -> (tau_r[13]);  iw 0, w 0  [back, returns QD_NONFINITE / QD_SINGULAR / QD_DEGENERATE]
  *   qd_fd_r_BL_BR(q_r[13], qd_r[13], tau_ext[13], quat[4]) -> (qdd_r[13]);  iw 0, w 0  [back, returns QD_NONFINITE / QD_SINGULAR / QD_DEGENERATE]
  *   qd_dfd_r_BL_BR(q_r[13], qd_r[13], tau_ext[13], quat[4]) -> (dqdd_dq[13x13], dqdd_dqd[13x13], dqdd_dtau[13x13], dqdd_dtheta[13x3]);  iw 0, w 1359  [back, returns QD_NONFINITE / QD_SINGULAR / QD_DEGENERATE]
- *   qd_did_full(q[19], v[18], a[18]) -> (dtau_dq[18x18, 216 nonzeros], dtau_dv[18x18, 212 nonzeros], dtau_da[18x18, 210 nonzeros]);  iw 0, w 0
+ *   qd_did_full(q[19], v[18], a[18]) -> (dtau_dq[18x18, 162 nonzeros], dtau_dv[18x18, 212 nonzeros], dtau_da[18x18, 210 nonzeros]);  iw 0, w 0
  *   qd_dfd_full_parts(q[19], v[18]) -> (M[18x18], nle[18]);  iw 0, w 0
- *   qd_dfd_full(q[19], v[18], tau_full[18]) -> (da_dq[18x18], da_dv[18x18], da_dtau[18x18]);  iw 0, w 0  [returns QD_NONFINITE / QD_SINGULAR]
+ *   qd_dfd_full(q[19], v[18], tau_full[18]) -> (da_dq[18x18], da_dv[18x18], da_dtau[18x18]);  iw 0, w 1476  [returns QD_NONFINITE / QD_SINGULAR]
  *   qd_dgrf_dir_FL_FR_BL_BR(q[19], w[6], dq[18]) -> (lambda_w[6], dlambda_w[6]);  iw 0, w 0  [returns QD_NONFINITE]
- *   qd_dgrf_FL_FR_BL_BR(q[19], v[18], a[18]) -> (dlambda_dq[6x18], dlambda_dv[6x18], dlambda_da[6x18]);  iw 0, w 0  [returns QD_NONFINITE]
+ *   qd_dgrf_FL_FR_BL_BR(q[19], v[18], a[18]) -> (dlambda_dq[6x18], dlambda_dv[6x18], dlambda_da[6x18]);  iw 0, w 1158  [returns QD_NONFINITE]
  *   qd_dgrf_dir_FL_FR_BL(q[19], w[6], dq[18]) -> (lambda_w[6], dlambda_w[6]);  iw 0, w 0  [returns QD_NONFINITE]
- *   qd_dgrf_FL_FR_BL(q[19], v[18], a[18]) -> (dlambda_dq[6x18], dlambda_dv[6x18], dlambda_da[6x18]);  iw 0, w 0  [returns QD_NONFINITE]
+ *   qd_dgrf_FL_FR_BL(q[19], v[18], a[18]) -> (dlambda_dq[6x18], dlambda_dv[6x18], dlambda_da[6x18]);  iw 0, w 1158  [returns QD_NONFINITE]
  *   qd_dgrf_dir_FL_FR_BR(q[19], w[6], dq[18]) -> (lambda_w[6], dlambda_w[6]);  iw 0, w 0  [returns QD_NONFINITE]
- *   qd_dgrf_FL_FR_BR(q[19], v[18], a[18]) -> (dlambda_dq[6x18], dlambda_dv[6x18], dlambda_da[6x18]);  iw 0, w 0  [returns QD_NONFINITE]
+ *   qd_dgrf_FL_FR_BR(q[19], v[18], a[18]) -> (dlambda_dq[6x18], dlambda_dv[6x18], dlambda_da[6x18]);  iw 0, w 1158  [returns QD_NONFINITE]
  *   qd_dgrf_dir_FL_BL_BR(q[19], w[6], dq[18]) -> (lambda_w[6], dlambda_w[6]);  iw 0, w 0  [returns QD_NONFINITE]
- *   qd_dgrf_FL_BL_BR(q[19], v[18], a[18]) -> (dlambda_dq[6x18], dlambda_dv[6x18], dlambda_da[6x18]);  iw 0, w 0  [returns QD_NONFINITE]
+ *   qd_dgrf_FL_BL_BR(q[19], v[18], a[18]) -> (dlambda_dq[6x18], dlambda_dv[6x18], dlambda_da[6x18]);  iw 0, w 1158  [returns QD_NONFINITE]
  *   qd_dgrf_dir_FR_BL_BR(q[19], w[6], dq[18]) -> (lambda_w[6], dlambda_w[6]);  iw 0, w 0  [returns QD_NONFINITE]
- *   qd_dgrf_FR_BL_BR(q[19], v[18], a[18]) -> (dlambda_dq[6x18], dlambda_dv[6x18], dlambda_da[6x18]);  iw 0, w 0  [returns QD_NONFINITE]
+ *   qd_dgrf_FR_BL_BR(q[19], v[18], a[18]) -> (dlambda_dq[6x18], dlambda_dv[6x18], dlambda_da[6x18]);  iw 0, w 1158  [returns QD_NONFINITE]
  *   qd_dgrf_dir_FL_FR(q[19], w[6], dq[18]) -> (lambda_w[6], dlambda_w[6]);  iw 0, w 0  [returns QD_NONFINITE]
- *   qd_dgrf_FL_FR(q[19], v[18], a[18]) -> (dlambda_dq[6x18], dlambda_dv[6x18], dlambda_da[6x18]);  iw 0, w 0  [returns QD_NONFINITE]
+ *   qd_dgrf_FL_FR(q[19], v[18], a[18]) -> (dlambda_dq[6x18], dlambda_dv[6x18], dlambda_da[6x18]);  iw 0, w 1158  [returns QD_NONFINITE]
  *   qd_dgrf_dir_FL_BL(q[19], w[6], dq[18]) -> (lambda_w[6], dlambda_w[6]);  iw 0, w 0  [returns QD_NONFINITE]
- *   qd_dgrf_FL_BL(q[19], v[18], a[18]) -> (dlambda_dq[6x18], dlambda_dv[6x18], dlambda_da[6x18]);  iw 0, w 0  [returns QD_NONFINITE]
+ *   qd_dgrf_FL_BL(q[19], v[18], a[18]) -> (dlambda_dq[6x18], dlambda_dv[6x18], dlambda_da[6x18]);  iw 0, w 1158  [returns QD_NONFINITE]
  *   qd_dgrf_dir_FL_BR(q[19], w[6], dq[18]) -> (lambda_w[6], dlambda_w[6]);  iw 0, w 0  [returns QD_NONFINITE]
- *   qd_dgrf_FL_BR(q[19], v[18], a[18]) -> (dlambda_dq[6x18], dlambda_dv[6x18], dlambda_da[6x18]);  iw 0, w 0  [returns QD_NONFINITE]
+ *   qd_dgrf_FL_BR(q[19], v[18], a[18]) -> (dlambda_dq[6x18], dlambda_dv[6x18], dlambda_da[6x18]);  iw 0, w 1158  [returns QD_NONFINITE]
  *   qd_dgrf_dir_FR_BL(q[19], w[6], dq[18]) -> (lambda_w[6], dlambda_w[6]);  iw 0, w 0  [returns QD_NONFINITE]
- *   qd_dgrf_FR_BL(q[19], v[18], a[18]) -> (dlambda_dq[6x18], dlambda_dv[6x18], dlambda_da[6x18]);  iw 0, w 0  [returns QD_NONFINITE]
+ *   qd_dgrf_FR_BL(q[19], v[18], a[18]) -> (dlambda_dq[6x18], dlambda_dv[6x18], dlambda_da[6x18]);  iw 0, w 1158  [returns QD_NONFINITE]
  *   qd_dgrf_dir_FR_BR(q[19], w[6], dq[18]) -> (lambda_w[6], dlambda_w[6]);  iw 0, w 0  [returns QD_NONFINITE]
- *   qd_dgrf_FR_BR(q[19], v[18], a[18]) -> (dlambda_dq[6x18], dlambda_dv[6x18], dlambda_da[6x18]);  iw 0, w 0  [returns QD_NONFINITE]
+ *   qd_dgrf_FR_BR(q[19], v[18], a[18]) -> (dlambda_dq[6x18], dlambda_dv[6x18], dlambda_da[6x18]);  iw 0, w 1158  [returns QD_NONFINITE]
  *   qd_dgrf_dir_BL_BR(q[19], w[6], dq[18]) -> (lambda_w[6], dlambda_w[6]);  iw 0, w 0  [returns QD_NONFINITE]
- *   qd_dgrf_BL_BR(q[19], v[18], a[18]) -> (dlambda_dq[6x18], dlambda_dv[6x18], dlambda_da[6x18]);  iw 0, w 0  [returns QD_NONFINITE]
+ *   qd_dgrf_BL_BR(q[19], v[18], a[18]) -> (dlambda_dq[6x18], dlambda_dv[6x18], dlambda_da[6x18]);  iw 0, w 1158  [returns QD_NONFINITE]
  *   qd_dgrf_dir_FL(q[19], w[6], dq[18]) -> (lambda_w[3], dlambda_w[3]);  iw 0, w 0  [returns QD_NONFINITE]
- *   qd_dgrf_FL(q[19], v[18], a[18]) -> (dlambda_dq[3x18], dlambda_dv[3x18], dlambda_da[3x18]);  iw 0, w 0  [returns QD_NONFINITE]
+ *   qd_dgrf_FL(q[19], v[18], a[18]) -> (dlambda_dq[3x18], dlambda_dv[3x18], dlambda_da[3x18]);  iw 0, w 1158  [returns QD_NONFINITE]
  *   qd_dgrf_dir_FR(q[19], w[6], dq[18]) -> (lambda_w[3], dlambda_w[3]);  iw 0, w 0  [returns QD_NONFINITE]
- *   qd_dgrf_FR(q[19], v[18], a[18]) -> (dlambda_dq[3x18], dlambda_dv[3x18], dlambda_da[3x18]);  iw 0, w 0  [returns QD_NONFINITE]
+ *   qd_dgrf_FR(q[19], v[18], a[18]) -> (dlambda_dq[3x18], dlambda_dv[3x18], dlambda_da[3x18]);  iw 0, w 1158  [returns QD_NONFINITE]
  *   qd_dgrf_dir_BL(q[19], w[6], dq[18]) -> (lambda_w[3], dlambda_w[3]);  iw 0, w 0  [returns QD_NONFINITE]
- *   qd_dgrf_BL(q[19], v[18], a[18]) -> (dlambda_dq[3x18], dlambda_dv[3x18], dlambda_da[3x18]);  iw 0, w 0  [returns QD_NONFINITE]
+ *   qd_dgrf_BL(q[19], v[18], a[18]) -> (dlambda_dq[3x18], dlambda_dv[3x18], dlambda_da[3x18]);  iw 0, w 1158  [returns QD_NONFINITE]
  *   qd_dgrf_dir_BR(q[19], w[6], dq[18]) -> (lambda_w[3], dlambda_w[3]);  iw 0, w 0  [returns QD_NONFINITE]
- *   qd_dgrf_BR(q[19], v[18], a[18]) -> (dlambda_dq[3x18], dlambda_dv[3x18], dlambda_da[3x18]);  iw 0, w 0  [returns QD_NONFINITE]
+ *   qd_dgrf_BR(q[19], v[18], a[18]) -> (dlambda_dq[3x18], dlambda_dv[3x18], dlambda_da[3x18]);  iw 0, w 1158  [returns QD_NONFINITE]
  *
  * Embedded use (docs/embedded.md): memory the caller provides per call, in bytes on a 32-bit
  * target: arg and res pointer arrays (4 B each), iw (8 B casadi_int), w, and the
@@ -257,17 +260,17 @@
  *   qd_id_r_FR_BL 468/244; qd_fd_r_FR_BL 468/244; qd_dfd_r_FR_BL 15616/7824; qd_M_r_FR_BR 1500/756;
  *   qd_CG_r_FR_BR 360/188; qd_G_r_FR_BR 252/132; qd_id_r_FR_BR 468/244; qd_fd_r_FR_BR 468/244;
  *   qd_dfd_r_FR_BR 15616/7824; qd_M_r_BL_BR 1500/756; qd_CG_r_BL_BR 360/188; qd_G_r_BL_BR 252/132;
- *   qd_id_r_BL_BR 468/244; qd_fd_r_BL_BR 468/244; qd_dfd_r_BL_BR 15616/7824; qd_did_full 5568/2796;
- *   qd_dfd_full_parts 3048/1532; qd_dfd_full 8240/4132; qd_dgrf_dir_FL_FR_BL_BR 460/240;
- *   qd_dgrf_FL_FR_BL_BR 3056/1540; qd_dgrf_dir_FL_FR_BL 460/240; qd_dgrf_FL_FR_BL 3056/1540;
- *   qd_dgrf_dir_FL_FR_BR 460/240; qd_dgrf_FL_FR_BR 3056/1540; qd_dgrf_dir_FL_BL_BR 460/240;
- *   qd_dgrf_FL_BL_BR 3056/1540; qd_dgrf_dir_FR_BL_BR 460/240; qd_dgrf_FR_BL_BR 3056/1540;
- *   qd_dgrf_dir_FL_FR 460/240; qd_dgrf_FL_FR 3056/1540; qd_dgrf_dir_FL_BL 460/240;
- *   qd_dgrf_FL_BL 3056/1540; qd_dgrf_dir_FL_BR 460/240; qd_dgrf_FL_BR 3056/1540;
- *   qd_dgrf_dir_FR_BL 460/240; qd_dgrf_FR_BL 3056/1540; qd_dgrf_dir_FR_BR 460/240;
- *   qd_dgrf_FR_BR 3056/1540; qd_dgrf_dir_BL_BR 460/240; qd_dgrf_BL_BR 3056/1540;
- *   qd_dgrf_dir_FL 412/216; qd_dgrf_FL 1760/892; qd_dgrf_dir_FR 412/216; qd_dgrf_FR 1760/892;
- *   qd_dgrf_dir_BL 412/216; qd_dgrf_BL 1760/892; qd_dgrf_dir_BR 412/216; qd_dgrf_BR 1760/892;
+ *   qd_id_r_BL_BR 468/244; qd_fd_r_BL_BR 468/244; qd_dfd_r_BL_BR 15616/7824; qd_did_full 5136/2580;
+ *   qd_dfd_full_parts 3048/1532; qd_dfd_full 20048/10036; qd_dgrf_dir_FL_FR_BL_BR 460/240;
+ *   qd_dgrf_FL_FR_BL_BR 12320/6172; qd_dgrf_dir_FL_FR_BL 460/240; qd_dgrf_FL_FR_BL 12320/6172;
+ *   qd_dgrf_dir_FL_FR_BR 460/240; qd_dgrf_FL_FR_BR 12320/6172; qd_dgrf_dir_FL_BL_BR 460/240;
+ *   qd_dgrf_FL_BL_BR 12320/6172; qd_dgrf_dir_FR_BL_BR 460/240; qd_dgrf_FR_BL_BR 12320/6172;
+ *   qd_dgrf_dir_FL_FR 460/240; qd_dgrf_FL_FR 12320/6172; qd_dgrf_dir_FL_BL 460/240;
+ *   qd_dgrf_FL_BL 12320/6172; qd_dgrf_dir_FL_BR 460/240; qd_dgrf_FL_BR 12320/6172;
+ *   qd_dgrf_dir_FR_BL 460/240; qd_dgrf_FR_BL 12320/6172; qd_dgrf_dir_FR_BR 460/240;
+ *   qd_dgrf_FR_BR 12320/6172; qd_dgrf_dir_BL_BR 460/240; qd_dgrf_BL_BR 12320/6172;
+ *   qd_dgrf_dir_FL 412/216; qd_dgrf_FL 11024/5524; qd_dgrf_dir_FR 412/216; qd_dgrf_FR 11024/5524;
+ *   qd_dgrf_dir_BL 412/216; qd_dgrf_BL 11024/5524; qd_dgrf_dir_BR 412/216; qd_dgrf_BR 11024/5524;
  */
 /* This file was automatically generated by CasADi 3.8.2.
  *  It consists of: 
@@ -2207,7 +2210,7 @@ int qd_dfd_full_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *s
 #define qd_dfd_full_SZ_ARG 3
 #define qd_dfd_full_SZ_RES 3
 #define qd_dfd_full_SZ_IW 0
-#define qd_dfd_full_SZ_W 0
+#define qd_dfd_full_SZ_W 1476
 int qd_dgrf_dir_FL_FR_BL_BR(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem);
 int qd_dgrf_dir_FL_FR_BL_BR_checkout(void);
 void qd_dgrf_dir_FL_FR_BL_BR_release(int mem);
@@ -2243,7 +2246,7 @@ int qd_dgrf_FL_FR_BL_BR_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casad
 #define qd_dgrf_FL_FR_BL_BR_SZ_ARG 3
 #define qd_dgrf_FL_FR_BL_BR_SZ_RES 3
 #define qd_dgrf_FL_FR_BL_BR_SZ_IW 0
-#define qd_dgrf_FL_FR_BL_BR_SZ_W 0
+#define qd_dgrf_FL_FR_BL_BR_SZ_W 1158
 int qd_dgrf_dir_FL_FR_BL(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem);
 int qd_dgrf_dir_FL_FR_BL_checkout(void);
 void qd_dgrf_dir_FL_FR_BL_release(int mem);
@@ -2279,7 +2282,7 @@ int qd_dgrf_FL_FR_BL_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_i
 #define qd_dgrf_FL_FR_BL_SZ_ARG 3
 #define qd_dgrf_FL_FR_BL_SZ_RES 3
 #define qd_dgrf_FL_FR_BL_SZ_IW 0
-#define qd_dgrf_FL_FR_BL_SZ_W 0
+#define qd_dgrf_FL_FR_BL_SZ_W 1158
 int qd_dgrf_dir_FL_FR_BR(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem);
 int qd_dgrf_dir_FL_FR_BR_checkout(void);
 void qd_dgrf_dir_FL_FR_BR_release(int mem);
@@ -2315,7 +2318,7 @@ int qd_dgrf_FL_FR_BR_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_i
 #define qd_dgrf_FL_FR_BR_SZ_ARG 3
 #define qd_dgrf_FL_FR_BR_SZ_RES 3
 #define qd_dgrf_FL_FR_BR_SZ_IW 0
-#define qd_dgrf_FL_FR_BR_SZ_W 0
+#define qd_dgrf_FL_FR_BR_SZ_W 1158
 int qd_dgrf_dir_FL_BL_BR(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem);
 int qd_dgrf_dir_FL_BL_BR_checkout(void);
 void qd_dgrf_dir_FL_BL_BR_release(int mem);
@@ -2351,7 +2354,7 @@ int qd_dgrf_FL_BL_BR_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_i
 #define qd_dgrf_FL_BL_BR_SZ_ARG 3
 #define qd_dgrf_FL_BL_BR_SZ_RES 3
 #define qd_dgrf_FL_BL_BR_SZ_IW 0
-#define qd_dgrf_FL_BL_BR_SZ_W 0
+#define qd_dgrf_FL_BL_BR_SZ_W 1158
 int qd_dgrf_dir_FR_BL_BR(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem);
 int qd_dgrf_dir_FR_BL_BR_checkout(void);
 void qd_dgrf_dir_FR_BL_BR_release(int mem);
@@ -2387,7 +2390,7 @@ int qd_dgrf_FR_BL_BR_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_i
 #define qd_dgrf_FR_BL_BR_SZ_ARG 3
 #define qd_dgrf_FR_BL_BR_SZ_RES 3
 #define qd_dgrf_FR_BL_BR_SZ_IW 0
-#define qd_dgrf_FR_BL_BR_SZ_W 0
+#define qd_dgrf_FR_BL_BR_SZ_W 1158
 int qd_dgrf_dir_FL_FR(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem);
 int qd_dgrf_dir_FL_FR_checkout(void);
 void qd_dgrf_dir_FL_FR_release(int mem);
@@ -2423,7 +2426,7 @@ int qd_dgrf_FL_FR_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_int 
 #define qd_dgrf_FL_FR_SZ_ARG 3
 #define qd_dgrf_FL_FR_SZ_RES 3
 #define qd_dgrf_FL_FR_SZ_IW 0
-#define qd_dgrf_FL_FR_SZ_W 0
+#define qd_dgrf_FL_FR_SZ_W 1158
 int qd_dgrf_dir_FL_BL(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem);
 int qd_dgrf_dir_FL_BL_checkout(void);
 void qd_dgrf_dir_FL_BL_release(int mem);
@@ -2459,7 +2462,7 @@ int qd_dgrf_FL_BL_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_int 
 #define qd_dgrf_FL_BL_SZ_ARG 3
 #define qd_dgrf_FL_BL_SZ_RES 3
 #define qd_dgrf_FL_BL_SZ_IW 0
-#define qd_dgrf_FL_BL_SZ_W 0
+#define qd_dgrf_FL_BL_SZ_W 1158
 int qd_dgrf_dir_FL_BR(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem);
 int qd_dgrf_dir_FL_BR_checkout(void);
 void qd_dgrf_dir_FL_BR_release(int mem);
@@ -2495,7 +2498,7 @@ int qd_dgrf_FL_BR_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_int 
 #define qd_dgrf_FL_BR_SZ_ARG 3
 #define qd_dgrf_FL_BR_SZ_RES 3
 #define qd_dgrf_FL_BR_SZ_IW 0
-#define qd_dgrf_FL_BR_SZ_W 0
+#define qd_dgrf_FL_BR_SZ_W 1158
 int qd_dgrf_dir_FR_BL(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem);
 int qd_dgrf_dir_FR_BL_checkout(void);
 void qd_dgrf_dir_FR_BL_release(int mem);
@@ -2531,7 +2534,7 @@ int qd_dgrf_FR_BL_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_int 
 #define qd_dgrf_FR_BL_SZ_ARG 3
 #define qd_dgrf_FR_BL_SZ_RES 3
 #define qd_dgrf_FR_BL_SZ_IW 0
-#define qd_dgrf_FR_BL_SZ_W 0
+#define qd_dgrf_FR_BL_SZ_W 1158
 int qd_dgrf_dir_FR_BR(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem);
 int qd_dgrf_dir_FR_BR_checkout(void);
 void qd_dgrf_dir_FR_BR_release(int mem);
@@ -2567,7 +2570,7 @@ int qd_dgrf_FR_BR_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_int 
 #define qd_dgrf_FR_BR_SZ_ARG 3
 #define qd_dgrf_FR_BR_SZ_RES 3
 #define qd_dgrf_FR_BR_SZ_IW 0
-#define qd_dgrf_FR_BR_SZ_W 0
+#define qd_dgrf_FR_BR_SZ_W 1158
 int qd_dgrf_dir_BL_BR(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem);
 int qd_dgrf_dir_BL_BR_checkout(void);
 void qd_dgrf_dir_BL_BR_release(int mem);
@@ -2603,7 +2606,7 @@ int qd_dgrf_BL_BR_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_int 
 #define qd_dgrf_BL_BR_SZ_ARG 3
 #define qd_dgrf_BL_BR_SZ_RES 3
 #define qd_dgrf_BL_BR_SZ_IW 0
-#define qd_dgrf_BL_BR_SZ_W 0
+#define qd_dgrf_BL_BR_SZ_W 1158
 int qd_dgrf_dir_FL(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem);
 int qd_dgrf_dir_FL_checkout(void);
 void qd_dgrf_dir_FL_release(int mem);
@@ -2639,7 +2642,7 @@ int qd_dgrf_FL_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz
 #define qd_dgrf_FL_SZ_ARG 3
 #define qd_dgrf_FL_SZ_RES 3
 #define qd_dgrf_FL_SZ_IW 0
-#define qd_dgrf_FL_SZ_W 0
+#define qd_dgrf_FL_SZ_W 1158
 int qd_dgrf_dir_FR(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem);
 int qd_dgrf_dir_FR_checkout(void);
 void qd_dgrf_dir_FR_release(int mem);
@@ -2675,7 +2678,7 @@ int qd_dgrf_FR_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz
 #define qd_dgrf_FR_SZ_ARG 3
 #define qd_dgrf_FR_SZ_RES 3
 #define qd_dgrf_FR_SZ_IW 0
-#define qd_dgrf_FR_SZ_W 0
+#define qd_dgrf_FR_SZ_W 1158
 int qd_dgrf_dir_BL(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem);
 int qd_dgrf_dir_BL_checkout(void);
 void qd_dgrf_dir_BL_release(int mem);
@@ -2711,7 +2714,7 @@ int qd_dgrf_BL_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz
 #define qd_dgrf_BL_SZ_ARG 3
 #define qd_dgrf_BL_SZ_RES 3
 #define qd_dgrf_BL_SZ_IW 0
-#define qd_dgrf_BL_SZ_W 0
+#define qd_dgrf_BL_SZ_W 1158
 int qd_dgrf_dir_BR(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem);
 int qd_dgrf_dir_BR_checkout(void);
 void qd_dgrf_dir_BR_release(int mem);
@@ -2747,7 +2750,7 @@ int qd_dgrf_BR_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz
 #define qd_dgrf_BR_SZ_ARG 3
 #define qd_dgrf_BR_SZ_RES 3
 #define qd_dgrf_BR_SZ_IW 0
-#define qd_dgrf_BR_SZ_W 0
+#define qd_dgrf_BR_SZ_W 1158
 void qd_paper_d_casadi_version(int* major, int* minor, int* patch);
 int qd_paper_d_casadi_int_size(void);
 int qd_paper_d_casadi_real_size(void);

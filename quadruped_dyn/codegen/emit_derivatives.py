@@ -6,7 +6,8 @@ In ``qd_<robot>_d.c`` (prefix ``qd_``), compiled into the same library as the ot
   dynamics (``dynamics/derivatives.py``), sparse outputs (leg rows do not depend on other legs);
 * ``dfd_full_parts(q, v) -> (M, nle)``: M (dense) and C + G, what the forward-dynamics derivative needs;
 * ``dfd_full(q, v, tau_full) -> (da_dq, da_dv, da_dtau)``: a signature only; its body is
-  ``c/qd_derivatives_solve.c`` (Cholesky of M in plain C, then -M^-1 dtau/dx at a = fd);
+  ``c/qd_derivatives_solve.c`` (M^-1 by M's tree structure in plain C, then -M^-1 dtau/dx at a = fd;
+  its temporaries in the caller's w, stated as its work size);
 * per stance set of 1-4 feet, ``dgrf_dir_<feet>(q, w, dq) -> (lambda_w, dlambda_w)``: the GRF
   solve for a given trunk wrench w, lambda_w = P(q) w (linear in w), and its forward-mode
   directional derivative along dq at fixed w; and ``dgrf_<feet>(q, v, a)``, a signature whose body
@@ -74,6 +75,8 @@ def grf_derivative_functions(robot: Robot, stance: StanceSet) -> list[ca.Functio
         raise AssertionError("the GRF solve depends on the trunk pose; qd_dgrf_solve assumes it does not")
     direction = ca.jtimes(lam, q, configuration_tangent(q) @ dq)
     suffix, m, opts = feet_suffix(stance), lam.shape[0], {"cse": True}
+    if m > 6:
+        raise AssertionError(f"the GRF solve of {stance.name} has {m} unknowns; qd_dgrf_solve holds P (m x 6) for m <= 6")
     grf_dir = ca.Function(f"{PREFIX}dgrf_dir_{suffix}", [q, w, dq], [ca.densify(lam), ca.densify(direction)],
                           ["q", "w", "dq"], ["lambda_w", "dlambda_w"], opts)
     placeholder = ca.repmat(ca.sum1(q) + ca.sum1(v) + ca.sum1(a), m, NV_FULL)  # dense m x 18, depends on every input
@@ -158,6 +161,10 @@ def derivative_functions(robot: Robot) -> list[ca.Function]:
     opts = {"cse": True}
     did = ca.Function(PREFIX + "did_full", [q, v, a], d.did_full.call([q, v, a]), ["q", "v", "a"],
                       ["dtau_dq", "dtau_dv", "dtau_da"], opts)
+    M = did.sparsity_out(2)
+    if any(M.has_nz(6 + 3 * leg + i, 6 + 3 * other + j) for leg in range(4) for other in range(4) if leg != other
+           for i in range(3) for j in range(3)):
+        raise AssertionError("M couples two legs; qd_d_tree_inverse assumes each leg couples only to the trunk")
     parts = ca.Function(PREFIX + "dfd_full_parts", [q, v], [ca.densify(fd.M_full_crba(q)), fd.nle_full(q, v)],
                         ["q", "v"], ["M", "nle"], opts)
     placeholder = ca.repmat(tau, 1, NV_FULL) + ca.sum1(q) + ca.sum1(v)  # dense 18 x 18, depends on every input
@@ -166,16 +173,29 @@ def derivative_functions(robot: Robot) -> list[ca.Function]:
     return [did, parts, dfd, *(f for st in GRF_DERIVATIVE_STANCE_SETS for f in grf_derivative_functions(robot, st))]
 
 
+def declare_work(c_text: str, h_text: str, name: str, sz_w: int) -> tuple[str, str]:
+    """State that ``name`` needs ``sz_w`` reals of work w (its template's temporaries) in its _work and
+    _work_bytes functions and the header's _SZ_W, where CasADi wrote 0 for the placeholder signature."""
+    c_text, n_c = re.subn(rf"(int {name}_work(?:_bytes)?\(.*?\n  if \(sz_w\) \*sz_w = )0((?:\*sizeof\(casadi_real\))?;)",
+                          rf"\g<1>{sz_w}\2", c_text, flags=re.S)
+    h_text, n_h = re.subn(rf"#define {name}_SZ_W 0\n", f"#define {name}_SZ_W {sz_w}\n", h_text)
+    if (n_c, n_h) != (2, 1):
+        raise AssertionError(f"{name}: CasADi's work sizes not found as expected")
+    return c_text, h_text
+
+
 def derivative_source(file_stem: str, functions: list[ca.Function], precision: str) -> tuple[str, str]:
     """(C source, CasADi's header) of qd_<robot>_d.c: CasADi's code with c/qd_derivatives_solve.c
     inserted; every entry point returns QD_NONFINITE for a non-finite output, dfd_full solves."""
     c_text, h_text = casadi_c(file_stem, functions, precision)
     first = c_text.index(f"\n/* {functions[0].name()}:")
-    c_text = c_text[:first] + "\n" + (TEMPLATES / "qd_derivatives_solve.c").read_text() + c_text[first:]
+    template = (TEMPLATES / "qd_derivatives_solve.c").read_text()
+    c_text = c_text[:first] + "\n" + template + c_text[first:]
     work = work_sizes(h_text)
     raw = evaluations(c_text, [f.name() for f in functions])
     if any(work[f.name()] != (0, 0) for f in functions):
         raise AssertionError("a derivative function needs work memory; qd_derivatives_solve.c passes none")
+    template_w = {k: int(v) for k, v in re.findall(r"#define QD_(DFD_FULL|DGRF)_SZ_W (\d+)", template)}
     for f in functions:
         signature = f.name() == PREFIX + "dfd_full" or (f.name().startswith(PREFIX + "dgrf_")
                                                          and not f.name().startswith(PREFIX + "dgrf_dir_"))
@@ -195,8 +215,10 @@ def derivative_source(file_stem: str, functions: list[ca.Function], precision: s
         c_text, count = re.subn(entry_point(f.name()), body, c_text)
         if count != 1:
             raise AssertionError(f"entry point of {f.name()} not found in CasADi's output")
-        if signature:  # its CasADi body is a placeholder: the template solves
+        if signature:  # its CasADi body is a placeholder: the template solves, its temporaries in the caller's w
             c_text = drop_evaluation(c_text, raw[f.name()])
+            sz_w = template_w["DFD_FULL" if f.name() == PREFIX + "dfd_full" else "DGRF"]
+            c_text, h_text = declare_work(c_text, h_text, f.name(), sz_w)
     # dfd_full calls qd_did_full_sparsity_out, defined further down: declare it first
     declaration = f"CASADI_SYMBOL_EXPORT const casadi_int* {PREFIX}did_full_sparsity_out(casadi_int i);\n"
     first = c_text.index("\n/* quadruped_dyn: derivatives")

@@ -67,6 +67,18 @@ def test_q_derivative_is_along_pinocchio_integrate(paper):
     assert np.abs(world - dq[:, 3:6]).max() > 1e-3 * np.abs(dq).max()
 
 
+@pytest.mark.parametrize("name", FAST_ROBOTS)
+def test_did_full_equals_the_literal_tangent_jacobian(name):
+    """did_full's shortcuts (rotation columns -M[:, 0:3] [g_b]x, no position columns) against CasADi's
+    Jacobian of the whole rnea with respect to q times d q / d dq of pinocchio.integrate (did_full_ad)."""
+    robot = load_robot(name)
+    d = full_derivatives(robot)
+    for seed in (0, 1):
+        s = random_state(robot.lower, robot.upper, np.random.default_rng(seed))
+        for k, (ours, literal) in enumerate(zip(d.did_full(s.q, s.v, s.a), d.did_full_ad(s.q, s.v, s.a))):
+            assert_close(np.array(ours), np.array(literal), REL_TOL_DERIVATIVES, f"{name} did_full output {k}")
+
+
 @pytest.mark.parametrize("bad", ["nan", "shape", "zero_quat"])
 def test_bad_input_is_input_error(paper, bad):
     d = full_derivatives(paper)

@@ -6,12 +6,14 @@
  * them a derivative with respect to a quaternion entry (docs/derivatives.md).
  *
  * qd_dfd_full(q, v, tau_full) -> (da_dq, da_dv, da_dtau), a = M^-1 (tau_full - C - G):
- *   M and C + G from the generated qd_dfd_full_parts, M = L L^T (Cholesky, on the stack),
- *   M^-1 = L^-T L^-1, a = M^-1 (tau_full - C - G), then the generated qd_did_full at (q, v, a):
- *   da/dq = -M^-1 dtau/dq, da/dv = -M^-1 dtau/dv (sparse products), da/dtau = M^-1.
+ *   M and C + G from the generated qd_dfd_full_parts, M^-1 by M's tree structure (qd_d_tree_inverse: the legs'
+ *   3 x 3 blocks, then the trunk's Schur complement; no fill-in, ~2k multiply-adds), a = M^-1 (tau_full - C - G),
+ *   then the generated qd_did_full at (q, v, a): da/dq = -M^-1 dtau/dq, da/dv = -M^-1 dtau/dv (sparse products),
+ *   da/dtau = M^-1. Temporaries in the caller's w (QD_DFD_FULL_SZ_W reals, the function's _SZ_W).
  * Return codes: 0 ok; QD_NONFINITE (1) an input or output is NaN/inf (or a zero quaternion);
- * QD_SINGULAR (2) a Cholesky pivot of M is below QD_SINGULAR_RTOL * max diag(M) (M not positive
- * definite to working precision: not a physical robot); the outputs are not written then. */
+ * QD_SINGULAR (2) a pivot of M's Cholesky factorisation with the legs ordered first is below QD_SINGULAR_RTOL *
+ * max diag(M) (M not positive definite to working precision: not a physical robot); the outputs are not
+ * written then. */
 #include <float.h>
 #include <math.h>
 
@@ -28,7 +30,6 @@
 
 typedef int (*qd_d_eval_fn)(const casadi_real**, casadi_real**, casadi_int*, casadi_real*, int);
 
-/* flag, or QD_NONFINITE if any of the n_out outputs (nnz[i] entries each) is not finite. */
 /* Where a generated function is passed as a pointer, the template is inlined into its caller so the
  * call becomes direct and a static stack walk (-fcallgraph-info, docs/embedded.md) can bound it. */
 #ifndef QD_INLINE
@@ -39,78 +40,159 @@ typedef int (*qd_d_eval_fn)(const casadi_real**, casadi_real**, casadi_int*, cas
 #endif
 #endif
 
+/* Reals of the caller's w that qd_dfd_full and qd_dgrf_<feet> use for their temporaries (the generator states
+ * them as the functions' _SZ_W, so the Cortex-M stack holds none of the 18 x 18 arrays). */
+#define QD_DFD_FULL_SZ_W 1476 /* M, M^-1, dtau/dq, dtau/dv (18 x 18 each), nle, a (18), the blocks (4 * 9 + 4 * 18 + 36) */
+#define QD_DGRF_SZ_W 1158 /* M, dtau/dq, dtau/dv (18 x 18 each), nle, seed (18), wrench (6), P (6 x 6), d(P w)/dq (6 x 18) */
+
+/* 1 if any of x[0..n) is NaN or inf: x * 0 is 0 for every finite x and NaN otherwise, summed in 8 independent
+ * lanes (a reduction the compiler vectorises; one running flag or sum is a serial chain, ~6x slower here). */
+static int qd_d_nonfinite(const casadi_real* restrict x, casadi_int n) {
+  casadi_real s[8] = {0};
+  casadi_int i = 0;
+  for (; i + 8 <= n; i += 8) {
+    for (int j = 0; j < 8; ++j) s[j] += x[i + j] * 0;
+  }
+  for (; i < n; ++i) s[0] += x[i] * 0;
+  return !(s[0] + s[1] + s[2] + s[3] + s[4] + s[5] + s[6] + s[7] == 0);
+}
+
+/* flag, or QD_NONFINITE if any of the n_out outputs (nnz[i] entries each) is not finite. */
 static int qd_d_finite(int flag, casadi_real** res, int n_out, const casadi_int* nnz) {
   if (flag) return flag;
   for (int i = 0; i < n_out; ++i) {
-    if (!res[i]) continue;
-    for (casadi_int j = 0; j < nnz[i]; ++j) {
-      if (!isfinite(res[i][j])) return QD_NONFINITE;
-    }
+    if (res[i] && qd_d_nonfinite(res[i], nnz[i])) return QD_NONFINITE;
   }
   return 0;
 }
 
 /* out (18 x 18, column-major) = -Minv D for D in CasADi's compressed-column format (sp, nz). */
-static void qd_d_neg_product(const casadi_real* Minv, const casadi_int* sp, const casadi_real* nz, casadi_real* out) {
+#if defined(__GNUC__) && !defined(__clang__) /* GCC's -O3 unroll-and-jam turns the vectorised row loop into scalar code */
+__attribute__((optimize("no-loop-unroll-and-jam")))
+#endif
+static void qd_d_neg_product(const casadi_real* restrict Minv, const casadi_int* sp, const casadi_real* restrict nz,
+                             casadi_real* restrict out) {
   const casadi_int ncol = sp[1], *colind = sp + 2, *row = sp + 2 + ncol + 1;
   for (casadi_int j = 0; j < ncol; ++j) {
-    casadi_real* o = out + QD_NV * j;
-    for (int i = 0; i < QD_NV; ++i) o[i] = 0;
+    casadi_real acc[QD_NV] = {0};
     for (casadi_int k = colind[j]; k < colind[j + 1]; ++k) {
-      const casadi_real* m = Minv + QD_NV * row[k]; /* Minv is symmetric: column row[k] = row row[k] */
+      const casadi_real* restrict m = Minv + QD_NV * row[k];
       const casadi_real d = nz[k];
-      for (int i = 0; i < QD_NV; ++i) o[i] -= m[i] * d;
+      for (int i = 0; i < QD_NV; ++i) acc[i] -= m[i] * d;
+    }
+    for (int i = 0; i < QD_NV; ++i) out[i + QD_NV * j] = acc[i];
+  }
+}
+
+/* a (n x n, column-major, n <= 6, symmetric positive definite) -> a^-1, by a = L L^T, L^-1 and a^-1 = L^-T L^-1.
+ * QD_SINGULAR (a left as is or partly factorised) if a pivot is not above tol. */
+static int qd_d_spd_inverse(casadi_real* restrict a, int n, casadi_real tol) {
+  casadi_real x[36], r[6]; /* x = L^-1 (lower), r = 1 / diag(L) */
+  for (int j = 0; j < n; ++j) { /* a = L L^T, L in the lower triangle */
+    for (int k = 0; k < j; ++k) {
+      const casadi_real u = a[j + n * k];
+      for (int i = j; i < n; ++i) a[i + n * j] -= a[i + n * k] * u;
+    }
+    if (!(a[j + n * j] > tol)) return QD_SINGULAR;
+    r[j] = 1 / sqrt(a[j + n * j]);
+    for (int i = j; i < n; ++i) a[i + n * j] *= r[j];
+  }
+  for (int j = 0; j < n; ++j) { /* L x_j = e_j */
+    for (int i = 0; i < j; ++i) x[i + n * j] = 0;
+    x[j + n * j] = r[j];
+    for (int i = j + 1; i < n; ++i) {
+      casadi_real s = 0;
+      for (int k = j; k < i; ++k) s += a[i + n * k] * x[k + n * j];
+      x[i + n * j] = -s * r[i];
     }
   }
+  for (int j = 0; j < n; ++j) { /* a^-1 = X^T X */
+    for (int i = 0; i <= j; ++i) {
+      casadi_real s = 0;
+      for (int k = j; k < n; ++k) s += x[k + n * i] * x[k + n * j];
+      a[i + n * j] = s;
+      a[j + n * i] = s;
+    }
+  }
+  return 0;
+}
+
+/* Minv (18 x 18, column-major) = M^-1 by M's branch-induced sparsity (a tree: the trunk's 6 coordinates, then
+ * four legs of 3 joints each coupled only to the trunk and to themselves): with the legs' blocks D_l (3 x 3),
+ * their trunk coupling B_l (6 x 3) and E_l = D_l^-1 B_l^T, the Schur complement S = A - sum_l B_l E_l of the
+ * trunk block A gives M^-1 = [[S^-1, -S^-1 E_l^T], [-E_l S^-1, delta_lm D_l^-1 + E_l S^-1 E_m^T]]. This is the
+ * Cholesky factorisation of M with the legs ordered first (no fill-in): QD_SINGULAR if one of its pivots is not
+ * above QD_SINGULAR_RTOL * max diag(M). blk: 4 * 9 + 4 * 18 + 36 reals. */
+static int qd_d_tree_inverse(const casadi_real* restrict M, casadi_real* restrict Minv, casadi_real* restrict blk) {
+  casadi_real *Dinv = blk, *E = blk + 4 * 9, *S = E + 4 * 18; /* E_l: 3 x 6, column-major */
+  casadi_real scale = 0;
+  for (int i = 0; i < QD_NV; ++i) scale = M[i + QD_NV * i] > scale ? M[i + QD_NV * i] : scale;
+  const casadi_real tol = QD_SINGULAR_RTOL * scale;
+  for (int i = 0; i < 6; ++i) {
+    for (int j = 0; j < 6; ++j) S[i + 6 * j] = M[i + QD_NV * j];
+  }
+  for (int l = 0; l < 4; ++l) {
+    const int o = 6 + 3 * l;
+    casadi_real *Di = Dinv + 9 * l, *El = E + 18 * l;
+    for (int c = 0; c < 3; ++c) {
+      for (int r = 0; r < 3; ++r) Di[r + 3 * c] = M[o + r + QD_NV * (o + c)];
+    }
+    if (qd_d_spd_inverse(Di, 3, tol)) return QD_SINGULAR;
+    for (int i = 0; i < 6; ++i) { /* E_l[:, i] = D_l^-1 B_l^T[:, i], B_l^T[c, i] = M[o + c, i] */
+      for (int r = 0; r < 3; ++r) {
+        El[r + 3 * i] = Di[r] * M[o + QD_NV * i] + Di[r + 3] * M[o + 1 + QD_NV * i] + Di[r + 6] * M[o + 2 + QD_NV * i];
+      }
+    }
+    for (int j = 0; j < 6; ++j) { /* S -= B_l E_l */
+      for (int i = 0; i < 6; ++i) {
+        S[i + 6 * j] -= M[o + QD_NV * i] * El[3 * j] + M[o + 1 + QD_NV * i] * El[1 + 3 * j] + M[o + 2 + QD_NV * i] * El[2 + 3 * j];
+      }
+    }
+  }
+  if (qd_d_spd_inverse(S, 6, tol)) return QD_SINGULAR;
+  for (int j = 0; j < 6; ++j) {
+    for (int i = 0; i < 6; ++i) Minv[i + QD_NV * j] = S[i + 6 * j];
+  }
+  for (int l = 0; l < 4; ++l) { /* F_l = E_l S^-1 (3 x 6): Minv's leg-trunk block is -F_l */
+    const int o = 6 + 3 * l;
+    const casadi_real* El = E + 18 * l;
+    for (int j = 0; j < 6; ++j) {
+      for (int r = 0; r < 3; ++r) {
+        casadi_real s = 0;
+        for (int i = 0; i < 6; ++i) s += El[r + 3 * i] * S[i + 6 * j];
+        Minv[o + r + QD_NV * j] = -s;
+        Minv[j + QD_NV * (o + r)] = -s;
+      }
+    }
+  }
+  for (int l = 0; l < 4; ++l) { /* leg-leg blocks: delta_lm D_l^-1 + F_l E_m^T = delta_lm D_l^-1 - Minv[l, trunk] E_m^T */
+    const int o = 6 + 3 * l;
+    for (int m = 0; m <= l; ++m) {
+      const int p = 6 + 3 * m;
+      const casadi_real* Em = E + 18 * m;
+      for (int c = 0; c < 3; ++c) {
+        for (int r = 0; r < 3; ++r) {
+          casadi_real s = m == l ? Dinv[9 * l + r + 3 * c] : 0;
+          for (int i = 0; i < 6; ++i) s -= Minv[o + r + QD_NV * i] * Em[c + 3 * i];
+          Minv[o + r + QD_NV * (p + c)] = s;
+          Minv[p + c + QD_NV * (o + r)] = s;
+        }
+      }
+    }
+  }
+  return 0;
 }
 
 QD_INLINE int qd_dfd_full_solve(qd_d_eval_fn parts, qd_d_eval_fn did, const casadi_int* sp_dq, const casadi_int* sp_dv,
                              const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem) {
-  casadi_real L[QD_NV * QD_NV], X[QD_NV * QD_NV], Minv[QD_NV * QD_NV], nle[QD_NV], a[QD_NV];
-  casadi_real Dq[QD_NV * QD_NV], Dv[QD_NV * QD_NV];
+  casadi_real *M = w, *Minv = M + QD_NV * QD_NV, *Dq = Minv + QD_NV * QD_NV, *Dv = Dq + QD_NV * QD_NV;
+  casadi_real *nle = Dv + QD_NV * QD_NV, *a = nle + QD_NV, *blk = a + QD_NV, *rest = blk + 4 * 9 + 4 * 18 + 36;
   const casadi_real* p_arg[2] = {arg[0], arg[1]};
-  casadi_real* p_res[2] = {L, nle};
-  int flag = parts(p_arg, p_res, iw, w, mem);
+  casadi_real* p_res[2] = {M, nle};
+  int flag = parts(p_arg, p_res, iw, rest, mem);
   if (flag) return flag;
-  casadi_real scale = 0, sum = 0; /* a NaN or inf anywhere makes the sum non-finite */
-  for (int i = 0; i < QD_NV * QD_NV; ++i) sum += L[i];
-  for (int i = 0; i < QD_NV; ++i) {
-    sum += nle[i] + arg[2][i];
-    scale = L[i + QD_NV * i] > scale ? L[i + QD_NV * i] : scale;
-  }
-  if (!isfinite(sum)) return QD_NONFINITE;
-  for (int j = 0; j < QD_NV; ++j) { /* M = L L^T in place, lower triangle, L[i + n j] = L_ij */
-    casadi_real* cj = L + QD_NV * j;
-    for (int k = 0; k < j; ++k) {
-      const casadi_real* ck = L + QD_NV * k;
-      const casadi_real u = ck[j];
-      for (int i = j; i < QD_NV; ++i) cj[i] -= ck[i] * u;
-    }
-    if (!(cj[j] > QD_SINGULAR_RTOL * scale)) return QD_SINGULAR;
-    const casadi_real d = sqrt(cj[j]), inv = 1 / d;
-    cj[j] = d;
-    for (int i = j + 1; i < QD_NV; ++i) cj[i] *= inv;
-  }
-  for (int c = 0; c < QD_NV; ++c) { /* X = L^-1, lower triangular, column by column */
-    casadi_real* x = X + QD_NV * c;
-    for (int i = 0; i < c; ++i) x[i] = 0;
-    x[c] = 1 / L[c + QD_NV * c];
-    for (int i = c + 1; i < QD_NV; ++i) x[i] = 0;
-    for (int k = c; k < QD_NV; ++k) { /* forward substitution, by columns of L */
-      if (k > c) x[k] /= L[k + QD_NV * k];
-      const casadi_real xk = x[k], *lk = L + QD_NV * k;
-      for (int i = k + 1; i < QD_NV; ++i) x[i] -= lk[i] * xk;
-    }
-  }
-  for (int j = 0; j < QD_NV; ++j) { /* M^-1 = X^T X */
-    for (int i = 0; i <= j; ++i) {
-      const casadi_real *xi = X + QD_NV * i, *xj = X + QD_NV * j;
-      casadi_real s = 0;
-      for (int k = j; k < QD_NV; ++k) s += xi[k] * xj[k];
-      Minv[i + QD_NV * j] = s;
-      Minv[j + QD_NV * i] = s;
-    }
-  }
+  if (qd_d_nonfinite(M, QD_NV * QD_NV) | qd_d_nonfinite(nle, QD_NV) | qd_d_nonfinite(arg[2], QD_NV)) return QD_NONFINITE;
+  if (qd_d_tree_inverse(M, Minv, blk)) return QD_SINGULAR;
   for (int i = 0; i < QD_NV; ++i) a[i] = 0;
   for (int j = 0; j < QD_NV; ++j) {
     const casadi_real b = arg[2][j] - nle[j], *m = Minv + QD_NV * j;
@@ -118,7 +200,7 @@ QD_INLINE int qd_dfd_full_solve(qd_d_eval_fn parts, qd_d_eval_fn did, const casa
   }
   const casadi_real* d_arg[3] = {arg[0], arg[1], a};
   casadi_real* d_res[3] = {Dq, Dv, 0};
-  flag = did(d_arg, d_res, iw, w, mem);
+  flag = did(d_arg, d_res, iw, rest, mem);
   if (flag) return flag;
   if (res[0]) qd_d_neg_product(Minv, sp_dq, Dq, res[0]);
   if (res[1]) qd_d_neg_product(Minv, sp_dv, Dv, res[1]);
@@ -159,10 +241,10 @@ static void qd_d_trunk_product(int m, const casadi_real* P, const casadi_int* sp
 QD_INLINE int qd_dgrf_solve(int m, int legs, qd_d_eval_fn parts, qd_d_eval_fn did, qd_d_eval_fn dir, const casadi_int* sp_dq,
                          const casadi_int* sp_dv, const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w,
                          int mem) {
-  casadi_real M[QD_NV * QD_NV], nle[QD_NV], wrench[6], seed[QD_NV], P[6 * 6], dPw[6 * QD_NV], Dq[QD_NV * QD_NV],
-      Dv[QD_NV * QD_NV];
+  casadi_real *M = w, *Dq = M + QD_NV * QD_NV, *Dv = Dq + QD_NV * QD_NV, *nle = Dv + QD_NV * QD_NV, *seed = nle + QD_NV;
+  casadi_real *wrench = seed + QD_NV, *P = wrench + 6, *dPw = P + 6 * 6, *rest = dPw + 6 * QD_NV; /* m <= 6 */
   casadi_real* p_res[2] = {M, nle};
-  int flag = parts(arg, p_res, iw, w, mem);
+  int flag = parts(arg, p_res, iw, rest, mem);
   if (flag) return flag;
   for (int i = 0; i < 6; ++i) {
     wrench[i] = nle[i];
@@ -173,7 +255,7 @@ QD_INLINE int qd_dgrf_solve(int m, int legs, qd_d_eval_fn parts, qd_d_eval_fn di
   for (int k = 0; k < 6 && !flag; ++k) {
     casadi_real* g_res[2] = {P + m * k, 0};
     seed[k] = 1;
-    flag = dir(g_arg, g_res, iw, w, mem);
+    flag = dir(g_arg, g_res, iw, rest, mem);
     seed[k] = 0;
   }
   g_arg[1] = wrench; /* d(P w)/dq along each stance-leg joint, at w = w_req */
@@ -183,13 +265,13 @@ QD_INLINE int qd_dgrf_solve(int m, int legs, qd_d_eval_fn parts, qd_d_eval_fn di
     if (j < 6 || !(legs & (1 << ((j - 6) / 3))) || flag) continue;
     casadi_real* g_res[2] = {0, x};
     seed[j] = 1;
-    flag = dir(g_arg, g_res, iw, w, mem);
+    flag = dir(g_arg, g_res, iw, rest, mem);
     seed[j] = 0;
   }
   if (flag) return flag;
   const casadi_real* d_arg[3] = {arg[0], arg[1], arg[2]};
   casadi_real* d_res[3] = {Dq, Dv, 0};
-  flag = did(d_arg, d_res, iw, w, mem);
+  flag = did(d_arg, d_res, iw, rest, mem);
   if (flag) return flag;
   if (res[0]) {
     qd_d_trunk_product(m, P, sp_dq, Dq, res[0]);
