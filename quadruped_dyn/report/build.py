@@ -270,8 +270,9 @@ def _symbolic_section(job: _Job) -> Section:
 
 def _notebooks_section(job: _Job) -> Section:
     """The notebooks, each executed by whichever process gets to it first: the warm process, after
-    its builds, while the steps before ran; here, every one it has not started when this step
-    begins (their tasks cancelled), all without it, or if it died. A bar counts them."""
+    its builds, from the front of the list; here, from the back, one at a time, each one it has not
+    started (its task cancelled), so both processes execute notebooks until none is left; all of
+    them here without the warm process, or if it died. A bar counts them."""
     from quadruped_dyn.report import sections as rs
 
     paths, note = notebook_list(job.robot)
@@ -279,11 +280,14 @@ def _notebooks_section(job: _Job) -> Section:
         return rs.notebooks_section(None, note)
     bar = job.progress.bar(len(paths), "notebooks")
     ahead: list[Future[dict[str, Any]] | None] = [*job.notebooks_ahead] if job.notebooks_ahead else [None] * len(paths)
-    # every notebook the warm process has not started is this process's now (both cores execute
-    # notebooks while the warm process finishes what it is on); then the warm process's results
-    mine = {k for k, future in enumerate(ahead) if future is None or future.cancel()}
+    # from the back, one at a time, until one is the warm process's (started: it takes them in order,
+    # so every one before it is too); taking all at once left the warm process idle once its builds were done
+    mine: set[int] = set()
     rendered: dict[int, dict[str, Any]] = {}
-    for k in sorted(mine):
+    for k in reversed(range(len(paths))):
+        if not (ahead[k] is None or ahead[k].cancel()):  # type: ignore[union-attr]
+            break
+        mine.add(k)
         rendered[k] = executed_notebook(paths[k])
         bar.advance(1)
     for k, future in enumerate(ahead):

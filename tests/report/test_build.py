@@ -147,29 +147,33 @@ def test_steps_are_numbered_up_to_their_total(tmp_path, monkeypatch, capsys):
                                                 "optimal_control", "closed_loop", "notebooks", "versions"]
 
 
-def test_notebooks_not_started_by_the_warm_process_run_here_at_once(monkeypatch):
-    """The notebooks step takes over every notebook the warm process has not started (so both cores
-    execute notebooks), keeps the one it is running, and shows them in their own order."""
+def test_notebooks_are_shared_with_the_warm_process_from_both_ends(monkeypatch):
+    """The notebooks step takes the notebooks the warm process has not started from the back, one at
+    a time (so both processes execute notebooks), stops at the first one the warm process started,
+    waits for the warm process's results, and shows them all in their own order."""
     from concurrent.futures import Future
 
     from quadruped_dyn.progress import Steps
     from quadruped_dyn.report import build
 
-    paths = [Path(f"n{k}.ipynb") for k in range(4)]
+    paths = [Path(f"n{k}.ipynb") for k in range(5)]
     monkeypatch.setattr(build, "notebook_list", lambda robot: (paths, ""))
+    futures: list[Future] = [Future() for _ in paths]
+    futures[0].set_running_or_notify_cancel()  # the warm process is executing n0: it cannot be cancelled
     order: list[str] = []
 
     def here(path):
         order.append(path.name)
+        if path.name == "n3.ipynb":  # meanwhile the warm process finished n0 and started n1
+            futures[0].set_result({"name": "n0.ipynb", "seconds": 0.0, "errors": 0, "html": "<p>n0.ipynb warm</p>"})
+            futures[1].set_running_or_notify_cancel()
+            futures[1].set_result({"name": "n1.ipynb", "seconds": 0.0, "errors": 0, "html": "<p>n1.ipynb warm</p>"})
         return {"name": path.name, "seconds": 0.0, "errors": 0, "html": f"<p>{path.name} here</p>"}
 
     monkeypatch.setattr(build, "executed_notebook", here)
-    running: Future = Future()
-    running.set_running_or_notify_cancel()  # the warm process is executing this one: it cannot be cancelled
-    queued = [Future() for _ in range(3)]
-    job = build._Job(None, [], Path("."), False, 1, False, Steps(1, enabled=False), notebooks_ahead=[running, *queued])
-    running.set_result({"name": "n0.ipynb", "seconds": 0.0, "errors": 0, "html": "<p>n0.ipynb warm</p>"})
+    job = build._Job(None, [], Path("."), False, 1, False, Steps(1, enabled=False), notebooks_ahead=futures)
     section = build._notebooks_section(job)
-    assert order == ["n1.ipynb", "n2.ipynb", "n3.ipynb"] and all(f.cancelled() for f in queued)
+    assert order == ["n4.ipynb", "n3.ipynb", "n2.ipynb"] and all(f.cancelled() for f in futures[2:])
     body = section.body
-    assert body.index("n0.ipynb warm") < body.index("n1.ipynb here") < body.index("n3.ipynb here")
+    assert (body.index("n0.ipynb warm") < body.index("n1.ipynb warm") < body.index("n2.ipynb here")
+            < body.index("n3.ipynb here") < body.index("n4.ipynb here"))
