@@ -285,7 +285,8 @@ def _notebooks_section(job: _Job) -> Section:
     mine: set[int] = set()
     rendered: dict[int, dict[str, Any]] = {}
     for k in reversed(range(len(paths))):
-        if not (ahead[k] is None or ahead[k].cancel()):  # type: ignore[union-attr]
+        future = ahead[k]
+        if not (future is None or future.cancel()):
             break
         mine.add(k)
         rendered[k] = executed_notebook(paths[k])
