@@ -10,7 +10,7 @@ from pathlib import Path
 import pytest
 
 from quadruped_dyn.codegen.emit import REDUCED_STANCE_SETS
-from quadruped_dyn.codegen.emit_derivatives import DERIVATIVE_NAMES, GRF_DERIVATIVE_NAMES, REDUCED_DERIVATIVE_NAMES
+from quadruped_dyn.codegen.emit_derivatives import DERIVATIVE_NAMES, GRF_DERIVATIVE_NAMES
 from quadruped_dyn.codegen.footprint import (
     BUDGET_FULL_CODE,
     BUDGET_REDUCED_CODE,
@@ -57,8 +57,9 @@ def test_register_lists():
 
 
 #: The derivative functions (issue 21) came after the budgets (docs/embedded.md), which are stated for
-#: the dynamics a controller evaluates every tick.
-DERIVATIVES = tuple(f"qd_{n}" for n in (*DERIVATIVE_NAMES, *GRF_DERIVATIVE_NAMES, *REDUCED_DERIVATIVE_NAMES))
+#: the dynamics a controller evaluates every tick. Those whose stack is not yet within the budget (their work
+#: arrays are on the stack); dfd_r's temporaries are the caller's w since 2026-12-02: it is held to the budget.
+STACK_OVER_BUDGET = tuple(f"qd_{n}" for n in (*DERIVATIVE_NAMES, *GRF_DERIVATIVE_NAMES))
 
 
 def _paper_footprint(tmp_path: Path, name: str) -> tuple[object, dict, list[str]]:
@@ -74,13 +75,15 @@ def _paper_footprint(tmp_path: Path, name: str) -> tuple[object, dict, list[str]
 @pytest.mark.parametrize("name", ["cortex-m7", "cortex-m4f"])
 def test_paper_footprint_meets_the_budgets(tmp_path, name):
     """casadi_gen at -Os: M + C+G + id <= 64 kB, M_r + CG_r + fd_r of every stance set <= 48 kB,
-    every function's stack bounded (the derivatives' too) and <= 8 kB (the derivatives: see below)."""
+    every function's stack bounded (the derivatives' too) and <= 8 kB (dfd_r's too; the other derivatives: see
+    below)."""
     fp, s, names = _paper_footprint(tmp_path, name)
     assert set(fp.functions) == set(names)
     assert s["all_bounded"]
     assert 0 < s["full_code"] <= BUDGET_FULL_CODE, s["full_code"]
     assert all(0 < v <= BUDGET_REDUCED_CODE for v in s["reduced_code"].values()), s["reduced_code"]
-    stacks = {n: f.stack for n, f in fp.functions.items() if not n.startswith(DERIVATIVES)}
+    stacks = {n: f.stack for n, f in fp.functions.items() if not n.startswith(STACK_OVER_BUDGET)}
+    assert any(n.startswith("qd_dfd_r_") for n in stacks)
     assert stacks and all(0 < v <= BUDGET_STACK for v in stacks.values()), max(stacks.items(), key=lambda x: x[1])
     # fd_r runs M_r's and CG_r's evaluations below its own LU frame
     for st in REDUCED_STANCE_SETS:
