@@ -201,7 +201,8 @@ CASADI_SYMBOL_EXPORT const casadi_int* qd_did_full_sparsity_out(casadi_int i);
  *   M and C + G from the generated qd_dfd_full_parts, M^-1 by M's tree structure (qd_d_tree_inverse: the legs'
  *   3 x 3 blocks, then the trunk's Schur complement; no fill-in, ~2k multiply-adds), a = M^-1 (tau_full - C - G),
  *   then the generated qd_did_full at (q, v, a): da/dq = -M^-1 dtau/dq, da/dv = -M^-1 dtau/dv (sparse products),
- *   da/dtau = M^-1. Temporaries in the caller's w (QD_DFD_FULL_SZ_W reals, the function's _SZ_W).
+ *   da/dtau = M^-1; da/dq's trunk-pose columns without the product (gravity is uniform: a = M^-1 (tau - C) + [g_b; 0],
+ *   so they are 0 for the position and [[g_b]x; 0] for the rotation, read from dtau/dq's rotation rows -m [g_b]x). Temporaries in the caller's w (QD_DFD_FULL_SZ_W reals, the function's _SZ_W).
  * Return codes: 0 ok; QD_NONFINITE (1) an input or output is NaN/inf (or a zero quaternion);
  * QD_SINGULAR (2) a pivot of M's Cholesky factorisation with the legs ordered first is below QD_SINGULAR_RTOL *
  * max diag(M) (M not positive definite to working precision: not a physical robot); the outputs are not
