@@ -201,7 +201,8 @@ CASADI_SYMBOL_EXPORT const casadi_int* qd_did_full_sparsity_out(casadi_int i);
  *   M and C + G from the generated qd_dfd_full_parts, M^-1 by M's tree structure (qd_d_tree_inverse: the legs'
  *   3 x 3 blocks, then the trunk's Schur complement; no fill-in, ~2k multiply-adds), a = M^-1 (tau_full - C - G),
  *   then the generated qd_did_full at (q, v, a): da/dq = -M^-1 dtau/dq, da/dv = -M^-1 dtau/dv (sparse products),
- *   da/dtau = M^-1. Temporaries in the caller's w (QD_DFD_FULL_SZ_W reals, the function's _SZ_W).
+ *   da/dtau = M^-1; da/dq's trunk-pose columns without the product (gravity is uniform: a = M^-1 (tau - C) + [g_b; 0],
+ *   so they are 0 for the position and [[g_b]x; 0] for the rotation, read from dtau/dq's rotation rows -m [g_b]x). Temporaries in the caller's w (QD_DFD_FULL_SZ_W reals, the function's _SZ_W).
  * Return codes: 0 ok; QD_NONFINITE (1) an input or output is NaN/inf (or a zero quaternion);
  * QD_SINGULAR (2) a pivot of M's Cholesky factorisation with the legs ordered first is below QD_SINGULAR_RTOL *
  * max diag(M) (M not positive definite to working precision: not a physical robot); the outputs are not
@@ -258,14 +259,14 @@ static int qd_d_finite(int flag, casadi_real** res, int n_out, const casadi_int*
   return 0;
 }
 
-/* out (18 x 18, column-major) = -Minv D for D in CasADi's compressed-column format (sp, nz). */
+/* out (18 x 18, column-major) = -Minv D for D in CasADi's compressed-column format (sp, nz), columns from first on. */
 #if defined(__GNUC__) && !defined(__clang__) /* GCC's -O3 unroll-and-jam turns the vectorised row loop into scalar code */
 __attribute__((optimize("no-loop-unroll-and-jam")))
 #endif
 static void qd_d_neg_product(const casadi_real* restrict Minv, const casadi_int* sp, const casadi_real* restrict nz,
-                             casadi_real* restrict out) {
+                             casadi_int first, casadi_real* restrict out) {
   const casadi_int ncol = sp[1], *colind = sp + 2, *row = sp + 2 + ncol + 1;
-  for (casadi_int j = 0; j < ncol; ++j) {
+  for (casadi_int j = first; j < ncol; ++j) {
     casadi_real acc[QD_NV] = {0};
     for (casadi_int k = colind[j]; k < colind[j + 1]; ++k) {
       const casadi_real* restrict m = Minv + QD_NV * row[k];
@@ -394,8 +395,15 @@ QD_INLINE int qd_dfd_full_solve(qd_d_eval_fn parts, qd_d_eval_fn did, const casa
   casadi_real* d_res[3] = {Dq, Dv, 0};
   flag = did(d_arg, d_res, iw, rest, mem);
   if (flag) return flag;
-  if (res[0]) qd_d_neg_product(Minv, sp_dq, Dq, res[0]);
-  if (res[1]) qd_d_neg_product(Minv, sp_dv, Dv, res[1]);
+  if (res[0]) { /* the trunk pose's columns without the product: gravity is uniform, a = M^-1 (tau - C) + [g_b; 0] */
+    const casadi_int *colind = sp_dq + 2, *row = sp_dq + 2 + QD_NV + 1;
+    for (int i = 0; i < 6 * QD_NV; ++i) res[0][i] = 0; /* position: 0; rotation: [[g_b]x; 0] */
+    for (casadi_int j = 3; j < 6; ++j) { /* dtau/dq's rotation columns are -M[:, 0:3] [g_b]x, M[0:3, 0:3] = m I */
+      for (casadi_int k = colind[j]; k < colind[j + 1] && row[k] < 3; ++k) res[0][row[k] + QD_NV * j] = -Dq[k] / M[0];
+    }
+    qd_d_neg_product(Minv, sp_dq, Dq, 6, res[0]);
+  }
+  if (res[1]) qd_d_neg_product(Minv, sp_dv, Dv, 0, res[1]);
   if (res[2]) {
     for (int i = 0; i < QD_NV * QD_NV; ++i) res[2][i] = Minv[i];
   }

@@ -165,6 +165,11 @@ def derivative_functions(robot: Robot) -> list[ca.Function]:
     if any(M.has_nz(6 + 3 * leg + i, 6 + 3 * other + j) for leg in range(4) for other in range(4) if leg != other
            for i in range(3) for j in range(3)):
         raise AssertionError("M couples two legs; qd_d_tree_inverse assumes each leg couples only to the trunk")
+    trunk = d.did_full.call([q, v, a])[2][0:3, 0:3]  # qd_dfd_full_solve reads [g_b]x from dtau_dq's rotation columns / m
+    dq = did.sparsity_out(0)
+    if (not all(trunk[i, j].is_constant() and float(trunk[i, j]) == (float(trunk[0, 0]) if i == j else 0.0)
+                for i in range(3) for j in range(3)) or dq.is_dense() or any(dq.colind()[j] != 0 for j in range(4))):
+        raise AssertionError("M[0:3, 0:3] is not m I or dtau_dq has position entries; qd_dfd_full_solve assumes both")
     parts = ca.Function(PREFIX + "dfd_full_parts", [q, v], [ca.densify(fd.M_full_crba(q)), fd.nle_full(q, v)],
                         ["q", "v"], ["M", "nle"], opts)
     placeholder = ca.repmat(tau, 1, NV_FULL) + ca.sum1(q) + ca.sum1(v)  # dense 18 x 18, depends on every input

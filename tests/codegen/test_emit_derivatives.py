@@ -24,18 +24,22 @@ from tests.conftest import assert_close
 from tests.dynamics.test_derivatives import grf_point, reduced_point
 
 
-def test_compiled_derivatives_match_pinocchio(paper):
-    library = compiled_library(paper)
-    pd = PinocchioDerivatives(PinocchioReference(paper))
+def _check_compiled_full(robot, library) -> None:
+    """The C did_full and dfd_full against Pinocchio's analytical derivatives at two random states."""
+    pd = PinocchioDerivatives(PinocchioReference(robot))
     did, dfd = CompiledFunction(library, "did_full"), CompiledFunction(library, "dfd_full")
     for seed in (0, 1):
         rng = np.random.default_rng(seed)
-        s = random_state(paper.lower, paper.upper, rng)
+        s = random_state(robot.lower, robot.upper, rng)
         for name, ours, theirs in zip(("dtau_dq", "dtau_dv", "M"), did(s.q, s.v, s.a), pd.rnea_derivatives(s.q, s.v, s.a)):
-            assert_close(ours, theirs, REL_TOL_DERIVATIVES, f"C did_full {name}")
+            assert_close(ours, theirs, REL_TOL_DERIVATIVES, f"{robot.name} C did_full {name}")
         tau = rng.normal(scale=10.0, size=18)
         for name, ours, theirs in zip(("da_dq", "da_dv", "Minv"), dfd(s.q, s.v, tau), pd.aba_derivatives(s.q, s.v, tau)):
-            assert_close(ours, theirs, REL_TOL_DERIVATIVES, f"C dfd_full {name}")
+            assert_close(ours, theirs, REL_TOL_DERIVATIVES, f"{robot.name} C dfd_full {name}")
+
+
+def test_compiled_derivatives_match_pinocchio(paper):
+    _check_compiled_full(paper, compiled_library(paper))
 
 
 def test_float_derivatives_match_double(paper):
@@ -137,6 +141,7 @@ def test_compiled_grf_derivatives_match_reference_differences(paper, stance):
 
 def _every_stance_set(robot) -> dict[str, float]:
     library = compiled_library(robot)
+    _check_compiled_full(robot, library)
     worst = {st.name: _check_compiled_reduced(robot, library, st.name) for st in REDUCED_STANCE_SETS}
     worst.update({f"grf {st.name}": _check_compiled_grf(robot, library, st.name) for st in GRF_DERIVATIVE_STANCE_SETS})
     print(f"{robot.name}: dfd_r max rel err {max(v for k, v in worst.items() if not k.startswith('grf')):.1e}, "
@@ -147,7 +152,8 @@ def _every_stance_set(robot) -> dict[str, float]:
 @pytest.mark.slow
 @pytest.mark.parametrize("name", ROBOT_NAMES)
 def test_compiled_reduced_and_grf_derivatives_every_robot(name):
-    """Every reduced stance set's dfd_r and every GRF stance set's dgrf, compiled, on every built-in robot."""
+    """did_full, dfd_full, every reduced stance set's dfd_r and every GRF stance set's dgrf, compiled, on every
+    built-in robot."""
     _every_stance_set(load_robot(name))
 
 
