@@ -229,9 +229,8 @@ class ReducedProjection:
         return self.project(generalized_gravity(self.robot, self.q_joints, self.g_b))
 
     def inverse_dynamics(self, qd_r: ca.SX, qdd_r: ca.SX) -> ca.SX:
-        """id_r (n,) = M_r qdd_r + C_r + G_r, in one Newton-Euler pass."""
-        v, k = self.velocity_and_bias(qd_r)
-        return self.project(self.rnea(v, self.T @ qdd_r + k))
+        """id_r (n,) = M_r qdd_r + C_r + G_r, in one Newton-Euler pass (a = T qdd_r + k without forming T)."""
+        return self.project(self.rnea(*self.velocity_and_acceleration(qd_r, qdd_r)))
 
 
 def reduced_projection(robot: Robot, stance: StanceSet, q_r: ca.SX, quat: ca.SX) -> ReducedProjection:
