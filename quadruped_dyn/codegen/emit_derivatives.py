@@ -141,17 +141,7 @@ def reduced_derivative_functions(robot: Robot, stance: StanceSet) -> list[ca.Fun
 def declare_dfd_r_work(c_text: str, h_text: str, f: ca.Function) -> tuple[str, str]:
     """dfd_r_<feet>'s _work / _work_bytes entries and its header's _SZ_W state the caller's w it uses
     (``dfd_r_work_reals``); CasADi's say 0 for the signature-only Function."""
-    name, reals = f.name(), dfd_r_work_reals(f.size1_out(0))
-    patterns = [(rf"(int {name}_work\(.*?if \(sz_w\) \*sz_w = )0;", rf"\g<1>{reals};"),
-                (rf"(int {name}_work_bytes\(.*?if \(sz_w\) \*sz_w = )0\*", rf"\g<1>{reals}*")]
-    for pattern, replacement in patterns:
-        c_text, count = re.subn(pattern, replacement, c_text, count=1, flags=re.S)
-        if count != 1:
-            raise AssertionError(f"{name}: CasADi's work entry not found")
-    h_text, count = re.subn(rf"#define {name}_SZ_W 0\n", f"#define {name}_SZ_W {reals}\n", h_text)
-    if count != 1:
-        raise AssertionError(f"{name}: CasADi's _SZ_W not found")
-    return c_text, h_text
+    return declare_work(c_text, h_text, f.name(), dfd_r_work_reals(f.size1_out(0)))
 
 
 def derivative_functions(robot: Robot) -> list[ca.Function]:
