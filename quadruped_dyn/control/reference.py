@@ -17,7 +17,7 @@ import numpy as np
 from quadruped_dyn.codegen.library import CompiledFunction, compiled_library
 from quadruped_dyn.dynamics.kinematics import robot_kinematics
 from quadruped_dyn.experiment.gait import Plan
-from quadruped_dyn.experiment.plan_ik import ReferenceSample, reference
+from quadruped_dyn.experiment.plan_ik import ReferenceSample, references
 
 
 @dataclass(frozen=True)
@@ -58,11 +58,7 @@ def reference_cycle(plan: Plan, rate_hz: float) -> tuple[Reference, ...]:
     period = plan.gait.period
     m = max(1, int(round(period / REFERENCE_KNOT_S)))
     h = period / m
-    knots, guess = [], None
-    for j in range(m + 1):
-        s = reference(plan, j * h, guess)
-        guess = s.q_r[:12]
-        knots.append(s)
+    knots = references(plan, h * np.arange(m + 1))
     Q = np.array([s.q_r for s in knots])
     QD = np.array([s.qd_r for s in knots])
     QDD = np.array([s.qdd_r for s in knots])

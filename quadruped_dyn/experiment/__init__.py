@@ -8,7 +8,7 @@ _MODULES: dict[str, tuple[str, ...]] = {
         "CROUCH", "ZMP_WEIGHT", "gait_posture", "gait_feet", "Gait", "TROT", "WALK", "GAITS", "support_margin", "deepest_point",
         "Plan", "gait_plan",
     ),
-    "ik": ("analytic_ik", "IK_POSITION_TOL", "numeric_ik"),
+    "ik": ("analytic_ik", "IK_POSITION_TOL", "numeric_ik", "gauss_newton"),
     "linearised_growth": ("PROJECTION_FD_STEP", "STEP", "linearised_departure", "linearised_growth_rate"),
     "outputs": ("output_paths", "write_csv", "plot_br_hfe", "plot_physics_check", "summary_text"),
     "paper_experiment": (
@@ -16,7 +16,7 @@ _MODULES: dict[str, tuple[str, ...]] = {
         "percent_errors", "departure", "growth_rate", "static_stability", "pd_gains", "run_experiment", "report",
         "physics_check",
     ),
-    "plan_ik": ("POLISH_STEPS", "ReferenceSample", "leg_ik", "reference"),
+    "plan_ik": ("POLISH_STEPS", "ReferenceSample", "feet_ik", "reference", "references"),
     "rigid_contact": ("simulate_rigid",),
     "simulate": (
         "FALLEN_CLOSURE_M", "FALLEN_TRUNK_M", "RTOL", "TRUNCATION_RTOL_FACTOR", "IDENTITY_QUAT", "ReducedDynamics",

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from collections.abc import Callable
+
 import numpy as np
 
 from quadruped_dyn.dynamics.kinematics import robot_kinematics
@@ -45,13 +47,44 @@ def numeric_ik(robot: Robot, leg_index: int, r: np.ndarray, q0: np.ndarray | Non
     r = check_array("r", r, (3,))
     kin = robot_kinematics(robot)[leg_index]
     q = np.array(robot.standing_q[3 * leg_index : 3 * leg_index + 3] if q0 is None else q0, dtype=float)
-    for _ in range(iterations):
-        e = r - np.array(kin.foot_position(q)).ravel()
-        if np.linalg.norm(e) < IK_POSITION_TOL:
-            return q
-        J = np.array(kin.foot_jacobian(q))
-        q = q + np.linalg.solve(J.T @ J + 1e-9 * np.eye(3), J.T @ e)
-    raise InputError(
+
+    def fk(q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        return np.asarray(kin.foot_position(q[0])).T, np.asarray(kin.foot_jacobian(q[0]))[None]
+
+    q, residual = gauss_newton(fk, r[None], q[None], iterations)
+    if not residual[0] < IK_POSITION_TOL:
+        raise not_reached(robot, leg_index, r, residual[0])
+    return q[0]
+
+
+def not_reached(robot: Robot, leg_index: int, r: np.ndarray, residual: float) -> InputError:
+    """The error of a numeric IK that did not reach ``r`` (``residual`` m away)."""
+    return InputError(
         f"numeric IK for leg {robot.legs[leg_index].label} did not reach {np.round(r, 4)} m "
-        f"(residual {np.linalg.norm(e):.2e} m); expected a target inside the leg's workspace"
+        f"(residual {residual:.2e} m); expected a target inside the leg's workspace"
     )
+
+
+FootKinematics = Callable[[np.ndarray], tuple[np.ndarray, np.ndarray]]
+
+
+def gauss_newton(fk: FootKinematics, r: np.ndarray, q0: np.ndarray, iterations: int = 100
+                 ) -> tuple[np.ndarray, np.ndarray]:
+    """Damped Gauss-Newton for m independent 3-joint problems at once: q (m, 3) from q0 with
+    fk(q) = (foot (m, 3), Jacobian (m, 3, 3)) reaching r (m, 3) (m), each problem iterated until
+    its foot is within IK_POSITION_TOL, at most ``iterations`` steps. Returns (q, each foot's
+    residual |r - foot| (m,), m): a residual not below IK_POSITION_TOL did not converge."""
+    q = np.array(q0, dtype=float)
+    for _ in range(iterations):
+        foot, J = fk(q)
+        residual = np.linalg.norm(r - foot, axis=1)
+        active = ~(residual < IK_POSITION_TOL)  # NaN stays active
+        if not active.any():
+            break
+        Ja, ea = J[active], (r - foot)[active]
+        JT = Ja.transpose(0, 2, 1)
+        q[active] += np.linalg.solve(JT @ Ja + 1e-9 * np.eye(3), JT @ ea[:, :, None])[:, :, 0]
+    else:
+        foot, _ = fk(q)
+        residual = np.linalg.norm(r - foot, axis=1)
+    return q, residual

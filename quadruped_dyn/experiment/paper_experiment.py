@@ -240,7 +240,7 @@ def run_experiment(robot: Robot, gait: Gait, dynamics: ReducedDynamics, horizon:
             exp.rigid[law.name] = rigid(law)
     # the planned grid, also when the 'paper' run stopped early (its own times would shrink the reference)
     grid = np.arange(int(np.floor(horizon / dt + 1e-9)) + 1) * dt
-    refs = [ik.exact(float(t), plan.stance(float(t)))[0] for t in grid]
+    refs = [ref for ref, _ in ik.exact_many(grid, [plan.stance(float(t)) for t in grid])]
     exp.reference = {"t": grid, "q": np.array([r.q_r for r in refs]), "qd": np.array([r.qd_r for r in refs]),
                      "qdd": np.array([r.qdd_r for r in refs])}
     return exp

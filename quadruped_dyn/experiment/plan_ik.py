@@ -17,7 +17,7 @@ import numpy as np
 
 from quadruped_dyn.dynamics.kinematics import robot_feet, robot_kinematics
 from quadruped_dyn.experiment.gait import Plan, gait_posture
-from quadruped_dyn.experiment.ik import analytic_ik, numeric_ik
+from quadruped_dyn.experiment.ik import IK_POSITION_TOL, analytic_ik, gauss_newton, not_reached
 from quadruped_dyn.model.paper_robot import PaperRobotParams, dh_form
 from quadruped_dyn.model.robot import Robot
 
@@ -44,16 +44,38 @@ def leg_dh_forms(robot: Robot) -> tuple[PaperRobotParams | None, ...]:
     return tuple(dh_form(leg) for leg in robot.legs)
 
 
-def leg_ik(robot: Robot, i: int, r: np.ndarray, guess: np.ndarray) -> np.ndarray:
-    """Joint angles (3,) putting foot i at r (trunk frame, m)."""
-    params = leg_dh_forms(robot)[i]
-    if params is not None:
-        return analytic_ik(robot.legs[i].label, r, params)
-    q = numeric_ik(robot, i, r, guess)
-    kin = robot_kinematics(robot)[i]
-    for _ in range(POLISH_STEPS):
-        q = q + np.linalg.solve(np.asarray(kin.foot_jacobian(q)), r - np.asarray(kin.foot_position(q)).ravel())
-    return q
+def feet_ik(robot: Robot, r: np.ndarray, guess: np.ndarray) -> np.ndarray:
+    """Joint angles (N, 12) putting the four feet at r (N, 4, 3) (trunk frame, m), N targets at
+    once: the closed form for a leg of the paper's DH form; otherwise damped Gauss-Newton from
+    ``guess`` (N, 12) (``ik.gauss_newton``, every foot of every target in one batch) polished by
+    POLISH_STEPS Newton steps. InputError naming the leg if a target is not reached."""
+    n = len(r)
+    q = np.array(guess, dtype=float).reshape(n, 4, 3)
+    numeric = [i for i, params in enumerate(leg_dh_forms(robot)) if params is None]
+    for i, params in enumerate(leg_dh_forms(robot)):
+        if params is not None:
+            q[:, i] = [analytic_ik(robot.legs[i].label, x, params) for x in r[:, i]]
+    if numeric:
+        feet = robot_feet(robot).map(n)
+
+        def fk(qs: np.ndarray) -> tuple[np.ndarray, np.ndarray]:  # qs (n * len(numeric), 3)
+            full = q.copy()
+            full[:, numeric] = qs.reshape(n, len(numeric), 3)
+            foot, J = feet(full.reshape(n, 12).T)
+            foot = np.asarray(foot).reshape(3, n, 4).transpose(1, 2, 0)  # (target, leg, xyz)
+            J = np.asarray(J).reshape(3, n, 4, 3).transpose(1, 2, 0, 3)  # (target, leg, row, joint)
+            return foot[:, numeric].reshape(-1, 3), J[:, numeric].reshape(-1, 3, 3)
+
+        target = r[:, numeric].reshape(-1, 3)
+        qs, residual = gauss_newton(fk, target, q[:, numeric].reshape(-1, 3))
+        if not (residual < IK_POSITION_TOL).all():
+            k = int(np.argmax(~(residual < IK_POSITION_TOL)))
+            raise not_reached(robot, numeric[k % len(numeric)], target[k], float(residual[k]))
+        for _ in range(POLISH_STEPS):
+            foot, J = fk(qs)
+            qs = qs + np.linalg.solve(J, (target - foot)[:, :, None])[:, :, 0]
+        q[:, numeric] = qs.reshape(n, len(numeric), 3)
+    return q.reshape(n, 12)
 
 
 @cache
@@ -68,18 +90,26 @@ def robot_bias_accelerations(robot: Robot) -> ca.Function:
 
 def reference(plan: Plan, t: float, q_guess: np.ndarray | None = None) -> ReferenceSample:
     """IK of the plan at time t (``q_guess``: joint angles (12,) near the answer, for numeric IK)."""
+    return references(plan, np.array([t]), q_guess)[0]
+
+
+def references(plan: Plan, ts: np.ndarray, q_guess: np.ndarray | None = None) -> list[ReferenceSample]:
+    """``reference`` at each time of ``ts`` (s), in one batch (numeric IK of every target from the
+    same ``q_guess``, default the gait's posture)."""
     robot = plan.robot
-    guess = gait_posture(robot) if q_guess is None else q_guess
-    p, pd, pdd = plan.trunk(t)
-    q = np.zeros(12)
-    rd, rdd = np.zeros((4, 3)), np.zeros((4, 3))
-    for i in range(4):
-        P, Pd, Pdd = plan.foot(i, t)
-        rd[i], rdd[i] = Pd - pd, Pdd - pdd  # trunk frame = world orientation (R = I)
-        q[3 * i : 3 * i + 3] = leg_ik(robot, i, P - p, guess[3 * i : 3 * i + 3])
-    J = np.asarray(robot_feet(robot)(q)[1]).reshape(3, 4, 3).transpose(1, 0, 2)  # (leg, row, joint)
-    qd = np.linalg.solve(J, rd[:, :, None]).ravel()
-    bias = np.asarray(robot_bias_accelerations(robot)(q, qd)).T
-    qdd = np.linalg.solve(J, (rdd - bias)[:, :, None]).ravel()
+    n = len(ts)
+    guess = np.tile(gait_posture(robot) if q_guess is None else q_guess, (n, 1))
+    r, rd, rdd = np.zeros((n, 4, 3)), np.zeros((n, 4, 3)), np.zeros((n, 4, 3))
+    for k, t in enumerate(ts):
+        p, pd, pdd = plan.trunk(float(t))
+        for i in range(4):
+            P, Pd, Pdd = plan.foot(i, float(t))
+            r[k, i], rd[k, i], rdd[k, i] = P - p, Pd - pd, Pdd - pdd  # trunk frame = world orientation (R = I)
+    q = feet_ik(robot, r, guess)
+    J = np.asarray(robot_feet(robot).map(n)(q.T)[1]).reshape(3, n, 4, 3).transpose(1, 2, 0, 3)  # (t, leg, row, joint)
+    qd = np.linalg.solve(J, rd[..., None]).reshape(n, 12)
+    bias = np.asarray(robot_bias_accelerations(robot).map(n)(q.T, qd.T)).reshape(3, n, 4).transpose(1, 2, 0)
+    qdd = np.linalg.solve(J, (rdd - bias)[..., None]).reshape(n, 12)
     extra = np.zeros(plan.gait.n_coords - 12)  # roll, its rate and acceleration: 0 with R = I
-    return ReferenceSample(np.append(q, extra), np.append(qd, extra), np.append(qdd, extra), plan.stance(t))
+    return [ReferenceSample(np.append(q[k], extra), np.append(qd[k], extra), np.append(qdd[k], extra),
+                            plan.stance(float(ts[k]))) for k in range(n)]

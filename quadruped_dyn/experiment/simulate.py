@@ -40,7 +40,7 @@ from quadruped_dyn.dynamics.kinematics import robot_feet, robot_kinematics
 from quadruped_dyn.dynamics.reduced import reduced_model
 from quadruped_dyn.errors import InputError, NumericalError
 from quadruped_dyn.experiment.gait import Plan
-from quadruped_dyn.experiment.plan_ik import ReferenceSample, reference
+from quadruped_dyn.experiment.plan_ik import ReferenceSample, references
 from quadruped_dyn.experiment.trunk_pose import pose_from_feet
 from quadruped_dyn.math.rigid import skew
 from quadruped_dyn.model.robot import Robot
@@ -124,13 +124,19 @@ class IkTorques:
     def __call__(self, t: float, stance: tuple[int, ...]) -> tuple[ReferenceSample, np.ndarray]:
         """(reference at t, id_r (n,) of the given stance there -- a step ending on a switch
         keeps its phase's stance)."""
-        key = (t, stance)
-        if key not in self._memo:
-            ref = reference(self.plan, t, self._guess)
-            self._guess = ref.q_r[:12]
-            tau = self.dynamics.id_r(StanceSet(stance), ref.q_r, ref.qd_r, ref.qdd_r, IDENTITY_QUAT)
-            self._memo[key] = (ref, tau)
-        return self._memo[key]
+        return self.many(np.array([t]), [stance])[0]
+
+    def many(self, ts: np.ndarray, stances: list[tuple[int, ...]]) -> list[tuple[ReferenceSample, np.ndarray]]:
+        """``self(t, stance)`` for each pair; the times not memoised yet in one batch (``references``)."""
+        keys = [(float(t), stance) for t, stance in zip(ts, stances, strict=True)]
+        missing = list(dict.fromkeys(k for k in keys if k not in self._memo))
+        if missing:
+            refs = references(self.plan, np.array([t for t, _ in missing]), self._guess)
+            self._guess = refs[-1].q_r[:12]
+            for (t, stance), ref in zip(missing, refs):
+                tau = self.dynamics.id_r(StanceSet(stance), ref.q_r, ref.qd_r, ref.qdd_r, IDENTITY_QUAT)
+                self._memo[(t, stance)] = (ref, tau)
+        return [self._memo[k] for k in keys]
 
 
 @dataclass(frozen=True)

@@ -78,9 +78,13 @@ class IkTorqueTable(IkTorques):
     def exact(self, t: float, stance: tuple[int, ...]) -> tuple[ReferenceSample, np.ndarray]:
         return super().__call__(t, stance)
 
-    def _stack(self, t: float, stance: tuple[int, ...]) -> np.ndarray:
-        ref, tau = self.exact(t, stance)
-        return np.concatenate([ref.q_r, ref.qd_r, ref.qdd_r, tau])
+    def exact_many(self, ts: np.ndarray, stances: list[tuple[int, ...]]) -> list[tuple[ReferenceSample, np.ndarray]]:
+        return super().many(ts, stances)
+
+    def _stack(self, ts: np.ndarray, stance: tuple[int, ...]) -> np.ndarray:
+        """(len(ts), 3 n + n_tau): q_r, qd_r, qdd_r and id_r at each time, exactly."""
+        return np.array([np.concatenate([ref.q_r, ref.qd_r, ref.qdd_r, tau])
+                         for ref, tau in self.exact_many(ts, [stance] * len(ts))])
 
     def _build(self, k: int, stance: tuple[int, ...]) -> _Phase | None:
         h = self.plan.gait.phase_duration
@@ -89,10 +93,10 @@ class IkTorqueTable(IkTorques):
         previous = np.inf
         while degree <= CHEB_MAX_DEGREE:
             nodes = lobatto(t0, t1, degree)
-            values = np.array([self._stack(float(t), stance) for t in nodes])
+            values = self._stack(nodes, stance)
             phase = _Phase(t0, t1, degree, values, nodes)
             mids = 0.5 * (nodes[:-1] + nodes[1:])
-            exact = np.array([self._stack(float(t), stance) for t in mids])
+            exact = self._stack(mids, stance)
             approx = np.array([phase(float(t)) for t in mids])
             scale = np.maximum(np.abs(values).max(axis=0), np.abs(exact).max(axis=0))
             signal_scale = np.concatenate([np.full(self.n, scale[i * self.n : (i + 1) * self.n].max())
