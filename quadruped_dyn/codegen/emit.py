@@ -355,13 +355,12 @@ def _reduced_helpers_c(robot: Robot, stance: StanceSet, dfd_r: DfdRPieces, preci
     q_r, qd_r, qdd_r, quat = (ca.SX.sym(k, m) for k, m in (("q_r", n), ("qd_r", n), ("qdd_r", n), ("quat", 4)))
     p = reduced_projection(robot, stance, q_r, quat)
     S_b, T_b, _ = p.mass_matrix_factors()
-    factors = ca.Function("M_r_factors", [q_r, quat], [ca.densify(S_b), ca.densify(T_b)], {"cse": True})
-    motion = ca.Function("motion", [q_r, qd_r, qdd_r, quat], [ca.densify(x) for x in p.velocity_and_acceleration(qd_r, qdd_r)],
-                         {"cse": True})
+    parts = ca.Function("reduced_parts", [q_r, qd_r, qdd_r, quat],
+                        [regularity_function(robot, stance)(q_r, quat), ca.densify(S_b), ca.densify(T_b),
+                         *(ca.densify(x) for x in p.velocity_and_acceleration(qd_r, qdd_r))], {"cse": True})
     return (f"#define QD_REGULARITY_MIN ((casadi_real){REGULARITY_MIN!r}) /* quadruped_dyn.tolerances.REGULARITY_MIN */\n"
             + _static_c("qd_regularity", regularity_function(robot, stance), precision) + "\n"
-            + _static_c("qd_M_r_factors", factors, precision) + "\n"
-            + _static_c("qd_motion", motion, precision) + "\n"
+            + _static_c("qd_reduced_parts", parts, precision) + "\n"
             + _static_c("qd_dfd_r_lift", dfd_r.lift, precision))
 
 
@@ -382,9 +381,8 @@ def _checked_reduced_c(c_text: str, casadi_header: str, functions: list[ca.Funct
     legs = sum(1 << i for i in stance.feet)  # S_b's rows and T_b's columns of the other legs' joints are zero
     n_r = functions[0].size1_out(0)
     signature = "(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem)"
-    evals = (f"static int qd_M_r_eval{signature} {{\n  return qd_M_r_project({n_r}, {legs}, arg, res, iw, w, mem);\n}}\n"
-             + "".join(f"static int qd_{kind}_eval{signature} {{\n  return qd_reduced_term({n_r}, {which}, arg, res, iw, w, "
-                       "mem);\n}\n" for which, kind in enumerate(("CG_r", "G_r", "id_r"))))
+    evals = "".join(f"static int qd_{kind}_eval{signature} {{\n  return qd_reduced_term({n_r}, {legs}, {which}, arg, res, iw, "
+                    "w, mem);\n}\n" for which, kind in enumerate(("M_r", "CG_r", "G_r", "id_r")))
     c_text = c_text[:first] + "\n" + helpers_c + "\n" + templates + "\n" + evals + c_text[first:]
     work = work_sizes(casadi_header)
     cg_r = "qd_CG_r_eval"
@@ -401,8 +399,7 @@ def _checked_reduced_c(c_text: str, casadi_header: str, functions: list[ca.Funct
         else:
             nnz = ", ".join(str(f.nnz_out(i)) for i in range(f.n_out()))
             evaluation = f"qd_{reduced_parts(f.name()[len(PREFIX):])[0]}_eval"  # type: ignore[index]
-            body = (rf"\1  return qd_checked({evaluation}, {f.index_in('quat')}, {f.n_out()}, "
-                    rf"(const casadi_int[]){{{nnz}}}, arg, res, iw, w, mem);\n")
+            body = rf"\1  return qd_finite({evaluation}(arg, res, iw, w, mem), res, 1, (const casadi_int[]){{{nnz}}});\n"
         c_text, count = re.subn(entry_point(f.name()), body, c_text)
         if count != 1:
             raise AssertionError(f"entry point of {f.name()} not found in CasADi's output")

@@ -61,22 +61,33 @@ static int qd_finite(int flag, casadi_real** res, int n_out, const casadi_int* n
   return 0;
 }
 
+/* 0 where a stance of regularity m is regular; QD_DEGENERATE or QD_NONFINITE. */
+static int qd_regular_value(casadi_real m) {
+  if (!isfinite(m)) return QD_NONFINITE;
+  return m > QD_REGULARITY_MIN && m > QD_REGULARITY_FLOOR ? 0 : QD_DEGENERATE;
+}
+
 /* 0 where the stance is regular at (q_r = arg[0], quat = arg[i_quat]); QD_DEGENERATE or QD_NONFINITE. */
 static int qd_regular(const casadi_real** arg, int i_quat, casadi_int* iw, casadi_real* w, int mem) {
   casadi_real m = 0;
   const casadi_real* m_arg[2] = {arg[0], arg[i_quat]};
   casadi_real* m_res[1] = {&m};
   int flag = qd_regularity(m_arg, m_res, iw, w, mem);
-  if (flag || !isfinite(m)) return flag ? flag : QD_NONFINITE;
-  return m > QD_REGULARITY_MIN && m > QD_REGULARITY_FLOOR ? 0 : QD_DEGENERATE;
+  return flag ? flag : qd_regular_value(m);
 }
 
-/* The checked call of a generated reduced function f with quat at arg[i_quat]: the stance's
- * regularity first, then f, then its outputs' finiteness. */
-QD_INLINE int qd_checked(qd_eval_fn f, int i_quat, int n_out, const casadi_int* nnz, const casadi_real** arg,
-                      casadi_real** res, casadi_int* iw, casadi_real* w, int mem) {
-  int flag = qd_regular(arg, i_quat, iw, w, mem);
-  return qd_finite(flag ? flag : f(arg, res, iw, w, mem), res, n_out, nnz);
+/* The generated qd_reduced_parts at (q_r, qd_r, qdd_r, quat) (a null qd_r or qdd_r is zero), one graph: the
+ * stance's regularity *m (as qd_regularity), S_b (n x 6) and T_b (6 x n), dense column-major, with M_r = S M T,
+ * S = [S_b, I_12] (row 12, two feet: no joint part), T = [T_b; I_12] (column 12: no joint part)
+ * (quadruped_dyn/dynamics/reduced_projection.py, mass_matrix_factors), and the full velocity and acceleration
+ * v, a (18 each; a = T qdd_r + k without forming T: velocity_and_acceleration). A null output is skipped. */
+static int qd_parts(const casadi_real* q_r, const casadi_real* qd_r, const casadi_real* qdd_r, const casadi_real* quat,
+                    casadi_real* m, casadi_real* S_b, casadi_real* T_b, casadi_real* v, casadi_real* a, casadi_int* iw,
+                    casadi_real* w, int mem) {
+  const casadi_real zero[QD_N_MAX] = {0};
+  const casadi_real* p_arg[4] = {q_r, qd_r ? qd_r : zero, qdd_r ? qdd_r : zero, quat};
+  casadi_real* p_res[5] = {m, S_b, T_b, v, a};
+  return qd_reduced_parts(p_arg, p_res, iw, w, mem);
 }
 
 /* defined in qd_<robot>.c of the same library (no work memory: checked by the generator) */
@@ -85,27 +96,26 @@ const casadi_int* qd_M_full_sparsity_out(casadi_int i);
 int qd_G_full(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem);
 int qd_id_full(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem);
 
-/* (q_r, quat) -> (S_b (n x 6), T_b (6 x n), M (18 x 18, the full inertia matrix)), all dense column-major,
- * with M_r = S M T, S = [S_b, I_12] (row 12, two feet: no joint part) and T = [T_b; I_12] (column 12: no joint
- * part) (quadruped_dyn/dynamics/reduced_projection.py, mass_matrix_factors): S_b and T_b from the generated
- * qd_M_r_factors (written before this text), M from the library's qd_M_full (one copy per library, not one per
- * stance set). qd_M_full writes its nonzeros (pattern sp, nnz of them) to the end of the 18 x 18 array; column
- * c is then spread in place: the h = 324 - nnz slots before them hold at least the pattern's holes in columns
- * 0..c, so column c's writes (slots < 18 (c + 1)) never reach a later column's nonzeros, and its own are read
- * first. A null res[i] skips that output. */
-static int qd_M_r_parts(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem) {
-  int flag = qd_M_r_factors(arg, res, iw, w, mem);
-  if (flag || !res[2]) return flag;
-  casadi_real q[19] = {0}; /* (p, quat, joint angles): M depends on the joint angles only */
-  for (int i = 0; i < 4; ++i) q[3 + i] = arg[1][i];
-  for (int i = 0; i < 12; ++i) q[7 + i] = arg[0][i];
+/* q (19) = (0, quat, the joint angles of q_r): the full configuration the library's functions take (the
+ * trunk position enters none of them). */
+static void qd_full_q(const casadi_real* q_r, const casadi_real* quat, casadi_real* q) {
+  for (int i = 0; i < 3; ++i) q[i] = 0;
+  for (int i = 0; i < 4; ++i) q[3 + i] = quat[i];
+  for (int i = 0; i < 12; ++i) q[7 + i] = q_r[i];
+}
+
+/* M (18 x 18, dense column-major): the full inertia matrix at q (19) from the library's qd_M_full (one copy per
+ * library, not one per stance set). qd_M_full writes its nonzeros (CasADi's pattern, nnz of them) to the end of
+ * the array; column c is then spread in place: the 324 - nnz slots before them hold at least the pattern's holes
+ * in columns 0..c, so column c's writes (slots < 18 (c + 1)) never reach a later column's nonzeros, and its own
+ * are read first. */
+static int qd_M_full_dense(const casadi_real* q, casadi_real* M, casadi_int* iw, casadi_real* w, int mem) {
   const casadi_int* sp = qd_M_full_sparsity_out(0);
   const casadi_int *colind = sp + 2, *row = sp + 3 + 18;
-  casadi_real* M = res[2];
   casadi_real* x = M + 18 * 18 - colind[18];
   const casadi_real* m_arg[1] = {q};
   casadi_real* m_res[1] = {x};
-  flag = qd_M_full(m_arg, m_res, iw, w, mem);
+  int flag = qd_M_full(m_arg, m_res, iw, w, mem);
   if (flag) return flag;
   for (int c = 0; c < 18; ++c) {
     casadi_real t[18] = {0};
@@ -113,6 +123,16 @@ static int qd_M_r_parts(const casadi_real** arg, casadi_real** res, casadi_int* 
     for (int i = 0; i < 18; ++i) M[i + 18 * c] = t[i];
   }
   return 0;
+}
+
+/* (q_r, quat) -> (S_b (n x 6), T_b (6 x n), M (18 x 18, the full inertia matrix)), all dense column-major, from
+ * qd_parts (the regularity not checked: the caller does) and qd_M_full_dense. A null res[i] skips that output. */
+static int qd_M_r_parts(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem) {
+  int flag = qd_parts(arg[0], 0, 0, arg[1], 0, res[0], res[1], 0, 0, iw, w, mem);
+  if (flag || !res[2]) return flag;
+  casadi_real q[19];
+  qd_full_q(arg[0], arg[1], q);
+  return qd_M_full_dense(q, res[2], iw, w, mem);
 }
 
 /* M_r = S M T (n x n, column-major, into M_r) from qd_M_r_parts' factors, column by column: mt = M T e_j
@@ -152,16 +172,6 @@ static void qd_M_r_product(int n, const casadi_real* S_b, const casadi_real* T_b
   qd_M_r_legs(n, 15, S_b, T_b, M, M_r);
 }
 
-QD_INLINE int qd_M_r_project(int n, int legs, const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w,
-                             int mem) {
-  casadi_real S_b[QD_N_MAX * 6], T_b[6 * QD_N_MAX], M[18 * 18];
-  casadi_real* p_res[3] = {S_b, T_b, M};
-  int flag = qd_M_r_parts(arg, p_res, iw, w, mem);
-  if (flag || !res[0]) return flag;
-  qd_M_r_legs(n, legs, S_b, T_b, M, res[0]);
-  return 0;
-}
-
 /* tau (n) = S F = S_b F[0:6] + F[6:18] (row 12, two feet: S_b only) for a full generalized force F (18). */
 static void qd_project(int n, const casadi_real* S_b, const casadi_real* F, casadi_real* tau) {
   for (int i = 0; i < n; ++i) {
@@ -171,53 +181,45 @@ static void qd_project(int n, const casadi_real* S_b, const casadi_real* F, casa
   }
 }
 
-/* q (19) = (0, quat, the joint angles of q_r): the full configuration the library's functions take (the
- * trunk position enters none of them). */
-static void qd_full_q(const casadi_real* q_r, const casadi_real* quat, casadi_real* q) {
-  for (int i = 0; i < 3; ++i) q[i] = 0;
-  for (int i = 0; i < 4; ++i) q[3 + i] = quat[i];
-  for (int i = 0; i < 12; ++i) q[7 + i] = q_r[i];
-}
-
-/* tau_r (n) = S rnea(q, v, a) (reduced_projection.py: id_r, and C_r + G_r at qdd_r = 0): (v, a) from the
- * generated qd_motion(q_r, qd_r, qdd_r, quat) (a = T qdd_r + k without forming T; a null qd_r or qdd_r is
- * zero), rnea by the library's qd_id_full with zero foot forces (one copy per library, not one Newton-Euler
- * graph per stance set), S by S_b. */
-static int qd_rnea_r(int n, const casadi_real* S_b, const casadi_real* q_r, const casadi_real* qd_r,
-                     const casadi_real* qdd_r, const casadi_real* quat, casadi_real* tau, casadi_int* iw, casadi_real* w,
-                     int mem) {
-  const casadi_real zero[QD_N_MAX] = {0}, f[12] = {0};
-  casadi_real q[19], v[18], a[18], F[18];
-  const casadi_real* m_arg[4] = {q_r, qd_r ? qd_r : zero, qdd_r ? qdd_r : zero, quat};
-  casadi_real* m_res[2] = {v, a};
-  int flag = qd_motion(m_arg, m_res, iw, w, mem);
-  if (flag) return flag;
+/* tau (n) = S rnea(q, v, a) with the library's qd_id_full (zero foot forces; one copy per library, not one
+ * Newton-Euler graph per stance set) at q = (0, quat, q_r's joint angles). */
+static int qd_rnea_r(int n, const casadi_real* S_b, const casadi_real* q_r, const casadi_real* quat, const casadi_real* v,
+                     const casadi_real* a, casadi_real* tau, casadi_int* iw, casadi_real* w, int mem) {
+  const casadi_real f[12] = {0};
+  casadi_real q[19], F[18];
   qd_full_q(q_r, quat, q);
   const casadi_real* i_arg[4] = {q, v, a, f};
   casadi_real* i_res[2] = {F, F + 6};
-  flag = qd_id_full(i_arg, i_res, iw, w, mem);
+  int flag = qd_id_full(i_arg, i_res, iw, w, mem);
   if (!flag) qd_project(n, S_b, F, tau);
   return flag;
 }
 
-/* The reduced terms at arg = (q_r, [qd_r, [qdd_r,]] quat) into res[0] (n): which = 0 C_r + G_r (arg = q_r, qd_r,
- * quat), 1 G_r (arg = q_r, quat; S G_full, G_full by the library's qd_G_full), 2 id_r (arg = q_r, qd_r, qdd_r,
- * quat). S_b from the generated qd_M_r_factors. */
-static int qd_reduced_term(int n, int which, const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w,
-                           int mem) {
-  const casadi_real* quat = arg[which == 0 ? 2 : which == 1 ? 1 : 3];
-  casadi_real S_b[QD_N_MAX * 6], T_b[6 * QD_N_MAX];
-  const casadi_real* p_arg[2] = {arg[0], quat};
-  casadi_real* p_res[2] = {S_b, T_b};
-  int flag = qd_M_r_factors(p_arg, p_res, iw, w, mem);
+/* The reduced terms (quadruped_dyn/dynamics/reduced_projection.py) at arg = (q_r, [qd_r, [qdd_r,]] quat) into
+ * res[0] (n): which = 0 M_r (arg = q_r, quat; S M T, qd_M_r_legs), 1 C_r + G_r (arg = q_r, qd_r, quat;
+ * S rnea(q, v, k)), 2 G_r (arg = q_r, quat; S G_full, the library's qd_G_full), 3 id_r (arg = q_r, qd_r, qdd_r,
+ * quat; S rnea(q, v, T qdd_r + k)); legs as qd_M_r_legs'. The stance's regularity is checked first (0,
+ * QD_DEGENERATE or QD_NONFINITE; res[0] not written unless 0). */
+QD_INLINE int qd_reduced_term(int n, int legs, int which, const casadi_real** arg, casadi_real** res, casadi_int* iw,
+                              casadi_real* w, int mem) {
+  const casadi_real* quat = arg[which == 1 ? 2 : which == 3 ? 3 : 1];
+  const casadi_real* qd_r = which == 1 || which == 3 ? arg[1] : 0;
+  casadi_real m = 0, S_b[QD_N_MAX * 6], T_b[6 * QD_N_MAX], v[18], a[18];
+  int flag = qd_parts(arg[0], qd_r, which == 3 ? arg[2] : 0, quat, &m, S_b, T_b, v, a, iw, w, mem);
+  if (!flag) flag = qd_regular_value(m);
   if (flag || !res[0]) return flag;
-  if (which != 1) return qd_rnea_r(n, S_b, arg[0], arg[1], which == 2 ? arg[2] : 0, quat, res[0], iw, w, mem);
-  casadi_real q[19], G[18];
+  if (which == 1 || which == 3) return qd_rnea_r(n, S_b, arg[0], quat, v, a, res[0], iw, w, mem);
+  casadi_real q[19], M[18 * 18];
   qd_full_q(arg[0], quat, q);
   const casadi_real* g_arg[1] = {q};
-  casadi_real* g_res[1] = {G};
-  flag = qd_G_full(g_arg, g_res, iw, w, mem);
-  if (!flag) qd_project(n, S_b, G, res[0]);
+  casadi_real* g_res[1] = {M};
+  if (which == 2) {
+    flag = qd_G_full(g_arg, g_res, iw, w, mem);
+    if (!flag) qd_project(n, S_b, M, res[0]);
+    return flag;
+  }
+  flag = qd_M_full_dense(q, M, iw, w, mem);
+  if (!flag) qd_M_r_legs(n, legs, S_b, T_b, M, res[0]);
   return flag;
 }
 
@@ -299,16 +301,18 @@ QD_INLINE int qd_fd_r_finish(int n, qd_eval_fn CG_r, const casadi_real** arg, ca
  * (n <= QD_N_MAX). Each generated file calls it once with constant n and legs, so the compiler specialises it. */
 QD_INLINE int qd_fd_r_solve(int n, int legs, const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w,
                             int mem) {
-  casadi_real S_b[QD_N_MAX * 6], T_b[6 * QD_N_MAX], M[18 * 18], M_r[QD_N_MAX * QD_N_MAX], b[QD_N_MAX];
+  casadi_real m = 0, S_b[QD_N_MAX * 6], T_b[6 * QD_N_MAX], v[18], a[18], q[19], M[18 * 18], M_r[QD_N_MAX * QD_N_MAX],
+              b[QD_N_MAX];
   int piv[QD_N_MAX];
-  const casadi_real* p_arg[2] = {arg[0], arg[3]};
-  casadi_real* p_res[3] = {S_b, T_b, M};
-  int flag = qd_regular(arg, 3, iw, w, mem);
-  if (!flag) flag = qd_M_r_parts(p_arg, p_res, iw, w, mem);
+  int flag = qd_parts(arg[0], arg[1], 0, arg[3], &m, S_b, T_b, v, a, iw, w, mem);
+  if (!flag) flag = qd_regular_value(m);
+  if (!flag) flag = qd_rnea_r(n, S_b, arg[0], arg[3], v, a, b, iw, w, mem);
+  if (flag) return flag;
+  qd_full_q(arg[0], arg[3], q);
+  flag = qd_M_full_dense(q, M, iw, w, mem);
   if (flag) return flag;
   qd_M_r_legs(n, legs, S_b, T_b, M, M_r);
-  flag = qd_rnea_r(n, S_b, arg[0], arg[1], 0, arg[3], b, iw, w, mem);
-  if (!flag) flag = qd_fd_r_factor(n, arg[2], M_r, piv, b);
+  flag = qd_fd_r_factor(n, arg[2], M_r, piv, b);
   if (flag) return flag;
   qd_lu_solve(n, M_r, piv, b);
   if (res[0]) {
