@@ -78,6 +78,9 @@ static const casadi_int casadi_s2[3] = {12, 12, 1};
 static const casadi_int casadi_s3[3] = {12, 3, 1};
 
 #define QD_REGULARITY_MIN ((casadi_real)1e-18) /* quadruped_dyn.tolerances.REGULARITY_MIN */
+#define QD_M_NNZ 210 /* qd_M_full's nonzeros */
+static const short qd_M_at[QD_M_NNZ] = {0, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14, 15, 16, 17, 19, 21, 22, 23, 24, 25, 26, 27, 28, 29, 30, 31, 32, 33, 34, 35, 38, 39, 40, 41, 42, 43, 44, 45, 46, 47, 48, 49, 50, 51, 52, 53, 54, 55, 56, 57, 58, 59, 60, 61, 62, 63, 64, 65, 66, 67, 68, 69, 70, 71, 72, 73, 74, 75, 76, 77, 78, 79, 80, 81, 82, 83, 84, 85, 86, 87, 88, 89, 90, 91, 92, 93, 94, 95, 96, 97, 98, 99, 100, 101, 102, 103, 104, 105, 106, 107, 108, 109, 110, 111, 112, 113, 114, 115, 116, 126, 127, 128, 129, 130, 131, 132, 133, 134, 144, 145, 146, 147, 148, 149, 150, 151, 152, 162, 163, 164, 165, 166, 167, 171, 172, 173, 180, 181, 182, 183, 184, 185, 189, 190, 191, 198, 199, 200, 201, 202, 203, 207, 208, 209, 216, 217, 218, 219, 220, 221, 228, 229, 230, 234, 235, 236, 237, 238, 239, 246, 247, 248, 252, 253, 254, 255, 256, 257, 264, 265, 266, 270, 271, 272, 273, 274, 275, 285, 286, 287, 288, 289, 290, 291, 292, 293, 303, 304, 305, 306, 307, 308, 309, 310, 311, 321, 322, 323};
+static const short qd_M_zero[114] = {1, 2, 18, 20, 36, 37, 117, 118, 119, 120, 121, 122, 123, 124, 125, 135, 136, 137, 138, 139, 140, 141, 142, 143, 153, 154, 155, 156, 157, 158, 159, 160, 161, 168, 169, 170, 174, 175, 176, 177, 178, 179, 186, 187, 188, 192, 193, 194, 195, 196, 197, 204, 205, 206, 210, 211, 212, 213, 214, 215, 222, 223, 224, 225, 226, 227, 231, 232, 233, 240, 241, 242, 243, 244, 245, 249, 250, 251, 258, 259, 260, 261, 262, 263, 267, 268, 269, 276, 277, 278, 279, 280, 281, 282, 283, 284, 294, 295, 296, 297, 298, 299, 300, 301, 302, 312, 313, 314, 315, 316, 317, 318, 319, 320};
 static int qd_regularity(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem) {
   (void)arg; (void)res; (void)iw; (void)w; (void)mem;
   casadi_real a00, a01, a02, a03, a04, a05, a06, a07, a08, a09, a10, a11;
@@ -5449,7 +5452,6 @@ static int qd_parts(const casadi_real* q_r, const casadi_real* qd_r, const casad
 
 /* defined in qd_<robot>.c of the same library (no work memory: checked by the generator) */
 int qd_M_full(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem);
-const casadi_int* qd_M_full_sparsity_out(casadi_int i);
 int qd_G_full(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem);
 int qd_id_full(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem);
 
@@ -5462,23 +5464,17 @@ static void qd_full_q(const casadi_real* q_r, const casadi_real* quat, casadi_re
 }
 
 /* M (18 x 18, dense column-major): the full inertia matrix at q (19) from the library's qd_M_full (one copy per
- * library, not one per stance set). qd_M_full writes its nonzeros (CasADi's pattern, nnz of them) to the end of
- * the array; column c is then spread in place: the 324 - nnz slots before them hold at least the pattern's holes
- * in columns 0..c, so column c's writes (slots < 18 (c + 1)) never reach a later column's nonzeros, and its own
- * are read first. */
+ * library, not one per stance set). qd_M_full writes its QD_M_NNZ nonzeros to the end of the array; each moves to
+ * its dense slot qd_M_at[k] (the generator's table of qd_M_full's pattern), in order: that slot is at most
+ * 324 - QD_M_NNZ + k, never a nonzero still to move; then the slots qd_M_zero get the zeros. */
 static int qd_M_full_dense(const casadi_real* q, casadi_real* M, casadi_int* iw, casadi_real* w, int mem) {
-  const casadi_int* sp = qd_M_full_sparsity_out(0);
-  const casadi_int *colind = sp + 2, *row = sp + 3 + 18;
-  casadi_real* x = M + 18 * 18 - colind[18];
+  casadi_real* x = M + 18 * 18 - QD_M_NNZ;
   const casadi_real* m_arg[1] = {q};
   casadi_real* m_res[1] = {x};
   int flag = qd_M_full(m_arg, m_res, iw, w, mem);
   if (flag) return flag;
-  for (int c = 0; c < 18; ++c) {
-    casadi_real t[18] = {0};
-    for (casadi_int k = colind[c]; k < colind[c + 1]; ++k) t[row[k]] = x[k];
-    for (int i = 0; i < 18; ++i) M[i + 18 * c] = t[i];
-  }
+  for (int k = 0; k < QD_M_NNZ; ++k) M[qd_M_at[k]] = x[k];
+  for (int k = 0; k < 18 * 18 - QD_M_NNZ; ++k) M[qd_M_zero[k]] = 0;
   return 0;
 }
 
@@ -5494,8 +5490,9 @@ static int qd_M_r_parts(const casadi_real** arg, casadi_real** res, casadi_int* 
 
 /* M_r = S M T (n x n, column-major, into M_r) from qd_M_r_parts' factors, column by column: mt = M T e_j
  * = M[:, 0:6] T_b e_j + M[:, 6 + j], then S mt = S_b mt[0:6] + mt[6:18]. legs: bit i set for a stance leg i;
- * T_b's columns and S_b's rows of the other legs' joints are zero (their feet carry no constraint and no
- * force), so those skip the trunk products (15: none skipped, any stance). The products in loops of constant length
+ * T_b's columns of the other legs' joints are zero (their feet carry no constraint), so those columns skip the
+ * trunk product (15: none skipped, any stance); S_b's rows of those joints are zero too, but the full-length
+ * loop over them (vectorised) is faster than skipping them. The products in loops of constant length
  * (n is a constant at each call), not unrolled: ~1,300-2,200 multiply-adds in a few hundred bytes of code
  * instead of ~60 kB of straight-line C per stance set. */
 QD_INLINE void qd_M_r_legs(int n, int legs, const casadi_real* S_b, const casadi_real* T_b, const casadi_real* M,
@@ -5514,12 +5511,10 @@ QD_INLINE void qd_M_r_legs(int n, int legs, const casadi_real* S_b, const casadi
       }
     }
     casadi_real* col = M_r + n * j;
-    for (int i = 0; i < n; ++i) { /* S_b's rows of the other legs' joints are zero too */
-      casadi_real s = i < 12 ? mt[6 + i] : 0;
-      if (i >= 12 || legs >> (i / 3) & 1) {
-        for (int k = 0; k < 6; ++k) s += S_b[i + n * k] * mt[k];
-      }
-      col[i] = s;
+    for (int i = 0; i < 12; ++i) col[i] = mt[6 + i];
+    if (n > 12) col[12] = 0;
+    for (int k = 0; k < 6; ++k) {
+      for (int i = 0; i < n; ++i) col[i] += S_b[i + n * k] * mt[k];
     }
   }
 }
@@ -5660,7 +5655,6 @@ QD_INLINE int qd_fd_r_solve(int n, int legs, const casadi_real** arg, casadi_rea
                             int mem) {
   casadi_real m = 0, S_b[QD_N_MAX * 6], T_b[6 * QD_N_MAX], v[18], a[18], q[19], M[18 * 18], M_r[QD_N_MAX * QD_N_MAX],
               b[QD_N_MAX];
-  int piv[QD_N_MAX];
   int flag = qd_parts(arg[0], arg[1], 0, arg[3], &m, S_b, T_b, v, a, iw, w, mem);
   if (!flag) flag = qd_regular_value(m);
   if (!flag) flag = qd_rnea_r(n, S_b, arg[0], arg[3], v, a, b, iw, w, mem);
@@ -5669,6 +5663,7 @@ QD_INLINE int qd_fd_r_solve(int n, int legs, const casadi_real** arg, casadi_rea
   flag = qd_M_full_dense(q, M, iw, w, mem);
   if (flag) return flag;
   qd_M_r_legs(n, legs, S_b, T_b, M, M_r);
+  int piv[QD_N_MAX];
   flag = qd_fd_r_factor(n, arg[2], M_r, piv, b);
   if (flag) return flag;
   qd_lu_solve(n, M_r, piv, b);

@@ -344,7 +344,22 @@ def _static_c(c_name: str, f: ca.Function, precision: str, host_helpers: frozens
     return body.group(0).replace("casadi_f0", c_name)
 
 
-def _reduced_helpers_c(robot: Robot, stance: StanceSet, dfd_r: DfdRPieces, precision: str) -> str:
+def _dense_tables_c(sp: ca.Sparsity) -> str:
+    """QD_M_NNZ, qd_M_at (the dense column-major slot of each of M_full's nonzeros) and qd_M_zero (the other
+    slots), for qd_M_full_dense (c/qd_reduced_solve.c), which moves the nonzeros in order within one array."""
+    nrow = sp.size1()
+    at = [
+        sp.row()[k] + nrow * c for c in range(sp.size2()) for k in range(sp.colind()[c], sp.colind()[c + 1])]
+    holes = nrow * sp.size2() - sp.nnz()
+    if (nrow, sp.size2()) != (18, 18) or any(d > holes + k for k, d in enumerate(at)):
+        raise AssertionError("M_full's pattern is not an 18 x 18 compressed-column one; qd_M_full_dense assumes it")
+    zero = sorted(set(range(nrow * sp.size2())) - set(at))
+    return (f"#define QD_M_NNZ {sp.nnz()} /* qd_M_full's nonzeros */\n"
+            f"static const short qd_M_at[QD_M_NNZ] = {{{', '.join(map(str, at))}}};\n"
+            f"static const short qd_M_zero[{len(zero)}] = {{{', '.join(map(str, zero))}}};\n")
+
+
+def _reduced_helpers_c(robot: Robot, stance: StanceSet, dfd_r: DfdRPieces, M_full: ca.Sparsity, precision: str) -> str:
     """QD_REGULARITY_MIN, ``qd_regularity`` (the stance's regularity (q_r, quat) -> (regularity),
     ``dynamics.reduced.regularity_function``), ``qd_M_r_factors`` ((q_r, quat) -> (S_b, T_b),
     ``ReducedProjection.mass_matrix_factors`` without M_full, which the templates take from the library's
@@ -359,6 +374,7 @@ def _reduced_helpers_c(robot: Robot, stance: StanceSet, dfd_r: DfdRPieces, preci
                         [regularity_function(robot, stance)(q_r, quat), ca.densify(S_b), ca.densify(T_b),
                          *(ca.densify(x) for x in p.velocity_and_acceleration(qd_r, qdd_r))], {"cse": True})
     return (f"#define QD_REGULARITY_MIN ((casadi_real){REGULARITY_MIN!r}) /* quadruped_dyn.tolerances.REGULARITY_MIN */\n"
+            + _dense_tables_c(M_full)
             + _static_c("qd_regularity", regularity_function(robot, stance), precision) + "\n"
             + _static_c("qd_reduced_parts", parts, precision) + "\n"
             + _static_c("qd_dfd_r_lift", dfd_r.lift, precision))
@@ -487,13 +503,14 @@ def generate(robot: Robot, out_dir: Path, precision: str = "double",
     c_full = _grf_through_id_full(robot, c_full, full, precision)
     sources = {f"{name}.c": c_full}
     functions = list(full)
+    m_full = next(f for f in full if f.name() == PREFIX + "M_full").sparsity_out(0)  # the reduced files densify it
     for stance in REDUCED_STANCE_SETS:
         reduced = reduced_functions(robot, stance)
         file_stem = f"{name}_r_{stance.name.replace('+', '_')}"
         c_text, h_text = casadi_c(file_stem, reduced, precision)
         dfd_r = dfd_r_pieces(robot, stance)
         sources[f"{file_stem}.c"], h_text = _checked_reduced_c(c_text, h_text, reduced,
-                                                               _reduced_helpers_c(robot, stance, dfd_r, precision), dfd_r)
+                                                               _reduced_helpers_c(robot, stance, dfd_r, m_full, precision), dfd_r)
         casadi_header += h_text
         functions += reduced
     derivatives = derivative_functions(robot)  # qd_<robot>_d.c: derivatives of the full dynamics
