@@ -344,18 +344,39 @@ def _static_c(c_name: str, f: ca.Function, precision: str, host_helpers: frozens
     return body.group(0).replace("casadi_f0", c_name)
 
 
-def _reduced_helpers_c(robot: Robot, stance: StanceSet, dfd_r: DfdRPieces, precision: str) -> str:
+def _dense_tables_c(sp: ca.Sparsity) -> str:
+    """QD_M_NNZ, qd_M_at (the dense column-major slot of each of M_full's nonzeros) and qd_M_zero (the other
+    slots), for qd_M_full_dense (c/qd_reduced_solve.c), which moves the nonzeros in order within one array."""
+    nrow = sp.size1()
+    at = [
+        sp.row()[k] + nrow * c for c in range(sp.size2()) for k in range(sp.colind()[c], sp.colind()[c + 1])]
+    holes = nrow * sp.size2() - sp.nnz()
+    if (nrow, sp.size2()) != (18, 18) or any(d > holes + k for k, d in enumerate(at)):
+        raise AssertionError("M_full's pattern is not an 18 x 18 compressed-column one; qd_M_full_dense assumes it")
+    zero = sorted(set(range(nrow * sp.size2())) - set(at))
+    return (f"#define QD_M_NNZ {sp.nnz()} /* qd_M_full's nonzeros */\n"
+            f"static const short qd_M_at[QD_M_NNZ] = {{{', '.join(map(str, at))}}};\n"
+            f"static const short qd_M_zero[{len(zero)}] = {{{', '.join(map(str, zero))}}};\n")
+
+
+def _reduced_helpers_c(robot: Robot, stance: StanceSet, dfd_r: DfdRPieces, M_full: ca.Sparsity, precision: str) -> str:
     """QD_REGULARITY_MIN, ``qd_regularity`` (the stance's regularity (q_r, quat) -> (regularity),
-    ``dynamics.reduced.regularity_function``), ``qd_M_r_parts`` ((q_r, quat) -> (S_b, T_b, M_full),
-    ``ReducedProjection.mass_matrix_factors``) and dfd_r's ``qd_dfd_r_lift``
-    (``emit_derivatives.dfd_r_pieces``), the generated pieces the templates call."""
+    ``dynamics.reduced.regularity_function``), ``qd_M_r_factors`` ((q_r, quat) -> (S_b, T_b),
+    ``ReducedProjection.mass_matrix_factors`` without M_full, which the templates take from the library's
+    qd_M_full), ``qd_motion`` ((q_r, qd_r, qdd_r, quat) -> (v, a), ``ReducedProjection.velocity_and_acceleration``,
+    for the library's qd_id_full) and dfd_r's ``qd_dfd_r_lift`` (``emit_derivatives.dfd_r_pieces``), the
+    generated pieces the templates call."""
     n = 13 if len(stance.feet) == 2 else 12
-    q_r, quat = ca.SX.sym("q_r", n), ca.SX.sym("quat", 4)
-    parts = ca.Function("M_r_parts", [q_r, quat], [ca.densify(x) for x in reduced_projection(
-        robot, stance, q_r, quat).mass_matrix_factors()], {"cse": True})
+    q_r, qd_r, qdd_r, quat = (ca.SX.sym(k, m) for k, m in (("q_r", n), ("qd_r", n), ("qdd_r", n), ("quat", 4)))
+    p = reduced_projection(robot, stance, q_r, quat)
+    S_b, T_b, _ = p.mass_matrix_factors()
+    parts = ca.Function("reduced_parts", [q_r, qd_r, qdd_r, quat],
+                        [regularity_function(robot, stance)(q_r, quat), ca.densify(S_b), ca.densify(T_b),
+                         *(ca.densify(x) for x in p.velocity_and_acceleration(qd_r, qdd_r))], {"cse": True})
     return (f"#define QD_REGULARITY_MIN ((casadi_real){REGULARITY_MIN!r}) /* quadruped_dyn.tolerances.REGULARITY_MIN */\n"
+            + _dense_tables_c(M_full)
             + _static_c("qd_regularity", regularity_function(robot, stance), precision) + "\n"
-            + _static_c("qd_M_r_parts", parts, precision) + "\n"
+            + _static_c("qd_reduced_parts", parts, precision) + "\n"
             + _static_c("qd_dfd_r_lift", dfd_r.lift, precision))
 
 
@@ -364,22 +385,28 @@ def _checked_reduced_c(c_text: str, casadi_header: str, functions: list[ca.Funct
     """Insert ``helpers_c`` (``_reduced_helpers_c``) and ``c/qd_reduced_solve.c`` and route the entry
     points through them: every function returns QD_DEGENERATE at a degenerate stance and
     QD_NONFINITE for a non-finite output; M_r is the product of its factors (qd_M_r_project: CasADi's
-    unrolled M_r is dropped, ~50 kB per stance set, and M_r is faster); fd_r evaluates M_r and CG_r
+    unrolled M_r is dropped, ~50 kB per stance set, and M_r is faster); G_r is CG_r's evaluation at qd_r = 0
+    and id_r = S M T qdd_r + CG_r (qd_G_r_from_CG_r, qd_id_r_from_parts: their graphs dropped, ~60 kB per
+    stance set); fd_r evaluates M_r and CG_r
     (checked once in the solve) and solves M_r qdd_r = tau_ext - CG_r; dfd_r by ``c/qd_reduced_derivatives.c``
     over ``dfd_r``'s pieces, its caller work memory declared. Returns (C source, CasADi's header text)."""
     first = c_text.index(f"\n/* {functions[0].name()}:")
     templates = "\n".join((TEMPLATES / t).read_text() for t in ("qd_reduced_solve.c", "qd_reduced_derivatives.c"))
     raw = evaluations(c_text, [f.name() for f in functions])  # entry point -> CasADi's evaluation function
-    m_r_eval = ("static int qd_M_r_eval(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, "
-                f"int mem) {{\n  return qd_M_r_project({functions[0].size1_out(0)}, arg, res, iw, w, mem);\n}}\n")
-    c_text = c_text[:first] + "\n" + helpers_c + "\n" + templates + "\n" + m_r_eval + c_text[first:]
+    stance = reduced_parts(functions[0].name()[len(PREFIX):])[1]  # type: ignore[index]
+    legs = sum(1 << i for i in stance.feet)  # S_b's rows and T_b's columns of the other legs' joints are zero
+    n_r = functions[0].size1_out(0)
+    signature = "(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem)"
+    evals = "".join(f"static int qd_{kind}_eval{signature} {{\n  return qd_reduced_term({n_r}, {legs}, {which}, arg, res, iw, "
+                    "w, mem);\n}\n" for which, kind in enumerate(("M_r", "CG_r", "G_r", "id_r")))
+    c_text = c_text[:first] + "\n" + helpers_c + "\n" + templates + "\n" + evals + c_text[first:]
     work = work_sizes(casadi_header)
-    m_r, cg_r = "qd_M_r_eval", next(raw[g.name()] for g in functions if g.name().startswith(PREFIX + "CG_r_"))
+    cg_r = "qd_CG_r_eval"
     for f in functions:
         if f.sz_arg() != f.n_in() or work[f.name()] != (0, 0):
             raise AssertionError(f"{f.name()} needs work memory; qd_fd_r_solve assumes it does not")
         if f.name().startswith(PREFIX + "fd_r_"):
-            body = rf"\1  return qd_fd_r_solve({f.nnz_out(0)}, {m_r}, {cg_r}, arg, res, iw, w, mem);\n"
+            body = rf"\1  return qd_fd_r_solve({f.nnz_out(0)}, {legs}, arg, res, iw, w, mem);\n"
         elif f.name().startswith(PREFIX + "dfd_r_"):  # caller work memory: declare_dfd_r_work; size checked at compile time
             n = f.size1_out(0)
             body = (rf"\1  typedef char w_agrees[QD_DFD_R_W({n}) == {dfd_r_work_reals(n)} ? 1 : -1];\n"
@@ -387,14 +414,12 @@ def _checked_reduced_c(c_text: str, casadi_header: str, functions: list[ca.Funct
                     rf"  return qd_dfd_r_solve({n}, {dfd_r.legs}, {int(dfd_r.lift_reads_quat)}, {cg_r}, arg, res, iw, w, mem);\n")
         else:
             nnz = ", ".join(str(f.nnz_out(i)) for i in range(f.n_out()))
-            evaluation = m_r if f.name().startswith(PREFIX + "M_r_") else r"\2"
-            body = (rf"\1  return qd_checked({evaluation}, {f.index_in('quat')}, {f.n_out()}, "
-                    rf"(const casadi_int[]){{{nnz}}}, arg, res, iw, w, mem);\n")
+            evaluation = f"qd_{reduced_parts(f.name()[len(PREFIX):])[0]}_eval"  # type: ignore[index]
+            body = rf"\1  return qd_finite({evaluation}(arg, res, iw, w, mem), res, 1, (const casadi_int[]){{{nnz}}});\n"
         c_text, count = re.subn(entry_point(f.name()), body, c_text)
         if count != 1:
             raise AssertionError(f"entry point of {f.name()} not found in CasADi's output")
-        if f.name().startswith((PREFIX + "M_r_", PREFIX + "fd_r_", PREFIX + "dfd_r_")):  # evaluated above
-            c_text = drop_evaluation(c_text, raw[f.name()])
+        c_text = drop_evaluation(c_text, raw[f.name()])  # every one evaluated above
         if f.name().startswith(PREFIX + "dfd_r_"):
             c_text, casadi_header = declare_dfd_r_work(c_text, casadi_header, f)
     return c_text, casadi_header
@@ -478,13 +503,14 @@ def generate(robot: Robot, out_dir: Path, precision: str = "double",
     c_full = _grf_through_id_full(robot, c_full, full, precision)
     sources = {f"{name}.c": c_full}
     functions = list(full)
+    m_full = next(f for f in full if f.name() == PREFIX + "M_full").sparsity_out(0)  # the reduced files densify it
     for stance in REDUCED_STANCE_SETS:
         reduced = reduced_functions(robot, stance)
         file_stem = f"{name}_r_{stance.name.replace('+', '_')}"
         c_text, h_text = casadi_c(file_stem, reduced, precision)
         dfd_r = dfd_r_pieces(robot, stance)
         sources[f"{file_stem}.c"], h_text = _checked_reduced_c(c_text, h_text, reduced,
-                                                               _reduced_helpers_c(robot, stance, dfd_r, precision), dfd_r)
+                                                               _reduced_helpers_c(robot, stance, dfd_r, m_full, precision), dfd_r)
         casadi_header += h_text
         functions += reduced
     derivatives = derivative_functions(robot)  # qd_<robot>_d.c: derivatives of the full dynamics
@@ -493,10 +519,10 @@ def generate(robot: Robot, out_dir: Path, precision: str = "double",
     functions += derivatives
     work = work_sizes(casadi_header)
     did = next(f for f in functions if f.name() == PREFIX + "did_full")
-    if any(work[PREFIX + g] != (0, 0) for g in ("id_full", "did_full")) or did.sz_arg() != 3 or (
+    if any(work[PREFIX + g] != (0, 0) for g in ("M_full", "G_full", "id_full", "did_full")) or did.sz_arg() != 3 or (
             did.name_in(), did.name_out()) != (["q", "v", "a"], ["dtau_dq", "dtau_dv", "dtau_da"]):
-        raise AssertionError("qd_dfd_r_solve calls id_full and did_full (q, v, a) -> (dtau_dq, dtau_dv, dtau_da) with "
-                             "no work memory of their own")
+        raise AssertionError("qd_dfd_r_solve calls id_full and did_full (q, v, a) -> (dtau_dq, dtau_dv, dtau_da), "
+                             "the reduced terms M_full, G_full and id_full, with no work memory of their own")
     extra = extra_files(functions, work) if extra_files else {}
     sources = {file_name: _precision_math(text) for file_name, text in sources.items()}
     files = {

@@ -210,13 +210,17 @@ class ReducedProjection:
 
     def mass_matrix_factors(self) -> tuple[ca.SX, ca.SX, ca.SX]:
         """(S_b (n, 6), T_b (6, n), M_full (18, 18)) with M_r = S M_full T, S = [S_b, I_12] (the
-        13th row, two feet, has no joint part) and T = [T_b; I_12] (the 13th column has none): what
-        the generated C multiplies in loops (codegen/c/qd_reduced_solve.c, qd_M_r_project)."""
+        13th row, two feet, has no joint part) and T = [T_b; I_12] (the 13th column has none); T_b's
+        columns and S_b's rows of the swing legs' joints are zero (checked): what the generated C multiplies in loops
+        (codegen/c/qd_reduced_solve.c, qd_M_r_legs)."""
         x = ca.SX.sym("x", NV_FULL)
         S = ca.jacobian(self.project(x), x)  # project is linear in F: S exactly
         joint_rows = ca.DM.eye(self.n)[:, :12]
         if not (ca.is_equal(ca.simplify(S[:, 6:]), ca.SX(joint_rows)) and ca.is_equal(self.T[6:, :], ca.SX(joint_rows.T))):
             raise AssertionError("S or T has a joint part other than the identity; qd_M_r_project assumes it")
+        swing = [3 * i + c for i in range(4) if i not in self.stance.feet for c in range(3)]
+        if any(not (self.T[k, j].is_zero() and S[j, k].is_zero()) for k in range(6) for j in swing):
+            raise AssertionError("T_b (S_b) has a nonzero entry in a swing leg's joint column (row); qd_M_r_legs skips those")
         return S[:, :6], self.T[:6, :], mass_matrix_crba(self.robot, self.q_joints)
 
     def coriolis_gravity(self, qd_r: ca.SX) -> ca.SX:

@@ -61,53 +61,158 @@ static int qd_finite(int flag, casadi_real** res, int n_out, const casadi_int* n
   return 0;
 }
 
+/* 0 where a stance of regularity m is regular; QD_DEGENERATE or QD_NONFINITE. */
+static int qd_regular_value(casadi_real m) {
+  if (!isfinite(m)) return QD_NONFINITE;
+  return m > QD_REGULARITY_MIN && m > QD_REGULARITY_FLOOR ? 0 : QD_DEGENERATE;
+}
+
 /* 0 where the stance is regular at (q_r = arg[0], quat = arg[i_quat]); QD_DEGENERATE or QD_NONFINITE. */
 static int qd_regular(const casadi_real** arg, int i_quat, casadi_int* iw, casadi_real* w, int mem) {
   casadi_real m = 0;
   const casadi_real* m_arg[2] = {arg[0], arg[i_quat]};
   casadi_real* m_res[1] = {&m};
   int flag = qd_regularity(m_arg, m_res, iw, w, mem);
-  if (flag || !isfinite(m)) return flag ? flag : QD_NONFINITE;
-  return m > QD_REGULARITY_MIN && m > QD_REGULARITY_FLOOR ? 0 : QD_DEGENERATE;
+  return flag ? flag : qd_regular_value(m);
 }
 
-/* The checked call of a generated reduced function f with quat at arg[i_quat]: the stance's
- * regularity first, then f, then its outputs' finiteness. */
-QD_INLINE int qd_checked(qd_eval_fn f, int i_quat, int n_out, const casadi_int* nnz, const casadi_real** arg,
-                      casadi_real** res, casadi_int* iw, casadi_real* w, int mem) {
-  int flag = qd_regular(arg, i_quat, iw, w, mem);
-  return qd_finite(flag ? flag : f(arg, res, iw, w, mem), res, n_out, nnz);
+/* The generated qd_reduced_parts at (q_r, qd_r, qdd_r, quat) (a null qd_r or qdd_r is zero), one graph: the
+ * stance's regularity *m (as qd_regularity), S_b (n x 6) and T_b (6 x n), dense column-major, with M_r = S M T,
+ * S = [S_b, I_12] (row 12, two feet: no joint part), T = [T_b; I_12] (column 12: no joint part)
+ * (quadruped_dyn/dynamics/reduced_projection.py, mass_matrix_factors), and the full velocity and acceleration
+ * v, a (18 each; a = T qdd_r + k without forming T: velocity_and_acceleration). A null output is skipped. */
+static int qd_parts(const casadi_real* q_r, const casadi_real* qd_r, const casadi_real* qdd_r, const casadi_real* quat,
+                    casadi_real* m, casadi_real* S_b, casadi_real* T_b, casadi_real* v, casadi_real* a, casadi_int* iw,
+                    casadi_real* w, int mem) {
+  const casadi_real zero[QD_N_MAX] = {0};
+  const casadi_real* p_arg[4] = {q_r, qd_r ? qd_r : zero, qdd_r ? qdd_r : zero, quat};
+  casadi_real* p_res[5] = {m, S_b, T_b, v, a};
+  return qd_reduced_parts(p_arg, p_res, iw, w, mem);
 }
 
-/* M_r = S M T (n x n, column-major, into res[0]; quadruped_dyn/dynamics/reduced_projection.py,
- * mass_matrix_factors): the generated qd_M_r_parts(q_r, quat) (written before this text; called directly,
- * not through a pointer, so the Cortex-M stack walk stays bounded) gives S_b (n x 6), T_b (6 x n) and M (18 x 18, the
- * full inertia matrix), all column-major, with S = [S_b, I_12] (row 12, two feet: no joint part) and
- * T = [T_b; I_12] (column 12: no joint part). The products in loops, not unrolled: ~2,200 multiply-adds
- * in a few hundred bytes of code instead of ~60 kB of straight-line C per stance set. qd_M_r_product
- * multiplies given factors (the reduced derivatives reuse them). */
-static void qd_M_r_product(int n, const casadi_real* S_b, const casadi_real* T_b, const casadi_real* M, casadi_real* M_r) {
-  casadi_real mt[18];
-  for (int j = 0; j < n; ++j) { /* column j: mt = M T e_j, then S mt */
-    for (int i = 0; i < 18; ++i) mt[i] = j < 12 ? M[i + 18 * (6 + j)] : 0;
-    for (int k = 0; k < 6; ++k) {
-      for (int i = 0; i < 18; ++i) mt[i] += M[i + 18 * k] * T_b[k + 6 * j];
+/* defined in qd_<robot>.c of the same library (no work memory: checked by the generator) */
+int qd_M_full(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem);
+int qd_G_full(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem);
+int qd_id_full(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem);
+
+/* q (19) = (0, quat, the joint angles of q_r): the full configuration the library's functions take (the
+ * trunk position enters none of them). */
+static void qd_full_q(const casadi_real* q_r, const casadi_real* quat, casadi_real* q) {
+  for (int i = 0; i < 3; ++i) q[i] = 0;
+  for (int i = 0; i < 4; ++i) q[3 + i] = quat[i];
+  for (int i = 0; i < 12; ++i) q[7 + i] = q_r[i];
+}
+
+/* M (18 x 18, dense column-major): the full inertia matrix at q (19) from the library's qd_M_full (one copy per
+ * library, not one per stance set). qd_M_full writes its QD_M_NNZ nonzeros to the end of the array; each moves to
+ * its dense slot qd_M_at[k] (the generator's table of qd_M_full's pattern), in order: that slot is at most
+ * 324 - QD_M_NNZ + k, never a nonzero still to move; then the slots qd_M_zero get the zeros. */
+static int qd_M_full_dense(const casadi_real* q, casadi_real* M, casadi_int* iw, casadi_real* w, int mem) {
+  casadi_real* x = M + 18 * 18 - QD_M_NNZ;
+  const casadi_real* m_arg[1] = {q};
+  casadi_real* m_res[1] = {x};
+  int flag = qd_M_full(m_arg, m_res, iw, w, mem);
+  if (flag) return flag;
+  for (int k = 0; k < QD_M_NNZ; ++k) M[qd_M_at[k]] = x[k];
+  for (int k = 0; k < 18 * 18 - QD_M_NNZ; ++k) M[qd_M_zero[k]] = 0;
+  return 0;
+}
+
+/* (q_r, quat) -> (S_b (n x 6), T_b (6 x n), M (18 x 18, the full inertia matrix)), all dense column-major, from
+ * qd_parts (the regularity not checked: the caller does) and qd_M_full_dense. A null res[i] skips that output. */
+static int qd_M_r_parts(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem) {
+  int flag = qd_parts(arg[0], 0, 0, arg[1], 0, res[0], res[1], 0, 0, iw, w, mem);
+  if (flag || !res[2]) return flag;
+  casadi_real q[19];
+  qd_full_q(arg[0], arg[1], q);
+  return qd_M_full_dense(q, res[2], iw, w, mem);
+}
+
+/* M_r = S M T (n x n, column-major, into M_r) from qd_M_r_parts' factors, column by column: mt = M T e_j
+ * = M[:, 0:6] T_b e_j + M[:, 6 + j], then S mt = S_b mt[0:6] + mt[6:18]. legs: bit i set for a stance leg i;
+ * T_b's columns of the other legs' joints are zero (their feet carry no constraint), so those columns skip the
+ * trunk product (15: none skipped, any stance); S_b's rows of those joints are zero too, but the full-length
+ * loop over them (vectorised) is faster than skipping them. The products in loops of constant length
+ * (n is a constant at each call), not unrolled: ~1,300-2,200 multiply-adds in a few hundred bytes of code
+ * instead of ~60 kB of straight-line C per stance set. */
+QD_INLINE void qd_M_r_legs(int n, int legs, const casadi_real* S_b, const casadi_real* T_b, const casadi_real* M,
+                           casadi_real* M_r) {
+  for (int j = 0; j < n; ++j) {
+    casadi_real mt[18];
+    if (j < 12) {
+      for (int i = 0; i < 18; ++i) mt[i] = M[i + 18 * (6 + j)];
+    } else {
+      for (int i = 0; i < 18; ++i) mt[i] = 0;
+    }
+    if (j >= 12 || legs >> (j / 3) & 1) {
+      const casadi_real* t = T_b + 6 * j;
+      for (int k = 0; k < 6; ++k) {
+        for (int i = 0; i < 18; ++i) mt[i] += M[i + 18 * k] * t[k];
+      }
     }
     casadi_real* col = M_r + n * j;
-    for (int i = 0; i < n; ++i) col[i] = i < 12 ? mt[6 + i] : 0;
+    for (int i = 0; i < 12; ++i) col[i] = mt[6 + i];
+    if (n > 12) col[12] = 0;
     for (int k = 0; k < 6; ++k) {
       for (int i = 0; i < n; ++i) col[i] += S_b[i + n * k] * mt[k];
     }
   }
 }
 
-static int qd_M_r_project(int n, const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem) {
-  casadi_real S_b[QD_N_MAX * 6], T_b[6 * QD_N_MAX], M[18 * 18];
-  casadi_real* p_res[3] = {S_b, T_b, M};
-  int flag = qd_M_r_parts(arg, p_res, iw, w, mem);
+/* qd_M_r_legs for any stance (no column skipped); the reduced derivatives use it. */
+static void qd_M_r_product(int n, const casadi_real* S_b, const casadi_real* T_b, const casadi_real* M, casadi_real* M_r) {
+  qd_M_r_legs(n, 15, S_b, T_b, M, M_r);
+}
+
+/* tau (n) = S F = S_b F[0:6] + F[6:18] (row 12, two feet: S_b only) for a full generalized force F (18). */
+static void qd_project(int n, const casadi_real* S_b, const casadi_real* F, casadi_real* tau) {
+  for (int i = 0; i < n; ++i) {
+    casadi_real s = i < 12 ? F[6 + i] : 0;
+    for (int k = 0; k < 6; ++k) s += S_b[i + n * k] * F[k];
+    tau[i] = s;
+  }
+}
+
+/* tau (n) = S rnea(q, v, a) with the library's qd_id_full (zero foot forces; one copy per library, not one
+ * Newton-Euler graph per stance set) at q = (0, quat, q_r's joint angles). */
+static int qd_rnea_r(int n, const casadi_real* S_b, const casadi_real* q_r, const casadi_real* quat, const casadi_real* v,
+                     const casadi_real* a, casadi_real* tau, casadi_int* iw, casadi_real* w, int mem) {
+  const casadi_real f[12] = {0};
+  casadi_real q[19], F[18];
+  qd_full_q(q_r, quat, q);
+  const casadi_real* i_arg[4] = {q, v, a, f};
+  casadi_real* i_res[2] = {F, F + 6};
+  int flag = qd_id_full(i_arg, i_res, iw, w, mem);
+  if (!flag) qd_project(n, S_b, F, tau);
+  return flag;
+}
+
+/* The reduced terms (quadruped_dyn/dynamics/reduced_projection.py) at arg = (q_r, [qd_r, [qdd_r,]] quat) into
+ * res[0] (n): which = 0 M_r (arg = q_r, quat; S M T, qd_M_r_legs), 1 C_r + G_r (arg = q_r, qd_r, quat;
+ * S rnea(q, v, k)), 2 G_r (arg = q_r, quat; S G_full, the library's qd_G_full), 3 id_r (arg = q_r, qd_r, qdd_r,
+ * quat; S rnea(q, v, T qdd_r + k)); legs as qd_M_r_legs'. The stance's regularity is checked first (0,
+ * QD_DEGENERATE or QD_NONFINITE; res[0] not written unless 0). */
+QD_INLINE int qd_reduced_term(int n, int legs, int which, const casadi_real** arg, casadi_real** res, casadi_int* iw,
+                              casadi_real* w, int mem) {
+  const casadi_real* quat = arg[which == 1 ? 2 : which == 3 ? 3 : 1];
+  const casadi_real* qd_r = which == 1 || which == 3 ? arg[1] : 0;
+  casadi_real m = 0, S_b[QD_N_MAX * 6], T_b[6 * QD_N_MAX], v[18], a[18];
+  int flag = qd_parts(arg[0], qd_r, which == 3 ? arg[2] : 0, quat, &m, S_b, T_b, v, a, iw, w, mem);
+  if (!flag) flag = qd_regular_value(m);
   if (flag || !res[0]) return flag;
-  qd_M_r_product(n, S_b, T_b, M, res[0]);
-  return 0;
+  if (which == 1 || which == 3) return qd_rnea_r(n, S_b, arg[0], quat, v, a, res[0], iw, w, mem);
+  casadi_real q[19], M[18 * 18];
+  qd_full_q(arg[0], quat, q);
+  const casadi_real* g_arg[1] = {q};
+  casadi_real* g_res[1] = {M};
+  if (which == 2) {
+    flag = qd_G_full(g_arg, g_res, iw, w, mem);
+    if (!flag) qd_project(n, S_b, M, res[0]);
+    return flag;
+  }
+  flag = qd_M_full_dense(q, M, iw, w, mem);
+  if (!flag) qd_M_r_legs(n, legs, S_b, T_b, M, res[0]);
+  return flag;
 }
 
 /* LU factorisation with partial pivoting of M (n x n, column-major, in place: the multipliers of
@@ -156,49 +261,52 @@ static void qd_lu_solve(int n, const casadi_real* LU, const int* piv, casadi_rea
   }
 }
 
-/* M (= M_r, evaluated) factorised (qd_lu_factor) and b = tau_ext - (C_r + G_r) at arg = (q_r, qd_r, tau_ext, quat),
- * C_r + G_r from the generated evaluation, checked here in one pass. 0, QD_NONFINITE or QD_SINGULAR. */
-QD_INLINE int qd_fd_r_finish(int n, qd_eval_fn CG_r, const casadi_real** arg, casadi_real* M, int* piv, casadi_real* b,
-                             casadi_int* iw, casadi_real* w, int mem) {
-  const casadi_real* cg_arg[3] = {arg[0], arg[1], arg[3]};
-  casadi_real* cg_res[1] = {b};
-  int flag = CG_r(cg_arg, cg_res, iw, w, mem);
-  if (flag) return flag;
+/* M (= M_r) factorised (qd_lu_factor) and b <- tau_ext - b (b holding C_r + G_r), both checked in one pass.
+ * 0, QD_NONFINITE or QD_SINGULAR. */
+static int qd_fd_r_factor(int n, const casadi_real* tau_ext, casadi_real* M, int* piv, casadi_real* b) {
   casadi_real scale = 0, sum = 0; /* a NaN or inf anywhere makes the sum non-finite */
   for (int i = 0; i < n * n; ++i) {
     scale = fabs(M[i]) > scale ? fabs(M[i]) : scale;
     sum += M[i];
   }
   for (int i = 0; i < n; ++i) {
-    b[i] = arg[2][i] - b[i];
+    b[i] = tau_ext[i] - b[i];
     sum += b[i];
   }
   if (!isfinite(sum)) return QD_NONFINITE;
   return qd_lu_factor(n, M, piv, scale);
 }
 
-/* M_r (factorised: qd_lu_factor) and b = tau_ext - (C_r + G_r) at arg = (q_r, qd_r, tau_ext, quat), from the
- * generated evaluations (qd_fd_r_finish). 0, QD_NONFINITE or QD_SINGULAR (nothing usable then). */
-QD_INLINE int qd_fd_r_factor(int n, qd_eval_fn M_r, qd_eval_fn CG_r, const casadi_real** arg, casadi_real* M, int* piv,
-                          casadi_real* b, casadi_int* iw, casadi_real* w, int mem) {
-  const casadi_real* m_arg[2] = {arg[0], arg[3]};
-  casadi_real* m_res[1] = {M};
-  int flag = qd_regular(arg, 3, iw, w, mem);
-  if (!flag) flag = M_r(m_arg, m_res, iw, w, mem);
-  return flag ? flag : qd_fd_r_finish(n, CG_r, arg, M, piv, b, iw, w, mem);
+/* M (= M_r, evaluated) factorised and b = tau_ext - (C_r + G_r) at arg = (q_r, qd_r, tau_ext, quat), C_r + G_r
+ * from the evaluation CG_r (qd_fd_r_factor). 0, QD_NONFINITE or QD_SINGULAR. */
+QD_INLINE int qd_fd_r_finish(int n, qd_eval_fn CG_r, const casadi_real** arg, casadi_real* M, int* piv, casadi_real* b,
+                             casadi_int* iw, casadi_real* w, int mem) {
+  const casadi_real* cg_arg[3] = {arg[0], arg[1], arg[3]};
+  casadi_real* cg_res[1] = {b};
+  int flag = CG_r(cg_arg, cg_res, iw, w, mem);
+  return flag ? flag : qd_fd_r_factor(n, arg[2], M, piv, b);
 }
 
-/* qdd_r = M_r^-1 (tau_ext - (C_r + G_r)): arg = (q_r, qd_r, tau_ext, quat), res = (qdd_r).
- * M_r and C_r + G_r from the generated evaluations (qd_fd_r_factor), then the LU solve; no heap,
- * all temporaries on the stack (n <= QD_N_MAX). Each generated file calls it once with a constant
- * n, so the compiler can specialise it. */
-QD_INLINE int qd_fd_r_solve(int n, qd_eval_fn M_r, qd_eval_fn CG_r, const casadi_real** arg, casadi_real** res,
-                                casadi_int* iw, casadi_real* w, int mem) {
-  casadi_real M[QD_N_MAX * QD_N_MAX], b[QD_N_MAX];
-  int piv[QD_N_MAX];
-  int flag = qd_fd_r_factor(n, M_r, CG_r, arg, M, piv, b, iw, w, mem);
+/* qdd_r = M_r^-1 (tau_ext - (C_r + G_r)): arg = (q_r, qd_r, tau_ext, quat), res = (qdd_r). The factors S_b, T_b
+ * and M once (qd_M_r_parts), M_r from them (qd_M_r_legs, legs as there), C_r + G_r by qd_rnea_r with the same
+ * S_b, both checked in one pass (qd_fd_r_factor), then the LU solve; no heap, all temporaries on the stack
+ * (n <= QD_N_MAX). Each generated file calls it once with constant n and legs, so the compiler specialises it. */
+QD_INLINE int qd_fd_r_solve(int n, int legs, const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w,
+                            int mem) {
+  casadi_real m = 0, S_b[QD_N_MAX * 6], T_b[6 * QD_N_MAX], v[18], a[18], q[19], M[18 * 18], M_r[QD_N_MAX * QD_N_MAX],
+              b[QD_N_MAX];
+  int flag = qd_parts(arg[0], arg[1], 0, arg[3], &m, S_b, T_b, v, a, iw, w, mem);
+  if (!flag) flag = qd_regular_value(m);
+  if (!flag) flag = qd_rnea_r(n, S_b, arg[0], arg[3], v, a, b, iw, w, mem);
   if (flag) return flag;
-  qd_lu_solve(n, M, piv, b);
+  qd_full_q(arg[0], arg[3], q);
+  flag = qd_M_full_dense(q, M, iw, w, mem);
+  if (flag) return flag;
+  qd_M_r_legs(n, legs, S_b, T_b, M, M_r);
+  int piv[QD_N_MAX];
+  flag = qd_fd_r_factor(n, arg[2], M_r, piv, b);
+  if (flag) return flag;
+  qd_lu_solve(n, M_r, piv, b);
   if (res[0]) {
     for (int i = 0; i < n; ++i) res[0][i] = b[i];
   }
