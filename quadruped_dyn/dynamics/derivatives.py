@@ -106,18 +106,24 @@ def _rnea(robot: Robot, q: ca.SX, v: ca.SX, a: ca.SX) -> ca.SX:
 
 def rnea_tangent_derivatives(robot: Robot, q: ca.SX, v: ca.SX, a: ca.SX) -> tuple[ca.SX, ca.SX, ca.SX]:
     """(dtau_dq (18, 18), dtau_dv (18, 18), dtau_da = M (18, 18)) of the full inverse dynamics (no foot
-    forces). The trunk position does not enter (its columns are structurally zero) and the orientation
-    enters only through gravity in the trunk frame g_b = R^T g, whose change under R -> R exp([dw]x) is
-    g_b x dw; gravity enters the Newton-Euler recursion as the trunk's linear acceleration a_lin - g_b, so
-    d tau/d g_b = -M[:, 0:3] and the rotation columns are ``-M[:, 0:3] [g_b]x``: no Jacobian of the recursion
-    with respect to g_b (~7 % of did_full's operations; equal to ``tangent_jacobian``'s, tested). M by composite
-    rigid bodies."""
-    g = ca.SX.sym("g_b", 3)
-    tau = inverse_dynamics(robot, q[7:], g, v, a, ca.SX.zeros(12))
+    forces), M by composite rigid bodies. Three input directions need no Jacobian of the recursion
+    (docs/derivatives.md): the trunk's linear velocity v_b and gravity in the trunk frame g_b enter the
+    Newton-Euler recursion only through the trunk's classical linear acceleration a_cl = a_lin + w_b x v_b - g_b,
+    whose coefficient is d tau/d a_lin = M[:, 0:3]. So d tau/d v_b = M[:, 0:3] [w_b]x, the rotation columns
+    are ``-M[:, 0:3] [g_b]x`` (g_b -> g_b x dw under R -> R exp([dw]x)), and d tau/d w_b is the recursion's
+    Jacobian at fixed a_cl plus M[:, 0:3] d(w_b x v_b)/d w_b = -M[:, 0:3] [v_b]x. The trunk position does
+    not enter (its columns are structurally zero). Equal to ``tangent_jacobian``'s (tested)."""
+    a_cl = ca.SX.sym("a_cl", 3)  # a_lin + w_b x v_b - g_b, the recursion's trunk linear acceleration
+    w_b, v_b = v[3:6], v[0:3]
+    tau = inverse_dynamics(robot, q[7:], ca.SX.zeros(3), ca.vertcat(ca.SX.zeros(3), v[3:]),
+                           ca.vertcat(a_cl, a[3:]), ca.SX.zeros(12))
     M = mass_matrix_crba(robot, q[7:])
+    M_lin = M[:, 0:3]
     g_b = quat_to_rotation(q[3:7]).T @ dm(GRAVITY_W)
-    dq_joints, dv = ca.substitute([ca.jacobian(tau, q[7:]), ca.jacobian(tau, v)], [g], [g_b])
-    dq = ca.horzcat(ca.SX(NV_FULL, 3), -M[:, 0:3] @ skew(g_b), dq_joints)
+    dq_joints, dw, dv_j = ca.substitute([ca.jacobian(tau, q[7:]), ca.jacobian(tau, w_b), ca.jacobian(tau, v[6:])],
+                                        [a_cl], [a[0:3] + ca.cross(w_b, v_b) - g_b])
+    dq = ca.horzcat(ca.SX(NV_FULL, 3), -M_lin @ skew(g_b), dq_joints)
+    dv = ca.horzcat(M_lin @ skew(w_b), dw - M_lin @ skew(v_b), dv_j)
     return dq, dv, M
 
 
