@@ -145,7 +145,7 @@ def rnea_tangent_derivatives(robot: Robot, q: ca.SX, v: ca.SX, a: ca.SX) -> tupl
         leg, s = axis_aligned(urdf_leg), slice(3 * k, 3 * k + 3)
         R1, p = placement_rt(leg.joints[0].placement)
         a1 = R1 @ dm(leg.joints[0].axis)
-        S = ca.vertcat(ca.cross(p, a1), a1)
+        S = ca.SX(ca.vertcat(ca.cross(p, a1), a1))
         m, h, I_o = leg_composite_inertia(leg, qj[s])
         K = ca.vertcat(ca.horzcat(m * ca.SX.eye(3), -skew(h)), ca.horzcat(skew(h), I_o), M[6 + 3 * k : 9 + 3 * k, 0:6])
         y = ca.vertcat(wrench, tau)  # the leg's rows: its wrench on the trunk, its torques
