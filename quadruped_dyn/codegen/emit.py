@@ -519,10 +519,11 @@ def generate(robot: Robot, out_dir: Path, precision: str = "double",
     functions += derivatives
     work = work_sizes(casadi_header)
     did = next(f for f in functions if f.name() == PREFIX + "did_full")
-    if any(work[PREFIX + g] != (0, 0) for g in ("M_full", "G_full", "id_full", "did_full")) or did.sz_arg() != 3 or (
-            did.name_in(), did.name_out()) != (["q", "v", "a"], ["dtau_dq", "dtau_dv", "dtau_da"]):
+    if any(work[PREFIX + g] != (0, 0) for g in ("M_full", "G_full", "id_full", "nle_full", "did_full")) or (
+            did.sz_arg() != 3 or (did.name_in(), did.name_out()) != (["q", "v", "a"], ["dtau_dq", "dtau_dv", "dtau_da"])):
         raise AssertionError("qd_dfd_r_solve calls id_full and did_full (q, v, a) -> (dtau_dq, dtau_dv, dtau_da), "
-                             "the reduced terms M_full, G_full and id_full, with no work memory of their own")
+                             "the reduced terms M_full, G_full and id_full, qd_dfd_full_parts M_full and nle_full, "
+                             "with no work memory of their own")
     extra = extra_files(functions, work) if extra_files else {}
     sources = {file_name: _precision_math(text) for file_name, text in sources.items()}
     files = {

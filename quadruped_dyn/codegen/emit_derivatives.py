@@ -4,7 +4,9 @@ In ``qd_<robot>_d.c`` (prefix ``qd_``), compiled into the same library as the ot
 
 * ``did_full(q, v, a) -> (dtau_dq, dtau_dv, dtau_da)``: CasADi's Jacobians of the full inverse
   dynamics (``dynamics/derivatives.py``), sparse outputs (leg rows do not depend on other legs);
-* ``dfd_full_parts(q, v) -> (M, nle)``: M (dense) and C + G, what the forward-dynamics derivative needs;
+* ``dfd_full_parts(q, v) -> (M, nle)``: M (dense) and C + G, what the forward-dynamics derivative needs: a
+  signature whose body (``c/qd_derivatives_solve.c``) calls ``qd_M_full`` and ``qd_nle_full`` of ``qd_<robot>.c``
+  (same library) instead of a second generated copy of them;
 * ``dfd_full(q, v, tau_full) -> (da_dq, da_dv, da_dtau)``: a signature only; its body is
   ``c/qd_derivatives_solve.c`` (M^-1 by M's tree structure in plain C, then -M^-1 dtau/dx at a = fd;
   its temporaries in the caller's w, stated as its work size);
@@ -160,7 +162,10 @@ def derivative_functions(robot: Robot) -> list[ca.Function]:
     if (not all(trunk[i, j].is_constant() and float(trunk[i, j]) == (float(trunk[0, 0]) if i == j else 0.0)
                 for i in range(3) for j in range(3)) or dq.is_dense() or any(dq.colind()[j] != 0 for j in range(4))):
         raise AssertionError("M[0:3, 0:3] is not m I or dtau_dq has position entries; qd_dfd_full_solve assumes both")
-    parts = ca.Function(PREFIX + "dfd_full_parts", [q, v], [ca.densify(fd.M_full_crba(q)), fd.nle_full(q, v)],
+    if (fd.M_full_crba.name_in(), fd.nle_full.name_in()) != (["q"], ["q", "v"]):
+        raise AssertionError("qd_dfd_full_parts calls qd_M_full(q) and qd_nle_full(q, v)")
+    dense = ca.sum1(q) + ca.sum1(v)  # a placeholder depending on every input: the template's body computes
+    parts = ca.Function(PREFIX + "dfd_full_parts", [q, v], [ca.repmat(dense, NV_FULL, NV_FULL), ca.repmat(dense, NV_FULL, 1)],
                         ["q", "v"], ["M", "nle"], opts)
     placeholder = ca.repmat(tau, 1, NV_FULL) + ca.sum1(q) + ca.sum1(v)  # dense 18 x 18, depends on every input
     dfd = ca.Function(PREFIX + "dfd_full", [q, v, tau], [placeholder] * 3, ["q", "v", "tau_full"],
@@ -192,15 +197,19 @@ def derivative_source(file_stem: str, functions: list[ca.Function], precision: s
         raise AssertionError("a derivative function needs work memory; qd_derivatives_solve.c passes none")
     template_w = {k: int(v) for k, v in re.findall(r"#define QD_(DFD_FULL|DGRF)_SZ_W (\d+)", template)}
     for f in functions:
-        signature = f.name() == PREFIX + "dfd_full" or (f.name().startswith(PREFIX + "dgrf_")
-                                                         and not f.name().startswith(PREFIX + "dgrf_dir_"))
-        if f.name() == PREFIX + "dfd_full":
-            did, parts = raw[PREFIX + "did_full"], raw[PREFIX + "dfd_full_parts"]
+        signature = f.name() in (PREFIX + "dfd_full", PREFIX + "dfd_full_parts") or (
+            f.name().startswith(PREFIX + "dgrf_") and not f.name().startswith(PREFIX + "dgrf_dir_"))
+        parts = "qd_dfd_full_parts_eval"  # the template's: qd_M_full and qd_nle_full
+        if f.name() == PREFIX + "dfd_full_parts":
+            nnz = f"{f.nnz_out(0)}, {f.nnz_out(1)}"
+            body = rf"\1  return qd_d_finite({parts}(arg, res, iw, w, mem), res, 2, (const casadi_int[]){{{nnz}}});\n"
+        elif f.name() == PREFIX + "dfd_full":
+            did = raw[PREFIX + "did_full"]
             body = (rf"\1  return qd_dfd_full_solve({parts}, {did}, {PREFIX}did_full_sparsity_out(0), "
                     rf"{PREFIX}did_full_sparsity_out(1), arg, res, iw, w, mem);\n")
         elif signature:  # dgrf_<feet>
             suffix = f.name()[len(PREFIX + "dgrf_"):]
-            did, parts, direction = (raw[PREFIX + n] for n in ("did_full", "dfd_full_parts", f"dgrf_dir_{suffix}"))
+            did, direction = (raw[PREFIX + n] for n in ("did_full", f"dgrf_dir_{suffix}"))
             legs = sum(1 << i for i in stance_set(suffix.replace("_", "+")).feet)  # the joints lambda reads
             body = (rf"\1  return qd_dgrf_solve({f.size1_out(0)}, {legs}, {parts}, {did}, {direction}, "
                     rf"{PREFIX}did_full_sparsity_out(0), {PREFIX}did_full_sparsity_out(1), arg, res, iw, w, mem);\n")
@@ -212,8 +221,9 @@ def derivative_source(file_stem: str, functions: list[ca.Function], precision: s
             raise AssertionError(f"entry point of {f.name()} not found in CasADi's output")
         if signature:  # its CasADi body is a placeholder: the template solves, its temporaries in the caller's w
             c_text = drop_evaluation(c_text, raw[f.name()])
-            sz_w = template_w["DFD_FULL" if f.name() == PREFIX + "dfd_full" else "DGRF"]
-            c_text, h_text = declare_work(c_text, h_text, f.name(), sz_w)
+            if f.name() != PREFIX + "dfd_full_parts":  # it uses none
+                sz_w = template_w["DFD_FULL" if f.name() == PREFIX + "dfd_full" else "DGRF"]
+                c_text, h_text = declare_work(c_text, h_text, f.name(), sz_w)
     # dfd_full calls qd_did_full_sparsity_out, defined further down: declare it first
     declaration = f"CASADI_SYMBOL_EXPORT const casadi_int* {PREFIX}did_full_sparsity_out(casadi_int i);\n"
     first = c_text.index("\n/* quadruped_dyn: derivatives")

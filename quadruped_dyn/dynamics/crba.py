@@ -95,6 +95,12 @@ def _composites(leg: Leg, q: ca.SX) -> list[Inertia]:
     return out
 
 
+def leg_composite_inertia(leg: Leg, q: ca.SX) -> Inertia:
+    """(m, h, I_o) of a whole leg (canonical frames, ``axis_aligned``) at the trunk origin, in trunk axes: its
+    block of M's trunk rows and columns, M[0:6, 0:6] = [[m 1, -[h]x], [[h]x, I_o]] summed with the trunk's."""
+    return _to_parent(_composites(leg, q)[0], leg.joints[0].axis, q[0], leg.joints[0].placement.p)
+
+
 def _force_to_parent(f: ca.SX, n: ca.SX, axis: np.ndarray, q: ca.SX, P: np.ndarray) -> tuple[ca.SX, ca.SX]:
     """A force (f, n) carried into the parent frame: (R f, R n + P x R f)."""
     R = axis_rotation(axis, q)
@@ -122,7 +128,7 @@ def mass_matrix_crba(robot: Robot, q_joints: ca.SX) -> ca.SX:
             f, n = _force_to_parent(f, n, leg.joints[0].axis, q[0], leg.joints[0].placement.p)
             M[0:6, col] = ca.vertcat(f, n)
             M[col, 0:6] = M[0:6, col].T
-        total = _add(total, _to_parent(Yc[0], leg.joints[0].axis, q[0], leg.joints[0].placement.p))
+        total = _add(total, _to_parent(Yc[0], leg.joints[0].axis, q[0], leg.joints[0].placement.p))  # leg_composite_inertia
     m_total, h_total, I_total = total
     H = skew(h_total)
     M[0:6, 0:6] = ca.vertcat(ca.horzcat(m_total * ca.SX.eye(3), -H), ca.horzcat(H, I_total))

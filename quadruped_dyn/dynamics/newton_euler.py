@@ -106,9 +106,12 @@ def hip_reaction_split(
     return suspended, LegForces(-J.T @ f, -f, -ca.cross(r - dm(leg.hip), f))
 
 
-def inverse_dynamics(robot: Robot, q_joints: ca.SX, g_b: ca.SX, v: ca.SX, a: ca.SX, f: ca.SX) -> ca.SX:
-    """(18,) = (base wrench residual, 12 joint torques). ``g_b`` gravity in the trunk frame
-    (0 to drop gravity), v (18,), a = vdot (18,) spatial for the body, f (12,) ground forces."""
+def inverse_dynamics_parts(
+    robot: Robot, q_joints: ca.SX, g_b: ca.SX, v: ca.SX, a: ca.SX, f: ca.SX
+) -> tuple[ca.SX, list[tuple[ca.SX, ca.SX]]]:
+    """``inverse_dynamics`` by body: (the trunk's own wrench (6,), per leg (its wrench on the trunk (6,): force
+    and moment about the trunk origin, trunk frame; its joint torques (3,))). The trunk rows of
+    ``inverse_dynamics`` are the sum of the wrenches, its joint rows the torques."""
     v_b, omega_b = v[0:3], v[3:6]
     a_b = a[0:3] + ca.cross(omega_b, v_b)  # classical, as the paper's recursion needs
     alpha_b = a[3:6]
@@ -116,16 +119,24 @@ def inverse_dynamics(robot: Robot, q_joints: ca.SX, g_b: ca.SX, v: ca.SX, a: ca.
     trunk = robot.trunk
     c, Ic = dm(trunk.com), dm(trunk.inertia)
     a_c = a0 + ca.cross(alpha_b, c) + ca.cross(omega_b, ca.cross(omega_b, c))
-    force = trunk.mass * a_c
-    moment = Ic @ alpha_b + ca.cross(omega_b, Ic @ omega_b) + ca.cross(c, trunk.mass * a_c)
-    tau = []
+    own = ca.vertcat(trunk.mass * a_c, Ic @ alpha_b + ca.cross(omega_b, Ic @ omega_b) + ca.cross(c, trunk.mass * a_c))
+    legs = []
     for k, leg in enumerate(robot.legs):
         s = slice(3 * k, 3 * k + 3)
         lf = leg_newton_euler(leg, q_joints[s], v[6:][s], a[6:][s], omega_b, alpha_b, a0, f[s])
-        force += lf.f1
-        moment += lf.n1 + ca.cross(dm(leg.hip), lf.f1)
-        tau.append(lf.tau)
-    return ca.vertcat(force, moment, *tau)
+        legs.append((ca.vertcat(lf.f1, lf.n1 + ca.cross(dm(leg.hip), lf.f1)), lf.tau))
+    return own, legs
+
+
+def inverse_dynamics(robot: Robot, q_joints: ca.SX, g_b: ca.SX, v: ca.SX, a: ca.SX, f: ca.SX) -> ca.SX:
+    """(18,) = (base wrench residual, 12 joint torques). ``g_b`` gravity in the trunk frame
+    (0 to drop gravity), v (18,), a = vdot (18,) spatial for the body, f (12,) ground forces."""
+    own, legs = inverse_dynamics_parts(robot, q_joints, g_b, v, a, f)
+    force, moment = own[0:3], own[3:6]
+    for wrench, _ in legs:
+        force += wrench[0:3]
+        moment += wrench[3:6]
+    return ca.vertcat(force, moment, *(tau for _, tau in legs))
 
 
 def coriolis_matrix(robot: Robot, q_joints: ca.SX, v: ca.SX) -> ca.SX:

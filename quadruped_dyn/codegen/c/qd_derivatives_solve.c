@@ -6,7 +6,7 @@
  * them a derivative with respect to a quaternion entry (docs/derivatives.md).
  *
  * qd_dfd_full(q, v, tau_full) -> (da_dq, da_dv, da_dtau), a = M^-1 (tau_full - C - G):
- *   M and C + G from the generated qd_dfd_full_parts, M^-1 by M's tree structure (qd_d_tree_inverse: the legs'
+ *   M and C + G from qd_dfd_full_parts (qd_M_full and qd_nle_full of qd_<robot>.c), M^-1 by M's tree structure (qd_d_tree_inverse: the legs'
  *   3 x 3 blocks, then the trunk's Schur complement; no fill-in, ~2k multiply-adds), a = M^-1 (tau_full - C - G),
  *   then the generated qd_did_full at (q, v, a): da/dq = -M^-1 dtau/dq, da/dv = -M^-1 dtau/dv (sparse products),
  *   da/dtau = M^-1; da/dq's trunk-pose columns without the product (gravity is uniform: a = M^-1 (tau - C) + [g_b; 0],
@@ -40,6 +40,39 @@ typedef int (*qd_d_eval_fn)(const casadi_real**, casadi_real**, casadi_int*, cas
 #define QD_INLINE static inline
 #endif
 #endif
+
+/* defined in qd_<robot>.c of the same library (no work memory: checked by the generator) */
+int qd_M_full(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem);
+const casadi_int* qd_M_full_sparsity_out(casadi_int i);
+int qd_nle_full(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem);
+
+/* x: the nonzeros of a CasADi sparsity sp (nrow, ncol, colind[ncol + 1], row[nnz]) -> the dense matrix,
+ * column-major, in place (x holds nrow * ncol reals). Backwards: a nonzero's dense index is >= its own. */
+static inline void qd_d_densify(const casadi_int* sp, casadi_real* x) {
+  const casadi_int nrow = sp[0], ncol = sp[1], *colind = sp + 2, *row = sp + 3 + ncol;
+  casadi_int next = nrow * ncol; /* entries from here on are final */
+  for (casadi_int j = ncol - 1; j >= 0; --j) {
+    for (casadi_int k = colind[j + 1] - 1; k >= colind[j]; --k) {
+      casadi_int d = row[k] + nrow * j;
+      casadi_real value = x[k];
+      for (casadi_int i = d + 1; i < next; ++i) x[i] = 0;
+      x[d] = value;
+      next = d;
+    }
+  }
+  for (casadi_int i = 0; i < next; ++i) x[i] = 0;
+}
+
+/* qd_dfd_full_parts(q, v) -> (M (18 x 18, dense, column-major), nle = C + G (18)): qd_M_full (sparse, densified
+ * in place) and qd_nle_full, not a second generated copy of them. Either output may be NULL. */
+QD_INLINE int qd_dfd_full_parts_eval(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem) {
+  casadi_real* m_res[1] = {res[0]};
+  int flag = res[0] ? qd_M_full(arg, m_res, iw, w, mem) : 0;
+  if (!flag && res[0]) qd_d_densify(qd_M_full_sparsity_out(0), res[0]);
+  m_res[0] = res[1];
+  if (!flag && res[1]) flag = qd_nle_full(arg, m_res, iw, w, mem);
+  return flag;
+}
 
 /* Reals of the caller's w that qd_dfd_full and qd_dgrf_<feet> use for their temporaries (the generator states
  * them as the functions' _SZ_W, so the Cortex-M stack holds none of the 18 x 18 arrays). */
@@ -240,7 +273,7 @@ static void qd_d_trunk_product(int m, const casadi_real* P, const casadi_int* sp
 
 /* qd_dgrf_<feet>(q, v, a) -> (dlambda_dq, dlambda_dv, dlambda_da), m x 18 each, of the GRF solve's
  * lambda = P(q) w_req(q, v, a), linear in the required trunk wrench w_req (the rnea's trunk rows):
- *   w_req = M[0:6] a + nle[0:6] from the generated qd_dfd_full_parts; P column by column and d(P w)/dq one
+ *   w_req = M[0:6] a + nle[0:6] from qd_dfd_full_parts; P column by column and d(P w)/dq one
  *   joint direction at a time (the joints of the stance legs, bit i of legs for leg i; no other coordinate
  *   enters P) from the generated qd_dgrf_dir_<feet> (dir: q, w, dq -> P w, d(P w)/dq dq); d w_req/dx from the
  *   generated qd_did_full's trunk rows (sp_dq, sp_dv: its output patterns) and M:
