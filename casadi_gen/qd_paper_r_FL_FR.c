@@ -4883,14 +4883,22 @@ static int qd_dfd_r_lift(const casadi_real** arg, casadi_real** res, casadi_int*
 #endif
 typedef int (*qd_eval_fn)(const casadi_real**, casadi_real**, casadi_int*, casadi_real*, int);
 
-/* flag, or QD_NONFINITE if any of the n_out outputs (nnz[i] entries each) is not finite. */
+/* flag, or QD_NONFINITE if any of the n_out outputs (nnz[i] entries each) is not finite. x - x is 0 for a finite
+ * x and NaN for NaN or inf; four running sums of it (the compiler vectorises them) instead of isfinite per entry,
+ * which a strict C99 build calls as a library function: 169 entries ~30 ns instead of ~200. (Like isfinite, it
+ * needs IEEE arithmetic: not -ffast-math.) */
 static int qd_finite(int flag, casadi_real** res, int n_out, const casadi_int* nnz) {
   if (flag) return flag;
   for (int i = 0; i < n_out; ++i) {
     if (!res[i]) continue;
-    for (casadi_int j = 0; j < nnz[i]; ++j) {
-      if (!isfinite(res[i][j])) return QD_NONFINITE;
+    const casadi_real* x = res[i];
+    casadi_real a[4] = {0, 0, 0, 0};
+    casadi_int j = 0;
+    for (; j + 4 <= nnz[i]; j += 4) {
+      for (int k = 0; k < 4; ++k) a[k] += x[j + k] - x[j + k];
     }
+    for (; j < nnz[i]; ++j) a[0] += x[j] - x[j];
+    if (!(a[0] + a[1] + a[2] + a[3] == 0)) return QD_NONFINITE;
   }
   return 0;
 }
@@ -5008,11 +5016,12 @@ static void qd_project(int n, const casadi_real* S_b, const casadi_real* F, casa
 }
 
 /* tau (n) = S rnea(q, v, a) with the library's qd_id_full (zero foot forces; one copy per library, not one
- * Newton-Euler graph per stance set) at q = (0, quat, q_r's joint angles). */
+ * Newton-Euler graph per stance set) at q = (0, quat, q_r's joint angles); work: QD_RNEA_R_WORK reals (the
+ * caller's, so fd_r can lend it space it uses later: the Cortex-M stack budget). */
 static int qd_rnea_r(int n, const casadi_real* S_b, const casadi_real* q_r, const casadi_real* quat, const casadi_real* v,
-                     const casadi_real* a, casadi_real* tau, casadi_int* iw, casadi_real* w, int mem) {
-  const casadi_real f[12] = {0};
-  casadi_real q[19], F[18];
+                     const casadi_real* a, casadi_real* tau, casadi_real* work, casadi_int* iw, casadi_real* w, int mem) {
+  casadi_real *q = work, *F = q + 19, *f = F + 18; /* work: QD_RNEA_R_WORK reals */
+  for (int i = 0; i < 12; ++i) f[i] = 0;
   qd_full_q(q_r, quat, q);
   const casadi_real* i_arg[4] = {q, v, a, f};
   casadi_real* i_res[2] = {F, F + 6};
@@ -5020,6 +5029,7 @@ static int qd_rnea_r(int n, const casadi_real* S_b, const casadi_real* q_r, cons
   if (!flag) qd_project(n, S_b, F, tau);
   return flag;
 }
+#define QD_RNEA_R_WORK (19 + 18 + 12)
 
 /* The reduced terms (quadruped_dyn/dynamics/reduced_projection.py) at arg = (q_r, [qd_r, [qdd_r,]] quat) into
  * res[0] (n): which = 0 M_r (arg = q_r, quat; S M T, qd_M_r_legs), 1 C_r + G_r (arg = q_r, qd_r, quat;
@@ -5034,7 +5044,10 @@ QD_INLINE int qd_reduced_term(int n, int legs, int which, const casadi_real** ar
   int flag = qd_parts(arg[0], qd_r, which == 3 ? arg[2] : 0, quat, &m, S_b, T_b, v, a, iw, w, mem);
   if (!flag) flag = qd_regular_value(m);
   if (flag || !res[0]) return flag;
-  if (which == 1 || which == 3) return qd_rnea_r(n, S_b, arg[0], quat, v, a, res[0], iw, w, mem);
+  if (which == 1 || which == 3) {
+    casadi_real work[QD_RNEA_R_WORK];
+    return qd_rnea_r(n, S_b, arg[0], quat, v, a, res[0], work, iw, w, mem);
+  }
   casadi_real q[19], M[18 * 18];
   qd_full_q(arg[0], quat, q);
   const casadi_real* g_arg[1] = {q};
@@ -5127,17 +5140,17 @@ QD_INLINE int qd_fd_r_finish(int n, qd_eval_fn CG_r, const casadi_real** arg, ca
  * (n <= QD_N_MAX). Each generated file calls it once with constant n and legs, so the compiler specialises it. */
 QD_INLINE int qd_fd_r_solve(int n, int legs, const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w,
                             int mem) {
-  casadi_real m = 0, S_b[QD_N_MAX * 6], T_b[6 * QD_N_MAX], v[18], a[18], q[19], M[18 * 18], M_r[QD_N_MAX * QD_N_MAX],
-              b[QD_N_MAX];
+  casadi_real m = 0, S_b[QD_N_MAX * 6], T_b[6 * QD_N_MAX], M[18 * 18], M_r[QD_N_MAX * QD_N_MAX], b[QD_N_MAX];
+  casadi_real *v = M, *a = M + 18, *q = M_r; /* in space M and M_r take later: fd_r's stack stays within budget */
+  int piv[QD_N_MAX];
   int flag = qd_parts(arg[0], arg[1], 0, arg[3], &m, S_b, T_b, v, a, iw, w, mem);
   if (!flag) flag = qd_regular_value(m);
-  if (!flag) flag = qd_rnea_r(n, S_b, arg[0], arg[3], v, a, b, iw, w, mem);
+  if (!flag) flag = qd_rnea_r(n, S_b, arg[0], arg[3], v, a, b, M + 36, iw, w, mem);
   if (flag) return flag;
   qd_full_q(arg[0], arg[3], q);
   flag = qd_M_full_dense(q, M, iw, w, mem);
   if (flag) return flag;
   qd_M_r_legs(n, legs, S_b, T_b, M, M_r);
-  int piv[QD_N_MAX];
   flag = qd_fd_r_factor(n, arg[2], M_r, piv, b);
   if (flag) return flag;
   qd_lu_solve(n, M_r, piv, b);
