@@ -365,12 +365,12 @@ def _dense_tables_c(sp: ca.Sparsity) -> str:
 
 
 def _reduced_helpers_c(robot: Robot, stance: StanceSet, dfd_r: DfdRPieces, M_full: ca.Sparsity, precision: str) -> str:
-    """QD_REGULARITY_MIN, ``qd_regularity`` (the stance's regularity (q_r, quat) -> (regularity),
-    ``dynamics.reduced.regularity_function``), ``qd_M_r_factors`` ((q_r, quat) -> (S_b, T_b),
-    ``ReducedProjection.mass_matrix_factors`` without M_full, which the templates take from the library's
-    qd_M_full), ``qd_motion`` ((q_r, qd_r, qdd_r, quat) -> (v, a), ``ReducedProjection.velocity_and_acceleration``,
-    for the library's qd_id_full) and dfd_r's ``qd_dfd_r_lift`` (``emit_derivatives.dfd_r_pieces``), the
-    generated pieces the templates call."""
+    """QD_REGULARITY_MIN, M_full's pattern tables (``_dense_tables_c``), ``qd_regularity`` (the stance's regularity
+    (q_r, quat) -> (regularity), ``dynamics.reduced.regularity_function``; dfd_r checks it), ``qd_reduced_parts``
+    ((q_r, qd_r, qdd_r, quat) -> (regularity, S_b, T_b, v, a) in one graph: ``ReducedProjection.mass_matrix_factors``
+    without M_full, which the templates take from the library's qd_M_full, and ``velocity_and_acceleration`` for
+    the library's qd_id_full) and dfd_r's ``qd_dfd_r_lift`` (``emit_derivatives.dfd_r_pieces``), the generated
+    pieces the templates call."""
     n = 13 if len(stance.feet) == 2 else 12
     q_r, qd_r, qdd_r, quat = (ca.SX.sym(k, m) for k, m in (("q_r", n), ("qd_r", n), ("qdd_r", n), ("quat", 4)))
     p = reduced_projection(robot, stance, q_r, quat)

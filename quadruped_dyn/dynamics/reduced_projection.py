@@ -218,7 +218,7 @@ class ReducedProjection:
         S = ca.jacobian(self.project(x), x)  # project is linear in F: S exactly
         joint_rows = ca.DM.eye(self.n)[:, :12]
         if not (ca.is_equal(ca.simplify(S[:, 6:]), ca.SX(joint_rows)) and ca.is_equal(self.T[6:, :], ca.SX(joint_rows.T))):
-            raise AssertionError("S or T has a joint part other than the identity; qd_M_r_project assumes it")
+            raise AssertionError("S or T has a joint part other than the identity; qd_M_r_legs assumes it")
         swing = [3 * i + c for i in range(4) if i not in self.stance.feet for c in range(3)]
         if any(not (self.T[k, j].is_zero() and S[j, k].is_zero()) for k in range(6) for j in swing):
             raise AssertionError("T_b (S_b) has a nonzero entry in a swing leg's joint column (row); qd_M_r_legs skips those")

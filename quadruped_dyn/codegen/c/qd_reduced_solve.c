@@ -301,9 +301,9 @@ QD_INLINE int qd_fd_r_finish(int n, qd_eval_fn CG_r, const casadi_real** arg, ca
   return flag ? flag : qd_fd_r_factor(n, arg[2], M, piv, b);
 }
 
-/* qdd_r = M_r^-1 (tau_ext - (C_r + G_r)): arg = (q_r, qd_r, tau_ext, quat), res = (qdd_r). The factors S_b, T_b
- * and M once (qd_M_r_parts), M_r from them (qd_M_r_legs, legs as there), C_r + G_r by qd_rnea_r with the same
- * S_b, both checked in one pass (qd_fd_r_factor), then the LU solve; no heap, all temporaries on the stack
+/* qdd_r = M_r^-1 (tau_ext - (C_r + G_r)): arg = (q_r, qd_r, tau_ext, quat), res = (qdd_r). The stance's parts
+ * once (qd_parts: S_b, T_b, v, k), C_r + G_r by qd_rnea_r, M (qd_M_full_dense) and M_r (qd_M_r_legs, legs as there),
+ * both checked in one pass (qd_fd_r_factor), then the LU solve; no heap, all temporaries on the stack
  * (n <= QD_N_MAX). Each generated file calls it once with constant n and legs, so the compiler specialises it. */
 QD_INLINE int qd_fd_r_solve(int n, int legs, const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w,
                             int mem) {
