@@ -24,6 +24,9 @@
  *   id_r(q_r, qd_r, qdd_r, quat)    tau_r = M_r qdd_r + C_r + G_r (paper's GRF model);
  *   fd_r(q_r, qd_r, tau_ext, quat)  qdd_r = M_r^-1 (tau_ext - C_r - G_r) (paper eq. (5)), by LU
  *                                   with partial pivoting on the stack (no work memory needed).
+ * Each reduced file generates only the stance's pieces (regularity, S_b, T_b, the full v and a) and
+ * calls qd_M_full, qd_G_full and qd_id_full of qd_<robot>.c: M_r = S M_full T, CG_r = S rnea(q, v, k),
+ * G_r = S G_full, id_r = S rnea(q, v, T qdd_r + k) (link the reduced files with qd_<robot>.c).
  * Return codes: 0 ok; QD_NONFINITE (1) an output is NaN/inf: the trunk pitched +-90 deg (two feet:
  * the roll row has tan(pitch)), a zero quaternion or a non-finite input; QD_SINGULAR (2, fd_r only) M_r
  * singular to working precision (an LU pivot below QD_SINGULAR_RTOL max|M_r|, e.g. two feet, the trunk

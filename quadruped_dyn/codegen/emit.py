@@ -91,8 +91,10 @@ def reduced_symbol(name: str, stance: StanceSet) -> str:
 def reduced_functions(robot: Robot, stance: StanceSet) -> list[ca.Function]:
     """The generated reduced functions of one stance set (``reduced_projection``'s forms),
     named with the C prefix, then its derivatives (``emit_derivatives.reduced_derivative_functions``).
-    ``fd_r`` is a signature only (qdd_r = tau_ext): its generated body is replaced by the
-    hand-written solve of ``c/qd_reduced_solve.c`` (and dfd_r's by ``c/qd_reduced_derivatives.c``)."""
+    Their graphs give the C functions' signatures (and are tested against the references); the C bodies are the
+    hand-written templates of ``c/qd_reduced_solve.c`` over the generated pieces (``_reduced_helpers_c``) and the
+    library's qd_M_full, qd_G_full, qd_id_full. ``fd_r`` is a signature only (qdd_r = tau_ext), and dfd_r's body
+    is ``c/qd_reduced_derivatives.c``."""
     n = 13 if len(stance.feet) == 2 else 12
     q_r, qd_r, qdd_r = ca.SX.sym("q_r", n), ca.SX.sym("qd_r", n), ca.SX.sym("qdd_r", n)
     quat, tau_ext = ca.SX.sym("quat", 4), ca.SX.sym("tau_ext", n)
@@ -238,6 +240,9 @@ def header_doc(robot: Robot, functions: list[ca.Function], work: dict[str, tuple
         " *   id_r(q_r, qd_r, qdd_r, quat)    tau_r = M_r qdd_r + C_r + G_r (paper's GRF model);",
         " *   fd_r(q_r, qd_r, tau_ext, quat)  qdd_r = M_r^-1 (tau_ext - C_r - G_r) (paper eq. (5)), by LU",
         " *                                   with partial pivoting on the stack (no work memory needed).",
+        " * Each reduced file generates only the stance's pieces (regularity, S_b, T_b, the full v and a) and",
+        " * calls qd_M_full, qd_G_full and qd_id_full of qd_<robot>.c: M_r = S M_full T, CG_r = S rnea(q, v, k),",
+        " * G_r = S G_full, id_r = S rnea(q, v, T qdd_r + k) (link the reduced files with qd_<robot>.c).",
         " * Return codes: 0 ok; QD_NONFINITE (1) an output is NaN/inf: the trunk pitched +-90 deg (two feet:",
         " * the roll row has tan(pitch)), a zero quaternion or a non-finite input; QD_SINGULAR (2, fd_r only) M_r",
         " * singular to working precision (an LU pivot below QD_SINGULAR_RTOL max|M_r|, e.g. two feet, the trunk",
@@ -360,12 +365,12 @@ def _dense_tables_c(sp: ca.Sparsity) -> str:
 
 
 def _reduced_helpers_c(robot: Robot, stance: StanceSet, dfd_r: DfdRPieces, M_full: ca.Sparsity, precision: str) -> str:
-    """QD_REGULARITY_MIN, ``qd_regularity`` (the stance's regularity (q_r, quat) -> (regularity),
-    ``dynamics.reduced.regularity_function``), ``qd_M_r_factors`` ((q_r, quat) -> (S_b, T_b),
-    ``ReducedProjection.mass_matrix_factors`` without M_full, which the templates take from the library's
-    qd_M_full), ``qd_motion`` ((q_r, qd_r, qdd_r, quat) -> (v, a), ``ReducedProjection.velocity_and_acceleration``,
-    for the library's qd_id_full) and dfd_r's ``qd_dfd_r_lift`` (``emit_derivatives.dfd_r_pieces``), the
-    generated pieces the templates call."""
+    """QD_REGULARITY_MIN, M_full's pattern tables (``_dense_tables_c``), ``qd_regularity`` (the stance's regularity
+    (q_r, quat) -> (regularity), ``dynamics.reduced.regularity_function``; dfd_r checks it), ``qd_reduced_parts``
+    ((q_r, qd_r, qdd_r, quat) -> (regularity, S_b, T_b, v, a) in one graph: ``ReducedProjection.mass_matrix_factors``
+    without M_full, which the templates take from the library's qd_M_full, and ``velocity_and_acceleration`` for
+    the library's qd_id_full) and dfd_r's ``qd_dfd_r_lift`` (``emit_derivatives.dfd_r_pieces``), the generated
+    pieces the templates call."""
     n = 13 if len(stance.feet) == 2 else 12
     q_r, qd_r, qdd_r, quat = (ca.SX.sym(k, m) for k, m in (("q_r", n), ("qd_r", n), ("qdd_r", n), ("quat", 4)))
     p = reduced_projection(robot, stance, q_r, quat)
@@ -384,12 +389,11 @@ def _checked_reduced_c(c_text: str, casadi_header: str, functions: list[ca.Funct
                        dfd_r: DfdRPieces) -> tuple[str, str]:
     """Insert ``helpers_c`` (``_reduced_helpers_c``) and ``c/qd_reduced_solve.c`` and route the entry
     points through them: every function returns QD_DEGENERATE at a degenerate stance and
-    QD_NONFINITE for a non-finite output; M_r is the product of its factors (qd_M_r_project: CasADi's
-    unrolled M_r is dropped, ~50 kB per stance set, and M_r is faster); G_r is CG_r's evaluation at qd_r = 0
-    and id_r = S M T qdd_r + CG_r (qd_G_r_from_CG_r, qd_id_r_from_parts: their graphs dropped, ~60 kB per
-    stance set); fd_r evaluates M_r and CG_r
-    (checked once in the solve) and solves M_r qdd_r = tau_ext - CG_r; dfd_r by ``c/qd_reduced_derivatives.c``
-    over ``dfd_r``'s pieces, its caller work memory declared. Returns (C source, CasADi's header text)."""
+    QD_NONFINITE for a non-finite output; M_r, CG_r, G_r and id_r by ``qd_reduced_term`` over the generated
+    qd_reduced_parts and the library's qd_M_full, qd_G_full, qd_id_full (CasADi's unrolled graphs of the four
+    dropped: ~160 kB per stance set); fd_r by ``qd_fd_r_solve`` (the parts once for M_r and C_r + G_r, checked
+    once, then the LU); dfd_r by ``c/qd_reduced_derivatives.c`` over ``dfd_r``'s pieces, its caller work memory
+    declared. Returns (C source, CasADi's header text)."""
     first = c_text.index(f"\n/* {functions[0].name()}:")
     templates = "\n".join((TEMPLATES / t).read_text() for t in ("qd_reduced_solve.c", "qd_reduced_derivatives.c"))
     raw = evaluations(c_text, [f.name() for f in functions])  # entry point -> CasADi's evaluation function

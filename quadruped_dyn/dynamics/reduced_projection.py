@@ -18,7 +18,8 @@ shared (equal to ``reduced`` to round-off, tested):
 Hence, with rnea(q, v, a) the project's Newton-Euler with zero foot forces and gravity on,
     M_r = S M_full T,   C_r + G_r = S rnea(q, v, k),   G_r = S G_full = S rnea(q, 0, 0),   id_r = S rnea(q, v, T qdd_r + k),
 M_full and G_full by composite rigid bodies (``crba``); S and T are computed once and shared. The generated
-C forms M_r from S, T and M_full in loops (``mass_matrix_factors``), not unrolled.
+C evaluates only S_b, T_b (``mass_matrix_factors``) and v, a (``velocity_and_acceleration``) per stance set and
+takes M_full, G_full and rnea from the robot's full-coordinate C, the products in loops (docs/formulation.md §6.2).
 """
 
 from __future__ import annotations
@@ -217,7 +218,7 @@ class ReducedProjection:
         S = ca.jacobian(self.project(x), x)  # project is linear in F: S exactly
         joint_rows = ca.DM.eye(self.n)[:, :12]
         if not (ca.is_equal(ca.simplify(S[:, 6:]), ca.SX(joint_rows)) and ca.is_equal(self.T[6:, :], ca.SX(joint_rows.T))):
-            raise AssertionError("S or T has a joint part other than the identity; qd_M_r_project assumes it")
+            raise AssertionError("S or T has a joint part other than the identity; qd_M_r_legs assumes it")
         swing = [3 * i + c for i in range(4) if i not in self.stance.feet for c in range(3)]
         if any(not (self.T[k, j].is_zero() and S[j, k].is_zero()) for k in range(6) for j in swing):
             raise AssertionError("T_b (S_b) has a nonzero entry in a swing leg's joint column (row); qd_M_r_legs skips those")

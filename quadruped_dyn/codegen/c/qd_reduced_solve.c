@@ -1,8 +1,8 @@
 /* quadruped_dyn: checks and the forward-dynamics solve of the reduced model (hand-written,
  * inserted into each generated qd_<robot>_r_<stance>.c; see quadruped_dyn/codegen/emit.py).
- * Before it the generator writes QD_REGULARITY_MIN (quadruped_dyn.tolerances.REGULARITY_MIN) and
- * qd_regularity, the stance's regularity (q_r, quat) -> [0, 1] of
- * quadruped_dyn/dynamics/stance_regularity.py, the expression the Python model checks.
+ * Before it the generator writes QD_REGULARITY_MIN (quadruped_dyn.tolerances.REGULARITY_MIN), qd_M_full's
+ * pattern (QD_M_NNZ, qd_M_at, qd_M_zero), qd_regularity (the stance's regularity (q_r, quat) -> [0, 1] of
+ * quadruped_dyn/dynamics/stance_regularity.py) and qd_reduced_parts (the same regularity, S_b, T_b, v, a).
  *
  * Return codes of the reduced functions (qd_M_r_*, qd_CG_r_*, qd_G_r_*, qd_id_r_*, qd_fd_r_*):
  *   0              success
@@ -49,14 +49,20 @@
 #endif
 typedef int (*qd_eval_fn)(const casadi_real**, casadi_real**, casadi_int*, casadi_real*, int);
 
-/* flag, or QD_NONFINITE if any of the n_out outputs (nnz[i] entries each) is not finite. */
+/* flag, or QD_NONFINITE if any of the n_out outputs (nnz[i] entries each) is not finite: x - x is 0 for a finite x,
+ * else NaN; four sums of it, branch-free and vectorised (~8x faster than isfinite per entry). Not -ffast-math. */
 static int qd_finite(int flag, casadi_real** res, int n_out, const casadi_int* nnz) {
   if (flag) return flag;
   for (int i = 0; i < n_out; ++i) {
     if (!res[i]) continue;
-    for (casadi_int j = 0; j < nnz[i]; ++j) {
-      if (!isfinite(res[i][j])) return QD_NONFINITE;
+    const casadi_real* x = res[i];
+    casadi_real a[4] = {0, 0, 0, 0};
+    casadi_int j = 0;
+    for (; j + 4 <= nnz[i]; j += 4) {
+      for (int k = 0; k < 4; ++k) a[k] += x[j + k] - x[j + k];
     }
+    for (; j < nnz[i]; ++j) a[0] += x[j] - x[j];
+    if (!(a[0] + a[1] + a[2] + a[3] == 0)) return QD_NONFINITE;
   }
   return 0;
 }
@@ -76,11 +82,9 @@ static int qd_regular(const casadi_real** arg, int i_quat, casadi_int* iw, casad
   return flag ? flag : qd_regular_value(m);
 }
 
-/* The generated qd_reduced_parts at (q_r, qd_r, qdd_r, quat) (a null qd_r or qdd_r is zero), one graph: the
- * stance's regularity *m (as qd_regularity), S_b (n x 6) and T_b (6 x n), dense column-major, with M_r = S M T,
- * S = [S_b, I_12] (row 12, two feet: no joint part), T = [T_b; I_12] (column 12: no joint part)
- * (quadruped_dyn/dynamics/reduced_projection.py, mass_matrix_factors), and the full velocity and acceleration
- * v, a (18 each; a = T qdd_r + k without forming T: velocity_and_acceleration). A null output is skipped. */
+/* The generated qd_reduced_parts at (q_r, qd_r, qdd_r, quat) (null qd_r, qdd_r: zero): the regularity *m, S_b (n x 6),
+ * T_b (6 x n) (column-major; M_r = S M T, S = [S_b, I_12], T = [T_b; I_12], row/column 12 no joint part) and the
+ * full v, a = T qdd_r + k (reduced_projection.py). A null output is skipped. */
 static int qd_parts(const casadi_real* q_r, const casadi_real* qd_r, const casadi_real* qdd_r, const casadi_real* quat,
                     casadi_real* m, casadi_real* S_b, casadi_real* T_b, casadi_real* v, casadi_real* a, casadi_int* iw,
                     casadi_real* w, int mem) {
@@ -95,18 +99,15 @@ int qd_M_full(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi
 int qd_G_full(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem);
 int qd_id_full(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem);
 
-/* q (19) = (0, quat, the joint angles of q_r): the full configuration the library's functions take (the
- * trunk position enters none of them). */
+/* q (19) = (0, quat, q_r's joint angles): the library's functions ignore the trunk position. */
 static void qd_full_q(const casadi_real* q_r, const casadi_real* quat, casadi_real* q) {
   for (int i = 0; i < 3; ++i) q[i] = 0;
   for (int i = 0; i < 4; ++i) q[3 + i] = quat[i];
   for (int i = 0; i < 12; ++i) q[7 + i] = q_r[i];
 }
 
-/* M (18 x 18, dense column-major): the full inertia matrix at q (19) from the library's qd_M_full (one copy per
- * library, not one per stance set). qd_M_full writes its QD_M_NNZ nonzeros to the end of the array; each moves to
- * its dense slot qd_M_at[k] (the generator's table of qd_M_full's pattern), in order: that slot is at most
- * 324 - QD_M_NNZ + k, never a nonzero still to move; then the slots qd_M_zero get the zeros. */
+/* M (18 x 18, dense column-major) at q by the library's qd_M_full: its nonzeros, written at the array's end, move
+ * in order to their slots qd_M_at[k] <= 324 - QD_M_NNZ + k (never one still to move); then the zeros. */
 static int qd_M_full_dense(const casadi_real* q, casadi_real* M, casadi_int* iw, casadi_real* w, int mem) {
   casadi_real* x = M + 18 * 18 - QD_M_NNZ;
   const casadi_real* m_arg[1] = {q};
@@ -118,8 +119,7 @@ static int qd_M_full_dense(const casadi_real* q, casadi_real* M, casadi_int* iw,
   return 0;
 }
 
-/* (q_r, quat) -> (S_b (n x 6), T_b (6 x n), M (18 x 18, the full inertia matrix)), all dense column-major, from
- * qd_parts (the regularity not checked: the caller does) and qd_M_full_dense. A null res[i] skips that output. */
+/* (q_r, quat) -> (S_b, T_b, M (18 x 18)), dense column-major (regularity not checked); a null res[i] is skipped. */
 static int qd_M_r_parts(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem) {
   int flag = qd_parts(arg[0], 0, 0, arg[1], 0, res[0], res[1], 0, 0, iw, w, mem);
   if (flag || !res[2]) return flag;
@@ -128,13 +128,9 @@ static int qd_M_r_parts(const casadi_real** arg, casadi_real** res, casadi_int* 
   return qd_M_full_dense(q, res[2], iw, w, mem);
 }
 
-/* M_r = S M T (n x n, column-major, into M_r) from qd_M_r_parts' factors, column by column: mt = M T e_j
- * = M[:, 0:6] T_b e_j + M[:, 6 + j], then S mt = S_b mt[0:6] + mt[6:18]. legs: bit i set for a stance leg i;
- * T_b's columns of the other legs' joints are zero (their feet carry no constraint), so those columns skip the
- * trunk product (15: none skipped, any stance); S_b's rows of those joints are zero too, but the full-length
- * loop over them (vectorised) is faster than skipping them. The products in loops of constant length
- * (n is a constant at each call), not unrolled: ~1,300-2,200 multiply-adds in a few hundred bytes of code
- * instead of ~60 kB of straight-line C per stance set. */
+/* M_r = S M T (n x n, column-major) by columns: mt = M[:, 0:6] T_b e_j + M[:, 6 + j], then S_b mt[0:6] + mt[6:18].
+ * legs: bit i for a stance leg i; T_b's columns of the other legs' joints are zero, so they skip the trunk product
+ * (15: none skipped). (S_b's rows of those joints are zero too; skipping them was slower than the vectorised loop.) */
 QD_INLINE void qd_M_r_legs(int n, int legs, const casadi_real* S_b, const casadi_real* T_b, const casadi_real* M,
                            casadi_real* M_r) {
   for (int j = 0; j < n; ++j) {
@@ -173,12 +169,12 @@ static void qd_project(int n, const casadi_real* S_b, const casadi_real* F, casa
   }
 }
 
-/* tau (n) = S rnea(q, v, a) with the library's qd_id_full (zero foot forces; one copy per library, not one
- * Newton-Euler graph per stance set) at q = (0, quat, q_r's joint angles). */
+/* tau (n) = S rnea(q, v, a), rnea by the library's qd_id_full (zero foot forces); work: QD_RNEA_R_WORK reals,
+ * the caller's (fd_r lends space it uses later: Cortex-M stack budget). */
 static int qd_rnea_r(int n, const casadi_real* S_b, const casadi_real* q_r, const casadi_real* quat, const casadi_real* v,
-                     const casadi_real* a, casadi_real* tau, casadi_int* iw, casadi_real* w, int mem) {
-  const casadi_real f[12] = {0};
-  casadi_real q[19], F[18];
+                     const casadi_real* a, casadi_real* tau, casadi_real* work, casadi_int* iw, casadi_real* w, int mem) {
+  casadi_real *q = work, *F = q + 19, *f = F + 18;
+  for (int i = 0; i < 12; ++i) f[i] = 0;
   qd_full_q(q_r, quat, q);
   const casadi_real* i_arg[4] = {q, v, a, f};
   casadi_real* i_res[2] = {F, F + 6};
@@ -186,6 +182,7 @@ static int qd_rnea_r(int n, const casadi_real* S_b, const casadi_real* q_r, cons
   if (!flag) qd_project(n, S_b, F, tau);
   return flag;
 }
+#define QD_RNEA_R_WORK (19 + 18 + 12)
 
 /* The reduced terms (quadruped_dyn/dynamics/reduced_projection.py) at arg = (q_r, [qd_r, [qdd_r,]] quat) into
  * res[0] (n): which = 0 M_r (arg = q_r, quat; S M T, qd_M_r_legs), 1 C_r + G_r (arg = q_r, qd_r, quat;
@@ -200,7 +197,10 @@ QD_INLINE int qd_reduced_term(int n, int legs, int which, const casadi_real** ar
   int flag = qd_parts(arg[0], qd_r, which == 3 ? arg[2] : 0, quat, &m, S_b, T_b, v, a, iw, w, mem);
   if (!flag) flag = qd_regular_value(m);
   if (flag || !res[0]) return flag;
-  if (which == 1 || which == 3) return qd_rnea_r(n, S_b, arg[0], quat, v, a, res[0], iw, w, mem);
+  if (which == 1 || which == 3) {
+    casadi_real work[QD_RNEA_R_WORK];
+    return qd_rnea_r(n, S_b, arg[0], quat, v, a, res[0], work, iw, w, mem);
+  }
   casadi_real q[19], M[18 * 18];
   qd_full_q(arg[0], quat, q);
   const casadi_real* g_arg[1] = {q};
@@ -264,17 +264,18 @@ static void qd_lu_solve(int n, const casadi_real* LU, const int* piv, casadi_rea
 /* M (= M_r) factorised (qd_lu_factor) and b <- tau_ext - b (b holding C_r + G_r), both checked in one pass.
  * 0, QD_NONFINITE or QD_SINGULAR. */
 static int qd_fd_r_factor(int n, const casadi_real* tau_ext, casadi_real* M, int* piv, casadi_real* b) {
-  casadi_real scale = 0, sum = 0; /* a NaN or inf anywhere makes the sum non-finite */
-  for (int i = 0; i < n * n; ++i) {
-    scale = fabs(M[i]) > scale ? fabs(M[i]) : scale;
-    sum += M[i];
+  casadi_real top[4] = {0, 0, 0, 0}; /* max|M| in four lanes (the compiler vectorises them) */
+  casadi_real* res[2] = {M, b};
+  casadi_int nnz[2] = {n * n, n};
+  int i = 0;
+  for (; i + 4 <= n * n; i += 4) {
+    for (int k = 0; k < 4; ++k) top[k] = fabs(M[i + k]) > top[k] ? fabs(M[i + k]) : top[k];
   }
-  for (int i = 0; i < n; ++i) {
-    b[i] = tau_ext[i] - b[i];
-    sum += b[i];
-  }
-  if (!isfinite(sum)) return QD_NONFINITE;
-  return qd_lu_factor(n, M, piv, scale);
+  for (; i < n * n; ++i) top[0] = fabs(M[i]) > top[0] ? fabs(M[i]) : top[0];
+  for (i = 0; i < n; ++i) b[i] = tau_ext[i] - b[i];
+  if (qd_finite(0, res, 2, nnz)) return QD_NONFINITE;
+  casadi_real scale = top[0] > top[1] ? top[0] : top[1], scale2 = top[2] > top[3] ? top[2] : top[3];
+  return qd_lu_factor(n, M, piv, scale > scale2 ? scale : scale2);
 }
 
 /* M (= M_r, evaluated) factorised and b = tau_ext - (C_r + G_r) at arg = (q_r, qd_r, tau_ext, quat), C_r + G_r
@@ -287,23 +288,23 @@ QD_INLINE int qd_fd_r_finish(int n, qd_eval_fn CG_r, const casadi_real** arg, ca
   return flag ? flag : qd_fd_r_factor(n, arg[2], M, piv, b);
 }
 
-/* qdd_r = M_r^-1 (tau_ext - (C_r + G_r)): arg = (q_r, qd_r, tau_ext, quat), res = (qdd_r). The factors S_b, T_b
- * and M once (qd_M_r_parts), M_r from them (qd_M_r_legs, legs as there), C_r + G_r by qd_rnea_r with the same
- * S_b, both checked in one pass (qd_fd_r_factor), then the LU solve; no heap, all temporaries on the stack
+/* qdd_r = M_r^-1 (tau_ext - (C_r + G_r)): arg = (q_r, qd_r, tau_ext, quat), res = (qdd_r). The stance's parts
+ * once (qd_parts: S_b, T_b, v, k), C_r + G_r by qd_rnea_r, M (qd_M_full_dense) and M_r (qd_M_r_legs, legs as there),
+ * both checked in one pass (qd_fd_r_factor), then the LU solve; no heap, all temporaries on the stack
  * (n <= QD_N_MAX). Each generated file calls it once with constant n and legs, so the compiler specialises it. */
 QD_INLINE int qd_fd_r_solve(int n, int legs, const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w,
                             int mem) {
-  casadi_real m = 0, S_b[QD_N_MAX * 6], T_b[6 * QD_N_MAX], v[18], a[18], q[19], M[18 * 18], M_r[QD_N_MAX * QD_N_MAX],
-              b[QD_N_MAX];
+  casadi_real m = 0, S_b[QD_N_MAX * 6], T_b[6 * QD_N_MAX], M[18 * 18], M_r[QD_N_MAX * QD_N_MAX], b[QD_N_MAX];
+  casadi_real *v = M, *a = M + 18, *q = M_r; /* in space M and M_r take later: fd_r's stack stays within budget */
+  int piv[QD_N_MAX];
   int flag = qd_parts(arg[0], arg[1], 0, arg[3], &m, S_b, T_b, v, a, iw, w, mem);
   if (!flag) flag = qd_regular_value(m);
-  if (!flag) flag = qd_rnea_r(n, S_b, arg[0], arg[3], v, a, b, iw, w, mem);
+  if (!flag) flag = qd_rnea_r(n, S_b, arg[0], arg[3], v, a, b, M + 36, iw, w, mem);
   if (flag) return flag;
   qd_full_q(arg[0], arg[3], q);
   flag = qd_M_full_dense(q, M, iw, w, mem);
   if (flag) return flag;
   qd_M_r_legs(n, legs, S_b, T_b, M, M_r);
-  int piv[QD_N_MAX];
   flag = qd_fd_r_factor(n, arg[2], M_r, piv, b);
   if (flag) return flag;
   qd_lu_solve(n, M_r, piv, b);
