@@ -172,3 +172,26 @@ def test_output_paths_are_plain_names_under_out(tmp_path):
     if not os.access(tmp_path / "ro", os.W_OK):  # root writes anyway
         with pytest.raises(InputError, match="cannot write .*Permission denied"):
             write_text(tmp_path / "ro" / "x.txt", "x")
+
+
+@pytest.mark.parametrize(("args", "expected"), [
+    (["bench", "--peers", "none", "--calls", "2147483648"], r"--calls.*2147483648 is not in the range 1<=x<=10000000"),
+    (["bench", "--peers", "none", "--reps", "99999999999999999999"], r"--reps.*is not in the range 1<=x<=1000"),
+])
+def test_bench_counts_are_bounded_up_front(args, expected):
+    """The harnesses read the counts as a C int: 2^31 calls divided by zero, 2^63 gave negative times."""
+    _one_line(CliRunner().invoke(main, args), 2, expected)
+
+
+@pytest.mark.parametrize("calls", [0, 2**31, 10**20, 1.5, True])
+def test_run_bench_refuses_counts_outside_the_bounds(calls, paper):
+    from quadruped_dyn.bench.timing import run_bench
+    from quadruped_dyn.errors import InputError
+
+    with pytest.raises(InputError, match="calls is .*; expected an integer from 1 to 10,000,000"):
+        run_bench(paper, calls=calls)  # type: ignore[arg-type]
+
+
+@pytest.mark.parametrize("path", ["/dev/null", "/"])
+def test_a_path_that_is_not_a_file_says_so(path):
+    _one_line(CliRunner().invoke(main, ["info", path]), 2, rf"not a regular file: '{path}'; expected a URDF path")

@@ -31,6 +31,7 @@ import numpy as np
 
 from quadruped_dyn.bench import cppadcg
 from quadruped_dyn.bench.harnesses import HARNESSES
+from quadruped_dyn.bench.limits import check_counts
 from quadruped_dyn.bench.timing import arithmetic_operations
 from quadruped_dyn.codegen.casadi_source import silence_unused_parameters
 from quadruped_dyn.codegen.emit import CODEGEN_FUNCTIONS, PREFIX
@@ -153,6 +154,7 @@ def _harness(functions: list[ca.Function], flags: tuple[str, ...], cc: str) -> P
 def run_peers(robot: Robot, native: bool = False, calls: int = 20000, reps: int = 9,
               rounds: int = 3, cc: str = "gcc") -> list[PeerEntry]:
     """Time the toolkit's generated functions against adam's, same file, flags and harness."""
+    check_counts(calls, reps)
     parse_peers("adam")
     ours = {}
     for name in ADAM_PAIRS:

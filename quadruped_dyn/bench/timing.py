@@ -35,6 +35,7 @@ import pinocchio as pin
 
 from quadruped_dyn.bench import cppadcg
 from quadruped_dyn.bench.harnesses import HARNESSES, PINOCCHIO_CXX_FLAGS, pinocchio_program, require_headers
+from quadruped_dyn.bench.limits import check_counts
 from quadruped_dyn.checks.c_reference import generate_checked, reference_header_name
 from quadruped_dyn.codegen.emit import PREFIX, GeneratedFiles, codegen_functions, work_sizes
 from quadruped_dyn.codegen.library import C_FLAGS, CompiledFunction, CompiledLibrary, compile_sources, compiled_library, run_tool
@@ -158,7 +159,9 @@ def run_bench(robot: Robot, calls: int = 20000, reps: int = 9, rounds: int = 3, 
     also Pinocchio's CppADCodeGen code (cppadcg.py, checked against Pinocchio first). ``native``:
     the generated C and the peer built with -march=native (Pinocchio native stays the wheel's).
     ``checked_c``: ``generate_checked``'s files of ``robot`` (double), already written (the
-    report's own c/), timed as they are instead of generated again (``generation_s`` is then None)."""
+    report's own c/), timed as they are instead of generated again (``generation_s`` is then None).
+    InputError for counts outside ``limits.check_counts``' bounds, before anything is built."""
+    check_counts(calls, reps)
     flags = (*C_FLAGS, "-Dcasadi_real=double", *(("-march=native",) if native else ()))  # as library.compiled_library
     report = BenchReport(robot.name, native=native, c_flags=list(flags),
                          pinocchio_flags=list(PINOCCHIO_CXX_FLAGS))  # the wheel's algorithms, --native or not

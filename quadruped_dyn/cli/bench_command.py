@@ -6,6 +6,7 @@ import json
 
 import click
 
+from quadruped_dyn.bench.limits import MAX_CALLS, MAX_REPS
 from quadruped_dyn.cli.app import require_tools
 from quadruped_dyn.files.paths import writable_dir
 from quadruped_dyn.model.robot import load_robot
@@ -13,8 +14,8 @@ from quadruped_dyn.model.robot import load_robot
 
 @click.command()
 @click.option("--robot", "robots", multiple=True, default=["paper"], show_default=True, help="Robot (repeatable).")
-@click.option("--calls", default=20000, show_default=True, type=click.IntRange(min=1), help="Calls per timing run.")
-@click.option("--reps", default=9, show_default=True, type=click.IntRange(min=1), help="Timing runs (median).")
+@click.option("--calls", default=20000, show_default=True, type=click.IntRange(1, MAX_CALLS), help="Calls per timing run.")
+@click.option("--reps", default=9, show_default=True, type=click.IntRange(1, MAX_REPS), help="Timing runs (median).")
 @click.option("--json", "as_json", is_flag=True, help="Print JSON.")
 @click.option("--peers", default="auto", show_default=True,
               help="Other generated dynamics timed against the toolkit's, same run, same flags (comma-separated): "

@@ -16,10 +16,12 @@ import casadi as ca
 import numpy as np
 
 from quadruped_dyn.dynamics.kinematics import robot_feet, robot_kinematics
+from quadruped_dyn.errors import InputError
 from quadruped_dyn.experiment.gait import Plan, gait_posture
 from quadruped_dyn.experiment.ik import IK_POSITION_TOL, analytic_ik, gauss_newton, not_reached
 from quadruped_dyn.model.paper_robot import PaperRobotParams, dh_form
 from quadruped_dyn.model.robot import Robot
+from quadruped_dyn.model.state import check_array
 
 #: Newton steps after numeric IK has converged to IK_POSITION_TOL: each squares the relative
 #: error, so two take 1e-12 m to the FK's own round-off (~1e-17 m).
@@ -95,10 +97,16 @@ def reference(plan: Plan, t: float, q_guess: np.ndarray | None = None) -> Refere
 
 def references(plan: Plan, ts: np.ndarray, q_guess: np.ndarray | None = None) -> list[ReferenceSample]:
     """``reference`` at each time of ``ts`` (s), in one batch (numeric IK of every target from the
-    same ``q_guess``, default the gait's posture)."""
+    same ``q_guess``, default the gait's posture). InputError unless ``ts`` is a non-empty 1-D array of
+    finite times >= 0 and ``q_guess`` (12,) finite."""
+    ts = np.asarray(ts)
+    if ts.dtype.kind not in "biuf" or ts.ndim != 1 or not len(ts) or not np.all(np.isfinite(ts)) or not np.all(ts >= 0):
+        raise InputError(f"ts has shape {ts.shape} and dtype {ts.dtype}; expected a non-empty 1-D array of finite "
+                         "times >= 0 (s)")
+    ts = ts.astype(float)
     robot = plan.robot
     n = len(ts)
-    guess = np.tile(gait_posture(robot) if q_guess is None else q_guess, (n, 1))
+    guess = np.tile(gait_posture(robot) if q_guess is None else check_array("q_guess", q_guess, (12,)), (n, 1))
     r, rd, rdd = np.zeros((n, 4, 3)), np.zeros((n, 4, 3)), np.zeros((n, 4, 3))
     for k, t in enumerate(ts):
         p, pd, pdd = plan.trunk(float(t))

@@ -82,7 +82,8 @@ def robot_path(name_or_path: str | Path) -> Path:
         return path.resolve()
     path = Path(key)
     if not path.is_file():
-        raise InputError(f"no such file: '{printable(key)}'; expected a URDF path or one of: {', '.join(ROBOT_NAMES)}")
+        what = "not a regular file" if path.exists() else "no such file"
+        raise InputError(f"{what}: '{printable(key)}'; expected a URDF path or one of: {', '.join(ROBOT_NAMES)}")
     return path.resolve()
 
 

@@ -169,3 +169,15 @@ def test_closed_form_ik_is_chosen_by_the_leg_not_the_file(paper, tmp_path):
     assert not any(dh_form(leg) is not None for leg in load_robot("solo12").legs)
     a, b = reference(gait_plan(paper, WALK), 0.41), reference(gait_plan(robot, WALK), 0.41)
     np.testing.assert_array_equal(a.q_r, b.q_r)
+
+
+@pytest.mark.parametrize("ts", [[0.1, np.nan], [np.inf], [], [[0.1]], [-0.1], [0.1 + 1j], ["0.1"]])
+def test_references_refuse_times_that_are_not_times(ts):
+    """NaN, inf, negative, complex, empty or 2-D times: InputError naming ts, not a ValueError deep in the plan."""
+    with pytest.raises(InputError, match="ts has shape .*; expected a non-empty 1-D array of finite times >= 0"):
+        references(gait_plan(load_robot("solo12"), TROT), np.array(ts, dtype=object if ts == ["0.1"] else None))
+
+
+def test_references_refuse_a_non_finite_guess():
+    with pytest.raises(InputError, match="q_guess"):
+        references(gait_plan(load_robot("solo12"), TROT), np.array([0.1]), np.full(12, np.nan))
