@@ -195,3 +195,9 @@ def test_run_bench_refuses_counts_outside_the_bounds(calls, paper):
 @pytest.mark.parametrize("path", ["/dev/null", "/"])
 def test_a_path_that_is_not_a_file_says_so(path):
     _one_line(CliRunner().invoke(main, ["info", path]), 2, rf"not a regular file: '{path}'; expected a URDF path")
+
+
+def test_check_bounds_the_work_up_front():
+    """A billion random states (~years at ~15 states/s) is refused before the models are built."""
+    _one_line(CliRunner().invoke(main, ["check", "paper", "--samples", "1000000000"]), 2,
+              r"samples is 1000000000; expected an integer from 1 to 100,000")

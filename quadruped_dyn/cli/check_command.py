@@ -23,8 +23,10 @@ from quadruped_dyn.model.robot import load_robot
               help="The foot frame of each leg (comma-separated, leg order FL, FR, BL, BR) instead of the chosen ones.")
 def check(robot: str, samples: int, seed: int, as_json: bool, against: str | None, foot_frames: str | None) -> None:
     """Check every symbolic term of ROBOT against Pinocchio on random states (exit 1 on failure)."""
-    from quadruped_dyn.checks.terms import run_check
+    from quadruped_dyn.checks.terms import check_samples, run_check
     from quadruped_dyn.files.json import json_safe
+
+    check_samples(samples)
 
     libraries: tuple[str, ...] = ()
     if against is not None:
