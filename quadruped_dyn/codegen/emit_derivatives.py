@@ -40,6 +40,7 @@ import re
 from dataclasses import dataclass
 
 import casadi as ca
+import numpy as np
 
 from quadruped_dyn.codegen.casadi_source import PREFIX, TEMPLATES, casadi_c, drop_evaluation, entry_point, evaluations, work_sizes
 from quadruped_dyn.dynamics.derivatives import configuration_tangent, full_derivatives, quaternion_tangent
@@ -47,6 +48,7 @@ from quadruped_dyn.dynamics.grf import solve_lambda
 from quadruped_dyn.dynamics.kinematics import foot_position
 from quadruped_dyn.dynamics.newton_euler import full_dynamics
 from quadruped_dyn.dynamics.reduced_projection import reduced_projection, stance_forces
+from quadruped_dyn.math.rigid import skew
 from quadruped_dyn.model.robot import Robot
 from quadruped_dyn.model.stance import STANCE_SETS, StanceSet, stance_set
 from quadruped_dyn.model.state import NQ_FULL, NV_FULL
@@ -162,6 +164,8 @@ def derivative_functions(robot: Robot) -> list[ca.Function]:
     if (not all(trunk[i, j].is_constant() and float(trunk[i, j]) == (float(trunk[0, 0]) if i == j else 0.0)
                 for i in range(3) for j in range(3)) or dq.is_dense() or any(dq.colind()[j] != 0 for j in range(4))):
         raise AssertionError("M[0:3, 0:3] is not m I or dtau_dq has position entries; qd_dfd_full_solve assumes both")
+    if not _linear_velocity_columns_are_m_wx(did, q, v, a):
+        raise AssertionError("dtau_dv[:, 0:3] is not M[:, 0:3] [w_b]x; qd_dfd_full_solve writes da/dv_b = -[[w_b]x; 0]")
     if (fd.M_full_crba.name_in(), fd.nle_full.name_in()) != (["q"], ["q", "v"]):
         raise AssertionError("qd_dfd_full_parts calls qd_M_full(q) and qd_nle_full(q, v)")
     dense = ca.sum1(q) + ca.sum1(v)  # a placeholder depending on every input: the template's body computes
@@ -171,6 +175,21 @@ def derivative_functions(robot: Robot) -> list[ca.Function]:
     dfd = ca.Function(PREFIX + "dfd_full", [q, v, tau], [placeholder] * 3, ["q", "v", "tau_full"],
                       ["da_dq", "da_dv", "da_dtau"], opts)
     return [did, parts, dfd, *(f for st in GRF_DERIVATIVE_STANCE_SETS for f in grf_derivative_functions(robot, st))]
+
+
+def _linear_velocity_columns_are_m_wx(did: ca.Function, q: ca.SX, v: ca.SX, a: ca.SX) -> bool:
+    """did_full's v_b columns are M[:, 0:3] [w_b]x: linear in w_b alone, and equal to it exactly for w_b = e_k (a
+    product with 0 and +-1, no rounding) at a fixed configuration."""
+    dv_b = did.call([q, v, a])[1][:, 0:3]
+    if not ca.is_linear(dv_b, v[3:6]) or ca.depends_on(dv_b, ca.vertcat(v[0:3], v[6:], a)):
+        return False
+    q0 = np.r_[0.0, 0.0, 0.0, 0.1, -0.2, 0.3, 0.9, np.linspace(-0.7, 0.8, 12)]
+    for k in range(3):
+        w = np.eye(3)[k]
+        _, dv, M = (np.asarray(ca.densify(x)) for x in did(q0, np.r_[0.0, 0.0, 0.0, w, np.zeros(12)], np.zeros(NV_FULL)))
+        if not np.array_equal(dv[:, 0:3], M[:, 0:3] @ np.asarray(skew(w))):
+            return False
+    return True
 
 
 def declare_work(c_text: str, h_text: str, name: str, sz_w: int) -> tuple[str, str]:
