@@ -127,8 +127,8 @@ def dfd_r_pieces(robot: Robot, stance: StanceSet) -> DfdRPieces:
 def dfd_r_work_reals(n: int) -> int:
     """Reals of caller work memory qd_dfd_r_<feet> uses (``QD_DFD_R_W`` of c/qd_reduced_derivatives.c, which
     checks at compile time that the two agree): M_r's LU, qdd_r, S_b, T_b, M, d rnea/dq, d rnea/dv, F, one
-    full-coordinate column and one reduced column."""
-    return n * n + 14 * n + 3 * 18 * 18 + 36
+    full-coordinate column, one reduced column, and the 3 n + 3 right-hand sides of the one LU solve."""
+    return n * n + 14 * n + 3 * 18 * 18 + 36 + n * (3 * n + 3)
 
 
 def reduced_derivative_functions(robot: Robot, stance: StanceSet) -> list[ca.Function]:
