@@ -93,8 +93,8 @@ def grf_derivative_functions(robot: Robot, stance: StanceSet) -> list[ca.Functio
 class DfdRPieces:
     """What qd_dfd_r_<feet>'s template (``c/qd_reduced_derivatives.c``) calls and is told, for one stance set."""
 
-    #: dfd_r_lift (q_r, qd_r, qdd_r, quat, F_b, dq_r, dtheta, dqd_r) -> (v_b, a_b, dv_b, da_b (6 each), dSF (n),
-    #: da_qd (6)): the lift, its derivative along (dq_r, dtheta), d(S_b F_b) along dq_r, d a_b along dqd_r
+    #: dfd_r_lift (q_r, qd_r, qdd_r, quat, F_b, dq_r, dtheta, dqd_r, sin q_r, cos q_r) -> (v_b, a_b, dv_b, da_b (6 each),
+    #: dSF (n), da_qd (6)): the lift, its derivative along (dq_r, dtheta), d(S_b F_b) along dq_r, d a_b along dqd_r
     lift: ca.Function
     legs: int  # bit i set: leg i is a stance leg (the lift and S depend on its joints, not on the others')
     lift_reads_quat: bool  # two feet: the roll row makes v_b, a_b depend on the trunk orientation
@@ -121,7 +121,38 @@ def dfd_r_pieces(robot: Robot, stance: StanceSet) -> DfdRPieces:
     lift = ca.Function("dfd_r_lift", [q_r, qd_r, qdd_r, quat, F_b, dq_r, dtheta, dqd_r],
                        [v[:6], a[:6], lifted[:6], lifted[6:], ca.jtimes(SF, q_r, dq_r), ca.jtimes(a[:6], qd_r, dqd_r)],
                        {"cse": True})
-    return DfdRPieces(lift, sum(1 << i for i in stance.feet), bool(ca.depends_on(trunk, quat)))
+    return DfdRPieces(trig_as_inputs(lift, 0), sum(1 << i for i in stance.feet), bool(ca.depends_on(trunk, quat)))
+
+
+def trig_as_inputs(f: ca.Function, i_q: int) -> ca.Function:
+    """``f`` with two more inputs, s and c (the sines and cosines of input ``i_q``'s entries), that its sin and cos
+    of those entries read instead: a caller calling it many times at the same angles (dfd_r's lift, 7-13 times) takes
+    them once. The same operations otherwise, rebuilt instruction by instruction from f's algorithm."""
+    ins = [ca.SX.sym(f.name_in(i), f.sparsity_in(i)) for i in range(f.n_in())]
+    sin, cos = (ca.SX.sym(x, f.nnz_in(i_q)) for x in ("sin", "cos"))
+    outs = [ca.SX(f.sparsity_out(i)) for i in range(f.n_out())]
+    work: dict[int, ca.SX] = {}
+    angle: dict[int, int] = {}  # work slot -> entry of input i_q it holds
+    for k in range(f.n_instructions()):
+        op, a, r = f.instruction_id(k), f.instruction_input(k), f.instruction_output(k)
+        if op == ca.OP_OUTPUT:
+            outs[r[0]].nz[r[1]] = work[a[0]]
+            continue
+        read = angle.get(a[0]) if op in (ca.OP_SIN, ca.OP_COS) else None
+        angle.pop(r[0], None)  # the slot is overwritten (CasADi reuses them, in place too)
+        if op == ca.OP_INPUT:
+            work[r[0]] = ins[a[0]].nz[a[1]]
+            if a[0] == i_q:
+                angle[r[0]] = a[1]
+        elif op == ca.OP_CONST:
+            work[r[0]] = ca.SX(f.instruction_constant(k))
+        elif read is not None:
+            work[r[0]] = (sin if op == ca.OP_SIN else cos)[read]
+        elif len(a) == 1:
+            work[r[0]] = ca.SX.unary(op, work[a[0]])
+        else:
+            work[r[0]] = ca.SX.binary(op, work[a[0]], work[a[1]])
+    return ca.Function(f.name(), [*ins, sin, cos], outs, [*f.name_in(), "sin", "cos"], f.name_out(), {"cse": True})
 
 
 def dfd_r_work_reals(n: int) -> int:

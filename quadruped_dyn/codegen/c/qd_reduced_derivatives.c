@@ -11,7 +11,7 @@
  * with dF/dq, dF/dv from qd_did_full and F from qd_id_full (qd_<robot>_d.c, qd_<robot>.c: same library),
  * S_b, T_b and M from qd_M_r_parts. Only the trunk rows v_b, a_b ("the lift") depend on x other than by
  * identity: their derivative along a joint angle or theta is the generated qd_dfd_r_lift (one forward-mode
- * direction per call, only for the stance legs' joints and, for two feet, theta); along qd_r, dv_b = T_b and
+ * direction per call, the angles' sines and cosines taken once and passed in, only for the stance legs' joints and, for two feet, theta); along qd_r, dv_b = T_b and
  * da_b from qd_dfd_r_parts, which also gives d(S_b F_b)/dq_r. The products in loops.
  * The trunk orientation is the separate input quat: dqdd_dq is the partial derivative at fixed quat (its
  * 13th column, the roll, is zero: the functions read the roll from quat), dqdd_dtheta (n x 3) the
@@ -117,7 +117,7 @@ QD_INLINE int qd_dfd_r_solve(int n, int legs, int lift_quat, qd_eval_fn CG_r, co
               *H = G + 18 * 18, *F = H + 18 * 18, *y = F + 18, *col = y + 18, *X = col + n;
   const int m = QD_DFD_R_COLUMNS(n);
   casadi_real q[19] = {0}, v[18], a[18], f[12] = {0}, dv[6], da[6], dSF[QD_N_MAX], da_qd[6];
-  casadi_real dq[QD_N_MAX] = {0}, dqd[QD_N_MAX] = {0}, dtheta[3] = {0};
+  casadi_real dq[QD_N_MAX] = {0}, dqd[QD_N_MAX] = {0}, dtheta[3] = {0}, sin_q[QD_N_MAX], cos_q[QD_N_MAX];
   int piv[QD_N_MAX];
   const casadi_real* m_arg[2] = {arg[0], arg[3]};
   casadi_real* m_res[3] = {S_b, T_b, M};
@@ -130,7 +130,11 @@ QD_INLINE int qd_dfd_r_solve(int n, int legs, int lift_quat, qd_eval_fn CG_r, co
   qd_lu_solve(n, M_r, piv, qdd);
   /* the lift at qdd_r (its directions unused yet: F zero), then F, dF/dq, dF/dv at (q, v, a) */
   for (int i = 0; i < 18; ++i) F[i] = 0;
-  const casadi_real* l_arg[8] = {arg[0], arg[1], qdd, arg[3], F, dq, dtheta, dqd};
+  for (int i = 0; i < n; ++i) { /* the lift reads the angles' sines and cosines: taken once for its 7-13 calls */
+    sin_q[i] = sin(arg[0][i]);
+    cos_q[i] = cos(arg[0][i]);
+  }
+  const casadi_real* l_arg[10] = {arg[0], arg[1], qdd, arg[3], F, dq, dtheta, dqd, sin_q, cos_q};
   casadi_real* l_res[6] = {v, a, 0, 0, 0, 0};
   flag = qd_dfd_r_lift(l_arg, l_res, iw, w, mem);
   if (flag) return flag;
