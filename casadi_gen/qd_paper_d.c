@@ -201,7 +201,9 @@ CASADI_SYMBOL_EXPORT const casadi_int* qd_did_full_sparsity_out(casadi_int i);
  *   3 x 3 blocks, then the trunk's Schur complement; no fill-in, ~2k multiply-adds), a = M^-1 (tau_full - C - G),
  *   then the generated qd_did_full at (q, v, a): da/dq = -M^-1 dtau/dq, da/dv = -M^-1 dtau/dv (sparse products),
  *   da/dtau = M^-1; da/dq's trunk-pose columns without the product (gravity is uniform: a = M^-1 (tau - C) + [g_b; 0],
- *   so they are 0 for the position and [[g_b]x; 0] for the rotation, read from dtau/dq's rotation rows -m [g_b]x). Temporaries in the caller's w (QD_DFD_FULL_SZ_W reals, the function's _SZ_W).
+ *   so they are 0 for the position and [[g_b]x; 0] for the rotation, read from dtau/dq's rotation rows -m [g_b]x), and
+ *   da/dv's linear-velocity columns -[[w_b]x; 0] likewise (v_b enters only through the trunk's classical acceleration
+ *   a_lin + w_b x v_b, so dtau/dv_b = M[:, 0:3] [w_b]x; the generator checks did_full's columns are that). Temporaries in the caller's w (QD_DFD_FULL_SZ_W reals, the function's _SZ_W).
  * Return codes: 0 ok; QD_NONFINITE (1) an input or output is NaN/inf (or a zero quaternion);
  * QD_SINGULAR (2) a pivot of M's Cholesky factorisation with the legs ordered first is below QD_SINGULAR_RTOL *
  * max diag(M) (M not positive definite to working precision: not a physical robot); the outputs are not
@@ -435,7 +437,14 @@ QD_INLINE int qd_dfd_full_solve(qd_d_eval_fn parts, qd_d_eval_fn did, const casa
     }
     qd_d_neg_product(Minv, sp_dq, Dq, 6, res[0]);
   }
-  if (res[1]) qd_d_neg_product(Minv, sp_dv, Dv, 0, res[1]);
+  if (res[1]) { /* the trunk's linear-velocity columns without the product: dtau/dv_b = M[:, 0:3] [w_b]x, so -[[w_b]x; 0] */
+    const casadi_real* w_b = arg[1] + 3;
+    for (int i = 0; i < 3 * QD_NV; ++i) res[1][i] = 0;
+    res[1][1] = -w_b[2], res[1][2] = w_b[1];
+    res[1][QD_NV] = w_b[2], res[1][QD_NV + 2] = -w_b[0];
+    res[1][2 * QD_NV] = -w_b[1], res[1][2 * QD_NV + 1] = w_b[0];
+    qd_d_neg_product(Minv, sp_dv, Dv, 3, res[1]);
+  }
   if (res[2]) {
     for (int i = 0; i < QD_NV * QD_NV; ++i) res[2][i] = Minv[i];
   }

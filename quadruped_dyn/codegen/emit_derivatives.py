@@ -40,6 +40,7 @@ import re
 from dataclasses import dataclass
 
 import casadi as ca
+import numpy as np
 
 from quadruped_dyn.codegen.casadi_source import PREFIX, TEMPLATES, casadi_c, drop_evaluation, entry_point, evaluations, work_sizes
 from quadruped_dyn.dynamics.derivatives import configuration_tangent, full_derivatives, quaternion_tangent
@@ -47,6 +48,7 @@ from quadruped_dyn.dynamics.grf import solve_lambda
 from quadruped_dyn.dynamics.kinematics import foot_position
 from quadruped_dyn.dynamics.newton_euler import full_dynamics
 from quadruped_dyn.dynamics.reduced_projection import reduced_projection, stance_forces
+from quadruped_dyn.math.rigid import skew
 from quadruped_dyn.model.robot import Robot
 from quadruped_dyn.model.stance import STANCE_SETS, StanceSet, stance_set
 from quadruped_dyn.model.state import NQ_FULL, NV_FULL
@@ -91,8 +93,8 @@ def grf_derivative_functions(robot: Robot, stance: StanceSet) -> list[ca.Functio
 class DfdRPieces:
     """What qd_dfd_r_<feet>'s template (``c/qd_reduced_derivatives.c``) calls and is told, for one stance set."""
 
-    #: dfd_r_lift (q_r, qd_r, qdd_r, quat, F_b, dq_r, dtheta, dqd_r) -> (v_b, a_b, dv_b, da_b (6 each), dSF (n),
-    #: da_qd (6)): the lift, its derivative along (dq_r, dtheta), d(S_b F_b) along dq_r, d a_b along dqd_r
+    #: dfd_r_lift (q_r, qd_r, qdd_r, quat, F_b, dq_r, dtheta, dqd_r, sin q_r, cos q_r) -> (v_b, a_b, dv_b, da_b (6 each),
+    #: dSF (n), da_qd (6)): the lift, its derivative along (dq_r, dtheta), d(S_b F_b) along dq_r, d a_b along dqd_r
     lift: ca.Function
     legs: int  # bit i set: leg i is a stance leg (the lift and S depend on its joints, not on the others')
     lift_reads_quat: bool  # two feet: the roll row makes v_b, a_b depend on the trunk orientation
@@ -119,14 +121,45 @@ def dfd_r_pieces(robot: Robot, stance: StanceSet) -> DfdRPieces:
     lift = ca.Function("dfd_r_lift", [q_r, qd_r, qdd_r, quat, F_b, dq_r, dtheta, dqd_r],
                        [v[:6], a[:6], lifted[:6], lifted[6:], ca.jtimes(SF, q_r, dq_r), ca.jtimes(a[:6], qd_r, dqd_r)],
                        {"cse": True})
-    return DfdRPieces(lift, sum(1 << i for i in stance.feet), bool(ca.depends_on(trunk, quat)))
+    return DfdRPieces(trig_as_inputs(lift, 0), sum(1 << i for i in stance.feet), bool(ca.depends_on(trunk, quat)))
+
+
+def trig_as_inputs(f: ca.Function, i_q: int) -> ca.Function:
+    """``f`` with two more inputs, s and c (the sines and cosines of input ``i_q``'s entries), that its sin and cos
+    of those entries read instead: a caller calling it many times at the same angles (dfd_r's lift, 7-13 times) takes
+    them once. The same operations otherwise, rebuilt instruction by instruction from f's algorithm."""
+    ins = [ca.SX.sym(f.name_in(i), f.sparsity_in(i)) for i in range(f.n_in())]
+    sin, cos = (ca.SX.sym(x, f.nnz_in(i_q)) for x in ("sin", "cos"))
+    outs = [ca.SX(f.sparsity_out(i)) for i in range(f.n_out())]
+    work: dict[int, ca.SX] = {}
+    angle: dict[int, int] = {}  # work slot -> entry of input i_q it holds
+    for k in range(f.n_instructions()):
+        op, a, r = f.instruction_id(k), f.instruction_input(k), f.instruction_output(k)
+        if op == ca.OP_OUTPUT:
+            outs[r[0]].nz[r[1]] = work[a[0]]
+            continue
+        read = angle.get(a[0]) if op in (ca.OP_SIN, ca.OP_COS) else None
+        angle.pop(r[0], None)  # the slot is overwritten (CasADi reuses them, in place too)
+        if op == ca.OP_INPUT:
+            work[r[0]] = ins[a[0]].nz[a[1]]
+            if a[0] == i_q:
+                angle[r[0]] = a[1]
+        elif op == ca.OP_CONST:
+            work[r[0]] = ca.SX(f.instruction_constant(k))
+        elif read is not None:
+            work[r[0]] = (sin if op == ca.OP_SIN else cos)[read]
+        elif len(a) == 1:
+            work[r[0]] = ca.SX.unary(op, work[a[0]])
+        else:
+            work[r[0]] = ca.SX.binary(op, work[a[0]], work[a[1]])
+    return ca.Function(f.name(), [*ins, sin, cos], outs, [*f.name_in(), "sin", "cos"], f.name_out(), {"cse": True})
 
 
 def dfd_r_work_reals(n: int) -> int:
     """Reals of caller work memory qd_dfd_r_<feet> uses (``QD_DFD_R_W`` of c/qd_reduced_derivatives.c, which
     checks at compile time that the two agree): M_r's LU, qdd_r, S_b, T_b, M, d rnea/dq, d rnea/dv, F, one
-    full-coordinate column and one reduced column."""
-    return n * n + 14 * n + 3 * 18 * 18 + 36
+    full-coordinate column, one reduced column, and the 3 n + 3 right-hand sides of the one LU solve."""
+    return n * n + 14 * n + 3 * 18 * 18 + 36 + n * (3 * n + 3)
 
 
 def reduced_derivative_functions(robot: Robot, stance: StanceSet) -> list[ca.Function]:
@@ -162,6 +195,8 @@ def derivative_functions(robot: Robot) -> list[ca.Function]:
     if (not all(trunk[i, j].is_constant() and float(trunk[i, j]) == (float(trunk[0, 0]) if i == j else 0.0)
                 for i in range(3) for j in range(3)) or dq.is_dense() or any(dq.colind()[j] != 0 for j in range(4))):
         raise AssertionError("M[0:3, 0:3] is not m I or dtau_dq has position entries; qd_dfd_full_solve assumes both")
+    if not _linear_velocity_columns_are_m_wx(did, q, v, a):
+        raise AssertionError("dtau_dv[:, 0:3] is not M[:, 0:3] [w_b]x; qd_dfd_full_solve writes da/dv_b = -[[w_b]x; 0]")
     if (fd.M_full_crba.name_in(), fd.nle_full.name_in()) != (["q"], ["q", "v"]):
         raise AssertionError("qd_dfd_full_parts calls qd_M_full(q) and qd_nle_full(q, v)")
     dense = ca.sum1(q) + ca.sum1(v)  # a placeholder depending on every input: the template's body computes
@@ -171,6 +206,21 @@ def derivative_functions(robot: Robot) -> list[ca.Function]:
     dfd = ca.Function(PREFIX + "dfd_full", [q, v, tau], [placeholder] * 3, ["q", "v", "tau_full"],
                       ["da_dq", "da_dv", "da_dtau"], opts)
     return [did, parts, dfd, *(f for st in GRF_DERIVATIVE_STANCE_SETS for f in grf_derivative_functions(robot, st))]
+
+
+def _linear_velocity_columns_are_m_wx(did: ca.Function, q: ca.SX, v: ca.SX, a: ca.SX) -> bool:
+    """did_full's v_b columns are M[:, 0:3] [w_b]x: linear in w_b alone, and equal to it exactly for w_b = e_k (a
+    product with 0 and +-1, no rounding) at a fixed configuration."""
+    dv_b = did.call([q, v, a])[1][:, 0:3]
+    if not ca.is_linear(dv_b, v[3:6]) or ca.depends_on(dv_b, ca.vertcat(v[0:3], v[6:], a)):
+        return False
+    q0 = np.r_[0.0, 0.0, 0.0, 0.1, -0.2, 0.3, 0.9, np.linspace(-0.7, 0.8, 12)]
+    for k in range(3):
+        w = np.eye(3)[k]
+        _, dv, M = (np.asarray(ca.densify(x)) for x in did(q0, np.r_[0.0, 0.0, 0.0, w, np.zeros(12)], np.zeros(NV_FULL)))
+        if not np.array_equal(dv[:, 0:3], M[:, 0:3] @ np.asarray(skew(w))):
+            return False
+    return True
 
 
 def declare_work(c_text: str, h_text: str, name: str, sz_w: int) -> tuple[str, str]:

@@ -121,12 +121,12 @@ def rnea_tangent_derivatives(robot: Robot, q: ca.SX, v: ca.SX, a: ca.SX) -> tupl
     holds (docs/derivatives.md, "How did_full is formed"):
 
     * the trunk's linear velocity v_b and gravity g_b enter only through the trunk's classical linear
-      acceleration a_cl = a_lin + w_b x v_b - g_b, whose coefficient is M[:, 0:3]: d tau/d v_b = M[:, 0:3] [w_b]x,
-      the rotation columns -M[:, 0:3] [g_b]x, and d tau/d w_b is the recursion's Jacobian J_w at fixed a_cl
-      minus M[:, 0:3] [v_b]x;
+      acceleration a_cl = a_lin + w_b x v_b - g_b, whose coefficient is ``M[:, 0:3]``: ``d tau/d v_b = M[:, 0:3] [w_b]x``,
+      the rotation columns ``-M[:, 0:3] [g_b]x``, and d tau/d w_b is the recursion's Jacobian J_w at fixed a_cl
+      minus ``M[:, 0:3] [v_b]x``;
     * a leg's first joint (axis a_1 through the hip p, fixed in the trunk; spatial axis S = (p x a_1, a_1)) moves
       the leg's velocity like a trunk rotation: with the leg's J_w (its torques and its wrench on the trunk) and
-      K its acceleration coefficient (M[leg rows, 0:6]; the leg's composite inertia for the wrench),
+      K its acceleration coefficient (``M[leg rows, 0:6]``; the leg's composite inertia for the wrench),
       d/d qd_1 = J_w a_1 + K (2 w_b x (p x a_1), w_b x a_1), and with u = (0, w_b) x S and A_b = (a_cl, alpha),
       d/d q_1 = J_w u_ang + K ((w_b x u_lin, 0) - S x A_b) (+ S x* the leg's wrench, for the trunk rows);
     * the other joints by the recursion's Jacobian of their leg only.

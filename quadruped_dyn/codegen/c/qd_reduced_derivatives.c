@@ -11,7 +11,7 @@
  * with dF/dq, dF/dv from qd_did_full and F from qd_id_full (qd_<robot>_d.c, qd_<robot>.c: same library),
  * S_b, T_b and M from qd_M_r_parts. Only the trunk rows v_b, a_b ("the lift") depend on x other than by
  * identity: their derivative along a joint angle or theta is the generated qd_dfd_r_lift (one forward-mode
- * direction per call, only for the stance legs' joints and, for two feet, theta); along qd_r, dv_b = T_b and
+ * direction per call, the angles' sines and cosines taken once and passed in, only for the stance legs' joints and, for two feet, theta); along qd_r, dv_b = T_b and
  * da_b from qd_dfd_r_parts, which also gives d(S_b F_b)/dq_r. The products in loops.
  * The trunk orientation is the separate input quat: dqdd_dq is the partial derivative at fixed quat (its
  * 13th column, the roll, is zero: the functions read the roll from quat), dqdd_dtheta (n x 3) the
@@ -26,7 +26,9 @@ const casadi_int* qd_did_full_sparsity_out(casadi_int i);
 int qd_id_full(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem);
 
 /* Reals of w qd_dfd_r_solve uses for n coordinates (the generator states the same number, checked below). */
-#define QD_DFD_R_W(n) ((n) * (n) + 14 * (n) + 3 * 18 * 18 + 36)
+#define QD_DFD_R_W(n) ((n) * (n) + 14 * (n) + 3 * 18 * 18 + 36 + (n) * QD_DFD_R_COLUMNS(n))
+/* right-hand sides of the one LU solve: the n angle and n rate columns, 3 rotations, and the n of M_r^-1 */
+#define QD_DFD_R_COLUMNS(n) (3 * (n) + 3)
 
 /* x: the nonzeros of a CasADi sparsity sp (nrow, ncol, colind[ncol + 1], row[nnz]) -> the dense matrix,
  * column-major, in place (x holds nrow * ncol reals). Backwards: a nonzero's dense index is >= its own. */
@@ -62,10 +64,49 @@ static void qd_dfd_r_through_trunk(const casadi_real* H, const casadi_real* M, c
   }
 }
 
-/* the column j of output k (n x ncol, column-major), if that output is wanted */
-static void qd_dfd_r_store(int n, casadi_real** res, int k, int j, const casadi_real* col) {
+/* X (n rows of m right-hand sides, row-major) <- M^-1 X with the factors of qd_lu_factor: qd_lu_solve's operations
+ * in its order for each column (the same results), across the m columns at once, so the inner loops vectorise
+ * (a triangular solve per column is a serial chain of n^2 / 2 dependent steps). */
+static void qd_dfd_r_lu_solve_rows(int n, const casadi_real* restrict LU, const int* piv, casadi_real* restrict X, int m) {
+  for (int k = 0; k < n; ++k) {
+    casadi_real *a = X + m * k, *b = X + m * piv[k];
+    for (int c = 0; c < m && b != a; ++c) {
+      casadi_real t = a[c];
+      a[c] = b[c];
+      b[c] = t;
+    }
+  }
+  for (int k = 0; k < n; ++k) {
+    const casadi_real* xk = X + m * k;
+    for (int i = k + 1; i < n; ++i) {
+      const casadi_real l = LU[i + n * k];
+      casadi_real* xi = X + m * i;
+      for (int c = 0; c < m; ++c) xi[c] -= l * xk[c];
+    }
+  }
+  for (int j = n - 1; j >= 0; --j) { /* U x = y */
+    casadi_real* xj = X + m * j;
+    const casadi_real d = LU[j + n * j];
+    for (int c = 0; c < m; ++c) xj[c] /= d;
+    for (int i = 0; i < j; ++i) {
+      const casadi_real u = LU[i + n * j];
+      casadi_real* xi = X + m * i;
+      for (int c = 0; c < m; ++c) xi[c] -= u * xj[c];
+    }
+  }
+}
+
+/* column c of X (n x m, row-major) = col */
+static void qd_dfd_r_put(int n, int m, casadi_real* X, int c, const casadi_real* col) {
+  for (int i = 0; i < n; ++i) X[m * i + c] = col[i];
+}
+
+/* output k (n x ncol, column-major), if wanted, = columns first .. first + ncol of X (n x m, row-major) */
+static void qd_dfd_r_store(int n, int m, casadi_real** res, int k, const casadi_real* X, int first, int ncol) {
   if (!res[k]) return;
-  for (int i = 0; i < n; ++i) res[k][i + n * j] = col[i];
+  for (int j = 0; j < ncol; ++j) {
+    for (int i = 0; i < n; ++i) res[k][i + n * j] = X[m * i + first + j];
+  }
 }
 
 /* n coordinates; legs: bit i set for a stance leg i (the lift and S depend on its joints only);
@@ -73,9 +114,10 @@ static void qd_dfd_r_store(int n, casadi_real** res, int k, int j, const casadi_
 QD_INLINE int qd_dfd_r_solve(int n, int legs, int lift_quat, qd_eval_fn CG_r, const casadi_real** arg, casadi_real** res,
                              casadi_int* iw, casadi_real* w, int mem) {
   casadi_real *M_r = w, *qdd = M_r + n * n, *S_b = qdd + n, *T_b = S_b + 6 * n, *M = T_b + 6 * n, *G = M + 18 * 18,
-              *H = G + 18 * 18, *F = H + 18 * 18, *y = F + 18, *col = y + 18;
+              *H = G + 18 * 18, *F = H + 18 * 18, *y = F + 18, *col = y + 18, *X = col + n;
+  const int m = QD_DFD_R_COLUMNS(n);
   casadi_real q[19] = {0}, v[18], a[18], f[12] = {0}, dv[6], da[6], dSF[QD_N_MAX], da_qd[6];
-  casadi_real dq[QD_N_MAX] = {0}, dqd[QD_N_MAX] = {0}, dtheta[3] = {0};
+  casadi_real dq[QD_N_MAX] = {0}, dqd[QD_N_MAX] = {0}, dtheta[3] = {0}, sin_q[QD_N_MAX], cos_q[QD_N_MAX];
   int piv[QD_N_MAX];
   const casadi_real* m_arg[2] = {arg[0], arg[3]};
   casadi_real* m_res[3] = {S_b, T_b, M};
@@ -88,7 +130,11 @@ QD_INLINE int qd_dfd_r_solve(int n, int legs, int lift_quat, qd_eval_fn CG_r, co
   qd_lu_solve(n, M_r, piv, qdd);
   /* the lift at qdd_r (its directions unused yet: F zero), then F, dF/dq, dF/dv at (q, v, a) */
   for (int i = 0; i < 18; ++i) F[i] = 0;
-  const casadi_real* l_arg[8] = {arg[0], arg[1], qdd, arg[3], F, dq, dtheta, dqd};
+  for (int i = 0; i < n; ++i) { /* the lift reads the angles' sines and cosines: taken once for its 7-13 calls */
+    sin_q[i] = sin(arg[0][i]);
+    cos_q[i] = cos(arg[0][i]);
+  }
+  const casadi_real* l_arg[10] = {arg[0], arg[1], qdd, arg[3], F, dq, dtheta, dqd, sin_q, cos_q};
   casadi_real* l_res[6] = {v, a, 0, 0, 0, 0};
   flag = qd_dfd_r_lift(l_arg, l_res, iw, w, mem);
   if (flag) return flag;
@@ -125,13 +171,11 @@ QD_INLINE int qd_dfd_r_solve(int n, int legs, int lift_quat, qd_eval_fn CG_r, co
     for (int i = 0; i < 18; ++i) y[i] = j < 12 ? G[i + 18 * (6 + j)] : 0;
     if (moves && j < 12) qd_dfd_r_through_trunk(H, M, dv, da, y);
     qd_dfd_r_column(n, S_b, y, moves && j < 12 ? dSF : 0, col);
-    qd_lu_solve(n, M_r, piv, col);
-    qd_dfd_r_store(n, res, 0, j, col);
+    qd_dfd_r_put(n, m, X, j, col);
     for (int i = 0; i < 18; ++i) y[i] = j < 12 ? H[i + 18 * (6 + j)] : 0;
     if (moves) qd_dfd_r_through_trunk(H, M, T_b + 6 * j, da_qd, y); /* dv_b = T_b e_j */
     qd_dfd_r_column(n, S_b, y, 0, col);
-    qd_lu_solve(n, M_r, piv, col);
-    qd_dfd_r_store(n, res, 1, j, col);
+    qd_dfd_r_put(n, m, X, n + j, col);
   }
   for (int k = 0; k < 3; ++k) { /* theta: gravity in the trunk frame (did_full's rotation columns), the lift for two feet */
     for (int i = 0; i < 18; ++i) y[i] = G[i + 18 * (3 + k)];
@@ -143,16 +187,16 @@ QD_INLINE int qd_dfd_r_solve(int n, int legs, int lift_quat, qd_eval_fn CG_r, co
       qd_dfd_r_through_trunk(H, M, dv, da, y);
     }
     qd_dfd_r_column(n, S_b, y, 0, col);
-    qd_lu_solve(n, M_r, piv, col);
-    qd_dfd_r_store(n, res, 3, k, col);
+    qd_dfd_r_put(n, m, X, 2 * n + k, col);
   }
-  if (res[2]) {
-    for (int j = 0; j < n; ++j) { /* M_r^-1, column by column */
-      casadi_real* x = res[2] + n * j;
-      for (int i = 0; i < n; ++i) x[i] = i == j;
-      qd_lu_solve(n, M_r, piv, x);
-    }
+  for (int i = 0; i < n; ++i) { /* M_r^-1 from the identity */
+    for (int j = 0; j < n; ++j) X[m * i + 2 * n + 3 + j] = i == j;
   }
+  qd_dfd_r_lu_solve_rows(n, M_r, piv, X, m);
+  qd_dfd_r_store(n, m, res, 0, X, 0, n);
+  qd_dfd_r_store(n, m, res, 1, X, n, n);
+  qd_dfd_r_store(n, m, res, 3, X, 2 * n, 3);
+  qd_dfd_r_store(n, m, res, 2, X, 2 * n + 3, n);
   const casadi_int nnz[4] = {n * n, n * n, n * n, 3 * n};
   return qd_finite(0, res, 4, nnz);
 }
