@@ -4826,6 +4826,25 @@ static int qd_dfd_r_lift(const casadi_real** arg, casadi_real** res, casadi_int*
   return 0;
 }
 
+/* quadruped_dyn: a CasADi sparse output made dense (hand-written, inserted into each generated
+ * qd_<robot>_r_<feet>.c and qd_<robot>_d.c; see quadruped_dyn/codegen/emit.py). */
+/* x: the nonzeros of a CasADi sparsity sp (nrow, ncol, colind[ncol + 1], row[nnz]) -> the dense matrix,
+ * column-major, in place (x holds nrow * ncol reals). Backwards: a nonzero's dense index is >= its own. */
+static void qd_densify(const casadi_int* sp, casadi_real* x) {
+  const casadi_int nrow = sp[0], ncol = sp[1], *colind = sp + 2, *row = sp + 3 + ncol;
+  casadi_int next = nrow * ncol; /* entries from here on are final */
+  for (casadi_int j = ncol - 1; j >= 0; --j) {
+    for (casadi_int k = colind[j + 1] - 1; k >= colind[j]; --k) {
+      casadi_int d = row[k] + nrow * j;
+      casadi_real value = x[k];
+      for (casadi_int i = d + 1; i < next; ++i) x[i] = 0;
+      x[d] = value;
+      next = d;
+    }
+  }
+  for (casadi_int i = 0; i < next; ++i) x[i] = 0;
+}
+
 /* quadruped_dyn: checks and the forward-dynamics solve of the reduced model (hand-written,
  * inserted into each generated qd_<robot>_r_<stance>.c; see quadruped_dyn/codegen/emit.py).
  * Before it the generator writes QD_REGULARITY_MIN (quadruped_dyn.tolerances.REGULARITY_MIN), qd_M_full's
@@ -5174,23 +5193,6 @@ int qd_id_full(const casadi_real** arg, casadi_real** res, casadi_int* iw, casad
 #define QD_DFD_R_W(n) ((n) * (n) + 14 * (n) + 3 * 18 * 18 + 36 + (n) * QD_DFD_R_COLUMNS(n))
 /* right-hand sides of the one LU solve: the n angle and n rate columns, 3 rotations, and the n of M_r^-1 */
 #define QD_DFD_R_COLUMNS(n) (3 * (n) + 3)
-
-/* x: the nonzeros of a CasADi sparsity sp (nrow, ncol, colind[ncol + 1], row[nnz]) -> the dense matrix,
- * column-major, in place (x holds nrow * ncol reals). Backwards: a nonzero's dense index is >= its own. */
-static void qd_densify(const casadi_int* sp, casadi_real* x) {
-  const casadi_int nrow = sp[0], ncol = sp[1], *colind = sp + 2, *row = sp + 3 + ncol;
-  casadi_int next = nrow * ncol; /* entries from here on are final */
-  for (casadi_int j = ncol - 1; j >= 0; --j) {
-    for (casadi_int k = colind[j + 1] - 1; k >= colind[j]; --k) {
-      casadi_int d = row[k] + nrow * j;
-      casadi_real value = x[k];
-      for (casadi_int i = d + 1; i < next; ++i) x[i] = 0;
-      x[d] = value;
-      next = d;
-    }
-  }
-  for (casadi_int i = 0; i < next; ++i) x[i] = 0;
-}
 
 /* col (n) = -(S y + extra), S y = S_b y_b + y_j (rows 0..11; row 12 has no joint part); extra may be NULL. */
 static void qd_dfd_r_column(int n, const casadi_real* S_b, const casadi_real* y, const casadi_real* extra, casadi_real* col) {

@@ -395,7 +395,7 @@ def _checked_reduced_c(c_text: str, casadi_header: str, functions: list[ca.Funct
     once, then the LU); dfd_r by ``c/qd_reduced_derivatives.c`` over ``dfd_r``'s pieces, its caller work memory
     declared. Returns (C source, CasADi's header text)."""
     first = c_text.index(f"\n/* {functions[0].name()}:")
-    templates = "\n".join((TEMPLATES / t).read_text() for t in ("qd_reduced_solve.c", "qd_reduced_derivatives.c"))
+    templates = "\n".join((TEMPLATES / t).read_text() for t in ("qd_dense.c", "qd_reduced_solve.c", "qd_reduced_derivatives.c"))
     raw = evaluations(c_text, [f.name() for f in functions])  # entry point -> CasADi's evaluation function
     stance = reduced_parts(functions[0].name()[len(PREFIX):])[1]  # type: ignore[index]
     legs = sum(1 << i for i in stance.feet)  # S_b's rows and T_b's columns of the other legs' joints are zero

@@ -236,11 +236,11 @@ def declare_work(c_text: str, h_text: str, name: str, sz_w: int) -> tuple[str, s
 
 def derivative_source(file_stem: str, functions: list[ca.Function], precision: str) -> tuple[str, str]:
     """(C source, CasADi's header) of qd_<robot>_d.c: CasADi's code with c/qd_derivatives_solve.c
-    inserted; every entry point returns QD_NONFINITE for a non-finite output, dfd_full solves."""
+    inserted (after c/qd_dense.c); every entry point returns QD_NONFINITE for a non-finite output, dfd_full solves."""
     c_text, h_text = casadi_c(file_stem, functions, precision)
     first = c_text.index(f"\n/* {functions[0].name()}:")
     template = (TEMPLATES / "qd_derivatives_solve.c").read_text()
-    c_text = c_text[:first] + "\n" + template + c_text[first:]
+    c_text = c_text[:first] + "\n" + (TEMPLATES / "qd_dense.c").read_text() + "\n" + template + c_text[first:]
     work = work_sizes(h_text)
     raw = evaluations(c_text, [f.name() for f in functions])
     if any(work[f.name()] != (0, 0) for f in functions):

@@ -74,6 +74,7 @@ def test_singular_mass_matrix_returns_singular(tmp_path, zero):
     program = tmp_path / "singular.c"
     program.write_text(f"""#define casadi_real double
 #define casadi_int long long int
+#include "{TEMPLATES / 'qd_dense.c'}"
 #include "{TEMPLATES / 'qd_derivatives_solve.c'}"
 #include <stdio.h>
 static int parts(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem) {{

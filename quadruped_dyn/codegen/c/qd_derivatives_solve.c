@@ -48,29 +48,12 @@ int qd_M_full(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi
 const casadi_int* qd_M_full_sparsity_out(casadi_int i);
 int qd_nle_full(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem);
 
-/* x: the nonzeros of a CasADi sparsity sp (nrow, ncol, colind[ncol + 1], row[nnz]) -> the dense matrix,
- * column-major, in place (x holds nrow * ncol reals). Backwards: a nonzero's dense index is >= its own. */
-static inline void qd_d_densify(const casadi_int* sp, casadi_real* x) {
-  const casadi_int nrow = sp[0], ncol = sp[1], *colind = sp + 2, *row = sp + 3 + ncol;
-  casadi_int next = nrow * ncol; /* entries from here on are final */
-  for (casadi_int j = ncol - 1; j >= 0; --j) {
-    for (casadi_int k = colind[j + 1] - 1; k >= colind[j]; --k) {
-      casadi_int d = row[k] + nrow * j;
-      casadi_real value = x[k];
-      for (casadi_int i = d + 1; i < next; ++i) x[i] = 0;
-      x[d] = value;
-      next = d;
-    }
-  }
-  for (casadi_int i = 0; i < next; ++i) x[i] = 0;
-}
-
 /* qd_dfd_full_parts(q, v) -> (M (18 x 18, dense, column-major), nle = C + G (18)): qd_M_full (sparse, densified
  * in place) and qd_nle_full, not a second generated copy of them. Either output may be NULL. */
 QD_INLINE int qd_dfd_full_parts_eval(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem) {
   casadi_real* m_res[1] = {res[0]};
   int flag = res[0] ? qd_M_full(arg, m_res, iw, w, mem) : 0;
-  if (!flag && res[0]) qd_d_densify(qd_M_full_sparsity_out(0), res[0]);
+  if (!flag && res[0]) qd_densify(qd_M_full_sparsity_out(0), res[0]);
   m_res[0] = res[1];
   if (!flag && res[1]) flag = qd_nle_full(arg, m_res, iw, w, mem);
   return flag;

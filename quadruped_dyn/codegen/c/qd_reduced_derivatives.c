@@ -30,23 +30,6 @@ int qd_id_full(const casadi_real** arg, casadi_real** res, casadi_int* iw, casad
 /* right-hand sides of the one LU solve: the n angle and n rate columns, 3 rotations, and the n of M_r^-1 */
 #define QD_DFD_R_COLUMNS(n) (3 * (n) + 3)
 
-/* x: the nonzeros of a CasADi sparsity sp (nrow, ncol, colind[ncol + 1], row[nnz]) -> the dense matrix,
- * column-major, in place (x holds nrow * ncol reals). Backwards: a nonzero's dense index is >= its own. */
-static void qd_densify(const casadi_int* sp, casadi_real* x) {
-  const casadi_int nrow = sp[0], ncol = sp[1], *colind = sp + 2, *row = sp + 3 + ncol;
-  casadi_int next = nrow * ncol; /* entries from here on are final */
-  for (casadi_int j = ncol - 1; j >= 0; --j) {
-    for (casadi_int k = colind[j + 1] - 1; k >= colind[j]; --k) {
-      casadi_int d = row[k] + nrow * j;
-      casadi_real value = x[k];
-      for (casadi_int i = d + 1; i < next; ++i) x[i] = 0;
-      x[d] = value;
-      next = d;
-    }
-  }
-  for (casadi_int i = 0; i < next; ++i) x[i] = 0;
-}
-
 /* col (n) = -(S y + extra), S y = S_b y_b + y_j (rows 0..11; row 12 has no joint part); extra may be NULL. */
 static void qd_dfd_r_column(int n, const casadi_real* S_b, const casadi_real* y, const casadi_real* extra, casadi_real* col) {
   for (int i = 0; i < n; ++i) col[i] = i < 12 ? y[6 + i] : 0;
