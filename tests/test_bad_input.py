@@ -50,6 +50,7 @@ SHANK_MASS = f'<mass value="{paper_robot.PARAMS.shank_mass:g}"/>'
         ("prismatic", r"leg joint 'FL_HAA' is JointModelP.*expected revolute"),
         ("zero_mass", r"moved by joint 'FL_KFE' has mass 0 kg.*expected a positive mass"),
         ("non_pd_inertia", r"link 'FL_shank' <inertial> <inertia> is not positive semi-definite.*expected a physical rigid body"),
+        ("knee_deleted", r"cannot parse.*Two root links.*expected one tree of links.*four legs of three revolute joints"),
     ],
 )
 def test_bad_urdf(case, expected, tmp_path, erd):
@@ -67,6 +68,10 @@ def test_bad_urdf(case, expected, tmp_path, erd):
         paths[case] = str(tmp_path / "page.urdf")
     elif case == "prismatic":
         paths[case] = _paper_variant(tmp_path, '<joint name="FL_HAA" type="revolute">', '<joint name="FL_HAA" type="prismatic">')
+    elif case == "knee_deleted":  # the shank is left without a parent: a second root
+        text = paper_robot.urdf_text()
+        start = text.index('<joint name="FL_KFE"')
+        paths[case] = _paper_variant(tmp_path, text[start : text.index("</joint>", start) + len("</joint>")], "")
     elif case == "zero_mass":
         paths[case] = _paper_variant(tmp_path, SHANK_MASS, '<mass value="0"/>')
     elif case == "non_pd_inertia":

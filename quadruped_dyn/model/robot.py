@@ -284,7 +284,8 @@ def _parse_urdf(path: Path, data: bytes) -> pin.Model:
     except Exception as e:  # Pinocchio raises plain ValueError/RuntimeError with the parser's text
         said = [line.strip() for line in capture.text.splitlines() if line.strip()]
         reason = (said[:1] or str(e).strip().splitlines()[:1] or ["no reason given"])[0].removeprefix("Error:").strip()
-        raise InputError(f"Pinocchio cannot parse '{printable(path)}': {printable(reason)}") from e
+        raise InputError(f"Pinocchio cannot parse '{printable(path)}': {printable(reason)}; expected one tree of links "
+                         "joined by joints: a trunk with four legs of three revolute joints each") from e
 
 
 def load_robot(name_or_path: str, cached: bool = True, foot_frames: object = None) -> Robot:
