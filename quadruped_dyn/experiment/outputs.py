@@ -128,15 +128,21 @@ def summary_text(data: dict[str, Any], names: list[str], written: list[Path]) ->
                  + ("" if margin is None else f"; smallest CoM margin {margin * 100:.2f} cm (at {at:.3f} s)"))
     for name, run in data["runs"].items():
         if run["stopped_at_s"] is not None or run["departs_1pct_at_s"] is not None:
-            lines.append(f"  run {name}: 1 % off IK at {run['departs_1pct_at_s']} s, stopped (fell) at {run['stopped_at_s']} s")
+            lines.append(f"  run {name}: 1 % off IK {_at(run['departs_1pct_at_s'], 'never')}, "
+                         f"{_at(run['stopped_at_s'], 'ran to the end', 'stopped (fell) at')}")
     for name, pc in data.get("physics_check", {}).items():
         if isinstance(pc, dict):
             rr = pc["rigid_vs_reduced"]
             ik = pc["rigid_vs_ik"]
             lines.append(f"  physics check, {name}: rigid-contact vs reduced max {rr['max_joint_angle_diff_rad']:.1e} rad, "
-                         f"1 % at {rr['time_to_1pct_s']} s; rigid vs IK max {ik['max_joint_angle_diff_rad']:.1e} rad")
+                         f"1 % {_at(rr['time_to_1pct_s'], 'never')}; rigid vs IK max {ik['max_joint_angle_diff_rad']:.1e} rad")
     lines.append("  wrote " + ", ".join(str(p) for p in written))
     return "\n".join(lines)
+
+
+def _at(t: float | None, none: str, what: str = "at") -> str:
+    """'at 0.123 s', or what a missing time means (a run that never departed, never fell)."""
+    return none if t is None else f"{what} {t:.3f} s"
 
 
 def _pct(x: float | None) -> str:

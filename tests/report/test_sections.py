@@ -128,6 +128,13 @@ def test_generated_c_lists_every_function_with_its_check():
     assert len(rows_of(table)) == 4 and all(n in table for n in names)
     assert section.verdict == "pass" and "4 functions" in section.headline
     assert "3 pass vs Pinocchio, 1 skipped" in section.headline
+    bench = {"robot": "paper", "entries": [{"name": "M_full", "generated_ns": 1.0, "pinocchio_ns": 4.0, "ratio": 0.25,
+                                            "target": 0.4},
+                                           {"name": "fd_r_FL_BR", "generated_ns": 4.0, "pinocchio_ns": 10.0, "ratio": 0.4,
+                                            "target": 0.25},
+                                           {"name": "id_r_FL_BR", "generated_ns": 4.0, "pinocchio_ns": 1.0, "ratio": 4.0}]}
+    timed = rs.generated_c_section(gen, bench)  # the checks pass; the headline says a speed target is missed
+    assert timed.verdict == "pass" and "speed targets met 1 of 2" in timed.headline, timed.headline
     unchecked = {**gen, "checks": gen["checks"][:2]}  # a function without its check does not pass
     assert rs.generated_c_section(unchecked, None).verdict == "FAIL"
 
@@ -171,3 +178,23 @@ def test_a_footprint_not_measured_says_how_to_get_it(tmp_path):
     html = rs.embedded_html({"footprint": {"skipped": FOOTPRINT_NOT_MEASURED}})
     assert "not measured in this run: pass --footprint" in html
     assert "--footprint" in CliRunner().invoke(main, ["report", "--help"]).output
+
+
+def test_a_time_that_never_came_reads_as_such():
+    """A run that never left the plan by 1 % or never fell has None times: the summary and the
+    optimised trot's headline say 'never' / 'ran to the end', not 'None s' or 'n/a s'."""
+    from quadruped_dyn.experiment.outputs import summary_text
+
+    data = {**VALIDATION, "runs": {"paper": {**VALIDATION["runs"]["paper"], "departs_1pct_at_s": 0.5},
+                                   "plus_1pct": {**VALIDATION["runs"]["paper"], "stopped_at_s": 0.7}}}
+    text = summary_text(data, JOINTS, [])
+    assert "run paper: 1 % off IK at 0.500 s, ran to the end" in text, text
+    assert "run plus_1pct: 1 % off IK never, stopped (fell) at 0.700 s" in text, text
+    assert "None" not in text, text
+    trot = {"status": "Solve_Succeeded", "iterations": 40, "solve_seconds": 30.0, "constraint_violation": 1e-9,
+            "converged": True, "effort": {"max_roll_moment_optimised_Nm": 1e-9, "max_roll_moment_plan_Nm": 2.1, "ratio": 0.9},
+            "formulation": {"nodes": 40, "variables": 1000, "constraints": 900, "mu": 0.6, "fz_min_N": 1.0},
+            "rigid_contact_replay": {"time_to_1pct_s": None, "horizon_s": 2.0, "growth_rate_per_s": None}}
+    section = rs.optimal_control_section(trot)
+    assert "replay 1 % off at never within 2 s" in section.headline, section.headline
+    assert "n/a s" not in section.headline and "n/a s" not in section.body
