@@ -183,10 +183,7 @@ def _foot_frame(model: pin.Model, knee: int, label: str, wanted: str | None = No
     a sensor or camera (``NOT_FOOT_WORDS``), the farthest named like a foot (``FOOT_WORDS``), else
     the farthest. With several candidates a UrdfWarning says which was chosen, why, and how to
     name another."""
-    if wanted is not None:
-        if not model.existFrame(wanted):
-            raise InputError(f"foot frame '{printable(wanted)}' of leg {label} is not a frame of the URDF; "
-                             "expected a link or frame below that leg's knee")
+    if wanted is not None:  # it exists: _named_feet_exist ran first
         fid = model.getFrameId(wanted)
         if model.frames[fid].parentJoint != knee:
             raise InputError(f"foot frame '{printable(wanted)}' of leg {label} does not hang from the knee joint "
@@ -354,6 +351,7 @@ def _load(path: Path, digest: str, foot_frames: tuple[str, str, str, str] | None
     builtin = builtin_name(path, digest)
     name = _name(path, builtin, digest)
     wanted_feet = dict(zip(LEG_LABELS, foot_frames)) if foot_frames else {}
+    _named_feet_exist(model, wanted_feet)
     legs: dict[str, Leg] = {}
     foot_ids: dict[str, int] = {}
     for chain in _leg_chains(model, path):
@@ -390,6 +388,15 @@ def _prepared_model(path: Path, data: bytes) -> pin.Model:
     for frame in model.frames:
         frame.placement = _snap(frame.placement)
     return model
+
+
+def _named_feet_exist(model: pin.Model, wanted_feet: dict[str, str]) -> None:
+    """Every foot frame the user named is a frame of the URDF (checked in leg order, FL FR BL BR,
+    before any leg is built)."""
+    for label, wanted in wanted_feet.items():
+        if not model.existFrame(wanted):
+            raise InputError(f"foot frame '{printable(wanted)}' of leg {label} is not a frame of the URDF; "
+                             "expected a link or frame below that leg's knee")
 
 
 def _leg_chains(model: pin.Model, path: Path) -> list[list[int]]:
