@@ -18,6 +18,13 @@ The rigid-contact runs take M and nle from the robot's generated full-coordinate
 and the feet, their Jacobians and J'qd' from ``qdx_feet_rates`` (generated here from
 ``kinematics.robot_feet``); the contact rows are in the trunk frame.
 
+Extended precision (``NativeRuns(robot, "long double")``, reduced runs only): the same C with
+every real a long double (x87's 64-bit significand here), linked with the robot's generated C
+compiled with casadi_real = long double and its elementary functions in long double
+(``long_double_sources``). Its inputs stay double: the reference table (the exact IK and id_r),
+the initial state, the footholds and DOP853's coefficients. It measures what the double
+integration's own round-off costs (docs/results.md, the experiment's error budget).
+
 Evaluation counts: the dense output's three extra stages are evaluated only for steps with a
 sample inside (the Python path evaluates them after every step), so ``rhs_evaluations`` is
 lower for the same trajectory.
@@ -27,19 +34,29 @@ from __future__ import annotations
 
 import ctypes
 import hashlib
+import re
 import tempfile
 from collections.abc import Callable
+from functools import cache
 from pathlib import Path
+from typing import Any
 
 import casadi as ca
 import numpy as np
 from scipy.integrate._ivp import dop853_coefficients as dop
 
 from quadruped_dyn.codegen.casadi_source import casadi_c
-from quadruped_dyn.codegen.emit import PREFIX, REDUCED_STANCE_SETS, reduced_symbol
-from quadruped_dyn.codegen.library import C_FLAGS, compile_sources, compiled_library, compiler_version, work_sizes_of
+from quadruped_dyn.codegen.emit import PREFIX, REDUCED_STANCE_SETS, generate, reduced_symbol
+from quadruped_dyn.codegen.library import (
+    C_FLAGS,
+    compile_sources,
+    compiled_library,
+    compiler_version,
+    generation_key,
+    work_sizes_of,
+)
 from quadruped_dyn.dynamics.kinematics import robot_feet
-from quadruped_dyn.errors import BuildError, NumericalError
+from quadruped_dyn.errors import BuildError, InputError, NumericalError
 from quadruped_dyn.experiment.gait import Plan
 from quadruped_dyn.experiment.rigid_contact import initial_state, touch_down
 from quadruped_dyn.experiment.simulate import (
@@ -65,51 +82,56 @@ SOURCE = Path(__file__).parent / "c" / "qdx_native_run.c"
 #: Stop codes of c/qdx_native_run.c.
 FALLEN, SINGULAR, STEP_FAILED = 1, 2, 3
 
-_dbl = ctypes.POINTER(ctypes.c_double)
+#: The working precisions: the C type and numpy dtype of every real.
+PRECISIONS: dict[str, tuple[Any, Any]] = {"double": (ctypes.c_double, np.float64),
+                                          "long double": (ctypes.c_longdouble, np.longdouble)}
+
 _int = ctypes.POINTER(ctypes.c_longlong)
 
 
-class _Dop853(ctypes.Structure):
-    _fields_ = [(name, _dbl) for name in ("A", "B", "C", "E3", "E5", "D")]
+@cache
+def _structures(real: Any) -> dict[str, Any]:
+    """c/qdx_native_run.c's structures with qdx_real = ``real`` (a ctypes type), by C name."""
+    ptr = ctypes.POINTER(real)
 
+    class Dop853(ctypes.Structure):
+        _fields_ = [(name, ptr) for name in ("A", "B", "C", "E3", "E5", "D")]
 
-class _Table(ctypes.Structure):
-    _fields_ = [("m1", ctypes.c_int), ("width", ctypes.c_int), ("nodes", _dbl), ("weights", _dbl), ("values", _dbl)]
+    class Table(ctypes.Structure):
+        _fields_ = [("m1", ctypes.c_int), ("width", ctypes.c_int), ("nodes", ptr), ("weights", ptr), ("values", ptr)]
 
+    class Law(ctypes.Structure):
+        _fields_ = [("scale", real), ("kp", real), ("kd", real), ("roll_applied", ctypes.c_int)]
 
-class _Law(ctypes.Structure):
-    _fields_ = [("scale", ctypes.c_double), ("kp", ctypes.c_double), ("kd", ctypes.c_double),
-                ("roll_applied", ctypes.c_int)]
+    class Frame(ctypes.Structure):
+        """qdx_frame: the arg, res, iw and w arrays of a call of a generated function."""
 
+        _fields_ = [("arg", ctypes.POINTER(ptr)), ("res", ctypes.POINTER(ptr)), ("iw", _int), ("w", ptr)]
 
-class _Frame(ctypes.Structure):
-    """c/qdx_native_run.c's qdx_frame: the arg, res, iw and w arrays of a call of a generated function."""
+    class Reduced(ctypes.Structure):
+        _fields_ = [("table", Table), ("law", Law), ("fd_r", ctypes.c_void_p), ("frame", Frame),
+                    ("n", ctypes.c_int), ("k", ctypes.c_int),
+                    ("project", ctypes.c_int), ("legs", ctypes.c_int * 4), ("holds", real * 12),
+                    ("fallen_closure", real), ("fallen_trunk", real), ("pitch", real),
+                    ("evaluations", ctypes.c_longlong), ("out_t", ptr), ("out_y", ptr), ("out_qdd", ptr),
+                    ("out_closure", ptr), ("recorded", ctypes.c_int)]
 
-    _fields_ = [("arg", ctypes.POINTER(_dbl)), ("res", ctypes.POINTER(_dbl)), ("iw", _int), ("w", _dbl)]
+    class Rigid(ctypes.Structure):
+        _fields_ = [("table", Table), ("law", Law), ("M_full", ctypes.c_void_p), ("nle_full", ctypes.c_void_p),
+                    ("M_rows", _int), ("M_cols", _int), ("M_nnz", ctypes.c_int), ("M_mirror", ctypes.c_int),
+                    ("frame", Frame), ("k", ctypes.c_int), ("legs", ctypes.c_int * 4), ("trunk", ptr),
+                    ("fallen_trunk", real), ("evaluations", ctypes.c_longlong), ("out_t", ptr),
+                    ("out_y", ptr), ("out_a", ptr), ("out_off", ptr), ("recorded", ctypes.c_int)]
 
-
-class _Reduced(ctypes.Structure):
-    _fields_ = [("table", _Table), ("law", _Law), ("fd_r", ctypes.c_void_p), ("frame", _Frame),
-                ("n", ctypes.c_int), ("k", ctypes.c_int),
-                ("project", ctypes.c_int), ("legs", ctypes.c_int * 4), ("holds", ctypes.c_double * 12),
-                ("fallen_closure", ctypes.c_double), ("fallen_trunk", ctypes.c_double), ("pitch", ctypes.c_double),
-                ("evaluations", ctypes.c_longlong), ("out_t", _dbl), ("out_y", _dbl), ("out_qdd", _dbl),
-                ("out_closure", _dbl), ("recorded", ctypes.c_int)]
-
-
-class _Rigid(ctypes.Structure):
-    _fields_ = [("table", _Table), ("law", _Law), ("M_full", ctypes.c_void_p), ("nle_full", ctypes.c_void_p),
-                ("M_rows", _int), ("M_cols", _int), ("M_nnz", ctypes.c_int), ("M_mirror", ctypes.c_int),
-                ("frame", _Frame), ("k", ctypes.c_int), ("legs", ctypes.c_int * 4), ("trunk", _dbl),
-                ("fallen_trunk", ctypes.c_double), ("evaluations", ctypes.c_longlong), ("out_t", _dbl),
-                ("out_y", _dbl), ("out_a", _dbl), ("out_off", _dbl), ("recorded", ctypes.c_int)]
+    return {"qdx_dop853": Dop853, "qdx_table": Table, "qdx_law": Law, "qdx_frame": Frame, "qdx_reduced": Reduced,
+            "qdx_rigid": Rigid}
 
 
 Buffers = tuple[np.ndarray, ...]
 
 
-def _integrate(segments: list[tuple[float, float, Stance, np.ndarray]], tables: list[_Table],
-               phase: Callable[[float, float, Stance, np.ndarray, _Table], tuple[Buffers, int]],
+def _integrate(segments: list[tuple[float, float, Stance, np.ndarray]], tables: list[Any],
+               phase: Callable[[float, float, Stance, np.ndarray, Any], tuple[Buffers, int]],
                progress: Progress | None, widths: list[tuple[int, ...]]) -> tuple[list[np.ndarray], float | None]:
     """``phase`` on every gait phase until one returns a stop code: the samples it recorded,
     concatenated (arrays of the given row shapes), and where the run stopped (its last sample;
@@ -126,8 +148,12 @@ def _integrate(segments: list[tuple[float, float, Stance, np.ndarray]], tables: 
     return [np.concatenate(parts) for parts in zip(*out)], None
 
 
+_C_TYPES = {np.dtype(np.int64): ctypes.c_longlong, np.dtype(np.float64): ctypes.c_double,
+            np.dtype(np.longdouble): ctypes.c_longdouble}
+
+
 def _ptr(a: np.ndarray) -> ctypes._Pointer:  # type: ignore[type-arg]
-    return a.ctypes.data_as(_int if a.dtype == np.int64 else _dbl)
+    return a.ctypes.data_as(ctypes.POINTER(_C_TYPES[a.dtype]))
 
 
 def feet_source(robot: Robot, directory: Path) -> Path:
@@ -146,58 +172,98 @@ def feet_source(robot: Robot, directory: Path) -> Path:
     return path
 
 
-def native_library(robot: Robot, cc: str = "gcc") -> Path:
-    """The robot's compiled native-run library (c/qdx_native_run.c + its generated feet),
-    cached under the hash of both sources, the flags and the compiler."""
+#: The flags of a long-double build: c/qdx_native_run.c's qdx_real, the generated C's casadi_real,
+#: and tgmath.h for the elementary functions CasADi's C calls directly (the feet).
+LONG_DOUBLE_FLAGS = (*C_FLAGS, "-DQDX_LONG_DOUBLE", "-Dcasadi_real=long double", "-include", "tgmath.h")
+
+#: The generated C's elementary-function wrappers (codegen/emit.py) call the double functions
+#: unless casadi_real is float; a long-double build calls them type-generic (tgmath.h).
+_DOUBLE_MATH = re.compile(r"\(casadi_real\)(sin|cos|tan|sqrt|fabs)\(\(double\)x\)")
+
+
+def long_double_sources(robot: Robot, directory: Path) -> list[Path]:
+    """The robot's generated C (``codegen.generate``) with its elementary functions in
+    casadi_real's precision, for a build with casadi_real = long double. BuildError if a file
+    no longer has the five wrappers this rewrites."""
+    files = generate(robot, directory, "double").c_sources
+    for path in files:
+        text, count = _DOUBLE_MATH.subn(r"\1(x)", path.read_text())
+        if count != 5:
+            raise BuildError(f"{path.name}: {count} elementary-function wrappers found, expected 5 "
+                             "(sin, cos, tan, sqrt, fabs of codegen/emit.py)")
+        path.write_text(text)
+    return files
+
+
+def native_library(robot: Robot, cc: str = "gcc", precision: str = "double") -> Path:
+    """The robot's compiled native-run library (c/qdx_native_run.c + its generated feet; in long
+    double also the robot's generated C, ``long_double_sources``), cached under the hash of the
+    sources (the generated C by its generation key), the flags and the compiler."""
+    if precision not in PRECISIONS:
+        raise InputError(f"precision '{precision}' is not supported; expected one of {', '.join(PRECISIONS)}")
+    flags = C_FLAGS if precision == "double" else LONG_DOUBLE_FLAGS
     with tempfile.TemporaryDirectory() as tmp:
         feet = feet_source(robot, Path(tmp))
         h = hashlib.sha256(SOURCE.read_bytes() + feet.read_bytes())
-        h.update(f"{' '.join(C_FLAGS)} {compiler_version(cc)}".encode())
+        h.update(f"{' '.join(flags)} {compiler_version(cc)}".encode())
+        if precision != "double":
+            h.update(generation_key(robot, precision, flags, cc).encode())
 
         def build(building: Path) -> None:
-            compile_sources([SOURCE, feet], C_FLAGS, building, cc)
+            generated = long_double_sources(robot, Path(tmp)) if precision != "double" else []
+            compile_sources([SOURCE, feet, *generated], flags, building, cc)
 
-        return cached_build(h.hexdigest()[:16], f"libqdx_native_{robot.name}.so", build)
+        suffix = "" if precision == "double" else "_" + precision.replace(" ", "_")
+        return cached_build(h.hexdigest()[:16], f"libqdx_native{suffix}_{robot.name}.so", build)
 
 
 class NativeRuns:
-    """The robot's native runs: ``reduced`` and ``rigid`` (one gait phase per C call)."""
+    """The robot's native runs: ``reduced`` and ``rigid`` (one gait phase per C call), in double
+    or (reduced runs only) long double (the module docstring)."""
 
-    def __init__(self, robot: Robot) -> None:
+    def __init__(self, robot: Robot, precision: str = "double") -> None:
         self.robot = robot
-        self._lib = ctypes.CDLL(str(native_library(robot)))
+        self._lib = ctypes.CDLL(str(native_library(robot, precision=precision)))
+        self.precision = precision
+        self._real, self._dtype = PRECISIONS[precision]
+        self._s = _structures(self._real)
+        real, ptr = self._real, ctypes.POINTER(self._real)
         for name, n_arg, n_res in (("qdx_feet", 1, 2), ("qdx_feet_rates", 2, 3)):
             if any(x > limit for x, limit in zip(work_sizes_of(self._lib, name), (n_arg, n_res, 0, 0))):
                 raise BuildError(f"{name} asks for more than its own {n_arg} inputs and {n_res} outputs; "
                                  "c/qdx_native_run.c's feet_of passes no more")
-        self._lib.qdx_reduced_phase.argtypes = [ctypes.POINTER(_Dop853), ctypes.POINTER(_Reduced), ctypes.c_double,
-                                                ctypes.c_double, ctypes.c_double, _dbl, _dbl, ctypes.c_int]
-        self._lib.qdx_rigid_phase.argtypes = [ctypes.POINTER(_Dop853), ctypes.POINTER(_Rigid), ctypes.c_double,
-                                              ctypes.c_double, ctypes.c_double, _dbl, _dbl, ctypes.c_int]
-        self._coef = [np.ascontiguousarray(a, dtype=float) for a in
+        for name, kind in (("qdx_reduced_phase", "qdx_reduced"), ("qdx_rigid_phase", "qdx_rigid")):
+            getattr(self._lib, name).argtypes = [ctypes.POINTER(self._s["qdx_dop853"]), ctypes.POINTER(self._s[kind]),
+                                                 real, real, real, ptr, ptr, ctypes.c_int]
+        # scipy's coefficients, also in long double (its 30-digit literals measured no different)
+        self._coef = [np.ascontiguousarray(a, dtype=self._dtype) for a in
                       (dop.A, dop.B, dop.C, dop.E3, dop.E5, dop.D)]
         if self._coef[0].shape != (16, 16) or self._coef[5].shape != (4, 16) or self._coef[3].size != 13:
             raise BuildError("scipy's DOP853 coefficients do not have the shapes c/qdx_native_run.c expects")
-        self._dop = _Dop853(*[_ptr(a) for a in self._coef])
-        self._main = ctypes.CDLL(str(compiled_library(robot).path))
+        self._dop = self._s["qdx_dop853"](*[_ptr(a) for a in self._coef])
         self._interpolants: dict[tuple[int, Stance], tuple[np.ndarray, ...]] = {}
-        graph = ca.external(PREFIX + "M_full", str(compiled_library(robot).path))
-        rows, cols = (np.ascontiguousarray(x, dtype=np.int64) for x in graph.sparsity_out(0).get_triplet())
-        pairs = set(zip(rows.tolist(), cols.tolist()))
-        self._M = (rows, cols, int(any((c, r) not in pairs for r, c in pairs)))
-        called = [PREFIX + reduced_symbol("fd_r", s) for s in REDUCED_STANCE_SETS] + [PREFIX + "M_full", PREFIX + "nle_full"]
+        called = [PREFIX + reduced_symbol("fd_r", s) for s in REDUCED_STANCE_SETS]
+        if precision == "double":
+            self._main = ctypes.CDLL(str(compiled_library(robot).path))
+            graph = ca.external(PREFIX + "M_full", str(compiled_library(robot).path))
+            rows, cols = (np.ascontiguousarray(x, dtype=np.int64) for x in graph.sparsity_out(0).get_triplet())
+            pairs = set(zip(rows.tolist(), cols.tolist()))
+            self._M = (rows, cols, int(any((c, r) not in pairs for r, c in pairs)))
+            called += [PREFIX + "M_full", PREFIX + "nle_full"]
+        else:
+            self._main = self._lib  # the generated C is linked in
         sizes = [work_sizes_of(self._main, name) for name in called] + [work_sizes_of(self._lib, "qdx_feet_rates")]
         n_arg, n_res, n_iw, n_w = (max(1, *column) for column in zip(*sizes))
-        self._work = (np.zeros(n_iw, dtype=np.int64), np.zeros(n_w))  # kept alive with the frame
-        self._frame = _Frame((_dbl * n_arg)(), (_dbl * n_res)(), _ptr(self._work[0]), _ptr(self._work[1]))
+        self._work = (np.zeros(n_iw, dtype=np.int64), np.zeros(n_w, dtype=self._dtype))  # kept alive with the frame
+        self._frame = self._s["qdx_frame"]((ptr * n_arg)(), (ptr * n_res)(), _ptr(self._work[0]), _ptr(self._work[1]))
 
     def pose(self, r_b: np.ndarray, P_w: np.ndarray, roll: float | None = None,
              pitch_hint: float = 0.0) -> tuple[np.ndarray, np.ndarray, float]:
         """The C pose fit (same arguments and result as ``trunk_pose.pose_from_feet``)."""
-        rb, P = (np.ascontiguousarray(x, dtype=float).reshape(-1, 3) for x in (r_b, P_w))
-        R, p, closure = np.zeros((3, 3)), np.zeros(3), ctypes.c_double()
-        code = self._lib.qdx_pose(rb.shape[0], _ptr(rb), _ptr(P), ctypes.c_double(roll or 0.0),
-                                  ctypes.c_double(pitch_hint), _ptr(R), _ptr(p), ctypes.byref(closure))
+        rb, P = (np.ascontiguousarray(x, dtype=self._dtype).reshape(-1, 3) for x in (r_b, P_w))
+        R, p, closure = np.zeros((3, 3), dtype=self._dtype), np.zeros(3, dtype=self._dtype), self._real()
+        code = self._lib.qdx_pose(rb.shape[0], _ptr(rb), _ptr(P), self._real(roll or 0.0),
+                                  self._real(pitch_hint), _ptr(R), _ptr(p), ctypes.byref(closure))
         if code:
             raise NumericalError(f"the C pose fit failed for {rb.shape[0]} feet (code {code})")
         return R, p, closure.value
@@ -206,12 +272,12 @@ class NativeRuns:
         return ctypes.cast(getattr(self._main, PREFIX + symbol), ctypes.c_void_p).value or 0
 
     def _tables(self, table: IkTorqueTable, plan: Plan,
-                segments: list[tuple[float, float, Stance, np.ndarray]]) -> list[_Table] | None:
+                segments: list[tuple[float, float, Stance, np.ndarray]]) -> list[Any] | None:
         """Every phase's interpolant, or None if one of them falls back to the exact evaluation."""
         tables = [self._table(table, plan, t0, stance) for t0, _, stance, _ in segments]
         return [tb for tb in tables if tb is not None] if all(tb is not None for tb in tables) else None
 
-    def _table(self, table: IkTorqueTable, plan: Plan, t0: float, stance: Stance) -> _Table | None:
+    def _table(self, table: IkTorqueTable, plan: Plan, t0: float, stance: Stance) -> Any:
         """The phase's interpolant (nodes, weights, values | the plan's trunk position), kept alive here."""
         k = int(np.floor(t0 / plan.gait.phase_duration + 1e-12))
         key = (k, stance)
@@ -220,10 +286,10 @@ class NativeRuns:
             if phase is None:
                 return None
             trunk = np.array([plan.trunk(float(t))[0] for t in phase.nodes])
-            self._interpolants[key] = tuple(np.ascontiguousarray(a, dtype=float) for a in
+            self._interpolants[key] = tuple(np.ascontiguousarray(a, dtype=self._dtype) for a in
                                       (phase.nodes, phase.weights, np.hstack([phase.values, trunk])))
         nodes, weights, values = self._interpolants[key]
-        return _Table(nodes.size, values.shape[1], _ptr(nodes), _ptr(weights), _ptr(values))
+        return self._s["qdx_table"](nodes.size, values.shape[1], _ptr(nodes), _ptr(weights), _ptr(values))
 
     def reduced(self, plan: Plan, table: IkTorqueTable, law: TorqueLaw, horizon: float, dt: float,
                 rtol: float = RTOL, initial_ulps: int = 0, progress: Progress | None = None,
@@ -241,29 +307,31 @@ class NativeRuns:
         y = np.concatenate([ref0.q_r, ref0.qd_r])
         for _ in range(initial_ulps):
             y = np.nextafter(y, np.inf)
-        y = np.ascontiguousarray(y)
-        cfg = _Reduced(law=_Law(law.scale, law.kp, law.kd, int(law.roll_applied)), frame=self._frame, n=n, project=int(project),
-                       fallen_closure=FALLEN_CLOSURE_M, fallen_trunk=FALLEN_TRUNK_M, pitch=0.0, evaluations=0)
+        y = np.ascontiguousarray(y, dtype=self._dtype)
+        cfg = self._s["qdx_reduced"](law=self._s["qdx_law"](law.scale, law.kp, law.kd, int(law.roll_applied)),
+                                     frame=self._frame, n=n, project=int(project), fallen_closure=FALLEN_CLOSURE_M,
+                                     fallen_trunk=FALLEN_TRUNK_M, pitch=0.0, evaluations=0)
         current = [gait.stance(0.0)]
 
-        def phase(t0: float, t1: float, stance: Stance, inside: np.ndarray, tb: _Table) -> tuple[Buffers, int]:
-            if t0 > 0:
+        def phase(t0: float, t1: float, stance: Stance, inside: np.ndarray, tb: Any) -> tuple[Buffers, int]:
+            if t0 > 0:  # the landing in double (so, in long double, are the footholds)
                 before = current[0]
-                feet = np.asarray(robot_feet(robot)(y[:12])[0]).T[list(before)]
-                roll = float(y[12]) if len(before) == 2 else None
+                y_d = y.astype(float)
+                feet = np.asarray(robot_feet(robot)(y_d[:12])[0]).T[list(before)]
+                roll = float(y_d[12]) if len(before) == 2 else None
                 R, p, _ = pose_from_feet(feet, np.array([footholds[i] for i in before]), roll=roll,
                                          pitch_hint=cfg.pitch)
                 cfg.pitch = float(np.arctan2(-R[2, 0], np.hypot(R[2, 1], R[2, 2])))
-                land(robot, footholds, before, stance, y, R, p)
+                land(robot, footholds, before, stance, y_d, R, p)
                 current[0] = stance
             m = len(inside)
-            bufs = (np.zeros(m), np.zeros((m, 2 * n)), np.zeros((m, n)), np.zeros(m))
+            bufs = tuple(np.zeros(shape, dtype=self._dtype) for shape in (m, (m, 2 * n), (m, n), m))
             cfg.table, cfg.k, cfg.fd_r = tb, len(stance), self._address(reduced_symbol("fd_r", StanceSet(stance)))
             cfg.legs[:] = [*stance, *[0] * (4 - len(stance))]
             cfg.holds[:] = [*np.concatenate([footholds[i] for i in stance]), *[0.0] * (12 - 3 * len(stance))]
             cfg.out_t, cfg.out_y, cfg.out_qdd, cfg.out_closure = (_ptr(b) for b in bufs)
             code = self._lib.qdx_reduced_phase(ctypes.byref(self._dop), ctypes.byref(cfg), t0, t1, rtol, _ptr(y),
-                                               _ptr(inside), m)
+                                               _ptr(np.ascontiguousarray(inside, dtype=self._dtype)), m)
             return tuple(b[: cfg.recorded] for b in bufs), code
 
         (t, Y, qdd, closure), stopped_at = _integrate(segments, tables, phase, progress, [(), (2 * n,), (n,), ()])
@@ -275,6 +343,8 @@ class NativeRuns:
               trunk: Callable[[float], np.ndarray] | None = None) -> Run | None:
         """``rigid_contact.simulate_rigid`` with DOP853 (same arguments and result), or None
         when a phase has no table."""
+        if self.precision != "double":
+            raise InputError(f"the rigid-contact runs are in double only, not {self.precision}")
         ref = PinocchioReference(plan.robot)
         segments = phase_segments(plan, horizon, dt)
         tables = self._tables(table, plan, segments)
@@ -283,12 +353,13 @@ class NativeRuns:
         y = np.ascontiguousarray(initial_state(plan, table, ref, initial))
         trunk_at = trunk if trunk is not None else (lambda t: plan.trunk(t)[0])
         rows, cols, mirror = self._M
-        cfg = _Rigid(law=_Law(law.scale, law.kp, law.kd, 0), M_full=self._address("M_full"),
-                     nle_full=self._address("nle_full"), M_rows=_ptr(rows), M_cols=_ptr(cols), M_nnz=rows.size,
-                     M_mirror=mirror, frame=self._frame, fallen_trunk=FALLEN_TRUNK_M, evaluations=0)
+        cfg = self._s["qdx_rigid"](law=self._s["qdx_law"](law.scale, law.kp, law.kd, 0),
+                                   M_full=self._address("M_full"), nle_full=self._address("nle_full"),
+                                   M_rows=_ptr(rows), M_cols=_ptr(cols), M_nnz=rows.size, M_mirror=mirror,
+                                   frame=self._frame, fallen_trunk=FALLEN_TRUNK_M, evaluations=0)
         state = [y]
 
-        def phase(t0: float, t1: float, stance: Stance, inside: np.ndarray, tb: _Table) -> tuple[Buffers, int]:
+        def phase(t0: float, t1: float, stance: Stance, inside: np.ndarray, tb: Any) -> tuple[Buffers, int]:
             m = len(inside)
             bufs = (np.zeros(m), np.zeros((m, 37)), np.zeros((m, 18)), np.zeros(m))
             if t0 > 0:

@@ -13,7 +13,8 @@ Runs of the reduced model (all from the IK state at t = 0, on the stance closure
   ``TRUNCATION_RTOL_FACTOR`` x the tolerance (DOP853) or a ``refined`` run at half the step (RK4):
   the instability and the error budget. ``growth_rate_per_s`` is the slope of ln |twin - paper|
   (largest joint angle, running maximum) over the second half of the run; ``roundoff_pct`` =
-  % difference twin vs paper (what one ulp of noise grows to), ``truncation_pct`` = the
+  % difference twin vs paper (what one ulp of noise grows to: the run's own round-off enters at
+  every step and is larger, 2.6x on go2's walk against a long-double run), ``truncation_pct`` = the
   integrator's own error: % difference coarse vs paper / (factor - 1) (DOP853's error is
   proportional to its tolerance, ``simulate.TRUNCATION_RTOL_FACTOR``), refined vs paper (RK4).
 

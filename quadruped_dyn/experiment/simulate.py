@@ -60,10 +60,13 @@ RTOL = 1e-13
 #: The error budget's truncation estimate is a run at this many times RTOL: DOP853's error is
 #: proportional to its tolerance (measured on the walks of the paper robot and go2, 2026-12-02:
 #: error ~ rtol^0.8-0.9 from 1e-11 to 1e-13), so the 'paper' run's own truncation error is
-#: |coarse - paper| / (factor - 1) (an underestimate by up to 1.7x at exponent 0.8). A tighter
-#: run cannot measure it: below ~3e-14 (~100 eps) DOP853 in double stops converging (go2's walk:
-#: 6.3e-5 % at 1e-13, 4.9e-5 % at 3e-14), and a run at RTOL / 10 differed from the 'paper' run by
-#: less than the paper run's own truncation (go2's walk looked 3-40x over its error budget).
+#: |coarse - paper| / (factor - 1). A tighter run cannot measure it: below ~3e-14 a double run is
+#: limited by its own round-off, which grows with the number of steps (go2's walk: 5.0e-5 % at
+#: 1e-13, 3.7e-5 / 4.2e-5 % at 3e-14 / 1e-14), and a run at RTOL / 10 differed from the 'paper' run
+#: by less than the paper run's own truncation (go2's walk looked 3-40x over its error budget).
+#: Measured against a long-double run (native_run, 2026-12-02): go2's truncation at 1e-13 is
+#: 2.8e-5 % (this estimate: 4.4e-5) and its round-off 2.2e-5 % (the one-ulp twin: 8e-6), so the
+#: budget's sum meets the total by compensation (docs/results.md, what limits the walks).
 TRUNCATION_RTOL_FACTOR = 10.0
 
 IDENTITY_QUAT = np.array([0.0, 0.0, 0.0, 1.0])

@@ -84,9 +84,10 @@ def test_validate_writes_json_csv_and_plots(tmp_path):
 
 
 
-#: How far the error budget may fall short of the total: the truncation estimate assumes DOP853's
-#: error proportional to its tolerance, measured ~rtol^0.8 (an underestimate by up to 1.7x), and
-#: one twin samples the round-off once (twins differ ~2x from run to run).
+#: How far the error budget may fall short of the total: both terms are estimates. Measured against
+#: a long-double run (go2's walk, 2026-12-02, docs/results.md), the truncation estimate is 1.6x high
+#: and the one-ulp twin 2.6-3.2x below the run's own round-off, which enters at every step, not only
+#: at the start; and one twin samples the round-off once (twins differ ~2x from run to run).
 BUDGET_SHORTFALL = 3.0
 
 #: Relative agreement of the growth rate predicted from the derivatives with the measured one: the
