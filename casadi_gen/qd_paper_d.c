@@ -26,14 +26,16 @@ extern "C" {
 
 /* quadruped_dyn: the elementary functions in casadi_real's precision. A float build
  * (-Dcasadi_real=float) calls sinf, cosf, ... instead of promoting to double, so it does no
- * double arithmetic (none on a single-precision FPU: -Wdouble-promotion clean); a double build
+ * double arithmetic (none on a single-precision FPU: -Wdouble-promotion clean); a long double
+ * build wider than double (x87's 64-bit significand) calls sinl, cosl, ...; a double build
  * calls sin, cos, ... exactly as before. */
 #define QD_REAL_IS_FLOAT (sizeof(casadi_real) == sizeof(float))
-static inline casadi_real qd_sin(casadi_real x) { return QD_REAL_IS_FLOAT ? (casadi_real)sinf((float)x) : (casadi_real)sin((double)x); }
-static inline casadi_real qd_cos(casadi_real x) { return QD_REAL_IS_FLOAT ? (casadi_real)cosf((float)x) : (casadi_real)cos((double)x); }
-static inline casadi_real qd_tan(casadi_real x) { return QD_REAL_IS_FLOAT ? (casadi_real)tanf((float)x) : (casadi_real)tan((double)x); }
-static inline casadi_real qd_sqrt(casadi_real x) { return QD_REAL_IS_FLOAT ? (casadi_real)sqrtf((float)x) : (casadi_real)sqrt((double)x); }
-static inline casadi_real qd_fabs(casadi_real x) { return QD_REAL_IS_FLOAT ? (casadi_real)fabsf((float)x) : (casadi_real)fabs((double)x); }
+#define QD_REAL_IS_EXTENDED (sizeof(casadi_real) > sizeof(double))
+static inline casadi_real qd_sin(casadi_real x) { return QD_REAL_IS_FLOAT ? (casadi_real)sinf((float)x) : QD_REAL_IS_EXTENDED ? (casadi_real)sinl((long double)x) : (casadi_real)sin((double)x); }
+static inline casadi_real qd_cos(casadi_real x) { return QD_REAL_IS_FLOAT ? (casadi_real)cosf((float)x) : QD_REAL_IS_EXTENDED ? (casadi_real)cosl((long double)x) : (casadi_real)cos((double)x); }
+static inline casadi_real qd_tan(casadi_real x) { return QD_REAL_IS_FLOAT ? (casadi_real)tanf((float)x) : QD_REAL_IS_EXTENDED ? (casadi_real)tanl((long double)x) : (casadi_real)tan((double)x); }
+static inline casadi_real qd_sqrt(casadi_real x) { return QD_REAL_IS_FLOAT ? (casadi_real)sqrtf((float)x) : QD_REAL_IS_EXTENDED ? (casadi_real)sqrtl((long double)x) : (casadi_real)sqrt((double)x); }
+static inline casadi_real qd_fabs(casadi_real x) { return QD_REAL_IS_FLOAT ? (casadi_real)fabsf((float)x) : QD_REAL_IS_EXTENDED ? (casadi_real)fabsl((long double)x) : (casadi_real)fabs((double)x); }
 
 #ifndef casadi_int
 #define casadi_int long long int

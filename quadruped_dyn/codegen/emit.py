@@ -297,11 +297,14 @@ _WRAPPED_MATH = ("sin", "cos", "tan", "sqrt", "fabs")
 _PRECISION_MATH = """
 /* quadruped_dyn: the elementary functions in casadi_real's precision. A float build
  * (-Dcasadi_real=float) calls sinf, cosf, ... instead of promoting to double, so it does no
- * double arithmetic (none on a single-precision FPU: -Wdouble-promotion clean); a double build
+ * double arithmetic (none on a single-precision FPU: -Wdouble-promotion clean); a long double
+ * build wider than double (x87's 64-bit significand) calls sinl, cosl, ...; a double build
  * calls sin, cos, ... exactly as before. */
 #define QD_REAL_IS_FLOAT (sizeof(casadi_real) == sizeof(float))
+#define QD_REAL_IS_EXTENDED (sizeof(casadi_real) > sizeof(double))
 """ + "".join(f"static inline casadi_real qd_{f}(casadi_real x) {{ return QD_REAL_IS_FLOAT ? (casadi_real){f}f((float)x) "
-              f": (casadi_real){f}((double)x); }}\n" for f in _WRAPPED_MATH)
+              f": QD_REAL_IS_EXTENDED ? (casadi_real){f}l((long double)x) : (casadi_real){f}((double)x); }}\n"
+              for f in _WRAPPED_MATH)
 #: CasADi's default precision block; the wrappers go right after it, so a build without
 #: -Dcasadi_real (double, the default) compiles.
 _CASADI_REAL_DEFAULT = re.compile(r"#ifndef casadi_real\n#define casadi_real [\w ]+\n#endif\n")  # double or float

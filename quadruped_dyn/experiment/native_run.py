@@ -20,8 +20,8 @@ and the feet, their Jacobians and J'qd' from ``qdx_feet_rates`` (generated here 
 
 Extended precision (``NativeRuns(robot, "long double")``, reduced runs only): the same C with
 every real a long double (x87's 64-bit significand here), linked with the robot's generated C
-compiled with casadi_real = long double and its elementary functions in long double
-(``long_double_sources``). Its inputs stay double: the reference table (the exact IK and id_r),
+compiled with casadi_real = long double (its elementary-function wrappers then call sinl, cosl,
+...: codegen/emit.py). Its inputs stay double: the reference table (the exact IK and id_r),
 the initial state, the footholds and DOP853's coefficients. It measures what the double
 integration's own round-off costs (docs/results.md, the experiment's error budget).
 
@@ -34,7 +34,6 @@ from __future__ import annotations
 
 import ctypes
 import hashlib
-import re
 import tempfile
 from collections.abc import Callable
 from functools import cache
@@ -176,28 +175,9 @@ def feet_source(robot: Robot, directory: Path) -> Path:
 #: and tgmath.h for the elementary functions CasADi's C calls directly (the feet).
 LONG_DOUBLE_FLAGS = (*C_FLAGS, "-DQDX_LONG_DOUBLE", "-Dcasadi_real=long double", "-include", "tgmath.h")
 
-#: The generated C's elementary-function wrappers (codegen/emit.py) call the double functions
-#: unless casadi_real is float; a long-double build calls them type-generic (tgmath.h).
-_DOUBLE_MATH = re.compile(r"\(casadi_real\)(sin|cos|tan|sqrt|fabs)\(\(double\)x\)")
-
-
-def long_double_sources(robot: Robot, directory: Path) -> list[Path]:
-    """The robot's generated C (``codegen.generate``) with its elementary functions in
-    casadi_real's precision, for a build with casadi_real = long double. BuildError if a file
-    no longer has the five wrappers this rewrites."""
-    files = generate(robot, directory, "double").c_sources
-    for path in files:
-        text, count = _DOUBLE_MATH.subn(r"\1(x)", path.read_text())
-        if count != 5:
-            raise BuildError(f"{path.name}: {count} elementary-function wrappers found, expected 5 "
-                             "(sin, cos, tan, sqrt, fabs of codegen/emit.py)")
-        path.write_text(text)
-    return files
-
-
 def native_library(robot: Robot, cc: str = "gcc", precision: str = "double") -> Path:
     """The robot's compiled native-run library (c/qdx_native_run.c + its generated feet; in long
-    double also the robot's generated C, ``long_double_sources``), cached under the hash of the
+    double also the robot's generated C), cached under the hash of the
     sources (the generated C by its generation key), the flags and the compiler."""
     if precision not in PRECISIONS:
         raise InputError(f"precision '{precision}' is not supported; expected one of {', '.join(PRECISIONS)}")
@@ -210,7 +190,7 @@ def native_library(robot: Robot, cc: str = "gcc", precision: str = "double") -> 
             h.update(generation_key(robot, precision, flags, cc).encode())
 
         def build(building: Path) -> None:
-            generated = long_double_sources(robot, Path(tmp)) if precision != "double" else []
+            generated = generate(robot, Path(tmp), "double").c_sources if precision != "double" else []
             compile_sources([SOURCE, feet, *generated], flags, building, cc)
 
         suffix = "" if precision == "double" else "_" + precision.replace(" ", "_")
