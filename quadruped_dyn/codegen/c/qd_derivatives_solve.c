@@ -138,57 +138,66 @@ static int qd_d_spd_inverse(casadi_real* restrict a, int n, casadi_real tol) {
 
 /* Minv (18 x 18, column-major) = M^-1 by M's branch-induced sparsity (a tree: the trunk's 6 coordinates, then
  * four legs of 3 joints each coupled only to the trunk and to themselves): with the legs' blocks D_l (3 x 3),
- * their trunk coupling B_l = M[0:6, leg] (6 x 3) and E_l = D_l^-1 B_l^T, the Schur complement S = A - sum_l B_l E_l
- * of the trunk block A gives M^-1 = [[S^-1, -S^-1 E_l^T], [-E_l S^-1, delta_lm D_l^-1 + E_l S^-1 E_m^T]]. This is the
+ * their trunk coupling B_l (6 x 3) and E_l = D_l^-1 B_l^T, the Schur complement S = A - sum_l B_l E_l of the
+ * trunk block A gives M^-1 = [[S^-1, -S^-1 E_l^T], [-E_l S^-1, delta_lm D_l^-1 + E_l S^-1 E_m^T]]. This is the
  * Cholesky factorisation of M with the legs ordered first (no fill-in): QD_SINGULAR if one of its pivots is not
- * above QD_SINGULAR_RTOL * max diag(M). The legs' E_l are stacked (E, 12 x 6) and every inner loop runs down a
- * column of 6 or 12 contiguous reals into a local accumulator, which the compiler vectorises. blk: 36 + 72 + 36 reals. */
+ * above QD_SINGULAR_RTOL * max diag(M). blk: 4 * 9 + 4 * 18 + 36 reals. */
 static int qd_d_tree_inverse(const casadi_real* restrict M, casadi_real* restrict Minv, casadi_real* restrict blk) {
-  casadi_real *Dinv = blk, *E = blk + 4 * 9, *S = E + 12 * 6; /* E: 12 x 6, column-major, leg l in rows 3l..3l+2 */
+  casadi_real *Dinv = blk, *E = blk + 4 * 9, *S = E + 4 * 18; /* E_l: 3 x 6, column-major */
   casadi_real scale = 0;
   for (int i = 0; i < QD_NV; ++i) scale = M[i + QD_NV * i] > scale ? M[i + QD_NV * i] : scale;
   const casadi_real tol = QD_SINGULAR_RTOL * scale;
+  for (int i = 0; i < 6; ++i) {
+    for (int j = 0; j < 6; ++j) S[i + 6 * j] = M[i + QD_NV * j];
+  }
   for (int l = 0; l < 4; ++l) {
     const int o = 6 + 3 * l;
-    casadi_real* Di = Dinv + 9 * l;
+    casadi_real *Di = Dinv + 9 * l, *El = E + 18 * l;
     for (int c = 0; c < 3; ++c) {
       for (int r = 0; r < 3; ++r) Di[r + 3 * c] = M[o + r + QD_NV * (o + c)];
     }
     if (qd_d_spd_inverse(Di, 3, tol)) return QD_SINGULAR;
-    for (int i = 0; i < 6; ++i) { /* E_l[:, i] = D_l^-1 M[leg, i] */
-      const casadi_real* m = M + o + QD_NV * i;
-      for (int r = 0; r < 3; ++r) E[3 * l + r + 12 * i] = Di[r] * m[0] + Di[r + 3] * m[1] + Di[r + 6] * m[2];
+    for (int i = 0; i < 6; ++i) { /* E_l[:, i] = D_l^-1 B_l^T[:, i], B_l^T[c, i] = M[o + c, i] */
+      for (int r = 0; r < 3; ++r) {
+        El[r + 3 * i] = Di[r] * M[o + QD_NV * i] + Di[r + 3] * M[o + 1 + QD_NV * i] + Di[r + 6] * M[o + 2 + QD_NV * i];
+      }
     }
-  }
-  for (int j = 0; j < 6; ++j) { /* S = A - sum_l B_l E_l, B_l's columns M[0:6, leg] */
-    casadi_real acc[6];
-    for (int i = 0; i < 6; ++i) acc[i] = M[i + QD_NV * j];
-    for (int k = 0; k < 12; ++k) {
-      const casadi_real e = E[k + 12 * j], *b = M + QD_NV * (6 + k);
-      for (int i = 0; i < 6; ++i) acc[i] -= b[i] * e;
+    for (int j = 0; j < 6; ++j) { /* S -= B_l E_l */
+      for (int i = 0; i < 6; ++i) {
+        S[i + 6 * j] -= M[o + QD_NV * i] * El[3 * j] + M[o + 1 + QD_NV * i] * El[1 + 3 * j] + M[o + 2 + QD_NV * i] * El[2 + 3 * j];
+      }
     }
-    for (int i = 0; i < 6; ++i) S[i + 6 * j] = acc[i];
   }
   if (qd_d_spd_inverse(S, 6, tol)) return QD_SINGULAR;
-  for (int j = 0; j < 6; ++j) { /* the trunk block S^-1, and the legs' rows -E S^-1 */
-    casadi_real acc[12] = {0};
-    for (int k = 0; k < 6; ++k) {
-      const casadi_real s = S[k + 6 * j];
-      Minv[k + QD_NV * j] = s;
-      for (int i = 0; i < 12; ++i) acc[i] -= E[i + 12 * k] * s;
-    }
-    for (int i = 0; i < 12; ++i) Minv[6 + i + QD_NV * j] = acc[i];
+  for (int j = 0; j < 6; ++j) {
+    for (int i = 0; i < 6; ++i) Minv[i + QD_NV * j] = S[i + 6 * j];
   }
-  for (int c = 0; c < 12; ++c) { /* the legs' columns: -S^-1 E^T on the trunk rows, delta_lm D_l^-1 + E S^-1 E^T below */
-    casadi_real top[6] = {0}, acc[12] = {0};
-    for (int k = 0; k < 6; ++k) {
-      const casadi_real e = E[c + 12 * k];
-      for (int i = 0; i < 6; ++i) top[i] -= S[i + 6 * k] * e;
-      for (int i = 0; i < 12; ++i) acc[i] -= Minv[6 + i + QD_NV * k] * e;
+  for (int l = 0; l < 4; ++l) { /* F_l = E_l S^-1 (3 x 6): Minv's leg-trunk block is -F_l */
+    const int o = 6 + 3 * l;
+    const casadi_real* El = E + 18 * l;
+    for (int j = 0; j < 6; ++j) {
+      for (int r = 0; r < 3; ++r) {
+        casadi_real s = 0;
+        for (int i = 0; i < 6; ++i) s += El[r + 3 * i] * S[i + 6 * j];
+        Minv[o + r + QD_NV * j] = -s;
+        Minv[j + QD_NV * (o + r)] = -s;
+      }
     }
-    for (int r = 0; r < 3; ++r) acc[c - c % 3 + r] += Dinv[9 * (c / 3) + r + 3 * (c % 3)];
-    for (int i = 0; i < 6; ++i) Minv[i + QD_NV * (6 + c)] = top[i];
-    for (int i = 0; i < 12; ++i) Minv[6 + i + QD_NV * (6 + c)] = acc[i];
+  }
+  for (int l = 0; l < 4; ++l) { /* leg-leg blocks: delta_lm D_l^-1 + F_l E_m^T = delta_lm D_l^-1 - Minv[l, trunk] E_m^T */
+    const int o = 6 + 3 * l;
+    for (int m = 0; m <= l; ++m) {
+      const int p = 6 + 3 * m;
+      const casadi_real* Em = E + 18 * m;
+      for (int c = 0; c < 3; ++c) {
+        for (int r = 0; r < 3; ++r) {
+          casadi_real s = m == l ? Dinv[9 * l + r + 3 * c] : 0;
+          for (int i = 0; i < 6; ++i) s -= Minv[o + r + QD_NV * i] * Em[c + 3 * i];
+          Minv[o + r + QD_NV * (p + c)] = s;
+          Minv[p + c + QD_NV * (o + r)] = s;
+        }
+      }
+    }
   }
   return 0;
 }
