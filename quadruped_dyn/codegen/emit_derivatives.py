@@ -111,10 +111,20 @@ class DfdRPieces:
 
 
 def dfd_r_pieces(robot: Robot, stance: StanceSet) -> DfdRPieces:
-    """The per-stance generated pieces of dfd_r (module docstring) as Functions for static C helpers.
-    id_r = S(q_r) F(q, v, a) with F the full rnea (no foot forces) at q = (0, quat, joints), v = (v_b, qd_j),
-    a = (a_b, qdd_j): only the trunk rows v_b, a_b ("the lift") depend on (q_r, qd_r, quat) other than by
-    identity, S only on the stance legs' joints and only through S_b (S = [S_b, I])."""
+    """The per-stance generated pieces of dfd_r (module docstring) as Functions for static C helpers: the lift
+    (``dfd_r_lift``), its sines and cosines as inputs, split at its seeds."""
+    lift = dfd_r_lift(robot, stance)
+    x = lift.sx_in()
+    reads_quat = bool(ca.depends_on(ca.vertcat(*lift.call(x)[:2]), x[3]))
+    primal, direction = split_at_seeds(trig_as_inputs(lift, 0), seeds=(4, 5, 6, 7), n_primal_out=2)
+    return DfdRPieces(primal, direction, sum(1 << i for i in stance.feet), reads_quat)
+
+
+def dfd_r_lift(robot: Robot, stance: StanceSet) -> ca.Function:
+    """dfd_r_lift (q_r, qd_r, qdd_r, quat, F_b, dq_r, dtheta, dqd_r) -> (v_b, a_b, dv_b, da_b, dSF, da_qd): the lift
+    and its derivatives in one piece. id_r = S(q_r) F(q, v, a) with F the full rnea (no foot forces) at
+    q = (0, quat, joints), v = (v_b, qd_j), a = (a_b, qdd_j): only the trunk rows v_b, a_b ("the lift") depend on
+    (q_r, qd_r, quat) other than by identity, S only on the stance legs' joints and only through S_b (S = [S_b, I])."""
     n = 13 if len(stance.feet) == 2 else 12
     q_r, qd_r, qdd_r, quat = (ca.SX.sym(s, k) for s, k in (("q_r", n), ("qd_r", n), ("qdd_r", n), ("quat", 4)))
     dq_r, dtheta, dqd_r, F_b = ca.SX.sym("dq_r", n), ca.SX.sym("dtheta", 3), ca.SX.sym("dqd_r", n), ca.SX.sym("F_b", 6)
@@ -128,11 +138,9 @@ def dfd_r_pieces(robot: Robot, stance: StanceSet) -> DfdRPieces:
         raise AssertionError("the lift or S reads a swing leg's joint or rate or the roll q_r[12], or S reads quat; "
                              "qd_dfd_r_solve assumes neither")
     lifted = ca.jtimes(trunk, ca.vertcat(q_r, quat), ca.vertcat(dq_r, quaternion_tangent(quat) @ dtheta))
-    lift = ca.Function("dfd_r_lift", [q_r, qd_r, qdd_r, quat, F_b, dq_r, dtheta, dqd_r],
+    return ca.Function("dfd_r_lift", [q_r, qd_r, qdd_r, quat, F_b, dq_r, dtheta, dqd_r],
                        [v[:6], a[:6], lifted[:6], lifted[6:], ca.jtimes(SF, q_r, dq_r), ca.jtimes(a[:6], qd_r, dqd_r)],
                        {"cse": True})
-    primal, direction = split_at_seeds(trig_as_inputs(lift, 0), seeds=(4, 5, 6, 7), n_primal_out=2)
-    return DfdRPieces(primal, direction, sum(1 << i for i in stance.feet), bool(ca.depends_on(trunk, quat)))
 
 
 def split_at_seeds(f: ca.Function, seeds: tuple[int, ...], n_primal_out: int) -> tuple[ca.Function, ca.Function]:
