@@ -340,16 +340,24 @@ def stem(robot: Robot) -> str:
     return f"qd_{re.sub(r'[^A-Za-z0-9_]', '_', robot.name)}"
 
 
-def _static_c(c_name: str, f: ca.Function, precision: str, host_helpers: frozenset[str] = frozenset()) -> str:
+def _static_c(c_name: str, f: ca.Function, precision: str, host_helpers: frozenset[str] = frozenset(),
+              all_io: bool = False) -> str:
     """``f`` as the static C function ``c_name`` (arg, res, iw, w, mem): CasADi's evaluation body alone,
     checked to need no work memory (the templates call it with none) and no helper but casadi_sq and
-    ``host_helpers`` (CasADi helpers the file it goes into defines)."""
+    ``host_helpers`` (CasADi helpers the file it goes into defines). ``all_io``: the templates pass every input
+    and output (none NULL), so CasADi's tests of each pointer at each read and write are left out."""
     c_text, h_text = casadi_c(c_name, [f], precision)
     body = re.search(r"static int casadi_f0\(.*?\n\}\n", c_text, re.S)
     if not body or work_sizes(h_text)[f.name()] != (0, 0) or set(re.findall(r"casadi_\w+", body.group(0))) - {
             "casadi_f0", "casadi_real", "casadi_int", "casadi_sq", *host_helpers}:
         raise AssertionError(f"{f.name()}: CasADi's body is not self-contained; the templates need it to be")
-    return body.group(0).replace("casadi_f0", c_name)
+    text = body.group(0).replace("casadi_f0", c_name)
+    if all_io:
+        text = re.sub(r"arg\[(\d+)\]\? (arg\[\1\]\[\d+\]) : 0;", r"\2;", text)
+        text = re.sub(r"if \(res\[(\d+)\]!=0\) (res\[\1\]\[\d+\]=)", r"\2", text)
+        if re.search(r"arg\[\d+\]\?|res\[\d+\]!=0", text):
+            raise AssertionError(f"{f.name()}: a test of an argument pointer is left after all_io")
+    return text
 
 
 def _dense_tables_c(sp: ca.Sparsity) -> str:
@@ -385,7 +393,9 @@ def _reduced_helpers_c(robot: Robot, stance: StanceSet, dfd_r: DfdRPieces, M_ful
             + _dense_tables_c(M_full)
             + _static_c("qd_regularity", regularity_function(robot, stance), precision) + "\n"
             + _static_c("qd_reduced_parts", parts, precision) + "\n"
-            + _static_c("qd_dfd_r_lift", dfd_r.lift, precision))
+            + f"#define QD_DFD_R_TAPE {dfd_r.tape} /* reals of the lift's tape: emit_derivatives.split_at_seeds */\n"
+            + _static_c("qd_dfd_r_lift", dfd_r.lift, precision, all_io=True) + "\n"
+            + _static_c("qd_dfd_r_lift_dir", dfd_r.lift_dir, precision, all_io=True))
 
 
 def _checked_reduced_c(c_text: str, casadi_header: str, functions: list[ca.Function], helpers_c: str,
@@ -416,7 +426,7 @@ def _checked_reduced_c(c_text: str, casadi_header: str, functions: list[ca.Funct
             body = rf"\1  return qd_fd_r_solve({f.nnz_out(0)}, {legs}, arg, res, iw, w, mem);\n"
         elif f.name().startswith(PREFIX + "dfd_r_"):  # caller work memory: declare_dfd_r_work; size checked at compile time
             n = f.size1_out(0)
-            body = (rf"\1  typedef char w_agrees[QD_DFD_R_W({n}) == {dfd_r_work_reals(n)} ? 1 : -1];\n"
+            body = (rf"\1  typedef char w_agrees[QD_DFD_R_W({n}) == {dfd_r_work_reals(n, dfd_r.tape)} ? 1 : -1];\n"
                     r"  (void)sizeof(w_agrees);\n"
                     rf"  return qd_dfd_r_solve({n}, {dfd_r.legs}, {int(dfd_r.lift_reads_quat)}, {cg_r}, arg, res, iw, w, mem);\n")
         else:
@@ -428,7 +438,7 @@ def _checked_reduced_c(c_text: str, casadi_header: str, functions: list[ca.Funct
             raise AssertionError(f"entry point of {f.name()} not found in CasADi's output")
         c_text = drop_evaluation(c_text, raw[f.name()])  # every one evaluated above
         if f.name().startswith(PREFIX + "dfd_r_"):
-            c_text, casadi_header = declare_dfd_r_work(c_text, casadi_header, f)
+            c_text, casadi_header = declare_dfd_r_work(c_text, casadi_header, f, dfd_r.tape)
     return c_text, casadi_header
 
 

@@ -23,11 +23,13 @@ In each reduced file ``qd_<robot>_r_<feet>.c`` (``reduced_derivative_functions``
   applies the chain rule over the full-coordinate derivatives: id_r = S F(q, v, a), F the full rnea, so
   d id_r / dx = d(S_b F_b)/dx + S (dF/dq dq/dx + dF/dv dv/dx + M da/dx) with ``qd_did_full`` and ``qd_id_full``
   (the same library) and S_b, T_b, M from ``qd_M_r_parts``; then -M_r^-1 with the LU of ``c/qd_reduced_solve.c``.
-  Per stance set only "the lift" is generated, the static ``qd_dfd_r_lift``: the trunk rows v_b, a_b of v and a
+  Per stance set only "the lift" is generated: the trunk rows v_b, a_b of v and a
   (``ReducedProjection.velocity_and_acceleration``, without forming T) and their forward-mode derivative along
   one direction of (q_r, theta) and one of qd_r at once, with d(S_b F_b) along the q_r direction (2.8-4.3k
-  operations on the paper robot, called once per stance-leg joint: 7-13 calls). Its temporaries (~14 kB in
-  double) are the caller's w, declared by its _work entry (``declare_dfd_r_work``).
+  operations on the paper robot), split (``split_at_seeds``) into the static ``qd_dfd_r_lift`` (v_b, a_b and the
+  tape, the values the derivative reads; once per call) and ``qd_dfd_r_lift_dir`` (the derivative over the tape,
+  ~70 % of the operations; once per stance-leg joint: 7-13 calls). Its temporaries (~16 kB in double, the tape
+  included) are the caller's w, declared by its _work entry (``declare_dfd_r_work``).
 
 Why directions and a chain rule, not CasADi's Jacobians: those take 48-97k operations per reduced
 stance set and 18-21k per GRF solve (~20 bytes of C each), beyond the 6 MB budget of a robot's C.
@@ -93,18 +95,36 @@ def grf_derivative_functions(robot: Robot, stance: StanceSet) -> list[ca.Functio
 class DfdRPieces:
     """What qd_dfd_r_<feet>'s template (``c/qd_reduced_derivatives.c``) calls and is told, for one stance set."""
 
-    #: dfd_r_lift (q_r, qd_r, qdd_r, quat, F_b, dq_r, dtheta, dqd_r, sin q_r, cos q_r) -> (v_b, a_b, dv_b, da_b (6 each),
-    #: dSF (n), da_qd (6)): the lift, its derivative along (dq_r, dtheta), d(S_b F_b) along dq_r, d a_b along dqd_r
+    #: dfd_r_lift (q_r, qd_r, qdd_r, quat, sin q_r, cos q_r) -> (v_b, a_b (6 each), tape): the lift, and the values
+    #: of its algorithm that its derivative reads (``split_at_seeds``), once per dfd_r
     lift: ca.Function
+    #: dfd_r_lift_dir (tape, F_b, dq_r, dtheta, dqd_r) -> (dv_b, da_b (6 each), dSF (n), da_qd (6)): the lift's
+    #: derivative along (dq_r, dtheta), d(S_b F_b) along dq_r, d a_b along dqd_r; once per stance-leg joint
+    lift_dir: ca.Function
     legs: int  # bit i set: leg i is a stance leg (the lift and S depend on its joints, not on the others')
     lift_reads_quat: bool  # two feet: the roll row makes v_b, a_b depend on the trunk orientation
 
+    @property
+    def tape(self) -> int:
+        """Reals of the tape (the lift's values its derivative reads)."""
+        return self.lift.nnz_out(2)
+
 
 def dfd_r_pieces(robot: Robot, stance: StanceSet) -> DfdRPieces:
-    """The per-stance generated piece of dfd_r (module docstring) as a Function for a static C helper.
-    id_r = S(q_r) F(q, v, a) with F the full rnea (no foot forces) at q = (0, quat, joints), v = (v_b, qd_j),
-    a = (a_b, qdd_j): only the trunk rows v_b, a_b ("the lift") depend on (q_r, qd_r, quat) other than by
-    identity, S only on the stance legs' joints and only through S_b (S = [S_b, I])."""
+    """The per-stance generated pieces of dfd_r (module docstring) as Functions for static C helpers: the lift
+    (``dfd_r_lift``), its sines and cosines as inputs, split at its seeds."""
+    lift = dfd_r_lift(robot, stance)
+    x = lift.sx_in()
+    reads_quat = bool(ca.depends_on(ca.vertcat(*lift.call(x)[:2]), x[3]))
+    primal, direction = split_at_seeds(trig_as_inputs(lift, 0), seeds=(4, 5, 6, 7), n_primal_out=2)
+    return DfdRPieces(primal, direction, sum(1 << i for i in stance.feet), reads_quat)
+
+
+def dfd_r_lift(robot: Robot, stance: StanceSet) -> ca.Function:
+    """dfd_r_lift (q_r, qd_r, qdd_r, quat, F_b, dq_r, dtheta, dqd_r) -> (v_b, a_b, dv_b, da_b, dSF, da_qd): the lift
+    and its derivatives in one piece. id_r = S(q_r) F(q, v, a) with F the full rnea (no foot forces) at
+    q = (0, quat, joints), v = (v_b, qd_j), a = (a_b, qdd_j): only the trunk rows v_b, a_b ("the lift") depend on
+    (q_r, qd_r, quat) other than by identity, S only on the stance legs' joints and only through S_b (S = [S_b, I])."""
     n = 13 if len(stance.feet) == 2 else 12
     q_r, qd_r, qdd_r, quat = (ca.SX.sym(s, k) for s, k in (("q_r", n), ("qd_r", n), ("qdd_r", n), ("quat", 4)))
     dq_r, dtheta, dqd_r, F_b = ca.SX.sym("dq_r", n), ca.SX.sym("dtheta", 3), ca.SX.sym("dqd_r", n), ca.SX.sym("F_b", 6)
@@ -118,10 +138,59 @@ def dfd_r_pieces(robot: Robot, stance: StanceSet) -> DfdRPieces:
         raise AssertionError("the lift or S reads a swing leg's joint or rate or the roll q_r[12], or S reads quat; "
                              "qd_dfd_r_solve assumes neither")
     lifted = ca.jtimes(trunk, ca.vertcat(q_r, quat), ca.vertcat(dq_r, quaternion_tangent(quat) @ dtheta))
-    lift = ca.Function("dfd_r_lift", [q_r, qd_r, qdd_r, quat, F_b, dq_r, dtheta, dqd_r],
+    return ca.Function("dfd_r_lift", [q_r, qd_r, qdd_r, quat, F_b, dq_r, dtheta, dqd_r],
                        [v[:6], a[:6], lifted[:6], lifted[6:], ca.jtimes(SF, q_r, dq_r), ca.jtimes(a[:6], qd_r, dqd_r)],
                        {"cse": True})
-    return DfdRPieces(trig_as_inputs(lift, 0), sum(1 << i for i in stance.feet), bool(ca.depends_on(trunk, quat)))
+
+
+def split_at_seeds(f: ca.Function, seeds: tuple[int, ...], n_primal_out: int) -> tuple[ca.Function, ca.Function]:
+    """``f``'s algorithm in two: the primal (the instructions that read no input in ``seeds``: inputs the others,
+    outputs f's first ``n_primal_out`` and the tape, the primal values the rest reads) and the direction (inputs
+    the tape and the seeds, outputs f's others). A caller evaluating f at one point along many seeds (dfd_r's
+    lift, 7-13 directions) runs the primal once and only the direction per seed. The same operations in the same
+    order, rebuilt instruction by instruction from f's algorithm (so the same results to the digit)."""
+    ins = [ca.SX.sym(f.name_in(i), f.sparsity_in(i)) for i in range(f.n_in())]
+    outs = [ca.SX(f.sparsity_out(i)) for i in range(f.n_out())]
+    tape_sym = ca.SX.sym("tape", f.n_instructions())
+    work: dict[int, tuple[ca.SX, bool]] = {}  # slot -> (value, whether it reads a seed)
+    tape: dict[int, int] = {}  # a primal value (its element_hash) -> its entry of the tape
+    tape_values: list[ca.SX] = []
+
+    def read(slot: int) -> ca.SX:  # a value as the direction's algorithm sees it
+        value, seeded = work[slot]
+        if seeded or value.is_constant():
+            return value
+        if value.element_hash() not in tape:
+            tape[value.element_hash()] = len(tape_values)
+            tape_values.append(value)
+        return tape_sym[tape[value.element_hash()]]
+
+    for k in range(f.n_instructions()):
+        op, a, r = f.instruction_id(k), f.instruction_input(k), f.instruction_output(k)
+        if op == ca.OP_OUTPUT:
+            if r[0] < n_primal_out:
+                if work[a[0]][1]:
+                    raise AssertionError(f"{f.name()}: output {r[0]} reads a seed; split_at_seeds assumes it does not")
+                outs[r[0]].nz[r[1]] = work[a[0]][0]
+            else:
+                outs[r[0]].nz[r[1]] = read(a[0])
+        elif op == ca.OP_INPUT:
+            work[r[0]] = (ins[a[0]].nz[a[1]], a[0] in seeds)
+        elif op == ca.OP_CONST:
+            work[r[0]] = (ca.SX(f.instruction_constant(k)), False)
+        elif any(work[x][1] for x in a):
+            args = [read(x) for x in a]
+            work[r[0]] = (ca.SX.unary(op, *args) if len(a) == 1 else ca.SX.binary(op, *args), True)
+        else:
+            args = [work[x][0] for x in a]
+            work[r[0]] = (ca.SX.unary(op, *args) if len(a) == 1 else ca.SX.binary(op, *args), False)
+    others = [i for i in range(f.n_in()) if i not in seeds]
+    primal = ca.Function(f.name(), [ins[i] for i in others], [*outs[:n_primal_out], ca.vertcat(*tape_values)],
+                         [f.name_in(i) for i in others], [*f.name_out()[:n_primal_out], "tape"], {"cse": True})
+    direction = ca.Function(f.name() + "_dir", [tape_sym[:len(tape_values)], *(ins[i] for i in seeds)],
+                            outs[n_primal_out:], ["tape", *(f.name_in(i) for i in seeds)], f.name_out()[n_primal_out:],
+                            {"cse": True})
+    return primal, direction
 
 
 def trig_as_inputs(f: ca.Function, i_q: int) -> ca.Function:
@@ -155,11 +224,12 @@ def trig_as_inputs(f: ca.Function, i_q: int) -> ca.Function:
     return ca.Function(f.name(), [*ins, sin, cos], outs, [*f.name_in(), "sin", "cos"], f.name_out(), {"cse": True})
 
 
-def dfd_r_work_reals(n: int) -> int:
+def dfd_r_work_reals(n: int, tape: int) -> int:
     """Reals of caller work memory qd_dfd_r_<feet> uses (``QD_DFD_R_W`` of c/qd_reduced_derivatives.c, which
     checks at compile time that the two agree): M_r's LU, qdd_r, S_b, T_b, M, d rnea/dq, d rnea/dv, F, one
-    full-coordinate column, one reduced column, and the 3 n + 3 right-hand sides of the one LU solve."""
-    return n * n + 14 * n + 3 * 18 * 18 + 36 + n * (3 * n + 3)
+    full-coordinate column, one reduced column, the 3 n + 3 right-hand sides of the one LU solve, and the lift's
+    tape (``DfdRPieces.tape``)."""
+    return n * n + 14 * n + 3 * 18 * 18 + 36 + n * (3 * n + 3) + tape
 
 
 def reduced_derivative_functions(robot: Robot, stance: StanceSet) -> list[ca.Function]:
@@ -173,10 +243,10 @@ def reduced_derivative_functions(robot: Robot, stance: StanceSet) -> list[ca.Fun
     return [dfd]
 
 
-def declare_dfd_r_work(c_text: str, h_text: str, f: ca.Function) -> tuple[str, str]:
+def declare_dfd_r_work(c_text: str, h_text: str, f: ca.Function, tape: int) -> tuple[str, str]:
     """dfd_r_<feet>'s _work / _work_bytes entries and its header's _SZ_W state the caller's w it uses
     (``dfd_r_work_reals``); CasADi's say 0 for the signature-only Function."""
-    return declare_work(c_text, h_text, f.name(), dfd_r_work_reals(f.size1_out(0)))
+    return declare_work(c_text, h_text, f.name(), dfd_r_work_reals(f.size1_out(0), tape))
 
 
 def derivative_functions(robot: Robot) -> list[ca.Function]:

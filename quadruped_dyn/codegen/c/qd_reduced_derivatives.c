@@ -10,9 +10,11 @@
  *   d id_r/dx = d(S_b F_b)/dx at fixed F + S (dF/dq dq/dx + dF/dv dv/dx + M da/dx),
  * with dF/dq, dF/dv from qd_did_full and F from qd_id_full (qd_<robot>_d.c, qd_<robot>.c: same library),
  * S_b, T_b and M from qd_M_r_parts. Only the trunk rows v_b, a_b ("the lift") depend on x other than by
- * identity: their derivative along a joint angle or theta is the generated qd_dfd_r_lift (one forward-mode
- * direction per call, the angles' sines and cosines taken once and passed in, only for the stance legs' joints and, for two feet, theta); along qd_r, dv_b = T_b and
- * da_b from qd_dfd_r_parts, which also gives d(S_b F_b)/dq_r. The products in loops.
+ * identity: the generated qd_dfd_r_lift gives them once (the angles' sines and cosines taken once and passed in)
+ * with its tape, the values of its algorithm that its derivative reads; their derivative along a joint angle or
+ * theta is the generated qd_dfd_r_lift_dir over that tape (one forward-mode direction per call, only for the stance
+ * legs' joints and, for two feet, theta); along qd_r, dv_b = T_b and da_b from qd_dfd_r_lift_dir, which also gives
+ * d(S_b F_b)/dq_r. The products in loops.
  * The trunk orientation is the separate input quat: dqdd_dq is the partial derivative at fixed quat (its
  * 13th column, the roll, is zero: the functions read the roll from quat), dqdd_dtheta (n x 3) the
  * derivative along a body-frame increment quat -> quat (x) Exp(dtheta/2), Pinocchio's convention for
@@ -26,7 +28,7 @@ const casadi_int* qd_did_full_sparsity_out(casadi_int i);
 int qd_id_full(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem);
 
 /* Reals of w qd_dfd_r_solve uses for n coordinates (the generator states the same number, checked below). */
-#define QD_DFD_R_W(n) ((n) * (n) + 14 * (n) + 3 * 18 * 18 + 36 + (n) * QD_DFD_R_COLUMNS(n))
+#define QD_DFD_R_W(n) ((n) * (n) + 14 * (n) + 3 * 18 * 18 + 36 + (n) * QD_DFD_R_COLUMNS(n) + QD_DFD_R_TAPE)
 /* right-hand sides of the one LU solve: the n angle and n rate columns, 3 rotations, and the n of M_r^-1 */
 #define QD_DFD_R_COLUMNS(n) (3 * (n) + 3)
 
@@ -97,7 +99,7 @@ static void qd_dfd_r_store(int n, int m, casadi_real** res, int k, const casadi_
 QD_INLINE int qd_dfd_r_solve(int n, int legs, int lift_quat, qd_eval_fn CG_r, const casadi_real** arg, casadi_real** res,
                              casadi_int* iw, casadi_real* w, int mem) {
   casadi_real *M_r = w, *qdd = M_r + n * n, *S_b = qdd + n, *T_b = S_b + 6 * n, *M = T_b + 6 * n, *G = M + 18 * 18,
-              *H = G + 18 * 18, *F = H + 18 * 18, *y = F + 18, *col = y + 18, *X = col + n;
+              *H = G + 18 * 18, *F = H + 18 * 18, *y = F + 18, *col = y + 18, *X = col + n, *tape = X + n * QD_DFD_R_COLUMNS(n);
   const int m = QD_DFD_R_COLUMNS(n);
   casadi_real q[19] = {0}, v[18], a[18], f[12] = {0}, dv[6], da[6], dSF[QD_N_MAX], da_qd[6];
   casadi_real dq[QD_N_MAX] = {0}, dqd[QD_N_MAX] = {0}, dtheta[3] = {0}, sin_q[QD_N_MAX], cos_q[QD_N_MAX];
@@ -111,14 +113,13 @@ QD_INLINE int qd_dfd_r_solve(int n, int legs, int lift_quat, qd_eval_fn CG_r, co
   flag = qd_fd_r_finish(n, CG_r, arg, M_r, piv, qdd, iw, w, mem);
   if (flag) return flag;
   qd_lu_solve(n, M_r, piv, qdd);
-  /* the lift at qdd_r (its directions unused yet: F zero), then F, dF/dq, dF/dv at (q, v, a) */
-  for (int i = 0; i < 18; ++i) F[i] = 0;
-  for (int i = 0; i < n; ++i) { /* the lift reads the angles' sines and cosines: taken once for its 7-13 calls */
+  /* the lift at qdd_r and its tape, then F, dF/dq, dF/dv at (q, v, a) */
+  for (int i = 0; i < n; ++i) { /* the lift reads the angles' sines and cosines */
     sin_q[i] = sin(arg[0][i]);
     cos_q[i] = cos(arg[0][i]);
   }
-  const casadi_real* l_arg[10] = {arg[0], arg[1], qdd, arg[3], F, dq, dtheta, dqd, sin_q, cos_q};
-  casadi_real* l_res[6] = {v, a, 0, 0, 0, 0};
+  const casadi_real* l_arg[6] = {arg[0], arg[1], qdd, arg[3], sin_q, cos_q};
+  casadi_real* l_res[3] = {v, a, tape};
   flag = qd_dfd_r_lift(l_arg, l_res, iw, w, mem);
   if (flag) return flag;
   for (int i = 0; i < 4; ++i) q[3 + i] = arg[3][i];
@@ -135,11 +136,8 @@ QD_INLINE int qd_dfd_r_solve(int n, int legs, int lift_quat, qd_eval_fn CG_r, co
   if (flag) return flag;
   qd_densify(qd_did_full_sparsity_out(0), G);
   qd_densify(qd_did_full_sparsity_out(1), H);
-  l_res[0] = l_res[1] = 0;
-  l_res[2] = dv;
-  l_res[3] = da;
-  l_res[4] = dSF;
-  l_res[5] = da_qd;
+  const casadi_real* t_arg[5] = {tape, F, dq, dtheta, dqd};
+  casadi_real* t_res[4] = {dv, da, dSF, da_qd};
   /* columns of -d id_r/dx, then M_r^-1 of each: the joint angle and rate j together (one lift call for a
      stance leg's joint; the roll, read by no function, has a zero column; its rate moves the lift) */
   for (int j = 0; j < n; ++j) {
@@ -147,7 +145,7 @@ QD_INLINE int qd_dfd_r_solve(int n, int legs, int lift_quat, qd_eval_fn CG_r, co
     if (moves) {
       dq[j] = j < 12;
       dqd[j] = 1;
-      flag = qd_dfd_r_lift(l_arg, l_res, iw, w, mem);
+      flag = qd_dfd_r_lift_dir(t_arg, t_res, iw, w, mem);
       dq[j] = dqd[j] = 0;
       if (flag) return flag;
     }
@@ -164,7 +162,7 @@ QD_INLINE int qd_dfd_r_solve(int n, int legs, int lift_quat, qd_eval_fn CG_r, co
     for (int i = 0; i < 18; ++i) y[i] = G[i + 18 * (3 + k)];
     if (lift_quat) {
       dtheta[k] = 1;
-      flag = qd_dfd_r_lift(l_arg, l_res, iw, w, mem);
+      flag = qd_dfd_r_lift_dir(t_arg, t_res, iw, w, mem);
       dtheta[k] = 0;
       if (flag) return flag;
       qd_dfd_r_through_trunk(H, M, dv, da, y);
