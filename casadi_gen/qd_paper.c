@@ -31,11 +31,9 @@ extern "C" {
  * calls sin, cos, ... exactly as before. */
 #define QD_REAL_IS_FLOAT (sizeof(casadi_real) == sizeof(float))
 #define QD_REAL_IS_EXTENDED (sizeof(casadi_real) > sizeof(double))
-static inline casadi_real qd_sin(casadi_real x) { return QD_REAL_IS_FLOAT ? (casadi_real)sinf((float)x) : QD_REAL_IS_EXTENDED ? (casadi_real)sinl((long double)x) : (casadi_real)sin((double)x); }
-static inline casadi_real qd_cos(casadi_real x) { return QD_REAL_IS_FLOAT ? (casadi_real)cosf((float)x) : QD_REAL_IS_EXTENDED ? (casadi_real)cosl((long double)x) : (casadi_real)cos((double)x); }
-static inline casadi_real qd_tan(casadi_real x) { return QD_REAL_IS_FLOAT ? (casadi_real)tanf((float)x) : QD_REAL_IS_EXTENDED ? (casadi_real)tanl((long double)x) : (casadi_real)tan((double)x); }
-static inline casadi_real qd_sqrt(casadi_real x) { return QD_REAL_IS_FLOAT ? (casadi_real)sqrtf((float)x) : QD_REAL_IS_EXTENDED ? (casadi_real)sqrtl((long double)x) : (casadi_real)sqrt((double)x); }
-static inline casadi_real qd_fabs(casadi_real x) { return QD_REAL_IS_FLOAT ? (casadi_real)fabsf((float)x) : QD_REAL_IS_EXTENDED ? (casadi_real)fabsl((long double)x) : (casadi_real)fabs((double)x); }
+#define QD_MATH(fn) static inline casadi_real qd_##fn(casadi_real x) { return QD_REAL_IS_FLOAT ? (casadi_real)fn##f((float)x) \
+  : QD_REAL_IS_EXTENDED ? (casadi_real)fn##l((long double)x) : (casadi_real)fn((double)x); }
+QD_MATH(sin) QD_MATH(cos) QD_MATH(tan) QD_MATH(sqrt) QD_MATH(fabs)
 
 #ifndef casadi_int
 #define casadi_int long long int

@@ -302,9 +302,9 @@ _PRECISION_MATH = """
  * calls sin, cos, ... exactly as before. */
 #define QD_REAL_IS_FLOAT (sizeof(casadi_real) == sizeof(float))
 #define QD_REAL_IS_EXTENDED (sizeof(casadi_real) > sizeof(double))
-""" + "".join(f"static inline casadi_real qd_{f}(casadi_real x) {{ return QD_REAL_IS_FLOAT ? (casadi_real){f}f((float)x) "
-              f": QD_REAL_IS_EXTENDED ? (casadi_real){f}l((long double)x) : (casadi_real){f}((double)x); }}\n"
-              for f in _WRAPPED_MATH)
+#define QD_MATH(fn) static inline casadi_real qd_##fn(casadi_real x) { return QD_REAL_IS_FLOAT ? (casadi_real)fn##f((float)x) \\
+  : QD_REAL_IS_EXTENDED ? (casadi_real)fn##l((long double)x) : (casadi_real)fn((double)x); }
+""" + " ".join(f"QD_MATH({f})" for f in _WRAPPED_MATH) + "\n"
 #: CasADi's default precision block; the wrappers go right after it, so a build without
 #: -Dcasadi_real (double, the default) compiles.
 _CASADI_REAL_DEFAULT = re.compile(r"#ifndef casadi_real\n#define casadi_real [\w ]+\n#endif\n")  # double or float
