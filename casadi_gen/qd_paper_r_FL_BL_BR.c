@@ -61,7 +61,7 @@ static inline casadi_real qd_fabs(casadi_real x) { return QD_REAL_IS_FLOAT ? (ca
   #endif
 #endif
 
-casadi_real casadi_sq(casadi_real x) { return x*x;}
+static inline casadi_real casadi_sq(casadi_real x) { return x*x;}
 
 /* Configuration this file was compiled with */
 CASADI_SYMBOL_EXPORT void qd_paper_r_FL_BL_BR_casadi_version(int* major, int* minor, int* patch) {
