@@ -458,7 +458,7 @@ def _joint_rows_first(c_text: str, functions: list[ca.Function], precision: str)
         if name == "id_full":  # (w_res, tau): the torques first
             ordered, res = [outs[1], outs[0]], "{res[1], res[0]}"
         else:  # one output, compressed-column nonzeros: rows 6..17 of a vector, columns 6..17 of M
-            nz = ca.vertcat(*outs[0].nonzeros())
+            nz = outs[0].nz[:]  # column vector of the nonzeros
             k = 6 if f.size2_out(0) == 1 else int(f.sparsity_out(0).colind()[6])
             ordered, res = [nz[k:], nz[:k]], f"{{res[0] ? res[0] + {k} : 0, res[0]}}"
         if f.n_out() != (2 if name == "id_full" else 1) or f.sz_arg() != f.n_in():
