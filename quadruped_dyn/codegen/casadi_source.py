@@ -1,5 +1,6 @@
 """CasADi's C for a list of Functions: the source and CasADi's header text (unused parameters
-cast to void for -Wextra -Werror), the work sizes it states, the entry-point pattern, the C templates' folder.
+cast to void for -Wextra -Werror, the scalar helpers static inline), the work sizes it states, the entry-point
+pattern, the C templates' folder.
 The one place ``codegen.emit`` and ``codegen.emit_derivatives`` both build on."""
 
 from __future__ import annotations
