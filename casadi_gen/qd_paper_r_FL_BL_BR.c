@@ -61,7 +61,7 @@ QD_MATH(sin) QD_MATH(cos) QD_MATH(tan) QD_MATH(sqrt) QD_MATH(fabs)
   #endif
 #endif
 
-casadi_real casadi_sq(casadi_real x) { return x*x;}
+static inline casadi_real casadi_sq(casadi_real x) { return x*x;}
 
 /* Configuration this file was compiled with */
 CASADI_SYMBOL_EXPORT void qd_paper_r_FL_BL_BR_casadi_version(int* major, int* minor, int* patch) {

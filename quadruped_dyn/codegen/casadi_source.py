@@ -1,5 +1,6 @@
 """CasADi's C for a list of Functions: the source and CasADi's header text (unused parameters
-cast to void for -Wextra -Werror), the work sizes it states, the entry-point pattern, the C templates' folder.
+cast to void for -Wextra -Werror, the scalar helpers static inline), the work sizes it states, the entry-point
+pattern, the C templates' folder.
 The one place ``codegen.emit`` and ``codegen.emit_derivatives`` both build on."""
 
 from __future__ import annotations
@@ -30,6 +31,13 @@ def silence_unused_parameters(c_source: str) -> str:
     return re.sub(r"(void \w+_release\(int mem\) \{\n)", lambda m: m.group(1) + "  (void)mem;\n", c_source)
 
 
+def static_helpers(c_source: str) -> str:
+    """CasADi defines its scalar helpers (casadi_sq, casadi_fabs) with external linkage: in a -fPIC build gcc
+    does not inline an interposable function, and a call in straight-line code spills every live floating-point
+    register (all are caller-saved). ``static inline``, each file keeps its own (their names carry the file's prefix)."""
+    return re.sub(r"\ncasadi_real (casadi_(?:sq|fabs))\(", r"\nstatic inline casadi_real \1(", c_source)
+
+
 TEMPLATES = Path(__file__).resolve().parent / "c"
 
 
@@ -40,7 +48,8 @@ def casadi_c(file_stem: str, functions: list[ca.Function], precision: str) -> tu
         cg.add(f)
     with tempfile.TemporaryDirectory() as tmp:
         cg.generate(tmp + os.sep)
-        return silence_unused_parameters((Path(tmp) / f"{file_stem}.c").read_text()), (Path(tmp) / f"{file_stem}.h").read_text()
+        c_source = static_helpers(silence_unused_parameters((Path(tmp) / f"{file_stem}.c").read_text()))
+        return c_source, (Path(tmp) / f"{file_stem}.h").read_text()
 
 
 def drop_evaluation(c_text: str, raw: str) -> str:

@@ -442,19 +442,73 @@ def _checked_reduced_c(c_text: str, casadi_header: str, functions: list[ca.Funct
     return c_text, casadi_header
 
 
+#: The full terms whose C evaluates the joint rows first (``_joint_rows_first``); the GRF solves call id_full's.
+JOINT_ROWS_FIRST = ("M_full", "G_full", "nle_full", "id_full")
+_SIGNATURE = "(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem)"
+
+
+def _host_helpers(c_text: str) -> frozenset[str]:
+    """The CasADi helpers (e.g. casadi_sq, casadi_fabs) a generated file defines."""
+    return frozenset(re.findall(r"\n(?:static (?:inline )?)?casadi_real (casadi_\w+)\(", c_text))
+
+
+def _joint_rows_first(c_text: str, functions: list[ca.Function], precision: str) -> str:
+    """Evaluate M_full, G_full, nle_full and id_full joint rows first (M_full: its joint columns). CasADi's C
+    evaluates a graph output by output, each depth first: the trunk rows come first and gather all four legs,
+    so the legs' recursions interleave and their temporaries are live together (spilled: x86-64 has 16
+    registers). With the joint rows first each leg's recursion runs to its end before the next starts and
+    the trunk rows then add up the legs' wrenches. Each entry point calls a static qd_<name>_eval of its own
+    signature: the same graph with its outputs in that order (``_static_c``) and mapped back, CasADi's evaluation
+    in the signature's order dropped. The same operations on the same values (docs/benchmark.md)."""
+    raw = evaluations(c_text, [f.name() for f in functions])
+    helpers = []
+    for f in functions:
+        name = f.name()[len(PREFIX):]
+        if name not in JOINT_ROWS_FIRST:
+            continue
+        args = f.sx_in()
+        outs = f.call(args)
+        if name == "id_full":  # (w_res, tau): the torques first
+            ordered, res = [outs[1], outs[0]], "{res[1], res[0]}"
+        else:  # one output, compressed-column nonzeros: rows 6..17 of a vector, columns 6..17 of M
+            nz = outs[0].nz[:]  # column vector of the nonzeros
+            k = 6 if f.size2_out(0) == 1 else int(f.sparsity_out(0).colind()[6])
+            ordered, res = [nz[k:], nz[:k]], f"{{res[0] ? res[0] + {k} : 0, res[0]}}"
+        if f.n_out() != (2 if name == "id_full" else 1) or f.sz_arg() != f.n_in():
+            raise AssertionError(f"{f.name()}: not the signature _joint_rows_first reorders")
+        body = ca.Function(f"{name}_joint_rows_first", args, ordered, {"cse": True})
+        helpers.append(_static_c(f"qd_{name}_joint_rows_first", body, precision, _host_helpers(c_text))
+                       + f"static int qd_{name}_eval{_SIGNATURE} {{\n  casadi_real* r[2] = {res};\n"
+                       f"  return qd_{name}_joint_rows_first(arg, r, iw, w, mem);\n}}\n")
+        c_text, count = re.subn(entry_point(f.name()), rf"\1  return qd_{name}_eval(arg, res, iw, w, mem);\n", c_text)
+        if count != 1:
+            raise AssertionError(f"entry point of {f.name()} not found in CasADi's output")
+        c_text = drop_evaluation(c_text, raw[f.name()])
+    first = _first_evaluation(c_text)
+    return c_text[:first] + "\n" + "\n".join(helpers) + c_text[first:]
+
+
+def _first_evaluation(c_text: str) -> int:
+    """Where the first of CasADi's evaluation functions (its comment) or entry points left in ``c_text`` begins:
+    helpers inserted there precede every function that calls them."""
+    found = [m.start() for m in (re.search(r"\n/\* qd_\w+:\(", c_text),
+                                 re.search(r"\nCASADI_SYMBOL_EXPORT int qd_\w+\(const casadi_real\*\* arg", c_text)) if m]
+    if not found:
+        raise AssertionError("no CasADi evaluation function in the generated source")
+    return min(found)
+
+
 def _grf_through_id_full(robot: Robot, c_text: str, functions: list[ca.Function], precision: str) -> str:
     """Route every qd_grf_<feet> of qd_<robot>.c through ``c/qd_grf_solve.c``: id_full's evaluation (one
     Newton-Euler pass) and a generated static qd_grf_balance_<feet> (``grf.grf_balance``), instead of
     CasADi's unrolled graph, which repeats the recursion in each of the 15 (dropped: ~0.4 MB per robot)."""
-    raw = evaluations(c_text, [f.name() for f in functions])
+    raw = evaluations(c_text, [f.name() for f in functions if f.name().startswith(PREFIX + "grf_")])
     id_full = next(f for f in functions if f.name() == PREFIX + "id_full")
     if id_full.name_in() != ["q", "v", "a", "f"] or id_full.name_out() != ["w_res", "tau"] or id_full.sz_arg() != 4:
         raise AssertionError("qd_grf_solve calls id_full as (q, v, a, f) -> (w_res, tau) with no work memory")
     q, w_req = ca.SX.sym("q", NQ_FULL), ca.SX.sym("w_req", 6)
-    host_helpers = frozenset(re.findall(r"\n(?:static )?casadi_real (casadi_\w+)\(", c_text))  # e.g. casadi_fabs
-    signature = "(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem)"
-    helpers = [f"static int {raw[id_full.name()]}{signature};\n#define QD_ID_FULL_EVAL {raw[id_full.name()]}\n"
-               + (TEMPLATES / "qd_grf_solve.c").read_text()]
+    host_helpers = _host_helpers(c_text)
+    helpers = ["#define QD_ID_FULL_EVAL qd_id_full_eval /* _joint_rows_first */\n" + (TEMPLATES / "qd_grf_solve.c").read_text()]
     for f in functions:
         if not f.name().startswith(PREFIX + "grf_"):
             continue
@@ -474,7 +528,7 @@ def _grf_through_id_full(robot: Robot, c_text: str, functions: list[ca.Function]
         if count != 1:
             raise AssertionError(f"entry point of {f.name()} not found in CasADi's output")
         c_text = drop_evaluation(c_text, raw[f.name()])
-    first = c_text.index(f"\n/* {functions[0].name()}:")
+    first = _first_evaluation(c_text)
     return c_text[:first] + "\n" + "\n".join(helpers) + c_text[first:]
 
 
@@ -517,7 +571,7 @@ def generate(robot: Robot, out_dir: Path, precision: str = "double",
     name = stem(robot)
     full = codegen_functions(robot)
     c_full, casadi_header = casadi_c(name, full, precision)
-    c_full = _grf_through_id_full(robot, c_full, full, precision)
+    c_full = _grf_through_id_full(robot, _joint_rows_first(c_full, full, precision), full, precision)
     sources = {f"{name}.c": c_full}
     functions = list(full)
     m_full = next(f for f in full if f.name() == PREFIX + "M_full").sparsity_out(0)  # the reduced files densify it
