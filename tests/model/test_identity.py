@@ -179,7 +179,8 @@ def test_the_foot_frame_is_stated_and_can_be_named(tmp_path):
     assert _key(named) != _key(load_robot(str(sensor)))
     by_label = load_robot(str(sensor), foot_frames={"FL": "FL_foot", "FR": "FR_foot", "BL": "BL_foot", "BR": "BR_foot_sensor"})
     assert by_label.legs[3].foot_frame == "BR_foot_sensor" and by_label.legs[0].foot_frame == "FL_foot"
-    for bad, message in [(["FL_foot"], "four frame names"), ("a,b,c,d", "foot frame .a. of leg FL is not a frame"), (42, "expected four"),
+    for bad, message in [(["FL_foot"], "four frame names"), ("a,b,c,d", "foot frame .a. of leg FL is not a frame"),
+                         (42, "expected four"),
                          (["FR_foot", "FL_foot", "BL_foot", "BR_foot"], "does not hang from the knee"),
                          ({"FL": "FL_foot"}, "expected \\['FL', 'FR', 'BL', 'BR'\\]")]:
         with pytest.raises(InputError, match=message):
