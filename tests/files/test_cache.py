@@ -209,10 +209,10 @@ def test_truncated_generated_library_is_rebuilt_without_a_signal(paper, tmp_path
     (entry / (lib.name + HASH_SUFFIX)).write_text((original.path.parent / (lib.name + HASH_SUFFIX)).read_text())
     child = (
         "import numpy as np\n"
-        "from quadruped_dyn.compiled import CompiledFunction, compiled_library\n"
-        "from quadruped_dyn.pinocchio_ref import PinocchioReference\n"
-        "from quadruped_dyn.robot import load_robot\n"
-        "from quadruped_dyn.state import random_state\n"
+        "from quadruped_dyn.codegen.library import CompiledFunction, compiled_library\n"
+        "from quadruped_dyn.references.pinocchio import PinocchioReference\n"
+        "from quadruped_dyn.model.robot import load_robot\n"
+        "from quadruped_dyn.model.state import random_state\n"
         "r = load_robot('paper')\n"
         "s = random_state(r.lower, r.upper, np.random.default_rng(0))\n"
         "(M,) = CompiledFunction(compiled_library(r), 'M_full')(s.q)\n"

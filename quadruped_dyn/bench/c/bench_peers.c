@@ -1,4 +1,4 @@
-/* Times generated functions side by side (quadruped_dyn.peers). Usage: bench_peers CALLS REPS.
+/* Times generated functions side by side (quadruped_dyn.bench.peers). Usage: bench_peers CALLS REPS.
  * The functions are listed in qd_peers_list.h as QD_FN(name); every input points at the same
  * array of small pseudo-random numbers (timing only: the values are checked in Python).
  * Prints one line per function: "name median_ns" (median over REPS runs of CALLS calls, in this
