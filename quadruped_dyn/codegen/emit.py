@@ -383,11 +383,12 @@ def _dense_tables_c(sp: ca.Sparsity) -> str:
     if (nrow, sp.size2()) != (18, 18) or any(d > holes + k for k, d in enumerate(at)):
         raise AssertionError("M_full's pattern is not an 18 x 18 compressed-column one; qd_M_full_dense assumes it")
     zero = sorted(set(range(nrow * sp.size2())) - set(at))
-    runs, zeros = _runs(at), [(d, n) for d, _, n in _runs(zero)]
+    runs = ", ".join(f"{{{d}, {k}, {n}}}" for d, k, n in _runs(at))
+    zeros = ", ".join(f"{{{d}, {n}}}" for d, _, n in _runs(zero))
     return (f"#define QD_M_NNZ {sp.nnz()} /* qd_M_full's nonzeros */\n"
-            f"#define QD_M_RUNS {len(runs)}\n#define QD_M_ZEROS {len(zeros)}\n"
-            f"static const short qd_M_runs[QD_M_RUNS][3] = {{{', '.join('{%d, %d, %d}' % r for r in runs)}}};\n"
-            f"static const short qd_M_zeros[QD_M_ZEROS][2] = {{{', '.join('{%d, %d}' % z for z in zeros)}}};\n")
+            f"#define QD_M_RUNS {len(_runs(at))}\n#define QD_M_ZEROS {len(_runs(zero))}\n"
+            f"static const short qd_M_runs[QD_M_RUNS][3] = {{{runs}}};\n"
+            f"static const short qd_M_zeros[QD_M_ZEROS][2] = {{{zeros}}};\n")
 
 
 def _reduced_helpers_c(robot: Robot, stance: StanceSet, dfd_r: DfdRPieces, M_full: ca.Sparsity, precision: str) -> str:
