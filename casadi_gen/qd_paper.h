@@ -23,7 +23,8 @@
  *   G_r(q_r, quat)                  gravity part;
  *   id_r(q_r, qd_r, qdd_r, quat)    tau_r = M_r qdd_r + C_r + G_r (paper's GRF model);
  *   fd_r(q_r, qd_r, tau_ext, quat)  qdd_r = M_r^-1 (tau_ext - C_r - G_r) (paper eq. (5)), by LU
- *                                   with partial pivoting on the stack (no work memory needed).
+ *                                   on the stack (no work memory needed): the swing legs' joints first
+ *                                   (M's leg blocks, positive definite: no pivoting), then partial pivoting.
  * Each reduced file generates only the stance's pieces (regularity, S_b, T_b, the full v and a) and
  * calls qd_M_full, qd_G_full and qd_id_full of qd_<robot>.c: M_r = S M_full T, CG_r = S rnea(q, v, k),
  * G_r = S G_full, id_r = S rnea(q, v, T qdd_r + k) (link the reduced files with qd_<robot>.c).

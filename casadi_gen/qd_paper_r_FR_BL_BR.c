@@ -79,8 +79,10 @@ static const casadi_int casadi_s3[3] = {12, 3, 1};
 
 #define QD_REGULARITY_MIN ((casadi_real)1e-18) /* quadruped_dyn.tolerances.REGULARITY_MIN */
 #define QD_M_NNZ 210 /* qd_M_full's nonzeros */
-static const short qd_M_at[QD_M_NNZ] = {0, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14, 15, 16, 17, 19, 21, 22, 23, 24, 25, 26, 27, 28, 29, 30, 31, 32, 33, 34, 35, 38, 39, 40, 41, 42, 43, 44, 45, 46, 47, 48, 49, 50, 51, 52, 53, 54, 55, 56, 57, 58, 59, 60, 61, 62, 63, 64, 65, 66, 67, 68, 69, 70, 71, 72, 73, 74, 75, 76, 77, 78, 79, 80, 81, 82, 83, 84, 85, 86, 87, 88, 89, 90, 91, 92, 93, 94, 95, 96, 97, 98, 99, 100, 101, 102, 103, 104, 105, 106, 107, 108, 109, 110, 111, 112, 113, 114, 115, 116, 126, 127, 128, 129, 130, 131, 132, 133, 134, 144, 145, 146, 147, 148, 149, 150, 151, 152, 162, 163, 164, 165, 166, 167, 171, 172, 173, 180, 181, 182, 183, 184, 185, 189, 190, 191, 198, 199, 200, 201, 202, 203, 207, 208, 209, 216, 217, 218, 219, 220, 221, 228, 229, 230, 234, 235, 236, 237, 238, 239, 246, 247, 248, 252, 253, 254, 255, 256, 257, 264, 265, 266, 270, 271, 272, 273, 274, 275, 285, 286, 287, 288, 289, 290, 291, 292, 293, 303, 304, 305, 306, 307, 308, 309, 310, 311, 321, 322, 323};
-static const short qd_M_zero[114] = {1, 2, 18, 20, 36, 37, 117, 118, 119, 120, 121, 122, 123, 124, 125, 135, 136, 137, 138, 139, 140, 141, 142, 143, 153, 154, 155, 156, 157, 158, 159, 160, 161, 168, 169, 170, 174, 175, 176, 177, 178, 179, 186, 187, 188, 192, 193, 194, 195, 196, 197, 204, 205, 206, 210, 211, 212, 213, 214, 215, 222, 223, 224, 225, 226, 227, 231, 232, 233, 240, 241, 242, 243, 244, 245, 249, 250, 251, 258, 259, 260, 261, 262, 263, 267, 268, 269, 276, 277, 278, 279, 280, 281, 282, 283, 284, 294, 295, 296, 297, 298, 299, 300, 301, 302, 312, 313, 314, 315, 316, 317, 318, 319, 320};
+#define QD_M_RUNS 23
+#define QD_M_ZEROS 22
+static const short qd_M_runs[QD_M_RUNS][3] = {{0, 0, 1}, {3, 1, 15}, {19, 16, 1}, {21, 17, 15}, {38, 32, 79}, {126, 111, 9}, {144, 120, 9}, {162, 129, 6}, {171, 135, 3}, {180, 138, 6}, {189, 144, 3}, {198, 147, 6}, {207, 153, 3}, {216, 156, 6}, {228, 162, 3}, {234, 165, 6}, {246, 171, 3}, {252, 174, 6}, {264, 180, 3}, {270, 183, 6}, {285, 189, 9}, {303, 198, 9}, {321, 207, 3}};
+static const short qd_M_zeros[QD_M_ZEROS][2] = {{1, 2}, {18, 1}, {20, 1}, {36, 2}, {117, 9}, {135, 9}, {153, 9}, {168, 3}, {174, 6}, {186, 3}, {192, 6}, {204, 3}, {210, 6}, {222, 6}, {231, 3}, {240, 6}, {249, 3}, {258, 6}, {267, 3}, {276, 9}, {294, 9}, {312, 9}};
 static int qd_regularity(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem) {
   (void)arg; (void)res; (void)iw; (void)w; (void)mem;
   casadi_real a00, a01, a02, a03, a04, a05, a06, a07, a08, a09, a10, a11;
@@ -5922,28 +5924,13 @@ static void qd_densify(const casadi_int* sp, casadi_real* x) {
   for (casadi_int i = 0; i < next; ++i) x[i] = 0;
 }
 
-/* quadruped_dyn: checks and the forward-dynamics solve of the reduced model (hand-written,
- * inserted into each generated qd_<robot>_r_<stance>.c; see quadruped_dyn/codegen/emit.py).
- * Before it the generator writes QD_REGULARITY_MIN (quadruped_dyn.tolerances.REGULARITY_MIN), qd_M_full's
- * pattern (QD_M_NNZ, qd_M_at, qd_M_zero), qd_regularity (the stance's regularity (q_r, quat) -> [0, 1] of
- * quadruped_dyn/dynamics/stance_regularity.py) and qd_reduced_parts (the same regularity, S_b, T_b, v, a).
- *
- * Return codes of the reduced functions (qd_M_r_*, qd_CG_r_*, qd_G_r_*, qd_id_r_*, qd_fd_r_*):
- *   0              success
- *   QD_NONFINITE   an output is NaN or inf: the trunk pitched +-90 deg (the roll row of two
- *                  stance feet has qd_tan(pitch)), a zero quaternion, or a non-finite input;
- *   QD_SINGULAR    (qd_fd_r_* only) M_r is singular to working precision: a pivot of its LU
- *                  factorisation (partial pivoting) is below QD_SINGULAR_RTOL * max|M_r|,
- *                  e.g. two stance feet with the trunk pitched within ~1e-12 rad of 90 deg.
- *                  (A stance leg stretched straight is not singular: the reduced model never
- *                  inverts a leg's Jacobian.)
- *   QD_DEGENERATE  the stance is degenerate: regularity <= QD_REGULARITY_MIN (coincident or
- *                  collinear stance feet, or two feet whose line is perpendicular to the roll
- *                  axis: the front or back pair with zero pitch or roll). Checked first, by
- *                  every function; the model is undefined there (it would return ~1e15).
- * No output is written when the code is QD_SINGULAR or QD_DEGENERATE. */
+/* quadruped_dyn: checks and the forward-dynamics solve of the reduced model (hand-written, inserted into each
+ * qd_<robot>_r_<stance>.c by quadruped_dyn/codegen/emit.py after QD_REGULARITY_MIN, qd_M_full's pattern (QD_M_NNZ,
+ * qd_M_runs, qd_M_zeros), qd_regularity ((q_r, quat) -> [0, 1], dynamics/stance_regularity.py) and qd_reduced_parts
+ * (the regularity, S_b, T_b, v, a)). The return codes are documented in qd_<robot>.h. */
 #include <float.h>
 #include <math.h>
+#include <string.h>
 
 #ifndef QD_NONFINITE
 #define QD_NONFINITE 1
@@ -6006,9 +5993,8 @@ static int qd_regular(const casadi_real** arg, int i_quat, casadi_int* iw, casad
   return flag ? flag : qd_regular_value(m);
 }
 
-/* The generated qd_reduced_parts at (q_r, qd_r, qdd_r, quat) (null qd_r, qdd_r: zero): the regularity *m, S_b (n x 6),
- * T_b (6 x n) (column-major; M_r = S M T, S = [S_b, I_12], T = [T_b; I_12], row/column 12 no joint part) and the
- * full v, a = T qdd_r + k (reduced_projection.py). A null output is skipped. */
+/* qd_reduced_parts at (q_r, qd_r, qdd_r, quat) (null qd_r, qdd_r: zero): the regularity *m, S_b (n x 6), T_b (6 x n)
+ * (column-major; S = [S_b, I_12], T = [T_b; I_12], row/column 12 no joint part), the full v, a = T qdd_r + k. */
 static int qd_parts(const casadi_real* q_r, const casadi_real* qd_r, const casadi_real* qdd_r, const casadi_real* quat,
                     casadi_real* m, casadi_real* S_b, casadi_real* T_b, casadi_real* v, casadi_real* a, casadi_int* iw,
                     casadi_real* w, int mem) {
@@ -6030,16 +6016,16 @@ static void qd_full_q(const casadi_real* q_r, const casadi_real* quat, casadi_re
   for (int i = 0; i < 12; ++i) q[7 + i] = q_r[i];
 }
 
-/* M (18 x 18, dense column-major) at q by the library's qd_M_full: its nonzeros, written at the array's end, move
- * in order to their slots qd_M_at[k] <= 324 - QD_M_NNZ + k (never one still to move); then the zeros. */
+/* M (18 x 18, dense column-major) at q by qd_M_full: its nonzeros, written at the end, move in order, run by run
+ * (qd_M_runs), the k-th to slot <= 324 - QD_M_NNZ + k (never over one still to move); then the zeros. */
 static int qd_M_full_dense(const casadi_real* q, casadi_real* M, casadi_int* iw, casadi_real* w, int mem) {
   casadi_real* x = M + 18 * 18 - QD_M_NNZ;
   const casadi_real* m_arg[1] = {q};
   casadi_real* m_res[1] = {x};
   int flag = qd_M_full(m_arg, m_res, iw, w, mem);
   if (flag) return flag;
-  for (int k = 0; k < QD_M_NNZ; ++k) M[qd_M_at[k]] = x[k];
-  for (int k = 0; k < 18 * 18 - QD_M_NNZ; ++k) M[qd_M_zero[k]] = 0;
+  for (int r = 0; r < QD_M_RUNS; ++r) memmove(M + qd_M_runs[r][0], x + qd_M_runs[r][1], qd_M_runs[r][2] * sizeof *M);
+  for (int r = 0; r < QD_M_ZEROS; ++r) memset(M + qd_M_zeros[r][0], 0, qd_M_zeros[r][1] * sizeof *M);
   return 0;
 }
 
@@ -6053,8 +6039,7 @@ static int qd_M_r_parts(const casadi_real** arg, casadi_real** res, casadi_int* 
 }
 
 /* M_r = S M T (n x n, column-major) by columns: mt = M[:, 0:6] T_b e_j + M[:, 6 + j], then S_b mt[0:6] + mt[6:18].
- * legs: bit i for a stance leg i; T_b's columns of the other legs' joints are zero, so they skip the trunk product
- * (15: none skipped). (S_b's rows of those joints are zero too; skipping them was slower than the vectorised loop.) */
+ * legs: bit i for a stance leg i; T_b's columns of the other legs' joints are zero: no trunk product (15: none). */
 QD_INLINE void qd_M_r_legs(int n, int legs, const casadi_real* S_b, const casadi_real* T_b, const casadi_real* M,
                            casadi_real* M_r) {
   for (int j = 0; j < n; ++j) {
@@ -6108,11 +6093,9 @@ static int qd_rnea_r(int n, const casadi_real* S_b, const casadi_real* q_r, cons
 }
 #define QD_RNEA_R_WORK (19 + 18 + 12)
 
-/* The reduced terms (quadruped_dyn/dynamics/reduced_projection.py) at arg = (q_r, [qd_r, [qdd_r,]] quat) into
- * res[0] (n): which = 0 M_r (arg = q_r, quat; S M T, qd_M_r_legs), 1 C_r + G_r (arg = q_r, qd_r, quat;
- * S rnea(q, v, k)), 2 G_r (arg = q_r, quat; S G_full, the library's qd_G_full), 3 id_r (arg = q_r, qd_r, qdd_r,
- * quat; S rnea(q, v, T qdd_r + k)); legs as qd_M_r_legs'. The stance's regularity is checked first (0,
- * QD_DEGENERATE or QD_NONFINITE; res[0] not written unless 0). */
+/* The reduced terms (dynamics/reduced_projection.py) into res[0] (n): which = 0 M_r (arg = q_r, quat; S M T),
+ * 1 C_r + G_r (q_r, qd_r, quat; S rnea(q, v, k)), 2 G_r (q_r, quat; S G_full), 3 id_r (q_r, qd_r, qdd_r, quat;
+ * S rnea(q, v, T qdd_r + k)); legs as qd_M_r_legs'. Regularity checked first (res[0] written only on 0). */
 QD_INLINE int qd_reduced_term(int n, int legs, int which, const casadi_real** arg, casadi_real** res, casadi_int* iw,
                               casadi_real* w, int mem) {
   const casadi_real* quat = arg[which == 1 ? 2 : which == 3 ? 3 : 1];
@@ -6139,10 +6122,9 @@ QD_INLINE int qd_reduced_term(int n, int legs, int which, const casadi_real** ar
   return flag;
 }
 
-/* LU factorisation with partial pivoting of M (n x n, column-major, in place: the multipliers of
- * L below the diagonal, U on and above it; piv[k] the row swapped with k at step k), column-oriented
- * (the inner loops run down contiguous columns). 0, or QD_SINGULAR when a pivot is below
- * QD_SINGULAR_RTOL * scale (scale = max|M|). Shared by qd_fd_r_solve and the reduced derivatives. */
+/* LU factorisation with partial pivoting of M (n x n, column-major, in place: L's multipliers below the diagonal,
+ * U on and above; piv[k] the row swapped with k at step k), the inner loops down contiguous columns. 0, or
+ * QD_SINGULAR when a pivot is below QD_SINGULAR_RTOL * scale. Shared by fd_r and the reduced derivatives. */
 static int qd_lu_factor(int n, casadi_real* M, int* piv, casadi_real scale) {
   for (int k = 0; k < n; ++k) { /* M[i + n j] = M_ij */
     casadi_real* col = M + n * k;
@@ -6185,9 +6167,9 @@ static void qd_lu_solve(int n, const casadi_real* LU, const int* piv, casadi_rea
   }
 }
 
-/* M (= M_r) factorised (qd_lu_factor) and b <- tau_ext - b (b holding C_r + G_r), both checked in one pass.
- * 0, QD_NONFINITE or QD_SINGULAR. */
-static int qd_fd_r_factor(int n, const casadi_real* tau_ext, casadi_real* M, int* piv, casadi_real* b) {
+/* b <- tau_ext - b (b: C_r + G_r), *max = max|M| (M = M_r), both checked, and M's LU (qd_lu_factor) unless piv is
+ * null. 0, QD_NONFINITE or QD_SINGULAR. */
+static int qd_fd_r_factor(int n, const casadi_real* tau_ext, casadi_real* M, int* piv, casadi_real* b, casadi_real* max) {
   casadi_real top[4] = {0, 0, 0, 0}; /* max|M| in four lanes (the compiler vectorises them) */
   casadi_real* res[2] = {M, b};
   casadi_int nnz[2] = {n * n, n};
@@ -6199,7 +6181,61 @@ static int qd_fd_r_factor(int n, const casadi_real* tau_ext, casadi_real* M, int
   for (i = 0; i < n; ++i) b[i] = tau_ext[i] - b[i];
   if (qd_finite(0, res, 2, nnz)) return QD_NONFINITE;
   casadi_real scale = top[0] > top[1] ? top[0] : top[1], scale2 = top[2] > top[3] ? top[2] : top[3];
-  return qd_lu_factor(n, M, piv, scale > scale2 ? scale : scale2);
+  *max = scale > scale2 ? scale : scale2;
+  return piv ? qd_lu_factor(n, M, piv, *max) : 0;
+}
+
+/* x <- M_r^-1 x (fd_r, a swing leg at least; legs as qd_M_r_legs'): a swing leg's S_b rows and T_b columns are zero,
+ * so M_r's block of its joints is M's (SPD: 3 x 3 LU, no pivoting) and zero to the other swing legs'. They go first,
+ * then the Schur complement K over the rest R (stance joints, row 12; m = 7 or 9) by qd_lu_factor; every pivot
+ * checked against QD_SINGULAR_RTOL * scale (max|M_r|): 0 or QD_SINGULAR. work: K, per swing leg v and h. */
+QD_INLINE int qd_fd_r_lu(int n, int legs, const casadi_real* M_r, casadi_real* x, casadi_real scale, casadi_real* work) {
+  const int m = n - 3 * (4 - (legs & 1) - (legs >> 1 & 1) - (legs >> 2 & 1) - (legs >> 3 & 1));
+  int r[QD_N_MAX], piv[QD_N_MAX];
+  for (int l = 0, i = 0; l < 4; ++l) {
+    for (int c = 0; c < 3 && (legs >> l & 1); ++c) r[i++] = 3 * l + c;
+  }
+  r[m - 1] = n > 12 ? 12 : r[m - 1];
+  casadi_real *K = work, *v = K + m * m, *h = v + 6 * (m + 1), y[QD_N_MAX], thr = QD_SINGULAR_RTOL * scale;
+  for (int j = 0; j < m; ++j) {
+    for (int i = 0; i < m; ++i) K[i + m * j] = M_r[r[i] + n * r[j]];
+    y[j] = x[r[j]];
+  }
+  for (int l = 0; l < 4; ++l) {
+    if (legs >> l & 1) continue;
+    const casadi_real* A = M_r + 3 * l * (n + 1); /* D: A[i + n j] */
+    casadi_real u00 = A[0], u01 = A[n], u02 = A[2 * n], l10 = A[1] / u00, l20 = A[2] / u00;
+    casadi_real u11 = A[1 + n] - l10 * u01, u12 = A[1 + 2 * n] - l10 * u02, l21 = (A[2 + n] - l20 * u01) / u11;
+    casadi_real u22 = A[2 + 2 * n] - l20 * u02 - l21 * u12, i00 = 1 / u00, i11 = 1 / u11, i22 = 1 / u22;
+    if (!(qd_fabs(u00) > thr && qd_fabs(u11) > thr && qd_fabs(u22) > thr)) return QD_SINGULAR;
+    for (int p = 0; p <= m; ++p) {
+      const casadi_real* a = p < m ? M_r + 3 * l + n * r[p] : x + 3 * l;
+      casadi_real y1 = a[1] - l10 * a[0], x2 = (a[2] - l20 * a[0] - l21 * y1) * i22, x1 = (y1 - u12 * x2) * i11;
+      v[3 * p] = (a[0] - u01 * x1 - u02 * x2) * i00, v[3 * p + 1] = x1, v[3 * p + 2] = x2;
+    }
+    for (int c = 0; c < 3; ++c) {
+      for (int i = 0; i < m; ++i) h[i + m * c] = M_r[r[i] + n * (3 * l + c)];
+    }
+    for (int p = 0; p <= m; ++p) { /* K -= h v[:, 0:m], y -= h v[:, m] */
+      casadi_real* k = p < m ? K + m * p : y;
+      for (int i = 0; i < m; ++i) k[i] -= h[i] * v[3 * p] + h[i + m] * v[3 * p + 1] + h[i + 2 * m] * v[3 * p + 2];
+    }
+    v += 3 * (m + 1);
+  }
+  int flag = qd_lu_factor(m, K, piv, scale);
+  if (flag) return flag;
+  qd_lu_solve(m, K, piv, y);
+  for (int l = 3; l >= 0; --l) { /* x[leg] = v[:, m] - v[:, 0:m] y, the swing legs last to first */
+    if (legs >> l & 1) continue;
+    v -= 3 * (m + 1);
+    for (int c = 0; c < 3; ++c) {
+      casadi_real s = v[3 * m + c];
+      for (int p = 0; p < m; ++p) s -= v[3 * p + c] * y[p];
+      x[3 * l + c] = s;
+    }
+  }
+  for (int i = 0; i < m; ++i) x[r[i]] = y[i];
+  return 0;
 }
 
 /* M (= M_r, evaluated) factorised and b = tau_ext - (C_r + G_r) at arg = (q_r, qd_r, tau_ext, quat), C_r + G_r
@@ -6209,18 +6245,17 @@ QD_INLINE int qd_fd_r_finish(int n, qd_eval_fn CG_r, const casadi_real** arg, ca
   const casadi_real* cg_arg[3] = {arg[0], arg[1], arg[3]};
   casadi_real* cg_res[1] = {b};
   int flag = CG_r(cg_arg, cg_res, iw, w, mem);
-  return flag ? flag : qd_fd_r_factor(n, arg[2], M, piv, b);
+  casadi_real scale = 0;
+  return flag ? flag : qd_fd_r_factor(n, arg[2], M, piv, b, &scale);
 }
 
-/* qdd_r = M_r^-1 (tau_ext - (C_r + G_r)): arg = (q_r, qd_r, tau_ext, quat), res = (qdd_r). The stance's parts
- * once (qd_parts: S_b, T_b, v, k), C_r + G_r by qd_rnea_r, M (qd_M_full_dense) and M_r (qd_M_r_legs, legs as there),
- * both checked in one pass (qd_fd_r_factor), then the LU solve; no heap, all temporaries on the stack
- * (n <= QD_N_MAX). Each generated file calls it once with constant n and legs, so the compiler specialises it. */
+/* qdd_r = M_r^-1 (tau_ext - (C_r + G_r)): arg = (q_r, qd_r, tau_ext, quat), res = (qdd_r). The parts once
+ * (qd_parts), C_r + G_r (qd_rnea_r), M and M_r (qd_M_r_legs, legs as there), both checked (qd_fd_r_factor), the solve
+ * (qd_fd_r_lu; four feet: M_r's LU); temporaries on the stack. Called once per file with constant n and legs. */
 QD_INLINE int qd_fd_r_solve(int n, int legs, const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w,
                             int mem) {
   casadi_real m = 0, S_b[QD_N_MAX * 6], T_b[6 * QD_N_MAX], M[18 * 18], M_r[QD_N_MAX * QD_N_MAX], b[QD_N_MAX];
   casadi_real *v = M, *a = M + 18, *q = M_r; /* in space M and M_r take later: fd_r's stack stays within budget */
-  int piv[QD_N_MAX];
   int flag = qd_parts(arg[0], arg[1], 0, arg[3], &m, S_b, T_b, v, a, iw, w, mem);
   if (!flag) flag = qd_regular_value(m);
   if (!flag) flag = qd_rnea_r(n, S_b, arg[0], arg[3], v, a, b, M + 36, iw, w, mem);
@@ -6229,9 +6264,12 @@ QD_INLINE int qd_fd_r_solve(int n, int legs, const casadi_real** arg, casadi_rea
   flag = qd_M_full_dense(q, M, iw, w, mem);
   if (flag) return flag;
   qd_M_r_legs(n, legs, S_b, T_b, M, M_r);
-  flag = qd_fd_r_factor(n, arg[2], M_r, piv, b);
+  casadi_real scale = 0;
+  int piv[QD_N_MAX];
+  flag = qd_fd_r_factor(n, arg[2], M_r, legs == 15 ? piv : 0, b, &scale); /* four feet: the LU of M_r */
+  if (!flag && legs != 15) flag = qd_fd_r_lu(n, legs, M_r, b, scale, M);
   if (flag) return flag;
-  qd_lu_solve(n, M_r, piv, b);
+  if (legs == 15) qd_lu_solve(n, M_r, piv, b);
   if (res[0]) {
     for (int i = 0; i < n; ++i) res[0][i] = b[i];
   }

@@ -239,7 +239,8 @@ def header_doc(robot: Robot, functions: list[ca.Function], work: dict[str, tuple
         " *   G_r(q_r, quat)                  gravity part;",
         " *   id_r(q_r, qd_r, qdd_r, quat)    tau_r = M_r qdd_r + C_r + G_r (paper's GRF model);",
         " *   fd_r(q_r, qd_r, tau_ext, quat)  qdd_r = M_r^-1 (tau_ext - C_r - G_r) (paper eq. (5)), by LU",
-        " *                                   with partial pivoting on the stack (no work memory needed).",
+        " *                                   on the stack (no work memory needed): the swing legs' joints first",
+        " *                                   (M's leg blocks, positive definite: no pivoting), then partial pivoting.",
         " * Each reduced file generates only the stance's pieces (regularity, S_b, T_b, the full v and a) and",
         " * calls qd_M_full, qd_G_full and qd_id_full of qd_<robot>.c: M_r = S M_full T, CG_r = S rnea(q, v, k),",
         " * G_r = S G_full, id_r = S rnea(q, v, T qdd_r + k) (link the reduced files with qd_<robot>.c).",
@@ -360,9 +361,21 @@ def _static_c(c_name: str, f: ca.Function, precision: str, host_helpers: frozens
     return text
 
 
+def _runs(slots: list[int]) -> list[tuple[int, int, int]]:
+    """(first slot, first index into ``slots``, length) of each run of consecutive slots."""
+    runs: list[tuple[int, int, int]] = []
+    for k, d in enumerate(slots):
+        if runs and runs[-1][0] + runs[-1][2] == d:
+            runs[-1] = (runs[-1][0], runs[-1][1], runs[-1][2] + 1)
+        else:
+            runs.append((d, k, 1))
+    return runs
+
+
 def _dense_tables_c(sp: ca.Sparsity) -> str:
-    """QD_M_NNZ, qd_M_at (the dense column-major slot of each of M_full's nonzeros) and qd_M_zero (the other
-    slots), for qd_M_full_dense (c/qd_reduced_solve.c), which moves the nonzeros in order within one array."""
+    """QD_M_NNZ, qd_M_runs (runs of M_full's nonzeros: dense column-major slot, first nonzero, length) and qd_M_zeros
+    (runs of the other slots: slot, length), for qd_M_full_dense (c/qd_reduced_solve.c), which moves the nonzeros in
+    order within one array."""
     nrow = sp.size1()
     at = [
         sp.row()[k] + nrow * c for c in range(sp.size2()) for k in range(sp.colind()[c], sp.colind()[c + 1])]
@@ -370,9 +383,12 @@ def _dense_tables_c(sp: ca.Sparsity) -> str:
     if (nrow, sp.size2()) != (18, 18) or any(d > holes + k for k, d in enumerate(at)):
         raise AssertionError("M_full's pattern is not an 18 x 18 compressed-column one; qd_M_full_dense assumes it")
     zero = sorted(set(range(nrow * sp.size2())) - set(at))
+    runs = ", ".join(f"{{{d}, {k}, {n}}}" for d, k, n in _runs(at))
+    zeros = ", ".join(f"{{{d}, {n}}}" for d, _, n in _runs(zero))
     return (f"#define QD_M_NNZ {sp.nnz()} /* qd_M_full's nonzeros */\n"
-            f"static const short qd_M_at[QD_M_NNZ] = {{{', '.join(map(str, at))}}};\n"
-            f"static const short qd_M_zero[{len(zero)}] = {{{', '.join(map(str, zero))}}};\n")
+            f"#define QD_M_RUNS {len(_runs(at))}\n#define QD_M_ZEROS {len(_runs(zero))}\n"
+            f"static const short qd_M_runs[QD_M_RUNS][3] = {{{runs}}};\n"
+            f"static const short qd_M_zeros[QD_M_ZEROS][2] = {{{zeros}}};\n")
 
 
 def _reduced_helpers_c(robot: Robot, stance: StanceSet, dfd_r: DfdRPieces, M_full: ca.Sparsity, precision: str) -> str:
