@@ -6248,11 +6248,32 @@ QD_INLINE int qd_dfd_r_solve(int n, int legs, int lift_quat, const casadi_real**
   qd_densify(qd_did_full_sparsity_out(1), H);
   const casadi_real* t_arg[5] = {tape, F, dq, dtheta, dqd};
   casadi_real* t_res[4] = {dv, da, dSF, da_qd};
-  /* columns of -d id_r/dx, then M_r^-1 of each: the joint angle and rate j together (one lift call for a
-     stance leg's joint; the roll, read by no function, has a zero column; its rate moves the lift) */
+  /* columns of -d id_r/dx, then M_r^-1 of each. theta: gravity in the trunk frame (did_full's rotation columns), the
+     lift for two feet; the roll rate's da_b (its own output of the lift, seed dqd) in theta's first call */
+  casadi_real da_roll[6];
+  const int roll_with_theta = lift_quat && n > 12;
+  for (int k = 0; k < 3; ++k) {
+    for (int i = 0; i < 18; ++i) y[i] = G[i + 18 * (3 + k)];
+    if (lift_quat) {
+      dtheta[k] = 1;
+      if (k == 0 && roll_with_theta) dqd[12] = 1;
+      flag = qd_dfd_r_lift_dir(t_arg, t_res, iw, w, mem);
+      dtheta[k] = 0;
+      if (n > 12) dqd[12] = 0;
+      if (flag) return flag;
+      if (k == 0 && roll_with_theta) {
+        for (int i = 0; i < 6; ++i) da_roll[i] = da_qd[i];
+      }
+      qd_dfd_r_through_trunk(H, M, dv, da, y);
+    }
+    qd_dfd_r_column(n, S_b, y, 0, col);
+    qd_dfd_r_put(n, m, X, 2 * n + k, col);
+  }
+  /* the joint angle and rate j together (one lift call for a stance leg's joint; the roll, read by no function, has a
+     zero column; its rate moves the lift) */
   for (int j = 0; j < n; ++j) {
     int moves = j < 12 ? legs >> (j / 3) & 1 : 1;
-    if (moves) {
+    if (moves && !(j >= 12 && roll_with_theta)) {
       dq[j] = j < 12;
       dqd[j] = 1;
       flag = qd_dfd_r_lift_dir(t_arg, t_res, iw, w, mem);
@@ -6264,21 +6285,9 @@ QD_INLINE int qd_dfd_r_solve(int n, int legs, int lift_quat, const casadi_real**
     qd_dfd_r_column(n, S_b, y, moves && j < 12 ? dSF : 0, col);
     qd_dfd_r_put(n, m, X, j, col);
     for (int i = 0; i < 18; ++i) y[i] = j < 12 ? H[i + 18 * (6 + j)] : 0;
-    if (moves) qd_dfd_r_through_trunk(H, M, T_b + 6 * j, da_qd, y); /* dv_b = T_b e_j */
+    if (moves) qd_dfd_r_through_trunk(H, M, T_b + 6 * j, j >= 12 && roll_with_theta ? da_roll : da_qd, y); /* dv_b = T_b e_j */
     qd_dfd_r_column(n, S_b, y, 0, col);
     qd_dfd_r_put(n, m, X, n + j, col);
-  }
-  for (int k = 0; k < 3; ++k) { /* theta: gravity in the trunk frame (did_full's rotation columns), the lift for two feet */
-    for (int i = 0; i < 18; ++i) y[i] = G[i + 18 * (3 + k)];
-    if (lift_quat) {
-      dtheta[k] = 1;
-      flag = qd_dfd_r_lift_dir(t_arg, t_res, iw, w, mem);
-      dtheta[k] = 0;
-      if (flag) return flag;
-      qd_dfd_r_through_trunk(H, M, dv, da, y);
-    }
-    qd_dfd_r_column(n, S_b, y, 0, col);
-    qd_dfd_r_put(n, m, X, 2 * n + k, col);
   }
   for (int i = 0; i < n; ++i) { /* M_r^-1 from the identity */
     for (int j = 0; j < n; ++j) X[m * i + 2 * n + 3 + j] = i == j;
