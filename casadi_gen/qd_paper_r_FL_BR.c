@@ -83,142 +83,6 @@ static const casadi_int casadi_s3[3] = {13, 3, 1};
 #define QD_M_ZEROS 22
 static const short qd_M_runs[QD_M_RUNS][3] = {{0, 0, 1}, {3, 1, 15}, {19, 16, 1}, {21, 17, 15}, {38, 32, 79}, {126, 111, 9}, {144, 120, 9}, {162, 129, 6}, {171, 135, 3}, {180, 138, 6}, {189, 144, 3}, {198, 147, 6}, {207, 153, 3}, {216, 156, 6}, {228, 162, 3}, {234, 165, 6}, {246, 171, 3}, {252, 174, 6}, {264, 180, 3}, {270, 183, 6}, {285, 189, 9}, {303, 198, 9}, {321, 207, 3}};
 static const short qd_M_zeros[QD_M_ZEROS][2] = {{1, 2}, {18, 1}, {20, 1}, {36, 2}, {117, 9}, {135, 9}, {153, 9}, {168, 3}, {174, 6}, {186, 3}, {192, 6}, {204, 3}, {210, 6}, {222, 6}, {231, 3}, {240, 6}, {249, 3}, {258, 6}, {267, 3}, {276, 9}, {294, 9}, {312, 9}};
-static int qd_regularity(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem) {
-  (void)arg; (void)res; (void)iw; (void)w; (void)mem;
-  casadi_real a00, a01, a02, a03, a04, a05, a06, a07, a08, a09, a10, a11;
-  casadi_real a12, a13, a14, a15, a16, a17, a18, a19, a20, a21, a22, a23;
-  a00=1.9000000000000000e-01;
-  a01=2.0000000000000001e-01;
-  a02=arg[0]? arg[0][1] : 0;
-  a03=qd_sin(a02);
-  a04=(a01*a03);
-  a00=(a00+a04);
-  a02=qd_cos(a02);
-  a04=arg[0]? arg[0][2] : 0;
-  a05=qd_sin(a04);
-  a06=(a02*a05);
-  a04=qd_cos(a04);
-  a07=(a03*a04);
-  a06=(a06+a07);
-  a06=(a01*a06);
-  a00=(a00+a06);
-  a06=-1.9000000000000000e-01;
-  a07=arg[0]? arg[0][10] : 0;
-  a08=qd_sin(a07);
-  a09=(a01*a08);
-  a06=(a06+a09);
-  a07=qd_cos(a07);
-  a09=arg[0]? arg[0][11] : 0;
-  a10=qd_sin(a09);
-  a11=(a07*a10);
-  a09=qd_cos(a09);
-  a12=(a08*a09);
-  a11=(a11+a12);
-  a11=(a01*a11);
-  a06=(a06+a11);
-  a11=(a00-a06);
-  a12=2.;
-  a13=arg[1]? arg[1][0] : 0;
-  a14=casadi_sq(a13);
-  a15=arg[1]? arg[1][1] : 0;
-  a16=casadi_sq(a15);
-  a14=(a14+a16);
-  a16=arg[1]? arg[1][2] : 0;
-  a17=casadi_sq(a16);
-  a17=(a14+a17);
-  a18=arg[1]? arg[1][3] : 0;
-  a19=casadi_sq(a18);
-  a17=(a17+a19);
-  a12=(a12/a17);
-  a17=(a13*a16);
-  a19=(a15*a18);
-  a17=(a17-a19);
-  a17=(a12*a17);
-  a15=(a15*a16);
-  a13=(a13*a18);
-  a15=(a15+a13);
-  a15=(a12*a15);
-  a13=(a17*a15);
-  a15=casadi_sq(a15);
-  a18=1.;
-  a12=(a12*a14);
-  a12=(a18-a12);
-  a14=casadi_sq(a12);
-  a15=(a15+a14);
-  a13=(a13/a15);
-  a14=7.0000000000000007e-02;
-  a16=arg[0]? arg[0][0] : 0;
-  a19=qd_cos(a16);
-  a20=(a19*a02);
-  a21=(a01*a20);
-  a14=(a14+a21);
-  a20=(a20*a04);
-  a19=(a19*a03);
-  a19=(a19*a05);
-  a20=(a20-a19);
-  a20=(a01*a20);
-  a14=(a14+a20);
-  a20=-7.0000000000000007e-02;
-  a19=arg[0]? arg[0][9] : 0;
-  a21=qd_cos(a19);
-  a22=(a21*a07);
-  a23=(a01*a22);
-  a20=(a20+a23);
-  a22=(a22*a09);
-  a21=(a21*a08);
-  a21=(a21*a10);
-  a22=(a22-a21);
-  a22=(a01*a22);
-  a20=(a20+a22);
-  a22=(a14-a20);
-  a22=(a13*a22);
-  a11=(a11-a22);
-  a17=(a17*a12);
-  a17=(a17/a15);
-  a16=qd_sin(a16);
-  a03=(a16*a03);
-  a03=(a03*a05);
-  a16=(a16*a02);
-  a04=(a16*a04);
-  a03=(a03-a04);
-  a03=(a01*a03);
-  a16=(a01*a16);
-  a03=(a03-a16);
-  a19=qd_sin(a19);
-  a08=(a19*a08);
-  a08=(a08*a10);
-  a19=(a19*a07);
-  a09=(a19*a09);
-  a08=(a08-a09);
-  a08=(a01*a08);
-  a01=(a01*a19);
-  a08=(a08-a01);
-  a01=(a03-a08);
-  a01=(a17*a01);
-  a11=(a11-a01);
-  a11=casadi_sq(a11);
-  a13=casadi_sq(a13);
-  a18=(a18+a13);
-  a17=casadi_sq(a17);
-  a18=(a18+a17);
-  a18=(2*a18);
-  a00=casadi_sq(a00);
-  a14=casadi_sq(a14);
-  a00=(a00+a14);
-  a03=casadi_sq(a03);
-  a00=(a00+a03);
-  a06=casadi_sq(a06);
-  a20=casadi_sq(a20);
-  a06=(a06+a20);
-  a08=casadi_sq(a08);
-  a06=(a06+a08);
-  a00=(a00+a06);
-  a18=(a18*a00);
-  a11=(a11/a18);
-  if (res[0]!=0) res[0][0]=a11;
-  return 0;
-}
-
 static int qd_reduced_parts(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem) {
   (void)arg; (void)res; (void)iw; (void)w; (void)mem;
   casadi_real a000, a001, a002, a003, a004, a005, a006, a007, a008, a009, a010, a011;
@@ -5365,8 +5229,8 @@ static void qd_densify(const casadi_int* sp, casadi_real* x) {
 
 /* quadruped_dyn: checks and the forward-dynamics solve of the reduced model (hand-written, inserted into each
  * qd_<robot>_r_<stance>.c by quadruped_dyn/codegen/emit.py after QD_REGULARITY_MIN, qd_M_full's pattern (QD_M_NNZ,
- * qd_M_runs, qd_M_zeros), qd_regularity ((q_r, quat) -> [0, 1], dynamics/stance_regularity.py) and qd_reduced_parts
- * (the regularity, S_b, T_b, v, a)). The return codes are documented in qd_<robot>.h. */
+ * qd_M_runs, qd_M_zeros) and qd_reduced_parts (the regularity (q_r, quat) -> [0, 1] of dynamics/stance_regularity.py,
+ * S_b, T_b, v, a). The return codes are documented in qd_<robot>.h. */
 #include <float.h>
 #include <math.h>
 #include <string.h>
@@ -5423,15 +5287,6 @@ static int qd_regular_value(casadi_real m) {
   return m > QD_REGULARITY_MIN && m > QD_REGULARITY_FLOOR ? 0 : QD_DEGENERATE;
 }
 
-/* 0 where the stance is regular at (q_r = arg[0], quat = arg[i_quat]); QD_DEGENERATE or QD_NONFINITE. */
-static int qd_regular(const casadi_real** arg, int i_quat, casadi_int* iw, casadi_real* w, int mem) {
-  casadi_real m = 0;
-  const casadi_real* m_arg[2] = {arg[0], arg[i_quat]};
-  casadi_real* m_res[1] = {&m};
-  int flag = qd_regularity(m_arg, m_res, iw, w, mem);
-  return flag ? flag : qd_regular_value(m);
-}
-
 /* qd_reduced_parts at (q_r, qd_r, qdd_r, quat) (null qd_r, qdd_r: zero): the regularity *m, S_b (n x 6), T_b (6 x n)
  * (column-major; S = [S_b, I_12], T = [T_b; I_12], row/column 12 no joint part), the full v, a = T qdd_r + k. */
 static int qd_parts(const casadi_real* q_r, const casadi_real* qd_r, const casadi_real* qdd_r, const casadi_real* quat,
@@ -5468,15 +5323,6 @@ static int qd_M_full_dense(const casadi_real* q, casadi_real* M, casadi_int* iw,
   return 0;
 }
 
-/* (q_r, quat) -> (S_b, T_b, M (18 x 18)), dense column-major (regularity not checked); a null res[i] is skipped. */
-static int qd_M_r_parts(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem) {
-  int flag = qd_parts(arg[0], 0, 0, arg[1], 0, res[0], res[1], 0, 0, iw, w, mem);
-  if (flag || !res[2]) return flag;
-  casadi_real q[19];
-  qd_full_q(arg[0], arg[1], q);
-  return qd_M_full_dense(q, res[2], iw, w, mem);
-}
-
 /* M_r = S M T (n x n, column-major) by columns: mt = M[:, 0:6] T_b e_j + M[:, 6 + j], then S_b mt[0:6] + mt[6:18].
  * legs: bit i for a stance leg i; T_b's columns of the other legs' joints are zero: no trunk product (15: none). */
 QD_INLINE void qd_M_r_legs(int n, int legs, const casadi_real* S_b, const casadi_real* T_b, const casadi_real* M,
@@ -5501,11 +5347,6 @@ QD_INLINE void qd_M_r_legs(int n, int legs, const casadi_real* S_b, const casadi
       for (int i = 0; i < n; ++i) col[i] += S_b[i + n * k] * mt[k];
     }
   }
-}
-
-/* qd_M_r_legs for any stance (no column skipped); the reduced derivatives use it. */
-static void qd_M_r_product(int n, const casadi_real* S_b, const casadi_real* T_b, const casadi_real* M, casadi_real* M_r) {
-  qd_M_r_legs(n, 15, S_b, T_b, M, M_r);
 }
 
 /* tau (n) = S F = S_b F[0:6] + F[6:18] (row 12, two feet: S_b only) for a full generalized force F (18). */
@@ -5726,8 +5567,8 @@ QD_INLINE int qd_fd_r_solve(int n, int legs, const casadi_real** arg, casadi_rea
  * derivatives: id_r = S(q_r) F(q, v, a), F the full inverse dynamics (no foot forces) at q = (0, quat, q_j),
  * v = (v_b, qd_j), a = (a_b, qdd_j), S = [S_b, I] (row 12 of two feet: S_b only), so
  *   d id_r/dx = d(S_b F_b)/dx at fixed F + S (dF/dq dq/dx + dF/dv dv/dx + M da/dx),
- * with dF/dq, dF/dv from qd_did_full and F from qd_id_full (qd_<robot>_d.c, qd_<robot>.c: same library),
- * S_b, T_b and M from qd_M_r_parts. Only the trunk rows v_b, a_b ("the lift") depend on x other than by
+ * with dF/dq, dF/dv from qd_did_full (qd_<robot>_d.c: same library); qdd_r as qd_fd_r_solve forms it (S_b, T_b, the
+ * rnea at qdd_r = 0, M), F's trunk rows from that rnea's by M (rnea is linear in a). Only the trunk rows v_b, a_b ("the lift") depend on x other than by
  * identity: the generated qd_dfd_r_lift gives them once (the angles' sines and cosines taken once and passed in)
  * with its tape, the values of its algorithm that its derivative reads; their derivative along a joint angle or
  * theta is the generated qd_dfd_r_lift_dir over that tape (one forward-mode direction per call, only for the stance
@@ -5743,7 +5584,6 @@ QD_INLINE int qd_fd_r_solve(int n, int legs, const casadi_real** arg, casadi_rea
 /* defined in qd_<robot>_d.c and qd_<robot>.c of the same library (no work memory: checked by the generator) */
 int qd_did_full(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem);
 const casadi_int* qd_did_full_sparsity_out(casadi_int i);
-int qd_id_full(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem);
 
 /* Reals of w qd_dfd_r_solve uses for n coordinates (the generator states the same number, checked below). */
 #define QD_DFD_R_W(n) ((n) * (n) + 14 * (n) + 3 * 18 * 18 + 36 + (n) * QD_DFD_R_COLUMNS(n) + QD_DFD_R_TAPE)
@@ -5751,7 +5591,8 @@ int qd_id_full(const casadi_real** arg, casadi_real** res, casadi_int* iw, casad
 #define QD_DFD_R_COLUMNS(n) (3 * (n) + 3)
 
 /* col (n) = -(S y + extra), S y = S_b y_b + y_j (rows 0..11; row 12 has no joint part); extra may be NULL. */
-static void qd_dfd_r_column(int n, const casadi_real* S_b, const casadi_real* y, const casadi_real* extra, casadi_real* col) {
+static void qd_dfd_r_column(int n, const casadi_real* restrict S_b, const casadi_real* restrict y, const casadi_real* restrict extra,
+                            casadi_real* restrict col) {
   for (int i = 0; i < n; ++i) col[i] = i < 12 ? y[6 + i] : 0;
   for (int k = 0; k < 6; ++k) {
     for (int i = 0; i < n; ++i) col[i] += S_b[i + n * k] * y[k];
@@ -5760,16 +5601,43 @@ static void qd_dfd_r_column(int n, const casadi_real* S_b, const casadi_real* y,
 }
 
 /* y (18) += H[:, 0:6] dv + M[:, 0:6] da (18 x 18 column-major each): the trunk rows' change through F. */
-static void qd_dfd_r_through_trunk(const casadi_real* H, const casadi_real* M, const casadi_real* dv, const casadi_real* da,
-                                   casadi_real* y) {
+static void qd_dfd_r_through_trunk(const casadi_real* restrict H, const casadi_real* restrict M, const casadi_real* restrict dv,
+                                   const casadi_real* restrict da, casadi_real* restrict y) {
   for (int k = 0; k < 6; ++k) {
     for (int i = 0; i < 18; ++i) y[i] += H[i + 18 * k] * dv[k] + M[i + 18 * k] * da[k];
   }
 }
 
+/* Rows i of X's columns c0 .. c0 + W - 1: the lower (lower = 1: x_i -= sum_k<i L_ik x_k, the k ascending) or the
+ * upper solve (x_i = (x_i - sum_k>i U_ik x_k, the k descending) / U_ii), row i's block kept in W locals (registers). */
+static inline void qd_dfd_r_solve_block(int n, const casadi_real* restrict LU, casadi_real* restrict X, int m, int c0,
+                                        int W, int lower) {
+  for (int s = 0; s < n; ++s) {
+    const int i = lower ? s : n - 1 - s;
+    casadi_real acc[8];
+    casadi_real* xi = X + m * i + c0;
+    for (int c = 0; c < W; ++c) acc[c] = xi[c];
+    if (lower) {
+      for (int k = 0; k < i; ++k) {
+        const casadi_real l = LU[i + n * k], *xk = X + m * k + c0;
+        for (int c = 0; c < W; ++c) acc[c] -= l * xk[c];
+      }
+      for (int c = 0; c < W; ++c) xi[c] = acc[c];
+    } else {
+      for (int k = n - 1; k > i; --k) {
+        const casadi_real u = LU[i + n * k], *xk = X + m * k + c0;
+        for (int c = 0; c < W; ++c) acc[c] -= u * xk[c];
+      }
+      const casadi_real d = LU[i + n * i];
+      for (int c = 0; c < W; ++c) xi[c] = acc[c] / d;
+    }
+  }
+}
+
 /* X (n rows of m right-hand sides, row-major) <- M^-1 X with the factors of qd_lu_factor: qd_lu_solve's operations
- * in its order for each column (the same results), across the m columns at once, so the inner loops vectorise
- * (a triangular solve per column is a serial chain of n^2 / 2 dependent steps). */
+ * in its order for each column (the same results: row i's updates come in the same order of k), eight columns at a
+ * time with row i's block in registers (a triangular solve per column is a serial chain of n^2 / 2 dependent steps;
+ * row by row across all m columns each multiply-subtract loads and stores x_i). */
 static void qd_dfd_r_lu_solve_rows(int n, const casadi_real* restrict LU, const int* piv, casadi_real* restrict X, int m) {
   for (int k = 0; k < n; ++k) {
     casadi_real *a = X + m * k, *b = X + m * piv[k];
@@ -5779,23 +5647,11 @@ static void qd_dfd_r_lu_solve_rows(int n, const casadi_real* restrict LU, const 
       b[c] = t;
     }
   }
-  for (int k = 0; k < n; ++k) {
-    const casadi_real* xk = X + m * k;
-    for (int i = k + 1; i < n; ++i) {
-      const casadi_real l = LU[i + n * k];
-      casadi_real* xi = X + m * i;
-      for (int c = 0; c < m; ++c) xi[c] -= l * xk[c];
-    }
-  }
-  for (int j = n - 1; j >= 0; --j) { /* U x = y */
-    casadi_real* xj = X + m * j;
-    const casadi_real d = LU[j + n * j];
-    for (int c = 0; c < m; ++c) xj[c] /= d;
-    for (int i = 0; i < j; ++i) {
-      const casadi_real u = LU[i + n * j];
-      casadi_real* xi = X + m * i;
-      for (int c = 0; c < m; ++c) xi[c] -= u * xj[c];
-    }
+  for (int lower = 1; lower >= 0; --lower) {
+    int c0 = 0;
+    for (; c0 + 8 <= m; c0 += 8) qd_dfd_r_solve_block(n, LU, X, m, c0, 8, lower);
+    for (; c0 + 2 <= m; c0 += 2) qd_dfd_r_solve_block(n, LU, X, m, c0, 2, lower);
+    for (; c0 < m; ++c0) qd_dfd_r_solve_block(n, LU, X, m, c0, 1, lower);
   }
 }
 
@@ -5813,25 +5669,33 @@ static void qd_dfd_r_store(int n, int m, casadi_real** res, int k, const casadi_
 }
 
 /* n coordinates; legs: bit i set for a stance leg i (the lift and S depend on its joints only);
- * lift_quat: the lift depends on the trunk orientation (two feet). CG_r: the generated C_r + G_r. */
-QD_INLINE int qd_dfd_r_solve(int n, int legs, int lift_quat, qd_eval_fn CG_r, const casadi_real** arg, casadi_real** res,
-                             casadi_int* iw, casadi_real* w, int mem) {
+ * lift_quat: the lift depends on the trunk orientation (two feet). */
+QD_INLINE int qd_dfd_r_solve(int n, int legs, int lift_quat, const casadi_real** arg, casadi_real** res, casadi_int* iw,
+                             casadi_real* w, int mem) {
   casadi_real *M_r = w, *qdd = M_r + n * n, *S_b = qdd + n, *T_b = S_b + 6 * n, *M = T_b + 6 * n, *G = M + 18 * 18,
               *H = G + 18 * 18, *F = H + 18 * 18, *y = F + 18, *col = y + 18, *X = col + n, *tape = X + n * QD_DFD_R_COLUMNS(n);
   const int m = QD_DFD_R_COLUMNS(n);
-  casadi_real q[19] = {0}, v[18], a[18], f[12] = {0}, dv[6], da[6], dSF[QD_N_MAX], da_qd[6];
+  casadi_real q[19], v[18], a[18], k[18], f[12] = {0}, dv[6], da[6], dSF[QD_N_MAX], da_qd[6], reg = 0;
   casadi_real dq[QD_N_MAX] = {0}, dqd[QD_N_MAX] = {0}, dtheta[3] = {0}, sin_q[QD_N_MAX], cos_q[QD_N_MAX];
   int piv[QD_N_MAX];
-  const casadi_real* m_arg[2] = {arg[0], arg[3]};
-  casadi_real* m_res[3] = {S_b, T_b, M};
-  int flag = qd_regular(arg, 3, iw, w, mem);
-  if (!flag) flag = qd_M_r_parts(m_arg, m_res, iw, w, mem);
+  /* qdd_r as qd_fd_r_solve: the parts once (S_b, T_b, v and a at qdd_r = 0: k), C_r + G_r = S rnea(q, v, k), M_r */
+  int flag = qd_parts(arg[0], arg[1], 0, arg[3], &reg, S_b, T_b, v, a, iw, w, mem);
+  if (!flag) flag = qd_regular_value(reg);
   if (flag) return flag;
-  qd_M_r_product(n, S_b, T_b, M, M_r);
-  flag = qd_fd_r_finish(n, CG_r, arg, M_r, piv, qdd, iw, w, mem);
+  qd_full_q(arg[0], arg[3], q);
+  const casadi_real* d_arg[4] = {q, v, a, f};
+  casadi_real* i_res[2] = {F, F + 6};
+  flag = qd_id_full(d_arg, i_res, iw, w, mem);
+  if (!flag) flag = qd_M_full_dense(q, M, iw, w, mem);
+  if (flag) return flag;
+  qd_project(n, S_b, F, qdd);
+  qd_M_r_legs(n, legs, S_b, T_b, M, M_r);
+  casadi_real scale; /* max|M_r| (qd_lu_factor's reference for a singular pivot) */
+  flag = qd_fd_r_factor(n, arg[2], M_r, piv, qdd, &scale);
   if (flag) return flag;
   qd_lu_solve(n, M_r, piv, qdd);
-  /* the lift at qdd_r and its tape, then F, dF/dq, dF/dv at (q, v, a) */
+  for (int i = 0; i < 18; ++i) k[i] = a[i];
+  /* the lift at qdd_r and its tape; then v, a = (v_b, qd_j), (a_b, qdd_j) */
   for (int i = 0; i < n; ++i) { /* the lift reads the angles' sines and cosines */
     sin_q[i] = qd_sin(arg[0][i]);
     cos_q[i] = qd_cos(arg[0][i]);
@@ -5840,27 +5704,49 @@ QD_INLINE int qd_dfd_r_solve(int n, int legs, int lift_quat, qd_eval_fn CG_r, co
   casadi_real* l_res[3] = {v, a, tape};
   flag = qd_dfd_r_lift(l_arg, l_res, iw, w, mem);
   if (flag) return flag;
-  for (int i = 0; i < 4; ++i) q[3 + i] = arg[3][i];
   for (int i = 0; i < 12; ++i) {
-    q[7 + i] = arg[0][i];
     v[6 + i] = arg[1][i];
     a[6 + i] = qdd[i];
   }
-  const casadi_real* d_arg[4] = {q, v, a, f};
-  casadi_real* i_res[2] = {F, F + 6};
+  /* F's trunk rows at (q, v, a) from those at (q, v, k), rnea being linear in a: F_b += M[0:6, :] (a - k); then
+     dF/dq, dF/dv at (q, v, a) */
+  for (int j = 0; j < 18; ++j) {
+    const casadi_real d = a[j] - k[j];
+    for (int i = 0; i < 6; ++i) F[i] += M[i + 18 * j] * d;
+  }
   casadi_real* d_res[3] = {G, H, 0};
-  flag = qd_id_full(d_arg, i_res, iw, w, mem);
-  if (!flag) flag = qd_did_full(d_arg, d_res, iw, w, mem);
+  flag = qd_did_full(d_arg, d_res, iw, w, mem);
   if (flag) return flag;
   qd_densify(qd_did_full_sparsity_out(0), G);
   qd_densify(qd_did_full_sparsity_out(1), H);
   const casadi_real* t_arg[5] = {tape, F, dq, dtheta, dqd};
   casadi_real* t_res[4] = {dv, da, dSF, da_qd};
-  /* columns of -d id_r/dx, then M_r^-1 of each: the joint angle and rate j together (one lift call for a
-     stance leg's joint; the roll, read by no function, has a zero column; its rate moves the lift) */
+  /* columns of -d id_r/dx, then M_r^-1 of each. theta: gravity in the trunk frame (did_full's rotation columns), the
+     lift for two feet; the roll rate's da_b (its own output of the lift, seed dqd) in theta's first call */
+  casadi_real da_roll[6];
+  const int roll_with_theta = lift_quat && n > 12;
+  for (int k = 0; k < 3; ++k) {
+    for (int i = 0; i < 18; ++i) y[i] = G[i + 18 * (3 + k)];
+    if (lift_quat) {
+      dtheta[k] = 1;
+      if (k == 0 && roll_with_theta) dqd[12] = 1;
+      flag = qd_dfd_r_lift_dir(t_arg, t_res, iw, w, mem);
+      dtheta[k] = 0;
+      if (n > 12) dqd[12] = 0;
+      if (flag) return flag;
+      if (k == 0 && roll_with_theta) {
+        for (int i = 0; i < 6; ++i) da_roll[i] = da_qd[i];
+      }
+      qd_dfd_r_through_trunk(H, M, dv, da, y);
+    }
+    qd_dfd_r_column(n, S_b, y, 0, col);
+    qd_dfd_r_put(n, m, X, 2 * n + k, col);
+  }
+  /* the joint angle and rate j together (one lift call for a stance leg's joint; the roll, read by no function, has a
+     zero column; its rate moves the lift) */
   for (int j = 0; j < n; ++j) {
     int moves = j < 12 ? legs >> (j / 3) & 1 : 1;
-    if (moves) {
+    if (moves && !(j >= 12 && roll_with_theta)) {
       dq[j] = j < 12;
       dqd[j] = 1;
       flag = qd_dfd_r_lift_dir(t_arg, t_res, iw, w, mem);
@@ -5872,21 +5758,9 @@ QD_INLINE int qd_dfd_r_solve(int n, int legs, int lift_quat, qd_eval_fn CG_r, co
     qd_dfd_r_column(n, S_b, y, moves && j < 12 ? dSF : 0, col);
     qd_dfd_r_put(n, m, X, j, col);
     for (int i = 0; i < 18; ++i) y[i] = j < 12 ? H[i + 18 * (6 + j)] : 0;
-    if (moves) qd_dfd_r_through_trunk(H, M, T_b + 6 * j, da_qd, y); /* dv_b = T_b e_j */
+    if (moves) qd_dfd_r_through_trunk(H, M, T_b + 6 * j, j >= 12 && roll_with_theta ? da_roll : da_qd, y); /* dv_b = T_b e_j */
     qd_dfd_r_column(n, S_b, y, 0, col);
     qd_dfd_r_put(n, m, X, n + j, col);
-  }
-  for (int k = 0; k < 3; ++k) { /* theta: gravity in the trunk frame (did_full's rotation columns), the lift for two feet */
-    for (int i = 0; i < 18; ++i) y[i] = G[i + 18 * (3 + k)];
-    if (lift_quat) {
-      dtheta[k] = 1;
-      flag = qd_dfd_r_lift_dir(t_arg, t_res, iw, w, mem);
-      dtheta[k] = 0;
-      if (flag) return flag;
-      qd_dfd_r_through_trunk(H, M, dv, da, y);
-    }
-    qd_dfd_r_column(n, S_b, y, 0, col);
-    qd_dfd_r_put(n, m, X, 2 * n + k, col);
   }
   for (int i = 0; i < n; ++i) { /* M_r^-1 from the identity */
     for (int j = 0; j < n; ++j) X[m * i + 2 * n + 3 + j] = i == j;
@@ -6296,7 +6170,7 @@ CASADI_SYMBOL_EXPORT int qd_fd_r_FL_BR_work_bytes(casadi_int *sz_arg, casadi_int
 CASADI_SYMBOL_EXPORT int qd_dfd_r_FL_BR(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem){
   typedef char w_agrees[QD_DFD_R_W(13) == 2153 ? 1 : -1];
   (void)sizeof(w_agrees);
-  return qd_dfd_r_solve(13, 9, 1, qd_CG_r_eval, arg, res, iw, w, mem);
+  return qd_dfd_r_solve(13, 9, 1, arg, res, iw, w, mem);
 }
 
 CASADI_SYMBOL_EXPORT int qd_dfd_r_FL_BR_checkout(void) {

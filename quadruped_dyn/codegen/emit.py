@@ -392,9 +392,9 @@ def _dense_tables_c(sp: ca.Sparsity) -> str:
 
 
 def _reduced_helpers_c(robot: Robot, stance: StanceSet, dfd_r: DfdRPieces, M_full: ca.Sparsity, precision: str) -> str:
-    """QD_REGULARITY_MIN, M_full's pattern tables (``_dense_tables_c``), ``qd_regularity`` (the stance's regularity
-    (q_r, quat) -> (regularity), ``dynamics.reduced.regularity_function``; dfd_r checks it), ``qd_reduced_parts``
-    ((q_r, qd_r, qdd_r, quat) -> (regularity, S_b, T_b, v, a) in one graph: ``ReducedProjection.mass_matrix_factors``
+    """QD_REGULARITY_MIN, M_full's pattern tables (``_dense_tables_c``), ``qd_reduced_parts``
+    ((q_r, qd_r, qdd_r, quat) -> (regularity, S_b, T_b, v, a) in one graph (the regularity
+    ``dynamics.reduced.regularity_function``): ``ReducedProjection.mass_matrix_factors``
     without M_full, which the templates take from the library's qd_M_full, and ``velocity_and_acceleration`` for
     the library's qd_id_full) and dfd_r's ``qd_dfd_r_lift`` (``emit_derivatives.dfd_r_pieces``), the generated
     pieces the templates call."""
@@ -407,7 +407,6 @@ def _reduced_helpers_c(robot: Robot, stance: StanceSet, dfd_r: DfdRPieces, M_ful
                          *(ca.densify(x) for x in p.velocity_and_acceleration(qd_r, qdd_r))], {"cse": True})
     return (f"#define QD_REGULARITY_MIN ((casadi_real){REGULARITY_MIN!r}) /* quadruped_dyn.tolerances.REGULARITY_MIN */\n"
             + _dense_tables_c(M_full)
-            + _static_c("qd_regularity", regularity_function(robot, stance), precision) + "\n"
             + _static_c("qd_reduced_parts", parts, precision) + "\n"
             + f"#define QD_DFD_R_TAPE {dfd_r.tape} /* reals of the lift's tape: emit_derivatives.split_at_seeds */\n"
             + _static_c("qd_dfd_r_lift", dfd_r.lift, precision, all_io=True) + "\n"
@@ -434,7 +433,6 @@ def _checked_reduced_c(c_text: str, casadi_header: str, functions: list[ca.Funct
                     "w, mem);\n}\n" for which, kind in enumerate(("M_r", "CG_r", "G_r", "id_r")))
     c_text = c_text[:first] + "\n" + helpers_c + "\n" + templates + "\n" + evals + c_text[first:]
     work = work_sizes(casadi_header)
-    cg_r = "qd_CG_r_eval"
     for f in functions:
         if f.sz_arg() != f.n_in() or work[f.name()] != (0, 0):
             raise AssertionError(f"{f.name()} needs work memory; qd_fd_r_solve assumes it does not")
@@ -444,7 +442,7 @@ def _checked_reduced_c(c_text: str, casadi_header: str, functions: list[ca.Funct
             n = f.size1_out(0)
             body = (rf"\1  typedef char w_agrees[QD_DFD_R_W({n}) == {dfd_r_work_reals(n, dfd_r.tape)} ? 1 : -1];\n"
                     r"  (void)sizeof(w_agrees);\n"
-                    rf"  return qd_dfd_r_solve({n}, {dfd_r.legs}, {int(dfd_r.lift_reads_quat)}, {cg_r}, arg, res, iw, w, mem);\n")
+                    rf"  return qd_dfd_r_solve({n}, {dfd_r.legs}, {int(dfd_r.lift_reads_quat)}, arg, res, iw, w, mem);\n")
         else:
             nnz = ", ".join(str(f.nnz_out(i)) for i in range(f.n_out()))
             evaluation = f"qd_{reduced_parts(f.name()[len(PREFIX):])[0]}_eval"  # type: ignore[index]

@@ -22,14 +22,14 @@ In each reduced file ``qd_<robot>_r_<feet>.c`` (``reduced_derivative_functions``
 * ``dfd_r_<feet>(q_r, qd_r, tau_ext, quat)``: a signature whose body (``c/qd_reduced_derivatives.c``)
   applies the chain rule over the full-coordinate derivatives: id_r = S F(q, v, a), F the full rnea, so
   d id_r / dx = d(S_b F_b)/dx + S (dF/dq dq/dx + dF/dv dv/dx + M da/dx) with ``qd_did_full`` and ``qd_id_full``
-  (the same library) and S_b, T_b, M from ``qd_M_r_parts``; then -M_r^-1 with the LU of ``c/qd_reduced_solve.c``.
+  (the same library) and S_b, T_b, M as fd_r takes them; then -M_r^-1 with the LU of ``c/qd_reduced_solve.c``.
   Per stance set only "the lift" is generated: the trunk rows v_b, a_b of v and a
   (``ReducedProjection.velocity_and_acceleration``, without forming T) and their forward-mode derivative along
   one direction of (q_r, theta) and one of qd_r at once, with d(S_b F_b) along the q_r direction (2.8-4.3k
   operations on the paper robot), split (``split_at_seeds``) into the static ``qd_dfd_r_lift`` (v_b, a_b and the
   tape, the values the derivative reads; once per call) and ``qd_dfd_r_lift_dir`` (the derivative over the tape,
-  ~70 % of the operations; once per stance-leg joint: 7-13 calls). Its temporaries (~16 kB in double, the tape
-  included) are the caller's w, declared by its _work entry (``declare_dfd_r_work``).
+  ~70 % of the operations; once per stance-leg joint and two feet's rotation: 9-12 calls). Its temporaries (~16 kB in
+  double, the tape included) are the caller's w, declared by its _work entry (``declare_dfd_r_work``).
 
 Why directions and a chain rule, not CasADi's Jacobians: those take 48-97k operations per reduced
 stance set and 18-21k per GRF solve (~20 bytes of C each), beyond the 6 MB budget of a robot's C.

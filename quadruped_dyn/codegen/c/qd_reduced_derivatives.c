@@ -8,8 +8,8 @@
  * derivatives: id_r = S(q_r) F(q, v, a), F the full inverse dynamics (no foot forces) at q = (0, quat, q_j),
  * v = (v_b, qd_j), a = (a_b, qdd_j), S = [S_b, I] (row 12 of two feet: S_b only), so
  *   d id_r/dx = d(S_b F_b)/dx at fixed F + S (dF/dq dq/dx + dF/dv dv/dx + M da/dx),
- * with dF/dq, dF/dv from qd_did_full and F from qd_id_full (qd_<robot>_d.c, qd_<robot>.c: same library),
- * S_b, T_b and M from qd_M_r_parts. Only the trunk rows v_b, a_b ("the lift") depend on x other than by
+ * with dF/dq, dF/dv from qd_did_full (qd_<robot>_d.c: same library); qdd_r as qd_fd_r_solve forms it (S_b, T_b, the
+ * rnea at qdd_r = 0, M), F's trunk rows from that rnea's by M (rnea is linear in a). Only the trunk rows v_b, a_b ("the lift") depend on x other than by
  * identity: the generated qd_dfd_r_lift gives them once (the angles' sines and cosines taken once and passed in)
  * with its tape, the values of its algorithm that its derivative reads; their derivative along a joint angle or
  * theta is the generated qd_dfd_r_lift_dir over that tape (one forward-mode direction per call, only for the stance
@@ -25,7 +25,6 @@
 /* defined in qd_<robot>_d.c and qd_<robot>.c of the same library (no work memory: checked by the generator) */
 int qd_did_full(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem);
 const casadi_int* qd_did_full_sparsity_out(casadi_int i);
-int qd_id_full(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem);
 
 /* Reals of w qd_dfd_r_solve uses for n coordinates (the generator states the same number, checked below). */
 #define QD_DFD_R_W(n) ((n) * (n) + 14 * (n) + 3 * 18 * 18 + 36 + (n) * QD_DFD_R_COLUMNS(n) + QD_DFD_R_TAPE)
@@ -33,7 +32,8 @@ int qd_id_full(const casadi_real** arg, casadi_real** res, casadi_int* iw, casad
 #define QD_DFD_R_COLUMNS(n) (3 * (n) + 3)
 
 /* col (n) = -(S y + extra), S y = S_b y_b + y_j (rows 0..11; row 12 has no joint part); extra may be NULL. */
-static void qd_dfd_r_column(int n, const casadi_real* S_b, const casadi_real* y, const casadi_real* extra, casadi_real* col) {
+static void qd_dfd_r_column(int n, const casadi_real* restrict S_b, const casadi_real* restrict y, const casadi_real* restrict extra,
+                            casadi_real* restrict col) {
   for (int i = 0; i < n; ++i) col[i] = i < 12 ? y[6 + i] : 0;
   for (int k = 0; k < 6; ++k) {
     for (int i = 0; i < n; ++i) col[i] += S_b[i + n * k] * y[k];
@@ -42,16 +42,43 @@ static void qd_dfd_r_column(int n, const casadi_real* S_b, const casadi_real* y,
 }
 
 /* y (18) += H[:, 0:6] dv + M[:, 0:6] da (18 x 18 column-major each): the trunk rows' change through F. */
-static void qd_dfd_r_through_trunk(const casadi_real* H, const casadi_real* M, const casadi_real* dv, const casadi_real* da,
-                                   casadi_real* y) {
+static void qd_dfd_r_through_trunk(const casadi_real* restrict H, const casadi_real* restrict M, const casadi_real* restrict dv,
+                                   const casadi_real* restrict da, casadi_real* restrict y) {
   for (int k = 0; k < 6; ++k) {
     for (int i = 0; i < 18; ++i) y[i] += H[i + 18 * k] * dv[k] + M[i + 18 * k] * da[k];
   }
 }
 
+/* Rows i of X's columns c0 .. c0 + W - 1: the lower (lower = 1: x_i -= sum_k<i L_ik x_k, the k ascending) or the
+ * upper solve (x_i = (x_i - sum_k>i U_ik x_k, the k descending) / U_ii), row i's block kept in W locals (registers). */
+static inline void qd_dfd_r_solve_block(int n, const casadi_real* restrict LU, casadi_real* restrict X, int m, int c0,
+                                        int W, int lower) {
+  for (int s = 0; s < n; ++s) {
+    const int i = lower ? s : n - 1 - s;
+    casadi_real acc[8];
+    casadi_real* xi = X + m * i + c0;
+    for (int c = 0; c < W; ++c) acc[c] = xi[c];
+    if (lower) {
+      for (int k = 0; k < i; ++k) {
+        const casadi_real l = LU[i + n * k], *xk = X + m * k + c0;
+        for (int c = 0; c < W; ++c) acc[c] -= l * xk[c];
+      }
+      for (int c = 0; c < W; ++c) xi[c] = acc[c];
+    } else {
+      for (int k = n - 1; k > i; --k) {
+        const casadi_real u = LU[i + n * k], *xk = X + m * k + c0;
+        for (int c = 0; c < W; ++c) acc[c] -= u * xk[c];
+      }
+      const casadi_real d = LU[i + n * i];
+      for (int c = 0; c < W; ++c) xi[c] = acc[c] / d;
+    }
+  }
+}
+
 /* X (n rows of m right-hand sides, row-major) <- M^-1 X with the factors of qd_lu_factor: qd_lu_solve's operations
- * in its order for each column (the same results), across the m columns at once, so the inner loops vectorise
- * (a triangular solve per column is a serial chain of n^2 / 2 dependent steps). */
+ * in its order for each column (the same results: row i's updates come in the same order of k), eight columns at a
+ * time with row i's block in registers (a triangular solve per column is a serial chain of n^2 / 2 dependent steps;
+ * row by row across all m columns each multiply-subtract loads and stores x_i). */
 static void qd_dfd_r_lu_solve_rows(int n, const casadi_real* restrict LU, const int* piv, casadi_real* restrict X, int m) {
   for (int k = 0; k < n; ++k) {
     casadi_real *a = X + m * k, *b = X + m * piv[k];
@@ -61,23 +88,11 @@ static void qd_dfd_r_lu_solve_rows(int n, const casadi_real* restrict LU, const 
       b[c] = t;
     }
   }
-  for (int k = 0; k < n; ++k) {
-    const casadi_real* xk = X + m * k;
-    for (int i = k + 1; i < n; ++i) {
-      const casadi_real l = LU[i + n * k];
-      casadi_real* xi = X + m * i;
-      for (int c = 0; c < m; ++c) xi[c] -= l * xk[c];
-    }
-  }
-  for (int j = n - 1; j >= 0; --j) { /* U x = y */
-    casadi_real* xj = X + m * j;
-    const casadi_real d = LU[j + n * j];
-    for (int c = 0; c < m; ++c) xj[c] /= d;
-    for (int i = 0; i < j; ++i) {
-      const casadi_real u = LU[i + n * j];
-      casadi_real* xi = X + m * i;
-      for (int c = 0; c < m; ++c) xi[c] -= u * xj[c];
-    }
+  for (int lower = 1; lower >= 0; --lower) {
+    int c0 = 0;
+    for (; c0 + 8 <= m; c0 += 8) qd_dfd_r_solve_block(n, LU, X, m, c0, 8, lower);
+    for (; c0 + 2 <= m; c0 += 2) qd_dfd_r_solve_block(n, LU, X, m, c0, 2, lower);
+    for (; c0 < m; ++c0) qd_dfd_r_solve_block(n, LU, X, m, c0, 1, lower);
   }
 }
 
@@ -95,25 +110,33 @@ static void qd_dfd_r_store(int n, int m, casadi_real** res, int k, const casadi_
 }
 
 /* n coordinates; legs: bit i set for a stance leg i (the lift and S depend on its joints only);
- * lift_quat: the lift depends on the trunk orientation (two feet). CG_r: the generated C_r + G_r. */
-QD_INLINE int qd_dfd_r_solve(int n, int legs, int lift_quat, qd_eval_fn CG_r, const casadi_real** arg, casadi_real** res,
-                             casadi_int* iw, casadi_real* w, int mem) {
+ * lift_quat: the lift depends on the trunk orientation (two feet). */
+QD_INLINE int qd_dfd_r_solve(int n, int legs, int lift_quat, const casadi_real** arg, casadi_real** res, casadi_int* iw,
+                             casadi_real* w, int mem) {
   casadi_real *M_r = w, *qdd = M_r + n * n, *S_b = qdd + n, *T_b = S_b + 6 * n, *M = T_b + 6 * n, *G = M + 18 * 18,
               *H = G + 18 * 18, *F = H + 18 * 18, *y = F + 18, *col = y + 18, *X = col + n, *tape = X + n * QD_DFD_R_COLUMNS(n);
   const int m = QD_DFD_R_COLUMNS(n);
-  casadi_real q[19] = {0}, v[18], a[18], f[12] = {0}, dv[6], da[6], dSF[QD_N_MAX], da_qd[6];
+  casadi_real q[19], v[18], a[18], k[18], f[12] = {0}, dv[6], da[6], dSF[QD_N_MAX], da_qd[6], reg = 0;
   casadi_real dq[QD_N_MAX] = {0}, dqd[QD_N_MAX] = {0}, dtheta[3] = {0}, sin_q[QD_N_MAX], cos_q[QD_N_MAX];
   int piv[QD_N_MAX];
-  const casadi_real* m_arg[2] = {arg[0], arg[3]};
-  casadi_real* m_res[3] = {S_b, T_b, M};
-  int flag = qd_regular(arg, 3, iw, w, mem);
-  if (!flag) flag = qd_M_r_parts(m_arg, m_res, iw, w, mem);
+  /* qdd_r as qd_fd_r_solve: the parts once (S_b, T_b, v and a at qdd_r = 0: k), C_r + G_r = S rnea(q, v, k), M_r */
+  int flag = qd_parts(arg[0], arg[1], 0, arg[3], &reg, S_b, T_b, v, a, iw, w, mem);
+  if (!flag) flag = qd_regular_value(reg);
   if (flag) return flag;
-  qd_M_r_product(n, S_b, T_b, M, M_r);
-  flag = qd_fd_r_finish(n, CG_r, arg, M_r, piv, qdd, iw, w, mem);
+  qd_full_q(arg[0], arg[3], q);
+  const casadi_real* d_arg[4] = {q, v, a, f};
+  casadi_real* i_res[2] = {F, F + 6};
+  flag = qd_id_full(d_arg, i_res, iw, w, mem);
+  if (!flag) flag = qd_M_full_dense(q, M, iw, w, mem);
+  if (flag) return flag;
+  qd_project(n, S_b, F, qdd);
+  qd_M_r_legs(n, legs, S_b, T_b, M, M_r);
+  casadi_real scale; /* max|M_r| (qd_lu_factor's reference for a singular pivot) */
+  flag = qd_fd_r_factor(n, arg[2], M_r, piv, qdd, &scale);
   if (flag) return flag;
   qd_lu_solve(n, M_r, piv, qdd);
-  /* the lift at qdd_r and its tape, then F, dF/dq, dF/dv at (q, v, a) */
+  for (int i = 0; i < 18; ++i) k[i] = a[i];
+  /* the lift at qdd_r and its tape; then v, a = (v_b, qd_j), (a_b, qdd_j) */
   for (int i = 0; i < n; ++i) { /* the lift reads the angles' sines and cosines */
     sin_q[i] = sin(arg[0][i]);
     cos_q[i] = cos(arg[0][i]);
@@ -122,27 +145,49 @@ QD_INLINE int qd_dfd_r_solve(int n, int legs, int lift_quat, qd_eval_fn CG_r, co
   casadi_real* l_res[3] = {v, a, tape};
   flag = qd_dfd_r_lift(l_arg, l_res, iw, w, mem);
   if (flag) return flag;
-  for (int i = 0; i < 4; ++i) q[3 + i] = arg[3][i];
   for (int i = 0; i < 12; ++i) {
-    q[7 + i] = arg[0][i];
     v[6 + i] = arg[1][i];
     a[6 + i] = qdd[i];
   }
-  const casadi_real* d_arg[4] = {q, v, a, f};
-  casadi_real* i_res[2] = {F, F + 6};
+  /* F's trunk rows at (q, v, a) from those at (q, v, k), rnea being linear in a: F_b += M[0:6, :] (a - k); then
+     dF/dq, dF/dv at (q, v, a) */
+  for (int j = 0; j < 18; ++j) {
+    const casadi_real d = a[j] - k[j];
+    for (int i = 0; i < 6; ++i) F[i] += M[i + 18 * j] * d;
+  }
   casadi_real* d_res[3] = {G, H, 0};
-  flag = qd_id_full(d_arg, i_res, iw, w, mem);
-  if (!flag) flag = qd_did_full(d_arg, d_res, iw, w, mem);
+  flag = qd_did_full(d_arg, d_res, iw, w, mem);
   if (flag) return flag;
   qd_densify(qd_did_full_sparsity_out(0), G);
   qd_densify(qd_did_full_sparsity_out(1), H);
   const casadi_real* t_arg[5] = {tape, F, dq, dtheta, dqd};
   casadi_real* t_res[4] = {dv, da, dSF, da_qd};
-  /* columns of -d id_r/dx, then M_r^-1 of each: the joint angle and rate j together (one lift call for a
-     stance leg's joint; the roll, read by no function, has a zero column; its rate moves the lift) */
+  /* columns of -d id_r/dx, then M_r^-1 of each. theta: gravity in the trunk frame (did_full's rotation columns), the
+     lift for two feet; the roll rate's da_b (its own output of the lift, seed dqd) in theta's first call */
+  casadi_real da_roll[6];
+  const int roll_with_theta = lift_quat && n > 12;
+  for (int k = 0; k < 3; ++k) {
+    for (int i = 0; i < 18; ++i) y[i] = G[i + 18 * (3 + k)];
+    if (lift_quat) {
+      dtheta[k] = 1;
+      if (k == 0 && roll_with_theta) dqd[12] = 1;
+      flag = qd_dfd_r_lift_dir(t_arg, t_res, iw, w, mem);
+      dtheta[k] = 0;
+      if (n > 12) dqd[12] = 0;
+      if (flag) return flag;
+      if (k == 0 && roll_with_theta) {
+        for (int i = 0; i < 6; ++i) da_roll[i] = da_qd[i];
+      }
+      qd_dfd_r_through_trunk(H, M, dv, da, y);
+    }
+    qd_dfd_r_column(n, S_b, y, 0, col);
+    qd_dfd_r_put(n, m, X, 2 * n + k, col);
+  }
+  /* the joint angle and rate j together (one lift call for a stance leg's joint; the roll, read by no function, has a
+     zero column; its rate moves the lift) */
   for (int j = 0; j < n; ++j) {
     int moves = j < 12 ? legs >> (j / 3) & 1 : 1;
-    if (moves) {
+    if (moves && !(j >= 12 && roll_with_theta)) {
       dq[j] = j < 12;
       dqd[j] = 1;
       flag = qd_dfd_r_lift_dir(t_arg, t_res, iw, w, mem);
@@ -154,21 +199,9 @@ QD_INLINE int qd_dfd_r_solve(int n, int legs, int lift_quat, qd_eval_fn CG_r, co
     qd_dfd_r_column(n, S_b, y, moves && j < 12 ? dSF : 0, col);
     qd_dfd_r_put(n, m, X, j, col);
     for (int i = 0; i < 18; ++i) y[i] = j < 12 ? H[i + 18 * (6 + j)] : 0;
-    if (moves) qd_dfd_r_through_trunk(H, M, T_b + 6 * j, da_qd, y); /* dv_b = T_b e_j */
+    if (moves) qd_dfd_r_through_trunk(H, M, T_b + 6 * j, j >= 12 && roll_with_theta ? da_roll : da_qd, y); /* dv_b = T_b e_j */
     qd_dfd_r_column(n, S_b, y, 0, col);
     qd_dfd_r_put(n, m, X, n + j, col);
-  }
-  for (int k = 0; k < 3; ++k) { /* theta: gravity in the trunk frame (did_full's rotation columns), the lift for two feet */
-    for (int i = 0; i < 18; ++i) y[i] = G[i + 18 * (3 + k)];
-    if (lift_quat) {
-      dtheta[k] = 1;
-      flag = qd_dfd_r_lift_dir(t_arg, t_res, iw, w, mem);
-      dtheta[k] = 0;
-      if (flag) return flag;
-      qd_dfd_r_through_trunk(H, M, dv, da, y);
-    }
-    qd_dfd_r_column(n, S_b, y, 0, col);
-    qd_dfd_r_put(n, m, X, 2 * n + k, col);
   }
   for (int i = 0; i < n; ++i) { /* M_r^-1 from the identity */
     for (int j = 0; j < n; ++j) X[m * i + 2 * n + 3 + j] = i == j;

@@ -1,7 +1,7 @@
 /* quadruped_dyn: checks and the forward-dynamics solve of the reduced model (hand-written, inserted into each
  * qd_<robot>_r_<stance>.c by quadruped_dyn/codegen/emit.py after QD_REGULARITY_MIN, qd_M_full's pattern (QD_M_NNZ,
- * qd_M_runs, qd_M_zeros), qd_regularity ((q_r, quat) -> [0, 1], dynamics/stance_regularity.py) and qd_reduced_parts
- * (the regularity, S_b, T_b, v, a)). The return codes are documented in qd_<robot>.h. */
+ * qd_M_runs, qd_M_zeros) and qd_reduced_parts (the regularity (q_r, quat) -> [0, 1] of dynamics/stance_regularity.py,
+ * S_b, T_b, v, a). The return codes are documented in qd_<robot>.h. */
 #include <float.h>
 #include <math.h>
 #include <string.h>
@@ -58,15 +58,6 @@ static int qd_regular_value(casadi_real m) {
   return m > QD_REGULARITY_MIN && m > QD_REGULARITY_FLOOR ? 0 : QD_DEGENERATE;
 }
 
-/* 0 where the stance is regular at (q_r = arg[0], quat = arg[i_quat]); QD_DEGENERATE or QD_NONFINITE. */
-static int qd_regular(const casadi_real** arg, int i_quat, casadi_int* iw, casadi_real* w, int mem) {
-  casadi_real m = 0;
-  const casadi_real* m_arg[2] = {arg[0], arg[i_quat]};
-  casadi_real* m_res[1] = {&m};
-  int flag = qd_regularity(m_arg, m_res, iw, w, mem);
-  return flag ? flag : qd_regular_value(m);
-}
-
 /* qd_reduced_parts at (q_r, qd_r, qdd_r, quat) (null qd_r, qdd_r: zero): the regularity *m, S_b (n x 6), T_b (6 x n)
  * (column-major; S = [S_b, I_12], T = [T_b; I_12], row/column 12 no joint part), the full v, a = T qdd_r + k. */
 static int qd_parts(const casadi_real* q_r, const casadi_real* qd_r, const casadi_real* qdd_r, const casadi_real* quat,
@@ -103,15 +94,6 @@ static int qd_M_full_dense(const casadi_real* q, casadi_real* M, casadi_int* iw,
   return 0;
 }
 
-/* (q_r, quat) -> (S_b, T_b, M (18 x 18)), dense column-major (regularity not checked); a null res[i] is skipped. */
-static int qd_M_r_parts(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem) {
-  int flag = qd_parts(arg[0], 0, 0, arg[1], 0, res[0], res[1], 0, 0, iw, w, mem);
-  if (flag || !res[2]) return flag;
-  casadi_real q[19];
-  qd_full_q(arg[0], arg[1], q);
-  return qd_M_full_dense(q, res[2], iw, w, mem);
-}
-
 /* M_r = S M T (n x n, column-major) by columns: mt = M[:, 0:6] T_b e_j + M[:, 6 + j], then S_b mt[0:6] + mt[6:18].
  * legs: bit i for a stance leg i; T_b's columns of the other legs' joints are zero: no trunk product (15: none). */
 QD_INLINE void qd_M_r_legs(int n, int legs, const casadi_real* S_b, const casadi_real* T_b, const casadi_real* M,
@@ -136,11 +118,6 @@ QD_INLINE void qd_M_r_legs(int n, int legs, const casadi_real* S_b, const casadi
       for (int i = 0; i < n; ++i) col[i] += S_b[i + n * k] * mt[k];
     }
   }
-}
-
-/* qd_M_r_legs for any stance (no column skipped); the reduced derivatives use it. */
-static void qd_M_r_product(int n, const casadi_real* S_b, const casadi_real* T_b, const casadi_real* M, casadi_real* M_r) {
-  qd_M_r_legs(n, 15, S_b, T_b, M, M_r);
 }
 
 /* tau (n) = S F = S_b F[0:6] + F[6:18] (row 12, two feet: S_b only) for a full generalized force F (18). */
