@@ -216,7 +216,7 @@ CASADI_SYMBOL_EXPORT const casadi_int* qd_did_full_sparsity_out(casadi_int i);
  * them a derivative with respect to a quaternion entry (docs/derivatives.md).
  *
  * qd_dfd_full(q, v, tau_full) -> (da_dq, da_dv, da_dtau), a = M^-1 (tau_full - C - G):
- *   M and C + G from qd_dfd_full_parts (qd_M_full and qd_nle_full of qd_<robot>.c), M^-1 by M's tree structure (qd_d_tree_inverse: the legs'
+ *   M and C + G from qd_d_parts (qd_M_full and qd_nle_full of qd_<robot>.c), M^-1 by M's tree structure (qd_d_tree_inverse: the legs'
  *   3 x 3 blocks, then the trunk's Schur complement; no fill-in, ~2k multiply-adds), a = M^-1 (tau_full - C - G),
  *   then the generated qd_did_full at (q, v, a): da/dq = -M^-1 dtau/dq, da/dv = -M^-1 dtau/dv (sparse products),
  *   da/dtau = M^-1; da/dq's trunk-pose columns without the product (gravity is uniform: a = M^-1 (tau - C) + [g_b; 0],
@@ -258,17 +258,6 @@ int qd_M_full(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi
 const casadi_int* qd_M_full_sparsity_out(casadi_int i);
 int qd_nle_full(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem);
 
-/* qd_dfd_full_parts(q, v) -> (M (18 x 18, dense, column-major), nle = C + G (18)): qd_M_full (sparse, densified
- * in place) and qd_nle_full, not a second generated copy of them. Either output may be NULL. */
-QD_INLINE int qd_dfd_full_parts_eval(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem) {
-  casadi_real* m_res[1] = {res[0]};
-  int flag = res[0] ? qd_M_full(arg, m_res, iw, w, mem) : 0;
-  if (!flag && res[0]) qd_densify(qd_M_full_sparsity_out(0), res[0]);
-  m_res[0] = res[1];
-  if (!flag && res[1]) flag = qd_nle_full(arg, m_res, iw, w, mem);
-  return flag;
-}
-
 /* Reals of the caller's w that qd_dfd_full and qd_dgrf_<feet> use for their temporaries (the generator states
  * them as the functions' _SZ_W, so the Cortex-M stack holds none of the 18 x 18 arrays). */
 #define QD_DFD_FULL_SZ_W 1476 /* M, M^-1, dtau/dq, dtau/dv (18 x 18 each), nle, a (18), the blocks (4 * 9 + 4 * 18 + 36) */
@@ -286,6 +275,16 @@ static int qd_d_nonfinite(const casadi_real* restrict x, casadi_int n) {
   return !(s[0] + s[1] + s[2] + s[3] + s[4] + s[5] + s[6] + s[7] == 0);
 }
 
+/* f (n_in <= 3 inputs of <= 19 reals, read without testing their pointers) at arg, a NULL input as zeros
+ * (CasADi's convention). */
+static const casadi_real qd_d_zeros[19];
+QD_INLINE int qd_d_all_inputs(qd_d_eval_fn f, int n_in, const casadi_real** arg, casadi_real** res, casadi_int* iw,
+                              casadi_real* w, int mem) {
+  const casadi_real* a[3];
+  for (int i = 0; i < n_in; ++i) a[i] = arg[i] ? arg[i] : qd_d_zeros;
+  return f(a, res, iw, w, mem);
+}
+
 /* flag, or QD_NONFINITE if any of the n_out outputs (nnz[i] entries each) is not finite. */
 static int qd_d_finite(int flag, casadi_real** res, int n_out, const casadi_int* nnz) {
   if (flag) return flag;
@@ -293,6 +292,39 @@ static int qd_d_finite(int flag, casadi_real** res, int n_out, const casadi_int*
     if (res[i] && qd_d_nonfinite(res[i], nnz[i])) return QD_NONFINITE;
   }
   return 0;
+}
+
+/* x (nrow * ncol reals, column-major) = the dense matrix of the nonzeros nz of sparsity sp (x and nz apart). */
+static void qd_d_scatter(const casadi_int* sp, const casadi_real* restrict nz, casadi_real* restrict x) {
+  const casadi_int nrow = sp[0], ncol = sp[1], *colind = sp + 2, *row = sp + 3 + ncol;
+  for (casadi_int i = 0; i < nrow * ncol; ++i) x[i] = 0;
+  for (casadi_int j = 0; j < ncol; ++j) {
+    for (casadi_int k = colind[j]; k < colind[j + 1]; ++k) x[row[k] + nrow * j] = nz[k];
+  }
+}
+
+/* M (18 x 18, dense, column-major) and nle = C + G (18) at (q, v) = (arg[0], arg[1]) from qd_M_full and qd_nle_full,
+ * not a second generated copy of them; either may be NULL. With scratch (>= M_full's nonzeros, apart from M),
+ * M_full's nonzeros go there and are scattered into M (fewer instructions than densifying in place) and
+ * QD_NONFINITE is returned if M has a NaN/inf. */
+QD_INLINE int qd_d_parts(const casadi_real** arg, casadi_real* M, casadi_real* nle, casadi_real* scratch, casadi_int* iw,
+                         casadi_real* w, int mem) {
+  const casadi_int* sp = qd_M_full_sparsity_out(0);
+  casadi_real* m_res[1] = {scratch ? scratch : M};
+  int flag = M ? qd_M_full(arg, m_res, iw, w, mem) : 0;
+  if (!flag && M) {
+    if (scratch) qd_d_scatter(sp, scratch, M);
+    else qd_densify(sp, M);
+    if (scratch && qd_d_nonfinite(M, QD_NV * QD_NV)) return QD_NONFINITE;
+  }
+  m_res[0] = nle;
+  if (!flag && nle) flag = qd_nle_full(arg, m_res, iw, w, mem);
+  return flag;
+}
+
+/* qd_dfd_full_parts(q, v) -> (M (18 x 18, dense, column-major), nle = C + G (18)) by qd_d_parts. */
+QD_INLINE int qd_dfd_full_parts_eval(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem) {
+  return qd_d_parts(arg, res[0], res[1], 0, iw, w, mem);
 }
 
 /* out (18 x 18, column-major) = -Minv D for D in CasADi's compressed-column format (sp, nz), columns from first on. */
@@ -412,15 +444,14 @@ static int qd_d_tree_inverse(const casadi_real* restrict M, casadi_real* restric
   return 0;
 }
 
-QD_INLINE int qd_dfd_full_solve(qd_d_eval_fn parts, qd_d_eval_fn did, const casadi_int* sp_dq, const casadi_int* sp_dv,
+QD_INLINE int qd_dfd_full_solve(qd_d_eval_fn did, const casadi_int* sp_dq, const casadi_int* sp_dv,
                              const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem) {
   casadi_real *M = w, *Minv = M + QD_NV * QD_NV, *Dq = Minv + QD_NV * QD_NV, *Dv = Dq + QD_NV * QD_NV;
   casadi_real *nle = Dv + QD_NV * QD_NV, *a = nle + QD_NV, *blk = a + QD_NV, *rest = blk + 4 * 9 + 4 * 18 + 36;
-  const casadi_real* p_arg[2] = {arg[0], arg[1]};
-  casadi_real* p_res[2] = {M, nle};
-  int flag = parts(p_arg, p_res, iw, rest, mem);
+  int flag = qd_d_parts(arg, M, nle, Minv, iw, rest, mem); /* M_full's nonzeros in Minv's place until the inverse */
   if (flag) return flag;
-  if (qd_d_nonfinite(M, QD_NV * QD_NV) | qd_d_nonfinite(nle, QD_NV) | qd_d_nonfinite(arg[2], QD_NV)) return QD_NONFINITE;
+  if (qd_d_nonfinite(nle, QD_NV) | qd_d_nonfinite(arg[2], QD_NV)) return QD_NONFINITE;
+  if (res[2]) Minv = res[2]; /* da/dtau = M^-1: formed in place (written only once every pivot has passed) */
   if (qd_d_tree_inverse(M, Minv, blk)) return QD_SINGULAR;
   for (int i = 0; i < QD_NV; ++i) a[i] = 0;
   for (int j = 0; j < QD_NV; ++j) {
@@ -447,9 +478,6 @@ QD_INLINE int qd_dfd_full_solve(qd_d_eval_fn parts, qd_d_eval_fn did, const casa
     res[1][2 * QD_NV] = -w_b[1], res[1][2 * QD_NV + 1] = w_b[0];
     qd_d_neg_product(Minv, sp_dv, Dv, 3, res[1]);
   }
-  if (res[2]) {
-    for (int i = 0; i < QD_NV * QD_NV; ++i) res[2][i] = Minv[i];
-  }
   const casadi_int nnz[3] = {QD_NV * QD_NV, QD_NV * QD_NV, QD_NV * QD_NV};
   return qd_d_finite(0, res, 3, nnz);
 }
@@ -475,19 +503,18 @@ static void qd_d_trunk_product(int m, const casadi_real* P, const casadi_int* sp
 
 /* qd_dgrf_<feet>(q, v, a) -> (dlambda_dq, dlambda_dv, dlambda_da), m x 18 each, of the GRF solve's
  * lambda = P(q) w_req(q, v, a), linear in the required trunk wrench w_req (the rnea's trunk rows):
- *   w_req = M[0:6] a + nle[0:6] from qd_dfd_full_parts; P column by column and d(P w)/dq one
+ *   w_req = M[0:6] a + nle[0:6] from qd_d_parts; P column by column and d(P w)/dq one
  *   joint direction at a time (the joints of the stance legs, bit i of legs for leg i; no other coordinate
  *   enters P) from the generated qd_dgrf_dir_<feet> (dir: q, w, dq -> P w, d(P w)/dq dq); d w_req/dx from the
  *   generated qd_did_full's trunk rows (sp_dq, sp_dv: its output patterns) and M:
  *   dlambda/dq = P dtau_dq[0:6] + d(P w)/dq, dlambda/dv = P dtau_dv[0:6], dlambda/da = P M[0:6].
  * d/dq along pinocchio.integrate as above. Return codes: 0, QD_NONFINITE. */
-QD_INLINE int qd_dgrf_solve(int m, int legs, qd_d_eval_fn parts, qd_d_eval_fn did, qd_d_eval_fn dir, const casadi_int* sp_dq,
+QD_INLINE int qd_dgrf_solve(int m, int legs, qd_d_eval_fn did, qd_d_eval_fn dir, const casadi_int* sp_dq,
                          const casadi_int* sp_dv, const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w,
                          int mem) {
   casadi_real *M = w, *Dq = M + QD_NV * QD_NV, *Dv = Dq + QD_NV * QD_NV, *nle = Dv + QD_NV * QD_NV, *seed = nle + QD_NV;
   casadi_real *wrench = seed + QD_NV, *P = wrench + 6, *dPw = P + 6 * 6, *rest = dPw + 6 * QD_NV; /* m <= 6 */
-  casadi_real* p_res[2] = {M, nle};
-  int flag = parts(arg, p_res, iw, rest, mem);
+  int flag = qd_d_parts(arg, M, nle, Dq, iw, rest, mem); /* M_full's nonzeros in Dq's place until did_full */
   if (flag) return flag;
   for (int i = 0; i < 6; ++i) {
     wrench[i] = nle[i];
@@ -575,15 +602,15 @@ static int casadi_f0(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a001=9.8100000000000023e+01;
   a002=1.;
   a003=2.;
-  a004=arg[0]? arg[0][3] : 0;
+  a004=arg[0][3];
   a005=casadi_sq(a004);
-  a006=arg[0]? arg[0][4] : 0;
+  a006=arg[0][4];
   a007=casadi_sq(a006);
   a005=(a005+a007);
-  a007=arg[0]? arg[0][5] : 0;
+  a007=arg[0][5];
   a008=casadi_sq(a007);
   a008=(a005+a008);
-  a009=arg[0]? arg[0][6] : 0;
+  a009=arg[0][6];
   a010=casadi_sq(a009);
   a008=(a008+a010);
   a003=(a003/a008);
@@ -598,13 +625,13 @@ static int casadi_f0(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a010=(a001*a008);
   a011=(-a010);
   if (res[0]!=0) res[0][2]=a011;
-  a011=arg[0]? arg[0][7] : 0;
+  a011=arg[0][7];
   a012=qd_cos(a011);
-  a013=arg[0]? arg[0][8] : 0;
+  a013=arg[0][8];
   a014=qd_cos(a013);
   a015=5.5000000000000007e-02;
   a016=1.4999999999999999e-02;
-  a017=arg[0]? arg[0][9] : 0;
+  a017=arg[0][9];
   a018=qd_cos(a017);
   a019=(a016*a018);
   a020=2.9999999999999999e-02;
@@ -619,11 +646,11 @@ static int casadi_f0(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a025=(a012*a022);
   a026=8.0500000000000016e-02;
   a027=(a025+a026);
-  a028=arg[0]? arg[0][10] : 0;
+  a028=arg[0][10];
   a029=qd_cos(a028);
-  a030=arg[0]? arg[0][11] : 0;
+  a030=arg[0][11];
   a031=qd_cos(a030);
-  a032=arg[0]? arg[0][12] : 0;
+  a032=arg[0][12];
   a033=qd_cos(a032);
   a034=(a016*a033);
   a035=(a034+a020);
@@ -638,11 +665,11 @@ static int casadi_f0(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a040=-8.0500000000000016e-02;
   a041=(a039+a040);
   a042=(a027+a041);
-  a043=arg[0]? arg[0][13] : 0;
+  a043=arg[0][13];
   a044=qd_cos(a043);
-  a045=arg[0]? arg[0][14] : 0;
+  a045=arg[0][14];
   a046=qd_cos(a045);
-  a047=arg[0]? arg[0][15] : 0;
+  a047=arg[0][15];
   a048=qd_cos(a047);
   a049=(a016*a048);
   a050=(a049+a020);
@@ -656,11 +683,11 @@ static int casadi_f0(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a054=(a044*a051);
   a026=(a054+a026);
   a042=(a042+a026);
-  a055=arg[0]? arg[0][16] : 0;
+  a055=arg[0][16];
   a056=qd_cos(a055);
-  a057=arg[0]? arg[0][17] : 0;
+  a057=arg[0][17];
   a058=qd_cos(a057);
-  a059=arg[0]? arg[0][18] : 0;
+  a059=arg[0][18];
   a060=qd_cos(a059);
   a061=(a016*a060);
   a062=(a061+a020);
@@ -926,13 +953,13 @@ static int casadi_f0(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   if (res[0]!=0) res[0][53]=a068;
   a068=1.4999999999999999e-01;
   a003=1.0000000000000001e-01;
-  a001=arg[1]? arg[1][3] : 0;
-  a010=arg[1]? arg[1][6] : 0;
+  a001=arg[1][3];
+  a010=arg[1][6];
   a065=(a001-a010);
   a053=(a014*a065);
-  a038=arg[1]? arg[1][4] : 0;
+  a038=arg[1][4];
   a024=(a012*a038);
-  a074=arg[1]? arg[1][5] : 0;
+  a074=arg[1][5];
   a004=(a011*a074);
   a024=(a024-a004);
   a004=(a013*a024);
@@ -993,7 +1020,7 @@ static int casadi_f0(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a117=(a011*a038);
   a118=(a012*a074);
   a117=(a117+a118);
-  a118=arg[1]? arg[1][7] : 0;
+  a118=arg[1][7];
   a119=(a117-a118);
   a120=(a101*a119);
   a121=(a120*a012);
@@ -1013,7 +1040,7 @@ static int casadi_f0(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a103=(a017*a103);
   a121=(a018*a121);
   a103=(a103-a121);
-  a121=arg[1]? arg[1][8] : 0;
+  a121=arg[1][8];
   a102=(a119-a121);
   a124=(a003*a102);
   a125=(a124*a012);
@@ -1159,11 +1186,11 @@ static int casadi_f0(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a129=(a129-a144);
   a144=1.1500000000000001e+00;
   a149=(a074*a139);
-  a134=arg[2]? arg[2][4] : 0;
+  a134=arg[2][4];
   a154=(a110*a134);
   a149=(a149+a154);
   a154=(a144*a149);
-  a155=arg[2]? arg[2][5] : 0;
+  a155=arg[2][5];
   a156=(a069*a155);
   a156=(a154+a156);
   a157=(a027*a134);
@@ -1264,15 +1291,15 @@ static int casadi_f0(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a162=(a147*a074);
   a112=(a112-a162);
   a162=(a074*a111);
-  a163=arg[2]? arg[2][2] : 0;
-  a138=arg[1]? arg[1][1] : 0;
+  a163=arg[2][2];
+  a138=arg[1][1];
   a164=(a001*a138);
-  a165=arg[1]? arg[1][0] : 0;
+  a165=arg[1][0];
   a166=(a038*a165);
   a164=(a164-a166);
   a163=(a163+a164);
   a163=(a163-a002);
-  a002=arg[2]? arg[2][3] : 0;
+  a002=arg[2][3];
   a164=(a110*a002);
   a166=(a163+a164);
   a162=(a162-a166);
@@ -1280,7 +1307,7 @@ static int casadi_f0(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a167=(a077*a134);
   a167=(a166+a167);
   a112=(a112+a167);
-  a167=arg[2]? arg[2][6] : 0;
+  a167=arg[2][6];
   a167=(a002-a167);
   a168=(a014*a167);
   a169=(a012*a134);
@@ -1313,9 +1340,9 @@ static int casadi_f0(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a176=(a001*a141);
   a176=(a175+a176);
   a176=(a174-a176);
-  a177=arg[2]? arg[2][1] : 0;
+  a177=arg[2][1];
   a178=(a074*a165);
-  a179=arg[1]? arg[1][2] : 0;
+  a179=arg[1][2];
   a180=(a001*a179);
   a178=(a178-a180);
   a177=(a177+a178);
@@ -1350,7 +1377,7 @@ static int casadi_f0(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a186=(a186+a187);
   a010=(a024*a010);
   a186=(a186+a010);
-  a010=arg[2]? arg[2][7] : 0;
+  a010=arg[2][7];
   a010=(a186-a010);
   a187=(a101*a010);
   a185=(a185-a187);
@@ -1359,7 +1386,7 @@ static int casadi_f0(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a187=(a187-a188);
   a189=(a110*a155);
   a187=(a187-a189);
-  a190=arg[2]? arg[2][0] : 0;
+  a190=arg[2][0];
   a191=(a038*a179);
   a192=(a074*a138);
   a191=(a191-a192);
@@ -1390,7 +1417,7 @@ static int casadi_f0(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a180=(a068*a180);
   a193=(a018*a180);
   a194=(a096*a009);
-  a195=arg[2]? arg[2][8] : 0;
+  a195=arg[2][8];
   a195=(a010-a195);
   a196=(a003*a195);
   a194=(a194-a196);
@@ -2331,7 +2358,7 @@ static int casadi_f0(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   if (res[0]!=0) res[0][79]=a184;
   a198=(-a198);
   if (res[0]!=0) res[0][80]=a198;
-  a198=arg[1]? arg[1][9] : 0;
+  a198=arg[1][9];
   a184=(a001-a198);
   a067=(a031*a184);
   a180=(a029*a038);
@@ -2390,7 +2417,7 @@ static int casadi_f0(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a098=(a028*a038);
   a195=(a029*a074);
   a098=(a098+a195);
-  a195=arg[1]? arg[1][10] : 0;
+  a195=arg[1][10];
   a151=(a098-a195);
   a224=(a101*a151);
   a133=(a224*a029);
@@ -2410,7 +2437,7 @@ static int casadi_f0(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a145=(a032*a145);
   a133=(a033*a133);
   a145=(a145-a133);
-  a133=arg[1]? arg[1][11] : 0;
+  a133=arg[1][11];
   a024=(a151-a133);
   a220=(a003*a024);
   a131=(a220*a029);
@@ -2657,7 +2684,7 @@ static int casadi_f0(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a261=(a076*a134);
   a261=(a211+a261);
   a117=(a117+a261);
-  a261=arg[2]? arg[2][9] : 0;
+  a261=arg[2][9];
   a261=(a002-a261);
   a262=(a031*a261);
   a263=(a029*a134);
@@ -2716,7 +2743,7 @@ static int casadi_f0(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a272=(a272+a273);
   a198=(a180*a198);
   a272=(a272+a198);
-  a198=arg[2]? arg[2][10] : 0;
+  a198=arg[2][10];
   a198=(a272-a198);
   a273=(a101*a198);
   a271=(a271-a273);
@@ -2749,7 +2776,7 @@ static int casadi_f0(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a178=(a068*a178);
   a277=(a033*a178);
   a278=(a185*a168);
-  a279=arg[2]? arg[2][11] : 0;
+  a279=arg[2][11];
   a279=(a198-a279);
   a280=(a003*a279);
   a278=(a278-a280);
@@ -3673,7 +3700,7 @@ static int casadi_f0(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   if (res[0]!=0) res[0][106]=a275;
   a282=(-a282);
   if (res[0]!=0) res[0][107]=a282;
-  a282=arg[1]? arg[1][12] : 0;
+  a282=arg[1][12];
   a275=(a001-a282);
   a274=(a046*a275);
   a178=(a044*a038);
@@ -3730,7 +3757,7 @@ static int casadi_f0(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a273=(a043*a038);
   a279=(a044*a074);
   a273=(a273+a279);
-  a279=arg[1]? arg[1][13] : 0;
+  a279=arg[1][13];
   a284=(a273-a279);
   a266=(a101*a284);
   a283=(a266*a044);
@@ -3750,7 +3777,7 @@ static int casadi_f0(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a247=(a047*a247);
   a283=(a048*a283);
   a247=(a247-a283);
-  a283=arg[1]? arg[1][14] : 0;
+  a283=arg[1][14];
   a180=(a284-a283);
   a301=(a003*a180);
   a093=(a301*a044);
@@ -3988,7 +4015,7 @@ static int casadi_f0(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a148=(a082*a134);
   a166=(a166+a148);
   a313=(a313+a166);
-  a166=arg[2]? arg[2][12] : 0;
+  a166=arg[2][12];
   a166=(a002-a166);
   a148=(a046*a166);
   a317=(a044*a134);
@@ -4049,7 +4076,7 @@ static int casadi_f0(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a329=(a329+a330);
   a282=(a178*a282);
   a329=(a329+a282);
-  a282=arg[2]? arg[2][13] : 0;
+  a282=arg[2][13];
   a282=(a329-a282);
   a330=(a101*a282);
   a328=(a328-a330);
@@ -4082,7 +4109,7 @@ static int casadi_f0(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a164=(a068*a164);
   a334=(a048*a164);
   a335=(a271*a262);
-  a336=arg[2]? arg[2][14] : 0;
+  a336=arg[2][14];
   a336=(a282-a336);
   a337=(a003*a336);
   a335=(a335-a337);
@@ -5000,7 +5027,7 @@ static int casadi_f0(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   if (res[0]!=0) res[0][133]=a005;
   a339=(-a339);
   if (res[0]!=0) res[0][134]=a339;
-  a339=arg[1]? arg[1][15] : 0;
+  a339=arg[1][15];
   a005=(a001-a339);
   a189=(a058*a005);
   a164=(a056*a038);
@@ -5055,7 +5082,7 @@ static int casadi_f0(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a275=(a055*a038);
   a324=(a056*a074);
   a275=(a275+a324);
-  a324=arg[1]? arg[1][16] : 0;
+  a324=arg[1][16];
   a273=(a275-a324);
   a330=(a101*a273);
   a332=(a330*a056);
@@ -5075,7 +5102,7 @@ static int casadi_f0(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a149=(a059*a149);
   a332=(a060*a332);
   a149=(a149-a332);
-  a332=arg[1]? arg[1][17] : 0;
+  a332=arg[1][17];
   a178=(a273-a332);
   a183=(a003*a178);
   a336=(a183*a056);
@@ -5311,7 +5338,7 @@ static int casadi_f0(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a249=(a081*a134);
   a211=(a211+a249);
   a146=(a146+a211);
-  a211=arg[2]? arg[2][15] : 0;
+  a211=arg[2][15];
   a002=(a002-a211);
   a211=(a058*a002);
   a249=(a056*a134);
@@ -5368,7 +5395,7 @@ static int casadi_f0(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a270=(a270+a325);
   a339=(a164*a339);
   a270=(a270+a339);
-  a339=arg[2]? arg[2][16] : 0;
+  a339=arg[2][16];
   a339=(a270-a339);
   a325=(a101*a339);
   a327=(a327-a325);
@@ -5400,7 +5427,7 @@ static int casadi_f0(const casadi_real** arg, casadi_real** res, casadi_int* iw,
   a260=(a068*a260);
   a268=(a060*a260);
   a351=(a328*a148);
-  a182=arg[2]? arg[2][17] : 0;
+  a182=arg[2][17];
   a182=(a339-a182);
   a346=(a003*a182);
   a351=(a351-a346);
@@ -8792,7 +8819,7 @@ static int casadi_f0(const casadi_real** arg, casadi_real** res, casadi_int* iw,
 }
 
 CASADI_SYMBOL_EXPORT int qd_did_full(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem){
-  return qd_d_finite(casadi_f0(arg, res, iw, w, mem), res, 3, (const casadi_int[]){162, 212, 210});
+  return qd_d_finite(qd_d_all_inputs(casadi_f0, 3, arg, res, iw, w, mem), res, 3, (const casadi_int[]){162, 212, 210});
 }
 
 CASADI_SYMBOL_EXPORT int qd_did_full_checkout(void) {
@@ -8948,7 +8975,7 @@ CASADI_SYMBOL_EXPORT int qd_dfd_full_parts_work_bytes(casadi_int *sz_arg, casadi
 }
 
 CASADI_SYMBOL_EXPORT int qd_dfd_full(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem){
-  return qd_dfd_full_solve(qd_dfd_full_parts_eval, casadi_f0, qd_did_full_sparsity_out(0), qd_did_full_sparsity_out(1), arg, res, iw, w, mem);
+  return qd_dfd_full_solve(casadi_f0, qd_did_full_sparsity_out(0), qd_did_full_sparsity_out(1), arg, res, iw, w, mem);
 }
 
 CASADI_SYMBOL_EXPORT int qd_dfd_full_checkout(void) {
@@ -9820,7 +9847,7 @@ CASADI_SYMBOL_EXPORT int qd_dgrf_dir_FL_FR_BL_BR_work_bytes(casadi_int *sz_arg, 
 }
 
 CASADI_SYMBOL_EXPORT int qd_dgrf_FL_FR_BL_BR(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem){
-  return qd_dgrf_solve(6, 15, qd_dfd_full_parts_eval, casadi_f0, casadi_f3, qd_did_full_sparsity_out(0), qd_did_full_sparsity_out(1), arg, res, iw, w, mem);
+  return qd_dgrf_solve(6, 15, casadi_f0, casadi_f3, qd_did_full_sparsity_out(0), qd_did_full_sparsity_out(1), arg, res, iw, w, mem);
 }
 
 CASADI_SYMBOL_EXPORT int qd_dgrf_FL_FR_BL_BR_checkout(void) {
@@ -10430,7 +10457,7 @@ CASADI_SYMBOL_EXPORT int qd_dgrf_dir_FL_FR_BL_work_bytes(casadi_int *sz_arg, cas
 }
 
 CASADI_SYMBOL_EXPORT int qd_dgrf_FL_FR_BL(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem){
-  return qd_dgrf_solve(6, 7, qd_dfd_full_parts_eval, casadi_f0, casadi_f5, qd_did_full_sparsity_out(0), qd_did_full_sparsity_out(1), arg, res, iw, w, mem);
+  return qd_dgrf_solve(6, 7, casadi_f0, casadi_f5, qd_did_full_sparsity_out(0), qd_did_full_sparsity_out(1), arg, res, iw, w, mem);
 }
 
 CASADI_SYMBOL_EXPORT int qd_dgrf_FL_FR_BL_checkout(void) {
@@ -11040,7 +11067,7 @@ CASADI_SYMBOL_EXPORT int qd_dgrf_dir_FL_FR_BR_work_bytes(casadi_int *sz_arg, cas
 }
 
 CASADI_SYMBOL_EXPORT int qd_dgrf_FL_FR_BR(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem){
-  return qd_dgrf_solve(6, 11, qd_dfd_full_parts_eval, casadi_f0, casadi_f7, qd_did_full_sparsity_out(0), qd_did_full_sparsity_out(1), arg, res, iw, w, mem);
+  return qd_dgrf_solve(6, 11, casadi_f0, casadi_f7, qd_did_full_sparsity_out(0), qd_did_full_sparsity_out(1), arg, res, iw, w, mem);
 }
 
 CASADI_SYMBOL_EXPORT int qd_dgrf_FL_FR_BR_checkout(void) {
@@ -11650,7 +11677,7 @@ CASADI_SYMBOL_EXPORT int qd_dgrf_dir_FL_BL_BR_work_bytes(casadi_int *sz_arg, cas
 }
 
 CASADI_SYMBOL_EXPORT int qd_dgrf_FL_BL_BR(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem){
-  return qd_dgrf_solve(6, 13, qd_dfd_full_parts_eval, casadi_f0, casadi_f9, qd_did_full_sparsity_out(0), qd_did_full_sparsity_out(1), arg, res, iw, w, mem);
+  return qd_dgrf_solve(6, 13, casadi_f0, casadi_f9, qd_did_full_sparsity_out(0), qd_did_full_sparsity_out(1), arg, res, iw, w, mem);
 }
 
 CASADI_SYMBOL_EXPORT int qd_dgrf_FL_BL_BR_checkout(void) {
@@ -12260,7 +12287,7 @@ CASADI_SYMBOL_EXPORT int qd_dgrf_dir_FR_BL_BR_work_bytes(casadi_int *sz_arg, cas
 }
 
 CASADI_SYMBOL_EXPORT int qd_dgrf_FR_BL_BR(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem){
-  return qd_dgrf_solve(6, 14, qd_dfd_full_parts_eval, casadi_f0, casadi_f11, qd_did_full_sparsity_out(0), qd_did_full_sparsity_out(1), arg, res, iw, w, mem);
+  return qd_dgrf_solve(6, 14, casadi_f0, casadi_f11, qd_did_full_sparsity_out(0), qd_did_full_sparsity_out(1), arg, res, iw, w, mem);
 }
 
 CASADI_SYMBOL_EXPORT int qd_dgrf_FR_BL_BR_checkout(void) {
@@ -12857,7 +12884,7 @@ CASADI_SYMBOL_EXPORT int qd_dgrf_dir_FL_FR_work_bytes(casadi_int *sz_arg, casadi
 }
 
 CASADI_SYMBOL_EXPORT int qd_dgrf_FL_FR(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem){
-  return qd_dgrf_solve(6, 3, qd_dfd_full_parts_eval, casadi_f0, casadi_f13, qd_did_full_sparsity_out(0), qd_did_full_sparsity_out(1), arg, res, iw, w, mem);
+  return qd_dgrf_solve(6, 3, casadi_f0, casadi_f13, qd_did_full_sparsity_out(0), qd_did_full_sparsity_out(1), arg, res, iw, w, mem);
 }
 
 CASADI_SYMBOL_EXPORT int qd_dgrf_FL_FR_checkout(void) {
@@ -13454,7 +13481,7 @@ CASADI_SYMBOL_EXPORT int qd_dgrf_dir_FL_BL_work_bytes(casadi_int *sz_arg, casadi
 }
 
 CASADI_SYMBOL_EXPORT int qd_dgrf_FL_BL(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem){
-  return qd_dgrf_solve(6, 5, qd_dfd_full_parts_eval, casadi_f0, casadi_f15, qd_did_full_sparsity_out(0), qd_did_full_sparsity_out(1), arg, res, iw, w, mem);
+  return qd_dgrf_solve(6, 5, casadi_f0, casadi_f15, qd_did_full_sparsity_out(0), qd_did_full_sparsity_out(1), arg, res, iw, w, mem);
 }
 
 CASADI_SYMBOL_EXPORT int qd_dgrf_FL_BL_checkout(void) {
@@ -14052,7 +14079,7 @@ CASADI_SYMBOL_EXPORT int qd_dgrf_dir_FL_BR_work_bytes(casadi_int *sz_arg, casadi
 }
 
 CASADI_SYMBOL_EXPORT int qd_dgrf_FL_BR(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem){
-  return qd_dgrf_solve(6, 9, qd_dfd_full_parts_eval, casadi_f0, casadi_f17, qd_did_full_sparsity_out(0), qd_did_full_sparsity_out(1), arg, res, iw, w, mem);
+  return qd_dgrf_solve(6, 9, casadi_f0, casadi_f17, qd_did_full_sparsity_out(0), qd_did_full_sparsity_out(1), arg, res, iw, w, mem);
 }
 
 CASADI_SYMBOL_EXPORT int qd_dgrf_FL_BR_checkout(void) {
@@ -14650,7 +14677,7 @@ CASADI_SYMBOL_EXPORT int qd_dgrf_dir_FR_BL_work_bytes(casadi_int *sz_arg, casadi
 }
 
 CASADI_SYMBOL_EXPORT int qd_dgrf_FR_BL(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem){
-  return qd_dgrf_solve(6, 6, qd_dfd_full_parts_eval, casadi_f0, casadi_f19, qd_did_full_sparsity_out(0), qd_did_full_sparsity_out(1), arg, res, iw, w, mem);
+  return qd_dgrf_solve(6, 6, casadi_f0, casadi_f19, qd_did_full_sparsity_out(0), qd_did_full_sparsity_out(1), arg, res, iw, w, mem);
 }
 
 CASADI_SYMBOL_EXPORT int qd_dgrf_FR_BL_checkout(void) {
@@ -15247,7 +15274,7 @@ CASADI_SYMBOL_EXPORT int qd_dgrf_dir_FR_BR_work_bytes(casadi_int *sz_arg, casadi
 }
 
 CASADI_SYMBOL_EXPORT int qd_dgrf_FR_BR(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem){
-  return qd_dgrf_solve(6, 10, qd_dfd_full_parts_eval, casadi_f0, casadi_f21, qd_did_full_sparsity_out(0), qd_did_full_sparsity_out(1), arg, res, iw, w, mem);
+  return qd_dgrf_solve(6, 10, casadi_f0, casadi_f21, qd_did_full_sparsity_out(0), qd_did_full_sparsity_out(1), arg, res, iw, w, mem);
 }
 
 CASADI_SYMBOL_EXPORT int qd_dgrf_FR_BR_checkout(void) {
@@ -15844,7 +15871,7 @@ CASADI_SYMBOL_EXPORT int qd_dgrf_dir_BL_BR_work_bytes(casadi_int *sz_arg, casadi
 }
 
 CASADI_SYMBOL_EXPORT int qd_dgrf_BL_BR(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem){
-  return qd_dgrf_solve(6, 12, qd_dfd_full_parts_eval, casadi_f0, casadi_f23, qd_did_full_sparsity_out(0), qd_did_full_sparsity_out(1), arg, res, iw, w, mem);
+  return qd_dgrf_solve(6, 12, casadi_f0, casadi_f23, qd_did_full_sparsity_out(0), qd_did_full_sparsity_out(1), arg, res, iw, w, mem);
 }
 
 CASADI_SYMBOL_EXPORT int qd_dgrf_BL_BR_checkout(void) {
@@ -16529,7 +16556,7 @@ CASADI_SYMBOL_EXPORT int qd_dgrf_dir_FL_work_bytes(casadi_int *sz_arg, casadi_in
 }
 
 CASADI_SYMBOL_EXPORT int qd_dgrf_FL(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem){
-  return qd_dgrf_solve(3, 1, qd_dfd_full_parts_eval, casadi_f0, casadi_f25, qd_did_full_sparsity_out(0), qd_did_full_sparsity_out(1), arg, res, iw, w, mem);
+  return qd_dgrf_solve(3, 1, casadi_f0, casadi_f25, qd_did_full_sparsity_out(0), qd_did_full_sparsity_out(1), arg, res, iw, w, mem);
 }
 
 CASADI_SYMBOL_EXPORT int qd_dgrf_FL_checkout(void) {
@@ -17214,7 +17241,7 @@ CASADI_SYMBOL_EXPORT int qd_dgrf_dir_FR_work_bytes(casadi_int *sz_arg, casadi_in
 }
 
 CASADI_SYMBOL_EXPORT int qd_dgrf_FR(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem){
-  return qd_dgrf_solve(3, 2, qd_dfd_full_parts_eval, casadi_f0, casadi_f27, qd_did_full_sparsity_out(0), qd_did_full_sparsity_out(1), arg, res, iw, w, mem);
+  return qd_dgrf_solve(3, 2, casadi_f0, casadi_f27, qd_did_full_sparsity_out(0), qd_did_full_sparsity_out(1), arg, res, iw, w, mem);
 }
 
 CASADI_SYMBOL_EXPORT int qd_dgrf_FR_checkout(void) {
@@ -17899,7 +17926,7 @@ CASADI_SYMBOL_EXPORT int qd_dgrf_dir_BL_work_bytes(casadi_int *sz_arg, casadi_in
 }
 
 CASADI_SYMBOL_EXPORT int qd_dgrf_BL(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem){
-  return qd_dgrf_solve(3, 4, qd_dfd_full_parts_eval, casadi_f0, casadi_f29, qd_did_full_sparsity_out(0), qd_did_full_sparsity_out(1), arg, res, iw, w, mem);
+  return qd_dgrf_solve(3, 4, casadi_f0, casadi_f29, qd_did_full_sparsity_out(0), qd_did_full_sparsity_out(1), arg, res, iw, w, mem);
 }
 
 CASADI_SYMBOL_EXPORT int qd_dgrf_BL_checkout(void) {
@@ -18584,7 +18611,7 @@ CASADI_SYMBOL_EXPORT int qd_dgrf_dir_BR_work_bytes(casadi_int *sz_arg, casadi_in
 }
 
 CASADI_SYMBOL_EXPORT int qd_dgrf_BR(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem){
-  return qd_dgrf_solve(3, 8, qd_dfd_full_parts_eval, casadi_f0, casadi_f31, qd_did_full_sparsity_out(0), qd_did_full_sparsity_out(1), arg, res, iw, w, mem);
+  return qd_dgrf_solve(3, 8, casadi_f0, casadi_f31, qd_did_full_sparsity_out(0), qd_did_full_sparsity_out(1), arg, res, iw, w, mem);
 }
 
 CASADI_SYMBOL_EXPORT int qd_dgrf_BR_checkout(void) {

@@ -304,6 +304,21 @@ def declare_work(c_text: str, h_text: str, name: str, sz_w: int) -> tuple[str, s
     return c_text, h_text
 
 
+def _unguarded_inputs(c_text: str, raw: str, f: ca.Function) -> str:
+    """CasADi's evaluation ``raw`` of ``f`` without its test of each input pointer at each read (``arg[i]? arg[i][k] :
+    0``): its callers pass every input (qd_d_all_inputs gives a NULL one qd_d_zeros). The tests split
+    each read into branches, so gcc takes an angle's sine and cosine in two libm calls instead of one sincos."""
+    if f.n_in() > 3 or max(f.nnz_in(i) for i in range(f.n_in())) > NQ_FULL:
+        raise AssertionError(f"{f.name()}: more inputs or reals than qd_d_all_inputs holds")
+    head = re.search(rf"static int {raw}\(.*?\n\}}\n", c_text, re.S)
+    if not head:
+        raise AssertionError(f"{raw}: CasADi's evaluation function not found")
+    body = re.sub(r"arg\[(\d+)\]\? (arg\[\1\]\[\d+\]) : 0;", r"\2;", head.group(0))
+    if re.search(r"arg\[\d+\]\?", body):
+        raise AssertionError(f"{raw}: a test of an input pointer is left")
+    return c_text[:head.start()] + body + c_text[head.end():]
+
+
 def derivative_source(file_stem: str, functions: list[ca.Function], precision: str) -> tuple[str, str]:
     """(C source, CasADi's header) of qd_<robot>_d.c: CasADi's code with c/qd_derivatives_solve.c
     inserted (after c/qd_dense.c); every entry point returns QD_NONFINITE for a non-finite output, dfd_full solves."""
@@ -325,13 +340,18 @@ def derivative_source(file_stem: str, functions: list[ca.Function], precision: s
             body = rf"\1  return qd_d_finite({parts}(arg, res, iw, w, mem), res, 2, (const casadi_int[]){{{nnz}}});\n"
         elif f.name() == PREFIX + "dfd_full":
             did = raw[PREFIX + "did_full"]
-            body = (rf"\1  return qd_dfd_full_solve({parts}, {did}, {PREFIX}did_full_sparsity_out(0), "
+            body = (rf"\1  return qd_dfd_full_solve({did}, {PREFIX}did_full_sparsity_out(0), "
                     rf"{PREFIX}did_full_sparsity_out(1), arg, res, iw, w, mem);\n")
+        elif f.name() == PREFIX + "did_full":  # its evaluation reads the inputs unguarded: NULL ones are zeros here
+            c_text = _unguarded_inputs(c_text, raw[f.name()], f)
+            nnz = ", ".join(str(f.nnz_out(i)) for i in range(f.n_out()))
+            body = (rf"\1  return qd_d_finite(qd_d_all_inputs(\2, {f.n_in()}, arg, res, iw, w, mem), res, {f.n_out()}, "
+                    rf"(const casadi_int[]){{{nnz}}});\n")
         elif signature:  # dgrf_<feet>
             suffix = f.name()[len(PREFIX + "dgrf_"):]
             did, direction = (raw[PREFIX + n] for n in ("did_full", f"dgrf_dir_{suffix}"))
             legs = sum(1 << i for i in stance_set(suffix.replace("_", "+")).feet)  # the joints lambda reads
-            body = (rf"\1  return qd_dgrf_solve({f.size1_out(0)}, {legs}, {parts}, {did}, {direction}, "
+            body = (rf"\1  return qd_dgrf_solve({f.size1_out(0)}, {legs}, {did}, {direction}, "
                     rf"{PREFIX}did_full_sparsity_out(0), {PREFIX}did_full_sparsity_out(1), arg, res, iw, w, mem);\n")
         else:
             nnz = ", ".join(str(f.nnz_out(i)) for i in range(f.n_out()))

@@ -77,10 +77,17 @@ def test_singular_mass_matrix_returns_singular(tmp_path, zero):
 #include "{TEMPLATES / 'qd_dense.c'}"
 #include "{TEMPLATES / 'qd_derivatives_solve.c'}"
 #include <stdio.h>
-static int parts(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem) {{
+static casadi_int sp_M[2 + 19 + 324] = {{18, 18}}; /* M dense, as a compressed-column pattern (filled in main) */
+const casadi_int* qd_M_full_sparsity_out(casadi_int i) {{ (void)i; return sp_M; }}
+int qd_M_full(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem) {{
   (void)arg; (void)iw; (void)w; (void)mem;
   for (int i = 0; i < 324; ++i) res[0][i] = 0;
-  for (int i = 0; i < 18; ++i) {{ res[0][i + 18 * i] = i == {zero} ? 0.0 : 1.0; res[1][i] = 0; }}
+  for (int i = 0; i < 18; ++i) res[0][i + 18 * i] = i == {zero} ? 0.0 : 1.0;
+  return 0;
+}}
+int qd_nle_full(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem) {{
+  (void)arg; (void)iw; (void)w; (void)mem;
+  for (int i = 0; i < 18; ++i) res[0][i] = 0;
   return 0;
 }}
 static int did(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem) {{
@@ -92,8 +99,10 @@ int main(void) {{
   const casadi_real* arg[3] = {{q, v, tau}};
   casadi_real* res[3] = {{out[0], out[1], out[2]}};
   static const casadi_int sp[2 + 19 + 1] = {{18, 18}};
-  (void)qd_dgrf_solve; /* the GRF derivative's driver, not exercised here */
-  printf("%d\\n", qd_dfd_full_solve(parts, did, sp, sp, arg, res, 0, w, 0));
+  for (int j = 0; j <= 18; ++j) sp_M[2 + j] = 18 * j;
+  for (int k = 0; k < 324; ++k) sp_M[2 + 19 + k] = k % 18;
+  (void)qd_dgrf_solve; (void)qd_dfd_full_parts_eval; /* not exercised here */
+  printf("%d\\n", qd_dfd_full_solve(did, sp, sp, arg, res, 0, w, 0));
   return 0;
 }}
 """)

@@ -6,7 +6,7 @@
  * them a derivative with respect to a quaternion entry (docs/derivatives.md).
  *
  * qd_dfd_full(q, v, tau_full) -> (da_dq, da_dv, da_dtau), a = M^-1 (tau_full - C - G):
- *   M and C + G from qd_dfd_full_parts (qd_M_full and qd_nle_full of qd_<robot>.c), M^-1 by M's tree structure (qd_d_tree_inverse: the legs'
+ *   M and C + G from qd_d_parts (qd_M_full and qd_nle_full of qd_<robot>.c), M^-1 by M's tree structure (qd_d_tree_inverse: the legs'
  *   3 x 3 blocks, then the trunk's Schur complement; no fill-in, ~2k multiply-adds), a = M^-1 (tau_full - C - G),
  *   then the generated qd_did_full at (q, v, a): da/dq = -M^-1 dtau/dq, da/dv = -M^-1 dtau/dv (sparse products),
  *   da/dtau = M^-1; da/dq's trunk-pose columns without the product (gravity is uniform: a = M^-1 (tau - C) + [g_b; 0],
@@ -48,17 +48,6 @@ int qd_M_full(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi
 const casadi_int* qd_M_full_sparsity_out(casadi_int i);
 int qd_nle_full(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem);
 
-/* qd_dfd_full_parts(q, v) -> (M (18 x 18, dense, column-major), nle = C + G (18)): qd_M_full (sparse, densified
- * in place) and qd_nle_full, not a second generated copy of them. Either output may be NULL. */
-QD_INLINE int qd_dfd_full_parts_eval(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem) {
-  casadi_real* m_res[1] = {res[0]};
-  int flag = res[0] ? qd_M_full(arg, m_res, iw, w, mem) : 0;
-  if (!flag && res[0]) qd_densify(qd_M_full_sparsity_out(0), res[0]);
-  m_res[0] = res[1];
-  if (!flag && res[1]) flag = qd_nle_full(arg, m_res, iw, w, mem);
-  return flag;
-}
-
 /* Reals of the caller's w that qd_dfd_full and qd_dgrf_<feet> use for their temporaries (the generator states
  * them as the functions' _SZ_W, so the Cortex-M stack holds none of the 18 x 18 arrays). */
 #define QD_DFD_FULL_SZ_W 1476 /* M, M^-1, dtau/dq, dtau/dv (18 x 18 each), nle, a (18), the blocks (4 * 9 + 4 * 18 + 36) */
@@ -76,6 +65,16 @@ static int qd_d_nonfinite(const casadi_real* restrict x, casadi_int n) {
   return !(s[0] + s[1] + s[2] + s[3] + s[4] + s[5] + s[6] + s[7] == 0);
 }
 
+/* f (n_in <= 3 inputs of <= 19 reals, read without testing their pointers) at arg, a NULL input as zeros
+ * (CasADi's convention). */
+static const casadi_real qd_d_zeros[19];
+QD_INLINE int qd_d_all_inputs(qd_d_eval_fn f, int n_in, const casadi_real** arg, casadi_real** res, casadi_int* iw,
+                              casadi_real* w, int mem) {
+  const casadi_real* a[3];
+  for (int i = 0; i < n_in; ++i) a[i] = arg[i] ? arg[i] : qd_d_zeros;
+  return f(a, res, iw, w, mem);
+}
+
 /* flag, or QD_NONFINITE if any of the n_out outputs (nnz[i] entries each) is not finite. */
 static int qd_d_finite(int flag, casadi_real** res, int n_out, const casadi_int* nnz) {
   if (flag) return flag;
@@ -83,6 +82,39 @@ static int qd_d_finite(int flag, casadi_real** res, int n_out, const casadi_int*
     if (res[i] && qd_d_nonfinite(res[i], nnz[i])) return QD_NONFINITE;
   }
   return 0;
+}
+
+/* x (nrow * ncol reals, column-major) = the dense matrix of the nonzeros nz of sparsity sp (x and nz apart). */
+static void qd_d_scatter(const casadi_int* sp, const casadi_real* restrict nz, casadi_real* restrict x) {
+  const casadi_int nrow = sp[0], ncol = sp[1], *colind = sp + 2, *row = sp + 3 + ncol;
+  for (casadi_int i = 0; i < nrow * ncol; ++i) x[i] = 0;
+  for (casadi_int j = 0; j < ncol; ++j) {
+    for (casadi_int k = colind[j]; k < colind[j + 1]; ++k) x[row[k] + nrow * j] = nz[k];
+  }
+}
+
+/* M (18 x 18, dense, column-major) and nle = C + G (18) at (q, v) = (arg[0], arg[1]) from qd_M_full and qd_nle_full,
+ * not a second generated copy of them; either may be NULL. With scratch (>= M_full's nonzeros, apart from M),
+ * M_full's nonzeros go there and are scattered into M (fewer instructions than densifying in place) and
+ * QD_NONFINITE is returned if M has a NaN/inf. */
+QD_INLINE int qd_d_parts(const casadi_real** arg, casadi_real* M, casadi_real* nle, casadi_real* scratch, casadi_int* iw,
+                         casadi_real* w, int mem) {
+  const casadi_int* sp = qd_M_full_sparsity_out(0);
+  casadi_real* m_res[1] = {scratch ? scratch : M};
+  int flag = M ? qd_M_full(arg, m_res, iw, w, mem) : 0;
+  if (!flag && M) {
+    if (scratch) qd_d_scatter(sp, scratch, M);
+    else qd_densify(sp, M);
+    if (scratch && qd_d_nonfinite(M, QD_NV * QD_NV)) return QD_NONFINITE;
+  }
+  m_res[0] = nle;
+  if (!flag && nle) flag = qd_nle_full(arg, m_res, iw, w, mem);
+  return flag;
+}
+
+/* qd_dfd_full_parts(q, v) -> (M (18 x 18, dense, column-major), nle = C + G (18)) by qd_d_parts. */
+QD_INLINE int qd_dfd_full_parts_eval(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem) {
+  return qd_d_parts(arg, res[0], res[1], 0, iw, w, mem);
 }
 
 /* out (18 x 18, column-major) = -Minv D for D in CasADi's compressed-column format (sp, nz), columns from first on. */
@@ -202,15 +234,14 @@ static int qd_d_tree_inverse(const casadi_real* restrict M, casadi_real* restric
   return 0;
 }
 
-QD_INLINE int qd_dfd_full_solve(qd_d_eval_fn parts, qd_d_eval_fn did, const casadi_int* sp_dq, const casadi_int* sp_dv,
+QD_INLINE int qd_dfd_full_solve(qd_d_eval_fn did, const casadi_int* sp_dq, const casadi_int* sp_dv,
                              const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem) {
   casadi_real *M = w, *Minv = M + QD_NV * QD_NV, *Dq = Minv + QD_NV * QD_NV, *Dv = Dq + QD_NV * QD_NV;
   casadi_real *nle = Dv + QD_NV * QD_NV, *a = nle + QD_NV, *blk = a + QD_NV, *rest = blk + 4 * 9 + 4 * 18 + 36;
-  const casadi_real* p_arg[2] = {arg[0], arg[1]};
-  casadi_real* p_res[2] = {M, nle};
-  int flag = parts(p_arg, p_res, iw, rest, mem);
+  int flag = qd_d_parts(arg, M, nle, Minv, iw, rest, mem); /* M_full's nonzeros in Minv's place until the inverse */
   if (flag) return flag;
-  if (qd_d_nonfinite(M, QD_NV * QD_NV) | qd_d_nonfinite(nle, QD_NV) | qd_d_nonfinite(arg[2], QD_NV)) return QD_NONFINITE;
+  if (qd_d_nonfinite(nle, QD_NV) | qd_d_nonfinite(arg[2], QD_NV)) return QD_NONFINITE;
+  if (res[2]) Minv = res[2]; /* da/dtau = M^-1: formed in place (written only once every pivot has passed) */
   if (qd_d_tree_inverse(M, Minv, blk)) return QD_SINGULAR;
   for (int i = 0; i < QD_NV; ++i) a[i] = 0;
   for (int j = 0; j < QD_NV; ++j) {
@@ -237,9 +268,6 @@ QD_INLINE int qd_dfd_full_solve(qd_d_eval_fn parts, qd_d_eval_fn did, const casa
     res[1][2 * QD_NV] = -w_b[1], res[1][2 * QD_NV + 1] = w_b[0];
     qd_d_neg_product(Minv, sp_dv, Dv, 3, res[1]);
   }
-  if (res[2]) {
-    for (int i = 0; i < QD_NV * QD_NV; ++i) res[2][i] = Minv[i];
-  }
   const casadi_int nnz[3] = {QD_NV * QD_NV, QD_NV * QD_NV, QD_NV * QD_NV};
   return qd_d_finite(0, res, 3, nnz);
 }
@@ -265,19 +293,18 @@ static void qd_d_trunk_product(int m, const casadi_real* P, const casadi_int* sp
 
 /* qd_dgrf_<feet>(q, v, a) -> (dlambda_dq, dlambda_dv, dlambda_da), m x 18 each, of the GRF solve's
  * lambda = P(q) w_req(q, v, a), linear in the required trunk wrench w_req (the rnea's trunk rows):
- *   w_req = M[0:6] a + nle[0:6] from qd_dfd_full_parts; P column by column and d(P w)/dq one
+ *   w_req = M[0:6] a + nle[0:6] from qd_d_parts; P column by column and d(P w)/dq one
  *   joint direction at a time (the joints of the stance legs, bit i of legs for leg i; no other coordinate
  *   enters P) from the generated qd_dgrf_dir_<feet> (dir: q, w, dq -> P w, d(P w)/dq dq); d w_req/dx from the
  *   generated qd_did_full's trunk rows (sp_dq, sp_dv: its output patterns) and M:
  *   dlambda/dq = P dtau_dq[0:6] + d(P w)/dq, dlambda/dv = P dtau_dv[0:6], dlambda/da = P M[0:6].
  * d/dq along pinocchio.integrate as above. Return codes: 0, QD_NONFINITE. */
-QD_INLINE int qd_dgrf_solve(int m, int legs, qd_d_eval_fn parts, qd_d_eval_fn did, qd_d_eval_fn dir, const casadi_int* sp_dq,
+QD_INLINE int qd_dgrf_solve(int m, int legs, qd_d_eval_fn did, qd_d_eval_fn dir, const casadi_int* sp_dq,
                          const casadi_int* sp_dv, const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w,
                          int mem) {
   casadi_real *M = w, *Dq = M + QD_NV * QD_NV, *Dv = Dq + QD_NV * QD_NV, *nle = Dv + QD_NV * QD_NV, *seed = nle + QD_NV;
   casadi_real *wrench = seed + QD_NV, *P = wrench + 6, *dPw = P + 6 * 6, *rest = dPw + 6 * QD_NV; /* m <= 6 */
-  casadi_real* p_res[2] = {M, nle};
-  int flag = parts(arg, p_res, iw, rest, mem);
+  int flag = qd_d_parts(arg, M, nle, Dq, iw, rest, mem); /* M_full's nonzeros in Dq's place until did_full */
   if (flag) return flag;
   for (int i = 0; i < 6; ++i) {
     wrench[i] = nle[i];
