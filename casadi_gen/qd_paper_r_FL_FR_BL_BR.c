@@ -7734,8 +7734,8 @@ static void qd_densify(const casadi_int* sp, casadi_real* x) {
  * foot positions rounded at eps, it cannot resolve values below ~(64 eps)^2 (float: 6e-11). */
 #define QD_REGULARITY_FLOOR ((64 * QD_EPS) * (64 * QD_EPS))
 
-/* Where a generated function is passed as a pointer, the template is inlined into its caller so the
- * call becomes direct and a static stack walk (-fcallgraph-info, docs/embedded.md) can bound it. */
+/* The templates are inlined into their callers: each specialised for its constant n and legs, and every call direct,
+ * so a static stack walk (-fcallgraph-info, docs/embedded.md) can bound it. */
 #ifndef QD_INLINE
 #if defined(__GNUC__)
 #define QD_INLINE static inline __attribute__((always_inline))
@@ -7743,7 +7743,6 @@ static void qd_densify(const casadi_int* sp, casadi_real* x) {
 #define QD_INLINE static inline
 #endif
 #endif
-typedef int (*qd_eval_fn)(const casadi_real**, casadi_real**, casadi_int*, casadi_real*, int);
 
 /* flag, or QD_NONFINITE if any of the n_out outputs (nnz[i] entries each) is not finite: x - x is 0 for a finite x,
  * else NaN; four sums of it, branch-free and vectorised (~8x faster than isfinite per entry). Not -ffast-math. */
@@ -7998,17 +7997,6 @@ QD_INLINE int qd_fd_r_lu(int n, int legs, const casadi_real* M_r, casadi_real* x
   }
   for (int i = 0; i < m; ++i) x[r[i]] = y[i];
   return 0;
-}
-
-/* M (= M_r, evaluated) factorised and b = tau_ext - (C_r + G_r) at arg = (q_r, qd_r, tau_ext, quat), C_r + G_r
- * from the evaluation CG_r (qd_fd_r_factor). 0, QD_NONFINITE or QD_SINGULAR. */
-QD_INLINE int qd_fd_r_finish(int n, qd_eval_fn CG_r, const casadi_real** arg, casadi_real* M, int* piv, casadi_real* b,
-                             casadi_int* iw, casadi_real* w, int mem) {
-  const casadi_real* cg_arg[3] = {arg[0], arg[1], arg[3]};
-  casadi_real* cg_res[1] = {b};
-  int flag = CG_r(cg_arg, cg_res, iw, w, mem);
-  casadi_real scale = 0;
-  return flag ? flag : qd_fd_r_factor(n, arg[2], M, piv, b, &scale);
 }
 
 /* qdd_r = M_r^-1 (tau_ext - (C_r + G_r)): arg = (q_r, qd_r, tau_ext, quat), res = (qdd_r). The parts once
