@@ -187,8 +187,8 @@ static const casadi_int casadi_s7[3] = {6, 18, 1};
 static const casadi_int casadi_s8[3] = {3, 1, 1};
 static const casadi_int casadi_s9[3] = {3, 18, 1};
 
-/* quadruped_dyn: a CasADi sparse output made dense (hand-written, inserted into each generated
- * qd_<robot>_r_<feet>.c and qd_<robot>_d.c; see quadruped_dyn/codegen/emit.py). */
+/* quadruped_dyn: a CasADi sparse output made dense (hand-written; inserted into qd_<robot>_d.c
+ * and in qd_reduced_templates.h, which each qd_<robot>_r_<feet>.c includes; see quadruped_dyn/codegen/emit.py). */
 /* x: the nonzeros of a CasADi sparsity sp (nrow, ncol, colind[ncol + 1], row[nnz]) -> the dense matrix,
  * column-major, in place (x holds nrow * ncol reals). Backwards: a nonzero's dense index is >= its own. */
 static void qd_densify(const casadi_int* sp, casadi_real* x) {

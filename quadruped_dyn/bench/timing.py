@@ -79,7 +79,7 @@ class BenchEntry:
 class BenchReport:
     robot: str
     entries: list[BenchEntry] = field(default_factory=list)
-    code_bytes: int = 0  # generated C source
+    code_bytes: int = 0  # generated C: the library's sources and the headers they include
     source_files: int = 0  # generated C files
     library_bytes: int = 0  # compiled shared library (-O3)
     work_bytes: int = 0  # largest caller-provided work memory (iw + w) of any function; temporaries are locals
@@ -174,7 +174,8 @@ def run_bench(robot: Robot, calls: int = 20000, reps: int = 9, rounds: int = 3, 
             report.generation_s = time.perf_counter() - start
         c_path, h_path, ref_path = files.source, files.header, files.extra[reference_header_name(robot)]
         sources = files.c_sources
-        report.code_bytes, report.source_files = sum(p.stat().st_size for p in sources), len(sources)
+        report.code_bytes = sum(p.stat().st_size for p in files.library_sources)
+        report.source_files = len(sources)
         report.work_bytes = max(8 * (iw + w) for iw, w in work_sizes(h_path.read_text()).values())
         for name in ("bench_qd.c", "bench_median.h"):
             shutil.copy(HARNESSES / name, tmp)

@@ -320,15 +320,37 @@ def _precision_math(c_source: str) -> str:
                              c_source))
     if unknown:
         raise AssertionError(f"elementary functions {sorted(unknown)} have no precision wrapper in emit._WRAPPED_MATH")
-    used = bool(_MATH_CALL.search(c_source))
-    c_source = _MATH_CALL.sub(r"qd_\1(", c_source)  # before the wrappers go in: they call the real ones
+    used = bool(_MATH_CALL.search(c_source)) or f'#include "{REDUCED_TEMPLATES}"' in c_source  # it calls qd_fabs
+    c_source = _precision_calls(c_source)  # before the wrappers go in: they call the real ones
     if used:  # after CasADi's default of casadi_real, which the wrappers' signatures need
         default = _CASADI_REAL_DEFAULT.search(c_source)
         if not default:
             raise AssertionError("CasADi's '#ifndef casadi_real' default is not in the generated source")
         c_source = c_source[:default.end()] + _PRECISION_MATH + c_source[default.end():]
+    return c_source
+
+
+def _precision_calls(c_source: str) -> str:
+    """``_precision_math`` without the wrappers' definitions (a header the file that defines them includes)."""
+    c_source = _MATH_CALL.sub(r"qd_\1(", c_source)
     c_source = re.sub(r"\((\d+)\.\*", r"(\1*", c_source)
     return re.sub(r"\((\d+)\./", r"(\1/", c_source)
+
+
+#: The hand-written templates of the reduced files (checks, fd_r's solve, dfd_r's solve), one header every
+#: qd_<robot>_r_<feet>.c includes (not one copy per stance file: ~28 kB each); robot-independent.
+REDUCED_TEMPLATES = "qd_reduced_templates.h"
+_REDUCED_TEMPLATE_FILES = ("qd_dense.c", "qd_reduced_solve.c", "qd_reduced_derivatives.c")
+
+
+def reduced_templates_h() -> str:
+    """The text of ``REDUCED_TEMPLATES``: c/qd_dense.c, c/qd_reduced_solve.c and c/qd_reduced_derivatives.c, their
+    elementary functions routed through the including file's precision wrappers (``_precision_math``)."""
+    body = "\n".join((TEMPLATES / t).read_text() for t in _REDUCED_TEMPLATE_FILES)
+    return ("/* quadruped_dyn: the hand-written templates of the reduced model, included by every qd_<robot>_r_<feet>.c\n"
+            " * after its generated pieces (quadruped_dyn/codegen/emit.py). Not a header to include elsewhere: its\n"
+            " * functions are static and call the including file's qd_reduced_parts, qd_M_full, qd_id_full, ... */\n"
+            + _precision_calls(body))
 
 
 #: start-up and memory map of the check program on QEMU's MPS2 Cortex-M boards (the Makefile's cross builds)
@@ -415,7 +437,7 @@ def _reduced_helpers_c(robot: Robot, stance: StanceSet, dfd_r: DfdRPieces, M_ful
 
 def _checked_reduced_c(c_text: str, casadi_header: str, functions: list[ca.Function], helpers_c: str,
                        dfd_r: DfdRPieces) -> tuple[str, str]:
-    """Insert ``helpers_c`` (``_reduced_helpers_c``) and ``c/qd_reduced_solve.c`` and route the entry
+    """Insert ``helpers_c`` (``_reduced_helpers_c``) and the include of ``REDUCED_TEMPLATES`` and route the entry
     points through them: every function returns QD_DEGENERATE at a degenerate stance and
     QD_NONFINITE for a non-finite output; M_r, CG_r, G_r and id_r by ``qd_reduced_term`` over the generated
     qd_reduced_parts and the library's qd_M_full, qd_G_full, qd_id_full (CasADi's unrolled graphs of the four
@@ -423,7 +445,6 @@ def _checked_reduced_c(c_text: str, casadi_header: str, functions: list[ca.Funct
     once, then the LU); dfd_r by ``c/qd_reduced_derivatives.c`` over ``dfd_r``'s pieces, its caller work memory
     declared. Returns (C source, CasADi's header text)."""
     first = c_text.index(f"\n/* {functions[0].name()}:")
-    templates = "\n".join((TEMPLATES / t).read_text() for t in ("qd_dense.c", "qd_reduced_solve.c", "qd_reduced_derivatives.c"))
     raw = evaluations(c_text, [f.name() for f in functions])  # entry point -> CasADi's evaluation function
     stance = reduced_parts(functions[0].name()[len(PREFIX):])[1]  # type: ignore[index]
     legs = sum(1 << i for i in stance.feet)  # S_b's rows and T_b's columns of the other legs' joints are zero
@@ -431,7 +452,7 @@ def _checked_reduced_c(c_text: str, casadi_header: str, functions: list[ca.Funct
     signature = "(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem)"
     evals = "".join(f"static int qd_{kind}_eval{signature} {{\n  return qd_reduced_term({n_r}, {legs}, {which}, arg, res, iw, "
                     "w, mem);\n}\n" for which, kind in enumerate(("M_r", "CG_r", "G_r", "id_r")))
-    c_text = c_text[:first] + "\n" + helpers_c + "\n" + templates + "\n" + evals + c_text[first:]
+    c_text = c_text[:first] + "\n" + helpers_c + f'\n#include "{REDUCED_TEMPLATES}"\n' + evals + c_text[first:]
     work = work_sizes(casadi_header)
     for f in functions:
         if f.sz_arg() != f.n_in() or work[f.name()] != (0, 0):
@@ -556,6 +577,7 @@ class GeneratedFiles:
     check_program: Path  # check_qd.c
     makefile: Path
     reduced: tuple[Path, ...]  # qd_<robot>_r_<feet>.c: the reduced model of each stance set of 2-4 feet
+    reduced_templates: Path  # qd_reduced_templates.h: the hand-written templates every reduced file includes
     derivatives: tuple[Path, ...] = ()  # qd_<robot>_d.c: derivatives of the full dynamics (codegen/emit_derivatives.py)
     embedded: tuple[Path, ...] = ()  # Cortex-M start-up and linker script, qd_threads.c (docs/embedded.md)
 
@@ -564,10 +586,16 @@ class GeneratedFiles:
         """The generated C files of the library (not the check program)."""
         return [self.source, *self.reduced, *self.derivatives]
 
+    @property
+    def library_sources(self) -> list[Path]:
+        """What the library is compiled from: ``c_sources`` and the headers they include (its size is the
+        generated C's size, docs/benchmark.md)."""
+        return [*self.c_sources, self.header, self.reduced_templates]
+
     def all(self) -> list[Path]:
         """Every file, in the order they were written."""
         return [self.source, self.header, *self.extra.values(), self.check_program, *self.embedded, self.makefile,
-                *self.reduced, *self.derivatives]
+                *self.reduced, self.reduced_templates, *self.derivatives]
 
 
 def generate(robot: Robot, out_dir: Path, precision: str = "double",
@@ -619,6 +647,7 @@ def generate(robot: Robot, out_dir: Path, precision: str = "double",
         **{f: (TEMPLATES / f).read_text() for f in (*CORTEX_M_FILES, THREADS_FILE)},  # docs/embedded.md
         "Makefile": (TEMPLATES / "Makefile").read_text().replace("ROBOT ?= paper", f"ROBOT ?= {name[3:]}"),
         **sources,
+        REDUCED_TEMPLATES: reduced_templates_h(),
     }
     for file_name, text in files.items():
         write_text(output_path(out_dir, file_name), text)  # under out_dir, never through a link
@@ -626,6 +655,7 @@ def generate(robot: Robot, out_dir: Path, precision: str = "double",
                           extra={f: out_dir / f for f in extra}, check_program=out_dir / "check_qd.c",
                           makefile=out_dir / "Makefile",
                           reduced=tuple(out_dir / f for f in sources if f not in (f"{name}.c", f"{name}_d.c")),
+                          reduced_templates=out_dir / REDUCED_TEMPLATES,
                           derivatives=(out_dir / f"{name}_d.c",),
                           embedded=tuple(out_dir / f for f in (*CORTEX_M_FILES, THREADS_FILE)))
 

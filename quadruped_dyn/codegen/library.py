@@ -63,20 +63,34 @@ class CompiledLibrary:
     precision: str = "double"  # casadi_real of the build: "double" or "float"
 
 
-#: A ``#include "file"`` (or of a macro): the object would depend on bytes outside the source.
-_LOCAL_INCLUDE = re.compile(rb'^[ \t]*#[ \t]*include[ \t]*[^<\s]', re.M)
+#: A ``#include`` of anything but a <system> header: the object depends on bytes outside the source.
+_LOCAL_INCLUDE = re.compile(rb'^[ \t]*#[ \t]*include[ \t]*([^<\s].*)$', re.M)
+#: ... of a file beside the source, by name (``"qd_reduced_templates.h"``): its bytes go into the key.
+_QUOTED_NAME = re.compile(rb'"([\w.]+)"')
+
+
+def _included_bytes(source: Path, text: bytes) -> bytes:
+    """The bytes of the files ``text`` includes by a quoted name, from ``source``'s directory (where the compiler
+    looks first); BuildError for any other local include (a macro or a path: the key could miss its bytes)."""
+    included = b""
+    for target in _LOCAL_INCLUDE.findall(text):
+        name = _QUOTED_NAME.fullmatch(target.strip())
+        path = source.parent / name.group(1).decode() if name else None
+        if path is None or not path.is_file() or _LOCAL_INCLUDE.search(path.read_bytes()):
+            raise BuildError(f"'{source.name}' includes {target.strip().decode(errors='replace')!s}; the object cache "
+                             "takes C sources that include only <system> headers and self-contained files beside them")
+        included += b"\0" + name.group(1) + b"\0" + path.read_bytes()  # type: ignore[union-attr]
+    return included
 
 
 def cached_object(source: Path, flags: tuple[str, ...], cc: str = "gcc") -> tuple[Path, bool]:
     """``source`` compiled with ``flags`` (``-c``), from the build cache: the key is the source's
-    bytes, the flags and the compiler, so the same file compiled the same way by the library, the
-    benchmark or another robot's build is compiled once: (object path, True if compiled now).
-    BuildError for a source with a local include (the key would miss the included bytes)."""
+    bytes and those of the files beside it that it includes (``_included_bytes``), the flags and the compiler,
+    so the same file compiled the same way by the library, the benchmark or another robot's build is compiled
+    once: (object path, True if compiled now)."""
     text = source.read_bytes()
-    if _LOCAL_INCLUDE.search(text):
-        raise BuildError(f"'{source.name}' includes a local file; the object cache takes self-contained C "
-                         "sources (only <system> headers)")
-    key = hashlib.sha256(text + "\0".join((cc, compiler_version(cc), *flags)).encode()).hexdigest()[:20]
+    key = hashlib.sha256(text + _included_bytes(source, text) + "\0".join((cc, compiler_version(cc), *flags)).encode()
+                         ).hexdigest()[:20]
     compiled = []
 
     def build(building: Path) -> None:
@@ -151,7 +165,7 @@ def compiled_library(robot: Robot, precision: str = "double", cc: str = "gcc") -
         with tempfile.TemporaryDirectory() as tmp:
             files = generate(robot, Path(tmp), precision)
             compile_sources(files.c_sources, flags, building, cc)
-            for p in (*files.c_sources, files.header):  # for reading; the library is what is verified
+            for p in files.library_sources:  # for reading; the library is what is verified
                 shutil.copy(p, building.parent / p.name)
 
     lib = cached_build(key, f"lib{stem(robot)}.so", build)

@@ -243,11 +243,27 @@ def test_objects_are_compiled_once_per_source_and_flags(cache, tmp_path):
     assert compile_sources([source], (*C_FLAGS, "-DQD_OTHER"), tmp_path / "d.so") == 1
 
 
-def test_a_source_with_a_local_include_is_not_cached(cache, tmp_path):
+def test_an_edited_included_file_is_compiled_again(cache, tmp_path):
+    """The object's key holds the bytes of the file beside the source that it includes (as the reduced files
+    include qd_reduced_templates.h): editing only that file gives a new object, never the stale one."""
+    from quadruped_dyn.codegen.library import C_FLAGS, compile_sources
+
+    source, header = tmp_path / "probe.c", tmp_path / "value.h"
+    source.write_text('#include "value.h"\ndouble qd_cache_probe(void) { return VALUE; }\n')
+    header.write_text("#define VALUE 2.5\n")
+    assert compile_sources([source], C_FLAGS, tmp_path / "a.so") == 1
+    assert _probe(tmp_path / "a.so") == 2.5
+    header.write_text("#define VALUE 3.5\n")
+    assert compile_sources([source], C_FLAGS, tmp_path / "b.so") == 1
+    assert _probe(tmp_path / "b.so") == 3.5
+
+
+@pytest.mark.parametrize("include", ['#include "missing.h"', "#include QD_HEADER", '#include "sub/value.h"'])
+def test_an_include_the_key_cannot_hold_is_refused(cache, tmp_path, include):
     from quadruped_dyn.codegen.library import C_FLAGS, compile_sources
     from quadruped_dyn.errors import BuildError
 
     source = tmp_path / "probe.c"
-    source.write_text('#include "other.h"\n' + SOURCE)
-    with pytest.raises(BuildError, match="includes a local file"):
+    source.write_text(include + "\n" + SOURCE)
+    with pytest.raises(BuildError, match="includes .*only <system> headers and self-contained files beside them"):
         compile_sources([source], C_FLAGS, tmp_path / "a.so")

@@ -1,5 +1,5 @@
-/* quadruped_dyn: derivatives of the reduced forward dynamics (hand-written, inserted into each generated
- * qd_<robot>_r_<stance>.c after qd_reduced_solve.c, whose checks, M_r product and LU it uses; see
+/* quadruped_dyn: derivatives of the reduced forward dynamics (hand-written; in qd_reduced_templates.h,
+ * which each qd_<robot>_r_<stance>.c includes, after qd_reduced_solve.c, whose checks, M_r product and LU it uses; see
  * quadruped_dyn/codegen/emit_derivatives.py and docs/derivatives.md).
  *
  * qd_dfd_r_<feet>(q_r, qd_r, tau_ext, quat) -> (dqdd_dq, dqdd_dqd, dqdd_dtau, dqdd_dtheta) of

@@ -1,5 +1,5 @@
-/* quadruped_dyn: checks and the forward-dynamics solve of the reduced model (hand-written, inserted into each
- * qd_<robot>_r_<stance>.c by quadruped_dyn/codegen/emit.py after QD_REGULARITY_MIN, qd_M_full's pattern (QD_M_NNZ,
+/* quadruped_dyn: checks and the forward-dynamics solve of the reduced model (hand-written; in qd_reduced_templates.h,
+ * which each qd_<robot>_r_<stance>.c includes (quadruped_dyn/codegen/emit.py) after QD_REGULARITY_MIN, qd_M_full's pattern (QD_M_NNZ,
  * qd_M_runs, qd_M_zeros) and qd_reduced_parts (the regularity (q_r, quat) -> [0, 1] of dynamics/stance_regularity.py,
  * S_b, T_b, v, a). The return codes are documented in qd_<robot>.h. */
 #include <float.h>

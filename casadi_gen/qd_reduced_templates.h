@@ -1,0 +1,556 @@
+/* quadruped_dyn: the hand-written templates of the reduced model, included by every qd_<robot>_r_<feet>.c
+ * after its generated pieces (quadruped_dyn/codegen/emit.py). Not a header to include elsewhere: its
+ * functions are static and call the including file's qd_reduced_parts, qd_M_full, qd_id_full, ... */
+/* quadruped_dyn: a CasADi sparse output made dense (hand-written; inserted into qd_<robot>_d.c
+ * and in qd_reduced_templates.h, which each qd_<robot>_r_<feet>.c includes; see quadruped_dyn/codegen/emit.py). */
+/* x: the nonzeros of a CasADi sparsity sp (nrow, ncol, colind[ncol + 1], row[nnz]) -> the dense matrix,
+ * column-major, in place (x holds nrow * ncol reals). Backwards: a nonzero's dense index is >= its own. */
+static void qd_densify(const casadi_int* sp, casadi_real* x) {
+  const casadi_int nrow = sp[0], ncol = sp[1], *colind = sp + 2, *row = sp + 3 + ncol;
+  casadi_int next = nrow * ncol; /* entries from here on are final */
+  for (casadi_int j = ncol - 1; j >= 0; --j) {
+    for (casadi_int k = colind[j + 1] - 1; k >= colind[j]; --k) {
+      casadi_int d = row[k] + nrow * j;
+      casadi_real value = x[k];
+      for (casadi_int i = d + 1; i < next; ++i) x[i] = 0;
+      x[d] = value;
+      next = d;
+    }
+  }
+  for (casadi_int i = 0; i < next; ++i) x[i] = 0;
+}
+
+/* quadruped_dyn: checks and the forward-dynamics solve of the reduced model (hand-written; in qd_reduced_templates.h,
+ * which each qd_<robot>_r_<stance>.c includes (quadruped_dyn/codegen/emit.py) after QD_REGULARITY_MIN, qd_M_full's pattern (QD_M_NNZ,
+ * qd_M_runs, qd_M_zeros) and qd_reduced_parts (the regularity (q_r, quat) -> [0, 1] of dynamics/stance_regularity.py,
+ * S_b, T_b, v, a). The return codes are documented in qd_<robot>.h. */
+#include <float.h>
+#include <math.h>
+#include <string.h>
+
+#ifndef QD_NONFINITE
+#define QD_NONFINITE 1
+#define QD_SINGULAR 2
+#endif
+#define QD_DEGENERATE 3
+
+/* Machine epsilon of casadi_real (float, double or long double builds). */
+#define QD_EPS (sizeof(casadi_real) == sizeof(float) ? (casadi_real)FLT_EPSILON \
+                : sizeof(casadi_real) == sizeof(double) ? (casadi_real)DBL_EPSILON : (casadi_real)LDBL_EPSILON)
+/* A pivot this small relative to max|M_r| means M_r is singular to working precision
+ * (condition number beyond ~1 / (QD_SINGULAR_RTOL)): 1e-13 in double, 5e-5 in float. */
+#define QD_SINGULAR_RTOL (450 * QD_EPS)
+#define QD_N_MAX 13
+/* Regularity is the square of a relative singular value of the feet's layout; computed from
+ * foot positions rounded at eps, it cannot resolve values below ~(64 eps)^2 (float: 6e-11). */
+#define QD_REGULARITY_FLOOR ((64 * QD_EPS) * (64 * QD_EPS))
+
+/* The templates are inlined into their callers: each specialised for its constant n and legs, and every call direct,
+ * so a static stack walk (-fcallgraph-info, docs/embedded.md) can bound it. */
+#ifndef QD_INLINE
+#if defined(__GNUC__)
+#define QD_INLINE static inline __attribute__((always_inline))
+#else
+#define QD_INLINE static inline
+#endif
+#endif
+
+/* flag, or QD_NONFINITE if any of the n_out outputs (nnz[i] entries each) is not finite: x - x is 0 for a finite x,
+ * else NaN; four sums of it, branch-free and vectorised (~8x faster than isfinite per entry). Not -ffast-math. */
+static int qd_finite(int flag, casadi_real** res, int n_out, const casadi_int* nnz) {
+  if (flag) return flag;
+  for (int i = 0; i < n_out; ++i) {
+    if (!res[i]) continue;
+    const casadi_real* x = res[i];
+    casadi_real a[4] = {0, 0, 0, 0};
+    casadi_int j = 0;
+    for (; j + 4 <= nnz[i]; j += 4) {
+      for (int k = 0; k < 4; ++k) a[k] += x[j + k] - x[j + k];
+    }
+    for (; j < nnz[i]; ++j) a[0] += x[j] - x[j];
+    if (!(a[0] + a[1] + a[2] + a[3] == 0)) return QD_NONFINITE;
+  }
+  return 0;
+}
+
+/* 0 where a stance of regularity m is regular; QD_DEGENERATE or QD_NONFINITE. */
+static int qd_regular_value(casadi_real m) {
+  if (!isfinite(m)) return QD_NONFINITE;
+  return m > QD_REGULARITY_MIN && m > QD_REGULARITY_FLOOR ? 0 : QD_DEGENERATE;
+}
+
+/* qd_reduced_parts at (q_r, qd_r, qdd_r, quat) (null qd_r, qdd_r: zero): the regularity *m, S_b (n x 6), T_b (6 x n)
+ * (column-major; S = [S_b, I_12], T = [T_b; I_12], row/column 12 no joint part), the full v, a = T qdd_r + k. */
+static int qd_parts(const casadi_real* q_r, const casadi_real* qd_r, const casadi_real* qdd_r, const casadi_real* quat,
+                    casadi_real* m, casadi_real* S_b, casadi_real* T_b, casadi_real* v, casadi_real* a, casadi_int* iw,
+                    casadi_real* w, int mem) {
+  const casadi_real zero[QD_N_MAX] = {0};
+  const casadi_real* p_arg[4] = {q_r, qd_r ? qd_r : zero, qdd_r ? qdd_r : zero, quat};
+  casadi_real* p_res[5] = {m, S_b, T_b, v, a};
+  return qd_reduced_parts(p_arg, p_res, iw, w, mem);
+}
+
+/* defined in qd_<robot>.c of the same library (no work memory: checked by the generator) */
+int qd_M_full(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem);
+int qd_G_full(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem);
+int qd_id_full(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem);
+
+/* q (19) = (0, quat, q_r's joint angles): the library's functions ignore the trunk position. */
+static void qd_full_q(const casadi_real* q_r, const casadi_real* quat, casadi_real* q) {
+  for (int i = 0; i < 3; ++i) q[i] = 0;
+  for (int i = 0; i < 4; ++i) q[3 + i] = quat[i];
+  for (int i = 0; i < 12; ++i) q[7 + i] = q_r[i];
+}
+
+/* M (18 x 18, dense column-major) at q by qd_M_full: its nonzeros, written at the end, move in order, run by run
+ * (qd_M_runs), the k-th to slot <= 324 - QD_M_NNZ + k (never over one still to move); then the zeros. */
+static int qd_M_full_dense(const casadi_real* q, casadi_real* M, casadi_int* iw, casadi_real* w, int mem) {
+  casadi_real* x = M + 18 * 18 - QD_M_NNZ;
+  const casadi_real* m_arg[1] = {q};
+  casadi_real* m_res[1] = {x};
+  int flag = qd_M_full(m_arg, m_res, iw, w, mem);
+  if (flag) return flag;
+  for (int r = 0; r < QD_M_RUNS; ++r) memmove(M + qd_M_runs[r][0], x + qd_M_runs[r][1], qd_M_runs[r][2] * sizeof *M);
+  for (int r = 0; r < QD_M_ZEROS; ++r) memset(M + qd_M_zeros[r][0], 0, qd_M_zeros[r][1] * sizeof *M);
+  return 0;
+}
+
+/* M_r = S M T (n x n, column-major) by columns: mt = M[:, 0:6] T_b e_j + M[:, 6 + j], then S_b mt[0:6] + mt[6:18].
+ * legs: bit i for a stance leg i; T_b's columns of the other legs' joints are zero: no trunk product (15: none). */
+QD_INLINE void qd_M_r_legs(int n, int legs, const casadi_real* S_b, const casadi_real* T_b, const casadi_real* M,
+                           casadi_real* M_r) {
+  for (int j = 0; j < n; ++j) {
+    casadi_real mt[18];
+    if (j < 12) {
+      for (int i = 0; i < 18; ++i) mt[i] = M[i + 18 * (6 + j)];
+    } else {
+      for (int i = 0; i < 18; ++i) mt[i] = 0;
+    }
+    if (j >= 12 || legs >> (j / 3) & 1) {
+      const casadi_real* t = T_b + 6 * j;
+      for (int k = 0; k < 6; ++k) {
+        for (int i = 0; i < 18; ++i) mt[i] += M[i + 18 * k] * t[k];
+      }
+    }
+    casadi_real* col = M_r + n * j;
+    for (int i = 0; i < 12; ++i) col[i] = mt[6 + i];
+    if (n > 12) col[12] = 0;
+    for (int k = 0; k < 6; ++k) {
+      for (int i = 0; i < n; ++i) col[i] += S_b[i + n * k] * mt[k];
+    }
+  }
+}
+
+/* tau (n) = S F = S_b F[0:6] + F[6:18] (row 12, two feet: S_b only) for a full generalized force F (18). */
+static void qd_project(int n, const casadi_real* S_b, const casadi_real* F, casadi_real* tau) {
+  for (int i = 0; i < n; ++i) {
+    casadi_real s = i < 12 ? F[6 + i] : 0;
+    for (int k = 0; k < 6; ++k) s += S_b[i + n * k] * F[k];
+    tau[i] = s;
+  }
+}
+
+/* tau (n) = S rnea(q, v, a), rnea by the library's qd_id_full (zero foot forces); work: QD_RNEA_R_WORK reals,
+ * the caller's (fd_r lends space it uses later: Cortex-M stack budget). */
+static int qd_rnea_r(int n, const casadi_real* S_b, const casadi_real* q_r, const casadi_real* quat, const casadi_real* v,
+                     const casadi_real* a, casadi_real* tau, casadi_real* work, casadi_int* iw, casadi_real* w, int mem) {
+  casadi_real *q = work, *F = q + 19, *f = F + 18;
+  for (int i = 0; i < 12; ++i) f[i] = 0;
+  qd_full_q(q_r, quat, q);
+  const casadi_real* i_arg[4] = {q, v, a, f};
+  casadi_real* i_res[2] = {F, F + 6};
+  int flag = qd_id_full(i_arg, i_res, iw, w, mem);
+  if (!flag) qd_project(n, S_b, F, tau);
+  return flag;
+}
+#define QD_RNEA_R_WORK (19 + 18 + 12)
+
+/* The reduced terms (dynamics/reduced_projection.py) into res[0] (n): which = 0 M_r (arg = q_r, quat; S M T),
+ * 1 C_r + G_r (q_r, qd_r, quat; S rnea(q, v, k)), 2 G_r (q_r, quat; S G_full), 3 id_r (q_r, qd_r, qdd_r, quat;
+ * S rnea(q, v, T qdd_r + k)); legs as qd_M_r_legs'. Regularity checked first (res[0] written only on 0). */
+QD_INLINE int qd_reduced_term(int n, int legs, int which, const casadi_real** arg, casadi_real** res, casadi_int* iw,
+                              casadi_real* w, int mem) {
+  const casadi_real* quat = arg[which == 1 ? 2 : which == 3 ? 3 : 1];
+  const casadi_real* qd_r = which == 1 || which == 3 ? arg[1] : 0;
+  casadi_real m = 0, S_b[QD_N_MAX * 6], T_b[6 * QD_N_MAX], v[18], a[18];
+  int flag = qd_parts(arg[0], qd_r, which == 3 ? arg[2] : 0, quat, &m, S_b, T_b, v, a, iw, w, mem);
+  if (!flag) flag = qd_regular_value(m);
+  if (flag || !res[0]) return flag;
+  if (which == 1 || which == 3) {
+    casadi_real work[QD_RNEA_R_WORK];
+    return qd_rnea_r(n, S_b, arg[0], quat, v, a, res[0], work, iw, w, mem);
+  }
+  casadi_real q[19], M[18 * 18];
+  qd_full_q(arg[0], quat, q);
+  const casadi_real* g_arg[1] = {q};
+  casadi_real* g_res[1] = {M};
+  if (which == 2) {
+    flag = qd_G_full(g_arg, g_res, iw, w, mem);
+    if (!flag) qd_project(n, S_b, M, res[0]);
+    return flag;
+  }
+  flag = qd_M_full_dense(q, M, iw, w, mem);
+  if (!flag) qd_M_r_legs(n, legs, S_b, T_b, M, res[0]);
+  return flag;
+}
+
+/* LU factorisation with partial pivoting of M (n x n, column-major, in place: L's multipliers below the diagonal,
+ * U on and above; piv[k] the row swapped with k at step k), the inner loops down contiguous columns. 0, or
+ * QD_SINGULAR when a pivot is below QD_SINGULAR_RTOL * scale. Shared by fd_r and the reduced derivatives. */
+static int qd_lu_factor(int n, casadi_real* M, int* piv, casadi_real scale) {
+  for (int k = 0; k < n; ++k) { /* M[i + n j] = M_ij */
+    casadi_real* col = M + n * k;
+    int p = k;
+    for (int i = k + 1; i < n; ++i) p = qd_fabs(col[i]) > qd_fabs(col[p]) ? i : p;
+    if (!(qd_fabs(col[p]) > QD_SINGULAR_RTOL * scale)) return QD_SINGULAR;
+    piv[k] = p;
+    if (p != k) {
+      for (int j = 0; j < n; ++j) {
+        casadi_real t = M[k + n * j];
+        M[k + n * j] = M[p + n * j];
+        M[p + n * j] = t;
+      }
+    }
+    casadi_real inv = 1 / col[k];
+    for (int i = k + 1; i < n; ++i) col[i] *= inv; /* the multipliers, L below the diagonal */
+    for (int j = k + 1; j < n; ++j) {
+      casadi_real* cj = M + n * j;
+      casadi_real u = cj[k];
+      for (int i = k + 1; i < n; ++i) cj[i] -= col[i] * u;
+    }
+  }
+  return 0;
+}
+
+/* x <- M^-1 x with the factors of qd_lu_factor: the row swaps, L y = P x, U x = y. */
+static void qd_lu_solve(int n, const casadi_real* LU, const int* piv, casadi_real* x) {
+  for (int k = 0; k < n; ++k) {
+    casadi_real t = x[k];
+    x[k] = x[piv[k]];
+    x[piv[k]] = t;
+  }
+  for (int k = 0; k < n; ++k) {
+    const casadi_real* col = LU + n * k;
+    for (int i = k + 1; i < n; ++i) x[i] -= col[i] * x[k];
+  }
+  for (int j = n - 1; j >= 0; --j) { /* U x = y, column by column */
+    x[j] /= LU[j + n * j];
+    for (int i = 0; i < j; ++i) x[i] -= LU[i + n * j] * x[j];
+  }
+}
+
+/* b <- tau_ext - b (b: C_r + G_r), *max = max|M| (M = M_r), both checked, and M's LU (qd_lu_factor) unless piv is
+ * null. 0, QD_NONFINITE or QD_SINGULAR. */
+static int qd_fd_r_factor(int n, const casadi_real* tau_ext, casadi_real* M, int* piv, casadi_real* b, casadi_real* max) {
+  casadi_real top[4] = {0, 0, 0, 0}; /* max|M| in four lanes (the compiler vectorises them) */
+  casadi_real* res[2] = {M, b};
+  casadi_int nnz[2] = {n * n, n};
+  int i = 0;
+  for (; i + 4 <= n * n; i += 4) {
+    for (int k = 0; k < 4; ++k) top[k] = qd_fabs(M[i + k]) > top[k] ? qd_fabs(M[i + k]) : top[k];
+  }
+  for (; i < n * n; ++i) top[0] = qd_fabs(M[i]) > top[0] ? qd_fabs(M[i]) : top[0];
+  for (i = 0; i < n; ++i) b[i] = tau_ext[i] - b[i];
+  if (qd_finite(0, res, 2, nnz)) return QD_NONFINITE;
+  casadi_real scale = top[0] > top[1] ? top[0] : top[1], scale2 = top[2] > top[3] ? top[2] : top[3];
+  *max = scale > scale2 ? scale : scale2;
+  return piv ? qd_lu_factor(n, M, piv, *max) : 0;
+}
+
+/* x <- M_r^-1 x (fd_r, a swing leg at least; legs as qd_M_r_legs'): a swing leg's S_b rows and T_b columns are zero,
+ * so M_r's block of its joints is M's (SPD: 3 x 3 LU, no pivoting) and zero to the other swing legs'. They go first,
+ * then the Schur complement K over the rest R (stance joints, row 12; m = 7 or 9) by qd_lu_factor; every pivot
+ * checked against QD_SINGULAR_RTOL * scale (max|M_r|): 0 or QD_SINGULAR. work: K, per swing leg v and h. */
+QD_INLINE int qd_fd_r_lu(int n, int legs, const casadi_real* M_r, casadi_real* x, casadi_real scale, casadi_real* work) {
+  const int m = n - 3 * (4 - (legs & 1) - (legs >> 1 & 1) - (legs >> 2 & 1) - (legs >> 3 & 1));
+  int r[QD_N_MAX], piv[QD_N_MAX];
+  for (int l = 0, i = 0; l < 4; ++l) {
+    for (int c = 0; c < 3 && (legs >> l & 1); ++c) r[i++] = 3 * l + c;
+  }
+  r[m - 1] = n > 12 ? 12 : r[m - 1];
+  casadi_real *K = work, *v = K + m * m, *h = v + 6 * (m + 1), y[QD_N_MAX], thr = QD_SINGULAR_RTOL * scale;
+  for (int j = 0; j < m; ++j) {
+    for (int i = 0; i < m; ++i) K[i + m * j] = M_r[r[i] + n * r[j]];
+    y[j] = x[r[j]];
+  }
+  for (int l = 0; l < 4; ++l) {
+    if (legs >> l & 1) continue;
+    const casadi_real* A = M_r + 3 * l * (n + 1); /* D: A[i + n j] */
+    casadi_real u00 = A[0], u01 = A[n], u02 = A[2 * n], l10 = A[1] / u00, l20 = A[2] / u00;
+    casadi_real u11 = A[1 + n] - l10 * u01, u12 = A[1 + 2 * n] - l10 * u02, l21 = (A[2 + n] - l20 * u01) / u11;
+    casadi_real u22 = A[2 + 2 * n] - l20 * u02 - l21 * u12, i00 = 1 / u00, i11 = 1 / u11, i22 = 1 / u22;
+    if (!(qd_fabs(u00) > thr && qd_fabs(u11) > thr && qd_fabs(u22) > thr)) return QD_SINGULAR;
+    for (int p = 0; p <= m; ++p) {
+      const casadi_real* a = p < m ? M_r + 3 * l + n * r[p] : x + 3 * l;
+      casadi_real y1 = a[1] - l10 * a[0], x2 = (a[2] - l20 * a[0] - l21 * y1) * i22, x1 = (y1 - u12 * x2) * i11;
+      v[3 * p] = (a[0] - u01 * x1 - u02 * x2) * i00, v[3 * p + 1] = x1, v[3 * p + 2] = x2;
+    }
+    for (int c = 0; c < 3; ++c) {
+      for (int i = 0; i < m; ++i) h[i + m * c] = M_r[r[i] + n * (3 * l + c)];
+    }
+    for (int p = 0; p <= m; ++p) { /* K -= h v[:, 0:m], y -= h v[:, m] */
+      casadi_real* k = p < m ? K + m * p : y;
+      for (int i = 0; i < m; ++i) k[i] -= h[i] * v[3 * p] + h[i + m] * v[3 * p + 1] + h[i + 2 * m] * v[3 * p + 2];
+    }
+    v += 3 * (m + 1);
+  }
+  int flag = qd_lu_factor(m, K, piv, scale);
+  if (flag) return flag;
+  qd_lu_solve(m, K, piv, y);
+  for (int l = 3; l >= 0; --l) { /* x[leg] = v[:, m] - v[:, 0:m] y, the swing legs last to first */
+    if (legs >> l & 1) continue;
+    v -= 3 * (m + 1);
+    for (int c = 0; c < 3; ++c) {
+      casadi_real s = v[3 * m + c];
+      for (int p = 0; p < m; ++p) s -= v[3 * p + c] * y[p];
+      x[3 * l + c] = s;
+    }
+  }
+  for (int i = 0; i < m; ++i) x[r[i]] = y[i];
+  return 0;
+}
+
+/* qdd_r = M_r^-1 (tau_ext - (C_r + G_r)): arg = (q_r, qd_r, tau_ext, quat), res = (qdd_r). The parts once
+ * (qd_parts), C_r + G_r (qd_rnea_r), M and M_r (qd_M_r_legs, legs as there), both checked (qd_fd_r_factor), the solve
+ * (qd_fd_r_lu; four feet: M_r's LU); temporaries on the stack. Called once per file with constant n and legs. */
+QD_INLINE int qd_fd_r_solve(int n, int legs, const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w,
+                            int mem) {
+  casadi_real m = 0, S_b[QD_N_MAX * 6], T_b[6 * QD_N_MAX], M[18 * 18], M_r[QD_N_MAX * QD_N_MAX], b[QD_N_MAX];
+  casadi_real *v = M, *a = M + 18, *q = M_r; /* in space M and M_r take later: fd_r's stack stays within budget */
+  int flag = qd_parts(arg[0], arg[1], 0, arg[3], &m, S_b, T_b, v, a, iw, w, mem);
+  if (!flag) flag = qd_regular_value(m);
+  if (!flag) flag = qd_rnea_r(n, S_b, arg[0], arg[3], v, a, b, M + 36, iw, w, mem);
+  if (flag) return flag;
+  qd_full_q(arg[0], arg[3], q);
+  flag = qd_M_full_dense(q, M, iw, w, mem);
+  if (flag) return flag;
+  qd_M_r_legs(n, legs, S_b, T_b, M, M_r);
+  casadi_real scale = 0;
+  int piv[QD_N_MAX];
+  flag = qd_fd_r_factor(n, arg[2], M_r, legs == 15 ? piv : 0, b, &scale); /* four feet: the LU of M_r */
+  if (!flag && legs != 15) flag = qd_fd_r_lu(n, legs, M_r, b, scale, M);
+  if (flag) return flag;
+  if (legs == 15) qd_lu_solve(n, M_r, piv, b);
+  if (res[0]) {
+    for (int i = 0; i < n; ++i) res[0][i] = b[i];
+  }
+  casadi_int nnz[1] = {n};
+  return qd_finite(0, res, 1, nnz);
+}
+
+/* quadruped_dyn: derivatives of the reduced forward dynamics (hand-written; in qd_reduced_templates.h,
+ * which each qd_<robot>_r_<stance>.c includes, after qd_reduced_solve.c, whose checks, M_r product and LU it uses; see
+ * quadruped_dyn/codegen/emit_derivatives.py and docs/derivatives.md).
+ *
+ * qd_dfd_r_<feet>(q_r, qd_r, tau_ext, quat) -> (dqdd_dq, dqdd_dqd, dqdd_dtau, dqdd_dtheta) of
+ * qdd_r = M_r^-1 (tau_ext - C_r - G_r), by the implicit-function rule d qdd_r/dx = -M_r^-1 d id_r/dx at
+ * qdd_r (x = q_r, qd_r, theta), d qdd_r / d tau_ext = M_r^-1, and the chain rule over the full-coordinate
+ * derivatives: id_r = S(q_r) F(q, v, a), F the full inverse dynamics (no foot forces) at q = (0, quat, q_j),
+ * v = (v_b, qd_j), a = (a_b, qdd_j), S = [S_b, I] (row 12 of two feet: S_b only), so
+ *   d id_r/dx = d(S_b F_b)/dx at fixed F + S (dF/dq dq/dx + dF/dv dv/dx + M da/dx),
+ * with dF/dq, dF/dv from qd_did_full (qd_<robot>_d.c: same library); qdd_r as qd_fd_r_solve forms it (S_b, T_b, the
+ * rnea at qdd_r = 0, M), F's trunk rows from that rnea's by M (rnea is linear in a). Only the trunk rows v_b, a_b ("the lift") depend on x other than by
+ * identity: the generated qd_dfd_r_lift gives them once (the angles' sines and cosines taken once and passed in)
+ * with its tape, the values of its algorithm that its derivative reads; their derivative along a joint angle or
+ * theta is the generated qd_dfd_r_lift_dir over that tape (one forward-mode direction per call, only for the stance
+ * legs' joints and, for two feet, theta); along qd_r, dv_b = T_b and da_b from qd_dfd_r_lift_dir, which also gives
+ * d(S_b F_b)/dq_r. The products in loops.
+ * The trunk orientation is the separate input quat: dqdd_dq is the partial derivative at fixed quat (its
+ * 13th column, the roll, is zero: the functions read the roll from quat), dqdd_dtheta (n x 3) the
+ * derivative along a body-frame increment quat -> quat (x) Exp(dtheta/2), Pinocchio's convention for
+ * did_full's rotation columns 3:6. Outputs dense, column-major. Return codes as qd_fd_r_*: 0 ok,
+ * QD_NONFINITE, QD_SINGULAR (M_r singular to working precision); no output is usable then. No heap; the
+ * temporaries in the caller's w (QD_DFD_R_W(n) reals, stated by the _work entry), ~1 kB on the stack. */
+
+/* defined in qd_<robot>_d.c and qd_<robot>.c of the same library (no work memory: checked by the generator) */
+int qd_did_full(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem);
+const casadi_int* qd_did_full_sparsity_out(casadi_int i);
+
+/* Reals of w qd_dfd_r_solve uses for n coordinates (the generator states the same number, checked below). */
+#define QD_DFD_R_W(n) ((n) * (n) + 14 * (n) + 3 * 18 * 18 + 36 + (n) * QD_DFD_R_COLUMNS(n) + QD_DFD_R_TAPE)
+/* right-hand sides of the one LU solve: the n angle and n rate columns, 3 rotations, and the n of M_r^-1 */
+#define QD_DFD_R_COLUMNS(n) (3 * (n) + 3)
+
+/* col (n) = -(S y + extra), S y = S_b y_b + y_j (rows 0..11; row 12 has no joint part); extra may be NULL. */
+static void qd_dfd_r_column(int n, const casadi_real* restrict S_b, const casadi_real* restrict y, const casadi_real* restrict extra,
+                            casadi_real* restrict col) {
+  for (int i = 0; i < n; ++i) col[i] = i < 12 ? y[6 + i] : 0;
+  for (int k = 0; k < 6; ++k) {
+    for (int i = 0; i < n; ++i) col[i] += S_b[i + n * k] * y[k];
+  }
+  for (int i = 0; i < n; ++i) col[i] = -(col[i] + (extra ? extra[i] : 0));
+}
+
+/* y (18) += H[:, 0:6] dv + M[:, 0:6] da (18 x 18 column-major each): the trunk rows' change through F. */
+static void qd_dfd_r_through_trunk(const casadi_real* restrict H, const casadi_real* restrict M, const casadi_real* restrict dv,
+                                   const casadi_real* restrict da, casadi_real* restrict y) {
+  for (int k = 0; k < 6; ++k) {
+    for (int i = 0; i < 18; ++i) y[i] += H[i + 18 * k] * dv[k] + M[i + 18 * k] * da[k];
+  }
+}
+
+/* Rows i of X's columns c0 .. c0 + W - 1: the lower (lower = 1: x_i -= sum_k<i L_ik x_k, the k ascending) or the
+ * upper solve (x_i = (x_i - sum_k>i U_ik x_k, the k descending) / U_ii), row i's block kept in W locals (registers). */
+static inline void qd_dfd_r_solve_block(int n, const casadi_real* restrict LU, casadi_real* restrict X, int m, int c0,
+                                        int W, int lower) {
+  for (int s = 0; s < n; ++s) {
+    const int i = lower ? s : n - 1 - s;
+    casadi_real acc[8];
+    casadi_real* xi = X + m * i + c0;
+    for (int c = 0; c < W; ++c) acc[c] = xi[c];
+    if (lower) {
+      for (int k = 0; k < i; ++k) {
+        const casadi_real l = LU[i + n * k], *xk = X + m * k + c0;
+        for (int c = 0; c < W; ++c) acc[c] -= l * xk[c];
+      }
+      for (int c = 0; c < W; ++c) xi[c] = acc[c];
+    } else {
+      for (int k = n - 1; k > i; --k) {
+        const casadi_real u = LU[i + n * k], *xk = X + m * k + c0;
+        for (int c = 0; c < W; ++c) acc[c] -= u * xk[c];
+      }
+      const casadi_real d = LU[i + n * i];
+      for (int c = 0; c < W; ++c) xi[c] = acc[c] / d;
+    }
+  }
+}
+
+/* X (n rows of m right-hand sides, row-major) <- M^-1 X with the factors of qd_lu_factor: qd_lu_solve's operations
+ * in its order for each column (the same results: row i's updates come in the same order of k), eight columns at a
+ * time with row i's block in registers (a triangular solve per column is a serial chain of n^2 / 2 dependent steps;
+ * row by row across all m columns each multiply-subtract loads and stores x_i). */
+static void qd_dfd_r_lu_solve_rows(int n, const casadi_real* restrict LU, const int* piv, casadi_real* restrict X, int m) {
+  for (int k = 0; k < n; ++k) {
+    casadi_real *a = X + m * k, *b = X + m * piv[k];
+    for (int c = 0; c < m && b != a; ++c) {
+      casadi_real t = a[c];
+      a[c] = b[c];
+      b[c] = t;
+    }
+  }
+  for (int lower = 1; lower >= 0; --lower) {
+    int c0 = 0;
+    for (; c0 + 8 <= m; c0 += 8) qd_dfd_r_solve_block(n, LU, X, m, c0, 8, lower);
+    for (; c0 + 2 <= m; c0 += 2) qd_dfd_r_solve_block(n, LU, X, m, c0, 2, lower);
+    for (; c0 < m; ++c0) qd_dfd_r_solve_block(n, LU, X, m, c0, 1, lower);
+  }
+}
+
+/* column c of X (n x m, row-major) = col */
+static void qd_dfd_r_put(int n, int m, casadi_real* X, int c, const casadi_real* col) {
+  for (int i = 0; i < n; ++i) X[m * i + c] = col[i];
+}
+
+/* output k (n x ncol, column-major), if wanted, = columns first .. first + ncol of X (n x m, row-major) */
+static void qd_dfd_r_store(int n, int m, casadi_real** res, int k, const casadi_real* X, int first, int ncol) {
+  if (!res[k]) return;
+  for (int j = 0; j < ncol; ++j) {
+    for (int i = 0; i < n; ++i) res[k][i + n * j] = X[m * i + first + j];
+  }
+}
+
+/* n coordinates; legs: bit i set for a stance leg i (the lift and S depend on its joints only);
+ * lift_quat: the lift depends on the trunk orientation (two feet). */
+QD_INLINE int qd_dfd_r_solve(int n, int legs, int lift_quat, const casadi_real** arg, casadi_real** res, casadi_int* iw,
+                             casadi_real* w, int mem) {
+  casadi_real *M_r = w, *qdd = M_r + n * n, *S_b = qdd + n, *T_b = S_b + 6 * n, *M = T_b + 6 * n, *G = M + 18 * 18,
+              *H = G + 18 * 18, *F = H + 18 * 18, *y = F + 18, *col = y + 18, *X = col + n, *tape = X + n * QD_DFD_R_COLUMNS(n);
+  const int m = QD_DFD_R_COLUMNS(n);
+  casadi_real q[19], v[18], a[18], k[18], f[12] = {0}, dv[6], da[6], dSF[QD_N_MAX], da_qd[6], reg = 0;
+  casadi_real dq[QD_N_MAX] = {0}, dqd[QD_N_MAX] = {0}, dtheta[3] = {0}, sin_q[QD_N_MAX], cos_q[QD_N_MAX];
+  int piv[QD_N_MAX];
+  /* qdd_r as qd_fd_r_solve: the parts once (S_b, T_b, v and a at qdd_r = 0: k), C_r + G_r = S rnea(q, v, k), M_r */
+  int flag = qd_parts(arg[0], arg[1], 0, arg[3], &reg, S_b, T_b, v, a, iw, w, mem);
+  if (!flag) flag = qd_regular_value(reg);
+  if (flag) return flag;
+  qd_full_q(arg[0], arg[3], q);
+  const casadi_real* d_arg[4] = {q, v, a, f};
+  casadi_real* i_res[2] = {F, F + 6};
+  flag = qd_id_full(d_arg, i_res, iw, w, mem);
+  if (!flag) flag = qd_M_full_dense(q, M, iw, w, mem);
+  if (flag) return flag;
+  qd_project(n, S_b, F, qdd);
+  qd_M_r_legs(n, legs, S_b, T_b, M, M_r);
+  casadi_real scale; /* max|M_r| (qd_lu_factor's reference for a singular pivot) */
+  flag = qd_fd_r_factor(n, arg[2], M_r, piv, qdd, &scale);
+  if (flag) return flag;
+  qd_lu_solve(n, M_r, piv, qdd);
+  for (int i = 0; i < 18; ++i) k[i] = a[i];
+  /* the lift at qdd_r and its tape; then v, a = (v_b, qd_j), (a_b, qdd_j) */
+  for (int i = 0; i < n; ++i) { /* the lift reads the angles' sines and cosines */
+    sin_q[i] = qd_sin(arg[0][i]);
+    cos_q[i] = qd_cos(arg[0][i]);
+  }
+  const casadi_real* l_arg[6] = {arg[0], arg[1], qdd, arg[3], sin_q, cos_q};
+  casadi_real* l_res[3] = {v, a, tape};
+  flag = qd_dfd_r_lift(l_arg, l_res, iw, w, mem);
+  if (flag) return flag;
+  for (int i = 0; i < 12; ++i) {
+    v[6 + i] = arg[1][i];
+    a[6 + i] = qdd[i];
+  }
+  /* F's trunk rows at (q, v, a) from those at (q, v, k), rnea being linear in a: F_b += M[0:6, :] (a - k); then
+     dF/dq, dF/dv at (q, v, a) */
+  for (int j = 0; j < 18; ++j) {
+    const casadi_real d = a[j] - k[j];
+    for (int i = 0; i < 6; ++i) F[i] += M[i + 18 * j] * d;
+  }
+  casadi_real* d_res[3] = {G, H, 0};
+  flag = qd_did_full(d_arg, d_res, iw, w, mem);
+  if (flag) return flag;
+  qd_densify(qd_did_full_sparsity_out(0), G);
+  qd_densify(qd_did_full_sparsity_out(1), H);
+  const casadi_real* t_arg[5] = {tape, F, dq, dtheta, dqd};
+  casadi_real* t_res[4] = {dv, da, dSF, da_qd};
+  /* columns of -d id_r/dx, then M_r^-1 of each. theta: gravity in the trunk frame (did_full's rotation columns), the
+     lift for two feet; the roll rate's da_b (its own output of the lift, seed dqd) in theta's first call */
+  casadi_real da_roll[6];
+  const int roll_with_theta = lift_quat && n > 12;
+  for (int k = 0; k < 3; ++k) {
+    for (int i = 0; i < 18; ++i) y[i] = G[i + 18 * (3 + k)];
+    if (lift_quat) {
+      dtheta[k] = 1;
+      if (k == 0 && roll_with_theta) dqd[12] = 1;
+      flag = qd_dfd_r_lift_dir(t_arg, t_res, iw, w, mem);
+      dtheta[k] = 0;
+      if (n > 12) dqd[12] = 0;
+      if (flag) return flag;
+      if (k == 0 && roll_with_theta) {
+        for (int i = 0; i < 6; ++i) da_roll[i] = da_qd[i];
+      }
+      qd_dfd_r_through_trunk(H, M, dv, da, y);
+    }
+    qd_dfd_r_column(n, S_b, y, 0, col);
+    qd_dfd_r_put(n, m, X, 2 * n + k, col);
+  }
+  /* the joint angle and rate j together (one lift call for a stance leg's joint; the roll, read by no function, has a
+     zero column; its rate moves the lift) */
+  for (int j = 0; j < n; ++j) {
+    int moves = j < 12 ? legs >> (j / 3) & 1 : 1;
+    if (moves && !(j >= 12 && roll_with_theta)) {
+      dq[j] = j < 12;
+      dqd[j] = 1;
+      flag = qd_dfd_r_lift_dir(t_arg, t_res, iw, w, mem);
+      dq[j] = dqd[j] = 0;
+      if (flag) return flag;
+    }
+    for (int i = 0; i < 18; ++i) y[i] = j < 12 ? G[i + 18 * (6 + j)] : 0;
+    if (moves && j < 12) qd_dfd_r_through_trunk(H, M, dv, da, y);
+    qd_dfd_r_column(n, S_b, y, moves && j < 12 ? dSF : 0, col);
+    qd_dfd_r_put(n, m, X, j, col);
+    for (int i = 0; i < 18; ++i) y[i] = j < 12 ? H[i + 18 * (6 + j)] : 0;
+    if (moves) qd_dfd_r_through_trunk(H, M, T_b + 6 * j, j >= 12 && roll_with_theta ? da_roll : da_qd, y); /* dv_b = T_b e_j */
+    qd_dfd_r_column(n, S_b, y, 0, col);
+    qd_dfd_r_put(n, m, X, n + j, col);
+  }
+  for (int i = 0; i < n; ++i) { /* M_r^-1 from the identity */
+    for (int j = 0; j < n; ++j) X[m * i + 2 * n + 3 + j] = i == j;
+  }
+  qd_dfd_r_lu_solve_rows(n, M_r, piv, X, m);
+  qd_dfd_r_store(n, m, res, 0, X, 0, n);
+  qd_dfd_r_store(n, m, res, 1, X, n, n);
+  qd_dfd_r_store(n, m, res, 3, X, 2 * n, 3);
+  qd_dfd_r_store(n, m, res, 2, X, 2 * n + 3, n);
+  const casadi_int nnz[4] = {n * n, n * n, n * n, 3 * n};
+  return qd_finite(0, res, 4, nnz);
+}
