@@ -217,6 +217,39 @@ static void qd_lu_solve(int n, const casadi_real* LU, const int* piv, casadi_rea
   }
 }
 
+/* x <- M^-1 x for A = [M, x] (n x (n + 1), column-major; x its last column): Gaussian elimination with partial
+ * pivoting, x updated with M's columns as it goes (no pivot list, one pass fewer over M than qd_lu_factor +
+ * qd_lu_solve), then U x = y. A is overwritten (U on and above the diagonal). 0, or QD_SINGULAR when a pivot is below
+ * QD_SINGULAR_RTOL * scale (qd_lu_factor's test). */
+static int qd_gauss_solve(int n, casadi_real* A, casadi_real scale) {
+  for (int k = 0; k < n; ++k) { /* A[i + n j] = A_ij */
+    casadi_real* col = A + n * k;
+    int p = k;
+    for (int i = k + 1; i < n; ++i) p = fabs(col[i]) > fabs(col[p]) ? i : p;
+    if (!(fabs(col[p]) > QD_SINGULAR_RTOL * scale)) return QD_SINGULAR;
+    if (p != k) { /* the columns left of k are not read again */
+      for (int j = k; j <= n; ++j) {
+        casadi_real t = A[k + n * j];
+        A[k + n * j] = A[p + n * j];
+        A[p + n * j] = t;
+      }
+    }
+    casadi_real inv = 1 / col[k];
+    for (int i = k + 1; i < n; ++i) col[i] *= inv; /* the multipliers */
+    for (int j = k + 1; j <= n; ++j) {
+      casadi_real* cj = A + n * j;
+      casadi_real u = cj[k];
+      for (int i = k + 1; i < n; ++i) cj[i] -= col[i] * u;
+    }
+  }
+  casadi_real* x = A + n * n;
+  for (int j = n - 1; j >= 0; --j) { /* U x = y, column by column */
+    x[j] /= A[j + n * j];
+    for (int i = 0; i < j; ++i) x[i] -= A[i + n * j] * x[j];
+  }
+  return 0;
+}
+
 /* b <- tau_ext - b (b: C_r + G_r), *max = max|M| (M = M_r), both checked, and M's LU (qd_lu_factor) unless piv is
  * null. 0, QD_NONFINITE or QD_SINGULAR. */
 static int qd_fd_r_factor(int n, const casadi_real* tau_ext, casadi_real* M, int* piv, casadi_real* b, casadi_real* max) {
@@ -237,16 +270,16 @@ static int qd_fd_r_factor(int n, const casadi_real* tau_ext, casadi_real* M, int
 
 /* x <- M_r^-1 x (fd_r, a swing leg at least; legs as qd_M_r_legs'): a swing leg's S_b rows and T_b columns are zero,
  * so M_r's block of its joints is M's (SPD: 3 x 3 LU, no pivoting) and zero to the other swing legs'. They go first,
- * then the Schur complement K over the rest R (stance joints, row 12; m = 7 or 9) by qd_lu_factor; every pivot
- * checked against QD_SINGULAR_RTOL * scale (max|M_r|): 0 or QD_SINGULAR. work: K, per swing leg v and h. */
+ * then the Schur complement K over the rest R (stance joints, row 12; m = 7 or 9) by qd_gauss_solve; every pivot
+ * checked against QD_SINGULAR_RTOL * scale (max|M_r|): 0 or QD_SINGULAR. work: [K, y], per swing leg v and h. */
 QD_INLINE int qd_fd_r_lu(int n, int legs, const casadi_real* M_r, casadi_real* x, casadi_real scale, casadi_real* work) {
   const int m = n - 3 * (4 - (legs & 1) - (legs >> 1 & 1) - (legs >> 2 & 1) - (legs >> 3 & 1));
-  int r[QD_N_MAX], piv[QD_N_MAX];
+  int r[QD_N_MAX];
   for (int l = 0, i = 0; l < 4; ++l) {
     for (int c = 0; c < 3 && (legs >> l & 1); ++c) r[i++] = 3 * l + c;
   }
   r[m - 1] = n > 12 ? 12 : r[m - 1];
-  casadi_real *K = work, *v = K + m * m, *h = v + 6 * (m + 1), y[QD_N_MAX], thr = QD_SINGULAR_RTOL * scale;
+  casadi_real *K = work, *y = K + m * m, *v = y + m, *h = v + 6 * (m + 1), thr = QD_SINGULAR_RTOL * scale;
   for (int j = 0; j < m; ++j) {
     for (int i = 0; i < m; ++i) K[i + m * j] = M_r[r[i] + n * r[j]];
     y[j] = x[r[j]];
@@ -272,9 +305,8 @@ QD_INLINE int qd_fd_r_lu(int n, int legs, const casadi_real* M_r, casadi_real* x
     }
     v += 3 * (m + 1);
   }
-  int flag = qd_lu_factor(m, K, piv, scale);
+  int flag = qd_gauss_solve(m, K, scale); /* [K, y] */
   if (flag) return flag;
-  qd_lu_solve(m, K, piv, y);
   for (int l = 3; l >= 0; --l) { /* x[leg] = v[:, m] - v[:, 0:m] y, the swing legs last to first */
     if (legs >> l & 1) continue;
     v -= 3 * (m + 1);
@@ -290,7 +322,8 @@ QD_INLINE int qd_fd_r_lu(int n, int legs, const casadi_real* M_r, casadi_real* x
 
 /* qdd_r = M_r^-1 (tau_ext - (C_r + G_r)): arg = (q_r, qd_r, tau_ext, quat), res = (qdd_r). The parts once
  * (qd_parts), C_r + G_r (qd_rnea_r), M and M_r (qd_M_r_legs, legs as there), both checked (qd_fd_r_factor), the solve
- * (qd_fd_r_lu; four feet: M_r's LU); temporaries on the stack. Called once per file with constant n and legs. */
+ * (qd_fd_r_lu; four feet: qd_gauss_solve of [M_r, b]); temporaries on the stack. Called once per file with constant n
+ * and legs. */
 QD_INLINE int qd_fd_r_solve(int n, int legs, const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w,
                             int mem) {
   casadi_real m = 0, S_b[QD_N_MAX * 6], T_b[6 * QD_N_MAX], M[18 * 18], M_r[QD_N_MAX * QD_N_MAX], b[QD_N_MAX];
@@ -304,11 +337,14 @@ QD_INLINE int qd_fd_r_solve(int n, int legs, const casadi_real** arg, casadi_rea
   if (flag) return flag;
   qd_M_r_legs(n, legs, S_b, T_b, M, M_r);
   casadi_real scale = 0;
-  int piv[QD_N_MAX];
-  flag = qd_fd_r_factor(n, arg[2], M_r, legs == 15 ? piv : 0, b, &scale); /* four feet: the LU of M_r */
+  flag = qd_fd_r_factor(n, arg[2], M_r, 0, b, &scale);
   if (!flag && legs != 15) flag = qd_fd_r_lu(n, legs, M_r, b, scale, M);
+  if (!flag && legs == 15) { /* four feet (n = 12): [M_r, b] fits in M_r's space */
+    memcpy(M_r + n * n, b, n * sizeof *b);
+    flag = qd_gauss_solve(n, M_r, scale);
+    memcpy(b, M_r + n * n, n * sizeof *b);
+  }
   if (flag) return flag;
-  if (legs == 15) qd_lu_solve(n, M_r, piv, b);
   if (res[0]) {
     for (int i = 0; i < n; ++i) res[0][i] = b[i];
   }
