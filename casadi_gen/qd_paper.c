@@ -123,6 +123,8 @@ static const casadi_int casadi_s4[3] = {6, 1, 1};
 static const casadi_int casadi_s5[3] = {3, 1, 1};
 static const casadi_int casadi_s6[3] = {0, 1, 1};
 
+static const casadi_real qd_zeros[19]; /* a NULL input of UNGUARDED */
+
 static int qd_M_full_joint_rows_first(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem) {
   (void)arg; (void)res; (void)iw; (void)w; (void)mem;
   casadi_real a000, a001, a002, a003, a004, a005, a006, a007, a008, a009, a010, a011;
@@ -139,13 +141,13 @@ static int qd_M_full_joint_rows_first(const casadi_real** arg, casadi_real** res
   casadi_real a132, a133, a134, a135;
   a000=0.;
   if (res[0]!=0) res[0][0]=a000;
-  a001=arg[0]? arg[0][7] : 0;
+  a001=arg[0][7];
   a002=qd_sin(a001);
-  a003=arg[0]? arg[0][8] : 0;
+  a003=arg[0][8];
   a004=qd_cos(a003);
   a005=5.5000000000000007e-02;
   a006=1.4999999999999999e-02;
-  a007=arg[0]? arg[0][9] : 0;
+  a007=arg[0][9];
   a008=qd_cos(a007);
   a009=(a006*a008);
   a010=2.9999999999999999e-02;
@@ -288,11 +290,11 @@ static int qd_M_full_joint_rows_first(const casadi_real** arg, casadi_real** res
   a048=2.0084375000000002e-03;
   if (res[0]!=0) res[0][26]=a048;
   if (res[0]!=0) res[0][27]=a000;
-  a009=arg[0]? arg[0][10] : 0;
+  a009=arg[0][10];
   a051=qd_sin(a009);
-  a052=arg[0]? arg[0][11] : 0;
+  a052=arg[0][11];
   a053=qd_cos(a052);
-  a054=arg[0]? arg[0][12] : 0;
+  a054=arg[0][12];
   a055=qd_cos(a054);
   a056=(a006*a055);
   a057=(a056+a010);
@@ -420,11 +422,11 @@ static int qd_M_full_joint_rows_first(const casadi_real** arg, casadi_real** res
   if (res[0]!=0) res[0][52]=a077;
   if (res[0]!=0) res[0][53]=a048;
   if (res[0]!=0) res[0][54]=a000;
-  a077=arg[0]? arg[0][13] : 0;
+  a077=arg[0][13];
   a056=qd_sin(a077);
-  a084=arg[0]? arg[0][14] : 0;
+  a084=arg[0][14];
   a085=qd_cos(a084);
-  a086=arg[0]? arg[0][15] : 0;
+  a086=arg[0][15];
   a087=qd_cos(a086);
   a088=(a006*a087);
   a089=(a088+a010);
@@ -552,11 +554,11 @@ static int qd_M_full_joint_rows_first(const casadi_real** arg, casadi_real** res
   if (res[0]!=0) res[0][79]=a109;
   if (res[0]!=0) res[0][80]=a048;
   if (res[0]!=0) res[0][81]=a000;
-  a109=arg[0]? arg[0][16] : 0;
+  a109=arg[0][16];
   a088=qd_sin(a109);
-  a116=arg[0]? arg[0][17] : 0;
+  a116=arg[0][17];
   a117=qd_cos(a116);
-  a118=arg[0]? arg[0][18] : 0;
+  a118=arg[0][18];
   a119=qd_cos(a118);
   a120=(a006*a119);
   a010=(a120+a010);
@@ -985,8 +987,9 @@ static int qd_M_full_joint_rows_first(const casadi_real** arg, casadi_real** res
   return 0;
 }
 static int qd_M_full_eval(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem) {
+  const casadi_real* a[1] = {arg[0] ? arg[0] : qd_zeros};
   casadi_real* r[2] = {res[0] ? res[0] + 102 : 0, res[0]};
-  return qd_M_full_joint_rows_first(arg, r, iw, w, mem);
+  return qd_M_full_joint_rows_first(a, r, iw, w, mem);
 }
 
 static int qd_G_full_joint_rows_first(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem) {
@@ -995,11 +998,11 @@ static int qd_G_full_joint_rows_first(const casadi_real** arg, casadi_real** res
   casadi_real a12, a13, a14, a15, a16, a17, a18, a19, a20, a21, a22, a23;
   casadi_real a24, a25, a26, a27, a28, a29, a30, a31, a32, a33, a34, a35;
   casadi_real a36, a37, a38, a39, a40;
-  a00=arg[0]? arg[0][8] : 0;
+  a00=arg[0][8];
   a01=qd_cos(a00);
   a02=5.5000000000000007e-02;
   a03=1.4999999999999999e-02;
-  a04=arg[0]? arg[0][9] : 0;
+  a04=arg[0][9];
   a05=qd_cos(a04);
   a06=(a03*a05);
   a07=2.9999999999999999e-02;
@@ -1011,19 +1014,19 @@ static int qd_G_full_joint_rows_first(const casadi_real** arg, casadi_real** res
   a09=(a03*a04);
   a10=(a00*a09);
   a08=(a08-a10);
-  a10=arg[0]? arg[0][7] : 0;
+  a10=arg[0][7];
   a11=qd_sin(a10);
   a12=-9.8100000000000005e+00;
   a13=2.;
-  a14=arg[0]? arg[0][3] : 0;
+  a14=arg[0][3];
   a15=casadi_sq(a14);
-  a16=arg[0]? arg[0][4] : 0;
+  a16=arg[0][4];
   a17=casadi_sq(a16);
   a15=(a15+a17);
-  a17=arg[0]? arg[0][5] : 0;
+  a17=arg[0][5];
   a18=casadi_sq(a17);
   a18=(a15+a18);
-  a19=arg[0]? arg[0][6] : 0;
+  a19=arg[0][6];
   a20=casadi_sq(a19);
   a18=(a18+a20);
   a13=(a13/a18);
@@ -1066,9 +1069,9 @@ static int qd_G_full_joint_rows_first(const casadi_real** arg, casadi_real** res
   a05=(a03*a05);
   a05=(-a05);
   if (res[0]!=0) res[0][2]=a05;
-  a05=arg[0]? arg[0][11] : 0;
+  a05=arg[0][11];
   a04=qd_cos(a05);
-  a14=arg[0]? arg[0][12] : 0;
+  a14=arg[0][12];
   a17=qd_cos(a14);
   a19=(a03*a17);
   a19=(a19+a07);
@@ -1079,7 +1082,7 @@ static int qd_G_full_joint_rows_first(const casadi_real** arg, casadi_real** res
   a21=(a03*a14);
   a23=(a05*a21);
   a16=(a16-a23);
-  a23=arg[0]? arg[0][10] : 0;
+  a23=arg[0][10];
   a24=qd_sin(a23);
   a25=(a24*a20);
   a23=qd_cos(a23);
@@ -1106,9 +1109,9 @@ static int qd_G_full_joint_rows_first(const casadi_real** arg, casadi_real** res
   a17=(a03*a17);
   a17=(-a17);
   if (res[0]!=0) res[0][5]=a17;
-  a17=arg[0]? arg[0][14] : 0;
+  a17=arg[0][14];
   a14=qd_cos(a17);
-  a25=arg[0]? arg[0][15] : 0;
+  a25=arg[0][15];
   a28=qd_cos(a25);
   a27=(a03*a28);
   a27=(a27+a07);
@@ -1119,7 +1122,7 @@ static int qd_G_full_joint_rows_first(const casadi_real** arg, casadi_real** res
   a29=(a03*a25);
   a30=(a17*a29);
   a26=(a26-a30);
-  a30=arg[0]? arg[0][13] : 0;
+  a30=arg[0][13];
   a31=qd_sin(a30);
   a32=(a31*a20);
   a30=qd_cos(a30);
@@ -1146,9 +1149,9 @@ static int qd_G_full_joint_rows_first(const casadi_real** arg, casadi_real** res
   a28=(a03*a28);
   a28=(-a28);
   if (res[0]!=0) res[0][8]=a28;
-  a28=arg[0]? arg[0][17] : 0;
+  a28=arg[0][17];
   a25=qd_cos(a28);
-  a32=arg[0]? arg[0][18] : 0;
+  a32=arg[0][18];
   a35=qd_cos(a32);
   a34=(a03*a35);
   a34=(a34+a07);
@@ -1159,7 +1162,7 @@ static int qd_G_full_joint_rows_first(const casadi_real** arg, casadi_real** res
   a07=(a03*a32);
   a33=(a28*a07);
   a34=(a34-a33);
-  a33=arg[0]? arg[0][16] : 0;
+  a33=arg[0][16];
   a36=qd_sin(a33);
   a37=(a36*a20);
   a33=qd_cos(a33);
@@ -1251,8 +1254,9 @@ static int qd_G_full_joint_rows_first(const casadi_real** arg, casadi_real** res
   return 0;
 }
 static int qd_G_full_eval(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem) {
+  const casadi_real* a[1] = {arg[0] ? arg[0] : qd_zeros};
   casadi_real* r[2] = {res[0] ? res[0] + 6 : 0, res[0]};
-  return qd_G_full_joint_rows_first(arg, r, iw, w, mem);
+  return qd_G_full_joint_rows_first(a, r, iw, w, mem);
 }
 
 static int qd_nle_full_joint_rows_first(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem) {
