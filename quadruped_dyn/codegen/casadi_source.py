@@ -52,6 +52,25 @@ def casadi_c(file_stem: str, functions: list[ca.Function], precision: str) -> tu
         return c_source, (Path(tmp) / f"{file_stem}.h").read_text()
 
 
+#: The generated functions whose evaluation reads its inputs without CasADi's test of each input pointer at each
+#: read (``arg[i]? arg[i][k] : 0``, ``unguarded_inputs``); their entry point gives a NULL input zeros (CasADi's
+#: convention) before calling it. The tests split the reads into branches (gcc then takes an angle's sine and cosine
+#: in two libm calls instead of one sincos, and keeps fewer values in registers): per call M_full and G_full run
+#: fewer instructions without them, did_full too; id_full and nle_full measured more, and keep them
+#: (docs/benchmark.md).
+UNGUARDED = frozenset({"M_full", "G_full", "did_full"})
+
+
+def unguarded_inputs(body: str, name: str) -> str:
+    """``body``, one evaluation function of ``name`` (in ``UNGUARDED``), with its reads of the inputs unguarded."""
+    if name not in UNGUARDED:
+        raise AssertionError(f"{name} is not in UNGUARDED: its entry point passes NULL inputs on")
+    body = re.sub(r"arg\[(\d+)\]\? (arg\[\1\]\[\d+\]) : 0;", r"\2;", body)
+    if re.search(r"arg\[\d+\]\?", body):
+        raise AssertionError(f"{name}: a test of an input pointer is left")
+    return body
+
+
 def drop_evaluation(c_text: str, raw: str) -> str:
     """Remove CasADi's evaluation function ``raw`` (``casadi_fN``: its #define, the comment naming it
     and its definition). For a signature-only Function whose entry point calls a hand-written

@@ -23,10 +23,12 @@ import casadi as ca
 from quadruped_dyn.codegen.casadi_source import (
     PREFIX,
     TEMPLATES,
+    UNGUARDED,
     casadi_c,
     drop_evaluation,
     entry_point,
     evaluations,
+    unguarded_inputs,
     work_sizes,
 )
 from quadruped_dyn.codegen.emit_derivatives import (
@@ -494,7 +496,8 @@ def _joint_rows_first(c_text: str, functions: list[ca.Function], precision: str)
     registers). With the joint rows first each leg's recursion runs to its end before the next starts and
     the trunk rows then add up the legs' wrenches. Each entry point calls a static qd_<name>_eval of its own
     signature: the same graph with its outputs in that order (``_static_c``) and mapped back, CasADi's evaluation
-    in the signature's order dropped. The same operations on the same values (docs/benchmark.md)."""
+    in the signature's order dropped; for a function in ``UNGUARDED`` the graph reads its inputs untested and
+    qd_<name>_eval gives a NULL input qd_zeros. The same operations on the same values (docs/benchmark.md)."""
     raw = evaluations(c_text, [f.name() for f in functions])
     helpers = []
     for f in functions:
@@ -512,13 +515,24 @@ def _joint_rows_first(c_text: str, functions: list[ca.Function], precision: str)
         if f.n_out() != (2 if name == "id_full" else 1) or f.sz_arg() != f.n_in():
             raise AssertionError(f"{f.name()}: not the signature _joint_rows_first reorders")
         body = ca.Function(f"{name}_joint_rows_first", args, ordered, {"cse": True})
-        helpers.append(_static_c(f"qd_{name}_joint_rows_first", body, precision, _host_helpers(c_text))
-                       + f"static int qd_{name}_eval{_SIGNATURE} {{\n  casadi_real* r[2] = {res};\n"
-                       f"  return qd_{name}_joint_rows_first(arg, r, iw, w, mem);\n}}\n")
+        static = _static_c(f"qd_{name}_joint_rows_first", body, precision, _host_helpers(c_text))
+        a = "arg"
+        if name in UNGUARDED:  # a NULL input reads as zeros, as CasADi's tests gave it
+            if max(f.nnz_in(i) for i in range(f.n_in())) > NQ_FULL:
+                raise AssertionError(f"{f.name()}: an input longer than qd_zeros")
+            static, a = unguarded_inputs(static, name), "a"
+            a_init = ", ".join(f"arg[{i}] ? arg[{i}] : qd_zeros" for i in range(f.n_in()))
+            static += f"static int qd_{name}_eval{_SIGNATURE} {{\n  const casadi_real* a[{f.n_in()}] = {{{a_init}}};\n"
+        else:
+            static += f"static int qd_{name}_eval{_SIGNATURE} {{\n"
+        helpers.append(static + f"  casadi_real* r[2] = {res};\n"
+                       f"  return qd_{name}_joint_rows_first({a}, r, iw, w, mem);\n}}\n")
         c_text, count = re.subn(entry_point(f.name()), rf"\1  return qd_{name}_eval(arg, res, iw, w, mem);\n", c_text)
         if count != 1:
             raise AssertionError(f"entry point of {f.name()} not found in CasADi's output")
         c_text = drop_evaluation(c_text, raw[f.name()])
+    if any(n in UNGUARDED for n in JOINT_ROWS_FIRST):
+        helpers.insert(0, f"static const casadi_real qd_zeros[{NQ_FULL}]; /* a NULL input of UNGUARDED */\n")
     first = _first_evaluation(c_text)
     return c_text[:first] + "\n" + "\n".join(helpers) + c_text[first:]
 

@@ -44,7 +44,17 @@ from dataclasses import dataclass
 import casadi as ca
 import numpy as np
 
-from quadruped_dyn.codegen.casadi_source import PREFIX, TEMPLATES, casadi_c, drop_evaluation, entry_point, evaluations, work_sizes
+from quadruped_dyn.codegen.casadi_source import (
+    PREFIX,
+    TEMPLATES,
+    UNGUARDED,
+    casadi_c,
+    drop_evaluation,
+    entry_point,
+    evaluations,
+    unguarded_inputs,
+    work_sizes,
+)
 from quadruped_dyn.dynamics.derivatives import configuration_tangent, full_derivatives, quaternion_tangent
 from quadruped_dyn.dynamics.grf import solve_lambda
 from quadruped_dyn.dynamics.kinematics import foot_position
@@ -305,17 +315,14 @@ def declare_work(c_text: str, h_text: str, name: str, sz_w: int) -> tuple[str, s
 
 
 def _unguarded_inputs(c_text: str, raw: str, f: ca.Function) -> str:
-    """CasADi's evaluation ``raw`` of ``f`` without its test of each input pointer at each read (``arg[i]? arg[i][k] :
-    0``): its callers pass every input (qd_d_all_inputs gives a NULL one qd_d_zeros). The tests split
-    each read into branches, so gcc takes an angle's sine and cosine in two libm calls instead of one sincos."""
+    """CasADi's evaluation ``raw`` of ``f`` without its test of each input pointer at each read
+    (``casadi_source.unguarded_inputs``): its callers pass every input (qd_d_all_inputs gives a NULL one qd_d_zeros)."""
     if f.n_in() > 3 or max(f.nnz_in(i) for i in range(f.n_in())) > NQ_FULL:
         raise AssertionError(f"{f.name()}: more inputs or reals than qd_d_all_inputs holds")
     head = re.search(rf"static int {raw}\(.*?\n\}}\n", c_text, re.S)
     if not head:
         raise AssertionError(f"{raw}: CasADi's evaluation function not found")
-    body = re.sub(r"arg\[(\d+)\]\? (arg\[\1\]\[\d+\]) : 0;", r"\2;", head.group(0))
-    if re.search(r"arg\[\d+\]\?", body):
-        raise AssertionError(f"{raw}: a test of an input pointer is left")
+    body = unguarded_inputs(head.group(0), f.name()[len(PREFIX):])
     return c_text[:head.start()] + body + c_text[head.end():]
 
 
@@ -342,7 +349,7 @@ def derivative_source(file_stem: str, functions: list[ca.Function], precision: s
             did = raw[PREFIX + "did_full"]
             body = (rf"\1  return qd_dfd_full_solve({did}, {PREFIX}did_full_sparsity_out(0), "
                     rf"{PREFIX}did_full_sparsity_out(1), arg, res, iw, w, mem);\n")
-        elif f.name() == PREFIX + "did_full":  # its evaluation reads the inputs unguarded: NULL ones are zeros here
+        elif f.name()[len(PREFIX):] in UNGUARDED:  # its evaluation reads the inputs unguarded: NULL ones are zeros here
             c_text = _unguarded_inputs(c_text, raw[f.name()], f)
             nnz = ", ".join(str(f.nnz_out(i)) for i in range(f.n_out()))
             body = (rf"\1  return qd_d_finite(qd_d_all_inputs(\2, {f.n_in()}, arg, res, iw, w, mem), res, {f.n_out()}, "

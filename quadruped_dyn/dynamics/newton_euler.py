@@ -51,6 +51,18 @@ from quadruped_dyn.model.robot import Robot
 from quadruped_dyn.model.state import GRAVITY_W, NQ_FULL, NV_FULL
 
 
+def point_acceleration(w: ca.SX, wd: ca.SX) -> ca.SX:
+    """K (3, 3) with K p = wd x p + w x (w x p): the classical acceleration of a point at a fixed offset p in a
+    frame of angular velocity w and acceleration wd, relative to the frame origin's. K = [wd]x + w w^T - |w|^2 I,
+    formed once per frame and applied to each offset in it (CoM, child joint origins): fewer operations than the
+    two cross products per offset (docs/formulation.md §2)."""
+    x, y, z = w[0], w[1], w[2]
+    xx, yy, zz, xy, xz, yz = x * x, y * y, z * z, x * y, x * z, y * z
+    return ca.vertcat(ca.horzcat(-(yy + zz), xy - wd[2], xz + wd[1]),
+                      ca.horzcat(xy + wd[2], -(xx + zz), yz - wd[0]),
+                      ca.horzcat(xz - wd[1], yz + wd[0], -(xx + yy)))
+
+
 @dataclass(frozen=True)
 class LegForces:
     tau: ca.SX  # (3,) joint torques, N m
@@ -66,18 +78,20 @@ def leg_newton_euler(
     ground force on the foot; all in the trunk frame."""
     leg = axis_aligned(leg)
     w, wd, vd, f_foot = omega_b, alpha_b, a0, -f
+    K = point_acceleration(w, wd)  # the trunk's; CSE shares it with the trunk's and the other legs'
     links = []  # (R_parent_i, P_i, F_i, N_i) per link
     for i, (joint, link) in enumerate(zip(leg.joints, leg.links)):
         Rf, P = placement_rt(joint.placement)
         R = Rf @ axis_rotation(joint.axis, q[i])  # parent <- i
         z = dm(joint.axis)
         f_foot = R.T @ f_foot  # the foot's push on the ground, carried link by link into the KFE frame
-        vd = R.T @ (ca.cross(wd, P) + ca.cross(w, ca.cross(w, P)) + vd)
+        vd = R.T @ (K @ P + vd)
         w_parent = R.T @ w
         w = w_parent + qd[i] * z
         wd = R.T @ wd + ca.cross(w_parent, qd[i] * z) + qdd[i] * z
         c, Ic = dm(link.com), dm(link.inertia)
-        vdc = ca.cross(wd, c) + ca.cross(w, ca.cross(w, c)) + vd
+        K = point_acceleration(w, wd)
+        vdc = K @ c + vd
         links.append((R, P, link.mass * vdc, Ic @ wd + ca.cross(w, Ic @ w), c))
 
     # inward, starting at the foot frame: the foot pushes on the ground with f_4 = -f, n_4 = 0
@@ -118,7 +132,7 @@ def inverse_dynamics_parts(
     a0 = a_b - g_b
     trunk = robot.trunk
     c, Ic = dm(trunk.com), dm(trunk.inertia)
-    a_c = a0 + ca.cross(alpha_b, c) + ca.cross(omega_b, ca.cross(omega_b, c))
+    a_c = a0 + point_acceleration(omega_b, alpha_b) @ c
     own = ca.vertcat(trunk.mass * a_c, Ic @ alpha_b + ca.cross(omega_b, Ic @ omega_b) + ca.cross(c, trunk.mass * a_c))
     legs = []
     for k, leg in enumerate(robot.legs):

@@ -3,11 +3,13 @@ to Pinocchio when compiled and loaded back (double), and to the double build (fl
 
 from __future__ import annotations
 
+import ctypes
 import re
 import shutil
 import subprocess
 from pathlib import Path
 
+import casadi as ca
 import numpy as np
 import pytest
 
@@ -18,6 +20,7 @@ from quadruped_dyn.checks.c_reference import (
     reference_differences,
     reference_state,
 )
+from quadruped_dyn.codegen.casadi_source import UNGUARDED
 from quadruped_dyn.codegen.emit import (
     CODEGEN_FUNCTIONS,
     N_DERIVATIVE_FUNCTIONS,
@@ -244,3 +247,39 @@ def test_codegen_check_compares_at_the_precision_asked_for(tmp_path):
     assert bad.exit_code == 1, bad.output
     assert "source differs from a fresh generation: qd_paper.c, qd_paper.h" in bad.output, bad.output
     assert "reference values differ beyond tolerance: qd_paper_reference.h: qd_C_full_out0[1] " in bad.output
+
+
+def _evaluation_body(text: str, name: str) -> str:
+    """The body of the function that evaluates ``name`` in the committed C: the joint-rows-first one (emit.py) or
+    the one did_full's entry point passes to qd_d_all_inputs (emit_derivatives.py)."""
+    called = re.search(rf"int qd_{name}\(const casadi_real\*\* arg.*?\n  return (?:qd_d_finite\(qd_d_all_inputs\()?(\w+)[(,]",
+                       text, re.S)
+    assert called, name
+    inner = f"qd_{name}_joint_rows_first" if called.group(1) == f"qd_{name}_eval" else called.group(1)
+    body = re.search(rf"\nstatic int {inner}\(.*?\n\}}\n", text, re.S)
+    assert body, inner
+    return body.group(0)
+
+
+def test_unguarded_functions_read_no_input_pointer_and_a_null_input_as_zeros(paper):
+    """Each UNGUARDED function's evaluation reads its inputs without testing the pointers; its entry point still
+    gives a NULL input zeros (CasADi's convention): the same outputs, bit for bit, as zeros passed."""
+    text = "".join((CASADI_GEN / f).read_text() for f in ("qd_paper.c", "qd_paper_d.c"))
+    assert UNGUARDED == {"M_full", "G_full", "did_full"}
+    for name in sorted(UNGUARDED):
+        body = _evaluation_body(text, name)
+        assert "arg[0][" in body and not re.search(r"arg\[\d+\]\?", body), name
+    assert re.search(r"arg\[\d+\]\? arg\[\d+\]\[\d+\] : 0;", _evaluation_body(text, "id_full")), "id_full stays guarded"
+    lib = ctypes.CDLL(str(compiled_library(paper).path))
+    s = random_state(paper.lower, paper.upper, np.random.default_rng(5))
+    for name, given in (("M_full", {}), ("G_full", {}), ("did_full", {0: s.q})):  # G at q = 0: a zero quaternion
+        graph = ca.external(PREFIX + name, str(compiled_library(paper).path))
+        ptr = ctypes.POINTER(ctypes.c_double)
+        outs = []
+        for null in (True, False):
+            ins = [np.asarray(given.get(i, np.zeros(graph.nnz_in(i))), dtype=float) for i in range(graph.n_in())]
+            res = [np.full(graph.nnz_out(i), 7.0) for i in range(graph.n_out())]
+            arg = (ptr * 8)(*[None if null and i not in given else x.ctypes.data_as(ptr) for i, x in enumerate(ins)])
+            flag = getattr(lib, PREFIX + name)(arg, (ptr * 8)(*[r.ctypes.data_as(ptr) for r in res]), None, None, 0)
+            outs.append((flag, np.concatenate(res)))
+        assert outs[0][0] == outs[1][0] and np.array_equal(outs[0][1], outs[1][1], equal_nan=True), name
