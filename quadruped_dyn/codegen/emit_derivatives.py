@@ -275,6 +275,9 @@ def derivative_functions(robot: Robot) -> list[ca.Function]:
     if (not all(trunk[i, j].is_constant() and float(trunk[i, j]) == (float(trunk[0, 0]) if i == j else 0.0)
                 for i in range(3) for j in range(3)) or dq.is_dense() or any(dq.colind()[j] != 0 for j in range(4))):
         raise AssertionError("M[0:3, 0:3] is not m I or dtau_dq has position entries; qd_dfd_full_solve assumes both")
+    dv = did.sparsity_out(1)
+    if any(sp.colind()[j] == sp.colind()[j + 1] for sp, first in ((dq, 6), (dv, 3)) for j in range(first, NV_FULL)):
+        raise AssertionError("a column of dtau_dq[:, 6:] or dtau_dv[:, 3:] is empty; qd_d_neg_product assumes none is")
     if not _linear_velocity_columns_are_m_wx(did, q, v, a):
         raise AssertionError("dtau_dv[:, 0:3] is not M[:, 0:3] [w_b]x; qd_dfd_full_solve writes da/dv_b = -[[w_b]x; 0]")
     if (fd.M_full_crba.name_in(), fd.nle_full.name_in()) != (["q"], ["q", "v"]):

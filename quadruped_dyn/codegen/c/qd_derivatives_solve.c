@@ -117,7 +117,9 @@ QD_INLINE int qd_dfd_full_parts_eval(const casadi_real** arg, casadi_real** res,
   return qd_d_parts(arg, res[0], res[1], 0, iw, w, mem);
 }
 
-/* out (18 x 18, column-major) = -Minv D for D in CasADi's compressed-column format (sp, nz), columns from first on. */
+/* out (18 x 18, column-major) = -Minv D for D in CasADi's compressed-column format (sp, nz), columns from first on,
+ * each with a nonzero (the generator checks it): the accumulator starts at the first product, not at zeros
+ * (fewer instructions; each entry's sum in the same order, so the same bits). */
 #if defined(__GNUC__) && !defined(__clang__) /* GCC's -O3 unroll-and-jam turns the vectorised row loop into scalar code */
 __attribute__((optimize("no-loop-unroll-and-jam")))
 #endif
@@ -125,8 +127,11 @@ static void qd_d_neg_product(const casadi_real* restrict Minv, const casadi_int*
                              casadi_int first, casadi_real* restrict out) {
   const casadi_int ncol = sp[1], *colind = sp + 2, *row = sp + 2 + ncol + 1;
   for (casadi_int j = first; j < ncol; ++j) {
-    casadi_real acc[QD_NV] = {0};
-    for (casadi_int k = colind[j]; k < colind[j + 1]; ++k) {
+    casadi_real acc[QD_NV];
+    const casadi_real* restrict m0 = Minv + QD_NV * row[colind[j]];
+    const casadi_real d0 = nz[colind[j]];
+    for (int i = 0; i < QD_NV; ++i) acc[i] = 0 - m0[i] * d0;
+    for (casadi_int k = colind[j] + 1; k < colind[j + 1]; ++k) {
       const casadi_real* restrict m = Minv + QD_NV * row[k];
       const casadi_real d = nz[k];
       for (int i = 0; i < QD_NV; ++i) acc[i] -= m[i] * d;
