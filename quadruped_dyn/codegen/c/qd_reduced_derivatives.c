@@ -55,7 +55,7 @@ static inline void qd_dfd_r_solve_block(int n, const casadi_real* restrict LU, c
                                         int W, int lower) {
   for (int s = 0; s < n; ++s) {
     const int i = lower ? s : n - 1 - s;
-    casadi_real acc[8];
+    casadi_real acc[16];
     casadi_real* xi = X + m * i + c0;
     for (int c = 0; c < W; ++c) acc[c] = xi[c];
     if (lower) {
@@ -76,8 +76,8 @@ static inline void qd_dfd_r_solve_block(int n, const casadi_real* restrict LU, c
 }
 
 /* X (n rows of m right-hand sides, row-major) <- M^-1 X with the factors of qd_lu_factor: qd_lu_solve's operations
- * in its order for each column (the same results: row i's updates come in the same order of k), eight columns at a
- * time with row i's block in registers (a triangular solve per column is a serial chain of n^2 / 2 dependent steps;
+ * in its order for each column (the same results: row i's updates come in the same order of k), 16 columns at a
+ * time (then 8, 2, 1) with row i's block in registers (a triangular solve per column is a serial chain of n^2 / 2 dependent steps;
  * row by row across all m columns each multiply-subtract loads and stores x_i). */
 static void qd_dfd_r_lu_solve_rows(int n, const casadi_real* restrict LU, const int* piv, casadi_real* restrict X, int m) {
   for (int k = 0; k < n; ++k) {
@@ -90,6 +90,7 @@ static void qd_dfd_r_lu_solve_rows(int n, const casadi_real* restrict LU, const 
   }
   for (int lower = 1; lower >= 0; --lower) {
     int c0 = 0;
+    for (; c0 + 16 <= m; c0 += 16) qd_dfd_r_solve_block(n, LU, X, m, c0, 16, lower);
     for (; c0 + 8 <= m; c0 += 8) qd_dfd_r_solve_block(n, LU, X, m, c0, 8, lower);
     for (; c0 + 2 <= m; c0 += 2) qd_dfd_r_solve_block(n, LU, X, m, c0, 2, lower);
     for (; c0 < m; ++c0) qd_dfd_r_solve_block(n, LU, X, m, c0, 1, lower);
