@@ -39,6 +39,8 @@ def static_helpers(c_source: str) -> str:
 
 
 TEMPLATES = Path(__file__).resolve().parent / "c"
+#: the sines and cosines of a vector of angles (qd_sincos), pasted into each file whose entry points call it
+SINCOS = "qd_sincos.c"
 
 
 def casadi_c(file_stem: str, functions: list[ca.Function], precision: str) -> tuple[str, str]:
@@ -96,3 +98,28 @@ def evaluations(c_text: str, names: list[str]) -> dict[str, str]:
             raise AssertionError(f"entry point of {name} not found in CasADi's output")
         out[name] = found.group(2)
     return out
+
+
+def static_c(c_name: str, f: ca.Function, precision: str, host_helpers: frozenset[str] = frozenset(),
+              all_io: bool = False) -> str:
+    """``f`` as the static C function ``c_name`` (arg, res, iw, w, mem): CasADi's evaluation body alone,
+    checked to need no work memory (the templates call it with none) and no helper but casadi_sq and
+    ``host_helpers`` (CasADi helpers the file it goes into defines). ``all_io``: the templates pass every input
+    and output (none NULL), so CasADi's tests of each pointer at each read and write are left out."""
+    c_text, h_text = casadi_c(c_name, [f], precision)
+    body = re.search(r"static int casadi_f0\(.*?\n\}\n", c_text, re.S)
+    if not body or work_sizes(h_text)[f.name()] != (0, 0) or set(re.findall(r"casadi_\w+", body.group(0))) - {
+            "casadi_f0", "casadi_real", "casadi_int", "casadi_sq", *host_helpers}:
+        raise AssertionError(f"{f.name()}: CasADi's body is not self-contained; the templates need it to be")
+    text = body.group(0).replace("casadi_f0", c_name)
+    if all_io:
+        text = re.sub(r"arg\[(\d+)\]\? (arg\[\1\]\[\d+\]) : 0;", r"\2;", text)
+        text = re.sub(r"if \(res\[(\d+)\]!=0\) (res\[\1\]\[\d+\]=)", r"\2", text)
+        if re.search(r"arg\[\d+\]\?|res\[\d+\]!=0", text):
+            raise AssertionError(f"{f.name()}: a test of an argument pointer is left after all_io")
+    return text
+
+
+def defined_helpers(c_text: str) -> frozenset[str]:
+    """The CasADi helpers (e.g. casadi_sq, casadi_fabs) a generated file defines."""
+    return frozenset(re.findall(r"\n(?:static (?:inline )?)?casadi_real (casadi_\w+)\(", c_text))

@@ -22,12 +22,15 @@ import casadi as ca
 
 from quadruped_dyn.codegen.casadi_source import (
     PREFIX,
+    SINCOS,
     TEMPLATES,
     UNGUARDED,
     casadi_c,
+    defined_helpers,
     drop_evaluation,
     entry_point,
     evaluations,
+    static_c,
     unguarded_inputs,
     work_sizes,
 )
@@ -44,6 +47,7 @@ from quadruped_dyn.codegen.emit_derivatives import (
     dfd_r_work_reals,
     reduced_derivative_functions,
 )
+from quadruped_dyn.codegen.joint_trig import trig_as_inputs
 from quadruped_dyn.codegen.work_memory import memory_doc
 from quadruped_dyn.dynamics.grf import grf_balance, grf_solve
 from quadruped_dyn.dynamics.newton_euler import full_dynamics
@@ -53,7 +57,7 @@ from quadruped_dyn.errors import InputError
 from quadruped_dyn.files.safe_write import output_path, write_text
 from quadruped_dyn.model.robot import Robot
 from quadruped_dyn.model.stance import STANCE_SETS, StanceSet, stance_set
-from quadruped_dyn.model.state import NQ_FULL
+from quadruped_dyn.model.state import JOINT_ANGLES, NQ_FULL
 from quadruped_dyn.tolerances import REGULARITY_MIN
 
 
@@ -365,26 +369,6 @@ def stem(robot: Robot) -> str:
     return f"qd_{re.sub(r'[^A-Za-z0-9_]', '_', robot.name)}"
 
 
-def _static_c(c_name: str, f: ca.Function, precision: str, host_helpers: frozenset[str] = frozenset(),
-              all_io: bool = False) -> str:
-    """``f`` as the static C function ``c_name`` (arg, res, iw, w, mem): CasADi's evaluation body alone,
-    checked to need no work memory (the templates call it with none) and no helper but casadi_sq and
-    ``host_helpers`` (CasADi helpers the file it goes into defines). ``all_io``: the templates pass every input
-    and output (none NULL), so CasADi's tests of each pointer at each read and write are left out."""
-    c_text, h_text = casadi_c(c_name, [f], precision)
-    body = re.search(r"static int casadi_f0\(.*?\n\}\n", c_text, re.S)
-    if not body or work_sizes(h_text)[f.name()] != (0, 0) or set(re.findall(r"casadi_\w+", body.group(0))) - {
-            "casadi_f0", "casadi_real", "casadi_int", "casadi_sq", *host_helpers}:
-        raise AssertionError(f"{f.name()}: CasADi's body is not self-contained; the templates need it to be")
-    text = body.group(0).replace("casadi_f0", c_name)
-    if all_io:
-        text = re.sub(r"arg\[(\d+)\]\? (arg\[\1\]\[\d+\]) : 0;", r"\2;", text)
-        text = re.sub(r"if \(res\[(\d+)\]!=0\) (res\[\1\]\[\d+\]=)", r"\2", text)
-        if re.search(r"arg\[\d+\]\?|res\[\d+\]!=0", text):
-            raise AssertionError(f"{f.name()}: a test of an argument pointer is left after all_io")
-    return text
-
-
 def _runs(slots: list[int]) -> list[tuple[int, int, int]]:
     """(first slot, first index into ``slots``, length) of each run of consecutive slots."""
     runs: list[tuple[int, int, int]] = []
@@ -431,10 +415,10 @@ def _reduced_helpers_c(robot: Robot, stance: StanceSet, dfd_r: DfdRPieces, M_ful
                          *(ca.densify(x) for x in p.velocity_and_acceleration(qd_r, qdd_r))], {"cse": True})
     return (f"#define QD_REGULARITY_MIN ((casadi_real){REGULARITY_MIN!r}) /* quadruped_dyn.tolerances.REGULARITY_MIN */\n"
             + _dense_tables_c(M_full)
-            + _static_c("qd_reduced_parts", parts, precision) + "\n"
+            + static_c("qd_reduced_parts", parts, precision) + "\n"
             + f"#define QD_DFD_R_TAPE {dfd_r.tape} /* reals of the lift's tape: emit_derivatives.split_at_seeds */\n"
-            + _static_c("qd_dfd_r_lift", dfd_r.lift, precision, all_io=True) + "\n"
-            + _static_c("qd_dfd_r_lift_dir", dfd_r.lift_dir, precision, all_io=True))
+            + static_c("qd_dfd_r_lift", dfd_r.lift, precision, all_io=True) + "\n"
+            + static_c("qd_dfd_r_lift_dir", dfd_r.lift_dir, precision, all_io=True))
 
 
 def _checked_reduced_c(c_text: str, casadi_header: str, functions: list[ca.Function], helpers_c: str,
@@ -484,18 +468,13 @@ JOINT_ROWS_FIRST = ("M_full", "G_full", "nle_full", "id_full")
 _SIGNATURE = "(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem)"
 
 
-def _host_helpers(c_text: str) -> frozenset[str]:
-    """The CasADi helpers (e.g. casadi_sq, casadi_fabs) a generated file defines."""
-    return frozenset(re.findall(r"\n(?:static (?:inline )?)?casadi_real (casadi_\w+)\(", c_text))
-
-
 def _joint_rows_first(c_text: str, functions: list[ca.Function], precision: str) -> str:
     """Evaluate M_full, G_full, nle_full and id_full joint rows first (M_full: its joint columns). CasADi's C
     evaluates a graph output by output, each depth first: the trunk rows come first and gather all four legs,
     so the legs' recursions interleave and their temporaries are live together (spilled: x86-64 has 16
     registers). With the joint rows first each leg's recursion runs to its end before the next starts and
     the trunk rows then add up the legs' wrenches. Each entry point calls a static qd_<name>_eval of its own
-    signature: the same graph with its outputs in that order (``_static_c``) and mapped back, CasADi's evaluation
+    signature: the same graph with its outputs in that order (``static_c``) and mapped back, CasADi's evaluation
     in the signature's order dropped; for a function in ``UNGUARDED`` the graph reads its inputs untested and
     qd_<name>_eval gives a NULL input qd_zeros. The same operations on the same values (docs/benchmark.md)."""
     raw = evaluations(c_text, [f.name() for f in functions])
@@ -514,25 +493,28 @@ def _joint_rows_first(c_text: str, functions: list[ca.Function], precision: str)
             ordered, res = [nz[k:], nz[:k]], f"{{res[0] ? res[0] + {k} : 0, res[0]}}"
         if f.n_out() != (2 if name == "id_full" else 1) or f.sz_arg() != f.n_in():
             raise AssertionError(f"{f.name()}: not the signature _joint_rows_first reorders")
-        body = ca.Function(f"{name}_joint_rows_first", args, ordered, {"cse": True})
-        static = _static_c(f"qd_{name}_joint_rows_first", body, precision, _host_helpers(c_text))
-        a = "arg"
+        if f.name_in(0) != "q" or f.nnz_in(0) != NQ_FULL or max(f.nnz_in(i) for i in range(f.n_in())) > NQ_FULL:
+            raise AssertionError(f"{f.name()}: not (q (19), ...) with inputs no longer than qd_zeros")
+        body = trig_as_inputs(ca.Function(f"{name}_joint_rows_first", args, ordered, {"cse": True}), 0, JOINT_ANGLES)
+        static = static_c(f"qd_{name}_joint_rows_first", body, precision, defined_helpers(c_text))
         if name in UNGUARDED:  # a NULL input reads as zeros, as CasADi's tests gave it
-            if max(f.nnz_in(i) for i in range(f.n_in())) > NQ_FULL:
-                raise AssertionError(f"{f.name()}: an input longer than qd_zeros")
-            static, a = unguarded_inputs(static, name), "a"
-            a_init = ", ".join(f"arg[{i}] ? arg[{i}] : qd_zeros" for i in range(f.n_in()))
-            static += f"static int qd_{name}_eval{_SIGNATURE} {{\n  const casadi_real* a[{f.n_in()}] = {{{a_init}}};\n"
+            static = unguarded_inputs(static, name)
+            a_init = [f"arg[{i}] ? arg[{i}] : qd_zeros" for i in range(f.n_in())]
         else:
-            static += f"static int qd_{name}_eval{_SIGNATURE} {{\n"
-        helpers.append(static + f"  casadi_real* r[2] = {res};\n"
-                       f"  return qd_{name}_joint_rows_first({a}, r, iw, w, mem);\n}}\n")
+            a_init = [f"arg[{i}]" for i in range(f.n_in())]
+        n = len(JOINT_ANGLES)
+        helpers.append(static + f"static int qd_{name}_eval{_SIGNATURE} {{\n"
+                       f"  casadi_real c[{n}], s[{n}]; /* the joints' cosines and sines, once (qd_sincos) */\n"
+                       f"  qd_sincos({n}, (arg[0] ? arg[0] : qd_zeros) + {JOINT_ANGLES.start}, c, s);\n"
+                       f"  const casadi_real* a[{f.n_in() + 2}] = {{{', '.join([*a_init, 's', 'c'])}}};\n"
+                       f"  casadi_real* r[2] = {res};\n"
+                       f"  return qd_{name}_joint_rows_first(a, r, iw, w, mem);\n}}\n")
         c_text, count = re.subn(entry_point(f.name()), rf"\1  return qd_{name}_eval(arg, res, iw, w, mem);\n", c_text)
         if count != 1:
             raise AssertionError(f"entry point of {f.name()} not found in CasADi's output")
         c_text = drop_evaluation(c_text, raw[f.name()])
-    if any(n in UNGUARDED for n in JOINT_ROWS_FIRST):
-        helpers.insert(0, f"static const casadi_real qd_zeros[{NQ_FULL}]; /* a NULL input of UNGUARDED */\n")
+    helpers.insert(0, (TEMPLATES / SINCOS).read_text()
+                   + f"static const casadi_real qd_zeros[{NQ_FULL}]; /* a NULL input (CasADi's convention: zeros) */\n")
     first = _first_evaluation(c_text)
     return c_text[:first] + "\n" + "\n".join(helpers) + c_text[first:]
 
@@ -556,7 +538,7 @@ def _grf_through_id_full(robot: Robot, c_text: str, functions: list[ca.Function]
     if id_full.name_in() != ["q", "v", "a", "f"] or id_full.name_out() != ["w_res", "tau"] or id_full.sz_arg() != 4:
         raise AssertionError("qd_grf_solve calls id_full as (q, v, a, f) -> (w_res, tau) with no work memory")
     q, w_req = ca.SX.sym("q", NQ_FULL), ca.SX.sym("w_req", 6)
-    host_helpers = _host_helpers(c_text)
+    host_helpers = defined_helpers(c_text)
     helpers = ["#define QD_ID_FULL_EVAL qd_id_full_eval /* _joint_rows_first */\n" + (TEMPLATES / "qd_grf_solve.c").read_text()]
     for f in functions:
         if not f.name().startswith(PREFIX + "grf_"):
@@ -566,7 +548,7 @@ def _grf_through_id_full(robot: Robot, c_text: str, functions: list[ca.Function]
         balance = ca.Function(f"grf_balance_{suffix}", [q, w_req], [b.lam, b.f, b.residual, b.tau], {"cse": True})
         if [balance.sparsity_out(i) for i in range(3)] != [f.sparsity_out(i) for i in range(3)]:
             raise AssertionError(f"{f.name()}: the balance's outputs are not the GRF function's")
-        helpers.append(_static_c(f"qd_grf_balance_{suffix}", balance, precision, host_helpers))
+        helpers.append(static_c(f"qd_grf_balance_{suffix}", balance, precision, host_helpers))
         body = (r"\1  casadi_real w_req[6], tau_0[12], tau_f[12];\n"
                 r"  const casadi_real* b_arg[2] = {arg[0], w_req};\n"
                 r"  casadi_real* b_res[4] = {res[0], res[1], res[2], tau_f};\n"

@@ -46,15 +46,19 @@ import numpy as np
 
 from quadruped_dyn.codegen.casadi_source import (
     PREFIX,
+    SINCOS,
     TEMPLATES,
     UNGUARDED,
     casadi_c,
+    defined_helpers,
     drop_evaluation,
     entry_point,
     evaluations,
+    static_c,
     unguarded_inputs,
     work_sizes,
 )
+from quadruped_dyn.codegen.joint_trig import trig_as_inputs
 from quadruped_dyn.dynamics.derivatives import configuration_tangent, full_derivatives, quaternion_tangent
 from quadruped_dyn.dynamics.grf import solve_lambda
 from quadruped_dyn.dynamics.kinematics import foot_position
@@ -63,7 +67,7 @@ from quadruped_dyn.dynamics.reduced_projection import reduced_projection, stance
 from quadruped_dyn.math.rigid import skew
 from quadruped_dyn.model.robot import Robot
 from quadruped_dyn.model.stance import STANCE_SETS, StanceSet, stance_set
-from quadruped_dyn.model.state import NQ_FULL, NV_FULL
+from quadruped_dyn.model.state import JOINT_ANGLES, NQ_FULL, NV_FULL
 
 DERIVATIVE_NAMES = ("did_full", "dfd_full_parts", "dfd_full")
 #: Stance sets with a GRF derivative (every set with a foot), as dgrf_parts_<feet> and dgrf_<feet> in qd_<robot>_d.c.
@@ -203,37 +207,6 @@ def split_at_seeds(f: ca.Function, seeds: tuple[int, ...], n_primal_out: int) ->
     return primal, direction
 
 
-def trig_as_inputs(f: ca.Function, i_q: int) -> ca.Function:
-    """``f`` with two more inputs, s and c (the sines and cosines of input ``i_q``'s entries), that its sin and cos
-    of those entries read instead: a caller calling it many times at the same angles (dfd_r's lift, 7-13 times) takes
-    them once. The same operations otherwise, rebuilt instruction by instruction from f's algorithm."""
-    ins = [ca.SX.sym(f.name_in(i), f.sparsity_in(i)) for i in range(f.n_in())]
-    sin, cos = (ca.SX.sym(x, f.nnz_in(i_q)) for x in ("sin", "cos"))
-    outs = [ca.SX(f.sparsity_out(i)) for i in range(f.n_out())]
-    work: dict[int, ca.SX] = {}
-    angle: dict[int, int] = {}  # work slot -> entry of input i_q it holds
-    for k in range(f.n_instructions()):
-        op, a, r = f.instruction_id(k), f.instruction_input(k), f.instruction_output(k)
-        if op == ca.OP_OUTPUT:
-            outs[r[0]].nz[r[1]] = work[a[0]]
-            continue
-        read = angle.get(a[0]) if op in (ca.OP_SIN, ca.OP_COS) else None
-        angle.pop(r[0], None)  # the slot is overwritten (CasADi reuses them, in place too)
-        if op == ca.OP_INPUT:
-            work[r[0]] = ins[a[0]].nz[a[1]]
-            if a[0] == i_q:
-                angle[r[0]] = a[1]
-        elif op == ca.OP_CONST:
-            work[r[0]] = ca.SX(f.instruction_constant(k))
-        elif read is not None:
-            work[r[0]] = (sin if op == ca.OP_SIN else cos)[read]
-        elif len(a) == 1:
-            work[r[0]] = ca.SX.unary(op, work[a[0]])
-        else:
-            work[r[0]] = ca.SX.binary(op, work[a[0]], work[a[1]])
-    return ca.Function(f.name(), [*ins, sin, cos], outs, [*f.name_in(), "sin", "cos"], f.name_out(), {"cse": True})
-
-
 def dfd_r_work_reals(n: int, tape: int) -> int:
     """Reals of caller work memory qd_dfd_r_<feet> uses (``QD_DFD_R_W`` of c/qd_reduced_derivatives.c, which
     checks at compile time that the two agree): M_r's LU, qdd_r, S_b, T_b, M, d rnea/dq, d rnea/dv, F, one
@@ -329,6 +302,24 @@ def _unguarded_inputs(c_text: str, raw: str, f: ca.Function) -> str:
     return c_text[:head.start()] + body + c_text[head.end():]
 
 
+def _did_full_trig_once(c_text: str, raw: str, did: ca.Function, precision: str) -> str:
+    """did_full's evaluation ``raw`` (every input given: its callers and qd_d_all_inputs) as the joints' sines and
+    cosines taken once (c/qd_sincos.c) and the graph reading them (``trig_as_inputs``): static qd_did_full_trig."""
+    trig = trig_as_inputs(did, 0, JOINT_ANGLES)
+    static = unguarded_inputs(static_c("qd_did_full_trig", trig, precision, defined_helpers(c_text)), "did_full")
+    n = len(JOINT_ANGLES)
+    wrapper = (f"static int {raw}(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem) {{\n"
+               f"  casadi_real s[{n}], c[{n}]; /* the joints' sines and cosines, once (qd_sincos) */\n"
+               f"  qd_sincos({n}, arg[0] + {JOINT_ANGLES.start}, c, s);\n"
+               f"  const casadi_real* a[{did.n_in() + 2}] = {{{', '.join(f'arg[{i}]' for i in range(did.n_in()))}, s, c}};\n"
+               f"  return qd_did_full_trig(a, res, iw, w, mem);\n}}\n")
+    body = re.search(rf"static int {raw}\(.*?\n\}}\n", c_text, re.S)
+    if not body:
+        raise AssertionError(f"{raw}: CasADi's evaluation function not found")
+    return (c_text[:body.start()] + (TEMPLATES / SINCOS).read_text() + "\n" + static + "\n" + wrapper
+            + c_text[body.end():])
+
+
 def derivative_source(file_stem: str, functions: list[ca.Function], precision: str) -> tuple[str, str]:
     """(C source, CasADi's header) of qd_<robot>_d.c: CasADi's code with c/qd_derivatives_solve.c
     inserted (after c/qd_dense.c); every entry point returns QD_NONFINITE for a non-finite output, dfd_full solves."""
@@ -354,6 +345,8 @@ def derivative_source(file_stem: str, functions: list[ca.Function], precision: s
                     rf"{PREFIX}did_full_sparsity_out(1), arg, res, iw, w, mem);\n")
         elif f.name()[len(PREFIX):] in UNGUARDED:  # its evaluation reads the inputs unguarded: NULL ones are zeros here
             c_text = _unguarded_inputs(c_text, raw[f.name()], f)
+            if f.name() == PREFIX + "did_full":
+                c_text = _did_full_trig_once(c_text, raw[f.name()], f, precision)
             nnz = ", ".join(str(f.nnz_out(i)) for i in range(f.n_out()))
             body = (rf"\1  return qd_d_finite(qd_d_all_inputs(\2, {f.n_in()}, arg, res, iw, w, mem), res, {f.n_out()}, "
                     rf"(const casadi_int[]){{{nnz}}});\n")

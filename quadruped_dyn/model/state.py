@@ -31,6 +31,7 @@ from quadruped_dyn.tolerances import ORTHONORMAL_TOL
 
 GRAVITY_W = np.array([0.0, 0.0, -9.81])  # m/s^2, world frame
 NQ_FULL = 19
+JOINT_ANGLES = range(7, NQ_FULL)  # q's 12 joint angles [rad], in the project joint order
 NV_FULL = 18
 
 
