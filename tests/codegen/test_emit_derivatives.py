@@ -11,7 +11,8 @@ import pytest
 
 from quadruped_dyn.checks.derivative_reference import ReducedReference, grf_derivatives_reference
 from quadruped_dyn.codegen.emit import REDUCED_STANCE_SETS, TEMPLATES, reduced_symbol
-from quadruped_dyn.codegen.emit_derivatives import GRF_DERIVATIVE_STANCE_SETS, dfd_r_lift, dfd_r_pieces, trig_as_inputs
+from quadruped_dyn.codegen.emit_derivatives import GRF_DERIVATIVE_STANCE_SETS, dfd_r_lift, dfd_r_pieces
+from quadruped_dyn.codegen.joint_trig import trig_as_inputs
 from quadruped_dyn.codegen.library import C_FLAGS, CompiledFunction, compiled_library
 from quadruped_dyn.errors import InputError
 from quadruped_dyn.math.compare import relative_error

@@ -1,0 +1,48 @@
+"""``codegen.joint_trig.trig_as_inputs`` on the generated full terms: the rewritten graph reads the joints' sines and
+cosines from its two new inputs (no sin or cos of a joint angle left) and, given sin and cos of q's joint angles,
+gives the original function's outputs to the bit, on every built-in robot."""
+
+from __future__ import annotations
+
+import casadi as ca
+import numpy as np
+import pytest
+
+from quadruped_dyn.codegen.emit import codegen_functions
+from quadruped_dyn.codegen.emit_derivatives import derivative_functions
+from quadruped_dyn.codegen.joint_trig import trig_as_inputs, trig_count
+from quadruped_dyn.model.robot import ROBOT_NAMES, load_robot
+from quadruped_dyn.model.state import JOINT_ANGLES
+
+NAMES = ("qd_M_full", "qd_G_full", "qd_nle_full", "qd_id_full")
+
+
+def _dense(x: ca.DM) -> np.ndarray:
+    return np.asarray(ca.densify(x))
+
+
+@pytest.mark.parametrize("robot_name", ROBOT_NAMES)
+def test_full_terms_read_the_joints_trig_and_agree_to_the_bit(robot_name):
+    robot = load_robot(robot_name)
+    functions = {f.name(): f for f in codegen_functions(robot)}
+    functions["qd_did_full"] = derivative_functions(robot)[0]
+    rng = np.random.default_rng(11)
+    for name in (*NAMES, "qd_did_full"):
+        f = functions[name]
+        g = trig_as_inputs(f, 0, JOINT_ANGLES)
+        assert trig_count(f) > 0 and trig_count(g) == 0, name
+        args = [rng.uniform(-2.0, 2.0, f.nnz_in(i)) for i in range(f.n_in())]
+        angles = args[0][JOINT_ANGLES.start:JOINT_ANGLES.stop]
+        want = f.call([ca.DM(x) for x in args])
+        got = g.call([*(ca.DM(x) for x in args), ca.DM(np.sin(angles)), ca.DM(np.cos(angles))])
+        for w, o in zip(want, got):
+            assert np.all(np.isfinite(_dense(w))) and np.array_equal(_dense(w), _dense(o)), name
+
+
+def test_other_entries_keep_their_trig():
+    """Only the named entries are replaced: the sine of an entry outside them stays a sine."""
+    x = ca.SX.sym("x", 3)
+    f = ca.Function("f", [x], [ca.sin(x[0]) + ca.cos(x[1]) * ca.sin(x[2])])
+    g = trig_as_inputs(f, 0, range(1, 3))
+    assert trig_count(g) == 1
+    assert float(g(ca.DM([0.3, 0.5, 0.7]), ca.DM([0.0, 0.2]), ca.DM([0.4, 0.0]))) == pytest.approx(np.sin(0.3) + 0.4 * 0.2)
