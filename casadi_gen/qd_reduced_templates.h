@@ -1,6 +1,78 @@
 /* quadruped_dyn: the hand-written templates of the reduced model, included by every qd_<robot>_r_<feet>.c
  * after its generated pieces (quadruped_dyn/codegen/emit.py). Not a header to include elsewhere: its
  * functions are static and call the including file's qd_reduced_parts, qd_M_full, qd_id_full, ... */
+/* quadruped_dyn: the cosines and sines of the joint angles, taken once per call at a generated function's entry
+ * (docs/formulation.md, "The joints' sines and cosines"). In double: the angle reduced by pi/2 in three parts
+ * (Cody and Waite; pi/2 to 119 bits, exact products for |x| <= QD_SINCOS_MAX) and FreeBSD's kernels
+ * __kernel_sin / __kernel_cos on [-pi/4, pi/4] (msun, k_sin.c and k_cos.c: < 1 ulp), with no branch, so the loop
+ * vectorises; within 1 ulp of libm (tests/codegen/test_sincos.py). libm for an angle beyond QD_SINCOS_MAX or not
+ * finite, for float and long double, and where the reduction's rounding trick cannot be trusted (-ffast-math,
+ * x87's excess precision). */
+#include <float.h>
+#include <math.h>
+#include <stdint.h>
+#include <string.h>
+
+#define QD_SINCOS_MAX 200.0 /* rad: n = round(x 2/pi) < 2^7, so n pio2_1 and n pio2_2 are exact */
+#if defined(__FAST_MATH__) || !defined(FLT_EVAL_METHOD) || FLT_EVAL_METHOD != 0
+#define QD_SINCOS_LIBM 1
+#else
+#define QD_SINCOS_LIBM 0
+#endif
+
+/* (cos x, sin x) for |x| <= QD_SINCOS_MAX, no branch */
+static inline void qd_sincos_kernel(double xi, double* c, double* s) {
+  /* n = round(x 2/pi), ties to even, by the rounding of adding 1.5 2^52; its low bits are the quadrant */
+  const double big = xi * 6.36619772367581382433e-01 + 0x1.8p52, fn = big - 0x1.8p52;
+  uint64_t quadrant;
+  memcpy(&quadrant, &big, sizeof quadrant);
+  /* y0 + y1 = x - n pi/2 (pio2_1, pio2_2, pio2_2t of msun's e_rem_pio2.c) */
+  const double t = xi - fn * 1.57079632673412561417e+00, w0 = fn * 6.07710050630396597660e-11, r = t - w0;
+  const double w = fn * 2.02226624879595063154e-21 - ((t - r) - w0);
+  const double y0 = r - w, y1 = (r - y0) - w;
+  const double z = y0 * y0, zz = z * z, v = z * y0;
+  const double ps = 8.33333333332248946124e-03 + z * (-1.98412698298579493134e-04 + z * 2.75573137070700676789e-06)
+                    + z * zz * (-2.50507602534068634195e-08 + z * 1.58969099521155010221e-10);
+  const double sin_y = y0 - ((z * (0.5 * y1 - v * ps) - y1) - v * -1.66666666666666324348e-01);
+  const double pc = z * (4.16666666666666019037e-02 + z * (-1.38888888888741095749e-03 + z * 2.48015872894767294178e-05))
+                    + zz * zz * (-2.75573143513906633035e-07 + z * (2.08757232129817482790e-09
+                                                                    + z * -1.13596475577881948265e-11));
+  const double hz = 0.5 * z, one_hz = 1.0 - hz;
+  const double cos_y = one_hz + (((1.0 - one_hz) - hz) + (z * pc - y0 * y1));
+  /* quadrant k: (sin, cos) = (sin y, cos y), (cos y, -sin y), (-sin y, -cos y), (-cos y, sin y) */
+  uint64_t us, uc;
+  memcpy(&us, &sin_y, sizeof us);
+  memcpy(&uc, &cos_y, sizeof uc);
+  const uint64_t odd = 0 - (quadrant & 1);
+  uint64_t a = ((us & ~odd) | (uc & odd)) ^ ((quadrant & 2) << 62);
+  uint64_t b = ((uc & ~odd) | (us & odd)) ^ (((quadrant + 1) & 2) << 62);
+  double sa, cb;
+  memcpy(&sa, &a, sizeof sa);
+  memcpy(&cb, &b, sizeof cb);
+  *s = sa;
+  *c = cb;
+}
+
+/* c[i], s[i] = cos x[i], sin x[i] (n angles, rad): the kernel when every angle is within QD_SINCOS_MAX (and the
+ * build is double without -ffast-math), else the precision wrappers qd_cos, qd_sin (libm) for all. */
+static inline void qd_sincos(int n, const casadi_real* x, casadi_real* c, casadi_real* s) {
+  int fast = !QD_SINCOS_LIBM && sizeof(casadi_real) == sizeof(double);
+  for (int i = 0; i < n; ++i) fast &= qd_fabs((double)x[i]) <= QD_SINCOS_MAX;  /* false for NaN */
+  if (!fast) {
+    for (int i = 0; i < n; ++i) {
+      c[i] = qd_cos(x[i]);
+      s[i] = qd_sin(x[i]);
+    }
+    return;
+  }
+  for (int i = 0; i < n; ++i) {
+    double ci, si;
+    qd_sincos_kernel((double)x[i], &ci, &si);
+    c[i] = (casadi_real)ci;
+    s[i] = (casadi_real)si;
+  }
+}
+
 /* quadruped_dyn: a CasADi sparse output made dense (hand-written; inserted into qd_<robot>_d.c
  * and in qd_reduced_templates.h, which each qd_<robot>_r_<feet>.c includes; see quadruped_dyn/codegen/emit.py). */
 /* x: the nonzeros of a CasADi sparsity sp (nrow, ncol, colind[ncol + 1], row[nnz]) -> the dense matrix,
@@ -21,9 +93,10 @@ static void qd_densify(const casadi_int* sp, casadi_real* x) {
 }
 
 /* quadruped_dyn: checks and the forward-dynamics solve of the reduced model (hand-written; in qd_reduced_templates.h,
- * which each qd_<robot>_r_<stance>.c includes (quadruped_dyn/codegen/emit.py) after QD_REGULARITY_MIN, qd_M_full's pattern (QD_M_NNZ,
- * qd_M_runs, qd_M_zeros) and qd_reduced_parts (the regularity (q_r, quat) -> [0, 1] of dynamics/stance_regularity.py,
- * S_b, T_b, v, a). The return codes are documented in qd_<robot>.h. */
+ * which each qd_<robot>_r_<stance>.c includes (quadruped_dyn/codegen/emit.py) after QD_REGULARITY_MIN and
+ * qd_reduced_parts (the regularity (q_r, quat) -> [0, 1] of dynamics/stance_regularity.py, S_b, T_b, v, a). Every
+ * entry point takes the joints' sines and cosines once (qd_trig) and passes them to the generated pieces and to the
+ * library's qd_*_trig functions. The return codes are documented in qd_<robot>.h. */
 #include <float.h>
 #include <math.h>
 #include <string.h>
@@ -79,21 +152,31 @@ static int qd_regular_value(casadi_real m) {
   return m > QD_REGULARITY_MIN && m > QD_REGULARITY_FLOOR ? 0 : QD_DEGENERATE;
 }
 
-/* qd_reduced_parts at (q_r, qd_r, qdd_r, quat) (null qd_r, qdd_r: zero): the regularity *m, S_b (n x 6), T_b (6 x n)
- * (column-major; S = [S_b, I_12], T = [T_b; I_12], row/column 12 no joint part), the full v, a = T qdd_r + k. */
+/* The sines and cosines of q_r's n entries (the joint angles first), taken once per call (qd_sincos). */
+typedef struct {
+  casadi_real s[QD_N_MAX], c[QD_N_MAX];
+} qd_trig;
+
+static void qd_trig_of(int n, const casadi_real* q_r, qd_trig* t) { qd_sincos(n, q_r, t->c, t->s); }
+
+/* qd_reduced_parts at (q_r, qd_r, qdd_r, quat) (null qd_r, qdd_r: zero), t q_r's sines and cosines: the regularity *m,
+ * S_b (n x 6), T_b (6 x n) (column-major; S = [S_b, I_12], T = [T_b; I_12], row/column 12 no joint part), the full v,
+ * a = T qdd_r + k. */
 static int qd_parts(const casadi_real* q_r, const casadi_real* qd_r, const casadi_real* qdd_r, const casadi_real* quat,
-                    casadi_real* m, casadi_real* S_b, casadi_real* T_b, casadi_real* v, casadi_real* a, casadi_int* iw,
-                    casadi_real* w, int mem) {
+                    const qd_trig* t, casadi_real* m, casadi_real* S_b, casadi_real* T_b, casadi_real* v, casadi_real* a,
+                    casadi_int* iw, casadi_real* w, int mem) {
   const casadi_real zero[QD_N_MAX] = {0};
-  const casadi_real* p_arg[4] = {q_r, qd_r ? qd_r : zero, qdd_r ? qdd_r : zero, quat};
+  const casadi_real* p_arg[6] = {q_r, qd_r ? qd_r : zero, qdd_r ? qdd_r : zero, quat, t->s, t->c};
   casadi_real* p_res[5] = {m, S_b, T_b, v, a};
   return qd_reduced_parts(p_arg, p_res, iw, w, mem);
 }
 
-/* defined in qd_<robot>.c of the same library (no work memory: checked by the generator) */
-int qd_M_full(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem);
-int qd_G_full(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem);
-int qd_id_full(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem);
+/* defined in qd_<robot>.c of the same library (no work memory: checked by the generator): M_full (dense, zeros
+ * written), G_full and id_full with the joints' sines and cosines as their last two inputs, (q, sin, cos) and
+ * (q, v, a, f, sin, cos), sin and cos of q[7..18] */
+int qd_M_full_dense_trig(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem);
+int qd_G_full_trig(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem);
+int qd_id_full_trig(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem);
 
 /* q (19) = (0, quat, q_r's joint angles): the library's functions ignore the trunk position. */
 static void qd_full_q(const casadi_real* q_r, const casadi_real* quat, casadi_real* q) {
@@ -102,21 +185,17 @@ static void qd_full_q(const casadi_real* q_r, const casadi_real* quat, casadi_re
   for (int i = 0; i < 12; ++i) q[7 + i] = q_r[i];
 }
 
-/* M (18 x 18, dense column-major) at q by qd_M_full: its nonzeros, written at the end, move in order, run by run
- * (qd_M_runs), the k-th to slot <= 324 - QD_M_NNZ + k (never over one still to move); then the zeros. */
-static int qd_M_full_dense(const casadi_real* q, casadi_real* M, casadi_int* iw, casadi_real* w, int mem) {
-  casadi_real* x = M + 18 * 18 - QD_M_NNZ;
-  const casadi_real* m_arg[1] = {q};
-  casadi_real* m_res[1] = {x};
-  int flag = qd_M_full(m_arg, m_res, iw, w, mem);
-  if (flag) return flag;
-  for (int r = 0; r < QD_M_RUNS; ++r) memmove(M + qd_M_runs[r][0], x + qd_M_runs[r][1], qd_M_runs[r][2] * sizeof *M);
-  for (int r = 0; r < QD_M_ZEROS; ++r) memset(M + qd_M_zeros[r][0], 0, qd_M_zeros[r][1] * sizeof *M);
-  return 0;
+/* M (18 x 18, dense column-major) at q (t: q_r's sines and cosines, q's joint angles) by qd_M_full_dense_trig. */
+static int qd_M_full_dense(const casadi_real* q, const qd_trig* t, casadi_real* M, casadi_int* iw, casadi_real* w,
+                           int mem) {
+  const casadi_real* m_arg[3] = {q, t->s, t->c};
+  casadi_real* m_res[1] = {M};
+  return qd_M_full_dense_trig(m_arg, m_res, iw, w, mem);
 }
 
 /* M_r = S M T (n x n, column-major) by columns: mt = M[:, 0:6] T_b e_j + M[:, 6 + j], then S_b mt[0:6] + mt[6:18].
- * legs: bit i for a stance leg i; T_b's columns of the other legs' joints are zero: no trunk product (15: none). */
+ * legs: bit i for a stance leg i; S_b's rows and T_b's columns of the other legs' joints are zero: no trunk product
+ * there (15: none). */
 QD_INLINE void qd_M_r_legs(int n, int legs, const casadi_real* S_b, const casadi_real* T_b, const casadi_real* M,
                            casadi_real* M_r) {
   for (int j = 0; j < n; ++j) {
@@ -136,7 +215,14 @@ QD_INLINE void qd_M_r_legs(int n, int legs, const casadi_real* S_b, const casadi
     for (int i = 0; i < 12; ++i) col[i] = mt[6 + i];
     if (n > 12) col[12] = 0;
     for (int k = 0; k < 6; ++k) {
-      for (int i = 0; i < n; ++i) col[i] += S_b[i + n * k] * mt[k];
+      if (n == 12) { /* three or four feet: all rows (vectorised) */
+        for (int i = 0; i < 12; ++i) col[i] += S_b[i + n * k] * mt[k];
+        continue;
+      }
+      for (int l = 0; l < 4; ++l) { /* two feet: the swing legs' rows of S_b are zero */
+        for (int i = 3 * l; i < 3 * l + 3 && (legs >> l & 1); ++i) col[i] += S_b[i + n * k] * mt[k];
+      }
+      col[12] += S_b[12 + n * k] * mt[k];
     }
   }
 }
@@ -150,16 +236,17 @@ static void qd_project(int n, const casadi_real* S_b, const casadi_real* F, casa
   }
 }
 
-/* tau (n) = S rnea(q, v, a), rnea by the library's qd_id_full (zero foot forces); work: QD_RNEA_R_WORK reals,
- * the caller's (fd_r lends space it uses later: Cortex-M stack budget). */
-static int qd_rnea_r(int n, const casadi_real* S_b, const casadi_real* q_r, const casadi_real* quat, const casadi_real* v,
-                     const casadi_real* a, casadi_real* tau, casadi_real* work, casadi_int* iw, casadi_real* w, int mem) {
+/* tau (n) = S rnea(q, v, a), rnea by the library's qd_id_full_trig (zero foot forces; t: q_r's sines and cosines);
+ * work: QD_RNEA_R_WORK reals, the caller's (fd_r lends space it uses later: Cortex-M stack budget). */
+static int qd_rnea_r(int n, const casadi_real* S_b, const casadi_real* q_r, const casadi_real* quat, const qd_trig* t,
+                     const casadi_real* v, const casadi_real* a, casadi_real* tau, casadi_real* work, casadi_int* iw,
+                     casadi_real* w, int mem) {
   casadi_real *q = work, *F = q + 19, *f = F + 18;
   for (int i = 0; i < 12; ++i) f[i] = 0;
   qd_full_q(q_r, quat, q);
-  const casadi_real* i_arg[4] = {q, v, a, f};
+  const casadi_real* i_arg[6] = {q, v, a, f, t->s, t->c};
   casadi_real* i_res[2] = {F, F + 6};
-  int flag = qd_id_full(i_arg, i_res, iw, w, mem);
+  int flag = qd_id_full_trig(i_arg, i_res, iw, w, mem);
   if (!flag) qd_project(n, S_b, F, tau);
   return flag;
 }
@@ -173,23 +260,25 @@ QD_INLINE int qd_reduced_term(int n, int legs, int which, const casadi_real** ar
   const casadi_real* quat = arg[which == 1 ? 2 : which == 3 ? 3 : 1];
   const casadi_real* qd_r = which == 1 || which == 3 ? arg[1] : 0;
   casadi_real m = 0, S_b[QD_N_MAX * 6], T_b[6 * QD_N_MAX], v[18], a[18];
-  int flag = qd_parts(arg[0], qd_r, which == 3 ? arg[2] : 0, quat, &m, S_b, T_b, v, a, iw, w, mem);
+  qd_trig t;
+  qd_trig_of(n, arg[0], &t);
+  int flag = qd_parts(arg[0], qd_r, which == 3 ? arg[2] : 0, quat, &t, &m, S_b, T_b, v, a, iw, w, mem);
   if (!flag) flag = qd_regular_value(m);
   if (flag || !res[0]) return flag;
   if (which == 1 || which == 3) {
     casadi_real work[QD_RNEA_R_WORK];
-    return qd_rnea_r(n, S_b, arg[0], quat, v, a, res[0], work, iw, w, mem);
+    return qd_rnea_r(n, S_b, arg[0], quat, &t, v, a, res[0], work, iw, w, mem);
   }
   casadi_real q[19], M[18 * 18];
   qd_full_q(arg[0], quat, q);
-  const casadi_real* g_arg[1] = {q};
-  casadi_real* g_res[1] = {M};
   if (which == 2) {
-    flag = qd_G_full(g_arg, g_res, iw, w, mem);
+    const casadi_real* g_arg[3] = {q, t.s, t.c};
+    casadi_real* g_res[1] = {M};
+    flag = qd_G_full_trig(g_arg, g_res, iw, w, mem);
     if (!flag) qd_project(n, S_b, M, res[0]);
     return flag;
   }
-  flag = qd_M_full_dense(q, M, iw, w, mem);
+  flag = qd_M_full_dense(q, &t, M, iw, w, mem);
   if (!flag) qd_M_r_legs(n, legs, S_b, T_b, M, res[0]);
   return flag;
 }
@@ -350,12 +439,14 @@ QD_INLINE int qd_fd_r_solve(int n, int legs, const casadi_real** arg, casadi_rea
                             int mem) {
   casadi_real m = 0, S_b[QD_N_MAX * 6], T_b[6 * QD_N_MAX], M[18 * 18], M_r[QD_N_MAX * QD_N_MAX], b[QD_N_MAX];
   casadi_real *v = M, *a = M + 18, *q = M_r; /* in space M and M_r take later: fd_r's stack stays within budget */
-  int flag = qd_parts(arg[0], arg[1], 0, arg[3], &m, S_b, T_b, v, a, iw, w, mem);
+  qd_trig t;
+  qd_trig_of(n, arg[0], &t);
+  int flag = qd_parts(arg[0], arg[1], 0, arg[3], &t, &m, S_b, T_b, v, a, iw, w, mem);
   if (!flag) flag = qd_regular_value(m);
-  if (!flag) flag = qd_rnea_r(n, S_b, arg[0], arg[3], v, a, b, M + 36, iw, w, mem);
+  if (!flag) flag = qd_rnea_r(n, S_b, arg[0], arg[3], &t, v, a, b, M + 36, iw, w, mem);
   if (flag) return flag;
   qd_full_q(arg[0], arg[3], q);
-  flag = qd_M_full_dense(q, M, iw, w, mem);
+  flag = qd_M_full_dense(q, &t, M, iw, w, mem);
   if (flag) return flag;
   qd_M_r_legs(n, legs, S_b, T_b, M, M_r);
   casadi_real scale = 0;
@@ -494,17 +585,19 @@ QD_INLINE int qd_dfd_r_solve(int n, int legs, int lift_quat, const casadi_real**
               *H = G + 18 * 18, *F = H + 18 * 18, *y = F + 18, *col = y + 18, *X = col + n, *tape = X + n * QD_DFD_R_COLUMNS(n);
   const int m = QD_DFD_R_COLUMNS(n);
   casadi_real q[19], v[18], a[18], k[18], f[12] = {0}, dv[6], da[6], dSF[QD_N_MAX], da_qd[6], reg = 0;
-  casadi_real dq[QD_N_MAX] = {0}, dqd[QD_N_MAX] = {0}, dtheta[3] = {0}, sin_q[QD_N_MAX], cos_q[QD_N_MAX];
+  casadi_real dq[QD_N_MAX] = {0}, dqd[QD_N_MAX] = {0}, dtheta[3] = {0};
+  qd_trig t; /* q_r's sines and cosines, once for the parts, id_full, M_full and the lift */
+  qd_trig_of(n, arg[0], &t);
   int piv[QD_N_MAX];
   /* qdd_r as qd_fd_r_solve: the parts once (S_b, T_b, v and a at qdd_r = 0: k), C_r + G_r = S rnea(q, v, k), M_r */
-  int flag = qd_parts(arg[0], arg[1], 0, arg[3], &reg, S_b, T_b, v, a, iw, w, mem);
+  int flag = qd_parts(arg[0], arg[1], 0, arg[3], &t, &reg, S_b, T_b, v, a, iw, w, mem);
   if (!flag) flag = qd_regular_value(reg);
   if (flag) return flag;
   qd_full_q(arg[0], arg[3], q);
-  const casadi_real* d_arg[4] = {q, v, a, f};
+  const casadi_real* d_arg[6] = {q, v, a, f, t.s, t.c};
   casadi_real* i_res[2] = {F, F + 6};
-  flag = qd_id_full(d_arg, i_res, iw, w, mem);
-  if (!flag) flag = qd_M_full_dense(q, M, iw, w, mem);
+  flag = qd_id_full_trig(d_arg, i_res, iw, w, mem);
+  if (!flag) flag = qd_M_full_dense(q, &t, M, iw, w, mem);
   if (flag) return flag;
   qd_project(n, S_b, F, qdd);
   qd_M_r_legs(n, legs, S_b, T_b, M, M_r);
@@ -514,11 +607,7 @@ QD_INLINE int qd_dfd_r_solve(int n, int legs, int lift_quat, const casadi_real**
   qd_lu_solve(n, M_r, piv, qdd);
   for (int i = 0; i < 18; ++i) k[i] = a[i];
   /* the lift at qdd_r and its tape; then v, a = (v_b, qd_j), (a_b, qdd_j) */
-  for (int i = 0; i < n; ++i) { /* the lift reads the angles' sines and cosines */
-    sin_q[i] = qd_sin(arg[0][i]);
-    cos_q[i] = qd_cos(arg[0][i]);
-  }
-  const casadi_real* l_arg[6] = {arg[0], arg[1], qdd, arg[3], sin_q, cos_q};
+  const casadi_real* l_arg[6] = {arg[0], arg[1], qdd, arg[3], t.s, t.c}; /* the lift reads the angles' sines, cosines */
   casadi_real* l_res[3] = {v, a, tape};
   flag = qd_dfd_r_lift(l_arg, l_res, iw, w, mem);
   if (flag) return flag;

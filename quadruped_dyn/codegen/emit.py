@@ -346,12 +346,13 @@ def _precision_calls(c_source: str) -> str:
 #: The hand-written templates of the reduced files (checks, fd_r's solve, dfd_r's solve), one header every
 #: qd_<robot>_r_<feet>.c includes (not one copy per stance file: ~28 kB each); robot-independent.
 REDUCED_TEMPLATES = "qd_reduced_templates.h"
-_REDUCED_TEMPLATE_FILES = ("qd_dense.c", "qd_reduced_solve.c", "qd_reduced_derivatives.c")
+_REDUCED_TEMPLATE_FILES = (SINCOS, "qd_dense.c", "qd_reduced_solve.c", "qd_reduced_derivatives.c")
 
 
 def reduced_templates_h() -> str:
-    """The text of ``REDUCED_TEMPLATES``: c/qd_dense.c, c/qd_reduced_solve.c and c/qd_reduced_derivatives.c, their
-    elementary functions routed through the including file's precision wrappers (``_precision_math``)."""
+    """The text of ``REDUCED_TEMPLATES``: c/qd_sincos.c, c/qd_dense.c, c/qd_reduced_solve.c and
+    c/qd_reduced_derivatives.c, their elementary functions routed through the including file's precision wrappers
+    (``_precision_math``)."""
     body = "\n".join((TEMPLATES / t).read_text() for t in _REDUCED_TEMPLATE_FILES)
     return ("/* quadruped_dyn: the hand-written templates of the reduced model, included by every qd_<robot>_r_<feet>.c\n"
             " * after its generated pieces (quadruped_dyn/codegen/emit.py). Not a header to include elsewhere: its\n"
@@ -369,39 +370,10 @@ def stem(robot: Robot) -> str:
     return f"qd_{re.sub(r'[^A-Za-z0-9_]', '_', robot.name)}"
 
 
-def _runs(slots: list[int]) -> list[tuple[int, int, int]]:
-    """(first slot, first index into ``slots``, length) of each run of consecutive slots."""
-    runs: list[tuple[int, int, int]] = []
-    for k, d in enumerate(slots):
-        if runs and runs[-1][0] + runs[-1][2] == d:
-            runs[-1] = (runs[-1][0], runs[-1][1], runs[-1][2] + 1)
-        else:
-            runs.append((d, k, 1))
-    return runs
-
-
-def _dense_tables_c(sp: ca.Sparsity) -> str:
-    """QD_M_NNZ, qd_M_runs (runs of M_full's nonzeros: dense column-major slot, first nonzero, length) and qd_M_zeros
-    (runs of the other slots: slot, length), for qd_M_full_dense (c/qd_reduced_solve.c), which moves the nonzeros in
-    order within one array."""
-    nrow = sp.size1()
-    at = [
-        sp.row()[k] + nrow * c for c in range(sp.size2()) for k in range(sp.colind()[c], sp.colind()[c + 1])]
-    holes = nrow * sp.size2() - sp.nnz()
-    if (nrow, sp.size2()) != (18, 18) or any(d > holes + k for k, d in enumerate(at)):
-        raise AssertionError("M_full's pattern is not an 18 x 18 compressed-column one; qd_M_full_dense assumes it")
-    zero = sorted(set(range(nrow * sp.size2())) - set(at))
-    runs = ", ".join(f"{{{d}, {k}, {n}}}" for d, k, n in _runs(at))
-    zeros = ", ".join(f"{{{d}, {n}}}" for d, _, n in _runs(zero))
-    return (f"#define QD_M_NNZ {sp.nnz()} /* qd_M_full's nonzeros */\n"
-            f"#define QD_M_RUNS {len(_runs(at))}\n#define QD_M_ZEROS {len(_runs(zero))}\n"
-            f"static const short qd_M_runs[QD_M_RUNS][3] = {{{runs}}};\n"
-            f"static const short qd_M_zeros[QD_M_ZEROS][2] = {{{zeros}}};\n")
-
-
-def _reduced_helpers_c(robot: Robot, stance: StanceSet, dfd_r: DfdRPieces, M_full: ca.Sparsity, precision: str) -> str:
-    """QD_REGULARITY_MIN, M_full's pattern tables (``_dense_tables_c``), ``qd_reduced_parts``
-    ((q_r, qd_r, qdd_r, quat) -> (regularity, S_b, T_b, v, a) in one graph (the regularity
+def _reduced_helpers_c(robot: Robot, stance: StanceSet, dfd_r: DfdRPieces, precision: str) -> str:
+    """QD_REGULARITY_MIN, ``qd_reduced_parts``
+    ((q_r, qd_r, qdd_r, quat, sin, cos) -> (regularity, S_b, T_b, v, a) in one graph, sin and cos of the joint
+    angles q_r[0:12] given (``trig_as_inputs``: the templates take them once per call) (the regularity
     ``dynamics.reduced.regularity_function``): ``ReducedProjection.mass_matrix_factors``
     without M_full, which the templates take from the library's qd_M_full, and ``velocity_and_acceleration`` for
     the library's qd_id_full) and dfd_r's ``qd_dfd_r_lift`` (``emit_derivatives.dfd_r_pieces``), the generated
@@ -410,11 +382,11 @@ def _reduced_helpers_c(robot: Robot, stance: StanceSet, dfd_r: DfdRPieces, M_ful
     q_r, qd_r, qdd_r, quat = (ca.SX.sym(k, m) for k, m in (("q_r", n), ("qd_r", n), ("qdd_r", n), ("quat", 4)))
     p = reduced_projection(robot, stance, q_r, quat)
     S_b, T_b, _ = p.mass_matrix_factors()
-    parts = ca.Function("reduced_parts", [q_r, qd_r, qdd_r, quat],
-                        [regularity_function(robot, stance)(q_r, quat), ca.densify(S_b), ca.densify(T_b),
-                         *(ca.densify(x) for x in p.velocity_and_acceleration(qd_r, qdd_r))], {"cse": True})
+    parts = trig_as_inputs(ca.Function("reduced_parts", [q_r, qd_r, qdd_r, quat],
+                                       [regularity_function(robot, stance)(q_r, quat), ca.densify(S_b), ca.densify(T_b),
+                                        *(ca.densify(x) for x in p.velocity_and_acceleration(qd_r, qdd_r))],
+                                       {"cse": True}), 0, range(len(JOINT_ANGLES)))
     return (f"#define QD_REGULARITY_MIN ((casadi_real){REGULARITY_MIN!r}) /* quadruped_dyn.tolerances.REGULARITY_MIN */\n"
-            + _dense_tables_c(M_full)
             + static_c("qd_reduced_parts", parts, precision) + "\n"
             + f"#define QD_DFD_R_TAPE {dfd_r.tape} /* reals of the lift's tape: emit_derivatives.split_at_seeds */\n"
             + static_c("qd_dfd_r_lift", dfd_r.lift, precision, all_io=True) + "\n"
@@ -465,6 +437,10 @@ def _checked_reduced_c(c_text: str, casadi_header: str, functions: list[ca.Funct
 
 #: The full terms whose C evaluates the joint rows first (``_joint_rows_first``); the GRF solves call id_full's.
 JOINT_ROWS_FIRST = ("M_full", "G_full", "nle_full", "id_full")
+#: Of those, the ones qd_<robot>.c also exports as qd_<name>_trig (arg: theirs, then sin and cos of q's joint angles)
+#: for the reduced files, which take the sines and cosines once per call (c/qd_reduced_solve.c); with
+#: qd_M_full_dense_trig (``_M_full_dense``).
+TRIG_GIVEN = ("G_full", "id_full")
 _SIGNATURE = "(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem)"
 
 
@@ -476,7 +452,9 @@ def _joint_rows_first(c_text: str, functions: list[ca.Function], precision: str)
     the trunk rows then add up the legs' wrenches. Each entry point calls a static qd_<name>_eval of its own
     signature: the same graph with its outputs in that order (``static_c``) and mapped back, CasADi's evaluation
     in the signature's order dropped; for a function in ``UNGUARDED`` the graph reads its inputs untested and
-    qd_<name>_eval gives a NULL input qd_zeros. The same operations on the same values (docs/benchmark.md)."""
+    qd_<name>_eval gives a NULL input qd_zeros. The same operations on the same values (docs/benchmark.md). For the
+    reduced files the graphs are also exported with the joints' sines and cosines as inputs (no NULL input):
+    qd_<name>_trig for ``TRIG_GIVEN``, qd_M_full_dense_trig (``_M_full_dense``)."""
     raw = evaluations(c_text, [f.name() for f in functions])
     helpers = []
     for f in functions:
@@ -503,6 +481,10 @@ def _joint_rows_first(c_text: str, functions: list[ca.Function], precision: str)
         else:
             a_init = [f"arg[{i}]" for i in range(f.n_in())]
         n = len(JOINT_ANGLES)
+        if name in TRIG_GIVEN:
+            static += (f"/* {name} with the joints' sines and cosines given: arg = ({', '.join(f.name_in())}, sin, cos) */\n"
+                       f"int qd_{name}_trig{_SIGNATURE} {{\n  casadi_real* r[2] = {res};\n"
+                       f"  return qd_{name}_joint_rows_first(arg, r, iw, w, mem);\n}}\n")
         helpers.append(static + f"static int qd_{name}_eval{_SIGNATURE} {{\n"
                        f"  casadi_real c[{n}], s[{n}]; /* the joints' cosines and sines, once (qd_sincos) */\n"
                        f"  qd_sincos({n}, (arg[0] ? arg[0] : qd_zeros) + {JOINT_ANGLES.start}, c, s);\n"
@@ -513,10 +495,28 @@ def _joint_rows_first(c_text: str, functions: list[ca.Function], precision: str)
         if count != 1:
             raise AssertionError(f"entry point of {f.name()} not found in CasADi's output")
         c_text = drop_evaluation(c_text, raw[f.name()])
+    helpers.append(_M_full_dense(functions, precision, defined_helpers(c_text)))
     helpers.insert(0, (TEMPLATES / SINCOS).read_text()
                    + f"static const casadi_real qd_zeros[{NQ_FULL}]; /* a NULL input (CasADi's convention: zeros) */\n")
     first = _first_evaluation(c_text)
     return c_text[:first] + "\n" + "\n".join(helpers) + c_text[first:]
+
+
+def _M_full_dense(functions: list[ca.Function], precision: str, host_helpers: frozenset[str]) -> str:
+    """qd_M_full_dense_trig (q, sin, cos) -> M (18 x 18, dense column-major): M_full's graph with its zeros written
+    and the joints' sines and cosines given, joint columns first (as ``_joint_rows_first``), for the reduced files,
+    which take the sines and cosines once for all their calls and read M dense (c/qd_reduced_solve.c)."""
+    m = next(f for f in functions if f.name() == PREFIX + "M_full")
+    args = m.sx_in()
+    nz = ca.densify(m.call(args)[0]).nz[:]  # column-major, 18 x 18
+    k = 18 * 6  # the joint columns first
+    dense = trig_as_inputs(ca.Function("M_full_dense", args, [nz[k:], nz[:k]], {"cse": True}), 0, JOINT_ANGLES)
+    return (static_c("qd_M_full_dense_joint_rows_first", dense, precision, host_helpers, all_io=True)
+            + "/* M_full (18 x 18, dense column-major, zeros written) with the joints' sines and cosines given: arg = "
+            "(q, sin, cos) */\n"
+            f"int qd_M_full_dense_trig{_SIGNATURE} {{\n"
+            f"  casadi_real* r[2] = {{res[0] + {k}, res[0]}};\n"
+            "  return qd_M_full_dense_joint_rows_first(arg, r, iw, w, mem);\n}\n")
 
 
 def _first_evaluation(c_text: str) -> int:
@@ -612,14 +612,13 @@ def generate(robot: Robot, out_dir: Path, precision: str = "double",
     c_full = _grf_through_id_full(robot, _joint_rows_first(c_full, full, precision), full, precision)
     sources = {f"{name}.c": c_full}
     functions = list(full)
-    m_full = next(f for f in full if f.name() == PREFIX + "M_full").sparsity_out(0)  # the reduced files densify it
     for stance in REDUCED_STANCE_SETS:
         reduced = reduced_functions(robot, stance)
         file_stem = f"{name}_r_{stance.name.replace('+', '_')}"
         c_text, h_text = casadi_c(file_stem, reduced, precision)
         dfd_r = dfd_r_pieces(robot, stance)
         sources[f"{file_stem}.c"], h_text = _checked_reduced_c(c_text, h_text, reduced,
-                                                               _reduced_helpers_c(robot, stance, dfd_r, m_full, precision), dfd_r)
+                                                               _reduced_helpers_c(robot, stance, dfd_r, precision), dfd_r)
         casadi_header += h_text
         functions += reduced
     derivatives = derivative_functions(robot)  # qd_<robot>_d.c: derivatives of the full dynamics

@@ -118,17 +118,19 @@ QD_INLINE int qd_dfd_r_solve(int n, int legs, int lift_quat, const casadi_real**
               *H = G + 18 * 18, *F = H + 18 * 18, *y = F + 18, *col = y + 18, *X = col + n, *tape = X + n * QD_DFD_R_COLUMNS(n);
   const int m = QD_DFD_R_COLUMNS(n);
   casadi_real q[19], v[18], a[18], k[18], f[12] = {0}, dv[6], da[6], dSF[QD_N_MAX], da_qd[6], reg = 0;
-  casadi_real dq[QD_N_MAX] = {0}, dqd[QD_N_MAX] = {0}, dtheta[3] = {0}, sin_q[QD_N_MAX], cos_q[QD_N_MAX];
+  casadi_real dq[QD_N_MAX] = {0}, dqd[QD_N_MAX] = {0}, dtheta[3] = {0};
+  qd_trig t; /* q_r's sines and cosines, once for the parts, id_full, M_full and the lift */
+  qd_trig_of(n, arg[0], &t);
   int piv[QD_N_MAX];
   /* qdd_r as qd_fd_r_solve: the parts once (S_b, T_b, v and a at qdd_r = 0: k), C_r + G_r = S rnea(q, v, k), M_r */
-  int flag = qd_parts(arg[0], arg[1], 0, arg[3], &reg, S_b, T_b, v, a, iw, w, mem);
+  int flag = qd_parts(arg[0], arg[1], 0, arg[3], &t, &reg, S_b, T_b, v, a, iw, w, mem);
   if (!flag) flag = qd_regular_value(reg);
   if (flag) return flag;
   qd_full_q(arg[0], arg[3], q);
-  const casadi_real* d_arg[4] = {q, v, a, f};
+  const casadi_real* d_arg[6] = {q, v, a, f, t.s, t.c};
   casadi_real* i_res[2] = {F, F + 6};
-  flag = qd_id_full(d_arg, i_res, iw, w, mem);
-  if (!flag) flag = qd_M_full_dense(q, M, iw, w, mem);
+  flag = qd_id_full_trig(d_arg, i_res, iw, w, mem);
+  if (!flag) flag = qd_M_full_dense(q, &t, M, iw, w, mem);
   if (flag) return flag;
   qd_project(n, S_b, F, qdd);
   qd_M_r_legs(n, legs, S_b, T_b, M, M_r);
@@ -138,11 +140,7 @@ QD_INLINE int qd_dfd_r_solve(int n, int legs, int lift_quat, const casadi_real**
   qd_lu_solve(n, M_r, piv, qdd);
   for (int i = 0; i < 18; ++i) k[i] = a[i];
   /* the lift at qdd_r and its tape; then v, a = (v_b, qd_j), (a_b, qdd_j) */
-  for (int i = 0; i < n; ++i) { /* the lift reads the angles' sines and cosines */
-    sin_q[i] = sin(arg[0][i]);
-    cos_q[i] = cos(arg[0][i]);
-  }
-  const casadi_real* l_arg[6] = {arg[0], arg[1], qdd, arg[3], sin_q, cos_q};
+  const casadi_real* l_arg[6] = {arg[0], arg[1], qdd, arg[3], t.s, t.c}; /* the lift reads the angles' sines, cosines */
   casadi_real* l_res[3] = {v, a, tape};
   flag = qd_dfd_r_lift(l_arg, l_res, iw, w, mem);
   if (flag) return flag;

@@ -1,7 +1,8 @@
 /* quadruped_dyn: checks and the forward-dynamics solve of the reduced model (hand-written; in qd_reduced_templates.h,
- * which each qd_<robot>_r_<stance>.c includes (quadruped_dyn/codegen/emit.py) after QD_REGULARITY_MIN, qd_M_full's pattern (QD_M_NNZ,
- * qd_M_runs, qd_M_zeros) and qd_reduced_parts (the regularity (q_r, quat) -> [0, 1] of dynamics/stance_regularity.py,
- * S_b, T_b, v, a). The return codes are documented in qd_<robot>.h. */
+ * which each qd_<robot>_r_<stance>.c includes (quadruped_dyn/codegen/emit.py) after QD_REGULARITY_MIN and
+ * qd_reduced_parts (the regularity (q_r, quat) -> [0, 1] of dynamics/stance_regularity.py, S_b, T_b, v, a). Every
+ * entry point takes the joints' sines and cosines once (qd_trig) and passes them to the generated pieces and to the
+ * library's qd_*_trig functions. The return codes are documented in qd_<robot>.h. */
 #include <float.h>
 #include <math.h>
 #include <string.h>
@@ -57,21 +58,31 @@ static int qd_regular_value(casadi_real m) {
   return m > QD_REGULARITY_MIN && m > QD_REGULARITY_FLOOR ? 0 : QD_DEGENERATE;
 }
 
-/* qd_reduced_parts at (q_r, qd_r, qdd_r, quat) (null qd_r, qdd_r: zero): the regularity *m, S_b (n x 6), T_b (6 x n)
- * (column-major; S = [S_b, I_12], T = [T_b; I_12], row/column 12 no joint part), the full v, a = T qdd_r + k. */
+/* The sines and cosines of q_r's n entries (the joint angles first), taken once per call (qd_sincos). */
+typedef struct {
+  casadi_real s[QD_N_MAX], c[QD_N_MAX];
+} qd_trig;
+
+static void qd_trig_of(int n, const casadi_real* q_r, qd_trig* t) { qd_sincos(n, q_r, t->c, t->s); }
+
+/* qd_reduced_parts at (q_r, qd_r, qdd_r, quat) (null qd_r, qdd_r: zero), t q_r's sines and cosines: the regularity *m,
+ * S_b (n x 6), T_b (6 x n) (column-major; S = [S_b, I_12], T = [T_b; I_12], row/column 12 no joint part), the full v,
+ * a = T qdd_r + k. */
 static int qd_parts(const casadi_real* q_r, const casadi_real* qd_r, const casadi_real* qdd_r, const casadi_real* quat,
-                    casadi_real* m, casadi_real* S_b, casadi_real* T_b, casadi_real* v, casadi_real* a, casadi_int* iw,
-                    casadi_real* w, int mem) {
+                    const qd_trig* t, casadi_real* m, casadi_real* S_b, casadi_real* T_b, casadi_real* v, casadi_real* a,
+                    casadi_int* iw, casadi_real* w, int mem) {
   const casadi_real zero[QD_N_MAX] = {0};
-  const casadi_real* p_arg[4] = {q_r, qd_r ? qd_r : zero, qdd_r ? qdd_r : zero, quat};
+  const casadi_real* p_arg[6] = {q_r, qd_r ? qd_r : zero, qdd_r ? qdd_r : zero, quat, t->s, t->c};
   casadi_real* p_res[5] = {m, S_b, T_b, v, a};
   return qd_reduced_parts(p_arg, p_res, iw, w, mem);
 }
 
-/* defined in qd_<robot>.c of the same library (no work memory: checked by the generator) */
-int qd_M_full(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem);
-int qd_G_full(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem);
-int qd_id_full(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem);
+/* defined in qd_<robot>.c of the same library (no work memory: checked by the generator): M_full (dense, zeros
+ * written), G_full and id_full with the joints' sines and cosines as their last two inputs, (q, sin, cos) and
+ * (q, v, a, f, sin, cos), sin and cos of q[7..18] */
+int qd_M_full_dense_trig(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem);
+int qd_G_full_trig(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem);
+int qd_id_full_trig(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem);
 
 /* q (19) = (0, quat, q_r's joint angles): the library's functions ignore the trunk position. */
 static void qd_full_q(const casadi_real* q_r, const casadi_real* quat, casadi_real* q) {
@@ -80,21 +91,17 @@ static void qd_full_q(const casadi_real* q_r, const casadi_real* quat, casadi_re
   for (int i = 0; i < 12; ++i) q[7 + i] = q_r[i];
 }
 
-/* M (18 x 18, dense column-major) at q by qd_M_full: its nonzeros, written at the end, move in order, run by run
- * (qd_M_runs), the k-th to slot <= 324 - QD_M_NNZ + k (never over one still to move); then the zeros. */
-static int qd_M_full_dense(const casadi_real* q, casadi_real* M, casadi_int* iw, casadi_real* w, int mem) {
-  casadi_real* x = M + 18 * 18 - QD_M_NNZ;
-  const casadi_real* m_arg[1] = {q};
-  casadi_real* m_res[1] = {x};
-  int flag = qd_M_full(m_arg, m_res, iw, w, mem);
-  if (flag) return flag;
-  for (int r = 0; r < QD_M_RUNS; ++r) memmove(M + qd_M_runs[r][0], x + qd_M_runs[r][1], qd_M_runs[r][2] * sizeof *M);
-  for (int r = 0; r < QD_M_ZEROS; ++r) memset(M + qd_M_zeros[r][0], 0, qd_M_zeros[r][1] * sizeof *M);
-  return 0;
+/* M (18 x 18, dense column-major) at q (t: q_r's sines and cosines, q's joint angles) by qd_M_full_dense_trig. */
+static int qd_M_full_dense(const casadi_real* q, const qd_trig* t, casadi_real* M, casadi_int* iw, casadi_real* w,
+                           int mem) {
+  const casadi_real* m_arg[3] = {q, t->s, t->c};
+  casadi_real* m_res[1] = {M};
+  return qd_M_full_dense_trig(m_arg, m_res, iw, w, mem);
 }
 
 /* M_r = S M T (n x n, column-major) by columns: mt = M[:, 0:6] T_b e_j + M[:, 6 + j], then S_b mt[0:6] + mt[6:18].
- * legs: bit i for a stance leg i; T_b's columns of the other legs' joints are zero: no trunk product (15: none). */
+ * legs: bit i for a stance leg i; S_b's rows and T_b's columns of the other legs' joints are zero: no trunk product
+ * there (15: none). */
 QD_INLINE void qd_M_r_legs(int n, int legs, const casadi_real* S_b, const casadi_real* T_b, const casadi_real* M,
                            casadi_real* M_r) {
   for (int j = 0; j < n; ++j) {
@@ -114,7 +121,14 @@ QD_INLINE void qd_M_r_legs(int n, int legs, const casadi_real* S_b, const casadi
     for (int i = 0; i < 12; ++i) col[i] = mt[6 + i];
     if (n > 12) col[12] = 0;
     for (int k = 0; k < 6; ++k) {
-      for (int i = 0; i < n; ++i) col[i] += S_b[i + n * k] * mt[k];
+      if (n == 12) { /* three or four feet: all rows (vectorised) */
+        for (int i = 0; i < 12; ++i) col[i] += S_b[i + n * k] * mt[k];
+        continue;
+      }
+      for (int l = 0; l < 4; ++l) { /* two feet: the swing legs' rows of S_b are zero */
+        for (int i = 3 * l; i < 3 * l + 3 && (legs >> l & 1); ++i) col[i] += S_b[i + n * k] * mt[k];
+      }
+      col[12] += S_b[12 + n * k] * mt[k];
     }
   }
 }
@@ -128,16 +142,17 @@ static void qd_project(int n, const casadi_real* S_b, const casadi_real* F, casa
   }
 }
 
-/* tau (n) = S rnea(q, v, a), rnea by the library's qd_id_full (zero foot forces); work: QD_RNEA_R_WORK reals,
- * the caller's (fd_r lends space it uses later: Cortex-M stack budget). */
-static int qd_rnea_r(int n, const casadi_real* S_b, const casadi_real* q_r, const casadi_real* quat, const casadi_real* v,
-                     const casadi_real* a, casadi_real* tau, casadi_real* work, casadi_int* iw, casadi_real* w, int mem) {
+/* tau (n) = S rnea(q, v, a), rnea by the library's qd_id_full_trig (zero foot forces; t: q_r's sines and cosines);
+ * work: QD_RNEA_R_WORK reals, the caller's (fd_r lends space it uses later: Cortex-M stack budget). */
+static int qd_rnea_r(int n, const casadi_real* S_b, const casadi_real* q_r, const casadi_real* quat, const qd_trig* t,
+                     const casadi_real* v, const casadi_real* a, casadi_real* tau, casadi_real* work, casadi_int* iw,
+                     casadi_real* w, int mem) {
   casadi_real *q = work, *F = q + 19, *f = F + 18;
   for (int i = 0; i < 12; ++i) f[i] = 0;
   qd_full_q(q_r, quat, q);
-  const casadi_real* i_arg[4] = {q, v, a, f};
+  const casadi_real* i_arg[6] = {q, v, a, f, t->s, t->c};
   casadi_real* i_res[2] = {F, F + 6};
-  int flag = qd_id_full(i_arg, i_res, iw, w, mem);
+  int flag = qd_id_full_trig(i_arg, i_res, iw, w, mem);
   if (!flag) qd_project(n, S_b, F, tau);
   return flag;
 }
@@ -151,23 +166,25 @@ QD_INLINE int qd_reduced_term(int n, int legs, int which, const casadi_real** ar
   const casadi_real* quat = arg[which == 1 ? 2 : which == 3 ? 3 : 1];
   const casadi_real* qd_r = which == 1 || which == 3 ? arg[1] : 0;
   casadi_real m = 0, S_b[QD_N_MAX * 6], T_b[6 * QD_N_MAX], v[18], a[18];
-  int flag = qd_parts(arg[0], qd_r, which == 3 ? arg[2] : 0, quat, &m, S_b, T_b, v, a, iw, w, mem);
+  qd_trig t;
+  qd_trig_of(n, arg[0], &t);
+  int flag = qd_parts(arg[0], qd_r, which == 3 ? arg[2] : 0, quat, &t, &m, S_b, T_b, v, a, iw, w, mem);
   if (!flag) flag = qd_regular_value(m);
   if (flag || !res[0]) return flag;
   if (which == 1 || which == 3) {
     casadi_real work[QD_RNEA_R_WORK];
-    return qd_rnea_r(n, S_b, arg[0], quat, v, a, res[0], work, iw, w, mem);
+    return qd_rnea_r(n, S_b, arg[0], quat, &t, v, a, res[0], work, iw, w, mem);
   }
   casadi_real q[19], M[18 * 18];
   qd_full_q(arg[0], quat, q);
-  const casadi_real* g_arg[1] = {q};
-  casadi_real* g_res[1] = {M};
   if (which == 2) {
-    flag = qd_G_full(g_arg, g_res, iw, w, mem);
+    const casadi_real* g_arg[3] = {q, t.s, t.c};
+    casadi_real* g_res[1] = {M};
+    flag = qd_G_full_trig(g_arg, g_res, iw, w, mem);
     if (!flag) qd_project(n, S_b, M, res[0]);
     return flag;
   }
-  flag = qd_M_full_dense(q, M, iw, w, mem);
+  flag = qd_M_full_dense(q, &t, M, iw, w, mem);
   if (!flag) qd_M_r_legs(n, legs, S_b, T_b, M, res[0]);
   return flag;
 }
@@ -328,12 +345,14 @@ QD_INLINE int qd_fd_r_solve(int n, int legs, const casadi_real** arg, casadi_rea
                             int mem) {
   casadi_real m = 0, S_b[QD_N_MAX * 6], T_b[6 * QD_N_MAX], M[18 * 18], M_r[QD_N_MAX * QD_N_MAX], b[QD_N_MAX];
   casadi_real *v = M, *a = M + 18, *q = M_r; /* in space M and M_r take later: fd_r's stack stays within budget */
-  int flag = qd_parts(arg[0], arg[1], 0, arg[3], &m, S_b, T_b, v, a, iw, w, mem);
+  qd_trig t;
+  qd_trig_of(n, arg[0], &t);
+  int flag = qd_parts(arg[0], arg[1], 0, arg[3], &t, &m, S_b, T_b, v, a, iw, w, mem);
   if (!flag) flag = qd_regular_value(m);
-  if (!flag) flag = qd_rnea_r(n, S_b, arg[0], arg[3], v, a, b, M + 36, iw, w, mem);
+  if (!flag) flag = qd_rnea_r(n, S_b, arg[0], arg[3], &t, v, a, b, M + 36, iw, w, mem);
   if (flag) return flag;
   qd_full_q(arg[0], arg[3], q);
-  flag = qd_M_full_dense(q, M, iw, w, mem);
+  flag = qd_M_full_dense(q, &t, M, iw, w, mem);
   if (flag) return flag;
   qd_M_r_legs(n, legs, S_b, T_b, M, M_r);
   casadi_real scale = 0;
