@@ -26,6 +26,15 @@
 
 /* The templates are inlined into their callers: each specialised for its constant n and legs, and every call direct,
  * so a static stack walk (-fcallgraph-info, docs/embedded.md) can bound it. */
+/* Loops whose trip count is a constant once a template is inlined (the elimination's, the Schur complement's) are
+ * unrolled in full by GCC when optimising for speed (a1, callgrind: fd_r -6 % two feet, -10 % four feet); not at -Os,
+ * the embedded builds' size budget (docs/embedded.md). */
+#if defined(__GNUC__) && !defined(__clang__) && __GNUC__ >= 8 && defined(__OPTIMIZE__) && !defined(__OPTIMIZE_SIZE__)
+#define QD_UNROLL _Pragma("GCC unroll 16")
+#else
+#define QD_UNROLL
+#endif
+
 #ifndef QD_INLINE
 #if defined(__GNUC__)
 #define QD_INLINE static inline __attribute__((always_inline))
@@ -238,8 +247,8 @@ static void qd_lu_solve(int n, const casadi_real* LU, const int* piv, casadi_rea
  * pivoting, x updated with M's columns as it goes (no pivot list, one pass fewer over M than qd_lu_factor +
  * qd_lu_solve), then U x = y. A is overwritten (U on and above the diagonal). 0, or QD_SINGULAR when a pivot is below
  * QD_SINGULAR_RTOL * scale (qd_lu_factor's test). */
-static int qd_gauss_solve(int n, casadi_real* A, casadi_real scale) {
-  for (int k = 0; k < n; ++k) { /* A[i + n j] = A_ij */
+QD_INLINE int qd_gauss_solve(int n, casadi_real* A, casadi_real scale) {
+  QD_UNROLL for (int k = 0; k < n; ++k) { /* A[i + n j] = A_ij */
     casadi_real* col = A + n * k;
     int p = k;
     for (int i = k + 1; i < n; ++i) p = fabs(col[i]) > fabs(col[p]) ? i : p;
@@ -253,10 +262,10 @@ static int qd_gauss_solve(int n, casadi_real* A, casadi_real scale) {
     }
     casadi_real inv = 1 / col[k];
     for (int i = k + 1; i < n; ++i) col[i] *= inv; /* the multipliers */
-    for (int j = k + 1; j <= n; ++j) {
+    QD_UNROLL for (int j = k + 1; j <= n; ++j) {
       casadi_real* cj = A + n * j;
       casadi_real u = cj[k];
-      for (int i = k + 1; i < n; ++i) cj[i] -= col[i] * u;
+      QD_UNROLL for (int i = k + 1; i < n; ++i) cj[i] -= col[i] * u;
     }
   }
   casadi_real* x = A + n * n;
@@ -316,9 +325,9 @@ QD_INLINE int qd_fd_r_lu(int n, int legs, const casadi_real* M_r, casadi_real* x
     for (int c = 0; c < 3; ++c) {
       for (int i = 0; i < m; ++i) h[i + m * c] = M_r[r[i] + n * (3 * l + c)];
     }
-    for (int p = 0; p <= m; ++p) { /* K -= h v[:, 0:m], y -= h v[:, m] */
-      casadi_real* k = p < m ? K + m * p : y;
-      for (int i = 0; i < m; ++i) k[i] -= h[i] * v[3 * p] + h[i + m] * v[3 * p + 1] + h[i + 2 * m] * v[3 * p + 2];
+    for (int p = 0; p <= m; ++p) { /* K -= h v[:, 0:m], y -= h v[:, m] (y = K + m m) */
+      casadi_real* k = K + m * p;
+      QD_UNROLL for (int i = 0; i < m; ++i) k[i] -= h[i] * v[3 * p] + h[i + m] * v[3 * p + 1] + h[i + 2 * m] * v[3 * p + 2];
     }
     v += 3 * (m + 1);
   }
