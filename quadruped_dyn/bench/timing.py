@@ -3,7 +3,8 @@
 Both sides are timed in compiled code (``c/bench_qd.c`` and ``c/bench_pinocchio.cpp``, and
 with ``peer`` Pinocchio's CppADCodeGen code, ``cppadcg.py``): the median over ``reps`` runs of
 ``calls`` calls each, fewer for a function slower than 2 ms / ``calls`` (every harness stops a run
-at about 2 ms: ``c/bench_median.h``, QD_RUN_BUDGET_NS); the harnesses alternate for ``rounds``
+at about 2 ms: ``c/bench_median.h``, QD_RUN_BUDGET_NS), each harness's runs interleaved across its
+functions (a few ms of disturbance spoil one run of a few functions, not all of one's); the harnesses alternate for ``rounds``
 rounds and each function keeps its best median (the least disturbed by other load on a shared 2-core machine). Ratios are what to
 read; absolute times drift with the machine's load. By default the Pinocchio harness links the pin
 wheel's libraries (built for generic x86-64) and the generated C is built with ``C_FLAGS``, so

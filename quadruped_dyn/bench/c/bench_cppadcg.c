@@ -71,23 +71,34 @@ int main(int argc, char** argv) {
   }
   double* q = malloc(sizeof(double) * (size_t)(nq + 3 * nv));
   double *v = q + nq, *a = v + nv, *tau = a + nv;
-  double* x = malloc(sizeof(double) * (size_t)(nq + 2 * nv));
   double* y = malloc(sizeof(double) * (size_t)(nv * (nv + 1) / 2));
   for (int i = 0; i < nq + 3 * nv; ++i) q[i] = atof(argv[first + 2 + i]);
   int calls = timing ? atoi(argv[2]) : 0, reps = timing ? atoi(argv[3]) : 0;
-  double* t = malloc(sizeof(double) * (size_t)(reps > 0 ? reps : 1));
+  /* every peer's input (q, then its other vectors) apart: the timed runs interleave */
+  double* x = malloc(sizeof(double) * QD_N_PEERS * (size_t)(nq + 2 * nv));
+  double* t = malloc(sizeof(double) * QD_N_PEERS * (size_t)(reps > 0 ? reps : 1));
+  const casadi_real* arg[QD_N_PEERS][1];
+  casadi_real* res[QD_N_PEERS][1];
+  qd_timed timed[QD_N_PEERS];
+  double ns[QD_N_PEERS];
   for (size_t f = 0; f < QD_N_PEERS; ++f) {
     const qd_peer* p = &PEERS[f];
+    double* xf = x + f * (size_t)(nq + 2 * nv);
     int n = nq;
-    memcpy(x, q, sizeof(double) * (size_t)nq);
+    memcpy(xf, q, sizeof(double) * (size_t)nq);
     for (const char* c = p->inputs; *c; ++c, n += nv)
-      memcpy(x + n, *c == 'v' ? v : *c == 'a' ? a : tau, sizeof(double) * (size_t)nv);
-    const casadi_real* arg[1] = {x};
-    casadi_real* res[1] = {y};
+      memcpy(xf + n, *c == 'v' ? v : *c == 'a' ? a : tau, sizeof(double) * (size_t)nv);
+    arg[f][0] = xf;
+    res[f][0] = y;
+    timed[f] = (qd_timed){p->fn, arg[f], res[f], &xf[7], 0, 0};
+  }
+  if (timing) qd_medians_ns(timed, (int)QD_N_PEERS, iw, w, calls, reps, t, ns);
+  for (size_t f = 0; f < QD_N_PEERS; ++f) {
+    const qd_peer* p = &PEERS[f];
     if (timing) {
-      printf("%s %.2f\n", p->name, qd_median_ns(p->fn, arg, res, iw, w, &x[7], calls, reps, t));
+      printf("%s %.2f\n", p->name, ns[f]);
     } else {
-      p->fn(arg, res, iw, w, 0);
+      p->fn(arg[f], res[f], iw, w, 0);
       printf("%s", p->name);
       for (int i = 0; i < (p->triangle ? nv * (nv + 1) / 2 : nv); ++i) printf(" %.17g", y[i]);
       printf("\n");

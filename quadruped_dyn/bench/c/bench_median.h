@@ -1,6 +1,7 @@
-/* The timing of both C harnesses (bench_qd.c, bench_peers.c): the median time of one call over
- * REPS runs of CALLS calls, in this thread's CPU time (a wall clock on a shared machine also counts
- * the time the scheduler gives to others, which a slow function's longer runs catch more often). */
+/* The timing of the C harnesses (bench_qd.c, bench_peers.c, bench_cppadcg.c): the median time of one call over
+ * REPS runs of CALLS calls, the runs interleaved across the functions (qd_medians_ns), in this thread's CPU time (a
+ * wall clock on a shared machine also counts the time the scheduler gives to others, which a slow function's longer
+ * runs catch more often). */
 #ifndef QD_BENCH_MEDIAN_H
 #define QD_BENCH_MEDIAN_H
 #include <stdlib.h>
@@ -30,26 +31,44 @@ static int qd_calls_in_budget(double one_call_ns, int calls) {
   return fit < 1.0 ? 1 : fit < (double)calls ? (int)fit : calls;
 }
 
-/* Median ns per call of fn(arg, res, iw, w, 0) after a warm-up (caches, clock; CALLS / 10 + 1 calls,
- * within the budget), over REPS runs of CALLS calls (fewer for a slow function: qd_calls_in_budget);
- * *changing moves by 1e-15 before every call so that no call can be hoisted. t: scratch of reps entries. */
-static double qd_median_ns(qd_bench_fn fn, const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w,
-                           casadi_real* changing, int calls, int reps, double* t) {
-  double t0 = now_ns();
-  fn(arg, res, iw, w, 0);
-  int warm = qd_calls_in_budget(now_ns() - t0, calls / 10 + 1);
-  t0 = now_ns();
-  for (int n = 0; n < warm; ++n) fn(arg, res, iw, w, 0);
-  calls = qd_calls_in_budget((now_ns() - t0) / warm, calls);
-  for (int r = 0; r < reps; ++r) {
+/* One function to time: fn(arg, res, iw, w, 0), *changing moved by 1e-15 before every timed call so that no call can
+ * be hoisted. warm and calls: set by qd_medians_ns. */
+typedef struct {
+  qd_bench_fn fn;
+  const casadi_real** arg;
+  casadi_real** res;
+  casadi_real* changing;
+  int warm, calls;
+} qd_timed;
+
+/* Median ns per call of each of the n functions f into ns, over REPS runs of CALLS calls (fewer for a slow function:
+ * qd_calls_in_budget), the runs interleaved: every function is first calibrated (one call, then CALLS / 10 + 1 within
+ * the budget), then in each of REPS rounds every function in turn gets its warm-up again (its caches and branch
+ * history back after the others') and one timed run. A disturbance of a few ms (another job on a shared 2-core
+ * machine) then spoils one run of a few functions, not every run of one. t: scratch of n * reps entries. */
+static void qd_medians_ns(qd_timed* f, int n, casadi_int* iw, casadi_real* w, int calls, int reps, double* t, double* ns) {
+  for (int i = 0; i < n; ++i) {
+    double t0 = now_ns();
+    f[i].fn(f[i].arg, f[i].res, iw, w, 0);
+    f[i].warm = qd_calls_in_budget(now_ns() - t0, calls / 10 + 1);
     t0 = now_ns();
-    for (int n = 0; n < calls; ++n) {
-      *changing += (casadi_real)1e-15;
-      fn(arg, res, iw, w, 0);
-    }
-    t[r] = (now_ns() - t0) / calls;
+    for (int k = 0; k < f[i].warm; ++k) f[i].fn(f[i].arg, f[i].res, iw, w, 0);
+    f[i].calls = qd_calls_in_budget((now_ns() - t0) / f[i].warm, calls);
   }
-  qsort(t, (size_t)reps, sizeof(double), by_value);
-  return t[reps / 2];
+  for (int r = 0; r < reps; ++r) {
+    for (int i = 0; i < n; ++i) {
+      for (int k = 0; k < f[i].warm; ++k) f[i].fn(f[i].arg, f[i].res, iw, w, 0);
+      double t0 = now_ns();
+      for (int k = 0; k < f[i].calls; ++k) {
+        *f[i].changing += (casadi_real)1e-15;
+        f[i].fn(f[i].arg, f[i].res, iw, w, 0);
+      }
+      t[reps * i + r] = (now_ns() - t0) / f[i].calls;
+    }
+  }
+  for (int i = 0; i < n; ++i) {
+    qsort(t + reps * i, (size_t)reps, sizeof(double), by_value);
+    ns[i] = t[reps * i + reps / 2];
+  }
 }
 #endif

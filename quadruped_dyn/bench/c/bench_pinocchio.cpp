@@ -13,6 +13,7 @@
 #include <cstdio>
 #include <cstdlib>
 #include <functional>
+#include <memory>
 #include <vector>
 
 #include <string>
@@ -51,24 +52,48 @@ static int calls_in_budget(double one_call_ns, int calls) {
   return fit < 1.0 ? 1 : fit < double(calls) ? int(fit) : calls;
 }
 
-// Median ns per call over REPS runs of CALLS calls (fewer for a slow function: calls_in_budget),
-// after a warm-up of CALLS / 10 + 1 calls within the budget, as bench_median.h.
-static double median_ns(const std::function<void()>& f, int calls, int reps) {
+// One algorithm to time, and what its runs found.
+struct Timed {
+  std::string name;
+  std::function<void()> f;
+  int warm = 0, calls = 0;
   std::vector<double> t;
-  double t0 = cpu_ns();
-  f();
-  const int warm = calls_in_budget(cpu_ns() - t0, calls / 10 + 1);
-  t0 = cpu_ns();
-  for (int k = 0; k < warm; ++k) f();
-  calls = calls_in_budget((cpu_ns() - t0) / warm, calls);
-  for (int r = 0; r < reps; ++r) {
+};
+
+// Median ns per call of each algorithm over REPS runs of CALLS calls (fewer for a slow one: calls_in_budget), the
+// runs interleaved as bench_median.h's qd_medians_ns: each calibrated (one call, then CALLS / 10 + 1 within the
+// budget), then in each of REPS rounds every algorithm in turn gets its warm-up again and one timed run.
+static void medians_ns(std::vector<Timed>& all, int calls, int reps) {
+  for (Timed& a : all) {
     double t0 = cpu_ns();
-    for (int k = 0; k < calls; ++k) f();
-    t.push_back((cpu_ns() - t0) / calls);
+    a.f();
+    a.warm = calls_in_budget(cpu_ns() - t0, calls / 10 + 1);
+    t0 = cpu_ns();
+    for (int k = 0; k < a.warm; ++k) a.f();
+    a.calls = calls_in_budget((cpu_ns() - t0) / a.warm, calls);
   }
-  std::sort(t.begin(), t.end());
-  return t[t.size() / 2];
+  for (int r = 0; r < reps; ++r) {
+    for (Timed& a : all) {
+      for (int k = 0; k < a.warm; ++k) a.f();
+      const double t0 = cpu_ns();
+      for (int k = 0; k < a.calls; ++k) a.f();
+      a.t.push_back((cpu_ns() - t0) / a.calls);
+    }
+  }
+  for (Timed& a : all) {
+    std::sort(a.t.begin(), a.t.end());
+    std::printf("%s %.2f\n", a.name.c_str(), a.t[a.t.size() / 2]);
+  }
 }
+
+// The rigid point contacts of one stance set and the Data their algorithms fill (one per set: the runs interleave).
+struct Stance {
+  std::vector<pin::RigidConstraintModel> contacts;
+  std::vector<pin::RigidConstraintData> datas;
+  pin::Data data;
+  Eigen::MatrixXd ddq_dq, ddq_dv, ddq_dtau, dlambda_dq, dlambda_dv, dlambda_dtau;
+  explicit Stance(const pin::Model& model) : data(model) {}
+};
 
 int main(int argc, char** argv) {
   if (argc != 4 && argc != 8) {
@@ -86,49 +111,49 @@ int main(int argc, char** argv) {
   Eigen::VectorXd tau = Eigen::VectorXd::Random(model.nv);
   const Ref q_r(q), v_r(v), a_r(a), tau_r(tau);
   volatile double sink = 0;
-  std::printf("crba %.2f\n", median_ns([&] { pin::crba(model, data, q_r, pin::Convention::LOCAL); sink = sink + data.M(0, 0); }, calls, reps));
-  std::printf("nonLinearEffects %.2f\n", median_ns([&] { sink = sink + pin::nonLinearEffects(model, data, q_r, v_r)[0]; }, calls, reps));
-  std::printf("computeGeneralizedGravity %.2f\n",
-              median_ns([&] { sink = sink + pin::computeGeneralizedGravity(model, data, q_r)[0]; }, calls, reps));
-  std::printf("rnea %.2f\n", median_ns([&] { sink = sink + pin::rnea(model, data, q_r, v_r, a_r)[0]; }, calls, reps));
-  { // analytical derivatives (Carpentier & Mansard 2018), the peers of did_full and dfd_full
-    std::printf("aba %.2f\n", median_ns([&] { sink = sink + pin::aba(model, data, q_r, v_r, tau_r, pin::Convention::WORLD)[0]; }, calls, reps));
-    Eigen::MatrixXd dtau_dq = Eigen::MatrixXd::Zero(model.nv, model.nv), dtau_dv = dtau_dq, dtau_da = dtau_dq;
-    Eigen::Ref<Eigen::MatrixXd> dtau_dq_r(dtau_dq), dtau_dv_r(dtau_dv), dtau_da_r(dtau_da);
-    std::printf("computeRNEADerivatives %.2f\n", median_ns([&] {
-      pin::computeRNEADerivatives(model, data, q_r, v_r, a_r, dtau_dq_r, dtau_dv_r, dtau_da_r); sink = sink + dtau_dq(0, 0); }, calls, reps));
-    std::printf("computeABADerivatives %.2f\n", median_ns([&] {
-      pin::computeABADerivatives(model, data, q_r, v_r, tau_r); sink = sink + data.ddq_dq(0, 0); }, calls, reps));
-  }
+  std::vector<Timed> all;
+  all.push_back({"crba", [&] { pin::crba(model, data, q_r, pin::Convention::LOCAL); sink = sink + data.M(0, 0); }});
+  all.push_back({"nonLinearEffects", [&] { sink = sink + pin::nonLinearEffects(model, data, q_r, v_r)[0]; }});
+  all.push_back({"computeGeneralizedGravity", [&] { sink = sink + pin::computeGeneralizedGravity(model, data, q_r)[0]; }});
+  all.push_back({"rnea", [&] { sink = sink + pin::rnea(model, data, q_r, v_r, a_r)[0]; }});
+  // analytical derivatives (Carpentier & Mansard 2018), the peers of did_full and dfd_full
+  all.push_back({"aba", [&] { sink = sink + pin::aba(model, data, q_r, v_r, tau_r, pin::Convention::WORLD)[0]; }});
+  Eigen::MatrixXd dtau_dq = Eigen::MatrixXd::Zero(model.nv, model.nv), dtau_dv = dtau_dq, dtau_da = dtau_dq;
+  Eigen::Ref<Eigen::MatrixXd> dtau_dq_r(dtau_dq), dtau_dv_r(dtau_dv), dtau_da_r(dtau_da);
+  all.push_back({"computeRNEADerivatives", [&] {
+    pin::computeRNEADerivatives(model, data, q_r, v_r, a_r, dtau_dq_r, dtau_dv_r, dtau_da_r); sink = sink + dtau_dq(0, 0); }});
+  all.push_back({"computeABADerivatives", [&] {
+    pin::computeABADerivatives(model, data, q_r, v_r, tau_r); sink = sink + data.ddq_dq(0, 0); }});
+  std::vector<std::unique_ptr<Stance>> stances; // stable addresses: the lambdas hold them
+  pin::ProximalSettings prox(1e-12, 0.0, 1); // constraintDynamics writes its iteration count here
+  Eigen::VectorXd tau_c = Eigen::VectorXd::Random(model.nv);
   if (argc == 8) {
     const char* labels[4] = {"FL", "FR", "BL", "BR"};
-    Eigen::VectorXd tau = Eigen::VectorXd::Random(model.nv);
     for (int set = 0; set < 16; ++set) {
       int k = __builtin_popcount(set);
       if (k < 2) continue;
-      std::vector<pin::RigidConstraintModel> contacts;
+      stances.push_back(std::make_unique<Stance>(model));
+      Stance& s = *stances.back();
       std::string name = "constraintDynamics";
       for (int i = 0; i < 4; ++i) {
         if (!(set & (1 << i))) continue;
         const pin::Frame& frame = model.frames[model.getFrameId(argv[4 + i])];
-        contacts.emplace_back(pin::CONTACT_3D, model, frame.parentJoint, frame.placement, pin::LOCAL_WORLD_ALIGNED);
+        s.contacts.emplace_back(pin::CONTACT_3D, model, frame.parentJoint, frame.placement, pin::LOCAL_WORLD_ALIGNED);
         name += std::string("_") + labels[i];
       }
-      std::vector<pin::RigidConstraintData> datas;
-      for (const pin::RigidConstraintModel& c : contacts) datas.emplace_back(c);
-      pin::initConstraintDynamics(model, data, contacts, datas);
-      pin::ProximalSettings prox(1e-12, 0.0, 1);
-      Eigen::MatrixXd ddq_dq(model.nv, model.nv), ddq_dv(model.nv, model.nv), ddq_dtau(model.nv, model.nv);
-      Eigen::MatrixXd dlambda_dq(3 * k, model.nv), dlambda_dv(3 * k, model.nv), dlambda_dtau(3 * k, model.nv);
-      std::printf("%s %.2f\n", name.c_str(), median_ns([&] {
-        sink = sink + pin::constraintDynamics(model, data, q, v, tau, contacts, datas, prox)[0]; }, calls, reps));
-      std::string derivatives = "constraintDynamicsDerivatives" + name.substr(std::string("constraintDynamics").size());
-      std::printf("%s %.2f\n", derivatives.c_str(), median_ns([&] {
-        pin::constraintDynamics(model, data, q, v, tau, contacts, datas, prox);
-        pin::computeConstraintDynamicsDerivatives(model, data, contacts, datas, prox, ddq_dq, ddq_dv, ddq_dtau,
-                                                  dlambda_dq, dlambda_dv, dlambda_dtau);
-        sink = sink + ddq_dq(0, 0); }, calls, reps));
+      for (const pin::RigidConstraintModel& c : s.contacts) s.datas.emplace_back(c);
+      pin::initConstraintDynamics(model, s.data, s.contacts, s.datas);
+      s.ddq_dq.resize(model.nv, model.nv), s.ddq_dv.resize(model.nv, model.nv), s.ddq_dtau.resize(model.nv, model.nv);
+      s.dlambda_dq.resize(3 * k, model.nv), s.dlambda_dv.resize(3 * k, model.nv), s.dlambda_dtau.resize(3 * k, model.nv);
+      all.push_back({name, [&, p = &s] {
+        sink = sink + pin::constraintDynamics(model, p->data, q, v, tau_c, p->contacts, p->datas, prox)[0]; }});
+      all.push_back({"constraintDynamicsDerivatives" + name.substr(std::string("constraintDynamics").size()), [&, p = &s] {
+        pin::constraintDynamics(model, p->data, q, v, tau_c, p->contacts, p->datas, prox);
+        pin::computeConstraintDynamicsDerivatives(model, p->data, p->contacts, p->datas, prox, p->ddq_dq, p->ddq_dv,
+                                                  p->ddq_dtau, p->dlambda_dq, p->dlambda_dv, p->dlambda_dtau);
+        sink = sink + p->ddq_dq(0, 0); }});
     }
   }
+  medians_ns(all, calls, reps);
   return 0;
 }
