@@ -120,6 +120,14 @@ static void qd_densify(const casadi_int* sp, casadi_real* x) {
 
 /* The templates are inlined into their callers: each specialised for its constant n and legs, and every call direct,
  * so a static stack walk (-fcallgraph-info, docs/embedded.md) can bound it. */
+#ifndef QD_INLINE
+#if defined(__GNUC__)
+#define QD_INLINE static inline __attribute__((always_inline))
+#else
+#define QD_INLINE static inline
+#endif
+#endif
+
 /* Loops whose trip count is a constant once a template is inlined (the elimination's, the Schur complement's) are
  * unrolled in full by GCC when optimising for speed (a1, callgrind: fd_r -6 % two feet, -10 % four feet); not at -Os,
  * the embedded builds' size budget (docs/embedded.md). */
@@ -127,14 +135,6 @@ static void qd_densify(const casadi_int* sp, casadi_real* x) {
 #define QD_UNROLL _Pragma("GCC unroll 16")
 #else
 #define QD_UNROLL
-#endif
-
-#ifndef QD_INLINE
-#if defined(__GNUC__)
-#define QD_INLINE static inline __attribute__((always_inline))
-#else
-#define QD_INLINE static inline
-#endif
 #endif
 
 /* flag, or QD_NONFINITE if any of the n_out outputs (nnz[i] entries each) is not finite: x - x is 0 for a finite x,
