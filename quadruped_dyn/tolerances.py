@@ -148,3 +148,9 @@ EXTENDED_WALK_PCT = {"q": 1e-6, "qd": 1.5e-6, "qdd": 2e-5}
 #: The C pose fit (Horn's quaternion, Jacobi eigenvector) against numpy's SVD (Kabsch) on the
 #: same feet, m and rad: both are backward stable, ~100 operations on coordinates of ~0.5 m.
 POSE_FIT_TOL = 1e-13
+
+#: qd_dfd_r_lift_columns against qd_dfd_r_lift_dir at its seeds (codegen/emit_derivatives.lift_columns): the same
+#: graph with the seeds' zeros and ones substituted, which CasADi simplifies (x * 1, x + 0 * y), so a sum can round
+#: once differently (measured 2026-12-04, paper robot: 1.5e-16 of an output's scale with three feet, 0 with four).
+#: 16 machine epsilons of the output's largest entry.
+LIFT_COLUMNS_REL_TOL = 16 * 2.220446049250313e-16

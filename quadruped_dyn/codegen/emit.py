@@ -389,8 +389,20 @@ def _reduced_helpers_c(robot: Robot, stance: StanceSet, dfd_r: DfdRPieces, preci
     return (f"#define QD_REGULARITY_MIN ((casadi_real){REGULARITY_MIN!r}) /* quadruped_dyn.tolerances.REGULARITY_MIN */\n"
             + static_c("qd_reduced_parts", parts, precision) + "\n"
             + f"#define QD_DFD_R_TAPE {dfd_r.tape} /* reals of the lift's tape: emit_derivatives.split_at_seeds */\n"
-            + static_c("qd_dfd_r_lift", dfd_r.lift, precision, all_io=True) + "\n"
-            + static_c("qd_dfd_r_lift_dir", dfd_r.lift_dir, precision, all_io=True))
+            + static_c("qd_dfd_r_lift", dfd_r.lift, precision, all_io=True) + "\n" + _lift_derivative_c(dfd_r, precision))
+
+
+def _lift_derivative_c(dfd_r: DfdRPieces, precision: str) -> str:
+    """The lift's derivative dfd_r calls: qd_dfd_r_lift_dir (one direction per call), and for the stance sets that have
+    them qd_dfd_r_lift_columns (every direction at once, QD_DFD_R_LIFT_COLUMNS columns) but at -Os, the embedded
+    builds' size budget (docs/derivatives.md)."""
+    one = static_c("qd_dfd_r_lift_dir", dfd_r.lift_dir, precision, all_io=True)
+    if dfd_r.lift_columns is None:
+        return one
+    return ("#if !defined(__OPTIMIZE_SIZE__) /* the lift's columns at once; at -Os one direction per call */\n"
+            f"#define QD_DFD_R_LIFT_COLUMNS {dfd_r.lift_columns.size2_out(0)} /* emit_derivatives.lift_seeds */\n"
+            + static_c("qd_dfd_r_lift_columns", dfd_r.lift_columns, precision, all_io=True)
+            + "#else\n" + one + "#endif\n")
 
 
 def _checked_reduced_c(c_text: str, casadi_header: str, functions: list[ca.Function], helpers_c: str,

@@ -28,8 +28,10 @@ In each reduced file ``qd_<robot>_r_<feet>.c`` (``reduced_derivative_functions``
   one direction of (q_r, theta) and one of qd_r at once, with d(S_b F_b) along the q_r direction (2.8-4.3k
   operations on the paper robot), split (``split_at_seeds``) into the static ``qd_dfd_r_lift`` (v_b, a_b and the
   tape, the values the derivative reads; once per call) and ``qd_dfd_r_lift_dir`` (the derivative over the tape,
-  ~70 % of the operations; once per stance-leg joint and two feet's rotation: 9-12 calls). Its temporaries (~16 kB in
-  double, the tape included) are the caller's w, declared by its _work entry (``declare_dfd_r_work``).
+  ~70 % of the operations; once per stance-leg joint and two feet's rotation: 9-12 calls). With three and four feet
+  also ``qd_dfd_r_lift_columns`` (``lift_columns``: every one of those directions at once, 2.3-2.4x fewer operations,
+  ~4x the C), which dfd_r calls instead but at -Os. Its temporaries (~16 kB in double, the tape included) are the
+  caller's w, declared by its _work entry (``declare_dfd_r_work``).
 
 Why directions and a chain rule, not CasADi's Jacobians: those take 48-97k operations per reduced
 stance set and 18-21k per GRF solve (~20 bytes of C each), beyond the 6 MB budget of a robot's C.
@@ -115,6 +117,10 @@ class DfdRPieces:
     #: dfd_r_lift_dir (tape, F_b, dq_r, dtheta, dqd_r) -> (dv_b, da_b (6 each), dSF (n), da_qd (6)): the lift's
     #: derivative along (dq_r, dtheta), d(S_b F_b) along dq_r, d a_b along dqd_r; once per stance-leg joint
     lift_dir: ca.Function
+    #: dfd_r_lift_columns (tape, F_b) -> (dv_b, da_b (6 x K), dSF (n x K), da_qd (6 x K)): lift_dir at each of the K
+    #: unit seeds qd_dfd_r_solve takes, one column each in its order (``lift_columns``); once per dfd_r. None: lift_dir
+    #: only (``LIFT_COLUMNS_MIN_FEET``)
+    lift_columns: ca.Function | None
     legs: int  # bit i set: leg i is a stance leg (the lift and S depend on its joints, not on the others')
     lift_reads_quat: bool  # two feet: the roll row makes v_b, a_b depend on the trunk orientation
 
@@ -131,7 +137,48 @@ def dfd_r_pieces(robot: Robot, stance: StanceSet) -> DfdRPieces:
     x = lift.sx_in()
     reads_quat = bool(ca.depends_on(ca.vertcat(*lift.call(x)[:2]), x[3]))
     primal, direction = split_at_seeds(trig_as_inputs(lift, 0), seeds=(4, 5, 6, 7), n_primal_out=2)
-    return DfdRPieces(primal, direction, sum(1 << i for i in stance.feet), reads_quat)
+    legs = sum(1 << i for i in stance.feet)
+    columns = lift_columns(direction, legs, reads_quat) if len(stance.feet) >= LIFT_COLUMNS_MIN_FEET else None
+    return DfdRPieces(primal, direction, columns, legs, reads_quat)
+
+
+#: The stance sets whose dfd_r takes the lift's derivative by columns (``lift_columns``): measured on a1 (2026-12-04,
+#: docs/benchmark.md), dfd_r -19 % with four feet, -9 % with three, +1 to -3.5 % with two (its columns' straight-line
+#: code outruns the instruction cache), for ~0.35 and ~0.2 MB of C per stance set.
+LIFT_COLUMNS_MIN_FEET = 3
+
+
+def lift_seeds(n: int, legs: int, reads_quat: bool) -> list[tuple[np.ndarray, np.ndarray, np.ndarray]]:
+    """The seeds (dq_r, dtheta, dqd_r) along which qd_dfd_r_solve (c/qd_reduced_derivatives.c) differentiates the
+    lift, in its order: with two feet the rotations theta_k (the roll rate's with theta_0), then each stance-leg
+    joint j with its rate (dq_r = dqd_r = e_j)."""
+    roll_with_theta = reads_quat and n > 12
+    seeds = []
+    for k in range(3 if reads_quat else 0):
+        dq, dtheta, dqd = np.zeros(n), np.zeros(3), np.zeros(n)
+        dtheta[k] = 1
+        dqd[12] = 1 if k == 0 and roll_with_theta else 0
+        seeds.append((dq, dtheta, dqd))
+    for j in range(n):
+        moves = bool(legs >> (j // 3) & 1) if j < 12 else True
+        if moves and not (j >= 12 and roll_with_theta):
+            dq, dtheta, dqd = np.zeros(n), np.zeros(3), np.zeros(n)
+            dq[j], dqd[j] = float(j < 12), 1
+            seeds.append((dq, dtheta, dqd))
+    return seeds
+
+
+def lift_columns(direction: ca.Function, legs: int, reads_quat: bool) -> ca.Function:
+    """``direction`` (the lift's derivative over its tape) at every seed of ``lift_seeds`` in one graph: with the
+    seeds' zeros and ones known, CasADi drops their products, 2.3-2.4x fewer operations than as many calls of the
+    one-direction function (a1: 9 x 2,225 -> 8,563 two feet, 12 x 3,320 -> 16,944 four), at ~4x its C
+    (docs/derivatives.md)."""
+    n = direction.size1_out(2)
+    tape, F_b = (ca.SX.sym(direction.name_in(i), direction.sparsity_in(i)) for i in range(2))
+    columns = [direction.call([tape, F_b, *(ca.DM(x) for x in seed)]) for seed in lift_seeds(n, legs, reads_quat)]
+    return ca.Function("dfd_r_lift_columns", [tape, F_b],
+                       [ca.densify(ca.horzcat(*[c[i] for c in columns])) for i in range(4)],
+                       ["tape", "F_b"], ["dv_b", "da_b", "dSF", "da_qd"], {"cse": True})
 
 
 def dfd_r_lift(robot: Robot, stance: StanceSet) -> ca.Function:

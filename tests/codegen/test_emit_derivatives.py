@@ -11,7 +11,13 @@ import pytest
 
 from quadruped_dyn.checks.derivative_reference import ReducedReference, grf_derivatives_reference
 from quadruped_dyn.codegen.emit import REDUCED_STANCE_SETS, TEMPLATES, reduced_symbol
-from quadruped_dyn.codegen.emit_derivatives import GRF_DERIVATIVE_STANCE_SETS, dfd_r_lift, dfd_r_pieces
+from quadruped_dyn.codegen.emit_derivatives import (
+    GRF_DERIVATIVE_STANCE_SETS,
+    LIFT_COLUMNS_MIN_FEET,
+    dfd_r_lift,
+    dfd_r_pieces,
+    lift_seeds,
+)
 from quadruped_dyn.codegen.joint_trig import trig_as_inputs
 from quadruped_dyn.codegen.library import C_FLAGS, CompiledFunction, compiled_library
 from quadruped_dyn.errors import InputError
@@ -20,7 +26,7 @@ from quadruped_dyn.model.robot import ROBOT_NAMES, load_robot
 from quadruped_dyn.model.stance import stance_set
 from quadruped_dyn.model.state import random_state
 from quadruped_dyn.references.pinocchio import PinocchioDerivatives, PinocchioReference
-from quadruped_dyn.tolerances import FLOAT_REL_TOL, REL_TOL_DERIVATIVES, REL_TOL_FD_DERIVATIVES
+from quadruped_dyn.tolerances import FLOAT_REL_TOL, LIFT_COLUMNS_REL_TOL, REL_TOL_DERIVATIVES, REL_TOL_FD_DERIVATIVES
 from tests.conftest import assert_close
 from tests.dynamics.test_derivatives import grf_point, reduced_point
 
@@ -204,3 +210,22 @@ def test_split_at_seeds_gives_the_lift_to_the_digit(paper):
         assert pieces.tape == tape.shape[0] > 0
         for i, (ours, theirs) in enumerate(zip(got, expected)):
             assert np.all(np.isfinite(ours)) and np.array_equal(ours, theirs), f"{name} output {i}"
+
+
+def test_lift_columns_are_the_lift_direction_at_each_seed(paper):
+    """qd_dfd_r_lift_columns' column c is qd_dfd_r_lift_dir along lift_seeds' seed c (the order the C template takes
+    them in), to round-off (LIFT_COLUMNS_REL_TOL), at a random tape and F_b; two feet have none (LIFT_COLUMNS_MIN_FEET)."""
+    rng = np.random.default_rng(4)
+    assert dfd_r_pieces(paper, stance_set("FL+BR")).lift_columns is None and LIFT_COLUMNS_MIN_FEET == 3
+    for name in ("FL+FR+BL", "FL+FR+BL+BR"):
+        pieces = dfd_r_pieces(paper, stance_set(name))
+        tape, F_b = rng.normal(size=pieces.tape), rng.normal(size=6)
+        columns = [np.asarray(x) for x in pieces.lift_columns(tape, F_b)]
+        seeds = lift_seeds(12, pieces.legs, pieces.lift_reads_quat)
+        assert len(seeds) == columns[0].shape[1] == 9 + 3 * (name == "FL+FR+BL+BR")
+        for c, seed in enumerate(seeds):
+            one = [np.asarray(x).ravel() for x in pieces.lift_dir(tape, F_b, *seed)]
+            for k, (col, dir_k) in enumerate(zip(columns, one)):
+                scale = np.max(np.abs(dir_k), initial=0.0)
+                assert np.all(np.isfinite(col[:, c])) and np.all(np.isfinite(dir_k)), f"{name} column {c} output {k}"
+                assert np.max(np.abs(col[:, c] - dir_k), initial=0.0) <= LIFT_COLUMNS_REL_TOL * scale, f"{name} {c} {k}"

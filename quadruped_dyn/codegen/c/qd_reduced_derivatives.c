@@ -12,15 +12,17 @@
  * rnea at qdd_r = 0, M), F's trunk rows from that rnea's by M (rnea is linear in a). Only the trunk rows v_b, a_b ("the lift") depend on x other than by
  * identity: the generated qd_dfd_r_lift gives them once (the angles' sines and cosines taken once and passed in)
  * with its tape, the values of its algorithm that its derivative reads; their derivative along a joint angle or
- * theta is the generated qd_dfd_r_lift_dir over that tape (one forward-mode direction per call, only for the stance
- * legs' joints and, for two feet, theta); along qd_r, dv_b = T_b and da_b from qd_dfd_r_lift_dir, which also gives
- * d(S_b F_b)/dq_r. The products in loops.
+ * theta is the generated qd_dfd_r_lift_columns over that tape (every direction the solve takes, in one graph whose unit
+ * seeds are known: 2.3-2.4x fewer operations than one call per direction; at -Os qd_dfd_r_lift_dir, one forward-mode
+ * direction per call, a quarter of the code), only for the stance legs' joints and, for two feet, theta; along qd_r,
+ * dv_b = T_b and da_b from the same column, which also gives d(S_b F_b)/dq_r. The products in loops.
  * The trunk orientation is the separate input quat: dqdd_dq is the partial derivative at fixed quat (its
  * 13th column, the roll, is zero: the functions read the roll from quat), dqdd_dtheta (n x 3) the
  * derivative along a body-frame increment quat -> quat (x) Exp(dtheta/2), Pinocchio's convention for
  * did_full's rotation columns 3:6. Outputs dense, column-major. Return codes as qd_fd_r_*: 0 ok,
  * QD_NONFINITE, QD_SINGULAR (M_r singular to working precision); no output is usable then. No heap; the
- * temporaries in the caller's w (QD_DFD_R_W(n) reals, stated by the _work entry), ~1 kB on the stack. */
+ * temporaries in the caller's w (QD_DFD_R_W(n) reals, stated by the _work entry), ~1 kB on the stack (and
+ * the lift's columns, (18 + n) K reals, but at -Os). */
 
 /* defined in qd_<robot>_d.c and qd_<robot>.c of the same library (no work memory: checked by the generator) */
 int qd_did_full(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem);
@@ -110,6 +112,15 @@ static void qd_dfd_r_store(int n, int m, casadi_real** res, int k, const casadi_
   }
 }
 
+/* column c of qd_dfd_r_lift_columns' outputs L (dv_b, da_b: 6 x K, dSF: n x K, da_qd: 6 x K, column-major; K =
+ * QD_DFD_R_LIFT_COLUMNS) into t_res (dv, da, dSF, da_qd): what qd_dfd_r_lift_dir gives along that column's seed */
+static inline void qd_dfd_r_take(int n, int K, const casadi_real* L, int c, casadi_real** t_res) {
+  const int first[4] = {0, 6 * K, 12 * K, 12 * K + n * K}, rows[4] = {6, 6, n, 6};
+  for (int o = 0; o < 4; ++o) {
+    for (int i = 0; i < rows[o]; ++i) t_res[o][i] = L[first[o] + rows[o] * c + i];
+  }
+}
+
 /* n coordinates; legs: bit i set for a stance leg i (the lift and S depend on its joints only);
  * lift_quat: the lift depends on the trunk orientation (two feet). */
 QD_INLINE int qd_dfd_r_solve(int n, int legs, int lift_quat, const casadi_real** arg, casadi_real** res, casadi_int* iw,
@@ -159,8 +170,21 @@ QD_INLINE int qd_dfd_r_solve(int n, int legs, int lift_quat, const casadi_real**
   if (flag) return flag;
   qd_densify(qd_did_full_sparsity_out(0), G);
   qd_densify(qd_did_full_sparsity_out(1), H);
-  const casadi_real* t_arg[5] = {tape, F, dq, dtheta, dqd};
   casadi_real* t_res[4] = {dv, da, dSF, da_qd};
+#ifdef QD_DFD_R_LIFT_COLUMNS /* every seed's column at once (emit_derivatives.lift_seeds' order), taken in turn */
+  casadi_real L[(18 + QD_N_MAX) * QD_DFD_R_LIFT_COLUMNS];
+  const casadi_real* c_arg[2] = {tape, F};
+  casadi_real* c_res[4] = {L, L + 6 * QD_DFD_R_LIFT_COLUMNS, L + 12 * QD_DFD_R_LIFT_COLUMNS,
+                           L + (12 + n) * QD_DFD_R_LIFT_COLUMNS};
+  flag = qd_dfd_r_lift_columns(c_arg, c_res, iw, w, mem);
+  if (flag) return flag;
+  int next = 0;
+  (void)dq, (void)dtheta; /* the seeds, set below as qd_dfd_r_lift_dir reads them: here the columns' order is theirs */
+#define QD_DFD_R_LIFT() (qd_dfd_r_take(n, QD_DFD_R_LIFT_COLUMNS, L, next++, t_res), 0)
+#else /* one direction per call (-Os: a quarter of the code) */
+  const casadi_real* t_arg[5] = {tape, F, dq, dtheta, dqd};
+#define QD_DFD_R_LIFT() qd_dfd_r_lift_dir(t_arg, t_res, iw, w, mem)
+#endif
   /* columns of -d id_r/dx, then M_r^-1 of each. theta: gravity in the trunk frame (did_full's rotation columns), the
      lift for two feet; the roll rate's da_b (its own output of the lift, seed dqd) in theta's first call */
   casadi_real da_roll[6];
@@ -170,7 +194,7 @@ QD_INLINE int qd_dfd_r_solve(int n, int legs, int lift_quat, const casadi_real**
     if (lift_quat) {
       dtheta[k] = 1;
       if (k == 0 && roll_with_theta) dqd[12] = 1;
-      flag = qd_dfd_r_lift_dir(t_arg, t_res, iw, w, mem);
+      flag = QD_DFD_R_LIFT(); /* along (dq, dtheta, dqd) */
       dtheta[k] = 0;
       if (n > 12) dqd[12] = 0;
       if (flag) return flag;
@@ -189,7 +213,7 @@ QD_INLINE int qd_dfd_r_solve(int n, int legs, int lift_quat, const casadi_real**
     if (moves && !(j >= 12 && roll_with_theta)) {
       dq[j] = j < 12;
       dqd[j] = 1;
-      flag = qd_dfd_r_lift_dir(t_arg, t_res, iw, w, mem);
+      flag = QD_DFD_R_LIFT(); /* along (dq, dtheta, dqd) */
       dq[j] = dqd[j] = 0;
       if (flag) return flag;
     }
@@ -213,3 +237,4 @@ QD_INLINE int qd_dfd_r_solve(int n, int legs, int lift_quat, const casadi_real**
   const casadi_int nnz[4] = {n * n, n * n, n * n, 3 * n};
   return qd_finite(0, res, 4, nnz);
 }
+#undef QD_DFD_R_LIFT
