@@ -157,7 +157,8 @@ def lift_seeds(n: int, legs: int, reads_quat: bool) -> list[tuple[np.ndarray, np
     for k in range(3 if reads_quat else 0):
         dq, dtheta, dqd = np.zeros(n), np.zeros(3), np.zeros(n)
         dtheta[k] = 1
-        dqd[12] = 1 if k == 0 and roll_with_theta else 0
+        if k == 0 and roll_with_theta:
+            dqd[12] = 1
         seeds.append((dq, dtheta, dqd))
     for j in range(n):
         moves = bool(legs >> (j // 3) & 1) if j < 12 else True
