@@ -44,8 +44,9 @@ def require_headers(headers: tuple[str, ...], packages: str) -> Path:
 
 
 def pinocchio_program(sources: list[Path], exe: Path, flags: tuple[str, ...], cxx: str = "g++") -> list[str]:
-    """The command that builds ``sources`` into ``exe`` against the wheel's Pinocchio."""
+    """The command that builds ``sources`` into ``exe`` against the wheel's Pinocchio (a RUNPATH, not an RPATH: the
+    benchmark's LD_LIBRARY_PATH finds its copies of the libraries first, placement.py)."""
     prefix = cmeel_prefix()
     include, lib = prefix / "include", prefix / "lib"
     return [cxx, *flags, f"-I{include}", f"-I{include / 'eigen3'}", f"-I{include / 'urdfdom_headers'}",
-            *map(str, sources), f"-L{lib}", f"-Wl,-rpath,{lib}", *PINOCCHIO_LIBS, "-o", str(exe)]
+            *map(str, sources), f"-L{lib}", "-Wl,--enable-new-dtags", f"-Wl,-rpath,{lib}", *PINOCCHIO_LIBS, "-o", str(exe)]

@@ -32,6 +32,7 @@ import numpy as np
 from quadruped_dyn.bench import cppadcg
 from quadruped_dyn.bench.harnesses import HARNESSES
 from quadruped_dyn.bench.limits import check_counts
+from quadruped_dyn.bench.placement import TimedProgram, median_over_rounds
 from quadruped_dyn.bench.timing import arithmetic_operations
 from quadruped_dyn.codegen.casadi_source import silence_unused_parameters
 from quadruped_dyn.codegen.emit import CODEGEN_FUNCTIONS, PREFIX
@@ -152,7 +153,7 @@ def _harness(functions: list[ca.Function], flags: tuple[str, ...], cc: str) -> P
 
 
 def run_peers(robot: Robot, native: bool = False, calls: int = 20000, reps: int = 9,
-              rounds: int = 3, cc: str = "gcc") -> list[PeerEntry]:
+              rounds: int = 5, cc: str = "gcc") -> list[PeerEntry]:
     """Time the toolkit's generated functions against adam's, same file, flags and harness."""
     check_counts(calls, reps)
     parse_peers("adam")
@@ -165,11 +166,9 @@ def run_peers(robot: Robot, native: bool = False, calls: int = 20000, reps: int 
     functions = [*ours.values(), *theirs]
     flags = tuple(f for f in C_FLAGS if f != "-fPIC") + (("-march=native",) if native else ())
     exe = _harness(functions, flags, cc)
-    best: dict[str, float] = {}
-    for _ in range(rounds):
-        for line in run_tool([str(exe), str(calls), str(reps)]).strip().splitlines():
-            name, ns = line.split()
-            best[name] = min(float(ns), best.get(name, float("inf")))
+    median, _ = median_over_rounds({"peers": TimedProgram([str(exe), str(calls), str(reps)])}, rounds,
+                                   lambda out: {name: float(ns) for name, ns in (line.split() for line in out.strip().splitlines())})
+    best = median["peers"]  # both sides in one program: the same copy each round
     peer_by_name = {f.name()[len(PREFIX):]: f for f in theirs}
     return [
         PeerEntry(robot.name, name, peer, best[PREFIX + name], best[PREFIX + peer], best[PREFIX + name] / best[PREFIX + peer],

@@ -5,7 +5,8 @@ with ``peer`` Pinocchio's CppADCodeGen code, ``cppadcg.py``): the median over ``
 ``calls`` calls each, fewer for a function slower than 2 ms / ``calls`` (every harness stops a run
 at about 2 ms: ``c/bench_median.h``, QD_RUN_BUDGET_NS), each harness's runs interleaved across its
 functions (a few ms of disturbance spoil one run of a few functions, not all of one's); the harnesses alternate for ``rounds``
-rounds and each function keeps its best median (the least disturbed by other load on a shared 2-core machine). Ratios are what to
+rounds, each round on fresh copies of the harnesses and the libraries they time (where code lands in memory moves the
+generated C's time by up to 1.6x: placement.py), and a function's time is its median over the rounds. Ratios are what to
 read; absolute times drift with the machine's load. By default the Pinocchio harness links the pin
 wheel's libraries (built for generic x86-64) and the generated C is built with ``C_FLAGS``, so
 neither side uses -march=native; ``native`` builds the generated C and the peer for this machine
@@ -35,8 +36,9 @@ import numpy as np
 import pinocchio as pin
 
 from quadruped_dyn.bench import cppadcg
-from quadruped_dyn.bench.harnesses import HARNESSES, PINOCCHIO_CXX_FLAGS, pinocchio_program, require_headers
+from quadruped_dyn.bench.harnesses import HARNESSES, PINOCCHIO_CXX_FLAGS, cmeel_prefix, pinocchio_program, require_headers
 from quadruped_dyn.bench.limits import check_counts
+from quadruped_dyn.bench.placement import TimedProgram, median_over_rounds
 from quadruped_dyn.checks.c_reference import generate_checked, reference_header_name
 from quadruped_dyn.codegen.emit import PREFIX, GeneratedFiles, codegen_functions, work_sizes
 from quadruped_dyn.codegen.library import C_FLAGS, CompiledFunction, CompiledLibrary, compile_sources, compiled_library, run_tool
@@ -74,6 +76,8 @@ class BenchEntry:
     target: float | None = None
     python_generated_us: float | None = None
     python_pinocchio_us: float | None = None
+    generated_spread: float | None = None  # max / min of generated_ns over the rounds' fresh copies (placement.py)
+    pinocchio_spread: float | None = None  # the same of pinocchio_ns
 
 
 @dataclass
@@ -92,6 +96,7 @@ class BenchReport:
     c_flags: list[str] = field(default_factory=list)  # of the generated C
     pinocchio_flags: list[str] = field(default_factory=list)  # of the Pinocchio harness
     peers: list[cppadcg.PeerTiming] = field(default_factory=list)  # Pinocchio's CppADCodeGen code, same rounds
+    rounds: int = 0  # timing rounds, each on fresh copies of every harness and library timed (placement.py)
 
     def as_dict(self) -> dict[str, object]:
         return asdict(self)
@@ -154,7 +159,7 @@ def _parse(output: str) -> dict[str, float]:
     return {name: float(value) for name, value in (line.split() for line in output.strip().splitlines())}
 
 
-def run_bench(robot: Robot, calls: int = 20000, reps: int = 9, rounds: int = 3, cc: str = "gcc", native: bool = False,
+def run_bench(robot: Robot, calls: int = 20000, reps: int = 9, rounds: int = 5, cc: str = "gcc", native: bool = False,
               peer: bool = False, checked_c: GeneratedFiles | None = None) -> BenchReport:
     """Time every generated function and its Pinocchio counterpart in the same run; with ``peer``
     also Pinocchio's CppADCodeGen code (cppadcg.py, checked against Pinocchio first). ``native``:
@@ -186,34 +191,33 @@ def run_bench(robot: Robot, calls: int = 20000, reps: int = 9, rounds: int = 3, 
         report.compile_s = time.perf_counter() - start
         run_tool([cc, *flags, f"-I{h_path.parent.resolve()}",  # the headers beside the generated C (cwd is tmp)
                   f"-DQD_HEADER=\"{h_path.name}\"", f"-DQD_REFERENCE=\"{ref_path.name}\"", "bench_qd.c",
-                  lib.name, f"-Wl,-rpath,{tmp}", "-lm", "-o", exe.name], cwd=tmp)
+                  lib.name, "-Wl,--enable-new-dtags", f"-Wl,-rpath,{tmp}", "-lm", "-o", exe.name], cwd=tmp)
         harness = pinocchio_harness()
         feet = [robot.model.frames[i].name for i in robot.foot_frame_ids]
         commands = {"generated": [str(exe), str(calls), str(reps)],
                     "pinocchio": [str(harness), str(robot.urdf), str(calls), str(reps), *feet]}
+        libraries = {"generated": (lib,), "pinocchio": (cmeel_prefix() / "lib" / "libpinocchio_default.so",)}
         if peer:
             peer_exe = cppadcg.harness(robot, native, cc)
             peer_errors = cppadcg.check(robot, peer_exe)  # NumericalError before any timing if it differs
             commands["peer"] = cppadcg.time_command(robot, peer_exe, calls, reps)
-        best: dict[str, dict[str, float]] = {side: {} for side in commands}
-        for _ in range(rounds):  # alternate the harnesses; keep each function's best median
-            for side, cmd in commands.items():
-                for name, ns in _parse(run_tool(cmd)).items():
-                    best[side][name] = min(ns, best[side].get(name, ns))
-    generated, pinocchio = best["generated"], best["pinocchio"]
+        programs = {side: TimedProgram(cmd, libraries.get(side, ())) for side, cmd in commands.items()}
+        median, spread = median_over_rounds(programs, rounds, _parse)  # harnesses alternate, fresh copies each round
+    generated, pinocchio = median["generated"], median["pinocchio"]
+    report.rounds = rounds
     if peer:
-        report.peers = cppadcg.timings({n[len(PREFIX):]: t for n, t in generated.items()}, best["peer"], pinocchio, peer_errors)
+        report.peers = cppadcg.timings({n[len(PREFIX):]: t for n, t in generated.items()}, median["peer"], pinocchio, peer_errors)
     library = compiled_library(robot, cc=cc)
     report.library_bytes = library.path.stat().st_size
     python_us = _python_call_times(robot, library)
     for name, ns in ((n[len(PREFIX):], t) for n, t in generated.items()):
-        entry = BenchEntry(name, ns, python_generated_us=python_us.get(name))
+        entry = BenchEntry(name, ns, python_generated_us=python_us.get(name), generated_spread=spread["generated"][PREFIX + name])
         if name in PAIRS or name.startswith(("fd_r_", "dfd_r_")):
             algo, target = PAIRS.get(name) or (
                 (f"constraintDynamics_{name[len('fd_r_'):]}", FD_R_TARGET) if name.startswith("fd_r_")
                 else (f"constraintDynamicsDerivatives_{name[len('dfd_r_'):]}", DFD_R_TARGET))
             entry.pinocchio, entry.pinocchio_ns, entry.target = algo, pinocchio[algo], target
-            entry.ratio = ns / pinocchio[algo]
+            entry.ratio, entry.pinocchio_spread = ns / pinocchio[algo], spread["pinocchio"][algo]
             entry.python_pinocchio_us = python_us.get(algo)
         report.entries.append(entry)
     c_plus_g = generated[PREFIX + "C_full"] + generated[PREFIX + "G_full"]

@@ -34,11 +34,11 @@ COMPILE_JOBS = 2  # this machine's cores
 _DIAGNOSTIC = re.compile(r"(^|: )(fatal )?error:|undefined reference")
 
 
-def run_tool(cmd: list[str], cwd: str | Path | None = None) -> str:
-    """Run a compiler or harness; its stdout, or a BuildError naming the command and its complaint
-    (an InputError if the program is not installed)."""
+def run_tool(cmd: list[str], cwd: str | Path | None = None, env: dict[str, str] | None = None) -> str:
+    """Run a compiler or harness (in ``cwd``, with ``env`` if given); its stdout, or a BuildError naming the command
+    and its complaint (an InputError if the program is not installed)."""
     try:
-        proc = subprocess.run(cmd, capture_output=True, text=True, cwd=cwd, check=False)
+        proc = subprocess.run(cmd, capture_output=True, text=True, cwd=cwd, env=env, check=False)
     except FileNotFoundError as e:  # the environment, not a failed check: bad input (exit 2)
         raise InputError(f"'{cmd[0]}' not found; expected it on PATH (a C/C++ compiler is needed here)") from e
     if proc.returncode != 0:
