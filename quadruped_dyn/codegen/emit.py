@@ -400,12 +400,10 @@ def _reduced_helpers_c(robot: Robot, stance: StanceSet, dfd_r: DfdRPieces, preci
 
 
 def _lift_derivative_c(dfd_r: DfdRPieces, precision: str) -> str:
-    """The lift's derivative dfd_r calls: qd_dfd_r_lift_dir (one direction per call), and for the stance sets that have
-    them qd_dfd_r_lift_columns (every direction at once, QD_DFD_R_LIFT_COLUMNS columns) but at -Os, the embedded
-    builds' size budget (docs/derivatives.md)."""
+    """The lift's derivative dfd_r calls: qd_dfd_r_lift_columns (every direction at once, QD_DFD_R_LIFT_COLUMNS
+    columns), and at -Os, the embedded builds' size budget, qd_dfd_r_lift_dir (one direction per call;
+    docs/derivatives.md)."""
     one = static_c("qd_dfd_r_lift_dir", dfd_r.lift_dir, precision, all_io=True)
-    if dfd_r.lift_columns is None:
-        return one
     return ("#if !defined(__OPTIMIZE_SIZE__) /* the lift's columns at once; at -Os one direction per call */\n"
             f"#define QD_DFD_R_LIFT_COLUMNS {dfd_r.lift_columns.size2_out(0)} /* emit_derivatives.lift_seeds */\n"
             + static_c("qd_dfd_r_lift_columns", dfd_r.lift_columns, precision, all_io=True)

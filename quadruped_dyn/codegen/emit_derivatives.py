@@ -118,9 +118,9 @@ class DfdRPieces:
     #: derivative along (dq_r, dtheta), d(S_b F_b) along dq_r, d a_b along dqd_r; once per stance-leg joint
     lift_dir: ca.Function
     #: dfd_r_lift_columns (tape, F_b) -> (dv_b, da_b (6 x K), dSF (n x K), da_qd (6 x K)): lift_dir at each of the K
-    #: unit seeds qd_dfd_r_solve takes, one column each in its order (``lift_columns``); once per dfd_r. None: lift_dir
-    #: only (``LIFT_COLUMNS_MIN_FEET``)
-    lift_columns: ca.Function | None
+    #: unit seeds qd_dfd_r_solve takes, one column each in its order (``lift_columns``); once per dfd_r (but at -Os,
+    #: where lift_dir is called per seed: the embedded size budget)
+    lift_columns: ca.Function
     legs: int  # bit i set: leg i is a stance leg (the lift and S depend on its joints, not on the others')
     lift_reads_quat: bool  # two feet: the roll row makes v_b, a_b depend on the trunk orientation
 
@@ -138,14 +138,7 @@ def dfd_r_pieces(robot: Robot, stance: StanceSet) -> DfdRPieces:
     reads_quat = bool(ca.depends_on(ca.vertcat(*lift.call(x)[:2]), x[3]))
     primal, direction = split_at_seeds(trig_as_inputs(lift, 0), seeds=(4, 5, 6, 7), n_primal_out=2)
     legs = sum(1 << i for i in stance.feet)
-    columns = lift_columns(direction, legs, reads_quat) if len(stance.feet) >= LIFT_COLUMNS_MIN_FEET else None
-    return DfdRPieces(primal, direction, columns, legs, reads_quat)
-
-
-#: The stance sets whose dfd_r takes the lift's derivative by columns (``lift_columns``): measured on a1 (2026-12-04,
-#: docs/benchmark.md), dfd_r -19 % with four feet, -9 % with three, +1 to -3.5 % with two (its columns' straight-line
-#: code outruns the instruction cache), for ~0.35 and ~0.2 MB of C per stance set.
-LIFT_COLUMNS_MIN_FEET = 3
+    return DfdRPieces(primal, direction, lift_columns(direction, legs, reads_quat), legs, reads_quat)
 
 
 def lift_seeds(n: int, legs: int, reads_quat: bool) -> list[tuple[np.ndarray, np.ndarray, np.ndarray]]:

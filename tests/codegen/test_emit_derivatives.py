@@ -13,7 +13,6 @@ from quadruped_dyn.checks.derivative_reference import ReducedReference, grf_deri
 from quadruped_dyn.codegen.emit import REDUCED_STANCE_SETS, TEMPLATES, reduced_symbol
 from quadruped_dyn.codegen.emit_derivatives import (
     GRF_DERIVATIVE_STANCE_SETS,
-    LIFT_COLUMNS_MIN_FEET,
     dfd_r_lift,
     dfd_r_pieces,
     lift_seeds,
@@ -214,14 +213,15 @@ def test_split_at_seeds_gives_the_lift_to_the_digit(paper):
 
 def test_lift_columns_are_the_lift_direction_at_each_seed(paper):
     """qd_dfd_r_lift_columns' column c is qd_dfd_r_lift_dir along lift_seeds' seed c (the order the C template takes
-    them in), to round-off (LIFT_COLUMNS_REL_TOL), at a random tape and F_b; two feet have none (LIFT_COLUMNS_MIN_FEET)."""
+    them in), to round-off (LIFT_COLUMNS_REL_TOL), at a random tape and F_b, for two (13 coordinates: the rotations,
+    the roll rate's with the first, then the stance legs' joints), three and four feet."""
     rng = np.random.default_rng(4)
-    assert dfd_r_pieces(paper, stance_set("FL+BR")).lift_columns is None and LIFT_COLUMNS_MIN_FEET == 3
-    for name in ("FL+FR+BL", "FL+FR+BL+BR"):
+    for name in ("FL+BR", "FL+FR+BL", "FL+FR+BL+BR"):
         pieces = dfd_r_pieces(paper, stance_set(name))
         tape, F_b = rng.normal(size=pieces.tape), rng.normal(size=6)
         columns = [np.asarray(x) for x in pieces.lift_columns(tape, F_b)]
-        seeds = lift_seeds(12, pieces.legs, pieces.lift_reads_quat)
+        seeds = lift_seeds(13 if name == "FL+BR" else 12, pieces.legs, pieces.lift_reads_quat)
+        assert pieces.lift_reads_quat == (name == "FL+BR")
         assert len(seeds) == columns[0].shape[1] == 9 + 3 * (name == "FL+FR+BL+BR")
         for c, seed in enumerate(seeds):
             one = [np.asarray(x).ravel() for x in pieces.lift_dir(tape, F_b, *seed)]
