@@ -153,7 +153,7 @@ def _harness(functions: list[ca.Function], flags: tuple[str, ...], cc: str) -> P
 
 
 def run_peers(robot: Robot, native: bool = False, calls: int = 20000, reps: int = 9,
-              rounds: int = 5, cc: str = "gcc") -> list[PeerEntry]:
+              rounds: int = 9, cc: str = "gcc") -> list[PeerEntry]:
     """Time the toolkit's generated functions against adam's, same file, flags and harness."""
     check_counts(calls, reps)
     parse_peers("adam")

@@ -159,7 +159,7 @@ def _parse(output: str) -> dict[str, float]:
     return {name: float(value) for name, value in (line.split() for line in output.strip().splitlines())}
 
 
-def run_bench(robot: Robot, calls: int = 20000, reps: int = 9, rounds: int = 5, cc: str = "gcc", native: bool = False,
+def run_bench(robot: Robot, calls: int = 20000, reps: int = 9, rounds: int = 9, cc: str = "gcc", native: bool = False,
               peer: bool = False, checked_c: GeneratedFiles | None = None) -> BenchReport:
     """Time every generated function and its Pinocchio counterpart in the same run; with ``peer``
     also Pinocchio's CppADCodeGen code (cppadcg.py, checked against Pinocchio first). ``native``:
