@@ -6,7 +6,7 @@ _MODULES: dict[str, tuple[str, ...]] = {
     "harnesses": ("HARNESSES", "PINOCCHIO_CXX_FLAGS", "cmeel_prefix", "require_headers", "pinocchio_program"),
     "cppadcg": ("PEER", "PeerTiming"),
     "limits": ("MAX_CALLS", "MAX_REPS", "check_counts"),
-    "placement": ("TimedProgram", "median_over_rounds"),
+    "placement": ("TimedProgram", "parse_timings", "median_over_rounds"),
     "peers": ("PEERS", "ADAM_PAIRS", "PeerEntry", "parse_peers", "adam_functions", "check_adam", "run_peers", "peers_table"),
     "timing": ("FD_R_TARGET", "PAIRS", "BenchEntry", "BenchReport", "arithmetic_operations", "pinocchio_harness", "run_bench"),
 }

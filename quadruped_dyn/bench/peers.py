@@ -166,8 +166,7 @@ def run_peers(robot: Robot, native: bool = False, calls: int = 20000, reps: int 
     functions = [*ours.values(), *theirs]
     flags = tuple(f for f in C_FLAGS if f != "-fPIC") + (("-march=native",) if native else ())
     exe = _harness(functions, flags, cc)
-    median, _ = median_over_rounds({"peers": TimedProgram([str(exe), str(calls), str(reps)])}, rounds,
-                                   lambda out: {name: float(ns) for name, ns in (line.split() for line in out.strip().splitlines())})
+    median, _ = median_over_rounds({"peers": TimedProgram([str(exe), str(calls), str(reps)])}, rounds)
     best = median["peers"]  # both sides in one program: the same copy each round
     peer_by_name = {f.name()[len(PREFIX):]: f for f in theirs}
     return [

@@ -16,7 +16,6 @@ import os
 import shutil
 import statistics
 import tempfile
-from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -42,16 +41,22 @@ def _run_copy(program: TimedProgram, directory: Path) -> str:
     return run_tool([str(exe), *program.command[1:]], env=env)
 
 
-def median_over_rounds(programs: dict[str, TimedProgram], rounds: int,
-                       parse: Callable[[str], dict[str, float]]) -> tuple[dict[str, dict[str, float]], dict[str, dict[str, float]]]:
-    """Run the programs in turn for ``rounds`` rounds, each run on fresh copies (``TimedProgram``); ``parse`` reads a
-    run's output as name -> ns. Returns per side (name -> median ns over the rounds, name -> max / min over them: the
-    spread that placement and load gave)."""
+def parse_timings(output: str) -> dict[str, float]:
+    """A harness's output, one "name ns" line per function (c/bench_median.h), as name -> ns."""
+    return {name: float(value) for name, value in (line.split() for line in output.strip().splitlines())}
+
+
+Timings = dict[str, dict[str, float]]  # side -> function name -> ns (or a ratio)
+
+
+def median_over_rounds(programs: dict[str, TimedProgram], rounds: int) -> tuple[Timings, Timings]:
+    """Run the programs in turn for ``rounds`` rounds, each run on fresh copies (``TimedProgram``). Returns per side
+    (name -> median ns over the rounds, name -> max / min over them: the spread that placement and load gave)."""
     runs: dict[str, dict[str, list[float]]] = {side: {} for side in programs}
     for _ in range(rounds):
         for side, program in programs.items():
             with tempfile.TemporaryDirectory(prefix="qd-round-") as tmp:
-                for name, ns in parse(_run_copy(program, Path(tmp))).items():
+                for name, ns in parse_timings(_run_copy(program, Path(tmp))).items():
                     runs[side].setdefault(name, []).append(ns)
     medians = {side: {n: statistics.median(v) for n, v in by.items()} for side, by in runs.items()}
     spreads = {side: {n: max(v) / min(v) if min(v) > 0 else float("inf") for n, v in by.items()} for side, by in runs.items()}

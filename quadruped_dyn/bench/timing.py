@@ -155,10 +155,6 @@ def pinocchio_harness(cxx: str = "g++") -> Path:
     return cached_build(f"pinocchio-bench-{key}", "bench_pinocchio", build)
 
 
-def _parse(output: str) -> dict[str, float]:
-    return {name: float(value) for name, value in (line.split() for line in output.strip().splitlines())}
-
-
 def run_bench(robot: Robot, calls: int = 20000, reps: int = 9, rounds: int = 9, cc: str = "gcc", native: bool = False,
               peer: bool = False, checked_c: GeneratedFiles | None = None) -> BenchReport:
     """Time every generated function and its Pinocchio counterpart in the same run; with ``peer``
@@ -202,7 +198,7 @@ def run_bench(robot: Robot, calls: int = 20000, reps: int = 9, rounds: int = 9, 
             peer_errors = cppadcg.check(robot, peer_exe)  # NumericalError before any timing if it differs
             commands["peer"] = cppadcg.time_command(robot, peer_exe, calls, reps)
         programs = {side: TimedProgram(cmd, libraries.get(side, ())) for side, cmd in commands.items()}
-        median, spread = median_over_rounds(programs, rounds, _parse)  # harnesses alternate, fresh copies each round
+        median, spread = median_over_rounds(programs, rounds)  # harnesses alternate, fresh copies each round
     generated, pinocchio = median["generated"], median["pinocchio"]
     report.rounds = rounds
     if peer:

@@ -446,7 +446,8 @@ def generated_c_section(gen: dict[str, Any] | None, bench: Sequence[dict[str, An
                  cell(num(e.get("ratio"), ".2f"), grade(e.get("ratio"), e.get("target"))),
                  "" if e.get("target") is None else f"≤ {e['target']:.2f}"] for e in entries]
         body.append(table(["function", "generated ns", "peer", "peer ns", "ratio", "target"], rows,
-                          f"{b.get('robot')}: medians timed in C on both sides, same run "
+                          f"{b.get('robot')}: medians timed in C on both sides, same run, over "
+                          f"{b.get('rounds') or 'several'} rounds of fresh copies of the code timed "
                           f"(Pinocchio {b.get('pinocchio_version')}); "
                           f"C source {num(b.get('code_bytes'), ',')} B, library {num(b.get('library_bytes'), ',')} B"))
         ratios = [e["ratio"] for e in entries if e.get("ratio") is not None]

@@ -28,7 +28,7 @@ def test_every_round_runs_a_fresh_copy_and_takes_the_median(tmp_path: Path) -> N
     library.write_bytes(b"code")
     counter.write_text("0")
     program = TimedProgram([str(original), str(counter), str(tmp_path)], (library,))
-    median, spread = median_over_rounds({"side": program}, 3, lambda out: {k: float(v) for k, v in map(str.split, out.splitlines())})
+    median, spread = median_over_rounds({"side": program}, 3)
     # the copy ran (not the original: its directory differs, the library beside it and first on LD_LIBRARY_PATH)
     assert set(median["side"]) == {"t", "dir_0", "dir_1", "dir_2"}
     assert median["side"]["t"] == 20.0 and spread["side"]["t"] == pytest.approx(4.0)
