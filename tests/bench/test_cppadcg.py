@@ -3,7 +3,9 @@ catches a peer that does not, and bench names it in the JSON."""
 
 from __future__ import annotations
 
+import inspect
 import json
+import math
 
 import numpy as np
 import pinocchio as pin
@@ -11,6 +13,7 @@ import pytest
 from click.testing import CliRunner
 
 from quadruped_dyn.bench import cppadcg
+from quadruped_dyn.bench.timing import run_bench
 from quadruped_dyn.cli import main
 from quadruped_dyn.errors import NumericalError
 from quadruped_dyn.model.robot import load_robot
@@ -90,6 +93,11 @@ def test_bench_times_the_peer_in_the_same_run():
     assert result.exit_code == 0, result.output
     (report,) = json.loads(result.stdout)
     assert report["native"] is False and "-march=native" not in report["c_flags"]
+    # medians over the rounds of fresh copies (bench/placement.py): each entry's spread over them is a finite max / min
+    assert report["rounds"] == inspect.signature(run_bench).parameters["rounds"].default > 1
+    for e in (e for e in report["entries"] if e["name"] != "C_full + G_full"):  # that one is a sum of two entries
+        spreads = [e["generated_spread"], *([e["pinocchio_spread"]] if e["pinocchio"] else [])]
+        assert all(math.isfinite(x) and x >= 1.0 for x in spreads), e
     peers = {p["peer_function"]: p for p in report["peers"]}
     assert set(peers) == set(cppadcg.PAIRS)
     for function, (name, target) in cppadcg.PAIRS.items():
