@@ -383,13 +383,12 @@ def _reduced_helpers_c(robot: Robot, stance: StanceSet, dfd_r: DfdRPieces, preci
     q_r, qd_r, qdd_r, quat = (ca.SX.sym(k, m) for k, m in (("q_r", n), ("qd_r", n), ("qdd_r", n), ("quat", 4)))
     p = reduced_projection(robot, stance, q_r, quat)
     S_b, T_b, _ = p.mass_matrix_factors()
+    factor_outputs = [regularity_function(robot, stance)(q_r, quat), ca.densify(S_b), ca.densify(T_b)]
     parts = trig_as_inputs(ca.Function("reduced_parts", [q_r, qd_r, qdd_r, quat],
-                                       [regularity_function(robot, stance)(q_r, quat), ca.densify(S_b), ca.densify(T_b),
-                                        *(ca.densify(x) for x in p.velocity_and_acceleration(qd_r, qdd_r))],
+                                       [*factor_outputs, *(ca.densify(x) for x in p.velocity_and_acceleration(qd_r, qdd_r))],
                                        {"cse": True}), 0, range(len(JOINT_ANGLES)))
-    factors = trig_as_inputs(ca.Function("reduced_factors", [q_r, quat],
-                                         [regularity_function(robot, stance)(q_r, quat), ca.densify(S_b), ca.densify(T_b)],
-                                         {"cse": True}), 0, range(len(JOINT_ANGLES)))
+    factors = trig_as_inputs(ca.Function("reduced_factors", [q_r, quat], factor_outputs, {"cse": True}),
+                             0, range(len(JOINT_ANGLES)))
     return (f"#define QD_REGULARITY_MIN ((casadi_real){REGULARITY_MIN!r}) /* quadruped_dyn.tolerances.REGULARITY_MIN */\n"
             + static_c("qd_reduced_parts", parts, precision) + "\n"
             + "#if !defined(__OPTIMIZE_SIZE__) /* M_r's and G_r's factors alone; at -Os the parts (the size budget) */\n"

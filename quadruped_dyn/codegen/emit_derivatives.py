@@ -28,9 +28,9 @@ In each reduced file ``qd_<robot>_r_<feet>.c`` (``reduced_derivative_functions``
   one direction of (q_r, theta) and one of qd_r at once, with d(S_b F_b) along the q_r direction (2.8-4.3k
   operations on the paper robot), split (``split_at_seeds``) into the static ``qd_dfd_r_lift`` (v_b, a_b and the
   tape, the values the derivative reads; once per call) and ``qd_dfd_r_lift_dir`` (the derivative over the tape,
-  ~70 % of the operations; once per stance-leg joint and two feet's rotation: 9-12 calls). With three and four feet
-  also ``qd_dfd_r_lift_columns`` (``lift_columns``: every one of those directions at once, 2.3-2.4x fewer operations,
-  ~4x the C), which dfd_r calls instead but at -Os. Its temporaries (~16 kB in double, the tape included) are the
+  ~70 % of the operations; once per stance-leg joint and two feet's rotation: 9-12 calls, at -Os). For every stance
+  set also ``qd_dfd_r_lift_columns`` (``lift_columns``: every one of those directions at once, 2.3-2.4x fewer
+  operations, ~4x the C), which dfd_r calls instead but at -Os. Its temporaries (~16 kB in double, the tape included) are the
   caller's w, declared by its _work entry (``declare_dfd_r_work``).
 
 Why directions and a chain rule, not CasADi's Jacobians: those take 48-97k operations per reduced
