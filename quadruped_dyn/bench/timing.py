@@ -140,13 +140,14 @@ def arithmetic_operations(f: ca.Function) -> int:
 
 
 def pinocchio_harness(cxx: str = "g++") -> Path:
-    """The compiled Pinocchio benchmark, built once per (source, pin version, flags), linked with the
-    wheel's algorithms (harnesses.py)."""
+    """The compiled Pinocchio benchmark, built once per (source, pin version, build command: flags, the wheel's
+    paths, the link's RUNPATH that placement.py relies on), linked with the wheel's algorithms (harnesses.py)."""
     require_headers(("eigen3/Eigen/Core", "urdfdom_headers/urdf_model/model.h"),
                     "the cmeel-eigen and cmeel-urdfdom-headers packages (pip install cmeel-eigen cmeel-urdfdom-headers)")
     source = HARNESSES / "bench_pinocchio.cpp"
     flags = PINOCCHIO_CXX_FLAGS
-    key = hashlib.sha256(source.read_bytes() + pin.__version__.encode() + " ".join(flags).encode()).hexdigest()[:16]
+    command = " ".join(pinocchio_program([Path(source.name)], Path("bench_pinocchio"), flags, cxx))
+    key = hashlib.sha256(source.read_bytes() + pin.__version__.encode() + command.encode()).hexdigest()[:16]
 
     def build(exe: Path) -> None:
         print(f"building the Pinocchio benchmark harness once (about a minute) into {cache_dir()}", file=sys.stderr)
