@@ -189,21 +189,15 @@ static const casadi_int casadi_s9[3] = {3, 18, 1};
 
 /* quadruped_dyn: a CasADi sparse output made dense (hand-written; inserted into qd_<robot>_d.c
  * and in qd_reduced_templates.h, which each qd_<robot>_r_<feet>.c includes; see quadruped_dyn/codegen/emit.py). */
-/* x: the nonzeros of a CasADi sparsity sp (nrow, ncol, colind[ncol + 1], row[nnz]) -> the dense matrix,
- * column-major, in place (x holds nrow * ncol reals). Backwards: a nonzero's dense index is >= its own. */
-static void qd_densify(const casadi_int* sp, casadi_real* x) {
+/* x (nrow * ncol reals, column-major) = the dense matrix of the nonzeros nz of a CasADi sparsity sp
+ * (nrow, ncol, colind[ncol + 1], row[nnz]), x and nz apart: the zeros in one pass (memset), then the nonzeros; faster
+ * than densifying in place, whose gaps are zeroed one nonzero at a time (docs/benchmark.md). */
+static void qd_scatter(const casadi_int* sp, const casadi_real* restrict nz, casadi_real* restrict x) {
   const casadi_int nrow = sp[0], ncol = sp[1], *colind = sp + 2, *row = sp + 3 + ncol;
-  casadi_int next = nrow * ncol; /* entries from here on are final */
-  for (casadi_int j = ncol - 1; j >= 0; --j) {
-    for (casadi_int k = colind[j + 1] - 1; k >= colind[j]; --k) {
-      casadi_int d = row[k] + nrow * j;
-      casadi_real value = x[k];
-      for (casadi_int i = d + 1; i < next; ++i) x[i] = 0;
-      x[d] = value;
-      next = d;
-    }
+  for (casadi_int i = 0; i < nrow * ncol; ++i) x[i] = 0;
+  for (casadi_int j = 0; j < ncol; ++j) {
+    for (casadi_int k = colind[j]; k < colind[j + 1]; ++k) x[row[k] + nrow * j] = nz[k];
   }
-  for (casadi_int i = 0; i < next; ++i) x[i] = 0;
 }
 
 CASADI_SYMBOL_EXPORT const casadi_int* qd_did_full_sparsity_out(casadi_int i);
@@ -294,13 +288,21 @@ static int qd_d_finite(int flag, casadi_real** res, int n_out, const casadi_int*
   return 0;
 }
 
-/* x (nrow * ncol reals, column-major) = the dense matrix of the nonzeros nz of sparsity sp (x and nz apart). */
-static void qd_d_scatter(const casadi_int* sp, const casadi_real* restrict nz, casadi_real* restrict x) {
+/* x: the nonzeros of a CasADi sparsity sp (nrow, ncol, colind[ncol + 1], row[nnz]) -> the dense matrix,
+ * column-major, in place (x holds nrow * ncol reals). Backwards: a nonzero's dense index is >= its own. */
+static void qd_densify(const casadi_int* sp, casadi_real* x) {
   const casadi_int nrow = sp[0], ncol = sp[1], *colind = sp + 2, *row = sp + 3 + ncol;
-  for (casadi_int i = 0; i < nrow * ncol; ++i) x[i] = 0;
-  for (casadi_int j = 0; j < ncol; ++j) {
-    for (casadi_int k = colind[j]; k < colind[j + 1]; ++k) x[row[k] + nrow * j] = nz[k];
+  casadi_int next = nrow * ncol; /* entries from here on are final */
+  for (casadi_int j = ncol - 1; j >= 0; --j) {
+    for (casadi_int k = colind[j + 1] - 1; k >= colind[j]; --k) {
+      casadi_int d = row[k] + nrow * j;
+      casadi_real value = x[k];
+      for (casadi_int i = d + 1; i < next; ++i) x[i] = 0;
+      x[d] = value;
+      next = d;
+    }
   }
+  for (casadi_int i = 0; i < next; ++i) x[i] = 0;
 }
 
 /* M (18 x 18, dense, column-major) and nle = C + G (18) at (q, v) = (arg[0], arg[1]) from qd_M_full and qd_nle_full,
@@ -313,7 +315,7 @@ QD_INLINE int qd_d_parts(const casadi_real** arg, casadi_real* M, casadi_real* n
   casadi_real* m_res[1] = {scratch ? scratch : M};
   int flag = M ? qd_M_full(arg, m_res, iw, w, mem) : 0;
   if (!flag && M) {
-    if (scratch) qd_d_scatter(sp, scratch, M);
+    if (scratch) qd_scatter(sp, scratch, M);
     else qd_densify(sp, M);
     if (scratch && qd_d_nonfinite(M, QD_NV * QD_NV)) return QD_NONFINITE;
   }
@@ -639,7 +641,7 @@ static inline void qd_sincos(int n, const casadi_real* x, casadi_real* c, casadi
   }
 }
 
-static int qd_did_full_trig(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem) {
+int qd_did_full_trig(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem) {
   (void)arg; (void)res; (void)iw; (void)w; (void)mem;
   casadi_real a000, a001, a002, a003, a004, a005, a006, a007, a008, a009, a010, a011;
   casadi_real a012, a013, a014, a015, a016, a017, a018, a019, a020, a021, a022, a023;

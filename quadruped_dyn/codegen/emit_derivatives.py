@@ -345,9 +345,13 @@ def _unguarded_inputs(c_text: str, raw: str, f: ca.Function) -> str:
 
 def _did_full_trig_once(c_text: str, raw: str, did: ca.Function, precision: str) -> str:
     """did_full's evaluation ``raw`` (every input given: its callers and qd_d_all_inputs) as the joints' sines and
-    cosines taken once (c/qd_sincos.c) and the graph reading them (``trig_as_inputs``): static qd_did_full_trig."""
+    cosines taken once (c/qd_sincos.c) and the graph reading them (``trig_as_inputs``): qd_did_full_trig, also
+    called by dfd_r (c/qd_reduced_derivatives.c), which has the sines and cosines already."""
     trig = trig_as_inputs(did, 0, JOINT_ANGLES)
     static = unguarded_inputs(static_c("qd_did_full_trig", trig, precision, defined_helpers(c_text)), "did_full")
+    if not static.startswith("static int qd_did_full_trig("):
+        raise AssertionError("static_c's qd_did_full_trig does not start as expected")
+    exported = static[len("static "):]
     n = len(JOINT_ANGLES)
     wrapper = (f"static int {raw}(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem) {{\n"
                f"  casadi_real s[{n}], c[{n}]; /* the joints' sines and cosines, once (qd_sincos) */\n"
@@ -357,7 +361,7 @@ def _did_full_trig_once(c_text: str, raw: str, did: ca.Function, precision: str)
     body = re.search(rf"static int {raw}\(.*?\n\}}\n", c_text, re.S)
     if not body:
         raise AssertionError(f"{raw}: CasADi's evaluation function not found")
-    return (c_text[:body.start()] + (TEMPLATES / SINCOS).read_text() + "\n" + static + "\n" + wrapper
+    return (c_text[:body.start()] + (TEMPLATES / SINCOS).read_text() + "\n" + exported + "\n" + wrapper
             + c_text[body.end():])
 
 

@@ -260,7 +260,7 @@ def _evaluation_body(text: str, name: str) -> str:
     assert body, inner
     trig = re.search(r"return (qd_\w+_trig)\(", body.group(0))  # did_full: the graph after qd_sincos (joint_trig)
     if trig:
-        body = re.search(rf"\nstatic int {trig.group(1)}\(.*?\n\}}\n", text, re.S)
+        body = re.search(rf"\n(?:static )?int {trig.group(1)}\(.*?\n\}}\n", text, re.S)  # exported: dfd_r calls it too
         assert body, trig.group(1)
     return body.group(0)
 

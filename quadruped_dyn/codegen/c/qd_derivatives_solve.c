@@ -84,13 +84,21 @@ static int qd_d_finite(int flag, casadi_real** res, int n_out, const casadi_int*
   return 0;
 }
 
-/* x (nrow * ncol reals, column-major) = the dense matrix of the nonzeros nz of sparsity sp (x and nz apart). */
-static void qd_d_scatter(const casadi_int* sp, const casadi_real* restrict nz, casadi_real* restrict x) {
+/* x: the nonzeros of a CasADi sparsity sp (nrow, ncol, colind[ncol + 1], row[nnz]) -> the dense matrix,
+ * column-major, in place (x holds nrow * ncol reals). Backwards: a nonzero's dense index is >= its own. */
+static void qd_densify(const casadi_int* sp, casadi_real* x) {
   const casadi_int nrow = sp[0], ncol = sp[1], *colind = sp + 2, *row = sp + 3 + ncol;
-  for (casadi_int i = 0; i < nrow * ncol; ++i) x[i] = 0;
-  for (casadi_int j = 0; j < ncol; ++j) {
-    for (casadi_int k = colind[j]; k < colind[j + 1]; ++k) x[row[k] + nrow * j] = nz[k];
+  casadi_int next = nrow * ncol; /* entries from here on are final */
+  for (casadi_int j = ncol - 1; j >= 0; --j) {
+    for (casadi_int k = colind[j + 1] - 1; k >= colind[j]; --k) {
+      casadi_int d = row[k] + nrow * j;
+      casadi_real value = x[k];
+      for (casadi_int i = d + 1; i < next; ++i) x[i] = 0;
+      x[d] = value;
+      next = d;
+    }
   }
+  for (casadi_int i = 0; i < next; ++i) x[i] = 0;
 }
 
 /* M (18 x 18, dense, column-major) and nle = C + G (18) at (q, v) = (arg[0], arg[1]) from qd_M_full and qd_nle_full,
@@ -103,7 +111,7 @@ QD_INLINE int qd_d_parts(const casadi_real** arg, casadi_real* M, casadi_real* n
   casadi_real* m_res[1] = {scratch ? scratch : M};
   int flag = M ? qd_M_full(arg, m_res, iw, w, mem) : 0;
   if (!flag && M) {
-    if (scratch) qd_d_scatter(sp, scratch, M);
+    if (scratch) qd_scatter(sp, scratch, M);
     else qd_densify(sp, M);
     if (scratch && qd_d_nonfinite(M, QD_NV * QD_NV)) return QD_NONFINITE;
   }

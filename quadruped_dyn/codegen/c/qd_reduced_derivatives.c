@@ -24,8 +24,10 @@
  * temporaries in the caller's w (QD_DFD_R_W(n) reals, stated by the _work entry), ~1 kB on the stack (and
  * the lift's columns, (18 + n) K reals, but at -Os). */
 
-/* defined in qd_<robot>_d.c and qd_<robot>.c of the same library (no work memory: checked by the generator) */
-int qd_did_full(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem);
+/* defined in qd_<robot>_d.c of the same library (no work memory: checked by the generator): did_full's graph with the
+ * joints' sines and cosines given, arg = (q, v, a, sin, cos), sin and cos of q[7..18]; no test of its inputs or
+ * outputs (dfd_r tests its own) */
+int qd_did_full_trig(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem);
 const casadi_int* qd_did_full_sparsity_out(casadi_int i);
 
 /* Reals of w qd_dfd_r_solve uses for n coordinates (the generator states the same number, checked below). */
@@ -165,11 +167,13 @@ QD_INLINE int qd_dfd_r_solve(int n, int legs, int lift_quat, const casadi_real**
     const casadi_real d = a[j] - k[j];
     for (int i = 0; i < 6; ++i) F[i] += M[i + 18 * j] * d;
   }
-  casadi_real* d_res[3] = {G, H, 0};
-  flag = qd_did_full(d_arg, d_res, iw, w, mem);
+  /* dF/dq's nonzeros in H's place, dF/dv's in X's (n (3n + 3) >= 18 x 18), each scattered into its dense matrix */
+  const casadi_real* did_arg[5] = {q, v, a, t.s, t.c};
+  casadi_real* d_res[3] = {H, X, 0};
+  flag = qd_did_full_trig(did_arg, d_res, iw, w, mem);
   if (flag) return flag;
-  qd_densify(qd_did_full_sparsity_out(0), G);
-  qd_densify(qd_did_full_sparsity_out(1), H);
+  qd_scatter(qd_did_full_sparsity_out(0), H, G);
+  qd_scatter(qd_did_full_sparsity_out(1), X, H);
   casadi_real* t_res[4] = {dv, da, dSF, da_qd};
 #ifdef QD_DFD_R_LIFT_COLUMNS /* every seed's column at once (emit_derivatives.lift_seeds' order), taken in turn */
   casadi_real L[(18 + QD_N_MAX) * QD_DFD_R_LIFT_COLUMNS];
