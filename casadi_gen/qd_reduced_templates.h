@@ -540,7 +540,7 @@ static void qd_dfd_r_through_trunk(const casadi_real* restrict H, const casadi_r
 }
 
 /* Rows i of X's columns c0 .. c0 + W - 1: the lower (lower = 1: x_i -= sum_k<i L_ik x_k, the k ascending) or the
- * upper solve (x_i = (x_i - sum_k>i U_ik x_k, the k descending) / U_ii), row i's block kept in W locals (registers). */
+ * upper solve (x_i = (x_i - sum_k>i U_ik x_k, the k descending) (1 / U_ii)), row i's block kept in W locals (registers). */
 static inline void qd_dfd_r_solve_block(int n, const casadi_real* restrict LU, casadi_real* restrict X, int m, int c0,
                                         int W, int lower) {
   for (int s = 0; s < n; ++s) {
@@ -559,15 +559,15 @@ static inline void qd_dfd_r_solve_block(int n, const casadi_real* restrict LU, c
         const casadi_real u = LU[i + n * k], *xk = X + m * k + c0;
         for (int c = 0; c < W; ++c) acc[c] -= u * xk[c];
       }
-      const casadi_real d = LU[i + n * i];
-      for (int c = 0; c < W; ++c) xi[c] = acc[c] / d;
+      const casadi_real inv = 1 / LU[i + n * i]; /* one division per row, not per column */
+      for (int c = 0; c < W; ++c) xi[c] = acc[c] * inv;
     }
   }
 }
 
 /* X (n rows of m right-hand sides, row-major) <- M^-1 X with the factors of qd_lu_factor: qd_lu_solve's operations
- * in its order for each column (the same results: row i's updates come in the same order of k), 16 columns at a
- * time (then 8, 2, 1) with row i's block in registers (a triangular solve per column is a serial chain of n^2 / 2 dependent steps;
+ * in its order for each column (row i's updates in the same order of k; U's diagonal as its reciprocal, one division
+ * per row: within an ulp of qd_lu_solve's quotient), 16 columns at a time (then 8, 2, 1) with row i's block in registers (a triangular solve per column is a serial chain of n^2 / 2 dependent steps;
  * row by row across all m columns each multiply-subtract loads and stores x_i). */
 static void qd_dfd_r_lu_solve_rows(int n, const casadi_real* restrict LU, const int* piv, casadi_real* restrict X, int m) {
   for (int k = 0; k < n; ++k) {
