@@ -22,15 +22,18 @@
  *   CG_r(q_r, qd_r, quat)           C_r + G_r in one Newton-Euler pass;
  *   G_r(q_r, quat)                  gravity part;
  *   id_r(q_r, qd_r, qdd_r, quat)    tau_r = M_r qdd_r + C_r + G_r (paper's GRF model);
- *   fd_r(q_r, qd_r, tau_ext, quat)  qdd_r = M_r^-1 (tau_ext - C_r - G_r) (paper eq. (5)), by LU
- *                                   on the stack (no work memory needed): the swing legs' joints first
- *                                   (M's leg blocks, positive definite: no pivoting), then partial pivoting.
+ *   fd_r(q_r, qd_r, tau_ext, quat)  qdd_r = M_r^-1 (tau_ext - C_r - G_r) (paper eq. (5)), on the stack
+ *                                   (no work memory needed): with a swing leg, M_r is not formed: each
+ *                                   swing leg is folded into the trunk's inertia (M's leg block, positive
+ *                                   definite: no pivoting) and the rest solved with partial pivoting;
+ *                                   four feet: M_r, then partial pivoting.
  * Each reduced file generates only the stance's pieces (regularity, S_b, T_b, the full v and a) and
  * calls qd_M_full, qd_G_full and qd_id_full of qd_<robot>.c: M_r = S M_full T, CG_r = S rnea(q, v, k),
  * G_r = S G_full, id_r = S rnea(q, v, T qdd_r + k) (link the reduced files with qd_<robot>.c).
  * Return codes: 0 ok; QD_NONFINITE (1) an output is NaN/inf: the trunk pitched +-90 deg (two feet:
  * the roll row has tan(pitch)), a zero quaternion or a non-finite input; QD_SINGULAR (2, fd_r only) M_r
- * singular to working precision (an LU pivot below QD_SINGULAR_RTOL max|M_r|, e.g. two feet, the trunk
+ * singular to working precision (a pivot below QD_SINGULAR_RTOL times the largest entry of the matrix it
+ * eliminates, M_r's, or a swing leg's block and the folded rest's, e.g. two feet, the trunk
  * pitched within ~1e-12 rad of 90 deg); QD_DEGENERATE (3) the stance is degenerate, checked first by
  * every reduced function: its regularity (quadruped_dyn/dynamics/stance_regularity.py, in [0, 1]) is
  * at most QD_REGULARITY_MIN (coincident or collinear stance feet, or two feet whose line is

@@ -104,8 +104,9 @@ static void qd_scatter(const casadi_int* sp, const casadi_real* restrict nz, cas
 /* Machine epsilon of casadi_real (float, double or long double builds). */
 #define QD_EPS (sizeof(casadi_real) == sizeof(float) ? (casadi_real)FLT_EPSILON \
                 : sizeof(casadi_real) == sizeof(double) ? (casadi_real)DBL_EPSILON : (casadi_real)LDBL_EPSILON)
-/* A pivot this small relative to max|M_r| means M_r is singular to working precision
- * (condition number beyond ~1 / (QD_SINGULAR_RTOL)): 1e-13 in double, 5e-5 in float. */
+/* A pivot this small relative to the largest entry of the matrix eliminated (M_r, or with a swing leg its blocks of M
+ * and the folded rest K) means M_r is singular to working precision (condition number beyond ~1 / (QD_SINGULAR_RTOL)):
+ * 1e-13 in double, 5e-5 in float. */
 #define QD_SINGULAR_RTOL (450 * QD_EPS)
 #define QD_N_MAX 13
 /* Regularity is the square of a relative singular value of the feet's layout; computed from
@@ -380,69 +381,113 @@ QD_INLINE int qd_gauss_solve(int n, casadi_real* A, casadi_real scale) {
   return 0;
 }
 
+/* max|x_i| over n entries (four lanes: the compiler vectorises them); NaN entries are skipped (qd_finite tests them). */
+static casadi_real qd_max_abs(int n, const casadi_real* x) {
+  casadi_real top[4] = {0, 0, 0, 0};
+  int i = 0;
+  for (; i + 4 <= n; i += 4) {
+    for (int k = 0; k < 4; ++k) top[k] = qd_fabs(x[i + k]) > top[k] ? qd_fabs(x[i + k]) : top[k];
+  }
+  for (; i < n; ++i) top[0] = qd_fabs(x[i]) > top[0] ? qd_fabs(x[i]) : top[0];
+  casadi_real a = top[0] > top[1] ? top[0] : top[1], b = top[2] > top[3] ? top[2] : top[3];
+  return a > b ? a : b;
+}
+
 /* b <- tau_ext - b (b: C_r + G_r), *max = max|M| (M = M_r), both checked, and M's LU (qd_lu_factor) unless piv is
  * null. 0, QD_NONFINITE or QD_SINGULAR. */
 static int qd_fd_r_factor(int n, const casadi_real* tau_ext, casadi_real* M, int* piv, casadi_real* b, casadi_real* max) {
-  casadi_real top[4] = {0, 0, 0, 0}; /* max|M| in four lanes (the compiler vectorises them) */
   casadi_real* res[2] = {M, b};
   casadi_int nnz[2] = {n * n, n};
-  int i = 0;
-  for (; i + 4 <= n * n; i += 4) {
-    for (int k = 0; k < 4; ++k) top[k] = qd_fabs(M[i + k]) > top[k] ? qd_fabs(M[i + k]) : top[k];
-  }
-  for (; i < n * n; ++i) top[0] = qd_fabs(M[i]) > top[0] ? qd_fabs(M[i]) : top[0];
-  for (i = 0; i < n; ++i) b[i] = tau_ext[i] - b[i];
+  for (int i = 0; i < n; ++i) b[i] = tau_ext[i] - b[i];
   if (qd_finite(0, res, 2, nnz)) return QD_NONFINITE;
-  casadi_real scale = top[0] > top[1] ? top[0] : top[1], scale2 = top[2] > top[3] ? top[2] : top[3];
-  *max = scale > scale2 ? scale : scale2;
+  *max = qd_max_abs(n * n, M);
   return piv ? qd_lu_factor(n, M, piv, *max) : 0;
 }
 
-/* x <- M_r^-1 x (fd_r, a swing leg at least; legs as qd_M_r_legs'): a swing leg's S_b rows and T_b columns are zero,
- * so M_r's block of its joints is M's (SPD: 3 x 3 LU, no pivoting) and zero to the other swing legs'. They go first,
- * then the Schur complement K over the rest R (stance joints, row 12; m = 7 or 9) by qd_gauss_solve; every pivot
- * checked against QD_SINGULAR_RTOL * scale (max|M_r|): 0 or QD_SINGULAR. work: [K, y], per swing leg v and h. */
-QD_INLINE int qd_fd_r_lu(int n, int legs, const casadi_real* M_r, casadi_real* x, casadi_real scale, casadi_real* work) {
+/* x <- M_r^-1 x with a swing leg at least (legs as qd_M_r_legs'), M_r = S M T never formed (docs/formulation.md, "fd_r
+ * with a swing leg"): a swing leg l's rows read M_lb a_b + M_ll qdd_l = x_l (a_b = T_b qdd_r, the trunk's acceleration),
+ * so qdd_l = w_l - Z_l a_b with [Z_l, w_l] = M_ll^-1 [M_lb, x_l] (3 x 3 LU, no pivoting: M_ll is SPD); folded into the
+ * trunk, M_bb <- M_bb - sum M_bl Z_l (in M, in place) and the rest R (stance joints, row 12; m = n - 3 swing legs)
+ * solves K qdd_R = x_R - S_b[R] sum M_bl w_l with K = (S M T)[R, R] (qd_gauss_solve of [K, y]); then qdd_l. M's swing
+ * blocks and [K, y] are checked finite (QD_NONFINITE); the swing pivots against QD_SINGULAR_RTOL max|M_ll|, K's against
+ * QD_SINGULAR_RTOL max(max|K|, max|M_ll|) (QD_SINGULAR). work: [K, y], then [Z_l, w_l] (3 x 7) per swing leg. */
+QD_INLINE int qd_fd_r_folded(int n, int legs, const casadi_real* S_b, const casadi_real* T_b, casadi_real* M,
+                             casadi_real* x, casadi_real* work) {
   const int m = n - 3 * (4 - (legs & 1) - (legs >> 1 & 1) - (legs >> 2 & 1) - (legs >> 3 & 1));
   int r[QD_N_MAX];
   for (int l = 0, i = 0; l < 4; ++l) {
     for (int c = 0; c < 3 && (legs >> l & 1); ++c) r[i++] = 3 * l + c;
   }
   r[m - 1] = n > 12 ? 12 : r[m - 1];
-  casadi_real *K = work, *y = K + m * m, *v = y + m, *h = v + 6 * (m + 1), thr = QD_SINGULAR_RTOL * scale;
-  for (int j = 0; j < m; ++j) {
-    for (int i = 0; i < m; ++i) K[i + m * j] = M_r[r[i] + n * r[j]];
-    y[j] = x[r[j]];
+  casadi_real *K = work, *y = K + m * m, *Z = y + m, f[6] = {0, 0, 0, 0, 0, 0}, sw[4] = {0, 0, 0, 0}, scale = 0;
+  for (int l = 0; l < 4; ++l) { /* the swing blocks M_ll: finite, and their scale */
+    if (legs >> l & 1) continue;
+    const casadi_real* A = M + (6 + 3 * l) * 19;
+    for (int j = 0; j < 3; ++j) {
+      for (int i = 0; i < 3; ++i) {
+        sw[0] += A[i + 18 * j] - A[i + 18 * j];
+        scale = qd_fabs(A[i + 18 * j]) > scale ? qd_fabs(A[i + 18 * j]) : scale;
+      }
+    }
   }
+  if (!(sw[0] == 0)) return QD_NONFINITE;
+  const casadi_real thr = QD_SINGULAR_RTOL * scale;
   for (int l = 0; l < 4; ++l) {
     if (legs >> l & 1) continue;
-    const casadi_real* A = M_r + 3 * l * (n + 1); /* D: A[i + n j] */
-    casadi_real u00 = A[0], u01 = A[n], u02 = A[2 * n], l10 = A[1] / u00, l20 = A[2] / u00;
-    casadi_real u11 = A[1 + n] - l10 * u01, u12 = A[1 + 2 * n] - l10 * u02, l21 = (A[2 + n] - l20 * u01) / u11;
-    casadi_real u22 = A[2 + 2 * n] - l20 * u02 - l21 * u12, i00 = 1 / u00, i11 = 1 / u11, i22 = 1 / u22;
+    const casadi_real* A = M + (6 + 3 * l) * 19; /* M_ll: A[i + 18 j] */
+    casadi_real u00 = A[0], u01 = A[18], u02 = A[36], l10 = A[1] / u00, l20 = A[2] / u00;
+    casadi_real u11 = A[19] - l10 * u01, u12 = A[37] - l10 * u02, l21 = (A[20] - l20 * u01) / u11;
+    casadi_real u22 = A[38] - l20 * u02 - l21 * u12, i00 = 1 / u00, i11 = 1 / u11, i22 = 1 / u22;
     if (!(qd_fabs(u00) > thr && qd_fabs(u11) > thr && qd_fabs(u22) > thr)) return QD_SINGULAR;
-    for (int p = 0; p <= m; ++p) {
-      const casadi_real* a = p < m ? M_r + 3 * l + n * r[p] : x + 3 * l;
+    for (int p = 0; p <= 6; ++p) { /* [Z_l, w_l] = M_ll^-1 [M_lb, x_l] */
+      const casadi_real* a = p < 6 ? M + 6 + 3 * l + 18 * p : x + 3 * l;
       casadi_real y1 = a[1] - l10 * a[0], x2 = (a[2] - l20 * a[0] - l21 * y1) * i22, x1 = (y1 - u12 * x2) * i11;
-      v[3 * p] = (a[0] - u01 * x1 - u02 * x2) * i00, v[3 * p + 1] = x1, v[3 * p + 2] = x2;
+      Z[3 * p] = (a[0] - u01 * x1 - u02 * x2) * i00, Z[3 * p + 1] = x1, Z[3 * p + 2] = x2;
     }
-    for (int c = 0; c < 3; ++c) {
-      for (int i = 0; i < m; ++i) h[i + m * c] = M_r[r[i] + n * (3 * l + c)];
+    const casadi_real* B = M + 18 * (6 + 3 * l); /* M_bl: B[i + 18 c], i < 6 */
+    for (int j = 0; j < 6; ++j) { /* M_bb -= M_bl Z_l */
+      QD_UNROLL for (int i = 0; i < 6; ++i) M[i + 18 * j] -= B[i] * Z[3 * j] + B[i + 18] * Z[3 * j + 1] + B[i + 36] * Z[3 * j + 2];
     }
-    for (int p = 0; p <= m; ++p) { /* K -= h v[:, 0:m], y -= h v[:, m] (y = K + m m) */
-      casadi_real* k = K + m * p;
-      QD_UNROLL for (int i = 0; i < m; ++i) k[i] -= h[i] * v[3 * p] + h[i + m] * v[3 * p + 1] + h[i + 2 * m] * v[3 * p + 2];
-    }
-    v += 3 * (m + 1);
+    for (int i = 0; i < 6; ++i) f[i] += B[i] * Z[18] + B[i + 18] * Z[19] + B[i + 36] * Z[20];
+    Z += 21;
   }
-  int flag = qd_gauss_solve(m, K, scale); /* [K, y] */
+  for (int q = 0; q < m; ++q) { /* K's column q: (S M T) e_r[q] on the rows R; y = x_R - S_b[R] f */
+    const int j = r[q];
+    const casadi_real* t = T_b + 6 * j;
+    casadi_real mt[6], mr[QD_N_MAX];
+    for (int i = 0; i < 6; ++i) mt[i] = j < 12 ? M[i + 18 * (6 + j)] : 0;
+    for (int i = 0; i < m; ++i) mr[i] = j < 12 && r[i] < 12 ? M[6 + r[i] + 18 * (6 + j)] : 0;
+    for (int k = 0; k < 6; ++k) {
+      for (int i = 0; i < 6; ++i) mt[i] += M[i + 18 * k] * t[k];
+      for (int i = 0; i < m; ++i) mr[i] += r[i] < 12 ? M[6 + r[i] + 18 * k] * t[k] : 0;
+    }
+    for (int i = 0; i < m; ++i) {
+      casadi_real s = mr[i];
+      for (int k = 0; k < 6; ++k) s += S_b[r[i] + n * k] * mt[k];
+      K[i + m * q] = s;
+    }
+  }
+  for (int i = 0; i < m; ++i) {
+    casadi_real s = x[r[i]];
+    for (int k = 0; k < 6; ++k) s -= S_b[r[i] + n * k] * f[k];
+    y[i] = s;
+  }
+  casadi_real* res[1] = {K};
+  casadi_int nnz[1] = {m * (m + 1)};
+  if (qd_finite(0, res, 1, nnz)) return QD_NONFINITE;
+  casadi_real k_max = qd_max_abs(m * m, K);
+  int flag = qd_gauss_solve(m, K, k_max > scale ? k_max : scale); /* [K, y] */
   if (flag) return flag;
-  for (int l = 3; l >= 0; --l) { /* x[leg] = v[:, m] - v[:, 0:m] y, the swing legs last to first */
+  casadi_real a_b[6] = {0, 0, 0, 0, 0, 0}; /* a_b = T_b[:, R] qdd_R */
+  for (int q = 0; q < m; ++q) {
+    for (int k = 0; k < 6; ++k) a_b[k] += T_b[k + 6 * r[q]] * y[q];
+  }
+  for (int l = 3; l >= 0; --l) { /* qdd_l = w_l - Z_l a_b, the swing legs last to first */
     if (legs >> l & 1) continue;
-    v -= 3 * (m + 1);
+    Z -= 21;
     for (int c = 0; c < 3; ++c) {
-      casadi_real s = v[3 * m + c];
-      for (int p = 0; p < m; ++p) s -= v[3 * p + c] * y[p];
+      casadi_real s = Z[18 + c];
+      for (int k = 0; k < 6; ++k) s -= Z[3 * k + c] * a_b[k];
       x[3 * l + c] = s;
     }
   }
@@ -451,9 +496,9 @@ QD_INLINE int qd_fd_r_lu(int n, int legs, const casadi_real* M_r, casadi_real* x
 }
 
 /* qdd_r = M_r^-1 (tau_ext - (C_r + G_r)): arg = (q_r, qd_r, tau_ext, quat), res = (qdd_r). The parts once
- * (qd_parts), C_r + G_r (qd_rnea_r), M and M_r (qd_M_r_legs, legs as there), both checked (qd_fd_r_factor), the solve
- * (qd_fd_r_lu; four feet: qd_gauss_solve of [M_r, b]); temporaries on the stack. Called once per file with constant n
- * and legs. */
+ * (qd_parts), C_r + G_r (qd_rnea_r), M; with a swing leg the folded solve (qd_fd_r_folded, M_r not formed), with four
+ * feet M_r (qd_M_r_legs, legs as there), checked (qd_fd_r_factor), and qd_gauss_solve of [M_r, b]; temporaries on the
+ * stack. Called once per file with constant n and legs. */
 QD_INLINE int qd_fd_r_solve(int n, int legs, const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w,
                             int mem) {
   casadi_real m = 0, S_b[QD_N_MAX * 6], T_b[6 * QD_N_MAX], M[18 * 18], M_r[QD_N_MAX * QD_N_MAX], b[QD_N_MAX];
@@ -467,14 +512,18 @@ QD_INLINE int qd_fd_r_solve(int n, int legs, const casadi_real** arg, casadi_rea
   qd_full_q(arg[0], arg[3], q);
   flag = qd_M_full_dense(q, &t, M, iw, w, mem);
   if (flag) return flag;
-  qd_M_r_legs(n, legs, S_b, T_b, M, M_r);
-  casadi_real scale = 0;
-  flag = qd_fd_r_factor(n, arg[2], M_r, 0, b, &scale);
-  if (!flag && legs != 15) flag = qd_fd_r_lu(n, legs, M_r, b, scale, M);
-  if (!flag && legs == 15) { /* four feet (n = 12): [M_r, b] fits in M_r's space */
-    memcpy(M_r + n * n, b, n * sizeof *b);
-    flag = qd_gauss_solve(n, M_r, scale);
-    memcpy(b, M_r + n * n, n * sizeof *b);
+  if (legs != 15) { /* M_r's space is the folded solve's work memory */
+    for (int i = 0; i < n; ++i) b[i] = arg[2][i] - b[i];
+    flag = qd_fd_r_folded(n, legs, S_b, T_b, M, b, M_r);
+  } else { /* four feet (n = 12): [M_r, b] fits in M_r's space */
+    qd_M_r_legs(n, legs, S_b, T_b, M, M_r);
+    casadi_real scale = 0;
+    flag = qd_fd_r_factor(n, arg[2], M_r, 0, b, &scale);
+    if (!flag) {
+      memcpy(M_r + n * n, b, n * sizeof *b);
+      flag = qd_gauss_solve(n, M_r, scale);
+      memcpy(b, M_r + n * n, n * sizeof *b);
+    }
   }
   if (flag) return flag;
   if (res[0]) {
