@@ -80,6 +80,9 @@ def optimize(robot: str, gait_name: str, nodes: int | None, mu: float | None, sp
                    f"{100 * opt['min_com_margin_m']:.2f} cm (plan {100 * pl['min_com_margin_m']:.2f})")
     if replay is not None:
         s = replay.summary()
-        click.echo(f"  rigid-contact replay, open loop: 1 % off at {s['time_to_1pct_s']} s of {s['horizon_s']:g} s, "
-                   f"growth rate {s['growth_rate_per_s']} /s, stopped at {s['stopped_at_s']}")
+        t, rate, stop = s["time_to_1pct_s"], s["growth_rate_per_s"], s["stopped_at_s"]
+        click.echo(f"  rigid-contact replay, open loop over {s['horizon_s']:g} s: "
+                   + (f"1 % off at {t:.3g} s" if t is not None else "never 1 % off")
+                   + (f", growth rate {rate:.1f} /s" if rate is not None else ", no growth rate (no departure to fit)")
+                   + (f", stopped (fell or singular) at {stop:.3g} s" if stop is not None else ", ran to the end"))
     click.echo("  wrote " + ", ".join(str(p) for p in paths.values()))

@@ -535,6 +535,15 @@ def _replay_departure(replay: dict[str, Any]) -> str:
     return _time(replay.get("time_to_1pct_s"), f"never within {num(replay.get('horizon_s'), 'g')} s")
 
 
+def _replay_headline(replay: dict[str, Any]) -> str:
+    """The replay in a summary line: 'replay 1 % off at 0.83 s', 'replay within 1 % for all 1.2 s'."""
+    if not replay:
+        return "not replayed"
+    t = replay.get("time_to_1pct_s")
+    return (f"replay 1 % off at {num(t, 'g')} s" if t is not None
+            else f"replay within 1 % for all {num(replay.get('horizon_s'), 'g')} s")
+
+
 def optimal_control_section(data: dict[str, Any] | None, plot: str = "") -> Section:
     """``data``: the JSON ``optimize`` writes for the trot (docs/optimal_control.md)."""
     title = "A trot the robot can do"
@@ -558,7 +567,7 @@ def optimal_control_section(data: dict[str, Any] | None, plot: str = "") -> Sect
             "Today's plan needs a roll moment from nowhere; the optimised trot does not.</p>"
             + table(["quantity", "value"], rows) + plot)
     headline = (f"{data['status']}, roll moment {num(e['max_roll_moment_optimised_Nm'])} N m (plan "
-                f"{num(e['max_roll_moment_plan_Nm'], '.2f')}); replay 1 % off at {_replay_departure(rp)}")
+                f"{num(e['max_roll_moment_plan_Nm'], '.2f')}); {_replay_headline(rp)}")
     return Section("optimal_control", title, "result" if converged else "FAIL", headline, html)
 
 # ----------------------------------------------------------------------------- closed loop

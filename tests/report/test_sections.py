@@ -196,5 +196,8 @@ def test_a_time_that_never_came_reads_as_such():
             "formulation": {"nodes": 40, "variables": 1000, "constraints": 900, "mu": 0.6, "fz_min_N": 1.0},
             "rigid_contact_replay": {"time_to_1pct_s": None, "horizon_s": 2.0, "growth_rate_per_s": None}}
     section = rs.optimal_control_section(trot)
-    assert "replay 1 % off at never within 2 s" in section.headline, section.headline
+    assert "replay within 1 % for all 2 s" in section.headline, section.headline
+    departed = rs.optimal_control_section(
+        {**trot, "rigid_contact_replay": {**trot["rigid_contact_replay"], "time_to_1pct_s": 0.83}})
+    assert "replay 1 % off at 0.83 s" in departed.headline, departed.headline
     assert "n/a s" not in section.headline and "n/a s" not in section.body
