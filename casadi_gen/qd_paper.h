@@ -35,7 +35,8 @@
  * singular to working precision (a pivot below QD_SINGULAR_RTOL times the largest entry of the matrix it
  * eliminates, M_r's, or a swing leg's block and the folded rest's, e.g. two feet, the trunk
  * pitched within ~1e-12 rad of 90 deg), and in the float build also where the result's error bound
- * FLT_EPSILON x cond_1 of that matrix exceeds 2.5e-3 (so a float fd_r returned as 0 is within 1 %);
+ * FLT_EPSILON x cond_1 of that matrix exceeds 0.0025 (so a float fd_r returned as 0 is
+ * within 1 %);
  * QD_DEGENERATE (3) the stance is degenerate, checked first by
  * every reduced function: its regularity (quadruped_dyn/dynamics/stance_regularity.py, in [0, 1]) is
  * at most QD_REGULARITY_MIN (coincident or collinear stance feet, or two feet whose line is

@@ -51,7 +51,11 @@ GRF_COND_ASSUMED = 100.0
 #: feet) that the tolerances allow for: 6-20 for three or four feet and the diagonal and side
 #: pairs near standing. The front and back pairs (FL+FR, BL+BR) reach ~1e2-1e3: their support
 #: line is lateral, nearly perpendicular to the roll axis, so the roll row barely fixes the
-#: pitch about that line (exactly not at zero pitch and roll: singular there).
+#: pitch about that line (exactly not at zero pitch and roll: singular there). The generated code
+#: solves the maps by their normal equations (docs/formulation.md §6.2), so its rounding grows with
+#: cond(A_s)^2: measured on solo12's BL+BR, CG_r's error is 0.015-0.024 eps cond(A_s)^2 in double and
+#: in float at cond(A_s) 145-472 (2-11 eps cond(A_s)); the terms' tolerances scale by (cond / this)^2
+#: (fd_r's and dfd_r's by cond / this, times their cond(M_r): checks.c_reference.tolerance_scale).
 MAP_COND_ASSUMED = 20.0
 
 #: Canonical leg frames (``leg_frames``): entries of a re-expressed axis, offset, CoM (m) or
@@ -102,6 +106,12 @@ FLOAT_FD_R_PER_COND = 1.0
 #: A float result with a larger error is not a result (the issue's 1 %). Measured: every float
 #: fd_r that returned 0 (not QD_SINGULAR) was within it (at most 1.1e-3 on the paper robot).
 FLOAT_USABLE_REL_ERR = 1e-2
+#: The float build's fd_r returns QD_SINGULAR where FLT_EPSILON * cond_1 of the matrix it eliminates
+#: (M_r with four feet, the folded rest K with a swing leg: docs/formulation.md §6.2) exceeds this
+#: (QD_FLOAT_MAX_BOUND in the generated C; docs/embedded.md). Measured at 300 states on the paper
+#: robot: the float error is at most 0.94 FLT_EPSILON cond_1(K); FLOAT_USABLE_REL_ERR over a margin
+#: of 4 for that constant.
+FLOAT_FD_R_MAX_BOUND = FLOAT_USABLE_REL_ERR / 4
 
 #: The tol_scale of a case in the generated C's reference header (a ratio of condition numbers,
 #: printed to 3 significant digits) on two machines: the CPU's round-off moves it by ~1e-15

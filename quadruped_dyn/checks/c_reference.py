@@ -20,6 +20,7 @@ from quadruped_dyn.model.stance import StanceSet, stance_set
 from quadruped_dyn.model.state import NV_FULL, FullState, full_q, rotation
 from quadruped_dyn.references.pinocchio import PinocchioDerivatives, PinocchioReference
 from quadruped_dyn.tolerances import (
+    FLOAT_FD_R_MAX_BOUND,
     FLOAT_REL_TOL,
     GRF_COND_ASSUMED,
     MAP_COND_ASSUMED,
@@ -131,9 +132,11 @@ def pinocchio_outputs(robot: Robot, ref: PinocchioReference, name: str, s: FullS
 def tolerance_scale(ref: PinocchioReference, name: str, s: FullState) -> float:
     """How much the conditioning at ``s`` amplifies rounding in generated function ``name``,
     beyond what the tolerances assume: for a reduced function cond(A) / GRF_COND_ASSUMED of its
-    stance set's GRF system times cond(A_s) / MAP_COND_ASSUMED of its stance-foot rows (the
-    velocity map), each at least 1, and for fd_r times cond(M_r) / GRF_COND_ASSUMED (the solve
-    amplifies M_r's and C_r + G_r's errors by cond(M_r)). 1 otherwise."""
+    stance set's GRF system times c = cond(A_s) / MAP_COND_ASSUMED of its stance-foot rows (the
+    velocity map), each at least 1: c^2 for the terms M_r, CG_r, G_r, id_r (the maps are solved by
+    their normal equations, docs/formulation.md §6.2), c for fd_r and dfd_r times cond(M_r) /
+    GRF_COND_ASSUMED (the solve amplifies M_r's and C_r + G_r's errors by cond(M_r); their map errors
+    largely cancel in it: FL+FR's float fd_r is within 2e-6 where its M_r is off by 2e-6). 1 otherwise."""
     reduced = reduced_parts(name)
     if name == "dfd_full":  # M^-1 amplifies the errors of M and of d rnea by cond(M)
         return max(1.0, float(np.linalg.cond(ref.mass_matrix(s.q))) / GRF_COND_ASSUMED)
@@ -144,10 +147,26 @@ def tolerance_scale(ref: PinocchioReference, name: str, s: FullState) -> float:
     q[7:] = reduced_inputs(s)["q_r"][:12]
     g = ref.grf_solve(q, v, a, stance.feet, stance.selection("paper"))
     scale = max(1.0, float(g.singular_values[0] / g.singular_values[g.rank - 1]) / GRF_COND_ASSUMED)
-    scale *= max(1.0, float(np.linalg.cond(ref.velocity_map(q, stance.feet))) / MAP_COND_ASSUMED)
+    c = max(1.0, float(np.linalg.cond(ref.velocity_map(q, stance.feet))) / MAP_COND_ASSUMED)
     if kind in ("fd_r", "dfd_r"):  # the tolerances allow for ~GRF_COND_ASSUMED of amplification already
-        scale *= max(1.0, float(np.linalg.cond(_reduced_reference(ref, "M_r", stance, s))) / GRF_COND_ASSUMED)
-    return scale
+        return scale * c * max(1.0, float(np.linalg.cond(_reduced_reference(ref, "M_r", stance, s))) / GRF_COND_ASSUMED)
+    return scale * c**2
+
+def float_bound(ref: PinocchioReference, name: str, s: FullState) -> float:
+    """For fd_r: FLT_EPSILON x cond_1 of the matrix its solve eliminates at ``s`` (M_r with four feet; with a swing
+    leg K, M_r's Schur complement over the swing legs' joints: docs/formulation.md §6.2), from the Pinocchio-built
+    M_r. The float build returns QD_SINGULAR where it exceeds QD_FLOAT_MAX_BOUND (docs/embedded.md); 0 for the
+    other functions."""
+    reduced = reduced_parts(name)
+    if not reduced or reduced[0] != "fd_r":
+        return 0.0
+    stance = reduced[1]
+    M = _reduced_reference(ref, "M_r", stance, s)
+    L = [3 * leg + c for leg in stance.lifted for c in range(3)]
+    R = [i for i in range(len(M)) if i not in L]
+    K = M[np.ix_(R, R)] - M[np.ix_(R, L)] @ np.linalg.solve(M[np.ix_(L, L)], M[np.ix_(L, R)]) if L else M
+    return float(np.finfo(np.float32).eps * np.linalg.cond(K, 1))
+
 
 def tolerance_floor(name: str) -> float:
     """The least relative tolerance of generated function ``name`` in either precision: the accuracy of
@@ -192,6 +211,9 @@ def reference_header(robot: Robot, functions: list[ca.Function], work: dict[str,
         " * is max(QD_REL_TOL_<precision>, tol_floor) * tol_scale */",
         f"#define QD_REL_TOL_DOUBLE {REL_TOL_TERMS:g}",
         f"#define QD_REL_TOL_FLOAT {FLOAT_REL_TOL:g}",
+        "/* qd_float_bound[k]: case k's FLT_EPSILON x cond_1 of the matrix fd_r eliminates (c_reference.float_bound; 0",
+        " * for the other functions); the float build's fd_r returns QD_SINGULAR above QD_FLOAT_MAX_BOUND */",
+        f"#define QD_FLOAT_MAX_BOUND {FLOAT_FD_R_MAX_BOUND!r}",
         f"#define QD_MAX_SZ_IW {max(iw for iw, _ in work.values())}",
         f"#define QD_MAX_SZ_W {max(w for _, w in work.values())}",
         f"#define QD_MAX_IN {max(len(x) for x in inputs.values())}",
@@ -216,7 +238,8 @@ def reference_header(robot: Robot, functions: list[ca.Function], work: dict[str,
             f'{{{", ".join(str(k) for _, k in ins)}}}, {{{", ".join(n for n, _ in outs)}}}, '
             f'{{{", ".join(str(k) for _, k in outs)}}}, {tol_scale:.3g}, {tolerance_floor(name):g}}},'
         )
-    lines += ["static const qd_case QD_CASES[] = {", *cases, "};", f"#define QD_N_CASES {len(functions)}"]
+    lines += ["static const qd_case QD_CASES[] = {", *cases, "};", f"#define QD_N_CASES {len(functions)}",
+              _c_array("qd_float_bound", np.array([float_bound(ref, f.name()[len(PREFIX):], s) for f in functions]))]
     lines += [
         "/* Point arg/res of case k at in/out, filled with its reference inputs in casadi_real. */",
         "static void qd_case_args(const qd_case* k, casadi_real in[QD_MAX_N_IN][QD_MAX_IN], const casadi_real* arg[QD_MAX_N_IN],",

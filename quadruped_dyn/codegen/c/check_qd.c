@@ -12,8 +12,10 @@
 
 #ifndef QD_FLOAT
 #define QD_TOL QD_REL_TOL_DOUBLE
+#define QD_BOUND_CHECKED 0
 #else
 #define QD_TOL QD_REL_TOL_FLOAT
+#define QD_BOUND_CHECKED 1 /* fd_r's float bound check: QD_SINGULAR above QD_FLOAT_MAX_BOUND */
 #endif
 
 static casadi_int iw[QD_MAX_SZ_IW + 1];
@@ -39,6 +41,14 @@ int main(void) {
       ++skipped;
       continue;
     }
+    /* the float fd_r's bound check at the reference's conditioning (a factor 2 either way: the float build takes
+       cond_1 of its own M_r or K) */
+    if (QD_BOUND_CHECKED && flag == 2 && qd_float_bound[c] > QD_FLOAT_MAX_BOUND / 2) {
+      printf("%-24s skipped: float error bound eps x cond_1 = %.1e over %.1e, as its return code says\n", k->name,
+             qd_float_bound[c], QD_FLOAT_MAX_BOUND);
+      ++skipped;
+      continue;
+    }
     if (flag != 0) {
       printf("%-24s returned %d\n", k->name, flag);
       ++failed;
@@ -61,6 +71,12 @@ int main(void) {
     if (finite && tol > QD_MAX_TOL) {
       printf("%-24s max rel err vs Pinocchio %.2e skipped: cond x eps = %.1e leaves < 2 digits\n", k->name, worst, tol);
       ++skipped;
+      continue;
+    }
+    if (QD_BOUND_CHECKED && qd_float_bound[c] > 2 * QD_FLOAT_MAX_BOUND) {
+      printf("%-24s returned 0 with a float error bound eps x cond_1 = %.1e over %.1e: FAIL\n", k->name,
+             qd_float_bound[c], QD_FLOAT_MAX_BOUND);
+      ++failed;
       continue;
     }
     int ok = finite && worst <= tol;

@@ -309,11 +309,10 @@ static casadi_real qd_max_abs(int n, const casadi_real* x) {
 
 /* Float builds only (a constant: the test compiles away in double and long double): fd_r's result is returned as 0 only
  * where its error bound eps * cond_1 of the matrix it eliminates (M_r, or with a swing leg the folded rest K) is at most
- * QD_FLOAT_MAX_BOUND. Measured (paper, 300 states near standing, tests/checks/test_float_accuracy.py): the float error
- * is at most 0.94 eps cond_1(K); the bound, 1 % (FLOAT_USABLE_REL_ERR) over a margin of 4 for that constant, makes the
- * float build's "returned 0 means within 1 %" a check instead of an observation (docs/embedded.md). */
+ * QD_FLOAT_MAX_BOUND (defined before this file: quadruped_dyn.tolerances.FLOAT_FD_R_MAX_BOUND). Measured (paper, 300
+ * states near standing, tests/checks/test_float_accuracy.py): the float error is at most 0.94 eps cond_1(K); the bound
+ * makes the float build's "returned 0 means within 1 %" a check instead of an observation (docs/embedded.md). */
 #define QD_FLOAT_BOUND_CHECKED (sizeof(casadi_real) == sizeof(float))
-#define QD_FLOAT_MAX_BOUND 2.5e-3f
 
 /* ||A||_1 (n x n, column-major): the largest column sum of |A_ij|. */
 static casadi_real qd_norm1(int n, const casadi_real* A) {
