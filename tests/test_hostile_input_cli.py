@@ -83,6 +83,28 @@ def test_validate_bounds_the_work_up_front(args, expected, no_work, tmp_path):
     _one_line(CliRunner().invoke(main, ["validate", "--out", str(tmp_path), *args]), 2, expected)
 
 
+@pytest.mark.parametrize(("args", "expected"), [
+    (["control", "paper", "--cycles", "100000000"], r"is 2\.4e\+11 MuJoCo steps per controller; expected at most 2,000,000"),
+    (["control", "paper", "--timestep", "1e-12"], r"at a 1e-12 s step is 1\.2e\+13 MuJoCo steps"),
+    (["control", "paper", "--mu", "1e6"], r"friction mu = 1000000\.0; expected a number from 0 to 1000"),
+    (["optimize", "--cycles", "1e9"], r"replay samples at 0\.002 s; expected at most 200,000"),
+    (["optimize", "--nodes", "100000"], r"--nodes 100000; expected 3 to 40 collocation nodes per phase"),
+])
+def test_control_and_optimize_bound_the_work_up_front(args, expected, monkeypatch, tmp_path):
+    """Found by a fresh-clone review (2026-12-06): these ran for minutes (or ever), or failed with a
+    traceback after the solve (--cycles 1e9: a 2 TiB allocation), or returned a blown-up MuJoCo run as
+    a result (mu 1e6)."""
+    from quadruped_dyn.control import closed_loop
+    from quadruped_dyn.optimal_control import transcription
+
+    def tripwire(*a, **k):
+        raise AssertionError("the work started before the arguments were checked")
+
+    monkeypatch.setattr(closed_loop, "build_plant", tripwire)
+    monkeypatch.setattr(transcription, "transcribe", tripwire)
+    _one_line(CliRunner().invoke(main, [*args, "--out", str(tmp_path)]), 2, expected)
+
+
 @pytest.mark.parametrize("extra", [["--no-physics"], ["--json", "--no-physics"], []])
 def test_a_run_that_fell_on_its_first_step_is_not_a_result(extra, tmp_path):
     """The static walk with RK4 at --dt 0.3 s (one step per phase) falls at once: exit 1, no

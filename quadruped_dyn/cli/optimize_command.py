@@ -36,14 +36,19 @@ def optimize(robot: str, gait_name: str, nodes: int | None, mu: float | None, sp
     periodicity at the plan's speed; effort + closeness to the plan. Exit 1 with IPOPT's status when
     the solve does not converge."""
     from quadruped_dyn.experiment.gait import GAITS
+    from quadruped_dyn.experiment.simulate import MAX_SAMPLES
     from quadruped_dyn.optimal_control.outputs import output_paths, report, write_outputs
-    from quadruped_dyn.optimal_control.replay import replay_rigid
+    from quadruped_dyn.optimal_control.replay import REPLAY_DT, replay_rigid
     from quadruped_dyn.optimal_control.solve import MAX_CONSTRAINT_VIOLATION, solve
     from quadruped_dyn.optimal_control.transcription import MU, NODES_PER_PHASE, Options, transcribe
 
     if not (math.isfinite(cycles) and cycles >= 0):
         raise InputError(f"--cycles {cycles} is not a number of cycles; expected e.g. 2")
     gait = GAITS[gait_name]
+    if cycles * gait.period / REPLAY_DT > MAX_SAMPLES:
+        raise InputError(f"--cycles {cycles:g} of the {gait.period:g} s cycle is {cycles * gait.period / REPLAY_DT:.3g} replay "
+                         f"samples at {REPLAY_DT:g} s; expected at most {MAX_SAMPLES:,} "
+                         f"(--cycles <= {MAX_SAMPLES * REPLAY_DT / gait.period:g})")
     options = Options(nodes_per_phase=NODES_PER_PHASE if nodes is None else nodes, mu=MU if mu is None else mu, speed=speed)
     out = writable_dir(out_dir, f"--out '{out_dir}'")
     r = load_robot(robot)

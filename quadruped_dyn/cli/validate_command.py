@@ -9,13 +9,11 @@ from typing import TYPE_CHECKING
 import click
 
 from quadruped_dyn.errors import InputError, NumericalError
+from quadruped_dyn.experiment.simulate import MAX_SAMPLES
 from quadruped_dyn.files.paths import writable_dir
 from quadruped_dyn.model.robot import load_robot
 
-#: Samples per run (horizon / dt) that validate accepts: 100x the default two cycles at 1 ms,
-#: minutes of integration per run; beyond it the work (and memory: a state per sample and run)
-#: is refused before it starts. Beyond WARN_SAMPLES the cost is stated.
-MAX_SAMPLES = 200_000
+#: Samples per run beyond which validate states the cost (the limit: simulate.MAX_SAMPLES).
 WARN_SAMPLES = 20_000
 
 if TYPE_CHECKING:

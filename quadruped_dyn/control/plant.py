@@ -44,6 +44,7 @@ from dataclasses import dataclass, field
 import mujoco
 import numpy as np
 
+from quadruped_dyn.dynamics.grf import MAX_FRICTION_COEFFICIENT
 from quadruped_dyn.errors import InputError
 from quadruped_dyn.experiment.gait import Plan
 from quadruped_dyn.model.robot import Robot
@@ -75,8 +76,8 @@ class PlantOptions:
             raise InputError(f"plant timestep {self.timestep} s; expected 0 < timestep <= 0.01 s")
         if self.integrator not in INTEGRATORS:
             raise InputError(f"unknown integrator '{self.integrator}'; expected one of {', '.join(INTEGRATORS)}")
-        if not (math.isfinite(self.mu) and self.mu >= 0):
-            raise InputError(f"friction mu = {self.mu}; expected a finite number >= 0")
+        if not (math.isfinite(self.mu) and 0 <= self.mu <= MAX_FRICTION_COEFFICIENT):
+            raise InputError(f"friction mu = {self.mu}; expected a number from 0 to {MAX_FRICTION_COEFFICIENT:g}")
         if self.foot_radius is not None and not (math.isfinite(self.foot_radius) and 0 < self.foot_radius < 0.2):
             raise InputError(f"foot radius {self.foot_radius} m; expected 0 < radius < 0.2 m")
 

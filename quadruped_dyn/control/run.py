@@ -38,7 +38,7 @@ from quadruped_dyn.codegen.library import CompiledFunction
 from quadruped_dyn.control.controllers import Controller, Gains, GeneratedC, Pd, make_controller
 from quadruped_dyn.control.plant import Plant, PlantOptions
 from quadruped_dyn.control.reference import reference_cycle
-from quadruped_dyn.errors import InputError
+from quadruped_dyn.errors import InputError, NumericalError
 from quadruped_dyn.experiment.gait import Plan
 from quadruped_dyn.experiment.plan_ik import ReferenceSample
 from quadruped_dyn.model.stance import StanceSet
@@ -51,6 +51,11 @@ FALL_HEIGHT_FRACTION = 0.5
 FALL_TILT_RAD = math.radians(40.0)
 
 Progress = Callable[[float], None]  # simulated time reached, s
+
+
+#: MuJoCo steps per controller run that `control` accepts: 80x the default 10 cycles of the paper's walk
+#: at 0.5 ms (24,000), minutes per controller; beyond it the work is refused before it starts.
+MAX_PLANT_STEPS = 2_000_000
 
 
 @dataclass(frozen=True)
@@ -66,6 +71,10 @@ class LoopOptions:
             raise InputError(f"--cycles {self.cycles}; expected a whole number of gait cycles > 0")
         if not (math.isfinite(self.rate_hz) and self.rate_hz > 0):
             raise InputError(f"control rate {self.rate_hz} Hz; expected a positive number")
+        total = self.cycles * period / plant.timestep
+        if total > MAX_PLANT_STEPS:
+            raise InputError(f"--cycles {self.cycles} of {period:g} s at a {plant.timestep:g} s step is {total:.3g} MuJoCo steps "
+                             f"per controller; expected at most {MAX_PLANT_STEPS:,} (fewer --cycles or a larger --timestep)")
         steps = 1.0 / self.rate_hz / plant.timestep
         if abs(steps - round(steps)) > 1e-9 * steps or round(steps) < 1:
             raise InputError(f"control period {1 / self.rate_hz:g} s is not a whole number of plant steps "
@@ -132,6 +141,12 @@ def settled_state(plant: Plant, plan: Plan, gains: Gains, c: GeneratedC, rate_hz
             f, touch = plant.contact_forces()
             grf.append(_grf_sample(plant, functions, c, k / rate_hz - settle_s, four, q_full, v_full, f, touch))
     q, _ = plant.full_state()
+    height0, height = q0[2] - plant.floor_z, q[2] - plant.floor_z
+    if plant.unstable() or not (np.isfinite(q).all() and height > FALL_HEIGHT_FRACTION * height0):
+        # every run would start from it: MuJoCo diverged (and reset the state) or the robot did not stand
+        raise NumericalError(f"the robot did not stand after settling for {settle_s:g} s in MuJoCo (trunk height {height:.3f} m "
+                             f"above the floor, started at {height0:.3f} m; friction mu = {plant.options.mu:g}, step "
+                             f"{plant.options.timestep:g} s)")
     stance0 = plan.stance(0.0)
     _, v, _ = PinocchioReference(plant.robot).reduced_motion(stance0, ref0.q_r, ref0.qd_r, ref0.qdd_r, q[3:7])
     return (q, v), grf

@@ -173,6 +173,11 @@ class Run:
 
 Progress = Callable[[float], None]  # called with the simulated time reached, s
 
+#: Samples per run (horizon / dt) that a command accepts: 100x the default two cycles at 1 ms,
+#: minutes of integration per run; beyond it the work (and memory: a state per sample and run)
+#: is refused before it starts (validate, optimize's replay).
+MAX_SAMPLES = 200_000
+
 
 def _sample_times(horizon: float, dt: float) -> np.ndarray:
     return np.arange(int(np.floor(horizon / dt + 1e-9)) + 1) * dt

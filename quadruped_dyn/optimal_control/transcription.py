@@ -73,6 +73,10 @@ W_PLAN = 1.0
 W_SMOOTH = 1e-2
 #: Fewest nodes per phase: below this the collocation points are too sparse for the swing's bump.
 MIN_NODES_PER_PHASE = 3
+#: More nodes per phase than this is refused before any work: the default's 4 transcribe and solve in
+#: ~10 s (paper trot); the variables grow linearly and IPOPT's factorisations faster, so 10x the
+#: default is minutes, and 100,000 never finished transcribing.
+MAX_NODES_PER_PHASE = 40
 #: Collocation points inside each interval (fractions), besides the nodes: the roll moment and the
 #: effort limits are imposed there too. Nodes and midpoints alone leave the interpolant a cubic
 #: acceleration mode s (1 - 2 s)(1 - s) that none of them sees (paper trot, 8 nodes per phase: a
@@ -100,8 +104,10 @@ class Options:
 
     def check(self, robot: Robot, gait: Gait) -> None:
         """InputError for options no solve can satisfy, before any work."""
-        if not isinstance(self.nodes_per_phase, int) or self.nodes_per_phase < MIN_NODES_PER_PHASE:
-            raise InputError(f"--nodes {self.nodes_per_phase} is too few; expected at least {MIN_NODES_PER_PHASE} per phase")
+        if (not isinstance(self.nodes_per_phase, int)
+                or not MIN_NODES_PER_PHASE <= self.nodes_per_phase <= MAX_NODES_PER_PHASE):
+            raise InputError(f"--nodes {self.nodes_per_phase}; expected {MIN_NODES_PER_PHASE} to {MAX_NODES_PER_PHASE} "
+                             "collocation nodes per phase")
         if not (math.isfinite(self.mu) and self.mu > 0):
             raise InputError(f"mu = {self.mu} is not a friction coefficient the feet can stand on; expected mu > 0")
         if not (math.isfinite(self.fz_min_fraction) and 0 <= self.fz_min_fraction < 1 / len(gait.phases[0])):
