@@ -73,6 +73,9 @@ def _builtin_path(name: str) -> Path:
 
 def robot_path(name_or_path: str | Path) -> Path:
     """Resolve a built-in robot name or a URDF path to an existing file (absolute, symlinks resolved)."""
+    if not isinstance(name_or_path, (str, Path)):
+        raise InputError(f"robot {name_or_path!r} is a {type(name_or_path).__name__}; expected a built-in name "
+                         f"({', '.join(ROBOT_NAMES)}) or the path of a URDF file")
     key = str(name_or_path)
     if key in ROBOT_NAMES:
         path = _builtin_path(key)

@@ -11,7 +11,7 @@ from quadruped_dyn.cli import main
 @pytest.mark.parametrize("args, message", [
     (["--mu", "0"], "mu"),
     (["--mu", "-1"], "mu"),
-    (["--nodes", "1"], "too few"),
+    (["--nodes", "1"], "expected 3 to 40 collocation nodes per phase"),
     (["--speed", "9"], "beyond"),
     (["--cycles", "-1"], "cycles"),
 ])
