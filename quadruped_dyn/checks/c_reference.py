@@ -152,6 +152,7 @@ def tolerance_scale(ref: PinocchioReference, name: str, s: FullState) -> float:
         return scale * c * max(1.0, float(np.linalg.cond(_reduced_reference(ref, "M_r", stance, s))) / GRF_COND_ASSUMED)
     return scale * c**2
 
+
 def float_bound(ref: PinocchioReference, name: str, s: FullState) -> float:
     """For fd_r: FLT_EPSILON x cond_1 of the matrix its solve eliminates at ``s`` (M_r with four feet; with a swing
     leg K, M_r's Schur complement over the swing legs' joints: docs/formulation.md §6.2), from the Pinocchio-built

@@ -45,8 +45,9 @@ def optimize(robot: str, gait_name: str, nodes: int | None, mu: float | None, sp
     if not (math.isfinite(cycles) and cycles >= 0):
         raise InputError(f"--cycles {cycles} is not a number of cycles; expected e.g. 2")
     gait = GAITS[gait_name]
-    if cycles * gait.period / REPLAY_DT > MAX_SAMPLES:
-        raise InputError(f"--cycles {cycles:g} of the {gait.period:g} s cycle is {cycles * gait.period / REPLAY_DT:.3g} replay "
+    samples = cycles * gait.period / REPLAY_DT
+    if samples > MAX_SAMPLES:
+        raise InputError(f"--cycles {cycles:g} of the {gait.period:g} s cycle is {samples:.3g} replay "
                          f"samples at {REPLAY_DT:g} s; expected at most {MAX_SAMPLES:,} "
                          f"(--cycles <= {MAX_SAMPLES * REPLAY_DT / gait.period:g})")
     options = Options(nodes_per_phase=NODES_PER_PHASE if nodes is None else nodes, mu=MU if mu is None else mu, speed=speed)

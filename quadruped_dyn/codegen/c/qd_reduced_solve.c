@@ -349,6 +349,14 @@ static int qd_bound_exceeded(int n, const casadi_real* LU, const int* piv, casad
   return QD_EPS * norm1 * inv_norm1 > QD_FLOAT_MAX_BOUND ? QD_SINGULAR : 0;
 }
 
+/* qd_gauss_solve of A = [M, x] (n x (n + 1)), and in the float build qd_bound_exceeded's test of M after it. */
+QD_INLINE int qd_gauss_solve_bounded(int n, casadi_real* A, casadi_real scale) {
+  casadi_real norm1 = QD_FLOAT_BOUND_CHECKED ? qd_norm1(n, A) : 0;
+  int piv[QD_N_MAX];
+  int flag = qd_gauss_solve(n, A, scale, QD_FLOAT_BOUND_CHECKED ? piv : 0);
+  return !flag && QD_FLOAT_BOUND_CHECKED ? qd_bound_exceeded(n, A, piv, norm1) : flag;
+}
+
 /* b <- tau_ext - b (b: C_r + G_r), *max = max|M| (M = M_r), both checked, and M's LU (qd_lu_factor) unless piv is
  * null. 0, QD_NONFINITE or QD_SINGULAR. */
 static int qd_fd_r_factor(int n, const casadi_real* tau_ext, casadi_real* M, int* piv, casadi_real* b, casadi_real* max) {
@@ -431,10 +439,8 @@ QD_INLINE int qd_fd_r_folded(int n, int legs, const casadi_real* S_b, const casa
   casadi_real* res[1] = {K};
   casadi_int nnz[1] = {m * (m + 1)};
   if (qd_finite(0, res, 1, nnz)) return QD_NONFINITE;
-  casadi_real k_max = qd_max_abs(m * m, K), k_norm1 = QD_FLOAT_BOUND_CHECKED ? qd_norm1(m, K) : 0;
-  int piv[QD_N_MAX];
-  int flag = qd_gauss_solve(m, K, k_max > scale ? k_max : scale, QD_FLOAT_BOUND_CHECKED ? piv : 0); /* [K, y] */
-  if (!flag && QD_FLOAT_BOUND_CHECKED) flag = qd_bound_exceeded(m, K, piv, k_norm1);
+  casadi_real k_max = qd_max_abs(m * m, K);
+  int flag = qd_gauss_solve_bounded(m, K, k_max > scale ? k_max : scale); /* [K, y] */
   if (flag) return flag;
   casadi_real a_b[6] = {0, 0, 0, 0, 0, 0}; /* a_b = T_b[:, R] qdd_R */
   for (int q = 0; q < m; ++q) {
@@ -478,11 +484,8 @@ QD_INLINE int qd_fd_r_solve(int n, int legs, const casadi_real** arg, casadi_rea
     casadi_real scale = 0;
     flag = qd_fd_r_factor(n, arg[2], M_r, 0, b, &scale);
     if (!flag) {
-      casadi_real norm1 = QD_FLOAT_BOUND_CHECKED ? qd_norm1(n, M_r) : 0;
-      int piv[QD_N_MAX];
       memcpy(M_r + n * n, b, n * sizeof *b);
-      flag = qd_gauss_solve(n, M_r, scale, QD_FLOAT_BOUND_CHECKED ? piv : 0);
-      if (!flag && QD_FLOAT_BOUND_CHECKED) flag = qd_bound_exceeded(n, M_r, piv, norm1);
+      flag = qd_gauss_solve_bounded(n, M_r, scale);
       memcpy(b, M_r + n * n, n * sizeof *b);
     }
   }
