@@ -153,6 +153,12 @@ def tolerance_scale(ref: PinocchioReference, name: str, s: FullState) -> float:
     return scale * c**2
 
 
+#: The reference header's array of fd_r's float bounds, a condition number like tol_scale: printed to 3 digits
+#: and compared entry by entry within REFERENCE_TOL_SCALE_REL_TOL (an ill-conditioned K moves it by ~1e-6
+#: relative between CPUs).
+FLOAT_BOUND_ARRAY = "qd_float_bound"
+
+
 def float_bound(ref: PinocchioReference, name: str, s: FullState) -> float:
     """For fd_r: FLT_EPSILON x cond_1 of the matrix its solve eliminates at ``s`` (M_r with four feet; with a swing
     leg K, M_r's Schur complement over the swing legs' joints: docs/formulation.md §6.2), from the Pinocchio-built
@@ -239,8 +245,9 @@ def reference_header(robot: Robot, functions: list[ca.Function], work: dict[str,
             f'{{{", ".join(str(k) for _, k in ins)}}}, {{{", ".join(n for n, _ in outs)}}}, '
             f'{{{", ".join(str(k) for _, k in outs)}}}, {tol_scale:.3g}, {tolerance_floor(name):g}}},'
         )
+    bounds = ", ".join(f"{float_bound(ref, f.name()[len(PREFIX):], s):.3g}" for f in functions)
     lines += ["static const qd_case QD_CASES[] = {", *cases, "};", f"#define QD_N_CASES {len(functions)}",
-              _c_array("qd_float_bound", np.array([float_bound(ref, f.name()[len(PREFIX):], s) for f in functions]))]
+              f"static const double {FLOAT_BOUND_ARRAY}[{len(functions)}] = {{{bounds}}};"]
     lines += [
         "/* Point arg/res of case k at in/out, filled with its reference inputs in casadi_real. */",
         "static void qd_case_args(const qd_case* k, casadi_real in[QD_MAX_N_IN][QD_MAX_IN], const casadi_real* arg[QD_MAX_N_IN],",
@@ -316,7 +323,7 @@ def reference_differences(committed: str, fresh: str) -> list[str]:
         return moved
     in_case = {name for outs in b.case_outputs.values() for name in outs}
     groups = [(case, outs, max(b.rel_tol, b.tol_floor[case]) * b.tol_scale[case]) for case, outs in b.case_outputs.items()]
-    groups += [(name, (name,), b.rel_tol) for name in b.arrays if name not in in_case]
+    groups += [(name, (name,), b.rel_tol) for name in b.arrays if name not in in_case and name != FLOAT_BOUND_ARRAY]
     for _case, outs, tol in groups:
         scale = scale_of(np.concatenate([b.arrays[o] for o in outs]))
         for o in outs:
@@ -329,6 +336,9 @@ def reference_differences(committed: str, fresh: str) -> list[str]:
         x, y = a.tol_scale[case], b.tol_scale[case]
         if not within(relative_error(x, y), REFERENCE_TOL_SCALE_REL_TOL):
             moved.append(f"tol_scale of {case} {x:.3g} -> {y:.3g}")
+    for k, (x, y) in enumerate(zip(a.arrays.get(FLOAT_BOUND_ARRAY, []), b.arrays.get(FLOAT_BOUND_ARRAY, []))):
+        if not within(relative_error(x, y), REFERENCE_TOL_SCALE_REL_TOL):
+            moved.append(f"{FLOAT_BOUND_ARRAY}[{k}] {x:.3g} -> {y:.3g}")
     return moved
 
 

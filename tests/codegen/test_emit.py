@@ -80,6 +80,11 @@ def test_reference_values_are_compared_numerically():
     assert reference_differences(text, _perturbed(text, "qd_M_full_out0", 0, 1 + 1e-14)) == []
     assert reference_differences(text, _perturbed(text, residual, 0, 3.0)) == []
     assert reference_differences(text, _perturbed(text, "qd_ref_q", 7, 1 + 1e-13)) == []
+    bounds = header.arrays["qd_float_bound"]
+    fd_r = int(np.flatnonzero(bounds)[0])  # fd_r's float bound: a condition number, compared as tol_scale is
+    assert reference_differences(text, _perturbed(text, "qd_float_bound", fd_r, 1 + 1e-3)) == []
+    moved = reference_differences(text, _perturbed(text, "qd_float_bound", fd_r, 1.1))
+    assert len(moved) == 1 and moved[0].startswith(f"qd_float_bound[{fd_r}] "), moved
     moved = reference_differences(text, _perturbed(text, "qd_M_full_out0", 3, 1 + 1e-6))
     assert len(moved) == 1 and moved[0].startswith("qd_M_full_out0[3] ") and "tolerance 1.0e-10" in moved[0], moved
     moved = reference_differences(text, _perturbed(text, "qd_ref_v", 2, 2.0))
