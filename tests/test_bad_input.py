@@ -134,6 +134,7 @@ ARGUMENTS = [
     (["check", "paper", "--seed", "-1"], r"Invalid value for '--seed': -1 is not in the range x>=0"),
     (["check", "paper", "--samples", "0"], r"Invalid value for '--samples'"),
     (["check", "paper", "--samples", "many"], r"Invalid value for '--samples'"),
+    (["check", "paper", "--samples", "100001"], r"'--samples': 100001 is not in the range 1<=x<=100000"),
     (["validate", "--dt", "nan"], r"--dt nan is not a positive finite number"),
     (["validate", "--dt", "inf"], r"--dt inf is not a positive finite number"),
     (["validate", "--dt", "-1e-3"], r"--dt -0.001 is not a positive finite number"),
@@ -158,10 +159,16 @@ def test_bad_argument(args, expected, no_work, tmp_path, monkeypatch):
 
 
 @pytest.mark.parametrize("command", [["codegen", "paper"], ["validate", "paper"]])
-@pytest.mark.parametrize("where", ["the file", "under the file", "/proc/quadruped_dyn", "/proc"])
+@pytest.mark.parametrize("where", ["the file", "under the file", "a dangling link", "under a dangling link",
+                                   "/proc/quadruped_dyn", "/proc"])
 def test_unwritable_out_is_rejected_before_the_work(command, where, a_file, no_work):
-    out = {"the file": str(a_file), "under the file": str(a_file / "gen")}.get(where, where)
-    _fails_with([*command, "--out", out], r"--out '.*'.*(is a file|is not writable).*; expected a writable directory")
+    dangling = a_file.parent / "dangling"
+    dangling.symlink_to(a_file.parent / "nowhere")
+    out = {"the file": str(a_file), "under the file": str(a_file / "gen"), "a dangling link": str(dangling),
+           "under a dangling link": str(dangling / "gen")}.get(where, where)
+    reason = r"is a symbolic link to '.*nowhere', which does not exist" if "dangling" in where \
+        else r"(is a file|is not writable)"
+    _fails_with([*command, "--out", out], rf"--out '.*'.*{reason}.*; expected a writable directory")
 
 
 @pytest.mark.skipif(os.geteuid() == 0, reason="root writes into read-only directories")
