@@ -42,9 +42,9 @@ def control(robot: str, gait_name: str, controllers: tuple[str, ...], cycles: in
 
     gains = Gains()
     gains = replace(gains, **{k: v for k, v in (("kp_per_kg", kp_per_kg), ("kd_per_kg", kd_per_kg)) if v is not None})
-    out = writable_dir(out_dir, f"--out '{out_dir}'")
     study = prepare(load_robot(robot), gait_name, controllers, gains, LoopOptions(rate_hz=rate_hz, cycles=cycles),
                     PlantOptions(timestep=timestep, mu=mu))
+    out = writable_dir(out_dir, f"--out '{out_dir}'")
     total = study.loop.cycles * study.plan.gait.period * len(study.controllers)
     with progress(f"{study.robot.name} {gait_name}: simulated ms", int(round(total * 1000))) as bar:
         done = [0]

@@ -70,7 +70,7 @@ class LoopOptions:
         if not isinstance(self.cycles, int) or self.cycles <= 0:
             raise InputError(f"--cycles {self.cycles}; expected a whole number of gait cycles > 0")
         if not (math.isfinite(self.rate_hz) and self.rate_hz > 0):
-            raise InputError(f"control rate {self.rate_hz} Hz; expected a positive number")
+            raise InputError(f"--rate {self.rate_hz} Hz; expected a positive number of control ticks per second")
         total = self.cycles * period / plant.timestep
         if total > MAX_PLANT_STEPS:
             raise InputError(f"--cycles {self.cycles} of {period:g} s at a {plant.timestep:g} s step is {total:.3g} MuJoCo steps "
@@ -81,7 +81,8 @@ class LoopOptions:
                              f"({plant.timestep:g} s); expected e.g. {1 / plant.timestep / 2:g} Hz")
         ticks = period * self.rate_hz
         if abs(ticks - round(ticks)) > 1e-9 * ticks:
-            raise InputError(f"control period {1 / self.rate_hz:g} s does not divide the gait cycle of {period:g} s")
+            raise InputError(f"control period {1 / self.rate_hz:g} s does not divide the gait cycle of {period:g} s; "
+                             f"expected a --rate that is a whole multiple of {1 / period:g} Hz, e.g. {LoopOptions.rate_hz:g} Hz")
         if not (math.isfinite(self.settle_s) and self.settle_s >= 0):
             raise InputError(f"settle time {self.settle_s} s; expected >= 0")
         return int(round(steps))

@@ -95,14 +95,16 @@ def test_reference_cycle_is_the_plans_ik() -> None:
     (["--cycles", "0"], "--cycles 0"),
     (["--cycles", "-3"], "--cycles -3"),
     (["--rate", "3000"], "not a whole number of plant steps"),
+    (["--rate", "0.001"], "does not divide the gait cycle of 1.2 s; expected a --rate that is a whole multiple"),
+    (["--rate", "0"], "--rate 0.0 Hz; expected a positive number"),
     (["--mu", "-1"], "friction mu"),
 ])
 def test_bad_input_exits_2_with_one_line(args: list[str], words: str, tmp_path: Path) -> None:
-    result = CliRunner().invoke(main, ["control", "paper", *args, "--out", str(tmp_path)])
+    result = CliRunner().invoke(main, ["control", "paper", *args, "--out", str(tmp_path / "out")])
     assert result.exit_code == EXIT_BAD_INPUT, result.output
     lines = result.output.strip().splitlines()
-    assert len(lines) == 1 and words in lines[0], result.output
-    assert not list(tmp_path.iterdir())  # nothing simulated, nothing written
+    assert len(lines) == 1 and words in lines[0] and "expected" in lines[0], result.output
+    assert not list(tmp_path.iterdir())  # nothing simulated, nothing written, not even --out
 
 
 def test_urdf_mujoco_cannot_compile_exits_2(tmp_path: Path) -> None:
