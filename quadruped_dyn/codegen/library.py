@@ -15,6 +15,7 @@ import hashlib
 import re
 import shutil
 import subprocess
+import sys
 import tempfile
 from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass
@@ -162,6 +163,8 @@ def compiled_library(robot: Robot, precision: str = "double", cc: str = "gcc") -
     key = generation_key(robot, precision, flags, cc)
 
     def build(building: Path) -> None:
+        print(f"building {robot.name}'s generated C ({precision}) once into the cache {building.parent.parent} "
+              "(a few minutes for a new robot)", file=sys.stderr, flush=True)
         with tempfile.TemporaryDirectory() as tmp:
             files = generate(robot, Path(tmp), precision)
             compile_sources(files.c_sources, flags, building, cc)
