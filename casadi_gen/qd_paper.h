@@ -41,7 +41,9 @@
  * every reduced function: its regularity (quadruped_dyn/dynamics/stance_regularity.py, in [0, 1]) is
  * at most QD_REGULARITY_MIN (coincident or collinear stance feet, or two feet whose line is
  * perpendicular to the roll axis: the front or back pair at zero pitch or roll), where the model
- * is undefined and would return ~1e15. The outputs are not written on QD_SINGULAR or QD_DEGENERATE.
+ * is undefined and would return ~1e15; in the float build also, with two feet, where the maps' error
+ * bound 20 x FLT_EPSILON / regularity exceeds 0.0025 (regularity below 9.5e-04:
+ * the front or back pair near a level trunk). The outputs are not written on QD_SINGULAR or QD_DEGENERATE.
  * A stance leg stretched straight is not singular here: the reduced
  * model never inverts a leg's Jacobian (measured on the paper robot: cond(M_r) 1e3 -> 3e4).
  *

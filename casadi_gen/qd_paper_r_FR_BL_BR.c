@@ -78,7 +78,8 @@ static const casadi_int casadi_s2[3] = {12, 12, 1};
 static const casadi_int casadi_s3[3] = {12, 3, 1};
 
 #define QD_REGULARITY_MIN ((casadi_real)1e-18) /* quadruped_dyn.tolerances.REGULARITY_MIN */
-#define QD_FLOAT_MAX_BOUND ((casadi_real)0.0025) /* tolerances.FLOAT_FD_R_MAX_BOUND */
+#define QD_FLOAT_MAX_BOUND ((casadi_real)0.0025) /* tolerances.FLOAT_MAX_BOUND */
+#define QD_FLOAT_ERR_PER_REGULARITY ((casadi_real)0.0) /* tolerances.FLOAT_ERR_PER_REGULARITY; 0: three or four feet */
 static int qd_reduced_parts(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem) {
   (void)arg; (void)res; (void)iw; (void)w; (void)mem;
   casadi_real a000, a001, a002, a003, a004, a005, a006, a007, a008, a009, a010, a011;

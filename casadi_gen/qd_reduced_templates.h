@@ -150,9 +150,19 @@ static int qd_finite(int flag, casadi_real** res, int n_out, const casadi_int* n
   return 0;
 }
 
-/* 0 where a stance of regularity m is regular; QD_DEGENERATE or QD_NONFINITE. */
+/* Float builds only (a constant: the tests compile away in double and long double): a result is returned as 0 only where
+ * the error bound the build computes is at most QD_FLOAT_MAX_BOUND (defined before this file:
+ * quadruped_dyn.tolerances.FLOAT_MAX_BOUND): fd_r's eps * cond_1 of the matrix it eliminates (qd_bound_exceeded), and for
+ * two feet every function's QD_FLOAT_ERR_PER_REGULARITY * eps / regularity (qd_regular_value). This makes the float
+ * build's "returned 0 means within 1 %" a check instead of an observation (docs/embedded.md). */
+#define QD_FLOAT_BOUND_CHECKED (sizeof(casadi_real) == sizeof(float))
+
+/* 0 where a stance of regularity m is regular; QD_DEGENERATE or QD_NONFINITE. In the float build also QD_DEGENERATE where
+ * QD_FLOAT_ERR_PER_REGULARITY * eps / m exceeds QD_FLOAT_MAX_BOUND (defined before this file: with two feet the maps'
+ * rounding grows as eps / regularity, quadruped_dyn.tolerances.FLOAT_ERR_PER_REGULARITY; 0 for three and four feet). */
 static int qd_regular_value(casadi_real m) {
   if (!isfinite(m)) return QD_NONFINITE;
+  if (QD_FLOAT_BOUND_CHECKED && QD_FLOAT_ERR_PER_REGULARITY * QD_EPS > QD_FLOAT_MAX_BOUND * m) return QD_DEGENERATE;
   return m > QD_REGULARITY_MIN && m > QD_REGULARITY_FLOOR ? 0 : QD_DEGENERATE;
 }
 
@@ -395,13 +405,6 @@ static casadi_real qd_max_abs(int n, const casadi_real* x) {
   return a > b ? a : b;
 }
 
-/* Float builds only (a constant: the test compiles away in double and long double): fd_r's result is returned as 0 only
- * where its error bound eps * cond_1 of the matrix it eliminates (M_r, or with a swing leg the folded rest K) is at most
- * QD_FLOAT_MAX_BOUND (defined before this file: quadruped_dyn.tolerances.FLOAT_FD_R_MAX_BOUND). Measured (paper, 300
- * states near standing, tests/checks/test_float_accuracy.py): the float error is at most 0.94 eps cond_1(K); the bound
- * makes the float build's "returned 0 means within 1 %" a check instead of an observation (docs/embedded.md). */
-#define QD_FLOAT_BOUND_CHECKED (sizeof(casadi_real) == sizeof(float))
-
 /* ||A||_1 (n x n, column-major): the largest column sum of |A_ij|. */
 static casadi_real qd_norm1(int n, const casadi_real* A) {
   casadi_real top = 0;
@@ -413,7 +416,8 @@ static casadi_real qd_norm1(int n, const casadi_real* A) {
   return top;
 }
 
-/* QD_SINGULAR where eps * ||A||_1 ||A^-1||_1 > QD_FLOAT_MAX_BOUND, else 0: LU and piv A's factors from qd_gauss_solve,
+/* fd_r's float bound (the float error measured at most 0.94 eps cond_1 on the paper robot, 300 states near standing,
+ * tests/checks/test_float_accuracy.py): QD_SINGULAR where eps * ||A||_1 ||A^-1||_1 > QD_FLOAT_MAX_BOUND, else 0: LU and piv A's factors from qd_gauss_solve,
  * norm1 = ||A||_1 taken before it; ||A^-1||_1 exactly, column by column (n solves of n^2 multiply-adds: the row swaps
  * and multipliers in the order of the elimination, then U). */
 static int qd_bound_exceeded(int n, const casadi_real* LU, const int* piv, casadi_real norm1) {

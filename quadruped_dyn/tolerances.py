@@ -106,12 +106,26 @@ FLOAT_FD_R_PER_COND = 1.0
 #: A float result with a larger error is not a result (the issue's 1 %). Measured: every float
 #: fd_r that returned 0 (not QD_SINGULAR) was within it (at most 1.1e-3 on the paper robot).
 FLOAT_USABLE_REL_ERR = 1e-2
-#: The float build's fd_r returns QD_SINGULAR where FLT_EPSILON * cond_1 of the matrix it eliminates
-#: (M_r with four feet, the folded rest K with a swing leg: docs/formulation.md §6.2) exceeds this
-#: (QD_FLOAT_MAX_BOUND in the generated C; docs/embedded.md). Measured at 300 states on the paper
-#: robot: the float error is at most 0.94 FLT_EPSILON cond_1(K); FLOAT_USABLE_REL_ERR over a margin
-#: of 4 for that constant.
-FLOAT_FD_R_MAX_BOUND = FLOAT_USABLE_REL_ERR / 4
+#: The float build returns a non-zero code where an error bound it computes exceeds this
+#: (QD_FLOAT_MAX_BOUND in the generated C; docs/embedded.md): fd_r QD_SINGULAR where FLT_EPSILON *
+#: cond_1 of the matrix it eliminates (M_r with four feet, the folded rest K with a swing leg:
+#: docs/formulation.md §6.2) does -- measured at 300 states on the paper robot, the float error is at
+#: most 0.94 FLT_EPSILON cond_1(K) --, and every reduced function of two feet QD_DEGENERATE where
+#: FLOAT_ERR_PER_REGULARITY * FLT_EPSILON / regularity does. FLOAT_USABLE_REL_ERR over a margin of 4.
+FLOAT_MAX_BOUND = FLOAT_USABLE_REL_ERR / 4
+#: Two stance feet: the velocity maps are solved by their normal equations (docs/formulation.md §6.2),
+#: whose rounding grows as the square of the rigid-motion solve's condition number, i.e. as
+#: FLT_EPSILON / regularity (a squared relative singular value: dynamics/stance_regularity.py); the
+#: front and back pairs reach regularity ~1e-9 near standing, where a float M_r had no digit left.
+#: Measured, float build against double at 200-300 states near standing (docs/embedded.md): the error
+#: of M_r, CG_r, G_r, id_r and fd_r of FL+FR and BL+BR is at most 15 FLT_EPSILON / regularity on the paper
+#: robot, 8.1 solo12, 2.6 go2, 3.3 anymal_c, 5.7 hyq, 5.8 b1; 20 covers them all (with FLOAT_MAX_BOUND:
+#: QD_DEGENERATE below regularity 9.5e-4, FLOAT_REGULARITY_MIN).
+FLOAT_ERR_PER_REGULARITY = 20.0
+#: float32's machine epsilon, C's FLT_EPSILON.
+FLT_EPSILON = 2.0**-23
+#: The regularity below which the float build of a two-feet stance set returns QD_DEGENERATE.
+FLOAT_REGULARITY_MIN = FLOAT_ERR_PER_REGULARITY * FLT_EPSILON / FLOAT_MAX_BOUND
 
 #: The tol_scale of a case in the generated C's reference header (a ratio of condition numbers,
 #: printed to 3 significant digits) on two machines: the CPU's round-off moves it by ~1e-15

@@ -12,16 +12,18 @@ import numpy as np
 import pinocchio as pin
 
 from quadruped_dyn.checks.derivative_reference import ReducedReference, grf_derivatives_reference, grf_wrench_reference
-from quadruped_dyn.codegen.emit import PREFIX, GeneratedFiles, generate, reduced_parts, stem
+from quadruped_dyn.codegen.emit import PREFIX, GeneratedFiles, float_err_per_regularity, generate, reduced_parts, stem
 from quadruped_dyn.codegen.emit_derivatives import REDUCED_DERIVATIVE_NAMES
+from quadruped_dyn.dynamics.reduced import regularity_function
 from quadruped_dyn.math.compare import relative_error, scale_of, within
 from quadruped_dyn.model.robot import Robot
 from quadruped_dyn.model.stance import StanceSet, stance_set
 from quadruped_dyn.model.state import NV_FULL, FullState, full_q, rotation
 from quadruped_dyn.references.pinocchio import PinocchioDerivatives, PinocchioReference
 from quadruped_dyn.tolerances import (
-    FLOAT_FD_R_MAX_BOUND,
+    FLOAT_MAX_BOUND,
     FLOAT_REL_TOL,
+    FLT_EPSILON,
     GRF_COND_ASSUMED,
     MAP_COND_ASSUMED,
     REFERENCE_TOL_SCALE_REL_TOL,
@@ -160,19 +162,27 @@ FLOAT_BOUND_ARRAY = "qd_float_bound"
 
 
 def float_bound(ref: PinocchioReference, name: str, s: FullState) -> float:
-    """For fd_r: FLT_EPSILON x cond_1 of the matrix its solve eliminates at ``s`` (M_r with four feet; with a swing
-    leg K, M_r's Schur complement over the swing legs' joints: docs/formulation.md §6.2), from the Pinocchio-built
-    M_r. The float build returns QD_SINGULAR where it exceeds QD_FLOAT_MAX_BOUND (docs/embedded.md); 0 for the
-    other functions."""
+    """The error bound the float build of generated function ``name`` computes at ``s`` and returns a non-zero code
+    above QD_FLOAT_MAX_BOUND for (docs/embedded.md); 0 where it computes none. A reduced function of two feet:
+    FLOAT_ERR_PER_REGULARITY x FLT_EPSILON / regularity (QD_DEGENERATE). fd_r also, and at least: FLT_EPSILON x
+    cond_1 of the matrix its solve eliminates (M_r with four feet; with a swing leg K, M_r's Schur complement over the
+    swing legs' joints: docs/formulation.md §6.2), from the Pinocchio-built M_r (QD_SINGULAR)."""
     reduced = reduced_parts(name)
-    if not reduced or reduced[0] != "fd_r":
+    if not reduced:
         return 0.0
-    stance = reduced[1]
+    kind, stance = reduced
+    x = reduced_inputs(s)
+    n = 13 if len(stance.feet) == 2 else 12
+    per_regularity = float_err_per_regularity(stance)
+    bound = per_regularity * FLT_EPSILON / float(regularity_function(ref.robot, stance)(x["q_r"][:n], x["quat"])) \
+        if per_regularity else 0.0
+    if kind != "fd_r":
+        return bound
     M = _reduced_reference(ref, "M_r", stance, s)
     L = [3 * leg + c for leg in stance.lifted for c in range(3)]
     R = [i for i in range(len(M)) if i not in L]
     K = M[np.ix_(R, R)] - M[np.ix_(R, L)] @ np.linalg.solve(M[np.ix_(L, L)], M[np.ix_(L, R)]) if L else M
-    return float(np.finfo(np.float32).eps * np.linalg.cond(K, 1))
+    return max(bound, float(FLT_EPSILON * np.linalg.cond(K, 1)))
 
 
 def tolerance_floor(name: str) -> float:
@@ -218,9 +228,10 @@ def reference_header(robot: Robot, functions: list[ca.Function], work: dict[str,
         " * is max(QD_REL_TOL_<precision>, tol_floor) * tol_scale */",
         f"#define QD_REL_TOL_DOUBLE {REL_TOL_TERMS:g}",
         f"#define QD_REL_TOL_FLOAT {FLOAT_REL_TOL:g}",
-        "/* qd_float_bound[k]: case k's FLT_EPSILON x cond_1 of the matrix fd_r eliminates (c_reference.float_bound; 0",
-        " * for the other functions); the float build's fd_r returns QD_SINGULAR above QD_FLOAT_MAX_BOUND */",
-        f"#define QD_FLOAT_MAX_BOUND {FLOAT_FD_R_MAX_BOUND!r}",
+        "/* qd_float_bound[k]: the error bound case k's float build computes (c_reference.float_bound: fd_r's FLT_EPSILON",
+        " * x cond_1 of the matrix it eliminates, a two-feet function's FLOAT_ERR_PER_REGULARITY x FLT_EPSILON /",
+        " * regularity; 0 where none); the float build returns QD_SINGULAR or QD_DEGENERATE above QD_FLOAT_MAX_BOUND */",
+        f"#define QD_FLOAT_MAX_BOUND {FLOAT_MAX_BOUND!r}",
         f"#define QD_MAX_SZ_IW {max(iw for iw, _ in work.values())}",
         f"#define QD_MAX_SZ_W {max(w for _, w in work.values())}",
         f"#define QD_MAX_IN {max(len(x) for x in inputs.values())}",

@@ -58,7 +58,7 @@ from quadruped_dyn.files.safe_write import output_path, write_text
 from quadruped_dyn.model.robot import Robot
 from quadruped_dyn.model.stance import STANCE_SETS, StanceSet, stance_set
 from quadruped_dyn.model.state import JOINT_ANGLES, NQ_FULL
-from quadruped_dyn.tolerances import FLOAT_FD_R_MAX_BOUND, REGULARITY_MIN
+from quadruped_dyn.tolerances import FLOAT_ERR_PER_REGULARITY, FLOAT_MAX_BOUND, FLOAT_REGULARITY_MIN, REGULARITY_MIN
 
 
 def _grf_paper(stance: StanceSet) -> Callable[[Robot], ca.Function]:
@@ -257,13 +257,16 @@ def header_doc(robot: Robot, functions: list[ca.Function], work: dict[str, tuple
         " * singular to working precision (a pivot below QD_SINGULAR_RTOL times the largest entry of the matrix it",
         " * eliminates, M_r's, or a swing leg's block and the folded rest's, e.g. two feet, the trunk",
         " * pitched within ~1e-12 rad of 90 deg), and in the float build also where the result's error bound",
-        f" * FLT_EPSILON x cond_1 of that matrix exceeds {FLOAT_FD_R_MAX_BOUND:g} (so a float fd_r returned as 0 is",
+        f" * FLT_EPSILON x cond_1 of that matrix exceeds {FLOAT_MAX_BOUND:g} (so a float fd_r returned as 0 is",
         " * within 1 %);",
         " * QD_DEGENERATE (3) the stance is degenerate, checked first by",
         " * every reduced function: its regularity (quadruped_dyn/dynamics/stance_regularity.py, in [0, 1]) is",
         " * at most QD_REGULARITY_MIN (coincident or collinear stance feet, or two feet whose line is",
         " * perpendicular to the roll axis: the front or back pair at zero pitch or roll), where the model",
-        " * is undefined and would return ~1e15. The outputs are not written on QD_SINGULAR or QD_DEGENERATE.",
+        " * is undefined and would return ~1e15; in the float build also, with two feet, where the maps' error",
+        f" * bound {FLOAT_ERR_PER_REGULARITY:g} x FLT_EPSILON / regularity exceeds {FLOAT_MAX_BOUND:g} (regularity below"
+        f" {FLOAT_REGULARITY_MIN:.1e}:",
+        " * the front or back pair near a level trunk). The outputs are not written on QD_SINGULAR or QD_DEGENERATE.",
         " * A stance leg stretched straight is not singular here: the reduced",
         " * model never inverts a leg's Jacobian (measured on the paper robot: cond(M_r) 1e3 -> 3e4).",
         " *",
@@ -376,8 +379,14 @@ def stem(robot: Robot) -> str:
     return f"qd_{re.sub(r'[^A-Za-z0-9_]', '_', robot.name)}"
 
 
+def float_err_per_regularity(stance: StanceSet) -> float:
+    """The float build's error per FLT_EPSILON / regularity that stance set's reduced functions assume: with two feet
+    the maps' rounding grows so (tolerances.FLOAT_ERR_PER_REGULARITY); 0 with three or four, where it does not."""
+    return FLOAT_ERR_PER_REGULARITY if len(stance.feet) == 2 else 0.0
+
+
 def _reduced_helpers_c(robot: Robot, stance: StanceSet, dfd_r: DfdRPieces, precision: str) -> str:
-    """QD_REGULARITY_MIN, QD_FLOAT_MAX_BOUND, ``qd_reduced_parts``
+    """QD_REGULARITY_MIN, QD_FLOAT_MAX_BOUND, QD_FLOAT_ERR_PER_REGULARITY, ``qd_reduced_parts``
     ((q_r, qd_r, qdd_r, quat, sin, cos) -> (regularity, S_b, T_b, v, a) in one graph, sin and cos of the joint
     angles q_r[0:12] given (``trig_as_inputs``: the templates take them once per call) (the regularity
     ``dynamics.reduced.regularity_function``): ``ReducedProjection.mass_matrix_factors``
@@ -396,7 +405,9 @@ def _reduced_helpers_c(robot: Robot, stance: StanceSet, dfd_r: DfdRPieces, preci
     factors = trig_as_inputs(ca.Function("reduced_factors", [q_r, quat], factor_outputs, {"cse": True}),
                              0, range(len(JOINT_ANGLES)))
     return (f"#define QD_REGULARITY_MIN ((casadi_real){REGULARITY_MIN!r}) /* quadruped_dyn.tolerances.REGULARITY_MIN */\n"
-            f"#define QD_FLOAT_MAX_BOUND ((casadi_real){FLOAT_FD_R_MAX_BOUND!r}) /* tolerances.FLOAT_FD_R_MAX_BOUND */\n"
+            f"#define QD_FLOAT_MAX_BOUND ((casadi_real){FLOAT_MAX_BOUND!r}) /* tolerances.FLOAT_MAX_BOUND */\n"
+            f"#define QD_FLOAT_ERR_PER_REGULARITY ((casadi_real){float_err_per_regularity(stance)!r}) "
+            "/* tolerances.FLOAT_ERR_PER_REGULARITY; 0: three or four feet */\n"
             + static_c("qd_reduced_parts", parts, precision) + "\n"
             + "#if !defined(__OPTIMIZE_SIZE__) /* M_r's and G_r's factors alone; at -Os the parts (the size budget) */\n"
             + "#define QD_REDUCED_FACTORS 1\n" + static_c("qd_reduced_factors", factors, precision, all_io=True)

@@ -11,7 +11,7 @@ import numpy as np
 import pinocchio as pin
 import pytest
 
-from quadruped_dyn.checks.c_reference import pinocchio_outputs, reduced_inputs, reference_state, tolerance_scale
+from quadruped_dyn.checks.c_reference import float_bound, pinocchio_outputs, reduced_inputs, reference_state, tolerance_scale
 from quadruped_dyn.codegen.emit import REDUCED_NAMES, REDUCED_STANCE_SETS, reduced_functions, reduced_symbol
 from quadruped_dyn.codegen.library import QD_DEGENERATE, RETURN_CODES, CompiledFunction, compiled_library
 from quadruped_dyn.codegen.reduced_library import CompiledReducedDynamics
@@ -20,7 +20,7 @@ from quadruped_dyn.errors import InputError, NumericalError
 from quadruped_dyn.experiment.gait import GAITS, gait_plan
 from quadruped_dyn.experiment.plan_ik import reference
 from quadruped_dyn.model.stance import stance_set
-from quadruped_dyn.tolerances import FLOAT_REL_TOL, REL_TOL_TERMS
+from quadruped_dyn.tolerances import FLOAT_MAX_BOUND, FLOAT_REL_TOL, REL_TOL_TERMS
 from tests.codegen.test_emit import REL_TOL_GRAPH
 from tests.conftest import assert_close
 from tests.dynamics.test_singular_and_types import QUAT, _collinear_joints
@@ -169,7 +169,13 @@ def test_float_build_matches_pinocchio(paper):
         for kind in REDUCED_NAMES:
             name = reduced_symbol(kind, stance)
             f = CompiledFunction(library, name)
-            (out,) = f(*[x[k] for k in f.names_in])
+            bound = float_bound(ref, name, s)
+            try:
+                (out,) = f(*[x[k] for k in f.names_in])
+            except NumericalError:  # refused only where its own error bound says so (a factor 2: it rounds in float)
+                assert bound > FLOAT_MAX_BOUND / 2, f"{name} refused at a float error bound of {bound:.1e}"
+                continue
+            assert bound <= 2 * FLOAT_MAX_BOUND, f"{name} returned 0 at a float error bound of {bound:.1e}"
             tol = FLOAT_REL_TOL * tolerance_scale(ref, name, s)
             if tol > FLOAT_MAX_TOL:  # fd_r of BL+BR: cond(M_r) ~5e5 leaves float no digits to check
                 continue

@@ -21,14 +21,10 @@ from quadruped_dyn.codegen.emit import CODEGEN_FUNCTIONS, N_DERIVATIVE_FUNCTIONS
 from quadruped_dyn.codegen.library import compiled_library
 from quadruped_dyn.codegen.targets import TARGETS, Target, make, run_check, skip_reason
 from quadruped_dyn.model.robot import load_robot
+from tests.codegen.test_emit import MAX_DOUBLE_SKIPPED, MAX_FLOAT_SKIPPED
 
 CASADI_GEN = Path(__file__).resolve().parents[2] / "casadi_gen"
 N_FUNCTIONS = len(CODEGEN_FUNCTIONS) + len(REDUCED_NAMES) * len(REDUCED_STANCE_SETS) + N_DERIVATIVE_FUNCTIONS
-#: casadi_gen's check program reports at most this many float cases as skipped (cond x eps > 1e-2)
-MAX_FLOAT_SKIPPED = 2
-#: ... and in double at most this many: dfd_r of the back pair, whose conditioning at the reference state
-#: times its finite-difference reference's accuracy (REL_TOL_FD_DERIVATIVES) exceeds 1e-2
-MAX_DOUBLE_SKIPPED = 1
 
 
 def _require(target: Target) -> None:
