@@ -118,6 +118,17 @@ class _Stop(Exception):
     pass
 
 
+def fallen(plant: Plant, height0: float) -> str | None:
+    """Why the robot has fallen (trunk origin below FALL_HEIGHT_FRACTION of ``height0``, its
+    planned height above the floor, or trunk tilt above FALL_TILT_RAD), or None: the one test of
+    a run (it stops) and of the settled start (it is refused)."""
+    height = float(plant.data.qpos[2] - plant.floor_z)
+    tilt = math.acos(max(-1.0, min(1.0, float(plant.rotation()[2, 2]))))
+    if height < FALL_HEIGHT_FRACTION * height0 or tilt > FALL_TILT_RAD:
+        return f"trunk height {height:.3f} m above the floor, tilt {math.degrees(tilt):.0f} deg"
+    return None
+
+
 def settled_state(plant: Plant, plan: Plan, gains: Gains, c: GeneratedC, rate_hz: float, substeps: int,
                   settle_s: float, grf_every: int = 10) -> tuple[tuple[np.ndarray, np.ndarray], list[dict]]:
     """((q (19,), v (18,)), GRF samples): the initial state every run starts from (see the module
@@ -142,12 +153,14 @@ def settled_state(plant: Plant, plan: Plan, gains: Gains, c: GeneratedC, rate_hz
             f, touch = plant.contact_forces()
             grf.append(_grf_sample(plant, functions, c, k / rate_hz - settle_s, four, q_full, v_full, f, touch))
     q, _ = plant.full_state()
-    height0, height = q0[2] - plant.floor_z, q[2] - plant.floor_z
-    if plant.unstable() or not (np.isfinite(q).all() and height > FALL_HEIGHT_FRACTION * height0):
+    height0 = q0[2] - plant.floor_z
+    fell = fallen(plant, height0) if np.isfinite(q).all() else "a non-finite state"
+    if plant.unstable() or fell:
         # every run would start from it: MuJoCo diverged (and reset the state) or the robot did not stand
-        raise NumericalError(f"the robot did not stand after settling for {settle_s:g} s in MuJoCo (trunk height {height:.3f} m "
-                             f"above the floor, started at {height0:.3f} m; friction mu = {plant.options.mu:g}, step "
-                             f"{plant.options.timestep:g} s)")
+        # (fell, or was thrown: a trunk 2.9 m up and tilted 72 deg at mu <= 1e-5, MuJoCo's smallest friction)
+        raise NumericalError(f"the robot did not stand after settling for {settle_s:g} s in MuJoCo ({fell or 'MuJoCo diverged'}, "
+                             f"started at {height0:.3f} m; friction mu = {plant.options.mu:g}, "
+                             f"step {plant.options.timestep:g} s)")
     stance0 = plan.stance(0.0)
     _, v, _ = PinocchioReference(plant.robot).reduced_motion(stance0, ref0.q_r, ref0.qd_r, ref0.qdd_r, q[3:7])
     return (q, v), grf
@@ -208,12 +221,10 @@ def run_controller(plant: Plant, plan: Plan, name: str, gains: Gains, options: L
             stances.append(ref.stance)
             if sample:
                 grf.append(_grf_sample(plant, grf_functions, c, t, stance, q_full, v_full, f, touch))
-            z_axis = plant.rotation()[:, 2]
-            tilt = math.acos(max(-1.0, min(1.0, float(z_axis[2]))))
-            if plant.data.qpos[2] - plant.floor_z < FALL_HEIGHT_FRACTION * height0 or tilt > FALL_TILT_RAD:
+            fell = fallen(plant, height0)
+            if fell:
                 fell_at = t + dt
-                stopped = f"fell at t = {fell_at:.3f} s (trunk height {plant.data.qpos[2] - plant.floor_z:.3f} m above " \
-                          f"the floor, tilt {math.degrees(tilt):.0f} deg)"
+                stopped = f"fell at t = {fell_at:.3f} s ({fell})"
                 raise _Stop
             if progress and (k + 1) % every == 0:
                 progress((k + 1) * dt)

@@ -107,6 +107,18 @@ def test_bad_input_exits_2_with_one_line(args: list[str], words: str, tmp_path: 
     assert not list(tmp_path.iterdir())  # nothing simulated, nothing written, not even --out
 
 
+def test_a_start_that_did_not_settle_is_refused(tmp_path: Path) -> None:
+    """At mu = 0 (MuJoCo clamps it to 1e-5) the settling throws the trunk 2.9 m up, tilted 72 deg:
+    above the fall height, but no stand; every controller would be reported as fallen at the first
+    tick. The start is refused (exit 1, one line) by the runs' own fall test, tilt included."""
+    result = CliRunner().invoke(main, ["control", "paper", "--mu", "0", "--controller", "pd", "--cycles", "1",
+                                       "--no-animation", "--out", str(tmp_path)])
+    assert result.exit_code == 1, result.output
+    lines = result.output.strip().splitlines()
+    assert "did not stand after settling" in lines[-1] and "tilt" in lines[-1], result.output
+    assert not (tmp_path / "paper_walk_closed_loop.json").exists()
+
+
 def test_urdf_mujoco_cannot_compile_exits_2(tmp_path: Path) -> None:
     """A hip inertia of 1e-17 kg m^2: Pinocchio loads it, MuJoCo's compiler refuses it."""
     text = PAPER_URDF.read_text().replace(
