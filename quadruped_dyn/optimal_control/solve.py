@@ -24,7 +24,7 @@ MAX_CONSTRAINT_VIOLATION = 1e-8
 
 #: IPOPT's options: tight tolerances so the violation lands below MAX_CONSTRAINT_VIOLATION.
 IPOPT_OPTIONS = {"tol": 1e-8, "constr_viol_tol": 1e-9, "acceptable_iter": 0, "max_iter": 500,
-                 "print_level": 0, "mu_strategy": "adaptive", "linear_solver": "mumps"}
+                 "print_level": 0, "sb": "yes", "mu_strategy": "adaptive", "linear_solver": "mumps"}
 
 HESSIANS = ("exact", "limited-memory")
 

@@ -32,3 +32,19 @@ def test_no_convergence_is_exit_1_with_ipopt_status(tmp_path, monkeypatch) -> No
     errors = [line for line in result.output.splitlines() if line.startswith("error:")]
     assert len(errors) == 1 and "Maximum_Iterations_Exceeded" in errors[0]
     assert not list(tmp_path.iterdir())
+
+
+def test_ipopt_writes_nothing_to_stdout() -> None:
+    """IPOPT prints its banner on file descriptor 1 once per process, whatever print_level says,
+    which broke `optimize --json` (stdout no longer JSON); "sb" suppresses it. A fresh process, as
+    the banner is printed only by the first solve of a process; a one-variable NLP."""
+    import subprocess
+    import sys
+
+    code = ("import casadi as ca\n"
+            "from quadruped_dyn.optimal_control.solve import IPOPT_OPTIONS\n"
+            "x = ca.SX.sym('x')\n"
+            "ca.nlpsol('s', 'ipopt', {'x': x, 'f': (x - 1) ** 2}, {'ipopt': IPOPT_OPTIONS, 'print_time': False})(x0=0)\n")
+    run = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=120)
+    assert run.returncode == 0, run.stderr
+    assert run.stdout == "", run.stdout
