@@ -44,6 +44,7 @@ from typing import Any
 import casadi as ca
 import numpy as np
 
+from quadruped_dyn.dynamics.grf import MAX_FRICTION_COEFFICIENT
 from quadruped_dyn.errors import InputError
 from quadruped_dyn.experiment.gait import Gait, Plan, gait_plan
 from quadruped_dyn.experiment.plan_ik import reference
@@ -108,8 +109,9 @@ class Options:
                 or not MIN_NODES_PER_PHASE <= self.nodes_per_phase <= MAX_NODES_PER_PHASE):
             raise InputError(f"--nodes {self.nodes_per_phase}; expected {MIN_NODES_PER_PHASE} to {MAX_NODES_PER_PHASE} "
                              "collocation nodes per phase")
-        if not (math.isfinite(self.mu) and self.mu > 0):
-            raise InputError(f"mu = {self.mu} is not a friction coefficient the feet can stand on; expected mu > 0")
+        if not (math.isfinite(self.mu) and 0 < self.mu <= MAX_FRICTION_COEFFICIENT):  # mu**2 of 1e300 overflows
+            raise InputError(f"mu = {self.mu} is not a friction coefficient the feet can stand on; "
+                             f"expected 0 < mu <= {MAX_FRICTION_COEFFICIENT:g}")
         if not (math.isfinite(self.fz_min_fraction) and 0 <= self.fz_min_fraction < 1 / len(gait.phases[0])):
             raise InputError(f"f_z minimum {self.fz_min_fraction} of the weight per foot cannot be carried; "
                              f"expected 0 <= fraction < {1 / len(gait.phases[0]):.2f}")

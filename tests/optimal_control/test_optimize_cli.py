@@ -11,6 +11,7 @@ from quadruped_dyn.cli import main
 @pytest.mark.parametrize("args, message", [
     (["--mu", "0"], "mu"),
     (["--mu", "-1"], "mu"),
+    (["--mu", "1e300"], "expected 0 < mu <= 1000"),
     (["--nodes", "1"], "expected 3 to 40 collocation nodes per phase"),
     (["--speed", "9"], "beyond"),
     (["--cycles", "-1"], "cycles"),

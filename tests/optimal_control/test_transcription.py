@@ -30,6 +30,7 @@ def test_quintic_hermite_reproduces_quintics() -> None:
 @pytest.mark.parametrize("options, message", [
     (Options(mu=0.0), "mu"),
     (Options(mu=-0.3), "mu"),
+    (Options(mu=1e300), "expected 0 < mu <= 1000"),  # was an OverflowError in mu**2
     (Options(nodes_per_phase=2), "expected 3 to 40 collocation nodes per phase"),
     (Options(nodes_per_phase=41), "expected 3 to 40 collocation nodes per phase"),
     (Options(speed=5.0), "beyond"),
