@@ -97,6 +97,12 @@ CT_OMEGA_STANCE = 50.0
 CT_OMEGA_SWING = 250.0
 CT_ZETA = 1.0
 
+#: The largest gain accepted (any of Gains, in its unit). 5e4 x the default kp per kg: the paper
+#: robot's pd already saturates every joint's effort at 1e5 and falls within one walk cycle, and
+#: 1e10 behaves as 1e100 (bang-bang). Far larger gains overflowed: at 1e308, kp x mass is inf,
+#: MuJoCo diverged, and the run died with a NaN state blamed on the stance.
+MAX_GAIN = 1e6
+
 #: ct-diag+land: how far below the plan's touch-down point the swing feet aim (m). Measured on
 #: the paper robot's trot, 10 cycles asked: 3 mm falls at 2.2 s, 5 mm trots 10 cycles, 10 mm
 #: falls at 1.95 s; 5 mm trots solo12 and go2 10 cycles. A narrow window, not a tuned margin.
@@ -120,8 +126,8 @@ class Gains:
 
     def validate(self) -> None:
         for name, value in vars(self).items():
-            if not (math.isfinite(value) and value >= 0):
-                raise InputError(f"gain {name} = {value}; expected a finite number >= 0")
+            if not (math.isfinite(value) and 0 <= value <= MAX_GAIN):
+                raise InputError(f"gain {name} = {value}; expected a finite number from 0 to {MAX_GAIN:g}")
 
     def as_dict(self, robot: Robot) -> dict[str, float]:
         m = robot.total_mass

@@ -92,6 +92,7 @@ def test_reference_cycle_is_the_plans_ik() -> None:
     (["--gait", "gallop"], "unknown gait 'gallop'"),
     (["--kp-per-kg", "-1"], "kp_per_kg = -1.0"),
     (["--kd-per-kg", "-0.1"], "kd_per_kg = -0.1"),
+    (["--kp-per-kg", "1e308"], "expected a finite number from 0 to 1e+06"),  # kp x mass overflowed mid-run
     (["--cycles", "0"], "--cycles 0"),
     (["--cycles", "-3"], "--cycles -3"),
     (["--rate", "3000"], "not a whole number of plant steps"),
