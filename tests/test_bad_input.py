@@ -194,6 +194,14 @@ def test_bench_cache_that_is_a_file(kind, a_file, no_work):
     _fails_with(["bench"], r"QUADRUPED_DYN_CACHE.*is a file; expected a writable directory", env={"QUADRUPED_DYN_CACHE": cache})
 
 
+def test_bench_bad_robot_is_one_line_without_the_peers_headers(no_work, monkeypatch):
+    """The note that pinocchio-cppadcodegen is not timed came before the checks: two lines."""
+    from quadruped_dyn.bench import cppadcg
+
+    monkeypatch.setattr(cppadcg, "available", lambda: False)
+    _fails_with(["bench", "--robot", "/nonexistent.urdf"], r"no such file: '/nonexistent.urdf'")
+
+
 def test_make_urdf_into_unwritable_place(monkeypatch):
     monkeypatch.setattr(paper_robot, "URDF_COPIES", (Path("/proc/quadruped_dyn/paper_quadruped.urdf"),))
     _fails_with(["make-urdf"], r"cannot write '/proc/quadruped_dyn/paper_quadruped.urdf' .*expected a writable file")

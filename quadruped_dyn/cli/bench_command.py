@@ -32,15 +32,13 @@ def bench(robots: tuple[str, ...], calls: int, reps: int, as_json: bool, peers: 
     from quadruped_dyn.bench.timing import run_bench
     from quadruped_dyn.files.cache import cache_dir
 
-    if peers.strip() == "auto":
-        peer_names: tuple[str, ...] = (cppadcg.PEER,) if cppadcg.available() else ()
-        if not peer_names:
-            click.echo(f"note: {cppadcg.PEER} is not timed: its headers are not installed ({cppadcg.INSTALL_HINT})", err=True)
-    else:
-        peer_names = parse_peers(peers)
+    auto = peers.strip() == "auto"
+    peer_names: tuple[str, ...] = ((cppadcg.PEER,) if cppadcg.available() else ()) if auto else parse_peers(peers)
     require_tools("gcc", "g++")
     writable_dir(cache_dir(), f"the cache directory '{cache_dir()}' (QUADRUPED_DYN_CACHE)")
     loaded = [load_robot(r) for r in robots]  # every argument checked before minutes of work
+    if auto and not peer_names:  # after the checks: bad input stays one line
+        click.echo(f"note: {cppadcg.PEER} is not timed: its headers are not installed ({cppadcg.INSTALL_HINT})", err=True)
     reports = [run_bench(r, calls, reps, native=native, peer=cppadcg.PEER in peer_names) for r in loaded]
     adam = [e for r in loaded for e in run_peers(r, native, calls, reps)] if "adam" in peer_names else []
     if as_json:
