@@ -53,7 +53,7 @@ from quadruped_dyn.dynamics.reduced_projection import reduced_projection
 from quadruped_dyn.errors import InputError
 from quadruped_dyn.math.spatial import dm, placement_rt, quat_to_rotation, skew
 from quadruped_dyn.model.leg_frames import axis_aligned
-from quadruped_dyn.model.robot import Robot
+from quadruped_dyn.model.robot import Robot, check_robot
 from quadruped_dyn.model.stance import StanceSet, stance_set
 from quadruped_dyn.model.state import GRAVITY_W, NQ_FULL, NV_FULL, check_array
 
@@ -186,8 +186,12 @@ class FullDerivatives:
         guard_fields(self)
 
 
-@cache
 def full_derivatives(robot: Robot) -> FullDerivatives:
+    return _full_derivatives(check_robot(robot))
+
+
+@cache
+def _full_derivatives(robot: Robot) -> FullDerivatives:
     start = time.perf_counter()
     q, v, a, tau = ca.SX.sym("q", NQ_FULL), ca.SX.sym("v", NV_FULL), ca.SX.sym("a", NV_FULL), ca.SX.sym("tau", NV_FULL)
     dq, dv, M = rnea_tangent_derivatives(robot, q, v, a)
@@ -246,10 +250,14 @@ class ReducedDerivatives:
         return -Minv @ Dq, -Minv @ Dqd, Minv, -Minv @ Dth
 
 
-@cache
 def reduced_derivatives(robot: Robot, stance_name: str) -> ReducedDerivatives:
     """did_r and dfd_r of a stance set of 2, 3 or 4 feet: dfd_r by the implicit-function rule on
     id_r, d qdd/dx = -M_r^-1 d id_r/dx at qdd = fd_r (x = q_r, qd_r, theta), d qdd/d tau_ext = M_r^-1."""
+    return _reduced_derivatives(check_robot(robot), stance_set(stance_name).name)  # checked before the cache hashes it
+
+
+@cache
+def _reduced_derivatives(robot: Robot, stance_name: str) -> ReducedDerivatives:
     stance = stance_set(stance_name)
     if len(stance.feet) not in (2, 3, 4):
         raise InputError(f"stance {stance.name} has {len(stance.feet)} feet; the reduced model needs 2, 3 or 4 stance feet")
@@ -267,10 +275,14 @@ def reduced_derivatives(robot: Robot, stance_name: str) -> ReducedDerivatives:
     return ReducedDerivatives(stance, n, did, W)
 
 
-@cache
 def grf_derivatives(robot: Robot, stance_name: str) -> ca.Function:
     """dgrf_<stance>(q, v, a) -> dlambda_dq (n, 18, tangent convention), dlambda_dv (n, 18),
     dlambda_da (n, 18) of the paper's GRF model's minimum-norm unknowns."""
+    return _grf_derivatives(check_robot(robot), stance_set(stance_name).name)  # checked before the cache hashes it
+
+
+@cache
+def _grf_derivatives(robot: Robot, stance_name: str) -> ca.Function:
     g = grf_solve(robot, stance_name, "paper")
     q, v, a = ca.SX.sym("q", NQ_FULL), ca.SX.sym("v", NV_FULL), ca.SX.sym("a", NV_FULL)
     lam = g.function(q, v, a)[0]

@@ -44,7 +44,7 @@ from quadruped_dyn.errors import InputError, NumericalError
 from quadruped_dyn.math.linalg import least_squares, min_norm
 from quadruped_dyn.math.rigid import skew
 from quadruped_dyn.math.spatial import dm, quat_to_rotation
-from quadruped_dyn.model.robot import Robot
+from quadruped_dyn.model.robot import Robot, check_robot
 from quadruped_dyn.model.stance import GRF_MODELS, STANCE_SETS, StanceSet, stance_set
 from quadruped_dyn.model.state import GRAVITY_W, NQ_FULL, NV_FULL, rotation
 from quadruped_dyn.tolerances import RANK_RTOL
@@ -226,8 +226,7 @@ def grf_solves(robot: Robot) -> dict[tuple[str, str], GrfSolve]:
 
 
 def grf_solve(robot: Robot, stance: str | StanceSet, model: str = "paper") -> GrfSolve:
-    if not isinstance(robot, Robot):
-        raise InputError(f"robot is {type(robot).__name__}; expected a Robot (quadruped_dyn.load_robot)")
+    check_robot(robot)
     s = stance if isinstance(stance, StanceSet) else stance_set(stance)
     if not isinstance(model, str):
         raise InputError(f"model is {type(model).__name__}; expected one of {GRF_MODELS}")

@@ -47,7 +47,7 @@ from quadruped_dyn.math.spatial import (
 )
 from quadruped_dyn.model.leg import Leg
 from quadruped_dyn.model.leg_frames import axis_aligned
-from quadruped_dyn.model.robot import Robot
+from quadruped_dyn.model.robot import Robot, check_robot
 from quadruped_dyn.model.state import GRAVITY_W, NQ_FULL, NV_FULL
 
 
@@ -212,9 +212,13 @@ def _ordered_inputs() -> tuple[ca.SX, ca.SX, ca.SX, ca.SX]:
     return ca.SX.sym("q", NQ_FULL), ca.SX.sym("v", NV_FULL), ca.SX.sym("a", NV_FULL), ca.SX.sym("f", 12)
 
 
-@cache
 def full_dynamics(robot: Robot) -> FullDynamics:
     """Build the full-coordinate Functions once per robot."""
+    return _full_dynamics(check_robot(robot))
+
+
+@cache
+def _full_dynamics(robot: Robot) -> FullDynamics:
     start = time.perf_counter()
     q, v, a, f = _ordered_inputs()
     qj = q[7:]

@@ -44,7 +44,7 @@ from quadruped_dyn.errors import InputError, NumericalError
 from quadruped_dyn.math.linalg import least_squares
 from quadruped_dyn.math.rigid import skew
 from quadruped_dyn.math.spatial import quat_to_rotation
-from quadruped_dyn.model.robot import Robot
+from quadruped_dyn.model.robot import Robot, check_robot
 from quadruped_dyn.model.stance import StanceSet, stance_set
 from quadruped_dyn.model.state import check_array
 from quadruped_dyn.tolerances import REGULARITY_MIN
@@ -211,9 +211,7 @@ def solve_forward_dynamics(stance: StanceSet, M_r: np.ndarray, rhs: np.ndarray) 
 
 def reduced_model(robot: Robot, stance_name: str) -> ReducedModel:
     """Build the reduced model for a stance set of two, three or four feet (once per robot)."""
-    if not isinstance(robot, Robot):
-        raise InputError(f"robot is {type(robot).__name__}; expected a Robot (quadruped_dyn.load_robot)")
-    return _reduced_model(robot, stance_set(stance_name).name)  # checked before the cache hashes it
+    return _reduced_model(check_robot(robot), stance_set(stance_name).name)  # checked before the cache hashes it
 
 
 @cache

@@ -288,6 +288,14 @@ def _parse_urdf(path: Path, data: bytes) -> pin.Model:
                          "joined by joints: a trunk with four legs of three revolute joints each") from e
 
 
+def check_robot(robot: object) -> Robot:
+    """``robot`` itself, or an InputError if it is not a Robot (a name or a path is load_robot's):
+    the first check of every public function of a robot, before a cache hashes the argument."""
+    if not isinstance(robot, Robot):
+        raise InputError(f"robot is {type(robot).__name__}; expected a Robot (quadruped_dyn.load_robot)")
+    return robot
+
+
 def load_robot(name_or_path: str, cached: bool = True, foot_frames: object = None) -> Robot:
     """Load a built-in robot by name, or any quadruped URDF by path. Cached per path and
     content (an edited file is loaded afresh) unless ``cached`` is False (e.g. a temporary file).

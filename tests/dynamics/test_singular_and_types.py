@@ -13,8 +13,10 @@ import numpy as np
 import pytest
 from scipy.optimize import least_squares
 
+from quadruped_dyn.dynamics.derivatives import full_derivatives, grf_derivatives, reduced_derivatives
 from quadruped_dyn.dynamics.grf import grf_solve
 from quadruped_dyn.dynamics.guarded import guarded_call
+from quadruped_dyn.dynamics.newton_euler import full_dynamics
 from quadruped_dyn.dynamics.reduced import reduced_model
 from quadruped_dyn.errors import InputError, NumericalError
 from quadruped_dyn.model.state import full_q
@@ -124,6 +126,13 @@ def test_api_type_confusion_is_input_error(paper):
         "reduced None": lambda: reduced_model(paper, None),
         "reduced one foot": lambda: reduced_model(paper, "FL"),
         "reduced robot None": lambda: reduced_model(None, "FL+FR"),
+        # the cached builders check before the cache hashes (a list: TypeError) or the build reads (a str: AttributeError)
+        "full_dynamics name": lambda: full_dynamics("paper"),
+        "full_dynamics list": lambda: full_dynamics([paper]),
+        "full_derivatives name": lambda: full_derivatives("paper"),
+        "reduced_derivatives name": lambda: reduced_derivatives("paper", "FL+BR"),
+        "reduced_derivatives list": lambda: reduced_derivatives(paper, ["FL", "BR"]),
+        "grf_derivatives list": lambda: grf_derivatives(paper, ["FL", "BR"]),
         "id_r complex": lambda: reduced_model(paper, "FL+FR+BL+BR").id_r(paper.standing_q + 0j, np.zeros(12),
                                                                           np.zeros(12), QUAT),
         "M_r __array__": lambda: reduced_model(paper, "FL+FR+BL+BR").M_r(_Raises(), QUAT),
