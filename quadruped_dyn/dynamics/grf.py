@@ -227,7 +227,7 @@ def grf_solves(robot: Robot) -> dict[tuple[str, str], GrfSolve]:
 
 def grf_solve(robot: Robot, stance: str | StanceSet, model: str = "paper") -> GrfSolve:
     check_robot(robot)
-    s = stance if isinstance(stance, StanceSet) else stance_set(stance)
+    s = stance_set(stance)
     if not isinstance(model, str):
         raise InputError(f"model is {type(model).__name__}; expected one of {GRF_MODELS}")
     s.selection(model)  # validates the model name

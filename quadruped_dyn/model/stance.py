@@ -71,8 +71,14 @@ STANCE_SETS: tuple[StanceSet, ...] = tuple(
     StanceSet(feet) for k in (4, 3, 2, 1, 0) for feet in itertools.combinations(range(4), k)
 )
 
-def stance_set(name: str) -> StanceSet:
-    """Look up a stance set by name, e.g. 'FL+BR' (order-insensitive) or 'none'."""
+def stance_set(name: str | StanceSet) -> StanceSet:
+    """Look up a stance set by name, e.g. 'FL+BR' (order-insensitive) or 'none', or check one
+    built by hand (``StanceSet((0, 3))``: increasing feet of (FL, FR, BL, BR), one of STANCE_SETS)."""
+    if isinstance(name, StanceSet):
+        if name not in STANCE_SETS:
+            raise InputError(f"stance set {name!r} is not one of the 16; expected increasing, distinct foot indices "
+                             "0-3 (FL, FR, BL, BR), or a name such as 'FL+BR'")
+        return name
     if not isinstance(name, str):
         raise InputError(f"stance set is {type(name).__name__} {name!r}; expected a name such as 'FL+BR' "
                          "(feet joined by '+') or 'none'")

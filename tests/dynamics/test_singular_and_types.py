@@ -19,6 +19,7 @@ from quadruped_dyn.dynamics.guarded import guarded_call
 from quadruped_dyn.dynamics.newton_euler import full_dynamics
 from quadruped_dyn.dynamics.reduced import reduced_model
 from quadruped_dyn.errors import InputError, NumericalError
+from quadruped_dyn.model.stance import StanceSet
 from quadruped_dyn.model.state import full_q
 from quadruped_dyn.references.pinocchio import PinocchioReference
 
@@ -120,6 +121,8 @@ def test_api_type_confusion_is_input_error(paper):
         "stance None": lambda: grf_solve(paper, None),
         "stance list": lambda: grf_solve(paper, ["FL"]),
         "stance int": lambda: grf_solve(paper, 3),
+        "StanceSet foot 7": lambda: grf_solve(paper, StanceSet((0, 0, 7))),  # was an IndexError
+        "StanceSet unsorted": lambda: grf_solve(paper, StanceSet((3, 0))),  # was a KeyError
         "model None": lambda: grf_solve(paper, "FL+FR", None),
         "robot name": lambda: grf_solve("paper", "FL+FR"),
         "reduced list": lambda: reduced_model(paper, ["FL"]),
