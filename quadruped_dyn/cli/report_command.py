@@ -23,7 +23,7 @@ def report(robot: str, out_dir: str, fast: bool, samples: int, footprint: bool) 
     """One self-contained HTML page of everything the toolkit knows about ROBOT (exit 1 if a check fails)."""
     from quadruped_dyn.report.build import build_report, prepare
 
-    prepare(robot, out_dir)  # bad input is reported before any work
+    prepare(robot, out_dir, samples)  # bad input is reported before any work
     result = build_report(robot, out_dir, fast, samples, footprint=footprint)
     click.echo(result.summary())
     sys.exit(0 if result.passed else EXIT_CHECK_FAILED)

@@ -22,6 +22,7 @@ from functools import partial
 from pathlib import Path
 from typing import Any
 
+from quadruped_dyn.checks.terms import check_samples
 from quadruped_dyn.files.paths import writable_dir
 from quadruped_dyn.files.safe_write import output_dir, output_path, write_text
 from quadruped_dyn.model.robot import Robot, robot_name, robot_path
@@ -64,9 +65,11 @@ REPORT_CLOSED_LOOP_CYCLES = 2
 RUN_LATE = ("notebooks", "c")
 
 
-def prepare(robot_arg: str, out: str | Path) -> tuple[Path, Path]:
+def prepare(robot_arg: str, out: str | Path, samples: int = CHECK_SAMPLES) -> tuple[Path, Path]:
     """Validate the arguments before any work: (URDF path, the robot's output directory).
-    InputError for an unknown robot or an output directory that cannot be written."""
+    InputError for an unknown robot, a number of term-check samples ``run_check`` refuses (it runs
+    minutes into the report), or an output directory that cannot be written."""
+    check_samples(samples)
     urdf = robot_path(robot_arg)
     # as load_robot names it: a safe name, one path component; never a link out of --out
     target = output_dir(writable_dir(out, f"--out '{out}'", "a writable --out directory"), robot_name(urdf))
@@ -136,7 +139,7 @@ def build_report(robot_arg: str = "paper", out: str | Path = "results", fast: bo
     import matplotlib
 
     matplotlib.use("Agg")  # figures go into the page, never to a window
-    _, target = prepare(robot_arg, out)
+    _, target = prepare(robot_arg, out, samples)
     steps = _steps(samples, fast, with_notebooks)
     progress = Progress(len(steps) + 2, show_progress)  # loading, the steps, writing the page
     done = progress.step(f"loading {robot_arg}")

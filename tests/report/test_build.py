@@ -56,6 +56,21 @@ def test_bad_robot_is_one_line_exit_2(tmp_path):
     assert result.stderr.count("\n") == 1 and "expected a URDF path or one of" in result.stderr
 
 
+def test_too_many_samples_is_one_line_exit_2_before_the_work(tmp_path, monkeypatch):
+    """check refuses --samples above its cap before any work; the report ran minutes of sections
+    first and then failed its term check."""
+    from quadruped_dyn.report import build
+
+    def tripwire(*args, **kwargs):
+        raise AssertionError("the report started before its arguments were checked")
+
+    monkeypatch.setattr(build, "load_with_warnings", tripwire)
+    result = CliRunner().invoke(main, ["report", "paper", "--fast", "--samples", "100001", "--out", str(tmp_path)])
+    assert result.exit_code == 2, result.output
+    assert result.stderr.count("\n") == 1 and "expected an integer from 1 to 100,000" in result.stderr
+    assert not list(tmp_path.iterdir())
+
+
 def test_unwritable_out_is_one_line_exit_2(tmp_path):
     blocker = tmp_path / "file"
     blocker.write_text("")
