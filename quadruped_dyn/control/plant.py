@@ -47,7 +47,7 @@ import numpy as np
 from quadruped_dyn.dynamics.grf import MAX_FRICTION_COEFFICIENT
 from quadruped_dyn.errors import InputError
 from quadruped_dyn.experiment.gait import Plan
-from quadruped_dyn.model.robot import Robot
+from quadruped_dyn.model.robot import Robot, actuator_limit
 from quadruped_dyn.model.state import GRAVITY_W
 from quadruped_dyn.model.urdf_edit import strip_geometry, to_text
 from quadruped_dyn.references.mujoco import accepted_urdf
@@ -317,10 +317,7 @@ def build_plant(robot: Robot, plan: Plan, options: PlantOptions = PlantOptions()
         else:
             radius, source = DEFAULT_FOOT_RADIUS, f"default {DEFAULT_FOOT_RADIUS} m (no collision sphere at the foot frames)"
     strip_geometry(root)
-    effort = np.array([float(robot.model.effortLimit[v]) for v in robot.idx_v])
-    if not np.all(np.isfinite(effort) & (effort > 0)):
-        raise InputError(f"{robot.name}: effort limits {effort.round(2).tolist()} N m; expected a positive finite "
-                         "<limit effort> on every leg joint")
+    effort = actuator_limit(robot, "effort")
     floor_z = float(np.mean([plan.foot(i, 0.0)[0][2] for i in range(4)])) - radius
     text = to_text(root)
     model = _compile(_spec(text, robot, options, floor_z, radius, effort))

@@ -288,6 +288,22 @@ def _parse_urdf(path: Path, data: bytes) -> pin.Model:
                          "joined by joints: a trunk with four legs of three revolute joints each") from e
 
 
+#: The URDF <limit> attributes of a leg joint a controller or an optimiser bounds its motion by, and their units.
+ACTUATOR_LIMITS = {"effort": "N m", "velocity": "rad/s"}
+
+
+def actuator_limit(robot: Robot, kind: str) -> np.ndarray:
+    """(12,) the leg joints' <limit effort> (N m) or <limit velocity> (rad/s), project order;
+    InputError unless each is positive and finite: at 0 a joint can exert no torque or make no
+    motion, which no controller and no optimised gait can use (the dynamics do not read them)."""
+    values = {"effort": robot.model.effortLimit, "velocity": robot.model.velocityLimit}[kind]
+    limit = np.array([float(values[v]) for v in robot.idx_v])
+    if not np.all(np.isfinite(limit) & (limit > 0)):
+        raise InputError(f"{robot.name}: {kind} limits {limit.round(2).tolist()} {ACTUATOR_LIMITS[kind]}; expected a "
+                         f"positive finite <limit {kind}> on every leg joint")
+    return limit
+
+
 def check_robot(robot: object) -> Robot:
     """``robot`` itself, or an InputError if it is not a Robot (a name or a path is load_robot's):
     the first check of every public function of a robot, before a cache hashes the argument."""

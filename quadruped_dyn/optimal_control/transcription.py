@@ -48,7 +48,7 @@ from quadruped_dyn.dynamics.grf import MAX_FRICTION_COEFFICIENT
 from quadruped_dyn.errors import InputError
 from quadruped_dyn.experiment.gait import Gait, Plan, gait_plan
 from quadruped_dyn.experiment.plan_ik import reference
-from quadruped_dyn.model.robot import Robot
+from quadruped_dyn.model.robot import ACTUATOR_LIMITS, Robot, actuator_limit
 from quadruped_dyn.model.stance import StanceSet
 from quadruped_dyn.model.state import GRAVITY_W
 from quadruped_dyn.optimal_control.hermite import weights
@@ -115,6 +115,8 @@ class Options:
         if not (math.isfinite(self.fz_min_fraction) and 0 <= self.fz_min_fraction < 1 / len(gait.phases[0])):
             raise InputError(f"f_z minimum {self.fz_min_fraction} of the weight per foot cannot be carried; "
                              f"expected 0 <= fraction < {1 / len(gait.phases[0]):.2f}")
+        for kind in ACTUATOR_LIMITS:  # the effort and joint-rate bounds of every node
+            actuator_limit(robot, kind)
         speed = gait.speed if self.speed is None else self.speed
         reach = leg_length(robot)
         if not (math.isfinite(speed) and 0 <= speed * gait.period <= MAX_STEP_FRACTION * reach):
@@ -210,8 +212,7 @@ def transcribe(robot: Robot, gait: Gait, options: Options = Options()) -> Transc
     weight = robot.total_mass * -GRAVITY_W[2]
     fz_min = options.fz_min_fraction * weight
     tau_ref = weight * leg_length(robot)
-    effort_limit = np.asarray(robot.model.effortLimit[robot.idx_v], dtype=float)
-    rate_limit = np.asarray(robot.model.velocityLimit[robot.idx_v], dtype=float)
+    effort_limit, rate_limit = actuator_limit(robot, "effort"), actuator_limit(robot, "velocity")
     swing_phase = [gait.swing_phase(i) for i in range(4)]
 
     # warm start: the plan at the nodes

@@ -49,3 +49,20 @@ def test_ipopt_writes_nothing_to_stdout() -> None:
     run = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=120)
     assert run.returncode == 0, run.stderr
     assert run.stdout == "", run.stdout
+
+
+@pytest.mark.parametrize("kind", ["effort", "velocity"])
+def test_a_zero_actuator_limit_is_exit_2_one_line(tmp_path, kind) -> None:
+    """A URDF whose leg joints have <limit effort="0"> (or velocity): control refused it, optimize
+    ran IPOPT into 'Not_Enough_Degrees_Of_Freedom' (exit 1, a CasADi warning). Both read the limits
+    through model.robot.actuator_limit."""
+    from pathlib import Path
+
+    urdf = Path(__file__).resolve().parents[2] / "quadruped_dyn" / "urdf" / "paper_quadruped.urdf"
+    edited = tmp_path / f"zero_{kind}.urdf"
+    edited.write_text(urdf.read_text().replace(f'{kind}="20"', f'{kind}="0"'))
+    out = tmp_path / "out"
+    result = CliRunner().invoke(main, ["optimize", str(edited), "--nodes", "3", "--cycles", "0", "--out", str(out)])
+    assert result.exit_code == 2, result.output
+    lines = [line for line in result.output.splitlines() if line.strip()]
+    assert len(lines) == 1 and f"expected a positive finite <limit {kind}>" in lines[0], result.output
