@@ -58,6 +58,11 @@ Progress = Callable[[float], None]  # simulated time reached, s
 MAX_PLANT_STEPS = 2_000_000
 
 
+def _whole(x: float) -> bool:
+    """x is a whole number to within 1e-9 relative (a ratio of times given in decimal)."""
+    return abs(x - round(x)) <= 1e-9 * abs(x)
+
+
 @dataclass(frozen=True)
 class LoopOptions:
     rate_hz: float = 1000.0
@@ -75,14 +80,17 @@ class LoopOptions:
         if total > MAX_PLANT_STEPS:
             raise InputError(f"--cycles {self.cycles} of {period:g} s at a {plant.timestep:g} s step is {total:.3g} MuJoCo steps "
                              f"per controller; expected at most {MAX_PLANT_STEPS:,} (fewer --cycles or a larger --timestep)")
+        if not _whole(period / plant.timestep):  # then no control rate can be whole plant steps and divide the cycle
+            raise InputError(f"--timestep {plant.timestep:g} s does not divide the gait cycle of {period:g} s; "
+                             f"expected e.g. {PlantOptions.timestep:g} s")
+        one_step = f"expected e.g. {1 / plant.timestep:.15g} Hz (one plant step per tick)"  # then both hold
         steps = 1.0 / self.rate_hz / plant.timestep
-        if abs(steps - round(steps)) > 1e-9 * steps or round(steps) < 1:
+        if not _whole(steps) or round(steps) < 1:
             raise InputError(f"control period {1 / self.rate_hz:g} s is not a whole number of plant steps "
-                             f"({plant.timestep:g} s); expected e.g. {1 / plant.timestep / 2:g} Hz")
-        ticks = period * self.rate_hz
-        if abs(ticks - round(ticks)) > 1e-9 * ticks:
+                             f"({plant.timestep:g} s); {one_step}")
+        if not _whole(period * self.rate_hz):
             raise InputError(f"control period {1 / self.rate_hz:g} s does not divide the gait cycle of {period:g} s; "
-                             f"expected a --rate that is a whole multiple of {1 / period:g} Hz, e.g. {LoopOptions.rate_hz:g} Hz")
+                             f"{one_step}")
         if not (math.isfinite(self.settle_s) and self.settle_s >= 0):
             raise InputError(f"settle time {self.settle_s} s; expected >= 0")
         return int(round(steps))

@@ -4,6 +4,7 @@ simulation), and the long runs of the issue's targets (slow)."""
 from __future__ import annotations
 
 import json
+import re
 from pathlib import Path
 
 import numpy as np
@@ -17,8 +18,10 @@ pytest.importorskip("mujoco", reason="MuJoCo is in the 'xlib' extra: pip install
 from quadruped_dyn.cli import EXIT_BAD_INPUT, main  # noqa: E402
 from quadruped_dyn.control.closed_loop import prepare, run_all  # noqa: E402
 from quadruped_dyn.control.controllers import CONTROLLERS  # noqa: E402
+from quadruped_dyn.control.plant import PlantOptions  # noqa: E402
 from quadruped_dyn.control.reference import reference_cycle
 from quadruped_dyn.control.run import LoopOptions  # noqa: E402
+from quadruped_dyn.errors import InputError  # noqa: E402
 from quadruped_dyn.experiment.gait import GAITS, gait_plan  # noqa: E402
 from quadruped_dyn.experiment.plan_ik import reference  # noqa: E402
 from quadruped_dyn.model.robot import load_robot  # noqa: E402
@@ -96,7 +99,8 @@ def test_reference_cycle_is_the_plans_ik() -> None:
     (["--cycles", "0"], "--cycles 0"),
     (["--cycles", "-3"], "--cycles -3"),
     (["--rate", "3000"], "not a whole number of plant steps"),
-    (["--rate", "0.001"], "does not divide the gait cycle of 1.2 s; expected a --rate that is a whole multiple"),
+    (["--rate", "0.001"], "does not divide the gait cycle of 1.2 s; expected e.g. 2000 Hz (one plant step per tick)"),
+    (["--timestep", "0.007"], "--timestep 0.007 s does not divide the gait cycle of 1.2 s; expected e.g. 0.0005 s"),
     (["--rate", "0"], "--rate 0.0 Hz; expected a positive number"),
     (["--mu", "-1"], "friction mu"),
 ])
@@ -118,6 +122,17 @@ def test_a_start_that_did_not_settle_is_refused(tmp_path: Path) -> None:
     lines = result.output.strip().splitlines()
     assert "did not stand after settling" in lines[-1] and "tilt" in lines[-1], result.output
     assert not (tmp_path / "paper_walk_closed_loop.json").exists()
+
+
+@pytest.mark.parametrize("timestep, rate_hz", [(0.003, 166.667), (0.003, 100.0), (0.0004, 1e6), (0.0005, 0.001)])
+def test_a_refused_rate_suggests_one_that_is_accepted(timestep: float, rate_hz: float) -> None:
+    """Found by a fresh-clone review: at a 3 ms step the suggestion was '166.667 Hz' (6 digits), which
+    the whole-steps test then refused."""
+    plant = PlantOptions(timestep=timestep)
+    with pytest.raises(InputError, match=r"expected e\.g\. ([0-9.e+]+) Hz") as refused:
+        LoopOptions(rate_hz=rate_hz).validate(plant, GAITS["walk"].period)
+    suggested = float(re.search(r"expected e\.g\. ([0-9.e+]+) Hz", str(refused.value)).group(1))
+    assert LoopOptions(rate_hz=suggested).validate(plant, GAITS["walk"].period) >= 1
 
 
 def test_urdf_mujoco_cannot_compile_exits_2(tmp_path: Path) -> None:
