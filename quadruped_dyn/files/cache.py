@@ -89,7 +89,8 @@ def cached_build(key: str, name: str, build: Callable[[Path], None]) -> Path:
             stray.unlink(missing_ok=True)
         recorded = artefact.with_name(name + HASH_SUFFIX)
         if artefact.exists():
-            print(f"cache: '{artefact}' does not match its recorded hash; rebuilding it", file=sys.stderr)
+            why = "does not match its recorded hash" if recorded.exists() else "has no recorded hash"
+            print(f"cache: '{artefact}' {why}; rebuilding it", file=sys.stderr)
         recorded.unlink(missing_ok=True)  # first: the old artefact must not stay trusted
         _write_atomic(artefact, build)
         digest = file_sha256(artefact)

@@ -178,6 +178,9 @@ def _axis(joint: pin.JointModel) -> np.ndarray | None:
 #: one (a force sensor or camera can sit nearer the knee than the toe).
 FOOT_WORDS = ("foot", "toe", "contact", "sole", "tip")
 NOT_FOOT_WORDS = ("sensor", "imu", "camera", "lidar", "cam")
+#: A foot frame is at least this far from the knee joint's axis origin (m): a frame at the origin (the shank's
+#: own link frame) would make the shank length 0 and the leg a two-link leg.
+FOOT_MIN_DISTANCE_M = 1e-9
 
 
 def _foot_frame(model: pin.Model, knee: int, label: str, wanted: str | None = None) -> int:
@@ -191,12 +194,15 @@ def _foot_frame(model: pin.Model, knee: int, label: str, wanted: str | None = No
         if model.frames[fid].parentJoint != knee:
             raise InputError(f"foot frame '{printable(wanted)}' of leg {label} does not hang from the knee joint "
                              f"'{model.names[knee]}'; expected a frame rigidly attached to the last leg link")
+        if np.linalg.norm(model.frames[fid].placement.translation) <= FOOT_MIN_DISTANCE_M:
+            raise InputError(f"foot frame '{printable(wanted)}' of leg {label} is at the knee joint "
+                             f"'{model.names[knee]}' (a shank of length 0); expected a frame at the foot, below the knee")
         return fid
     parents = {f.parentFrame for f in model.frames}
     leaves = [
         i
         for i, f in enumerate(model.frames)
-        if f.parentJoint == knee and i not in parents and np.linalg.norm(f.placement.translation) > 1e-9
+        if f.parentJoint == knee and i not in parents and np.linalg.norm(f.placement.translation) > FOOT_MIN_DISTANCE_M
     ]
     if not leaves:
         raise InputError(
@@ -283,7 +289,8 @@ def _parse_urdf(path: Path, data: bytes) -> pin.Model:
             return pin.buildModelFromXML(data.decode("utf-8", "replace"), pin.JointModelFreeFlyer())
     except Exception as e:  # Pinocchio raises plain ValueError/RuntimeError with the parser's text
         said = [line.strip() for line in capture.text.splitlines() if line.strip()]
-        reason = (said[:1] or str(e).strip().splitlines()[:1] or ["no reason given"])[0].removeprefix("Error:").strip()
+        first = (said[:1] or str(e).strip().splitlines()[:1] or ["no reason given"])[0]
+        reason = first.removeprefix("Error:").strip().rstrip(".")  # our sentence goes on after it
         raise InputError(f"Pinocchio cannot parse '{printable(path)}': {printable(reason)}; expected one tree of links "
                          "joined by joints: a trunk with four legs of three revolute joints each") from e
 

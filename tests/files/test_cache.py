@@ -94,8 +94,8 @@ def test_corrupted_entry_is_rebuilt_not_loaded(fault, cache, tmp_path, capfd):
     rebuilt = cached_build("probe", "libprobe.so", _build_counted(log))
     assert log.read_text().count("built") == 2, "the damaged entry was rebuilt"
     assert verified(rebuilt) and _probe(rebuilt) == EXPECTED
-    if fault is not _drop_hash:
-        assert "rebuilding" in capfd.readouterr().err
+    why = "has no recorded hash" if fault is _drop_hash else "does not match its recorded hash"
+    assert f"{why}; rebuilding it" in capfd.readouterr().err
 
 
 def test_stray_partial_files_are_ignored_and_cleaned(cache, tmp_path):

@@ -221,6 +221,7 @@ def test_parser_errors_are_one_line(tmp_path, what):
     assert proc.returncode == 2 and proc.stdout == "", proc.stderr
     lines = proc.stderr.strip().splitlines()
     assert len(lines) == 1 and lines[0].startswith("error: ") and "Traceback" not in proc.stderr, proc.stderr
+    assert ".;" not in lines[0], lines[0]  # the parser's sentence ends where ours goes on
 
 
 def test_foot_frames_on_the_command_line(tmp_path):
@@ -243,3 +244,7 @@ def test_foot_frames_on_the_command_line(tmp_path):
     for bad in ("FL_foot", "a,b,c,d"):
         result = CliRunner().invoke(main, ["info", str(sensor), "--foot-frames", bad])
         assert result.exit_code == 2 and result.stderr.count("\n") == 1 and "foot" in result.stderr, result.output
+    # the shank's own link frame, at the knee (found by a fresh-clone review: it was a leg of shank length 0)
+    at_knee = CliRunner().invoke(main, ["info", "paper", "--foot-frames", "FL_shank,FR_foot,BL_foot,BR_foot"])
+    assert at_knee.exit_code == 2 and at_knee.stderr.count("\n") == 1, at_knee.output
+    assert "foot frame 'FL_shank' of leg FL is at the knee joint" in at_knee.stderr, at_knee.stderr
