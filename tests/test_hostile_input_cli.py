@@ -222,4 +222,4 @@ def test_a_path_that_is_not_a_file_says_so(path):
 def test_check_bounds_the_work_up_front():
     """A billion random states (~years at ~15 states/s) is refused before the models are built."""
     _one_line(CliRunner().invoke(main, ["check", "paper", "--samples", "1000000000"]), 2,
-              r"samples is 1000000000; expected an integer from 1 to 100,000")
+              r"'--samples': 1000000000 is not in the range 1<=x<=100000")

@@ -146,7 +146,7 @@ def test_urdf_mujoco_cannot_compile_exits_2(tmp_path: Path) -> None:
     result = CliRunner().invoke(main, ["control", str(urdf), "--out", str(out)])
     assert result.exit_code == EXIT_BAD_INPUT, result.output
     assert "MuJoCo cannot compile" in result.output and len(result.output.strip().splitlines()) == 1
-    assert not list(out.iterdir())
+    assert not out.exists()  # refused before --out is made
 
 
 def test_cli_writes_json_csv_plots(tmp_path: Path) -> None:
