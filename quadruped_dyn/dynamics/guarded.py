@@ -21,21 +21,11 @@ import casadi as ca
 import numpy as np
 
 from quadruped_dyn.errors import InputError
-from quadruped_dyn.model.state import check_array
+from quadruped_dyn.model.state import check_array, check_quaternion
 
 
 def _shape(f: ca.Function, i: int) -> tuple[int, ...]:
     return (f.size1_in(i),) if f.size2_in(i) == 1 else (f.size1_in(i), f.size2_in(i))
-
-
-def check_quaternion(name: str, quat: np.ndarray) -> None:
-    """InputError unless |quat|^2 is a normal positive double (R = f(quat / |quat|) is then finite)."""
-    with np.errstate(over="ignore", under="ignore"):
-        norm2 = float(np.dot(quat, quat))
-    if not np.finfo(float).tiny <= norm2 < np.inf:
-        kind = "a zero quaternion" if norm2 < np.finfo(float).tiny else "a quaternion too large to normalise"
-        raise InputError(f"{name} has {kind} {np.array2string(quat, precision=3)} (|q|^2 = {norm2:.1e} in double "
-                         "precision); expected (x, y, z, w) of a rotation")
 
 
 def check_inputs(f: ca.Function, args: tuple[object, ...]) -> list[np.ndarray]:

@@ -45,19 +45,33 @@ def full_q(R: np.ndarray, p: np.ndarray, q_joints: np.ndarray) -> np.ndarray:
 
 
 def rotation(q: np.ndarray) -> np.ndarray:
-    """R (b -> w) from the project's q; the quaternion is normalised first."""
-    quat = np.asarray(q[3:7], dtype=float)
+    """R (b -> w) from the project's q (checked: InputError on a wrong shape, NaN/inf or a zero
+    quaternion); the quaternion is normalised first."""
+    quat = check_array("q", q, (NQ_FULL,))[3:7]
+    check_quaternion("q", quat)
     return pin.Quaternion(quat / np.linalg.norm(quat)).toRotationMatrix()
 
 
 def spatial_from_classical(omega_b: np.ndarray, v_b: np.ndarray, a_b: np.ndarray) -> np.ndarray:
-    """vdot_b = a_b - omega_b x v_b (body frame)."""
+    """vdot_b = a_b - omega_b x v_b (body frame; each (3,), checked)."""
+    omega_b, v_b, a_b = (check_array(n, x, (3,)) for n, x in (("omega_b", omega_b), ("v_b", v_b), ("a_b", a_b)))
     return a_b - np.cross(omega_b, v_b)
 
 
 def classical_from_spatial(omega_b: np.ndarray, v_b: np.ndarray, vdot_b: np.ndarray) -> np.ndarray:
-    """a_b = vdot_b + omega_b x v_b (body frame)."""
+    """a_b = vdot_b + omega_b x v_b (body frame; each (3,), checked)."""
+    omega_b, v_b, vdot_b = (check_array(n, x, (3,)) for n, x in (("omega_b", omega_b), ("v_b", v_b), ("vdot_b", vdot_b)))
     return vdot_b + np.cross(omega_b, v_b)
+
+
+def check_quaternion(name: str, quat: np.ndarray) -> None:
+    """InputError unless |quat|^2 is a normal positive double (R = f(quat / |quat|) is then finite)."""
+    with np.errstate(over="ignore", under="ignore"):
+        norm2 = float(np.dot(quat, quat))
+    if not np.finfo(float).tiny <= norm2 < np.inf:
+        kind = "a zero quaternion" if norm2 < np.finfo(float).tiny else "a quaternion too large to normalise"
+        raise InputError(f"{name} has {kind} {np.array2string(quat, precision=3)} (|q|^2 = {norm2:.1e} in double "
+                         "precision); expected (x, y, z, w) of a rotation")
 
 
 def check_array(name: str, x: object, shape: tuple[int, ...]) -> np.ndarray:
@@ -94,7 +108,16 @@ class FullState:
 
 
 def random_state(lower: np.ndarray, upper: np.ndarray, rng: np.random.Generator) -> FullState:
-    """Random orientation and position, joints uniform inside [lower, upper], unit-scale rates."""
+    """Random orientation and position, joints uniform inside [lower, upper] (12 joint limits each,
+    finite, lower <= upper: ``Robot.lower``, ``Robot.upper``), unit-scale rates."""
+    lower, upper = check_array("lower", lower, (12,)), check_array("upper", upper, (12,))
+    with np.errstate(over="ignore"):
+        bad = np.flatnonzero(~(np.isfinite(upper - lower) & (lower <= upper)))
+    if bad.size:
+        raise InputError(f"joint limits [lower, upper] at joints {bad.tolist()} are not a finite range; expected "
+                         "lower <= upper with a finite difference")
+    if not isinstance(rng, np.random.Generator):
+        raise InputError(f"rng is {type(rng).__name__}; expected a numpy.random.Generator (np.random.default_rng(seed))")
     quat = rng.normal(size=4)
     R = pin.Quaternion(quat / np.linalg.norm(quat)).toRotationMatrix()
     q = full_q(R, rng.uniform(-1.0, 1.0, 3), rng.uniform(lower, upper))

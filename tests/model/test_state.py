@@ -51,3 +51,32 @@ def test_full_q_rejects_bad_input():
         full_q(np.eye(3), np.zeros(2), np.zeros(12))
     with pytest.raises(InputError, match="NaN"):
         full_q(np.eye(3), np.zeros(3), np.full(12, np.nan))
+
+
+def test_state_helpers_check_their_inputs():
+    """rotation returned NaN for a zero quaternion and raised RuntimeError/ValueError for a short q;
+    spatial_from_classical broadcast a (3, 1) a_b into a (3, 3) answer and passed NaN; random_state
+    raised ValueError/OverflowError/AttributeError for swapped or NaN limits and an int seed."""
+    q = full_q(np.eye(3), np.zeros(3), np.zeros(12))
+    zero_quat = q.copy()
+    zero_quat[3:7] = 0.0
+    rng = np.random.default_rng(0)
+    bad_calls = [
+        (lambda: rotation(zero_quat), "zero quaternion"),
+        (lambda: rotation(q[:5]), "shape"),
+        (lambda: rotation("abc"), "string"),
+        (lambda: rotation(np.full(19, np.nan)), "NaN"),
+        (lambda: spatial_from_classical(np.ones(3), np.ones(3), np.ones((3, 1))), "shape"),
+        (lambda: spatial_from_classical(np.full(3, np.nan), np.ones(3), np.ones(3)), "NaN"),
+        (lambda: classical_from_spatial("abc", np.ones(3), np.ones(3)), "string"),
+        (lambda: classical_from_spatial(np.ones(2), np.ones(2), np.ones(2)), "shape"),
+        (lambda: random_state(np.ones(12), -np.ones(12), rng), "lower <= upper"),
+        (lambda: random_state(np.full(12, -1e308), np.full(12, 1e308), rng), "finite"),
+        (lambda: random_state(np.full(12, np.nan), np.ones(12), rng), "NaN"),
+        (lambda: random_state(-np.ones(12), np.ones(12), 0), "Generator"),
+    ]
+    for call, match in bad_calls:
+        with pytest.raises(InputError, match=match):
+            call()
+    assert_close(rotation(list(q)), np.eye(3))
+    assert_close(spatial_from_classical([0, 0, 1], [1, 0, 0], [0, 0, 0]), np.array([0.0, -1.0, 0.0]))
