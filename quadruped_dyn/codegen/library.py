@@ -28,6 +28,7 @@ from quadruped_dyn.codegen.emit import PREFIX, TEMPLATES, generate, stem
 from quadruped_dyn.errors import BuildError, InputError, NumericalError
 from quadruped_dyn.files.cache import cached_build
 from quadruped_dyn.model.robot import Robot
+from quadruped_dyn.model.state import check_array, check_quaternion
 
 C_FLAGS = ("-std=c99", "-pedantic", "-Wall", "-Wextra", "-Werror", "-O3", "-fPIC")
 COMPILE_JOBS = 2  # this machine's cores
@@ -200,12 +201,18 @@ class CompiledFunction:
     """A generated function of a library, called through ctypes in the library's precision with
     preallocated buffers (every input and output, the work arrays its ``_work`` entry asks for):
     a few microseconds per call from Python, against ~20 us through ``casadi.external``. Inputs
-    are checked for shape; outputs are fresh dense float64 arrays (vectors 1-D, matrices 2-D)."""
+    are checked as the symbolic functions' are (``model.state.check_array``: real, 1-D of the input's
+    size, finite; a quaternion ``q`` (entries 3:7) or ``quat`` not zero); outputs are fresh dense
+    float64 arrays (vectors 1-D, matrices 2-D)."""
 
     def __init__(self, library: CompiledLibrary, name: str) -> None:
         self._lib = ctypes.CDLL(str(library.path))
         self.name = PREFIX + name
-        self._fn = getattr(self._lib, self.name)
+        try:
+            self._fn = getattr(self._lib, self.name)
+        except AttributeError:
+            raise InputError(f"{library.path.name} has no function {self.name}; expected a name its header "
+                             f"{library.path.stem.removeprefix('lib')}.h declares (e.g. 'M_full')") from None
         graph = ca.external(self.name, str(library.path))  # only to read names and sparsity
         real, c_real = {"double": (np.float64, ctypes.c_double), "float": (np.float32, ctypes.c_float)}[library.precision]
         ptr = ctypes.POINTER(c_real)
@@ -241,9 +248,9 @@ class CompiledFunction:
         if len(args) != len(self._in):
             raise InputError(f"{self.name} takes inputs {self.names_in}; got {len(args)} arrays")
         for buf, x, name in zip(self._in, args, self.names_in):
-            x = np.asarray(x, dtype=float).ravel()
-            if x.shape != buf.shape:
-                raise InputError(f"{name} has {x.size} entries; {self.name} expects {buf.size}")
+            x = check_array(name, x, buf.shape)
+            if name in ("q", "quat"):
+                check_quaternion(name, x[3:7] if name == "q" else x)
             buf[:] = x
         flag = self._fn(self._arg, self._res, self._iw, self._w, 0)
         if flag != 0:  # QD_SINGULAR, QD_DEGENERATE are numerical; QD_NONFINITE cannot tell a bad input from a singular stance

@@ -67,9 +67,11 @@ def test_bad_input_returns_nonfinite(paper, bad):
         q[9] = np.nan
     else:
         q[3:7] = 0.0
-    with pytest.raises(InputError, match="not finite"):
+    with pytest.raises(InputError, match="not finite"):  # the C's QD_NONFINITE (raw: __call__ refuses it first)
+        dfd.raw(q, s.v, s.a)
+    with pytest.raises(InputError, match="NaN" if bad == "nan" else "zero quaternion"):
         dfd(q, s.v, s.a)
-    with pytest.raises(InputError, match="entries"):
+    with pytest.raises(InputError, match="shape"):
         dfd(q[:18], s.v, s.a)
 
 
@@ -179,14 +181,17 @@ def test_compiled_reduced_and_grf_derivatives_b1_by_path(erd):
 
 
 def test_compiled_reduced_derivatives_bad_input(paper):
-    """A NaN input or a zero quaternion: QD_NONFINITE, an InputError; a wrong length: InputError first."""
+    """A NaN input or a zero quaternion: QD_NONFINITE from the C (raw), an InputError, refused by __call__
+    before the C; a wrong length: InputError first."""
     stance = stance_set("FL+BR")
     dfd = CompiledFunction(compiled_library(paper), reduced_symbol("dfd_r", stance))
     q_r, qd, tau, quat = reduced_point(paper, 13, np.random.default_rng(0))
-    for args in ((q_r, np.full(13, np.nan), tau, quat), (q_r, qd, tau, np.zeros(4))):
+    for args, refused in (((q_r, np.full(13, np.nan), tau, quat), "NaN"), ((q_r, qd, tau, np.zeros(4)), "zero quaternion")):
         with pytest.raises(InputError, match="not finite"):
+            dfd.raw(*args)
+        with pytest.raises(InputError, match=refused):
             dfd(*args)
-    with pytest.raises(InputError, match="entries"):
+    with pytest.raises(InputError, match="shape"):
         dfd(q_r[:12], qd, tau, quat)
 
 

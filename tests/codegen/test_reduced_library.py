@@ -72,7 +72,8 @@ def _stance_args(robot, stance_name):
 def test_singular_configurations_are_reported(paper):
     """The C return codes, through the Python layer: QD_SINGULAR for two feet with the trunk
     pitched to within 1e-13 rad of 90 deg (the roll row has tan(pitch): cond(M_r) ~ 1e14 and
-    beyond), QD_NONFINITE for a zero quaternion and a NaN input. A stretched stance leg is NOT
+    beyond), QD_NONFINITE for a zero quaternion and a NaN input (through ``raw``: ``__call__`` refuses
+    those inputs before the C sees them, tests/codegen/test_library.py). A stretched stance leg is NOT
     singular: the reduced model never inverts the leg's Jacobian (cond(M_r) 1e3 -> 3e4)."""
     library = compiled_library(paper)
     stance, x = _stance_args(paper, "FL+BR")
@@ -84,10 +85,10 @@ def test_singular_configurations_are_reported(paper):
         f = CompiledFunction(library, reduced_symbol(name, stance))
         args = {"q_r": x["q_r"], "qd_r": x["qd_r"], "tau_ext": x["tau_ext"], "quat": np.zeros(4)}
         with pytest.raises(InputError, match="not finite"):
-            f(*[args[k] for k in f.names_in])
+            f.raw(*[args[k] for k in f.names_in])
     f = CompiledFunction(library, reduced_symbol("id_r", stance))
     with pytest.raises(InputError, match="not finite"):
-        f(np.full(13, np.nan), x["qd_r"], x["qdd_r"], x["quat"])
+        f.raw(np.full(13, np.nan), x["qd_r"], x["qdd_r"], x["quat"])
     stance, x = _stance_args(paper, "FR+BL+BR")
     q = x["q_r"].copy()
     q[3 * 3 + 2] = 0.0  # BR knee straight
