@@ -16,7 +16,7 @@ import numpy as np
 from quadruped_dyn.codegen.emit import reduced_symbol
 from quadruped_dyn.codegen.library import CompiledFunction, compiled_library
 from quadruped_dyn.errors import InputError
-from quadruped_dyn.model.robot import Robot
+from quadruped_dyn.model.robot import Robot, check_robot
 from quadruped_dyn.model.stance import StanceSet, stance_set
 from quadruped_dyn.model.state import check_array
 
@@ -25,7 +25,7 @@ class CompiledReducedDynamics:
     """id_r and fd_r of every stance set of two, three or four feet, from the compiled C."""
 
     def __init__(self, robot: Robot) -> None:
-        self.robot = robot
+        self.robot = check_robot(robot)
         self.library = compiled_library(robot)
         self._functions: dict[str, CompiledFunction] = {}
 
@@ -33,14 +33,12 @@ class CompiledReducedDynamics:
         """Checked call: the stance (a StanceSet or a name like 'FL+BR'), shapes, finiteness and a
         non-zero quaternion here; singular configurations by the C function's return code
         (CompiledFunction raises NumericalError or InputError)."""
-        stance = stance_set(stance) if isinstance(stance, str) else stance
+        stance = stance_set(stance)
         k = len(stance.feet)
         if k not in (2, 3, 4):
             raise InputError(f"stance {stance.name} has {k} feet; the reduced model needs 2, 3 or 4 distinct stance feet")
         n = 13 if k == 2 else 12
-        args = [check_array(key, x, (4,) if key == "quat" else (n,)) for key, x in inputs.items()]
-        if not np.linalg.norm(args[-1]) > 0.0:
-            raise InputError("quat is zero; expected the trunk orientation as a quaternion (x, y, z, w)")
+        args = [check_array(key, x, (4,) if key == "quat" else (n,)) for key, x in inputs.items()]  # quat: CompiledFunction
         symbol = reduced_symbol(name, stance)
         if symbol not in self._functions:
             self._functions[symbol] = CompiledFunction(self.library, symbol)

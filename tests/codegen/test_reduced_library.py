@@ -182,3 +182,18 @@ def test_float_build_matches_pinocchio(paper):
                 continue
             expected = pinocchio_outputs(paper, ref, name, s)[0]
             assert_close(out, expected, rel=tol, what=name)
+
+
+def test_python_layer_refuses_what_is_not_a_stance_or_a_robot(paper):
+    """A stance that is None or a list raised AttributeError ('feet'), a robot given by name
+    AttributeError ('urdf_sha256'), a quaternion whose |q|^2 underflows was 'zero' by one check
+    and not by the other."""
+    d = CompiledReducedDynamics(paper)
+    stance, x = _stance_args(paper, "FL+BR")
+    for bad in (None, ["FL", "BR"], 3):
+        with pytest.raises(InputError, match="stance set"):
+            d.fd_r(bad, x["q_r"], x["qd_r"], x["tau_ext"], x["quat"])
+    with pytest.raises(InputError, match="zero quaternion"):
+        d.id_r(stance, x["q_r"], x["qd_r"], x["qd_r"], np.array([0.0, 0.0, 0.0, 1e-200]))
+    with pytest.raises(InputError, match="robot"):
+        CompiledReducedDynamics("paper")
