@@ -46,9 +46,9 @@ import numpy as np
 
 from quadruped_dyn.dynamics.crba import leg_composite_inertia, mass_matrix_crba
 from quadruped_dyn.dynamics.grf import grf_solve
-from quadruped_dyn.dynamics.guarded import GuardedFunction, guard_fields, guarded_call
+from quadruped_dyn.dynamics.guarded import GuardedFunction, guard_fields, guarded_call, with_condition
 from quadruped_dyn.dynamics.newton_euler import inverse_dynamics, inverse_dynamics_parts
-from quadruped_dyn.dynamics.reduced import MAX_COND_M_R
+from quadruped_dyn.dynamics.reduced import check_regularity, regularity_function, solve_forward_dynamics
 from quadruped_dyn.dynamics.reduced_projection import reduced_projection
 from quadruped_dyn.errors import InputError
 from quadruped_dyn.math.spatial import dm, placement_rt, quat_to_rotation, skew
@@ -228,23 +228,28 @@ class ReducedDerivatives:
     #: dtau_dtheta (n, 3): the reduced inverse dynamics and its derivatives (``reduced_projection``'s form)
     did_r: ca.Function
     velocity_map: ca.Function  # q_r, quat -> W (3, n): omega_b = W qd_r (for the total derivative)
+    regularity: ca.Function | None = None  # q_r, quat -> the stance's regularity, checked before numeric calls
 
     def __post_init__(self) -> None:
         guard_fields(self)
+        if self.regularity is not None:  # a degenerate stance is a NumericalError, as in ReducedModel
+            for name in ("did_r", "velocity_map"):
+                object.__setattr__(self, name, with_condition(getattr(self, name), self._regular_at))
+
+    def _regular_at(self, values: list[np.ndarray]) -> None:
+        assert self.regularity is not None
+        check_regularity(self.stance, guarded_call(self.regularity, values[0], values[-1])[0].item())
 
     def dfd_r(self, q_r: np.ndarray, qd_r: np.ndarray, tau_ext: np.ndarray,
               quat: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
         """(dqdd_dq (n, n), dqdd_dqd (n, n), dqdd_dtau = M_r^-1 (n, n), dqdd_dtheta (n, 3)) at
         qdd_r = fd_r(q_r, qd_r, tau_ext, quat), by d qdd/dx = -M_r^-1 d id_r/dx there. Inputs are
-        checked (InputError on a wrong shape, NaN/inf, a zero quaternion, or a singular M_r)."""
+        checked (InputError on a wrong shape, NaN/inf or a zero quaternion); NumericalError at a
+        degenerate stance or a singular M_r, as ``ReducedModel.fd_r``."""
         zero = np.zeros(self.n)
         tau0, _, _, M, _ = guarded_call(self.did_r, q_r, qd_r, zero, quat)
         tau_ext = check_array("tau_ext", tau_ext, (self.n,))
-        cond = float(np.linalg.cond(M))
-        if not cond < MAX_COND_M_R:
-            raise InputError(f"M_r of {self.stance.name} has condition number {cond:.1e} here; the reduced model is "
-                             "singular (e.g. collinear stance feet, or two feet with the trunk pitched 90 deg)")
-        qdd = np.linalg.solve(M, tau_ext - tau0)
+        qdd, _ = solve_forward_dynamics(self.stance, M, tau_ext - tau0)
         _, Dq, Dqd, M, Dth = guarded_call(self.did_r, q_r, qd_r, qdd, quat)
         Minv = np.linalg.inv(M)
         return -Minv @ Dq, -Minv @ Dqd, Minv, -Minv @ Dth
@@ -272,7 +277,7 @@ def _reduced_derivatives(robot: Robot, stance_name: str) -> ReducedDerivatives:
                       {"cse": True})
     v, _ = p.velocity_and_bias(qd)
     W = ca.Function(f"velocity_map_{name}", [q, quat], [ca.jacobian(v[3:6], qd)], ["q_r", "quat"], ["W"])
-    return ReducedDerivatives(stance, n, did, W)
+    return ReducedDerivatives(stance, n, did, W, regularity_function(robot, stance))
 
 
 def grf_derivatives(robot: Robot, stance_name: str) -> ca.Function:

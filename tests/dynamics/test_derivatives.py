@@ -9,7 +9,7 @@ import pytest
 
 from quadruped_dyn.checks.derivative_reference import ReducedReference, central, grf_derivatives_reference
 from quadruped_dyn.dynamics.derivatives import full_derivatives, grf_derivatives, reduced_derivatives
-from quadruped_dyn.errors import InputError
+from quadruped_dyn.errors import InputError, NumericalError
 from quadruped_dyn.model.robot import ROBOT_NAMES, load_robot
 from quadruped_dyn.model.stance import stance_set
 from quadruped_dyn.model.state import random_state, rotation
@@ -165,3 +165,19 @@ def test_reduced_derivatives_bad_input(paper):
         d.dfd_r(q_r, qd, tau, np.zeros(4))
     with pytest.raises(InputError):
         reduced_derivatives(paper, "FL")
+
+
+def test_reduced_derivatives_numerical_outcomes_are_numerical_errors(paper):
+    """As ReducedModel (docs/reliability.md §6-§7): the front pair at a level trunk (degenerate) and
+    a trot pair with the trunk pitched 90 deg were InputErrors ('gives a non-finite ...'), and a
+    singular M_r too, from dfd_r's own copy of the condition check."""
+    front, trot = reduced_derivatives(paper, "FL+FR"), reduced_derivatives(paper, "FL+BR")
+    q_r, z = np.r_[paper.standing_q, 0.0], np.zeros(13)
+    level = np.array([0.0, 0.0, 0.0, 1.0])
+    pitched = np.array([0.0, np.sin(np.pi / 4), 0.0, np.cos(np.pi / 4)])
+    for call in (lambda: front.dfd_r(q_r, z, z, level), lambda: front.did_r(q_r, z, z, level),
+                 lambda: front.velocity_map(q_r, level), lambda: trot.dfd_r(q_r, z, z, pitched)):
+        with pytest.raises(NumericalError, match="degenerate"):
+            call()
+    assert all(np.all(np.isfinite(x)) for x in trot.dfd_r(q_r, z, z, level))
+
