@@ -71,3 +71,13 @@ def _names_of(module: str) -> set[str]:
     tree = ast.parse(path.read_text())
     names = {n.name for n in tree.body if isinstance(n, ast.FunctionDef | ast.ClassDef)}
     return names | {t.id for n in tree.body if isinstance(n, ast.Assign) for t in n.targets if isinstance(t, ast.Name)}
+
+
+def test_top_level_exports_the_api_errors() -> None:
+    """Both errors the API raises (docs/reliability.md) are importable from the package itself."""
+    from quadruped_dyn import InputError, NumericalError
+    from quadruped_dyn.errors import InputError as input_error
+    from quadruped_dyn.errors import NumericalError as numerical_error
+
+    assert (InputError, NumericalError) == (input_error, numerical_error)
+    assert {"InputError", "NumericalError"} <= set(quadruped_dyn.__all__)
