@@ -76,6 +76,7 @@ from quadruped_dyn.errors import InputError
 from quadruped_dyn.experiment.plan_ik import ReferenceSample
 from quadruped_dyn.model.robot import Robot
 from quadruped_dyn.model.stance import StanceSet
+from quadruped_dyn.model.state import quaternion_rotation
 
 IDENTITY_QUAT = np.array([0.0, 0.0, 0.0, 1.0])
 
@@ -166,7 +167,7 @@ class GeneratedC:
 
 def imu_roll(meas: Measurement) -> tuple[float, float]:
     """Trunk roll phi (R = Rz Ry Rx(phi)) and its rate phid = e_phi . omega_b, from the IMU."""
-    R = pin.Quaternion(meas.quat / np.linalg.norm(meas.quat)).toRotationMatrix()
+    R = quaternion_rotation(meas.quat)
     roll, pitch, _ = pin.rpy.matrixToRpy(R)
     e = np.array([1.0, math.sin(roll) * math.tan(pitch), math.cos(roll) * math.tan(pitch)])
     return float(roll), float(e @ meas.omega_b)
@@ -315,7 +316,7 @@ def levelled(ref: Reference, meas: Measurement) -> Reference:
     so that the stance legs push the trunk back to level and the swing feet land on the ground
     rather than above or below it; the rates likewise with (omega_x, omega_y, 0). Through the
     inverse foot Jacobians at the reference (``Reference.J_inv``): no kinematics per tick."""
-    R = pin.Quaternion(meas.quat / np.linalg.norm(meas.quat)).toRotationMatrix()
+    R = quaternion_rotation(meas.quat)
     roll, pitch, _ = pin.rpy.matrixToRpy(R)
     delta = np.array([roll, pitch, 0.0])
     rate = np.array([meas.omega_b[0], meas.omega_b[1], 0.0])

@@ -228,16 +228,14 @@ class ReducedDerivatives:
     #: dtau_dtheta (n, 3): the reduced inverse dynamics and its derivatives (``reduced_projection``'s form)
     did_r: ca.Function
     velocity_map: ca.Function  # q_r, quat -> W (3, n): omega_b = W qd_r (for the total derivative)
-    regularity: ca.Function | None = None  # q_r, quat -> the stance's regularity, checked before numeric calls
+    regularity: ca.Function  # q_r, quat -> the stance's regularity, checked before numeric calls
 
     def __post_init__(self) -> None:
         guard_fields(self)
-        if self.regularity is not None:  # a degenerate stance is a NumericalError, as in ReducedModel
-            for name in ("did_r", "velocity_map"):
-                object.__setattr__(self, name, with_condition(getattr(self, name), self._regular_at))
+        for name in ("did_r", "velocity_map"):  # a degenerate stance is a NumericalError, as in ReducedModel
+            object.__setattr__(self, name, with_condition(getattr(self, name), self._regular_at))
 
     def _regular_at(self, values: list[np.ndarray]) -> None:
-        assert self.regularity is not None
         check_regularity(self.stance, guarded_call(self.regularity, values[0], values[-1])[0].item())
 
     def dfd_r(self, q_r: np.ndarray, qd_r: np.ndarray, tau_ext: np.ndarray,

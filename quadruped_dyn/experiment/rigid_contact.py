@@ -21,7 +21,7 @@ import numpy as np
 from quadruped_dyn.errors import InputError, NumericalError
 from quadruped_dyn.experiment.gait import Plan
 from quadruped_dyn.experiment.simulate import FALLEN_TRUNK_M, RTOL, IkTorques, Progress, Run, TorqueLaw, integrate_phases
-from quadruped_dyn.model.state import rotation
+from quadruped_dyn.model.state import quaternion_rotation
 from quadruped_dyn.references.pinocchio import PinocchioReference
 
 
@@ -31,7 +31,7 @@ def _derivative(q: np.ndarray, v: np.ndarray, a: np.ndarray) -> np.ndarray:
     x, y, z, w = quat
     omega = v[3:6]
     quat_dot = 0.5 * np.array([[w, -z, y], [z, w, -x], [-y, x, w], [-x, -y, -z]]) @ omega
-    return np.concatenate([rotation(q) @ v[:3], quat_dot, v[6:], a])
+    return np.concatenate([quaternion_rotation(q[3:7]) @ v[:3], quat_dot, v[6:], a])
 
 
 def _impact(ref: PinocchioReference, q: np.ndarray, v: np.ndarray, stance: tuple[int, ...]) -> np.ndarray:
@@ -87,7 +87,7 @@ def _kkt_accelerations(ref: PinocchioReference, q: np.ndarray, v: np.ndarray, ta
         pin.forwardKinematics(model, data, qp, vp, np.zeros(model.nv))
         pin.updateFramePlacements(model, data)
         Rb = data.oMi[1].rotation
-        R = rotation(q)
+        R = quaternion_rotation(q[3:7])
         drift = np.concatenate([R @ (Rb.T @ pin.getFrameClassicalAcceleration(model, data, ids[i], LWA).linear)
                                 for i in stance])
     else:

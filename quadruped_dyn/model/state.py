@@ -49,6 +49,13 @@ def rotation(q: np.ndarray) -> np.ndarray:
     quaternion); the quaternion is normalised first."""
     quat = check_array("q", q, (NQ_FULL,))[3:7]
     check_quaternion("q", quat)
+    return quaternion_rotation(quat)
+
+
+def quaternion_rotation(quat: np.ndarray) -> np.ndarray:
+    """R (b -> w) of a non-zero quaternion (x, y, z, w), normalised first. Unchecked: for states the
+    toolkit itself produced (an integrator's, MuJoCo's), where ``rotation``'s checks would cost more
+    than the conversion."""
     return pin.Quaternion(quat / np.linalg.norm(quat)).toRotationMatrix()
 
 
@@ -119,6 +126,6 @@ def random_state(lower: np.ndarray, upper: np.ndarray, rng: np.random.Generator)
     if not isinstance(rng, np.random.Generator):
         raise InputError(f"rng is {type(rng).__name__}; expected a numpy.random.Generator (np.random.default_rng(seed))")
     quat = rng.normal(size=4)
-    R = pin.Quaternion(quat / np.linalg.norm(quat)).toRotationMatrix()
+    R = quaternion_rotation(quat)
     q = full_q(R, rng.uniform(-1.0, 1.0, 3), rng.uniform(lower, upper))
     return FullState(q, rng.normal(size=NV_FULL), rng.normal(size=NV_FULL), rng.normal(scale=20.0, size=(4, 3)))
