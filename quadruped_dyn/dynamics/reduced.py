@@ -117,6 +117,7 @@ def reduced_inverse_dynamics(
     return ca.vertcat(g.tau, ca.dot(e, g.residual[3:] - ca.cross(r1, g.residual[:3])))
 
 
+@cache  # built once per robot and stance set: by the model, the generator and the reference header (per case)
 def regularity_function(robot: Robot, stance: StanceSet) -> ca.Function:
     """q_r (n,), quat (4,) -> the stance's regularity (``stance_regularity``), dimensionless: the
     one expression ``ReducedModel`` checks and the generated C evaluates."""
