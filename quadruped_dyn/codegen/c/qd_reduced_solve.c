@@ -152,7 +152,7 @@ QD_INLINE void qd_M_r_legs(int n, int legs, const casadi_real* S_b, const casadi
         for (int i = 0; i < 18; ++i) mt[i] += M[i + 18 * k] * t[k];
       }
     }
-    casadi_real* col = M_r + n * j;
+    casadi_real col[QD_N_MAX]; /* a local column: the compiler need not assume that M_r aliases S_b (dfd_r's w) */
     for (int i = 0; i < 12; ++i) col[i] = mt[6 + i];
     if (n > 12) col[12] = 0;
     for (int k = 0; k < 6; ++k) {
@@ -165,6 +165,7 @@ QD_INLINE void qd_M_r_legs(int n, int legs, const casadi_real* S_b, const casadi
       }
       col[12] += S_b[12 + n * k] * mt[k];
     }
+    for (int i = 0; i < n; ++i) M_r[i + n * j] = col[i];
   }
 }
 
@@ -375,11 +376,11 @@ static int qd_fd_r_factor(int n, const casadi_real* tau_ext, casadi_real* M, int
 /* x <- M_r^-1 x with a swing leg at least (legs as qd_M_r_legs'), M_r = S M T never formed (docs/formulation.md, "fd_r
  * with a swing leg"): a swing leg l's rows read M_lb a_b + M_ll qdd_l = x_l (a_b = T_b qdd_r, the trunk's acceleration),
  * so qdd_l = w_l - Z_l a_b with [Z_l, w_l] = M_ll^-1 [M_lb, x_l] (3 x 3 LU, no pivoting: M_ll is SPD); folded into the
- * trunk, M_bb <- M_bb - sum M_bl Z_l (in M, in place) and the rest R (stance joints, row 12; m = n - 3 swing legs)
+ * trunk, M_bb <- M_bb - sum M_bl Z_l (in a copy of M_bb) and the rest R (stance joints, row 12; m = n - 3 swing legs)
  * solves K qdd_R = x_R - S_b[R] sum M_bl w_l with K = (S M T)[R, R] (qd_gauss_solve of [K, y]); then qdd_l. M's swing
  * blocks and [K, y] are checked finite (QD_NONFINITE); the swing pivots against QD_SINGULAR_RTOL max|M_ll|, K's against
  * QD_SINGULAR_RTOL max(max|K|, max|M_ll|) (QD_SINGULAR). work: [K, y], then [Z_l, w_l] (3 x 7) per swing leg. */
-QD_INLINE int qd_fd_r_folded(int n, int legs, const casadi_real* S_b, const casadi_real* T_b, casadi_real* M,
+QD_INLINE int qd_fd_r_folded(int n, int legs, const casadi_real* S_b, const casadi_real* T_b, const casadi_real* M,
                              casadi_real* x, casadi_real* work) {
   const int m = n - 3 * (4 - (legs & 1) - (legs >> 1 & 1) - (legs >> 2 & 1) - (legs >> 3 & 1));
   int r[QD_N_MAX];
@@ -400,6 +401,10 @@ QD_INLINE int qd_fd_r_folded(int n, int legs, const casadi_real* S_b, const casa
   }
   if (!(sw[0] == 0)) return QD_NONFINITE;
   const casadi_real thr = QD_SINGULAR_RTOL * scale;
+  casadi_real Mbb[36]; /* M_bb, folded below: a copy, which the compiler need not assume aliases M_bl */
+  for (int k = 0; k < 6; ++k) {
+    for (int i = 0; i < 6; ++i) Mbb[i + 6 * k] = M[i + 18 * k];
+  }
   for (int l = 0; l < 4; ++l) {
     if (legs >> l & 1) continue;
     const casadi_real* A = M + (6 + 3 * l) * 19; /* M_ll: A[i + 18 j] */
@@ -414,7 +419,7 @@ QD_INLINE int qd_fd_r_folded(int n, int legs, const casadi_real* S_b, const casa
     }
     const casadi_real* B = M + 18 * (6 + 3 * l); /* M_bl: B[i + 18 c], i < 6 */
     for (int j = 0; j < 6; ++j) { /* M_bb -= M_bl Z_l */
-      QD_UNROLL for (int i = 0; i < 6; ++i) M[i + 18 * j] -= B[i] * Z[3 * j] + B[i + 18] * Z[3 * j + 1] + B[i + 36] * Z[3 * j + 2];
+      QD_UNROLL for (int i = 0; i < 6; ++i) Mbb[i + 6 * j] -= B[i] * Z[3 * j] + B[i + 18] * Z[3 * j + 1] + B[i + 36] * Z[3 * j + 2];
     }
     for (int i = 0; i < 6; ++i) f[i] += B[i] * Z[18] + B[i + 18] * Z[19] + B[i + 36] * Z[20];
     Z += 21;
@@ -426,7 +431,7 @@ QD_INLINE int qd_fd_r_folded(int n, int legs, const casadi_real* S_b, const casa
     for (int i = 0; i < 6; ++i) mt[i] = j < 12 ? M[i + 18 * (6 + j)] : 0;
     for (int i = 0; i < m; ++i) mr[i] = j < 12 && r[i] < 12 ? M[6 + r[i] + 18 * (6 + j)] : 0;
     for (int k = 0; k < 6; ++k) {
-      for (int i = 0; i < 6; ++i) mt[i] += M[i + 18 * k] * t[k];
+      for (int i = 0; i < 6; ++i) mt[i] += Mbb[i + 6 * k] * t[k];
       for (int i = 0; i < m; ++i) mr[i] += r[i] < 12 ? M[6 + r[i] + 18 * k] * t[k] : 0;
     }
     for (int i = 0; i < m; ++i) {
