@@ -35,9 +35,9 @@
 #endif
 #endif
 
-/* Loops whose trip count is a constant once a template is inlined (the elimination's, the Schur complement's) are
- * unrolled in full by GCC when optimising for speed (a1, callgrind: fd_r -6 % two feet, -10 % four feet); not at -Os,
- * the embedded builds' size budget (docs/embedded.md). */
+/* Loops whose trip count is a constant once a template is inlined (the elimination's and its back-substitution's, the
+ * Schur complement's) are unrolled in full by GCC when optimising for speed (a1, callgrind: fd_r -6 % two feet, -10 %
+ * four feet); not at -Os, the embedded builds' size budget (docs/embedded.md). */
 #if defined(__GNUC__) && !defined(__clang__) && __GNUC__ >= 8 && defined(__OPTIMIZE__) && !defined(__OPTIMIZE_SIZE__)
 #define QD_UNROLL _Pragma("GCC unroll 16")
 #else
@@ -171,11 +171,12 @@ QD_INLINE void qd_M_r_legs(int n, int legs, const casadi_real* S_b, const casadi
 
 /* tau (n) = S F = S_b F[0:6] + F[6:18] (row 12, two feet: S_b only) for a full generalized force F (18). */
 static void qd_project(int n, const casadi_real* S_b, const casadi_real* F, casadi_real* tau) {
-  for (int i = 0; i < n; ++i) {
-    casadi_real s = i < 12 ? F[6 + i] : 0;
-    for (int k = 0; k < 6; ++k) s += S_b[i + n * k] * F[k];
-    tau[i] = s;
+  casadi_real s[QD_N_MAX]; /* every row at once (vectorised), each row's sum over k ascending */
+  for (int i = 0; i < n; ++i) s[i] = i < 12 ? F[6 + i] : 0;
+  for (int k = 0; k < 6; ++k) {
+    for (int i = 0; i < n; ++i) s[i] += S_b[i + n * k] * F[k];
   }
+  for (int i = 0; i < n; ++i) tau[i] = s[i];
 }
 
 /* tau (n) = S rnea(q, v, a), rnea by the library's qd_id_full_trig (zero foot forces; t: q_r's sines and cosines);
@@ -299,9 +300,9 @@ QD_INLINE int qd_gauss_solve(int n, casadi_real* A, casadi_real scale, int* piv)
     }
   }
   casadi_real* x = A + n * n;
-  for (int j = n - 1; j >= 0; --j) { /* U x = y, column by column */
+  QD_UNROLL for (int j = n - 1; j >= 0; --j) { /* U x = y, column by column */
     x[j] /= A[j + n * j];
-    for (int i = 0; i < j; ++i) x[i] -= A[i + n * j] * x[j];
+    QD_UNROLL for (int i = 0; i < j; ++i) x[i] -= A[i + n * j] * x[j];
   }
   return 0;
 }
