@@ -236,13 +236,19 @@ class CompiledFunction:
         """The hot path of a control loop: inputs (arrays of the right sizes, not checked) copied
         into the preallocated buffers (in the library's precision), the C function called, its output buffers returned
         (the nonzeros, column-major; overwritten by the next call). A non-zero return code
-        raises InputError as ``__call__`` does."""
+        raises as ``__call__``'s does (``_raise_for``)."""
         for buf, x in zip(self._in, args):
             buf[:] = x
         flag = self._fn(self._arg, self._res, self._iw, self._w, 0)
         if flag != 0:
-            raise InputError(f"{self.name}: {RETURN_CODES.get(flag, f'error code {flag}')}")
+            self._raise_for(flag)
         return self._out
+
+    def _raise_for(self, flag: int) -> None:
+        """QD_SINGULAR, QD_DEGENERATE are numerical (NumericalError); QD_NONFINITE cannot tell a bad input
+        from a singular stance (InputError): docs/reliability.md §6."""
+        error = NumericalError if flag in (QD_SINGULAR, QD_DEGENERATE) else InputError
+        raise error(f"{self.name}: {RETURN_CODES.get(flag, f'error code {flag}')}")
 
     def __call__(self, *args: np.ndarray) -> list[np.ndarray]:
         if len(args) != len(self._in):
@@ -253,9 +259,8 @@ class CompiledFunction:
                 check_quaternion(name, x[3:7] if name == "q" else x)
             buf[:] = x
         flag = self._fn(self._arg, self._res, self._iw, self._w, 0)
-        if flag != 0:  # QD_SINGULAR, QD_DEGENERATE are numerical; QD_NONFINITE cannot tell a bad input from a singular stance
-            error = NumericalError if flag in (QD_SINGULAR, QD_DEGENERATE) else InputError
-            raise error(f"{self.name}: {RETURN_CODES.get(flag, f'error code {flag}')}")
+        if flag != 0:
+            self._raise_for(flag)
         outs = []
         for buf, shape, index in zip(self._out, self._shapes, self._index):
             dense = np.zeros(shape[0] * shape[1])

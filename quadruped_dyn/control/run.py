@@ -201,7 +201,7 @@ def run_controller(plant: Plant, plan: Plan, name: str, gains: Gains, options: L
             stance = StanceSet(ref.stance)
             try:
                 command = controller.command(ref, stance, meas)
-            except InputError as e:
+            except (InputError, NumericalError) as e:  # the generated C's return codes (CompiledFunction.raw)
                 stopped = f"controller failed at t = {t:.3f} s: {e}"
                 raise _Stop from e
             t1 = time.perf_counter_ns()

@@ -114,6 +114,8 @@ def test_degenerate_stances_are_reported_by_every_function(paper):
             with pytest.raises(NumericalError, match=code):
                 f(*[x[k] for k in f.names_in])
                 pytest.fail(f"{kind} of {name} returned at a degenerate stance")
+            with pytest.raises(NumericalError, match=code):  # the control loop's unchecked call: the same error
+                f.raw(*[x[k] for k in f.names_in])
         ones = np.ones(n)
         calls = {"compiled id_r": (compiled.id_r, stance), "compiled fd_r": (compiled.fd_r, stance),
                  "Python id_r": (reduced_model(paper, name).id_r,)}  # the Python model agrees
