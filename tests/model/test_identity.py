@@ -236,6 +236,11 @@ def test_foot_frames_on_the_command_line(tmp_path):
     sensor = _with_extra_frames(tmp_path, {"foot_sensor": 0.05})
     chosen = CliRunner().invoke(main, ["info", str(sensor), "--json"])
     assert chosen.exit_code == 0 and "warning: leg FL: foot frame 'FL_foot'" in chosen.stderr
+    # the commands the warning sends the user to take the option (codegen, validate, ... do not)
+    suggested = re.search(r"--foot-frames of ([a-z, ]+?)\)", chosen.stderr)
+    assert suggested, chosen.stderr
+    for command in re.split(r", | and ", suggested.group(1)):
+        assert "foot_frames" in [p.name for p in main.commands[command].params], command
     named = CliRunner().invoke(main, ["info", str(sensor), "--json", "--foot-frames",
                                       "FL_foot_sensor,FR_foot_sensor,BL_foot_sensor,BR_foot_sensor"])
     legs = json.loads(named.stdout)["legs"]
