@@ -159,6 +159,16 @@ def test_cli_writes_json_csv_plots(tmp_path: Path) -> None:
         assert (tmp_path / f"paper_walk_closed_loop{suffix}").stat().st_size > 0
 
 
+def test_cli_table_columns_line_up(tmp_path: Path) -> None:
+    """The longest controller name (ct-diag+land) keeps its row under the header."""
+    result = CliRunner().invoke(main, ["control", "paper", "--controller", "ct-diag+land", "--cycles", "1",
+                                       "--no-animation", "--out", str(tmp_path)])
+    assert result.exit_code == 0, result.output
+    header, row = (line for line in result.stdout.splitlines() if line.startswith(("controller ", "ct-diag+land ")))
+    end = header.index("cycles up") + len("cycles up")
+    assert row[:end].rstrip() == row[:end] and row[end] == " ", (header, row)
+
+
 def test_animation_renders_headless(walk, tmp_path: Path) -> None:
     from quadruped_dyn.control.outputs import animate, rendering_available
 
