@@ -77,7 +77,7 @@ def optimize(robot: str, gait_name: str, nodes: int | None, mu: float | None, sp
                f"({sol.solve_cpu_seconds:.1f} s CPU; + {sol.build_seconds:.1f} s building), "
                f"constraint violation {sol.constraint_violation:.1e}")
     click.echo(f"  effort {e['optimised_Nm2s']:.3g} N^2 m^2 s vs the plan's {e['plan_Nm2s']:.3g} "
-               f"({100 * (1 - e['ratio']):+.1f} % lower); largest roll moment needed "
+               f"({100 * (e['ratio'] - 1):+.1f} %); largest roll moment needed "
                f"{e['max_roll_moment_optimised_Nm']:.1e} N m (plan {e['max_roll_moment_plan_Nm']:.2f})")
     if "feasibility" in data:
         f = data["feasibility"]

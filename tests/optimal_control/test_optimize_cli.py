@@ -35,6 +35,18 @@ def test_no_convergence_is_exit_1_with_ipopt_status(tmp_path, monkeypatch) -> No
     assert not list(tmp_path.iterdir())
 
 
+def test_effort_change_has_its_sign(tmp_path) -> None:
+    """The effort line's percentage is the change from the plan, signed as such (it said "+4.9 % lower")."""
+    import re
+
+    result = CliRunner().invoke(main, ["optimize", "paper", "--nodes", "3", "--cycles", "0", "--out", str(tmp_path)])
+    assert result.exit_code == 0, result.output
+    m = re.search(r"effort (\S+) N\^2 m\^2 s vs the plan's (\S+) \(([+-]\d+\.\d) %\);", result.output)
+    assert m, result.output
+    optimised, plan, change = map(float, m.groups())
+    assert (change < 0) == (optimised < plan) and change == pytest.approx(100 * (optimised / plan - 1), abs=1.0)  # 3 digits
+
+
 def test_ipopt_writes_nothing_to_stdout() -> None:
     """IPOPT prints its banner on file descriptor 1 once per process, whatever print_level says,
     which broke `optimize --json` (stdout no longer JSON); "sb" suppresses it. A fresh process, as
