@@ -24,7 +24,8 @@ from quadruped_dyn.model.robot import load_robot
                    "and worst-case stack on Cortex-M7 and Cortex-M4F at -Os and -O2 (cross builds: minutes, "
                    "cached; docs/embedded.md).")
 def codegen(robot: str, out_dir: str, precision: str, check: bool, as_json: bool) -> None:
-    """Generate standalone C for ROBOT's M, C, G, id and GRF solves, with a Makefile and a check program."""
+    """Generate standalone C for ROBOT: M, C, G, id, the GRF solves, the reduced model of every stance set
+    and the derivatives, with a Makefile and a check program."""
     from pathlib import Path
 
     from quadruped_dyn.checks.c_reference import compare_generation, generate_checked

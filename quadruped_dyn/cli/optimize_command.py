@@ -34,7 +34,7 @@ def optimize(robot: str, gait_name: str, nodes: int | None, mu: float | None, sp
     """Optimise one periodic gait cycle on the reduced model: the roll unactuated (id_r's 13th entry
     = 0), the paper's GRF in the friction cone, URDF joint and effort limits, swing clearance,
     periodicity at the plan's speed; effort + closeness to the plan. Exit 1 with IPOPT's status when
-    the solve does not converge."""
+    the solve does not converge. ROBOT: a name or URDF path, default paper."""
     from quadruped_dyn.experiment.gait import GAITS
     from quadruped_dyn.experiment.simulate import MAX_SAMPLES
     from quadruped_dyn.optimal_control.outputs import output_paths, report, write_outputs

@@ -20,7 +20,8 @@ from quadruped_dyn.report.gather import CHECK_SAMPLES
 @click.option("--footprint", is_flag=True,
               help="Add the Cortex-M footprint (code size, stack): two cross builds, minutes on a cold cache.")
 def report(robot: str, out_dir: str, fast: bool, samples: int, footprint: bool) -> None:
-    """One self-contained HTML page of everything the toolkit knows about ROBOT (exit 1 if a check fails)."""
+    """One self-contained HTML page of everything the toolkit knows about ROBOT (a name or URDF path,
+    default paper; exit 1 if a check fails)."""
     from quadruped_dyn.report.build import build_report, prepare
 
     prepare(robot, out_dir, samples)  # bad input is reported before any work

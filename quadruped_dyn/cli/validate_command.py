@@ -43,7 +43,8 @@ def validate(robot: str, gait_name: str, horizon: float | None, integrator: str,
     with the instability, the error budget and the physics check against rigid-contact dynamics.
 
     Trot: 'paper' applies all of id_r (the roll moment as if actuated), 'physical' leaves the
-    roll unactuated. Percentage errors per joint (FL, FR, BL, BR x HAA, HFE, KFE)."""
+    roll unactuated. Percentage errors per joint (FL, FR, BL, BR x HAA, HFE, KFE). ROBOT: a name or
+    URDF path, default paper."""
 
     from quadruped_dyn.experiment.gait import GAITS
     from quadruped_dyn.experiment.outputs import output_paths, plot_br_hfe, plot_physics_check, summary_text, write_csv
