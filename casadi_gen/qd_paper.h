@@ -33,15 +33,16 @@
  * Return codes: 0 ok; QD_NONFINITE (1) an output is NaN/inf: the trunk pitched +-90 deg (two feet:
  * the roll row has tan(pitch)), a zero quaternion or a non-finite input; QD_SINGULAR (2, fd_r only) M_r
  * singular to working precision (a pivot below QD_SINGULAR_RTOL times the largest entry of the matrix it
- * eliminates, M_r's, or a swing leg's block and the folded rest's, e.g. two feet, the trunk
- * pitched within ~1e-12 rad of 90 deg), and in the float build also where the result's error bound
+ * eliminates, M_r's, or a swing leg's block and the folded rest's), and in the float build also where the
+ * result's error bound
  * FLT_EPSILON x cond_1 of that matrix exceeds 0.0025 (so a float fd_r returned as 0 is
  * within 1 %);
  * QD_DEGENERATE (3) the stance is degenerate, checked first by
  * every reduced function: its regularity (quadruped_dyn/dynamics/stance_regularity.py, in [0, 1]) is
  * at most QD_REGULARITY_MIN (coincident or collinear stance feet, or two feet whose line is
  * perpendicular to the roll axis: the front or back pair at zero pitch or roll), where the model
- * is undefined and would return ~1e15; in the float build also, with two feet, where the maps' error
+ * is undefined and would return ~1e15, or two feet with the trunk pitched within 2.0 deg of +-90 deg,
+ * where the error 20 eps / cos(pitch)^3 exceeds 1e-10; in the float build also, with two feet, where the maps' error
  * bound 20 x FLT_EPSILON / regularity exceeds 0.0025 (regularity below 9.5e-04:
  * the front or back pair near a level trunk). The outputs are not written on QD_SINGULAR or QD_DEGENERATE.
  * A stance leg stretched straight is not singular here: the reduced

@@ -3,6 +3,8 @@
 All are relative to the norm of the reference quantity unless the name says otherwise.
 """
 
+import math
+
 #: Two double-precision evaluations of the same rigid-body quantity by different
 #: algorithms (CasADi recursion vs Pinocchio): round-off grows with the number of
 #: operations (~1e3) times machine epsilon (2.2e-16), so 1e-10 leaves a wide margin
@@ -29,6 +31,16 @@ RANK_RTOL = 1e-9
 #: robot and b1: at least 6.5e-2 (docs/reliability.md §7). The generated C compares with the
 #: same number (QD_REGULARITY_MIN, written by codegen.emit; in float at least (64 FLT_EPSILON)^2).
 REGULARITY_MIN = RANK_RTOL**2
+
+#: With two feet the reduced forms the generated C uses (dynamics/reduced_projection.py: the roll-rate row e_phi has
+#: tan(pitch), its rigid-motion solve e_phi e_phi^T) lose accuracy as the trunk pitches toward +-90 deg: against the
+#: paper's recipe, paper FL+BR, ~PITCH_ERR_PER_COS3 * eps / cos(pitch)^3 (1.7e-9 at 0.57 deg from 90 deg, 0.1 at
+#: 6e-4 deg, all returned as success before; docs/reliability.md §7). The stance's regularity is 0 (degenerate) where
+#: cos(pitch) < TRUNK_PITCH_COS_MIN, where that term would exceed REL_TOL_TERMS: within 2.0 deg of +-90 deg. (The
+#: layout's term, ~20 eps / regularity as in float, is not bounded in double: up to 1e-8 at 2 deg, FR+BL.)
+PITCH_ERR_PER_COS3 = 20.0
+TRUNK_PITCH_COS_MIN = (PITCH_ERR_PER_COS3 * 2.0**-52 / REL_TOL_TERMS) ** (1 / 3)
+TRUNK_PITCH_DEG_MARGIN = math.degrees(math.asin(TRUNK_PITCH_COS_MIN))  # 90 deg - arccos(TRUNK_PITCH_COS_MIN)
 
 #: Two backward-stable solves of the same linear system agree to about cond(A) * eps in
 #: relative terms; a GRF solution is compared with the SVD reference within

@@ -58,7 +58,15 @@ from quadruped_dyn.files.safe_write import output_path, write_text
 from quadruped_dyn.model.robot import Robot
 from quadruped_dyn.model.stance import STANCE_SETS, StanceSet, stance_set
 from quadruped_dyn.model.state import JOINT_ANGLES, NQ_FULL
-from quadruped_dyn.tolerances import FLOAT_ERR_PER_REGULARITY, FLOAT_MAX_BOUND, FLOAT_REGULARITY_MIN, REGULARITY_MIN
+from quadruped_dyn.tolerances import (
+    FLOAT_ERR_PER_REGULARITY,
+    FLOAT_MAX_BOUND,
+    FLOAT_REGULARITY_MIN,
+    PITCH_ERR_PER_COS3,
+    REGULARITY_MIN,
+    REL_TOL_TERMS,
+    TRUNK_PITCH_DEG_MARGIN,
+)
 
 
 def _grf_paper(stance: StanceSet) -> Callable[[Robot], ca.Function]:
@@ -255,15 +263,18 @@ def header_doc(robot: Robot, functions: list[ca.Function], work: dict[str, tuple
         " * Return codes: 0 ok; QD_NONFINITE (1) an output is NaN/inf: the trunk pitched +-90 deg (two feet:",
         " * the roll row has tan(pitch)), a zero quaternion or a non-finite input; QD_SINGULAR (2, fd_r only) M_r",
         " * singular to working precision (a pivot below QD_SINGULAR_RTOL times the largest entry of the matrix it",
-        " * eliminates, M_r's, or a swing leg's block and the folded rest's, e.g. two feet, the trunk",
-        " * pitched within ~1e-12 rad of 90 deg), and in the float build also where the result's error bound",
+        " * eliminates, M_r's, or a swing leg's block and the folded rest's), and in the float build also where the",
+        " * result's error bound",
         f" * FLT_EPSILON x cond_1 of that matrix exceeds {FLOAT_MAX_BOUND:g} (so a float fd_r returned as 0 is",
         " * within 1 %);",
         " * QD_DEGENERATE (3) the stance is degenerate, checked first by",
         " * every reduced function: its regularity (quadruped_dyn/dynamics/stance_regularity.py, in [0, 1]) is",
         " * at most QD_REGULARITY_MIN (coincident or collinear stance feet, or two feet whose line is",
         " * perpendicular to the roll axis: the front or back pair at zero pitch or roll), where the model",
-        " * is undefined and would return ~1e15; in the float build also, with two feet, where the maps' error",
+        " * is undefined and would return ~1e15, or two feet with the trunk pitched within"
+        f" {TRUNK_PITCH_DEG_MARGIN:.1f} deg of +-90 deg,",
+        f" * where the error {PITCH_ERR_PER_COS3:g} eps / cos(pitch)^3 exceeds {REL_TOL_TERMS:g}; in the float build"
+        " also, with two feet, where the maps' error",
         f" * bound {FLOAT_ERR_PER_REGULARITY:g} x FLT_EPSILON / regularity exceeds {FLOAT_MAX_BOUND:g} (regularity below"
         f" {FLOAT_REGULARITY_MIN:.1e}:",
         " * the front or back pair near a level trunk). The outputs are not written on QD_SINGULAR or QD_DEGENERATE.",

@@ -187,11 +187,12 @@ QD_NONFINITE, QD_SINGULAR, QD_DEGENERATE = 1, 2, 3
 RETURN_CODES = {
     1: "an output is not finite (the trunk pitched 90 deg with two stance feet, a zero quaternion, or a "
     "non-finite input); expected a stance the model can hold",
-    2: "M_r is singular to working precision here (e.g. two stance feet with the trunk pitched to within "
-    "~1e-12 rad of 90 deg; in float, fd_r's error bound over 1/4 %); expected a configuration where the reduced "
+    2: "M_r is singular to working precision here (in float also where fd_r's error bound exceeds 1/4 %); "
+    "expected a configuration where the reduced "
     "model is regular",
     3: "the stance is degenerate here (coincident or collinear stance feet, or two feet whose line is "
-    "perpendicular to the roll axis: the front or back pair at zero pitch or roll; regularity at most "
+    "perpendicular to the roll axis: the front or back pair at zero pitch or roll, or two feet with the trunk "
+    "pitched within 2 deg of 90 deg; regularity at most "
     "QD_REGULARITY_MIN; in float, with two feet, below FLOAT_REGULARITY_MIN); the reduced model is undefined "
     "to this precision",
 }

@@ -47,7 +47,7 @@ from quadruped_dyn.math.spatial import quat_to_rotation
 from quadruped_dyn.model.robot import Robot, check_robot
 from quadruped_dyn.model.stance import StanceSet, stance_set
 from quadruped_dyn.model.state import check_array
-from quadruped_dyn.tolerances import REGULARITY_MIN
+from quadruped_dyn.tolerances import REGULARITY_MIN, TRUNK_PITCH_DEG_MARGIN
 
 REDUCED_KINDS = {4: "stand", 3: "static walk", 2: "trot / pace"}
 
@@ -135,7 +135,8 @@ def check_regularity(stance: StanceSet, value: float) -> None:
         raise NumericalError(
             f"stance {stance.name} is degenerate here (regularity {value:.1e}, at most {REGULARITY_MIN:.0e}): "
             "coincident or collinear stance feet, or two feet whose line is perpendicular to the roll axis "
-            "(the front or back pair with zero pitch or roll); the reduced model is undefined"
+            "(the front or back pair with zero pitch or roll), or two feet with the trunk pitched within "
+            f"{TRUNK_PITCH_DEG_MARGIN:.1f} deg of 90 deg; the reduced model is undefined"
         )
 
 
@@ -206,7 +207,7 @@ def solve_forward_dynamics(stance: StanceSet, M_r: np.ndarray, rhs: np.ndarray) 
     cond = float(np.linalg.cond(M_r))
     if not cond < MAX_COND_M_R:
         raise NumericalError(f"M_r of {stance.name} has condition number {cond:.1e} here; the reduced model is "
-                             "singular (e.g. collinear stance feet, or two feet with the trunk pitched 90 deg)")
+                             "singular (e.g. collinear stance feet)")
     return np.linalg.solve(M_r, rhs), cond
 
 

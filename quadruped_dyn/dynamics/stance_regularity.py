@@ -17,7 +17,9 @@ factor per determinant, each the square of a relative singular value:
   ~ 4 (sigma_2 / sigma_1)^2 of the centred xy positions;
 * 3 feet also 3/2 rho_same,x^2 / tr(S): the fy system's pivot relative to the spread;
 * 2 feet: (e_phi . d)^2 / (2 |e_phi|^2 (|r_1|^2 + |r_2|^2)): zero for coincident feet and for
-  a roll axis perpendicular to the support line.
+  a roll axis perpendicular to the support line; and zero where the trunk is pitched to within
+  arccos(TRUNK_PITCH_COS_MIN) (2 deg) of +-90 deg, cos(pitch)^2 = 1 / |e_phi|^2: there e_phi's
+  tan(pitch) costs the generated forms more digits than REL_TOL_TERMS allows (``tolerances``).
 A state is regular where regularity > REGULARITY_MIN (``tolerances``: RANK_RTOL squared, the
 GRF rank test's relative singular value). NaN (e.g. the trunk pitched 90 deg: e_phi has
 tan(pitch)) is never regular.
@@ -29,6 +31,7 @@ import casadi as ca
 
 from quadruped_dyn.model.leg import LEG_LABELS
 from quadruped_dyn.model.stance import StanceSet
+from quadruped_dyn.tolerances import TRUNK_PITCH_COS_MIN
 
 
 def regularity(stance: StanceSet, r: list[ca.SX], e_phi: ca.SX | None) -> ca.SX:
@@ -37,8 +40,11 @@ def regularity(stance: StanceSet, r: list[ca.SX], e_phi: ca.SX | None) -> ca.SX:
     if len(r) == 2:
         if e_phi is None:
             raise ValueError("two stance feet: regularity needs the roll-rate row e_phi")
-        d = r[0] - r[1]
-        return ca.dot(e_phi, d) ** 2 / (2 * ca.dot(e_phi, e_phi) * (ca.dot(r[0], r[0]) + ca.dot(r[1], r[1])))
+        d, e2 = r[0] - r[1], ca.dot(e_phi, e_phi)
+        layout = ca.dot(e_phi, d) ** 2 / (2 * e2 * (ca.dot(r[0], r[0]) + ca.dot(r[1], r[1])))
+        # (cos(pitch)^2 = 1 / |e_phi|^2) > TRUNK_PITCH_COS_MIN^2: 1 or 0, times layout, so NaN stays NaN (an if_else
+        # would make it 0: a zero quaternion would read as degenerate instead of non-finite)
+        return layout * (e2 * TRUNK_PITCH_COS_MIN**2 < 1)
     xy = [ri[:2] for ri in r]
     centre = sum(xy[1:], xy[0]) / len(xy)
     rho = [p - centre for p in xy]

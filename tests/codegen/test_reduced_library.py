@@ -20,7 +20,7 @@ from quadruped_dyn.errors import InputError, NumericalError
 from quadruped_dyn.experiment.gait import GAITS, gait_plan
 from quadruped_dyn.experiment.plan_ik import reference
 from quadruped_dyn.model.stance import stance_set
-from quadruped_dyn.tolerances import FLOAT_MAX_BOUND, FLOAT_REL_TOL, REL_TOL_TERMS
+from quadruped_dyn.tolerances import FLOAT_MAX_BOUND, FLOAT_REL_TOL, REL_TOL_TERMS, TRUNK_PITCH_DEG_MARGIN
 from tests.codegen.test_emit import REL_TOL_GRAPH
 from tests.conftest import assert_close
 from tests.dynamics.test_singular_and_types import QUAT, _collinear_joints
@@ -70,17 +70,14 @@ def _stance_args(robot, stance_name):
 
 
 def test_singular_configurations_are_reported(paper):
-    """The C return codes, through the Python layer: QD_SINGULAR for two feet with the trunk
-    pitched to within 1e-13 rad of 90 deg (the roll row has tan(pitch): cond(M_r) ~ 1e14 and
-    beyond), QD_NONFINITE for a zero quaternion and a NaN input (through ``raw``: ``__call__`` refuses
-    those inputs before the C sees them, tests/codegen/test_library.py). A stretched stance leg is NOT
-    singular: the reduced model never inverts the leg's Jacobian (cond(M_r) 1e3 -> 3e4)."""
+    """The C return codes, through the Python layer: QD_NONFINITE for a zero quaternion and a NaN input
+    (through ``raw``: ``__call__`` refuses those inputs before the C sees them,
+    tests/codegen/test_library.py). A stretched stance leg is NOT singular: the reduced model never
+    inverts the leg's Jacobian (cond(M_r) 1e3 -> 3e4). (QD_SINGULAR: the float build's bound, checked by
+    the check program; no regular double state of a built-in robot is known to reach it since the trunk
+    pitched near 90 deg is degenerate, test_trunk_pitched_near_90_deg_is_degenerate_for_two_feet.)"""
     library = compiled_library(paper)
     stance, x = _stance_args(paper, "FL+BR")
-    fd = CompiledFunction(library, reduced_symbol("fd_r", stance))
-    pitched = pin.Quaternion(pin.rpy.rpyToMatrix(0.0, np.pi / 2 - 1e-13, 0.0)).coeffs()
-    with pytest.raises(NumericalError, match="M_r is singular"):
-        fd(x["q_r"], x["qd_r"], x["tau_ext"], pitched)
     for name in ("M_r", "fd_r"):
         f = CompiledFunction(library, reduced_symbol(name, stance))
         args = {"q_r": x["q_r"], "qd_r": x["qd_r"], "tau_ext": x["tau_ext"], "quat": np.zeros(4)}
@@ -94,6 +91,39 @@ def test_singular_configurations_are_reported(paper):
     q[3 * 3 + 2] = 0.0  # BR knee straight
     qdd = CompiledReducedDynamics(paper).fd_r(stance, q, x["qd_r"], x["tau_ext"], x["quat"])
     assert np.all(np.isfinite(qdd))
+
+
+def test_trunk_pitched_near_90_deg_is_degenerate_for_two_feet(paper):
+    """Two feet with the trunk pitched to within TRUNK_PITCH_DEG_MARGIN (2 deg) of 90 deg: every
+    generated function of the pair returns QD_DEGENERATE, as the Python model raises (their error
+    grows as eps / cos(pitch)^3: 0.1 relative at 1e-5 rad, returned as success before); 1 deg
+    outside the margin they agree with the paper's recipe (``reduced_model``) within REL_TOL_TERMS."""
+    library = compiled_library(paper)
+    stance = stance_set("FL+BR")
+    rng = np.random.default_rng(3)
+    q_r = np.r_[paper.standing_q, 0.1]
+    x = {"q_r": q_r, "qd_r": 0.3 * rng.standard_normal(13), "qdd_r": rng.standard_normal(13),
+         "tau_ext": rng.standard_normal(13)}
+    model = reduced_model(paper, stance.name)
+    code = re.escape(RETURN_CODES[QD_DEGENERATE])
+    for margin in (1e-13, 1e-5, np.radians(TRUNK_PITCH_DEG_MARGIN) - 1e-3):
+        quat = pin.Quaternion(pin.rpy.rpyToMatrix(0.1, np.pi / 2 - margin, 0.2)).coeffs()
+        for kind in REDUCED_NAMES:
+            f = CompiledFunction(library, reduced_symbol(kind, stance))
+            with pytest.raises(NumericalError, match=code):
+                f(*[{**x, "quat": quat}[k] for k in f.names_in])
+                pytest.fail(f"{kind} returned {margin:.0e} rad from a 90 deg pitch")
+        with pytest.raises(NumericalError, match="pitched within 2.0 deg of 90 deg"):
+            model.M_r(q_r, quat)
+    quat = pin.Quaternion(pin.rpy.rpyToMatrix(0.1, np.pi / 2 - np.radians(TRUNK_PITCH_DEG_MARGIN + 1), 0.2)).coeffs()
+    expected = {"M_r": np.asarray(model.M_r(q_r, quat)),
+                "CG_r": np.ravel(model.C_r(q_r, x["qd_r"], quat)) + np.ravel(model.G_r(q_r, quat)),
+                "id_r": np.ravel(model.id_r(q_r, x["qd_r"], x["qdd_r"], quat)),
+                "fd_r": model.forward_dynamics(q_r, x["qd_r"], x["tau_ext"], quat)[0]}
+    for kind, value in expected.items():
+        f = CompiledFunction(library, reduced_symbol(kind, stance))
+        assert_close(f(*[{**x, "quat": quat}[k] for k in f.names_in])[0], value, rel=REL_TOL_TERMS,
+                     what=f"{kind} 1 deg outside the pitch margin")
 
 
 def test_degenerate_stances_are_reported_by_every_function(paper):

@@ -17,11 +17,12 @@ from quadruped_dyn.dynamics.derivatives import full_derivatives, grf_derivatives
 from quadruped_dyn.dynamics.grf import grf_solve
 from quadruped_dyn.dynamics.guarded import guarded_call
 from quadruped_dyn.dynamics.newton_euler import full_dynamics
-from quadruped_dyn.dynamics.reduced import reduced_model
+from quadruped_dyn.dynamics.reduced import reduced_model, solve_forward_dynamics
 from quadruped_dyn.errors import InputError, NumericalError
-from quadruped_dyn.model.stance import StanceSet
+from quadruped_dyn.model.stance import StanceSet, stance_set
 from quadruped_dyn.model.state import full_q
 from quadruped_dyn.references.pinocchio import PinocchioReference
+from quadruped_dyn.tolerances import TRUNK_PITCH_DEG_MARGIN
 
 QUAT = np.array([0.0, 0.0, 0.0, 1.0])
 
@@ -84,18 +85,29 @@ def test_a_degenerate_pair_is_reported_by_every_numeric_call(paper):
     assert np.all(np.isfinite(np.asarray(diagonal.fd_r(q, z, z, QUAT))))
 
 
-def test_a_singular_M_r_is_reported_by_fd_r(paper):
-    """The trot's pair with the trunk pitched to within 1e-13 rad of 90 deg and the feet at different
-    heights: the stance is regular (the roll axis, now nearly the trunk's z, is not perpendicular to the
-    feet's line) but the roll row has tan(pitch) ~ 1e13, so M_r has cond beyond 1e12: fd_r reports it."""
-    m = reduced_model(paper, "FL+BR")
-    q = np.r_[paper.standing_q, 0.0]
-    q[2] += 0.2  # FL knee: the FL foot higher than the BR one
-    z = np.zeros(13)
-    pitched = np.array([0.0, np.sin((np.pi / 2 - 1e-13) / 2), 0.0, np.cos((np.pi / 2 - 1e-13) / 2)])
-    m.id_r(q, z, z, pitched)  # regular stance: an answer
+def test_a_singular_M_r_is_reported_by_fd_r():
+    """fd_r's solve (``solve_forward_dynamics``, the one numeric definition) refuses an M_r of
+    condition number beyond MAX_COND_M_R. (No regular state of a built-in robot is known to reach it
+    since the trunk pitched near 90 deg is degenerate for two feet: a regularity just above
+    REGULARITY_MIN means cond(M_r) ~ 1 / sqrt(regularity) ~ 1e9.)"""
+    M = np.diag([1.0] * 12 + [1e-14])
     with pytest.raises(NumericalError, match="M_r of FL\\+BR has condition number .*e\\+1[2-9]"):
-        m.fd_r(q, z, z, pitched)
+        solve_forward_dynamics(stance_set("FL+BR"), M, np.ones(13))
+
+
+def test_two_feet_with_the_trunk_pitched_near_90_deg_are_degenerate(paper):
+    """Within TRUNK_PITCH_DEG_MARGIN of a 90 deg pitch every numeric call of a two-feet model raises,
+    naming the pitch (the generated forms' error grows as eps / cos(pitch)^3: docs/reliability.md §7)."""
+    m = reduced_model(paper, "FL+BR")
+    q, z = np.r_[paper.standing_q, 0.0], np.zeros(13)
+    for margin in (1e-13, np.radians(TRUNK_PITCH_DEG_MARGIN) - 1e-3):
+        pitched = np.array([0.0, np.sin((np.pi / 2 - margin) / 2), 0.0, np.cos((np.pi / 2 - margin) / 2)])
+        for call in (lambda: m.id_r(q, z, z, pitched), lambda: m.fd_r(q, z, z, pitched)):
+            with pytest.raises(NumericalError, match="pitched within 2.0 deg of 90 deg"):
+                call()
+    outside = np.radians(TRUNK_PITCH_DEG_MARGIN) + 1e-3
+    pitched = np.array([0.0, np.sin((np.pi / 2 - outside) / 2), 0.0, np.cos((np.pi / 2 - outside) / 2)])
+    assert np.all(np.isfinite(np.asarray(m.fd_r(q, z, z, pitched))))
 
 
 class _Raises:
