@@ -102,9 +102,9 @@ def test_two_feet_with_the_trunk_pitched_near_90_deg_are_degenerate(paper):
     q, z = np.r_[paper.standing_q, 0.0], np.zeros(13)
     for margin in (1e-13, np.radians(TRUNK_PITCH_DEG_MARGIN) - 1e-3):
         pitched = np.array([0.0, np.sin((np.pi / 2 - margin) / 2), 0.0, np.cos((np.pi / 2 - margin) / 2)])
-        for call in (lambda: m.id_r(q, z, z, pitched), lambda: m.fd_r(q, z, z, pitched)):
+        for call in (m.id_r, m.fd_r):
             with pytest.raises(NumericalError, match="pitched within 2.0 deg of 90 deg"):
-                call()
+                call(q, z, z, pitched)
     outside = np.radians(TRUNK_PITCH_DEG_MARGIN) + 1e-3
     pitched = np.array([0.0, np.sin((np.pi / 2 - outside) / 2), 0.0, np.cos((np.pi / 2 - outside) / 2)])
     assert np.all(np.isfinite(np.asarray(m.fd_r(q, z, z, pitched))))
