@@ -1,8 +1,9 @@
 """Loading a quadruped from a URDF (or a built-in name) into the project's leg structure.
 
 Legs are found by tree structure: four chains of three revolute joints hanging from the
-trunk (the URDF root link), each ending in a foot frame. Each leg is labelled FL, FR, BL, BR
-from the sign of its HAA origin in the trunk frame (x forward, y left, z up).
+trunk (the URDF root link, or a link welded to it without rotation, e.g. below a 'world' link),
+each ending in a foot frame. Each leg is labelled FL, FR, BL, BR from the sign of its HAA origin
+about the trunk link's origin, in the trunk frame (x forward, y left, z up).
 
 Joint order inside the project: FL, FR, BL, BR x (HAA, HFE, KFE) -- 12 entries.
 ``Robot.idx_q`` / ``Robot.idx_v`` map project joint k to Pinocchio's q / v index.
@@ -389,8 +390,10 @@ def _load(path: Path, digest: str, foot_frames: tuple[str, str, str, str] | None
     _named_feet_exist(model, wanted_feet)
     legs: dict[str, Leg] = {}
     foot_ids: dict[str, int] = {}
-    for chain in _leg_chains(model, path):
-        leg, foot_ids[leg.label] = _leg(model, chain, taken=legs, wanted_feet=wanted_feet)
+    chains = _leg_chains(model, path)
+    trunk_origin = _trunk_origin(model, [chain[0] for chain in chains])
+    for chain in chains:
+        leg, foot_ids[leg.label] = _leg(model, chain, taken=legs, trunk_origin=trunk_origin, wanted_feet=wanted_feet)
         legs[leg.label] = leg
     ordered = tuple(legs[label] for label in LEG_LABELS)
     lower = np.array([j.lower for leg in ordered for j in leg.joints])
@@ -454,11 +457,39 @@ def _leg_chains(model: pin.Model, path: Path) -> list[list[int]]:
     return chains
 
 
-def _leg(model: pin.Model, chain: list[int], taken: dict[str, Leg],
+def _trunk_origin(model: pin.Model, hips: list[int]) -> np.ndarray:
+    """The origin, in the root link's frame, of the trunk link: the nearest link above every hip
+    (the URDF's root link unless it is, e.g., a 'world' or 'base_footprint' link welded to the
+    trunk). InputError if the root link holds the trunk rotated: the frame b of the model (the
+    root link's) would then not be the trunk's, and legs labelled in it would be the wrong legs."""
+
+    def links_above(joint: int) -> list[int]:
+        frame = model.frames[model.getFrameId(model.names[joint], pin.FrameType.JOINT)].parentFrame
+        above = []
+        while model.frames[frame].parentJoint == 1:
+            if model.frames[frame].type == pin.FrameType.BODY:
+                above.append(frame)
+            frame = model.frames[frame].parentFrame
+        return above
+
+    paths = [links_above(h) for h in hips]
+    trunk = next(f for f in paths[0] if all(f in p for p in paths[1:]))  # the root link is above every hip
+    placement = model.frames[trunk].placement
+    if not np.array_equal(placement.rotation, np.eye(3)):
+        root = model.frames[paths[0][-1]].name
+        rpy = np.round(pin.rpy.matrixToRpy(placement.rotation), 4) + 0.0  # no negative zeros
+        raise InputError(f"the legs hang from link '{printable(model.frames[trunk].name)}', which the URDF's root link "
+                         f"'{printable(root)}' holds rotated (rpy {rpy} through fixed joints); expected the trunk as the "
+                         "root link, or welded to it without rotation (x forward, y left, z up)")
+    return np.array(placement.translation)
+
+
+def _leg(model: pin.Model, chain: list[int], taken: dict[str, Leg], trunk_origin: np.ndarray,
          wanted_feet: dict[str, str] | None = None) -> tuple[Leg, int]:
-    """The leg of one joint chain, labelled by its hip's quadrant (not one of ``taken``), and the
-    Pinocchio id of its foot frame (``wanted_feet[label]`` if the user named it)."""
-    hip = model.jointPlacements[chain[0]].translation
+    """The leg of one joint chain, labelled by its hip's quadrant about the trunk link's origin
+    ``trunk_origin`` (not one of ``taken``), and the Pinocchio id of its foot frame
+    (``wanted_feet[label]`` if the user named it)."""
+    hip = model.jointPlacements[chain[0]].translation - trunk_origin
     if abs(hip[0]) < 1e-9 or abs(hip[1]) < 1e-9:
         raise InputError(
             f"hip '{model.names[chain[0]]}' at {np.round(hip, 4)} lies on a trunk axis; "

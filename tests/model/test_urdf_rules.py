@@ -198,3 +198,60 @@ def test_validate_runs_on_a_copy_of_the_paper_urdf(tmp_path):
                                        "--out", str(tmp_path / "out")])
     assert result.exit_code == 0, result.output
     assert (tmp_path / "out" / "paper_trot_validation.json").is_file()
+
+
+def _world_root(xyz: str, rpy: str) -> Callable[[ET.Element], None]:
+    """A 'world' link as the URDF's root, the trunk welded to it at (xyz, rpy)."""
+
+    def edit(r: ET.Element) -> None:
+        joint = ET.Element("joint", name="world_to_trunk", type="fixed")
+        ET.SubElement(joint, "origin", xyz=xyz, rpy=rpy)
+        ET.SubElement(joint, "parent", link="world")
+        ET.SubElement(joint, "child", link="trunk")
+        r.insert(0, joint)
+        r.insert(0, ET.Element("link", name="world"))
+
+    return edit
+
+
+def _pinocchio_mass_matrix(path: Path, joint_names: list[str], q: np.ndarray) -> np.ndarray:
+    """Pinocchio's M of the URDF at ``path`` with a free-flyer root, built here (not by the loader),
+    rows and columns in the order (base, ``joint_names``) of the revolute joints, at the project's q."""
+    import pinocchio as pin
+
+    model = pin.buildModelFromUrdf(str(path), pin.JointModelFreeFlyer())
+    q_pin = np.concatenate([q[:7], np.zeros(model.nq - 7)])
+    order = list(range(6))
+    for k, name in enumerate(joint_names):
+        joint = model.joints[model.getJointId(name)]
+        q_pin[joint.idx_q] = q[7 + k]
+        order.append(joint.idx_v)
+    M = pin.crba(model, model.createData(), q_pin)
+    M = np.triu(M) + np.triu(M, 1).T
+    return M[np.ix_(order, order)]
+
+
+def test_trunk_welded_to_a_world_root_with_an_offset(tmp_path):
+    """A 'world' root link with the trunk welded 0.3 m forward and 0.2 m right of it: the legs are
+    labelled about the trunk's origin (they were not: both right hips are in the FR quadrant of
+    'world', an InputError), and M agrees with Pinocchio's model of the same file."""
+    path = _variant(tmp_path, _world_root("0.3 -0.2 0.5", "0 0 0"))
+    robot = load_robot(str(path))
+    assert robot.joint_names == load_robot("paper").joint_names  # FL_HAA ... BR_KFE: each leg where its name says
+    s = random_state(robot.lower, robot.upper, np.random.default_rng(0))
+    assert_close(np.asarray(full_dynamics(robot).M_full(s.q)), _pinocchio_mass_matrix(path, robot.joint_names, s.q),
+                 what="M")
+
+
+@pytest.mark.parametrize("rpy", ["0 0 3.141592653589793", "3.141592653589793 0 0", "0 0 1.5707963267948966"])
+def test_trunk_welded_rotated_to_a_world_root_is_refused(rpy, tmp_path):
+    """The trunk welded turned by a yaw of 180 deg (or upside down, or 90 deg) to a 'world' root link:
+    the model's frame b is the root's, so legs labelled in it were the wrong legs, silently (FL was the
+    trunk's back-right leg). Now one line, exit 2, naming the links."""
+    path = _variant(tmp_path, _world_root("0 0 0.4", rpy))
+    for command in (["info", str(path)], ["check", str(path), "--samples", "1"]):
+        result = CliRunner().invoke(main, command)
+        assert result.exit_code == 2, result.output
+        assert re.search(r"the legs hang from link 'trunk', which the URDF's root link 'world' holds rotated",
+                         result.stderr), result.stderr
+        assert result.stderr.count("\n") == 1, "expected one line"
