@@ -5,7 +5,8 @@ NaN or 1e300 masses, lower > upper limits, inertias no body can have) and ignore
 ``validate_urdf`` reads the XML itself and rejects, with an ``InputError`` naming the element
 and the value:
 
-- XML that is not a URDF ``<robot>``;
+- XML that is not a URDF ``<robot>``; a tree deeper than ``MAX_URDF_DEPTH`` (Pinocchio's parser
+  recurses per level and overflows the stack);
 - numbers that are not numbers, not finite, or absurd (beyond ``MAX_LENGTH_M``, ``MAX_MASS_KG``,
   ``MAX_ANGLE_RAD``) in any origin, axis, limit, mass or inertia;
 - a zero joint axis; a joint with lower > upper limits;
@@ -157,6 +158,35 @@ def check_urdf_size(path: Path, data: bytes | None, size: int | None = None) -> 
                              f"{MAX_URDF_LINKS} (a quadruped has a few dozen)")
 
 
+#: Pinocchio's URDF parser recurses once per link from the root down, with ~2 kB of stack a level: a chain of
+#: 4,000 links (fixed joints, within MAX_URDF_LINKS) overflowed the 8 MB main-thread stack, SIGSEGV (measured
+#: 2026-12-06, Pinocchio 4.1; 3,500 passed). A quadruped's tree is a few links deep (trunk, 3 leg links, foot, sensors).
+MAX_URDF_DEPTH = 500
+
+
+def tree_depth(joints: list[ET.Element]) -> int:
+    """The number of joints on the longest path from a root link down the joints' parent -> child
+    tree (iterative: the tree may be deep; a cycle counts once around, Pinocchio refuses it)."""
+    parent: dict[str | None, str | None] = {}
+    for joint in joints:
+        p, c = joint.find("parent"), joint.find("child")
+        if p is not None and c is not None:
+            parent.setdefault(c.get("link"), p.get("link"))
+    depth: dict[str | None, int] = {}
+    for start in parent:
+        path: list[str | None] = []
+        on_path: set[str | None] = set()
+        node = start
+        while node in parent and node not in depth and node not in on_path:
+            path.append(node)
+            on_path.add(node)
+            node = parent[node]
+        below = 0 if node in on_path else depth.get(node, 0)
+        for k, link in enumerate(reversed(path), start=1):
+            depth[link] = below + k
+    return max(depth.values(), default=0)
+
+
 def validate_urdf(path: Path, data: bytes | None = None) -> list[str]:
     """Validate the URDF at ``path`` (whose bytes are ``data`` when given: what will be parsed);
     returns warnings (one line each), raises InputError."""
@@ -169,6 +199,10 @@ def validate_urdf(path: Path, data: bytes | None = None) -> list[str]:
     if root.tag != "robot":
         raise InputError(f"'{path}' has root element <{root.tag}>; expected a URDF <robot>")
     joints = root.findall("joint")
+    depth = tree_depth(joints)
+    if depth > MAX_URDF_DEPTH:
+        raise InputError(f"'{printable(Path(path).name)}' has a chain of {depth} joints from its root link; expected at most "
+                         f"{MAX_URDF_DEPTH} (a quadruped's is a few links deep)")
     for joint in joints:
         _joint(joint)
     moved = {c.get("link") for j in joints if j.get("type") != "fixed" for c in j.findall("child")}

@@ -255,3 +255,29 @@ def test_trunk_welded_rotated_to_a_world_root_is_refused(rpy, tmp_path):
         assert re.search(r"the legs hang from link 'trunk', which the URDF's root link 'world' holds rotated",
                          result.stderr), result.stderr
         assert result.stderr.count("\n") == 1, "expected one line"
+
+
+def test_a_deep_tree_is_refused_before_pinocchio_recurses_into_it(tmp_path):
+    """A chain of 4,500 fixed links below the trunk (within MAX_URDF_LINKS): Pinocchio's parser
+    recursed once per level and the process died of SIGSEGV (no message, exit -11). Now one line,
+    exit 2, before the parser (a subprocess sees the signal, and all of stderr)."""
+    import subprocess
+    import sys
+
+    def deep_chain(r: ET.Element) -> None:
+        parent = "trunk"
+        for k in range(4500):
+            ET.SubElement(r, "link", name=f"bracket{k}")
+            joint = ET.SubElement(r, "joint", name=f"bracket{k}_fixed", type="fixed")
+            ET.SubElement(joint, "origin", xyz="0 0 0.0001")
+            ET.SubElement(joint, "parent", link=parent)
+            ET.SubElement(joint, "child", link=f"bracket{k}")
+            parent = f"bracket{k}"
+
+    path = _variant(tmp_path, deep_chain)
+    proc = subprocess.run([sys.executable, "-m", "quadruped_dyn.cli", "info", str(path)],
+                          capture_output=True, text=True, check=False, timeout=600)
+    assert proc.returncode == 2, (proc.returncode, proc.stderr[-300:])
+    assert proc.stderr.count("\n") == 1, proc.stderr
+    expected = "error: 'variant.urdf' has a chain of 4500 joints from its root link; expected at most"
+    assert proc.stderr.startswith(expected), proc.stderr
