@@ -3,7 +3,7 @@
 Legs are found by tree structure: four chains of three revolute joints hanging from the
 trunk (the URDF root link, or a link welded to it without rotation, e.g. below a 'world' link),
 each ending in a foot frame. Each leg is labelled FL, FR, BL, BR from the sign of its HAA origin
-about the trunk link's origin, in the trunk frame (x forward, y left, z up).
+about the centre of the four HAA origins, in the trunk frame (x forward, y left, z up).
 
 Joint order inside the project: FL, FR, BL, BR x (HAA, HFE, KFE) -- 12 entries.
 ``Robot.idx_q`` / ``Robot.idx_v`` map project joint k to Pinocchio's q / v index.
@@ -391,9 +391,10 @@ def _load(path: Path, digest: str, foot_frames: tuple[str, str, str, str] | None
     legs: dict[str, Leg] = {}
     foot_ids: dict[str, int] = {}
     chains = _leg_chains(model, path)
-    trunk_origin = _trunk_origin(model, [chain[0] for chain in chains])
+    _check_trunk_frame(model, [chain[0] for chain in chains])
+    centre = np.mean([model.jointPlacements[chain[0]].translation for chain in chains], axis=0)
     for chain in chains:
-        leg, foot_ids[leg.label] = _leg(model, chain, taken=legs, trunk_origin=trunk_origin, wanted_feet=wanted_feet)
+        leg, foot_ids[leg.label] = _leg(model, chain, taken=legs, hips_centre=centre, wanted_feet=wanted_feet)
         legs[leg.label] = leg
     ordered = tuple(legs[label] for label in LEG_LABELS)
     lower = np.array([j.lower for leg in ordered for j in leg.joints])
@@ -457,11 +458,11 @@ def _leg_chains(model: pin.Model, path: Path) -> list[list[int]]:
     return chains
 
 
-def _trunk_origin(model: pin.Model, hips: list[int]) -> np.ndarray:
-    """The origin, in the root link's frame, of the trunk link: the nearest link above every hip
-    (the URDF's root link unless it is, e.g., a 'world' or 'base_footprint' link welded to the
-    trunk). InputError if the root link holds the trunk rotated: the frame b of the model (the
-    root link's) would then not be the trunk's, and legs labelled in it would be the wrong legs."""
+def _check_trunk_frame(model: pin.Model, hips: list[int]) -> None:
+    """InputError if the URDF's root link holds the trunk link (the nearest link above every hip: the
+    root itself unless it is, e.g., a 'world' or 'base_footprint' link welded to the trunk) rotated:
+    the model's frame b (the root link's) would then not be the trunk's, and legs labelled in it
+    would be the wrong legs."""
 
     def links_above(joint: int) -> list[int]:
         frame = model.frames[model.getFrameId(model.names[joint], pin.FrameType.JOINT)].parentFrame
@@ -481,23 +482,23 @@ def _trunk_origin(model: pin.Model, hips: list[int]) -> np.ndarray:
         raise InputError(f"the legs hang from link '{printable(model.frames[trunk].name)}', which the URDF's root link "
                          f"'{printable(root)}' holds rotated (rpy {rpy} through fixed joints); expected the trunk as the "
                          "root link, or welded to it without rotation (x forward, y left, z up)")
-    return np.array(placement.translation)
 
 
-def _leg(model: pin.Model, chain: list[int], taken: dict[str, Leg], trunk_origin: np.ndarray,
+def _leg(model: pin.Model, chain: list[int], taken: dict[str, Leg], hips_centre: np.ndarray,
          wanted_feet: dict[str, str] | None = None) -> tuple[Leg, int]:
-    """The leg of one joint chain, labelled by its hip's quadrant about the trunk link's origin
-    ``trunk_origin`` (not one of ``taken``), and the Pinocchio id of its foot frame
-    (``wanted_feet[label]`` if the user named it)."""
-    hip = model.jointPlacements[chain[0]].translation - trunk_origin
+    """The leg of one joint chain, labelled by its hip's quadrant about the centre of the four hips
+    ``hips_centre`` in the trunk frame (not one of ``taken``; the trunk frame's origin may be anywhere,
+    e.g. a CAD export's), and the Pinocchio id of its foot frame (``wanted_feet[label]`` if the user
+    named it)."""
+    hip = model.jointPlacements[chain[0]].translation - hips_centre
     if abs(hip[0]) < 1e-9 or abs(hip[1]) < 1e-9:
         raise InputError(
-            f"hip '{model.names[chain[0]]}' at {np.round(hip, 4)} lies on a trunk axis; "
-            "expected hips with nonzero x (front/back) and y (left/right)"
+            f"hip '{model.names[chain[0]]}' at {np.round(hip, 4) + 0.0} from the centre of the four hips is level with "
+            "it; expected hips with nonzero x (front/back) and y (left/right) about their centre"
         )
     label = ("F" if hip[0] > 0 else "B") + ("L" if hip[1] > 0 else "R")
     if label in taken:
-        raise InputError(f"two legs have their hip in the {label} quadrant; expected one leg per quadrant")
+        raise InputError(f"two legs have their hip in the {label} quadrant about the hips' centre; expected one leg per quadrant")
     joints = tuple(
         LegJoint(
             name=model.names[j],

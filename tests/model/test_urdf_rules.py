@@ -233,7 +233,7 @@ def _pinocchio_mass_matrix(path: Path, joint_names: list[str], q: np.ndarray) ->
 
 def test_trunk_welded_to_a_world_root_with_an_offset(tmp_path):
     """A 'world' root link with the trunk welded 0.3 m forward and 0.2 m right of it: the legs are
-    labelled about the trunk's origin (they were not: both right hips are in the FR quadrant of
+    labelled about the hips' centre (they were not: both right hips are in the FR quadrant of
     'world', an InputError), and M agrees with Pinocchio's model of the same file."""
     path = _variant(tmp_path, _world_root("0.3 -0.2 0.5", "0 0 0"))
     robot = load_robot(str(path))
@@ -281,3 +281,26 @@ def test_a_deep_tree_is_refused_before_pinocchio_recurses_into_it(tmp_path):
     assert proc.stderr.count("\n") == 1, proc.stderr
     expected = "error: 'variant.urdf' has a chain of 4500 joints from its root link; expected at most"
     assert proc.stderr.startswith(expected), proc.stderr
+
+
+def test_trunk_frame_origin_outside_the_hips(tmp_path):
+    """The trunk frame's origin 0.5 m behind and 0.3 m right of the body (a CAD export's origin): every
+    hip has x > 0 and y > 0 in it. The legs are labelled about the hips' centre (it was an InputError,
+    "two legs have their hip in the FL quadrant", for a valid robot), and M agrees with Pinocchio."""
+
+    def shift_trunk_origin(r: ET.Element) -> None:
+        for element in [*r.iter("joint"), next(x for x in r.iter("link") if x.get("name") == "trunk").find("inertial")]:
+            parent = element.find("parent")
+            if element.tag == "joint" and parent is not None and parent.get("link") != "trunk":
+                continue
+            origin = element.find("origin")
+            xyz = np.array([float(x) for x in origin.get("xyz", "0 0 0").split()]) + [0.5, 0.3, 0.0]  # type: ignore[union-attr]
+            origin.set("xyz", " ".join(repr(float(x)) for x in xyz))  # type: ignore[union-attr]
+
+    path = _variant(tmp_path, shift_trunk_origin)
+    robot = load_robot(str(path))
+    assert robot.joint_names == load_robot("paper").joint_names  # FL_HAA ... BR_KFE: each leg where its name says
+    assert (robot.legs[0].hip[:2] > 0).all() and (robot.legs[3].hip[:2] > 0).all()  # BR's hip too, in this frame
+    s = random_state(robot.lower, robot.upper, np.random.default_rng(0))
+    assert_close(np.asarray(full_dynamics(robot).M_full(s.q)), _pinocchio_mass_matrix(path, robot.joint_names, s.q),
+                 what="M")
