@@ -31,6 +31,7 @@ import importlib.metadata
 import os
 import tempfile
 import warnings
+import xml.etree.ElementTree as ET
 from dataclasses import dataclass
 from functools import cache
 from pathlib import Path
@@ -43,6 +44,7 @@ from quadruped_dyn.files.names import printable, safe_name
 from quadruped_dyn.math.rigid import LinkInertia, Placement
 from quadruped_dyn.model.leg import LEG_LABELS, Leg, LegJoint
 from quadruped_dyn.model.paper_robot import STANDING_Q, URDF_PATH
+from quadruped_dyn.model.urdf_edit import strip_geometry, to_text
 from quadruped_dyn.model.urdf_rules import check_urdf_size, inertia_problem, validate_urdf
 
 #: Built-in robots: the paper's (generated, package data) and six from example-robot-data.
@@ -283,18 +285,31 @@ class _Stderr:
 
 
 def _parse_urdf(path: Path, data: bytes) -> pin.Model:
+    """Pinocchio's free-flyer model of the URDF whose bytes are ``data``, validated first. Pinocchio parses
+    the XML the validation read (entities expanded, any encoding as Unicode), without the geometry (the
+    dynamics never read it). Its parser (urdfdom) drops an element it cannot read, e.g. a whole
+    ``<inertial>`` for ``<mass value="2.0 ">``, says so on stderr and returns the model anyway: that is an
+    InputError too, not a model without the mass."""
     for message in validate_urdf(path, data):
         warnings.warn(f"{printable(path.name)}: {message}", UrdfWarning, stacklevel=2)
+    root = ET.fromstring(data)  # well-formed: validate_urdf parsed it
+    strip_geometry(root)
     capture = _Stderr()
     try:
         with capture:
-            return pin.buildModelFromXML(data.decode("utf-8", "replace"), pin.JointModelFreeFlyer())
+            model = pin.buildModelFromXML(to_text(root), pin.JointModelFreeFlyer())
     except Exception as e:  # Pinocchio raises plain ValueError/RuntimeError with the parser's text
         said = [line.strip() for line in capture.text.splitlines() if line.strip()]
         first = (said[:1] or str(e).strip().splitlines()[:1] or ["no reason given"])[0]
         reason = first.removeprefix("Error:").strip().rstrip(".")  # our sentence goes on after it
         raise InputError(f"Pinocchio cannot parse '{printable(path)}': {printable(reason)}; expected one tree of links "
                          "joined by joints: a trunk with four legs of three revolute joints each") from e
+    errors = [line.strip() for line in capture.text.splitlines() if line.strip().startswith("Error:")]
+    if errors:
+        reasons = "; then ".join(e.removeprefix("Error:").strip().rstrip(".") for e in errors[:2])
+        raise InputError(f"Pinocchio's parser skipped part of '{printable(path)}': {printable(reasons)}; expected every "
+                         "element readable (numbers without stray characters or spaces inside the quotes)")
+    return model
 
 
 #: The URDF <limit> attributes of a leg joint a controller or an optimiser bounds its motion by, and their units.

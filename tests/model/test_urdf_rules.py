@@ -304,3 +304,50 @@ def test_trunk_frame_origin_outside_the_hips(tmp_path):
     s = random_state(robot.lower, robot.upper, np.random.default_rng(0))
     assert_close(np.asarray(full_dynamics(robot).M_full(s.q)), _pinocchio_mass_matrix(path, robot.joint_names, s.q),
                  what="M")
+
+
+def _payload(mass: str) -> Callable[[ET.Element], None]:
+    """A battery welded to the trunk, its mass written as ``mass``."""
+
+    def edit(r: ET.Element) -> None:
+        link = ET.SubElement(r, "link", name="battery")
+        inertial = ET.SubElement(link, "inertial")
+        ET.SubElement(inertial, "origin", xyz="0 0 0.05", rpy="0 0 0")
+        ET.SubElement(inertial, "mass", value=mass)
+        ET.SubElement(inertial, "inertia", ixx="0.002", ixy="0", ixz="0", iyy="0.004", iyz="0", izz="0.005")
+        joint = ET.SubElement(r, "joint", name="battery_fixed", type="fixed")
+        ET.SubElement(joint, "parent", link="trunk")
+        ET.SubElement(joint, "child", link="battery")
+
+    return edit
+
+
+def test_a_mass_pinocchio_cannot_read_is_refused(tmp_path):
+    """<mass value="2.0 "> (a trailing space) on a battery welded to the trunk: the validation read 2.0,
+    Pinocchio's parser (urdfdom) dropped the whole <inertial>, said so on stderr, which was swallowed,
+    and the robot loaded 2 kg light (exit 0, every check passing against the same light model).
+    Now one line, exit 2, naming the element."""
+    path = _variant(tmp_path, _payload("2.0 "))
+    for command in (["info", str(path)], ["check", str(path), "--samples", "1"]):
+        result = CliRunner().invoke(main, command)
+        assert result.exit_code == 2, result.output
+        assert re.search(r"parser skipped part of .*mass \[2\.0 \] is not a float", result.stderr), result.stderr
+        assert result.stderr.count("\n") == 1, "expected one line"
+
+
+def test_pinocchio_reads_the_xml_the_validation_read(tmp_path):
+    """The battery's mass through a DTD entity (&battery; = 2.0), in a Latin-1 file with a non-ASCII
+    link name: Pinocchio's parser was given the raw text, did not expand the entity, dropped the
+    <inertial> (the robot loaded 2 kg light, silently) and read 'batterie_\\xe4' as U+FFFD. Now it reads the
+    XML as the validation did: M equals Pinocchio's of the same robot written plainly."""
+    plain = _variant(tmp_path, _payload("2.0"), name="plain.urdf")
+    text = plain.read_text().replace('value="2.0"', 'value="&battery;"').replace('"battery"', '"batterie_\xe4"')
+    latin1 = tmp_path / "latin1.urdf"
+    latin1.write_bytes(('<?xml version="1.0" encoding="iso-8859-1"?>\n<!DOCTYPE robot [<!ENTITY battery "2.0">]>\n'
+                        + text).encode("latin-1"))
+    robot = load_robot(str(latin1))
+    assert robot.total_mass == pytest.approx(load_robot("paper").total_mass + 2.0, rel=1e-12)
+    assert robot.model.existFrame("batterie_\xe4")
+    s = random_state(robot.lower, robot.upper, np.random.default_rng(0))
+    assert_close(np.asarray(full_dynamics(robot).M_full(s.q)), _pinocchio_mass_matrix(plain, robot.joint_names, s.q),
+                 what="M")
