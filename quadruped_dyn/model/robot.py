@@ -532,7 +532,8 @@ def _leg(model: pin.Model, chain: list[int], taken: dict[str, Leg], hips_centre:
 
 
 def _limit(model: pin.Model, j: int, lower: bool) -> float:
-    """Joint limit in rad, clipped to [-pi, pi] (URDFs often state +-10 rad or none). A revolute
+    """Joint limit in rad, clipped to [-pi, pi] (URDFs often state +-10 rad or none), unless the
+    range lies wholly beyond one of them (e.g. [3.5, 4.0]): clipping would leave lower > upper. A revolute
     joint whose limits are equal (a ``<limit>`` without ``lower``/``upper`` reads as [0, 0]) gets
     the continuous-joint rule, [-pi, pi], with a UrdfWarning: a leg joint that cannot move is no
     range to sample or plan in."""
@@ -546,4 +547,6 @@ def _limit(model: pin.Model, j: int, lower: bool) -> float:
                           "using [-pi, pi] as for a continuous joint", UrdfWarning, stacklevel=4)
         return -np.pi if lower else np.pi
     value = lo if lower else hi
+    if lo > np.pi or hi < -np.pi:
+        return float(value)
     return float(max(value, -np.pi)) if lower else float(min(value, np.pi))

@@ -351,3 +351,17 @@ def test_pinocchio_reads_the_xml_the_validation_read(tmp_path):
     s = random_state(robot.lower, robot.upper, np.random.default_rng(0))
     assert_close(np.asarray(full_dynamics(robot).M_full(s.q)), _pinocchio_mass_matrix(plain, robot.joint_names, s.q),
                  what="M")
+
+
+@pytest.mark.parametrize(("lower", "upper"), [(3.5, 4.0), (-4.0, -3.5)])
+def test_a_joint_range_beyond_pi_is_kept(lower, upper, tmp_path):
+    """FL KFE limited to [3.5, 4.0] rad (valid: lower <= upper): clipping each limit to [-pi, pi] made
+    the range [3.5, 3.14], and check refused the robot after its symbolic build ("joint limits at
+    joints [2] are not a finite range"). The URDF's range is kept, and every term agrees with Pinocchio."""
+    path = _variant(tmp_path, lambda r: (_set(r, "FL_KFE", "limit", "lower", str(lower)),
+                                         _set(r, "FL_KFE", "limit", "upper", str(upper))))
+    robot = load_robot(str(path))
+    assert (robot.lower[2], robot.upper[2]) == (lower, upper)
+    assert lower <= robot.standing_q[2] <= upper
+    report = run_check(robot, samples=2, seed=0)
+    assert report.passed, report.table()
