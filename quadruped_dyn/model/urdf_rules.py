@@ -5,8 +5,9 @@ NaN or 1e300 masses, lower > upper limits, inertias no body can have) and ignore
 ``validate_urdf`` reads the XML itself and rejects, with an ``InputError`` naming the element
 and the value:
 
-- XML that is not a URDF ``<robot>``; a tree deeper than ``MAX_URDF_DEPTH`` (Pinocchio's parser
-  recurses per level and overflows the stack);
+- XML that is not a URDF ``<robot>``; joints that do not make a tree (a link the child of two
+  joints, a loop), or a tree deeper than ``MAX_URDF_DEPTH`` (Pinocchio's parser recurses per level
+  and overflows the stack);
 - numbers that are not numbers, not finite, or absurd (beyond ``MAX_LENGTH_M``, ``MAX_MASS_KG``,
   ``MAX_ANGLE_RAD``) in any origin, axis, limit, mass or inertia;
 - a zero joint axis; a joint with lower > upper limits;
@@ -166,12 +167,18 @@ MAX_URDF_DEPTH = 500
 
 def tree_depth(joints: list[ET.Element]) -> int:
     """The number of joints on the longest path from a root link down the joints' parent -> child
-    tree (iterative: the tree may be deep; a cycle counts once around, Pinocchio refuses it)."""
+    tree (iterative: the tree may be deep). InputError if the joints do not make a tree: a link the
+    child of two joints, or a loop (urdfdom's own messages for these name a symptom, e.g. '0 joint chains')."""
     parent: dict[str | None, str | None] = {}
+    via: dict[str | None, str | None] = {}
     for joint in joints:
         p, c = joint.find("parent"), joint.find("child")
         if p is not None and c is not None:
-            parent.setdefault(c.get("link"), p.get("link"))
+            child = c.get("link")
+            if child in parent:
+                raise InputError(f"link '{printable(str(child))}' is the child of joints '{printable(str(via[child]))}' and "
+                                 f"'{printable(str(joint.get('name')))}'; expected a tree: each link the child of one joint")
+            parent[child], via[child] = p.get("link"), joint.get("name")
     depth: dict[str | None, int] = {}
     for start in parent:
         path: list[str | None] = []
@@ -181,7 +188,10 @@ def tree_depth(joints: list[ET.Element]) -> int:
             path.append(node)
             on_path.add(node)
             node = parent[node]
-        below = 0 if node in on_path else depth.get(node, 0)
+        if node in on_path:
+            raise InputError(f"the joints make a loop through link '{printable(str(node))}'; expected a tree of links "
+                             "hanging from one root link")
+        below = depth.get(node, 0)
         for k, link in enumerate(reversed(path), start=1):
             depth[link] = below + k
     return max(depth.values(), default=0)

@@ -365,3 +365,26 @@ def test_a_joint_range_beyond_pi_is_kept(lower, upper, tmp_path):
     assert lower <= robot.standing_q[2] <= upper
     report = run_check(robot, samples=2, seed=0)
     assert report.passed, report.table()
+
+
+def _second_parent(r: ET.Element) -> None:
+    joint = ET.SubElement(r, "joint", name="strut", type="fixed")
+    ET.SubElement(joint, "parent", link="trunk")
+    ET.SubElement(joint, "child", link="FL_thigh")
+
+
+@pytest.mark.parametrize(("case", "edit", "expected"), [
+    ("loop", lambda r: _set(r, "FL_KFE", "child", "link", "trunk"),
+     r"the joints make a loop through link '(trunk|FL_hip|FL_thigh)'; expected a tree of links hanging from one root"),
+    ("two parents", _second_parent,
+     r"link 'FL_thigh' is the child of joints 'FL_HFE' and 'strut'; expected a tree: each link the child of one joint"),
+])
+def test_links_that_are_not_a_tree_are_named(case, edit, expected, tmp_path):
+    """FL_KFE's child set to the trunk (a loop) was "'variant.urdf' has 0 joint chains from the trunk";
+    a second joint to FL_thigh, which Pinocchio's parser accepted, was "6 joint chains from the trunk with
+    [3, 3, 1, 1, 3, 1] joints": one line naming the loop, or the link and its two joints."""
+    path = _variant(tmp_path, edit)
+    result = CliRunner().invoke(main, ["info", str(path)])
+    assert result.exit_code == 2, (case, result.output)
+    assert re.search(expected, result.stderr), result.stderr
+    assert result.stderr.count("\n") == 1, "expected one line"
