@@ -493,7 +493,7 @@ def _check_trunk_frame(model: pin.Model, hips: list[int]) -> None:
     placement = model.frames[trunk].placement
     if not np.array_equal(placement.rotation, np.eye(3)):
         root = model.frames[paths[0][-1]].name
-        rpy = np.round(pin.rpy.matrixToRpy(placement.rotation), 4) + 0.0  # no negative zeros
+        rpy = np.array2string(pin.rpy.matrixToRpy(placement.rotation) + 0.0, precision=4)  # a 1e-6 rad turn is not 0
         raise InputError(f"the legs hang from link '{printable(model.frames[trunk].name)}', which the URDF's root link "
                          f"'{printable(root)}' holds rotated (rpy {rpy} through fixed joints); expected the trunk as the "
                          "root link, or welded to it without rotation (x forward, y left, z up)")

@@ -243,8 +243,11 @@ def test_trunk_welded_to_a_world_root_with_an_offset(tmp_path):
                  what="M")
 
 
-@pytest.mark.parametrize("rpy", ["0 0 3.141592653589793", "3.141592653589793 0 0", "0 0 1.5707963267948966"])
-def test_trunk_welded_rotated_to_a_world_root_is_refused(rpy, tmp_path):
+@pytest.mark.parametrize(("rpy", "said"), [("0 0 3.141592653589793", "[0.     0.     3.1416]"),
+                                           ("3.141592653589793 0 0", "[3.1416 0.     0.    ]"),
+                                           ("0 0 1.5707963267948966", "[0.     0.     1.5708]"),
+                                           ("0 0 1e-6", "[0.e+00 0.e+00 1.e-06]")])
+def test_trunk_welded_rotated_to_a_world_root_is_refused(rpy, said, tmp_path):
     """The trunk welded turned by a yaw of 180 deg (or upside down, or 90 deg) to a 'world' root link:
     the model's frame b is the root's, so legs labelled in it were the wrong legs, silently (FL was the
     trunk's back-right leg). Now one line, exit 2, naming the links."""
@@ -254,6 +257,7 @@ def test_trunk_welded_rotated_to_a_world_root_is_refused(rpy, tmp_path):
         assert result.exit_code == 2, result.output
         assert re.search(r"the legs hang from link 'trunk', which the URDF's root link 'world' holds rotated",
                          result.stderr), result.stderr
+        assert f"(rpy {said} through fixed joints)" in result.stderr, result.stderr  # 1e-6 rad was printed as 0
         assert result.stderr.count("\n") == 1, "expected one line"
 
 
