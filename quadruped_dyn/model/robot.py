@@ -286,14 +286,16 @@ class _Stderr:
 
 def _parse_urdf(path: Path, data: bytes) -> pin.Model:
     """Pinocchio's free-flyer model of the URDF whose bytes are ``data``, validated first. Pinocchio parses
-    the XML the validation read (entities expanded, any encoding as Unicode), without the geometry (the
-    dynamics never read it). Its parser (urdfdom) drops an element it cannot read, e.g. a whole
+    the XML the validation read (entities expanded, any encoding as Unicode), without the geometry and
+    materials (the dynamics never read them). Its parser (urdfdom) drops an element it cannot read, e.g. a whole
     ``<inertial>`` for ``<mass value="2.0 ">``, says so on stderr and returns the model anyway: that is an
     InputError too, not a model without the mass."""
     for message in validate_urdf(path, data):
         warnings.warn(f"{printable(path.name)}: {message}", UrdfWarning, stacklevel=2)
     root = ET.fromstring(data)  # well-formed: validate_urdf parsed it
     strip_geometry(root)
+    for material in root.findall("material"):  # the visuals' colours: urdfdom's complaints about one are harmless
+        root.remove(material)
     capture = _Stderr()
     try:
         with capture:

@@ -392,3 +392,14 @@ def test_links_that_are_not_a_tree_are_named(case, edit, expected, tmp_path):
     assert result.exit_code == 2, (case, result.output)
     assert re.search(expected, result.stderr), result.stderr
     assert result.stderr.count("\n") == 1, "expected one line"
+
+
+def test_a_colour_pinocchio_cannot_read_is_harmless(tmp_path):
+    """A top-level <material name="grey"/> without a colour: urdfdom says "Material [grey] color has no
+    rgba" and parses on. Only what the dynamics read is refused when the parser skips it: the robot
+    loads, and M equals the paper robot's."""
+    path = _variant(tmp_path, lambda r: r.insert(0, ET.Element("material", name="grey")))
+    robot = load_robot(str(path))
+    s = random_state(robot.lower, robot.upper, np.random.default_rng(0))
+    assert_close(np.asarray(full_dynamics(robot).M_full(s.q)),
+                 _pinocchio_mass_matrix(paper_robot.URDF_PATH, robot.joint_names, s.q), what="M")
