@@ -286,7 +286,7 @@ class _Stderr:
 
 def _parse_urdf(path: Path, data: bytes) -> pin.Model:
     """Pinocchio's free-flyer model of the URDF whose bytes are ``data``, validated first. Pinocchio parses
-    the XML the validation read (entities expanded, any encoding as Unicode), without the geometry and
+    the XML the validation read (any encoding, as Unicode), without the geometry and
     materials (the dynamics never read them). Its parser (urdfdom) drops an element it cannot read, e.g. a whole
     ``<inertial>`` for ``<mass value="2.0 ">``, says so on stderr and returns the model anyway: that is an
     InputError too, not a model without the mass."""

@@ -5,7 +5,8 @@ NaN or 1e300 masses, lower > upper limits, inertias no body can have) and ignore
 ``validate_urdf`` reads the XML itself and rejects, with an ``InputError`` naming the element
 and the value:
 
-- XML that is not a URDF ``<robot>``; joints that do not make a tree (a link the child of two
+- XML that is not a URDF ``<robot>``, or that declares entities (URDF parsers do not expand them);
+  joints that do not make a tree (a link the child of two
   joints, a loop), or a tree deeper than ``MAX_URDF_DEPTH`` (Pinocchio's parser recurses per level
   and overflows the stack);
 - numbers that are not numbers, not finite, or absurd (beyond ``MAX_LENGTH_M``, ``MAX_MASS_KG``,
@@ -27,6 +28,7 @@ from __future__ import annotations
 import math
 import xml.etree.ElementTree as ET
 from pathlib import Path
+from xml.parsers import expat
 
 import numpy as np
 
@@ -197,6 +199,15 @@ def tree_depth(joints: list[ET.Element]) -> int:
     return max(depth.values(), default=0)
 
 
+def declared_entities(data: bytes) -> list[str]:
+    """The names of the entities a well-formed XML document declares in its DTD (``<!ENTITY m "2.0">``)."""
+    names: list[str] = []
+    parser = expat.ParserCreate()
+    parser.EntityDeclHandler = lambda name, *rest: names.append(name)
+    parser.Parse(data, True)
+    return names
+
+
 def validate_urdf(path: Path, data: bytes | None = None) -> list[str]:
     """Validate the URDF at ``path`` (whose bytes are ``data`` when given: what will be parsed);
     returns warnings (one line each), raises InputError."""
@@ -208,6 +219,11 @@ def validate_urdf(path: Path, data: bytes | None = None) -> list[str]:
         raise InputError(f"'{path}' is not well-formed XML ({e}); expected a URDF file") from e
     if root.tag != "robot":
         raise InputError(f"'{path}' has root element <{root.tag}>; expected a URDF <robot>")
+    entities = declared_entities(data)
+    if entities:  # Python's parser expands them; Pinocchio's, MuJoCo's and iDynTree's read the file's text as written
+        raise InputError(f"'{printable(Path(path).name)}' declares the XML entity '{printable(entities[0])}'; expected a URDF "
+                         "without <!ENTITY> declarations (URDF parsers do not expand them: each library would read "
+                         "another robot)")
     joints = root.findall("joint")
     depth = tree_depth(joints)
     if depth > MAX_URDF_DEPTH:

@@ -340,21 +340,33 @@ def test_a_mass_pinocchio_cannot_read_is_refused(tmp_path):
 
 
 def test_pinocchio_reads_the_xml_the_validation_read(tmp_path):
-    """The battery's mass through a DTD entity (&battery; = 2.0), in a Latin-1 file with a non-ASCII
-    link name: Pinocchio's parser was given the raw text, did not expand the entity, dropped the
-    <inertial> (the robot loaded 2 kg light, silently) and read 'batterie_\\xe4' as U+FFFD. Now it reads the
-    XML as the validation did: M equals Pinocchio's of the same robot written plainly."""
+    """A Latin-1 file with a non-ASCII link name: Pinocchio's parser was given the bytes decoded as UTF-8
+    and read 'batterie_\xe4' as U+FFFD. Now it reads the XML as the validation did: the name is kept,
+    and M equals Pinocchio's of the same robot written in UTF-8."""
     plain = _variant(tmp_path, _payload("2.0"), name="plain.urdf")
-    text = plain.read_text().replace('value="2.0"', 'value="&battery;"').replace('"battery"', '"batterie_\xe4"')
     latin1 = tmp_path / "latin1.urdf"
-    latin1.write_bytes(('<?xml version="1.0" encoding="iso-8859-1"?>\n<!DOCTYPE robot [<!ENTITY battery "2.0">]>\n'
-                        + text).encode("latin-1"))
+    latin1.write_bytes(('<?xml version="1.0" encoding="iso-8859-1"?>\n'
+                        + plain.read_text().replace('"battery"', '"batterie_\xe4"')).encode("latin-1"))
     robot = load_robot(str(latin1))
-    assert robot.total_mass == pytest.approx(load_robot("paper").total_mass + 2.0, rel=1e-12)
     assert robot.model.existFrame("batterie_\xe4")
+    assert robot.total_mass == pytest.approx(load_robot("paper").total_mass + 2.0, rel=1e-12)
     s = random_state(robot.lower, robot.upper, np.random.default_rng(0))
     assert_close(np.asarray(full_dynamics(robot).M_full(s.q)), _pinocchio_mass_matrix(plain, robot.joint_names, s.q),
                  what="M")
+
+
+def test_an_xml_entity_is_refused(tmp_path):
+    """The battery's mass through a DTD entity (&battery; = 2.0): Python's parser expanded it for the
+    validation, Pinocchio's parser (and MuJoCo's, and the benchmark's C++ Pinocchio, reading the file)
+    did not, dropped the <inertial>, and the robot loaded 2 kg light, silently. Now one line, exit 2."""
+    plain = _variant(tmp_path, _payload("2.0"), name="plain.urdf")
+    path = tmp_path / "entity.urdf"
+    path.write_text('<?xml version="1.0"?>\n<!DOCTYPE robot [<!ENTITY battery "2.0">]>\n'
+                    + plain.read_text().replace('value="2.0"', 'value="&battery;"'))
+    result = CliRunner().invoke(main, ["info", str(path)])
+    assert result.exit_code == 2, result.output
+    assert "'entity.urdf' declares the XML entity 'battery'; expected a URDF without <!ENTITY> declarations" in result.stderr
+    assert result.stderr.count("\n") == 1, "expected one line"
 
 
 @pytest.mark.parametrize(("lower", "upper"), [(3.5, 4.0), (-4.0, -3.5)])
