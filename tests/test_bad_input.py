@@ -47,7 +47,7 @@ SHANK_MASS = f'<mass value="{paper_robot.PARAMS.shank_mass:g}"/>'
         ("two_dof_legs", r"4 joint chains from the trunk with \[2, 2, 2, 2\] joints; expected a quadruped"),
         ("humanoid", r"joint chains from the trunk.*expected a quadruped"),
         ("fixed_base_arm", r"joint chains from the trunk.*expected a quadruped"),
-        ("prismatic", r"leg joint 'FL_HAA' is JointModelP.*expected revolute"),
+        ("prismatic", r"leg joint 'FL_HAA' is prismatic \(JointModelP.*expected revolute"),
         ("zero_mass", r"moved by joint 'FL_KFE' has mass 0 kg.*expected a positive mass"),
         ("non_pd_inertia", r"link 'FL_shank' <inertial> <inertia> is not positive semi-definite.*expected a physical rigid body"),
         ("knee_deleted", r"cannot parse.*Two root links.*expected one tree of links.*four legs of three revolute joints"),

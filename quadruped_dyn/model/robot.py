@@ -469,8 +469,10 @@ def _leg_chains(model: pin.Model, path: Path) -> list[list[int]]:
     for chain in chains:
         for j in chain:
             if _axis(model.joints[j]) is None:
+                kind = model.joints[j].shortname()
+                kind = f"prismatic ({kind})" if kind.startswith("JointModelP") else kind  # the only other URDF type left
                 raise InputError(
-                    f"leg joint '{model.names[j]}' is {model.joints[j].shortname()}; expected revolute joints only"
+                    f"leg joint '{model.names[j]}' is {kind}; expected revolute joints only"
                 )
     return chains
 

@@ -415,3 +415,13 @@ def test_a_colour_pinocchio_cannot_read_is_harmless(tmp_path):
     s = random_state(robot.lower, robot.upper, np.random.default_rng(0))
     assert_close(np.asarray(full_dynamics(robot).M_full(s.q)),
                  _pinocchio_mass_matrix(paper_robot.URDF_PATH, robot.joint_names, s.q), what="M")
+
+
+def test_a_prismatic_leg_joint_is_named_as_the_urdf_names_it(tmp_path):
+    """FL_KFE of type prismatic was "leg joint 'FL_KFE' is JointModelPZ" (Pinocchio's class, not the URDF's type)."""
+    path = _variant(tmp_path, lambda r: _joint(r, "FL_KFE").set("type", "prismatic"))
+    result = CliRunner().invoke(main, ["info", str(path)])
+    assert result.exit_code == 2, result.output
+    assert re.search(r"leg joint 'FL_KFE' is prismatic \(JointModelP\w*\); expected revolute joints only", result.stderr), \
+        result.stderr
+    assert result.stderr.count("\n") == 1, "expected one line"
