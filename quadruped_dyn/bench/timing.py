@@ -102,15 +102,14 @@ class BenchReport:
         return asdict(self)
 
     def table(self) -> str:
-        lines = [f"{'function':<22}{'generated ns':>13}{'Pinocchio':>36}{'ratio':>8}{'target':>8}"
-                 f"{'py gen us':>11}{'py pin us':>11}"]
+        rows = [["function", "generated ns", "Pinocchio", "ratio", "target", "py gen us", "py pin us"]]
         for e in self.entries:
-            pin_txt = f"{e.pinocchio} {e.pinocchio_ns:.0f} ns" if e.pinocchio else ""
-            ratio = f"{e.ratio:.2f}" if e.ratio is not None else ""
-            target = f"<={e.target:.2f}" if e.target is not None else ""
-            py = f"{e.python_generated_us:.1f}" if e.python_generated_us is not None else ""
-            pp = f"{e.python_pinocchio_us:.1f}" if e.python_pinocchio_us is not None else ""
-            lines.append(f"{e.name:<22}{e.generated_ns:>13.1f}{pin_txt:>36}{ratio:>8}{target:>8}{py:>11}{pp:>11}")
+            rows.append([e.name, f"{e.generated_ns:.1f}", f"{e.pinocchio} {e.pinocchio_ns:.0f} ns" if e.pinocchio else "",
+                         f"{e.ratio:.2f}" if e.ratio is not None else "",
+                         f"<={e.target:.2f}" if e.target is not None else "",
+                         f"{e.python_generated_us:.1f}" if e.python_generated_us is not None else "",
+                         f"{e.python_pinocchio_us:.1f}" if e.python_pinocchio_us is not None else ""])
+        lines = aligned(rows)
         lines.append(
             f"{self.robot}: C source {self.code_bytes / 1e3:.0f} kB, library {self.library_bytes / 1e3:.0f} kB, "
             f"max work memory {self.work_bytes} B, "
@@ -119,17 +118,26 @@ class BenchReport:
             f"(Pinocchio {self.pinocchio_version}; {' '.join(self.c_flags)})"
         )
         if self.peers:
-            lines.append(f"{'peer function':<22}{'peer ns':>9}{'generated':>22}{'ratio':>7}{'target':>8}"
-                         f"{'Pinocchio native':>34}{'peer/native':>12}{'peer err':>9}")
+            peer_rows = [["peer function", "peer ns", "generated", "ratio", "target", "Pinocchio native", "peer/native",
+                          "peer err"]]
             for p in self.peers:
-                ours = f"{p.name} {p.generated_ns:.0f} ns" if p.name and p.generated_ns is not None else ""
-                ratio = f"{p.ratio:.2f}" if p.ratio is not None else ""
-                target = f"<={p.target:.2f}" if p.target is not None else ""
-                native = f"{p.pinocchio} {p.pinocchio_ns:.0f} ns"
-                lines.append(f"{p.peer_function:<22}{p.peer_ns:>9.0f}{ours:>22}{ratio:>7}{target:>8}"
-                             f"{native:>34}{p.peer_vs_pinocchio:>12.2f}{p.checked_rel_error:>9.0e}")
+                peer_rows.append([p.peer_function, f"{p.peer_ns:.0f}",
+                                  f"{p.name} {p.generated_ns:.0f} ns" if p.name and p.generated_ns is not None else "",
+                                  f"{p.ratio:.2f}" if p.ratio is not None else "",
+                                  f"<={p.target:.2f}" if p.target is not None else "",
+                                  f"{p.pinocchio} {p.pinocchio_ns:.0f} ns", f"{p.peer_vs_pinocchio:.2f}",
+                                  f"{p.checked_rel_error:.0e}"])
+            lines += aligned(peer_rows)
             lines.append(f"peer: {self.peers[0].peer}, same flags as the generated C, timed in the same rounds")
         return "\n".join(lines)
+
+
+def aligned(rows: list[list[str]]) -> list[str]:
+    """Rows of cells as text lines: the first column left-aligned, the others right-aligned, each column as wide
+    as its widest cell plus two spaces (so a long Pinocchio name never runs into the next column)."""
+    widths = [max(len(row[i]) for row in rows) for i in range(len(rows[0]))]
+    return [row[0].ljust(widths[0]) + "".join(cell.rjust(w + 2) for cell, w in zip(row[1:], widths[1:]))
+            for row in rows]
 
 
 def arithmetic_operations(f: ca.Function) -> int:
