@@ -5,6 +5,10 @@ All are relative to the norm of the reference quantity unless the name says othe
 
 import math
 
+#: The machine epsilons of float64 and float32, C's DBL_EPSILON and FLT_EPSILON.
+DBL_EPSILON = 2.0**-52
+FLT_EPSILON = 2.0**-23
+
 #: Two double-precision evaluations of the same rigid-body quantity by different
 #: algorithms (CasADi recursion vs Pinocchio): round-off grows with the number of
 #: operations (~1e3) times machine epsilon (2.2e-16), so 1e-10 leaves a wide margin
@@ -39,7 +43,7 @@ REGULARITY_MIN = RANK_RTOL**2
 #: cos(pitch) < TRUNK_PITCH_COS_MIN, where that term would exceed REL_TOL_TERMS: within 2.0 deg of +-90 deg. (The
 #: layout's term, ~20 eps / regularity as in float, is not bounded in double: up to 1e-8 at 2 deg, FR+BL.)
 PITCH_ERR_PER_COS3 = 20.0
-TRUNK_PITCH_COS_MIN = (PITCH_ERR_PER_COS3 * 2.0**-52 / REL_TOL_TERMS) ** (1 / 3)
+TRUNK_PITCH_COS_MIN = (PITCH_ERR_PER_COS3 * DBL_EPSILON / REL_TOL_TERMS) ** (1 / 3)
 TRUNK_PITCH_DEG_MARGIN = math.degrees(math.asin(TRUNK_PITCH_COS_MIN))  # 90 deg - arccos(TRUNK_PITCH_COS_MIN)
 
 #: Two backward-stable solves of the same linear system agree to about cond(A) * eps in
@@ -134,8 +138,6 @@ FLOAT_MAX_BOUND = FLOAT_USABLE_REL_ERR / 4
 #: robot, 8.1 solo12, 2.6 go2, 3.3 anymal_c, 5.7 hyq, 5.8 b1; 20 covers them all (with FLOAT_MAX_BOUND:
 #: QD_DEGENERATE below regularity 9.5e-4, FLOAT_REGULARITY_MIN).
 FLOAT_ERR_PER_REGULARITY = 20.0
-#: float32's machine epsilon, C's FLT_EPSILON.
-FLT_EPSILON = 2.0**-23
 #: The regularity below which the float build of a two-feet stance set returns QD_DEGENERATE.
 FLOAT_REGULARITY_MIN = FLOAT_ERR_PER_REGULARITY * FLT_EPSILON / FLOAT_MAX_BOUND
 
@@ -189,4 +191,4 @@ POSE_FIT_TOL = 1e-13
 #: graph with the seeds' zeros and ones substituted, which CasADi simplifies (x * 1, x + 0 * y), so a sum can round
 #: once differently (measured 2026-12-04, paper robot: 1.5e-16 of an output's scale with three feet, 0 with four).
 #: 16 machine epsilons of the output's largest entry.
-LIFT_COLUMNS_REL_TOL = 16 * 2.220446049250313e-16
+LIFT_COLUMNS_REL_TOL = 16 * DBL_EPSILON
