@@ -33,7 +33,7 @@ from quadruped_dyn.bench import cppadcg
 from quadruped_dyn.bench.harnesses import HARNESSES
 from quadruped_dyn.bench.limits import check_counts
 from quadruped_dyn.bench.placement import TimedProgram, median_over_rounds
-from quadruped_dyn.bench.timing import arithmetic_operations
+from quadruped_dyn.bench.timing import aligned, arithmetic_operations
 from quadruped_dyn.codegen.casadi_source import silence_unused_parameters
 from quadruped_dyn.codegen.emit import CODEGEN_FUNCTIONS, PREFIX
 from quadruped_dyn.codegen.library import C_FLAGS, compiler_version, run_tool
@@ -177,9 +177,8 @@ def run_peers(robot: Robot, native: bool = False, calls: int = 20000, reps: int 
 
 
 def peers_table(entries: list[PeerEntry], native: bool) -> str:
-    lines = [f"peers ({'-march=native' if native else 'same flags as bench'}); ratio = toolkit / peer",
-             f"{'robot':<12}{'toolkit':<10}{'ns':>8}{'ops':>7}  {'peer':<10}{'ns':>8}{'ops':>7}{'ratio':>8}{'peer err':>10}"]
-    for e in entries:
-        lines.append(f"{e.robot:<12}{e.ours:<10}{e.ours_ns:>8.0f}{e.ours_operations:>7}  {e.peer:<10}{e.peer_ns:>8.0f}"
-                     f"{e.peer_operations:>7}{e.ratio:>8.2f}{e.checked_rel_error:>10.1e}")
-    return "\n".join(lines)
+    rows = [["robot", "toolkit", "ns", "ops", "peer", "ns", "ops", "ratio", "peer err"]]
+    rows += [[e.robot, e.ours, f"{e.ours_ns:.0f}", str(e.ours_operations), e.peer, f"{e.peer_ns:.0f}",
+              str(e.peer_operations), f"{e.ratio:.2f}", f"{e.checked_rel_error:.1e}"] for e in entries]
+    return "\n".join([f"peers ({'-march=native' if native else 'same flags as bench'}); ratio = toolkit / peer",
+                      *aligned(rows)])

@@ -19,3 +19,12 @@ def test_long_pinocchio_names_do_not_run_into_the_next_column():
     for row, ratio in zip(rows, ("0.18", "0.43")):
         assert row[end - len(ratio):end] == ratio, row
         assert row[end - len(ratio) - 2:end - len(ratio)] == "  ", row
+
+
+def test_peers_table_columns_stay_apart():
+    """adam's table (``peers_table``) sizes its columns the same way: a robot named after a long URDF file stays apart."""
+    from quadruped_dyn.bench.peers import PeerEntry, peers_table
+
+    entry = PeerEntry("a_robot_named_after_its_urdf_file", "M_full", "adam_M", 200.0, 3000.0, 0.07, 1200, 9000, 1e-15)
+    row = peers_table([entry], native=False).splitlines()[2]
+    assert row.startswith("a_robot_named_after_its_urdf_file  "), row
