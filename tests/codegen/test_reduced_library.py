@@ -106,10 +106,10 @@ def test_trunk_pitched_near_90_deg_is_degenerate_for_two_feet(paper):
          "tau_ext": rng.standard_normal(13)}
     model = reduced_model(paper, stance.name)
     code = re.escape(RETURN_CODES[QD_DEGENERATE])
+    compiled = {kind: CompiledFunction(library, reduced_symbol(kind, stance)) for kind in REDUCED_NAMES}
     for margin in (1e-13, 1e-5, np.radians(TRUNK_PITCH_DEG_MARGIN) - 1e-3):
         quat = pin.Quaternion(pin.rpy.rpyToMatrix(0.1, np.pi / 2 - margin, 0.2)).coeffs()
-        for kind in REDUCED_NAMES:
-            f = CompiledFunction(library, reduced_symbol(kind, stance))
+        for kind, f in compiled.items():
             with pytest.raises(NumericalError, match=code):
                 f(*[{**x, "quat": quat}[k] for k in f.names_in])
                 pytest.fail(f"{kind} returned {margin:.0e} rad from a 90 deg pitch")
@@ -121,7 +121,7 @@ def test_trunk_pitched_near_90_deg_is_degenerate_for_two_feet(paper):
                 "id_r": np.ravel(model.id_r(q_r, x["qd_r"], x["qdd_r"], quat)),
                 "fd_r": model.forward_dynamics(q_r, x["qd_r"], x["tau_ext"], quat)[0]}
     for kind, value in expected.items():
-        f = CompiledFunction(library, reduced_symbol(kind, stance))
+        f = compiled[kind]
         assert_close(f(*[{**x, "quat": quat}[k] for k in f.names_in])[0], value, rel=REL_TOL_TERMS,
                      what=f"{kind} 1 deg outside the pitch margin")
 
