@@ -12,6 +12,8 @@ from pathlib import Path
 
 import casadi as ca
 
+from quadruped_dyn.codegen.reciprocals import shared_reciprocals
+
 PREFIX = "qd_"
 
 
@@ -44,13 +46,15 @@ SINCOS = "qd_sincos.c"
 
 
 def casadi_c(file_stem: str, functions: list[ca.Function], precision: str) -> tuple[str, str]:
-    """(C source, CasADi's header) of ``functions`` generated into ``file_stem``.c."""
+    """(C source, CasADi's header) of ``functions`` generated into ``file_stem``.c, each shared denominator's
+    quotients as products with its reciprocal (``reciprocals``)."""
     cg = ca.CodeGenerator(f"{file_stem}.c", {"with_header": True, "casadi_real": precision})
     for f in functions:
         cg.add(f)
     with tempfile.TemporaryDirectory() as tmp:
         cg.generate(tmp + os.sep)
-        c_source = static_helpers(silence_unused_parameters((Path(tmp) / f"{file_stem}.c").read_text()))
+        c_source = (Path(tmp) / f"{file_stem}.c").read_text()
+        c_source = shared_reciprocals(static_helpers(silence_unused_parameters(c_source)))
         return c_source, (Path(tmp) / f"{file_stem}.h").read_text()
 
 

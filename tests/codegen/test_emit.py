@@ -38,8 +38,9 @@ from quadruped_dyn.tolerances import FLOAT_REL_TOL, REL_TOL_TERMS
 
 CASADI_GEN = Path(__file__).resolve().parents[2] / "casadi_gen"
 
-#: The compiled code and the in-memory CasADi graph perform the same operations; only the
-#: compiler's reassociation (-O3 without -ffast-math keeps IEEE order) could differ.
+#: The compiled code and the in-memory CasADi graph perform the same operations but for a shared denominator's
+#: quotients, which the C takes as products with its reciprocal (codegen.reciprocals: ~1 ulp each); -O3 without
+#: -ffast-math keeps IEEE order.
 REL_TOL_GRAPH = 1e-13
 
 
