@@ -419,7 +419,7 @@ def _reduced_helpers_c(robot: Robot, stance: StanceSet, dfd_r: DfdRPieces, preci
             f"#define QD_FLOAT_MAX_BOUND ((casadi_real){FLOAT_MAX_BOUND!r}) /* tolerances.FLOAT_MAX_BOUND */\n"
             f"#define QD_FLOAT_ERR_PER_REGULARITY ((casadi_real){float_err_per_regularity(stance)!r}) "
             "/* tolerances.FLOAT_ERR_PER_REGULARITY; 0: three or four feet */\n"
-            + static_c("qd_reduced_parts", parts, precision) + "\n"
+            + static_c("qd_reduced_parts", parts, precision, all_io=True) + "\n"
             + "#if !defined(__OPTIMIZE_SIZE__) /* M_r's and G_r's factors alone; at -Os the parts (the size budget) */\n"
             + "#define QD_REDUCED_FACTORS 1\n" + static_c("qd_reduced_factors", factors, precision, all_io=True)
             + "#endif\n"
