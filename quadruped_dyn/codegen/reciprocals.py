@@ -24,6 +24,7 @@ _BODY = re.compile(r"(static int \w+\(const casadi_real\*\* arg, casadi_real\*\*
 def _body_with_reciprocals(body: str) -> str:
     lines = body.split("\n")
     written: dict[str, int] = {}  # variable -> the line that last wrote it
+    constants: set[int] = set()  # the lines that write a constant
     uses: dict[tuple[str, int], list[int]] = {}  # (denominator, its writing line) -> the quotient lines
     for k, line in enumerate(lines):
         assign = _ASSIGN.fullmatch(line)
@@ -32,9 +33,10 @@ def _body_with_reciprocals(body: str) -> str:
         quotient = _QUOTIENT.fullmatch(assign.group(2))
         if quotient and quotient.group(2) in written:
             uses.setdefault((quotient.group(2), written[quotient.group(2)]), []).append(k)
+        if _CONSTANT.fullmatch(assign.group(2)):
+            constants.add(k)
         written[assign.group(1)] = k
-    shared = {key: quotients for key, quotients in uses.items()
-              if len(quotients) > 1 or _CONSTANT.fullmatch(_ASSIGN.fullmatch(lines[key[1]]).group(2))}
+    shared = {key: quotients for key, quotients in uses.items() if len(quotients) > 1 or key[1] in constants}
     if not shared:
         return body
     after: dict[int, list[str]] = {}
