@@ -177,11 +177,14 @@ NATIVE_TWIN_FACTOR = 10.0
 #: 1e-16) against the exact IK plan, % of each joint signal's largest |value| (q, qd, qdd). Its
 #: inputs stay double (the IK reference, id_r's table, the initial state, the footholds), and one
 #: ulp of them moves the run by up to 4.9e-7 / 6.8e-7 / 7.9e-6 % (2026-12-02, AMD EPYC: the initial
-#: state one ulp up, or every table value one ulp off); measured 1e-7 / 2e-7 / 3e-6 %. Twice the
-#: largest input sensitivity: the double run at RTOL is at 5e-5 / 9e-5 / 1.5e-3 % (truncation and
-#: its own round-off), so a systematic error of the experiment 50-100x below what double can see
-#: fails the check.
-EXTENDED_WALK_PCT = {"q": 1e-6, "qd": 1.5e-6, "qdd": 2e-5}
+#: state one ulp up, or every table value one ulp off). The table's own noise is larger: the same
+#: code, the table evaluated in another order (the grid's exact plan before or after the run),
+#: gave 2.1e-7-6.5e-7 / 4.5e-7-8.5e-7 / 8.0e-6-1.3e-5 % (2026-12-06, Intel Xeon), and the C with a
+#: shared denominator's quotients as reciprocal products (codegen.reciprocals, ~1 ulp per quotient)
+#: 2.2e-7-8.0e-7 / 1.8e-7-1.3e-6 / 1.8e-6-2.1e-5 %: the limit is 2.5x the largest of those. The
+#: double run at RTOL is at 5e-5 / 8e-5 / 1.2e-3-1.9e-3 % (truncation and its own round-off), so a
+#: systematic error of the experiment 25-40x below what double can see fails the check.
+EXTENDED_WALK_PCT = {"q": 2e-6, "qd": 3e-6, "qdd": 5e-5}
 
 #: The C pose fit (Horn's quaternion, Jacobi eigenvector) against numpy's SVD (Kabsch) on the
 #: same feet, m and rad: both are backward stable, ~100 operations on coordinates of ~0.5 m.
