@@ -223,3 +223,32 @@ def test_check_bounds_the_work_up_front():
     """A billion random states (~years at ~15 states/s) is refused before the models are built."""
     _one_line(CliRunner().invoke(main, ["check", "paper", "--samples", "1000000000"]), 2,
               r"'--samples': 1000000000 is not in the range 1<=x<=100000")
+
+
+def test_paths_in_a_summary_are_echoed_escaped(tmp_path):
+    """Found by a review (2026-12-06): validate, control, optimize, report and check printed their
+    summaries with click.echo, so an --out with a newline split the "wrote" line and an OSC sequence
+    (click strips only CSI ones, only off a terminal) reached the terminal raw."""
+    out = tmp_path / f"{ESCAPE}\nline"
+    result = CliRunner().invoke(main, ["validate", "--horizon", "0.05", "--no-physics", "--out", str(out)])
+    assert result.exit_code == 0, result.output
+    wrote = [line for line in result.stdout.splitlines() if "wrote" in line]
+    assert len(wrote) == 1 and "evil\\x1b]0;owned\\x07" in wrote[0] and "\\nline/paper_trot_validation.json" in wrote[0]
+    assert "\x1b" not in result.stdout and "\x07" not in result.stdout
+
+
+def test_every_command_prints_through_echo():
+    """Command output goes through ``cli.app.echo`` (control characters escaped per line); a bare
+    ``click.echo`` in a command module is allowed on stderr only (``err=True``)."""
+    import ast
+
+    from quadruped_dyn import cli
+
+    bare = []
+    for source in Path(cli.__file__).parent.glob("*_command*.py"):
+        for node in ast.walk(ast.parse(source.read_text())):
+            if (isinstance(node, ast.Call) and isinstance(node.func, ast.Attribute) and node.func.attr == "echo"
+                    and isinstance(node.func.value, ast.Name) and node.func.value.id == "click"
+                    and not any(k.arg == "err" for k in node.keywords)):
+                bare.append(f"{source.name}:{node.lineno}")
+    assert not bare, bare

@@ -79,9 +79,11 @@ def _flush_stdout_quietly() -> None:
 
 
 def echo(text: object) -> None:
-    """One line of a command's output, control characters escaped (names and paths from input
-    may carry terminal escape sequences)."""
-    click.echo(printable(text))
+    """A command's output on stdout, control characters escaped within each of its lines (names
+    from input may carry terminal escape sequences; click strips only CSI ones, and only off a
+    terminal). Every command prints through here; a path in a multi-line text is ``printable``
+    already, or its newlines would break the lines."""
+    click.echo("\n".join(printable(line) for line in str(text).split("\n")))
 
 
 def require_tools(*tools: str) -> None:

@@ -7,7 +7,7 @@ import json
 import click
 
 from quadruped_dyn.bench.limits import MAX_CALLS, MAX_REPS
-from quadruped_dyn.cli.app import require_tools
+from quadruped_dyn.cli.app import echo, require_tools
 from quadruped_dyn.files.paths import writable_dir
 from quadruped_dyn.model.robot import load_robot
 
@@ -43,6 +43,6 @@ def bench(robots: tuple[str, ...], calls: int, reps: int, as_json: bool, peers: 
     adam = [e for r in loaded for e in run_peers(r, native, calls, reps)] if "adam" in peer_names else []
     if as_json:
         out: object = [r.as_dict() for r in reports]
-        click.echo(json.dumps({"bench": out, "peers": [asdict(e) for e in adam]} if adam else out, indent=2))
+        echo(json.dumps({"bench": out, "peers": [asdict(e) for e in adam]} if adam else out, indent=2))
     else:
-        click.echo("\n\n".join([r.table() for r in reports] + ([peers_table(adam, native)] if adam else [])))
+        echo("\n\n".join([r.table() for r in reports] + ([peers_table(adam, native)] if adam else [])))

@@ -8,7 +8,7 @@ import sys
 import click
 
 from quadruped_dyn.checks.terms import MAX_SAMPLES
-from quadruped_dyn.cli.app import EXIT_CHECK_FAILED, progress
+from quadruped_dyn.cli.app import EXIT_CHECK_FAILED, echo, progress
 from quadruped_dyn.model.robot import load_robot
 
 
@@ -43,5 +43,5 @@ def check(robot: str, samples: int, seed: int, as_json: bool, against: str | Non
         cross = run_cross_library(r, libraries, samples, seed)
         passed = passed and cross.passed
         data, text = {**data, **cross.as_dict(), "passed": passed}, f"{text}\n\n{cross.table()}"
-    click.echo(json.dumps(json_safe(data), indent=2, allow_nan=False) if as_json else text)
+    echo(json.dumps(json_safe(data), indent=2, allow_nan=False) if as_json else text)
     sys.exit(0 if passed else EXIT_CHECK_FAILED)

@@ -6,7 +6,8 @@ import json
 
 import click
 
-from quadruped_dyn.cli.app import progress
+from quadruped_dyn.cli.app import echo, progress
+from quadruped_dyn.files.names import printable
 from quadruped_dyn.files.paths import writable_dir
 from quadruped_dyn.model.robot import load_robot
 
@@ -57,16 +58,16 @@ def control(robot: str, gait_name: str, controllers: tuple[str, ...], cycles: in
         run_all(study, progress=tick, keep_qpos=not no_animation)
     data, paths = write_all(out, study, animation=not no_animation)
     if as_json:
-        click.echo(json.dumps(data, indent=2))
+        echo(json.dumps(data, indent=2))
         return
-    click.echo(f"{study.robot.name} {gait_name}, {study.loop.cycles} cycles of {study.plan.gait.period:g} s, "
+    echo(f"{study.robot.name} {gait_name}, {study.loop.cycles} cycles of {study.plan.gait.period:g} s, "
                f"{study.loop.rate_hz:g} Hz control, MuJoCo step {study.plant.options.timestep:g} s")
     width = max(len("controller"), *map(len, data["controllers"]))  # ct-diag+land: 12
-    click.echo(f"{'controller':<{width}} {'cycles up':>9} {'RMS [rad]':>10} {'max [rad]':>10} {'slip [mm]':>9} "
+    echo(f"{'controller':<{width}} {'cycles up':>9} {'RMS [rad]':>10} {'max [rad]':>10} {'slip [mm]':>9} "
                f"{'sat [s]':>8} {'C med [us]':>10} {'tick [us]':>9}")
     for name, r in data["controllers"].items():
         slip = r["foot_slip"]["max_m"]
-        click.echo(f"{name:<{width}} {r['cycles_up']:>9.0f} {r['tracking']['rms_rad']:>10.4f} {r['tracking']['max_rad']:>10.3f} "
+        echo(f"{name:<{width}} {r['cycles_up']:>9.0f} {r['tracking']['rms_rad']:>10.4f} {r['tracking']['max_rad']:>10.3f} "
                    f"{(slip or 0) * 1e3:>9.1f} {r['saturation']['time_s']:>8.3f} {r['compute']['c_calls_median_us']:>10.2f} "
                    f"{r['compute']['tick_python_median_us']:>9.0f}" + (f"  {r['stopped']}" if r["stopped"] else ""))
-    click.echo(f"files: {', '.join(str(p) for p in paths.values() if p.exists())}")
+    echo(f"files: {', '.join(printable(p) for p in paths.values() if p.exists())}")

@@ -9,8 +9,9 @@ import sys
 
 import click
 
-from quadruped_dyn.cli.app import EXIT_CHECK_FAILED
+from quadruped_dyn.cli.app import EXIT_CHECK_FAILED, echo
 from quadruped_dyn.errors import InputError
+from quadruped_dyn.files.names import printable
 from quadruped_dyn.files.paths import writable_dir
 from quadruped_dyn.model.robot import load_robot
 
@@ -70,25 +71,25 @@ def optimize(robot: str, gait_name: str, nodes: int | None, mu: float | None, sp
     data = report(sol, replay)
     write_outputs(paths, sol, replay, data)
     if as_json:
-        click.echo(json.dumps(json.loads(paths["json"].read_text()), indent=2))
+        echo(json.dumps(json.loads(paths["json"].read_text()), indent=2))
         return
     e = data["effort"]
-    click.echo(f"{gait.name}, {r.name}: {sol.status} in {sol.iterations} iterations, {sol.solve_seconds:.1f} s "
+    echo(f"{gait.name}, {r.name}: {sol.status} in {sol.iterations} iterations, {sol.solve_seconds:.1f} s "
                f"({sol.solve_cpu_seconds:.1f} s CPU; + {sol.build_seconds:.1f} s building), "
                f"constraint violation {sol.constraint_violation:.1e}")
-    click.echo(f"  effort {e['optimised_Nm2s']:.3g} N^2 m^2 s vs the plan's {e['plan_Nm2s']:.3g} "
+    echo(f"  effort {e['optimised_Nm2s']:.3g} N^2 m^2 s vs the plan's {e['plan_Nm2s']:.3g} "
                f"({100 * (e['ratio'] - 1):+.1f} %); largest roll moment needed "
                f"{e['max_roll_moment_optimised_Nm']:.1e} N m (plan {e['max_roll_moment_plan_Nm']:.2f})")
     if "feasibility" in data:
         f = data["feasibility"]
         opt, pl = f["optimised"], f["plan"]
-        click.echo(f"  smallest f_z {opt['min_fz_N']:.2f} N (plan {pl['min_fz_N']:.2f}), CoM margin "
+        echo(f"  smallest f_z {opt['min_fz_N']:.2f} N (plan {pl['min_fz_N']:.2f}), CoM margin "
                    f"{100 * opt['min_com_margin_m']:.2f} cm (plan {100 * pl['min_com_margin_m']:.2f})")
     if replay is not None:
         s = replay.summary()
         t, rate, stop = s["time_to_1pct_s"], s["growth_rate_per_s"], s["stopped_at_s"]
-        click.echo(f"  rigid-contact replay, open loop over {s['horizon_s']:g} s: "
+        echo(f"  rigid-contact replay, open loop over {s['horizon_s']:g} s: "
                    + (f"1 % off at {t:.3g} s" if t is not None else "never 1 % off")
                    + (f", growth rate {rate:.1f} /s" if rate is not None else ", no growth rate (no departure to fit)")
                    + (f", stopped (fell or singular) at {stop:.3g} s" if stop is not None else ", ran to the end"))
-    click.echo("  wrote " + ", ".join(str(p) for p in paths.values()))
+    echo("  wrote " + ", ".join(printable(p) for p in paths.values()))

@@ -6,7 +6,7 @@ import sys
 
 import click
 
-from quadruped_dyn.cli.app import EXIT_CHECK_FAILED
+from quadruped_dyn.cli.app import EXIT_CHECK_FAILED, echo
 from quadruped_dyn.report.gather import CHECK_SAMPLES
 
 
@@ -26,5 +26,5 @@ def report(robot: str, out_dir: str, fast: bool, samples: int, footprint: bool) 
 
     prepare(robot, out_dir, samples)  # bad input is reported before any work
     result = build_report(robot, out_dir, fast, samples, footprint=footprint)
-    click.echo(result.summary())
+    echo(result.summary())
     sys.exit(0 if result.passed else EXIT_CHECK_FAILED)

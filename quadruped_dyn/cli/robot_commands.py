@@ -16,7 +16,7 @@ from quadruped_dyn.model.robot_summary import robot_info
 def robots() -> None:
     """List the built-in robot names."""
     for name in ROBOT_NAMES:
-        click.echo(name)
+        echo(name)
 
 
 @click.command()
@@ -28,7 +28,7 @@ def info(robot: str, as_json: bool, foot_frames: str | None) -> None:
     """Legs, joints, link lengths, masses and standing foot positions of ROBOT (name or URDF path)."""
     data = robot_info(load_robot(robot, foot_frames=foot_frames))
     if as_json:
-        click.echo(json.dumps(data, indent=2))
+        echo(json.dumps(data, indent=2))
         return
     echo(f"{data['name']}  ({data['urdf']})")
     echo(f"total mass {data['total_mass_kg']:.3f} kg, trunk {data['trunk_mass_kg']:.3f} kg")
@@ -50,7 +50,7 @@ def make_urdf(check: bool) -> None:
     if check:
         stale = stale_urdf_copies()
         for path in URDF_COPIES:
-            click.echo(f"{path}: {'DIFFERS from the generator' if path in stale else 'up to date'}")
+            echo(f"{path}: {'DIFFERS from the generator' if path in stale else 'up to date'}")
         sys.exit(EXIT_CHECK_FAILED if stale else 0)
     for path in write_urdf():
-        click.echo(f"wrote {path}")
+        echo(f"wrote {path}")

@@ -8,6 +8,7 @@ from typing import TYPE_CHECKING
 
 import click
 
+from quadruped_dyn.cli.app import echo
 from quadruped_dyn.errors import InputError, NumericalError
 from quadruped_dyn.experiment.simulate import MAX_SAMPLES
 from quadruped_dyn.files.paths import writable_dir
@@ -89,9 +90,9 @@ def validate(robot: str, gait_name: str, horizon: float | None, integrator: str,
     else:
         paths["physics_plot"].unlink(missing_ok=True)
     if as_json:
-        click.echo(json.dumps(json.loads(paths["json"].read_text()), indent=2))
+        echo(json.dumps(json.loads(paths["json"].read_text()), indent=2))
         return
-    click.echo(summary_text(data, joint_names(r), [p for p in paths.values() if p.exists()]))
+    echo(summary_text(data, joint_names(r), [p for p in paths.values() if p.exists()]))
 
 
 def _check_times(gait: Gait, horizon: float, dt: float, integrator: str) -> None:

@@ -10,6 +10,7 @@ from typing import Any
 import numpy as np
 
 from quadruped_dyn.experiment.paper_experiment import DEPARTURE_PCT, SIGNALS, Experiment, departure, joint_names
+from quadruped_dyn.files.names import printable
 from quadruped_dyn.files.safe_write import output_path, save_figure, text_writer
 from quadruped_dyn.model.leg import BR_HFE
 
@@ -136,7 +137,7 @@ def summary_text(data: dict[str, Any], names: list[str], written: list[Path]) ->
             ik = pc["rigid_vs_ik"]
             lines.append(f"  physics check, {name}: rigid-contact vs reduced max {rr['max_joint_angle_diff_rad']:.1e} rad, "
                          f"1 % {_at(rr['time_to_1pct_s'], 'never')}; rigid vs IK max {ik['max_joint_angle_diff_rad']:.1e} rad")
-    lines.append("  wrote " + ", ".join(str(p) for p in written))
+    lines.append("  wrote " + ", ".join(printable(p) for p in written))  # one line, whatever --out holds
     return "\n".join(lines)
 
 

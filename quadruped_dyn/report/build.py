@@ -23,6 +23,7 @@ from pathlib import Path
 from typing import Any
 
 from quadruped_dyn.checks.terms import check_samples
+from quadruped_dyn.files.names import printable
 from quadruped_dyn.files.paths import writable_dir
 from quadruped_dyn.files.safe_write import output_dir, output_path, write_text
 from quadruped_dyn.model.robot import Robot, robot_name, robot_path
@@ -95,7 +96,7 @@ class ReportResult:
         width = max(len(s.title) for s in self.sections)
         lines = [f"{'section':<{width}}  {'result':<13}  headline"]
         lines += [f"{s.title:<{width}}  {s.verdict:<13}  {s.headline}" for s in self.sections]
-        lines.append(f"wrote {self.path}")
+        lines.append(f"wrote {printable(self.path)}")  # one line, whatever --out holds
         return "\n".join(lines)
 
 
