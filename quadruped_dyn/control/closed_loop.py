@@ -46,7 +46,7 @@ class ClosedLoop:
 
 
 def parse_gait(name: str) -> str:
-    if name not in GAITS:
+    if not isinstance(name, str) or name not in GAITS:
         raise InputError(f"unknown gait '{name}'; expected one of {', '.join(GAITS)}")
     return name
 
@@ -56,7 +56,7 @@ def prepare(robot: Robot, gait: str, controllers: list[str] | tuple[str, ...] = 
     """Validate everything and build the plant (InputError before any simulation); defaults:
     ``Gains()``, ``LoopOptions()``, ``PlantOptions()``."""
     gains, loop, plant_options = gains or Gains(), loop or LoopOptions(), plant_options or PlantOptions()
-    names = parse_controllers(list(controllers))
+    names = parse_controllers(controllers)
     plan = gait_plan(robot, GAITS[parse_gait(gait)])
     gains.validate()
     plant_options.validate()

@@ -72,7 +72,7 @@ from quadruped_dyn.codegen.emit import reduced_symbol
 from quadruped_dyn.codegen.library import CompiledFunction, compiled_library
 from quadruped_dyn.control.plant import Command, Measurement
 from quadruped_dyn.control.reference import Reference
-from quadruped_dyn.errors import InputError
+from quadruped_dyn.errors import InputError, real_number
 from quadruped_dyn.experiment.plan_ik import ReferenceSample
 from quadruped_dyn.model.robot import Robot
 from quadruped_dyn.model.stance import StanceSet
@@ -126,7 +126,8 @@ class Gains:
         return w
 
     def validate(self) -> None:
-        for name, value in vars(self).items():
+        for name, given in vars(self).items():
+            value = real_number(f"gain {name}", given)
             if not (math.isfinite(value) and 0 <= value <= MAX_GAIN):
                 raise InputError(f"gain {name} = {value}; expected a finite number from 0 to {MAX_GAIN:g}")
 
@@ -393,7 +394,10 @@ CONTROLLERS = {c.name: c for c in (Pd, FfPd, ComputedTorque, DiagonalCt, Diagona
 
 def parse_controllers(names: tuple[str, ...] | list[str]) -> list[str]:
     """Validated controller names (all of them for an empty selection), in CONTROLLERS' order."""
-    unknown = [n for n in names if n not in CONTROLLERS]
+    if not isinstance(names, tuple | list):  # a str would be read letter by letter
+        raise InputError(f"controllers {names!r} is a {type(names).__name__}; expected a list of names from "
+                         f"{', '.join(CONTROLLERS)}")
+    unknown = [n for n in names if not isinstance(n, str) or n not in CONTROLLERS]
     if unknown:
         raise InputError(f"unknown controller '{unknown[0]}'; expected one of {', '.join(CONTROLLERS)}")
     return [n for n in CONTROLLERS if not names or n in names]

@@ -45,7 +45,7 @@ import mujoco
 import numpy as np
 
 from quadruped_dyn.dynamics.grf import MAX_FRICTION_COEFFICIENT
-from quadruped_dyn.errors import InputError
+from quadruped_dyn.errors import InputError, real_number
 from quadruped_dyn.experiment.gait import Plan
 from quadruped_dyn.model.robot import Robot, actuator_limit
 from quadruped_dyn.model.state import GRAVITY_W
@@ -72,6 +72,8 @@ class PlantOptions:
     foot_radius: float | None = None  # m; None: from the URDF (see the module docstring)
 
     def validate(self) -> None:
+        for name in ("timestep", "mu") + (("foot_radius",) if self.foot_radius is not None else ()):
+            real_number(f"plant {name}", getattr(self, name))
         if not (math.isfinite(self.timestep) and 0 < self.timestep <= 0.01):
             raise InputError(f"plant timestep {self.timestep} s; expected 0 < timestep <= 0.01 s")
         if self.integrator not in INTEGRATORS:

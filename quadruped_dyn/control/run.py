@@ -38,7 +38,7 @@ from quadruped_dyn.codegen.library import CompiledFunction
 from quadruped_dyn.control.controllers import Controller, Gains, GeneratedC, Pd, make_controller
 from quadruped_dyn.control.plant import Plant, PlantOptions
 from quadruped_dyn.control.reference import reference_cycle
-from quadruped_dyn.errors import InputError, NumericalError
+from quadruped_dyn.errors import InputError, NumericalError, real_number, whole_number
 from quadruped_dyn.experiment.gait import Plan
 from quadruped_dyn.experiment.plan_ik import ReferenceSample
 from quadruped_dyn.model.stance import StanceSet
@@ -72,8 +72,12 @@ class LoopOptions:
 
     def validate(self, plant: PlantOptions, period: float) -> int:
         """Plant steps per control tick; InputError for a rate that does not divide the plant's step."""
-        if not isinstance(self.cycles, int) or self.cycles <= 0:
+        if whole_number("--cycles", self.cycles) <= 0:
             raise InputError(f"--cycles {self.cycles}; expected a whole number of gait cycles > 0")
+        real_number("--rate", self.rate_hz)
+        real_number("settle time", self.settle_s)
+        if whole_number("grf_every", self.grf_every) < 1:
+            raise InputError(f"grf_every {self.grf_every}; expected a whole number of control ticks >= 1")
         if not (math.isfinite(self.rate_hz) and self.rate_hz > 0):
             raise InputError(f"--rate {self.rate_hz} Hz; expected a positive number of control ticks per second")
         total = self.cycles * period / plant.timestep
@@ -91,8 +95,9 @@ class LoopOptions:
         if not _whole(period * self.rate_hz):
             raise InputError(f"control period {1 / self.rate_hz:g} s does not divide the gait cycle of {period:g} s; "
                              f"{one_step}")
-        if not (math.isfinite(self.settle_s) and self.settle_s >= 0):
-            raise InputError(f"settle time {self.settle_s} s; expected >= 0")
+        if not (math.isfinite(self.settle_s) and 0 <= self.settle_s / plant.timestep <= MAX_PLANT_STEPS):
+            raise InputError(f"settle time {self.settle_s} s at a {plant.timestep:g} s step; expected >= 0 and at most "
+                             f"{MAX_PLANT_STEPS:,} MuJoCo steps ({MAX_PLANT_STEPS * plant.timestep:g} s)")
         return int(round(steps))
 
 

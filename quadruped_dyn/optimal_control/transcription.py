@@ -45,7 +45,7 @@ import casadi as ca
 import numpy as np
 
 from quadruped_dyn.dynamics.grf import MAX_FRICTION_COEFFICIENT
-from quadruped_dyn.errors import InputError
+from quadruped_dyn.errors import InputError, real_number, whole_number
 from quadruped_dyn.experiment.gait import Gait, Plan, gait_plan
 from quadruped_dyn.experiment.plan_ik import reference
 from quadruped_dyn.model.robot import ACTUATOR_LIMITS, Robot, actuator_limit
@@ -105,10 +105,17 @@ class Options:
 
     def check(self, robot: Robot, gait: Gait) -> None:
         """InputError for options no solve can satisfy, before any work."""
-        if (not isinstance(self.nodes_per_phase, int)
-                or not MIN_NODES_PER_PHASE <= self.nodes_per_phase <= MAX_NODES_PER_PHASE):
+        if not MIN_NODES_PER_PHASE <= whole_number("--nodes", self.nodes_per_phase) <= MAX_NODES_PER_PHASE:
             raise InputError(f"--nodes {self.nodes_per_phase}; expected {MIN_NODES_PER_PHASE} to {MAX_NODES_PER_PHASE} "
                              "collocation nodes per phase")
+        real_number("mu", self.mu)
+        real_number("f_z minimum fraction", self.fz_min_fraction)
+        if self.speed is not None:
+            real_number("speed", self.speed)
+        if not (isinstance(self.interior_points, tuple | list)
+                and all(0 < real_number("an interior point", s) < 1 for s in self.interior_points)):
+            raise InputError(f"interior points {self.interior_points!r}; expected fractions of an interval, each "
+                             "strictly between 0 and 1")
         if not (math.isfinite(self.mu) and 0 < self.mu <= MAX_FRICTION_COEFFICIENT):  # mu**2 of 1e300 overflows
             raise InputError(f"mu = {self.mu} is not a friction coefficient the feet can stand on; "
                              f"expected 0 < mu <= {MAX_FRICTION_COEFFICIENT:g}")

@@ -17,7 +17,7 @@ pytest.importorskip("mujoco", reason="MuJoCo is in the 'xlib' extra: pip install
 
 from quadruped_dyn.cli import EXIT_BAD_INPUT, main  # noqa: E402
 from quadruped_dyn.control.closed_loop import prepare, run_all  # noqa: E402
-from quadruped_dyn.control.controllers import CONTROLLERS  # noqa: E402
+from quadruped_dyn.control.controllers import CONTROLLERS, Gains  # noqa: E402
 from quadruped_dyn.control.plant import PlantOptions  # noqa: E402
 from quadruped_dyn.control.reference import reference_cycle
 from quadruped_dyn.control.run import LoopOptions  # noqa: E402
@@ -122,6 +122,33 @@ def test_a_start_that_did_not_settle_is_refused(tmp_path: Path) -> None:
     lines = result.output.strip().splitlines()
     assert "did not stand after settling" in lines[-1] and "tilt" in lines[-1], result.output
     assert not (tmp_path / "paper_walk_closed_loop.json").exists()
+
+
+@pytest.mark.parametrize("arguments, message", [
+    (dict(gait=["walk"]), r"unknown gait '\['walk'\]'"),
+    (dict(controllers="pd"), "controllers 'pd' is a str; expected a list of names"),
+    (dict(controllers=None), "controllers None is a NoneType; expected a list of names"),
+    (dict(controllers=[["pd"]]), r"unknown controller '\['pd'\]'"),
+    (dict(loop=LoopOptions(cycles=True)), "--cycles is True, a bool; expected a whole number"),
+    (dict(loop=LoopOptions(rate_hz="1000")), "--rate is '1000', a str; expected a real number"),
+    (dict(loop=LoopOptions(grf_every=0)), "grf_every 0; expected a whole number of control ticks >= 1"),
+    (dict(loop=LoopOptions(settle_s=1e9)), "settle time 1000000000.0 s at a 0.0005 s step; expected >= 0 and at most"),
+    (dict(plant_options=PlantOptions(mu=None)), "plant mu is None, a NoneType; expected a real number"),
+    (dict(plant_options=PlantOptions(timestep="0.001")), "plant timestep is '0.001', a str"),
+    (dict(gains=Gains(kp_per_kg="20")), "gain kp_per_kg is '20', a str; expected a real number"),
+])
+def test_prepare_refuses_arguments_of_the_wrong_kind(arguments: dict, message: str, monkeypatch) -> None:
+    """Found by a review (2026-12-06): these were TypeErrors (math.isfinite of a str or None, a list
+    as a dict key), a str of controllers read letter by letter, grf_every 0 a ZeroDivisionError after
+    the settling, a settle time of 1e9 s hours of MuJoCo steps, a bool taken as one cycle."""
+    from quadruped_dyn.control import closed_loop
+
+    def tripwire(*a, **k):
+        raise AssertionError("the plant was built before the arguments were checked")
+
+    monkeypatch.setattr(closed_loop, "build_plant", tripwire)
+    with pytest.raises(InputError, match=message):
+        prepare(load_robot("paper"), **{"gait": "walk", **arguments})
 
 
 @pytest.mark.parametrize("timestep, rate_hz", [(0.003, 166.667), (0.003, 100.0), (0.0004, 1e6), (0.0005, 0.001)])

@@ -35,6 +35,16 @@ def test_quintic_hermite_reproduces_quintics() -> None:
     (Options(nodes_per_phase=41), "expected 3 to 40 collocation nodes per phase"),
     (Options(speed=5.0), "beyond"),
     (Options(speed=float("nan")), "beyond"),
+    # found by a review (2026-12-06): a TypeError from math.isfinite, or a bool, a float count or a
+    # collocation point outside its interval taken as given
+    (Options(mu="0.6"), r"mu is '0\.6', a str; expected a real number"),
+    (Options(speed="0.2"), "speed is '0.2', a str; expected a real number"),
+    (Options(fz_min_fraction=None), "f_z minimum fraction is None, a NoneType; expected a real number"),
+    (Options(nodes_per_phase=True), "--nodes is True, a bool; expected a whole number"),
+    (Options(nodes_per_phase=4.0), "--nodes is 4.0, a float; expected a whole number"),
+    (Options(interior_points=(0.5, 1.5)), "expected fractions of an interval, each strictly between 0 and 1"),
+    (Options(interior_points=(float("nan"),)), "expected fractions of an interval"),
+    (Options(interior_points=0.5), "expected fractions of an interval"),  # type: ignore[arg-type]
 ])
 def test_bad_options_are_input_errors(paper: Robot, options: Options, message: str) -> None:
     with pytest.raises(InputError, match=message):
