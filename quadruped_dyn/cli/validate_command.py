@@ -3,22 +3,17 @@
 from __future__ import annotations
 
 import json
-import math
-from typing import TYPE_CHECKING
 
 import click
 
 from quadruped_dyn.cli.app import echo
-from quadruped_dyn.errors import InputError, NumericalError
-from quadruped_dyn.experiment.simulate import MAX_SAMPLES
+from quadruped_dyn.errors import NumericalError
+from quadruped_dyn.experiment.simulate import check_times, reduced_dynamics
 from quadruped_dyn.files.paths import writable_dir
 from quadruped_dyn.model.robot import load_robot
 
 #: Samples per run beyond which validate states the cost (the limit: simulate.MAX_SAMPLES).
 WARN_SAMPLES = 20_000
-
-if TYPE_CHECKING:
-    from quadruped_dyn.experiment.gait import Gait
 
 
 @click.command()
@@ -57,14 +52,13 @@ def validate(robot: str, gait_name: str, horizon: float | None, integrator: str,
         run_experiment,
         static_stability,
     )
-    from quadruped_dyn.experiment.simulate import reduced_dynamics
     from quadruped_dyn.files.json import write_json
 
     gait = GAITS[gait_name]
     horizon = 2 * gait.period if horizon is None else horizon
-    _check_times(gait, horizon, dt, integrator)
+    check_times(gait, horizon, dt, integrator)
     runs = 3 + (gait.n_coords == 13) + (0 if no_physics else 5)
-    _check_work(horizon, dt, runs)
+    _warn_work(horizon, dt, runs)
     out = writable_dir(out_dir, f"--out '{out_dir}'")
     r = load_robot(robot)
     paths = output_paths(out, r.name, gait.name)
@@ -95,25 +89,10 @@ def validate(robot: str, gait_name: str, horizon: float | None, integrator: str,
     echo(summary_text(data, joint_names(r), [p for p in paths.values() if p.exists()]))
 
 
-def _check_times(gait: Gait, horizon: float, dt: float, integrator: str) -> None:
-    """InputError unless --horizon and --dt are positive, finite, horizon >= dt, and (RK4) dt divides a phase."""
-    if not (math.isfinite(horizon) and horizon > 0):
-        raise InputError(f"--horizon {horizon} is not a positive finite number of seconds; expected e.g. {2 * gait.period}")
-    if not (math.isfinite(dt) and dt > 0):
-        raise InputError(f"--dt {dt} is not a positive finite number of seconds; expected e.g. 1e-3")
-    if horizon < dt:
-        raise InputError(f"--horizon {horizon} s is shorter than one step (--dt {dt} s); expected horizon >= dt")
-    if integrator == "rk4" and abs(gait.phase_duration / dt - round(gait.phase_duration / dt)) > 1e-9:
-        raise InputError(f"--dt {dt} does not divide the gait's phase of {gait.phase_duration} s; expected e.g. 1e-3")
-
-
-def _check_work(horizon: float, dt: float, runs: int) -> None:
-    """InputError beyond MAX_SAMPLES samples per run (horizon / dt: the work and the memory are
-    bounded before they start); beyond WARN_SAMPLES a one-line warning says what it will cost."""
+def _warn_work(horizon: float, dt: float, runs: int) -> None:
+    """Beyond WARN_SAMPLES samples per run (horizon / dt; ``check_times`` refused beyond MAX_SAMPLES), a
+    one-line warning says what it will cost."""
     samples = horizon / dt
-    if samples > MAX_SAMPLES:
-        raise InputError(f"--horizon {horizon:g} s at --dt {dt:g} s is {samples:.3g} samples per run; expected at most "
-                         f"{MAX_SAMPLES:,} samples (horizon / dt) per run; a larger --dt or a shorter --horizon")
     if samples > WARN_SAMPLES:
         click.echo(f"warning: {int(samples):,} samples per run x {runs} runs: expect {samples / WARN_SAMPLES:.0f}x the "
                    "default's time (minutes)", err=True)

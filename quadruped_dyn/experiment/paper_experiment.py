@@ -49,6 +49,7 @@ from quadruped_dyn.experiment.simulate import (
     ReducedDynamics,
     Run,
     TorqueLaw,
+    check_times,
     simulate_reduced,
 )
 from quadruped_dyn.experiment.torque_table import IkTorqueTable
@@ -199,6 +200,7 @@ def run_experiment(robot: Robot, gait: Gait, dynamics: ReducedDynamics, horizon:
     take the Python path."""
     if engine not in ENGINES:
         raise InputError(f"unknown engine '{engine}'; expected one of {', '.join(ENGINES)}")
+    check_times(gait, horizon, dt, integrator)
     plan = gait_plan(robot, gait)
     ik = IkTorqueTable(plan, dynamics)  # the runs' reference torques; the compared reference stays exact
     native = None

@@ -20,7 +20,16 @@ import numpy as np
 
 from quadruped_dyn.errors import InputError, NumericalError
 from quadruped_dyn.experiment.gait import Plan
-from quadruped_dyn.experiment.simulate import FALLEN_TRUNK_M, RTOL, IkTorques, Progress, Run, TorqueLaw, integrate_phases
+from quadruped_dyn.experiment.simulate import (
+    FALLEN_TRUNK_M,
+    RTOL,
+    IkTorques,
+    Progress,
+    Run,
+    TorqueLaw,
+    check_times,
+    integrate_phases,
+)
 from quadruped_dyn.model.state import quaternion_rotation
 from quadruped_dyn.references.pinocchio import PinocchioReference
 
@@ -107,6 +116,7 @@ def simulate_rigid(plan: Plan, ik: IkTorques, law: TorqueLaw, horizon: float, dt
     trunk's distance from the plan's trunk position (m). ``initial`` = (q (19,), v (18,))
     replaces the IK state, ``trunk(t)`` (world position, m) the plan's trunk, for a reference
     that is not the plan's (e.g. an optimised gait with the plan's phases)."""
+    check_times(plan.gait, horizon, dt, integrator)
     ref = PinocchioReference(plan.robot)
     y = initial_state(plan, ik, ref, initial)
     trunk_at = trunk if trunk is not None else (lambda t: plan.trunk(t)[0])

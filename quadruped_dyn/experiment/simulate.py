@@ -26,6 +26,7 @@ Evaluation backend: anything with the two methods of ``ReducedDynamics``: the ge
 
 from __future__ import annotations
 
+import math
 from collections.abc import Callable
 from dataclasses import dataclass
 from functools import partial
@@ -38,8 +39,8 @@ from scipy.integrate import DOP853
 from quadruped_dyn.dynamics.guarded import guarded_call
 from quadruped_dyn.dynamics.kinematics import robot_feet, robot_kinematics
 from quadruped_dyn.dynamics.reduced import reduced_model
-from quadruped_dyn.errors import InputError, NumericalError
-from quadruped_dyn.experiment.gait import Plan
+from quadruped_dyn.errors import InputError, NumericalError, real_number
+from quadruped_dyn.experiment.gait import Gait, Plan
 from quadruped_dyn.experiment.plan_ik import ReferenceSample, references
 from quadruped_dyn.experiment.trunk_pose import pose_from_feet
 from quadruped_dyn.math.rigid import skew
@@ -179,6 +180,32 @@ Progress = Callable[[float], None]  # called with the simulated time reached, s
 MAX_SAMPLES = 200_000
 
 
+INTEGRATORS = ("dop853", "rk4")
+
+
+def check_times(gait: Gait, horizon: object, dt: object, integrator: str = "dop853") -> None:
+    """InputError unless ``horizon`` and ``dt`` are positive finite seconds, horizon >= dt, at most
+    MAX_SAMPLES samples per run, the integrator is known and (RK4) dt divides a phase. Every run
+    checks these before any work (validate, the experiment, both simulations, the replay); a NaN
+    horizon, a zero or negative dt or 1e9 s were a ValueError, ZeroDivisionError, IndexError or a
+    7 TiB allocation."""
+    if integrator not in INTEGRATORS:
+        raise InputError(f"unknown integrator '{integrator}'; expected {' or '.join(INTEGRATORS)}")
+    horizon, dt = real_number("--horizon", horizon), real_number("--dt", dt)
+    if not (math.isfinite(horizon) and horizon > 0):
+        raise InputError(f"--horizon {horizon} is not a positive finite number of seconds; expected e.g. {2 * gait.period}")
+    if not (math.isfinite(dt) and dt > 0):
+        raise InputError(f"--dt {dt} is not a positive finite number of seconds; expected e.g. 1e-3")
+    if horizon < dt:
+        raise InputError(f"--horizon {horizon} s is shorter than one step (--dt {dt} s); expected horizon >= dt")
+    samples = horizon / dt
+    if samples > MAX_SAMPLES:
+        raise InputError(f"--horizon {horizon:g} s at --dt {dt:g} s is {samples:.3g} samples per run; expected at most "
+                         f"{MAX_SAMPLES:,} samples (horizon / dt) per run; a larger --dt or a shorter --horizon")
+    if integrator == "rk4" and abs(gait.phase_duration / dt - round(gait.phase_duration / dt)) > 1e-9:
+        raise InputError(f"--dt {dt} does not divide the gait's phase of {gait.phase_duration} s; expected e.g. 1e-3")
+
+
 def _sample_times(horizon: float, dt: float) -> np.ndarray:
     return np.arange(int(np.floor(horizon / dt + 1e-9)) + 1) * dt
 
@@ -194,8 +221,7 @@ def simulate_reduced(plan: Plan, dynamics: ReducedDynamics, law: TorqueLaw, hori
     docstring); ``initial_ulps`` moves every initial coordinate and rate that many ulps up (the
     twin run that measures how round-off grows). ``project``: keep the state on the stance
     closure (``project_on_stance``) after every step."""
-    if integrator not in ("dop853", "rk4"):
-        raise InputError(f"unknown integrator '{integrator}'; expected dop853 or rk4")
+    check_times(plan.gait, horizon, dt, integrator)
     robot, gait = plan.robot, plan.gait
     ik = ik or IkTorques(plan, dynamics)
     feet_of = robot_feet(robot)

@@ -16,10 +16,11 @@ from typing import Any
 
 import numpy as np
 
+from quadruped_dyn.errors import real_number
 from quadruped_dyn.experiment.paper_experiment import DEPARTURE_PCT, departure, growth_rate
 from quadruped_dyn.experiment.plan_ik import ReferenceSample
 from quadruped_dyn.experiment.rigid_contact import simulate_rigid
-from quadruped_dyn.experiment.simulate import Run, TorqueLaw
+from quadruped_dyn.experiment.simulate import Run, TorqueLaw, check_times
 from quadruped_dyn.optimal_control.hermite import interpolate
 from quadruped_dyn.optimal_control.node import N_X, node_functions, trunk_quaternion
 from quadruped_dyn.optimal_control.solve import Solution
@@ -108,6 +109,7 @@ def replay_rigid(solution: Solution, cycles: float = 2.0, dt: float = REPLAY_DT)
     from the optimised state at t = 0; departure from the optimised joint angles as the
     paper experiment measures it (1 % of the largest |joint angle|)."""
     tr = solution.transcription
+    check_times(tr.gait, real_number("cycles", cycles) * tr.gait.period, dt)
     traj = OptimizedTrajectory(solution)
     torques = _OptimizedTorques(traj)
     stance0 = tr.gait.stance(0.0)
