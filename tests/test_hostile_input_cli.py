@@ -252,3 +252,51 @@ def test_every_command_prints_through_echo():
                     and not any(k.arg == "err" for k in node.keywords)):
                 bare.append(f"{source.name}:{node.lineno}")
     assert not bare, bare
+
+
+def test_an_output_set_appears_whole_or_not_at_all(tmp_path):
+    """``output_set``: the files of one result are renamed into place together when the block ends;
+    an error or an interrupt inside leaves the old files as they were and no temporary file."""
+    from quadruped_dyn.files.safe_write import output_set, write_text
+
+    (tmp_path / "a.json").write_text("old a")
+    (tmp_path / "b.csv").write_text("old b")
+    with pytest.raises(KeyboardInterrupt), output_set():
+        write_text(tmp_path / "a.json", "new a")
+        raise KeyboardInterrupt
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["a.json", "b.csv"]
+    assert (tmp_path / "a.json").read_text() == "old a"
+    with output_set():
+        write_text(tmp_path / "a.json", "new a")
+        write_text(tmp_path / "b.csv", "new b")
+        assert (tmp_path / "a.json").read_text() == "old a", "not before the block ends"
+    assert [(tmp_path / n).read_text() for n in ("a.json", "b.csv")] == ["new a", "new b"]
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["a.json", "b.csv"]
+
+
+def test_validate_interrupted_while_plotting_leaves_no_new_json(tmp_path, monkeypatch):
+    """Found by a review (2026-12-06): Ctrl-C while validate drew its plots left the new JSON beside
+    the previous run's CSV and plots (each file was atomic, the set was not)."""
+    from quadruped_dyn.experiment import outputs
+
+    def interrupted(*args, **kwargs):
+        raise KeyboardInterrupt
+
+    monkeypatch.setattr(outputs, "plot_br_hfe", interrupted)
+    result = CliRunner().invoke(main, ["validate", "--horizon", "0.05", "--no-physics", "--out", str(tmp_path)])
+    assert result.exit_code == 1 and "Traceback" not in result.output, result.output
+    assert list(tmp_path.iterdir()) == [], "no file of the interrupted run, not even a temporary one"
+
+
+def test_output_files_are_written_through_safe_write():
+    """The modules that write a command's files (JSON, CSV, plots, animation) never open, save or
+    write a path themselves: only ``files.safe_write`` does (never through a link, atomic, in sets)."""
+    import quadruped_dyn
+
+    direct = re.compile(r"\.write_text\(|\.write_bytes\(|\bopen\([^)]*[\"']w|savefig\((?!buf)|\.save\((?!gif)")
+    package = Path(quadruped_dyn.__file__).parent
+    offenders = [f"{p.relative_to(package)}:{n}" for p in package.rglob("outputs.py")
+                 for n, line in enumerate(p.read_text().splitlines(), 1) if direct.search(line)]
+    offenders += [f"cli/{p.name}:{n}" for p in (package / "cli").glob("*.py")
+                  for n, line in enumerate(p.read_text().splitlines(), 1) if direct.search(line)]
+    assert not offenders, offenders

@@ -10,6 +10,7 @@ from quadruped_dyn.cli.app import echo
 from quadruped_dyn.errors import NumericalError
 from quadruped_dyn.experiment.simulate import check_times, reduced_dynamics
 from quadruped_dyn.files.paths import writable_dir
+from quadruped_dyn.files.safe_write import output_set
 from quadruped_dyn.model.robot import load_robot
 
 #: Samples per run beyond which validate states the cost (the limit: simulate.MAX_SAMPLES).
@@ -76,12 +77,13 @@ def validate(robot: str, gait_name: str, horizon: float | None, integrator: str,
                              "no result (try a smaller --dt)")
     stability = static_stability(exp.plan, exp.ik, horizon)
     data = report(exp, integrator, dt, backend, stability)
-    write_json(paths["json"], data)
-    write_csv(paths["csv"], exp)
-    plot_br_hfe(paths["plot"], exp)
-    if exp.rigid:
-        plot_physics_check(paths["physics_plot"], exp)
-    else:
+    with output_set():  # all or nothing: an interrupt never leaves the new JSON beside an old CSV
+        write_json(paths["json"], data)
+        write_csv(paths["csv"], exp)
+        plot_br_hfe(paths["plot"], exp)
+        if exp.rigid:
+            plot_physics_check(paths["physics_plot"], exp)
+    if not exp.rigid:
         paths["physics_plot"].unlink(missing_ok=True)
     if as_json:
         echo(json.dumps(json.loads(paths["json"].read_text()), indent=2))

@@ -10,8 +10,8 @@ dependency). ``rendering_available`` says whether it works and, if not, why.
 from __future__ import annotations
 
 import csv
+import io
 import json
-import math
 import os
 from pathlib import Path
 from typing import Any
@@ -19,37 +19,24 @@ from typing import Any
 import numpy as np
 
 from quadruped_dyn.control.closed_loop import ClosedLoop
+from quadruped_dyn.files.json import json_safe
+from quadruped_dyn.files.safe_write import output_path, output_set, save_figure, text_writer, write_bytes, write_text
 
 ANIMATION_FPS = 20
 ANIMATION_SIZE = (240, 320)  # height, width, px
 ANIMATION_MAX_S = 3.0  # of simulated time, from the start
 
 
-def json_safe(x: Any) -> Any:
-    """NaN and inf are not JSON: they become None (and never appear as numbers)."""
-    if isinstance(x, dict):
-        return {str(k): json_safe(v) for k, v in x.items()}
-    if isinstance(x, (list, tuple)):
-        return [json_safe(v) for v in x]
-    if isinstance(x, np.ndarray):
-        return json_safe(x.tolist())
-    if isinstance(x, (float, np.floating)):
-        return float(x) if math.isfinite(x) else None
-    if isinstance(x, (np.integer, np.bool_)):
-        return x.item()
-    return x
-
-
 def output_paths(out_dir: Path, robot: str, gait: str) -> dict[str, Path]:
     stem = f"{robot}_{gait}_closed_loop"
-    return {"json": out_dir / f"{stem}.json", "csv": out_dir / f"{stem}_timeseries.csv",
-            "plot": out_dir / f"{stem}.png", "grf_plot": out_dir / f"{stem}_grf.png",
-            "animation": out_dir / f"{stem}.gif"}
+    names = {"json": f"{stem}.json", "csv": f"{stem}_timeseries.csv", "plot": f"{stem}.png",
+             "grf_plot": f"{stem}_grf.png", "animation": f"{stem}.gif"}
+    return {key: output_path(out_dir, name) for key, name in names.items()}
 
 
 def write_json(path: Path, study: ClosedLoop) -> dict[str, Any]:
-    data = json_safe(study.as_dict())
-    path.write_text(json.dumps(data, indent=2, allow_nan=False))
+    data: dict[str, Any] = json_safe(study.as_dict())
+    write_text(path, json.dumps(data, indent=2, allow_nan=False))
     return data
 
 
@@ -57,7 +44,7 @@ def write_csv(path: Path, study: ClosedLoop) -> None:
     """Per controller and tick: t, measured and reference joint angles, commanded torques, trunk
     position and roll/pitch/yaw, MuJoCo's normal force per foot."""
     names = study.robot.joint_names
-    with path.open("w", newline="") as f:
+    with text_writer(path) as f:
         w = csv.writer(f)
         w.writerow(["controller", "t_s", *[f"{n}_q" for n in names], *[f"{n}_q_ref" for n in names],
                     *[f"{n}_tau" for n in names], "trunk_x", "trunk_y", "trunk_z", "roll_deg", "pitch_deg", "yaw_deg",
@@ -91,7 +78,7 @@ def plot(path: Path, study: ClosedLoop) -> None:
     axes[-1].set_xlabel("t [s]")
     fig.suptitle(f"{study.robot.name} {study.plan.gait.name}: closed loop in MuJoCo")
     fig.tight_layout()
-    fig.savefig(path, dpi=90)
+    save_figure(fig, path, dpi=90)
     plt.close(fig)
 
 
@@ -112,7 +99,7 @@ def plot_grf(path: Path, study: ClosedLoop) -> None:
     ax.grid(alpha=0.3)
     ax.legend(fontsize=8, ncol=4)
     fig.tight_layout()
-    fig.savefig(path, dpi=90)
+    save_figure(fig, path, dpi=90)
     plt.close(fig)
 
 
@@ -124,13 +111,14 @@ def best_controller(results: dict[str, dict[str, Any]]) -> str:
 def write_all(out_dir: Path, study: ClosedLoop, animation: bool = True) -> tuple[dict[str, Any], dict[str, Path]]:
     """JSON, CSV, plots and (if rendering works and qpos was kept) the animation of the best run."""
     paths = output_paths(out_dir, study.robot.name, study.plan.gait.name)
-    data = write_json(paths["json"], study)
-    write_csv(paths["csv"], study)
-    plot(paths["plot"], study)
-    plot_grf(paths["grf_plot"], study)
-    paths["animation"].unlink(missing_ok=True)
-    if animation and study.results:
-        animate(paths["animation"], study, best_controller(study.results))
+    with output_set():  # all or nothing: an interrupt never leaves the new JSON beside an old CSV
+        data = write_json(paths["json"], study)
+        write_csv(paths["csv"], study)
+        plot(paths["plot"], study)
+        plot_grf(paths["grf_plot"], study)
+        drawn = animation and bool(study.results) and animate(paths["animation"], study, best_controller(study.results))
+    if not drawn:
+        paths["animation"].unlink(missing_ok=True)
     return data, paths
 
 
@@ -177,6 +165,8 @@ def animate(path: Path, study: ClosedLoop, controller: str, seconds: float = ANI
             for flag in (mujoco.mjtRndFlag.mjRND_SHADOW, mujoco.mjtRndFlag.mjRND_REFLECTION, mujoco.mjtRndFlag.mjRND_SKYBOX):
                 r.scene.flags[flag] = 0
             frames.append(Image.fromarray(r.render()).quantize(colors=64))
-    frames[0].save(path, save_all=True, append_images=frames[1:], duration=int(1000 / ANIMATION_FPS), loop=0,
-                   optimize=True)
+    gif = io.BytesIO()
+    frames[0].save(gif, format="GIF", save_all=True, append_images=frames[1:], duration=int(1000 / ANIMATION_FPS),
+                   loop=0, optimize=True)
+    write_bytes(path, gif.getvalue())
     return True

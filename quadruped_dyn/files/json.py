@@ -13,12 +13,14 @@ from quadruped_dyn.files.safe_write import write_text
 
 
 def json_safe(x: Any) -> Any:
-    """``x`` as plain JSON types: dicts and lists (tuples become lists) recursively, numpy
+    """``x`` as plain JSON types: dicts and lists (tuples and arrays become lists) recursively, numpy
     scalars as Python ones, and a non-finite float as None (so it never appears as a number)."""
     if isinstance(x, dict):
         return {k: json_safe(v) for k, v in x.items()}
     if isinstance(x, list | tuple):
         return [json_safe(v) for v in x]
+    if isinstance(x, np.ndarray):
+        return json_safe(x.tolist())
     if isinstance(x, bool | np.bool_):
         return bool(x)
     if isinstance(x, float | np.floating):

@@ -9,6 +9,11 @@ existing file or link) and rename it over the target atomically: a symlink alrea
 is replaced, not written through, and a reader never sees a partial file; anything else that is not
 a regular file (a directory, a device such as /dev/full, a FIFO) is refused, never replaced. An OSError (a full disk,
 a read-only directory, a directory in the way) is an ``InputError`` naming the file.
+
+The files of one result (a run's JSON, CSV and plots) are written inside ``output_set()``: they
+are renamed into place together when the block ends, so an interrupted or failed run (Ctrl-C while
+the plots are drawn, a full disk at the last file) leaves the previous run's files as they were,
+never its new JSON beside the old CSV.
 """
 
 from __future__ import annotations
@@ -18,6 +23,7 @@ import io
 import os
 import tempfile
 from collections.abc import Iterator
+from contextvars import ContextVar
 from pathlib import Path
 
 from quadruped_dyn.errors import InputError
@@ -36,6 +42,37 @@ def output_path(out_dir: str | Path, name: str) -> Path:
     return path
 
 
+#: (temporary, target) of each file written inside ``output_set``, renamed when it ends.
+_PENDING: ContextVar[list[tuple[str, Path]] | None] = ContextVar("_PENDING", default=None)
+
+
+def _rename(tmp: str, path: Path) -> None:
+    try:
+        os.replace(tmp, path)  # replaces a link at ``path``; never follows it
+    except OSError as e:
+        raise InputError(f"cannot write '{printable(path)}' ({e.strerror}); expected a writable file path") from e
+
+
+@contextlib.contextmanager
+def output_set() -> Iterator[None]:
+    """Every ``write_bytes`` in the block is kept under its temporary name until the block ends
+    without an error, then all are renamed into place; an error or an interrupt removes them all."""
+    pending: list[tuple[str, Path]] = []
+    token = _PENDING.set(pending)
+    try:
+        try:
+            yield
+        finally:
+            _PENDING.reset(token)
+        while pending:
+            _rename(*pending[0])
+            pending.pop(0)
+    finally:
+        for tmp, _ in pending:
+            with contextlib.suppress(FileNotFoundError):
+                os.unlink(tmp)
+
+
 def _umask() -> int:
     mask = os.umask(0)
     os.umask(mask)
@@ -51,17 +88,23 @@ def write_bytes(path: str | Path, data: bytes) -> Path:
         fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name[:100]}.", suffix=".partial")
     except OSError as e:
         raise InputError(f"cannot write '{printable(path)}' ({e.strerror}); expected a writable directory") from e
+    pending = _PENDING.get()
     try:
         with os.fdopen(fd, "wb") as f:
             f.write(data)
             f.flush()
         os.chmod(tmp, 0o666 & ~_umask())
-        os.replace(tmp, path)  # replaces a link at ``path``; never follows it
+        if pending is None:
+            _rename(tmp, path)
+        else:
+            pending.append((tmp, path))
+            tmp = ""  # output_set renames or removes it
     except OSError as e:
         raise InputError(f"cannot write '{printable(path)}' ({e.strerror}); expected a writable file path") from e
     finally:
-        with contextlib.suppress(FileNotFoundError):
-            os.unlink(tmp)
+        if tmp:
+            with contextlib.suppress(FileNotFoundError):
+                os.unlink(tmp)
     return path
 
 

@@ -14,6 +14,7 @@ import numpy as np
 from quadruped_dyn.experiment.paper_experiment import joint_names, static_stability
 from quadruped_dyn.experiment.simulate import IkTorques, reduced_dynamics
 from quadruped_dyn.files.json import write_json
+from quadruped_dyn.files.safe_write import output_path, output_set, save_figure, text_writer
 from quadruped_dyn.model.stance import StanceSet
 from quadruped_dyn.optimal_control.replay import OptimizedTrajectory, Replay
 from quadruped_dyn.optimal_control.solve import MAX_CONSTRAINT_VIOLATION, Solution
@@ -37,7 +38,8 @@ SAMPLES_PER_CYCLE = 240
 
 def output_paths(out_dir: Path, robot: str, gait: str) -> dict[str, Path]:
     stem = f"{robot}_{gait}_optimised"
-    return {"json": out_dir / f"{stem}.json", "csv": out_dir / f"{stem}.csv", "plot": out_dir / f"{stem}.png"}
+    return {key: output_path(out_dir, f"{stem}{suffix}") for key, suffix in (("json", ".json"), ("csv", ".csv"),
+                                                                              ("plot", ".png"))}
 
 
 def coordinate_names(robot: Any) -> list[str]:
@@ -139,7 +141,7 @@ def write_csv(path: Path, sol: Solution, samples: int = SAMPLES_PER_CYCLE) -> No
     header = ["t_s", "stance"] + [f"{n}_opt" for n in names] + [f"{n}_plan" for n in names] + [f"tau_{n}_opt" for n in jn] + [
         "roll_moment_opt_Nm"]
     guess = None
-    with path.open("w", newline="") as f:
+    with text_writer(path) as f:
         w = csv.writer(f)
         w.writerow(header)
         for j in range(samples + 1):
@@ -203,11 +205,12 @@ def plot(path: Path, sol: Solution, replay: Replay | None = None, samples: int =
         ax.axis("off")
     fig.suptitle(f"{tr.robot.name} {tr.gait.name}: optimised ({sol.status}, {sol.iterations} iterations) vs today's plan")
     fig.tight_layout()
-    fig.savefig(path, dpi=90)
+    save_figure(fig, path, dpi=90)
     plt.close(fig)
 
 
 def write_outputs(paths: dict[str, Path], sol: Solution, replay: Replay | None, data: dict[str, Any]) -> None:
-    write_json(paths["json"], data)
-    write_csv(paths["csv"], sol)
-    plot(paths["plot"], sol, replay)
+    with output_set():  # all or nothing: an interrupt never leaves the new JSON beside an old CSV
+        write_json(paths["json"], data)
+        write_csv(paths["csv"], sol)
+        plot(paths["plot"], sol, replay)

@@ -186,6 +186,27 @@ def test_cli_writes_json_csv_plots(tmp_path: Path) -> None:
         assert (tmp_path / f"paper_walk_closed_loop{suffix}").stat().st_size > 0
 
 
+def test_cli_writes_under_out_and_never_through_a_link(tmp_path: Path) -> None:
+    """Found by a review (2026-12-06): control wrote its JSON, CSV, plots and GIF with Path.write_text,
+    open("w"), savefig and PIL's save: through a link in --out (a victim file elsewhere overwritten
+    with the CSV, a dangling link's target created), not atomically. Now files.safe_write, as every
+    other command's outputs."""
+    victim = tmp_path / "victim"
+    victim.write_text("keep me")
+    out = tmp_path / "out"
+    out.mkdir()
+    (out / "paper_walk_closed_loop_timeseries.csv").symlink_to(victim)
+    (out / "paper_walk_closed_loop.json").symlink_to(tmp_path / "created_elsewhere")
+    result = CliRunner().invoke(main, ["control", "paper", "--controller", "pd", "--cycles", "1", "--no-animation",
+                                       "--out", str(out)])
+    assert result.exit_code == 0, result.output
+    assert victim.read_text() == "keep me" and not (tmp_path / "created_elsewhere").exists()
+    written = sorted(out.iterdir())
+    assert [p.name for p in written] == sorted(f"paper_walk_closed_loop{s}" for s in (".json", "_timeseries.csv", ".png",
+                                                                                     "_grf.png"))
+    assert all(p.is_file() and not p.is_symlink() for p in written)
+
+
 def test_cli_table_columns_line_up(tmp_path: Path) -> None:
     """The longest controller name (ct-diag+land) keeps its row under the header."""
     result = CliRunner().invoke(main, ["control", "paper", "--controller", "ct-diag+land", "--cycles", "1",
