@@ -51,6 +51,9 @@ def optimize(robot: str, gait_name: str, nodes: int | None, mu: float | None, sp
         raise InputError(f"--cycles {cycles:g} of the {gait.period:g} s cycle is {samples:.3g} replay "
                          f"samples at {REPLAY_DT:g} s; expected at most {MAX_SAMPLES:,} "
                          f"(--cycles <= {MAX_SAMPLES * REPLAY_DT / gait.period:g})")
+    if 0 < cycles * gait.period < REPLAY_DT:  # replay_rigid would refuse it, after the solve
+        raise InputError(f"--cycles {cycles:g} of the {gait.period:g} s cycle is shorter than one replay step "
+                         f"({REPLAY_DT:g} s); expected 0 (no replay) or at least {REPLAY_DT / gait.period:.3g}")
     options = Options(nodes_per_phase=NODES_PER_PHASE if nodes is None else nodes, mu=MU if mu is None else mu, speed=speed)
     out = writable_dir(out_dir, f"--out '{out_dir}'")
     r = load_robot(robot)

@@ -23,6 +23,20 @@ def test_bad_input_is_exit_2_one_line(tmp_path, args, message) -> None:
     assert len(lines) == 1 and message in lines[0] and lines[0].startswith("error:")
 
 
+def test_a_replay_shorter_than_one_step_is_refused_before_the_solve(tmp_path, monkeypatch) -> None:
+    """replay_rigid checks its times (simulate.check_times): --cycles 1e-9 must not reach it after the solve."""
+    from quadruped_dyn.optimal_control import transcription
+
+    def tripwire(*a, **k):
+        raise AssertionError("the solve started before the arguments were checked")
+
+    monkeypatch.setattr(transcription, "transcribe", tripwire)
+    result = CliRunner().invoke(main, ["optimize", "paper", "--out", str(tmp_path), "--cycles", "1e-9"])
+    assert result.exit_code == 2, result.output
+    assert result.output.splitlines() == ["error: --cycles 1e-09 of the 0.6 s cycle is shorter than one replay step "
+                                          "(0.002 s); expected 0 (no replay) or at least 0.00333"]
+
+
 def test_no_convergence_is_exit_1_with_ipopt_status(tmp_path, monkeypatch) -> None:
     """IPOPT stopped after 2 iterations: exit 1, one error line with its status, no result written."""
     from quadruped_dyn.optimal_control import solve
