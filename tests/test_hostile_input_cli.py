@@ -300,3 +300,34 @@ def test_output_files_are_written_through_safe_write():
     offenders += [f"cli/{p.name}:{n}" for p in (package / "cli").glob("*.py")
                   for n, line in enumerate(p.read_text().splitlines(), 1) if direct.search(line)]
     assert not offenders, offenders
+
+
+@pytest.mark.parametrize(("args", "in_the_way"), [
+    (["validate", "--horizon", "0.05", "--no-physics"], "paper_trot_timeseries.csv"),
+    (["control", "paper", "--cycles", "1", "--controller", "pd", "--no-animation"], "paper_walk_closed_loop.png"),
+    (["optimize", "--cycles", "0"], "paper_trot_optimised.png"),
+])
+def test_a_directory_in_place_of_an_output_is_refused_before_the_work(args, in_the_way, tmp_path, monkeypatch):
+    """Found by a review (2026-12-06): refused only when written, after the runs (control: minutes)
+    or the solve."""
+    from quadruped_dyn.control import closed_loop
+    from quadruped_dyn.optimal_control import transcription
+
+    def tripwire(*a, **k):
+        raise AssertionError("the work started before the outputs were checked")
+
+    monkeypatch.setattr(validation, "run_experiment", tripwire)
+    monkeypatch.setattr(closed_loop, "run_all", tripwire)
+    monkeypatch.setattr(transcription, "transcribe", tripwire)
+    (tmp_path / in_the_way).mkdir()
+    result = CliRunner().invoke(main, [*args, "--out", str(tmp_path)])
+    _one_line(result, 2, rf"cannot write '.*{in_the_way}': it exists and is not a regular file; expected a file path")
+
+
+def test_codegen_writes_its_package_whole_or_not_at_all(tmp_path):
+    """A directory in place of one generated file (the Makefile): nothing of the package is written,
+    not the sources before it (they were, beside whatever the directory held from before)."""
+    (tmp_path / "Makefile").mkdir()
+    result = CliRunner().invoke(main, ["codegen", "paper", "--out", str(tmp_path)])
+    _one_line(result, 2, r"cannot write '.*Makefile': it exists and is not a regular file")
+    assert [p.name for p in tmp_path.iterdir()] == ["Makefile"]

@@ -9,6 +9,7 @@ import click
 from quadruped_dyn.cli.app import echo, progress
 from quadruped_dyn.files.names import printable
 from quadruped_dyn.files.paths import writable_dir
+from quadruped_dyn.files.safe_write import replaceable
 from quadruped_dyn.model.robot import load_robot
 
 
@@ -37,7 +38,7 @@ def control(robot: str, gait_name: str, controllers: tuple[str, ...], cycles: in
 
     from quadruped_dyn.control.closed_loop import prepare, run_all
     from quadruped_dyn.control.controllers import Gains
-    from quadruped_dyn.control.outputs import write_all
+    from quadruped_dyn.control.outputs import output_paths, write_all
     from quadruped_dyn.control.plant import PlantOptions
     from quadruped_dyn.control.run import LoopOptions
 
@@ -46,6 +47,7 @@ def control(robot: str, gait_name: str, controllers: tuple[str, ...], cycles: in
     study = prepare(load_robot(robot), gait_name, controllers, gains, LoopOptions(rate_hz=rate_hz, cycles=cycles),
                     PlantOptions(timestep=timestep, mu=mu))
     out = writable_dir(out_dir, f"--out '{out_dir}'")
+    replaceable(output_paths(out, study.robot.name, study.plan.gait.name).values())
     total = study.loop.cycles * study.plan.gait.period * len(study.controllers)
     with progress(f"{study.robot.name} {gait_name}: simulated ms", int(round(total * 1000))) as bar:
         done = [0]

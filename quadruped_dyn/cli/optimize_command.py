@@ -13,6 +13,7 @@ from quadruped_dyn.cli.app import EXIT_CHECK_FAILED, echo
 from quadruped_dyn.errors import InputError
 from quadruped_dyn.files.names import printable
 from quadruped_dyn.files.paths import writable_dir
+from quadruped_dyn.files.safe_write import replaceable
 from quadruped_dyn.model.robot import load_robot
 
 
@@ -58,6 +59,8 @@ def optimize(robot: str, gait_name: str, nodes: int | None, mu: float | None, sp
     out = writable_dir(out_dir, f"--out '{out_dir}'")
     r = load_robot(robot)
     options.check(r, gait)  # bad input: exit 2 before any work
+    paths = output_paths(out, r.name, gait.name)
+    replaceable(paths.values())
     click.echo(f"transcribing {r.name} {gait.name} ...", err=True)
     tr = transcribe(r, gait, options)
     click.echo(f"solving: {tr.lbw.size} variables, {tr.lbg.size} constraints, {hessian} Hessian ...", err=True)
@@ -70,7 +73,6 @@ def optimize(robot: str, gait_name: str, nodes: int | None, mu: float | None, sp
     if cycles > 0:
         click.echo(f"replaying the torques open loop in the rigid-contact dynamics for {cycles:g} cycles ...", err=True)
         replay = replay_rigid(sol, cycles)
-    paths = output_paths(out, r.name, gait.name)
     data = report(sol, replay)
     write_outputs(paths, sol, replay, data)
     if as_json:

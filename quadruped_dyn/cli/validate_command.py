@@ -10,7 +10,7 @@ from quadruped_dyn.cli.app import echo
 from quadruped_dyn.errors import NumericalError
 from quadruped_dyn.experiment.simulate import check_times, reduced_dynamics
 from quadruped_dyn.files.paths import writable_dir
-from quadruped_dyn.files.safe_write import output_set
+from quadruped_dyn.files.safe_write import output_set, replaceable
 from quadruped_dyn.model.robot import load_robot
 
 #: Samples per run beyond which validate states the cost (the limit: simulate.MAX_SAMPLES).
@@ -63,6 +63,7 @@ def validate(robot: str, gait_name: str, horizon: float | None, integrator: str,
     out = writable_dir(out_dir, f"--out '{out_dir}'")
     r = load_robot(robot)
     paths = output_paths(out, r.name, gait.name)
+    replaceable(paths.values())
     dynamics = reduced_dynamics(r, backend)
     from quadruped_dyn.progress import Bar
 

@@ -54,7 +54,7 @@ from quadruped_dyn.dynamics.newton_euler import full_dynamics
 from quadruped_dyn.dynamics.reduced import regularity_function
 from quadruped_dyn.dynamics.reduced_projection import reduced_projection
 from quadruped_dyn.errors import InputError
-from quadruped_dyn.files.safe_write import output_path, write_text
+from quadruped_dyn.files.safe_write import output_path, output_set, write_text
 from quadruped_dyn.model.robot import Robot
 from quadruped_dyn.model.stance import STANCE_SETS, StanceSet, stance_set
 from quadruped_dyn.model.state import JOINT_ANGLES, NQ_FULL
@@ -689,8 +689,9 @@ def generate(robot: Robot, out_dir: Path, precision: str = "double",
         **sources,
         REDUCED_TEMPLATES: reduced_templates_h(),
     }
-    for file_name, text in files.items():
-        write_text(output_path(out_dir, file_name), text)  # under out_dir, never through a link
+    with output_set():  # the package appears whole: an interrupt never leaves new sources beside old ones
+        for file_name, text in files.items():
+            write_text(output_path(out_dir, file_name), text)  # under out_dir, never through a link
     return GeneratedFiles(source=out_dir / f"{name}.c", header=out_dir / f"{name}.h",
                           extra={f: out_dir / f for f in extra}, check_program=out_dir / "check_qd.c",
                           makefile=out_dir / "Makefile",

@@ -22,7 +22,7 @@ import contextlib
 import io
 import os
 import tempfile
-from collections.abc import Iterator
+from collections.abc import Iterable, Iterator
 from contextvars import ContextVar
 from pathlib import Path
 
@@ -79,11 +79,19 @@ def _umask() -> int:
     return mask
 
 
+def replaceable(paths: Iterable[str | Path]) -> None:
+    """InputError if any of ``paths`` exists and is not a regular file or a link (a directory, a
+    device, a FIFO: never replaced). Commands call it on their output files before the work, so
+    that a directory in the way is not found after minutes of it."""
+    for path in map(Path, paths):
+        if path.exists() and not path.is_symlink() and not path.is_file():
+            raise InputError(f"cannot write '{printable(path)}': it exists and is not a regular file; expected a file path")
+
+
 def write_bytes(path: str | Path, data: bytes) -> Path:
     """Write ``data`` to ``path`` by create-new + atomic rename (see the module docstring)."""
     path = Path(path)
-    if path.exists() and not path.is_symlink() and not path.is_file():  # a directory, a device, a FIFO
-        raise InputError(f"cannot write '{printable(path)}': it exists and is not a regular file; expected a file path")
+    replaceable([path])
     try:
         fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name[:100]}.", suffix=".partial")
     except OSError as e:
