@@ -276,7 +276,7 @@ def test_an_output_set_appears_whole_or_not_at_all(tmp_path):
 
 def test_validate_interrupted_while_plotting_leaves_no_new_json(tmp_path, monkeypatch):
     """Found by a review (2026-12-06): Ctrl-C while validate drew its plots left the new JSON beside
-    the previous run's CSV and plots (each file was atomic, the set was not)."""
+    the previous run's CSV and plots (each file was atomic, the set was not), and exited 1 ("Aborted!")."""
     from quadruped_dyn.experiment import outputs
 
     def interrupted(*args, **kwargs):
@@ -284,7 +284,8 @@ def test_validate_interrupted_while_plotting_leaves_no_new_json(tmp_path, monkey
 
     monkeypatch.setattr(outputs, "plot_br_hfe", interrupted)
     result = CliRunner().invoke(main, ["validate", "--horizon", "0.05", "--no-physics", "--out", str(tmp_path)])
-    assert result.exit_code == 1 and "Traceback" not in result.output, result.output
+    assert result.exit_code == 130, result.output  # click's 'Aborted!' was exit 1, the code of a failed check
+    assert "Traceback" not in result.output and result.stderr.splitlines()[-1] == "error: interrupted", result.stderr
     assert list(tmp_path.iterdir()) == [], "no file of the interrupted run, not even a temporary one"
 
 

@@ -16,6 +16,7 @@ from quadruped_dyn.files.names import printable
 
 EXIT_CHECK_FAILED = 1
 EXIT_BAD_INPUT = 2
+EXIT_INTERRUPTED = 130  # 128 + SIGINT, as a shell reports it; click's "Aborted!" was exit 1, a failed check
 
 
 def _warn_one_line(message: Warning | str, category: type[Warning], *args: object, **kwargs: object) -> None:
@@ -66,6 +67,9 @@ class _Group(click.Group):
             where = f" '{e.filename}'" if e.filename else " to standard output"
             _flush_stdout_quietly()
             _error(f"cannot write{where} ({e.strerror or e}); expected a writable output", EXIT_BAD_INPUT)
+        except KeyboardInterrupt:
+            _flush_stdout_quietly()
+            _error("interrupted", EXIT_INTERRUPTED)
         except SystemExit:
             _flush_stdout()
             raise
