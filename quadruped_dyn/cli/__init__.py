@@ -1,5 +1,5 @@
 """The ``quadruped-dyn`` command line: ``main`` and its commands, one module per command.
-Exit codes: 0 success, 1 a check or a computation failed, 2 bad input (one line on stderr, no traceback)."""
+Exit codes: 0 success, 1 a check or a computation failed, 2 bad input (one line on stderr, no traceback), 130 interrupted."""
 
 from quadruped_dyn.cli.app import EXIT_BAD_INPUT, EXIT_CHECK_FAILED, main
 from quadruped_dyn.cli.bench_command import bench

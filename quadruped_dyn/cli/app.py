@@ -1,5 +1,5 @@
-"""The ``quadruped-dyn`` group: exit codes (0 success, 1 a check or a computation failed, 2 bad input), one-line errors
-and warnings, progress on stderr. Each command lives in its own module of this package."""
+"""The ``quadruped-dyn`` group: exit codes (0 success, 1 a check or a computation failed, 2 bad input, 130
+interrupted), one-line errors and warnings, progress on stderr. Each command lives in its own module of this package."""
 
 from __future__ import annotations
 
