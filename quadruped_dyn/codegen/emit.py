@@ -319,6 +319,18 @@ def header_doc(robot: Robot, functions: list[ca.Function], work: dict[str, tuple
     return "\n".join(lines) + "\n"
 
 
+#: The return codes the header documents, as macros a caller can test (the templates define the same values:
+#: c/qd_reduced_solve.c, c/qd_derivatives_solve.c; codegen.library.QD_NONFINITE, ... read them back).
+RETURN_CODES_C = """#ifndef QD_NONFINITE
+#define QD_NONFINITE 1 /* an output is NaN/inf */
+#define QD_SINGULAR 2
+#endif
+#ifndef QD_DEGENERATE
+#define QD_DEGENERATE 3
+#endif
+"""
+
+
 #: Elementary functions the generated code calls, each routed through a wrapper in casadi_real's precision.
 _WRAPPED_MATH = ("sin", "cos", "tan", "sqrt", "fabs")
 _PRECISION_MATH = """
@@ -681,7 +693,7 @@ def generate(robot: Robot, out_dir: Path, precision: str = "double",
     sources = {file_name: _precision_math(text) for file_name, text in sources.items()}
     files = {
         f"{name}.c": c_full,
-        f"{name}.h": header_doc(robot, functions, work) + casadi_header,
+        f"{name}.h": header_doc(robot, functions, work) + RETURN_CODES_C + casadi_header,
         **extra,
         "check_qd.c": (TEMPLATES / "check_qd.c").read_text(),
         **{f: (TEMPLATES / f).read_text() for f in (*CORTEX_M_FILES, THREADS_FILE)},  # docs/embedded.md

@@ -133,6 +133,21 @@ def test_generated_source_compiles_without_precision_flag(kind):
     assert proc.returncode == 0, proc.stderr[-2000:]
 
 
+def test_header_defines_the_return_codes_it_documents(tmp_path):
+    """A caller tests the documented codes by name with the header alone (before, QD_SINGULAR was undeclared), and
+    they are the values the library returns."""
+    from quadruped_dyn.codegen.library import C_FLAGS, QD_DEGENERATE, QD_NONFINITE, QD_SINGULAR
+
+    program = tmp_path / "codes.c"
+    program.write_text('#include "qd_paper.h"\n'
+                       f"typedef char codes_agree[QD_NONFINITE == {QD_NONFINITE} && QD_SINGULAR == {QD_SINGULAR}"
+                       f" && QD_DEGENERATE == {QD_DEGENERATE} ? 1 : -1];\n"
+                       "int main(void) { return (int)sizeof(codes_agree) - 1; }\n")
+    proc = subprocess.run(["gcc", *C_FLAGS, "-I", str(CASADI_GEN), "-fsyntax-only", str(program)],
+                          capture_output=True, text=True, check=False)
+    assert proc.returncode == 0, proc.stderr[-2000:]
+
+
 @pytest.mark.parametrize("precision", ["double", "float"])
 def test_precision_wrappers_follow_the_casadi_real_default(precision):
     """In both precisions' generation (CasADi writes its own default of casadi_real, double or
