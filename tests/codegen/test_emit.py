@@ -133,6 +133,17 @@ def test_generated_source_compiles_without_precision_flag(kind):
     assert proc.returncode == 0, proc.stderr[-2000:]
 
 
+@pytest.mark.parametrize("kind", ["qd_paper.c", "qd_paper_r_FL_BL.c", "qd_paper_d.c"])
+def test_float_build_has_no_double_promotion(kind):
+    """The float build computes in float (docs/embedded.md: `-Wdouble-promotion` clean): no float is promoted to
+    double anywhere in the generated file or the templates it includes, as generated (fabs is qd_fabs there)."""
+    from quadruped_dyn.codegen.library import C_FLAGS
+
+    proc = subprocess.run(["gcc", *C_FLAGS, "-Dcasadi_real=float", "-Wdouble-promotion", "-fsyntax-only",
+                           str(CASADI_GEN / kind)], capture_output=True, text=True, check=False)
+    assert proc.returncode == 0, proc.stderr[-2000:]
+
+
 def test_header_defines_the_return_codes_it_documents(tmp_path):
     """A caller tests the documented codes by name with the header alone (before, QD_SINGULAR was undeclared), and
     they are the values the library returns."""
