@@ -33,7 +33,7 @@ extern "C" {
 #define QD_REAL_IS_EXTENDED (sizeof(casadi_real) > sizeof(double))
 #define QD_MATH(fn) static inline casadi_real qd_##fn(casadi_real x) { return QD_REAL_IS_FLOAT ? (casadi_real)fn##f((float)x) \
   : QD_REAL_IS_EXTENDED ? (casadi_real)fn##l((long double)x) : (casadi_real)fn((double)x); }
-QD_MATH(sin) QD_MATH(cos) QD_MATH(tan) QD_MATH(sqrt) QD_MATH(fabs)
+QD_MATH(sin) QD_MATH(cos) QD_MATH(fabs)
 
 #ifndef casadi_int
 #define casadi_int long long int

@@ -343,7 +343,7 @@ _PRECISION_MATH = """
 #define QD_REAL_IS_EXTENDED (sizeof(casadi_real) > sizeof(double))
 #define QD_MATH(fn) static inline casadi_real qd_##fn(casadi_real x) { return QD_REAL_IS_FLOAT ? (casadi_real)fn##f((float)x) \\
   : QD_REAL_IS_EXTENDED ? (casadi_real)fn##l((long double)x) : (casadi_real)fn((double)x); }
-""" + " ".join(f"QD_MATH({f})" for f in _WRAPPED_MATH) + "\n"
+"""
 #: CasADi's default precision block; the wrappers go right after it, so a build without
 #: -Dcasadi_real (double, the default) compiles.
 _CASADI_REAL_DEFAULT = re.compile(r"#ifndef casadi_real\n#define casadi_real [\w ]+\n#endif\n")  # double or float
@@ -364,7 +364,11 @@ def _precision_math(c_source: str) -> str:
         default = _CASADI_REAL_DEFAULT.search(c_source)
         if not default:
             raise AssertionError("CasADi's '#ifndef casadi_real' default is not in the generated source")
-        c_source = c_source[:default.end()] + _PRECISION_MATH + c_source[default.end():]
+        # only the wrappers the file calls (its own text, and the reduced templates it includes): clang warns of an
+        # unused static inline function, which the Makefile's -Werror makes an error (`make CC=clang`)
+        calls = c_source + (reduced_templates_h() if f'#include "{REDUCED_TEMPLATES}"' in c_source else "")
+        wrappers = " ".join(f"QD_MATH({f})" for f in _WRAPPED_MATH if re.search(rf"(?<![\w.])qd_{f}\(", calls)) + "\n"
+        c_source = c_source[:default.end()] + _PRECISION_MATH + wrappers + c_source[default.end():]
     return c_source
 
 
