@@ -4,8 +4,14 @@
  * Call qd_NAME(arg, res, iw, w, 0): arg[i] points to input i, res[i] to output i (a null
  * res[i] skips it), iw and w are caller-provided work arrays of qd_NAME_SZ_IW and
  * qd_NAME_SZ_W entries. No malloc, no global state: thread-safe with per-thread work.
+ * A null arg[i] reads as zeros (CasADi's convention) only in
+ * M_full, C_full, G_full, nle_full, id_full, grf_<feet>, did_full, dfd_full_parts, dgrf_dir_<feet>;
+ * every other function dereferences each input: pass them all. No output may overlap an
+ * input or another output (e.g. id_full's tau written over its input f gives wrong values).
  * Vectors are contiguous; a sparse output holds its nonzeros column by column in the
- * pattern qd_NAME_sparsity_out(i) returns (CasADi's compressed-column format).
+ * pattern qd_NAME_sparsity_out(i) returns (CasADi's compressed-column format: nrow, ncol,
+ * colind[ncol + 1], row[nnz]); a dense input or output's pattern is the short form
+ * {nrow, ncol, 1} (nrow x ncol entries, column-major), with no colind or row after it.
  * casadi_real is double unless defined before this header (e.g. -Dcasadi_real=float).
  *
  * qd_grf_<feet>: the paper's GRF model for those stance feet (trunk-frame assumptions,

@@ -223,6 +223,12 @@ def _note(name: str) -> str:
     return f"  [{reduced[1].kind}, returns QD_NONFINITE / QD_SINGULAR / QD_DEGENERATE]" if reduced else ""
 
 
+#: The functions whose entry points read a null input pointer as zeros (CasADi's convention, kept by the generated
+#: graphs and the GRF solves); the templates' entry points (reduced functions, dfd_full, dgrf, dfd_r) read every input.
+NULL_INPUT_AS_ZEROS = ("M_full", "C_full", "G_full", "nle_full", "id_full", "grf_<feet>", "did_full", "dfd_full_parts",
+                       "dgrf_dir_<feet>")
+
+
 def header_doc(robot: Robot, functions: list[ca.Function], work: dict[str, tuple[int, int]]) -> str:
     """Documentation block: conventions, every signal once, every function's shapes and work sizes."""
     signals = sorted({f.name_in(i) for f in functions for i in range(f.n_in())}
@@ -234,8 +240,14 @@ def header_doc(robot: Robot, functions: list[ca.Function], work: dict[str, tuple
         " * Call qd_NAME(arg, res, iw, w, 0): arg[i] points to input i, res[i] to output i (a null",
         " * res[i] skips it), iw and w are caller-provided work arrays of qd_NAME_SZ_IW and",
         " * qd_NAME_SZ_W entries. No malloc, no global state: thread-safe with per-thread work.",
+        " * A null arg[i] reads as zeros (CasADi's convention) only in",
+        f" * {', '.join(NULL_INPUT_AS_ZEROS)};",
+        " * every other function dereferences each input: pass them all. No output may overlap an",
+        " * input or another output (e.g. id_full's tau written over its input f gives wrong values).",
         " * Vectors are contiguous; a sparse output holds its nonzeros column by column in the",
-        " * pattern qd_NAME_sparsity_out(i) returns (CasADi's compressed-column format).",
+        " * pattern qd_NAME_sparsity_out(i) returns (CasADi's compressed-column format: nrow, ncol,",
+        " * colind[ncol + 1], row[nnz]); a dense input or output's pattern is the short form",
+        " * {nrow, ncol, 1} (nrow x ncol entries, column-major), with no colind or row after it.",
         " * casadi_real is double unless defined before this header (e.g. -Dcasadi_real=float).",
         " *",
         " * qd_grf_<feet>: the paper's GRF model for those stance feet (trunk-frame assumptions,",

@@ -337,3 +337,60 @@ def test_unguarded_functions_read_no_input_pointer_and_a_null_input_as_zeros(pap
             flag = getattr(lib, PREFIX + name)(arg, (ptr * 8)(*[r.ctypes.data_as(ptr) for r in res]), None, None, 0)
             outs.append((flag, np.concatenate(res)))
         assert outs[0][0] == outs[1][0] and np.array_equal(outs[0][1], outs[1][1], equal_nan=True), name
+
+
+def _header_function_names() -> list[str]:
+    return re.findall(r"^int (qd_\w+)\(const casadi_real\*\* arg", (CASADI_GEN / "qd_paper.h").read_text(), re.M)
+
+
+def test_header_says_which_functions_read_a_null_input_as_zeros(tmp_path):
+    """Each function the header names as reading a null arg[i] as zeros does, for every input, bit for bit (the
+    others dereference their inputs: the header says so, since they are not CasADi's graphs)."""
+    from quadruped_dyn.codegen.emit import NULL_INPUT_AS_ZEROS
+
+    header = (CASADI_GEN / "qd_paper.h").read_text()
+    assert ", ".join(NULL_INPUT_AS_ZEROS) in " ".join(line.lstrip(" *") for line in header[: header.index("*/")].split("\n"))
+    patterns = [re.compile(PREFIX + name.replace("<feet>", "(?:FL|FR|BL|BR|none)(?:_(?:FR|BL|BR))*") + "$")
+                for name in NULL_INPUT_AS_ZEROS]
+    names = [n for n in _header_function_names() if any(p.match(n) for p in patterns)]
+    assert len(names) == 5 + 16 + 2 + 15, names  # full terms, GRF solves, did_full and dfd_full_parts, dgrf_dir
+    lib_path = tmp_path / "libfull.so"
+    subprocess.run(["gcc", "-std=c99", "-O0", "-fPIC", "-shared", str(CASADI_GEN / "qd_paper.c"),
+                    str(CASADI_GEN / "qd_paper_d.c"), "-o", str(lib_path), "-lm"], check=True, capture_output=True)
+    lib = ctypes.CDLL(str(lib_path))
+    ptr, rng = ctypes.POINTER(ctypes.c_double), np.random.default_rng(11)
+
+    def nnz(sp) -> int:  # the short form {nrow, ncol, 1} of a dense pattern, else colind[ncol]
+        return sp[0] * sp[1] if sp[2] == 1 else sp[2 + sp[1]]
+
+    for name in names:
+        fn = getattr(lib, name)
+        getattr(lib, name + "_sparsity_in").restype = getattr(lib, name + "_sparsity_out").restype = \
+            ctypes.POINTER(ctypes.c_longlong)
+        n_in, n_out = getattr(lib, name + "_n_in")(), getattr(lib, name + "_n_out")()
+        n_arg, n_w = ctypes.c_longlong(), ctypes.c_longlong()
+        getattr(lib, name + "_work")(ctypes.byref(n_arg), None, None, ctypes.byref(n_w))
+        sizes_in = [nnz(getattr(lib, name + "_sparsity_in")(i)) for i in range(n_in)]
+        sizes_out = [nnz(getattr(lib, name + "_sparsity_out")(i)) for i in range(n_out)]
+        values = [rng.uniform(-1, 1, k) for k in sizes_in]
+        values[0][3:7] = [0.1, -0.2, 0.05, 0.97]  # q's quaternion: not zero
+        w = np.zeros(max(n_w.value, 1))  # exactly the stated work memory
+        for i in range(n_in):
+            outs = []
+            for null in (True, False):
+                ins = [np.zeros(k) if j == i else values[j] for j, k in enumerate(sizes_in)]
+                res = [np.full(max(k, 1), 7.0) for k in sizes_out]
+                arg = (ptr * n_arg.value)(*[None if null and j == i else x.ctypes.data_as(ptr) for j, x in enumerate(ins)])
+                flag = fn(arg, (ptr * n_out)(*[r.ctypes.data_as(ptr) for r in res]), None, w.ctypes.data_as(ptr), 0)
+                outs.append((flag, np.concatenate(res)))
+            assert outs[0][0] == outs[1][0] and np.array_equal(outs[0][1], outs[1][1], equal_nan=True), (name, i)
+
+
+def test_dense_patterns_are_the_short_form_the_header_states():
+    """The header tells a caller that a dense input or output's pattern is {nrow, ncol, 1}: reading it as a full
+    compressed-column pattern (colind[ncol]) runs past the array (found by ASan in a caller's program)."""
+    header = (CASADI_GEN / "qd_paper.h").read_text()
+    assert "{nrow, ncol, 1}" in header[: header.index("*/")]
+    sparsity = re.findall(r"static const casadi_int casadi_s\d+\[(\d+)\] = \{(\d+), (\d+), (\d+)[,}]",
+                          (CASADI_GEN / "qd_paper_r_FL_BR.c").read_text())
+    assert any(size == "3" and third == "1" for size, _, _, third in sparsity)  # e.g. q_r, M_r: dense, 3 entries
