@@ -578,14 +578,17 @@ QD_INLINE int qd_fd_r_solve(int n, int legs, const casadi_real** arg, casadi_rea
   if (legs != 15) { /* M_r's space is the folded solve's work memory */
     for (int i = 0; i < n; ++i) b[i] = arg[2][i] - b[i];
     flag = qd_fd_r_folded(n, legs, S_b, T_b, M, b, M_r);
-  } else { /* four feet (n = 12): [M_r, b] fits in M_r's space */
-    qd_M_r_legs(n, legs, S_b, T_b, M, M_r);
+  } else { /* four feet: n is 12, and [M_r, b] fits in M_r's space. The constant 12, not n: in a two-feet file
+              (n = 13) this branch is dead, but at -O0 GCC still sees 13 * 13 + 13 reals written into M_r's 169 and
+              fails the build (-Werror=stringop-overflow) */
+    const int n4 = 12;
+    qd_M_r_legs(n4, legs, S_b, T_b, M, M_r);
     casadi_real scale = 0;
-    flag = qd_fd_r_factor(n, arg[2], M_r, 0, b, &scale);
+    flag = qd_fd_r_factor(n4, arg[2], M_r, 0, b, &scale);
     if (!flag) {
-      memcpy(M_r + n * n, b, n * sizeof *b);
-      flag = qd_gauss_solve_bounded(n, M_r, scale);
-      memcpy(b, M_r + n * n, n * sizeof *b);
+      memcpy(M_r + n4 * n4, b, n4 * sizeof *b);
+      flag = qd_gauss_solve_bounded(n4, M_r, scale);
+      memcpy(b, M_r + n4 * n4, n4 * sizeof *b);
     }
   }
   if (flag) return flag;

@@ -156,6 +156,15 @@ def test_generated_source_compiles_with_clang(kind, precision):
     assert proc.returncode == 0, proc.stderr[-2000:]
 
 
+@pytest.mark.parametrize("kind", ["qd_paper_r_FL_BL.c", "qd_paper_r_FL_FR_BL_BR.c"])
+def test_generated_source_builds_unoptimised(kind, tmp_path):
+    """`make CFLAGS=-O0` (a debug build) with the Makefile's -Werror: before, GCC's -O0 stringop check failed every
+    two-feet file on fd_r's dead four-feet branch (13 x 13 + 13 reals into M_r's 169)."""
+    proc = subprocess.run(["gcc", "-std=c99", "-pedantic", "-Wall", "-Wextra", "-Werror", "-O0", "-g", "-c",
+                           str(CASADI_GEN / kind), "-o", str(tmp_path / "r.o")], capture_output=True, text=True, check=False)
+    assert proc.returncode == 0, proc.stderr[-2000:]
+
+
 def test_header_defines_the_return_codes_it_documents(tmp_path):
     """A caller tests the documented codes by name with the header alone (before, QD_SINGULAR was undeclared), and
     they are the values the library returns."""
