@@ -218,9 +218,13 @@ def _note(name: str) -> str:
     reduced = reduced_parts(name)
     if name == "dfd_full":
         return "  [returns QD_NONFINITE / QD_SINGULAR]"
-    if name.startswith("dgrf_") and not name.startswith("dgrf_parts_"):
+    if name in ("did_full", "dfd_full_parts") or name.startswith("dgrf_") and not name.startswith("dgrf_parts_"):
         return "  [returns QD_NONFINITE]"
-    return f"  [{reduced[1].kind}, returns QD_NONFINITE / QD_SINGULAR / QD_DEGENERATE]" if reduced else ""
+    if not reduced:
+        return ""
+    # only the solves (fd_r, dfd_r) factor M_r: M_r, CG_r, G_r and id_r never return QD_SINGULAR
+    singular = " / QD_SINGULAR" if reduced[0] in ("fd_r", "dfd_r") else ""
+    return f"  [{reduced[1].kind}, returns QD_NONFINITE{singular} / QD_DEGENERATE]"
 
 
 #: The functions whose entry points read a null input pointer as zeros (CasADi's convention, kept by the generated
@@ -273,7 +277,7 @@ def header_doc(robot: Robot, functions: list[ca.Function], work: dict[str, tuple
         " * calls qd_M_full, qd_G_full and qd_id_full of qd_<robot>.c: M_r = S M_full T, CG_r = S rnea(q, v, k),",
         " * G_r = S G_full, id_r = S rnea(q, v, T qdd_r + k) (link the reduced files with qd_<robot>.c).",
         " * Return codes: 0 ok; QD_NONFINITE (1) an output is NaN/inf: the trunk pitched +-90 deg (two feet:",
-        " * the roll row has tan(pitch)), a zero quaternion or a non-finite input; QD_SINGULAR (2, fd_r only) M_r",
+        " * the roll row has tan(pitch)), a zero quaternion or a non-finite input; QD_SINGULAR (2, fd_r, dfd_r) M_r",
         " * singular to working precision (a pivot below QD_SINGULAR_RTOL times the largest entry of the matrix it",
         " * eliminates, M_r's, or a swing leg's block and the folded rest's), and in the float build also where the",
         " * result's error bound",
@@ -292,6 +296,8 @@ def header_doc(robot: Robot, functions: list[ca.Function], work: dict[str, tuple
         " * the front or back pair near a level trunk). The outputs are not written on QD_SINGULAR or QD_DEGENERATE.",
         " * A stance leg stretched straight is not singular here: the reduced",
         " * model never inverts a leg's Jacobian (measured on the paper robot: cond(M_r) 1e3 -> 3e4).",
+        " * Each function's codes are in its [returns ...] note below; one without that note returns 0",
+        " * always (M_full, C_full, G_full, nle_full, id_full, grf_<feet>): test its outputs for NaN/inf.",
         " *",
         " * Derivatives (qd_<robot>_d.c; quadruped_dyn/dynamics/derivatives.py, docs/derivatives.md). d/dq is",
         " * along pinocchio.integrate(q, dq): dq (18) = (dv_b, dw_b, dq_joints), a body-frame (local) increment",

@@ -403,3 +403,38 @@ def test_dense_patterns_are_the_short_form_the_header_states():
     sparsity = re.findall(r"static const casadi_int casadi_s\d+\[(\d+)\] = \{(\d+), (\d+), (\d+)[,}]",
                           (CASADI_GEN / "qd_paper_r_FL_BR.c").read_text())
     assert any(size == "3" and third == "1" for size, _, _, third in sparsity)  # e.g. q_r, M_r: dense, 3 entries
+
+
+def test_header_return_notes_match_the_codes_returned(tmp_path):
+    """A NaN joint angle: each full-coordinate, GRF and derivative function returns 0 or a code its header note lists,
+    and always 0 where the header says it returns 0 always (before, did_full and dfd_full_parts returned QD_NONFINITE with no
+    note); M_r, CG_r, G_r and id_r factor nothing and are not said to return QD_SINGULAR."""
+    header = (CASADI_GEN / "qd_paper.h").read_text()
+    doc = header[: header.index("*/")]
+    notes = dict(re.findall(r"^ \*   (qd_\w+)\(.*?;  iw \d+, w \d+(.*)$", doc, re.M))
+    codes = {"QD_NONFINITE": 1, "QD_SINGULAR": 2, "QD_DEGENERATE": 3}
+    lib_path = tmp_path / "libfull.so"
+    subprocess.run(["gcc", "-std=c99", "-O0", "-fPIC", "-shared", str(CASADI_GEN / "qd_paper.c"),
+                    str(CASADI_GEN / "qd_paper_d.c"), "-o", str(lib_path), "-lm"], check=True, capture_output=True)
+    lib = ctypes.CDLL(str(lib_path))
+    ptr = ctypes.POINTER(ctypes.c_double)
+    checked = 0
+    for name, note in notes.items():
+        if not hasattr(lib, name):
+            continue  # a reduced function: in its own file
+        n_in, n_out = getattr(lib, name + "_n_in")(), getattr(lib, name + "_n_out")()
+        ins = [np.full(400, 0.1) for _ in range(n_in)]
+        ins[0][3:7] = [0.0, 0.0, 0.0, 1.0]
+        ins[0][8] = np.nan  # a joint angle of q
+        res = [np.zeros(400) for _ in range(n_out)]
+        w = np.zeros(4000)
+        flag = getattr(lib, name)((ptr * n_in)(*[x.ctypes.data_as(ptr) for x in ins]),
+                                  (ptr * n_out)(*[r.ctypes.data_as(ptr) for r in res]), None, w.ctypes.data_as(ptr), 0)
+        listed = {codes[c] for c in re.findall(r"QD_[A-Z]+", note)}
+        assert flag in listed | {0} if listed else flag == 0, (name, flag, note)  # 0 where the NaN does not enter
+        checked += 1
+    assert checked == 5 + 16 + 3 + 2 * 15
+    for name, note in notes.items():
+        kind = re.match(r"qd_(\w+?_r)_", name)
+        if kind:
+            assert ("QD_SINGULAR" in note) == (kind.group(1) in ("fd_r", "dfd_r")), (name, note)
