@@ -80,45 +80,45 @@
  *                                   work memory w (its _work entry, _SZ_W); return codes as fd_r.
  *
  * Signals:
- *   q        p [m, world frame], quaternion (x, y, z, w) of R (trunk -> world, need not be unit), 12 joint angles [rad] in order FL, FR, BL, BR x (HAA, HFE, KFE)
- *   v        v_b [m/s], omega_b [rad/s] (trunk frame), 12 joint rates [rad/s]
- *   a        vdot: d/dt of v; trunk part is the SPATIAL acceleration vdot_b = a_b - omega_b x v_b [m/s^2], alpha_b [rad/s^2]; 12 joint accelerations [rad/s^2]
- *   f        ground force on each foot FL, FR, BL, BR, trunk frame [N]
- *   M        joint-space inertia matrix (6 trunk + 12 joints), column-major nonzeros [kg, kg m, kg m^2]
- *   C        velocity terms C(q, v) (g = 0, a = 0): trunk force [N], moment [N m], joint torques [N m]
- *   G        gravity terms G(q): trunk force [N], moment [N m] (trunk frame), joint torques [N m]
- *   nle      C(q, v) + G(q), as Pinocchio's nonLinearEffects
- *   w_res    base wrench residual: force [N], moment about the trunk origin [N m], trunk frame; zero when the foot forces produce the motion
- *   tau      joint torques [N m]
- *   lambda   the GRF model's unknowns (minimum-norm solution), see quadruped_dyn/dynamics/grf.py
- *   residual part of the required trunk wrench the GRF model cannot balance: force [N], moment [N m]
- *   q_r      reduced coordinates: 12 joint angles [rad] (FL, FR, BL, BR x HAA, HFE, KFE); for two stance feet a 13th, the trunk roll phi [rad] (R = Rz(psi) Ry(theta) Rx(phi)), which these functions take from quat
- *   qd_r     d/dt q_r [rad/s]; the 13th is the roll rate phid
- *   qdd_r    d2/dt2 q_r [rad/s^2]; the 13th is the roll acceleration
- *   quat     trunk orientation (x, y, z, w) of R (trunk -> world; need not be unit); must agree with the stance: it sets gravity in the trunk frame and, with two feet, the roll-rate row
- *   tau_ext  joint torques [N m] (project order); for two feet a 13th entry, a moment about the foot-to-foot line [N m] applied as if the roll were actuated (0 on the robot)
- *   M_r      reduced inertia matrix (n x n, column-major) = d tau_r / d qdd_r; not symmetric
- *   CG_r     C_r(q_r, qd_r) + G_r(q_r): tau_r at qdd_r = 0 [N m]
- *   G_r      tau_r at qd_r = 0, qdd_r = 0 [N m]
- *   tau_r    12 joint torques [N m] with the paper's GRF model of the stance set; for two feet a 13th entry: the trunk moment about the foot-to-foot line (from foot 2 to foot 1) that the feet cannot produce [N m], 0 for a motion the robot can make (the roll is unactuated)
- *   tau_full generalized force (18): trunk wrench (force [N], moment [N m], trunk frame), 12 joint torques [N m]
- *   dtau_dq  d rnea / dq (18x18): columns along the tangent dq = (dv_b, dw_b, dq_joints), body-frame increment
- *   dtau_dv  d rnea / dv (18x18)
- *   dtau_da  d rnea / da = M (18x18)
- *   da_dq    d a / dq (18x18, dense), a = M^-1 (tau_full - C - G); tangent columns as dtau_dq
- *   da_dv    d a / dv (18x18, dense)
- *   da_dtau  d a / d tau_full = M^-1 (18x18, dense)
- *   dqdd_dq  d qdd_r / d q_r (n x n, dense) at fixed quat; its 13th column (the roll) is 0
- *   dqdd_dqd d qdd_r / d qd_r (n x n, dense)
- *   dqdd_dtaud qdd_r / d tau_ext = M_r^-1 (n x n, dense)
- *   dqdd_dthetad qdd_r / d theta (n x 3, dense), theta as dtheta (total derivative along the stance: dqdd_dq + dqdd_dtheta W, W = d omega_b / d qd_r)
- *   w        a trunk wrench (force [N], moment about the trunk origin [N m], trunk frame) for the GRF solve
- *   dq       direction of q in the tangent (18): (dv_b, dw_b, dq_joints) as dtau_dq's columns
- *   lambda_w the GRF model's unknowns balancing the wrench w: P(q) w (minimum norm, as lambda)
- *   dlambda_wdirectional derivative of P(q) w along dq at fixed w (only the stance legs' joints enter)
- *   dlambda_dqd lambda / dq (m x 18, dense), tangent columns as dtau_dq
- *   dlambda_dvd lambda / dv (m x 18, dense)
- *   dlambda_dad lambda / da (m x 18, dense)
+ *   q           p [m, world frame], quaternion (x, y, z, w) of R (trunk -> world, need not be unit), 12 joint angles [rad] in order FL, FR, BL, BR x (HAA, HFE, KFE)
+ *   v           v_b [m/s], omega_b [rad/s] (trunk frame), 12 joint rates [rad/s]
+ *   a           vdot: d/dt of v; trunk part is the SPATIAL acceleration vdot_b = a_b - omega_b x v_b [m/s^2], alpha_b [rad/s^2]; 12 joint accelerations [rad/s^2]
+ *   f           ground force on each foot FL, FR, BL, BR, trunk frame [N]
+ *   M           joint-space inertia matrix (6 trunk + 12 joints), column-major nonzeros [kg, kg m, kg m^2]
+ *   C           velocity terms C(q, v) (g = 0, a = 0): trunk force [N], moment [N m], joint torques [N m]
+ *   G           gravity terms G(q): trunk force [N], moment [N m] (trunk frame), joint torques [N m]
+ *   nle         C(q, v) + G(q), as Pinocchio's nonLinearEffects
+ *   w_res       base wrench residual: force [N], moment about the trunk origin [N m], trunk frame; zero when the foot forces produce the motion
+ *   tau         joint torques [N m]
+ *   lambda      the GRF model's unknowns (minimum-norm solution), see quadruped_dyn/dynamics/grf.py
+ *   residual    part of the required trunk wrench the GRF model cannot balance: force [N], moment [N m]
+ *   q_r         reduced coordinates: 12 joint angles [rad] (FL, FR, BL, BR x HAA, HFE, KFE); for two stance feet a 13th, the trunk roll phi [rad] (R = Rz(psi) Ry(theta) Rx(phi)), which these functions take from quat
+ *   qd_r        d/dt q_r [rad/s]; the 13th is the roll rate phid
+ *   qdd_r       d2/dt2 q_r [rad/s^2]; the 13th is the roll acceleration
+ *   quat        trunk orientation (x, y, z, w) of R (trunk -> world; need not be unit); must agree with the stance: it sets gravity in the trunk frame and, with two feet, the roll-rate row
+ *   tau_ext     joint torques [N m] (project order); for two feet a 13th entry, a moment about the foot-to-foot line [N m] applied as if the roll were actuated (0 on the robot)
+ *   M_r         reduced inertia matrix (n x n, column-major) = d tau_r / d qdd_r; not symmetric
+ *   CG_r        C_r(q_r, qd_r) + G_r(q_r): tau_r at qdd_r = 0 [N m]
+ *   G_r         tau_r at qd_r = 0, qdd_r = 0 [N m]
+ *   tau_r       12 joint torques [N m] with the paper's GRF model of the stance set; for two feet a 13th entry: the trunk moment about the foot-to-foot line (from foot 2 to foot 1) that the feet cannot produce [N m], 0 for a motion the robot can make (the roll is unactuated)
+ *   tau_full    generalized force (18): trunk wrench (force [N], moment [N m], trunk frame), 12 joint torques [N m]
+ *   dtau_dq     d rnea / dq (18x18): columns along the tangent dq = (dv_b, dw_b, dq_joints), body-frame increment
+ *   dtau_dv     d rnea / dv (18x18)
+ *   dtau_da     d rnea / da = M (18x18)
+ *   da_dq       d a / dq (18x18, dense), a = M^-1 (tau_full - C - G); tangent columns as dtau_dq
+ *   da_dv       d a / dv (18x18, dense)
+ *   da_dtau     d a / d tau_full = M^-1 (18x18, dense)
+ *   dqdd_dq     d qdd_r / d q_r (n x n, dense) at fixed quat; its 13th column (the roll) is 0
+ *   dqdd_dqd    d qdd_r / d qd_r (n x n, dense)
+ *   dqdd_dtau   d qdd_r / d tau_ext = M_r^-1 (n x n, dense)
+ *   dqdd_dtheta d qdd_r / d theta (n x 3, dense), theta as dtheta (total derivative along the stance: dqdd_dq + dqdd_dtheta W, W = d omega_b / d qd_r)
+ *   w           a trunk wrench (force [N], moment about the trunk origin [N m], trunk frame) for the GRF solve
+ *   dq          direction of q in the tangent (18): (dv_b, dw_b, dq_joints) as dtau_dq's columns
+ *   lambda_w    the GRF model's unknowns balancing the wrench w: P(q) w (minimum norm, as lambda)
+ *   dlambda_w   directional derivative of P(q) w along dq at fixed w (only the stance legs' joints enter)
+ *   dlambda_dq  d lambda / dq (m x 18, dense), tangent columns as dtau_dq
+ *   dlambda_dv  d lambda / dv (m x 18, dense)
+ *   dlambda_da  d lambda / da (m x 18, dense)
  *
  * Functions (work sizes iw, w):
  *   qd_M_full(q[19]) -> (M[18x18, 210 nonzeros]);  iw 0, w 0

@@ -323,7 +323,8 @@ def header_doc(robot: Robot, functions: list[ca.Function], work: dict[str, tuple
         " *                                   work memory w (its _work entry, _SZ_W); return codes as fd_r.",
         " *",
         " * Signals:",
-        *[f" *   {name:<9}{SIGNAL_DOCS[name]}" for name in signals],
+        # the names' column as wide as the longest name and a space (a fixed 9 ran dlambda_w into its text)
+        *[f" *   {name:<{max(9, max(map(len, signals)) + 1)}}{SIGNAL_DOCS[name]}" for name in signals],
         " *",
         " * Functions (work sizes iw, w):",
     ]

@@ -438,3 +438,17 @@ def test_header_return_notes_match_the_codes_returned(tmp_path):
         kind = re.match(r"qd_(\w+?_r)_", name)
         if kind:
             assert ("QD_SINGULAR" in note) == (kind.group(1) in ("fd_r", "dfd_r")), (name, note)
+
+
+def test_header_signal_names_stand_apart_from_their_text():
+    """Every signal line of the header reads 'name text': a name longer than the old fixed column ran into its
+    description ('dlambda_wdirectional derivative', 'dqdd_dtaud qdd_r')."""
+    from quadruped_dyn.codegen.emit import SIGNAL_DOCS
+
+    header = (CASADI_GEN / "qd_paper.h").read_text()
+    block = header[header.index(" * Signals:\n"): header.index(" * Functions (work sizes")]
+    lines = [line for line in block.split("\n")[1:] if line.strip(" *")]
+    assert lines
+    for line in lines:
+        name, _, text = line[len(" *   "):].partition(" ")
+        assert name in SIGNAL_DOCS and text.strip() == SIGNAL_DOCS[name], line
