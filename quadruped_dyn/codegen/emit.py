@@ -283,6 +283,8 @@ def header_doc(robot: Robot, functions: list[ca.Function], work: dict[str, tuple
         " * result's error bound",
         f" * FLT_EPSILON x cond_1 of that matrix exceeds {FLOAT_MAX_BOUND:g} (so a float fd_r returned as 0 is",
         " * within 1 %);",
+        " * (QD_SINGULAR_RTOL: qd_reduced_templates.h, a multiple of casadi_real's epsilon; QD_REGULARITY_MIN:",
+        " * each qd_<robot>_r_<feet>.c, quadruped_dyn.tolerances.REGULARITY_MIN; neither is in this header.)",
         " * QD_DEGENERATE (3) the stance is degenerate, checked first by",
         " * every reduced function: its regularity (quadruped_dyn/dynamics/stance_regularity.py, in [0, 1]) is",
         " * at most QD_REGULARITY_MIN (coincident or collinear stance feet, or two feet whose line is",
