@@ -90,6 +90,14 @@ def echo(text: object) -> None:
     click.echo("\n".join(printable(line) for line in str(text).split("\n")))
 
 
+def foot_frames_option(command: Any) -> Any:
+    """``--foot-frames FL,FR,BL,BR``: the contact frames ``load_robot`` takes instead of those it chooses (its
+    warning names the commands that have this option)."""
+    return click.option("--foot-frames", default=None, metavar="FL,FR,BL,BR",
+                        help="The foot frame of each leg (comma-separated, leg order FL, FR, BL, BR) instead of the "
+                             "chosen ones.")(command)
+
+
 def require_tools(*tools: str) -> None:
     missing = [t for t in tools if shutil.which(t) is None]
     if missing:

@@ -8,7 +8,7 @@ import sys
 import click
 
 from quadruped_dyn.checks.terms import MAX_SAMPLES
-from quadruped_dyn.cli.app import EXIT_CHECK_FAILED, echo, progress
+from quadruped_dyn.cli.app import EXIT_CHECK_FAILED, echo, foot_frames_option, progress
 from quadruped_dyn.model.robot import load_robot
 
 
@@ -21,8 +21,7 @@ from quadruped_dyn.model.robot import load_robot
 @click.option("--against", default=None, metavar="LIBS",
               help="Also compare M, C + G, G and foot Jacobians with other libraries, after diagnosing what each does "
                    "to the URDF: comma-separated subset of mujoco,idyntree (pip install 'quadruped_dyn[xlib]').")
-@click.option("--foot-frames", default=None, metavar="FL,FR,BL,BR",
-              help="The foot frame of each leg (comma-separated, leg order FL, FR, BL, BR) instead of the chosen ones.")
+@foot_frames_option
 def check(robot: str, samples: int, seed: int, as_json: bool, against: str | None, foot_frames: str | None) -> None:
     """Check every symbolic term of ROBOT against Pinocchio on random states (exit 1 on failure)."""
     from quadruped_dyn.checks.terms import run_check

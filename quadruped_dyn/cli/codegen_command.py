@@ -6,7 +6,7 @@ import sys
 
 import click
 
-from quadruped_dyn.cli.app import EXIT_CHECK_FAILED, echo
+from quadruped_dyn.cli.app import EXIT_CHECK_FAILED, echo, foot_frames_option
 from quadruped_dyn.errors import InputError
 from quadruped_dyn.files.names import printable
 from quadruped_dyn.files.paths import writable_dir
@@ -23,14 +23,15 @@ from quadruped_dyn.model.robot import load_robot
               help="Print a JSON summary instead of the file list: every function's caller memory, and its code size "
                    "and worst-case stack on Cortex-M7 and Cortex-M4F at -Os and -O2 (cross builds: minutes, "
                    "cached; docs/embedded.md).")
-def codegen(robot: str, out_dir: str, precision: str, check: bool, as_json: bool) -> None:
+@foot_frames_option
+def codegen(robot: str, out_dir: str, precision: str, check: bool, as_json: bool, foot_frames: str | None) -> None:
     """Generate standalone C for ROBOT: M, C, G, id, the GRF solves, the reduced model of every stance set
     and the derivatives, with a Makefile and a check program."""
     from pathlib import Path
 
     from quadruped_dyn.checks.c_reference import compare_generation, generate_checked
 
-    r = load_robot(robot)
+    r = load_robot(robot, foot_frames=foot_frames)
     if check:
         if not Path(out_dir).is_dir():
             raise InputError(f"--out '{printable(out_dir)}' is not a directory; expected the directory to compare (--check)")

@@ -6,7 +6,7 @@ import json
 
 import click
 
-from quadruped_dyn.cli.app import echo, progress
+from quadruped_dyn.cli.app import echo, foot_frames_option, progress
 from quadruped_dyn.files.names import printable
 from quadruped_dyn.files.paths import writable_dir
 from quadruped_dyn.files.safe_write import replaceable
@@ -28,9 +28,10 @@ from quadruped_dyn.model.robot import load_robot
               help="Directory for the JSON, CSV, plots and animation.")
 @click.option("--no-animation", is_flag=True, help="Skip the animation.")
 @click.option("--json", "as_json", is_flag=True, help="Print the result as JSON.")
+@foot_frames_option
 def control(robot: str, gait_name: str, controllers: tuple[str, ...], cycles: int, rate_hz: float, timestep: float,
             mu: float, kp_per_kg: float | None, kd_per_kg: float | None, out_dir: str, no_animation: bool,
-            as_json: bool) -> None:
+            as_json: bool, foot_frames: str | None) -> None:
     """Closed loop: each controller (on the generated C) walks or trots ROBOT in MuJoCo.
     Reports falls, tracking, trunk drift, foot slip, MuJoCo's contact forces against the
     paper's GRF model, torque saturation and the C calls' time per tick."""
@@ -44,8 +45,8 @@ def control(robot: str, gait_name: str, controllers: tuple[str, ...], cycles: in
 
     gains = Gains()
     gains = replace(gains, **{k: v for k, v in (("kp_per_kg", kp_per_kg), ("kd_per_kg", kd_per_kg)) if v is not None})
-    study = prepare(load_robot(robot), gait_name, controllers, gains, LoopOptions(rate_hz=rate_hz, cycles=cycles),
-                    PlantOptions(timestep=timestep, mu=mu))
+    study = prepare(load_robot(robot, foot_frames=foot_frames), gait_name, controllers, gains,
+                    LoopOptions(rate_hz=rate_hz, cycles=cycles), PlantOptions(timestep=timestep, mu=mu))
     out = writable_dir(out_dir, f"--out '{out_dir}'")
     replaceable(output_paths(out, study.robot.name, study.plan.gait.name).values())
     total = study.loop.cycles * study.plan.gait.period * len(study.controllers)

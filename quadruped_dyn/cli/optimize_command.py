@@ -9,7 +9,7 @@ import sys
 
 import click
 
-from quadruped_dyn.cli.app import EXIT_CHECK_FAILED, echo
+from quadruped_dyn.cli.app import EXIT_CHECK_FAILED, echo, foot_frames_option
 from quadruped_dyn.errors import InputError
 from quadruped_dyn.files.names import printable
 from quadruped_dyn.files.paths import writable_dir
@@ -31,8 +31,9 @@ from quadruped_dyn.model.robot import load_robot
 @click.option("--out", "out_dir", default="results", show_default=True, type=click.Path(),
               help="Directory for the CSV, the JSON report and the plot.")
 @click.option("--json", "as_json", is_flag=True, help="Print the report as JSON.")
+@foot_frames_option
 def optimize(robot: str, gait_name: str, nodes: int | None, mu: float | None, speed: float | None, hessian: str,
-             cycles: float, out_dir: str, as_json: bool) -> None:
+             cycles: float, out_dir: str, as_json: bool, foot_frames: str | None) -> None:
     """Optimise one periodic gait cycle on the reduced model: the roll unactuated (id_r's 13th entry
     = 0), the paper's GRF in the friction cone, URDF joint and effort limits, swing clearance,
     periodicity at the plan's speed; effort + closeness to the plan. Exit 1 with IPOPT's status when
@@ -57,7 +58,7 @@ def optimize(robot: str, gait_name: str, nodes: int | None, mu: float | None, sp
                          f"({REPLAY_DT:g} s); expected 0 (no replay) or at least {REPLAY_DT / gait.period:.3g}")
     options = Options(nodes_per_phase=NODES_PER_PHASE if nodes is None else nodes, mu=MU if mu is None else mu, speed=speed)
     out = writable_dir(out_dir, f"--out '{out_dir}'")
-    r = load_robot(robot)
+    r = load_robot(robot, foot_frames=foot_frames)
     options.check(r, gait)  # bad input: exit 2 before any work
     paths = output_paths(out, r.name, gait.name)
     replaceable(paths.values())

@@ -7,7 +7,7 @@ import sys
 
 import click
 
-from quadruped_dyn.cli.app import EXIT_CHECK_FAILED, echo
+from quadruped_dyn.cli.app import EXIT_CHECK_FAILED, echo, foot_frames_option
 from quadruped_dyn.model.robot import ROBOT_NAMES, load_robot
 from quadruped_dyn.model.robot_summary import robot_info
 
@@ -22,8 +22,7 @@ def robots() -> None:
 @click.command()
 @click.argument("robot")
 @click.option("--json", "as_json", is_flag=True, help="Print JSON instead of a table.")
-@click.option("--foot-frames", default=None, metavar="FL,FR,BL,BR",
-              help="The foot frame of each leg (comma-separated, leg order FL, FR, BL, BR) instead of the chosen ones.")
+@foot_frames_option
 def info(robot: str, as_json: bool, foot_frames: str | None) -> None:
     """Legs, joints, link lengths, masses and standing foot positions of ROBOT (name or URDF path)."""
     data = robot_info(load_robot(robot, foot_frames=foot_frames))

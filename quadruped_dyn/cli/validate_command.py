@@ -6,7 +6,7 @@ import json
 
 import click
 
-from quadruped_dyn.cli.app import echo
+from quadruped_dyn.cli.app import echo, foot_frames_option
 from quadruped_dyn.errors import NumericalError
 from quadruped_dyn.experiment.simulate import check_times, reduced_dynamics
 from quadruped_dyn.files.paths import writable_dir
@@ -34,8 +34,9 @@ WARN_SAMPLES = 20_000
 @click.option("--out", "out_dir", default="results", show_default=True, type=click.Path(),
               help="Directory for the plots, the CSV and the JSON report.")
 @click.option("--json", "as_json", is_flag=True, help="Print the report as JSON.")
+@foot_frames_option
 def validate(robot: str, gait_name: str, horizon: float | None, integrator: str, dt: float, backend: str,
-             engine: str, no_physics: bool, out_dir: str, as_json: bool) -> None:
+             engine: str, no_physics: bool, out_dir: str, as_json: bool, foot_frames: str | None) -> None:
     """The paper's experiment: IK -> id_r -> forward dynamics -> compare with IK (plots, CSV, JSON),
     with the instability, the error budget and the physics check against rigid-contact dynamics.
 
@@ -61,7 +62,7 @@ def validate(robot: str, gait_name: str, horizon: float | None, integrator: str,
     runs = 3 + (gait.n_coords == 13) + (0 if no_physics else 5)
     _warn_work(horizon, dt, runs)
     out = writable_dir(out_dir, f"--out '{out_dir}'")
-    r = load_robot(robot)
+    r = load_robot(robot, foot_frames=foot_frames)
     paths = output_paths(out, r.name, gait.name)
     replaceable(paths.values())
     dynamics = reduced_dynamics(r, backend)

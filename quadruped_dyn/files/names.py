@@ -56,3 +56,9 @@ def printable(text: object) -> str:
         else:
             out.append(ch)
     return "".join(out)
+
+
+def comment_text(text: object) -> str:
+    """``printable(text)`` that cannot end a C block comment (a URDF's frame names are free text: ``*/`` becomes
+    ``* /``)."""
+    return printable(text).replace("*/", "* /")

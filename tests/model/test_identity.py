@@ -253,3 +253,25 @@ def test_foot_frames_on_the_command_line(tmp_path):
     at_knee = CliRunner().invoke(main, ["info", "paper", "--foot-frames", "FL_shank,FR_foot,BL_foot,BR_foot"])
     assert at_knee.exit_code == 2 and at_knee.stderr.count("\n") == 1, at_knee.output
     assert "foot frame 'FL_shank' of leg FL is at the knee joint" in at_knee.stderr, at_knee.stderr
+
+
+def test_the_header_names_the_feet(tmp_path):
+    """The generated header states the foot frames its C was generated for (every GRF solve and reduced function
+    depends on them), as text that cannot end its comment (a frame name is free text); codegen takes
+    --foot-frames and refuses a wrong list before generating."""
+    from click.testing import CliRunner
+
+    from quadruped_dyn.cli import main
+    from quadruped_dyn.codegen.emit import header_doc
+
+    sensor = _with_extra_frames(tmp_path, {"foot_sensor": 0.05})
+    feet = [f"{leg}_foot_sensor" for leg in ("FL", "FR", "BL", "BR")]
+    doc = header_doc(load_robot(str(sensor), foot_frames=feet), [], {})
+    assert "FL 'FL_foot_sensor', FR 'FR_foot_sensor', BL 'BL_foot_sensor', BR 'BR_foot_sensor'." in doc
+    odd = tmp_path / "odd.urdf"
+    odd.write_text(sensor.read_text().replace("_foot_sensor", "_foot*/sensor"))
+    doc = header_doc(load_robot(str(odd), foot_frames=[f.replace("_foot_sensor", "_foot*/sensor") for f in feet]), [], {})
+    assert "FL 'FL_foot* /sensor'" in doc and doc.count("*/") == 1 and doc.endswith("*/\n")  # the comment's own end
+    result = CliRunner().invoke(main, ["codegen", str(sensor), "--out", str(tmp_path / "gen"), "--foot-frames", "a,b,c,d"])
+    assert result.exit_code == 2 and "foot frame 'a' of leg FL is not a frame" in result.stderr, result.output
+    assert not (tmp_path / "gen").exists() or not any((tmp_path / "gen").iterdir())
