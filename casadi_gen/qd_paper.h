@@ -38,7 +38,8 @@
  * calls qd_M_full, qd_G_full and qd_id_full of qd_<robot>.c: M_r = S M_full T, CG_r = S rnea(q, v, k),
  * G_r = S G_full, id_r = S rnea(q, v, T qdd_r + k) (link the reduced files with qd_<robot>.c).
  * Return codes: 0 ok; QD_NONFINITE (1) an output is NaN/inf: the trunk pitched +-90 deg (two feet:
- * the roll row has tan(pitch)), a zero quaternion or a non-finite input; QD_SINGULAR (2, fd_r, dfd_r) M_r
+ * the roll row has tan(pitch)), a zero quaternion (M_r with three or four feet does not depend on quat and
+ * returns 0 for any) or a non-finite input; QD_SINGULAR (2, fd_r, dfd_r) M_r
  * singular to working precision (a pivot below QD_SINGULAR_RTOL times the largest entry of the matrix it
  * eliminates, M_r's, or a swing leg's block and the folded rest's), and in the float build also where the
  * result's error bound

@@ -86,6 +86,11 @@ def test_singular_configurations_are_reported(paper):
     f = CompiledFunction(library, reduced_symbol("id_r", stance))
     with pytest.raises(InputError, match="not finite"):
         f.raw(np.full(13, np.nan), x["qd_r"], x["qdd_r"], x["quat"])
+    for feet in ("FL+FR+BL", "FL+FR+BL+BR"):  # M_r of three or four feet does not read quat (the header says so)
+        stance, x = _stance_args(paper, feet)
+        f = CompiledFunction(library, reduced_symbol("M_r", stance))
+        zero, given = (np.asarray(f.raw(x["q_r"], quat)) for quat in (np.zeros(4), x["quat"]))
+        assert np.all(np.isfinite(given)) and np.array_equal(zero, given), feet
     stance, x = _stance_args(paper, "FR+BL+BR")
     q = x["q_r"].copy()
     q[3 * 3 + 2] = 0.0  # BR knee straight
