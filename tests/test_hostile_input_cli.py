@@ -257,7 +257,7 @@ def test_every_command_prints_through_echo():
 def test_an_output_set_appears_whole_or_not_at_all(tmp_path):
     """``output_set``: the files of one result are renamed into place together when the block ends;
     an error or an interrupt inside leaves the old files as they were and no temporary file."""
-    from quadruped_dyn.files.safe_write import output_set, write_text
+    from quadruped_dyn.files.safe_write import output_set, remove, write_text
 
     (tmp_path / "a.json").write_text("old a")
     (tmp_path / "b.csv").write_text("old b")
@@ -272,6 +272,10 @@ def test_an_output_set_appears_whole_or_not_at_all(tmp_path):
         assert (tmp_path / "a.json").read_text() == "old a", "not before the block ends"
     assert [(tmp_path / n).read_text() for n in ("a.json", "b.csv")] == ["new a", "new b"]
     assert sorted(p.name for p in tmp_path.iterdir()) == ["a.json", "b.csv"]
+    with output_set():  # a file of the previous result that this one has not: removed with the set
+        remove(tmp_path / "b.csv")
+        assert (tmp_path / "b.csv").read_text() == "new b", "not before the block ends"
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["a.json"]
 
 
 def test_validate_interrupted_while_plotting_leaves_no_new_json(tmp_path, monkeypatch):

@@ -9,7 +9,7 @@ _MODULES: dict[str, tuple[str, ...]] = {
     "json": ("json_safe", "write_json"),
     "names": ("MAX_NAME_CHARS", "is_safe_name", "safe_name", "printable"),
     "paths": ("writable_dir",),
-    "safe_write": ("output_path", "output_dir", "output_set", "replaceable", "write_bytes", "write_text", "text_writer",
-                   "save_figure"),
+    "safe_write": ("output_path", "output_dir", "output_set", "remove", "publish", "replaceable", "write_bytes",
+                   "write_text", "text_writer", "save_figure"),
 }
 __all__, __getattr__, __dir__ = lazy_exports(__name__, _MODULES)

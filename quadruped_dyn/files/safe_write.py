@@ -13,7 +13,9 @@ a read-only directory, a directory in the way) is an ``InputError`` naming the f
 The files of one result (a run's JSON, CSV and plots) are written inside ``output_set()``: they
 are renamed into place together when the block ends, so an interrupted or failed run (Ctrl-C while
 the plots are drawn, a full disk at the last file) leaves the previous run's files as they were,
-never its new JSON beside the old CSV.
+never its new JSON beside the old CSV. ``remove`` inside the set removes a file of the previous
+result when the set ends; ``publish`` moves a folder of files written elsewhere first (a report,
+whose steps read their files back) into place as one set.
 """
 
 from __future__ import annotations
@@ -42,13 +44,17 @@ def output_path(out_dir: str | Path, name: str) -> Path:
     return path
 
 
-#: (temporary, target) of each file written inside ``output_set``, renamed when it ends.
+#: (temporary, target) of each file written inside ``output_set``, renamed when it ends; ("", target)
+#: for a file ``remove``d then.
 _PENDING: ContextVar[list[tuple[str, Path]] | None] = ContextVar("_PENDING", default=None)
 
 
 def _rename(tmp: str, path: Path) -> None:
     try:
-        os.replace(tmp, path)  # replaces a link at ``path``; never follows it
+        if tmp:
+            os.replace(tmp, path)  # replaces a link at ``path``; never follows it
+        else:
+            path.unlink(missing_ok=True)  # a link is removed, not followed
     except OSError as e:
         raise InputError(f"cannot write '{printable(path)}' ({e.strerror}); expected a writable file path") from e
 
@@ -69,8 +75,37 @@ def output_set() -> Iterator[None]:
             pending.pop(0)
     finally:
         for tmp, _ in pending:
-            with contextlib.suppress(FileNotFoundError):
-                os.unlink(tmp)
+            if tmp:
+                with contextlib.suppress(FileNotFoundError):
+                    os.unlink(tmp)
+
+
+def remove(path: str | Path) -> None:
+    """Remove the file or link at ``path`` if there is one (never a directory: ``replaceable``); inside
+    ``output_set`` when the set ends, after its files are in place."""
+    path = Path(path)
+    replaceable([path])
+    pending = _PENDING.get()
+    if pending is None:
+        _rename("", path)
+    else:
+        pending.append(("", path))
+
+
+def publish(staging: Path, target: Path, replaces: Iterable[Path] = ()) -> list[Path]:
+    """Every file under ``staging`` written (``write_bytes``) to the same place under ``target``, its
+    subfolders made by ``output_dir``; then each file (or link) of ``replaces`` that was not written ``remove``d.
+    Inside ``output_set`` all of it happens when the set ends, or none of it. The files written, in ``target``."""
+    written = []
+    for src in sorted(p for p in staging.rglob("*") if p.is_file()):
+        folder = target
+        for part in src.relative_to(staging).parent.parts:
+            folder = output_dir(folder, part)
+        written.append(write_bytes(output_path(folder, src.name), src.read_bytes()))
+    for old in sorted(set(map(Path, replaces)) - set(written)):
+        if old.is_file() or old.is_symlink():  # a folder of the same pattern is not the previous result's
+            remove(old)
+    return written
 
 
 def _umask() -> int:

@@ -1,6 +1,9 @@
 """``quadruped-dyn report``: one self-contained HTML page of everything the toolkit knows about
 a robot (``<out>/<robot>/report.html``), with its files beside it (the experiment's plots and
-JSON, the generated C).
+JSON, the generated C). The steps write their files into a hidden folder inside it; the page and
+they are then put in place as one output set (``files.safe_write.publish``), replacing the previous
+report's (``report.html``, ``c/``, ``<robot>_*``): an interrupted or failed report leaves the
+previous one as it was, never new JSON beside old plots.
 
 Each section is gathered by a function here, from the toolkit's public APIs, and rendered by
 ``report_sections`` from plain data (the same dicts the commands print as JSON). A section
@@ -13,9 +16,12 @@ trunk's spatial acceleration, as everywhere in the project.
 
 from __future__ import annotations
 
-from collections.abc import Callable
+import shutil
+import tempfile
+from collections.abc import Callable, Iterator
 from concurrent.futures import Future
 from concurrent.futures.process import BrokenProcessPool
+from contextlib import contextmanager
 from dataclasses import dataclass
 from datetime import datetime, timezone
 from functools import partial
@@ -25,7 +31,7 @@ from typing import Any
 from quadruped_dyn.checks.terms import check_samples
 from quadruped_dyn.files.names import printable
 from quadruped_dyn.files.paths import writable_dir
-from quadruped_dyn.files.safe_write import output_dir, output_path, write_text
+from quadruped_dyn.files.safe_write import output_dir, output_path, output_set, publish, write_text
 from quadruped_dyn.model.robot import Robot, robot_name, robot_path
 from quadruped_dyn.progress import Steps
 from quadruped_dyn.report import warm
@@ -112,13 +118,14 @@ class _Job:
 
     robot: Robot
     urdf_warnings: list[str]
-    target: Path
+    target: Path  # where the steps write their files (published with the page)
     fast: bool
     samples: int
     footprint: bool
     progress: Progress
     check: dict[str, Any] | None = None
     notebooks_ahead: list[Future[dict[str, Any]]] | None = None  # executed by the warm process (warm.py)
+    folder: Path | None = None  # the report's folder, where the page says its files are (else ``target``)
 
 
 def _attempt(key: str, title: str, build: Callable[[], Section]) -> Section:
@@ -145,34 +152,48 @@ def build_report(robot_arg: str = "paper", out: str | Path = "results", fast: bo
     progress = Progress(len(steps) + 2, show_progress)  # loading, the steps, writing the page
     done = progress.step(f"loading {robot_arg}")
     robot, urdf_warnings = load_with_warnings(robot_arg)
-    job = _Job(robot, urdf_warnings, target, fast, samples, footprint, progress)
-    pool = None
-    if compile_ahead:
-        ahead = notebook_list(robot)[0] if with_notebooks else []
-        pool, _, job.notebooks_ahead = warm.start(robot.urdf, with_benchmark=not fast,
-                                                            with_footprint=footprint and not fast, notebooks=ahead)
-    try:
-        sections = [_attempt("robot", "The robot", lambda: _robot_section(job))]
-        done()
-        built: dict[str, Section] = {}
-        for label, key, title, build in sorted(steps, key=lambda step: RUN_LATE.index(step[1]) + 1 if step[1] in RUN_LATE else 0):
-            done = progress.step(label)
-            built[key] = _attempt(key, title, partial(build, job))
+    with _staging(target) as staging:
+        job = _Job(robot, urdf_warnings, staging, fast, samples, footprint, progress, folder=target)
+        pool = None
+        if compile_ahead:
+            ahead = notebook_list(robot)[0] if with_notebooks else []
+            pool, _, job.notebooks_ahead = warm.start(robot.urdf, with_benchmark=not fast,
+                                                      with_footprint=footprint and not fast, notebooks=ahead)
+        try:
+            sections = [_attempt("robot", "The robot", lambda: _robot_section(job))]
             done()
-        sections += [built[key] for _, key, _, _ in steps]  # page order
-    finally:
-        if pool is not None:
-            pool.shutdown(wait=True, cancel_futures=True)  # no process outlives the command
-    done = progress.step("versions, writing the page")
-    from quadruped_dyn.report import sections as rs
+            built: dict[str, Section] = {}
+            late_last = sorted(steps, key=lambda step: RUN_LATE.index(step[1]) + 1 if step[1] in RUN_LATE else 0)
+            for label, key, title, build in late_last:
+                done = progress.step(label)
+                built[key] = _attempt(key, title, partial(build, job))
+                done()
+            sections += [built[key] for _, key, _, _ in steps]  # page order
+        finally:
+            if pool is not None:
+                pool.shutdown(wait=True, cancel_futures=True)  # no process outlives the command
+        done = progress.step("versions, writing the page")
+        from quadruped_dyn.report import sections as rs
 
-    sections.append(rs.versions_section(versions()))
-    path = target / "report.html"
-    subtitle = (f"{robot.urdf} — built {datetime.now(timezone.utc):%Y-%m-%d %H:%M} UTC by quadruped-dyn report"
-                + (" --fast" if fast else "") + (" --footprint" if footprint and not fast else ""))
-    write_text(output_path(target, "report.html"), page(f"quadruped_dyn report: {robot.name}", subtitle, sections))
+        sections.append(rs.versions_section(versions()))
+        subtitle = (f"{robot.urdf} — built {datetime.now(timezone.utc):%Y-%m-%d %H:%M} UTC by quadruped-dyn report"
+                    + (" --fast" if fast else "") + (" --footprint" if footprint and not fast else ""))
+        write_text(output_path(staging, "report.html"), page(f"quadruped_dyn report: {robot.name}", subtitle, sections))
+        with output_set():  # the page and every file of the steps, or none of them
+            publish(staging, target, replaces=[target / "report.html", *target.glob(f"{robot.name}_*"),
+                                               *target.glob("c/*")])
     done()
-    return ReportResult(path, sections)
+    return ReportResult(target / "report.html", sections)
+
+
+@contextmanager
+def _staging(target: Path) -> Iterator[Path]:
+    """A new hidden folder in ``target`` for the report's files until they are published; removed at the end."""
+    staging = Path(tempfile.mkdtemp(prefix=".report.", suffix=".partial", dir=target))
+    try:
+        yield staging
+    finally:
+        shutil.rmtree(staging, ignore_errors=True)
 
 
 def _steps(samples: int, fast: bool, with_notebooks: bool) -> list[tuple[str, str, str, Callable[[_Job], Section]]]:
@@ -253,12 +274,13 @@ def _c_section(job: _Job) -> Section:
     from quadruped_dyn.report import sections as rs
 
     gen, files = generated_c(job.robot, job.target, job.progress.count)
+    gen["directory"] = str((job.folder or job.target) / "c")  # where they are published, with the page
     if job.fast:
         return rs.generated_c_section(gen, None, "skipped with --fast")
     from quadruped_dyn.bench.timing import run_bench
 
     # the cross builds (cached; docs/embedded.md) only with --footprint: minutes of compiling on a cold cache
-    gen["embedded"] = embedded_footprint(job.robot, Path(gen["directory"]), measure=job.footprint)
+    gen["embedded"] = embedded_footprint(job.robot, job.target / "c", measure=job.footprint)
     return rs.generated_c_section(gen, run_bench(job.robot, checked_c=files).as_dict())  # the files just checked
 
 

@@ -4,6 +4,7 @@ the written page opened in a real headless Chromium with every image loaded."""
 from __future__ import annotations
 
 import importlib.util
+import json
 import re
 import shutil
 import subprocess
@@ -192,3 +193,71 @@ def test_notebooks_are_shared_with_the_warm_process_from_both_ends(monkeypatch):
     body = section.body
     assert (body.index("n0.ipynb warm") < body.index("n1.ipynb warm") < body.index("n2.ipynb here")
             < body.index("n3.ipynb here") < body.index("n4.ipynb here"))
+
+
+def _report_with_experiment_files(monkeypatch, tmp_path, run: int, figure_raises: BaseException | None = None):
+    """``build_report`` with every section but the robot's stubbed out, and an experiment section that
+    writes its JSON (``write_json``) and then its plot (``save_figure``, raising ``figure_raises``
+    if given) into the report's folder, as ``gather.experiment`` does."""
+    import matplotlib.pyplot as plt
+
+    from quadruped_dyn.experiment.outputs import output_paths
+    from quadruped_dyn.files import safe_write
+    from quadruped_dyn.files.json import write_json
+    from quadruped_dyn.report import build
+    from quadruped_dyn.report.html import Section
+
+    def broken(*_args, **_kwargs):
+        raise RuntimeError("stubbed out")
+
+    for name in ("_terms_section", "_grf_section", "_reduced_section", "_c_section", "_symbolic_section",
+                 "optimal_trot", "closed_loop"):
+        monkeypatch.setattr(build, name, broken)
+    if figure_raises is not None:
+        def raising(*_args, **_kwargs):
+            raise figure_raises
+
+        monkeypatch.setattr(safe_write, "save_figure", raising)
+
+    def experiment_section(job):
+        paths = output_paths(job.target, job.robot.name, "trot")
+        write_json(paths["json"], {"run": run})
+        fig = plt.figure()
+        fig.suptitle(f"run {run}")
+        safe_write.save_figure(fig, paths["plot"])
+        plt.close(fig)
+        return Section("experiment", "The paper's experiment", "pass", f"run {run}", "")
+
+    monkeypatch.setattr(build, "_experiment_section", experiment_section)
+    return build.build_report("paper", tmp_path, fast=True, with_notebooks=False, show_progress=False,
+                              compile_ahead=False)
+
+
+def _tree(root: Path) -> dict[str, bytes | None]:
+    """Every path under ``root`` (hidden ones too): a file's bytes, None for a directory."""
+    return {str(p.relative_to(root)): (p.read_bytes() if p.is_file() else None) for p in sorted(root.rglob("*"))}
+
+
+def test_an_interrupted_report_leaves_the_previous_one_as_it_was(tmp_path, monkeypatch):
+    """The page, the JSON and the plots of a report are one output set: an interrupt (here in a figure
+    writer, after the new JSON was written) leaves the previous report's files as they were, byte for
+    byte, and no temporary file or folder behind."""
+    _report_with_experiment_files(monkeypatch, tmp_path, 1)
+    before = _tree(tmp_path)
+    assert {"paper/report.html", "paper/paper_trot_validation.json", "paper/paper_trot_BR_HFE.png"} <= set(before)
+    with pytest.raises(KeyboardInterrupt):
+        _report_with_experiment_files(monkeypatch, tmp_path, 2, figure_raises=KeyboardInterrupt())
+    assert _tree(tmp_path) == before
+
+
+def test_a_failed_section_leaves_no_old_file_beside_its_new_ones(tmp_path, monkeypatch):
+    """A section that fails half-way (its figure writer raises after its JSON was written) is FAIL on the
+    page, and the report replaces the previous one's files as a whole: the new JSON is not published
+    beside the previous report's plot."""
+    _report_with_experiment_files(monkeypatch, tmp_path, 1)
+    result = _report_with_experiment_files(monkeypatch, tmp_path, 2, figure_raises=RuntimeError("no figure"))
+    assert next(s for s in result.sections if s.key == "experiment").verdict == "FAIL"
+    folder = tmp_path / "paper"
+    assert json.loads((folder / "paper_trot_validation.json").read_text()) == {"run": 2}
+    assert not (folder / "paper_trot_BR_HFE.png").exists()
+    assert sorted(p.name for p in folder.iterdir()) == ["paper_trot_validation.json", "report.html"]
