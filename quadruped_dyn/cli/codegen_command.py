@@ -10,6 +10,7 @@ from quadruped_dyn.cli.app import EXIT_CHECK_FAILED, echo, foot_frames_option
 from quadruped_dyn.errors import InputError
 from quadruped_dyn.files.names import printable
 from quadruped_dyn.files.paths import writable_dir
+from quadruped_dyn.files.provenance import check_source, record_source
 from quadruped_dyn.model.robot import load_robot
 
 
@@ -38,7 +39,10 @@ def codegen(robot: str, out_dir: str, precision: str, check: bool, as_json: bool
         diff = compare_generation(r, Path(out_dir), precision)  # the precision asked for, not always double
         echo(f"{out_dir} ({precision}): {diff.summary()}")
         sys.exit(EXIT_CHECK_FAILED if diff else 0)
-    paths = generate_checked(r, writable_dir(out_dir, f"--out '{out_dir}'"), precision).all()
+    out = writable_dir(out_dir, f"--out '{out_dir}'")
+    check_source(out, r)  # another URDF's C of the same name is never overwritten
+    paths = generate_checked(r, out, precision).all()
+    paths += filter(None, [record_source(out, r)])  # the URDF they came from (none for a built-in robot)
     if as_json:
         import json
 

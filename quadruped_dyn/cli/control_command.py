@@ -9,6 +9,7 @@ import click
 from quadruped_dyn.cli.app import echo, foot_frames_option, progress
 from quadruped_dyn.files.names import printable
 from quadruped_dyn.files.paths import writable_dir
+from quadruped_dyn.files.provenance import check_source, record_source
 from quadruped_dyn.files.safe_write import replaceable
 from quadruped_dyn.model.robot import load_robot
 
@@ -49,6 +50,7 @@ def control(robot: str, gait_name: str, controllers: tuple[str, ...], cycles: in
                     LoopOptions(rate_hz=rate_hz, cycles=cycles), PlantOptions(timestep=timestep, mu=mu))
     out = writable_dir(out_dir, f"--out '{out_dir}'")
     replaceable(output_paths(out, study.robot.name, study.plan.gait.name).values())
+    check_source(out, study.robot)  # another URDF's outputs of the same name are never overwritten
     total = study.loop.cycles * study.plan.gait.period * len(study.controllers)
     with progress(f"{study.robot.name} {gait_name}: simulated ms", int(round(total * 1000))) as bar:
         done = [0]
@@ -60,6 +62,7 @@ def control(robot: str, gait_name: str, controllers: tuple[str, ...], cycles: in
 
         run_all(study, progress=tick, keep_qpos=not no_animation)
     data, paths = write_all(out, study, animation=not no_animation)
+    record_source(out, study.robot)
     if as_json:
         echo(json.dumps(data, indent=2))
         return

@@ -13,6 +13,7 @@ from quadruped_dyn.cli.app import EXIT_CHECK_FAILED, echo, foot_frames_option
 from quadruped_dyn.errors import InputError
 from quadruped_dyn.files.names import printable
 from quadruped_dyn.files.paths import writable_dir
+from quadruped_dyn.files.provenance import check_source, record_source
 from quadruped_dyn.files.safe_write import replaceable
 from quadruped_dyn.model.robot import load_robot
 
@@ -62,6 +63,7 @@ def optimize(robot: str, gait_name: str, nodes: int | None, mu: float | None, sp
     options.check(r, gait)  # bad input: exit 2 before any work
     paths = output_paths(out, r.name, gait.name)
     replaceable(paths.values())
+    check_source(out, r)  # another URDF's outputs of the same name are never overwritten
     click.echo(f"transcribing {r.name} {gait.name} ...", err=True)
     tr = transcribe(r, gait, options)
     click.echo(f"solving: {tr.lbw.size} variables, {tr.lbg.size} constraints, {hessian} Hessian ...", err=True)
@@ -76,6 +78,7 @@ def optimize(robot: str, gait_name: str, nodes: int | None, mu: float | None, sp
         replay = replay_rigid(sol, cycles)
     data = report(sol, replay)
     write_outputs(paths, sol, replay, data)
+    record_source(out, r)
     if as_json:
         echo(json.dumps(json.loads(paths["json"].read_text()), indent=2))
         return

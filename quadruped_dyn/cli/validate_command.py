@@ -10,6 +10,7 @@ from quadruped_dyn.cli.app import echo, foot_frames_option
 from quadruped_dyn.errors import NumericalError
 from quadruped_dyn.experiment.simulate import check_times, reduced_dynamics
 from quadruped_dyn.files.paths import writable_dir
+from quadruped_dyn.files.provenance import check_source, record_source
 from quadruped_dyn.files.safe_write import output_set, replaceable
 from quadruped_dyn.model.robot import load_robot
 
@@ -65,6 +66,7 @@ def validate(robot: str, gait_name: str, horizon: float | None, integrator: str,
     r = load_robot(robot, foot_frames=foot_frames)
     paths = output_paths(out, r.name, gait.name)
     replaceable(paths.values())
+    check_source(out, r)  # another URDF's outputs of the same name are never overwritten
     dynamics = reduced_dynamics(r, backend)
     from quadruped_dyn.progress import Bar
 
@@ -85,6 +87,7 @@ def validate(robot: str, gait_name: str, horizon: float | None, integrator: str,
         plot_br_hfe(paths["plot"], exp)
         if exp.rigid:
             plot_physics_check(paths["physics_plot"], exp)
+        record_source(out, r)
     if not exp.rigid:
         paths["physics_plot"].unlink(missing_ok=True)
     if as_json:

@@ -16,7 +16,8 @@ identity, and identity is content: a file whose bytes are those of a built-in ro
 reached by its name, by any path or as a copy, loads as that robot (its name, its standing
 posture); any other file is named after its stem (``files.names.safe_name``: valid as a C
 identifier and a file name), with a hash of its content appended when the stem is a built-in's
-name (a user's ``paper.urdf`` is not the paper robot).
+name (a user's ``paper.urdf`` is not the paper robot). Two files with the same stem share the name;
+the commands keep their outputs apart (``files.provenance``).
 
 A model never outlives its file's content: the bytes are read once, hashed
 (``Robot.urdf_sha256``) and parsed from memory, and the cache of loaded robots is keyed by
@@ -379,10 +380,22 @@ def _foot_frame_names(foot_frames: object) -> tuple[str, str, str, str] | None:
     return names  # type: ignore[return-value]
 
 
-def robot_name(path: Path) -> str:
-    """The name ``load_robot`` gives the URDF at ``path`` (without parsing it)."""
+@dataclass(frozen=True)
+class UrdfSource:
+    """What ``load_robot`` makes of a URDF's file before parsing it: the name, the path, the SHA-256
+    of its bytes and the built-in robot they are (else None), as a ``Robot`` has them."""
+
+    name: str
+    urdf: Path
+    urdf_sha256: str
+    builtin: str | None
+
+
+def urdf_source(path: Path) -> UrdfSource:
+    """The name ``load_robot`` gives the URDF at ``path``, with its path, hash and built-in (without parsing it)."""
     digest = hashlib.sha256(_read_urdf(path)).hexdigest()
-    return _name(path, builtin_name(path, digest), digest)
+    builtin = builtin_name(path, digest)
+    return UrdfSource(_name(path, builtin, digest), path, digest, builtin)
 
 
 def _name(path: Path, builtin: str | None, digest: str) -> str:

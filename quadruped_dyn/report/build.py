@@ -31,8 +31,9 @@ from typing import Any
 from quadruped_dyn.checks.terms import check_samples
 from quadruped_dyn.files.names import printable
 from quadruped_dyn.files.paths import writable_dir
+from quadruped_dyn.files.provenance import check_source, record_source
 from quadruped_dyn.files.safe_write import output_dir, output_path, output_set, publish, write_text
-from quadruped_dyn.model.robot import Robot, robot_name, robot_path
+from quadruped_dyn.model.robot import Robot, robot_path, urdf_source
 from quadruped_dyn.progress import Steps
 from quadruped_dyn.report import warm
 from quadruped_dyn.report.gather import (
@@ -75,11 +76,15 @@ RUN_LATE = ("notebooks", "c")
 def prepare(robot_arg: str, out: str | Path, samples: int = CHECK_SAMPLES) -> tuple[Path, Path]:
     """Validate the arguments before any work: (URDF path, the robot's output directory).
     InputError for an unknown robot, a number of term-check samples ``run_check`` refuses (it runs
-    minutes into the report), or an output directory that cannot be written."""
+    minutes into the report), an output directory that cannot be written or that holds another URDF's
+    outputs of the same robot name (``files.provenance``)."""
     check_samples(samples)
     urdf = robot_path(robot_arg)
+    out_dir = writable_dir(out, f"--out '{out}'", "a writable --out directory")
+    source = urdf_source(urdf)
+    check_source(out_dir, source)  # another URDF's report of the same name is never overwritten
     # as load_robot names it: a safe name, one path component; never a link out of --out
-    target = output_dir(writable_dir(out, f"--out '{out}'", "a writable --out directory"), robot_name(urdf))
+    target = output_dir(out_dir, source.name)
     return urdf, writable_dir(target, f"--out '{target}'", "a writable --out directory")
 
 
@@ -182,6 +187,7 @@ def build_report(robot_arg: str = "paper", out: str | Path = "results", fast: bo
         with output_set():  # the page and every file of the steps, or none of them
             publish(staging, target, replaces=[target / "report.html", *target.glob(f"{robot.name}_*"),
                                                *target.glob("c/*")])
+            record_source(target.parent, robot)
     done()
     return ReportResult(target / "report.html", sections)
 
