@@ -1,5 +1,5 @@
 """``python -m quadruped_dyn.cli``."""
 
-from quadruped_dyn.cli import main
+from quadruped_dyn.cli.entry import main
 
 main()

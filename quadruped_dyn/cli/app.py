@@ -1,5 +1,6 @@
-"""The ``quadruped-dyn`` group: exit codes (0 success, 1 a check or a computation failed, 2 bad input, 130
-interrupted), one-line errors and warnings, progress on stderr. Each command lives in its own module of this package."""
+"""The ``quadruped-dyn`` group: exit codes (0 success, 1 a check or a computation failed, 2 bad input; 130
+interrupted, ``entry``), one-line errors and warnings, progress on stderr. Each command lives in its own module
+of this package."""
 
 from __future__ import annotations
 
@@ -11,12 +12,12 @@ from typing import Any
 
 import click
 
+from quadruped_dyn.cli.entry import interrupted
 from quadruped_dyn.errors import BuildError, InputError, NumericalError, UrdfWarning
 from quadruped_dyn.files.names import printable
 
 EXIT_CHECK_FAILED = 1
 EXIT_BAD_INPUT = 2
-EXIT_INTERRUPTED = 130  # 128 + SIGINT, as a shell reports it; click's "Aborted!" was exit 1, a failed check
 
 
 def _warn_one_line(message: Warning | str, category: type[Warning], *args: object, **kwargs: object) -> None:
@@ -69,7 +70,7 @@ class _Group(click.Group):
             _error(f"cannot write{where} ({e.strerror or e}); expected a writable output", EXIT_BAD_INPUT)
         except KeyboardInterrupt:
             _flush_stdout_quietly()
-            _error("interrupted", EXIT_INTERRUPTED)
+            interrupted()
         except SystemExit:
             _flush_stdout()
             raise
