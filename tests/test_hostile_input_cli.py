@@ -311,10 +311,12 @@ def test_output_files_are_written_through_safe_write():
     (["validate", "--horizon", "0.05", "--no-physics"], "paper_trot_timeseries.csv"),
     (["control", "paper", "--cycles", "1", "--controller", "pd", "--no-animation"], "paper_walk_closed_loop.png"),
     (["optimize", "--cycles", "0"], "paper_trot_optimised.png"),
+    (["codegen", "paper"], "qd_paper_r_FL_BR.c"),
+    (["codegen", "paper"], "qd_paper_reference.h"),
 ])
 def test_a_directory_in_place_of_an_output_is_refused_before_the_work(args, in_the_way, tmp_path, monkeypatch):
-    """Found by a review (2026-12-06): refused only when written, after the runs (control: minutes)
-    or the solve."""
+    """Found by a review (2026-12-06): refused only when written, after the runs (control: minutes),
+    the solve or the generation (codegen: tens of seconds)."""
     from quadruped_dyn.control import closed_loop
     from quadruped_dyn.optimal_control import transcription
 
@@ -324,15 +326,19 @@ def test_a_directory_in_place_of_an_output_is_refused_before_the_work(args, in_t
     monkeypatch.setattr(validation, "run_experiment", tripwire)
     monkeypatch.setattr(closed_loop, "run_all", tripwire)
     monkeypatch.setattr(transcription, "transcribe", tripwire)
+    monkeypatch.setattr(c_reference, "generate", tripwire)
     (tmp_path / in_the_way).mkdir()
     result = CliRunner().invoke(main, [*args, "--out", str(tmp_path)])
     _one_line(result, 2, rf"cannot write '.*{in_the_way}': it exists and is not a regular file; expected a file path")
 
 
-def test_codegen_writes_its_package_whole_or_not_at_all(tmp_path):
+def test_codegen_writes_its_package_whole_or_not_at_all(paper, tmp_path):
     """A directory in place of one generated file (the Makefile): nothing of the package is written,
-    not the sources before it (they were, beside whatever the directory held from before)."""
+    not the sources before it (they were, beside whatever the directory held from before). Through the
+    API: the command refuses the directory before it generates."""
+    from quadruped_dyn.errors import InputError
+
     (tmp_path / "Makefile").mkdir()
-    result = CliRunner().invoke(main, ["codegen", "paper", "--out", str(tmp_path)])
-    _one_line(result, 2, r"cannot write '.*Makefile': it exists and is not a regular file")
+    with pytest.raises(InputError, match=r"cannot write '.*Makefile': it exists and is not a regular file"):
+        c_reference.generate_checked(paper, tmp_path)
     assert [p.name for p in tmp_path.iterdir()] == ["Makefile"]

@@ -6,8 +6,8 @@ from quadruped_dyn.exports import lazy_exports
 _MODULES: dict[str, tuple[str, ...]] = {
     "c_reference": (
         "REFERENCE_DIGITS", "reference_state", "reduced_inputs", "pinocchio_outputs", "tolerance_scale", "reference_header",
-        "reference_header_name", "generate_checked", "differing_files", "ReferenceHeader", "parse_reference_header",
-        "reference_differences", "GenerationDiff", "compare_generation",
+        "reference_header_name", "checked_files", "generate_checked", "differing_files", "ReferenceHeader",
+        "parse_reference_header", "reference_differences", "GenerationDiff", "compare_generation",
     ),
     "cross_library": (
         "LIBRARIES", "EXACT_CHANGES", "INSTALL_HINT", "parse_libraries", "ToolkitDynamics", "CrossLibraryResult",

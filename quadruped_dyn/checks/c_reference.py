@@ -12,7 +12,15 @@ import numpy as np
 import pinocchio as pin
 
 from quadruped_dyn.checks.derivative_reference import ReducedReference, grf_derivatives_reference, grf_wrench_reference
-from quadruped_dyn.codegen.emit import PREFIX, GeneratedFiles, float_err_per_regularity, generate, reduced_parts, stem
+from quadruped_dyn.codegen.emit import (
+    PREFIX,
+    GeneratedFiles,
+    file_layout,
+    float_err_per_regularity,
+    generate,
+    reduced_parts,
+    stem,
+)
 from quadruped_dyn.codegen.emit_derivatives import REDUCED_DERIVATIVE_NAMES
 from quadruped_dyn.dynamics.reduced import regularity_function
 from quadruped_dyn.math.compare import relative_error, scale_of, within
@@ -275,6 +283,11 @@ def reference_header(robot: Robot, functions: list[ca.Function], work: dict[str,
 def reference_header_name(robot: Robot) -> str:
     """File name of the reference values beside the generated C: ``<stem>_reference.h``."""
     return f"{stem(robot)}_reference.h"
+
+
+def checked_files(robot: Robot, out_dir: Path) -> GeneratedFiles:
+    """The files ``generate_checked`` writes into ``out_dir``, known before it runs (``codegen.emit.file_layout``)."""
+    return file_layout(robot, out_dir, (reference_header_name(robot),))
 
 
 def generate_checked(robot: Robot, out_dir: Path, precision: str = "double") -> GeneratedFiles:

@@ -11,6 +11,7 @@ from quadruped_dyn.errors import InputError
 from quadruped_dyn.files.names import printable
 from quadruped_dyn.files.paths import writable_dir
 from quadruped_dyn.files.provenance import check_source, record_source
+from quadruped_dyn.files.safe_write import replaceable
 from quadruped_dyn.model.robot import load_robot
 
 
@@ -30,7 +31,7 @@ def codegen(robot: str, out_dir: str, precision: str, check: bool, as_json: bool
     and the derivatives, with a Makefile and a check program."""
     from pathlib import Path
 
-    from quadruped_dyn.checks.c_reference import compare_generation, generate_checked
+    from quadruped_dyn.checks.c_reference import checked_files, compare_generation, generate_checked
 
     r = load_robot(robot, foot_frames=foot_frames)
     if check:
@@ -41,6 +42,7 @@ def codegen(robot: str, out_dir: str, precision: str, check: bool, as_json: bool
         sys.exit(EXIT_CHECK_FAILED if diff else 0)
     out = writable_dir(out_dir, f"--out '{out_dir}'")
     check_source(out, r)  # another URDF's C of the same name is never overwritten
+    replaceable(checked_files(r, out).all())  # a directory in the way is refused now, not after the generation
     paths = generate_checked(r, out, precision).all()
     paths += filter(None, [record_source(out, r)])  # the URDF they came from (none for a built-in robot)
     if as_json:

@@ -7,7 +7,8 @@ _MODULES: dict[str, tuple[str, ...]] = {
     "casadi_source": ("PREFIX", "TEMPLATES", "work_sizes", "silence_unused_parameters", "casadi_c", "entry_point"),
     "emit": (
         "CODEGEN_FUNCTIONS", "REDUCED_STANCE_SETS", "REDUCED_NAMES", "reduced_symbol", "reduced_functions",
-        "SIGNAL_DOCS", "codegen_functions", "reduced_parts", "header_doc", "stem", "GeneratedFiles", "generate",
+        "SIGNAL_DOCS", "codegen_functions", "reduced_parts", "header_doc", "stem", "GeneratedFiles", "file_layout",
+        "generate",
     ),
     "emit_derivatives": ("DERIVATIVE_NAMES", "GRF_DERIVATIVE_NAMES", "GRF_DERIVATIVE_STANCE_SETS", "REDUCED_DERIVATIVE_NAMES",
                          "derivative_functions", "derivative_source", "grf_derivative_functions",

@@ -675,9 +675,22 @@ class GeneratedFiles:
         return [*self.c_sources, self.header, self.reduced_templates]
 
     def all(self) -> list[Path]:
-        """Every file, in the order they were written."""
+        """Every file, in the order they are written."""
         return [self.source, self.header, *self.extra.values(), self.check_program, *self.embedded, self.makefile,
                 *self.reduced, self.reduced_templates, *self.derivatives]
+
+
+def file_layout(robot: Robot, out_dir: Path, extra_names: tuple[str, ...] = ()) -> GeneratedFiles:
+    """The files ``generate`` writes into ``out_dir`` (with ``extra_names`` for its ``extra_files``), by role:
+    the one place their names are made, known before the work (a command refuses a file it cannot write first)."""
+    out_dir = Path(out_dir)
+    name = stem(robot)
+    return GeneratedFiles(source=out_dir / f"{name}.c", header=out_dir / f"{name}.h",
+                          extra={f: out_dir / f for f in extra_names}, check_program=out_dir / "check_qd.c",
+                          makefile=out_dir / "Makefile",
+                          reduced=tuple(out_dir / f"{name}_r_{st.name.replace('+', '_')}.c" for st in REDUCED_STANCE_SETS),
+                          reduced_templates=out_dir / REDUCED_TEMPLATES, derivatives=(out_dir / f"{name}_d.c",),
+                          embedded=tuple(out_dir / f for f in (*CORTEX_M_FILES, THREADS_FILE)))
 
 
 def generate(robot: Robot, out_dir: Path, precision: str = "double",
@@ -692,23 +705,23 @@ def generate(robot: Robot, out_dir: Path, precision: str = "double",
         raise InputError(f"precision '{precision}' is not supported; expected 'double' or 'float'")
     out_dir = Path(out_dir)
     out_dir.mkdir(parents=True, exist_ok=True)
-    name = stem(robot)
+    layout = file_layout(robot, out_dir)
     full = codegen_functions(robot)
-    c_full, casadi_header = casadi_c(name, full, precision)
+    c_full, casadi_header = casadi_c(layout.source.stem, full, precision)
     c_full = _grf_through_id_full(robot, _joint_rows_first(c_full, full, precision), full, precision)
-    sources = {f"{name}.c": c_full}
+    sources = {layout.source: c_full}
     functions = list(full)
-    for stance in REDUCED_STANCE_SETS:
+    for stance, path in zip(REDUCED_STANCE_SETS, layout.reduced, strict=True):
         reduced = reduced_functions(robot, stance)
-        file_stem = f"{name}_r_{stance.name.replace('+', '_')}"
-        c_text, h_text = casadi_c(file_stem, reduced, precision)
+        c_text, h_text = casadi_c(path.stem, reduced, precision)
         dfd_r = dfd_r_pieces(robot, stance)
-        sources[f"{file_stem}.c"], h_text = _checked_reduced_c(c_text, h_text, reduced,
-                                                               _reduced_helpers_c(robot, stance, dfd_r, precision), dfd_r)
+        sources[path], h_text = _checked_reduced_c(c_text, h_text, reduced,
+                                                   _reduced_helpers_c(robot, stance, dfd_r, precision), dfd_r)
         casadi_header += h_text
         functions += reduced
     derivatives = derivative_functions(robot)  # qd_<robot>_d.c: derivatives of the full dynamics
-    sources[f"{name}_d.c"], h_text = derivative_source(f"{name}_d", derivatives, precision)
+    (derivative_path,) = layout.derivatives
+    sources[derivative_path], h_text = derivative_source(derivative_path.stem, derivatives, precision)
     casadi_header += h_text
     functions += derivatives
     work = work_sizes(casadi_header)
@@ -719,26 +732,19 @@ def generate(robot: Robot, out_dir: Path, precision: str = "double",
                              "the reduced terms M_full, G_full and id_full, qd_dfd_full_parts M_full and nle_full, "
                              "with no work memory of their own")
     extra = extra_files(functions, work) if extra_files else {}
-    sources = {file_name: _precision_math(text) for file_name, text in sources.items()}
-    files = {
-        f"{name}.c": c_full,
-        f"{name}.h": header_doc(robot, functions, work) + RETURN_CODES_C + casadi_header,
-        **extra,
-        "check_qd.c": (TEMPLATES / "check_qd.c").read_text(),
-        **{f: (TEMPLATES / f).read_text() for f in (*CORTEX_M_FILES, THREADS_FILE)},  # docs/embedded.md
-        "Makefile": (TEMPLATES / "Makefile").read_text().replace("ROBOT ?= paper", f"ROBOT ?= {name[3:]}"),
-        **sources,
-        REDUCED_TEMPLATES: reduced_templates_h(),
+    layout = file_layout(robot, out_dir, tuple(extra))
+    texts = {
+        **{path: _precision_math(text) for path, text in sources.items()},
+        layout.header: header_doc(robot, functions, work) + RETURN_CODES_C + casadi_header,
+        **{layout.extra[f]: text for f, text in extra.items()},
+        layout.check_program: (TEMPLATES / "check_qd.c").read_text(),
+        **{path: (TEMPLATES / path.name).read_text() for path in layout.embedded},  # docs/embedded.md
+        layout.makefile: (TEMPLATES / "Makefile").read_text().replace("ROBOT ?= paper", f"ROBOT ?= {stem(robot)[3:]}"),
+        layout.reduced_templates: reduced_templates_h(),
     }
     with output_set():  # the package appears whole: an interrupt never leaves new sources beside old ones
-        for file_name, text in files.items():
-            write_text(output_path(out_dir, file_name), text)  # under out_dir, never through a link
-    return GeneratedFiles(source=out_dir / f"{name}.c", header=out_dir / f"{name}.h",
-                          extra={f: out_dir / f for f in extra}, check_program=out_dir / "check_qd.c",
-                          makefile=out_dir / "Makefile",
-                          reduced=tuple(out_dir / f for f in sources if f not in (f"{name}.c", f"{name}_d.c")),
-                          reduced_templates=out_dir / REDUCED_TEMPLATES,
-                          derivatives=(out_dir / f"{name}_d.c",),
-                          embedded=tuple(out_dir / f for f in (*CORTEX_M_FILES, THREADS_FILE)))
+        for path in layout.all():
+            write_text(output_path(out_dir, path.name), texts[path])  # under out_dir, never through a link
+    return layout
 
 
