@@ -39,6 +39,7 @@ from quadruped_dyn.codegen.emit import CODEGEN_FUNCTIONS, PREFIX
 from quadruped_dyn.codegen.library import C_FLAGS, compiler_version, run_tool
 from quadruped_dyn.errors import InputError, NumericalError
 from quadruped_dyn.files.cache import cached_build
+from quadruped_dyn.files.names import printable
 from quadruped_dyn.math.compare import relative_error, within
 from quadruped_dyn.model.robot import Robot
 from quadruped_dyn.model.state import GRAVITY_W, random_state, rotation
@@ -68,13 +69,18 @@ class PeerEntry:
 
 
 def parse_peers(text: str) -> tuple[str, ...]:
-    """Peer names from a comma-separated list (empty or "none": none); InputError for an unknown one or a
-    missing package, before any work."""
-    names = tuple(p.strip() for p in text.split(",") if p.strip() and p.strip() != "none")
+    """Peer names from ``--peers``' comma-separated list (empty or "none": none); InputError for an empty name
+    in it (``,``, ``adam,``), an unknown one or a missing package, before any work."""
+    expected = f"expected a comma-separated list of: {', '.join(PEERS)} (or none)"
+    if not text.strip():
+        return ()
+    items = [p.strip() for p in text.split(",")]
+    if "" in items:  # ',' was read as no peers: a list with nothing in it is a mistake, not a choice
+        raise InputError(f"--peers '{printable(text)}' has an empty name; {expected}")
+    names = tuple(p for p in items if p != "none")
     unknown = [p for p in names if p not in PEERS]
     if unknown:
-        raise InputError(f"unknown peer(s) {', '.join(unknown)}; expected a comma-separated list of: "
-                         f"{', '.join(PEERS)} (or none)")
+        raise InputError(f"unknown peer(s) {', '.join(unknown)}; {expected}")
     if cppadcg.PEER in names and not cppadcg.available():
         raise InputError(f"the peer {cppadcg.PEER} needs the CppADCodeGen headers; expected {cppadcg.INSTALL_HINT}")
     if "adam" in names:

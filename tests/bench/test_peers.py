@@ -17,6 +17,21 @@ def test_unknown_peer_is_bad_input():
             in result.stderr)
 
 
+@pytest.mark.parametrize("peers", [",", " , ", "adam,", ",none"])
+def test_an_empty_peer_name_is_bad_input(peers, monkeypatch):
+    """Found by a review (2026-12-06): ``--peers ,`` was read as no peers (and the benchmark ran)."""
+    from quadruped_dyn.bench import timing
+
+    def tripwire(*a, **k):
+        raise AssertionError("the benchmark started")
+
+    monkeypatch.setattr(timing, "run_bench", tripwire)
+    result = CliRunner().invoke(main, ["bench", "--peers", peers])
+    assert result.exit_code == 2 and "Traceback" not in result.output and result.stderr.count("\n") == 1, result.output
+    assert (f"--peers '{peers}' has an empty name; expected a comma-separated list of: pinocchio-cppadcodegen, adam "
+            "(or none)") in result.stderr
+
+
 @pytest.mark.slow
 @pytest.mark.skipif(importlib.util.find_spec("adam") is None, reason="adam-robotics not installed")
 @pytest.mark.parametrize("name", ["solo12", "go2"])
