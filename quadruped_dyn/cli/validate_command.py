@@ -59,7 +59,7 @@ def validate(robot: str, gait_name: str, horizon: float | None, integrator: str,
 
     gait = GAITS[gait_name]
     horizon = 2 * gait.period if horizon is None else horizon
-    check_times(gait, horizon, dt, integrator)
+    check_times(gait, horizon, dt, integrator, names=("--horizon", "--dt"))
     runs = 3 + (gait.n_coords == 13) + (0 if no_physics else 5)
     _warn_work(horizon, dt, runs)
     out = writable_dir(out_dir, f"--out '{out_dir}'")

@@ -183,27 +183,30 @@ MAX_SAMPLES = 200_000
 INTEGRATORS = ("dop853", "rk4")
 
 
-def check_times(gait: Gait, horizon: object, dt: object, integrator: str = "dop853") -> None:
+def check_times(gait: Gait, horizon: object, dt: object, integrator: str = "dop853", *,
+                names: tuple[str, str] = ("horizon", "dt")) -> None:
     """InputError unless ``horizon`` and ``dt`` are positive finite seconds, horizon >= dt, at most
     MAX_SAMPLES samples per run, the integrator is known and (RK4) dt divides a phase. Every run
     checks these before any work (validate, the experiment, both simulations, the replay); a NaN
     horizon, a zero or negative dt or 1e9 s were a ValueError, ZeroDivisionError, IndexError or a
-    7 TiB allocation."""
+    7 TiB allocation. ``names``: what the messages call the horizon and the step, the API's parameter
+    names unless the caller's own (the CLI's options, ``("--horizon", "--dt")``)."""
+    h, d = names
     if integrator not in INTEGRATORS:
         raise InputError(f"unknown integrator '{integrator}'; expected {' or '.join(INTEGRATORS)}")
-    horizon, dt = real_number("--horizon", horizon), real_number("--dt", dt)
+    horizon, dt = real_number(h, horizon), real_number(d, dt)
     if not (math.isfinite(horizon) and horizon > 0):
-        raise InputError(f"--horizon {horizon} is not a positive finite number of seconds; expected e.g. {2 * gait.period}")
+        raise InputError(f"{h} {horizon} is not a positive finite number of seconds; expected e.g. {2 * gait.period}")
     if not (math.isfinite(dt) and dt > 0):
-        raise InputError(f"--dt {dt} is not a positive finite number of seconds; expected e.g. 1e-3")
+        raise InputError(f"{d} {dt} is not a positive finite number of seconds; expected e.g. 1e-3")
     if horizon < dt:
-        raise InputError(f"--horizon {horizon} s is shorter than one step (--dt {dt} s); expected horizon >= dt")
+        raise InputError(f"{h} {horizon} s is shorter than one step ({d} {dt} s); expected {h} >= {d}")
     samples = horizon / dt
     if samples > MAX_SAMPLES:
-        raise InputError(f"--horizon {horizon:g} s at --dt {dt:g} s is {samples:.3g} samples per run; expected at most "
-                         f"{MAX_SAMPLES:,} samples (horizon / dt) per run; a larger --dt or a shorter --horizon")
+        raise InputError(f"{h} {horizon:g} s at {d} {dt:g} s is {samples:.3g} samples per run; expected at most "
+                         f"{MAX_SAMPLES:,} samples ({h} / {d}) per run; a larger {d} or a shorter {h}")
     if integrator == "rk4" and abs(gait.phase_duration / dt - round(gait.phase_duration / dt)) > 1e-9:
-        raise InputError(f"--dt {dt} does not divide the gait's phase of {gait.phase_duration} s; expected e.g. 1e-3")
+        raise InputError(f"{d} {dt} does not divide the gait's phase of {gait.phase_duration} s; expected e.g. 1e-3")
 
 
 def _sample_times(horizon: float, dt: float) -> np.ndarray:

@@ -101,19 +101,22 @@ def test_trot_with_the_roll_unactuated_departs_under_rigid_contacts(paper):
 
 
 @pytest.mark.parametrize(("horizon", "dt", "integrator", "message"), [
-    (float("nan"), 1e-3, "dop853", "--horizon nan is not a positive finite number"),
-    (0.0, 1e-3, "dop853", "--horizon 0.0 is not a positive finite number"),
-    (0.05, 0.0, "dop853", "--dt 0.0 is not a positive finite number"),
-    (0.05, -1e-3, "dop853", "--dt -0.001 is not a positive finite number"),
-    (1e9, 1e-3, "dop853", r"is 1e\+12 samples per run; expected at most 200,000"),
-    ("0.05", 1e-3, "dop853", "--horizon is '0.05', a str; expected a real number"),
-    (0.05, 7e-4, "rk4", "--dt 0.0007 does not divide the gait's phase"),
+    (float("nan"), 1e-3, "dop853", "^horizon nan is not a positive finite number"),
+    (0.0, 1e-3, "dop853", "^horizon 0.0 is not a positive finite number"),
+    (0.05, 0.0, "dop853", "^dt 0.0 is not a positive finite number"),
+    (0.05, -1e-3, "dop853", "^dt -0.001 is not a positive finite number"),
+    (1e9, 1e-3, "dop853", r"^horizon 1e\+09 s at dt 0.001 s is 1e\+12 samples per run; expected at most 200,000 samples "
+                          r"\(horizon / dt\) per run; a larger dt or a shorter horizon$"),
+    (0.01, 0.05, "dop853", r"^horizon 0.01 s is shorter than one step \(dt 0.05 s\); expected horizon >= dt$"),
+    ("0.05", 1e-3, "dop853", "^horizon is '0.05', a str; expected a real number"),
+    (0.05, 7e-4, "rk4", "^dt 0.0007 does not divide the gait's phase"),
     (0.05, 1e-3, "euler", "unknown integrator 'euler'; expected dop853 or rk4"),
 ])
 def test_every_run_checks_its_times_before_the_work(paper, horizon, dt, integrator, message, monkeypatch):
     """Found by a review (2026-12-06): the CLI checked these, the API did not: run_experiment and the
     simulations raised ValueError (a NaN horizon), ZeroDivisionError (dt 0), IndexError (dt < 0), a
-    7 TiB MemoryError (1e9 s) or a TypeError (a str), after building the IK table."""
+    7 TiB MemoryError (1e9 s) or a TypeError (a str), after building the IK table. The messages name the
+    parameters (they named the CLI's --horizon and --dt, which the API has not; the CLI passes its own names)."""
     from quadruped_dyn.errors import InputError
     from quadruped_dyn.experiment import paper_experiment
     from quadruped_dyn.experiment.paper_experiment import run_experiment
