@@ -68,11 +68,12 @@ from typing import Protocol
 import numpy as np
 import pinocchio as pin
 
+from quadruped_dyn.arguments import real_number
 from quadruped_dyn.codegen.emit import reduced_symbol
 from quadruped_dyn.codegen.library import CompiledFunction, compiled_library
 from quadruped_dyn.control.plant import Command, Measurement
 from quadruped_dyn.control.reference import Reference
-from quadruped_dyn.errors import InputError, real_number
+from quadruped_dyn.errors import InputError
 from quadruped_dyn.experiment.plan_ik import ReferenceSample
 from quadruped_dyn.model.robot import Robot
 from quadruped_dyn.model.stance import StanceSet

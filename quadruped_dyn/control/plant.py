@@ -44,8 +44,9 @@ from dataclasses import dataclass, field
 import mujoco
 import numpy as np
 
+from quadruped_dyn.arguments import real_number
 from quadruped_dyn.dynamics.grf import MAX_FRICTION_COEFFICIENT
-from quadruped_dyn.errors import InputError, real_number
+from quadruped_dyn.errors import InputError
 from quadruped_dyn.experiment.gait import Plan
 from quadruped_dyn.model.robot import Robot, actuator_limit
 from quadruped_dyn.model.state import GRAVITY_W

@@ -34,11 +34,12 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from quadruped_dyn.arguments import real_number, whole_number
 from quadruped_dyn.codegen.library import CompiledFunction
 from quadruped_dyn.control.controllers import Controller, Gains, GeneratedC, Pd, make_controller
 from quadruped_dyn.control.plant import Plant, PlantOptions
 from quadruped_dyn.control.reference import reference_cycle
-from quadruped_dyn.errors import InputError, NumericalError, real_number, whole_number
+from quadruped_dyn.errors import InputError, NumericalError
 from quadruped_dyn.experiment.gait import Plan
 from quadruped_dyn.experiment.plan_ik import ReferenceSample
 from quadruped_dyn.model.stance import StanceSet

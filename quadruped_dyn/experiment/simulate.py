@@ -36,10 +36,11 @@ import numpy as np
 import pinocchio as pin
 from scipy.integrate import DOP853
 
+from quadruped_dyn.arguments import real_number
 from quadruped_dyn.dynamics.guarded import guarded_call
 from quadruped_dyn.dynamics.kinematics import robot_feet, robot_kinematics
 from quadruped_dyn.dynamics.reduced import reduced_model
-from quadruped_dyn.errors import InputError, NumericalError, real_number
+from quadruped_dyn.errors import InputError, NumericalError
 from quadruped_dyn.experiment.gait import Gait, Plan
 from quadruped_dyn.experiment.plan_ik import ReferenceSample, references
 from quadruped_dyn.experiment.trunk_pose import pose_from_feet

@@ -16,7 +16,7 @@ from typing import Any
 
 import numpy as np
 
-from quadruped_dyn.errors import real_number
+from quadruped_dyn.arguments import real_number
 from quadruped_dyn.experiment.paper_experiment import DEPARTURE_PCT, departure, growth_rate
 from quadruped_dyn.experiment.plan_ik import ReferenceSample
 from quadruped_dyn.experiment.rigid_contact import simulate_rigid

@@ -44,8 +44,9 @@ from typing import Any
 import casadi as ca
 import numpy as np
 
+from quadruped_dyn.arguments import real_number, whole_number
 from quadruped_dyn.dynamics.grf import MAX_FRICTION_COEFFICIENT
-from quadruped_dyn.errors import InputError, real_number, whole_number
+from quadruped_dyn.errors import InputError
 from quadruped_dyn.experiment.gait import Gait, Plan, gait_plan
 from quadruped_dyn.experiment.plan_ik import reference
 from quadruped_dyn.model.robot import ACTUATOR_LIMITS, Robot, actuator_limit
