@@ -293,6 +293,22 @@ def test_validate_interrupted_while_plotting_leaves_no_new_json(tmp_path, monkey
     assert list(tmp_path.iterdir()) == [], "no file of the interrupted run, not even a temporary one"
 
 
+def test_validate_without_physics_removes_the_previous_physics_plot(tmp_path):
+    """The physics plot of an earlier run is not this result's: removed with the result's set (it was unlinked after
+    the set, outside it), and kept when the run is interrupted."""
+    from quadruped_dyn.experiment import outputs
+
+    old = outputs.output_paths(tmp_path, "paper", "trot")["physics_plot"]
+    old.write_bytes(b"the previous run's plot")
+    args = ["validate", "--horizon", "0.05", "--no-physics", "--out", str(tmp_path)]
+    with pytest.MonkeyPatch.context() as patch:
+        patch.setattr(outputs, "plot_br_hfe", lambda *a, **k: (_ for _ in ()).throw(KeyboardInterrupt))
+        assert CliRunner().invoke(main, args).exit_code == 130
+    assert old.read_bytes() == b"the previous run's plot"
+    result = CliRunner().invoke(main, args)
+    assert result.exit_code == 0 and not old.exists(), result.output
+
+
 def test_output_files_are_written_through_safe_write():
     """The modules that write a command's files (JSON, CSV, plots, animation) never open, save or
     write a path themselves: only ``files.safe_write`` does (never through a link, atomic, in sets)."""

@@ -11,7 +11,7 @@ from quadruped_dyn.errors import NumericalError
 from quadruped_dyn.experiment.simulate import check_times, reduced_dynamics
 from quadruped_dyn.files.paths import writable_dir
 from quadruped_dyn.files.provenance import check_source, record_source
-from quadruped_dyn.files.safe_write import output_set, replaceable
+from quadruped_dyn.files.safe_write import output_set, remove, replaceable
 from quadruped_dyn.model.robot import load_robot
 
 #: Samples per run beyond which validate states the cost (the limit: simulate.MAX_SAMPLES).
@@ -87,9 +87,9 @@ def validate(robot: str, gait_name: str, horizon: float | None, integrator: str,
         plot_br_hfe(paths["plot"], exp)
         if exp.rigid:
             plot_physics_check(paths["physics_plot"], exp)
+        else:  # no physics check: the previous run's plot is not this result's
+            remove(paths["physics_plot"])
         record_source(out, r)
-    if not exp.rigid:
-        paths["physics_plot"].unlink(missing_ok=True)
     if as_json:
         echo(json.dumps(json.loads(paths["json"].read_text()), indent=2))
         return

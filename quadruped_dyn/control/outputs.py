@@ -20,7 +20,7 @@ import numpy as np
 
 from quadruped_dyn.control.closed_loop import ClosedLoop
 from quadruped_dyn.files.json import json_safe
-from quadruped_dyn.files.safe_write import output_path, output_set, save_figure, text_writer, write_bytes, write_text
+from quadruped_dyn.files.safe_write import output_path, output_set, remove, save_figure, text_writer, write_bytes, write_text
 
 ANIMATION_FPS = 20
 ANIMATION_SIZE = (240, 320)  # height, width, px
@@ -117,8 +117,8 @@ def write_all(out_dir: Path, study: ClosedLoop, animation: bool = True) -> tuple
         plot(paths["plot"], study)
         plot_grf(paths["grf_plot"], study)
         drawn = animation and bool(study.results) and animate(paths["animation"], study, best_controller(study.results))
-    if not drawn:
-        paths["animation"].unlink(missing_ok=True)
+        if not drawn:  # the previous run's animation is not this result's
+            remove(paths["animation"])
     return data, paths
 
 
