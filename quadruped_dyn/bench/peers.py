@@ -70,7 +70,7 @@ class PeerEntry:
 
 def parse_peers(text: str) -> tuple[str, ...]:
     """Peer names from ``--peers``' comma-separated list (empty or "none": none); InputError for an empty name
-    in it (``,``, ``adam,``), an unknown one or a missing package, before any work."""
+    in it (``,``, ``adam,``), "none" beside a peer, an unknown one or a missing package, before any work."""
     expected = f"expected a comma-separated list of: {', '.join(PEERS)} (or none)"
     if not text.strip():
         return ()
@@ -78,9 +78,11 @@ def parse_peers(text: str) -> tuple[str, ...]:
     if "" in items:  # ',' was read as no peers: a list with nothing in it is a mistake, not a choice
         raise InputError(f"--peers '{printable(text)}' has an empty name; {expected}")
     names = tuple(p for p in items if p != "none")
+    if names and len(names) < len(items):  # 'none,adam' was read as adam
+        raise InputError(f"--peers '{printable(text)}' names none and a peer; expected none alone, or peers without it")
     unknown = [p for p in names if p not in PEERS]
     if unknown:
-        raise InputError(f"unknown peer(s) {', '.join(unknown)}; {expected}")
+        raise InputError(f"--peers: unknown peer(s) {', '.join(unknown)}; {expected}")
     if cppadcg.PEER in names and not cppadcg.available():
         raise InputError(f"the peer {cppadcg.PEER} needs the CppADCodeGen headers; expected {cppadcg.INSTALL_HINT}")
     if "adam" in names:
