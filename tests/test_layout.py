@@ -81,3 +81,16 @@ def test_top_level_exports_the_api_errors() -> None:
 
     assert (InputError, NumericalError) == (input_error, numerical_error)
     assert {"InputError", "NumericalError"} <= set(quadruped_dyn.__all__)
+
+
+def test_typed_names_are_the_lazy_names() -> None:
+    """The top-level package lists its names twice (helper review, 2026-12-06): as imports for a type checker and in
+    ``_MODULES`` for loading on first use. The two lists name the same things, or a name is untyped or missing."""
+    import ast
+
+    tree = ast.parse(Path(quadruped_dyn.__file__).read_text())
+    typed = {(node.module.removeprefix("quadruped_dyn."), alias.name)
+             for block in tree.body if isinstance(block, ast.If) and ast.unparse(block.test) == "TYPE_CHECKING"
+             for node in block.body if isinstance(node, ast.ImportFrom) and node.module for alias in node.names}
+    lazy = {(module, name) for module, names in quadruped_dyn._MODULES.items() for name in names}
+    assert typed and typed == lazy, (typed ^ lazy)
