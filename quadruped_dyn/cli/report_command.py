@@ -6,7 +6,7 @@ import sys
 
 import click
 
-from quadruped_dyn.cli.app import EXIT_CHECK_FAILED, echo
+from quadruped_dyn.cli.app import EXIT_CHECK_FAILED, echo, foot_frames_option
 from quadruped_dyn.report.gather import CHECK_SAMPLES
 
 
@@ -19,12 +19,13 @@ from quadruped_dyn.report.gather import CHECK_SAMPLES
               help="Random states of the term check against Pinocchio (`check --samples` runs it alone).")
 @click.option("--footprint", is_flag=True,
               help="Add the Cortex-M footprint (code size, stack): two cross builds, minutes on a cold cache.")
-def report(robot: str, out_dir: str, fast: bool, samples: int, footprint: bool) -> None:
+@foot_frames_option
+def report(robot: str, out_dir: str, fast: bool, samples: int, footprint: bool, foot_frames: str | None) -> None:
     """One self-contained HTML page of everything the toolkit knows about ROBOT (a name or URDF path,
     default paper; exit 1 if a check fails)."""
     from quadruped_dyn.report.build import build_report, prepare
 
     prepare(robot, out_dir, samples)  # bad input is reported before any work
-    result = build_report(robot, out_dir, fast, samples, footprint=footprint)
+    result = build_report(robot, out_dir, fast, samples, footprint=footprint, foot_frames=foot_frames)
     echo(result.summary())
     sys.exit(0 if result.passed else EXIT_CHECK_FAILED)

@@ -227,7 +227,7 @@ def _foot_frame(model: pin.Model, knee: int, label: str, wanted: str | None = No
         others = ", ".join(f"'{model.frames[i].name}' ({dist(i):.3f} m)" for i in leaves if i != chosen)
         warnings.warn(f"leg {label}: foot frame '{model.frames[chosen].name}' at {dist(chosen):.3f} m from the knee, "
                       f"{why}; other leaf frames below the knee: {others}; name the feet (load_robot(..., "
-                      "foot_frames=[...]), or --foot-frames of info, check, codegen, validate, control and optimize) "
+                      "foot_frames=[...]), or --foot-frames of info, check, codegen, validate, control, optimize and report) "
                       "if another is the contact point",
                       UrdfWarning, stacklevel=4)
     return chosen

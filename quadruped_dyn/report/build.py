@@ -144,26 +144,27 @@ def _attempt(key: str, title: str, build: Callable[[], Section]) -> Section:
 
 def build_report(robot_arg: str = "paper", out: str | Path = "results", fast: bool = False,
                  samples: int = CHECK_SAMPLES, with_notebooks: bool = True, show_progress: bool = True,
-                 compile_ahead: bool = True, footprint: bool = False) -> ReportResult:
+                 compile_ahead: bool = True, footprint: bool = False, foot_frames: object = None) -> ReportResult:
     """Write ``<out>/<robot>/report.html`` (see the module docstring); ``fast`` skips the
     benchmark; ``footprint`` adds the Cortex-M cross builds (code size and stack; minutes on a
     cold cache); ``compile_ahead`` compiles the later steps' C in a second process from the start
-    (``warm.py``). Arguments are validated (InputError) before any work."""
+    (``warm.py``); ``foot_frames`` as ``load_robot``'s. Arguments are validated (InputError) before any work."""
     import matplotlib
 
     matplotlib.use("Agg")  # figures go into the page, never to a window
     _, target = prepare(robot_arg, out, samples)
+    robot, urdf_warnings = load_with_warnings(robot_arg, foot_frames)  # a URDF's or a foot's error before any line
     steps = _steps(samples, fast, with_notebooks)
     progress = Progress(len(steps) + 2, show_progress)  # loading, the steps, writing the page
     done = progress.step(f"loading {robot_arg}")
-    robot, urdf_warnings = load_with_warnings(robot_arg)
     with _staging(target) as staging:
         job = _Job(robot, urdf_warnings, staging, fast, samples, footprint, progress, folder=target)
         pool = None
         if compile_ahead:
             ahead = notebook_list(robot)[0] if with_notebooks else []
             pool, _, job.notebooks_ahead = warm.start(robot.urdf, with_benchmark=not fast,
-                                                      with_footprint=footprint and not fast, notebooks=ahead)
+                                                      with_footprint=footprint and not fast, notebooks=ahead,
+                                                      foot_frames=tuple(leg.foot_frame for leg in robot.legs))
         try:
             sections = [_attempt("robot", "The robot", lambda: _robot_section(job))]
             done()

@@ -42,12 +42,12 @@ EXPERIMENT_DT = 1e-3
 LIBRARIES = ("quadruped_dyn", "pin", "casadi", "numpy", "sympy", "matplotlib", "example-robot-data", "click",
              "nbclient", "ipykernel", "markdown-it-py", "pygments")
 
-def load_with_warnings(robot_arg: str) -> tuple[Robot, list[str]]:
-    """The robot, and every warning raised while loading it (Python warnings, and the
-    ``warnings`` attribute of a Robot if the loader records them)."""
+def load_with_warnings(robot_arg: str, foot_frames: object = None) -> tuple[Robot, list[str]]:
+    """The robot (``foot_frames`` as ``load_robot``'s), and every warning raised while loading it (Python warnings,
+    and the ``warnings`` attribute of a Robot if the loader records them)."""
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
-        robot = load_robot(robot_arg)
+        robot = load_robot(robot_arg, foot_frames=foot_frames)
     messages = [str(w.message) for w in caught]
     return robot, messages + [str(w) for w in getattr(robot, "warnings", ())]
 

@@ -24,16 +24,17 @@ from pathlib import Path
 from typing import Any
 
 
-def warm_caches(urdf: str, with_benchmark: bool, with_footprint: bool = False) -> str:
-    """Build every cached artefact of the report for the robot at ``urdf``, in the order the
-    steps need them (the Cortex-M builds only ``with_footprint``); "" on success, else the first
+def warm_caches(urdf: str, with_benchmark: bool, with_footprint: bool = False,
+                foot_frames: tuple[str, ...] | None = None) -> str:
+    """Build every cached artefact of the report for the robot at ``urdf`` on ``foot_frames`` (``load_robot``'s), in
+    the order the steps need them (the Cortex-M builds only ``with_footprint``); "" on success, else the first
     error (one line)."""
     try:
         from quadruped_dyn.codegen.library import compiled_library
         from quadruped_dyn.experiment.native_run import native_library
         from quadruped_dyn.model.robot import load_robot
 
-        robot = load_robot(urdf)
+        robot = load_robot(urdf, foot_frames=foot_frames)
         compiled_library(robot)  # the reduced-model step, the experiment, the generated-C step
         native_library(robot)  # the experiment's native driver
         if with_benchmark:
@@ -53,13 +54,14 @@ def warm_caches(urdf: str, with_benchmark: bool, with_footprint: bool = False) -
         return f"{type(e).__name__}: {str(e).strip().splitlines()[0] if str(e).strip() else ''}"
 
 
-def start(urdf: Path, with_benchmark: bool, notebooks: Sequence[Path] = (), with_footprint: bool = False) -> tuple[
-        ProcessPoolExecutor, Future[str], list[Future[dict[str, Any]]]]:
-    """The warm process, started (spawned: no state of this process is shared): ``warm_caches``,
+def start(urdf: Path, with_benchmark: bool, notebooks: Sequence[Path] = (), with_footprint: bool = False,
+          foot_frames: tuple[str, ...] | None = None) -> tuple[ProcessPoolExecutor, Future[str], list[Future[dict[str, Any]]]]:
+    """The warm process, started (spawned: no state of this process is shared): ``warm_caches`` (of the robot on
+    ``foot_frames``, the report's: the caches key on them),
     then each of ``notebooks`` executed and rendered (``gather.executed_notebook``), in that order.
     Shut the pool down with ``wait=True`` when the report is written, so no process outlives the command."""
     from quadruped_dyn.report.gather import executed_notebook
 
     pool = ProcessPoolExecutor(max_workers=1, mp_context=multiprocessing.get_context("spawn"))
-    warmed = pool.submit(warm_caches, str(urdf), with_benchmark, with_footprint)
+    warmed = pool.submit(warm_caches, str(urdf), with_benchmark, with_footprint, foot_frames)
     return pool, warmed, [pool.submit(executed_notebook, path) for path in notebooks]

@@ -72,6 +72,21 @@ def test_too_many_samples_is_one_line_exit_2_before_the_work(tmp_path, monkeypat
     assert not list(tmp_path.iterdir())
 
 
+def test_report_takes_the_feet(tmp_path, monkeypatch):
+    """``report --foot-frames`` loads the robot on them (a wrong name: one line, exit 2, before any section) and
+    hands them to the build."""
+    from quadruped_dyn.report import build
+
+    result = CliRunner().invoke(main, ["report", "paper", "--fast", "--foot-frames", "a,b,c,d", "--out", str(tmp_path)])
+    assert result.exit_code == 2 and result.stderr.count("\n") == 1, result.output
+    assert "foot frame 'a' of leg FL is not a frame" in result.stderr
+    given = {}
+    monkeypatch.setattr(build, "build_report", lambda *a, **k: given.update(k) or (_ for _ in ()).throw(KeyboardInterrupt))
+    CliRunner().invoke(main, ["report", "paper", "--fast", "--foot-frames", "FL_foot,FR_foot,BL_foot,BR_foot",
+                              "--out", str(tmp_path)])
+    assert given["foot_frames"] == "FL_foot,FR_foot,BL_foot,BR_foot"
+
+
 def test_unwritable_out_is_one_line_exit_2(tmp_path):
     blocker = tmp_path / "file"
     blocker.write_text("")

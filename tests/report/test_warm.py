@@ -38,3 +38,10 @@ def test_notebooks_run_in_the_warm_process_after_it(tmp_path):
     assert warmed.result().startswith("InputError: ")
     assert page["name"] == "probe.ipynb" and page["errors"] == 1
     assert "42" in page["html"] and "ZeroDivisionError" in page["html"]
+
+
+def test_the_warm_build_loads_the_reports_feet():
+    """The warm process loads the robot on the report's foot frames (the caches key on them: on the default feet it
+    would build another library): a foot frame the URDF does not have is its one-line error."""
+    message = warm.warm_caches("paper", with_benchmark=False, foot_frames=("FL_nowhere", "FR_foot", "BL_foot", "BR_foot"))
+    assert message.startswith("InputError: ") and "'FL_nowhere' of leg FL is not a frame" in message, message
