@@ -11,7 +11,7 @@ from quadruped_dyn.errors import InputError
 from quadruped_dyn.files.names import printable
 from quadruped_dyn.files.paths import writable_dir
 from quadruped_dyn.files.provenance import check_source, record_source
-from quadruped_dyn.files.safe_write import replaceable
+from quadruped_dyn.files.safe_write import output_set, replaceable
 from quadruped_dyn.model.robot import load_robot
 
 
@@ -43,8 +43,9 @@ def codegen(robot: str, out_dir: str, precision: str, check: bool, as_json: bool
     out = writable_dir(out_dir, f"--out '{out_dir}'")
     check_source(out, r)  # another URDF's C of the same name is never overwritten
     replaceable(checked_files(r, out).all())  # a directory in the way is refused now, not after the generation
-    paths = generate_checked(r, out, precision).all()
-    paths += filter(None, [record_source(out, r)])  # the URDF they came from (none for a built-in robot)
+    with output_set():  # the URDF they came from (no record for a built-in robot), with them
+        paths = generate_checked(r, out, precision).all()
+        paths += filter(None, [record_source(out, r)])
     if as_json:
         import json
 

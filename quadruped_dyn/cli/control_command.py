@@ -10,7 +10,7 @@ from quadruped_dyn.cli.app import echo, foot_frames_option, progress
 from quadruped_dyn.files.names import printable
 from quadruped_dyn.files.paths import writable_dir
 from quadruped_dyn.files.provenance import check_source, record_source
-from quadruped_dyn.files.safe_write import replaceable
+from quadruped_dyn.files.safe_write import output_set, replaceable
 from quadruped_dyn.model.robot import load_robot
 
 
@@ -61,8 +61,9 @@ def control(robot: str, gait_name: str, controllers: tuple[str, ...], cycles: in
             done[0] = max(done[0], ms)
 
         run_all(study, progress=tick, keep_qpos=not no_animation)
-    data, paths = write_all(out, study, animation=not no_animation)
-    record_source(out, study.robot)
+    with output_set():  # the record with the outputs
+        data, paths = write_all(out, study, animation=not no_animation)
+        record_source(out, study.robot)
     if as_json:
         echo(json.dumps(data, indent=2))
         return

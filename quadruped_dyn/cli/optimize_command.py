@@ -14,7 +14,7 @@ from quadruped_dyn.errors import InputError
 from quadruped_dyn.files.names import printable
 from quadruped_dyn.files.paths import writable_dir
 from quadruped_dyn.files.provenance import check_source, record_source
-from quadruped_dyn.files.safe_write import replaceable
+from quadruped_dyn.files.safe_write import output_set, replaceable
 from quadruped_dyn.model.robot import load_robot
 
 
@@ -77,8 +77,9 @@ def optimize(robot: str, gait_name: str, nodes: int | None, mu: float | None, sp
         click.echo(f"replaying the torques open loop in the rigid-contact dynamics for {cycles:g} cycles ...", err=True)
         replay = replay_rigid(sol, cycles)
     data = report(sol, replay)
-    write_outputs(paths, sol, replay, data)
-    record_source(out, r)
+    with output_set():  # the record with the outputs
+        write_outputs(paths, sol, replay, data)
+        record_source(out, r)
     if as_json:
         echo(json.dumps(json.loads(paths["json"].read_text()), indent=2))
         return

@@ -62,7 +62,12 @@ def _rename(tmp: str, path: Path) -> None:
 @contextlib.contextmanager
 def output_set() -> Iterator[None]:
     """Every ``write_bytes`` in the block is kept under its temporary name until the block ends
-    without an error, then all are renamed into place; an error or an interrupt removes them all."""
+    without an error, then all are renamed into place; an error or an interrupt removes them all. A set
+    inside another joins it: its files are renamed when the outermost set ends (a command adds a file,
+    such as the provenance record, to a writer's set)."""
+    if _PENDING.get() is not None:
+        yield
+        return
     pending: list[tuple[str, Path]] = []
     token = _PENDING.set(pending)
     try:
