@@ -39,6 +39,17 @@ def test_top_level_import_is_light() -> None:
     assert out.strip() == "[]", out
 
 
+def test_the_command_line_starts_light() -> None:
+    """``quadruped-dyn --help`` and every command's option parsing load none of scipy, matplotlib, CasADi or Pinocchio
+    (2 s before the commands imported them at the top: each command imports its work when it runs)."""
+    code = ("import sys; from quadruped_dyn.cli.commands import main; from click.testing import CliRunner; "
+            "assert all(CliRunner().invoke(main, [c, '--help']).exit_code == 0 for c in main.commands); "
+            "assert CliRunner().invoke(main, ['--help']).exit_code == 0; "
+            "print(sorted({'scipy', 'matplotlib', 'casadi', 'pinocchio'} & set(sys.modules)))")
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True).stdout
+    assert out.strip() == "[]", out
+
+
 def test_layer_contract() -> None:
     lint = Path(sys.executable).with_name("lint-imports")
     if not lint.exists():

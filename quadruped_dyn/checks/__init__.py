@@ -13,6 +13,7 @@ _MODULES: dict[str, tuple[str, ...]] = {
         "LIBRARIES", "EXACT_CHANGES", "INSTALL_HINT", "parse_libraries", "ToolkitDynamics", "CrossLibraryResult",
         "CrossLibraryReport", "run_cross_library",
     ),
+    "limits": ("MAX_SAMPLES", "CHECK_SAMPLES", "check_samples"),
     "derivative_reference": ("central", "rotated", "ReducedReference", "grf_derivatives_reference", "grf_wrench_reference"),
     "terms": ("TermResult", "CheckReport", "GrfResult", "REDUCED_STANCES", "run_check"),
 }

@@ -17,12 +17,12 @@ from dataclasses import asdict, dataclass, field
 import numpy as np
 import pinocchio as pin
 
+from quadruped_dyn.checks.limits import check_samples
 from quadruped_dyn.dynamics.derivatives import full_derivatives
 from quadruped_dyn.dynamics.grf import grf_solve, grf_solves
 from quadruped_dyn.dynamics.kinematics import robot_kinematics
 from quadruped_dyn.dynamics.newton_euler import full_dynamics
 from quadruped_dyn.dynamics.reduced import reduced_model
-from quadruped_dyn.errors import InputError
 from quadruped_dyn.files.json import json_safe
 from quadruped_dyn.math.compare import max_abs_error, relative_error, scale_of, within
 from quadruped_dyn.model.robot import Robot
@@ -191,17 +191,6 @@ def _derivative_comparisons(robot: Robot, ref: PinocchioReference, s: FullState,
 
 #: Symbolic models the check builds before its first sample (``run_check``'s ``building`` counts them).
 N_MODELS = 4 + len(REDUCED_STANCES)
-
-
-#: Random states ``run_check`` accepts: ~15 states/s once the models are built, so this is about two hours;
-#: more is refused before the minutes of model building start.
-MAX_SAMPLES = 100_000
-
-
-def check_samples(samples: object) -> None:
-    """InputError unless 1 <= samples <= MAX_SAMPLES (an integer)."""
-    if isinstance(samples, bool) or not isinstance(samples, int) or not 1 <= samples <= MAX_SAMPLES:
-        raise InputError(f"samples is {samples!r}; expected an integer from 1 to {MAX_SAMPLES:,}")
 
 
 def run_check(robot: Robot, samples: int = 20, seed: int = 0, progress: Callable[[int], None] | None = None,

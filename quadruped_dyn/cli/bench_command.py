@@ -9,7 +9,6 @@ import click
 from quadruped_dyn.bench.limits import MAX_CALLS, MAX_REPS
 from quadruped_dyn.cli.app import echo, require_tools
 from quadruped_dyn.files.paths import writable_dir
-from quadruped_dyn.model.robot import load_robot
 
 
 @click.command()
@@ -31,6 +30,7 @@ def bench(robots: tuple[str, ...], calls: int, reps: int, as_json: bool, peers: 
     from quadruped_dyn.bench.peers import parse_peers, peers_table, run_peers
     from quadruped_dyn.bench.timing import run_bench
     from quadruped_dyn.files.cache import cache_dir
+    from quadruped_dyn.model.robot import load_robot
 
     auto = peers.strip() == "auto"
     peer_names: tuple[str, ...] = ((cppadcg.PEER,) if cppadcg.available() else ()) if auto else parse_peers(peers)

@@ -7,9 +7,8 @@ import sys
 
 import click
 
-from quadruped_dyn.checks.terms import MAX_SAMPLES
+from quadruped_dyn.checks.limits import MAX_SAMPLES
 from quadruped_dyn.cli.app import EXIT_CHECK_FAILED, echo, foot_frames_option, progress
-from quadruped_dyn.model.robot import load_robot
 
 
 @click.command()
@@ -26,6 +25,7 @@ def check(robot: str, samples: int, seed: int, as_json: bool, against: str | Non
     """Check every symbolic term of ROBOT against Pinocchio on random states (exit 1 on failure)."""
     from quadruped_dyn.checks.terms import run_check
     from quadruped_dyn.files.json import json_safe
+    from quadruped_dyn.model.robot import load_robot
 
     libraries: tuple[str, ...] = ()
     if against is not None:

@@ -12,7 +12,6 @@ from quadruped_dyn.files.names import printable
 from quadruped_dyn.files.paths import writable_dir
 from quadruped_dyn.files.provenance import check_source, record_source
 from quadruped_dyn.files.safe_write import output_set, replaceable
-from quadruped_dyn.model.robot import load_robot
 
 
 @click.command()
@@ -32,6 +31,7 @@ def codegen(robot: str, out_dir: str, precision: str, check: bool, as_json: bool
     from pathlib import Path
 
     from quadruped_dyn.checks.c_reference import checked_files, compare_generation, generate_checked
+    from quadruped_dyn.model.robot import load_robot
 
     r = load_robot(robot, foot_frames=foot_frames)
     if check:

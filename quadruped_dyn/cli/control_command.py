@@ -11,7 +11,6 @@ from quadruped_dyn.files.names import printable
 from quadruped_dyn.files.paths import writable_dir
 from quadruped_dyn.files.provenance import check_source, record_source
 from quadruped_dyn.files.safe_write import output_set, replaceable
-from quadruped_dyn.model.robot import load_robot
 
 
 @click.command()
@@ -43,6 +42,7 @@ def control(robot: str, gait_name: str, controllers: tuple[str, ...], cycles: in
     from quadruped_dyn.control.outputs import output_paths, write_all
     from quadruped_dyn.control.plant import PlantOptions
     from quadruped_dyn.control.run import LoopOptions
+    from quadruped_dyn.model.robot import load_robot
 
     gains = Gains()
     gains = replace(gains, **{k: v for k, v in (("kp_per_kg", kp_per_kg), ("kd_per_kg", kd_per_kg)) if v is not None})

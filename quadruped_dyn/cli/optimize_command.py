@@ -15,7 +15,6 @@ from quadruped_dyn.files.names import printable
 from quadruped_dyn.files.paths import writable_dir
 from quadruped_dyn.files.provenance import check_source, record_source
 from quadruped_dyn.files.safe_write import output_set, replaceable
-from quadruped_dyn.model.robot import load_robot
 
 
 @click.command()
@@ -41,6 +40,7 @@ def optimize(robot: str, gait_name: str, nodes: int | None, mu: float | None, sp
     the solve does not converge. ROBOT: a name or URDF path, default paper."""
     from quadruped_dyn.experiment.gait import GAITS
     from quadruped_dyn.experiment.simulate import MAX_SAMPLES
+    from quadruped_dyn.model.robot import load_robot
     from quadruped_dyn.optimal_control.outputs import output_paths, report, write_outputs
     from quadruped_dyn.optimal_control.replay import REPLAY_DT, replay_rigid
     from quadruped_dyn.optimal_control.solve import MAX_CONSTRAINT_VIOLATION, solve

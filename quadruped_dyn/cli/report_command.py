@@ -6,8 +6,8 @@ import sys
 
 import click
 
+from quadruped_dyn.checks.limits import CHECK_SAMPLES
 from quadruped_dyn.cli.app import EXIT_CHECK_FAILED, echo, foot_frames_option
-from quadruped_dyn.report.gather import CHECK_SAMPLES
 
 
 @click.command()

@@ -8,13 +8,13 @@ import sys
 import click
 
 from quadruped_dyn.cli.app import EXIT_CHECK_FAILED, echo, foot_frames_option
-from quadruped_dyn.model.robot import ROBOT_NAMES, load_robot
-from quadruped_dyn.model.robot_summary import robot_info
 
 
 @click.command()
 def robots() -> None:
     """List the built-in robot names."""
+    from quadruped_dyn.model.robot import ROBOT_NAMES
+
     for name in ROBOT_NAMES:
         echo(name)
 
@@ -25,6 +25,9 @@ def robots() -> None:
 @foot_frames_option
 def info(robot: str, as_json: bool, foot_frames: str | None) -> None:
     """Legs, joints, link lengths, masses and standing foot positions of ROBOT (name or URDF path)."""
+    from quadruped_dyn.model.robot import load_robot
+    from quadruped_dyn.model.robot_summary import robot_info
+
     data = robot_info(load_robot(robot, foot_frames=foot_frames))
     if as_json:
         echo(json.dumps(data, indent=2))

@@ -8,11 +8,9 @@ import click
 
 from quadruped_dyn.cli.app import echo, foot_frames_option
 from quadruped_dyn.errors import NumericalError
-from quadruped_dyn.experiment.simulate import check_times, reduced_dynamics
 from quadruped_dyn.files.paths import writable_dir
 from quadruped_dyn.files.provenance import check_source, record_source
 from quadruped_dyn.files.safe_write import output_set, remove, replaceable
-from quadruped_dyn.model.robot import load_robot
 
 #: Samples per run beyond which validate states the cost (the limit: simulate.MAX_SAMPLES).
 WARN_SAMPLES = 20_000
@@ -55,7 +53,9 @@ def validate(robot: str, gait_name: str, horizon: float | None, integrator: str,
         run_experiment,
         static_stability,
     )
+    from quadruped_dyn.experiment.simulate import check_times, reduced_dynamics
     from quadruped_dyn.files.json import write_json
+    from quadruped_dyn.model.robot import load_robot
 
     gait = GAITS[gait_name]
     horizon = 2 * gait.period if horizon is None else horizon

@@ -6,7 +6,7 @@ _MODULES: dict[str, tuple[str, ...]] = {
     "build": ("Progress", "prepare", "ReportResult", "build_report"),
     "figures": ("stick_figure", "footprint_figure", "sparsity_figure"),
     "gather": (
-        "CHECK_SAMPLES", "FRICTION_MU", "EXPERIMENT_DT", "LIBRARIES", "load_with_warnings", "robot_data", "leg_points",
+        "FRICTION_MU", "EXPERIMENT_DT", "LIBRARIES", "load_with_warnings", "robot_data", "leg_points",
         "grf_posture", "reduced_rows", "experiment", "generate_c_directory", "generated_c", "symbolic_data", "versions",
     ),
     "html": (

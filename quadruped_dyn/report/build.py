@@ -28,7 +28,7 @@ from functools import partial
 from pathlib import Path
 from typing import Any
 
-from quadruped_dyn.checks.terms import check_samples
+from quadruped_dyn.checks.limits import CHECK_SAMPLES, check_samples
 from quadruped_dyn.files.names import printable
 from quadruped_dyn.files.paths import writable_dir
 from quadruped_dyn.files.provenance import check_source, record_source
@@ -37,7 +37,6 @@ from quadruped_dyn.model.robot import Robot, robot_path, urdf_source
 from quadruped_dyn.progress import Steps
 from quadruped_dyn.report import warm
 from quadruped_dyn.report.gather import (
-    CHECK_SAMPLES,
     FRICTION_MU,
     closed_loop,
     cross_library,

@@ -27,10 +27,6 @@ from quadruped_dyn.report.html import png_image
 if TYPE_CHECKING:
     from quadruped_dyn.codegen.emit import GeneratedFiles
 
-#: Random states of the report's term check (``report --samples``): ~1 s each on this 2-core machine
-#: (the Pinocchio-built reduced reference of four stance sets), so 50 keep the step near a minute;
-#: the README's numbers are ``check paper --samples 200``.
-CHECK_SAMPLES = 50
 
 #: Friction coefficient of the friction-cone column (rubber foot on a hard floor).
 FRICTION_MU = 0.6

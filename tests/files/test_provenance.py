@@ -72,7 +72,7 @@ def test_a_second_urdf_of_the_same_name_does_not_overwrite_the_first_report(resu
 
 
 @pytest.mark.parametrize(("command", "heavy"), [
-    (["validate", "--horizon", "0.05", "--no-physics"], "quadruped_dyn.cli.validate_command.reduced_dynamics"),
+    (["validate", "--horizon", "0.05", "--no-physics"], "quadruped_dyn.experiment.simulate.reduced_dynamics"),
     (["control", "--cycles", "1"], "quadruped_dyn.control.closed_loop.run_all"),
     (["optimize", "--cycles", "0"], "quadruped_dyn.optimal_control.transcription.transcribe"),
     (["codegen"], "quadruped_dyn.checks.c_reference.generate_checked"),
