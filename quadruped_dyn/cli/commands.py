@@ -1,5 +1,5 @@
-"""The ``quadruped-dyn`` group with every command added (importing it imports them all: scipy,
-CasADi, Pinocchio)."""
+"""The ``quadruped-dyn`` group with every command added (light: each command imports its work, CasADi, Pinocchio,
+scipy, when it runs; tests/test_layout.py holds it so)."""
 
 from quadruped_dyn.cli.app import main
 from quadruped_dyn.cli.bench_command import bench
