@@ -59,6 +59,10 @@ def printable(text: object) -> str:
 
 
 def comment_text(text: object) -> str:
-    """``printable(text)`` that cannot end a C block comment (a URDF's frame names are free text: ``*/`` becomes
-    ``* /``)."""
-    return printable(text).replace("*/", "* /")
+    """``printable(text)`` that cannot end a C block comment nor open one inside it (a URDF's frame names are
+    free text: ``*/`` becomes ``* /`` and ``/*`` becomes ``/ *``; gcc's -Wall -Werror, as in the generated
+    Makefile, refuses a ``/*`` within a comment)."""
+    text = printable(text)
+    while "*/" in text or "/*" in text:  # '/*/' needs both, and a replacement must not form another
+        text = text.replace("*/", "* /").replace("/*", "/ *")
+    return text
