@@ -21,6 +21,9 @@ from quadruped_dyn.errors import InputError
 from quadruped_dyn.files.names import printable
 from quadruped_dyn.files.safe_write import output_path, write_text
 
+#: A record is a few hundred bytes (its URDF's path is at most PATH_MAX); a larger file is not one.
+MAX_RECORD_BYTES = 64 * 1024
+
 
 class Source(Protocol):
     """What a record says about a robot (``model.robot.Robot`` is one)."""
@@ -50,9 +53,15 @@ def check_source(out_dir: Path, robot: Source) -> None:
     if robot.builtin is not None or not path.exists():
         return
     try:
-        recorded = json.loads(path.read_text())
+        if not path.is_file():  # a directory, a FIFO (its read would block), a device (/dev/zero: endless)
+            raise ValueError("not a regular file")
+        with path.open("rb") as f:
+            data = f.read(MAX_RECORD_BYTES + 1)
+        if len(data) > MAX_RECORD_BYTES:
+            raise ValueError("too large")
+        recorded = json.loads(data)
         urdf, sha256 = str(recorded["urdf"]), str(recorded["urdf_sha256"])
-    except (OSError, ValueError, TypeError, KeyError) as e:
+    except (OSError, ValueError, TypeError, KeyError, RecursionError) as e:  # RecursionError: '[[[[...' nested
         raise InputError(f"'{printable(path)}' does not say which URDF the outputs of '{robot.name}' came from; "
                          "expected the JSON quadruped-dyn writes there (remove the file, or pass another --out)") from e
     if urdf != str(robot.urdf) and sha256 != robot.urdf_sha256:

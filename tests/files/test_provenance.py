@@ -111,3 +111,25 @@ def test_a_record_that_is_not_one_is_refused(tmp_path):
     (tmp_path / "robot.source.json").write_text("[1, 2]")
     with pytest.raises(InputError, match="does not say which URDF the outputs of 'robot' came from"):
         check_source(tmp_path, robot)
+
+
+@pytest.mark.parametrize("content", ["[" * 200_000 + "]" * 200_000, "{" + " " * 100_000 + "}", "dir", "devzero"])
+def test_a_hostile_record_is_an_input_error(tmp_path, content):
+    """A record nested past Python's recursion limit was a RecursionError traceback; a record that is a huge
+    file or a symlink to /dev/zero was read whole (endlessly). Each is an InputError naming the record."""
+    from quadruped_dyn.errors import InputError
+    from quadruped_dyn.files.provenance import check_source, record_path
+    from quadruped_dyn.model.robot import urdf_source
+
+    source = urdf_source(_urdf(tmp_path / "a", "a"))
+    out = tmp_path / "out"
+    out.mkdir()
+    record = record_path(out, source.name)
+    if content == "dir":
+        record.mkdir()
+    elif content == "devzero":
+        record.symlink_to("/dev/zero")
+    else:
+        record.write_text(content)
+    with pytest.raises(InputError, match=r"robot.source.json' does not say which URDF"):
+        check_source(out, source)
