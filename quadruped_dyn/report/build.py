@@ -32,7 +32,7 @@ from quadruped_dyn.checks.limits import CHECK_SAMPLES, check_samples
 from quadruped_dyn.files.names import printable
 from quadruped_dyn.files.paths import writable_dir
 from quadruped_dyn.files.provenance import check_source, record_source
-from quadruped_dyn.files.safe_write import output_dir, output_path, output_set, publish, write_text
+from quadruped_dyn.files.safe_write import output_dir, output_path, output_set, publish, replaceable, write_text
 from quadruped_dyn.model.robot import Robot, robot_path, urdf_source
 from quadruped_dyn.progress import Steps
 from quadruped_dyn.report import warm
@@ -84,6 +84,7 @@ def prepare(robot_arg: str, out: str | Path, samples: int = CHECK_SAMPLES) -> tu
     check_source(out_dir, source)  # another URDF's report of the same name is never overwritten
     # as load_robot names it: a safe name, one path component; never a link out of --out
     target = output_dir(out_dir, source.name)
+    replaceable([target / "report.html"])  # a directory in its place: refused now, not at the publish minutes later
     return urdf, writable_dir(target, f"--out '{target}'", "a writable --out directory")
 
 

@@ -276,3 +276,14 @@ def test_a_failed_section_leaves_no_old_file_beside_its_new_ones(tmp_path, monke
     assert json.loads((folder / "paper_trot_validation.json").read_text()) == {"run": 2}
     assert not (folder / "paper_trot_BR_HFE.png").exists()
     assert sorted(p.name for p in folder.iterdir()) == ["paper_trot_validation.json", "report.html"]
+
+
+def test_a_directory_in_place_of_report_html_is_refused_before_the_work(tmp_path):
+    """It was found when the page was published, after every step (minutes): now exit 2 at once."""
+    from quadruped_dyn.errors import InputError
+    from quadruped_dyn.report.build import prepare
+
+    (tmp_path / "paper" / "report.html").mkdir(parents=True)
+    with pytest.raises(InputError, match=r"report.html' ?: it exists and is not a regular file"):
+        prepare("paper", tmp_path)
+    assert [p.name for p in (tmp_path / "paper").iterdir()] == ["report.html"]  # no staging folder made
