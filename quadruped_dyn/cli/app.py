@@ -94,9 +94,19 @@ def echo(text: object) -> None:
 def foot_frames_option(command: Any) -> Any:
     """``--foot-frames FL,FR,BL,BR``: the contact frames ``load_robot`` takes instead of those it chooses (its
     warning names the commands that have this option)."""
-    return click.option("--foot-frames", default=None, metavar="FL,FR,BL,BR",
+    return click.option("--foot-frames", default=None, metavar="FL,FR,BL,BR", callback=_four_names,
                         help="The foot frame of each leg (comma-separated, leg order FL, FR, BL, BR) instead of the "
                              "chosen ones.")(command)
+
+
+def _four_names(_ctx: Any, _param: Any, value: str | None) -> str | None:
+    """``--foot-frames`` as given if it is four non-empty names; else bad input naming the option (``load_robot``'s
+    own message names its parameter, ``foot_frames``, which the command line does not have)."""
+    if value is not None and (len(names := value.split(",")) != 4 or not all(names)):
+        raise click.BadParameter(f"'{printable(value)}' has {len(names)} comma-separated names"
+                                 f"{' (some empty)' if not all(names) else ''}; expected four frame names, in leg "
+                                 "order FL, FR, BL, BR")
+    return value
 
 
 def require_tools(*tools: str) -> None:
