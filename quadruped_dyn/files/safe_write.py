@@ -178,14 +178,23 @@ def save_figure(fig: object, path: str | Path, **savefig_kwargs: object) -> Path
 def output_dir(parent: str | Path, name: str) -> Path:
     """The subdirectory ``parent / name`` (a plain name, ``output_path``), created if missing; an
     InputError if a symlink or a file is in its place (writes must not leave ``parent``)."""
-    path = output_path(parent, name)
-    if path.is_symlink():
-        raise InputError(f"'{printable(path)}' is a symbolic link; expected a directory inside "
-                         f"'{printable(parent)}' (remove the link)")
+    path = dir_place(parent, name)
     try:
         path.mkdir(exist_ok=True)
     except OSError as e:
         raise InputError(f"cannot create '{printable(path)}' ({e.strerror}); expected a writable directory") from e
     if not path.is_dir():
+        raise InputError(f"'{printable(path)}' is a file; expected a directory")
+    return path
+
+
+def dir_place(parent: str | Path, name: str) -> Path:
+    """``parent / name`` if ``output_dir`` can make or use it there: an InputError if a symlink or a
+    file (anything but a directory) is in its place. Creates nothing: commands call it before the work."""
+    path = output_path(parent, name)
+    if path.is_symlink():
+        raise InputError(f"'{printable(path)}' is a symbolic link; expected a directory inside "
+                         f"'{printable(parent)}' (remove the link)")
+    if path.exists() and not path.is_dir():
         raise InputError(f"'{printable(path)}' is a file; expected a directory")
     return path

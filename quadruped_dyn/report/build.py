@@ -32,11 +32,13 @@ from quadruped_dyn.checks.limits import CHECK_SAMPLES, check_samples
 from quadruped_dyn.files.names import printable
 from quadruped_dyn.files.paths import writable_dir
 from quadruped_dyn.files.provenance import check_source, record_source
-from quadruped_dyn.files.safe_write import output_dir, output_path, output_set, publish, replaceable, write_text
+from quadruped_dyn.files.safe_write import (dir_place, output_dir, output_path, output_set, publish, replaceable,
+                                            write_text)
 from quadruped_dyn.model.robot import Robot, robot_path, urdf_source
 from quadruped_dyn.progress import Steps
 from quadruped_dyn.report import warm
 from quadruped_dyn.report.gather import (
+    C_FOLDER,
     FRICTION_MU,
     closed_loop,
     cross_library,
@@ -84,7 +86,9 @@ def prepare(robot_arg: str, out: str | Path, samples: int = CHECK_SAMPLES) -> tu
     check_source(out_dir, source)  # another URDF's report of the same name is never overwritten
     # as load_robot names it: a safe name, one path component; never a link out of --out
     target = output_dir(out_dir, source.name)
-    replaceable([target / "report.html"])  # a directory in its place: refused now, not at the publish minutes later
+    # what is in the way of the publish (minutes later) is refused now
+    replaceable([target / "report.html"])  # a directory in its place
+    dir_place(target, C_FOLDER)  # a link or a file in place of the generated C's folder
     return urdf, writable_dir(target, f"--out '{target}'", "a writable --out directory")
 
 
@@ -187,7 +191,7 @@ def build_report(robot_arg: str = "paper", out: str | Path = "results", fast: bo
         write_text(output_path(staging, "report.html"), page(f"quadruped_dyn report: {robot.name}", subtitle, sections))
         with output_set():  # the page and every file of the steps, or none of them
             publish(staging, target, replaces=[target / "report.html", *target.glob(f"{robot.name}_*"),
-                                               *target.glob("c/*")])
+                                               *target.glob(f"{C_FOLDER}/*")])
             record_source(target.parent, robot)
     done()
     return ReportResult(target / "report.html", sections)
@@ -281,13 +285,13 @@ def _c_section(job: _Job) -> Section:
     from quadruped_dyn.report import sections as rs
 
     gen, files = generated_c(job.robot, job.target, job.progress.count)
-    gen["directory"] = str((job.folder or job.target) / "c")  # where they are published, with the page
+    gen["directory"] = str((job.folder or job.target) / C_FOLDER)  # where they are published, with the page
     if job.fast:
         return rs.generated_c_section(gen, None, "skipped with --fast")
     from quadruped_dyn.bench.timing import run_bench
 
     # the cross builds (cached; docs/embedded.md) only with --footprint: minutes of compiling on a cold cache
-    gen["embedded"] = embedded_footprint(job.robot, job.target / "c", measure=job.footprint)
+    gen["embedded"] = embedded_footprint(job.robot, job.target / C_FOLDER, measure=job.footprint)
     return rs.generated_c_section(gen, run_bench(job.robot, checked_c=files).as_dict())  # the files just checked
 
 

@@ -33,6 +33,7 @@ FRICTION_MU = 0.6
 
 #: The experiment's sampling interval, s (the ``validate`` default).
 EXPERIMENT_DT = 1e-3
+C_FOLDER = "c"  # the generated C's folder beside the report's page
 
 #: Libraries whose versions the page records.
 LIBRARIES = ("quadruped_dyn", "pin", "casadi", "numpy", "sympy", "matplotlib", "example-robot-data", "click",
@@ -203,8 +204,8 @@ def generated_c(robot: Robot, out: Path, progress: Any = None) -> tuple[dict[str
     from quadruped_dyn.codegen.library import compiled_library
     from quadruped_dyn.dynamics.formulas import shapes
 
-    directory = out / "c"  # created by output_dir (never a link out of --out) when generated
-    files, generated = generate_c_directory(robot, output_dir(out, "c"))
+    directory = out / C_FOLDER  # created by output_dir (never a link out of --out) when generated
+    files, generated = generate_c_directory(robot, output_dir(out, C_FOLDER))
     paths = files.all()
     work = generated["work"]
     functions: list[dict[str, Any]] = [

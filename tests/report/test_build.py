@@ -287,3 +287,22 @@ def test_a_directory_in_place_of_report_html_is_refused_before_the_work(tmp_path
     with pytest.raises(InputError, match=r"report.html' ?: it exists and is not a regular file"):
         prepare("paper", tmp_path)
     assert [p.name for p in (tmp_path / "paper").iterdir()] == ["report.html"]  # no staging folder made
+
+
+@pytest.mark.parametrize("kind", ["link", "file"])
+def test_a_link_or_file_in_place_of_the_c_folder_is_refused_before_the_work(tmp_path, kind):
+    """Found when the report published its generated C (minutes in): now exit 2 at once, nothing made."""
+    from quadruped_dyn.errors import InputError
+    from quadruped_dyn.report.build import prepare
+
+    folder = tmp_path / "paper"
+    folder.mkdir()
+    outside = tmp_path / "outside"
+    outside.mkdir()
+    if kind == "link":
+        (folder / "c").symlink_to(outside)
+    else:
+        (folder / "c").write_text("not a folder")
+    with pytest.raises(InputError, match="symbolic link; expected a directory" if kind == "link" else "is a file; expected a directory"):
+        prepare("paper", tmp_path)
+    assert [p.name for p in folder.iterdir()] == ["c"] and not any(outside.iterdir())
