@@ -68,9 +68,9 @@ class _Group(click.Group):
             where = f" '{e.filename}'" if e.filename else " to standard output"
             _flush_stdout_quietly()
             _error(f"cannot write{where} ({e.strerror or e}); expected a writable output", EXIT_BAD_INPUT)
-        except KeyboardInterrupt:
+        except KeyboardInterrupt as e:  # Ctrl-C, or SIGTERM (cli.entry.Terminated)
             _flush_stdout_quietly()
-            interrupted()
+            interrupted(e)
         except SystemExit:
             _flush_stdout()
             raise

@@ -32,8 +32,7 @@ from quadruped_dyn.checks.limits import CHECK_SAMPLES, check_samples
 from quadruped_dyn.files.names import printable
 from quadruped_dyn.files.paths import writable_dir
 from quadruped_dyn.files.provenance import check_source, record_source
-from quadruped_dyn.files.safe_write import (dir_place, output_dir, output_path, output_set, publish, replaceable,
-                                            write_text)
+from quadruped_dyn.files.safe_write import dir_place, output_dir, output_path, output_set, publish, replaceable, write_text
 from quadruped_dyn.model.robot import Robot, robot_path, urdf_source
 from quadruped_dyn.progress import Steps
 from quadruped_dyn.report import warm
@@ -169,6 +168,7 @@ def build_report(robot_arg: str = "paper", out: str | Path = "results", fast: bo
             pool, _, job.notebooks_ahead = warm.start(robot.urdf, with_benchmark=not fast,
                                                       with_footprint=footprint and not fast, notebooks=ahead,
                                                       foot_frames=tuple(leg.foot_frame for leg in robot.legs))
+        stopped = False
         try:
             sections = [_attempt("robot", "The robot", lambda: _robot_section(job))]
             done()
@@ -179,9 +179,12 @@ def build_report(robot_arg: str = "paper", out: str | Path = "results", fast: bo
                 built[key] = _attempt(key, title, partial(build, job))
                 done()
             sections += [built[key] for _, key, _, _ in steps]  # page order
+        except KeyboardInterrupt:  # Ctrl-C or SIGTERM: the warm process's work is not waited for
+            stopped = True
+            raise
         finally:
             if pool is not None:
-                pool.shutdown(wait=True, cancel_futures=True)  # no process outlives the command
+                warm.stop(pool, now=stopped)  # no process outlives the command
         done = progress.step("versions, writing the page")
         from quadruped_dyn.report import sections as rs
 

@@ -59,9 +59,19 @@ def start(urdf: Path, with_benchmark: bool, notebooks: Sequence[Path] = (), with
     """The warm process, started (spawned: no state of this process is shared): ``warm_caches`` (of the robot on
     ``foot_frames``, the report's: the caches key on them),
     then each of ``notebooks`` executed and rendered (``gather.executed_notebook``), in that order.
-    Shut the pool down with ``wait=True`` when the report is written, so no process outlives the command."""
+    Shut it down with ``stop`` when the report is written, so no process outlives the command."""
     from quadruped_dyn.report.gather import executed_notebook
 
     pool = ProcessPoolExecutor(max_workers=1, mp_context=multiprocessing.get_context("spawn"))
     warmed = pool.submit(warm_caches, str(urdf), with_benchmark, with_footprint, foot_frames)
     return pool, warmed, [pool.submit(executed_notebook, path) for path in notebooks]
+
+
+def stop(pool: ProcessPoolExecutor, now: bool = False) -> None:
+    """Shut the warm process down and wait for it to end; ``now`` (the report interrupted): end it at once
+    (SIGTERM) instead of waiting for its work in hand (a compile, the benchmark: minutes)."""
+    if now:
+        workers = getattr(pool, "_processes", None) or {}  # CPython's; Python 3.14 has pool.terminate_workers()
+        for process in list(workers.values()):
+            process.terminate()
+    pool.shutdown(wait=True, cancel_futures=True)

@@ -303,6 +303,7 @@ def test_a_link_or_file_in_place_of_the_c_folder_is_refused_before_the_work(tmp_
         (folder / "c").symlink_to(outside)
     else:
         (folder / "c").write_text("not a folder")
-    with pytest.raises(InputError, match="symbolic link; expected a directory" if kind == "link" else "is a file; expected a directory"):
+    said = "symbolic link; expected a directory" if kind == "link" else "is a file; expected a directory"
+    with pytest.raises(InputError, match=said):
         prepare("paper", tmp_path)
     assert [p.name for p in folder.iterdir()] == ["c"] and not any(outside.iterdir())
