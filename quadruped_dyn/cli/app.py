@@ -100,12 +100,11 @@ def foot_frames_option(command: Any) -> Any:
 
 
 def _four_names(_ctx: Any, _param: Any, value: str | None) -> str | None:
-    """``--foot-frames`` as given if it is four non-empty names; else bad input naming the option (``load_robot``'s
-    own message names its parameter, ``foot_frames``, which the command line does not have)."""
-    if value is not None and (len(names := value.split(",")) != 4 or not all(names)):
-        raise click.BadParameter(f"'{printable(value)}' has {len(names)} comma-separated names"
-                                 f"{' (some empty)' if not all(names) else ''}; expected four frame names, in leg "
-                                 "order FL, FR, BL, BR")
+    """``--foot-frames`` as given if ``load_robot`` takes it; else bad input naming the option (before any work)."""
+    if value is not None:
+        from quadruped_dyn.model.robot import foot_frame_names
+
+        foot_frame_names(value, "--foot-frames")
     return value
 
 

@@ -346,7 +346,7 @@ def load_robot(name_or_path: str, cached: bool = True, foot_frames: object = Non
     ``foot_frames``: the foot frame of each leg, as four frame names in the order FL, FR, BL, BR
     or a mapping from leg label to name (default: chosen by ``_foot_frame``'s rule)."""
     path = robot_path(name_or_path)
-    feet = _foot_frame_names(foot_frames)
+    feet = foot_frame_names(foot_frames)
     data = _read_urdf(path)
     digest = hashlib.sha256(data).hexdigest()
     return _load(path, digest, feet) if cached else _load.__wrapped__(path, digest, feet, data)
@@ -361,22 +361,25 @@ def _read_urdf(path: Path) -> bytes:
     return data
 
 
-def _foot_frame_names(foot_frames: object) -> tuple[str, str, str, str] | None:
-    """``foot_frames`` as four names in leg order, or None; an InputError for anything else."""
+def foot_frame_names(foot_frames: object, what: str = "foot_frames") -> tuple[str, str, str, str] | None:
+    """``foot_frames`` (a sequence, a comma-separated string or a dict by leg label) as four names in leg order,
+    or None; an InputError for anything else, naming ``what`` (the caller's parameter or option)."""
     if foot_frames is None:
         return None
     if isinstance(foot_frames, dict):
         if set(foot_frames) != set(LEG_LABELS):
-            raise InputError(f"foot_frames has keys {sorted(map(str, foot_frames))}; expected {list(LEG_LABELS)}")
+            raise InputError(f"{what} has keys {sorted(map(str, foot_frames))}; expected {list(LEG_LABELS)}")
         foot_frames = [foot_frames[label] for label in LEG_LABELS]
+    given = foot_frames
     if isinstance(foot_frames, str):
         foot_frames = foot_frames.split(",")
     try:
         names: tuple[object, ...] = tuple(foot_frames)  # type: ignore[arg-type]
     except TypeError as e:
-        raise InputError(f"foot_frames is {type(foot_frames).__name__}; expected four frame names (FL, FR, BL, BR)") from e
+        raise InputError(f"{what} is {type(foot_frames).__name__}; expected four frame names (FL, FR, BL, BR)") from e
     if len(names) != 4 or not all(isinstance(n, str) and n for n in names):
-        raise InputError(f"foot_frames is {printable(names)}; expected four frame names in the order FL, FR, BL, BR")
+        shown = f"'{given}'" if isinstance(given, str) else str(names)
+        raise InputError(f"{what} is {printable(shown)}; expected four frame names in the order FL, FR, BL, BR")
     return names  # type: ignore[return-value]
 
 
