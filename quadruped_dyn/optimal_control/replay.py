@@ -11,12 +11,14 @@ transcription's defect (reported as ``max_roll_defect_Nm``, sampled on the repla
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
 
 from quadruped_dyn.arguments import real_number
+from quadruped_dyn.errors import InputError
 from quadruped_dyn.experiment.paper_experiment import DEPARTURE_PCT, departure, growth_rate
 from quadruped_dyn.experiment.plan_ik import ReferenceSample
 from quadruped_dyn.experiment.rigid_contact import simulate_rigid
@@ -109,7 +111,10 @@ def replay_rigid(solution: Solution, cycles: float = 2.0, dt: float = REPLAY_DT)
     from the optimised state at t = 0; departure from the optimised joint angles as the
     paper experiment measures it (1 % of the largest |joint angle|)."""
     tr = solution.transcription
-    check_times(tr.gait, real_number("cycles", cycles) * tr.gait.period, dt)
+    cycles = real_number("cycles", cycles)
+    if not (math.isfinite(cycles) and cycles > 0):
+        raise InputError(f"cycles {cycles} is not a positive finite number; expected e.g. 2")
+    check_times(tr.gait, cycles * tr.gait.period, dt, names=("cycles × period", "dt"))
     traj = OptimizedTrajectory(solution)
     torques = _OptimizedTorques(traj)
     stance0 = tr.gait.stance(0.0)

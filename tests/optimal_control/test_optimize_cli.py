@@ -92,3 +92,22 @@ def test_a_zero_actuator_limit_is_exit_2_one_line(tmp_path, kind) -> None:
     assert result.exit_code == 2, result.output
     lines = [line for line in result.output.splitlines() if line.strip()]
     assert len(lines) == 1 and f"expected a positive finite <limit {kind}>" in lines[0], result.output
+
+
+@pytest.mark.parametrize("cycles, message", [
+    (0.0, "cycles 0.0 is not a positive finite number"),
+    (float("nan"), "cycles nan is not a positive finite number"),
+    (1e-9, "cycles × period 6e-10 s is shorter than one step"),
+])
+def test_replay_rigid_names_cycles_not_horizon(cycles, message) -> None:
+    """Its time errors said "horizon", a parameter replay_rigid does not have. Checked before any use of
+    the solution (only its gait's period is read), so a solution with just a gait stands in for a solve."""
+    from types import SimpleNamespace
+
+    from quadruped_dyn.errors import InputError
+    from quadruped_dyn.experiment.gait import TROT
+    from quadruped_dyn.optimal_control.replay import replay_rigid
+
+    solution = SimpleNamespace(transcription=SimpleNamespace(gait=TROT))
+    with pytest.raises(InputError, match=message.replace("(", r"\(")):
+        replay_rigid(solution, cycles=cycles)  # type: ignore[arg-type]
