@@ -13,7 +13,8 @@ a read-only directory, a directory in the way) is an ``InputError`` naming the f
 The files of one result (a run's JSON, CSV and plots) are written inside ``output_set()``: they
 are renamed into place together when the block ends, so an interrupted or failed run (Ctrl-C while
 the plots are drawn, a full disk at the last file) leaves the previous run's files as they were,
-never its new JSON beside the old CSV. ``remove`` inside the set removes a file of the previous
+never its new JSON beside the old CSV (Ctrl-C or SIGTERM while they are renamed takes effect after the last).
+``remove`` inside the set removes a file of the previous
 result when the set ends; ``publish`` moves a folder of files written elsewhere first (a report,
 whose steps read their files back) into place as one set.
 """
@@ -23,7 +24,9 @@ from __future__ import annotations
 import contextlib
 import io
 import os
+import signal
 import tempfile
+import threading
 from collections.abc import Iterable, Iterator
 from contextvars import ContextVar
 from pathlib import Path
@@ -75,14 +78,37 @@ def output_set() -> Iterator[None]:
             yield
         finally:
             _PENDING.reset(token)
-        while pending:
-            _rename(*pending[0])
-            pending.pop(0)
+        with _interrupts_deferred():  # an interrupt between two renames would leave a mix of the two results
+            while pending:
+                _rename(*pending[0])
+                pending.pop(0)
     finally:
         for tmp, _ in pending:
             if tmp:
                 with contextlib.suppress(FileNotFoundError):
                     os.unlink(tmp)
+
+
+@contextlib.contextmanager
+def _interrupts_deferred() -> Iterator[None]:
+    """Ctrl-C (SIGINT) and SIGTERM that arrive in the block take effect when it ends, by the handlers they
+    had (``KeyboardInterrupt``, ``cli.entry.Terminated``). Python runs signal handlers in the main thread
+    only: elsewhere the block runs as it is."""
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+    caught: list[int] = []
+    previous = {signum: handler for signum in (signal.SIGINT, signal.SIGTERM)
+                if (handler := signal.getsignal(signum)) is not None}  # None: set outside Python, not restorable
+    for signum in previous:
+        signal.signal(signum, lambda number, _frame: caught.append(number))
+    try:
+        yield
+    finally:
+        for signum, handler in previous.items():
+            signal.signal(signum, handler)
+        for caught_signum in caught:
+            signal.raise_signal(caught_signum)  # its own handler now: raises, or ends the process (SIG_DFL)
 
 
 def remove(path: str | Path) -> None:

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import signal
+
 import pytest
 
 from quadruped_dyn.files.safe_write import output_set, write_text
@@ -23,3 +25,36 @@ def test_a_set_inside_a_set_joins_it(tmp_path):
             write_text(a, "newer a")
         raise RuntimeError("after the writer's set")
     assert a.read_text() == "new a" and sorted(p.name for p in tmp_path.iterdir()) == ["a.txt", "b.txt"]
+
+
+@pytest.mark.parametrize("signum", [signal.SIGINT, signal.SIGTERM], ids=["SIGINT", "SIGTERM"])
+def test_an_interrupt_while_the_set_is_renamed_comes_after_every_file(tmp_path, monkeypatch, signum):
+    """A signal between two renames left the first file new and the second old (a mix of two results). It is
+    sent here during the first rename: every file is put in place, then the interrupt is raised, and the
+    handlers are the ones from before."""
+    from quadruped_dyn.cli.entry import Terminated, _terminate
+    from quadruped_dyn.files import safe_write
+
+    files = [tmp_path / f"{k}.txt" for k in range(3)]
+    for path in files:
+        path.write_text("old")
+    rename = safe_write._rename
+    sent = []
+
+    def rename_and_signal(tmp, path):
+        if not sent:
+            sent.append(signum)
+            signal.raise_signal(signum)  # its handler runs at once unless deferred
+        rename(tmp, path)
+
+    monkeypatch.setattr(safe_write, "_rename", rename_and_signal)
+    previous = signal.signal(signal.SIGTERM, _terminate)  # as cli.entry sets it
+    try:
+        with pytest.raises(Terminated if signum == signal.SIGTERM else KeyboardInterrupt), output_set():
+            for path in files:
+                write_text(path, "new")
+        assert [path.read_text() for path in files] == ["new"] * 3
+        assert signal.getsignal(signal.SIGTERM) is _terminate
+        assert signal.getsignal(signal.SIGINT) is signal.default_int_handler
+    finally:
+        signal.signal(signal.SIGTERM, previous)
