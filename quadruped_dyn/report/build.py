@@ -16,6 +16,7 @@ trunk's spatial acceleration, as everywhere in the project.
 
 from __future__ import annotations
 
+import os
 import shutil
 import tempfile
 from collections.abc import Callable, Iterator
@@ -200,14 +201,34 @@ def build_report(robot_arg: str = "paper", out: str | Path = "results", fast: bo
     return ReportResult(target / "report.html", sections)
 
 
+STAGING_PREFIX, STAGING_SUFFIX = ".report.", ".partial"  # .report.<pid>.<random>.partial
+
+
 @contextmanager
 def _staging(target: Path) -> Iterator[Path]:
-    """A new hidden folder in ``target`` for the report's files until they are published; removed at the end."""
-    staging = Path(tempfile.mkdtemp(prefix=".report.", suffix=".partial", dir=target))
+    """A new hidden folder in ``target`` for the report's files until they are published; removed at the end.
+    Those a killed report left (SIGKILL, a power cut: its process is gone) are removed first; a running
+    report's are left alone."""
+    for old in target.glob(f"{STAGING_PREFIX}*{STAGING_SUFFIX}"):
+        pid = old.name.removeprefix(STAGING_PREFIX).split(".")[0]
+        if old.is_dir() and not old.is_symlink() and pid.isdigit() and not _alive(int(pid)):
+            shutil.rmtree(old, ignore_errors=True)
+    staging = Path(tempfile.mkdtemp(prefix=f"{STAGING_PREFIX}{os.getpid()}.", suffix=STAGING_SUFFIX, dir=target))
     try:
         yield staging
     finally:
         shutil.rmtree(staging, ignore_errors=True)
+
+
+def _alive(pid: int) -> bool:
+    """Whether a process ``pid`` exists (one of another user counts: never remove what may be in use)."""
+    try:
+        os.kill(pid, 0)
+    except ProcessLookupError:
+        return False
+    except OSError:
+        return True
+    return True
 
 
 def _steps(samples: int, fast: bool, with_notebooks: bool) -> list[tuple[str, str, str, Callable[[_Job], Section]]]:
