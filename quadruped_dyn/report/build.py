@@ -17,7 +17,9 @@ trunk's spatial acceleration, as everywhere in the project.
 from __future__ import annotations
 
 import os
+import re
 import shutil
+import socket
 import tempfile
 from collections.abc import Callable, Iterator
 from concurrent.futures import Future
@@ -201,23 +203,30 @@ def build_report(robot_arg: str = "paper", out: str | Path = "results", fast: bo
     return ReportResult(target / "report.html", sections)
 
 
-STAGING_PREFIX, STAGING_SUFFIX = ".report.", ".partial"  # .report.<pid>.<random>.partial
+STAGING_PREFIX, STAGING_SUFFIX = ".report.", ".partial"  # .report.<pid>@<host>.<random>.partial
 
 
 @contextmanager
 def _staging(target: Path) -> Iterator[Path]:
     """A new hidden folder in ``target`` for the report's files until they are published; removed at the end.
-    Those a killed report left (SIGKILL, a power cut: its process is gone) are removed first; a running
-    report's are left alone."""
+    Those a killed report of this machine left (SIGKILL, a power cut: its process is gone) are removed first; a
+    running report's, and another machine's or container's (its host name differs: its pids are not ours), are left."""
+    owner = f"{os.getpid()}@{_host()}"
     for old in target.glob(f"{STAGING_PREFIX}*{STAGING_SUFFIX}"):
-        pid = old.name.removeprefix(STAGING_PREFIX).split(".")[0]
-        if old.is_dir() and not old.is_symlink() and pid.isdigit() and not _alive(int(pid)):
+        pid, _, host = old.name.removeprefix(STAGING_PREFIX).split(".")[0].partition("@")
+        if (host == _host() and pid.isdigit() and not _alive(int(pid)) and old.is_dir()
+                and not old.is_symlink()):
             shutil.rmtree(old, ignore_errors=True)
-    staging = Path(tempfile.mkdtemp(prefix=f"{STAGING_PREFIX}{os.getpid()}.", suffix=STAGING_SUFFIX, dir=target))
+    staging = Path(tempfile.mkdtemp(prefix=f"{STAGING_PREFIX}{owner}.", suffix=STAGING_SUFFIX, dir=target))
     try:
         yield staging
     finally:
         shutil.rmtree(staging, ignore_errors=True)
+
+
+def _host() -> str:
+    """This machine's name as a file name may hold it (letters, digits, '-')."""
+    return re.sub(r"[^A-Za-z0-9-]", "-", socket.gethostname())[:64] or "host"
 
 
 def _alive(pid: int) -> bool:

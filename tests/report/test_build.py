@@ -312,20 +312,22 @@ def test_a_link_or_file_in_place_of_the_c_folder_is_refused_before_the_work(tmp_
 
 def test_a_killed_reports_staging_folder_is_removed_by_the_next_a_running_ones_kept(tmp_path):
     """SIGKILL leaves the hidden staging folder (no cleanup runs); the next report in the folder removes it when
-    the process named in it is gone, and keeps one whose process runs (a second report at the same time)."""
+    the process named in it is gone, and keeps one whose process runs (a second report at the same time) and one
+    of another host (its pids are not this machine's)."""
     import subprocess
     import sys
 
-    from quadruped_dyn.report.build import _staging
+    from quadruped_dyn.report.build import _host, _staging
 
     gone = subprocess.run([sys.executable, "-c", "import os; print(os.getpid())"], capture_output=True, text=True,
                           check=True)
-    dead = tmp_path / f".report.{int(gone.stdout)}.abc.partial"
-    running = tmp_path / f".report.{os.getppid()}.def.partial"
-    for folder in (dead, running):
+    dead = tmp_path / f".report.{int(gone.stdout)}@{_host()}.abc.partial"
+    running = tmp_path / f".report.{os.getppid()}@{_host()}.def.partial"
+    elsewhere = tmp_path / f".report.{int(gone.stdout)}@{_host()}-other.ghi.partial"
+    for folder in (dead, running, elsewhere):
         (folder / "c").mkdir(parents=True)
         (folder / "report.html").write_text("half")
     with _staging(tmp_path) as staging:
-        assert staging.name.startswith(f".report.{os.getpid()}.")
-        assert sorted(p.name for p in tmp_path.iterdir()) == sorted([running.name, staging.name])
-    assert [p.name for p in tmp_path.iterdir()] == [running.name]
+        assert staging.name.startswith(f".report.{os.getpid()}@{_host()}.")
+        assert sorted(p.name for p in tmp_path.iterdir()) == sorted([running.name, elsewhere.name, staging.name])
+    assert sorted(p.name for p in tmp_path.iterdir()) == sorted([running.name, elsewhere.name])
