@@ -64,4 +64,5 @@ def axis_rotation(axis: np.ndarray, angle: Any) -> Any:
     if isinstance(angle, ca.SX):
         aaT = np.outer(a, a)
         return ca.cos(angle) * ca.DM(np.eye(3) - aaT) + ca.DM(aaT) + ca.sin(angle) * ca.DM(K)
+    angle = float(angle)  # a 1 x 1 DM too: numpy's sin of a CasADi value is legacy behaviour CasADi will change
     return np.eye(3) + np.sin(angle) * K + (1.0 - np.cos(angle)) * (K @ K)

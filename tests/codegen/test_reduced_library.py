@@ -122,8 +122,8 @@ def test_trunk_pitched_near_90_deg_is_degenerate_for_two_feet(paper):
             model.M_r(q_r, quat)
     quat = pin.Quaternion(pin.rpy.rpyToMatrix(0.1, np.pi / 2 - np.radians(TRUNK_PITCH_DEG_MARGIN + 1), 0.2)).coeffs()
     expected = {"M_r": np.asarray(model.M_r(q_r, quat)),
-                "CG_r": np.ravel(model.C_r(q_r, x["qd_r"], quat)) + np.ravel(model.G_r(q_r, quat)),
-                "id_r": np.ravel(model.id_r(q_r, x["qd_r"], x["qdd_r"], quat)),
+                "CG_r": np.asarray(model.C_r(q_r, x["qd_r"], quat)).ravel() + np.asarray(model.G_r(q_r, quat)).ravel(),
+                "id_r": np.asarray(model.id_r(q_r, x["qd_r"], x["qdd_r"], quat)).ravel(),
                 "fd_r": model.forward_dynamics(q_r, x["qd_r"], x["tau_ext"], quat)[0]}
     for kind, value in expected.items():
         f = compiled[kind]
