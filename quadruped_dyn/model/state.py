@@ -38,7 +38,9 @@ NV_FULL = 18
 def full_q(R: np.ndarray, p: np.ndarray, q_joints: np.ndarray) -> np.ndarray:
     """Pack (R, p, 12 joint angles) into the project's q (19,)."""
     R = check_array("R", R, (3, 3))
-    if not within(max_abs_error(R.T @ R, np.eye(3)), ORTHONORMAL_TOL) or np.linalg.det(R) < 0:
+    with np.errstate(over="ignore"):  # a huge R's R^T R is inf: not within, refused below
+        orthonormal = within(max_abs_error(R.T @ R, np.eye(3)), ORTHONORMAL_TOL)
+    if not orthonormal or np.linalg.det(R) < 0:
         raise InputError("R is not a rotation matrix; expected R^T R = I and det R = +1")
     quat = pin.Quaternion(R).coeffs()  # (x, y, z, w)
     return np.concatenate([check_array("p", p, (3,)), quat, check_array("q_joints", q_joints, (12,))])
