@@ -214,8 +214,8 @@ def _staging(target: Path) -> Iterator[Path]:
     owner = f"{os.getpid()}@{_host()}"
     for old in target.glob(f"{STAGING_PREFIX}*{STAGING_SUFFIX}"):
         pid, _, host = old.name.removeprefix(STAGING_PREFIX).split(".")[0].partition("@")
-        if (host == _host() and pid.isdigit() and not _alive(int(pid)) and old.is_dir()
-                and not old.is_symlink()):
+        if (host == _host() and re.fullmatch(r"[0-9]{1,9}", pid) and not _alive(int(pid)) and old.is_dir()
+                and not old.is_symlink()):  # ASCII digits a pid can have: another name is not a report's
             shutil.rmtree(old, ignore_errors=True)
     staging = Path(tempfile.mkdtemp(prefix=f"{STAGING_PREFIX}{owner}.", suffix=STAGING_SUFFIX, dir=target))
     try:

@@ -331,3 +331,17 @@ def test_a_killed_reports_staging_folder_is_removed_by_the_next_a_running_ones_k
         assert staging.name.startswith(f".report.{os.getpid()}@{_host()}.")
         assert sorted(p.name for p in tmp_path.iterdir()) == sorted([running.name, elsewhere.name, staging.name])
     assert sorted(p.name for p in tmp_path.iterdir()) == sorted([running.name, elsewhere.name])
+
+
+@pytest.mark.parametrize("pid", ["99999999999999999999", "²", "١٢"])
+def test_a_staging_folder_whose_pid_no_process_can_have_is_kept_without_an_error(tmp_path, pid):
+    """A hidden folder of the staging pattern whose pid is beyond any process id (os.kill raised OverflowError) or
+    not ASCII digits ('²'.isdigit(): int() raised ValueError; '١٢' read as pid 12) is not one a report made: the
+    next report starts and leaves it as it is."""
+    from quadruped_dyn.report.build import _host, _staging
+
+    odd = tmp_path / f".report.{pid}@{_host()}.abc.partial"
+    (odd / "c").mkdir(parents=True)
+    with _staging(tmp_path) as staging:
+        assert staging.is_dir()
+    assert [p.name for p in tmp_path.iterdir()] == [odd.name] and (odd / "c").is_dir()
