@@ -62,9 +62,20 @@ def start(urdf: Path, with_benchmark: bool, notebooks: Sequence[Path] = (), with
     Shut it down with ``stop`` when the report is written, so no process outlives the command."""
     from quadruped_dyn.report.gather import executed_notebook
 
-    pool = ProcessPoolExecutor(max_workers=1, mp_context=multiprocessing.get_context("spawn"))
+    pool = ProcessPoolExecutor(max_workers=1, mp_context=multiprocessing.get_context("spawn"), initializer=_quiet)
     warmed = pool.submit(warm_caches, str(urdf), with_benchmark, with_footprint, foot_frames)
     return pool, warmed, [pool.submit(executed_notebook, path) for path in notebooks]
+
+
+def _quiet() -> None:
+    """The warm process's stderr is /dev/null: its errors come back through the futures, one line each; what it
+    would print (nbclient's traceback when ``stop(now=True)`` ends it during a kernel's start, the URDF's warnings
+    again) would land under the report's own lines."""
+    import os
+
+    devnull = os.open(os.devnull, os.O_WRONLY)
+    os.dup2(devnull, 2)
+    os.close(devnull)  # sys.stderr writes to fd 2: now /dev/null too
 
 
 def stop(pool: ProcessPoolExecutor, now: bool = False) -> None:

@@ -45,3 +45,17 @@ def test_the_warm_build_loads_the_reports_feet():
     would build another library): a foot frame the URDF does not have is its one-line error."""
     message = warm.warm_caches("paper", with_benchmark=False, foot_frames=("FL_nowhere", "FR_foot", "BL_foot", "BR_foot"))
     assert message.startswith("InputError: ") and "'FL_nowhere' of leg FL is not a frame" in message, message
+
+
+def test_the_warm_process_writes_nothing_to_the_reports_stderr(tmp_path, capfd):
+    """What the warm process prints is not the report's output (its errors come back as one line through the
+    futures): nbclient's cleanup when ``stop(now=True)`` ends it during a kernel's start printed asyncio's 'Task
+    exception was never retrieved' traceback under the report's ``error: terminated``."""
+    import os
+
+    pool, _, _ = warm.start(tmp_path / "missing.urdf", with_benchmark=False)
+    try:
+        assert pool.submit(os.write, 2, b"Traceback (most recent call last):\n").result(timeout=120) > 0
+    finally:
+        warm.stop(pool)
+    assert "Traceback" not in capfd.readouterr().err
