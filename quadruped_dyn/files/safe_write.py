@@ -78,7 +78,7 @@ def output_set() -> Iterator[None]:
             yield
         finally:
             _PENDING.reset(token)
-        with _interrupts_deferred():  # an interrupt between two renames would leave a mix of the two results
+        with interrupts_deferred():  # an interrupt between two renames would leave a mix of the two results
             while pending:
                 _rename(*pending[0])
                 pending.pop(0)
@@ -90,7 +90,7 @@ def output_set() -> Iterator[None]:
 
 
 @contextlib.contextmanager
-def _interrupts_deferred() -> Iterator[None]:
+def interrupts_deferred() -> Iterator[None]:
     """Ctrl-C (SIGINT) and SIGTERM that arrive in the block take effect when it ends, by the handlers they
     had (``KeyboardInterrupt``, ``cli.entry.Terminated``). Python runs signal handlers in the main thread
     only: elsewhere the block runs as it is."""

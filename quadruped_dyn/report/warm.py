@@ -80,9 +80,15 @@ def _quiet() -> None:
 
 def stop(pool: ProcessPoolExecutor, now: bool = False) -> None:
     """Shut the warm process down and wait for it to end; ``now`` (the report interrupted): end it at once
-    (SIGTERM) instead of waiting for its work in hand (a compile, the benchmark: minutes)."""
-    if now:
+    (SIGTERM) instead of waiting for its work in hand (a compile, the benchmark: minutes); a second interrupt
+    meanwhile takes effect once it has ended."""
+    if not now:
+        pool.shutdown(wait=True, cancel_futures=True)
+        return
+    from quadruped_dyn.files.safe_write import interrupts_deferred
+
+    with interrupts_deferred():  # a second Ctrl-C or SIGTERM here left the pool running: the exit hung on it
         workers = getattr(pool, "_processes", None) or {}  # CPython's; Python 3.14 has pool.terminate_workers()
         for process in list(workers.values()):
             process.terminate()
-    pool.shutdown(wait=True, cancel_futures=True)
+        pool.shutdown(wait=True, cancel_futures=True)

@@ -59,3 +59,31 @@ def test_the_warm_process_writes_nothing_to_the_reports_stderr(tmp_path, capfd):
     finally:
         warm.stop(pool)
     assert "Traceback" not in capfd.readouterr().err
+
+
+def test_a_second_interrupt_while_the_warm_process_is_stopped_still_ends_it(tmp_path, monkeypatch):
+    """Ctrl-C (or SIGTERM) again while ``stop(now=True)`` ends the warm process (the first one's cleanup) takes
+    effect once it has ended: it cut the stop short, the pool stayed up and the exit hung joining its worker."""
+    import multiprocessing.process
+    import os
+    import signal
+
+    pool, warmed, _ = warm.start(tmp_path / "missing.urdf", with_benchmark=False)
+    warmed.result(timeout=120)
+    workers = list((pool._processes or {}).values())
+    terminate = multiprocessing.process.BaseProcess.terminate
+
+    def interrupted_terminate(self):
+        os.kill(os.getpid(), signal.SIGINT)  # the second Ctrl-C, as the first is being handled
+        terminate(self)
+
+    monkeypatch.setattr(multiprocessing.process.BaseProcess, "terminate", interrupted_terminate)
+    try:
+        with pytest.raises(KeyboardInterrupt):
+            warm.stop(pool, now=True)
+        assert workers and not [p for p in workers if p.is_alive()]
+    finally:
+        for p in workers:
+            p.kill()
+        pool.shutdown(wait=True)
+    assert signal.getsignal(signal.SIGINT) is signal.default_int_handler
