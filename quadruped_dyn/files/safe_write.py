@@ -105,8 +105,13 @@ def interrupts_deferred() -> Iterator[None]:
     try:
         yield
     finally:
-        for signum, handler in previous.items():
-            signal.signal(signum, handler)
+        try:
+            for signum, handler in previous.items():
+                signal.signal(signum, handler)
+        finally:  # a signal as soon as its handler is back raises out of the loop: the others' are put back still
+            for signum, handler in previous.items():
+                if signal.getsignal(signum) is not handler:
+                    signal.signal(signum, handler)
         for caught_signum in caught:
             signal.raise_signal(caught_signum)  # its own handler now: raises, or ends the process (SIG_DFL)
 

@@ -58,3 +58,27 @@ def test_an_interrupt_while_the_set_is_renamed_comes_after_every_file(tmp_path, 
         assert signal.getsignal(signal.SIGINT) is signal.default_int_handler
     finally:
         signal.signal(signal.SIGTERM, previous)
+
+
+def test_an_interrupt_as_the_handlers_are_put_back_leaves_none_of_the_sets(tmp_path, monkeypatch):
+    """Ctrl-C just after SIGINT's handler is put back raised out of the loop before SIGTERM's was: SIGTERM kept
+    the set's deferring handler for good, and every later SIGTERM was swallowed."""
+    from quadruped_dyn.cli.entry import _terminate
+
+    real = signal.signal
+
+    def signal_then_ctrl_c(signum, handler):
+        old = real(signum, handler)
+        if signum == signal.SIGINT and handler is signal.default_int_handler:
+            signal.raise_signal(signal.SIGINT)  # the Ctrl-C, as soon as its handler is back
+        return old
+
+    previous = real(signal.SIGTERM, _terminate)
+    monkeypatch.setattr(signal, "signal", signal_then_ctrl_c)
+    try:
+        with pytest.raises(KeyboardInterrupt), output_set():
+            write_text(tmp_path / "a.txt", "new")
+        assert (tmp_path / "a.txt").read_text() == "new"
+        assert signal.getsignal(signal.SIGTERM) is _terminate
+    finally:
+        real(signal.SIGTERM, previous)
