@@ -81,3 +81,37 @@ def test_stance_feet_stay_on_their_footholds_by_pinocchio(coarse_trot: Solution,
         held = np.array(held)
         assert np.abs(held[:, :, 2] - ground).max() <= 1e-9
         assert np.abs(held - held[0]).max() <= 1e-9
+
+
+@pytest.mark.parametrize("signum", ["SIGINT", "SIGTERM"])
+def test_an_interrupt_during_the_solve_is_raised_not_a_failed_solve(paper: Robot, monkeypatch, signum) -> None:
+    """CasADi swallowed the KeyboardInterrupt (or cli.entry.Terminated) of Ctrl-C or SIGTERM during IPOPT's
+    iterations: the solve came back 'NonIpopt_Exception_Thrown' and the command said 'did not converge', exit 1."""
+    import os
+    import signal
+    import threading
+
+    import casadi as ca
+
+    from quadruped_dyn.cli.entry import Terminated, _terminate
+
+    number = getattr(signal, signum)
+    nlpsol = ca.nlpsol
+
+    def nlpsol_then_signal(*args, **kwargs):
+        solver = nlpsol(*args, **kwargs)
+
+        def solve_signalled(**given):
+            threading.Timer(0.02, os.kill, (os.getpid(), number)).start()  # into IPOPT's iterations
+            return solver(**given)
+        return solve_signalled
+
+    monkeypatch.setattr(ca, "nlpsol", nlpsol_then_signal)
+    previous = signal.signal(signal.SIGTERM, _terminate)  # as cli.entry sets it
+    try:
+        with pytest.raises(Terminated if number == signal.SIGTERM else KeyboardInterrupt):
+            solve(transcribe(paper, TROT, COARSE))
+        assert signal.getsignal(signal.SIGTERM) is _terminate
+        assert signal.getsignal(signal.SIGINT) is signal.default_int_handler
+    finally:
+        signal.signal(signal.SIGTERM, previous)
