@@ -24,15 +24,14 @@ from __future__ import annotations
 import contextlib
 import io
 import os
-import signal
 import tempfile
-import threading
 from collections.abc import Iterable, Iterator
 from contextvars import ContextVar
 from pathlib import Path
 
 from quadruped_dyn.errors import InputError
 from quadruped_dyn.files.names import printable
+from quadruped_dyn.interrupts import interrupts_deferred
 
 
 def output_path(out_dir: str | Path, name: str) -> Path:
@@ -87,33 +86,6 @@ def output_set() -> Iterator[None]:
             if tmp:
                 with contextlib.suppress(FileNotFoundError):
                     os.unlink(tmp)
-
-
-@contextlib.contextmanager
-def interrupts_deferred() -> Iterator[None]:
-    """Ctrl-C (SIGINT) and SIGTERM that arrive in the block take effect when it ends, by the handlers they
-    had (``KeyboardInterrupt``, ``cli.entry.Terminated``). Python runs signal handlers in the main thread
-    only: elsewhere the block runs as it is."""
-    if threading.current_thread() is not threading.main_thread():
-        yield
-        return
-    caught: list[int] = []
-    previous = {signum: handler for signum in (signal.SIGINT, signal.SIGTERM)
-                if (handler := signal.getsignal(signum)) is not None}  # None: set outside Python, not restorable
-    for signum in previous:
-        signal.signal(signum, lambda number, _frame: caught.append(number))
-    try:
-        yield
-    finally:
-        try:
-            for signum, handler in previous.items():
-                signal.signal(signum, handler)
-        finally:  # a signal as soon as its handler is back raises out of the loop: the others' are put back still
-            for signum, handler in previous.items():
-                if signal.getsignal(signum) is not handler:
-                    signal.signal(signum, handler)
-        for caught_signum in caught:
-            signal.raise_signal(caught_signum)  # its own handler now: raises, or ends the process (SIG_DFL)
 
 
 def remove(path: str | Path) -> None:

@@ -8,17 +8,14 @@ bounds, not taken from IPOPT) at most MAX_CONSTRAINT_VIOLATION. Callers must che
 
 from __future__ import annotations
 
-import signal
-import threading
 import time
-from collections.abc import Iterator
-from contextlib import contextmanager
 from dataclasses import dataclass
 from typing import Any
 
 import casadi as ca
 import numpy as np
 
+from quadruped_dyn.interrupts import interrupts_deferred
 from quadruped_dyn.optimal_control.blocks import derivative_functions
 from quadruped_dyn.optimal_control.transcription import Transcription
 
@@ -61,33 +58,6 @@ def constraint_violation(tr: Transcription, w: np.ndarray, g: np.ndarray) -> flo
     return float(max(gv.max(initial=0.0), wv.max(initial=0.0)))
 
 
-@contextmanager
-def _interrupts_kept() -> Iterator[None]:
-    """Ctrl-C or SIGTERM during the solve is raised by its handler once IPOPT has returned: CasADi swallowed the
-    handler's exception (a warning, the solve 'NonIpopt_Exception_Thrown', exit 1 'did not converge').
-    Signals with no Python handler (ignored, default) are left as they are; outside the main thread, all are."""
-    if threading.current_thread() is not threading.main_thread():
-        yield
-        return
-    caught: list[int] = []
-
-    def stop(signum: int, _frame: object) -> None:
-        caught.append(signum)
-        raise KeyboardInterrupt  # ends IPOPT's iterations
-
-    previous = {signum: handler for signum in (signal.SIGINT, signal.SIGTERM)
-                if callable(handler := signal.getsignal(signum))}
-    for signum in previous:
-        signal.signal(signum, stop)
-    try:
-        yield
-    finally:
-        for signum, handler in previous.items():
-            signal.signal(signum, handler)
-        if caught:
-            signal.raise_signal(caught[0])  # its own handler: KeyboardInterrupt, cli.entry.Terminated
-
-
 def solve(tr: Transcription, hessian: str = "exact", expand: bool = False, w0: np.ndarray | None = None,
           verbose: bool = False) -> Solution:
     """IPOPT from the plan (``tr.w0``) or ``w0``."""
@@ -104,7 +74,7 @@ def solve(tr: Transcription, hessian: str = "exact", expand: bool = False, w0: n
     solver = ca.nlpsol("gait_cycle", "ipopt", tr.nlp, nlp_opts)
     build = time.perf_counter() - start
     start, cpu = time.perf_counter(), time.process_time()
-    with _interrupts_kept():
+    with interrupts_deferred(stop=True):  # CasADi would swallow the handler's exception: 'did not converge'
         sol = solver(x0=tr.w0 if w0 is None else w0, lbx=tr.lbw, ubx=tr.ubw, lbg=tr.lbg, ubg=tr.ubg)
     seconds, cpu = time.perf_counter() - start, time.process_time() - cpu
     stats = solver.stats()

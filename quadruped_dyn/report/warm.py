@@ -85,7 +85,7 @@ def stop(pool: ProcessPoolExecutor, now: bool = False) -> None:
     if not now:
         pool.shutdown(wait=True, cancel_futures=True)
         return
-    from quadruped_dyn.files.safe_write import interrupts_deferred
+    from quadruped_dyn.interrupts import interrupts_deferred
 
     with interrupts_deferred():  # a second Ctrl-C or SIGTERM here left the pool running: the exit hung on it
         workers = getattr(pool, "_processes", None) or {}  # CPython's; Python 3.14 has pool.terminate_workers()
