@@ -211,13 +211,13 @@ def _staging(target: Path) -> Iterator[Path]:
     """A new hidden folder in ``target`` for the report's files until they are published; removed at the end.
     Those a killed report of this machine left (SIGKILL, a power cut: its process is gone) are removed first; a
     running report's, and another machine's or container's (its host name differs: its pids are not ours), are left."""
-    owner = f"{os.getpid()}@{_host()}"
+    here = _host()
     for old in target.glob(f"{STAGING_PREFIX}*{STAGING_SUFFIX}"):
         pid, _, host = old.name.removeprefix(STAGING_PREFIX).split(".")[0].partition("@")
-        if (host == _host() and re.fullmatch(r"[0-9]{1,9}", pid) and not _alive(int(pid)) and old.is_dir()
+        if (host == here and re.fullmatch(r"[0-9]{1,9}", pid) and not _alive(int(pid)) and old.is_dir()
                 and not old.is_symlink()):  # ASCII digits a pid can have: another name is not a report's
             shutil.rmtree(old, ignore_errors=True)
-    staging = Path(tempfile.mkdtemp(prefix=f"{STAGING_PREFIX}{owner}.", suffix=STAGING_SUFFIX, dir=target))
+    staging = Path(tempfile.mkdtemp(prefix=f"{STAGING_PREFIX}{os.getpid()}@{here}.", suffix=STAGING_SUFFIX, dir=target))
     try:
         yield staging
     finally:

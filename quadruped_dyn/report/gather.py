@@ -33,7 +33,9 @@ FRICTION_MU = 0.6
 
 #: The experiment's sampling interval, s (the ``validate`` default).
 EXPERIMENT_DT = 1e-3
-C_FOLDER = "c"  # the generated C's folder beside the report's page
+
+#: The generated C's folder beside the report's page.
+C_FOLDER = "c"
 
 #: Libraries whose versions the page records.
 LIBRARIES = ("quadruped_dyn", "pin", "casadi", "numpy", "sympy", "matplotlib", "example-robot-data", "click",

@@ -23,6 +23,8 @@ from concurrent.futures import Future, ProcessPoolExecutor, ThreadPoolExecutor
 from pathlib import Path
 from typing import Any
 
+from quadruped_dyn.interrupts import interrupts_deferred
+
 
 def warm_caches(urdf: str, with_benchmark: bool, with_footprint: bool = False,
                 foot_frames: tuple[str, ...] | None = None) -> str:
@@ -85,8 +87,6 @@ def stop(pool: ProcessPoolExecutor, now: bool = False) -> None:
     if not now:
         pool.shutdown(wait=True, cancel_futures=True)
         return
-    from quadruped_dyn.interrupts import interrupts_deferred
-
     with interrupts_deferred():  # a second Ctrl-C or SIGTERM here left the pool running: the exit hung on it
         workers = getattr(pool, "_processes", None) or {}  # CPython's; Python 3.14 has pool.terminate_workers()
         for process in list(workers.values()):
