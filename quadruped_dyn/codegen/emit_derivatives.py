@@ -66,6 +66,7 @@ from quadruped_dyn.dynamics.grf import solve_lambda
 from quadruped_dyn.dynamics.kinematics import foot_position
 from quadruped_dyn.dynamics.newton_euler import full_dynamics
 from quadruped_dyn.dynamics.reduced_projection import reduced_projection, stance_forces
+from quadruped_dyn.dynamics.rnea_derivatives import did_full_pieces
 from quadruped_dyn.math.rigid import skew
 from quadruped_dyn.model.robot import Robot
 from quadruped_dyn.model.stance import STANCE_SETS, StanceSet, stance_set
@@ -343,15 +344,48 @@ def _unguarded_inputs(c_text: str, raw: str, f: ca.Function) -> str:
     return c_text[:head.start()] + body + c_text[head.end():]
 
 
-def _did_full_trig_once(c_text: str, raw: str, did: ca.Function, precision: str) -> str:
-    """did_full's evaluation ``raw`` (every input given: its callers and qd_d_all_inputs) as the joints' sines and
-    cosines taken once (c/qd_sincos.c) and the graph reading them (``trig_as_inputs``): qd_did_full_trig, also
-    called by dfd_r (c/qd_reduced_derivatives.c), which has the sines and cosines already."""
-    trig = trig_as_inputs(did, 0, JOINT_ANGLES)
-    static = unguarded_inputs(static_c("qd_did_full_trig", trig, precision, defined_helpers(c_text)), "did_full")
-    if not static.startswith("static int qd_did_full_trig("):
-        raise AssertionError("static_c's qd_did_full_trig does not start as expected")
-    exported = static[len("static "):]
+def _did_full_trig_by_leg(robot: Robot, precision: str, host_helpers: frozenset[str]) -> str:
+    """qd_did_full_trig(q, v, a, sin, cos) (sin and cos of the 12 joint angles): did_full as
+    ``rnea_derivatives.did_full_pieces``' head, one call of its leg template's function per leg (the joints' sines and
+    cosines read, ``trig_as_inputs``; each template's parameters a static table per leg) and the tail, which writes
+    the outputs. One template's machine code serves its legs: it stays in the instruction cache across the four calls
+    (docs/derivatives.md, "did_full by leg")."""
+    pieces = did_full_pieces(robot)
+    if pieces.tail.sparsity_out(0).nnz() == 0 or pieces.head.nnz_out(0) != 3:
+        raise AssertionError("did_full's pieces are not as qd_did_full_trig calls them")
+    noinline = "#if defined(__GNUC__)\n#define QD_NOINLINE __attribute__((noinline))\n#else\n#define QD_NOINLINE\n#endif\n"
+    text = [noinline, static_c("qd_did_full_head", pieces.head, precision, host_helpers, all_io=True)]
+    for i, leg in enumerate(pieces.legs):
+        body = static_c(f"qd_did_full_leg{i}", trig_as_inputs(leg, 3), precision, host_helpers, all_io=True)
+        text.append("QD_NOINLINE " + body)  # one copy of its code for every leg of its template
+    for k in range(4):
+        values = pieces.leg_values(k)
+        entries = ", ".join(repr(x) for x in values) if values else "0"
+        text.append(f"static const casadi_real qd_did_full_p{k}[{max(len(values), 1)}] = {{{entries}}}; "
+                    f"/* {robot.legs[k].label}'s parameters */\n")
+    text.append(unguarded_inputs(static_c("qd_did_full_tail", pieces.tail, precision, host_helpers), "did_full"))
+    nl = max(f.nnz_out(0) for f in pieces.legs)
+    calls = "".join(
+        f"  {{\n    const casadi_real* l_arg[9] = {{arg[1] + 3, arg[2] + 3, a_cl, arg[0] + {7 + 3 * k}, arg[1] + {6 + 3 * k}, "
+        f"arg[2] + {6 + 3 * k}, qd_did_full_p{k}, arg[3] + {3 * k}, arg[4] + {3 * k}}};\n"
+        f"    casadi_real* l_res[1] = {{L[{k}]}};\n"
+        f"    qd_did_full_leg{pieces.template_of[k]}(l_arg, l_res, iw, w, mem);\n  }}\n" for k in range(4))
+    text.append(
+        "int qd_did_full_trig(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem) {\n"
+        f"  casadi_real a_cl[3], L[4][{nl}];\n"
+        "  const casadi_real* h_arg[3] = {arg[0], arg[1], arg[2]};\n"
+        "  casadi_real* h_res[1] = {a_cl};\n"
+        "  qd_did_full_head(h_arg, h_res, iw, w, mem);\n" + calls +
+        "  const casadi_real* t_arg[7] = {arg[0], arg[1], arg[2], L[0], L[1], L[2], L[3]};\n"
+        "  return qd_did_full_tail(t_arg, res, iw, w, mem);\n}\n")
+    return "\n".join(text)
+
+
+def _did_full_trig_once(c_text: str, raw: str, did: ca.Function, robot: Robot, precision: str) -> str:
+    """did_full's evaluation ``raw`` as the joints' sines and cosines taken once (c/qd_sincos.c) and
+    ``_did_full_trig_by_leg``'s qd_did_full_trig reading them, also called by dfd_r (c/qd_reduced_derivatives.c), which
+    has the sines and cosines already."""
+    exported = _did_full_trig_by_leg(robot, precision, defined_helpers(c_text))
     n = len(JOINT_ANGLES)
     wrapper = (f"static int {raw}(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem) {{\n"
                f"  casadi_real s[{n}], c[{n}]; /* the joints' sines and cosines, once (qd_sincos) */\n"
@@ -365,7 +399,7 @@ def _did_full_trig_once(c_text: str, raw: str, did: ca.Function, precision: str)
             + c_text[body.end():])
 
 
-def derivative_source(file_stem: str, functions: list[ca.Function], precision: str) -> tuple[str, str]:
+def derivative_source(robot: Robot, file_stem: str, functions: list[ca.Function], precision: str) -> tuple[str, str]:
     """(C source, CasADi's header) of qd_<robot>_d.c: CasADi's code with c/qd_derivatives_solve.c
     inserted (after c/qd_dense.c); every entry point returns QD_NONFINITE for a non-finite output, dfd_full solves."""
     c_text, h_text = casadi_c(file_stem, functions, precision)
@@ -391,7 +425,7 @@ def derivative_source(file_stem: str, functions: list[ca.Function], precision: s
         elif f.name()[len(PREFIX):] in UNGUARDED:  # its evaluation reads the inputs unguarded: NULL ones are zeros here
             c_text = _unguarded_inputs(c_text, raw[f.name()], f)
             if f.name() == PREFIX + "did_full":
-                c_text = _did_full_trig_once(c_text, raw[f.name()], f, precision)
+                c_text = _did_full_trig_once(c_text, raw[f.name()], f, robot, precision)
             nnz = ", ".join(str(f.nnz_out(i)) for i in range(f.n_out()))
             body = (rf"\1  return qd_d_finite(qd_d_all_inputs(\2, {f.n_in()}, arg, res, iw, w, mem), res, {f.n_out()}, "
                     rf"(const casadi_int[]){{{nnz}}});\n")

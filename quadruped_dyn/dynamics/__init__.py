@@ -6,7 +6,7 @@ from quadruped_dyn.exports import lazy_exports
 _MODULES: dict[str, tuple[str, ...]] = {
     "crba": ("mass_matrix_crba", "generalized_gravity"),
     "derivatives": (
-        "quaternion_tangent", "configuration_tangent", "tangent_jacobian", "cholesky_solve", "rnea_tangent_derivatives",
+        "quaternion_tangent", "configuration_tangent", "tangent_jacobian", "cholesky_solve",
         "FullDerivatives", "full_derivatives", "rotation_jacobian", "ReducedDerivatives", "reduced_derivatives",
         "grf_derivatives",
     ),
@@ -29,5 +29,7 @@ _MODULES: dict[str, tuple[str, ...]] = {
         "solve_forward_dynamics", "reduced_model",
     ),
     "reduced_projection": ("rigid_motion", "ReducedProjection"),
+    "rnea_derivatives": ("rnea_tangent_derivatives", "DidFullPieces", "did_full_pieces"),
+    "leg_template": ("LegTemplate", "leg_templates"),
 }
 __all__, __getattr__, __dir__ = lazy_exports(__name__, _MODULES)

@@ -66,6 +66,9 @@ def _rotate_symmetric(axis: np.ndarray, q: ca.SX, I: ca.SX) -> ca.SX:
 
 def _link(link: LinkInertia) -> Inertia:
     """(m, h, I_o) of a link in its joint frame (constants)."""
+    if any(isinstance(x, ca.SX) for x in (link.mass, link.com, link.inertia)):  # a leg template's parameters
+        c = ca.SX(dm(link.com))
+        return link.mass, link.mass * c, ca.SX(dm(link.inertia)) - link.mass * skew(c) @ skew(c)
     c = np.asarray(link.com)
     return link.mass, ca.SX(dm(link.mass * c)), ca.SX(dm(link.inertia - link.mass * skew(c) @ skew(c)))
 
@@ -77,7 +80,12 @@ def _to_parent(Y: Inertia, axis: np.ndarray, q: ca.SX, P: np.ndarray) -> Inertia
     hr = axis_rotation(axis, q) @ h
     Pd = dm(P)
     shift = Pd @ hr.T
-    I_p = _rotate_symmetric(axis, q, I_o) + dm(m * (P @ P * np.eye(3) - np.outer(P, P))) - shift - shift.T
+    if isinstance(P, ca.SX) or isinstance(m, ca.SX):  # a leg template's parameters
+        Ps = ca.SX(dm(P))
+        parallel = m * (ca.dot(Ps, Ps) * ca.SX.eye(3) - Ps @ Ps.T)
+    else:
+        parallel = dm(m * (P @ P * np.eye(3) - np.outer(P, P)))
+    I_p = _rotate_symmetric(axis, q, I_o) + parallel - shift - shift.T
     return m, hr + m * Pd, _symmetric(I_p + 2 * ca.dot(Pd, hr) * ca.SX.eye(3))
 
 
@@ -108,31 +116,54 @@ def _force_to_parent(f: ca.SX, n: ca.SX, axis: np.ndarray, q: ca.SX, P: np.ndarr
     return f_p, R @ n + ca.cross(dm(P), f_p)
 
 
+def leg_mass_blocks(leg: Leg, q: ca.SX) -> tuple[ca.SX, ca.SX, Inertia]:
+    """A leg's part of M (canonical frames, ``axis_aligned``; SX parameters allowed): (M_ll (3, 3), its joints' block;
+    M_bl (6, 3), the trunk rows of its columns; the leg's composite inertia at the trunk origin,
+    ``leg_composite_inertia``)."""
+    Yc = _composites(leg, q)
+    M_ll, M_bl = ca.SX(3, 3), ca.SX(6, 3)
+    for j in range(3):
+        a = dm(leg.joints[j].axis)
+        f, n = ca.cross(a, Yc[j][1]), Yc[j][2] @ a
+        M_ll[j, j] = ca.dot(a, n)
+        for i in reversed(range(j)):
+            joint = leg.joints[i + 1]
+            f, n = _force_to_parent(f, n, joint.axis, q[i + 1], joint.placement.p)
+            M_ll[i, j] = M_ll[j, i] = ca.dot(dm(leg.joints[i].axis), n)
+        f, n = _force_to_parent(f, n, leg.joints[0].axis, q[0], leg.joints[0].placement.p)
+        M_bl[:, j] = ca.vertcat(f, n)
+    return M_ll, M_bl, _to_parent(Yc[0], leg.joints[0].axis, q[0], leg.joints[0].placement.p)
+
+
+def trunk_mass_block(total: Inertia) -> ca.SX:
+    """M[0:6, 0:6] = [[m 1, -[h]x], [[h]x, I_o]] of the whole robot's composite inertia at the trunk origin."""
+    m_total, h_total, I_total = total
+    H = skew(h_total)
+    return ca.vertcat(ca.horzcat(m_total * ca.SX.eye(3), -H), ca.horzcat(H, I_total))
+
+
 def mass_matrix_crba(robot: Robot, q_joints: ca.SX) -> ca.SX:
     """M (18, 18), sparse (leg-leg blocks absent), for the 12 joint angles."""
     M = ca.SX(ca.Sparsity(NV_FULL, NV_FULL))
     total = _link(robot.trunk)
     for k, urdf_leg in enumerate(robot.legs):
-        leg = axis_aligned(urdf_leg)
-        q = q_joints[3 * k : 3 * k + 3]
-        Yc = _composites(leg, q)
-        for j in range(3):
-            col = 6 + 3 * k + j
-            a = dm(leg.joints[j].axis)
-            f, n = ca.cross(a, Yc[j][1]), Yc[j][2] @ a
-            M[col, col] = ca.dot(a, n)
-            for i in reversed(range(j)):
-                joint = leg.joints[i + 1]
-                f, n = _force_to_parent(f, n, joint.axis, q[i + 1], joint.placement.p)
-                M[6 + 3 * k + i, col] = M[col, 6 + 3 * k + i] = ca.dot(dm(leg.joints[i].axis), n)
-            f, n = _force_to_parent(f, n, leg.joints[0].axis, q[0], leg.joints[0].placement.p)
-            M[0:6, col] = ca.vertcat(f, n)
-            M[col, 0:6] = M[0:6, col].T
-        total = _add(total, _to_parent(Yc[0], leg.joints[0].axis, q[0], leg.joints[0].placement.p))  # leg_composite_inertia
-    m_total, h_total, I_total = total
-    H = skew(h_total)
-    M[0:6, 0:6] = ca.vertcat(ca.horzcat(m_total * ca.SX.eye(3), -H), ca.horzcat(H, I_total))
+        M_ll, M_bl, composite = leg_mass_blocks(axis_aligned(urdf_leg), q_joints[3 * k : 3 * k + 3])
+        s = slice(6 + 3 * k, 9 + 3 * k)
+        M[s, s] = M_ll
+        M[0:6, s] = M_bl
+        M[s, 0:6] = M_bl.T
+        total = _add(total, composite)
+    M[0:6, 0:6] = trunk_mass_block(total)
     return M
+
+
+def trunk_inertia(robot: Robot) -> Inertia:
+    """(m, h, I_o) of the trunk alone at its origin (constants)."""
+    return _link(robot.trunk)
+
+
+def add_inertia(Y1: Inertia, Y2: Inertia) -> Inertia:
+    return _add(Y1, Y2)
 
 
 def generalized_gravity(robot: Robot, q_joints: ca.SX, g_b: ca.SX) -> ca.SX:

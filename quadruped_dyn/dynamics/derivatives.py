@@ -44,15 +44,14 @@ from functools import cache
 import casadi as ca
 import numpy as np
 
-from quadruped_dyn.dynamics.crba import leg_composite_inertia, mass_matrix_crba
 from quadruped_dyn.dynamics.grf import grf_solve
 from quadruped_dyn.dynamics.guarded import GuardedFunction, guard_fields, guarded_call, with_condition
-from quadruped_dyn.dynamics.newton_euler import inverse_dynamics, inverse_dynamics_parts
+from quadruped_dyn.dynamics.newton_euler import inverse_dynamics
 from quadruped_dyn.dynamics.reduced import check_regularity, regularity_function, solve_forward_dynamics
 from quadruped_dyn.dynamics.reduced_projection import reduced_projection
+from quadruped_dyn.dynamics.rnea_derivatives import rnea_tangent_derivatives
 from quadruped_dyn.errors import InputError
-from quadruped_dyn.math.spatial import dm, placement_rt, quat_to_rotation, skew
-from quadruped_dyn.model.leg_frames import axis_aligned
+from quadruped_dyn.math.spatial import dm, quat_to_rotation, skew
 from quadruped_dyn.model.robot import Robot, check_robot
 from quadruped_dyn.model.stance import StanceSet, stance_set
 from quadruped_dyn.model.state import GRAVITY_W, NQ_FULL, NV_FULL, check_array
@@ -103,73 +102,6 @@ def cholesky_solve(M: ca.SX, B: ca.SX) -> ca.SX:
 def _rnea(robot: Robot, q: ca.SX, v: ca.SX, a: ca.SX) -> ca.SX:
     g_b = quat_to_rotation(q[3:7]).T @ dm(GRAVITY_W)
     return inverse_dynamics(robot, q[7:], g_b, v, a, ca.SX.zeros(12))
-
-
-def _motion_cross(x: ca.SX, y: ca.SX) -> ca.SX:
-    """x x y of spatial motions in the project's (linear, angular) order."""
-    return ca.vertcat(ca.cross(x[3:], y[:3]) + ca.cross(x[:3], y[3:]), ca.cross(x[3:], y[3:]))
-
-
-def _force_cross(x: ca.SX, f: ca.SX) -> ca.SX:
-    """x x* f of a spatial motion x and a force f = (force, moment), (linear, angular) order."""
-    return ca.vertcat(ca.cross(x[3:], f[:3]), ca.cross(x[3:], f[3:]) + ca.cross(x[:3], f[:3]))
-
-
-def rnea_tangent_derivatives(robot: Robot, q: ca.SX, v: ca.SX, a: ca.SX) -> tuple[ca.SX, ca.SX, ca.SX]:
-    """(dtau_dq (18, 18), dtau_dv (18, 18), dtau_da = M (18, 18)) of the full inverse dynamics (no foot
-    forces), M by composite rigid bodies. Jacobians of the Newton-Euler recursion only where nothing cheaper
-    holds (docs/derivatives.md, "How did_full is formed"):
-
-    * the trunk's linear velocity v_b and gravity g_b enter only through the trunk's classical linear
-      acceleration a_cl = a_lin + w_b x v_b - g_b, whose coefficient is ``M[:, 0:3]``: ``d tau/d v_b = M[:, 0:3] [w_b]x``,
-      the rotation columns ``-M[:, 0:3] [g_b]x``, and d tau/d w_b is the recursion's Jacobian J_w at fixed a_cl
-      minus ``M[:, 0:3] [v_b]x``;
-    * a leg's first joint (axis a_1 through the hip p, fixed in the trunk; spatial axis S = (p x a_1, a_1)) moves
-      the leg's velocity like a trunk rotation: with the leg's J_w (its torques and its wrench on the trunk) and
-      K its acceleration coefficient (``M[leg rows, 0:6]``; the leg's composite inertia for the wrench),
-      d/d qd_1 = J_w a_1 + K (2 w_b x (p x a_1), w_b x a_1), and with u = (0, w_b) x S and A_b = (a_cl, alpha),
-      d/d q_1 = J_w u_ang + K ((w_b x u_lin, 0) - S x A_b) (+ S x* the leg's wrench, for the trunk rows);
-    * the other joints by the recursion's Jacobian of their leg only.
-
-    The trunk position does not enter (its columns are structurally zero). Equal to ``tangent_jacobian``'s (tested)."""
-    a_cl = ca.SX.sym("a_cl", 3)  # a_lin + w_b x v_b - g_b, the recursion's trunk linear acceleration
-    w_b, v_b = v[3:6], v[0:3]
-    qj, qdj = q[7:], v[6:]
-    own, legs = inverse_dynamics_parts(robot, qj, ca.SX.zeros(3), ca.vertcat(ca.SX.zeros(3), v[3:]),
-                                       ca.vertcat(a_cl, a[3:]), ca.SX.zeros(12))
-    M = mass_matrix_crba(robot, qj)
-    A_b = ca.vertcat(a_cl, a[3:6])
-    dw = ca.vertcat(ca.jacobian(own, w_b), ca.SX(12, 3))
-    dq_legs, dv_legs = [], []
-    for k, (urdf_leg, (wrench, tau)) in enumerate(zip(robot.legs, legs)):
-        leg, s = axis_aligned(urdf_leg), slice(3 * k, 3 * k + 3)
-        R1, p = placement_rt(leg.joints[0].placement)
-        a1 = R1 @ dm(leg.joints[0].axis)
-        S = ca.SX(ca.vertcat(ca.cross(p, a1), a1))
-        m, h, I_o = leg_composite_inertia(leg, qj[s])
-        K = ca.vertcat(ca.horzcat(m * ca.SX.eye(3), -skew(h)), ca.horzcat(skew(h), I_o), M[6 + 3 * k : 9 + 3 * k, 0:6])
-        y = ca.vertcat(wrench, tau)  # the leg's rows: its wrench on the trunk, its torques
-        J_w = ca.jacobian(y, w_b)
-        u = _motion_cross(ca.vertcat(ca.SX.zeros(3), w_b), S)
-        d_q1 = J_w @ u[3:] + K @ (ca.vertcat(ca.cross(w_b, u[:3]), ca.SX.zeros(3)) - _motion_cross(S, A_b))
-        d_q1 = d_q1 + ca.vertcat(_force_cross(S, wrench), ca.SX.zeros(3))
-        d_qd1 = J_w @ a1 + K @ ca.vertcat(2 * ca.cross(w_b, ca.cross(p, a1)), ca.cross(w_b, a1))
-        rest = [qj[3 * k + 1 : 3 * k + 3], qdj[3 * k + 1 : 3 * k + 3]]
-        J_q, J_qd = (ca.horzcat(d, ca.jacobian(y, x)) for d, x in zip((d_q1, d_qd1), rest))
-
-        def rows(Y: ca.SX, k: int = k) -> ca.SX:  # the leg's 9 rows into the 18: trunk, then its own joints
-            return ca.vertcat(Y[0:6, :], ca.SX(3 * k, Y.shape[1]), Y[6:9, :], ca.SX(9 - 3 * k, Y.shape[1]))
-
-        dq_legs.append(rows(J_q))
-        dv_legs.append(rows(J_qd))
-        dw = dw + rows(J_w)
-    M_lin = M[:, 0:3]
-    g_b = quat_to_rotation(q[3:7]).T @ dm(GRAVITY_W)
-    dq_joints, dw, dv_j = ca.substitute([ca.horzcat(*dq_legs), dw, ca.horzcat(*dv_legs)],
-                                        [a_cl], [a[0:3] + ca.cross(w_b, v_b) - g_b])
-    dq = ca.horzcat(ca.SX(NV_FULL, 3), -M_lin @ skew(g_b), dq_joints)
-    dv = ca.horzcat(M_lin @ skew(w_b), dw - M_lin @ skew(v_b), dv_j)
-    return dq, dv, M
 
 
 @dataclass(frozen=True)

@@ -35,7 +35,7 @@ import casadi as ca
 from quadruped_dyn.dynamics.crba import generalized_gravity, mass_matrix_crba
 from quadruped_dyn.dynamics.guarded import guard_fields
 from quadruped_dyn.dynamics.kinematics import foot_position, joint_frames
-from quadruped_dyn.math.rigid import axis_rotation
+from quadruped_dyn.math.rigid import LinkInertia, axis_rotation
 from quadruped_dyn.math.spatial import (
     dm,
     force_cross,
@@ -76,7 +76,14 @@ def leg_newton_euler(
     """Craig's recursion for one leg. ``a0`` = a_b - g_b (classical trunk-origin acceleration
     minus gravity), ``omega_b``/``alpha_b`` trunk angular velocity/acceleration, ``f`` the
     ground force on the foot; all in the trunk frame."""
-    leg = axis_aligned(leg)
+    return aligned_leg_newton_euler(axis_aligned(leg), q, qd, qdd, omega_b, alpha_b, a0, f)
+
+
+def aligned_leg_newton_euler(
+    leg: Leg, q: ca.SX, qd: ca.SX, qdd: ca.SX, omega_b: ca.SX, alpha_b: ca.SX, a0: ca.SX, f: ca.SX
+) -> LegForces:
+    """``leg_newton_euler`` of a leg already in canonical frames (``axis_aligned``); its placements, inertias
+    and foot may be SX (a leg template, ``dynamics.leg_template``)."""
     w, wd, vd, f_foot = omega_b, alpha_b, a0, -f
     K = point_acceleration(w, wd)  # the trunk's; CSE shares it with the trunk's and the other legs'
     links = []  # (R_parent_i, P_i, F_i, N_i) per link
@@ -120,6 +127,14 @@ def hip_reaction_split(
     return suspended, LegForces(-J.T @ f, -f, -ca.cross(r - dm(leg.hip), f))
 
 
+def trunk_own_wrench(trunk: LinkInertia, omega_b: ca.SX, alpha_b: ca.SX, a0: ca.SX) -> ca.SX:
+    """The trunk's own wrench (6,) (force, moment about the trunk origin; trunk frame) for its angular velocity and
+    acceleration and a0 = a_b - g_b, its origin's classical acceleration minus gravity."""
+    c, Ic = dm(trunk.com), dm(trunk.inertia)
+    a_c = a0 + point_acceleration(omega_b, alpha_b) @ c
+    return ca.vertcat(trunk.mass * a_c, Ic @ alpha_b + ca.cross(omega_b, Ic @ omega_b) + ca.cross(c, trunk.mass * a_c))
+
+
 def inverse_dynamics_parts(
     robot: Robot, q_joints: ca.SX, g_b: ca.SX, v: ca.SX, a: ca.SX, f: ca.SX
 ) -> tuple[ca.SX, list[tuple[ca.SX, ca.SX]]]:
@@ -130,10 +145,7 @@ def inverse_dynamics_parts(
     a_b = a[0:3] + ca.cross(omega_b, v_b)  # classical, as the paper's recursion needs
     alpha_b = a[3:6]
     a0 = a_b - g_b
-    trunk = robot.trunk
-    c, Ic = dm(trunk.com), dm(trunk.inertia)
-    a_c = a0 + point_acceleration(omega_b, alpha_b) @ c
-    own = ca.vertcat(trunk.mass * a_c, Ic @ alpha_b + ca.cross(omega_b, Ic @ omega_b) + ca.cross(c, trunk.mass * a_c))
+    own = trunk_own_wrench(robot.trunk, omega_b, alpha_b, a0)
     legs = []
     for k, leg in enumerate(robot.legs):
         s = slice(3 * k, 3 * k + 3)

@@ -24,7 +24,10 @@ def quat_to_rotation(quat: ca.SX) -> ca.SX:
     )
 
 
-def dm(x: np.ndarray) -> ca.DM:
+def dm(x: np.ndarray | ca.SX) -> ca.DM | ca.SX:
+    """A constant as a CasADi matrix; an SX (a robot parameter left symbolic, ``dynamics.leg_template``) as is."""
+    if isinstance(x, ca.SX):
+        return x
     return ca.DM(np.asarray(x, dtype=float))
 
 

@@ -321,6 +321,12 @@ def _evaluation_body(text: str, name: str) -> str:
     if trig:
         body = re.search(rf"\n(?:static )?int {trig.group(1)}\(.*?\n\}}\n", text, re.S)  # exported: dfd_r calls it too
         assert body, trig.group(1)
+        pieces = sorted(set(re.findall(r"\n    (qd_did_full_\w+)\(|\n  (?:return )?(qd_did_full_\w+)\(", body.group(0))))
+        if pieces:  # did_full by leg: the pieces qd_did_full_trig calls read the inputs
+            names = {n for pair in pieces for n in pair if n}
+            bodies = [re.search(rf"\n(?:QD_NOINLINE )?static int {n}\(.*?\n\}}\n", text, re.S) for n in sorted(names)]
+            assert names and all(bodies), names
+            return "".join(b.group(0) for b in bodies if b)
     return body.group(0)
 
 

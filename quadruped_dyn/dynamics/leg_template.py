@@ -1,0 +1,91 @@
+"""One symbolic leg for several legs of a robot: the numbers in which they differ as parameters.
+
+The legs of a quadruped share their structure (canonical frames, ``leg_frames.axis_aligned``: the same joint axes)
+and differ in a few numbers: the hip's position, the signs of mirrored offsets and products of inertia. A leg
+template is the canonical leg with each number in which its legs differ (placements, foot point, masses, centres of
+mass, inertia entries; a symmetric pair as one) replaced by an entry of the SX parameter vector ``p``; the numbers
+they share stay constants. A generated function of a template is one piece of machine code that serves all its legs,
+each call with its leg's ``values`` (docs/derivatives.md, "did_full by leg"). Legs whose joint axes differ cannot
+share a template (the axes shape the expressions): each group of equal axes gets its own.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import casadi as ca
+import numpy as np
+
+from quadruped_dyn.math.rigid import LinkInertia, Placement
+from quadruped_dyn.model.leg import Leg, LegJoint
+from quadruped_dyn.model.leg_frames import axis_aligned
+from quadruped_dyn.model.robot import Robot
+
+
+@dataclass(frozen=True)
+class LegTemplate:
+    """A canonical leg whose differing numbers are the entries of ``p`` (module docstring)."""
+
+    legs: tuple[int, ...]  # the robot's legs it stands for (0..3: FL, FR, BL, BR)
+    leg: Leg  # canonical frames; fields SX where these legs differ
+    p: ca.SX  # (n_p,) the parameters (n_p may be 0)
+    values: np.ndarray  # (len(legs), n_p): each leg's parameters, in ``legs``' order
+
+
+def leg_templates(robot: Robot) -> tuple[LegTemplate, ...]:
+    """The robot's legs grouped by their joint axes (canonical frames), one template per group, in leg order."""
+    aligned = [axis_aligned(leg) for leg in robot.legs]
+    groups: dict[bytes, list[int]] = {}
+    for k, leg in enumerate(aligned):
+        groups.setdefault(np.array([j.axis for j in leg.joints]).tobytes(), []).append(k)
+    return tuple(_template([aligned[k] for k in ks], tuple(ks)) for ks in groups.values())
+
+
+class _Parameters:
+    """Collects the parameters of one template: each number the legs differ in becomes a new symbol."""
+
+    def __init__(self, count: int) -> None:
+        self.symbols: list[ca.SX] = []
+        self.values: list[list[float]] = [[] for _ in range(count)]
+
+    def scalar(self, per_leg: list[float]) -> float | ca.SX:
+        if all(x == per_leg[0] for x in per_leg):
+            return per_leg[0]
+        s = ca.SX.sym(f"p{len(self.symbols)}")
+        self.symbols.append(s)
+        for row, x in zip(self.values, per_leg):
+            row.append(float(x))
+        return s
+
+    def array(self, per_leg: list[np.ndarray], symmetric: bool = False) -> np.ndarray | ca.SX:
+        """The legs' arrays (3,) or (3, 3) as a numpy constant if equal, else an SX with parameters where they differ."""
+        first = np.asarray(per_leg[0], dtype=float)
+        if all(np.array_equal(first, x) for x in per_leg):
+            return first
+        out = ca.SX(ca.DM(first))
+        cols = 1 if first.ndim == 1 else first.shape[1]
+        for i in range(first.shape[0]):
+            for j in range(cols):
+                if symmetric and j < i:
+                    out[i, j] = out[j, i]
+                    continue
+                out[i, j] = self.scalar([float(np.asarray(x)[i] if cols == 1 and first.ndim == 1 else np.asarray(x)[i, j])
+                                         for x in per_leg])
+        return out
+
+
+def _template(legs: list[Leg], indices: tuple[int, ...]) -> LegTemplate:
+    par = _Parameters(len(legs))
+    first = legs[0]
+    if any(not np.array_equal(j.placement.R, np.eye(3)) for leg in legs for j in leg.joints):
+        raise AssertionError("a canonical joint placement is not the identity rotation")
+    joints = tuple(LegJoint(j.name, Placement(j.placement.R, par.array([leg.joints[i].placement.p for leg in legs])),
+                            j.axis, j.lower, j.upper) for i, j in enumerate(first.joints))
+    links = tuple(LinkInertia(par.scalar([leg.links[i].mass for leg in legs]),
+                              par.array([leg.links[i].com for leg in legs]),
+                              par.array([leg.links[i].inertia for leg in legs], symmetric=True))
+                  for i in range(3))
+    foot = Placement(first.foot.R, par.array([leg.foot.p for leg in legs]))
+    template = Leg("template", joints, links, foot, first.foot_frame)  # type: ignore[arg-type]
+    p = ca.vertcat(*par.symbols) if par.symbols else ca.SX(0, 1)
+    return LegTemplate(indices, template, p, np.array(par.values, dtype=float).reshape(len(legs), len(par.symbols)))

@@ -1,0 +1,71 @@
+"""Leg templates (dynamics/leg_template.py) and did_full composed of them (dynamics/rnea_derivatives.py)."""
+
+from __future__ import annotations
+
+import dataclasses
+
+import casadi as ca
+import numpy as np
+import pytest
+
+from quadruped_dyn.dynamics.derivatives import full_derivatives
+from quadruped_dyn.dynamics.leg_template import leg_templates
+from quadruped_dyn.dynamics.rnea_derivatives import did_full_pieces
+from quadruped_dyn.model.leg import LegJoint
+from quadruped_dyn.model.leg_frames import axis_aligned
+from quadruped_dyn.model.robot import ROBOT_NAMES, load_robot
+from quadruped_dyn.model.state import random_state
+from quadruped_dyn.tolerances import REL_TOL_DERIVATIVES
+from tests.conftest import assert_close
+
+
+def _numeric(x: object, p: ca.SX, values: np.ndarray) -> np.ndarray:
+    """A template field with one leg's parameters put in."""
+    if isinstance(x, ca.SX):
+        return ca.evalf(ca.substitute(x, p, ca.DM(values))).full().squeeze()
+    return np.asarray(x, dtype=float)
+
+
+@pytest.mark.parametrize("name", ROBOT_NAMES)
+def test_each_legs_parameters_give_back_its_canonical_leg(name):
+    """Every number of every canonical leg, exactly: the template's constants where the legs agree, its
+    parameters with that leg's values where they differ."""
+    robot = load_robot(name)
+    templates = leg_templates(robot)
+    assert sorted(k for t in templates for k in t.legs) == [0, 1, 2, 3]
+    for t in templates:
+        assert t.values.shape == (len(t.legs), t.p.numel())
+        for row, k in zip(t.values, t.legs):
+            leg = axis_aligned(robot.legs[k])
+            for mine, theirs in zip(t.leg.joints, leg.joints):
+                assert np.array_equal(mine.axis, theirs.axis)
+                assert np.array_equal(_numeric(mine.placement.p, t.p, row), theirs.placement.p)
+            for mine, theirs in zip(t.leg.links, leg.links):
+                assert float(_numeric(mine.mass, t.p, row)) == theirs.mass
+                assert np.array_equal(_numeric(mine.com, t.p, row), theirs.com)
+                assert np.array_equal(_numeric(mine.inertia, t.p, row), theirs.inertia)
+            assert np.array_equal(_numeric(t.leg.foot.p, t.p, row), leg.foot.p)
+
+
+def test_the_paper_robots_legs_share_one_template_with_two_parameters():
+    """Its legs differ only in the hip's position (x and y signs): one piece of code for the four."""
+    (t,) = leg_templates(load_robot("paper"))
+    assert t.legs == (0, 1, 2, 3) and t.p.numel() == 2
+
+
+def test_legs_with_other_axes_get_their_own_template_and_did_full_is_unchanged():
+    """A leg whose knee turns the other way cannot share the others' code: it gets a template of its own, and
+    did_full composed of the two templates still equals CasADi's Jacobian of the whole rnea (did_full_ad)."""
+    paper = load_robot("paper")
+    fr = paper.legs[1]
+    knee = fr.joints[2]
+    flipped = dataclasses.replace(fr, joints=(*fr.joints[:2], LegJoint(knee.name, knee.placement, -knee.axis,
+                                                                           -knee.upper, -knee.lower)))
+    robot = dataclasses.replace(paper, legs=(paper.legs[0], flipped, *paper.legs[2:]))
+    pieces = did_full_pieces(robot)
+    assert [t.legs for t in pieces.templates] == [(0, 2, 3), (1,)] and pieces.template_of == (0, 1, 0, 0)
+    d = full_derivatives(robot)
+    for seed in (0, 1):
+        s = random_state(robot.lower, robot.upper, np.random.default_rng(seed))
+        for k, (ours, literal) in enumerate(zip(d.did_full(s.q, s.v, s.a), d.did_full_ad(s.q, s.v, s.a))):
+            assert_close(np.array(ours), np.array(literal), REL_TOL_DERIVATIVES, f"flipped knee did_full output {k}")
