@@ -66,7 +66,7 @@ from quadruped_dyn.dynamics.grf import solve_lambda
 from quadruped_dyn.dynamics.kinematics import foot_position
 from quadruped_dyn.dynamics.newton_euler import full_dynamics
 from quadruped_dyn.dynamics.reduced_projection import reduced_projection, stance_forces
-from quadruped_dyn.dynamics.rnea_derivatives import did_full_pieces
+from quadruped_dyn.dynamics.rnea_derivatives import DidFullPieces, did_full_pieces
 from quadruped_dyn.math.rigid import skew
 from quadruped_dyn.model.robot import Robot
 from quadruped_dyn.model.stance import STANCE_SETS, StanceSet, stance_set
@@ -365,11 +365,7 @@ def _did_full_trig_by_leg(robot: Robot, precision: str, host_helpers: frozenset[
                     f"/* {robot.legs[k].label}'s parameters */\n")
     text.append(unguarded_inputs(static_c("qd_did_full_tail", pieces.tail, precision, host_helpers), "did_full"))
     nl = max(f.nnz_out(0) for f in pieces.legs)
-    calls = "".join(
-        f"  {{\n    const casadi_real* l_arg[9] = {{arg[1] + 3, arg[2] + 3, a_cl, arg[0] + {7 + 3 * k}, arg[1] + {6 + 3 * k}, "
-        f"arg[2] + {6 + 3 * k}, qd_did_full_p{k}, arg[3] + {3 * k}, arg[4] + {3 * k}}};\n"
-        f"    casadi_real* l_res[1] = {{L[{k}]}};\n"
-        f"    qd_did_full_leg{pieces.template_of[k]}(l_arg, l_res, iw, w, mem);\n  }}\n" for k in range(4))
+    calls = "".join(_leg_call(pieces, k) for k in sorted(range(4), key=lambda k: pieces.template_of[k]))
     text.append(
         "int qd_did_full_trig(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem) {\n"
         f"  casadi_real a_cl[3], L[4][{nl}];\n"
@@ -379,6 +375,25 @@ def _did_full_trig_by_leg(robot: Robot, precision: str, host_helpers: frozenset[
         "  const casadi_real* t_arg[7] = {arg[0], arg[1], arg[2], L[0], L[1], L[2], L[3]};\n"
         "  return qd_did_full_tail(t_arg, res, iw, w, mem);\n}\n")
     return "\n".join(text)
+
+
+def _leg_call(pieces: DidFullPieces, k: int) -> str:
+    """qd_did_full_trig's call of leg k's template function (its legs one after the other: the code stays in the
+    instruction cache): q, qd, qdd and sin of the leg's joints read in place, or negated into x where the leg turns
+    the other way (``leg_template``: sigma = -1; cos is even)."""
+    sigma = pieces.leg_signs(k)
+    reads = [(0, 7), (1, 6), (2, 6), (3, 0)]  # (arg, first entry of leg 0): q, qd, qdd, sin
+    if all(x == 1.0 for x in sigma):
+        inputs = [f"arg[{i}] + {start + 3 * k}" for i, start in reads]
+        prologue = ""
+    else:
+        entries = [f"{'-' if x < 0 else ''}arg[{i}][{start + 3 * k + j}]" for i, start in reads for j, x in enumerate(sigma)]
+        prologue = f"    const casadi_real x[12] = {{{', '.join(entries)}}}; /* sigma (q, qd, qdd, sin q) */\n"
+        inputs = ["x", "x + 3", "x + 6", "x + 9"]
+    return (f"  {{\n{prologue}    const casadi_real* l_arg[9] = {{arg[1] + 3, arg[2] + 3, a_cl, {inputs[0]}, {inputs[1]}, "
+            f"{inputs[2]}, qd_did_full_p{k}, {inputs[3]}, arg[4] + {3 * k}}};\n"
+            f"    casadi_real* l_res[1] = {{L[{k}]}};\n"
+            f"    qd_did_full_leg{pieces.template_of[k]}(l_arg, l_res, iw, w, mem);\n  }}\n")
 
 
 def _did_full_trig_once(c_text: str, raw: str, did: ca.Function, robot: Robot, precision: str) -> str:

@@ -5,8 +5,12 @@ and differ in a few numbers: the hip's position, the signs of mirrored offsets a
 template is the canonical leg with each number in which its legs differ (placements, foot point, masses, centres of
 mass, inertia entries; a symmetric pair as one) replaced by an entry of the SX parameter vector ``p``; the numbers
 they share stay constants. A generated function of a template is one piece of machine code that serves all its legs,
-each call with its leg's ``values`` (docs/derivatives.md, "did_full by leg"). Legs whose joint axes differ cannot
-share a template (the axes shape the expressions): each group of equal axes gets its own.
+each call with its leg's ``values`` (docs/derivatives.md, "did_full by leg").
+
+A joint turning about -a by q is the joint turning about a by -q (its torque about a is minus the torque about -a):
+a leg whose axes are the template's up to sign shares it in the coordinates sigma q, ``signs`` the sigma of each
+joint (hyq's left and right hips). Legs whose axes differ otherwise cannot share a template (the axes shape the
+expressions): each group gets its own.
 """
 
 from __future__ import annotations
@@ -30,15 +34,29 @@ class LegTemplate:
     leg: Leg  # canonical frames; fields SX where these legs differ
     p: ca.SX  # (n_p,) the parameters (n_p may be 0)
     values: np.ndarray  # (len(legs), n_p): each leg's parameters, in ``legs``' order
+    signs: np.ndarray  # (len(legs), 3) of +-1: each leg's joint i is the template's at sigma_i q_i
+
+
+def _up_to_sign(axis: np.ndarray) -> np.ndarray:
+    """The axis with its first nonzero entry positive: equal for a and -a."""
+    return axis * np.sign(axis[np.flatnonzero(axis)[0]]) + 0.0
 
 
 def leg_templates(robot: Robot) -> tuple[LegTemplate, ...]:
-    """The robot's legs grouped by their joint axes (canonical frames), one template per group, in leg order."""
+    """The robot's legs grouped by their joint axes up to sign (canonical frames), one template per group, in leg
+    order; a leg's joint turning the other way than the group's first leg's has sign -1."""
     aligned = [axis_aligned(leg) for leg in robot.legs]
     groups: dict[bytes, list[int]] = {}
     for k, leg in enumerate(aligned):
-        groups.setdefault(np.array([j.axis for j in leg.joints]).tobytes(), []).append(k)
+        groups.setdefault(np.array([_up_to_sign(j.axis) for j in leg.joints]).tobytes(), []).append(k)
     return tuple(_template([aligned[k] for k in ks], tuple(ks)) for ks in groups.values())
+
+
+def _turned(leg: Leg, signs: np.ndarray) -> Leg:
+    """``leg`` with joint i's axis times signs[i] (the same leg in the coordinates signs * q)."""
+    joints = tuple(LegJoint(j.name, j.placement, s * j.axis + 0.0, *sorted((s * j.lower, s * j.upper)))
+                   for j, s in zip(leg.joints, signs))
+    return Leg(leg.label, joints, leg.links, leg.foot, leg.foot_frame)  # type: ignore[arg-type]
 
 
 class _Parameters:
@@ -74,7 +92,12 @@ class _Parameters:
         return out
 
 
-def _template(legs: list[Leg], indices: tuple[int, ...]) -> LegTemplate:
+def _template(turning: list[Leg], indices: tuple[int, ...]) -> LegTemplate:
+    signs = np.array([[np.sign(a.axis @ b.axis) for a, b in zip(leg.joints, turning[0].joints)] for leg in turning])
+    if any(not np.array_equal(s * a.axis + 0.0, b.axis) for leg, row in zip(turning, signs)
+           for s, a, b in zip(row, leg.joints, turning[0].joints)):
+        raise AssertionError("the legs' axes are not equal up to sign")
+    legs = [_turned(leg, s) for leg, s in zip(turning, signs)]
     par = _Parameters(len(legs))
     first = legs[0]
     if any(not np.array_equal(j.placement.R, np.eye(3)) for leg in legs for j in leg.joints):
@@ -88,4 +111,4 @@ def _template(legs: list[Leg], indices: tuple[int, ...]) -> LegTemplate:
     foot = Placement(first.foot.R, par.array([leg.foot.p for leg in legs]))
     template = Leg("template", joints, links, foot, first.foot_frame)  # type: ignore[arg-type]
     p = ca.vertcat(*par.symbols) if par.symbols else ca.SX(0, 1)
-    return LegTemplate(indices, template, p, np.array(par.values, dtype=float).reshape(len(legs), len(par.symbols)))
+    return LegTemplate(indices, template, p, np.array(par.values, dtype=float).reshape(len(legs), len(par.symbols)), signs)

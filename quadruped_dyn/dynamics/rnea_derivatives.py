@@ -21,6 +21,7 @@ from dataclasses import dataclass
 from functools import cache
 
 import casadi as ca
+import numpy as np
 
 from quadruped_dyn.dynamics.crba import add_inertia, leg_mass_blocks, trunk_inertia, trunk_mass_block
 from quadruped_dyn.dynamics.leg_template import LegTemplate, leg_templates
@@ -99,6 +100,11 @@ class DidFullPieces:
         t = self.templates[self.template_of[k]]
         return tuple(float(x) for x in t.values[t.legs.index(k)])
 
+    def leg_signs(self, k: int) -> tuple[float, float, float]:
+        """Robot leg k's joint signs: its template's function takes sigma q, sigma qd, sigma qdd (``leg_template``)."""
+        t = self.templates[self.template_of[k]]
+        return tuple(float(x) for x in t.signs[t.legs.index(k)])  # type: ignore[return-value]
+
 
 def _g_b(q: ca.SX) -> ca.SX:
     return quat_to_rotation(q[3:7]).T @ dm(GRAVITY_W)
@@ -119,12 +125,26 @@ def did_full_pieces(robot: Robot) -> DidFullPieces:
                                 ["w_b", "alpha_b", "a_cl", "q_l", "qd_l", "qdd_l", "p"], ["L"], opts))
     template_of = tuple(next(i for i, t in enumerate(templates) if k in t.legs) for k in range(4))
     Ls = [ca.SX.sym(f"L_{k}", legs[template_of[k]].sparsity_out(0)) for k in range(4)]
-    tail = ca.Function("did_full_tail", [q, v, a, *Ls], list(_tail(robot, q, v, a, Ls)),
+    signs = [templates[template_of[k]].signs[templates[template_of[k]].legs.index(k)] for k in range(4)]
+    tail = ca.Function("did_full_tail", [q, v, a, *Ls], list(_tail(robot, q, v, a, Ls, signs)),
                        ["q", "v", "a", *(f"L_{k}" for k in range(4))], ["dtau_dq", "dtau_dv", "dtau_da"], opts)
     return DidFullPieces(head, templates, tuple(legs), template_of, tail)
 
 
-def _tail(robot: Robot, q: ca.SX, v: ca.SX, a: ca.SX, Ls: list[ca.SX]) -> tuple[ca.SX, ca.SX, ca.SX]:
+def _in_robot_coordinates(parts: dict[str, ca.SX], sigma: np.ndarray) -> dict[str, ca.SX]:
+    """A leg's parts from its template's coordinates sigma q back to the robot's: its torques and its joints' columns
+    times sigma (sigma = +-1: a product with 1 is dropped, with -1 a negation)."""
+    if np.all(sigma == 1.0):
+        return parts
+    D3, D9 = ca.diag(ca.DM(sigma)), ca.diag(ca.DM(np.r_[np.ones(6), sigma]))
+    out = dict(parts)
+    out["J_q"], out["J_qd"], out["J_w"] = D9 @ parts["J_q"] @ D3, D9 @ parts["J_qd"] @ D3, D9 @ parts["J_w"]
+    out["M_ll"], out["M_bl"] = D3 @ parts["M_ll"] @ D3, parts["M_bl"] @ D3
+    return out
+
+
+def _tail(robot: Robot, q: ca.SX, v: ca.SX, a: ca.SX, Ls: list[ca.SX],
+          signs: list[np.ndarray]) -> tuple[ca.SX, ca.SX, ca.SX]:
     w_b, v_b = v[3:6], v[0:3]
     a_cl = ca.SX.sym("a_cl", 3)
     own = trunk_own_wrench(robot.trunk, w_b, a[3:6], a_cl)
@@ -133,7 +153,7 @@ def _tail(robot: Robot, q: ca.SX, v: ca.SX, a: ca.SX, Ls: list[ca.SX]) -> tuple[
     total = trunk_inertia(robot)
     dq_legs, dv_legs = [], []
     for k, L in enumerate(Ls):
-        parts = _unpack(L)
+        parts = _in_robot_coordinates(_unpack(L), signs[k])
 
         def rows(Y: ca.SX, k: int = k) -> ca.SX:  # the leg's 9 rows into the 18: trunk, then its own joints
             return ca.vertcat(Y[0:6, :], ca.SX(3 * k, Y.shape[1]), Y[6:9, :], ca.SX(9 - 3 * k, Y.shape[1]))
@@ -163,5 +183,7 @@ def rnea_tangent_derivatives(robot: Robot, q: ca.SX, v: ca.SX, a: ca.SX) -> tupl
     Ls = []
     for k in range(4):
         i, s = pieces.template_of[k], slice(3 * k, 3 * k + 3)
-        Ls.append(pieces.legs[i](v[3:6], a[3:6], a_cl, q[7:][s], v[6:][s], a[6:][s], ca.DM(pieces.leg_values(k))))
+        sigma = ca.DM(pieces.leg_signs(k))
+        Ls.append(pieces.legs[i](v[3:6], a[3:6], a_cl, sigma * q[7:][s], sigma * v[6:][s], sigma * a[6:][s],
+                                 ca.DM(pieces.leg_values(k))))
     return tuple(pieces.tail(q, v, a, *Ls))  # type: ignore[return-value]

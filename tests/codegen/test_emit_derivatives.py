@@ -4,23 +4,31 @@ return codes on bad input and a singular M."""
 
 from __future__ import annotations
 
+import dataclasses
 import subprocess
 
+import casadi as ca
 import numpy as np
 import pytest
 
 from quadruped_dyn.checks.derivative_reference import ReducedReference, grf_derivatives_reference
-from quadruped_dyn.codegen.emit import REDUCED_STANCE_SETS, TEMPLATES, reduced_symbol
+from quadruped_dyn.codegen.casadi_source import PREFIX
+from quadruped_dyn.codegen.emit import REDUCED_STANCE_SETS, TEMPLATES, _precision_math, reduced_symbol
 from quadruped_dyn.codegen.emit_derivatives import (
     GRF_DERIVATIVE_STANCE_SETS,
+    derivative_functions,
+    derivative_source,
     dfd_r_lift,
     dfd_r_pieces,
     lift_seeds,
 )
 from quadruped_dyn.codegen.joint_trig import trig_as_inputs
 from quadruped_dyn.codegen.library import C_FLAGS, CompiledFunction, compiled_library
+from quadruped_dyn.dynamics.derivatives import full_derivatives
+from quadruped_dyn.dynamics.rnea_derivatives import did_full_pieces
 from quadruped_dyn.errors import InputError
 from quadruped_dyn.math.compare import relative_error
+from quadruped_dyn.model.leg import LegJoint
 from quadruped_dyn.model.robot import ROBOT_NAMES, load_robot
 from quadruped_dyn.model.stance import stance_set
 from quadruped_dyn.model.state import random_state
@@ -234,3 +242,29 @@ def test_lift_columns_are_the_lift_direction_at_each_seed(paper):
                 scale = np.max(np.abs(dir_k), initial=0.0)
                 assert np.all(np.isfinite(col[:, c])) and np.all(np.isfinite(dir_k)), f"{name} column {c} output {k}"
                 assert np.max(np.abs(col[:, c] - dir_k), initial=0.0) <= LIFT_COLUMNS_REL_TOL * scale, f"{name} {c} {k}"
+
+
+def test_did_full_of_two_leg_templates_and_a_turned_hip_compiled(tmp_path):
+    """qd_did_full of a robot whose legs need two templates (FR's knee turns about x: its own template) and a sign
+    (FL's hip axis reversed: the others' template at -q), compiled with the library's flags, against CasADi's
+    Jacobian of the whole rnea (did_full_ad), which has no templates."""
+    paper = load_robot("paper")
+    fl, fr = paper.legs[0], paper.legs[1]
+    hip, knee = fl.joints[0], fr.joints[2]
+    fl = dataclasses.replace(fl, joints=(LegJoint(hip.name, hip.placement, -hip.axis, -hip.upper, -hip.lower), *fl.joints[1:]))
+    fr = dataclasses.replace(fr, joints=(*fr.joints[:2], LegJoint(knee.name, knee.placement, np.array([1.0, 0.0, 0.0]),
+                                                                     knee.lower, knee.upper)))
+    robot = dataclasses.replace(paper, legs=(fl, fr, *paper.legs[2:]))
+    pieces = did_full_pieces(robot)
+    assert pieces.template_of == (0, 1, 0, 0) and [pieces.leg_signs(k)[0] for k in (0, 2, 3)] == [1.0, -1.0, -1.0]
+    c_text, _ = derivative_source(robot, "qd_turned_d", derivative_functions(robot), "double")
+    source = tmp_path / "qd_turned_d.c"
+    source.write_text(_precision_math(c_text))
+    library = tmp_path / "libturned.so"
+    subprocess.run(["gcc", *C_FLAGS, "-shared", str(source), "-o", str(library), "-lm"], check=True)  # qd_M_full: unused
+    compiled = ca.external(PREFIX + "did_full", str(library))
+    literal = full_derivatives(robot).did_full_ad
+    for seed in (0, 1):
+        s = random_state(robot.lower, robot.upper, np.random.default_rng(seed))
+        for k, (ours, theirs) in enumerate(zip(compiled(s.q, s.v, s.a), literal(s.q, s.v, s.a))):
+            assert_close(np.array(ca.densify(ours)), np.array(ca.densify(theirs)), REL_TOL_DERIVATIVES, f"output {k}")
