@@ -30,7 +30,7 @@ from quadruped_dyn.model.leg_frames import axis_aligned
 from quadruped_dyn.model.robot import Robot
 from quadruped_dyn.model.state import NV_FULL
 
-Inertia = tuple[float, ca.SX, ca.SX]  # (m kg, h kg m, I_o kg m^2) at a frame's origin, in its axes
+Inertia = tuple[float | ca.SX, ca.SX, ca.SX]  # (m kg, h kg m, I_o kg m^2) at a frame's origin, in its axes
 
 
 def _symmetric(X: ca.SX) -> ca.SX:
@@ -67,8 +67,8 @@ def _rotate_symmetric(axis: np.ndarray, q: ca.SX, I: ca.SX) -> ca.SX:
 def _link(link: LinkInertia) -> Inertia:
     """(m, h, I_o) of a link in its joint frame (constants)."""
     if any(isinstance(x, ca.SX) for x in (link.mass, link.com, link.inertia)):  # a leg template's parameters
-        c = ca.SX(dm(link.com))
-        return link.mass, link.mass * c, ca.SX(dm(link.inertia)) - link.mass * skew(c) @ skew(c)
+        c_sx = ca.SX(dm(link.com))
+        return link.mass, link.mass * c_sx, ca.SX(dm(link.inertia)) - link.mass * skew(c_sx) @ skew(c_sx)
     c = np.asarray(link.com)
     return link.mass, ca.SX(dm(link.mass * c)), ca.SX(dm(link.inertia - link.mass * skew(c) @ skew(c)))
 
@@ -80,6 +80,7 @@ def _to_parent(Y: Inertia, axis: np.ndarray, q: ca.SX, P: np.ndarray) -> Inertia
     hr = axis_rotation(axis, q) @ h
     Pd = dm(P)
     shift = Pd @ hr.T
+    parallel: ca.SX | ca.DM
     if isinstance(P, ca.SX) or isinstance(m, ca.SX):  # a leg template's parameters
         Ps = ca.SX(dm(P))
         parallel = m * (ca.dot(Ps, Ps) * ca.SX.eye(3) - Ps @ Ps.T)

@@ -16,6 +16,7 @@ expressions): each group gets its own.
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import cast
 
 import casadi as ca
 import numpy as np
@@ -102,13 +103,16 @@ def _template(turning: list[Leg], indices: tuple[int, ...]) -> LegTemplate:
     first = legs[0]
     if any(not np.array_equal(j.placement.R, np.eye(3)) for leg in legs for j in leg.joints):
         raise AssertionError("a canonical joint placement is not the identity rotation")
-    joints = tuple(LegJoint(j.name, Placement(j.placement.R, par.array([leg.joints[i].placement.p for leg in legs])),
+    # The fields are typed numeric; a template's hold SX where its legs differ, which every function the template is
+    # built for reads through ``dm`` (module docstring): the casts say so to the type checker.
+    joints = tuple(LegJoint(j.name, Placement(j.placement.R, cast(np.ndarray, par.array([leg.joints[i].placement.p
+                                                                                        for leg in legs]))),
                             j.axis, j.lower, j.upper) for i, j in enumerate(first.joints))
-    links = tuple(LinkInertia(par.scalar([leg.links[i].mass for leg in legs]),
-                              par.array([leg.links[i].com for leg in legs]),
-                              par.array([leg.links[i].inertia for leg in legs], symmetric=True))
+    links = tuple(LinkInertia(cast(float, par.scalar([leg.links[i].mass for leg in legs])),
+                              cast(np.ndarray, par.array([leg.links[i].com for leg in legs])),
+                              cast(np.ndarray, par.array([leg.links[i].inertia for leg in legs], symmetric=True)))
                   for i in range(3))
-    foot = Placement(first.foot.R, par.array([leg.foot.p for leg in legs]))
+    foot = Placement(first.foot.R, cast(np.ndarray, par.array([leg.foot.p for leg in legs])))
     template = Leg("template", joints, links, foot, first.foot_frame)  # type: ignore[arg-type]
     p = ca.vertcat(*par.symbols) if par.symbols else ca.SX(0, 1)
     return LegTemplate(indices, template, p, np.array(par.values, dtype=float).reshape(len(legs), len(par.symbols)), signs)

@@ -31,7 +31,7 @@ def dm(x: np.ndarray | ca.SX) -> ca.DM | ca.SX:
     return ca.DM(np.asarray(x, dtype=float))
 
 
-def placement_rt(T: Placement) -> tuple[ca.DM, ca.DM]:
+def placement_rt(T: Placement) -> tuple[ca.DM | ca.SX, ca.DM | ca.SX]:
     return dm(T.R), dm(T.p)
 
 
