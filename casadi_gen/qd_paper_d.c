@@ -642,13 +642,15 @@ static inline void qd_sincos(int n, const casadi_real* x, casadi_real* c, casadi
   }
 }
 
+#ifndef QD_NOINLINE
 #if defined(__GNUC__)
 #define QD_NOINLINE __attribute__((noinline))
 #else
 #define QD_NOINLINE
 #endif
+#endif
 
-static int qd_did_full_head(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem) {
+static int qd_did_full_trig_head(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem) {
   (void)arg; (void)res; (void)iw; (void)w; (void)mem;
   casadi_real a00, a01, a02, a03, a04, a05, a06, a07, a08, a09, a10, a11;
   casadi_real a12, a13;
@@ -710,7 +712,7 @@ static int qd_did_full_head(const casadi_real** arg, casadi_real** res, casadi_i
   return 0;
 }
 
-QD_NOINLINE static int qd_did_full_leg0(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem) {
+QD_NOINLINE static int qd_did_full_trig_leg0(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem) {
   (void)arg; (void)res; (void)iw; (void)w; (void)mem;
   casadi_real a000, a001, a002, a003, a004, a005, a006, a007, a008, a009, a010, a011;
   casadi_real a012, a013, a014, a015, a016, a017, a018, a019, a020, a021, a022, a023;
@@ -2599,15 +2601,15 @@ QD_NOINLINE static int qd_did_full_leg0(const casadi_real** arg, casadi_real** r
   return 0;
 }
 
-static const casadi_real qd_did_full_p0[2] = {0.19, 0.07}; /* FL's parameters */
+static const casadi_real qd_did_full_trig_p0[2] = {0.19, 0.07}; /* FL's parameters */
 
-static const casadi_real qd_did_full_p1[2] = {0.19, -0.07}; /* FR's parameters */
+static const casadi_real qd_did_full_trig_p1[2] = {0.19, -0.07}; /* FR's parameters */
 
-static const casadi_real qd_did_full_p2[2] = {-0.19, 0.07}; /* BL's parameters */
+static const casadi_real qd_did_full_trig_p2[2] = {-0.19, 0.07}; /* BL's parameters */
 
-static const casadi_real qd_did_full_p3[2] = {-0.19, -0.07}; /* BR's parameters */
+static const casadi_real qd_did_full_trig_p3[2] = {-0.19, -0.07}; /* BR's parameters */
 
-static int qd_did_full_tail(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem) {
+static int qd_did_full_trig_tail(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem) {
   (void)arg; (void)res; (void)iw; (void)w; (void)mem;
   casadi_real a00, a01, a02, a03, a04, a05, a06, a07, a08, a09, a10, a11;
   casadi_real a12, a13, a14, a15, a16, a17, a18, a19, a20, a21, a22, a23;
@@ -4278,32 +4280,33 @@ static int qd_did_full_tail(const casadi_real** arg, casadi_real** res, casadi_i
 }
 
 int qd_did_full_trig(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem) {
-  casadi_real a_cl[3], L[4][120];
+  casadi_real L[4][120];
+  casadi_real h0[3];
   const casadi_real* h_arg[3] = {arg[0], arg[1], arg[2]};
-  casadi_real* h_res[1] = {a_cl};
-  qd_did_full_head(h_arg, h_res, iw, w, mem);
-  {
-    const casadi_real* l_arg[9] = {arg[1] + 3, arg[2] + 3, a_cl, arg[0] + 7, arg[1] + 6, arg[2] + 6, qd_did_full_p0, arg[3] + 0, arg[4] + 0};
+  casadi_real* h_res[1] = {h0};
+  qd_did_full_trig_head(h_arg, h_res, iw, w, mem);
+  { /* leg 0 */
+    const casadi_real* l_arg[9] = {arg[1] + 3, arg[2] + 3, h0, arg[0] + 7, arg[1] + 6, arg[2] + 6, qd_did_full_trig_p0, arg[3] + 0, arg[4] + 0};
     casadi_real* l_res[1] = {L[0]};
-    qd_did_full_leg0(l_arg, l_res, iw, w, mem);
+    qd_did_full_trig_leg0(l_arg, l_res, iw, w, mem);
   }
-  {
-    const casadi_real* l_arg[9] = {arg[1] + 3, arg[2] + 3, a_cl, arg[0] + 10, arg[1] + 9, arg[2] + 9, qd_did_full_p1, arg[3] + 3, arg[4] + 3};
+  { /* leg 1 */
+    const casadi_real* l_arg[9] = {arg[1] + 3, arg[2] + 3, h0, arg[0] + 10, arg[1] + 9, arg[2] + 9, qd_did_full_trig_p1, arg[3] + 3, arg[4] + 3};
     casadi_real* l_res[1] = {L[1]};
-    qd_did_full_leg0(l_arg, l_res, iw, w, mem);
+    qd_did_full_trig_leg0(l_arg, l_res, iw, w, mem);
   }
-  {
-    const casadi_real* l_arg[9] = {arg[1] + 3, arg[2] + 3, a_cl, arg[0] + 13, arg[1] + 12, arg[2] + 12, qd_did_full_p2, arg[3] + 6, arg[4] + 6};
+  { /* leg 2 */
+    const casadi_real* l_arg[9] = {arg[1] + 3, arg[2] + 3, h0, arg[0] + 13, arg[1] + 12, arg[2] + 12, qd_did_full_trig_p2, arg[3] + 6, arg[4] + 6};
     casadi_real* l_res[1] = {L[2]};
-    qd_did_full_leg0(l_arg, l_res, iw, w, mem);
+    qd_did_full_trig_leg0(l_arg, l_res, iw, w, mem);
   }
-  {
-    const casadi_real* l_arg[9] = {arg[1] + 3, arg[2] + 3, a_cl, arg[0] + 16, arg[1] + 15, arg[2] + 15, qd_did_full_p3, arg[3] + 9, arg[4] + 9};
+  { /* leg 3 */
+    const casadi_real* l_arg[9] = {arg[1] + 3, arg[2] + 3, h0, arg[0] + 16, arg[1] + 15, arg[2] + 15, qd_did_full_trig_p3, arg[3] + 9, arg[4] + 9};
     casadi_real* l_res[1] = {L[3]};
-    qd_did_full_leg0(l_arg, l_res, iw, w, mem);
+    qd_did_full_trig_leg0(l_arg, l_res, iw, w, mem);
   }
   const casadi_real* t_arg[7] = {arg[0], arg[1], arg[2], L[0], L[1], L[2], L[3]};
-  return qd_did_full_tail(t_arg, res, iw, w, mem);
+  return qd_did_full_trig_tail(t_arg, res, iw, w, mem);
 }
 
 static int casadi_f0(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem) {

@@ -46,6 +46,7 @@ from dataclasses import dataclass
 import casadi as ca
 import numpy as np
 
+from quadruped_dyn.codegen.by_leg import LegCall, by_leg_c
 from quadruped_dyn.codegen.casadi_source import (
     PREFIX,
     SINCOS,
@@ -56,7 +57,6 @@ from quadruped_dyn.codegen.casadi_source import (
     drop_evaluation,
     entry_point,
     evaluations,
-    static_c,
     unguarded_inputs,
     work_sizes,
 )
@@ -66,7 +66,7 @@ from quadruped_dyn.dynamics.grf import solve_lambda
 from quadruped_dyn.dynamics.kinematics import foot_position
 from quadruped_dyn.dynamics.newton_euler import full_dynamics
 from quadruped_dyn.dynamics.reduced_projection import reduced_projection, stance_forces
-from quadruped_dyn.dynamics.rnea_derivatives import DidFullPieces, did_full_pieces
+from quadruped_dyn.dynamics.rnea_derivatives import did_full_pieces
 from quadruped_dyn.math.rigid import skew
 from quadruped_dyn.model.robot import Robot
 from quadruped_dyn.model.stance import STANCE_SETS, StanceSet, stance_set
@@ -344,63 +344,18 @@ def _unguarded_inputs(c_text: str, raw: str, f: ca.Function) -> str:
     return c_text[:head.start()] + body + c_text[head.end():]
 
 
-def _did_full_trig_by_leg(robot: Robot, precision: str, host_helpers: frozenset[str]) -> str:
-    """qd_did_full_trig(q, v, a, sin, cos) (sin and cos of the 12 joint angles): did_full as
-    ``rnea_derivatives.did_full_pieces``' head, one call of its leg template's function per leg (the joints' sines and
-    cosines read, ``trig_as_inputs``; each template's parameters a static table per leg) and the tail, which writes
-    the outputs. One template's machine code serves its legs: it stays in the instruction cache across the four calls
-    (docs/derivatives.md, "did_full by leg")."""
-    pieces = did_full_pieces(robot)
-    if pieces.tail.sparsity_out(0).nnz() == 0 or pieces.head.nnz_out(0) != 3:
-        raise AssertionError("did_full's pieces are not as qd_did_full_trig calls them")
-    noinline = "#if defined(__GNUC__)\n#define QD_NOINLINE __attribute__((noinline))\n#else\n#define QD_NOINLINE\n#endif\n"
-    text = [noinline, static_c("qd_did_full_head", pieces.head, precision, host_helpers, all_io=True)]
-    for i, leg in enumerate(pieces.legs):
-        body = static_c(f"qd_did_full_leg{i}", trig_as_inputs(leg, 3), precision, host_helpers, all_io=True)
-        text.append("QD_NOINLINE " + body)  # one copy of its code for every leg of its template
-    for k in range(4):
-        values = pieces.leg_values(k)
-        entries = ", ".join(repr(x) for x in values) if values else "0"
-        text.append(f"static const casadi_real qd_did_full_p{k}[{max(len(values), 1)}] = {{{entries}}}; "
-                    f"/* {robot.legs[k].label}'s parameters */\n")
-    text.append(unguarded_inputs(static_c("qd_did_full_tail", pieces.tail, precision, host_helpers), "did_full"))
-    nl = max(f.nnz_out(0) for f in pieces.legs)
-    calls = "".join(_leg_call(pieces, k) for k in sorted(range(4), key=lambda k: pieces.template_of[k]))
-    text.append(
-        "int qd_did_full_trig(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem) {\n"
-        f"  casadi_real a_cl[3], L[4][{nl}];\n"
-        "  const casadi_real* h_arg[3] = {arg[0], arg[1], arg[2]};\n"
-        "  casadi_real* h_res[1] = {a_cl};\n"
-        "  qd_did_full_head(h_arg, h_res, iw, w, mem);\n" + calls +
-        "  const casadi_real* t_arg[7] = {arg[0], arg[1], arg[2], L[0], L[1], L[2], L[3]};\n"
-        "  return qd_did_full_tail(t_arg, res, iw, w, mem);\n}\n")
-    return "\n".join(text)
-
-
-def _leg_call(pieces: DidFullPieces, k: int) -> str:
-    """qd_did_full_trig's call of leg k's template function (its legs one after the other: the code stays in the
-    instruction cache): q, qd, qdd and sin of the leg's joints read in place, or negated into x where the leg turns
-    the other way (``leg_template``: sigma = -1; cos is even)."""
-    sigma = pieces.leg_signs(k)
-    reads = [(0, 7), (1, 6), (2, 6), (3, 0)]  # (arg, first entry of leg 0): q, qd, qdd, sin
-    if all(x == 1.0 for x in sigma):
-        inputs = [f"arg[{i}] + {start + 3 * k}" for i, start in reads]
-        prologue = ""
-    else:
-        entries = [f"{'-' if x < 0 else ''}arg[{i}][{start + 3 * k + j}]" for i, start in reads for j, x in enumerate(sigma)]
-        prologue = f"    const casadi_real x[12] = {{{', '.join(entries)}}}; /* sigma (q, qd, qdd, sin q) */\n"
-        inputs = ["x", "x + 3", "x + 6", "x + 9"]
-    return (f"  {{\n{prologue}    const casadi_real* l_arg[9] = {{arg[1] + 3, arg[2] + 3, a_cl, {inputs[0]}, {inputs[1]}, "
-            f"{inputs[2]}, qd_did_full_p{k}, {inputs[3]}, arg[4] + {3 * k}}};\n"
-            f"    casadi_real* l_res[1] = {{L[{k}]}};\n"
-            f"    qd_did_full_leg{pieces.template_of[k]}(l_arg, l_res, iw, w, mem);\n  }}\n")
+#: qd_did_full_trig's arg (q, v, a, sin, cos) as did_full's pieces read it (``rnea_derivatives.did_full_pieces``).
+DID_FULL_CALL = LegCall(head_args=(0, 1, 2), leg_inputs=(("arg", 1, 3), ("arg", 2, 3), ("head", 0), ("joint", 0, 7),
+                                                         ("joint", 1, 6), ("joint", 2, 6)),
+                        sin_arg=3, tail_args=(0, 1, 2))
 
 
 def _did_full_trig_once(c_text: str, raw: str, did: ca.Function, robot: Robot, precision: str) -> str:
-    """did_full's evaluation ``raw`` as the joints' sines and cosines taken once (c/qd_sincos.c) and
-    ``_did_full_trig_by_leg``'s qd_did_full_trig reading them, also called by dfd_r (c/qd_reduced_derivatives.c), which
-    has the sines and cosines already."""
-    exported = _did_full_trig_by_leg(robot, precision, defined_helpers(c_text))
+    """did_full's evaluation ``raw`` as the joints' sines and cosines taken once (c/qd_sincos.c) and qd_did_full_trig
+    reading them, did_full leg by leg (``by_leg``, docs/derivatives.md "did_full by leg"), also called by dfd_r
+    (c/qd_reduced_derivatives.c), which has the sines and cosines already."""
+    exported = by_leg_c("qd_did_full_trig", did_full_pieces(robot), DID_FULL_CALL, precision, defined_helpers(c_text),
+                        unguarded="did_full")
     n = len(JOINT_ANGLES)
     wrapper = (f"static int {raw}(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem) {{\n"
                f"  casadi_real s[{n}], c[{n}]; /* the joints' sines and cosines, once (qd_sincos) */\n"

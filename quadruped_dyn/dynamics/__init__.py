@@ -29,7 +29,7 @@ _MODULES: dict[str, tuple[str, ...]] = {
         "solve_forward_dynamics", "reduced_model",
     ),
     "reduced_projection": ("rigid_motion", "ReducedProjection"),
-    "rnea_derivatives": ("rnea_tangent_derivatives", "DidFullPieces", "did_full_pieces"),
-    "leg_template": ("LegTemplate", "leg_templates"),
+    "rnea_derivatives": ("rnea_tangent_derivatives", "did_full_pieces"),
+    "leg_template": ("LegTemplate", "leg_templates", "LegPieces", "template_of"),
 }
 __all__, __getattr__, __dir__ = lazy_exports(__name__, _MODULES)

@@ -116,3 +116,32 @@ def _template(turning: list[Leg], indices: tuple[int, ...]) -> LegTemplate:
     template = Leg("template", joints, links, foot, first.foot_frame)  # type: ignore[arg-type]
     p = ca.vertcat(*par.symbols) if par.symbols else ca.SX(0, 1)
     return LegTemplate(indices, template, p, np.array(par.values, dtype=float).reshape(len(legs), len(par.symbols)), signs)
+
+
+@dataclass(frozen=True)
+class LegPieces:
+    """A function of the whole robot as generated pieces (docs/derivatives.md, "did_full by leg"): an optional
+    ``head`` of the trunk's inputs, one ``legs`` Function per template (called once per leg of it, with the leg's
+    parameters and its joint inputs times its signs) and a ``tail`` that takes the legs' outputs L_0..L_3 (in the
+    template's coordinates: the tail turns them back by the signs) to the function's outputs."""
+
+    head: ca.Function | None
+    templates: tuple[LegTemplate, ...]
+    legs: tuple[ca.Function, ...]  # per template
+    template_of: tuple[int, ...]  # per robot leg 0..3: the index of its template
+    tail: ca.Function
+
+    def leg_values(self, k: int) -> tuple[float, ...]:
+        """Robot leg k's parameters for its template's function."""
+        t = self.templates[self.template_of[k]]
+        return tuple(float(x) for x in t.values[t.legs.index(k)])
+
+    def leg_signs(self, k: int) -> tuple[float, float, float]:
+        """Robot leg k's joint signs: its template's function takes sigma q, sigma qd, sigma qdd (module docstring)."""
+        t = self.templates[self.template_of[k]]
+        return tuple(float(x) for x in t.signs[t.legs.index(k)])  # type: ignore[return-value]
+
+
+def template_of(templates: tuple[LegTemplate, ...]) -> tuple[int, ...]:
+    """Per robot leg 0..3, the index of the template that stands for it."""
+    return tuple(next(i for i, t in enumerate(templates) if k in t.legs) for k in range(4))

@@ -17,14 +17,21 @@ three generated pieces, so that one piece of machine code serves every leg (``le
 
 from __future__ import annotations
 
-from dataclasses import dataclass
 from functools import cache
 
 import casadi as ca
 import numpy as np
 
-from quadruped_dyn.dynamics.crba import add_inertia, leg_mass_blocks, trunk_inertia, trunk_mass_block
-from quadruped_dyn.dynamics.leg_template import LegTemplate, leg_templates
+from quadruped_dyn.dynamics.by_leg import (
+    MASS_PARTS,
+    assembled_mass_matrix,
+    leg_signs,
+    stacked,
+    trunk_acceleration,
+    unstacked,
+)
+from quadruped_dyn.dynamics.crba import leg_mass_blocks
+from quadruped_dyn.dynamics.leg_template import LegPieces, leg_templates, template_of
 from quadruped_dyn.dynamics.newton_euler import aligned_leg_newton_euler, trunk_own_wrench
 from quadruped_dyn.math.spatial import dm, quat_to_rotation, skew
 from quadruped_dyn.model.leg import Leg
@@ -32,10 +39,7 @@ from quadruped_dyn.model.robot import Robot
 from quadruped_dyn.model.state import GRAVITY_W, NQ_FULL, NV_FULL
 
 #: A leg function's output L, in order: (name, rows, columns), each stacked column by column.
-LEG_PARTS: tuple[tuple[str, int, int], ...] = (
-    ("J_q", 9, 3), ("J_qd", 9, 3), ("J_w", 9, 3), ("M_ll", 3, 3), ("M_bl", 6, 3), ("m", 1, 1), ("h", 3, 1),
-    ("I_o", 3, 3),
-)
+LEG_PARTS: tuple[tuple[str, int, int], ...] = (("J_q", 9, 3), ("J_qd", 9, 3), ("J_w", 9, 3), *MASS_PARTS)
 
 
 def _motion_cross(x: ca.SX, y: ca.SX) -> ca.SX:
@@ -73,37 +77,7 @@ def leg_rows(leg: Leg, q: ca.SX, qd: ca.SX, qdd: ca.SX, w_b: ca.SX, alpha_b: ca.
     d_qd1 = J_w @ a1 + K @ ca.vertcat(2 * ca.cross(w_b, ca.cross(p, a1)), ca.cross(w_b, a1))
     J_q = ca.horzcat(d_q1, ca.jacobian(y, q[1:]))
     J_qd = ca.horzcat(d_qd1, ca.jacobian(y, qd[1:]))
-    parts = (J_q, J_qd, J_w, M_ll, M_bl, ca.SX(m), h, I_o)
-    return ca.vertcat(*(ca.vec(ca.SX(x)) for x in parts))
-
-
-def _unpack(L: ca.SX) -> dict[str, ca.SX]:
-    out, start = {}, 0
-    for name, rows, cols in LEG_PARTS:
-        out[name] = ca.reshape(L[start : start + rows * cols], rows, cols)
-        start += rows * cols
-    return out
-
-
-@dataclass(frozen=True)
-class DidFullPieces:
-    """did_full's generated pieces (module docstring)."""
-
-    head: ca.Function  # q, v, a -> a_cl (3,)
-    templates: tuple[LegTemplate, ...]
-    legs: tuple[ca.Function, ...]  # per template: w_b, alpha_b, a_cl, q_l, qd_l, qdd_l, p -> L
-    template_of: tuple[int, ...]  # per robot leg 0..3: the index of its template
-    tail: ca.Function  # q, v, a, L_0, L_1, L_2, L_3 -> dtau_dq, dtau_dv, dtau_da
-
-    def leg_values(self, k: int) -> tuple[float, ...]:
-        """Robot leg k's parameters for its template's function."""
-        t = self.templates[self.template_of[k]]
-        return tuple(float(x) for x in t.values[t.legs.index(k)])
-
-    def leg_signs(self, k: int) -> tuple[float, float, float]:
-        """Robot leg k's joint signs: its template's function takes sigma q, sigma qd, sigma qdd (``leg_template``)."""
-        t = self.templates[self.template_of[k]]
-        return tuple(float(x) for x in t.signs[t.legs.index(k)])  # type: ignore[return-value]
+    return stacked((J_q, J_qd, J_w, M_ll, M_bl, ca.SX(m), h, I_o))
 
 
 def _g_b(q: ca.SX) -> ca.SX:
@@ -111,35 +85,33 @@ def _g_b(q: ca.SX) -> ca.SX:
 
 
 @cache
-def did_full_pieces(robot: Robot) -> DidFullPieces:
+def did_full_pieces(robot: Robot) -> LegPieces:
     q, v, a = ca.SX.sym("q", NQ_FULL), ca.SX.sym("v", NV_FULL), ca.SX.sym("a", NV_FULL)
     opts = {"cse": True}
-    w_b, v_b = v[3:6], v[0:3]
-    head = ca.Function("did_full_head", [q, v, a], [a[0:3] + ca.cross(w_b, v_b) - _g_b(q)], ["q", "v", "a"], ["a_cl"],
-                       opts)
+    head = ca.Function("did_full_head", [q, v, a], [trunk_acceleration(q, v, a)], ["q", "v", "a"], ["a_cl"], opts)
     templates = leg_templates(robot)
     legs = []
     for i, t in enumerate(templates):
         xs = [ca.SX.sym(n, 3) for n in ("w_b", "alpha_b", "a_cl", "q_l", "qd_l", "qdd_l")]
         legs.append(ca.Function(f"did_full_leg{i}", [*xs, t.p], [leg_rows(t.leg, xs[3], xs[4], xs[5], *xs[0:3])],
                                 ["w_b", "alpha_b", "a_cl", "q_l", "qd_l", "qdd_l", "p"], ["L"], opts))
-    template_of = tuple(next(i for i, t in enumerate(templates) if k in t.legs) for k in range(4))
-    Ls = [ca.SX.sym(f"L_{k}", legs[template_of[k]].sparsity_out(0)) for k in range(4)]
-    signs = [templates[template_of[k]].signs[templates[template_of[k]].legs.index(k)] for k in range(4)]
+    of = template_of(templates)
+    Ls = [ca.SX.sym(f"L_{k}", legs[of[k]].sparsity_out(0)) for k in range(4)]
+    signs = [leg_signs(templates, k) for k in range(4)]
     tail = ca.Function("did_full_tail", [q, v, a, *Ls], list(_tail(robot, q, v, a, Ls, signs)),
                        ["q", "v", "a", *(f"L_{k}" for k in range(4))], ["dtau_dq", "dtau_dv", "dtau_da"], opts)
-    return DidFullPieces(head, templates, tuple(legs), template_of, tail)
+    return LegPieces(head, templates, tuple(legs), of, tail)
 
 
 def _in_robot_coordinates(parts: dict[str, ca.SX], sigma: np.ndarray) -> dict[str, ca.SX]:
-    """A leg's parts from its template's coordinates sigma q back to the robot's: its torques and its joints' columns
-    times sigma (sigma = +-1: a product with 1 is dropped, with -1 a negation)."""
+    """A leg's Jacobians from its template's coordinates sigma q back to the robot's: its torque rows and its joints'
+    columns times sigma (sigma = +-1: a product with 1 is dropped, with -1 a negation); M's parts: see
+    ``assembled_mass_matrix``."""
     if np.all(sigma == 1.0):
         return parts
     D3, D9 = ca.diag(ca.DM(sigma)), ca.diag(ca.DM(np.r_[np.ones(6), sigma]))
     out = dict(parts)
     out["J_q"], out["J_qd"], out["J_w"] = D9 @ parts["J_q"] @ D3, D9 @ parts["J_qd"] @ D3, D9 @ parts["J_w"]
-    out["M_ll"], out["M_bl"] = D3 @ parts["M_ll"] @ D3, parts["M_bl"] @ D3
     return out
 
 
@@ -148,12 +120,11 @@ def _tail(robot: Robot, q: ca.SX, v: ca.SX, a: ca.SX, Ls: list[ca.SX],
     w_b, v_b = v[3:6], v[0:3]
     a_cl = ca.SX.sym("a_cl", 3)
     own = trunk_own_wrench(robot.trunk, w_b, a[3:6], a_cl)
-    dw = ca.vertcat(ca.substitute(ca.jacobian(own, w_b), a_cl, a[0:3] + ca.cross(w_b, v_b) - _g_b(q)), ca.SX(12, 3))
-    M = ca.SX(ca.Sparsity(NV_FULL, NV_FULL))
-    total = trunk_inertia(robot)
-    dq_legs, dv_legs = [], []
+    dw = ca.vertcat(ca.substitute(ca.jacobian(own, w_b), a_cl, trunk_acceleration(q, v, a)), ca.SX(12, 3))
+    dq_legs, dv_legs, all_parts = [], [], []
     for k, L in enumerate(Ls):
-        parts = _in_robot_coordinates(_unpack(L), signs[k])
+        parts = _in_robot_coordinates(unstacked(L, LEG_PARTS), signs[k])
+        all_parts.append(parts)
 
         def rows(Y: ca.SX, k: int = k) -> ca.SX:  # the leg's 9 rows into the 18: trunk, then its own joints
             return ca.vertcat(Y[0:6, :], ca.SX(3 * k, Y.shape[1]), Y[6:9, :], ca.SX(9 - 3 * k, Y.shape[1]))
@@ -161,12 +132,7 @@ def _tail(robot: Robot, q: ca.SX, v: ca.SX, a: ca.SX, Ls: list[ca.SX],
         dq_legs.append(rows(parts["J_q"]))
         dv_legs.append(rows(parts["J_qd"]))
         dw = dw + rows(parts["J_w"])
-        s = slice(6 + 3 * k, 9 + 3 * k)
-        M[s, s] = parts["M_ll"]
-        M[0:6, s] = parts["M_bl"]
-        M[s, 0:6] = parts["M_bl"].T
-        total = add_inertia(total, (parts["m"], parts["h"], parts["I_o"]))
-    M[0:6, 0:6] = trunk_mass_block(total)
+    M = assembled_mass_matrix(robot, all_parts, signs)
     M_lin = M[:, 0:3]
     g_b = _g_b(q)
     dq = ca.horzcat(ca.SX(NV_FULL, 3), -M_lin @ skew(g_b), *dq_legs)
@@ -179,6 +145,8 @@ def rnea_tangent_derivatives(robot: Robot, q: ca.SX, v: ca.SX, a: ca.SX) -> tupl
     composed of ``did_full_pieces``' head, leg and tail functions (module docstring). The trunk position does not
     enter (its columns are structurally zero). Equal to ``tangent_jacobian``'s of the whole rnea (tested)."""
     pieces = did_full_pieces(robot)
+    if pieces.head is None:
+        raise AssertionError("did_full's pieces have a head")
     a_cl = pieces.head(q, v, a)
     Ls = []
     for k in range(4):

@@ -34,14 +34,9 @@ from quadruped_dyn.codegen.library import CompiledFunction, compiled_library, lo
 from quadruped_dyn.math.compare import max_abs_error, scale_of
 from quadruped_dyn.model.robot import load_robot
 from quadruped_dyn.model.state import random_state
-from quadruped_dyn.tolerances import FLOAT_REL_TOL, REL_TOL_TERMS
+from quadruped_dyn.tolerances import FLOAT_REL_TOL, REL_TOL_GRAPH, REL_TOL_TERMS
 
 CASADI_GEN = Path(__file__).resolve().parents[2] / "casadi_gen"
-
-#: The compiled code and the in-memory CasADi graph perform the same operations but for a shared denominator's
-#: quotients, which the C takes as products with its reciprocal (codegen.reciprocals: ~1 ulp each); -O3 without
-#: -ffast-math keeps IEEE order.
-REL_TOL_GRAPH = 1e-13
 
 
 def _function_scale_error(ours: list[np.ndarray], expected: list[np.ndarray]) -> float:

@@ -4,7 +4,6 @@ return codes on bad input and a singular M."""
 
 from __future__ import annotations
 
-import dataclasses
 import subprocess
 
 import casadi as ca
@@ -28,7 +27,6 @@ from quadruped_dyn.dynamics.derivatives import full_derivatives
 from quadruped_dyn.dynamics.rnea_derivatives import did_full_pieces
 from quadruped_dyn.errors import InputError
 from quadruped_dyn.math.compare import relative_error
-from quadruped_dyn.model.leg import LegJoint
 from quadruped_dyn.model.robot import ROBOT_NAMES, load_robot
 from quadruped_dyn.model.stance import stance_set
 from quadruped_dyn.model.state import random_state
@@ -36,6 +34,7 @@ from quadruped_dyn.references.pinocchio import PinocchioDerivatives, PinocchioRe
 from quadruped_dyn.tolerances import FLOAT_REL_TOL, LIFT_COLUMNS_REL_TOL, REL_TOL_DERIVATIVES, REL_TOL_FD_DERIVATIVES
 from tests.conftest import assert_close
 from tests.dynamics.test_derivatives import grf_point, reduced_point
+from tests.dynamics.test_leg_template import turned_robot
 
 
 def _check_compiled_full(robot, library) -> None:
@@ -248,13 +247,7 @@ def test_did_full_of_two_leg_templates_and_a_turned_hip_compiled(tmp_path):
     """qd_did_full of a robot whose legs need two templates (FR's knee turns about x: its own template) and a sign
     (FL's hip axis reversed: the others' template at -q), compiled with the library's flags, against CasADi's
     Jacobian of the whole rnea (did_full_ad), which has no templates."""
-    paper = load_robot("paper")
-    fl, fr = paper.legs[0], paper.legs[1]
-    hip, knee = fl.joints[0], fr.joints[2]
-    fl = dataclasses.replace(fl, joints=(LegJoint(hip.name, hip.placement, -hip.axis, -hip.upper, -hip.lower), *fl.joints[1:]))
-    fr = dataclasses.replace(fr, joints=(*fr.joints[:2], LegJoint(knee.name, knee.placement, np.array([1.0, 0.0, 0.0]),
-                                                                     knee.lower, knee.upper)))
-    robot = dataclasses.replace(paper, legs=(fl, fr, *paper.legs[2:]))
+    robot = turned_robot()
     pieces = did_full_pieces(robot)
     assert pieces.template_of == (0, 1, 0, 0) and [pieces.leg_signs(k)[0] for k in (0, 2, 3)] == [1.0, -1.0, -1.0]
     c_text, _ = derivative_source(robot, "qd_turned_d", derivative_functions(robot), "double")

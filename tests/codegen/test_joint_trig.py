@@ -9,8 +9,9 @@ import numpy as np
 import pytest
 
 from quadruped_dyn.codegen.emit import codegen_functions
-from quadruped_dyn.codegen.emit_derivatives import derivative_functions
 from quadruped_dyn.codegen.joint_trig import trig_as_inputs, trig_count
+from quadruped_dyn.dynamics.by_leg import id_full_pieces, mass_matrix_pieces
+from quadruped_dyn.dynamics.rnea_derivatives import did_full_pieces
 from quadruped_dyn.model.robot import ROBOT_NAMES, load_robot
 from quadruped_dyn.model.state import JOINT_ANGLES
 
@@ -25,9 +26,8 @@ def _dense(x: ca.DM) -> np.ndarray:
 def test_full_terms_read_the_joints_trig_and_agree_to_the_bit(robot_name):
     robot = load_robot(robot_name)
     functions = {f.name(): f for f in codegen_functions(robot)}
-    functions["qd_did_full"] = derivative_functions(robot)[0]
     rng = np.random.default_rng(11)
-    for name in (*NAMES, "qd_did_full"):
+    for name in NAMES:
         f = functions[name]
         g = trig_as_inputs(f, 0, JOINT_ANGLES)
         assert trig_count(f) > 0 and trig_count(g) == 0, name
@@ -37,6 +37,24 @@ def test_full_terms_read_the_joints_trig_and_agree_to_the_bit(robot_name):
         got = g.call([*(ca.DM(x) for x in args), ca.DM(np.sin(angles)), ca.DM(np.cos(angles))])
         for w, o in zip(want, got):
             assert np.all(np.isfinite(_dense(w))) and np.array_equal(_dense(w), _dense(o)), name
+
+
+@pytest.mark.parametrize("robot_name", ROBOT_NAMES)
+def test_leg_functions_read_the_joints_trig_and_agree_to_the_bit(robot_name):
+    """The leg functions of did_full, id_full and M (by_leg_c rewrites each, its joint angles the first joint input)."""
+    robot = load_robot(robot_name)
+    rng = np.random.default_rng(12)
+    for pieces in (did_full_pieces(robot), id_full_pieces(robot), mass_matrix_pieces(robot)):
+        for f in pieces.legs:
+            i_q = 3 if f.n_in() > 2 else 0  # (w_b, alpha_b, a, q_l, ...) or (q_l, p)
+            assert f.name_in(i_q) == "q_l"
+            g = trig_as_inputs(f, i_q)
+            assert trig_count(f) > 0 and trig_count(g) == 0, f.name()
+            args = [rng.uniform(-2.0, 2.0, f.nnz_in(i)) for i in range(f.n_in())]
+            want = f.call([ca.DM(x) for x in args])
+            got = g.call([*(ca.DM(x) for x in args), ca.DM(np.sin(args[i_q])), ca.DM(np.cos(args[i_q]))])
+            for w, o in zip(want, got):
+                assert np.all(np.isfinite(_dense(w))) and np.array_equal(_dense(w), _dense(o)), f.name()
 
 
 def test_other_entries_keep_their_trig():

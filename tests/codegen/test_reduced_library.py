@@ -20,8 +20,7 @@ from quadruped_dyn.errors import InputError, NumericalError
 from quadruped_dyn.experiment.gait import GAITS, gait_plan
 from quadruped_dyn.experiment.plan_ik import reference
 from quadruped_dyn.model.stance import stance_set
-from quadruped_dyn.tolerances import FLOAT_MAX_BOUND, FLOAT_REL_TOL, REL_TOL_TERMS, TRUNK_PITCH_DEG_MARGIN
-from tests.codegen.test_emit import REL_TOL_GRAPH
+from quadruped_dyn.tolerances import FLOAT_MAX_BOUND, FLOAT_REL_TOL, REL_TOL_GRAPH, REL_TOL_TERMS, TRUNK_PITCH_DEG_MARGIN
 from tests.conftest import assert_close
 from tests.dynamics.test_singular_and_types import QUAT, _collinear_joints
 

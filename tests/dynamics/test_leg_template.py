@@ -29,16 +29,16 @@ def _numeric(x: object, p: ca.SX, values: np.ndarray) -> np.ndarray:
 @pytest.mark.parametrize("name", ROBOT_NAMES)
 def test_each_legs_parameters_give_back_its_canonical_leg(name):
     """Every number of every canonical leg, exactly: the template's constants where the legs agree, its
-    parameters with that leg's values where they differ."""
+    parameters with that leg's values where they differ, its axes times the leg's signs."""
     robot = load_robot(name)
     templates = leg_templates(robot)
     assert sorted(k for t in templates for k in t.legs) == [0, 1, 2, 3]
     for t in templates:
         assert t.values.shape == (len(t.legs), t.p.numel())
-        for row, k in zip(t.values, t.legs):
+        for row, sigma, k in zip(t.values, t.signs, t.legs):
             leg = axis_aligned(robot.legs[k])
-            for mine, theirs in zip(t.leg.joints, leg.joints):
-                assert np.array_equal(mine.axis, theirs.axis)
+            for mine, theirs, s in zip(t.leg.joints, leg.joints, sigma):
+                assert s in (1.0, -1.0) and np.array_equal(s * mine.axis, theirs.axis)
                 assert np.array_equal(_numeric(mine.placement.p, t.p, row), theirs.placement.p)
             for mine, theirs in zip(t.leg.links, leg.links):
                 assert float(_numeric(mine.mass, t.p, row)) == theirs.mass
@@ -53,19 +53,28 @@ def test_the_paper_robots_legs_share_one_template_with_two_parameters():
     assert t.legs == (0, 1, 2, 3) and t.p.numel() == 2
 
 
-def test_legs_with_other_axes_get_their_own_template_and_did_full_is_unchanged():
-    """A leg whose knee turns the other way cannot share the others' code: it gets a template of its own, and
-    did_full composed of the two templates still equals CasADi's Jacobian of the whole rnea (did_full_ad)."""
+def turned_robot():
+    """The paper robot with FL's hip axis reversed (the others' template at -q: a sign) and FR's knee turning about x
+    (a template of its own): every path of the templates."""
     paper = load_robot("paper")
-    fr = paper.legs[1]
-    knee = fr.joints[2]
-    flipped = dataclasses.replace(fr, joints=(*fr.joints[:2], LegJoint(knee.name, knee.placement, -knee.axis,
-                                                                           -knee.upper, -knee.lower)))
-    robot = dataclasses.replace(paper, legs=(paper.legs[0], flipped, *paper.legs[2:]))
+    fl, fr = paper.legs[0], paper.legs[1]
+    hip, knee = fl.joints[0], fr.joints[2]
+    fl = dataclasses.replace(fl, joints=(LegJoint(hip.name, hip.placement, -hip.axis, -hip.upper, -hip.lower), *fl.joints[1:]))
+    fr = dataclasses.replace(fr, joints=(*fr.joints[:2], LegJoint(knee.name, knee.placement, np.array([1.0, 0.0, 0.0]),
+                                                                     knee.lower, knee.upper)))
+    return dataclasses.replace(paper, legs=(fl, fr, *paper.legs[2:]))
+
+
+def test_legs_with_other_axes_get_their_own_template_and_did_full_is_unchanged():
+    """A leg whose knee turns about another axis cannot share the others' code: it gets a template of its own; a leg
+    whose hip turns the other way shares it at -q. did_full composed of them still equals CasADi's Jacobian of the
+    whole rnea (did_full_ad)."""
+    robot = turned_robot()
     pieces = did_full_pieces(robot)
     assert [t.legs for t in pieces.templates] == [(0, 2, 3), (1,)] and pieces.template_of == (0, 1, 0, 0)
+    assert [pieces.leg_signs(k)[0] for k in (0, 2, 3)] == [1.0, -1.0, -1.0]
     d = full_derivatives(robot)
     for seed in (0, 1):
         s = random_state(robot.lower, robot.upper, np.random.default_rng(seed))
         for k, (ours, literal) in enumerate(zip(d.did_full(s.q, s.v, s.a), d.did_full_ad(s.q, s.v, s.a))):
-            assert_close(np.array(ours), np.array(literal), REL_TOL_DERIVATIVES, f"flipped knee did_full output {k}")
+            assert_close(np.array(ours), np.array(literal), REL_TOL_DERIVATIVES, f"turned robot did_full output {k}")

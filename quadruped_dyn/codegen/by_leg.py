@@ -1,0 +1,104 @@
+"""C of a function evaluated leg by leg (``dynamics.leg_template.LegPieces``; docs/derivatives.md, "did_full by leg").
+
+The head, each template's leg function and the tail become static C functions (``static_c``); the function itself
+calls the head, then each leg's template function once per leg (the legs of one template one after the other, so
+that its machine code stays in the instruction cache), then the tail, which writes the outputs. Each leg's
+parameters are a static table; a leg whose joints turn the other way than its template's (sigma = -1) gets its joint
+inputs and their sines negated into a local array first (cos is even)."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+from quadruped_dyn.codegen.casadi_source import static_c, unguarded_inputs
+from quadruped_dyn.codegen.joint_trig import trig_as_inputs
+from quadruped_dyn.dynamics.leg_template import LegPieces
+from quadruped_dyn.model.leg import LEG_LABELS
+
+_SIGNATURE = "(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem)"
+NOINLINE = ("#ifndef QD_NOINLINE\n#if defined(__GNUC__)\n#define QD_NOINLINE __attribute__((noinline))\n#else\n"
+            "#define QD_NOINLINE\n#endif\n#endif\n")
+
+#: A leg function's input before its parameters: ("arg", i, offset) the trunk's entries at arg[i] + offset; ("head",
+#: j) the head's output j; ("joint", i, first) the leg's three joint entries at arg[i][first + 3 k ...] (times sigma);
+#: ("leg", i, first) the leg's three entries at arg[i] + first + 3 k (a foot force: not turned).
+LegInput = tuple[str, int] | tuple[str, int, int]
+
+
+@dataclass(frozen=True)
+class LegCall:
+    """Where the pieces' inputs come from in the function's arg (its signature's inputs, then sin and cos of the 12
+    joint angles at ``sin_arg`` and ``sin_arg`` + 1)."""
+
+    head_args: tuple[int, ...]
+    leg_inputs: tuple[LegInput, ...]  # the leg function's inputs before p, sin, cos
+    sin_arg: int
+    tail_args: tuple[int, ...]  # the tail's inputs before L_0..L_3
+
+
+def by_leg_c(c_name: str, pieces: LegPieces, call: LegCall, precision: str, host_helpers: frozenset[str],
+             unguarded: str | None = None) -> str:
+    """Static C functions of ``pieces`` and ``int c_name(arg, res, iw, w, mem)`` calling them. The tail writes
+    every output (``unguarded`` None: the callers pass all) or, with ``unguarded`` a name of ``UNGUARDED``, tests
+    each output pointer as CasADi does (its inputs all given)."""
+    joints = [i for i, x in enumerate(call.leg_inputs) if x[0] == "joint"]
+    if not joints:
+        raise AssertionError(f"{c_name}: a leg function reads no joint angle")
+    q_input = joints[0]  # the angles: the first joint input
+    if any(f.n_in() != len(call.leg_inputs) + 1 for f in pieces.legs) or pieces.tail.n_in() != len(call.tail_args) + 4:
+        raise AssertionError(f"{c_name}: the pieces' inputs are not as the call reads them")
+    text = [NOINLINE]
+    if pieces.head is not None:
+        text.append(static_c(f"{c_name}_head", pieces.head, precision, host_helpers, all_io=True))
+    for i, leg in enumerate(pieces.legs):  # one copy of its code for every leg of its template
+        text.append("QD_NOINLINE " + static_c(f"{c_name}_leg{i}", trig_as_inputs(leg, q_input), precision, host_helpers,
+                                              all_io=True))
+    for k in range(4):
+        values = pieces.leg_values(k)
+        text.append(f"static const casadi_real {c_name}_p{k}[{max(len(values), 1)}] = "
+                    f"{{{', '.join(repr(x) for x in values) if values else '0'}}}; /* {LEG_LABELS[k]}'s parameters */\n")
+    tail = static_c(f"{c_name}_tail", pieces.tail, precision, host_helpers, all_io=unguarded is None)
+    text.append(tail if unguarded is None else unguarded_inputs(tail, unguarded))
+    body = [f"int {c_name}{_SIGNATURE} {{\n"]
+    nl = max(f.nnz_out(0) for f in pieces.legs)
+    body.append(f"  casadi_real L[4][{nl}];\n")
+    if pieces.head is not None:
+        heads = [f"h{j}" for j in range(pieces.head.n_out())]
+        body.append("".join(f"  casadi_real h{j}[{pieces.head.nnz_out(j)}];\n" for j in range(pieces.head.n_out())))
+        body.append(f"  const casadi_real* h_arg[{len(call.head_args)}] = {{{', '.join(f'arg[{i}]' for i in call.head_args)}}};\n"
+                    f"  casadi_real* h_res[{len(heads)}] = {{{', '.join(heads)}}};\n"
+                    f"  {c_name}_head(h_arg, h_res, iw, w, mem);\n")
+    for k in sorted(range(4), key=lambda k: pieces.template_of[k]):
+        body.append(_leg_call(c_name, pieces, call, k))
+    t_arg = [f"arg[{i}]" for i in call.tail_args] + [f"L[{k}]" for k in range(4)]
+    body.append(f"  const casadi_real* t_arg[{len(t_arg)}] = {{{', '.join(t_arg)}}};\n"
+                f"  return {c_name}_tail(t_arg, res, iw, w, mem);\n}}\n")
+    return "\n".join(text) + "\n" + "".join(body)
+
+
+def _leg_call(c_name: str, pieces: LegPieces, call: LegCall, k: int) -> str:
+    sigma = pieces.leg_signs(k)
+    turned = any(x < 0 for x in sigma)
+    local: list[str] = []
+    inputs: list[str] = []
+    for x in call.leg_inputs:
+        if x[0] == "arg":
+            inputs.append(f"arg[{x[1]}] + {x[2]}")  # type: ignore[misc]
+        elif x[0] == "head":
+            inputs.append(f"h{x[1]}")
+        elif x[0] == "leg":
+            inputs.append(f"arg[{x[1]}] + {x[2] + 3 * k}")  # type: ignore[misc]
+        elif turned:
+            inputs.append(f"x + {len(local)}")
+            local += [f"{'-' if s < 0 else ''}arg[{x[1]}][{x[2] + 3 * k + j}]" for j, s in enumerate(sigma)]  # type: ignore[misc]
+        else:
+            inputs.append(f"arg[{x[1]}] + {x[2] + 3 * k}")  # type: ignore[misc]
+    sin = f"arg[{call.sin_arg}] + {3 * k}"
+    if turned:
+        sin = f"x + {len(local)}"
+        local += [f"{'-' if s < 0 else ''}arg[{call.sin_arg}][{3 * k + j}]" for j, s in enumerate(sigma)]
+    prologue = f"    const casadi_real x[{len(local)}] = {{{', '.join(local)}}}; /* sigma times */\n" if turned else ""
+    l_arg = [*inputs, f"{c_name}_p{k}", sin, f"arg[{call.sin_arg + 1}] + {3 * k}"]
+    return (f"  {{ /* leg {k} */\n{prologue}    const casadi_real* l_arg[{len(l_arg)}] = {{{', '.join(l_arg)}}};\n"
+            f"    casadi_real* l_res[1] = {{L[{k}]}};\n"
+            f"    {c_name}_leg{pieces.template_of[k]}(l_arg, l_res, iw, w, mem);\n  }}\n")
