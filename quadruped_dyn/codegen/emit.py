@@ -527,9 +527,10 @@ def _checked_reduced_c(c_text: str, casadi_header: str, functions: list[ca.Funct
 JOINT_ROWS_FIRST = ("M_full", "G_full", "nle_full", "id_full")
 #: Of those, the ones qd_<robot>.c also exports as qd_<name>_trig (arg: theirs, then sin and cos of q's joint angles)
 #: for the reduced files, which take the sines and cosines once per call (c/qd_reduced_solve.c); with
-#: qd_id_full_trig and qd_M_full_dense_trig, leg by leg (``_reduced_calls_by_leg``).
+#: qd_M_full_dense_trig (``_M_full_dense``), and qd_id_full_trig and qd_M_full_dense_legs_trig leg by leg
+#: (``_reduced_calls_by_leg``).
 TRIG_GIVEN = ("G_full",)
-#: qd_id_full_trig's arg (q, v, a, f, sin, cos) and qd_M_full_dense_trig's (q, sin, cos) as their pieces read them
+#: qd_id_full_trig's arg (q, v, a, f, sin, cos) and qd_M_full_dense_legs_trig's (q, sin, cos) as their pieces read them
 #: (``dynamics.by_leg``): the reduced files' calls, leg by leg (``_reduced_calls_by_leg``).
 ID_FULL_CALL = LegCall(head_args=(0, 1, 2), leg_inputs=(("arg", 1, 3), ("arg", 2, 3), ("head", 0), ("joint", 0, 7),
                                                         ("joint", 1, 6), ("joint", 2, 6), ("leg", 3, 0)),
@@ -548,7 +549,8 @@ def _joint_rows_first(robot: Robot, c_text: str, functions: list[ca.Function], p
     in the signature's order dropped; for a function in ``UNGUARDED`` the graph reads its inputs untested and
     qd_<name>_eval gives a NULL input qd_zeros. The same operations on the same values (docs/benchmark.md). For the
     reduced files the graphs are also exported with the joints' sines and cosines as inputs (no NULL input):
-    qd_<name>_trig for ``TRIG_GIVEN``; qd_id_full_trig and qd_M_full_dense_trig leg by leg (``_reduced_calls_by_leg``)."""
+    qd_<name>_trig for ``TRIG_GIVEN``, qd_M_full_dense_trig (``_M_full_dense``); qd_id_full_trig and
+    qd_M_full_dense_legs_trig leg by leg (``_reduced_calls_by_leg``)."""
     raw = evaluations(c_text, [f.name() for f in functions])
     helpers = []
     for f in functions:
@@ -589,6 +591,7 @@ def _joint_rows_first(robot: Robot, c_text: str, functions: list[ca.Function], p
         if count != 1:
             raise AssertionError(f"entry point of {f.name()} not found in CasADi's output")
         c_text = drop_evaluation(c_text, raw[f.name()])
+    helpers.append(_M_full_dense(functions, precision, defined_helpers(c_text)))
     helpers.append(_reduced_calls_by_leg(robot, precision, defined_helpers(c_text)))
     helpers.insert(0, (TEMPLATES / SINCOS).read_text()
                    + f"static const casadi_real qd_zeros[{NQ_FULL}]; /* a NULL input (CasADi's convention: zeros) */\n")
@@ -596,16 +599,35 @@ def _joint_rows_first(robot: Robot, c_text: str, functions: list[ca.Function], p
     return c_text[:first] + "\n" + "\n".join(helpers) + c_text[first:]
 
 
+def _M_full_dense(functions: list[ca.Function], precision: str, host_helpers: frozenset[str]) -> str:
+    """qd_M_full_dense_trig (q, sin, cos) -> M (18 x 18, dense column-major): M_full's graph with its zeros written
+    and the joints' sines and cosines given, joint columns first (as ``_joint_rows_first``), for the reduced files,
+    which take the sines and cosines once for all their calls and read M dense (c/qd_reduced_solve.c)."""
+    m = next(f for f in functions if f.name() == PREFIX + "M_full")
+    args = m.sx_in()
+    nz = ca.densify(m.call(args)[0]).nz[:]  # column-major, 18 x 18
+    k = 18 * 6  # the joint columns first
+    dense = trig_as_inputs(ca.Function("M_full_dense", args, [nz[k:], nz[:k]], {"cse": True}), 0, JOINT_ANGLES)
+    return (static_c("qd_M_full_dense_joint_rows_first", dense, precision, host_helpers, all_io=True)
+            + "/* M_full (18 x 18, dense column-major, zeros written) with the joints' sines and cosines given: arg = "
+            "(q, sin, cos) */\n"
+            f"int qd_M_full_dense_trig{_SIGNATURE} {{\n"
+            f"  casadi_real* r[2] = {{res[0] + {k}, res[0]}};\n"
+            "  return qd_M_full_dense_joint_rows_first(arg, r, iw, w, mem);\n}\n")
+
+
 def _reduced_calls_by_leg(robot: Robot, precision: str, host_helpers: frozenset[str]) -> str:
-    """qd_id_full_trig (q, v, a, f, sin, cos) -> (w_res, tau) and qd_M_full_dense_trig (q, sin, cos) -> M (18 x 18,
-    dense column-major, zeros written), the joints' sines and cosines given: what the reduced files call once per
-    call (c/qd_reduced_solve.c), each as one leg function per leg template called once per leg
-    (``dynamics.by_leg``, ``codegen.by_leg``), whose code stays in the instruction cache."""
+    """qd_id_full_trig (q, v, a, f, sin, cos) -> (w_res, tau) and qd_M_full_dense_legs_trig (q, sin, cos) -> M
+    (``_M_full_dense``'s), the joints' sines and cosines given, each as one leg function per leg template called once
+    per leg (``dynamics.by_leg``, ``codegen.by_leg``), whose code stays in the instruction cache: for the reduced
+    files' fd_r, C_r + G_r, id_r and dfd_r (c/qd_reduced_solve.c), which call them among ~45 kB of other code per call
+    (docs/benchmark.md, "id_full and M by leg"). M_r calls ``_M_full_dense``'s qd_M_full_dense_trig, one function of
+    fewer instructions, which fits the cache beside M_r's other ~20 kB."""
     return ("/* id_full with the joints' sines and cosines given, leg by leg: arg = (q, v, a, f, sin, cos) */\n"
             + by_leg_c("qd_id_full_trig", id_full_pieces(robot), ID_FULL_CALL, precision, host_helpers) + "\n"
             "/* M_full (18 x 18, dense column-major, zeros written) with the joints' sines and cosines given, leg by leg: "
             "arg = (q, sin, cos) */\n"
-            + by_leg_c("qd_M_full_dense_trig", mass_matrix_pieces(robot), M_DENSE_CALL, precision, host_helpers))
+            + by_leg_c("qd_M_full_dense_legs_trig", mass_matrix_pieces(robot), M_DENSE_CALL, precision, host_helpers))
 
 
 def _first_evaluation(c_text: str) -> int:

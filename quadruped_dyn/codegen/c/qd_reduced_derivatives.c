@@ -143,7 +143,7 @@ QD_INLINE int qd_dfd_r_solve(int n, int legs, int lift_quat, const casadi_real**
   const casadi_real* d_arg[6] = {q, v, a, f, t.s, t.c};
   casadi_real* i_res[2] = {F, F + 6};
   flag = qd_id_full_trig(d_arg, i_res, iw, w, mem);
-  if (!flag) flag = qd_M_full_dense(q, &t, M, iw, w, mem);
+  if (!flag) flag = qd_M_full_dense(q, &t, M, iw, w, mem, 0);
   if (flag) return flag;
   qd_project(n, S_b, F, qdd);
   qd_M_r_legs(n, legs, S_b, T_b, M, M_r);

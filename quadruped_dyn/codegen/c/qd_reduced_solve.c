@@ -113,9 +113,10 @@ static int qd_factors(const casadi_real* q_r, const casadi_real* quat, const qd_
 }
 
 /* defined in qd_<robot>.c of the same library (no work memory: checked by the generator): M_full (dense, zeros
- * written), G_full and id_full with the joints' sines and cosines as their last two inputs, (q, sin, cos) and
- * (q, v, a, f, sin, cos), sin and cos of q[7..18] */
+ * written; also leg by leg, _legs_), G_full and id_full (leg by leg) with the joints' sines and cosines as their last
+ * two inputs, (q, sin, cos) and (q, v, a, f, sin, cos), sin and cos of q[7..18] */
 int qd_M_full_dense_trig(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem);
+int qd_M_full_dense_legs_trig(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem);
 int qd_G_full_trig(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem);
 int qd_id_full_trig(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem);
 
@@ -126,12 +127,15 @@ static void qd_full_q(const casadi_real* q_r, const casadi_real* quat, casadi_re
   for (int i = 0; i < 12; ++i) q[7 + i] = q_r[i];
 }
 
-/* M (18 x 18, dense column-major) at q (t: q_r's sines and cosines, q's joint angles) by qd_M_full_dense_trig. */
+/* M (18 x 18, dense column-major) at q (t: q_r's sines and cosines, q's joint angles) by qd_M_full_dense_trig, or with
+ * by_leg by qd_M_full_dense_legs_trig: the same M to round-off; leg by leg the code is smaller, and a caller that runs
+ * much other code per call (fd_r) gains more from that than it loses to the calls (docs/benchmark.md, "id_full and M
+ * by leg"). */
 static int qd_M_full_dense(const casadi_real* q, const qd_trig* t, casadi_real* M, casadi_int* iw, casadi_real* w,
-                           int mem) {
+                           int mem, int by_leg) {
   const casadi_real* m_arg[3] = {q, t->s, t->c};
   casadi_real* m_res[1] = {M};
-  return qd_M_full_dense_trig(m_arg, m_res, iw, w, mem);
+  return by_leg ? qd_M_full_dense_legs_trig(m_arg, m_res, iw, w, mem) : qd_M_full_dense_trig(m_arg, m_res, iw, w, mem);
 }
 
 /* M_r = S M T (n x n, column-major) by columns: mt = M[:, 0:6] T_b e_j + M[:, 6 + j], then S_b mt[0:6] + mt[6:18].
@@ -222,7 +226,7 @@ QD_INLINE int qd_reduced_term(int n, int legs, int which, const casadi_real** ar
     if (!flag) qd_project(n, S_b, M, res[0]);
     return flag;
   }
-  flag = qd_M_full_dense(q, &t, M, iw, w, mem);
+  flag = qd_M_full_dense(q, &t, M, iw, w, mem, 0);
   if (!flag) qd_M_r_legs(n, legs, S_b, T_b, M, res[0]);
   return flag;
 }
@@ -484,7 +488,7 @@ QD_INLINE int qd_fd_r_solve(int n, int legs, const casadi_real** arg, casadi_rea
   if (!flag) flag = qd_rnea_r(n, S_b, arg[0], arg[3], &t, v, a, b, M + 36, iw, w, mem);
   if (flag) return flag;
   qd_full_q(arg[0], arg[3], q);
-  flag = qd_M_full_dense(q, &t, M, iw, w, mem);
+  flag = qd_M_full_dense(q, &t, M, iw, w, mem, 1);
   if (flag) return flag;
   if (legs != 15) { /* M_r's space is the folded solve's work memory */
     for (int i = 0; i < n; ++i) b[i] = arg[2][i] - b[i];
