@@ -82,12 +82,18 @@ def trunk_acceleration(q: ca.SX, v: ca.SX, a: ca.SX) -> ca.SX:
     return a[0:3] + ca.cross(v[3:6], v[0:3]) - g_b
 
 
+def trunk_head(name: str, output: str) -> ca.Function:
+    """The head of id_full's and did_full's pieces: (q, v, a) -> ``trunk_acceleration``, named ``output``."""
+    q, v, a = ca.SX.sym("q", NQ_FULL), ca.SX.sym("v", NV_FULL), ca.SX.sym("a", NV_FULL)
+    return ca.Function(name, [q, v, a], [trunk_acceleration(q, v, a)], ["q", "v", "a"], [output], {"cse": True})
+
+
 @cache
 def id_full_pieces(robot: Robot) -> LegPieces:
     """id_full(q, v, a, f) -> (w_res, tau) leg by leg (module docstring)."""
     q, v, a = ca.SX.sym("q", NQ_FULL), ca.SX.sym("v", NV_FULL), ca.SX.sym("a", NV_FULL)
     opts = {"cse": True}
-    head = ca.Function("id_full_head", [q, v, a], [trunk_acceleration(q, v, a)], ["q", "v", "a"], ["a0"], opts)
+    head = trunk_head("id_full_head", "a0")
     templates = leg_templates(robot)
     legs = []
     for i, t in enumerate(templates):

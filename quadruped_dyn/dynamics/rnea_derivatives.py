@@ -28,6 +28,7 @@ from quadruped_dyn.dynamics.by_leg import (
     leg_signs,
     stacked,
     trunk_acceleration,
+    trunk_head,
     unstacked,
 )
 from quadruped_dyn.dynamics.crba import leg_mass_blocks
@@ -86,9 +87,10 @@ def _g_b(q: ca.SX) -> ca.SX:
 
 @cache
 def did_full_pieces(robot: Robot) -> LegPieces:
+    """did_full(q, v, a) -> (dtau_dq, dtau_dv, dtau_da) leg by leg (module docstring)."""
     q, v, a = ca.SX.sym("q", NQ_FULL), ca.SX.sym("v", NV_FULL), ca.SX.sym("a", NV_FULL)
     opts = {"cse": True}
-    head = ca.Function("did_full_head", [q, v, a], [trunk_acceleration(q, v, a)], ["q", "v", "a"], ["a_cl"], opts)
+    head = trunk_head("did_full_head", "a_cl")
     templates = leg_templates(robot)
     legs = []
     for i, t in enumerate(templates):
