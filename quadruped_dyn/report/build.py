@@ -166,13 +166,13 @@ def build_report(robot_arg: str = "paper", out: str | Path = "results", fast: bo
     with _staging(target) as staging:
         job = _Job(robot, urdf_warnings, staging, fast, samples, footprint, progress, folder=target)
         pool = None
-        if compile_ahead:
-            ahead = notebook_list(robot)[0] if with_notebooks else []
-            pool, _, job.notebooks_ahead = warm.start(robot.urdf, with_benchmark=not fast,
-                                                      with_footprint=footprint and not fast, notebooks=ahead,
-                                                      foot_frames=tuple(leg.foot_frame for leg in robot.legs))
         stopped = False
         try:
+            if compile_ahead:  # in the try: a signal right after the start still stops the pool below
+                ahead = notebook_list(robot)[0] if with_notebooks else []
+                pool, _, job.notebooks_ahead = warm.start(robot.urdf, with_benchmark=not fast,
+                                                          with_footprint=footprint and not fast, notebooks=ahead,
+                                                          foot_frames=tuple(leg.foot_frame for leg in robot.legs))
             sections = [_attempt("robot", "The robot", lambda: _robot_section(job))]
             done()
             built: dict[str, Section] = {}

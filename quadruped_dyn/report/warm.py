@@ -61,12 +61,19 @@ def start(urdf: Path, with_benchmark: bool, notebooks: Sequence[Path] = (), with
     """The warm process, started (spawned: no state of this process is shared): ``warm_caches`` (of the robot on
     ``foot_frames``, the report's: the caches key on them),
     then each of ``notebooks`` executed and rendered (``gather.executed_notebook``), in that order.
-    Shut it down with ``stop`` when the report is written, so no process outlives the command."""
+    Shut it down with ``stop`` when the report is written, so no process outlives the command; interrupted while it
+    starts, it is stopped here (after the spawn: a worker cut mid-spawn printed a traceback)."""
     from quadruped_dyn.report.gather import executed_notebook
 
     pool = ProcessPoolExecutor(max_workers=1, mp_context=multiprocessing.get_context("spawn"), initializer=_quiet)
-    warmed = pool.submit(warm_caches, str(urdf), with_benchmark, with_footprint, foot_frames)
-    return pool, warmed, [pool.submit(executed_notebook, path) for path in notebooks]
+    try:
+        with interrupts_deferred():  # the first submit spawns the worker: cut there, it read a closed pipe (traceback)
+            warmed = pool.submit(warm_caches, str(urdf), with_benchmark, with_footprint, foot_frames)
+            ahead = [pool.submit(executed_notebook, path) for path in notebooks]
+    except KeyboardInterrupt:  # Ctrl-C or SIGTERM while it started: the caller has no pool to stop
+        stop(pool, now=True)
+        raise
+    return pool, warmed, ahead
 
 
 def _quiet() -> None:

@@ -87,3 +87,29 @@ def test_a_second_interrupt_while_the_warm_process_is_stopped_still_ends_it(tmp_
             p.kill()
         pool.shutdown(wait=True)
     assert signal.getsignal(signal.SIGINT) is signal.default_int_handler
+
+
+def test_an_interrupt_while_the_warm_process_spawns_waits_for_the_spawn_then_stops_it(tmp_path, monkeypatch, capfd):
+    """Ctrl-C (or SIGTERM) while the first submit spawns the worker: the spawn completes, the worker is ended and the
+    interrupt raised from ``start``. Before, the parent's pipe closed mid-spawn and the worker printed multiprocessing's
+    'EOFError: Ran out of input' traceback under the report's ``error: terminated`` (and the caller, with no pool in
+    hand, could not stop it)."""
+    import multiprocessing.popen_spawn_posix
+    import os
+    import signal
+
+    spawned = []
+    launch = multiprocessing.popen_spawn_posix.Popen._launch
+
+    def interrupted_launch(self, process_obj):
+        os.kill(os.getpid(), signal.SIGINT)  # arrives while the worker's preparation data is being written
+        launch(self, process_obj)
+        spawned.append(self.pid)
+
+    monkeypatch.setattr(multiprocessing.popen_spawn_posix.Popen, "_launch", interrupted_launch)
+    with pytest.raises(KeyboardInterrupt):
+        warm.start(tmp_path / "missing.urdf", with_benchmark=False)
+    assert spawned and not [pid for pid in spawned if os.path.exists(f"/proc/{pid}") and
+                            "Z" not in open(f"/proc/{pid}/stat").read().split()[2]]
+    assert "Traceback" not in capfd.readouterr().err
+    assert signal.getsignal(signal.SIGINT) is signal.default_int_handler
