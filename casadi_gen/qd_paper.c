@@ -5308,34 +5308,38 @@ static int qd_id_full_trig_tail(const casadi_real** arg, casadi_real** res, casa
   return 0;
 }
 
-int qd_id_full_trig(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem) {
-  casadi_real L[4][9];
+static int qd_id_full_trig_in(const casadi_real** arg, casadi_real** res, casadi_real* L, casadi_int* iw, casadi_real* w, int mem) {
   casadi_real h0[3];
   const casadi_real* h_arg[3] = {arg[0], arg[1], arg[2]};
   casadi_real* h_res[1] = {h0};
   qd_id_full_trig_head(h_arg, h_res, iw, w, mem);
   { /* leg 0 */
     const casadi_real* l_arg[10] = {arg[1] + 3, arg[2] + 3, h0, arg[0] + 7, arg[1] + 6, arg[2] + 6, arg[3] + 0, qd_id_full_trig_p0, arg[4] + 0, arg[5] + 0};
-    casadi_real* l_res[1] = {L[0]};
+    casadi_real* l_res[1] = {L + 0};
     qd_id_full_trig_leg0(l_arg, l_res, iw, w, mem);
   }
   { /* leg 1 */
     const casadi_real* l_arg[10] = {arg[1] + 3, arg[2] + 3, h0, arg[0] + 10, arg[1] + 9, arg[2] + 9, arg[3] + 3, qd_id_full_trig_p1, arg[4] + 3, arg[5] + 3};
-    casadi_real* l_res[1] = {L[1]};
+    casadi_real* l_res[1] = {L + 9};
     qd_id_full_trig_leg0(l_arg, l_res, iw, w, mem);
   }
   { /* leg 2 */
     const casadi_real* l_arg[10] = {arg[1] + 3, arg[2] + 3, h0, arg[0] + 13, arg[1] + 12, arg[2] + 12, arg[3] + 6, qd_id_full_trig_p2, arg[4] + 6, arg[5] + 6};
-    casadi_real* l_res[1] = {L[2]};
+    casadi_real* l_res[1] = {L + 18};
     qd_id_full_trig_leg0(l_arg, l_res, iw, w, mem);
   }
   { /* leg 3 */
     const casadi_real* l_arg[10] = {arg[1] + 3, arg[2] + 3, h0, arg[0] + 16, arg[1] + 15, arg[2] + 15, arg[3] + 9, qd_id_full_trig_p3, arg[4] + 9, arg[5] + 9};
-    casadi_real* l_res[1] = {L[3]};
+    casadi_real* l_res[1] = {L + 27};
     qd_id_full_trig_leg0(l_arg, l_res, iw, w, mem);
   }
-  const casadi_real* t_arg[7] = {arg[0], arg[1], arg[2], L[0], L[1], L[2], L[3]};
+  const casadi_real* t_arg[7] = {arg[0], arg[1], arg[2], L + 0, L + 9, L + 18, L + 27};
   return qd_id_full_trig_tail(t_arg, res, iw, w, mem);
+}
+
+int qd_id_full_trig(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem) {
+  casadi_real L[36];
+  return qd_id_full_trig_in(arg, res, L, iw, w, mem);
 }
 
 /* M_full (18 x 18, dense column-major, zeros written) with the joints' sines and cosines given, leg by leg: arg = (q, sin, cos) */
@@ -6120,30 +6124,34 @@ static int qd_M_full_dense_legs_trig_tail(const casadi_real** arg, casadi_real**
   return 0;
 }
 
-int qd_M_full_dense_legs_trig(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem) {
-  casadi_real L[4][40];
+static int qd_M_full_dense_legs_trig_in(const casadi_real** arg, casadi_real** res, casadi_real* L, casadi_int* iw, casadi_real* w, int mem) {
   { /* leg 0 */
     const casadi_real* l_arg[4] = {arg[0] + 7, qd_M_full_dense_legs_trig_p0, arg[1] + 0, arg[2] + 0};
-    casadi_real* l_res[1] = {L[0]};
+    casadi_real* l_res[1] = {L + 0};
     qd_M_full_dense_legs_trig_leg0(l_arg, l_res, iw, w, mem);
   }
   { /* leg 1 */
     const casadi_real* l_arg[4] = {arg[0] + 10, qd_M_full_dense_legs_trig_p1, arg[1] + 3, arg[2] + 3};
-    casadi_real* l_res[1] = {L[1]};
+    casadi_real* l_res[1] = {L + 40};
     qd_M_full_dense_legs_trig_leg0(l_arg, l_res, iw, w, mem);
   }
   { /* leg 2 */
     const casadi_real* l_arg[4] = {arg[0] + 13, qd_M_full_dense_legs_trig_p2, arg[1] + 6, arg[2] + 6};
-    casadi_real* l_res[1] = {L[2]};
+    casadi_real* l_res[1] = {L + 80};
     qd_M_full_dense_legs_trig_leg0(l_arg, l_res, iw, w, mem);
   }
   { /* leg 3 */
     const casadi_real* l_arg[4] = {arg[0] + 16, qd_M_full_dense_legs_trig_p3, arg[1] + 9, arg[2] + 9};
-    casadi_real* l_res[1] = {L[3]};
+    casadi_real* l_res[1] = {L + 120};
     qd_M_full_dense_legs_trig_leg0(l_arg, l_res, iw, w, mem);
   }
-  const casadi_real* t_arg[4] = {L[0], L[1], L[2], L[3]};
+  const casadi_real* t_arg[4] = {L + 0, L + 40, L + 80, L + 120};
   return qd_M_full_dense_legs_trig_tail(t_arg, res, iw, w, mem);
+}
+
+int qd_M_full_dense_legs_trig(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem) {
+  casadi_real L[160];
+  return qd_M_full_dense_legs_trig_in(arg, res, L, iw, w, mem);
 }
 
 #define QD_ID_FULL_EVAL qd_id_full_eval /* _joint_rows_first */

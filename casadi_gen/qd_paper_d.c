@@ -4279,34 +4279,38 @@ static int qd_did_full_trig_tail(const casadi_real** arg, casadi_real** res, cas
   return 0;
 }
 
-int qd_did_full_trig(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem) {
-  casadi_real L[4][120];
+int qd_did_full_trig_in(const casadi_real** arg, casadi_real** res, casadi_real* L, casadi_int* iw, casadi_real* w, int mem) {
   casadi_real h0[3];
   const casadi_real* h_arg[3] = {arg[0], arg[1], arg[2]};
   casadi_real* h_res[1] = {h0};
   qd_did_full_trig_head(h_arg, h_res, iw, w, mem);
   { /* leg 0 */
     const casadi_real* l_arg[9] = {arg[1] + 3, arg[2] + 3, h0, arg[0] + 7, arg[1] + 6, arg[2] + 6, qd_did_full_trig_p0, arg[3] + 0, arg[4] + 0};
-    casadi_real* l_res[1] = {L[0]};
+    casadi_real* l_res[1] = {L + 0};
     qd_did_full_trig_leg0(l_arg, l_res, iw, w, mem);
   }
   { /* leg 1 */
     const casadi_real* l_arg[9] = {arg[1] + 3, arg[2] + 3, h0, arg[0] + 10, arg[1] + 9, arg[2] + 9, qd_did_full_trig_p1, arg[3] + 3, arg[4] + 3};
-    casadi_real* l_res[1] = {L[1]};
+    casadi_real* l_res[1] = {L + 120};
     qd_did_full_trig_leg0(l_arg, l_res, iw, w, mem);
   }
   { /* leg 2 */
     const casadi_real* l_arg[9] = {arg[1] + 3, arg[2] + 3, h0, arg[0] + 13, arg[1] + 12, arg[2] + 12, qd_did_full_trig_p2, arg[3] + 6, arg[4] + 6};
-    casadi_real* l_res[1] = {L[2]};
+    casadi_real* l_res[1] = {L + 240};
     qd_did_full_trig_leg0(l_arg, l_res, iw, w, mem);
   }
   { /* leg 3 */
     const casadi_real* l_arg[9] = {arg[1] + 3, arg[2] + 3, h0, arg[0] + 16, arg[1] + 15, arg[2] + 15, qd_did_full_trig_p3, arg[3] + 9, arg[4] + 9};
-    casadi_real* l_res[1] = {L[3]};
+    casadi_real* l_res[1] = {L + 360};
     qd_did_full_trig_leg0(l_arg, l_res, iw, w, mem);
   }
-  const casadi_real* t_arg[7] = {arg[0], arg[1], arg[2], L[0], L[1], L[2], L[3]};
+  const casadi_real* t_arg[7] = {arg[0], arg[1], arg[2], L + 0, L + 120, L + 240, L + 360};
   return qd_did_full_trig_tail(t_arg, res, iw, w, mem);
+}
+
+int qd_did_full_trig(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem) {
+  casadi_real L[480];
+  return qd_did_full_trig_in(arg, res, L, iw, w, mem);
 }
 
 static int casadi_f0(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem) {

@@ -3029,6 +3029,7 @@ static int qd_reduced_factors(const casadi_real** arg, casadi_real** res, casadi
 }
 #endif
 #define QD_DFD_R_TAPE 270 /* reals of the lift's tape: emit_derivatives.split_at_seeds */
+#define QD_DID_FULL_L 480 /* reals of did_full's legs' outputs: codegen.by_leg.legs_reals */
 static int qd_dfd_r_lift(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem) {
   (void)arg; (void)res; (void)iw; (void)w; (void)mem;
   casadi_real a000, a001, a002, a003, a004, a005, a006, a007, a008, a009, a010, a011;
@@ -17595,7 +17596,7 @@ CASADI_SYMBOL_EXPORT int qd_fd_r_FL_BL_BR_work_bytes(casadi_int *sz_arg, casadi_
 }
 
 CASADI_SYMBOL_EXPORT int qd_dfd_r_FL_BL_BR(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem){
-  typedef char w_agrees[QD_DFD_R_W(12) == 2058 ? 1 : -1];
+  typedef char w_agrees[QD_DFD_R_W(12) == 2538 ? 1 : -1];
   (void)sizeof(w_agrees);
   return qd_dfd_r_solve(12, 13, 0, arg, res, iw, w, mem);
 }
@@ -17668,7 +17669,7 @@ CASADI_SYMBOL_EXPORT int qd_dfd_r_FL_BL_BR_work(casadi_int *sz_arg, casadi_int* 
   if (sz_arg) *sz_arg = 4;
   if (sz_res) *sz_res = 4;
   if (sz_iw) *sz_iw = 0;
-  if (sz_w) *sz_w = 2058;
+  if (sz_w) *sz_w = 2538;
   return 0;
 }
 
@@ -17676,7 +17677,7 @@ CASADI_SYMBOL_EXPORT int qd_dfd_r_FL_BL_BR_work_bytes(casadi_int *sz_arg, casadi
   if (sz_arg) *sz_arg = 4*sizeof(const casadi_real*);
   if (sz_res) *sz_res = 4*sizeof(casadi_real*);
   if (sz_iw) *sz_iw = 0*sizeof(casadi_int);
-  if (sz_w) *sz_w = 2058*sizeof(casadi_real);
+  if (sz_w) *sz_w = 2538*sizeof(casadi_real);
   return 0;
 }
 

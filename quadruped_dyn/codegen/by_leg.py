@@ -36,11 +36,18 @@ class LegCall:
     tail_args: tuple[int, ...]  # the tail's inputs before L_0..L_3
 
 
+def legs_reals(pieces: LegPieces) -> int:
+    """Reals of the legs' outputs L_0..L_3 ``by_leg_c``'s function keeps between the legs and the tail."""
+    return 4 * max(f.nnz_out(0) for f in pieces.legs)
+
+
 def by_leg_c(c_name: str, pieces: LegPieces, call: LegCall, precision: str, host_helpers: frozenset[str],
-             unguarded: str | None = None) -> str:
-    """Static C functions of ``pieces`` and ``int c_name(arg, res, iw, w, mem)`` calling them. The tail writes
-    every output (``unguarded`` None: the callers pass all) or, with ``unguarded`` a name of ``UNGUARDED``, tests
-    each output pointer as CasADi does (its inputs all given)."""
+             unguarded: str | None = None, export_in: bool = False) -> str:
+    """Static C functions of ``pieces``, ``{c_name}_in(arg, res, L, iw, w, mem)`` calling them with the legs' outputs in
+    L (``legs_reals``: the caller's memory; exported with ``export_in``, for a caller short of stack) and
+    ``int c_name(arg, res, iw, w, mem)``, which keeps L on its stack. The tail writes every output (``unguarded``
+    None: the callers pass all) or, with ``unguarded`` a name of ``UNGUARDED``, tests each output pointer as CasADi
+    does (its inputs all given)."""
     joints = [i for i, x in enumerate(call.leg_inputs) if x[0] == "joint"]
     if not joints:
         raise AssertionError(f"{c_name}: a leg function reads no joint angle")
@@ -59,9 +66,9 @@ def by_leg_c(c_name: str, pieces: LegPieces, call: LegCall, precision: str, host
                     f"{{{', '.join(repr(x) for x in values) if values else '0'}}}; /* {LEG_LABELS[k]}'s parameters */\n")
     tail = static_c(f"{c_name}_tail", pieces.tail, precision, host_helpers, all_io=unguarded is None)
     text.append(tail if unguarded is None else unguarded_inputs(tail, unguarded))
-    body = [f"int {c_name}{_SIGNATURE} {{\n"]
-    nl = max(f.nnz_out(0) for f in pieces.legs)
-    body.append(f"  casadi_real L[4][{nl}];\n")
+    nl = legs_reals(pieces) // 4
+    body = [f"{'' if export_in else 'static '}int {c_name}_in(const casadi_real** arg, casadi_real** res, casadi_real* L, "
+            "casadi_int* iw, casadi_real* w, int mem) {\n"]
     if pieces.head is not None:
         heads = [f"h{j}" for j in range(pieces.head.n_out())]
         body.append("".join(f"  casadi_real h{j}[{pieces.head.nnz_out(j)}];\n" for j in range(pieces.head.n_out())))
@@ -69,14 +76,16 @@ def by_leg_c(c_name: str, pieces: LegPieces, call: LegCall, precision: str, host
                     f"  casadi_real* h_res[{len(heads)}] = {{{', '.join(heads)}}};\n"
                     f"  {c_name}_head(h_arg, h_res, iw, w, mem);\n")
     for k in sorted(range(4), key=lambda k: pieces.template_of[k]):
-        body.append(_leg_call(c_name, pieces, call, k))
-    t_arg = [f"arg[{i}]" for i in call.tail_args] + [f"L[{k}]" for k in range(4)]
+        body.append(_leg_call(c_name, pieces, call, k, nl))
+    t_arg = [f"arg[{i}]" for i in call.tail_args] + [f"L + {nl * k}" for k in range(4)]
     body.append(f"  const casadi_real* t_arg[{len(t_arg)}] = {{{', '.join(t_arg)}}};\n"
-                f"  return {c_name}_tail(t_arg, res, iw, w, mem);\n}}\n")
+                f"  return {c_name}_tail(t_arg, res, iw, w, mem);\n}}\n\n")
+    body.append(f"int {c_name}{_SIGNATURE} {{\n  casadi_real L[{4 * nl}];\n"
+                f"  return {c_name}_in(arg, res, L, iw, w, mem);\n}}\n")
     return "\n".join(text) + "\n" + "".join(body)
 
 
-def _leg_call(c_name: str, pieces: LegPieces, call: LegCall, k: int) -> str:
+def _leg_call(c_name: str, pieces: LegPieces, call: LegCall, k: int, nl: int) -> str:
     sigma = pieces.leg_signs(k)
     turned = any(x < 0 for x in sigma)
     local: list[str] = []
@@ -100,5 +109,5 @@ def _leg_call(c_name: str, pieces: LegPieces, call: LegCall, k: int) -> str:
     prologue = f"    const casadi_real x[{len(local)}] = {{{', '.join(local)}}}; /* sigma times */\n" if turned else ""
     l_arg = [*inputs, f"{c_name}_p{k}", sin, f"arg[{call.sin_arg + 1}] + {3 * k}"]
     return (f"  {{ /* leg {k} */\n{prologue}    const casadi_real* l_arg[{len(l_arg)}] = {{{', '.join(l_arg)}}};\n"
-            f"    casadi_real* l_res[1] = {{L[{k}]}};\n"
+            f"    casadi_real* l_res[1] = {{L + {nl * k}}};\n"
             f"    {c_name}_leg{pieces.template_of[k]}(l_arg, l_res, iw, w, mem);\n  }}\n")

@@ -467,6 +467,7 @@ def _reduced_helpers_c(robot: Robot, stance: StanceSet, dfd_r: DfdRPieces, preci
             + "#define QD_REDUCED_FACTORS 1\n" + static_c("qd_reduced_factors", factors, precision, all_io=True)
             + "#endif\n"
             + f"#define QD_DFD_R_TAPE {dfd_r.tape} /* reals of the lift's tape: emit_derivatives.split_at_seeds */\n"
+            + f"#define QD_DID_FULL_L {dfd_r.did_legs} /* reals of did_full's legs' outputs: codegen.by_leg.legs_reals */\n"
             + static_c("qd_dfd_r_lift", dfd_r.lift, precision, all_io=True) + "\n" + _lift_derivative_c(dfd_r, precision))
 
 
@@ -506,8 +507,8 @@ def _checked_reduced_c(c_text: str, casadi_header: str, functions: list[ca.Funct
         if f.name().startswith(PREFIX + "fd_r_"):
             body = rf"\1  return qd_fd_r_solve({f.nnz_out(0)}, {legs}, arg, res, iw, w, mem);\n"
         elif f.name().startswith(PREFIX + "dfd_r_"):  # caller work memory: declare_dfd_r_work; size checked at compile time
-            n = f.size1_out(0)
-            body = (rf"\1  typedef char w_agrees[QD_DFD_R_W({n}) == {dfd_r_work_reals(n, dfd_r.tape)} ? 1 : -1];\n"
+            n, reals = f.size1_out(0), dfd_r_work_reals(f.size1_out(0), dfd_r.tape, dfd_r.did_legs)
+            body = (rf"\1  typedef char w_agrees[QD_DFD_R_W({n}) == {reals} ? 1 : -1];\n"
                     r"  (void)sizeof(w_agrees);\n"
                     rf"  return qd_dfd_r_solve({n}, {dfd_r.legs}, {int(dfd_r.lift_reads_quat)}, arg, res, iw, w, mem);\n")
         else:
@@ -519,7 +520,7 @@ def _checked_reduced_c(c_text: str, casadi_header: str, functions: list[ca.Funct
             raise AssertionError(f"entry point of {f.name()} not found in CasADi's output")
         c_text = drop_evaluation(c_text, raw[f.name()])  # every one evaluated above
         if f.name().startswith(PREFIX + "dfd_r_"):
-            c_text, casadi_header = declare_dfd_r_work(c_text, casadi_header, f, dfd_r.tape)
+            c_text, casadi_header = declare_dfd_r_work(c_text, casadi_header, f, dfd_r)
     return c_text, casadi_header
 
 

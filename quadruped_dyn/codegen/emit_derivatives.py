@@ -46,7 +46,7 @@ from dataclasses import dataclass
 import casadi as ca
 import numpy as np
 
-from quadruped_dyn.codegen.by_leg import LegCall, by_leg_c
+from quadruped_dyn.codegen.by_leg import LegCall, by_leg_c, legs_reals
 from quadruped_dyn.codegen.casadi_source import (
     PREFIX,
     SINCOS,
@@ -124,6 +124,7 @@ class DfdRPieces:
     lift_columns: ca.Function
     legs: int  # bit i set: leg i is a stance leg (the lift and S depend on its joints, not on the others')
     lift_reads_quat: bool  # two feet: the roll row makes v_b, a_b depend on the trunk orientation
+    did_legs: int  # reals of did_full's legs' outputs, in dfd_r's w (qd_did_full_trig_in): the Cortex-M stack budget
 
     @property
     def tape(self) -> int:
@@ -139,7 +140,8 @@ def dfd_r_pieces(robot: Robot, stance: StanceSet) -> DfdRPieces:
     reads_quat = bool(ca.depends_on(ca.vertcat(*lift.call(x)[:2]), x[3]))
     primal, direction = split_at_seeds(trig_as_inputs(lift, 0), seeds=(4, 5, 6, 7), n_primal_out=2)
     legs = sum(1 << i for i in stance.feet)
-    return DfdRPieces(primal, direction, lift_columns(direction, legs, reads_quat), legs, reads_quat)
+    return DfdRPieces(primal, direction, lift_columns(direction, legs, reads_quat), legs, reads_quat,
+                      legs_reals(did_full_pieces(robot)))
 
 
 def lift_seeds(n: int, legs: int, reads_quat: bool) -> list[tuple[np.ndarray, np.ndarray, np.ndarray]]:
@@ -249,12 +251,12 @@ def split_at_seeds(f: ca.Function, seeds: tuple[int, ...], n_primal_out: int) ->
     return primal, direction
 
 
-def dfd_r_work_reals(n: int, tape: int) -> int:
+def dfd_r_work_reals(n: int, tape: int, did_legs: int) -> int:
     """Reals of caller work memory qd_dfd_r_<feet> uses (``QD_DFD_R_W`` of c/qd_reduced_derivatives.c, which
     checks at compile time that the two agree): M_r's LU, qdd_r, S_b, T_b, M, d rnea/dq, d rnea/dv, F, one
-    full-coordinate column, one reduced column, the 3 n + 3 right-hand sides of the one LU solve, and the lift's
-    tape (``DfdRPieces.tape``)."""
-    return n * n + 14 * n + 3 * 18 * 18 + 36 + n * (3 * n + 3) + tape
+    full-coordinate column, one reduced column, the 3 n + 3 right-hand sides of the one LU solve, the lift's
+    tape (``DfdRPieces.tape``) and did_full's legs' outputs (``DfdRPieces.did_legs``)."""
+    return n * n + 14 * n + 3 * 18 * 18 + 36 + n * (3 * n + 3) + tape + did_legs
 
 
 def reduced_derivative_functions(robot: Robot, stance: StanceSet) -> list[ca.Function]:
@@ -268,10 +270,10 @@ def reduced_derivative_functions(robot: Robot, stance: StanceSet) -> list[ca.Fun
     return [dfd]
 
 
-def declare_dfd_r_work(c_text: str, h_text: str, f: ca.Function, tape: int) -> tuple[str, str]:
+def declare_dfd_r_work(c_text: str, h_text: str, f: ca.Function, dfd_r: DfdRPieces) -> tuple[str, str]:
     """dfd_r_<feet>'s _work / _work_bytes entries and its header's _SZ_W state the caller's w it uses
     (``dfd_r_work_reals``); CasADi's say 0 for the signature-only Function."""
-    return declare_work(c_text, h_text, f.name(), dfd_r_work_reals(f.size1_out(0), tape))
+    return declare_work(c_text, h_text, f.name(), dfd_r_work_reals(f.size1_out(0), dfd_r.tape, dfd_r.did_legs))
 
 
 def derivative_functions(robot: Robot) -> list[ca.Function]:
@@ -355,7 +357,7 @@ def _did_full_trig_once(c_text: str, raw: str, did: ca.Function, robot: Robot, p
     reading them, did_full leg by leg (``by_leg``, docs/derivatives.md "did_full by leg"), also called by dfd_r
     (c/qd_reduced_derivatives.c), which has the sines and cosines already."""
     exported = by_leg_c("qd_did_full_trig", did_full_pieces(robot), DID_FULL_CALL, precision, defined_helpers(c_text),
-                        unguarded="did_full")
+                        unguarded="did_full", export_in=True)  # dfd_r lends the legs' outputs its w (stack budget)
     n = len(JOINT_ANGLES)
     wrapper = (f"static int {raw}(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem) {{\n"
                f"  casadi_real s[{n}], c[{n}]; /* the joints' sines and cosines, once (qd_sincos) */\n"

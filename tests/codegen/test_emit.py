@@ -316,11 +316,13 @@ def _evaluation_body(text: str, name: str) -> str:
     if trig:
         body = re.search(rf"\n(?:static )?int {trig.group(1)}\(.*?\n\}}\n", text, re.S)  # exported: dfd_r calls it too
         assert body, trig.group(1)
-        pieces = sorted(set(re.findall(r"\n    (qd_did_full_\w+)\(|\n  (?:return )?(qd_did_full_\w+)\(", body.group(0))))
-        if pieces:  # did_full by leg: the pieces qd_did_full_trig calls read the inputs
-            names = {n for pair in pieces for n in pair if n}
+        inner = re.search(r"return (qd_did_full_trig_in)\(", body.group(0))  # did_full by leg (codegen.by_leg)
+        if inner:
+            body = re.search(r"\nint qd_did_full_trig_in\(.*?\n\}\n", text, re.S)
+            assert body, "qd_did_full_trig_in"
+            names = set(re.findall(r"\n {2,4}(?:return )?(qd_did_full_trig_(?:head|leg\d+|tail))\(", body.group(0)))
             bodies = [re.search(rf"\n(?:QD_NOINLINE )?static int {n}\(.*?\n\}}\n", text, re.S) for n in sorted(names)]
-            assert names and all(bodies), names
+            assert names and all(bodies), names  # the pieces it calls read the inputs
             return "".join(b.group(0) for b in bodies if b)
     return body.group(0)
 

@@ -91,9 +91,14 @@ def test_validate_writes_json_csv_and_plots(tmp_path):
 BUDGET_SHORTFALL = 3.0
 
 #: Relative agreement of the growth rate predicted from the derivatives with the measured one: the
-#: measured rate varies +-10 % between twin runs whose round-off differs (go2's walk: 6.4-7.8 /s
-#: over seven runs, 2026-12-02).
+#: measured rate of the one-ulp twin varies +-10 % between runs whose round-off differs (go2's walk: 6.4-7.8 /s
+#: over seven runs, 2026-12-02; 6.26 /s after the rnea leg by leg changed fd_r's round-off, 2026-12-06), because the
+#: round-off both runs accumulate starts ~10x above the propagated ulp; the test's twin starts ``GROWTH_TWIN_ULPS``
+#: up, so that its departure is the perturbation's.
 GROWTH_RATE_AGREEMENT = 0.2
+#: 2^16 ulps (~1e-11 rad on the joints): far above the round-off the runs accumulate, far below where the growth over
+#: two walk cycles (~e^17) would leave the linear regime (~1e-4 rad at the end).
+GROWTH_TWIN_ULPS = 2**16
 
 
 @pytest.fixture(scope="module")
@@ -141,14 +146,19 @@ def test_linearised_growth_rejects_bad_times(horizon, dt):
 
 @pytest.mark.slow
 @pytest.mark.parametrize("robot_name", ["paper", "go2"])
-def test_the_derivatives_predict_the_measured_growth_rate(walk_reports, robot_name):
+def test_the_derivatives_predict_the_measured_growth_rate(robot_name):
     """The twin's growth through the linearised, projected model (the derivatives, not a
-    simulation) equals the growth the twin run measures."""
+    simulation) equals the growth a twin run measures (its perturbation above the round-off: GROWTH_TWIN_ULPS)."""
     from quadruped_dyn.experiment.gait import GAITS
     from quadruped_dyn.experiment.linearised_growth import linearised_growth_rate
+    from quadruped_dyn.experiment.paper_experiment import report, run_experiment
+    from quadruped_dyn.experiment.simulate import reduced_dynamics
     from quadruped_dyn.model.robot import load_robot
 
-    measured = walk_reports(robot_name)["instability"]["growth_rate_per_s"]
+    robot, gait = load_robot(robot_name), GAITS["walk"]
+    exp = run_experiment(robot, gait, reduced_dynamics(robot, "c"), 2 * gait.period, 1e-3, physics=False,
+                         twin_ulps=GROWTH_TWIN_ULPS)
+    measured = report(exp, "dop853", 1e-3, "c", {})["instability"]["growth_rate_per_s"]
     gait = GAITS["walk"]
     predicted = linearised_growth_rate(load_robot(robot_name), gait, 2 * gait.period)
     assert measured is not None and predicted is not None and np.isfinite(measured) and np.isfinite(predicted)

@@ -24,14 +24,16 @@
  * temporaries in the caller's w (QD_DFD_R_W(n) reals, stated by the _work entry), ~1 kB on the stack (and
  * the lift's columns, (18 + n) K reals, but at -Os). */
 
-/* defined in qd_<robot>_d.c of the same library (no work memory: checked by the generator): did_full's graph with the
- * joints' sines and cosines given, arg = (q, v, a, sin, cos), sin and cos of q[7..18]; no test of its inputs or
- * outputs (dfd_r tests its own) */
-int qd_did_full_trig(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem);
+/* defined in qd_<robot>_d.c of the same library (no work memory: checked by the generator): did_full leg by leg with
+ * the joints' sines and cosines given, arg = (q, v, a, sin, cos), sin and cos of q[7..18], its legs' outputs in L
+ * (QD_DID_FULL_L reals: dfd_r's w, not the stack, the Cortex-M budget); no test of its inputs or outputs (dfd_r tests
+ * its own) */
+int qd_did_full_trig_in(const casadi_real** arg, casadi_real** res, casadi_real* L, casadi_int* iw, casadi_real* w,
+                        int mem);
 const casadi_int* qd_did_full_sparsity_out(casadi_int i);
 
 /* Reals of w qd_dfd_r_solve uses for n coordinates (the generator states the same number, checked below). */
-#define QD_DFD_R_W(n) ((n) * (n) + 14 * (n) + 3 * 18 * 18 + 36 + (n) * QD_DFD_R_COLUMNS(n) + QD_DFD_R_TAPE)
+#define QD_DFD_R_W(n) ((n) * (n) + 14 * (n) + 3 * 18 * 18 + 36 + (n) * QD_DFD_R_COLUMNS(n) + QD_DFD_R_TAPE + QD_DID_FULL_L)
 /* right-hand sides of the one LU solve: the n angle and n rate columns, 3 rotations, and the n of M_r^-1 */
 #define QD_DFD_R_COLUMNS(n) (3 * (n) + 3)
 
@@ -170,7 +172,7 @@ QD_INLINE int qd_dfd_r_solve(int n, int legs, int lift_quat, const casadi_real**
   /* dF/dq's nonzeros in H's place, dF/dv's in X's (n (3n + 3) >= 18 x 18), each scattered into its dense matrix */
   const casadi_real* did_arg[5] = {q, v, a, t.s, t.c};
   casadi_real* d_res[3] = {H, X, 0};
-  flag = qd_did_full_trig(did_arg, d_res, iw, w, mem);
+  flag = qd_did_full_trig_in(did_arg, d_res, tape + QD_DFD_R_TAPE, iw, w, mem);
   if (flag) return flag;
   qd_scatter(qd_did_full_sparsity_out(0), H, G);
   qd_scatter(qd_did_full_sparsity_out(1), X, H);
