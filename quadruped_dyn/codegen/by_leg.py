@@ -86,6 +86,7 @@ def by_leg_c(c_name: str, pieces: LegPieces, call: LegCall, precision: str, host
 
 
 def _leg_call(c_name: str, pieces: LegPieces, call: LegCall, k: int, nl: int) -> str:
+    """The call of robot leg k's template function, its outputs at L + nl k."""
     sigma = pieces.leg_signs(k)
     turned = any(x < 0 for x in sigma)
     local: list[str] = []
