@@ -21,7 +21,7 @@ import casadi as ca
 import numpy as np
 
 from quadruped_dyn.dynamics.crba import add_inertia, leg_mass_blocks, trunk_inertia, trunk_mass_block
-from quadruped_dyn.dynamics.leg_template import LegPieces, leg_templates, template_of
+from quadruped_dyn.dynamics.leg_template import LegPieces, leg_signs, leg_templates, template_of
 from quadruped_dyn.dynamics.newton_euler import aligned_leg_newton_euler, trunk_own_wrench
 from quadruped_dyn.math.spatial import dm, quat_to_rotation
 from quadruped_dyn.model.leg import Leg
@@ -69,17 +69,15 @@ def assembled_mass_matrix(robot: Robot, parts: list[dict[str, ca.SX]], signs: li
     return M
 
 
-def leg_signs(templates: tuple, k: int) -> np.ndarray:
-    """Robot leg k's joint signs in its template (``leg_template``)."""
-    t = templates[template_of(templates)[k]]
-    return t.signs[t.legs.index(k)]
+def gravity_in_trunk(q: ca.SX) -> ca.SX:
+    """g_b (3,): gravity in the trunk frame at q (19,) (quaternion x y z w at q[3:7])."""
+    return quat_to_rotation(q[3:7]).T @ dm(GRAVITY_W)
 
 
 def trunk_acceleration(q: ca.SX, v: ca.SX, a: ca.SX) -> ca.SX:
     """a0 = a_lin + w_b x v_b - g_b (3,): the trunk origin's classical acceleration minus gravity, trunk frame (a: the
     spatial acceleration of the project's convention, ``model/state.py``)."""
-    g_b = quat_to_rotation(q[3:7]).T @ dm(GRAVITY_W)
-    return a[0:3] + ca.cross(v[3:6], v[0:3]) - g_b
+    return a[0:3] + ca.cross(v[3:6], v[0:3]) - gravity_in_trunk(q)
 
 
 def trunk_head(name: str, output: str) -> ca.Function:

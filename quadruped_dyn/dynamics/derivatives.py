@@ -44,6 +44,7 @@ from functools import cache
 import casadi as ca
 import numpy as np
 
+from quadruped_dyn.dynamics.by_leg import gravity_in_trunk
 from quadruped_dyn.dynamics.grf import grf_solve
 from quadruped_dyn.dynamics.guarded import GuardedFunction, guard_fields, guarded_call, with_condition
 from quadruped_dyn.dynamics.newton_euler import inverse_dynamics
@@ -51,10 +52,10 @@ from quadruped_dyn.dynamics.reduced import check_regularity, regularity_function
 from quadruped_dyn.dynamics.reduced_projection import reduced_projection
 from quadruped_dyn.dynamics.rnea_derivatives import rnea_tangent_derivatives
 from quadruped_dyn.errors import InputError
-from quadruped_dyn.math.spatial import dm, quat_to_rotation, skew
+from quadruped_dyn.math.spatial import quat_to_rotation, skew
 from quadruped_dyn.model.robot import Robot, check_robot
 from quadruped_dyn.model.stance import StanceSet, stance_set
-from quadruped_dyn.model.state import GRAVITY_W, NQ_FULL, NV_FULL, check_array
+from quadruped_dyn.model.state import NQ_FULL, NV_FULL, check_array
 
 
 def quaternion_tangent(quat: ca.SX) -> ca.SX:
@@ -100,8 +101,7 @@ def cholesky_solve(M: ca.SX, B: ca.SX) -> ca.SX:
 
 
 def _rnea(robot: Robot, q: ca.SX, v: ca.SX, a: ca.SX) -> ca.SX:
-    g_b = quat_to_rotation(q[3:7]).T @ dm(GRAVITY_W)
-    return inverse_dynamics(robot, q[7:], g_b, v, a, ca.SX.zeros(12))
+    return inverse_dynamics(robot, q[7:], gravity_in_trunk(q), v, a, ca.SX.zeros(12))
 
 
 @dataclass(frozen=True)

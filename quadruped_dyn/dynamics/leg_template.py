@@ -138,8 +138,13 @@ class LegPieces:
 
     def leg_signs(self, k: int) -> tuple[float, float, float]:
         """Robot leg k's joint signs: its template's function takes sigma q, sigma qd, sigma qdd (module docstring)."""
-        t = self.templates[self.template_of[k]]
-        return tuple(float(x) for x in t.signs[t.legs.index(k)])  # type: ignore[return-value]
+        return tuple(float(x) for x in leg_signs(self.templates, k))  # type: ignore[return-value]
+
+
+def leg_signs(templates: tuple[LegTemplate, ...], k: int) -> np.ndarray:
+    """Robot leg k's joint signs (3,) in the template that stands for it."""
+    t = templates[template_of(templates)[k]]
+    return t.signs[t.legs.index(k)]
 
 
 def template_of(templates: tuple[LegTemplate, ...]) -> tuple[int, ...]:

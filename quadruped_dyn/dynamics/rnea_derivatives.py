@@ -25,19 +25,19 @@ import numpy as np
 from quadruped_dyn.dynamics.by_leg import (
     MASS_PARTS,
     assembled_mass_matrix,
-    leg_signs,
+    gravity_in_trunk,
     stacked,
     trunk_acceleration,
     trunk_head,
     unstacked,
 )
 from quadruped_dyn.dynamics.crba import leg_mass_blocks
-from quadruped_dyn.dynamics.leg_template import LegPieces, leg_templates, template_of
+from quadruped_dyn.dynamics.leg_template import LegPieces, leg_signs, leg_templates, template_of
 from quadruped_dyn.dynamics.newton_euler import aligned_leg_newton_euler, trunk_own_wrench
-from quadruped_dyn.math.spatial import dm, quat_to_rotation, skew
+from quadruped_dyn.math.spatial import dm, skew
 from quadruped_dyn.model.leg import Leg
 from quadruped_dyn.model.robot import Robot
-from quadruped_dyn.model.state import GRAVITY_W, NQ_FULL, NV_FULL
+from quadruped_dyn.model.state import NQ_FULL, NV_FULL
 
 #: A leg function's output L, in order: (name, rows, columns), each stacked column by column.
 LEG_PARTS: tuple[tuple[str, int, int], ...] = (("J_q", 9, 3), ("J_qd", 9, 3), ("J_w", 9, 3), *MASS_PARTS)
@@ -79,10 +79,6 @@ def leg_rows(leg: Leg, q: ca.SX, qd: ca.SX, qdd: ca.SX, w_b: ca.SX, alpha_b: ca.
     J_q = ca.horzcat(d_q1, ca.jacobian(y, q[1:]))
     J_qd = ca.horzcat(d_qd1, ca.jacobian(y, qd[1:]))
     return stacked((J_q, J_qd, J_w, M_ll, M_bl, ca.SX(m), h, I_o))
-
-
-def _g_b(q: ca.SX) -> ca.SX:
-    return quat_to_rotation(q[3:7]).T @ dm(GRAVITY_W)
 
 
 @cache
@@ -136,7 +132,7 @@ def _tail(robot: Robot, q: ca.SX, v: ca.SX, a: ca.SX, Ls: list[ca.SX],
         dw = dw + rows(parts["J_w"])
     M = assembled_mass_matrix(robot, all_parts, signs)
     M_lin = M[:, 0:3]
-    g_b = _g_b(q)
+    g_b = gravity_in_trunk(q)
     dq = ca.horzcat(ca.SX(NV_FULL, 3), -M_lin @ skew(g_b), *dq_legs)
     dv = ca.horzcat(M_lin @ skew(w_b), dw - M_lin @ skew(v_b), *dv_legs)
     return dq, dv, M
