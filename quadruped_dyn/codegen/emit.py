@@ -528,15 +528,15 @@ def _checked_reduced_c(c_text: str, casadi_header: str, functions: list[ca.Funct
 JOINT_ROWS_FIRST = ("M_full", "G_full", "nle_full", "id_full")
 #: Of those, the ones qd_<robot>.c also exports as qd_<name>_trig (arg: theirs, then sin and cos of q's joint angles)
 #: for the reduced files, which take the sines and cosines once per call (c/qd_reduced_solve.c); with
-#: qd_M_full_dense_trig (``_M_full_dense``), and qd_id_full_trig and qd_M_full_dense_legs_trig leg by leg
+#: qd_M_full_dense_trig (``_M_full_dense``), and qd_id_full_trig and qd_M_blocks_legs_trig leg by leg
 #: (``_reduced_calls_by_leg``).
 TRIG_GIVEN = ("G_full",)
-#: qd_id_full_trig's arg (q, v, a, f, sin, cos) and qd_M_full_dense_legs_trig's (q, sin, cos) as their pieces read them
+#: qd_id_full_trig's arg (q, v, a, sin, cos) and qd_M_blocks_legs_trig's (q, sin, cos) as their pieces read them
 #: (``dynamics.by_leg``): the reduced files' calls, leg by leg (``_reduced_calls_by_leg``).
 ID_FULL_CALL = LegCall(head_args=(0, 1, 2), leg_inputs=(("arg", 1, 3), ("arg", 2, 3), ("head", 0), ("joint", 0, 7),
-                                                        ("joint", 1, 6), ("joint", 2, 6), ("leg", 3, 0)),
-                       sin_arg=4, tail_args=(0, 1, 2))
-M_DENSE_CALL = LegCall(head_args=(), leg_inputs=(("joint", 0, 7),), sin_arg=1, tail_args=())
+                                                        ("joint", 1, 6), ("joint", 2, 6)),
+                       sin_arg=3, tail_args=(0, 1, 2))
+M_BLOCKS_CALL = LegCall(head_args=(), leg_inputs=(("joint", 0, 7),), sin_arg=1, tail_args=())
 _SIGNATURE = "(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem)"
 
 
@@ -551,7 +551,7 @@ def _joint_rows_first(robot: Robot, c_text: str, functions: list[ca.Function], p
     qd_<name>_eval gives a NULL input qd_zeros. The same operations on the same values (docs/benchmark.md). For the
     reduced files the graphs are also exported with the joints' sines and cosines as inputs (no NULL input):
     qd_<name>_trig for ``TRIG_GIVEN``, qd_M_full_dense_trig (``_M_full_dense``); qd_id_full_trig and
-    qd_M_full_dense_legs_trig leg by leg (``_reduced_calls_by_leg``)."""
+    qd_M_blocks_legs_trig leg by leg (``_reduced_calls_by_leg``)."""
     raw = evaluations(c_text, [f.name() for f in functions])
     helpers = []
     for f in functions:
@@ -618,17 +618,18 @@ def _M_full_dense(functions: list[ca.Function], precision: str, host_helpers: fr
 
 
 def _reduced_calls_by_leg(robot: Robot, precision: str, host_helpers: frozenset[str]) -> str:
-    """qd_id_full_trig (q, v, a, f, sin, cos) -> (w_res, tau) and qd_M_full_dense_legs_trig (q, sin, cos) -> M
-    (``_M_full_dense``'s), the joints' sines and cosines given, each as one leg function per leg template called once
-    per leg (``dynamics.by_leg``, ``codegen.by_leg``), whose code stays in the instruction cache: for the reduced
-    files' fd_r, C_r + G_r, id_r and dfd_r (c/qd_reduced_solve.c), which call them among ~45 kB of other code per call
+    """qd_id_full_trig (q, v, a, sin, cos) -> (w_res, tau) (no foot forces) and qd_M_blocks_legs_trig (q, sin, cos) ->
+    M's nonzero blocks (``by_leg.mass_blocks``: fd_r's), the joints' sines and cosines given, each as one leg function
+    per leg template called once per leg (``dynamics.by_leg``, ``codegen.by_leg``), whose code stays in the instruction
+    cache: for the reduced files' fd_r, C_r + G_r, id_r and dfd_r (c/qd_reduced_solve.c), which call them among ~45 kB
+    of other code per call
     (docs/benchmark.md, "id_full and M by leg"). M_r calls ``_M_full_dense``'s qd_M_full_dense_trig, one function of
     fewer instructions, which fits the cache beside M_r's other ~20 kB."""
-    return ("/* id_full with the joints' sines and cosines given, leg by leg: arg = (q, v, a, f, sin, cos) */\n"
+    return ("/* id_full without foot forces, the joints' sines and cosines given, leg by leg: arg = (q, v, a, sin, cos) */\n"
             + by_leg_c("qd_id_full_trig", id_full_pieces(robot), ID_FULL_CALL, precision, host_helpers) + "\n"
-            "/* M_full (18 x 18, dense column-major, zeros written) with the joints' sines and cosines given, leg by leg: "
-            "arg = (q, sin, cos) */\n"
-            + by_leg_c("qd_M_full_dense_legs_trig", mass_matrix_pieces(robot), M_DENSE_CALL, precision, host_helpers))
+            "/* M_full's nonzero blocks (M_bb, then per leg M_bl and M_ll, column-major: dynamics/by_leg.py, mass_blocks) "
+            "with the joints' sines and cosines given, leg by leg: arg = (q, sin, cos) */\n"
+            + by_leg_c("qd_M_blocks_legs_trig", mass_matrix_pieces(robot), M_BLOCKS_CALL, precision, host_helpers))
 
 
 def _first_evaluation(c_text: str) -> int:

@@ -6,11 +6,12 @@ call, with a stance's parts and the solve around them: ~60 kB of machine code pe
 instruction cache. Leg by leg, one leg function serves the four legs (docs/benchmark.md, "id_full and M by leg"):
 
 * ``id_full_pieces``: head(q, v, a) -> a0 = a_lin + w_b x v_b - g_b (the trunk origin's classical acceleration minus
-  gravity, trunk frame); leg(w_b, alpha_b, a0, q_l, qd_l, qdd_l, f_l, p) -> (the leg's wrench on the trunk (6), its
+  gravity, trunk frame); leg(w_b, alpha_b, a0, q_l, qd_l, qdd_l, p) -> (the leg's wrench on the trunk (6), its
   torques (3)) by the leg's Newton-Euler recursion; tail(q, v, a, y_0..y_3) -> (w_res, tau) = (the trunk's own
-  wrench + the legs', the legs' torques): ``newton_euler.inverse_dynamics``;
-* ``mass_matrix_pieces``: leg(q_l, p) -> the leg's part of M (``MASS_PARTS``); tail(L_0..L_3) -> M (18 x 18, dense):
-  ``crba.mass_matrix_crba``.
+  wrench + the legs', the legs' torques): ``newton_euler.inverse_dynamics`` without foot forces (the reduced terms'
+  rnea: their foot forces are the GRF projection's, not rnea's input);
+* ``mass_matrix_pieces``: leg(q_l, p) -> the leg's part of M (``MASS_PARTS``); tail(L_0..L_3) -> M's nonzero blocks
+  (``mass_blocks``): ``crba.mass_matrix_crba``.
 """
 
 from __future__ import annotations
@@ -69,6 +70,17 @@ def assembled_mass_matrix(robot: Robot, parts: list[dict[str, ca.SX]], signs: li
     return M
 
 
+def mass_blocks(M: ca.SX | ca.DM) -> ca.SX | ca.DM:
+    """M's (18 x 18) nonzero blocks, as fd_r reads them (codegen/c/qd_reduced_solve.c, QD_M_BB, QD_M_BL, QD_M_LL):
+    M_bb (6 x 6), then for each leg l M_bl (6 x 3) and M_ll (3 x 3), each column by column: (144,). M's blocks
+    between two legs are zero and M_lb = M_bl^T: nothing else."""
+    parts = [M[0:6, 0:6]]
+    for k in range(4):
+        s = slice(6 + 3 * k, 9 + 3 * k)
+        parts += [M[0:6, s], M[s, s]]
+    return ca.vertcat(*(ca.vec(ca.densify(x)) for x in parts))
+
+
 def gravity_in_trunk(q: ca.SX) -> ca.SX:
     """g_b (3,): gravity in the trunk frame at q (19,) (quaternion x y z w at q[3:7])."""
     return quat_to_rotation(q[3:7]).T @ dm(GRAVITY_W)
@@ -88,18 +100,18 @@ def trunk_head(name: str, output: str) -> ca.Function:
 
 @cache
 def id_full_pieces(robot: Robot) -> LegPieces:
-    """id_full(q, v, a, f) -> (w_res, tau) leg by leg (module docstring)."""
+    """id_full(q, v, a, f = 0) -> (w_res, tau) leg by leg (module docstring)."""
     q, v, a = ca.SX.sym("q", NQ_FULL), ca.SX.sym("v", NV_FULL), ca.SX.sym("a", NV_FULL)
     opts = {"cse": True}
     head = trunk_head("id_full_head", "a0")
     templates = leg_templates(robot)
     legs = []
     for i, t in enumerate(templates):
-        xs = [ca.SX.sym(n, 3) for n in ("w_b", "alpha_b", "a0", "q_l", "qd_l", "qdd_l", "f_l")]
-        lf = aligned_leg_newton_euler(t.leg, xs[3], xs[4], xs[5], xs[0], xs[1], xs[2], xs[6])
+        xs = [ca.SX.sym(n, 3) for n in ("w_b", "alpha_b", "a0", "q_l", "qd_l", "qdd_l")]
+        lf = aligned_leg_newton_euler(t.leg, xs[3], xs[4], xs[5], xs[0], xs[1], xs[2], ca.SX.zeros(3))
         y = ca.vertcat(lf.f1, lf.n1 + ca.cross(dm(t.leg.hip), lf.f1), lf.tau)
-        legs.append(ca.Function(f"id_full_leg{i}", [*xs, t.p], [y], ["w_b", "alpha_b", "a0", "q_l", "qd_l", "qdd_l",
-                                                                        "f_l", "p"], ["y"], opts))
+        legs.append(ca.Function(f"id_full_leg{i}", [*xs, t.p], [y], ["w_b", "alpha_b", "a0", "q_l", "qd_l", "qdd_l", "p"],
+                                ["y"], opts))
     of = template_of(templates)
     ys = [ca.SX.sym(f"y_{k}", legs[of[k]].sparsity_out(0)) for k in range(4)]
     w_res = trunk_own_wrench(robot.trunk, v[3:6], a[3:6], trunk_acceleration(q, v, a))
@@ -113,7 +125,7 @@ def id_full_pieces(robot: Robot) -> LegPieces:
 
 @cache
 def mass_matrix_pieces(robot: Robot) -> LegPieces:
-    """M(q) (18 x 18, dense: zeros written) leg by leg (module docstring)."""
+    """M(q)'s nonzero blocks (``mass_blocks``) leg by leg (module docstring)."""
     opts = {"cse": True}
     templates = leg_templates(robot)
     legs = []
@@ -123,5 +135,5 @@ def mass_matrix_pieces(robot: Robot) -> LegPieces:
     of = template_of(templates)
     Ls = [ca.SX.sym(f"L_{k}", legs[of[k]].sparsity_out(0)) for k in range(4)]
     M = assembled_mass_matrix(robot, [unstacked(L, MASS_PARTS) for L in Ls], [leg_signs(templates, k) for k in range(4)])
-    tail = ca.Function("M_tail", Ls, [ca.densify(M)], [f"L_{k}" for k in range(4)], ["M"], opts)
+    tail = ca.Function("M_tail", Ls, [mass_blocks(M)], [f"L_{k}" for k in range(4)], ["M_blocks"], opts)
     return LegPieces(None, templates, tuple(legs), of, tail)

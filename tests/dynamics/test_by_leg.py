@@ -8,7 +8,7 @@ import casadi as ca
 import numpy as np
 import pytest
 
-from quadruped_dyn.dynamics.by_leg import id_full_pieces, mass_matrix_pieces
+from quadruped_dyn.dynamics.by_leg import id_full_pieces, mass_blocks, mass_matrix_pieces
 from quadruped_dyn.dynamics.leg_template import LegPieces
 from quadruped_dyn.dynamics.newton_euler import full_dynamics
 from quadruped_dyn.model.robot import ROBOT_NAMES, load_robot
@@ -18,12 +18,13 @@ from tests.conftest import assert_close
 from tests.dynamics.test_leg_template import turned_robot
 
 
-def _legs(pieces: LegPieces, k: int, head: list[np.ndarray], q: np.ndarray, v: np.ndarray, a: np.ndarray,
-          f: np.ndarray | None) -> np.ndarray:
-    """Leg k's function at the robot's state, as the C calls it: joint inputs times the leg's signs."""
+def _legs(pieces: LegPieces, k: int, head: list[np.ndarray] | None, q: np.ndarray, v: np.ndarray,
+          a: np.ndarray) -> np.ndarray:
+    """Leg k's function at the robot's state, as the C calls it: joint inputs times the leg's signs (M's legs: no
+    head, the angles alone)."""
     s, sigma = slice(3 * k, 3 * k + 3), np.array(pieces.leg_signs(k))
-    joints = [sigma * q[7:][s]] if f is None else [sigma * q[7:][s], sigma * v[6:][s], sigma * a[6:][s], f[s]]
-    trunk = [] if f is None else [v[3:6], a[3:6], *head]
+    joints = [sigma * q[7:][s]] if head is None else [sigma * q[7:][s], sigma * v[6:][s], sigma * a[6:][s]]
+    trunk = [] if head is None else [v[3:6], a[3:6], *head]
     return pieces.legs[pieces.template_of[k]](*trunk, *joints, np.array(pieces.leg_values(k)))
 
 
@@ -33,14 +34,18 @@ def _check(robot, seeds=(0, 1)) -> None:
     for seed in seeds:
         rng = np.random.default_rng(seed)
         s = random_state(robot.lower, robot.upper, rng)
-        f = rng.normal(scale=20.0, size=12)
         head = [np.asarray(x) for x in id_pieces.head.call([s.q, s.v, s.a])]
-        ys = [_legs(id_pieces, k, head, s.q, s.v, s.a, f) for k in range(4)]
-        for name, ours, whole in zip(("w_res", "tau"), id_pieces.tail(s.q, s.v, s.a, *ys), fd.id_full(s.q, s.v, s.a, f)):
+        ys = [_legs(id_pieces, k, head, s.q, s.v, s.a) for k in range(4)]
+        no_force = np.zeros(12)  # the reduced terms' rnea: their foot forces are the GRF projection's
+        for name, ours, whole in zip(("w_res", "tau"), id_pieces.tail(s.q, s.v, s.a, *ys),
+                                     fd.id_full(s.q, s.v, s.a, no_force)):
             assert_close(np.array(ours), np.array(whole), REL_TOL_GRAPH, f"{robot.name} id_full {name} by leg")
-        Ls = [_legs(m_pieces, k, [], s.q, s.v, s.a, None) for k in range(4)]
-        assert_close(np.array(m_pieces.tail(*Ls)), np.array(ca.densify(fd.M_full_crba(s.q))), REL_TOL_GRAPH,
-                     f"{robot.name} M by leg")
+        Ls = [_legs(m_pieces, k, None, s.q, s.v, s.a) for k in range(4)]
+        M = np.array(ca.densify(fd.M_full_crba(s.q)))
+        assert_close(np.array(m_pieces.tail(*Ls)), np.array(mass_blocks(ca.DM(M))), REL_TOL_GRAPH,
+                     f"{robot.name} M's blocks by leg")
+        legs = [slice(6 + 3 * k, 9 + 3 * k) for k in range(4)]  # the blocks are all of M: none between two legs
+        assert all(not M[a, b].any() for a in legs for b in legs if a != b) and np.array_equal(M[6:, :6], M[:6, 6:].T)
 
 
 @pytest.mark.parametrize("name", ROBOT_NAMES)

@@ -132,7 +132,7 @@ QD_INLINE int qd_dfd_r_solve(int n, int legs, int lift_quat, const casadi_real**
   casadi_real *M_r = w, *qdd = M_r + n * n, *S_b = qdd + n, *T_b = S_b + 6 * n, *M = T_b + 6 * n, *G = M + 18 * 18,
               *H = G + 18 * 18, *F = H + 18 * 18, *y = F + 18, *col = y + 18, *X = col + n, *tape = X + n * QD_DFD_R_COLUMNS(n);
   const int m = QD_DFD_R_COLUMNS(n);
-  casadi_real q[19], v[18], a[18], k[18], f[12] = {0}, dv[6], da[6], dSF[QD_N_MAX], da_qd[6], reg = 0;
+  casadi_real q[19], v[18], a[18], k[18], dv[6], da[6], dSF[QD_N_MAX], da_qd[6], reg = 0;
   casadi_real dq[QD_N_MAX] = {0}, dqd[QD_N_MAX] = {0}, dtheta[3] = {0};
   qd_trig t; /* q_r's sines and cosines, once for the parts, id_full, M_full and the lift */
   qd_trig_of(n, arg[0], &t);
@@ -142,10 +142,10 @@ QD_INLINE int qd_dfd_r_solve(int n, int legs, int lift_quat, const casadi_real**
   if (!flag) flag = qd_regular_value(reg);
   if (flag) return flag;
   qd_full_q(arg[0], arg[3], q);
-  const casadi_real* d_arg[6] = {q, v, a, f, t.s, t.c};
+  const casadi_real* d_arg[5] = {q, v, a, t.s, t.c};
   casadi_real* i_res[2] = {F, F + 6};
   flag = qd_id_full_trig(d_arg, i_res, iw, w, mem);
-  if (!flag) flag = qd_M_full_dense(q, &t, M, iw, w, mem, 0);
+  if (!flag) flag = qd_M_full(q, &t, M, iw, w, mem, 0);
   if (flag) return flag;
   qd_project(n, S_b, F, qdd);
   qd_M_r_legs(n, legs, S_b, T_b, M, M_r);

@@ -44,6 +44,51 @@
 #define QD_UNROLL
 #endif
 
+/* Two reals at once where the compiler has vectors (GCC's and Clang's vector extension: SSE2 pairs on x86-64, NEON on
+ * AArch64, scalar code where the target has none): the same operations on each entry, in the same order, as the scalar
+ * loops below them, so the same results to the bit (docs/benchmark.md, "Pairs"). */
+#if defined(__GNUC__)
+typedef casadi_real qd_pair __attribute__((vector_size(2 * sizeof(casadi_real))));
+#define QD_PAIRS 1
+#endif
+
+/* y (m) += A x: A (m x p, column-major, column stride lda), each entry's sum over k ascending; m even with pairs. */
+QD_INLINE void qd_gemv(int m, int p, const casadi_real* A, int lda, const casadi_real* x, casadi_real* y) {
+#ifdef QD_PAIRS
+  if (!(m & 1)) {
+    qd_pair s[(QD_N_MAX + 1) / 2], a;
+    for (int i = 0; i < m / 2; ++i) memcpy(&s[i], y + 2 * i, sizeof a);
+    for (int k = 0; k < p; ++k) {
+      const casadi_real xk = x[k];
+      for (int i = 0; i < m / 2; ++i) {
+        memcpy(&a, A + 2 * i + lda * k, sizeof a);
+        s[i] += a * xk;
+      }
+    }
+    for (int i = 0; i < m / 2; ++i) memcpy(y + 2 * i, &s[i], sizeof a);
+    return;
+  }
+#endif
+  for (int k = 0; k < p; ++k) {
+    for (int i = 0; i < m; ++i) y[i] += A[i + lda * k] * x[k];
+  }
+}
+
+/* y (m) -= a u, entry by entry. */
+QD_INLINE void qd_axpy_minus(int m, casadi_real u, const casadi_real* a, casadi_real* y) {
+  int i = 0;
+#ifdef QD_PAIRS
+  for (; i + 2 <= m; i += 2) {
+    qd_pair s, b;
+    memcpy(&s, y + i, sizeof s);
+    memcpy(&b, a + i, sizeof b);
+    s -= b * u;
+    memcpy(y + i, &s, sizeof s);
+  }
+#endif
+  for (; i < m; ++i) y[i] -= a[i] * u;
+}
+
 /* flag, or QD_NONFINITE if any of the n_out outputs (nnz[i] entries each) is not finite: x - x is 0 for a finite x,
  * else NaN; four sums of it, branch-free and vectorised (~8x faster than isfinite per entry). Not -ffast-math. */
 static int qd_finite(int flag, casadi_real** res, int n_out, const casadi_int* nnz) {
@@ -113,10 +158,10 @@ static int qd_factors(const casadi_real* q_r, const casadi_real* quat, const qd_
 }
 
 /* defined in qd_<robot>.c of the same library (no work memory: checked by the generator): M_full (dense, zeros
- * written; also leg by leg, _legs_), G_full and id_full (leg by leg) with the joints' sines and cosines as their last
- * two inputs, (q, sin, cos) and (q, v, a, f, sin, cos), sin and cos of q[7..18] */
+ * written), M's nonzero blocks (leg by leg), G_full, and id_full without foot forces (leg by leg) with the joints' sines
+ * and cosines as their last two inputs, (q, sin, cos) and (q, v, a, sin, cos), sin and cos of q[7..18] */
 int qd_M_full_dense_trig(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem);
-int qd_M_full_dense_legs_trig(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem);
+int qd_M_blocks_legs_trig(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem);
 int qd_G_full_trig(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem);
 int qd_id_full_trig(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem);
 
@@ -127,16 +172,22 @@ static void qd_full_q(const casadi_real* q_r, const casadi_real* quat, casadi_re
   for (int i = 0; i < 12; ++i) q[7 + i] = q_r[i];
 }
 
-/* M (18 x 18, dense column-major) at q (t: q_r's sines and cosines, q's joint angles) by qd_M_full_dense_trig, or with
- * by_leg by qd_M_full_dense_legs_trig: the same M to round-off; leg by leg the code is smaller, and a caller that runs
- * much other code per call (fd_r) gains more from that than it loses to the calls (docs/benchmark.md, "id_full and M
- * by leg"). */
-static int qd_M_full_dense(const casadi_real* q, const qd_trig* t, casadi_real* M, casadi_int* iw, casadi_real* w,
-                           int mem, int by_leg) {
+/* M (18 x 18, dense column-major) at q (t: q_r's sines and cosines, q's joint angles), or with blocks only M's nonzero
+ * blocks (QD_M_BLOCKS reals, read by QD_M_BB, QD_M_BL, QD_M_LL) leg by leg: the same values to round-off. Leg by leg
+ * and without M's zeros the code is smaller, and a caller that runs much other code per call (fd_r) gains more from
+ * that than it loses to the calls (docs/benchmark.md, "id_full and M by leg", "M's blocks"). */
+static int qd_M_full(const casadi_real* q, const qd_trig* t, casadi_real* M, casadi_int* iw, casadi_real* w, int mem,
+                     int blocks) {
   const casadi_real* m_arg[3] = {q, t->s, t->c};
   casadi_real* m_res[1] = {M};
-  return by_leg ? qd_M_full_dense_legs_trig(m_arg, m_res, iw, w, mem) : qd_M_full_dense_trig(m_arg, m_res, iw, w, mem);
+  return blocks ? qd_M_blocks_legs_trig(m_arg, m_res, iw, w, mem) : qd_M_full_dense_trig(m_arg, m_res, iw, w, mem);
 }
+/* M's blocks (dynamics/by_leg.py, mass_blocks): M_bb (6 x 6), then per leg l M_bl (6 x 3) and M_ll (3 x 3), each
+ * column-major; the blocks between two legs are zero and M_lb = M_bl^T. */
+#define QD_M_BLOCKS (36 + 4 * 27)
+#define QD_M_BB(Mc, i, k) (Mc)[(i) + 6 * (k)]
+#define QD_M_BL(Mc, l, i, c) (Mc)[36 + 27 * (l) + (i) + 6 * (c)]
+#define QD_M_LL(Mc, l, i, c) (Mc)[54 + 27 * (l) + (i) + 3 * (c)]
 
 /* M_r = S M T (n x n, column-major) by columns: mt = M[:, 0:6] T_b e_j + M[:, 6 + j], then S_b mt[0:6] + mt[6:18].
  * legs: bit i for a stance leg i; S_b's rows and T_b's columns of the other legs' joints are zero: no trunk product
@@ -183,21 +234,20 @@ static void qd_project(int n, const casadi_real* S_b, const casadi_real* F, casa
   for (int i = 0; i < n; ++i) tau[i] = s[i];
 }
 
-/* tau (n) = S rnea(q, v, a), rnea by the library's qd_id_full_trig (zero foot forces; t: q_r's sines and cosines);
+/* tau (n) = S rnea(q, v, a), rnea by the library's qd_id_full_trig (no foot forces; t: q_r's sines and cosines);
  * work: QD_RNEA_R_WORK reals, the caller's (fd_r lends space it uses later: Cortex-M stack budget). */
 static int qd_rnea_r(int n, const casadi_real* S_b, const casadi_real* q_r, const casadi_real* quat, const qd_trig* t,
                      const casadi_real* v, const casadi_real* a, casadi_real* tau, casadi_real* work, casadi_int* iw,
                      casadi_real* w, int mem) {
-  casadi_real *q = work, *F = q + 19, *f = F + 18;
-  for (int i = 0; i < 12; ++i) f[i] = 0;
+  casadi_real *q = work, *F = q + 19;
   qd_full_q(q_r, quat, q);
-  const casadi_real* i_arg[6] = {q, v, a, f, t->s, t->c};
+  const casadi_real* i_arg[5] = {q, v, a, t->s, t->c};
   casadi_real* i_res[2] = {F, F + 6};
   int flag = qd_id_full_trig(i_arg, i_res, iw, w, mem);
   if (!flag) qd_project(n, S_b, F, tau);
   return flag;
 }
-#define QD_RNEA_R_WORK (19 + 18 + 12)
+#define QD_RNEA_R_WORK (19 + 18)
 
 /* The reduced terms (dynamics/reduced_projection.py) into res[0] (n): which = 0 M_r (arg = q_r, quat; S M T),
  * 1 C_r + G_r (q_r, qd_r, quat; S rnea(q, v, k)), 2 G_r (q_r, quat; S G_full), 3 id_r (q_r, qd_r, qdd_r, quat;
@@ -226,7 +276,7 @@ QD_INLINE int qd_reduced_term(int n, int legs, int which, const casadi_real** ar
     if (!flag) qd_project(n, S_b, M, res[0]);
     return flag;
   }
-  flag = qd_M_full_dense(q, &t, M, iw, w, mem, 0);
+  flag = qd_M_full(q, &t, M, iw, w, mem, 0);
   if (!flag) qd_M_r_legs(n, legs, S_b, T_b, M, res[0]);
   return flag;
 }
@@ -282,11 +332,17 @@ static void qd_lu_solve(int n, const casadi_real* LU, const int* piv, casadi_rea
  * from column k on); piv, unless null, gets the row swapped with k at step k (qd_bound_exceeded's solves). 0, or
  * QD_SINGULAR when a pivot is below QD_SINGULAR_RTOL * scale (qd_lu_factor's test). */
 QD_INLINE int qd_gauss_solve(int n, casadi_real* A, casadi_real scale, int* piv) {
+  casadi_real inv[QD_N_MAX]; /* 1 / U's diagonal, for U x = y */
   QD_UNROLL for (int k = 0; k < n; ++k) { /* A[i + n j] = A_ij */
     casadi_real* col = A + n * k;
-    int p = k;
-    for (int i = k + 1; i < n; ++i) p = fabs(col[i]) > fabs(col[p]) ? i : p;
-    if (!(fabs(col[p]) > QD_SINGULAR_RTOL * scale)) return QD_SINGULAR;
+    int p = k; /* the first entry of largest magnitude, found by its value (a chain of compares, not of loads) */
+    casadi_real big = fabs(col[k]);
+    for (int i = k + 1; i < n; ++i) {
+      const casadi_real a = fabs(col[i]);
+      p = a > big ? i : p;
+      big = a > big ? a : big;
+    }
+    if (!(big > QD_SINGULAR_RTOL * scale)) return QD_SINGULAR;
     if (piv) piv[k] = p;
     if (p != k) { /* the columns left of k are not read again */
       for (int j = k; j <= n; ++j) {
@@ -295,17 +351,17 @@ QD_INLINE int qd_gauss_solve(int n, casadi_real* A, casadi_real scale, int* piv)
         A[p + n * j] = t;
       }
     }
-    casadi_real inv = 1 / col[k];
-    for (int i = k + 1; i < n; ++i) col[i] *= inv; /* the multipliers */
+    inv[k] = 1 / col[k];
+    for (int i = k + 1; i < n; ++i) col[i] *= inv[k]; /* the multipliers */
     QD_UNROLL for (int j = k + 1; j <= n; ++j) {
       casadi_real* cj = A + n * j;
       casadi_real u = cj[k];
-      QD_UNROLL for (int i = k + 1; i < n; ++i) cj[i] -= col[i] * u;
+      qd_axpy_minus(n - k - 1, u, col + k + 1, cj + k + 1);
     }
   }
   casadi_real* x = A + n * n;
-  QD_UNROLL for (int j = n - 1; j >= 0; --j) { /* U x = y, column by column */
-    x[j] /= A[j + n * j];
+  QD_UNROLL for (int j = n - 1; j >= 0; --j) { /* U x = y, column by column; products, not divisions, on its chain */
+    x[j] *= inv[j];
     QD_UNROLL for (int i = 0; i < j; ++i) x[i] -= A[i + n * j] * x[j];
   }
   return 0;
@@ -378,14 +434,16 @@ static int qd_fd_r_factor(int n, const casadi_real* tau_ext, casadi_real* M, int
   return piv ? qd_lu_factor(n, M, piv, *max) : 0;
 }
 
-/* x <- M_r^-1 x with a swing leg at least (legs as qd_M_r_legs'), M_r = S M T never formed (docs/formulation.md, "fd_r
- * with a swing leg"): a swing leg l's rows read M_lb a_b + M_ll qdd_l = x_l (a_b = T_b qdd_r, the trunk's acceleration),
- * so qdd_l = w_l - Z_l a_b with [Z_l, w_l] = M_ll^-1 [M_lb, x_l] (3 x 3 LU, no pivoting: M_ll is SPD); folded into the
- * trunk, M_bb <- M_bb - sum M_bl Z_l (in a copy of M_bb) and the rest R (stance joints, row 12; m = n - 3 swing legs)
- * solves K qdd_R = x_R - S_b[R] sum M_bl w_l with K = (S M T)[R, R] (qd_gauss_solve of [K, y]); then qdd_l. M's swing
- * blocks and [K, y] are checked finite (QD_NONFINITE); the swing pivots against QD_SINGULAR_RTOL max|M_ll|, K's against
- * QD_SINGULAR_RTOL max(max|K|, max|M_ll|) (QD_SINGULAR). work: [K, y], then [Z_l, w_l] (3 x 7) per swing leg. */
-QD_INLINE int qd_fd_r_folded(int n, int legs, const casadi_real* S_b, const casadi_real* T_b, const casadi_real* M,
+/* x <- M_r^-1 x (legs as qd_M_r_legs'), M_r = S M T never formed, from M's blocks Mc (QD_M_BB, QD_M_BL, QD_M_LL;
+ * docs/formulation.md, "fd_r without M_r"): a swing leg l's rows of S_b and columns of T_b are zero, so its rows read
+ * M_lb a_b + M_ll qdd_l = x_l (a_b = T_b qdd_r, the trunk's acceleration), so qdd_l = w_l - Z_l a_b with
+ * [Z_l, w_l] = M_ll^-1 [M_lb, x_l] (3 x 3 LU, no pivoting: M_ll is SPD); folded into the trunk,
+ * M_bb <- M_bb - sum M_bl Z_l (in a copy of M_bb) and the rest R (stance joints, row 12; m = n - 3 swing legs)
+ * solves K qdd_R = x_R - S_b[R] sum M_bl w_l with K = (S M T)[R, R] (qd_gauss_solve of [K, y]); then qdd_l. With four
+ * feet there is no swing leg and K is M_r. M's swing blocks and [K, y] are checked finite (QD_NONFINITE); the swing
+ * pivots against QD_SINGULAR_RTOL max|M_ll|, K's against QD_SINGULAR_RTOL max(max|K|, max|M_ll|) (QD_SINGULAR).
+ * work: [K, y], then [Z_l, w_l] (3 x 7) per swing leg: m (m + 1) + 21 (4 - stance legs) <= 169 reals. */
+QD_INLINE int qd_fd_r_folded(int n, int legs, const casadi_real* S_b, const casadi_real* T_b, const casadi_real* Mc,
                              casadi_real* x, casadi_real* work) {
   const int m = n - 3 * (4 - (legs & 1) - (legs >> 1 & 1) - (legs >> 2 & 1) - (legs >> 3 & 1));
   int r[QD_N_MAX];
@@ -396,58 +454,62 @@ QD_INLINE int qd_fd_r_folded(int n, int legs, const casadi_real* S_b, const casa
   casadi_real *K = work, *y = K + m * m, *Z = y + m, f[6] = {0, 0, 0, 0, 0, 0}, sw[4] = {0, 0, 0, 0}, scale = 0;
   for (int l = 0; l < 4; ++l) { /* the swing blocks M_ll: finite, and their scale */
     if (legs >> l & 1) continue;
-    const casadi_real* A = M + (6 + 3 * l) * 19;
     for (int j = 0; j < 3; ++j) {
       for (int i = 0; i < 3; ++i) {
-        sw[0] += A[i + 18 * j] - A[i + 18 * j];
-        scale = fabs(A[i + 18 * j]) > scale ? fabs(A[i + 18 * j]) : scale;
+        const casadi_real a = QD_M_LL(Mc, l, i, j);
+        sw[0] += a - a;
+        scale = fabs(a) > scale ? fabs(a) : scale;
       }
     }
   }
   if (!(sw[0] == 0)) return QD_NONFINITE;
   const casadi_real thr = QD_SINGULAR_RTOL * scale;
-  casadi_real Mbb[36]; /* M_bb, folded below: a copy, which the compiler need not assume aliases M_bl */
-  for (int k = 0; k < 6; ++k) {
-    for (int i = 0; i < 6; ++i) Mbb[i + 6 * k] = M[i + 18 * k];
-  }
+  casadi_real Mbb[36]; /* M_bb, folded below: a copy */
+  for (int i = 0; i < 36; ++i) Mbb[i] = Mc[i];
   for (int l = 0; l < 4; ++l) {
     if (legs >> l & 1) continue;
-    const casadi_real* A = M + (6 + 3 * l) * 19; /* M_ll: A[i + 18 j] */
-    casadi_real u00 = A[0], u01 = A[18], u02 = A[36], l10 = A[1] / u00, l20 = A[2] / u00;
-    casadi_real u11 = A[19] - l10 * u01, u12 = A[37] - l10 * u02, l21 = (A[20] - l20 * u01) / u11;
-    casadi_real u22 = A[38] - l20 * u02 - l21 * u12, i00 = 1 / u00, i11 = 1 / u11, i22 = 1 / u22;
+    const casadi_real* B = &QD_M_BL(Mc, l, 0, 0); /* M_bl: B[i + 6 c] */
+    casadi_real u00 = QD_M_LL(Mc, l, 0, 0), u01 = QD_M_LL(Mc, l, 0, 1), u02 = QD_M_LL(Mc, l, 0, 2);
+    casadi_real l10 = QD_M_LL(Mc, l, 1, 0) / u00, l20 = QD_M_LL(Mc, l, 2, 0) / u00;
+    casadi_real u11 = QD_M_LL(Mc, l, 1, 1) - l10 * u01, u12 = QD_M_LL(Mc, l, 1, 2) - l10 * u02;
+    casadi_real l21 = (QD_M_LL(Mc, l, 2, 1) - l20 * u01) / u11;
+    casadi_real u22 = QD_M_LL(Mc, l, 2, 2) - l20 * u02 - l21 * u12, i00 = 1 / u00, i11 = 1 / u11, i22 = 1 / u22;
     if (!(fabs(u00) > thr && fabs(u11) > thr && fabs(u22) > thr)) return QD_SINGULAR;
-    for (int p = 0; p <= 6; ++p) { /* [Z_l, w_l] = M_ll^-1 [M_lb, x_l] */
-      const casadi_real* a = p < 6 ? M + 6 + 3 * l + 18 * p : x + 3 * l;
-      casadi_real y1 = a[1] - l10 * a[0], x2 = (a[2] - l20 * a[0] - l21 * y1) * i22, x1 = (y1 - u12 * x2) * i11;
-      Z[3 * p] = (a[0] - u01 * x1 - u02 * x2) * i00, Z[3 * p + 1] = x1, Z[3 * p + 2] = x2;
+    for (int p = 0; p <= 6; ++p) { /* [Z_l, w_l] = M_ll^-1 [M_lb, x_l], M_lb's column p = M_bl's row p */
+      const casadi_real a0 = p < 6 ? B[p] : x[3 * l], a1 = p < 6 ? B[p + 6] : x[3 * l + 1];
+      const casadi_real a2 = p < 6 ? B[p + 12] : x[3 * l + 2];
+      casadi_real y1 = a1 - l10 * a0, x2 = (a2 - l20 * a0 - l21 * y1) * i22, x1 = (y1 - u12 * x2) * i11;
+      Z[3 * p] = (a0 - u01 * x1 - u02 * x2) * i00, Z[3 * p + 1] = x1, Z[3 * p + 2] = x2;
     }
-    const casadi_real* B = M + 18 * (6 + 3 * l); /* M_bl: B[i + 18 c], i < 6 */
     for (int j = 0; j < 6; ++j) { /* M_bb -= M_bl Z_l */
-      QD_UNROLL for (int i = 0; i < 6; ++i) Mbb[i + 6 * j] -= B[i] * Z[3 * j] + B[i + 18] * Z[3 * j + 1] + B[i + 36] * Z[3 * j + 2];
+      QD_UNROLL for (int i = 0; i < 6; ++i) Mbb[i + 6 * j] -= B[i] * Z[3 * j] + B[i + 6] * Z[3 * j + 1] + B[i + 12] * Z[3 * j + 2];
     }
-    for (int i = 0; i < 6; ++i) f[i] += B[i] * Z[18] + B[i + 18] * Z[19] + B[i + 36] * Z[20];
+    for (int i = 0; i < 6; ++i) f[i] += B[i] * Z[18] + B[i + 6] * Z[19] + B[i + 12] * Z[20];
     Z += 21;
   }
-  for (int q = 0; q < m; ++q) { /* K's column q: (S M T) e_r[q] on the rows R; y = x_R - S_b[R] f */
+  /* S_b's rows R and M's (joint rows R, trunk columns), gathered, rows padded with zeros to an even count mp */
+  const int mp = (m + 1) & ~1;
+  casadi_real S_R[(QD_N_MAX + 1) * 6], M_Rb[(QD_N_MAX + 1) * 6];
+  for (int k = 0; k < 6; ++k) {
+    for (int i = 0; i < mp; ++i) {
+      S_R[i + mp * k] = i < m ? S_b[r[i] + n * k] : 0;
+      M_Rb[i + mp * k] = i < m && r[i] < 12 ? QD_M_BL(Mc, r[i] / 3, k, r[i] % 3) : 0;
+    }
+  }
+  for (int q = 0; q < m; ++q) { /* K's column q: (S M T) e_r[q] on the rows R = M_Rj + M_Rb t + S_R (M_bj + M_bb t) */
     const int j = r[q];
     const casadi_real* t = T_b + 6 * j;
-    casadi_real mt[6], mr[QD_N_MAX];
-    for (int i = 0; i < 6; ++i) mt[i] = j < 12 ? M[i + 18 * (6 + j)] : 0;
-    for (int i = 0; i < m; ++i) mr[i] = j < 12 && r[i] < 12 ? M[6 + r[i] + 18 * (6 + j)] : 0;
-    for (int k = 0; k < 6; ++k) {
-      for (int i = 0; i < 6; ++i) mt[i] += Mbb[i + 6 * k] * t[k];
-      for (int i = 0; i < m; ++i) mr[i] += r[i] < 12 ? M[6 + r[i] + 18 * k] * t[k] : 0;
-    }
-    for (int i = 0; i < m; ++i) {
-      casadi_real s = mr[i];
-      for (int k = 0; k < 6; ++k) s += S_b[r[i] + n * k] * mt[k];
-      K[i + m * q] = s;
-    }
+    casadi_real mt[6], mr[QD_N_MAX + 1];
+    for (int i = 0; i < 6; ++i) mt[i] = j < 12 ? QD_M_BL(Mc, j / 3, i, j % 3) : 0;
+    for (int i = 0; i < mp; ++i) mr[i] = i < m && j < 12 && r[i] < 12 && r[i] / 3 == j / 3 ? QD_M_LL(Mc, j / 3, r[i] % 3, j % 3) : 0;
+    qd_gemv(6, 6, Mbb, 6, t, mt);
+    qd_gemv(mp, 6, M_Rb, mp, t, mr);
+    qd_gemv(mp, 6, S_R, mp, mt, mr);
+    for (int i = 0; i < m; ++i) K[i + m * q] = mr[i];
   }
   for (int i = 0; i < m; ++i) {
     casadi_real s = x[r[i]];
-    for (int k = 0; k < 6; ++k) s -= S_b[r[i] + n * k] * f[k];
+    for (int k = 0; k < 6; ++k) s -= S_R[i + mp * k] * f[k];
     y[i] = s;
   }
   casadi_real* res[1] = {K};
@@ -474,38 +536,23 @@ QD_INLINE int qd_fd_r_folded(int n, int legs, const casadi_real* S_b, const casa
 }
 
 /* qdd_r = M_r^-1 (tau_ext - (C_r + G_r)): arg = (q_r, qd_r, tau_ext, quat), res = (qdd_r). The parts once
- * (qd_parts), C_r + G_r (qd_rnea_r), M; with a swing leg the folded solve (qd_fd_r_folded, M_r not formed), with four
- * feet M_r (qd_M_r_legs, legs as there), checked (qd_fd_r_factor), and qd_gauss_solve of [M_r, b]; temporaries on the
- * stack. Called once per file with constant n and legs. */
+ * (qd_parts), C_r + G_r (qd_rnea_r), M's blocks, and the folded solve (qd_fd_r_folded: M_r not formed); temporaries on
+ * the stack. Called once per file with constant n and legs. */
 QD_INLINE int qd_fd_r_solve(int n, int legs, const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w,
                             int mem) {
-  casadi_real m = 0, S_b[QD_N_MAX * 6], T_b[6 * QD_N_MAX], M[18 * 18], M_r[QD_N_MAX * QD_N_MAX], b[QD_N_MAX];
-  casadi_real *v = M, *a = M + 18, *q = M_r; /* in space M and M_r take later: fd_r's stack stays within budget */
+  casadi_real m = 0, S_b[QD_N_MAX * 6], T_b[6 * QD_N_MAX], Mc[QD_M_BLOCKS], work[QD_N_MAX * QD_N_MAX], b[QD_N_MAX];
+  casadi_real *v = Mc, *a = Mc + 18, *q = work; /* in space Mc and work take later: fd_r's stack stays within budget */
   qd_trig t;
   qd_trig_of(n, arg[0], &t);
   int flag = qd_parts(arg[0], arg[1], 0, arg[3], &t, &m, S_b, T_b, v, a, iw, w, mem);
   if (!flag) flag = qd_regular_value(m);
-  if (!flag) flag = qd_rnea_r(n, S_b, arg[0], arg[3], &t, v, a, b, M + 36, iw, w, mem);
+  if (!flag) flag = qd_rnea_r(n, S_b, arg[0], arg[3], &t, v, a, b, Mc + 36, iw, w, mem);
   if (flag) return flag;
   qd_full_q(arg[0], arg[3], q);
-  flag = qd_M_full_dense(q, &t, M, iw, w, mem, 1);
+  flag = qd_M_full(q, &t, Mc, iw, w, mem, 1);
   if (flag) return flag;
-  if (legs != 15) { /* M_r's space is the folded solve's work memory */
-    for (int i = 0; i < n; ++i) b[i] = arg[2][i] - b[i];
-    flag = qd_fd_r_folded(n, legs, S_b, T_b, M, b, M_r);
-  } else { /* four feet: n is 12, and [M_r, b] fits in M_r's space. The constant 12, not n: in a two-feet file
-              (n = 13) this branch is dead, but at -O0 GCC still sees 13 * 13 + 13 reals written into M_r's 169 and
-              fails the build (-Werror=stringop-overflow) */
-    const int n4 = 12;
-    qd_M_r_legs(n4, legs, S_b, T_b, M, M_r);
-    casadi_real scale = 0;
-    flag = qd_fd_r_factor(n4, arg[2], M_r, 0, b, &scale);
-    if (!flag) {
-      memcpy(M_r + n4 * n4, b, n4 * sizeof *b);
-      flag = qd_gauss_solve_bounded(n4, M_r, scale);
-      memcpy(b, M_r + n4 * n4, n4 * sizeof *b);
-    }
-  }
+  for (int i = 0; i < n; ++i) b[i] = arg[2][i] - b[i];
+  flag = qd_fd_r_folded(n, legs, S_b, T_b, Mc, b, work);
   if (flag) return flag;
   if (res[0]) {
     for (int i = 0; i < n; ++i) res[0][i] = b[i];
