@@ -135,7 +135,8 @@ static void qd_scatter(const casadi_int* sp, const casadi_real* restrict nz, cas
 
 /* Two reals at once where the compiler has vectors (GCC's and Clang's vector extension: SSE2 pairs on x86-64, NEON on
  * AArch64, scalar code where the target has none): the same operations on each entry, in the same order, as the scalar
- * loops below them, so the same results to the bit (docs/benchmark.md, "Pairs"). */
+ * loops below them, so the same results to the bit (docs/benchmark.md, "M's blocks, the elimination's chain,
+ * pairs"). */
 #if defined(__GNUC__)
 typedef casadi_real qd_pair __attribute__((vector_size(2 * sizeof(casadi_real))));
 #define QD_PAIRS 1
@@ -264,9 +265,10 @@ static void qd_full_q(const casadi_real* q_r, const casadi_real* quat, casadi_re
 /* M (18 x 18, dense column-major) at q (t: q_r's sines and cosines, q's joint angles), or with blocks only M's nonzero
  * blocks (QD_M_BLOCKS reals, read by QD_M_BB, QD_M_BL, QD_M_LL) leg by leg: the same values to round-off. Leg by leg
  * and without M's zeros the code is smaller, and a caller that runs much other code per call (fd_r) gains more from
- * that than it loses to the calls (docs/benchmark.md, "id_full and M by leg", "M's blocks"). */
-static int qd_M_full(const casadi_real* q, const qd_trig* t, casadi_real* M, casadi_int* iw, casadi_real* w, int mem,
-                     int blocks) {
+ * that than it loses to the calls (docs/benchmark.md, "id_full and M by leg", "M's blocks, the elimination's chain,
+ * pairs"). */
+static int qd_M_at(const casadi_real* q, const qd_trig* t, casadi_real* M, casadi_int* iw, casadi_real* w, int mem,
+                   int blocks) {
   const casadi_real* m_arg[3] = {q, t->s, t->c};
   casadi_real* m_res[1] = {M};
   return blocks ? qd_M_blocks_legs_trig(m_arg, m_res, iw, w, mem) : qd_M_full_dense_trig(m_arg, m_res, iw, w, mem);
@@ -365,7 +367,7 @@ QD_INLINE int qd_reduced_term(int n, int legs, int which, const casadi_real** ar
     if (!flag) qd_project(n, S_b, M, res[0]);
     return flag;
   }
-  flag = qd_M_full(q, &t, M, iw, w, mem, 0);
+  flag = qd_M_at(q, &t, M, iw, w, mem, 0);
   if (!flag) qd_M_r_legs(n, legs, S_b, T_b, M, res[0]);
   return flag;
 }
@@ -638,7 +640,7 @@ QD_INLINE int qd_fd_r_solve(int n, int legs, const casadi_real** arg, casadi_rea
   if (!flag) flag = qd_rnea_r(n, S_b, arg[0], arg[3], &t, v, a, b, Mc + 36, iw, w, mem);
   if (flag) return flag;
   qd_full_q(arg[0], arg[3], q);
-  flag = qd_M_full(q, &t, Mc, iw, w, mem, 1);
+  flag = qd_M_at(q, &t, Mc, iw, w, mem, 1);
   if (flag) return flag;
   for (int i = 0; i < n; ++i) b[i] = arg[2][i] - b[i];
   flag = qd_fd_r_folded(n, legs, S_b, T_b, Mc, b, work);
@@ -797,7 +799,7 @@ QD_INLINE int qd_dfd_r_solve(int n, int legs, int lift_quat, const casadi_real**
   const casadi_real* d_arg[5] = {q, v, a, t.s, t.c};
   casadi_real* i_res[2] = {F, F + 6};
   flag = qd_id_full_trig(d_arg, i_res, iw, w, mem);
-  if (!flag) flag = qd_M_full(q, &t, M, iw, w, mem, 0);
+  if (!flag) flag = qd_M_at(q, &t, M, iw, w, mem, 0);
   if (flag) return flag;
   qd_project(n, S_b, F, qdd);
   qd_M_r_legs(n, legs, S_b, T_b, M, M_r);

@@ -145,7 +145,7 @@ QD_INLINE int qd_dfd_r_solve(int n, int legs, int lift_quat, const casadi_real**
   const casadi_real* d_arg[5] = {q, v, a, t.s, t.c};
   casadi_real* i_res[2] = {F, F + 6};
   flag = qd_id_full_trig(d_arg, i_res, iw, w, mem);
-  if (!flag) flag = qd_M_full(q, &t, M, iw, w, mem, 0);
+  if (!flag) flag = qd_M_at(q, &t, M, iw, w, mem, 0);
   if (flag) return flag;
   qd_project(n, S_b, F, qdd);
   qd_M_r_legs(n, legs, S_b, T_b, M, M_r);
