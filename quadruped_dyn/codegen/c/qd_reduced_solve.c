@@ -48,7 +48,7 @@
  * AArch64, scalar code where the target has none): the same operations on each entry, in the same order, as the scalar
  * loops below them, so the same results to the bit (docs/benchmark.md, "M's blocks, the elimination's chain,
  * pairs"). */
-#if defined(__GNUC__)
+#if defined(__GNUC__) && !defined(QD_NO_PAIRS) /* QD_NO_PAIRS: the scalar loops (tests/codegen/test_pairs.py) */
 typedef casadi_real qd_pair __attribute__((vector_size(2 * sizeof(casadi_real))));
 #define QD_PAIRS 1
 #endif
