@@ -514,15 +514,15 @@ QD_INLINE int qd_gauss_solve_bounded(int n, casadi_real* A, casadi_real scale) {
   return !flag && QD_FLOAT_BOUND_CHECKED ? qd_bound_exceeded(n, A, piv, norm1) : flag;
 }
 
-/* b <- tau_ext - b (b: C_r + G_r), *max = max|M| (M = M_r), both checked, and M's LU (qd_lu_factor) unless piv is
- * null. 0, QD_NONFINITE or QD_SINGULAR. */
+/* b <- tau_ext - b (b: C_r + G_r), *max = max|M| (M = M_r), both checked, and M's LU (qd_lu_factor): dfd_r's.
+ * 0, QD_NONFINITE or QD_SINGULAR. */
 static int qd_fd_r_factor(int n, const casadi_real* tau_ext, casadi_real* M, int* piv, casadi_real* b, casadi_real* max) {
   casadi_real* res[2] = {M, b};
   casadi_int nnz[2] = {n * n, n};
   for (int i = 0; i < n; ++i) b[i] = tau_ext[i] - b[i];
   if (qd_finite(0, res, 2, nnz)) return QD_NONFINITE;
   *max = qd_max_abs(n * n, M);
-  return piv ? qd_lu_factor(n, M, piv, *max) : 0;
+  return qd_lu_factor(n, M, piv, *max);
 }
 
 /* x <- M_r^-1 x (legs as qd_M_r_legs'), M_r = S M T never formed, from M's blocks Mc (QD_M_BB, QD_M_BL, QD_M_LL;
@@ -556,7 +556,7 @@ QD_INLINE int qd_fd_r_folded(int n, int legs, const casadi_real* S_b, const casa
   if (!(sw[0] == 0)) return QD_NONFINITE;
   const casadi_real thr = QD_SINGULAR_RTOL * scale;
   casadi_real Mbb[36]; /* M_bb, folded below: a copy */
-  for (int i = 0; i < 36; ++i) Mbb[i] = Mc[i];
+  memcpy(Mbb, &QD_M_BB(Mc, 0, 0), sizeof Mbb);
   for (int l = 0; l < 4; ++l) {
     if (legs >> l & 1) continue;
     const casadi_real* B = &QD_M_BL(Mc, l, 0, 0); /* M_bl: B[i + 6 c] */

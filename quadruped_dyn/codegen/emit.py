@@ -622,9 +622,8 @@ def _reduced_calls_by_leg(robot: Robot, precision: str, host_helpers: frozenset[
     M's nonzero blocks (``by_leg.mass_blocks``: fd_r's), the joints' sines and cosines given, each as one leg function
     per leg template called once per leg (``dynamics.by_leg``, ``codegen.by_leg``), whose code stays in the instruction
     cache: for the reduced files' fd_r, C_r + G_r, id_r and dfd_r (c/qd_reduced_solve.c), which call them among ~45 kB
-    of other code per call
-    (docs/benchmark.md, "id_full and M by leg"). M_r calls ``_M_full_dense``'s qd_M_full_dense_trig, one function of
-    fewer instructions, which fits the cache beside M_r's other ~20 kB."""
+    of other code per call (docs/benchmark.md, "id_full and M by leg"). M_r calls ``_M_full_dense``'s
+    qd_M_full_dense_trig, one function of fewer instructions, which fits the cache beside M_r's other ~20 kB."""
     return ("/* id_full without foot forces, the joints' sines and cosines given, leg by leg: arg = (q, v, a, sin, cos) */\n"
             + by_leg_c("qd_id_full_trig", id_full_pieces(robot), ID_FULL_CALL, precision, host_helpers) + "\n"
             "/* M_full's nonzero blocks (M_bb, then per leg M_bl and M_ll, column-major: dynamics/by_leg.py, mass_blocks) "
