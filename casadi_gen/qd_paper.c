@@ -5941,6 +5941,381 @@ int qd_M_blocks_legs_trig(const casadi_real** arg, casadi_real** res, casadi_int
   return qd_M_blocks_legs_trig_in(arg, res, L, iw, w, mem);
 }
 
+/* a leg's foot kinematics (dynamics/by_leg.py, FOOT_PARTS), the joints' sines and cosines given: y = (r, J, J qd_l, Jdot qd_l), trunk frame */
+#ifndef QD_NOINLINE
+#if defined(__GNUC__)
+#define QD_NOINLINE __attribute__((noinline))
+#else
+#define QD_NOINLINE
+#endif
+#endif
+
+QD_NOINLINE static int qd_foot_trig_leg0(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem) {
+  (void)arg; (void)res; (void)iw; (void)w; (void)mem;
+  casadi_real a00, a01, a02, a03, a04, a05, a06, a07, a08, a09, a10, a11;
+  casadi_real a12, a13, a14, a15, a16, a17, a18, a19, a20, a21, a22, a23;
+  casadi_real a24, a25, a26, a27, a28, a29, a30, a31, a32, a33, a34, a35;
+  a00=arg[2][0];
+  a01=2.0000000000000001e-01;
+  a02=arg[3][1];
+  a03=(a01*a02);
+  a00=(a00+a03);
+  a04=arg[4][1];
+  a05=arg[3][2];
+  a06=(a04*a05);
+  a07=arg[4][2];
+  a08=(a02*a07);
+  a06=(a06+a08);
+  a06=(a01*a06);
+  a00=(a00+a06);
+  res[0][0]=a00;
+  a00=arg[2][1];
+  a08=arg[4][0];
+  a09=(a08*a04);
+  a10=(a01*a09);
+  a00=(a00+a10);
+  a11=(a09*a07);
+  a12=(a08*a02);
+  a13=(a12*a05);
+  a11=(a11-a13);
+  a11=(a01*a11);
+  a00=(a00+a11);
+  res[0][1]=a00;
+  a00=arg[3][0];
+  a13=(a00*a02);
+  a14=(a13*a05);
+  a15=(a00*a04);
+  a16=(a15*a07);
+  a17=(a14-a16);
+  a17=(a01*a17);
+  a18=(a01*a15);
+  a17=(a17-a18);
+  res[0][2]=a17;
+  a17=0.;
+  res[0][3]=a17;
+  a17=(a02*a00);
+  a19=(a05*a17);
+  a00=(a04*a00);
+  a20=(a07*a00);
+  a21=(a19-a20);
+  a21=(a01*a21);
+  a22=(a01*a00);
+  a21=(a21-a22);
+  res[0][4]=a21;
+  a23=(a02*a08);
+  a24=(a05*a23);
+  a08=(a04*a08);
+  a25=(a07*a08);
+  a24=(a24-a25);
+  a24=(a01*a24);
+  a25=(a01*a08);
+  a24=(a24-a25);
+  res[0][5]=a24;
+  a25=(a01*a04);
+  a26=(a07*a04);
+  a27=(a05*a02);
+  a26=(a26-a27);
+  a26=(a01*a26);
+  a25=(a25+a26);
+  res[0][6]=a25;
+  a26=(a01*a12);
+  a27=(a07*a12);
+  a28=(a05*a09);
+  a29=(a27+a28);
+  a29=(a01*a29);
+  a29=(a26+a29);
+  a30=(-a29);
+  res[0][7]=a30;
+  a30=(a05*a15);
+  a31=(a07*a13);
+  a30=(a30+a31);
+  a30=(a01*a30);
+  a31=(a01*a13);
+  a30=(a30+a31);
+  res[0][8]=a30;
+  a31=(a04*a07);
+  a32=(a02*a05);
+  a31=(a31-a32);
+  a31=(a01*a31);
+  res[0][9]=a31;
+  a32=(a09*a05);
+  a33=(a12*a07);
+  a32=(a32+a33);
+  a32=(a01*a32);
+  a33=(-a32);
+  res[0][10]=a33;
+  a33=(a13*a07);
+  a34=(a15*a05);
+  a33=(a33+a34);
+  a33=(a01*a33);
+  res[0][11]=a33;
+  a34=arg[1][1];
+  a25=(a25*a34);
+  a35=arg[1][2];
+  a31=(a31*a35);
+  a25=(a25+a31);
+  res[0][12]=a25;
+  a25=arg[1][0];
+  a21=(a21*a25);
+  a29=(a29*a34);
+  a21=(a21-a29);
+  a32=(a32*a35);
+  a21=(a21-a32);
+  res[0][13]=a21;
+  a21=(a24*a25);
+  a32=(a30*a34);
+  a21=(a21+a32);
+  a33=(a33*a35);
+  a21=(a21+a33);
+  res[0][14]=a21;
+  a02=(a07*a02);
+  a04=(a05*a04);
+  a02=(a02+a04);
+  a02=(a01*a02);
+  a03=(a03+a02);
+  a03=(a34*a03);
+  a02=(a35*a02);
+  a03=(a03+a02);
+  a03=(a03*a34);
+  a02=(a34*a06);
+  a06=(a35*a06);
+  a02=(a02+a06);
+  a02=(a02*a35);
+  a03=(a03+a02);
+  a03=(-a03);
+  res[0][15]=a03;
+  a24=(a25*a24);
+  a03=(a01*a17);
+  a02=(a07*a17);
+  a06=(a05*a00);
+  a04=(a02+a06);
+  a04=(a01*a04);
+  a03=(a03+a04);
+  a03=(a34*a03);
+  a24=(a24+a03);
+  a06=(a06+a02);
+  a06=(a01*a06);
+  a06=(a35*a06);
+  a24=(a24+a06);
+  a24=(a24*a25);
+  a30=(a25*a30);
+  a09=(a07*a09);
+  a12=(a05*a12);
+  a09=(a09-a12);
+  a09=(a01*a09);
+  a10=(a10+a09);
+  a10=(a34*a10);
+  a30=(a30-a10);
+  a09=(a35*a09);
+  a30=(a30-a09);
+  a30=(a30*a34);
+  a24=(a24+a30);
+  a17=(a17*a07);
+  a00=(a00*a05);
+  a17=(a17+a00);
+  a17=(a01*a17);
+  a17=(a25*a17);
+  a00=(a34*a11);
+  a17=(a17-a00);
+  a11=(a35*a11);
+  a17=(a17-a11);
+  a17=(a17*a35);
+  a24=(a24+a17);
+  res[0][16]=a24;
+  a20=(a20-a19);
+  a20=(a01*a20);
+  a20=(a20+a22);
+  a20=(a25*a20);
+  a22=(a05*a08);
+  a19=(a07*a23);
+  a24=(a22+a19);
+  a24=(a01*a24);
+  a17=(a01*a23);
+  a24=(a24+a17);
+  a24=(a34*a24);
+  a20=(a20+a24);
+  a19=(a19+a22);
+  a19=(a01*a19);
+  a19=(a35*a19);
+  a20=(a20+a19);
+  a20=(a20*a25);
+  a28=(a28+a27);
+  a28=(a01*a28);
+  a28=(a28+a26);
+  a28=(a25*a28);
+  a15=(a07*a15);
+  a13=(a05*a13);
+  a15=(a15-a13);
+  a15=(a01*a15);
+  a18=(a15+a18);
+  a18=(a34*a18);
+  a28=(a28+a18);
+  a15=(a35*a15);
+  a28=(a28+a15);
+  a28=(a28*a34);
+  a20=(a20+a28);
+  a23=(a23*a07);
+  a08=(a08*a05);
+  a23=(a23+a08);
+  a23=(a01*a23);
+  a25=(a25*a23);
+  a16=(a16-a14);
+  a01=(a01*a16);
+  a34=(a34*a01);
+  a25=(a25+a34);
+  a01=(a35*a01);
+  a25=(a25+a01);
+  a25=(a25*a35);
+  a20=(a20+a25);
+  res[0][17]=a20;
+  return 0;
+}
+
+QD_NOINLINE static int qd_foot_trig_at_rest_leg0(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem) {
+  (void)arg; (void)res; (void)iw; (void)w; (void)mem;
+  casadi_real a00, a01, a02, a03, a04, a05, a06, a07, a08, a09, a10, a11;
+  casadi_real a12, a13;
+  a00=arg[1][0];
+  a01=2.0000000000000001e-01;
+  a02=arg[2][1];
+  a03=(a01*a02);
+  a00=(a00+a03);
+  a03=arg[3][1];
+  a04=arg[2][2];
+  a05=(a03*a04);
+  a06=arg[3][2];
+  a07=(a02*a06);
+  a05=(a05+a07);
+  a05=(a01*a05);
+  a00=(a00+a05);
+  res[0][0]=a00;
+  a00=arg[1][1];
+  a05=arg[3][0];
+  a07=(a05*a03);
+  a08=(a01*a07);
+  a00=(a00+a08);
+  a08=(a07*a06);
+  a09=(a05*a02);
+  a10=(a09*a04);
+  a08=(a08-a10);
+  a08=(a01*a08);
+  a00=(a00+a08);
+  res[0][1]=a00;
+  a00=arg[2][0];
+  a08=(a00*a02);
+  a10=(a08*a04);
+  a11=(a00*a03);
+  a12=(a11*a06);
+  a10=(a10-a12);
+  a10=(a01*a10);
+  a12=(a01*a11);
+  a10=(a10-a12);
+  res[0][2]=a10;
+  a10=0.;
+  res[0][3]=a10;
+  a12=(a02*a00);
+  a12=(a04*a12);
+  a00=(a03*a00);
+  a13=(a06*a00);
+  a12=(a12-a13);
+  a12=(a01*a12);
+  a00=(a01*a00);
+  a12=(a12-a00);
+  res[0][4]=a12;
+  a12=(a02*a05);
+  a12=(a04*a12);
+  a05=(a03*a05);
+  a00=(a06*a05);
+  a12=(a12-a00);
+  a12=(a01*a12);
+  a05=(a01*a05);
+  a12=(a12-a05);
+  res[0][5]=a12;
+  a12=(a01*a03);
+  a05=(a06*a03);
+  a00=(a04*a02);
+  a05=(a05-a00);
+  a05=(a01*a05);
+  a12=(a12+a05);
+  res[0][6]=a12;
+  a12=(a01*a09);
+  a05=(a06*a09);
+  a00=(a04*a07);
+  a05=(a05+a00);
+  a05=(a01*a05);
+  a12=(a12+a05);
+  a12=(-a12);
+  res[0][7]=a12;
+  a12=(a04*a11);
+  a05=(a06*a08);
+  a12=(a12+a05);
+  a12=(a01*a12);
+  a05=(a01*a08);
+  a12=(a12+a05);
+  res[0][8]=a12;
+  a03=(a03*a06);
+  a02=(a02*a04);
+  a03=(a03-a02);
+  a03=(a01*a03);
+  res[0][9]=a03;
+  a07=(a07*a04);
+  a09=(a09*a06);
+  a07=(a07+a09);
+  a07=(a01*a07);
+  a07=(-a07);
+  res[0][10]=a07;
+  a08=(a08*a06);
+  a11=(a11*a04);
+  a08=(a08+a11);
+  a01=(a01*a08);
+  res[0][11]=a01;
+  res[0][12]=a10;
+  res[0][13]=a10;
+  res[0][14]=a10;
+  res[0][15]=a10;
+  res[0][16]=a10;
+  res[0][17]=a10;
+  return 0;
+}
+
+static const casadi_real qd_foot_trig_p0[2] = {0.19, 0.07}; /* FL's parameters */
+
+static const casadi_real qd_foot_trig_p1[2] = {0.19, -0.07}; /* FR's parameters */
+
+static const casadi_real qd_foot_trig_p2[2] = {-0.19, 0.07}; /* BL's parameters */
+
+static const casadi_real qd_foot_trig_p3[2] = {-0.19, -0.07}; /* BR's parameters */
+
+int qd_foot_trig(int k, const casadi_real* q_l, const casadi_real* qd_l, const casadi_real* s, const casadi_real* c, casadi_real* y) {
+  switch (k) {
+  case 0: {
+    const casadi_real* a[5] = {q_l, qd_l, qd_foot_trig_p0, s, c};
+    const casadi_real* a_rest[4] = {q_l, qd_foot_trig_p0, s, c};
+    casadi_real* r[1] = {y};
+    return qd_l ? qd_foot_trig_leg0(a, r, 0, 0, 0) : qd_foot_trig_at_rest_leg0(a_rest, r, 0, 0, 0);
+  }
+  case 1: {
+    const casadi_real* a[5] = {q_l, qd_l, qd_foot_trig_p1, s, c};
+    const casadi_real* a_rest[4] = {q_l, qd_foot_trig_p1, s, c};
+    casadi_real* r[1] = {y};
+    return qd_l ? qd_foot_trig_leg0(a, r, 0, 0, 0) : qd_foot_trig_at_rest_leg0(a_rest, r, 0, 0, 0);
+  }
+  case 2: {
+    const casadi_real* a[5] = {q_l, qd_l, qd_foot_trig_p2, s, c};
+    const casadi_real* a_rest[4] = {q_l, qd_foot_trig_p2, s, c};
+    casadi_real* r[1] = {y};
+    return qd_l ? qd_foot_trig_leg0(a, r, 0, 0, 0) : qd_foot_trig_at_rest_leg0(a_rest, r, 0, 0, 0);
+  }
+  case 3: {
+    const casadi_real* a[5] = {q_l, qd_l, qd_foot_trig_p3, s, c};
+    const casadi_real* a_rest[4] = {q_l, qd_foot_trig_p3, s, c};
+    casadi_real* r[1] = {y};
+    return qd_l ? qd_foot_trig_leg0(a, r, 0, 0, 0) : qd_foot_trig_at_rest_leg0(a_rest, r, 0, 0, 0);
+  }
+  }
+  return 0;
+}
+
 #define QD_ID_FULL_EVAL qd_id_full_eval /* _joint_rows_first */
 /* quadruped_dyn: the GRF solves of qd_<robot>.c (hand-written, inserted by quadruped_dyn/codegen/emit.py).
  * qd_grf_<feet>(q, v, a) -> (lambda, f, residual, tau): the required trunk wrench w_req and the joint

@@ -1,6 +1,6 @@
 /* quadruped_dyn: the hand-written templates of the reduced model, included by every qd_<robot>_r_<feet>.c
  * after its generated pieces (quadruped_dyn/codegen/emit.py). Not a header to include elsewhere: its
- * functions are static and call the including file's qd_reduced_parts, qd_M_full, qd_id_full, ... */
+ * functions are static and call the including file's qd_stance_maps, qd_M_full, qd_id_full, ... */
 /* quadruped_dyn: the cosines and sines of the joint angles, taken once per call at a generated function's entry
  * (docs/formulation.md, "The joints' sines and cosines"). In double: the angle reduced by pi/2 in three parts
  * (Cody and Waite; pi/2 to 119 bits, exact products for |x| <= QD_SINCOS_MAX) and FreeBSD's kernels
@@ -89,7 +89,8 @@ static void qd_scatter(const casadi_int* sp, const casadi_real* restrict nz, cas
 
 /* quadruped_dyn: checks and the forward-dynamics solve of the reduced model (hand-written; in qd_reduced_templates.h,
  * which each qd_<robot>_r_<stance>.c includes (quadruped_dyn/codegen/emit.py) after QD_REGULARITY_MIN and
- * qd_reduced_parts (the regularity (q_r, quat) -> [0, 1] of dynamics/stance_regularity.py, S_b, T_b, v, a). Every
+ * qd_stance_maps (the stance's maps from its feet's positions, dynamics/stance_maps.py, and its regularity
+ * (r, quat) -> [0, 1] of dynamics/stance_regularity.py), from which qd_parts forms S_b, T_b, v, a. Every
  * entry point takes the joints' sines and cosines once (qd_trig) and passes them to the generated pieces and to the
  * library's qd_*_trig functions. The return codes are documented in qd_<robot>.h. */
 #include <float.h>
@@ -220,31 +221,97 @@ typedef struct {
 
 static void qd_trig_of(int n, const casadi_real* q_r, qd_trig* t) { qd_sincos(n, q_r, t->c, t->s); }
 
-/* qd_reduced_parts at (q_r, qd_r, qdd_r, quat) (null qd_r, qdd_r: zero), t q_r's sines and cosines: the regularity *m,
- * S_b (n x 6), T_b (6 x n) (column-major; S = [S_b, I_12], T = [T_b; I_12], row/column 12 no joint part), the full v,
- * a = T qdd_r + k. */
-static int qd_parts(const casadi_real* q_r, const casadi_real* qd_r, const casadi_real* qdd_r, const casadi_real* quat,
-                    const qd_trig* t, casadi_real* m, casadi_real* S_b, casadi_real* T_b, casadi_real* v, casadi_real* a,
-                    casadi_int* iw, casadi_real* w, int mem) {
-  const casadi_real zero[QD_N_MAX] = {0};
-  const casadi_real* p_arg[6] = {q_r, qd_r ? qd_r : zero, qdd_r ? qdd_r : zero, quat, t->s, t->c};
-  casadi_real* p_res[5] = {m, S_b, T_b, v, a};
-  return qd_reduced_parts(p_arg, p_res, iw, w, mem);
-}
+/* defined in qd_<robot>.c of the same library: leg k's foot kinematics y (QD_FOOT reals: dynamics/by_leg.py,
+ * FOOT_PARTS) at its joints' q_l, qd_l and their sines s and cosines c (3 each): the foot's position r, J = dr/dq_l, J qd_l
+ * and Jdot qd_l, trunk frame, read by QD_FOOT_R, QD_FOOT_J, QD_FOOT_JQD and QD_FOOT_JDQD. */
+int qd_foot_trig(int k, const casadi_real* q_l, const casadi_real* qd_l, const casadi_real* s, const casadi_real* c,
+                 casadi_real* y);
+#define QD_FOOT 18
+#define QD_FOOT_R(y, d) (y)[d]
+#define QD_FOOT_J(y, d, c) (y)[3 + (d) + 3 * (c)]
+#define QD_FOOT_JQD(y, d) (y)[12 + (d)]
+#define QD_FOOT_JDQD(y, d) (y)[15 + (d)]
 
-/* qd_reduced_parts' regularity *m, S_b and T_b alone (M_r and G_r read nothing else): qd_reduced_factors, which
- * computes no v and a (a1: 1,210 of the parts' 1,766 operations with two feet, 1,594 of 2,492 with four); at -Os, where
- * it is not generated (size), the parts at zero rates. */
-static int qd_factors(const casadi_real* q_r, const casadi_real* quat, const qd_trig* t, casadi_real* m,
-                      casadi_real* S_b, casadi_real* T_b, casadi_int* iw, casadi_real* w, int mem) {
-#ifdef QD_REDUCED_FACTORS
-  const casadi_real* f_arg[4] = {q_r, quat, t->s, t->c};
-  casadi_real* f_res[3] = {m, S_b, T_b};
-  return qd_reduced_factors(f_arg, f_res, iw, w, mem);
-#else
-  casadi_real v[18], a[18];
-  return qd_parts(q_r, 0, 0, quat, t, m, S_b, T_b, v, a, iw, w, mem);
-#endif
+/* The parts of the reduced terms at (q_r, qd_r, qdd_r, quat) (null qd_r, qdd_r: zero), t q_r's sines and cosines, legs
+ * bit l for a stance leg l (docs/formulation.md §6.2, "The parts from the feet's maps"): the regularity *m, S_b (n x 6),
+ * T_b (6 x n) (column-major; S = [S_b, I_12], T = [T_b; I_12], row/column 12 no joint part), the full v, a = T qdd_r + k.
+ * Without rates (qd_r and qdd_r null) v and a are not written. The stance feet's kinematics (qd_foot_trig), the stance's maps from their positions (qd_stance_maps, generated before
+ * this file: dynamics/stance_maps.py; W_T (6 x 3k), Y (6 x 3k), with two feet y_e, s_e, D), then by foot j on leg l:
+ * S_b's rows of l = -(W_T,j J_j)^T, T_b's columns of l = -Y_j J_j (row and column 12: s_e, y_e);
+ * (v_b, omega_b) = sum_j Y_j (-J_j qd_j) + y_e qd_r[12] (= T_b qd_r); (a_b + omega_b x v_b, alpha_b) = sum_j Y_j b_j
+ * + y_e b_e (= T_b qdd_r + the bias) with the stance rows' right-hand sides
+ * b_j = -(omega_b x (omega_b x r_j) + 2 omega_b x J_j qd_j + Jdot_j qd_j) - J_j qdd_j, b_e = qdd_r[12] - (D omega_b) . omega_b. */
+static int qd_parts(int n, int legs, const casadi_real* q_r, const casadi_real* qd_r, const casadi_real* qdd_r,
+                    const casadi_real* quat, const qd_trig* t, casadi_real* m, casadi_real* restrict S_b,
+                    casadi_real* restrict T_b, casadi_real* restrict v, casadi_real* restrict a, casadi_int* iw, casadi_real* w,
+                    int mem) {
+  static const casadi_real zero[QD_N_MAX];
+  const int rates = qd_r || qdd_r; /* else v and a are not written (M_r's and G_r's calls) */
+  qd_r = qd_r ? qd_r : zero;
+  qdd_r = qdd_r ? qdd_r : zero;
+  casadi_real foot[4 * QD_FOOT], r[12], W[6 * 12], Y[6 * 12], e[6 + 6 + 9]; /* W: W_T; e: y_e, s_e, D (two feet) */
+  const int k = (legs & 1) + (legs >> 1 & 1) + (legs >> 2 & 1) + (legs >> 3 & 1); /* stance feet */
+  int leg[4], flag = 0;
+  for (int l = 0, j = 0; l < 4; ++l) {
+    if (!(legs >> l & 1)) continue;
+    casadi_real* y = foot + QD_FOOT * j;
+    flag |= qd_foot_trig(l, q_r + 3 * l, rates ? qd_r + 3 * l : 0, t->s + 3 * l, t->c + 3 * l, y);
+    for (int d = 0; d < 3; ++d) r[3 * j + d] = QD_FOOT_R(y, d);
+    leg[j++] = l;
+  }
+  const casadi_real* m_arg[2] = {r, quat};
+  casadi_real* m_res[6] = {m, W, Y, e, e + 6, e + 12};
+  flag |= qd_stance_maps(m_arg, m_res, iw, w, mem);
+  if (flag) return flag;
+  for (int l = 0; l < 4; ++l) { /* the swing legs' rows of S_b and columns of T_b: zero */
+    for (int c = 0; c < 3 && !(legs >> l & 1); ++c) {
+      for (int col = 0; col < 6; ++col) S_b[3 * l + c + n * col] = T_b[col + 6 * (3 * l + c)] = 0;
+    }
+  }
+  casadi_real vw[6] = {0, 0, 0, 0, 0, 0}, aw[6] = {0, 0, 0, 0, 0, 0};
+  for (int j = 0; j < k; ++j) {
+    const casadi_real* y = foot + QD_FOOT * j;
+    const casadi_real *Y_j = Y + 18 * j, *W_j = W + 18 * j;
+    casadi_real u[3];
+    for (int c = 0; c < 3; ++c) { /* S_b's row and T_b's column of the joint 3 leg[j] + c: -W_T,j J_j e_c, -Y_j J_j e_c */
+      const casadi_real Jc[3] = {-QD_FOOT_J(y, 0, c), -QD_FOOT_J(y, 1, c), -QD_FOOT_J(y, 2, c)};
+      casadi_real s[6] = {0, 0, 0, 0, 0, 0}, *T_c = T_b + 6 * (3 * leg[j] + c);
+      for (int col = 0; col < 6; ++col) T_c[col] = 0;
+      qd_gemv(6, 3, W_j, 6, Jc, s);
+      qd_gemv(6, 3, Y_j, 6, Jc, T_c);
+      for (int col = 0; col < 6; ++col) S_b[3 * leg[j] + c + n * col] = s[col];
+      u[c] = -QD_FOOT_JQD(y, c);
+    }
+    qd_gemv(6, 3, Y_j, 6, u, vw); /* (v_b, omega_b) = sum_j Y_j (-J_j qd_j) + y_e qd_r[12] */
+  }
+  if (n > 12) {
+    for (int col = 0; col < 6; ++col) S_b[12 + n * col] = e[6 + col], T_b[col + 6 * 12] = e[col], vw[col] += e[col] * qd_r[12];
+  }
+  if (!rates) return 0;
+  const casadi_real* o = vw + 3; /* omega_b */
+  for (int j = 0; j < k; ++j) {
+    const casadi_real* y = foot + QD_FOOT * j;
+    const casadi_real* q_dd = qdd_r + 3 * leg[j];
+    casadi_real x[3], b[3]; /* x = omega_b x r_j + 2 J_j qd_j; b = -(omega_b x x + Jdot_j qd_j) - J_j qdd_j */
+    for (int d = 0; d < 3; ++d) x[d] = o[(d + 1) % 3] * QD_FOOT_R(y, (d + 2) % 3) - o[(d + 2) % 3] * QD_FOOT_R(y, (d + 1) % 3)
+                                       + 2 * QD_FOOT_JQD(y, d);
+    for (int d = 0; d < 3; ++d) b[d] = -(o[(d + 1) % 3] * x[(d + 2) % 3] - o[(d + 2) % 3] * x[(d + 1) % 3] + QD_FOOT_JDQD(y, d))
+                                       - (QD_FOOT_J(y, d, 0) * q_dd[0] + QD_FOOT_J(y, d, 1) * q_dd[1] + QD_FOOT_J(y, d, 2) * q_dd[2]);
+    qd_gemv(6, 3, Y + 18 * j, 6, b, aw);
+  }
+  if (n > 12) {
+    const casadi_real* D = e + 12;
+    casadi_real b_e = qdd_r[12];
+    for (int d = 0; d < 3; ++d) b_e -= (D[d] * o[0] + D[d + 3] * o[1] + D[d + 6] * o[2]) * o[d];
+    for (int i = 0; i < 6; ++i) aw[i] += e[i] * b_e;
+  }
+  for (int i = 0; i < 6; ++i) v[i] = vw[i];
+  for (int d = 0; d < 3; ++d) {
+    a[d] = aw[d] - (o[(d + 1) % 3] * vw[(d + 2) % 3] - o[(d + 2) % 3] * vw[(d + 1) % 3]);
+    a[3 + d] = aw[3 + d];
+  }
+  for (int i = 0; i < 12; ++i) v[6 + i] = qd_r[i], a[6 + i] = qdd_r[i];
+  return 0;
 }
 
 /* defined in qd_<robot>.c of the same library (no work memory: checked by the generator): M_full (dense, zeros
@@ -350,8 +417,7 @@ QD_INLINE int qd_reduced_term(int n, int legs, int which, const casadi_real** ar
   casadi_real m = 0, S_b[QD_N_MAX * 6], T_b[6 * QD_N_MAX], v[18], a[18];
   qd_trig t;
   qd_trig_of(n, arg[0], &t);
-  int flag = which == 0 || which == 2 ? qd_factors(arg[0], quat, &t, &m, S_b, T_b, iw, w, mem)
-                                      : qd_parts(arg[0], qd_r, which == 3 ? arg[2] : 0, quat, &t, &m, S_b, T_b, v, a, iw, w, mem);
+  int flag = qd_parts(n, legs, arg[0], qd_r, which == 3 ? arg[2] : 0, quat, &t, &m, S_b, T_b, v, a, iw, w, mem);
   if (!flag) flag = qd_regular_value(m);
   if (flag || !res[0]) return flag;
   if (which == 1 || which == 3) {
@@ -635,7 +701,7 @@ QD_INLINE int qd_fd_r_solve(int n, int legs, const casadi_real** arg, casadi_rea
   casadi_real *v = Mc, *a = Mc + 18, *q = work; /* in space Mc and work take later: fd_r's stack stays within budget */
   qd_trig t;
   qd_trig_of(n, arg[0], &t);
-  int flag = qd_parts(arg[0], arg[1], 0, arg[3], &t, &m, S_b, T_b, v, a, iw, w, mem);
+  int flag = qd_parts(n, legs, arg[0], arg[1], 0, arg[3], &t, &m, S_b, T_b, v, a, iw, w, mem);
   if (!flag) flag = qd_regular_value(m);
   if (!flag) flag = qd_rnea_r(n, S_b, arg[0], arg[3], &t, v, a, b, Mc + 36, iw, w, mem);
   if (flag) return flag;
@@ -792,7 +858,7 @@ QD_INLINE int qd_dfd_r_solve(int n, int legs, int lift_quat, const casadi_real**
   qd_trig_of(n, arg[0], &t);
   int piv[QD_N_MAX];
   /* qdd_r as qd_fd_r_solve: the parts once (S_b, T_b, v and a at qdd_r = 0: k), C_r + G_r = S rnea(q, v, k), M_r */
-  int flag = qd_parts(arg[0], arg[1], 0, arg[3], &t, &reg, S_b, T_b, v, a, iw, w, mem);
+  int flag = qd_parts(n, legs, arg[0], arg[1], 0, arg[3], &t, &reg, S_b, T_b, v, a, iw, w, mem);
   if (!flag) flag = qd_regular_value(reg);
   if (flag) return flag;
   qd_full_q(arg[0], arg[3], q);

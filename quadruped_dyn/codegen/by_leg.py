@@ -10,6 +10,8 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
+import casadi as ca
+
 from quadruped_dyn.codegen.casadi_source import static_c, unguarded_inputs
 from quadruped_dyn.codegen.joint_trig import trig_as_inputs
 from quadruped_dyn.dynamics.leg_template import LegPieces
@@ -112,3 +114,46 @@ def _leg_call(c_name: str, pieces: LegPieces, call: LegCall, k: int, nl: int) ->
     return (f"  {{ /* leg {k} */\n{prologue}    const casadi_real* l_arg[{len(l_arg)}] = {{{', '.join(l_arg)}}};\n"
             f"    casadi_real* l_res[1] = {{L + {nl * k}}};\n"
             f"    {c_name}_leg{pieces.template_of[k]}(l_arg, l_res, iw, w, mem);\n  }}\n")
+
+
+def foot_c(c_name: str, pieces: LegPieces, precision: str, host_helpers: frozenset[str]) -> str:
+    """Static C functions of ``pieces`` (``dynamics.by_leg.foot_pieces``: leg functions (q_l, qd_l, p) -> FOOT_PARTS,
+    and each at qd_l = 0, without the rates' operations) and ``int c_name(int k, q_l, qd_l, s, c, y)``: robot leg k's
+    foot kinematics y (18) at its joints' q_l, qd_l (3 each; null: at rest) and their sines s and cosines c, by its
+    template's function and parameters; a leg whose joints turn the other
+    way than its template's gets q_l, qd_l and s negated into a local array and J's columns negated after (r, J qd_l
+    and Jdot qd_l are the template's at sigma q_l, sigma qd_l). The reduced files call it for their stance legs only
+    (c/qd_reduced_solve.c, qd_parts)."""
+    text = [NOINLINE]
+    for i, leg in enumerate(pieces.legs):
+        if leg.name_in() != ["q_l", "qd_l", "p"] or leg.nnz_out(0) != 18:
+            raise AssertionError(f"{c_name}: a leg function is not (q_l, qd_l, p) -> FOOT_PARTS")
+        q_l, p = ca.SX.sym("q_l", 3), ca.SX.sym("p", leg.sparsity_in(2))
+        at_rest = ca.Function(f"{leg.name()}_at_rest", [q_l, p], leg.call([q_l, ca.SX.zeros(3), p]), {"cse": True})
+        for name, f in ((f"{c_name}_leg{i}", leg), (f"{c_name}_at_rest_leg{i}", at_rest)):
+            text.append("QD_NOINLINE " + static_c(name, trig_as_inputs(f, 0), precision, host_helpers, all_io=True))
+    cases = []
+    for k in range(4):
+        values = pieces.leg_values(k)
+        text.append(f"static const casadi_real {c_name}_p{k}[{max(len(values), 1)}] = "
+                    f"{{{', '.join(repr(x) for x in values) if values else '0'}}}; /* {LEG_LABELS[k]}'s parameters */\n")
+        sigma = pieces.leg_signs(k)
+        t = pieces.template_of[k]
+        call = (f"qd_l ? {c_name}_leg{t}(a, r, 0, 0, 0) : {c_name}_at_rest_leg{t}(a_rest, r, 0, 0, 0)")
+        if all(s > 0 for s in sigma):
+            cases.append(f"  case {k}: {{\n    const casadi_real* a[5] = {{q_l, qd_l, {c_name}_p{k}, s, c}};\n"
+                         f"    const casadi_real* a_rest[4] = {{q_l, {c_name}_p{k}, s, c}};\n"
+                         f"    casadi_real* r[1] = {{y}};\n    return {call};\n  }}\n")
+            continue
+        turned = ", ".join(f"{'-' if sg < 0 else ''}{x}[{j}]" for x in ("q_l", "s") for j, sg in enumerate(sigma))
+        turned_qd = ", ".join(f"{'-' if sg < 0 else ''}qd_l[{j}]" for j, sg in enumerate(sigma))
+        back = "".join(f"    for (int d = 0; d < 3; ++d) y[{3 + 3 * j} + d] = -y[{3 + 3 * j} + d];\n"
+                       for j, sg in enumerate(sigma) if sg < 0)
+        cases.append(f"  case {k}: {{ /* sigma = {tuple(int(x) for x in sigma)} */\n    const casadi_real x[6] = {{{turned}}};\n"
+                     f"    const casadi_real x_d[3] = {{{turned_qd.replace('qd_l[', 'qd_l ? qd_l[').replace(']', '] : 0')}}};\n"
+                     f"    const casadi_real* a[5] = {{x, x_d, {c_name}_p{k}, x + 3, c}};\n"
+                     f"    const casadi_real* a_rest[4] = {{x, {c_name}_p{k}, x + 3, c}};\n"
+                     f"    casadi_real* r[1] = {{y}};\n    int flag = {call};\n{back}    return flag;\n  }}\n")
+    text.append(f"int {c_name}(int k, const casadi_real* q_l, const casadi_real* qd_l, const casadi_real* s, "
+                "const casadi_real* c, casadi_real* y) {\n  switch (k) {\n" + "".join(cases) + "  }\n  return 0;\n}\n")
+    return "\n".join(text)

@@ -20,7 +20,7 @@ from pathlib import Path
 
 import casadi as ca
 
-from quadruped_dyn.codegen.by_leg import LegCall, by_leg_c
+from quadruped_dyn.codegen.by_leg import LegCall, by_leg_c, foot_c
 from quadruped_dyn.codegen.casadi_source import (
     PREFIX,
     SINCOS,
@@ -50,11 +50,11 @@ from quadruped_dyn.codegen.emit_derivatives import (
 )
 from quadruped_dyn.codegen.joint_trig import trig_as_inputs
 from quadruped_dyn.codegen.work_memory import memory_doc
-from quadruped_dyn.dynamics.by_leg import id_full_pieces, mass_matrix_pieces
+from quadruped_dyn.dynamics.by_leg import foot_pieces, id_full_pieces, mass_matrix_pieces
 from quadruped_dyn.dynamics.grf import grf_balance, grf_solve
 from quadruped_dyn.dynamics.newton_euler import full_dynamics
-from quadruped_dyn.dynamics.reduced import regularity_function
 from quadruped_dyn.dynamics.reduced_projection import reduced_projection
+from quadruped_dyn.dynamics.stance_maps import stance_maps
 from quadruped_dyn.errors import InputError
 from quadruped_dyn.files.names import comment_text
 from quadruped_dyn.files.safe_write import output_path, output_set, write_text
@@ -419,7 +419,7 @@ def reduced_templates_h() -> str:
     body = "\n".join((TEMPLATES / t).read_text() for t in _REDUCED_TEMPLATE_FILES)
     return ("/* quadruped_dyn: the hand-written templates of the reduced model, included by every qd_<robot>_r_<feet>.c\n"
             " * after its generated pieces (quadruped_dyn/codegen/emit.py). Not a header to include elsewhere: its\n"
-            " * functions are static and call the including file's qd_reduced_parts, qd_M_full, qd_id_full, ... */\n"
+            " * functions are static and call the including file's qd_stance_maps, qd_M_full, qd_id_full, ... */\n"
             + _precision_calls(body))
 
 
@@ -439,33 +439,16 @@ def float_err_per_regularity(stance: StanceSet) -> float:
     return FLOAT_ERR_PER_REGULARITY if len(stance.feet) == 2 else 0.0
 
 
-def _reduced_helpers_c(robot: Robot, stance: StanceSet, dfd_r: DfdRPieces, precision: str) -> str:
-    """QD_REGULARITY_MIN, QD_FLOAT_MAX_BOUND, QD_FLOAT_ERR_PER_REGULARITY, ``qd_reduced_parts``
-    ((q_r, qd_r, qdd_r, quat, sin, cos) -> (regularity, S_b, T_b, v, a) in one graph, sin and cos of the joint
-    angles q_r[0:12] given (``trig_as_inputs``: the templates take them once per call) (the regularity
-    ``dynamics.reduced.regularity_function``): ``ReducedProjection.mass_matrix_factors``
-    without M_full, which the templates take from the library's qd_M_full, and ``velocity_and_acceleration`` for
-    the library's qd_id_full), ``qd_reduced_factors`` ((q_r, quat, sin, cos) -> (regularity, S_b, T_b): what M_r and
-    G_r need, 30-35 % fewer operations than the parts; not at -Os) and dfd_r's ``qd_dfd_r_lift``
-    (``emit_derivatives.dfd_r_pieces``), the generated pieces the templates call."""
-    n = 13 if len(stance.feet) == 2 else 12
-    q_r, qd_r, qdd_r, quat = (ca.SX.sym(k, m) for k, m in (("q_r", n), ("qd_r", n), ("qdd_r", n), ("quat", 4)))
-    p = reduced_projection(robot, stance, q_r, quat)
-    S_b, T_b, _ = p.mass_matrix_factors()
-    factor_outputs = [regularity_function(robot, stance)(q_r, quat), ca.densify(S_b), ca.densify(T_b)]
-    parts = trig_as_inputs(ca.Function("reduced_parts", [q_r, qd_r, qdd_r, quat],
-                                       [*factor_outputs, *(ca.densify(x) for x in p.velocity_and_acceleration(qd_r, qdd_r))],
-                                       {"cse": True}), 0, range(len(JOINT_ANGLES)))
-    factors = trig_as_inputs(ca.Function("reduced_factors", [q_r, quat], factor_outputs, {"cse": True}),
-                             0, range(len(JOINT_ANGLES)))
+def _reduced_helpers_c(stance: StanceSet, dfd_r: DfdRPieces, precision: str) -> str:
+    """QD_REGULARITY_MIN, QD_FLOAT_MAX_BOUND, QD_FLOAT_ERR_PER_REGULARITY, ``qd_stance_maps`` ((r, quat) ->
+    (regularity, W, Y[, y_e, s_e, D]): ``dynamics.stance_maps``, from which with the library's qd_foot_trig the
+    templates' qd_parts forms S_b, T_b, v and a) and dfd_r's ``qd_dfd_r_lift`` (``emit_derivatives.dfd_r_pieces``),
+    the generated pieces the templates call."""
     return (f"#define QD_REGULARITY_MIN ((casadi_real){REGULARITY_MIN!r}) /* quadruped_dyn.tolerances.REGULARITY_MIN */\n"
             f"#define QD_FLOAT_MAX_BOUND ((casadi_real){FLOAT_MAX_BOUND!r}) /* tolerances.FLOAT_MAX_BOUND */\n"
             f"#define QD_FLOAT_ERR_PER_REGULARITY ((casadi_real){float_err_per_regularity(stance)!r}) "
             "/* tolerances.FLOAT_ERR_PER_REGULARITY; 0: three or four feet */\n"
-            + static_c("qd_reduced_parts", parts, precision, all_io=True) + "\n"
-            + "#if !defined(__OPTIMIZE_SIZE__) /* M_r's and G_r's factors alone; at -Os the parts (the size budget) */\n"
-            + "#define QD_REDUCED_FACTORS 1\n" + static_c("qd_reduced_factors", factors, precision, all_io=True)
-            + "#endif\n"
+            + static_c("qd_stance_maps", stance_maps(stance), precision, all_io=True) + "\n"
             + f"#define QD_DFD_R_TAPE {dfd_r.tape} /* reals of the lift's tape: emit_derivatives.split_at_seeds */\n"
             + f"#define QD_DID_FULL_L {dfd_r.did_legs} /* reals of did_full's legs' outputs: codegen.by_leg.legs_reals */\n"
             + static_c("qd_dfd_r_lift", dfd_r.lift, precision, all_io=True) + "\n" + _lift_derivative_c(dfd_r, precision))
@@ -487,7 +470,7 @@ def _checked_reduced_c(c_text: str, casadi_header: str, functions: list[ca.Funct
     """Insert ``helpers_c`` (``_reduced_helpers_c``) and the include of ``REDUCED_TEMPLATES`` and route the entry
     points through them: every function returns QD_DEGENERATE at a degenerate stance and
     QD_NONFINITE for a non-finite output; M_r, CG_r, G_r and id_r by ``qd_reduced_term`` over the generated
-    qd_reduced_parts and the library's qd_M_full, qd_G_full, qd_id_full (CasADi's unrolled graphs of the four
+    qd_stance_maps and the library's qd_foot_trig, qd_M_full, qd_G_full, qd_id_full (CasADi's unrolled graphs of the four
     dropped: ~160 kB per stance set); fd_r by ``qd_fd_r_solve`` (the parts once for M_r and C_r + G_r, checked
     once, then the LU); dfd_r by ``c/qd_reduced_derivatives.c`` over ``dfd_r``'s pieces, its caller work memory
     declared. Returns (C source, CasADi's header text)."""
@@ -628,7 +611,10 @@ def _reduced_calls_by_leg(robot: Robot, precision: str, host_helpers: frozenset[
             + by_leg_c("qd_id_full_trig", id_full_pieces(robot), ID_FULL_CALL, precision, host_helpers) + "\n"
             "/* M_full's nonzero blocks (M_bb, then per leg M_bl and M_ll, column-major: dynamics/by_leg.py, mass_blocks) "
             "with the joints' sines and cosines given, leg by leg: arg = (q, sin, cos) */\n"
-            + by_leg_c("qd_M_blocks_legs_trig", mass_matrix_pieces(robot), M_BLOCKS_CALL, precision, host_helpers))
+            + by_leg_c("qd_M_blocks_legs_trig", mass_matrix_pieces(robot), M_BLOCKS_CALL, precision, host_helpers) + "\n"
+            "/* a leg's foot kinematics (dynamics/by_leg.py, FOOT_PARTS), the joints' sines and cosines given: y = (r, J, "
+            "J qd_l, Jdot qd_l), trunk frame */\n"
+            + foot_c("qd_foot_trig", foot_pieces(robot), precision, host_helpers))
 
 
 def _first_evaluation(c_text: str) -> int:
@@ -742,7 +728,7 @@ def generate(robot: Robot, out_dir: Path, precision: str = "double",
         c_text, h_text = casadi_c(path.stem, reduced, precision)
         dfd_r = dfd_r_pieces(robot, stance)
         sources[path], h_text = _checked_reduced_c(c_text, h_text, reduced,
-                                                   _reduced_helpers_c(robot, stance, dfd_r, precision), dfd_r)
+                                                   _reduced_helpers_c(stance, dfd_r, precision), dfd_r)
         casadi_header += h_text
         functions += reduced
     derivatives = derivative_functions(robot)  # qd_<robot>_d.c: derivatives of the full dynamics

@@ -11,7 +11,10 @@ instruction cache. Leg by leg, one leg function serves the four legs (docs/bench
   wrench + the legs', the legs' torques): ``newton_euler.inverse_dynamics`` without foot forces (the reduced terms'
   rnea: their foot forces are the GRF projection's, not rnea's input);
 * ``mass_matrix_pieces``: leg(q_l, p) -> the leg's part of M (``MASS_PARTS``); tail(L_0..L_3) -> M's nonzero blocks
-  (``mass_blocks``): ``crba.mass_matrix_crba``.
+  (``mass_blocks``): ``crba.mass_matrix_crba``;
+* ``foot_pieces``: leg(q_l, qd_l, p) -> the foot's r, J, J qd_l, Jdot qd_l (``FOOT_PARTS``, trunk frame); tail(L_0..L_3)
+  -> the four feet's, each leg's J turned back by its signs: ``kinematics.foot_position`` and its derivatives. The
+  reduced files call the leg function for their stance legs only (``stance_maps``).
 """
 
 from __future__ import annotations
@@ -22,6 +25,7 @@ import casadi as ca
 import numpy as np
 
 from quadruped_dyn.dynamics.crba import add_inertia, leg_mass_blocks, trunk_inertia, trunk_mass_block
+from quadruped_dyn.dynamics.kinematics import canonical_foot_position
 from quadruped_dyn.dynamics.leg_template import LegPieces, leg_signs, leg_templates, template_of
 from quadruped_dyn.dynamics.newton_euler import aligned_leg_newton_euler, trunk_own_wrench
 from quadruped_dyn.math.spatial import dm, quat_to_rotation
@@ -31,6 +35,9 @@ from quadruped_dyn.model.state import GRAVITY_W, NQ_FULL, NV_FULL
 
 #: A leg's part of M, in order: (name, rows, columns), each stacked column by column (``crba.leg_mass_blocks``).
 MASS_PARTS: tuple[tuple[str, int, int], ...] = (("M_ll", 3, 3), ("M_bl", 6, 3), ("m", 1, 1), ("h", 3, 1), ("I_o", 3, 3))
+#: A leg's foot kinematics, in order (trunk frame): its position r [m], J = dr/dq_l (column-major), J qd_l [m/s] and
+#: Jdot qd_l [m/s^2] (the foot's classical acceleration relative to the trunk at qdd_l = 0).
+FOOT_PARTS: tuple[tuple[str, int, int], ...] = (("r", 3, 1), ("J", 3, 3), ("J_qd", 3, 1), ("Jdot_qd", 3, 1))
 
 
 def stacked(parts: tuple[ca.SX, ...]) -> ca.SX:
@@ -136,4 +143,33 @@ def mass_matrix_pieces(robot: Robot) -> LegPieces:
     Ls = [ca.SX.sym(f"L_{k}", legs[of[k]].sparsity_out(0)) for k in range(4)]
     M = assembled_mass_matrix(robot, [unstacked(L, MASS_PARTS) for L in Ls], [leg_signs(templates, k) for k in range(4)])
     tail = ca.Function("M_tail", Ls, [mass_blocks(M)], [f"L_{k}" for k in range(4)], ["M_blocks"], opts)
+    return LegPieces(None, templates, tuple(legs), of, tail)
+
+
+def foot_kinematics(r: ca.SX, q_l: ca.SX, qd_l: ca.SX) -> ca.SX:
+    """``FOOT_PARTS`` stacked for a foot position r(q_l)."""
+    J = ca.jacobian(r, q_l)
+    J_qd = J @ qd_l
+    return ca.densify(stacked((r, J, J_qd, ca.jacobian(J_qd, q_l) @ qd_l)))
+
+
+@cache
+def foot_pieces(robot: Robot) -> LegPieces:
+    """The four feet's ``FOOT_PARTS`` leg by leg (module docstring): a leg function per template, the tail stacking
+    the legs' parts with each J's columns times the leg's signs (J = J_template diag(sigma); r, J qd and Jdot qd are
+    the template's at sigma q, sigma qd)."""
+    opts = {"cse": True}
+    templates = leg_templates(robot)
+    legs = []
+    for i, t in enumerate(templates):
+        q_l, qd_l = ca.SX.sym("q_l", 3), ca.SX.sym("qd_l", 3)
+        y = foot_kinematics(canonical_foot_position(t.leg, q_l), q_l, qd_l)
+        legs.append(ca.Function(f"foot_leg{i}", [q_l, qd_l, t.p], [y], ["q_l", "qd_l", "p"], ["y"], opts))
+    of = template_of(templates)
+    Ls = [ca.SX.sym(f"L_{k}", legs[of[k]].sparsity_out(0)) for k in range(4)]
+    feet = []
+    for k, L in enumerate(Ls):
+        x = unstacked(L, FOOT_PARTS)
+        feet.append(stacked((x["r"], x["J"] @ ca.diag(ca.DM(leg_signs(templates, k))), x["J_qd"], x["Jdot_qd"])))
+    tail = ca.Function("foot_tail", Ls, [ca.horzcat(*feet)], [f"L_{k}" for k in range(4)], ["feet"], opts)
     return LegPieces(None, templates, tuple(legs), of, tail)

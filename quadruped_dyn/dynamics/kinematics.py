@@ -26,9 +26,14 @@ def joint_frames(leg: Leg, q: ca.SX) -> list[tuple[ca.SX, ca.SX]]:
     """(R_bi, p_bi) of the three joint frames (after their joint rotation) in the trunk frame,
     in the leg's canonical frames (``leg_frames.axis_aligned``: parallel to the trunk frame at
     q = 0, HFE and KFE origins slid along their axes)."""
+    return canonical_joint_frames(axis_aligned(leg), q)
+
+
+def canonical_joint_frames(leg: Leg, q: ca.SX) -> list[tuple[ca.SX, ca.SX]]:
+    """``joint_frames`` of a leg already in canonical frames (a leg template's: SX parameters allowed)."""
     R, p = ca.SX.eye(3), ca.SX.zeros(3)
     frames = []
-    for i, joint in enumerate(axis_aligned(leg).joints):
+    for i, joint in enumerate(leg.joints):
         Rf, pf = placement_rt(joint.placement)
         p = p + R @ pf
         R = R @ Rf @ axis_rotation(joint.axis, q[i])
@@ -38,8 +43,12 @@ def joint_frames(leg: Leg, q: ca.SX) -> list[tuple[ca.SX, ca.SX]]:
 
 def foot_position(leg: Leg, q: ca.SX) -> ca.SX:
     """Foot (contact point) position in the trunk frame, m."""
-    leg = axis_aligned(leg)
-    R3, p3 = joint_frames(leg, q)[-1]
+    return canonical_foot_position(axis_aligned(leg), q)
+
+
+def canonical_foot_position(leg: Leg, q: ca.SX) -> ca.SX:
+    """``foot_position`` of a leg already in canonical frames (a leg template's: SX parameters allowed)."""
+    R3, p3 = canonical_joint_frames(leg, q)[-1]
     return p3 + R3 @ dm(leg.foot.p)
 
 
