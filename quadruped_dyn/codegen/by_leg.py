@@ -146,11 +146,11 @@ def foot_c(c_name: str, pieces: LegPieces, precision: str, host_helpers: frozens
                          f"    casadi_real* r[1] = {{y}};\n    return {call};\n  }}\n")
             continue
         turned = ", ".join(f"{'-' if sg < 0 else ''}{x}[{j}]" for x in ("q_l", "s") for j, sg in enumerate(sigma))
-        turned_qd = ", ".join(f"{'-' if sg < 0 else ''}qd_l[{j}]" for j, sg in enumerate(sigma))
+        turned_qd = ", ".join(f"qd_l ? {'-' if sg < 0 else ''}qd_l[{j}] : 0" for j, sg in enumerate(sigma))
         back = "".join(f"    for (int d = 0; d < 3; ++d) y[{3 + 3 * j} + d] = -y[{3 + 3 * j} + d];\n"
                        for j, sg in enumerate(sigma) if sg < 0)
         cases.append(f"  case {k}: {{ /* sigma = {tuple(int(x) for x in sigma)} */\n    const casadi_real x[6] = {{{turned}}};\n"
-                     f"    const casadi_real x_d[3] = {{{turned_qd.replace('qd_l[', 'qd_l ? qd_l[').replace(']', '] : 0')}}};\n"
+                     f"    const casadi_real x_d[3] = {{{turned_qd}}};\n"
                      f"    const casadi_real* a[5] = {{x, x_d, {c_name}_p{k}, x + 3, c}};\n"
                      f"    const casadi_real* a_rest[4] = {{x, {c_name}_p{k}, x + 3, c}};\n"
                      f"    casadi_real* r[1] = {{y}};\n    int flag = {call};\n{back}    return flag;\n  }}\n")
