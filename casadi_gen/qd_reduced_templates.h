@@ -243,13 +243,15 @@ int qd_foot_trig(int k, const casadi_real* q_l, const casadi_real* qd_l, const c
  * b_j = -(omega_b x (omega_b x r_j) + 2 omega_b x J_j qd_j + Jdot_j qd_j) - J_j qdd_j, b_e = qdd_r[12] - (D omega_b) . omega_b. */
 static int qd_parts(int n, int legs, const casadi_real* q_r, const casadi_real* qd_r, const casadi_real* qdd_r,
                     const casadi_real* quat, const qd_trig* t, casadi_real* m, casadi_real* restrict S_b,
-                    casadi_real* restrict T_b, casadi_real* restrict v, casadi_real* restrict a, casadi_int* iw, casadi_real* w,
-                    int mem) {
+                    casadi_real* restrict T_b, casadi_real* restrict v, casadi_real* restrict a,
+                    casadi_real* restrict scratch, casadi_int* iw, casadi_real* w, int mem) {
   static const casadi_real zero[QD_N_MAX];
   const int rates = qd_r || qdd_r; /* else v and a are not written (M_r's and G_r's calls) */
   qd_r = qd_r ? qd_r : zero;
   qdd_r = qdd_r ? qdd_r : zero;
-  casadi_real foot[4 * QD_FOOT], r[12], W[6 * 12], Y[6 * 12], e[6 + 6 + 9]; /* W: W_T; e: y_e, s_e, D (two feet) */
+  /* in the caller's scratch (QD_PARTS_WORK reals, space it uses later: the Cortex-M stack budget): the feet, their
+   * positions, W_T, Y, and e = (y_e, s_e, D) with two feet */
+  casadi_real *foot = scratch, *r = foot + 4 * QD_FOOT, *W = r + 12, *Y = W + 6 * 12, *e = Y + 6 * 12;
   const int k = (legs & 1) + (legs >> 1 & 1) + (legs >> 2 & 1) + (legs >> 3 & 1); /* stance feet */
   int leg[4], flag = 0;
   for (int l = 0, j = 0; l < 4; ++l) {
@@ -313,6 +315,7 @@ static int qd_parts(int n, int legs, const casadi_real* q_r, const casadi_real* 
   for (int i = 0; i < 12; ++i) v[6 + i] = qd_r[i], a[6 + i] = qdd_r[i];
   return 0;
 }
+#define QD_PARTS_WORK (4 * QD_FOOT + 12 + 6 * 12 + 6 * 12 + 6 + 6 + 9)
 
 /* defined in qd_<robot>.c of the same library (no work memory: checked by the generator): M_full (dense, zeros
  * written), M's nonzero blocks (leg by leg), G_full, and id_full without foot forces (leg by leg) with the joints' sines
@@ -414,17 +417,19 @@ QD_INLINE int qd_reduced_term(int n, int legs, int which, const casadi_real** ar
                               casadi_real* w, int mem) {
   const casadi_real* quat = arg[which == 1 ? 2 : which == 3 ? 3 : 1];
   const casadi_real* qd_r = which == 1 || which == 3 ? arg[1] : 0;
-  casadi_real m = 0, S_b[QD_N_MAX * 6], T_b[6 * QD_N_MAX], v[18], a[18];
+  casadi_real m = 0, S_b[QD_N_MAX * 6], T_b[6 * QD_N_MAX], v[18], a[18], M[18 * 18]; /* M: the parts' scratch first */
+  typedef char scratch_fits[QD_PARTS_WORK <= 18 * 18 ? 1 : -1];
+  (void)sizeof(scratch_fits);
   qd_trig t;
   qd_trig_of(n, arg[0], &t);
-  int flag = qd_parts(n, legs, arg[0], qd_r, which == 3 ? arg[2] : 0, quat, &t, &m, S_b, T_b, v, a, iw, w, mem);
+  int flag = qd_parts(n, legs, arg[0], qd_r, which == 3 ? arg[2] : 0, quat, &t, &m, S_b, T_b, v, a, M, iw, w, mem);
   if (!flag) flag = qd_regular_value(m);
   if (flag || !res[0]) return flag;
   if (which == 1 || which == 3) {
     casadi_real work[QD_RNEA_R_WORK];
     return qd_rnea_r(n, S_b, arg[0], quat, &t, v, a, res[0], work, iw, w, mem);
   }
-  casadi_real q[19], M[18 * 18];
+  casadi_real q[19];
   qd_full_q(arg[0], quat, q);
   if (which == 2) {
     const casadi_real* g_arg[3] = {q, t.s, t.c};
@@ -697,11 +702,14 @@ QD_INLINE int qd_fd_r_folded(int n, int legs, const casadi_real* S_b, const casa
  * the stack. Called once per file with constant n and legs. */
 QD_INLINE int qd_fd_r_solve(int n, int legs, const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w,
                             int mem) {
-  casadi_real m = 0, S_b[QD_N_MAX * 6], T_b[6 * QD_N_MAX], Mc[QD_M_BLOCKS], work[QD_N_MAX * QD_N_MAX], b[QD_N_MAX];
-  casadi_real *v = Mc, *a = Mc + 18, *q = work; /* in space Mc and work take later: fd_r's stack stays within budget */
+  casadi_real m = 0, S_b[QD_N_MAX * 6], T_b[6 * QD_N_MAX], space[QD_M_BLOCKS + QD_N_MAX * QD_N_MAX], b[QD_N_MAX];
+  /* M's blocks Mc, then the fold's work; before them v, a and the parts' scratch: fd_r's stack stays within budget */
+  casadi_real *Mc = space, *work = space + QD_M_BLOCKS, *v = space, *a = v + 18, *q = work;
+  typedef char scratch_fits[36 + QD_PARTS_WORK <= QD_M_BLOCKS + QD_N_MAX * QD_N_MAX ? 1 : -1];
+  (void)sizeof(scratch_fits);
   qd_trig t;
   qd_trig_of(n, arg[0], &t);
-  int flag = qd_parts(n, legs, arg[0], arg[1], 0, arg[3], &t, &m, S_b, T_b, v, a, iw, w, mem);
+  int flag = qd_parts(n, legs, arg[0], arg[1], 0, arg[3], &t, &m, S_b, T_b, v, a, a + 18, iw, w, mem);
   if (!flag) flag = qd_regular_value(m);
   if (!flag) flag = qd_rnea_r(n, S_b, arg[0], arg[3], &t, v, a, b, Mc + 36, iw, w, mem);
   if (flag) return flag;
@@ -858,7 +866,9 @@ QD_INLINE int qd_dfd_r_solve(int n, int legs, int lift_quat, const casadi_real**
   qd_trig_of(n, arg[0], &t);
   int piv[QD_N_MAX];
   /* qdd_r as qd_fd_r_solve: the parts once (S_b, T_b, v and a at qdd_r = 0: k), C_r + G_r = S rnea(q, v, k), M_r */
-  int flag = qd_parts(n, legs, arg[0], arg[1], 0, arg[3], &t, &reg, S_b, T_b, v, a, iw, w, mem);
+  typedef char scratch_fits[QD_PARTS_WORK <= 18 * 18 ? 1 : -1]; /* the parts' scratch in M, used after them */
+  (void)sizeof(scratch_fits);
+  int flag = qd_parts(n, legs, arg[0], arg[1], 0, arg[3], &t, &reg, S_b, T_b, v, a, M, iw, w, mem);
   if (!flag) flag = qd_regular_value(reg);
   if (flag) return flag;
   qd_full_q(arg[0], arg[3], q);

@@ -138,7 +138,9 @@ QD_INLINE int qd_dfd_r_solve(int n, int legs, int lift_quat, const casadi_real**
   qd_trig_of(n, arg[0], &t);
   int piv[QD_N_MAX];
   /* qdd_r as qd_fd_r_solve: the parts once (S_b, T_b, v and a at qdd_r = 0: k), C_r + G_r = S rnea(q, v, k), M_r */
-  int flag = qd_parts(n, legs, arg[0], arg[1], 0, arg[3], &t, &reg, S_b, T_b, v, a, iw, w, mem);
+  typedef char scratch_fits[QD_PARTS_WORK <= 18 * 18 ? 1 : -1]; /* the parts' scratch in M, used after them */
+  (void)sizeof(scratch_fits);
+  int flag = qd_parts(n, legs, arg[0], arg[1], 0, arg[3], &t, &reg, S_b, T_b, v, a, M, iw, w, mem);
   if (!flag) flag = qd_regular_value(reg);
   if (flag) return flag;
   qd_full_q(arg[0], arg[3], q);
