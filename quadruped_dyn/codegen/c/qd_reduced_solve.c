@@ -36,15 +36,6 @@
 #endif
 #endif
 
-/* Loops whose trip count is a constant once a template is inlined (the elimination's and its back-substitution's, the
- * Schur complement's) are unrolled in full by GCC when optimising for speed (a1, callgrind: fd_r -6 % two feet, -10 %
- * four feet); not at -Os, the embedded builds' size budget (docs/embedded.md). */
-#if defined(__GNUC__) && !defined(__clang__) && __GNUC__ >= 8 && defined(__OPTIMIZE__) && !defined(__OPTIMIZE_SIZE__)
-#define QD_UNROLL _Pragma("GCC unroll 16")
-#else
-#define QD_UNROLL
-#endif
-
 /* Two reals at once where the compiler has vectors (GCC's and Clang's vector extension: SSE2 pairs on x86-64, NEON on
  * AArch64, scalar code where the target has none): the same operations on each entry, in the same order, as the scalar
  * loops below them, so the same results to the bit (docs/benchmark.md, "M's blocks, the elimination's chain,
@@ -406,7 +397,7 @@ static void qd_lu_solve(int n, const casadi_real* LU, const int* piv, casadi_rea
  * QD_SINGULAR when a pivot is below QD_SINGULAR_RTOL * scale (qd_lu_factor's test). */
 QD_INLINE int qd_gauss_solve(int n, casadi_real* A, casadi_real scale, int* piv) {
   casadi_real inv[QD_N_MAX]; /* 1 / U's diagonal, for U x = y */
-  QD_UNROLL for (int k = 0; k < n; ++k) { /* A[i + n j] = A_ij */
+  for (int k = 0; k < n; ++k) { /* A[i + n j] = A_ij */
     casadi_real* col = A + n * k;
     int p = k; /* the first entry of largest magnitude, found by its value (a chain of compares, not of loads) */
     casadi_real big = fabs(col[k]);
@@ -426,16 +417,16 @@ QD_INLINE int qd_gauss_solve(int n, casadi_real* A, casadi_real scale, int* piv)
     }
     inv[k] = 1 / col[k];
     for (int i = k + 1; i < n; ++i) col[i] *= inv[k]; /* the multipliers */
-    QD_UNROLL for (int j = k + 1; j <= n; ++j) {
+    for (int j = k + 1; j <= n; ++j) {
       casadi_real* cj = A + n * j;
       casadi_real u = cj[k];
       qd_axpy_minus(n - k - 1, u, col + k + 1, cj + k + 1);
     }
   }
   casadi_real* x = A + n * n;
-  QD_UNROLL for (int j = n - 1; j >= 0; --j) { /* U x = y, column by column; products, not divisions, on its chain */
+  for (int j = n - 1; j >= 0; --j) { /* U x = y, column by column; products, not divisions, on its chain */
     x[j] *= inv[j];
-    QD_UNROLL for (int i = 0; i < j; ++i) x[i] -= A[i + n * j] * x[j];
+    for (int i = 0; i < j; ++i) x[i] -= A[i + n * j] * x[j];
   }
   return 0;
 }
@@ -555,7 +546,7 @@ QD_INLINE int qd_fd_r_folded(int n, int legs, const casadi_real* S_b, const casa
       Z[3 * p] = (a0 - u01 * x1 - u02 * x2) * i00, Z[3 * p + 1] = x1, Z[3 * p + 2] = x2;
     }
     for (int j = 0; j < 6; ++j) { /* M_bb -= M_bl Z_l */
-      QD_UNROLL for (int i = 0; i < 6; ++i) Mbb[i + 6 * j] -= B[i] * Z[3 * j] + B[i + 6] * Z[3 * j + 1] + B[i + 12] * Z[3 * j + 2];
+      for (int i = 0; i < 6; ++i) Mbb[i + 6 * j] -= B[i] * Z[3 * j] + B[i + 6] * Z[3 * j + 1] + B[i + 12] * Z[3 * j + 2];
     }
     for (int i = 0; i < 6; ++i) f[i] += B[i] * Z[18] + B[i + 6] * Z[19] + B[i + 12] * Z[20];
     Z += 21;
