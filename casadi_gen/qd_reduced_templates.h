@@ -222,12 +222,20 @@ int qd_foot_trig(int k, const casadi_real* q_l, const casadi_real* qd_l, const c
 #define QD_FOOT_J(y, d, c) (y)[3 + (d) + 3 * (c)]
 #define QD_FOOT_JQD(y, d) (y)[12 + (d)]
 #define QD_FOOT_JDQD(y, d) (y)[15 + (d)]
+/* qd_parts' scratch: the stance feet (QD_FOOT each), their positions, W_T and Y (6 x 3k each), y_e, s_e, D */
+#define QD_PARTS_WORK (4 * QD_FOOT + 12 + 6 * 12 + 6 * 12 + 6 + 6 + 9)
+
+/* c = a x b (3-vectors). */
+static void qd_cross(const casadi_real* a, const casadi_real* b, casadi_real* c) {
+  for (int d = 0; d < 3; ++d) c[d] = a[(d + 1) % 3] * b[(d + 2) % 3] - a[(d + 2) % 3] * b[(d + 1) % 3];
+}
 
 /* The parts of the reduced terms at (q_r, qd_r, qdd_r, quat) (null qd_r, qdd_r: zero), t q_r's sines and cosines, legs
  * bit l for a stance leg l (docs/formulation.md §6.2, "The parts from the feet's maps"): the regularity *m, S_b (n x 6),
  * T_b (6 x n) (column-major; S = [S_b, I_12], T = [T_b; I_12], row/column 12 no joint part), the full v, a = T qdd_r + k.
- * Without rates (qd_r and qdd_r null) v and a are not written. The stance feet's kinematics (qd_foot_trig), the stance's maps from their positions (qd_stance_maps, generated before
- * this file: dynamics/stance_maps.py; W_T (6 x 3k), Y (6 x 3k), with two feet y_e, s_e, D), then by foot j on leg l:
+ * Without rates (qd_r and qdd_r null) v and a are not written. The stance feet's kinematics (qd_foot_trig), the
+ * stance's maps from their positions (qd_stance_maps, generated before this file: dynamics/stance_maps.py; W_T (6 x 3k),
+ * Y (6 x 3k), with two feet y_e, s_e, D), then by foot j on leg l:
  * S_b's rows of l = -(W_T,j J_j)^T, T_b's columns of l = -Y_j J_j (row and column 12: s_e, y_e);
  * (v_b, omega_b) = sum_j Y_j (-J_j qd_j) + y_e qd_r[12] (= T_b qd_r); (a_b + omega_b x v_b, alpha_b) = sum_j Y_j b_j
  * + y_e b_e (= T_b qdd_r + the bias) with the stance rows' right-hand sides
@@ -286,10 +294,13 @@ static int qd_parts(int n, int legs, const casadi_real* q_r, const casadi_real* 
     const casadi_real* y = foot + QD_FOOT * j;
     const casadi_real* q_dd = qdd_r + 3 * leg[j];
     casadi_real x[3], b[3]; /* x = omega_b x r_j + 2 J_j qd_j; b = -(omega_b x x + Jdot_j qd_j) - J_j qdd_j */
-    for (int d = 0; d < 3; ++d) x[d] = o[(d + 1) % 3] * QD_FOOT_R(y, (d + 2) % 3) - o[(d + 2) % 3] * QD_FOOT_R(y, (d + 1) % 3)
-                                       + 2 * QD_FOOT_JQD(y, d);
-    for (int d = 0; d < 3; ++d) b[d] = -(o[(d + 1) % 3] * x[(d + 2) % 3] - o[(d + 2) % 3] * x[(d + 1) % 3] + QD_FOOT_JDQD(y, d))
-                                       - (QD_FOOT_J(y, d, 0) * q_dd[0] + QD_FOOT_J(y, d, 1) * q_dd[1] + QD_FOOT_J(y, d, 2) * q_dd[2]);
+    qd_cross(o, &QD_FOOT_R(y, 0), x);
+    for (int d = 0; d < 3; ++d) x[d] += 2 * QD_FOOT_JQD(y, d);
+    qd_cross(o, x, b);
+    for (int d = 0; d < 3; ++d) {
+      b[d] = -(b[d] + QD_FOOT_JDQD(y, d)) - (QD_FOOT_J(y, d, 0) * q_dd[0] + QD_FOOT_J(y, d, 1) * q_dd[1]
+                                             + QD_FOOT_J(y, d, 2) * q_dd[2]);
+    }
     qd_gemv(6, 3, Y + 18 * j, 6, b, aw);
   }
   if (n > 12) {
@@ -298,15 +309,13 @@ static int qd_parts(int n, int legs, const casadi_real* q_r, const casadi_real* 
     for (int d = 0; d < 3; ++d) b_e -= (D[d] * o[0] + D[d + 3] * o[1] + D[d + 6] * o[2]) * o[d];
     for (int i = 0; i < 6; ++i) aw[i] += e[i] * b_e;
   }
+  casadi_real ov[3]; /* omega_b x v_b */
+  qd_cross(o, vw, ov);
   for (int i = 0; i < 6; ++i) v[i] = vw[i];
-  for (int d = 0; d < 3; ++d) {
-    a[d] = aw[d] - (o[(d + 1) % 3] * vw[(d + 2) % 3] - o[(d + 2) % 3] * vw[(d + 1) % 3]);
-    a[3 + d] = aw[3 + d];
-  }
+  for (int d = 0; d < 3; ++d) a[d] = aw[d] - ov[d], a[3 + d] = aw[3 + d];
   for (int i = 0; i < 12; ++i) v[6 + i] = qd_r[i], a[6 + i] = qdd_r[i];
   return 0;
 }
-#define QD_PARTS_WORK (4 * QD_FOOT + 12 + 6 * 12 + 6 * 12 + 6 + 6 + 9)
 
 /* defined in qd_<robot>.c of the same library (no work memory: checked by the generator): M_full (dense, zeros
  * written), M's nonzero blocks (leg by leg), G_full, and id_full without foot forces (leg by leg) with the joints' sines
