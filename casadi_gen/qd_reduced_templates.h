@@ -124,6 +124,13 @@ static void qd_scatter(const casadi_int* sp, const casadi_real* restrict nz, cas
 #define QD_INLINE static inline
 #endif
 #endif
+#ifndef QD_NOINLINE
+#if defined(__GNUC__)
+#define QD_NOINLINE static __attribute__((noinline))
+#else
+#define QD_NOINLINE static
+#endif
+#endif
 
 /* Two reals at once where the compiler has vectors (GCC's and Clang's vector extension: SSE2 pairs on x86-64, NEON on
  * AArch64, scalar code where the target has none): the same operations on each entry, in the same order, as the scalar
@@ -154,6 +161,13 @@ QD_INLINE void qd_gemv(int m, int p, const casadi_real* A, int lda, const casadi
   for (int k = 0; k < p; ++k) {
     for (int i = 0; i < m; ++i) y[i] += A[i + lda * k] * x[k];
   }
+}
+
+/* qd_gemv, one copy for all its calls (not inlined): fd_r's fold and K. An fd_r call runs ~38 kB of code, more than the
+ * first-level instruction cache holds, and their products inlined were its largest piece (docs/benchmark.md, "The
+ * fold's products in one copy"). */
+QD_NOINLINE void qd_gemv_outlined(int m, int p, const casadi_real* A, int lda, const casadi_real* x, casadi_real* y) {
+  qd_gemv(m, p, A, lda, x, y);
 }
 
 /* y (m) -= a u, entry by entry. */
@@ -205,7 +219,8 @@ static int qd_regular_value(casadi_real m) {
   return m > QD_REGULARITY_MIN && m > QD_REGULARITY_FLOOR ? 0 : QD_DEGENERATE;
 }
 
-/* The sines and cosines of q_r's n entries (the joint angles first), taken once per call (qd_sincos). */
+/* The sines and cosines of q_r's first n entries (the joint angles first), taken once per call (qd_sincos): n = 12
+ * where nothing reads the roll's (q_r[12]; fd_r and the reduced terms), n = 13 where dfd_r's lift does. */
 typedef struct {
   casadi_real s[QD_N_MAX], c[QD_N_MAX];
 } qd_trig;
@@ -421,7 +436,7 @@ QD_INLINE int qd_reduced_term(int n, int legs, int which, const casadi_real** ar
   typedef char scratch_fits[QD_PARTS_WORK <= 18 * 18 ? 1 : -1];
   (void)sizeof(scratch_fits);
   qd_trig t;
-  qd_trig_of(n, arg[0], &t);
+  qd_trig_of(12, arg[0], &t);
   int flag = qd_parts(n, legs, arg[0], qd_r, which == 3 ? arg[2] : 0, quat, &t, &m, S_b, T_b, v, a, M, iw, w, mem);
   if (!flag) flag = qd_regular_value(m);
   if (flag || !res[0]) return flag;
@@ -498,14 +513,16 @@ QD_INLINE int qd_gauss_solve(int n, casadi_real* A, casadi_real scale, int* piv)
   for (int k = 0; k < n; ++k) { /* A[i + n j] = A_ij */
     casadi_real* col = A + n * k;
     int p = k; /* the first entry of largest magnitude, found by its value (a chain of compares, not of loads) */
-    casadi_real big = qd_fabs(col[k]);
+    casadi_real big = qd_fabs(col[k]), pv = col[k]; /* pv = col[p]: 1 / pv need not wait for the rows' swap */
     for (int i = k + 1; i < n; ++i) {
       const casadi_real a = qd_fabs(col[i]);
       p = a > big ? i : p;
+      pv = a > big ? col[i] : pv;
       big = a > big ? a : big;
     }
     if (!(big > QD_SINGULAR_RTOL * scale)) return QD_SINGULAR;
     if (piv) piv[k] = p;
+    inv[k] = 1 / pv;
     if (p != k) { /* the columns left of k are not read again */
       for (int j = k; j <= n; ++j) {
         casadi_real t = A[k + n * j];
@@ -513,7 +530,6 @@ QD_INLINE int qd_gauss_solve(int n, casadi_real* A, casadi_real scale, int* piv)
         A[p + n * j] = t;
       }
     }
-    inv[k] = 1 / col[k];
     for (int i = k + 1; i < n; ++i) col[i] *= inv[k]; /* the multipliers */
     for (int j = k + 1; j <= n; ++j) {
       casadi_real* cj = A + n * j;
@@ -643,11 +659,14 @@ QD_INLINE int qd_fd_r_folded(int n, int legs, const casadi_real* S_b, const casa
       casadi_real y1 = a1 - l10 * a0, x2 = (a2 - l20 * a0 - l21 * y1) * i22, x1 = (y1 - u12 * x2) * i11;
       Z[3 * p] = (a0 - u01 * x1 - u02 * x2) * i00, Z[3 * p + 1] = x1, Z[3 * p + 2] = x2;
     }
-    for (int j = 0; j < 6; ++j) { /* M_bb -= M_bl Z_l */
-      for (int i = 0; i < 6; ++i) Mbb[i + 6 * j] -= B[i] * Z[3 * j] + B[i + 6] * Z[3 * j + 1] + B[i + 12] * Z[3 * j + 2];
+    for (int j = 0; j < 6; ++j) { /* M_bb -= M_bl Z_l (= M_bl M_ll^-1 M_lb): symmetric, its lower triangle */
+      for (int i = j; i < 6; ++i) Mbb[i + 6 * j] -= B[i] * Z[3 * j] + B[i + 6] * Z[3 * j + 1] + B[i + 12] * Z[3 * j + 2];
     }
     for (int i = 0; i < 6; ++i) f[i] += B[i] * Z[18] + B[i + 6] * Z[19] + B[i + 12] * Z[20];
     Z += 21;
+  }
+  for (int j = 1; j < 6; ++j) { /* the upper triangle from the lower */
+    for (int i = 0; i < j; ++i) Mbb[i + 6 * j] = Mbb[j + 6 * i];
   }
   /* S_b's rows R and M's (joint rows R, trunk columns), gathered, rows padded with zeros to an even count mp */
   const int mp = (m + 1) & ~1;
@@ -658,15 +677,17 @@ QD_INLINE int qd_fd_r_folded(int n, int legs, const casadi_real* S_b, const casa
       M_Rb[i + mp * k] = i < m && r[i] < 12 ? QD_M_BL(Mc, r[i] / 3, k, r[i] % 3) : 0;
     }
   }
+  const int mj = m - (n > 12), mjp = (mj + 1) & ~1; /* R's joint rows (M_Rb's nonzero rows), padded to even */
   for (int q = 0; q < m; ++q) { /* K's column q: (S M T) e_r[q] on the rows R = M_Rj + M_Rb t + S_R (M_bj + M_bb t) */
     const int j = r[q];
     const casadi_real* t = T_b + 6 * j;
     casadi_real mt[6], mr[QD_N_MAX + 1];
-    for (int i = 0; i < 6; ++i) mt[i] = j < 12 ? QD_M_BL(Mc, j / 3, i, j % 3) : 0;
-    for (int i = 0; i < mp; ++i) mr[i] = i < m && j < 12 && r[i] < 12 && r[i] / 3 == j / 3 ? QD_M_LL(Mc, j / 3, r[i] % 3, j % 3) : 0;
-    qd_gemv(6, 6, Mbb, 6, t, mt);
-    qd_gemv(mp, 6, M_Rb, mp, t, mr);
-    qd_gemv(mp, 6, S_R, mp, mt, mr);
+    for (int i = 0; i < 6; ++i) mt[i] = M_Rb[q + mp * i]; /* M_bj: M_Rb's row q (zero for the roll) */
+    for (int i = 0; i < mp; ++i) mr[i] = 0;
+    for (int c = 0; c < 3 && j < 12; ++c) mr[q - q % 3 + c] = QD_M_LL(Mc, j / 3, c, j % 3); /* M_Rj: j's leg's rows */
+    qd_gemv_outlined(6, 6, Mbb, 6, t, mt);
+    qd_gemv_outlined(mjp, 6, M_Rb, mp, t, mr);
+    qd_gemv_outlined(mp, 6, S_R, mp, mt, mr);
     for (int i = 0; i < m; ++i) K[i + m * q] = mr[i];
   }
   for (int i = 0; i < m; ++i) {
@@ -680,10 +701,12 @@ QD_INLINE int qd_fd_r_folded(int n, int legs, const casadi_real* S_b, const casa
   casadi_real k_max = qd_max_abs(m * m, K);
   int flag = qd_gauss_solve_bounded(m, K, k_max > scale ? k_max : scale); /* [K, y] */
   if (flag) return flag;
-  casadi_real a_b[6] = {0, 0, 0, 0, 0, 0}; /* a_b = T_b[:, R] qdd_R */
-  for (int q = 0; q < m; ++q) {
-    for (int k = 0; k < 6; ++k) a_b[k] += T_b[k + 6 * r[q]] * y[q];
+  for (int l = 0; l < 4; ++l) { /* x = qdd_R on R, 0 on the swing legs (their columns of T_b are zero) */
+    for (int c = 0; c < 3 && !(legs >> l & 1); ++c) x[3 * l + c] = 0;
   }
+  for (int i = 0; i < m; ++i) x[r[i]] = y[i];
+  casadi_real a_b[6] = {0, 0, 0, 0, 0, 0}; /* a_b = T_b qdd_r, the trunk's acceleration */
+  qd_gemv_outlined(6, n, T_b, 6, x, a_b);
   for (int l = 3; l >= 0; --l) { /* qdd_l = w_l - Z_l a_b, the swing legs last to first */
     if (legs >> l & 1) continue;
     Z -= 21;
@@ -693,7 +716,6 @@ QD_INLINE int qd_fd_r_folded(int n, int legs, const casadi_real* S_b, const casa
       x[3 * l + c] = s;
     }
   }
-  for (int i = 0; i < m; ++i) x[r[i]] = y[i];
   return 0;
 }
 
@@ -708,7 +730,7 @@ QD_INLINE int qd_fd_r_solve(int n, int legs, const casadi_real** arg, casadi_rea
   typedef char scratch_fits[36 + QD_PARTS_WORK <= QD_M_BLOCKS + QD_N_MAX * QD_N_MAX ? 1 : -1];
   (void)sizeof(scratch_fits);
   qd_trig t;
-  qd_trig_of(n, arg[0], &t);
+  qd_trig_of(12, arg[0], &t);
   int flag = qd_parts(n, legs, arg[0], arg[1], 0, arg[3], &t, &m, S_b, T_b, v, a, a + 18, iw, w, mem);
   if (!flag) flag = qd_regular_value(m);
   if (!flag) flag = qd_rnea_r(n, S_b, arg[0], arg[3], &t, v, a, b, Mc + 36, iw, w, mem);
