@@ -601,11 +601,10 @@ QD_INLINE int qd_fd_r_folded(int n, int legs, const casadi_real* S_b, const casa
     qd_gemv_outlined(mp, 6, S_R, mp, mt, mr);
     for (int i = 0; i < m; ++i) K[i + m * q] = mr[i];
   }
-  for (int i = 0; i < m; ++i) {
-    casadi_real s = x[r[i]];
-    for (int k = 0; k < 6; ++k) s -= S_R[i + mp * k] * f[k];
-    y[i] = s;
-  }
+  casadi_real nf[6] = {-f[0], -f[1], -f[2], -f[3], -f[4], -f[5]}, xr[QD_N_MAX + 1];
+  for (int i = 0; i < mp; ++i) xr[i] = i < m ? x[r[i]] : 0;
+  qd_gemv_outlined(mp, 6, S_R, mp, nf, xr); /* y = x_R - S_R f (x + a (-b) is x - a b to the bit) */
+  for (int i = 0; i < m; ++i) y[i] = xr[i];
   casadi_real* res[1] = {K};
   casadi_int nnz[1] = {m * (m + 1)};
   if (qd_finite(0, res, 1, nnz)) return QD_NONFINITE;
@@ -618,14 +617,12 @@ QD_INLINE int qd_fd_r_folded(int n, int legs, const casadi_real* S_b, const casa
   for (int i = 0; i < m; ++i) x[r[i]] = y[i];
   casadi_real a_b[6] = {0, 0, 0, 0, 0, 0}; /* a_b = T_b qdd_r, the trunk's acceleration */
   qd_gemv_outlined(6, n, T_b, 6, x, a_b);
+  const casadi_real na_b[6] = {-a_b[0], -a_b[1], -a_b[2], -a_b[3], -a_b[4], -a_b[5]};
   for (int l = 3; l >= 0; --l) { /* qdd_l = w_l - Z_l a_b, the swing legs last to first */
     if (legs >> l & 1) continue;
     Z -= 21;
-    for (int c = 0; c < 3; ++c) {
-      casadi_real s = Z[18 + c];
-      for (int k = 0; k < 6; ++k) s -= Z[3 * k + c] * a_b[k];
-      x[3 * l + c] = s;
-    }
+    for (int c = 0; c < 3; ++c) x[3 * l + c] = Z[18 + c];
+    qd_gemv_outlined(3, 6, Z, 3, na_b, x + 3 * l);
   }
   return 0;
 }
