@@ -181,37 +181,37 @@
  *   qd_G_r_FL_FR(q_r[13], quat[4]) -> (G_r[13]);  iw 0, w 0  [front, returns QD_NONFINITE / QD_DEGENERATE]
  *   qd_id_r_FL_FR(q_r[13], qd_r[13], qdd_r[13], quat[4]) -> (tau_r[13]);  iw 0, w 0  [front, returns QD_NONFINITE / QD_DEGENERATE]
  *   qd_fd_r_FL_FR(q_r[13], qd_r[13], tau_ext[13], quat[4]) -> (qdd_r[13]);  iw 0, w 0  [front, returns QD_NONFINITE / QD_SINGULAR / QD_DEGENERATE]
- *   qd_dfd_r_FL_FR(q_r[13], qd_r[13], tau_ext[13], quat[4]) -> (dqdd_dq[13x13], dqdd_dqd[13x13], dqdd_dtau[13x13], dqdd_dtheta[13x3]);  iw 0, w 2633  [front, returns QD_NONFINITE / QD_SINGULAR / QD_DEGENERATE]
+ *   qd_dfd_r_FL_FR(q_r[13], qd_r[13], tau_ext[13], quat[4]) -> (dqdd_dq[13x13], dqdd_dqd[13x13], dqdd_dtau[13x13], dqdd_dtheta[13x3]);  iw 0, w 2624  [front, returns QD_NONFINITE / QD_SINGULAR / QD_DEGENERATE]
  *   qd_M_r_FL_BL(q_r[13], quat[4]) -> (M_r[13x13]);  iw 0, w 0  [pace (lateral), returns QD_NONFINITE / QD_DEGENERATE]
  *   qd_CG_r_FL_BL(q_r[13], qd_r[13], quat[4]) -> (CG_r[13]);  iw 0, w 0  [pace (lateral), returns QD_NONFINITE / QD_DEGENERATE]
  *   qd_G_r_FL_BL(q_r[13], quat[4]) -> (G_r[13]);  iw 0, w 0  [pace (lateral), returns QD_NONFINITE / QD_DEGENERATE]
  *   qd_id_r_FL_BL(q_r[13], qd_r[13], qdd_r[13], quat[4]) -> (tau_r[13]);  iw 0, w 0  [pace (lateral), returns QD_NONFINITE / QD_DEGENERATE]
  *   qd_fd_r_FL_BL(q_r[13], qd_r[13], tau_ext[13], quat[4]) -> (qdd_r[13]);  iw 0, w 0  [pace (lateral), returns QD_NONFINITE / QD_SINGULAR / QD_DEGENERATE]
- *   qd_dfd_r_FL_BL(q_r[13], qd_r[13], tau_ext[13], quat[4]) -> (dqdd_dq[13x13], dqdd_dqd[13x13], dqdd_dtau[13x13], dqdd_dtheta[13x3]);  iw 0, w 2633  [pace (lateral), returns QD_NONFINITE / QD_SINGULAR / QD_DEGENERATE]
+ *   qd_dfd_r_FL_BL(q_r[13], qd_r[13], tau_ext[13], quat[4]) -> (dqdd_dq[13x13], dqdd_dqd[13x13], dqdd_dtau[13x13], dqdd_dtheta[13x3]);  iw 0, w 2624  [pace (lateral), returns QD_NONFINITE / QD_SINGULAR / QD_DEGENERATE]
  *   qd_M_r_FL_BR(q_r[13], quat[4]) -> (M_r[13x13]);  iw 0, w 0  [trot (diagonal), returns QD_NONFINITE / QD_DEGENERATE]
  *   qd_CG_r_FL_BR(q_r[13], qd_r[13], quat[4]) -> (CG_r[13]);  iw 0, w 0  [trot (diagonal), returns QD_NONFINITE / QD_DEGENERATE]
  *   qd_G_r_FL_BR(q_r[13], quat[4]) -> (G_r[13]);  iw 0, w 0  [trot (diagonal), returns QD_NONFINITE / QD_DEGENERATE]
  *   qd_id_r_FL_BR(q_r[13], qd_r[13], qdd_r[13], quat[4]) -> (tau_r[13]);  iw 0, w 0  [trot (diagonal), returns QD_NONFINITE / QD_DEGENERATE]
  *   qd_fd_r_FL_BR(q_r[13], qd_r[13], tau_ext[13], quat[4]) -> (qdd_r[13]);  iw 0, w 0  [trot (diagonal), returns QD_NONFINITE / QD_SINGULAR / QD_DEGENERATE]
- *   qd_dfd_r_FL_BR(q_r[13], qd_r[13], tau_ext[13], quat[4]) -> (dqdd_dq[13x13], dqdd_dqd[13x13], dqdd_dtau[13x13], dqdd_dtheta[13x3]);  iw 0, w 2633  [trot (diagonal), returns QD_NONFINITE / QD_SINGULAR / QD_DEGENERATE]
+ *   qd_dfd_r_FL_BR(q_r[13], qd_r[13], tau_ext[13], quat[4]) -> (dqdd_dq[13x13], dqdd_dqd[13x13], dqdd_dtau[13x13], dqdd_dtheta[13x3]);  iw 0, w 2624  [trot (diagonal), returns QD_NONFINITE / QD_SINGULAR / QD_DEGENERATE]
  *   qd_M_r_FR_BL(q_r[13], quat[4]) -> (M_r[13x13]);  iw 0, w 0  [trot (diagonal), returns QD_NONFINITE / QD_DEGENERATE]
  *   qd_CG_r_FR_BL(q_r[13], qd_r[13], quat[4]) -> (CG_r[13]);  iw 0, w 0  [trot (diagonal), returns QD_NONFINITE / QD_DEGENERATE]
  *   qd_G_r_FR_BL(q_r[13], quat[4]) -> (G_r[13]);  iw 0, w 0  [trot (diagonal), returns QD_NONFINITE / QD_DEGENERATE]
  *   qd_id_r_FR_BL(q_r[13], qd_r[13], qdd_r[13], quat[4]) -> (tau_r[13]);  iw 0, w 0  [trot (diagonal), returns QD_NONFINITE / QD_DEGENERATE]
  *   qd_fd_r_FR_BL(q_r[13], qd_r[13], tau_ext[13], quat[4]) -> (qdd_r[13]);  iw 0, w 0  [trot (diagonal), returns QD_NONFINITE / QD_SINGULAR / QD_DEGENERATE]
- *   qd_dfd_r_FR_BL(q_r[13], qd_r[13], tau_ext[13], quat[4]) -> (dqdd_dq[13x13], dqdd_dqd[13x13], dqdd_dtau[13x13], dqdd_dtheta[13x3]);  iw 0, w 2633  [trot (diagonal), returns QD_NONFINITE / QD_SINGULAR / QD_DEGENERATE]
+ *   qd_dfd_r_FR_BL(q_r[13], qd_r[13], tau_ext[13], quat[4]) -> (dqdd_dq[13x13], dqdd_dqd[13x13], dqdd_dtau[13x13], dqdd_dtheta[13x3]);  iw 0, w 2624  [trot (diagonal), returns QD_NONFINITE / QD_SINGULAR / QD_DEGENERATE]
  *   qd_M_r_FR_BR(q_r[13], quat[4]) -> (M_r[13x13]);  iw 0, w 0  [pace (lateral), returns QD_NONFINITE / QD_DEGENERATE]
  *   qd_CG_r_FR_BR(q_r[13], qd_r[13], quat[4]) -> (CG_r[13]);  iw 0, w 0  [pace (lateral), returns QD_NONFINITE / QD_DEGENERATE]
  *   qd_G_r_FR_BR(q_r[13], quat[4]) -> (G_r[13]);  iw 0, w 0  [pace (lateral), returns QD_NONFINITE / QD_DEGENERATE]
  *   qd_id_r_FR_BR(q_r[13], qd_r[13], qdd_r[13], quat[4]) -> (tau_r[13]);  iw 0, w 0  [pace (lateral), returns QD_NONFINITE / QD_DEGENERATE]
  *   qd_fd_r_FR_BR(q_r[13], qd_r[13], tau_ext[13], quat[4]) -> (qdd_r[13]);  iw 0, w 0  [pace (lateral), returns QD_NONFINITE / QD_SINGULAR / QD_DEGENERATE]
- *   qd_dfd_r_FR_BR(q_r[13], qd_r[13], tau_ext[13], quat[4]) -> (dqdd_dq[13x13], dqdd_dqd[13x13], dqdd_dtau[13x13], dqdd_dtheta[13x3]);  iw 0, w 2633  [pace (lateral), returns QD_NONFINITE / QD_SINGULAR / QD_DEGENERATE]
+ *   qd_dfd_r_FR_BR(q_r[13], qd_r[13], tau_ext[13], quat[4]) -> (dqdd_dq[13x13], dqdd_dqd[13x13], dqdd_dtau[13x13], dqdd_dtheta[13x3]);  iw 0, w 2624  [pace (lateral), returns QD_NONFINITE / QD_SINGULAR / QD_DEGENERATE]
  *   qd_M_r_BL_BR(q_r[13], quat[4]) -> (M_r[13x13]);  iw 0, w 0  [back, returns QD_NONFINITE / QD_DEGENERATE]
  *   qd_CG_r_BL_BR(q_r[13], qd_r[13], quat[4]) -> (CG_r[13]);  iw 0, w 0  [back, returns QD_NONFINITE / QD_DEGENERATE]
  *   qd_G_r_BL_BR(q_r[13], quat[4]) -> (G_r[13]);  iw 0, w 0  [back, returns QD_NONFINITE / QD_DEGENERATE]
  *   qd_id_r_BL_BR(q_r[13], qd_r[13], qdd_r[13], quat[4]) -> (tau_r[13]);  iw 0, w 0  [back, returns QD_NONFINITE / QD_DEGENERATE]
  *   qd_fd_r_BL_BR(q_r[13], qd_r[13], tau_ext[13], quat[4]) -> (qdd_r[13]);  iw 0, w 0  [back, returns QD_NONFINITE / QD_SINGULAR / QD_DEGENERATE]
- *   qd_dfd_r_BL_BR(q_r[13], qd_r[13], tau_ext[13], quat[4]) -> (dqdd_dq[13x13], dqdd_dqd[13x13], dqdd_dtau[13x13], dqdd_dtheta[13x3]);  iw 0, w 2633  [back, returns QD_NONFINITE / QD_SINGULAR / QD_DEGENERATE]
+ *   qd_dfd_r_BL_BR(q_r[13], qd_r[13], tau_ext[13], quat[4]) -> (dqdd_dq[13x13], dqdd_dqd[13x13], dqdd_dtau[13x13], dqdd_dtheta[13x3]);  iw 0, w 2624  [back, returns QD_NONFINITE / QD_SINGULAR / QD_DEGENERATE]
  *   qd_did_full(q[19], v[18], a[18]) -> (dtau_dq[18x18, 162 nonzeros], dtau_dv[18x18, 212 nonzeros], dtau_da[18x18, 210 nonzeros]);  iw 0, w 0  [returns QD_NONFINITE]
  *   qd_dfd_full_parts(q[19], v[18]) -> (M[18x18], nle[18]);  iw 0, w 0  [returns QD_NONFINITE]
  *   qd_dfd_full(q[19], v[18], tau_full[18]) -> (da_dq[18x18], da_dv[18x18], da_dtau[18x18]);  iw 0, w 1476  [returns QD_NONFINITE / QD_SINGULAR]
@@ -278,15 +278,15 @@
  *   qd_CG_r_FR_BL_BR 336/176; qd_G_r_FR_BL_BR 236/124; qd_id_r_FR_BL_BR 436/228;
  *   qd_fd_r_FR_BL_BR 436/228; qd_dfd_r_FR_BL_BR 24400/12216; qd_M_r_FL_FR 1500/756;
  *   qd_CG_r_FL_FR 360/188; qd_G_r_FL_FR 252/132; qd_id_r_FL_FR 468/244; qd_fd_r_FL_FR 468/244;
- *   qd_dfd_r_FL_FR 25808/12920; qd_M_r_FL_BL 1500/756; qd_CG_r_FL_BL 360/188; qd_G_r_FL_BL 252/132;
- *   qd_id_r_FL_BL 468/244; qd_fd_r_FL_BL 468/244; qd_dfd_r_FL_BL 25808/12920;
+ *   qd_dfd_r_FL_FR 25736/12884; qd_M_r_FL_BL 1500/756; qd_CG_r_FL_BL 360/188; qd_G_r_FL_BL 252/132;
+ *   qd_id_r_FL_BL 468/244; qd_fd_r_FL_BL 468/244; qd_dfd_r_FL_BL 25736/12884;
  *   qd_M_r_FL_BR 1500/756; qd_CG_r_FL_BR 360/188; qd_G_r_FL_BR 252/132; qd_id_r_FL_BR 468/244;
- *   qd_fd_r_FL_BR 468/244; qd_dfd_r_FL_BR 25808/12920; qd_M_r_FR_BL 1500/756;
+ *   qd_fd_r_FL_BR 468/244; qd_dfd_r_FL_BR 25736/12884; qd_M_r_FR_BL 1500/756;
  *   qd_CG_r_FR_BL 360/188; qd_G_r_FR_BL 252/132; qd_id_r_FR_BL 468/244; qd_fd_r_FR_BL 468/244;
- *   qd_dfd_r_FR_BL 25808/12920; qd_M_r_FR_BR 1500/756; qd_CG_r_FR_BR 360/188; qd_G_r_FR_BR 252/132;
- *   qd_id_r_FR_BR 468/244; qd_fd_r_FR_BR 468/244; qd_dfd_r_FR_BR 25808/12920;
+ *   qd_dfd_r_FR_BL 25736/12884; qd_M_r_FR_BR 1500/756; qd_CG_r_FR_BR 360/188; qd_G_r_FR_BR 252/132;
+ *   qd_id_r_FR_BR 468/244; qd_fd_r_FR_BR 468/244; qd_dfd_r_FR_BR 25736/12884;
  *   qd_M_r_BL_BR 1500/756; qd_CG_r_BL_BR 360/188; qd_G_r_BL_BR 252/132; qd_id_r_BL_BR 468/244;
- *   qd_fd_r_BL_BR 468/244; qd_dfd_r_BL_BR 25808/12920; qd_did_full 5136/2580;
+ *   qd_fd_r_BL_BR 468/244; qd_dfd_r_BL_BR 25736/12884; qd_did_full 5136/2580;
  *   qd_dfd_full_parts 3048/1532; qd_dfd_full 20048/10036; qd_dgrf_dir_FL_FR_BL_BR 460/240;
  *   qd_dgrf_FL_FR_BL_BR 12320/6172; qd_dgrf_dir_FL_FR_BL 460/240; qd_dgrf_FL_FR_BL 12320/6172;
  *   qd_dgrf_dir_FL_FR_BR 460/240; qd_dgrf_FL_FR_BR 12320/6172; qd_dgrf_dir_FL_BL_BR 460/240;
@@ -1499,7 +1499,7 @@ int qd_dfd_r_FL_FR_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_int
 #define qd_dfd_r_FL_FR_SZ_ARG 4
 #define qd_dfd_r_FL_FR_SZ_RES 4
 #define qd_dfd_r_FL_FR_SZ_IW 0
-#define qd_dfd_r_FL_FR_SZ_W 2633
+#define qd_dfd_r_FL_FR_SZ_W 2624
 void qd_paper_r_FL_FR_casadi_version(int* major, int* minor, int* patch);
 int qd_paper_r_FL_FR_casadi_int_size(void);
 int qd_paper_r_FL_FR_casadi_real_size(void);
@@ -1632,7 +1632,7 @@ int qd_dfd_r_FL_BL_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_int
 #define qd_dfd_r_FL_BL_SZ_ARG 4
 #define qd_dfd_r_FL_BL_SZ_RES 4
 #define qd_dfd_r_FL_BL_SZ_IW 0
-#define qd_dfd_r_FL_BL_SZ_W 2633
+#define qd_dfd_r_FL_BL_SZ_W 2624
 void qd_paper_r_FL_BL_casadi_version(int* major, int* minor, int* patch);
 int qd_paper_r_FL_BL_casadi_int_size(void);
 int qd_paper_r_FL_BL_casadi_real_size(void);
@@ -1765,7 +1765,7 @@ int qd_dfd_r_FL_BR_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_int
 #define qd_dfd_r_FL_BR_SZ_ARG 4
 #define qd_dfd_r_FL_BR_SZ_RES 4
 #define qd_dfd_r_FL_BR_SZ_IW 0
-#define qd_dfd_r_FL_BR_SZ_W 2633
+#define qd_dfd_r_FL_BR_SZ_W 2624
 void qd_paper_r_FL_BR_casadi_version(int* major, int* minor, int* patch);
 int qd_paper_r_FL_BR_casadi_int_size(void);
 int qd_paper_r_FL_BR_casadi_real_size(void);
@@ -1898,7 +1898,7 @@ int qd_dfd_r_FR_BL_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_int
 #define qd_dfd_r_FR_BL_SZ_ARG 4
 #define qd_dfd_r_FR_BL_SZ_RES 4
 #define qd_dfd_r_FR_BL_SZ_IW 0
-#define qd_dfd_r_FR_BL_SZ_W 2633
+#define qd_dfd_r_FR_BL_SZ_W 2624
 void qd_paper_r_FR_BL_casadi_version(int* major, int* minor, int* patch);
 int qd_paper_r_FR_BL_casadi_int_size(void);
 int qd_paper_r_FR_BL_casadi_real_size(void);
@@ -2031,7 +2031,7 @@ int qd_dfd_r_FR_BR_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_int
 #define qd_dfd_r_FR_BR_SZ_ARG 4
 #define qd_dfd_r_FR_BR_SZ_RES 4
 #define qd_dfd_r_FR_BR_SZ_IW 0
-#define qd_dfd_r_FR_BR_SZ_W 2633
+#define qd_dfd_r_FR_BR_SZ_W 2624
 void qd_paper_r_FR_BR_casadi_version(int* major, int* minor, int* patch);
 int qd_paper_r_FR_BR_casadi_int_size(void);
 int qd_paper_r_FR_BR_casadi_real_size(void);
@@ -2164,7 +2164,7 @@ int qd_dfd_r_BL_BR_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_int
 #define qd_dfd_r_BL_BR_SZ_ARG 4
 #define qd_dfd_r_BL_BR_SZ_RES 4
 #define qd_dfd_r_BL_BR_SZ_IW 0
-#define qd_dfd_r_BL_BR_SZ_W 2633
+#define qd_dfd_r_BL_BR_SZ_W 2624
 void qd_paper_r_BL_BR_casadi_version(int* major, int* minor, int* patch);
 int qd_paper_r_BL_BR_casadi_int_size(void);
 int qd_paper_r_BL_BR_casadi_real_size(void);

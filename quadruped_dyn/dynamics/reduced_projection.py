@@ -60,9 +60,15 @@ def rigid_motion(r: list[ca.SX], u: list[ca.SX], e: ca.SX | None = None, rate: c
     hold m right-hand sides."""
     k = len(r)
     rbar = sum(r[1:], r[0]) / k
-    rho = [ri - rbar for ri in r]
-    K = sum((ca.dot(p, p) * ca.SX.eye(3) - p @ p.T for p in rho[1:]), ca.dot(rho[0], rho[0]) * ca.SX.eye(3) - rho[0] @ rho[0].T)
-    rhs = sum((skew(p) @ ui for p, ui in zip(rho[1:], u[1:])), skew(rho[0]) @ u[0])
+    if k == 2:  # rho = +-h: one outer product, one cross product (the same sums, fewer operations)
+        h = (r[0] - r[1]) / 2
+        K = 2 * (ca.dot(h, h) * ca.SX.eye(3) - h @ h.T)
+        rhs = skew(h) @ (u[0] - u[1])
+    else:
+        rho = [ri - rbar for ri in r]
+        K = sum((ca.dot(p, p) * ca.SX.eye(3) - p @ p.T for p in rho[1:]),
+                ca.dot(rho[0], rho[0]) * ca.SX.eye(3) - rho[0] @ rho[0].T)
+        rhs = sum((skew(p) @ ui for p, ui in zip(rho[1:], u[1:])), skew(rho[0]) @ u[0])
     if e is not None and rate is not None:
         K, rhs = K + e @ e.T, rhs + e @ rate
     omega = _solve3(K, rhs)
