@@ -33,6 +33,8 @@ def _install(tmp_path: Path, deps: bool) -> Path:
     cmd = [sys.executable, "-m", "pip", "--python", str(python), "install", "--quiet", str(source)]
     proc = subprocess.run(cmd + ([] if deps else ["--no-deps"]), capture_output=True, text=True, check=False)
     assert proc.returncode == 0, proc.stderr[-2000:]
+    left = sorted(p.name for p in source.iterdir() if p.name == "build" or p.name.endswith(".egg-info"))
+    assert not left, f"pip install . left {left} in the source tree"
     where = subprocess.run([str(python), "-c", "import quadruped_dyn; print(quadruped_dyn.__file__)"],
                            capture_output=True, text=True, check=True, cwd=tmp_path).stdout
     assert where.startswith(str(venv)), f"imported from {where}, not the installed copy"
@@ -61,5 +63,5 @@ def test_installed_package_with_its_dependencies(tmp_path):
     _run(bin_dir, tmp_path, "info", "paper")
     assert "all terms pass" in _run(bin_dir, tmp_path, "check", "paper", "--samples", "2").stdout
     _run(bin_dir, tmp_path, "codegen", "paper", "--out", str(tmp_path / "gen"))
-    for name in ("qd_paper.c", "qd_paper.h", "qd_paper_r_FL_BR.c"):
+    for name in ("qd_paper.c", "qd_paper.h", "qd_paper-r-FL_BR.c"):
         assert (tmp_path / "gen" / name).read_text() == (CHECKOUT / "casadi_gen" / name).read_text(), name
