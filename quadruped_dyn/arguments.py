@@ -12,6 +12,9 @@ def real_number(what: str, value: object) -> float:
     is the caller's to check."""
     if isinstance(value, bool) or not isinstance(value, numbers.Real):
         raise InputError(f"{what} is {value!r}, a {type(value).__name__}; expected a real number")
+    if type(value).__name__ == "float16":  # NumPy's half: 3 significant digits
+        raise InputError(f"{what} is {value!r}, a float16; expected a real number of float32 or float64 precision "
+                         "(every computation is in double precision)")
     return float(value)
 
 

@@ -71,7 +71,7 @@ GRF_COND_ASSUMED = 100.0
 #: solves the maps by their normal equations (docs/formulation.md §6.2), so its rounding grows with
 #: cond(A_s)^2: measured on solo12's BL+BR, CG_r's error is 0.015-0.024 eps cond(A_s)^2 in double and
 #: in float at cond(A_s) 145-472 (2-11 eps cond(A_s)); the terms' tolerances scale by (cond / this)^2
-#: (fd_r's and dfd_r's by cond / this, times their cond(M_r): checks.c_reference.tolerance_scale).
+#: (fd_r's and dfd_r's by cond / this, times their cond(M_r): checks.check_program_values.tolerance_scale).
 MAP_COND_ASSUMED = 20.0
 
 #: Canonical leg frames (``leg_frames``): entries of a re-expressed axis, offset, CoM (m) or
@@ -107,10 +107,31 @@ REL_TOL_DERIVATIVES = 1e-9
 #: h^2 / 6 |f'''| for second-order differences (measured on the paper robot's four-foot dfd_r: 1.6e-7
 #: at h = 1e-3, 8e-8 at 1e-4, 1.2e-6 at 1e-5, 1.6e-5 at 1e-6: round-off wins below 1e-4), but on
 #: solo12 (light legs, large accelerations) the walk triple FL+FR+BR's truncation is 2.6e-5 at 1e-4.
-#: So the references are fourth-order differences (``checks.derivative_reference.central``): there
+#: So the references are fourth-order differences (``checks.finite_differences.central``): there
 #: 2.6e-9 at h = 1e-4 (3.2e-9 at 1e-5, round-off). With h = 1e-4 (rad, rad/s, N m, m/s^2) 2e-6
 #: relative keeps a margin of ~20 over the paper robot's second-order figures and more over the
 #: fourth-order ones, and a wrong term (a missing orientation dependence, a sign) is an O(1e-2 - 1) error.
+#: dfd_full's terms go through M's solve, so the model, not the code, bounds their accuracy: a backward-stable solve's
+#: relative error is ~cond(M) eps, and da_dq's ~cond(M)^2 eps (dtau/dq is evaluated at a = M^-1 (tau - C - G),
+#: then solved with M again). Measured against Pinocchio (the paper robot with the FL shank's inertia x1e7 and x1e9,
+#: cond(M) 1e7-2e9, 5 states each): da_dtau <= 0.005 cond eps, da_dv <= 0.062 cond eps, da_dq <= 6.7e-9 cond^2 eps;
+#: the built-in robots (cond(M) <= 3.3e4 at 300 random states, solo12; 8.4e3 or less for the others) <= 0.43 cond eps.
+#: A term's tolerance is max(REL_TOL_DERIVATIVES, SOLVE_ERR_PER_COND cond eps), da_dq's also
+#: SOLVE_ERR_PER_COND2 cond^2 eps (``derivative_tolerance``): a margin of >= 150 over those measurements, and every
+#: built-in robot keeps REL_TOL_DERIVATIVES (10 cond eps reaches 1e-9 at cond(M) 4.5e5). An error the code makes
+#: (a wrong sign or term) is O(1e-2 - 1) relative and still fails wherever the scaled tolerance is below that.
+SOLVE_ERR_PER_COND = 10.0
+SOLVE_ERR_PER_COND2 = 1e-6
+
+
+def derivative_tolerance(name: str, cond_m: float) -> float:
+    """The tolerance of derivative term ``name`` at a state where M's condition number is ``cond_m``."""
+    scaled = SOLVE_ERR_PER_COND * cond_m * DBL_EPSILON
+    if name.endswith("da_dq"):
+        scaled = max(scaled, SOLVE_ERR_PER_COND2 * cond_m**2 * DBL_EPSILON)
+    return max(REL_TOL_DERIVATIVES, scaled) if name.startswith("dfd_full") else REL_TOL_DERIVATIVES
+
+
 FD_STEP_DERIVATIVES = 1e-4
 REL_TOL_FD_DERIVATIVES = 2e-6
 
@@ -156,7 +177,7 @@ REFERENCE_TOL_SCALE_REL_TOL = 2e-2
 #: below DOP853's tolerance (1e-13).
 TABLE_REL_TOL = 1e-14
 
-#: Later phases of a run reach a higher floor: on the paper robot's walk (2026-12-01), phase 6's
+#: Later phases of a run reach a higher floor: on the paper robot's walk, phase 6's
 #: id_r differs from its interpolant by 3.8e-14 of its scale at degree 64, 128 and 256 alike, and
 #: phase 7's qdd_r by 1.0-1.1e-14: the exact IK and id_r's round-off there, which no interpolant
 #: can go below (the exact evaluation the table replaces has that noise itself). Such a floor is
@@ -168,18 +189,18 @@ TABLE_NOISE_TOL = 1e-13
 #: method with the floating-point operations in another order (and, for rigid contacts, M and
 #: nle from the generated terms instead of Pinocchio's), so they differ by amplified round-off,
 #: which the one-ulp twin run samples once. One sample is not a bound: measured on the paper
-#: robot (0.3 s of trot and walk, 2026-12-01), native vs Python is 0.4-1.5x the twin difference
+#: robot (0.3 s of trot and walk), native vs Python is 0.4-1.5x the twin difference
 #: for reduced runs and 1-6.5x for rigid-contact runs. A wrong term (a missing projection, a
 #: sign, a stage) moves a run by many orders of magnitude more than 10x that noise.
 NATIVE_TWIN_FACTOR = 10.0
 
 #: go2's walk integrated in long double (``NativeRuns(robot, "long double")``, DOP853 at rtol
 #: 1e-16) against the exact IK plan, % of each joint signal's largest |value| (q, qd, qdd). Its
-#: inputs stay double (the IK reference, id_r's table, the initial state, the footholds), and one
-#: ulp of them moves the run by up to 4.9e-7 / 6.8e-7 / 7.9e-6 % (2026-12-02, AMD EPYC: the initial
+#: inputs stay double (the IK plan, id_r's table, the initial state, the footholds), and one
+#: ulp of them moves the run by up to 4.9e-7 / 6.8e-7 / 7.9e-6 % (AMD EPYC: the initial
 #: state one ulp up, or every table value one ulp off). The table's own noise is larger: the same
 #: code, the table evaluated in another order (the grid's exact plan before or after the run),
-#: gave 2.1e-7-6.5e-7 / 4.5e-7-8.5e-7 / 8.0e-6-1.3e-5 % (2026-12-06, Intel Xeon), and the C with a
+#: gave 2.1e-7-6.5e-7 / 4.5e-7-8.5e-7 / 8.0e-6-1.3e-5 % (Intel Xeon), and the C with a
 #: shared denominator's quotients as reciprocal products (codegen.reciprocals, ~1 ulp per quotient)
 #: 2.2e-7-8.0e-7 / 1.8e-7-1.3e-6 / 1.8e-6-2.1e-5 %: the limit is 2.5x the largest of those. The
 #: double run at RTOL is at 5e-5 / 8e-5 / 1.2e-3-1.9e-3 % (truncation and its own round-off), so a
@@ -192,7 +213,7 @@ POSE_FIT_TOL = 1e-13
 
 #: qd_dfd_r_lift_columns against qd_dfd_r_lift_dir at its seeds (codegen/emit_derivatives.lift_columns): the same
 #: graph with the seeds' zeros and ones substituted, which CasADi simplifies (x * 1, x + 0 * y), so a sum can round
-#: once differently (measured 2026-12-04, paper robot: 1.5e-16 of an output's scale with three feet, 0 with four).
+#: once differently (measured on the paper robot: 1.5e-16 of an output's scale with three feet, 0 with four).
 #: 16 machine epsilons of the output's largest entry.
 LIFT_COLUMNS_REL_TOL = 16 * DBL_EPSILON
 

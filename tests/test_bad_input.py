@@ -18,7 +18,7 @@ from quadruped_dyn.bench import timing as bench
 from quadruped_dyn.cli import main
 from quadruped_dyn.codegen import emit as codegen
 from quadruped_dyn.experiment import paper_experiment as validation
-from quadruped_dyn.model import paper_robot, robot
+from quadruped_dyn.model import paper_robot, registry
 
 
 def _info(path: str) -> tuple[int, str]:
@@ -209,7 +209,7 @@ def test_make_urdf_into_unwritable_place(monkeypatch):
 
 @pytest.mark.parametrize("kind", ["missing", "a directory"])
 def test_bundled_urdf_missing_or_a_directory(kind, tmp_path, monkeypatch):
-    monkeypatch.setattr(robot, "URDF_PATH", tmp_path / "paper_quadruped.urdf")
+    monkeypatch.setattr(registry, "URDF_PATH", tmp_path / "paper_quadruped.urdf")
     if kind == "a directory":
         (tmp_path / "paper_quadruped.urdf").mkdir()
     for command in (["info", "paper"], ["check", "paper"], ["codegen", "paper", "--out", str(tmp_path / "gen")]):

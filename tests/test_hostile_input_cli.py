@@ -1,4 +1,4 @@
-"""The third round of bad input (#18), at the command line: nothing written outside --out or
+"""Bad input at the command line: nothing written outside --out or
 through a link, hostile file names, bounded work, write failures, empty paths, non-results;
 each one line, exit 2 (bad input) or 1 (not a result), no traceback."""
 
@@ -13,7 +13,7 @@ from pathlib import Path
 import pytest
 from click.testing import CliRunner
 
-from quadruped_dyn.checks import c_reference
+from quadruped_dyn.checks import check_program_values
 from quadruped_dyn.cli import main
 from quadruped_dyn.codegen import emit as codegen
 from quadruped_dyn.experiment import paper_experiment as validation
@@ -36,7 +36,7 @@ def no_work(monkeypatch):
 
     monkeypatch.setattr(validation, "run_experiment", tripwire)
     monkeypatch.setattr(codegen, "generate", tripwire)
-    monkeypatch.setattr(c_reference, "generate", tripwire)  # bound by name there: patched and restored too
+    monkeypatch.setattr(check_program_values, "generate", tripwire)  # bound by name there: patched and restored too
 
 
 def _cli(*args: str, stdout: object = subprocess.PIPE, env: dict[str, str] | None = None) -> subprocess.CompletedProcess:
@@ -91,7 +91,7 @@ def test_validate_bounds_the_work_up_front(args, expected, no_work, tmp_path):
     (["optimize", "--nodes", "100000"], r"--nodes 100000; expected 3 to 40 collocation nodes per phase"),
 ])
 def test_control_and_optimize_bound_the_work_up_front(args, expected, monkeypatch, tmp_path):
-    """Found by a fresh-clone review (2026-12-06): these ran for minutes (or ever), or failed with a
+    """Found by a fresh-clone review: these ran for minutes (or ever), or failed with a
     traceback after the solve (--cycles 1e9: a 2 TiB allocation), or returned a blown-up MuJoCo run as
     a result (mu 1e6)."""
     from quadruped_dyn.control import closed_loop
@@ -160,7 +160,7 @@ def test_codegen_writes_only_under_out_and_never_through_a_link(tmp_path):
     written = [Path(line.removeprefix("wrote ")) for line in result.output.splitlines()]
     assert written and all(p.parent == out and p.is_file() and not p.is_symlink() for p in written)
     assert not (out / "Makefile").is_symlink() and victim.read_text() == "keep me"
-    robot = next(p.name for p in written if p.name.endswith("_reference.h")).removeprefix("qd_").removesuffix("_reference.h")
+    robot = next(p.name for p in written if p.name.endswith("-reference.h")).removeprefix("qd_").removesuffix("-reference.h")
     assert is_safe_name(robot) and robot.startswith("robot_"), robot
     assert sorted(p.name for p in tmp_path.iterdir()) == ["...urdf", "out", "victim"], "nothing written beside --out"
     assert sorted(p.name for p in out.iterdir()) == sorted(p.name for p in written), "no partial files left"
@@ -168,7 +168,7 @@ def test_codegen_writes_only_under_out_and_never_through_a_link(tmp_path):
 
 def test_output_paths_are_plain_names_under_out(tmp_path):
     from quadruped_dyn.errors import InputError
-    from quadruped_dyn.experiment.outputs import output_paths
+    from quadruped_dyn.experiment.validation_files import output_paths
     from quadruped_dyn.files.safe_write import output_dir, output_path, write_text
 
     for bad in ("..", ".", "", "a/b", "../x", "x\0"):
@@ -226,7 +226,7 @@ def test_check_bounds_the_work_up_front():
 
 
 def test_paths_in_a_summary_are_echoed_escaped(tmp_path):
-    """Found by a review (2026-12-06): validate, control, optimize, report and check printed their
+    """Found by a review: validate, control, optimize, report and check printed their
     summaries with click.echo, so an --out with a newline split the "wrote" line and an OSC sequence
     (click strips only CSI ones, only off a terminal) reached the terminal raw."""
     out = tmp_path / f"{ESCAPE}\nline"
@@ -279,14 +279,14 @@ def test_an_output_set_appears_whole_or_not_at_all(tmp_path):
 
 
 def test_validate_interrupted_while_plotting_leaves_no_new_json(tmp_path, monkeypatch):
-    """Found by a review (2026-12-06): Ctrl-C while validate drew its plots left the new JSON beside
+    """Found by a review: Ctrl-C while validate drew its plots left the new JSON beside
     the previous run's CSV and plots (each file was atomic, the set was not), and exited 1 ("Aborted!")."""
-    from quadruped_dyn.experiment import outputs
+    from quadruped_dyn.experiment import validation_files
 
     def interrupted(*args, **kwargs):
         raise KeyboardInterrupt
 
-    monkeypatch.setattr(outputs, "plot_br_hfe", interrupted)
+    monkeypatch.setattr(validation_files, "plot_br_hfe", interrupted)
     result = CliRunner().invoke(main, ["validate", "--horizon", "0.05", "--no-physics", "--out", str(tmp_path)])
     assert result.exit_code == 130, result.output  # click's 'Aborted!' was exit 1, the code of a failed check
     assert "Traceback" not in result.output and result.stderr.splitlines()[-1] == "error: interrupted", result.stderr
@@ -296,13 +296,13 @@ def test_validate_interrupted_while_plotting_leaves_no_new_json(tmp_path, monkey
 def test_validate_without_physics_removes_the_previous_physics_plot(tmp_path):
     """The physics plot of an earlier run is not this result's: removed with the result's set (it was unlinked after
     the set, outside it), and kept when the run is interrupted."""
-    from quadruped_dyn.experiment import outputs
+    from quadruped_dyn.experiment import validation_files
 
-    old = outputs.output_paths(tmp_path, "paper", "trot")["physics_plot"]
+    old = validation_files.output_paths(tmp_path, "paper", "trot")["physics_plot"]
     old.write_bytes(b"the previous run's plot")
     args = ["validate", "--horizon", "0.05", "--no-physics", "--out", str(tmp_path)]
     with pytest.MonkeyPatch.context() as patch:
-        patch.setattr(outputs, "plot_br_hfe", lambda *a, **k: (_ for _ in ()).throw(KeyboardInterrupt))
+        patch.setattr(validation_files, "plot_br_hfe", lambda *a, **k: (_ for _ in ()).throw(KeyboardInterrupt))
         assert CliRunner().invoke(main, args).exit_code == 130
     assert old.read_bytes() == b"the previous run's plot"
     result = CliRunner().invoke(main, args)
@@ -316,7 +316,10 @@ def test_output_files_are_written_through_safe_write():
 
     direct = re.compile(r"\.write_text\(|\.write_bytes\(|\bopen\([^)]*[\"']w|savefig\((?!buf)|\.save\((?!gif)")
     package = Path(quadruped_dyn.__file__).parent
-    offenders = [f"{p.relative_to(package)}:{n}" for p in package.rglob("outputs.py")
+    writers = [package / "control" / "study_files.py", package / "experiment" / "validation_files.py",
+               package / "optimal_control" / "trajectory_files.py"]
+    assert all(p.is_file() for p in writers), writers
+    offenders = [f"{p.relative_to(package)}:{n}" for p in writers
                  for n, line in enumerate(p.read_text().splitlines(), 1) if direct.search(line)]
     offenders += [f"cli/{p.name}:{n}" for p in (package / "cli").glob("*.py")
                   for n, line in enumerate(p.read_text().splitlines(), 1) if direct.search(line)]
@@ -327,11 +330,11 @@ def test_output_files_are_written_through_safe_write():
     (["validate", "--horizon", "0.05", "--no-physics"], "paper_trot_timeseries.csv"),
     (["control", "paper", "--cycles", "1", "--controller", "pd", "--no-animation"], "paper_walk_closed_loop.png"),
     (["optimize", "--cycles", "0"], "paper_trot_optimised.png"),
-    (["codegen", "paper"], "qd_paper_r_FL_BR.c"),
-    (["codegen", "paper"], "qd_paper_reference.h"),
+    (["codegen", "paper"], "qd_paper-r-FL_BR.c"),
+    (["codegen", "paper"], "qd_paper-reference.h"),
 ])
 def test_a_directory_in_place_of_an_output_is_refused_before_the_work(args, in_the_way, tmp_path, monkeypatch):
-    """Found by a review (2026-12-06): refused only when written, after the runs (control: minutes),
+    """Found by a review: refused only when written, after the runs (control: minutes),
     the solve or the generation (codegen: tens of seconds)."""
     from quadruped_dyn.control import closed_loop
     from quadruped_dyn.optimal_control import transcription
@@ -342,7 +345,7 @@ def test_a_directory_in_place_of_an_output_is_refused_before_the_work(args, in_t
     monkeypatch.setattr(validation, "run_experiment", tripwire)
     monkeypatch.setattr(closed_loop, "run_all", tripwire)
     monkeypatch.setattr(transcription, "transcribe", tripwire)
-    monkeypatch.setattr(c_reference, "generate", tripwire)
+    monkeypatch.setattr(check_program_values, "generate", tripwire)
     (tmp_path / in_the_way).mkdir()
     result = CliRunner().invoke(main, [*args, "--out", str(tmp_path)])
     _one_line(result, 2, rf"cannot write '.*{in_the_way}': it exists and is not a regular file; expected a file path")
@@ -356,5 +359,5 @@ def test_codegen_writes_its_package_whole_or_not_at_all(paper, tmp_path):
 
     (tmp_path / "Makefile").mkdir()
     with pytest.raises(InputError, match=r"cannot write '.*Makefile': it exists and is not a regular file"):
-        c_reference.generate_checked(paper, tmp_path)
+        check_program_values.generate_checked(paper, tmp_path)
     assert [p.name for p in tmp_path.iterdir()] == ["Makefile"]

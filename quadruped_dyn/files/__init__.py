@@ -6,7 +6,7 @@ libraries, harnesses, stored symbolic models)."""
 from quadruped_dyn.exports import lazy_exports
 
 _MODULES: dict[str, tuple[str, ...]] = {
-    "cache": ("HASH_SUFFIX", "PARTIAL_MARK", "cache_dir", "file_sha256", "verified", "cached_build"),
+    "cache": ("HASH_SUFFIX", "PARTIAL_MARK", "cache_dir", "writable_cache", "file_sha256", "verified", "cached_build"),
     "json": ("json_safe", "write_json"),
     "names": ("MAX_NAME_CHARS", "is_safe_name", "safe_name", "printable"),
     "paths": ("writable_dir",),

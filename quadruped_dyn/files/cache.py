@@ -17,6 +17,7 @@ hash (not trusted, rebuilt). Where: ``$QUADRUPED_DYN_CACHE``, else
 
 from __future__ import annotations
 
+import errno
 import fcntl
 import hashlib
 import os
@@ -25,6 +26,7 @@ from collections.abc import Callable
 from pathlib import Path
 
 from quadruped_dyn.errors import InputError
+from quadruped_dyn.files.names import printable
 from quadruped_dyn.files.paths import writable_dir
 
 HASH_SUFFIX = ".sha256"
@@ -38,6 +40,12 @@ def cache_dir() -> Path:
             raise InputError("QUADRUPED_DYN_CACHE is set but empty; expected a directory (or unset it for the default)")
         return Path(os.environ["QUADRUPED_DYN_CACHE"])
     return Path(os.environ.get("XDG_CACHE_HOME", Path.home() / ".cache")) / "quadruped_dyn"
+
+
+def writable_cache() -> Path:
+    """The cache directory, created; InputError (one line) unless a file can be written there. Commands that
+    build C call it before their first progress line: a read-only cache is then the only line they print."""
+    return writable_dir(cache_dir(), f"the cache directory '{printable(cache_dir())}' (QUADRUPED_DYN_CACHE)")
 
 
 def file_sha256(path: Path) -> str:
@@ -92,7 +100,31 @@ def cached_build(key: str, name: str, build: Callable[[Path], None]) -> Path:
             why = "does not match its recorded hash" if recorded.exists() else "has no recorded hash"
             print(f"cache: '{artefact}' {why}; rebuilding it", file=sys.stderr)
         recorded.unlink(missing_ok=True)  # first: the old artefact must not stay trusted
-        _write_atomic(artefact, build)
-        digest = file_sha256(artefact)
-        _write_atomic(recorded, lambda p: p.write_text(digest + "\n"))
+        _raise_if_full(entry)  # before ``build`` prints its progress note: a full cache is then the only line
+        try:
+            _write_atomic(artefact, build)
+            digest = file_sha256(artefact)
+            _write_atomic(recorded, lambda p: p.write_text(digest + "\n"))
+        except Exception as e:  # a compiler's own message for a full disk names a missing .partial file instead
+            _raise_if_full(entry, e)
+            raise
     return artefact
+
+
+#: A build that fails with less than this free on the cache's filesystem failed for want of space: a compiled
+#: library is 0.1-20 MB, its objects and the stored symbolic models a few MB each.
+MIN_FREE_BYTES = 64 * 2**20
+
+
+def _raise_if_full(entry: Path, error: Exception | None = None) -> None:
+    """InputError naming the cache and its path as full, if ``error`` is ENOSPC or the cache's filesystem has
+    less than MIN_FREE_BYTES free (one line: checked before a build and after a failed one)."""
+    try:
+        stat = os.statvfs(entry)
+        free = stat.f_bavail * stat.f_frsize
+    except OSError:
+        return
+    if getattr(error, "errno", None) == errno.ENOSPC or free < MIN_FREE_BYTES:
+        raise InputError(f"the cache (QUADRUPED_DYN_CACHE) at '{printable(cache_dir())}' is full ({free / 1e6:.1f} MB free "
+                         f"on its filesystem); expected at least {MIN_FREE_BYTES / 2**20:.0f} MB free there, or "
+                         "QUADRUPED_DYN_CACHE set to a directory with room") from error

@@ -15,7 +15,7 @@ import hashlib
 import re
 
 #: Long enough for any robot's name; short enough that the longest derived identifier
-#: (qd_<name>_r_FL_FR_BL_BR_reference.h and C symbols such as qd_fd_r_FL_FR_BL_BR_work) stays
+#: (qd_<name>-r-FL_FR_BL_BR.c and C symbols such as qd_fd_r_FL_FR_BL_BR_work) stays
 #: far below file-system (255 bytes) and C (63 significant characters in C99's external
 #: identifiers ... 31 guaranteed; gcc has no limit) limits.
 MAX_NAME_CHARS = 40

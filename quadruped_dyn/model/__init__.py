@@ -11,7 +11,12 @@ _MODULES: dict[str, tuple[str, ...]] = {
         "trunk_inertia", "dh_leg", "DH_MATCH_TOL", "dh_form", "LINK_NAMES", "urdf_text", "URDF_PATH", "URDF_COPIES",
         "write_urdf", "stale_urdf_copies",
     ),
-    "robot": ("ROBOT_NAMES", "example_robot_data_dir", "robot_path", "builtin_name", "Robot", "SNAP_TOL", "load_robot"),
+    "actuator_limits": ("ACTUATOR_LIMITS", "actuator_limit"),
+    "foot_frames": ("FOOT_WORDS", "NOT_FOOT_WORDS", "foot_frame", "foot_frame_names"),
+    "registry": ("ROBOT_NAMES", "example_robot_data_dir", "robot_path"),
+    "robot": ("Robot", "check_robot", "load_robot"),
+    "robot_identity": ("builtin_name", "UrdfSource", "urdf_source"),
+    "urdf_parsing": ("SNAP_TOL",),
     "robot_summary": ("robot_info",),
     "stance": ("GRF_MODELS", "StanceSet", "STANCE_SETS", "stance_set"),
     "state": (

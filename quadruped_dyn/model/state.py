@@ -84,14 +84,26 @@ def check_quaternion(name: str, quat: np.ndarray) -> None:
 
 
 def check_array(name: str, x: object, shape: tuple[int, ...]) -> np.ndarray:
-    """A float array of the given shape with finite entries, or a clear InputError."""
+    """A float64 array of the given shape with finite entries, or a clear InputError. Every computation is in
+    double precision: integer, float32 and float64 entries convert exactly, wider floats (long double) are
+    rounded to the nearest double; float16 (3 significant digits), booleans and masked arrays (their mask would
+    be ignored and the hidden values used) are refused."""
     if isinstance(x, (str, bytes)):
         raise InputError(f"{name} is a string; expected a numeric array of shape {shape}")
+    if np.ma.isMaskedArray(x) or (isinstance(x, (list, tuple)) and any(np.ma.isMaskedArray(e) for e in x)):
+        raise InputError(f"{name} is a masked array; expected a plain array of shape {shape} (the mask would be "
+                         "ignored and the hidden values used: fill them, e.g. x.filled(...))")
     try:
         raw = np.asarray(x)  # an object's own __array__ may raise anything: that is bad input too
         if np.iscomplexobj(raw):
             raise InputError(f"{name} is complex; expected a real array of shape {shape} (the imaginary part would be lost)")
-        if raw.dtype.kind not in "biuf":
+        if raw.dtype.kind == "b":
+            raise InputError(f"{name} is a boolean array; expected numbers of shape {shape} (True and False would "
+                             "be taken as 1 and 0)")
+        if raw.dtype == np.float16:
+            raise InputError(f"{name} is float16 (3 significant digits); expected float32 or float64 of shape "
+                             f"{shape}: every computation is in double precision")
+        if raw.dtype.kind not in "iuf":
             raise InputError(f"{name} has entries of type {raw.dtype}; expected a real numeric array of shape {shape}")
         arr = np.asarray(raw, dtype=float)
     except InputError:

@@ -154,6 +154,11 @@ def merge_inertial(root: ET.Element, link_name: str) -> str | None:
     return neighbour
 
 
+def set_inertial(root: ET.Element, link_name: str, Y: pin.Inertia) -> None:
+    """Replace the link's ``<inertial>`` by ``Y`` (in the link's frame; in place)."""
+    _write_inertial(next(x for x in root.findall("link") if x.get("name") == link_name), Y)
+
+
 def drop_inertial(root: ET.Element, link_name: str) -> None:
     """Remove the link's ``<inertial>`` (in place)."""
     link = next(x for x in root.findall("link") if x.get("name") == link_name)
@@ -174,3 +179,35 @@ def balance_inertia(root: ET.Element, link_name: str) -> None:
 
 def to_text(root: ET.Element) -> str:
     return ET.tostring(root, encoding="unicode")
+
+
+def scale_urdf(root: ET.Element, mass: float = 1.0, length: float = 1.0, inertia: float = 1.0) -> None:
+    """A design variant, in place: every link's mass times ``mass``; every length times ``length``
+    (joint, inertial, visual and collision origins, sphere and cylinder radii and lengths, box
+    sizes), so each rotational inertia times ``mass * length**2`` (a body scaled geometrically);
+    then each rotational inertia times ``inertia`` as well. Joint limits and efforts stay as
+    written. InputError unless each factor is a finite number > 0."""
+    for what, factor in (("mass", mass), ("length", length), ("inertia", inertia)):
+        if not (isinstance(factor, (int, float)) and not isinstance(factor, bool) and np.isfinite(factor) and factor > 0):
+            raise InputError(f"{what} scale {factor!r}; expected a finite number > 0")
+    for origin in root.iter("origin"):
+        if "xyz" in origin.attrib:
+            origin.set("xyz", " ".join(repr(float(x) * length) for x in origin.get("xyz", "").split()))
+    for tag, attrs in (("sphere", ("radius",)), ("cylinder", ("radius", "length")), ("capsule", ("radius", "length"))):
+        for shape in root.iter(tag):
+            for attr in attrs:
+                if attr in shape.attrib:
+                    shape.set(attr, repr(float(shape.get(attr, "0")) * length))
+    for box in root.iter("box"):
+        if "size" in box.attrib:
+            box.set("size", " ".join(repr(float(x) * length) for x in box.get("size", "").split()))
+    for link in root.findall("link"):
+        inertial = link.find("inertial")
+        if inertial is None:
+            continue
+        mass_el, inertia_el = inertial.find("mass"), inertial.find("inertia")
+        if mass_el is not None:
+            mass_el.set("value", repr(float(mass_el.get("value", "0")) * mass))
+        if inertia_el is not None:
+            for key in _INERTIA_KEYS:
+                inertia_el.set(key, repr(float(inertia_el.get(key, "0")) * mass * length**2 * inertia))

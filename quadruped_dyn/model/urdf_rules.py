@@ -163,7 +163,7 @@ def check_urdf_size(path: Path, data: bytes | None, size: int | None = None) -> 
 
 #: Pinocchio's URDF parser recurses once per link from the root down, with ~2 kB of stack a level: a chain of
 #: 4,000 links (fixed joints, within MAX_URDF_LINKS) overflowed the 8 MB main-thread stack, SIGSEGV (measured
-#: 2026-12-06, Pinocchio 4.1; 3,500 passed). A quadruped's tree is a few links deep (trunk, 3 leg links, foot, sensors).
+#: with Pinocchio 4.1; 3,500 passed). A quadruped's tree is a few links deep (trunk, 3 leg links, foot, sensors).
 MAX_URDF_DEPTH = 500
 
 

@@ -246,7 +246,7 @@ def test_objects_are_compiled_once_per_source_and_flags(cache, tmp_path):
 
 def test_an_edited_included_file_is_compiled_again(cache, tmp_path):
     """The object's key holds the bytes of the file beside the source that it includes (as the reduced files
-    include qd_reduced_templates.h): editing only that file gives a new object, never the stale one."""
+    include reduced_templates.h): editing only that file gives a new object, never the stale one."""
     from quadruped_dyn.codegen.library import C_FLAGS, compile_sources
 
     source, header = tmp_path / "probe.c", tmp_path / "value.h"

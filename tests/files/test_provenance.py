@@ -75,7 +75,7 @@ def test_a_second_urdf_of_the_same_name_does_not_overwrite_the_first_report(resu
     (["validate", "--horizon", "0.05", "--no-physics"], "quadruped_dyn.experiment.simulate.reduced_dynamics"),
     (["control", "--cycles", "1"], "quadruped_dyn.control.closed_loop.run_all"),
     (["optimize", "--cycles", "0"], "quadruped_dyn.optimal_control.transcription.transcribe"),
-    (["codegen"], "quadruped_dyn.checks.c_reference.generate_checked"),
+    (["codegen"], "quadruped_dyn.checks.check_program_values.generate_checked"),
 ])
 def test_every_command_refuses_another_urdfs_folder_before_the_work(results, tmp_path, monkeypatch, command, heavy):
     monkeypatch.setattr(heavy, _tripwire)
@@ -119,7 +119,7 @@ def test_a_hostile_record_is_an_input_error(tmp_path, content):
     file or a symlink to /dev/zero was read whole (endlessly). Each is an InputError naming the record."""
     from quadruped_dyn.errors import InputError
     from quadruped_dyn.files.provenance import check_source, record_path
-    from quadruped_dyn.model.robot import urdf_source
+    from quadruped_dyn.model.robot_identity import urdf_source
 
     source = urdf_source(_urdf(tmp_path / "a", "a"))
     out = tmp_path / "out"

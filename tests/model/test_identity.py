@@ -1,4 +1,4 @@
-"""A robot's identity is its URDF's content (#18): an edited file is a new model in this process
+"""A robot's identity is its URDF's content: an edited file is a new model in this process
 and in the next one, a copy named like a built-in is not that built-in, every derived name is
 valid; limits, foot frames, size and parser noise are stated."""
 
@@ -16,12 +16,13 @@ import numpy as np
 import pinocchio as pin
 import pytest
 
-from quadruped_dyn.codegen.emit import stem
+from quadruped_dyn.codegen.file_names import robot_stem
 from quadruped_dyn.codegen.library import generation_key
 from quadruped_dyn.errors import InputError, UrdfWarning
 from quadruped_dyn.files.names import MAX_NAME_CHARS, is_safe_name, safe_name
 from quadruped_dyn.model.paper_robot import STANDING_Q, URDF_PATH
-from quadruped_dyn.model.robot import ROBOT_NAMES, load_robot
+from quadruped_dyn.model.registry import ROBOT_NAMES
+from quadruped_dyn.model.robot import load_robot
 from tests.conftest import assert_close
 
 TRUNK_MASS = '<mass value="5.4"/>'  # the paper trunk's mass in its URDF
@@ -119,7 +120,7 @@ def test_a_hostile_file_name_loads_with_a_safe_name(tmp_path):
         path = tmp_path / f"{stem_text}.urdf"
         path.write_text(edited)
         r = load_robot(str(path))
-        assert is_safe_name(r.name) and ca.Function.check_name(f"{stem(r)}_M_full"), r.name
+        assert is_safe_name(r.name) and ca.Function.check_name(f"{robot_stem(r.name)}_M_full"), r.name
         names.add(r.name)
     assert len(names) == 5
 

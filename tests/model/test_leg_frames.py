@@ -7,7 +7,7 @@ import dataclasses
 import numpy as np
 import pytest
 
-from quadruped_dyn.bench.timing import arithmetic_operations
+from quadruped_dyn.bench.call_cost import arithmetic_operations
 from quadruped_dyn.dynamics.newton_euler import full_dynamics
 from quadruped_dyn.math.rigid import LinkInertia, Placement
 from quadruped_dyn.model.leg import Leg, LegJoint

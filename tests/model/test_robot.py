@@ -107,7 +107,7 @@ def test_free_flyer_convention():
 
 @pytest.mark.parametrize("robot", [None, 123, 1.5, b"paper"])
 def test_a_robot_that_is_not_a_name_or_path_says_its_type(robot):
-    """load_robot(None) said "no such file: 'None'" (a fresh-clone review, 2026-12-06)."""
+    """load_robot(None) said "no such file: 'None'" (found on a fresh clone)."""
     from quadruped_dyn.errors import InputError
 
     with pytest.raises(InputError, match=f"is a {type(robot).__name__}; expected a built-in name"):
