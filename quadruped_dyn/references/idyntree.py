@@ -42,9 +42,10 @@ def load_model(urdf_text: str) -> idt.Model:
 
 
 class IDynTreeReference:
-    """M, C + G, G and foot Jacobians from iDynTree, in the project's coordinates (``state``)."""
+    """M, C + G, G, inverse dynamics, foot positions and Jacobians from iDynTree, project coordinates (``state``)."""
 
     name = "idyntree"
+    cannot: dict[str, str] = {}
 
     def __init__(self, model: idt.Model, robot: Robot) -> None:
         self.kin_dyn = idt.KinDynComputations()
@@ -97,6 +98,27 @@ class IDynTreeReference:
         h = idt.FreeFloatingGeneralizedTorques(self.kin_dyn.model())
         self.kin_dyn.generalizedGravityForces(h)
         return self._project(h)
+
+    def inverse_dynamics(self, q: np.ndarray, v: np.ndarray, a: np.ndarray) -> np.ndarray:
+        """tau (18,): ``inverseDynamics`` with BODY_FIXED base acceleration a[:6] (the project's vdot_b)."""
+        self._set(q, v)
+        dds = np.zeros(12)
+        dds[self.dof_idx] = a[6:]
+        h = idt.FreeFloatingGeneralizedTorques(self.kin_dyn.model())
+        no_forces = idt.LinkWrenches(self.kin_dyn.model())
+        no_forces.zero()
+        if not self.kin_dyn.inverseDynamics(idt.Vector6(a[:6]), idt.VectorDynSize(dds), no_forces, h):
+            raise IDynTreeRefusal("iDynTree's inverseDynamics failed")
+        return self._project(h)
+
+    def foot_positions(self, q: np.ndarray) -> np.ndarray:
+        """(4, 3) foot frames' origins relative to the trunk origin, trunk frame, m."""
+        self._set(q, np.zeros(NV_FULL))
+        out = []
+        for foot in self.feet:
+            H = self.kin_dyn.getRelativeTransform(self.base, foot)  # kept: getPosition() is a view into it
+            out.append(np.array(H.getPosition().toNumPy()))
+        return np.array(out)
 
     def foot_jacobians(self, q: np.ndarray) -> np.ndarray:
         """(4, 3, 3): d(foot position in b)/d(own 3 joints), trunk frame."""

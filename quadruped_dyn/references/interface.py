@@ -16,37 +16,66 @@ from quadruped_dyn.model.robot import load_robot
 from quadruped_dyn.model.state import FullState
 from quadruped_dyn.references.pinocchio import PinocchioReference
 
-TERMS: tuple[str, ...] = ("M", "C+G", "G", "foot Jacobians")
+TERMS: tuple[str, ...] = ("M", "C+G", "G", "inverse dynamics", "foot positions", "foot Jacobians")
+
 
 class Dynamics(Protocol):
-    """Full-coordinate terms in the project's conventions (``state``), project joint order."""
+    """Full-coordinate terms in the project's conventions (``state``), project joint order: M (18, 18),
+    C + G (18,), G (18,), inverse dynamics tau = M a + C + G (18,) with a = vdot, foot positions
+    (4, 3) relative to the trunk origin and foot Jacobians (4, 3, 3) w.r.t. each leg's own joints,
+    both in the trunk frame. ``cannot`` names the terms the library does not compute, and why."""
+
+    cannot: dict[str, str]
 
     def mass_matrix(self, q: np.ndarray) -> np.ndarray: ...
     def nonlinear_effects(self, q: np.ndarray, v: np.ndarray) -> np.ndarray: ...
     def gravity(self, q: np.ndarray) -> np.ndarray: ...
+    def inverse_dynamics(self, q: np.ndarray, v: np.ndarray, a: np.ndarray) -> np.ndarray: ...
+    def foot_positions(self, q: np.ndarray) -> np.ndarray: ...
     def foot_jacobians(self, q: np.ndarray) -> np.ndarray: ...
 
-def terms_at(src: Dynamics, s: FullState) -> dict[str, np.ndarray]:
-    return {"M": src.mass_matrix(s.q), "C+G": src.nonlinear_effects(s.q, s.v), "G": src.gravity(s.q),
-            "foot Jacobians": src.foot_jacobians(s.q)}
+
+def computed_terms(src: Dynamics) -> tuple[str, ...]:
+    return tuple(t for t in TERMS if t not in src.cannot)
+
+
+def terms_at(src: Dynamics, s: FullState, terms: Sequence[str] = TERMS) -> dict[str, np.ndarray]:
+    """The terms of ``src`` at the state (only those in ``terms``)."""
+    evaluate = {"M": lambda: src.mass_matrix(s.q), "C+G": lambda: src.nonlinear_effects(s.q, s.v),
+                "G": lambda: src.gravity(s.q), "inverse dynamics": lambda: src.inverse_dynamics(s.q, s.v, s.a),
+                "foot positions": lambda: src.foot_positions(s.q), "foot Jacobians": lambda: src.foot_jacobians(s.q)}
+    return {t: evaluate[t]() for t in terms}
+
 
 def max_rel_errors(src: Dynamics, ref: Dynamics, states: Sequence[FullState]) -> dict[str, float]:
-    """Per term, the largest ``compare.relative_error`` of src against ref over the states
-    (max |src - ref| / max |ref|, absolute where ref is zero; inf for a non-finite value)."""
-    out = dict.fromkeys(TERMS, 0.0)
+    """Per term both compute, the largest ``compare.relative_error`` of src against ref over the
+    states (max |src - ref| / max |ref|, absolute where ref is zero; inf for a non-finite value)."""
+    terms = [t for t in computed_terms(src) if t not in ref.cannot]
+    out = dict.fromkeys(terms, 0.0)
     for s in states:
-        ours, theirs = terms_at(src, s), terms_at(ref, s)
-        for t in TERMS:
+        ours, theirs = terms_at(src, s, terms), terms_at(ref, s, terms)
+        for t in terms:
             out[t] = max(out[t], relative_error(ours[t], theirs[t]))
     return out
 
-def pinocchio_of(urdf_text: str) -> PinocchioReference:
+
+class PinocchioTerms(PinocchioReference):
+    """Pinocchio behind the ``Dynamics`` interface (inverse dynamics: ``rnea``)."""
+
+    name = "pinocchio"
+    cannot: dict[str, str] = {}
+
+    def inverse_dynamics(self, q: np.ndarray, v: np.ndarray, a: np.ndarray) -> np.ndarray:
+        return self.rnea(q, v, a)
+
+
+def pinocchio_of(urdf_text: str) -> PinocchioTerms:
     """Pinocchio on a URDF copy (loaded like any robot: validated, placements snapped)."""
     with tempfile.TemporaryDirectory() as tmp:
         path = Path(tmp) / "copy.urdf"
         path.write_text(urdf_text)
         robot = load_robot(str(path), cached=False)  # a temporary file
-    return PinocchioReference(robot)
+    return PinocchioTerms(robot)
 
 @dataclass
 class ModelChange:

@@ -24,7 +24,7 @@ import xml.etree.ElementTree as ET
 from collections.abc import Sequence
 from dataclasses import dataclass
 
-os.environ.setdefault("MUJOCO_GL", "egl")  # chosen at import: headless offscreen rendering (control/outputs.py)
+os.environ.setdefault("MUJOCO_GL", "egl")  # chosen at import: headless offscreen rendering (control/study_files.py)
 import mujoco  # noqa: E402
 import numpy as np
 
@@ -76,9 +76,10 @@ def compile_model(root: ET.Element, robot: Robot, options: MuJoCoOptions) -> muj
 
 
 class MuJoCoReference:
-    """M, C + G, G and foot Jacobians from MuJoCo, in the project's coordinates (``state``)."""
+    """M, C + G, G, inverse dynamics, foot positions and Jacobians from MuJoCo, project coordinates (``state``)."""
 
     name = "mujoco"
+    cannot: dict[str, str] = {}
 
     def __init__(self, model: mujoco.MjModel, robot: Robot) -> None:
         self.model = model
@@ -123,6 +124,21 @@ class MuJoCoReference:
     def gravity(self, q: np.ndarray) -> np.ndarray:
         T = self._set(q, np.zeros(NV_FULL))
         return T.T @ self.data.qfrc_bias
+
+    def inverse_dynamics(self, q: np.ndarray, v: np.ndarray, a: np.ndarray) -> np.ndarray:
+        """tau (18,) = T^T (M_mj qacc + bias) at qacc = T a + Tdot v: ``mj_rne`` with accelerations (the
+        rigid-body part of ``mj_inverse``, without the passive and friction forces of joint damping)."""
+        T = self._set(q, v)
+        self.data.qacc[:] = T @ a
+        self.data.qacc[:3] += rotation(q) @ np.cross(v[3:6], v[:3])
+        tau = np.zeros(NV_FULL)
+        mujoco.mj_rne(self.model, self.data, 1, tau)
+        return T.T @ tau
+
+    def foot_positions(self, q: np.ndarray) -> np.ndarray:
+        """(4, 3) foot sites relative to the trunk origin, trunk frame, m."""
+        self._set(q, np.zeros(NV_FULL))
+        return np.array([self.data.site_xpos[site] - q[:3] for site in self.sites]) @ rotation(q)
 
     def foot_jacobians(self, q: np.ndarray) -> np.ndarray:
         """(4, 3, 3): d(foot position in b)/d(own 3 joints), trunk frame."""
