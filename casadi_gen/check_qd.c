@@ -1,9 +1,11 @@
 /* Calls every generated function on the reference inputs and compares each output with
- * the reference values computed by Pinocchio (qd_<robot>_reference.h, generated beside it).
+ * the reference values computed by Pinocchio (qd_<robot>-reference.h, generated beside it).
  * Build and run: `make check` (double and float builds). Exit status 0 when all pass.
  * A non-zero return code or a NaN/inf output is a failure, never a pass. The derivatives of the
  * reduced model and of the GRF solve are checked against central differences of Pinocchio-built
- * references: their tolerance is at least the differences' accuracy (tol_floor, times tol_scale). */
+ * references: their tolerance is at least the differences' accuracy (tol_floor, times tol_scale).
+ * Each function is also called with null iw and w first (the header's contract): one that needs work memory
+ * returns QD_NO_WORK, any other what it returns with them. */
 #include <math.h>
 #include <stdio.h>
 
@@ -34,8 +36,14 @@ int main(void) {
     const casadi_real* arg[QD_MAX_N_IN];
     casadi_real* res[4];
     qd_case_args(k, in, arg, out, res);
+    int flag_null_w = k->fn(arg, res, 0, 0, 0); /* its outputs are written again below */
     int flag = k->fn(arg, res, iw, w, 0);
-    if (flag == 2 && QD_TOL * k->tol_scale > QD_MAX_TOL) { /* QD_SINGULAR where this precision has < 2 digits */
+    if (flag_null_w != QD_NO_WORK && flag_null_w != flag) {
+      printf("%-24s returned %d with a null w, %d with w: FAIL\n", k->name, flag_null_w, flag);
+      ++failed;
+      continue;
+    }
+    if (flag == QD_SINGULAR && QD_TOL * k->tol_scale > QD_MAX_TOL) { /* QD_SINGULAR where this precision has < 2 digits */
       printf("%-24s skipped: singular to this precision (cond x eps = %.1e), as its return code says\n", k->name,
              QD_TOL * k->tol_scale);
       ++skipped;
@@ -43,7 +51,7 @@ int main(void) {
     }
     /* the float build's bound checks at the reference's conditioning (a factor 2 either way: the float build takes
        cond_1 of its own M_r or K, and its own regularity) */
-    if (QD_BOUND_CHECKED && (flag == 2 || flag == 3) && qd_float_bound[c] > QD_FLOAT_MAX_BOUND / 2) {
+    if (QD_BOUND_CHECKED && (flag == QD_SINGULAR || flag == QD_DEGENERATE) && qd_float_bound[c] > QD_FLOAT_MAX_BOUND / 2) {
       printf("%-24s skipped: float error bound %.1e over %.1e, as its return code says\n", k->name,
              qd_float_bound[c], QD_FLOAT_MAX_BOUND);
       ++skipped;

@@ -41,6 +41,7 @@ QD_MATH(sin) QD_MATH(cos) QD_MATH(sqrt) QD_MATH(fabs)
 
 /* Add prefix to internal symbols */
 #define casadi_f1 CASADI_PREFIX(f1)
+#define casadi_f5 CASADI_PREFIX(f5)
 #define casadi_fabs CASADI_PREFIX(fabs)
 #define casadi_s0 CASADI_PREFIX(s0)
 #define casadi_s1 CASADI_PREFIX(s1)
@@ -49,6 +50,7 @@ QD_MATH(sin) QD_MATH(cos) QD_MATH(sqrt) QD_MATH(fabs)
 #define casadi_s4 CASADI_PREFIX(s4)
 #define casadi_s5 CASADI_PREFIX(s5)
 #define casadi_s6 CASADI_PREFIX(s6)
+#define casadi_s7 CASADI_PREFIX(s7)
 #define casadi_sq CASADI_PREFIX(sq)
 
 /* Symbol visibility in DLLs */
@@ -120,11 +122,25 @@ static const casadi_int casadi_s1[231] =
 static const casadi_int casadi_s2[3] = {18, 1, 1};
 static const casadi_int casadi_s3[3] = {12, 1, 1};
 static const casadi_int casadi_s4[3] = {6, 1, 1};
-static const casadi_int casadi_s5[3] = {3, 1, 1};
-static const casadi_int casadi_s6[3] = {0, 1, 1};
+static const casadi_int casadi_s5[101] = 
+  {12, 18, 0, 4, 8, 12, 24, 36,
+  48, 50, 53, 56, 58, 61, 64, 66,
+  69, 72, 74, 77, 80, 0, 3, 6,
+  9, 1, 4, 7, 10, 2, 5, 8,
+  11, 0, 1, 2, 3, 4, 5, 6,
+  7, 8, 9, 10, 11, 0, 1, 2,
+  3, 4, 5, 6, 7, 8, 9, 10,
+  11, 0, 1, 2, 3, 4, 5, 6,
+  7, 8, 9, 10, 11, 1, 2, 0,
+  1, 2, 0, 1, 2, 4, 5, 3,
+  4, 5, 3, 4, 5, 7, 8, 6,
+  7, 8, 6, 7, 8, 10, 11, 9,
+  10, 11, 9, 10, 11};
+static const casadi_int casadi_s6[3] = {3, 1, 1};
+static const casadi_int casadi_s7[3] = {0, 1, 1};
 
 /* quadruped_dyn: the cosines and sines of the joint angles, taken once per call at a generated function's entry
- * (docs/formulation.md, "The joints' sines and cosines"). In double: the angle reduced by pi/2 in three parts
+ * (docs/embedded.md, "The joints' sines and cosines"). In double: the angle reduced by pi/2 in three parts
  * (Cody and Waite; pi/2 to 119 bits, exact products for |x| <= QD_SINCOS_MAX) and FreeBSD's kernels
  * __kernel_sin / __kernel_cos on [-pi/4, pi/4] (msun, k_sin.c and k_cos.c: < 1 ulp), with no branch, so the loop
  * vectorises; within 1 ulp of libm (tests/codegen/test_sincos.py). libm for an angle beyond QD_SINCOS_MAX or not
@@ -4721,10 +4737,35 @@ int qd_M_full_dense_trig(const casadi_real** arg, casadi_real** res, casadi_int*
 }
 
 /* id_full without foot forces, the joints' sines and cosines given, leg by leg: arg = (q, v, a, sin, cos) */
-#ifndef QD_NOINLINE
+#ifndef QD_RETURN_CODES
+#define QD_RETURN_CODES
+#define QD_NONFINITE 1 /* an output is NaN/inf */
+#define QD_SINGULAR 2 /* M_r or M singular to working precision */
+#define QD_DEGENERATE 3 /* the stance is degenerate */
+#define QD_NO_WORK 4 /* the work memory w the function needs (its _SZ_W > 0) is a null pointer */
+#endif
+/* quadruped_dyn: the definitions the hand-written C shares (hand-written; written once into each generated file that
+ * uses them, after the return codes of quadruped_dyn/codegen/c_facts.py). casadi_real is defined before it. */
+#ifndef QD_PRELUDE
+#define QD_PRELUDE
+#include <float.h>
+
+/* Machine epsilon of casadi_real (float, double or long double builds). */
+#define QD_EPS (sizeof(casadi_real) == sizeof(float) ? (casadi_real)FLT_EPSILON \
+                : sizeof(casadi_real) == sizeof(double) ? (casadi_real)DBL_EPSILON : (casadi_real)LDBL_EPSILON)
+/* A pivot this small relative to the largest entry of the matrix eliminated (M_r, or with a swing leg its blocks of M
+ * and the folded rest K; M in dfd_full) means the matrix is singular to working precision (condition number beyond
+ * ~1 / (QD_SINGULAR_RTOL)): 1e-13 in double, 5e-5 in float. */
+#define QD_SINGULAR_RTOL (450 * QD_EPS)
+
+/* QD_INLINE: a template inlined into its callers, each specialised for its constant arguments and every call direct,
+ * so a static stack walk (-fcallgraph-info, docs/embedded.md) can bound it. QD_NOINLINE: a function kept out of line,
+ * its code once for all its calls (in the instruction cache). */
 #if defined(__GNUC__)
+#define QD_INLINE static inline __attribute__((always_inline))
 #define QD_NOINLINE __attribute__((noinline))
 #else
+#define QD_INLINE static inline
 #define QD_NOINLINE
 #endif
 #endif
@@ -5316,10 +5357,35 @@ int qd_id_full_trig(const casadi_real** arg, casadi_real** res, casadi_int* iw, 
 }
 
 /* M_full's nonzero blocks (M_bb, then per leg M_bl and M_ll, column-major: dynamics/by_leg.py, mass_blocks) with the joints' sines and cosines given, leg by leg: arg = (q, sin, cos) */
-#ifndef QD_NOINLINE
+#ifndef QD_RETURN_CODES
+#define QD_RETURN_CODES
+#define QD_NONFINITE 1 /* an output is NaN/inf */
+#define QD_SINGULAR 2 /* M_r or M singular to working precision */
+#define QD_DEGENERATE 3 /* the stance is degenerate */
+#define QD_NO_WORK 4 /* the work memory w the function needs (its _SZ_W > 0) is a null pointer */
+#endif
+/* quadruped_dyn: the definitions the hand-written C shares (hand-written; written once into each generated file that
+ * uses them, after the return codes of quadruped_dyn/codegen/c_facts.py). casadi_real is defined before it. */
+#ifndef QD_PRELUDE
+#define QD_PRELUDE
+#include <float.h>
+
+/* Machine epsilon of casadi_real (float, double or long double builds). */
+#define QD_EPS (sizeof(casadi_real) == sizeof(float) ? (casadi_real)FLT_EPSILON \
+                : sizeof(casadi_real) == sizeof(double) ? (casadi_real)DBL_EPSILON : (casadi_real)LDBL_EPSILON)
+/* A pivot this small relative to the largest entry of the matrix eliminated (M_r, or with a swing leg its blocks of M
+ * and the folded rest K; M in dfd_full) means the matrix is singular to working precision (condition number beyond
+ * ~1 / (QD_SINGULAR_RTOL)): 1e-13 in double, 5e-5 in float. */
+#define QD_SINGULAR_RTOL (450 * QD_EPS)
+
+/* QD_INLINE: a template inlined into its callers, each specialised for its constant arguments and every call direct,
+ * so a static stack walk (-fcallgraph-info, docs/embedded.md) can bound it. QD_NOINLINE: a function kept out of line,
+ * its code once for all its calls (in the instruction cache). */
 #if defined(__GNUC__)
+#define QD_INLINE static inline __attribute__((always_inline))
 #define QD_NOINLINE __attribute__((noinline))
 #else
+#define QD_INLINE static inline
 #define QD_NOINLINE
 #endif
 #endif
@@ -5942,10 +6008,35 @@ int qd_M_blocks_legs_trig(const casadi_real** arg, casadi_real** res, casadi_int
 }
 
 /* a leg's foot kinematics (dynamics/by_leg.py, FOOT_PARTS), the joints' sines and cosines given: y = (r, J, J qd_l, Jdot qd_l), trunk frame */
-#ifndef QD_NOINLINE
+#ifndef QD_RETURN_CODES
+#define QD_RETURN_CODES
+#define QD_NONFINITE 1 /* an output is NaN/inf */
+#define QD_SINGULAR 2 /* M_r or M singular to working precision */
+#define QD_DEGENERATE 3 /* the stance is degenerate */
+#define QD_NO_WORK 4 /* the work memory w the function needs (its _SZ_W > 0) is a null pointer */
+#endif
+/* quadruped_dyn: the definitions the hand-written C shares (hand-written; written once into each generated file that
+ * uses them, after the return codes of quadruped_dyn/codegen/c_facts.py). casadi_real is defined before it. */
+#ifndef QD_PRELUDE
+#define QD_PRELUDE
+#include <float.h>
+
+/* Machine epsilon of casadi_real (float, double or long double builds). */
+#define QD_EPS (sizeof(casadi_real) == sizeof(float) ? (casadi_real)FLT_EPSILON \
+                : sizeof(casadi_real) == sizeof(double) ? (casadi_real)DBL_EPSILON : (casadi_real)LDBL_EPSILON)
+/* A pivot this small relative to the largest entry of the matrix eliminated (M_r, or with a swing leg its blocks of M
+ * and the folded rest K; M in dfd_full) means the matrix is singular to working precision (condition number beyond
+ * ~1 / (QD_SINGULAR_RTOL)): 1e-13 in double, 5e-5 in float. */
+#define QD_SINGULAR_RTOL (450 * QD_EPS)
+
+/* QD_INLINE: a template inlined into its callers, each specialised for its constant arguments and every call direct,
+ * so a static stack walk (-fcallgraph-info, docs/embedded.md) can bound it. QD_NOINLINE: a function kept out of line,
+ * its code once for all its calls (in the instruction cache). */
 #if defined(__GNUC__)
+#define QD_INLINE static inline __attribute__((always_inline))
 #define QD_NOINLINE __attribute__((noinline))
 #else
+#define QD_INLINE static inline
 #define QD_NOINLINE
 #endif
 #endif
@@ -19182,6 +19273,1244 @@ CASADI_SYMBOL_EXPORT int qd_id_full_work_bytes(casadi_int *sz_arg, casadi_int* s
   return 0;
 }
 
+/* qd_feet_full:(q[19],v[18])->(r_feet[12],J_feet[12x18,80nz],Jdv_feet[12]) */
+static int casadi_f5(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem) {
+  (void)arg; (void)res; (void)iw; (void)w; (void)mem;
+  casadi_real a000, a001, a002, a003, a004, a005, a006, a007, a008, a009, a010, a011;
+  casadi_real a012, a013, a014, a015, a016, a017, a018, a019, a020, a021, a022, a023;
+  casadi_real a024, a025, a026, a027, a028, a029, a030, a031, a032, a033, a034, a035;
+  casadi_real a036, a037, a038, a039, a040, a041, a042, a043, a044, a045, a046, a047;
+  casadi_real a048, a049, a050, a051, a052, a053, a054, a055, a056, a057, a058, a059;
+  casadi_real a060, a061, a062, a063, a064, a065, a066, a067, a068, a069, a070, a071;
+  casadi_real a072, a073, a074, a075, a076, a077, a078, a079, a080, a081, a082, a083;
+  casadi_real a084, a085, a086, a087, a088, a089, a090, a091, a092, a093, a094, a095;
+  casadi_real a096, a097, a098, a099, a100, a101, a102, a103, a104, a105, a106, a107;
+  casadi_real a108, a109, a110, a111, a112, a113, a114, a115, a116, a117, a118, a119;
+  casadi_real a120, a121, a122, a123, a124, a125, a126, a127, a128, a129, a130, a131;
+  casadi_real a132, a133, a134, a135, a136, a137, a138, a139, a140, a141, a142, a143;
+  casadi_real a144, a145, a146, a147, a148, a149, a150, a151, a152, a153;
+  a000=1.9000000000000000e-01;
+  a001=2.0000000000000001e-01;
+  a002=arg[0]? arg[0][8] : 0;
+  a003=qd_sin(a002);
+  a004=(a001*a003);
+  a005=(a000+a004);
+  a002=qd_cos(a002);
+  a006=arg[0]? arg[0][9] : 0;
+  a007=qd_sin(a006);
+  a008=(a002*a007);
+  a006=qd_cos(a006);
+  a009=(a003*a006);
+  a008=(a008+a009);
+  a008=(a001*a008);
+  a005=(a005+a008);
+  if (res[0]!=0) res[0][0]=a005;
+  a009=7.0000000000000007e-02;
+  a010=arg[0]? arg[0][7] : 0;
+  a011=qd_cos(a010);
+  a012=(a011*a002);
+  a013=(a001*a012);
+  a014=(a009+a013);
+  a015=(a012*a006);
+  a016=(a011*a003);
+  a017=(a016*a007);
+  a015=(a015-a017);
+  a015=(a001*a015);
+  a014=(a014+a015);
+  if (res[0]!=0) res[0][1]=a014;
+  a010=qd_sin(a010);
+  a017=(a010*a003);
+  a018=(a017*a007);
+  a019=(a010*a002);
+  a020=(a019*a006);
+  a021=(a018-a020);
+  a021=(a001*a021);
+  a022=(a001*a019);
+  a021=(a021-a022);
+  if (res[0]!=0) res[0][2]=a021;
+  a023=arg[0]? arg[0][11] : 0;
+  a024=qd_sin(a023);
+  a025=(a001*a024);
+  a000=(a000+a025);
+  a023=qd_cos(a023);
+  a026=arg[0]? arg[0][12] : 0;
+  a027=qd_sin(a026);
+  a028=(a023*a027);
+  a026=qd_cos(a026);
+  a029=(a024*a026);
+  a028=(a028+a029);
+  a028=(a001*a028);
+  a000=(a000+a028);
+  if (res[0]!=0) res[0][3]=a000;
+  a029=-7.0000000000000007e-02;
+  a030=arg[0]? arg[0][10] : 0;
+  a031=qd_cos(a030);
+  a032=(a031*a023);
+  a033=(a001*a032);
+  a034=(a029+a033);
+  a035=(a032*a026);
+  a036=(a031*a024);
+  a037=(a036*a027);
+  a035=(a035-a037);
+  a035=(a001*a035);
+  a034=(a034+a035);
+  if (res[0]!=0) res[0][4]=a034;
+  a030=qd_sin(a030);
+  a037=(a030*a024);
+  a038=(a037*a027);
+  a039=(a030*a023);
+  a040=(a039*a026);
+  a041=(a038-a040);
+  a041=(a001*a041);
+  a042=(a001*a039);
+  a041=(a041-a042);
+  if (res[0]!=0) res[0][5]=a041;
+  a043=-1.9000000000000000e-01;
+  a044=arg[0]? arg[0][14] : 0;
+  a045=qd_sin(a044);
+  a046=(a001*a045);
+  a047=(a043+a046);
+  a044=qd_cos(a044);
+  a048=arg[0]? arg[0][15] : 0;
+  a049=qd_sin(a048);
+  a050=(a044*a049);
+  a048=qd_cos(a048);
+  a051=(a045*a048);
+  a050=(a050+a051);
+  a050=(a001*a050);
+  a047=(a047+a050);
+  if (res[0]!=0) res[0][6]=a047;
+  a051=arg[0]? arg[0][13] : 0;
+  a052=qd_cos(a051);
+  a053=(a052*a044);
+  a054=(a001*a053);
+  a009=(a009+a054);
+  a055=(a053*a048);
+  a056=(a052*a045);
+  a057=(a056*a049);
+  a055=(a055-a057);
+  a055=(a001*a055);
+  a009=(a009+a055);
+  if (res[0]!=0) res[0][7]=a009;
+  a051=qd_sin(a051);
+  a057=(a051*a045);
+  a058=(a057*a049);
+  a059=(a051*a044);
+  a060=(a059*a048);
+  a061=(a058-a060);
+  a061=(a001*a061);
+  a062=(a001*a059);
+  a061=(a061-a062);
+  if (res[0]!=0) res[0][8]=a061;
+  a063=arg[0]? arg[0][17] : 0;
+  a064=qd_sin(a063);
+  a065=(a001*a064);
+  a043=(a043+a065);
+  a063=qd_cos(a063);
+  a066=arg[0]? arg[0][18] : 0;
+  a067=qd_sin(a066);
+  a068=(a063*a067);
+  a066=qd_cos(a066);
+  a069=(a064*a066);
+  a068=(a068+a069);
+  a068=(a001*a068);
+  a043=(a043+a068);
+  if (res[0]!=0) res[0][9]=a043;
+  a069=arg[0]? arg[0][16] : 0;
+  a070=qd_cos(a069);
+  a071=(a070*a063);
+  a072=(a001*a071);
+  a029=(a029+a072);
+  a073=(a071*a066);
+  a074=(a070*a064);
+  a075=(a074*a067);
+  a073=(a073-a075);
+  a073=(a001*a073);
+  a029=(a029+a073);
+  if (res[0]!=0) res[0][10]=a029;
+  a069=qd_sin(a069);
+  a075=(a069*a064);
+  a076=(a075*a067);
+  a077=(a069*a063);
+  a078=(a077*a066);
+  a079=(a076-a078);
+  a079=(a001*a079);
+  a080=(a001*a077);
+  a079=(a079-a080);
+  if (res[0]!=0) res[0][11]=a079;
+  a081=1.;
+  if (res[1]!=0) res[1][0]=a081;
+  if (res[1]!=0) res[1][1]=a081;
+  if (res[1]!=0) res[1][2]=a081;
+  if (res[1]!=0) res[1][3]=a081;
+  if (res[1]!=0) res[1][4]=a081;
+  if (res[1]!=0) res[1][5]=a081;
+  if (res[1]!=0) res[1][6]=a081;
+  if (res[1]!=0) res[1][7]=a081;
+  if (res[1]!=0) res[1][8]=a081;
+  if (res[1]!=0) res[1][9]=a081;
+  if (res[1]!=0) res[1][10]=a081;
+  if (res[1]!=0) res[1][11]=a081;
+  a081=0.;
+  if (res[1]!=0) res[1][12]=a081;
+  a082=(-a021);
+  if (res[1]!=0) res[1][13]=a082;
+  if (res[1]!=0) res[1][14]=a014;
+  if (res[1]!=0) res[1][15]=a081;
+  a082=(-a041);
+  if (res[1]!=0) res[1][16]=a082;
+  if (res[1]!=0) res[1][17]=a034;
+  if (res[1]!=0) res[1][18]=a081;
+  a082=(-a061);
+  if (res[1]!=0) res[1][19]=a082;
+  if (res[1]!=0) res[1][20]=a009;
+  if (res[1]!=0) res[1][21]=a081;
+  a082=(-a079);
+  if (res[1]!=0) res[1][22]=a082;
+  if (res[1]!=0) res[1][23]=a029;
+  if (res[1]!=0) res[1][24]=a021;
+  if (res[1]!=0) res[1][25]=a081;
+  a082=(-a005);
+  if (res[1]!=0) res[1][26]=a082;
+  if (res[1]!=0) res[1][27]=a041;
+  if (res[1]!=0) res[1][28]=a081;
+  a082=(-a000);
+  if (res[1]!=0) res[1][29]=a082;
+  if (res[1]!=0) res[1][30]=a061;
+  if (res[1]!=0) res[1][31]=a081;
+  a082=(-a047);
+  if (res[1]!=0) res[1][32]=a082;
+  if (res[1]!=0) res[1][33]=a079;
+  if (res[1]!=0) res[1][34]=a081;
+  a082=(-a043);
+  if (res[1]!=0) res[1][35]=a082;
+  a082=(-a014);
+  if (res[1]!=0) res[1][36]=a082;
+  if (res[1]!=0) res[1][37]=a005;
+  if (res[1]!=0) res[1][38]=a081;
+  a082=(-a034);
+  if (res[1]!=0) res[1][39]=a082;
+  if (res[1]!=0) res[1][40]=a000;
+  if (res[1]!=0) res[1][41]=a081;
+  a082=(-a009);
+  if (res[1]!=0) res[1][42]=a082;
+  if (res[1]!=0) res[1][43]=a047;
+  if (res[1]!=0) res[1][44]=a081;
+  a082=(-a029);
+  if (res[1]!=0) res[1][45]=a082;
+  if (res[1]!=0) res[1][46]=a043;
+  if (res[1]!=0) res[1][47]=a081;
+  a081=(a003*a010);
+  a082=(a007*a081);
+  a010=(a002*a010);
+  a083=(a006*a010);
+  a084=(a082-a083);
+  a084=(a001*a084);
+  a085=(a001*a010);
+  a084=(a084-a085);
+  if (res[1]!=0) res[1][48]=a084;
+  a086=(a003*a011);
+  a087=(a007*a086);
+  a011=(a002*a011);
+  a088=(a006*a011);
+  a087=(a087-a088);
+  a087=(a001*a087);
+  a088=(a001*a011);
+  a087=(a087-a088);
+  if (res[1]!=0) res[1][49]=a087;
+  a088=(a001*a002);
+  a089=(a006*a002);
+  a090=(a007*a003);
+  a089=(a089-a090);
+  a089=(a001*a089);
+  a088=(a088+a089);
+  if (res[1]!=0) res[1][50]=a088;
+  a089=(a001*a016);
+  a090=(a006*a016);
+  a091=(a007*a012);
+  a092=(a090+a091);
+  a092=(a001*a092);
+  a092=(a089+a092);
+  a093=(-a092);
+  if (res[1]!=0) res[1][51]=a093;
+  a093=(a007*a019);
+  a094=(a006*a017);
+  a093=(a093+a094);
+  a093=(a001*a093);
+  a094=(a001*a017);
+  a093=(a093+a094);
+  if (res[1]!=0) res[1][52]=a093;
+  a094=(a002*a006);
+  a095=(a003*a007);
+  a094=(a094-a095);
+  a094=(a001*a094);
+  if (res[1]!=0) res[1][53]=a094;
+  a095=(a012*a007);
+  a096=(a016*a006);
+  a095=(a095+a096);
+  a095=(a001*a095);
+  a096=(-a095);
+  if (res[1]!=0) res[1][54]=a096;
+  a096=(a017*a006);
+  a097=(a019*a007);
+  a096=(a096+a097);
+  a096=(a001*a096);
+  if (res[1]!=0) res[1][55]=a096;
+  a097=(a024*a030);
+  a098=(a027*a097);
+  a030=(a023*a030);
+  a099=(a026*a030);
+  a100=(a098-a099);
+  a100=(a001*a100);
+  a101=(a001*a030);
+  a100=(a100-a101);
+  if (res[1]!=0) res[1][56]=a100;
+  a102=(a024*a031);
+  a103=(a027*a102);
+  a031=(a023*a031);
+  a104=(a026*a031);
+  a103=(a103-a104);
+  a103=(a001*a103);
+  a104=(a001*a031);
+  a103=(a103-a104);
+  if (res[1]!=0) res[1][57]=a103;
+  a104=(a001*a023);
+  a105=(a026*a023);
+  a106=(a027*a024);
+  a105=(a105-a106);
+  a105=(a001*a105);
+  a104=(a104+a105);
+  if (res[1]!=0) res[1][58]=a104;
+  a105=(a001*a036);
+  a106=(a026*a036);
+  a107=(a027*a032);
+  a108=(a106+a107);
+  a108=(a001*a108);
+  a108=(a105+a108);
+  a109=(-a108);
+  if (res[1]!=0) res[1][59]=a109;
+  a109=(a027*a039);
+  a110=(a026*a037);
+  a109=(a109+a110);
+  a109=(a001*a109);
+  a110=(a001*a037);
+  a109=(a109+a110);
+  if (res[1]!=0) res[1][60]=a109;
+  a110=(a023*a026);
+  a111=(a024*a027);
+  a110=(a110-a111);
+  a110=(a001*a110);
+  if (res[1]!=0) res[1][61]=a110;
+  a111=(a032*a027);
+  a112=(a036*a026);
+  a111=(a111+a112);
+  a111=(a001*a111);
+  a112=(-a111);
+  if (res[1]!=0) res[1][62]=a112;
+  a112=(a037*a026);
+  a113=(a039*a027);
+  a112=(a112+a113);
+  a112=(a001*a112);
+  if (res[1]!=0) res[1][63]=a112;
+  a113=(a045*a051);
+  a114=(a049*a113);
+  a051=(a044*a051);
+  a115=(a048*a051);
+  a116=(a114-a115);
+  a116=(a001*a116);
+  a117=(a001*a051);
+  a116=(a116-a117);
+  if (res[1]!=0) res[1][64]=a116;
+  a118=(a045*a052);
+  a119=(a049*a118);
+  a052=(a044*a052);
+  a120=(a048*a052);
+  a119=(a119-a120);
+  a119=(a001*a119);
+  a120=(a001*a052);
+  a119=(a119-a120);
+  if (res[1]!=0) res[1][65]=a119;
+  a120=(a001*a044);
+  a121=(a048*a044);
+  a122=(a049*a045);
+  a121=(a121-a122);
+  a121=(a001*a121);
+  a120=(a120+a121);
+  if (res[1]!=0) res[1][66]=a120;
+  a121=(a001*a056);
+  a122=(a048*a056);
+  a123=(a049*a053);
+  a124=(a122+a123);
+  a124=(a001*a124);
+  a124=(a121+a124);
+  a125=(-a124);
+  if (res[1]!=0) res[1][67]=a125;
+  a125=(a049*a059);
+  a126=(a048*a057);
+  a125=(a125+a126);
+  a125=(a001*a125);
+  a126=(a001*a057);
+  a125=(a125+a126);
+  if (res[1]!=0) res[1][68]=a125;
+  a126=(a044*a048);
+  a127=(a045*a049);
+  a126=(a126-a127);
+  a126=(a001*a126);
+  if (res[1]!=0) res[1][69]=a126;
+  a127=(a053*a049);
+  a128=(a056*a048);
+  a127=(a127+a128);
+  a127=(a001*a127);
+  a128=(-a127);
+  if (res[1]!=0) res[1][70]=a128;
+  a128=(a057*a048);
+  a129=(a059*a049);
+  a128=(a128+a129);
+  a128=(a001*a128);
+  if (res[1]!=0) res[1][71]=a128;
+  a129=(a064*a069);
+  a130=(a067*a129);
+  a069=(a063*a069);
+  a131=(a066*a069);
+  a132=(a130-a131);
+  a132=(a001*a132);
+  a133=(a001*a069);
+  a132=(a132-a133);
+  if (res[1]!=0) res[1][72]=a132;
+  a134=(a064*a070);
+  a135=(a067*a134);
+  a070=(a063*a070);
+  a136=(a066*a070);
+  a135=(a135-a136);
+  a135=(a001*a135);
+  a136=(a001*a070);
+  a135=(a135-a136);
+  if (res[1]!=0) res[1][73]=a135;
+  a136=(a001*a063);
+  a137=(a066*a063);
+  a138=(a067*a064);
+  a137=(a137-a138);
+  a137=(a001*a137);
+  a136=(a136+a137);
+  if (res[1]!=0) res[1][74]=a136;
+  a137=(a001*a074);
+  a138=(a066*a074);
+  a139=(a067*a071);
+  a140=(a138+a139);
+  a140=(a001*a140);
+  a140=(a137+a140);
+  a141=(-a140);
+  if (res[1]!=0) res[1][75]=a141;
+  a141=(a067*a077);
+  a142=(a066*a075);
+  a141=(a141+a142);
+  a141=(a001*a141);
+  a142=(a001*a075);
+  a141=(a141+a142);
+  if (res[1]!=0) res[1][76]=a141;
+  a142=(a063*a066);
+  a143=(a064*a067);
+  a142=(a142-a143);
+  a142=(a001*a142);
+  if (res[1]!=0) res[1][77]=a142;
+  a143=(a071*a067);
+  a144=(a074*a066);
+  a143=(a143+a144);
+  a143=(a001*a143);
+  a144=(-a143);
+  if (res[1]!=0) res[1][78]=a144;
+  a144=(a075*a066);
+  a145=(a077*a067);
+  a144=(a144+a145);
+  a144=(a001*a144);
+  if (res[1]!=0) res[1][79]=a144;
+  a145=arg[1]? arg[1][4] : 0;
+  a146=(a145*a087);
+  a147=arg[1]? arg[1][5] : 0;
+  a148=(a147*a084);
+  a146=(a146-a148);
+  a148=arg[1]? arg[1][6] : 0;
+  a146=(a146*a148);
+  a149=(a145*a093);
+  a150=(a147*a092);
+  a149=(a149+a150);
+  a150=arg[1]? arg[1][7] : 0;
+  a003=(a006*a003);
+  a002=(a007*a002);
+  a003=(a003+a002);
+  a003=(a001*a003);
+  a004=(a004+a003);
+  a004=(a150*a004);
+  a149=(a149-a004);
+  a004=arg[1]? arg[1][8] : 0;
+  a003=(a004*a003);
+  a149=(a149-a003);
+  a149=(a149*a150);
+  a146=(a146+a149);
+  a149=(a145*a096);
+  a003=(a147*a095);
+  a149=(a149+a003);
+  a003=(a150*a008);
+  a149=(a149-a003);
+  a008=(a004*a008);
+  a149=(a149-a008);
+  a149=(a149*a004);
+  a146=(a146+a149);
+  a149=arg[1]? arg[1][2] : 0;
+  a008=arg[1]? arg[1][3] : 0;
+  a003=(a014*a008);
+  a003=(a149+a003);
+  a002=(a005*a145);
+  a003=(a003-a002);
+  a002=(a087*a148);
+  a003=(a003+a002);
+  a002=(a093*a150);
+  a003=(a003+a002);
+  a002=(a096*a004);
+  a003=(a003+a002);
+  a002=(a145*a003);
+  a151=arg[1]? arg[1][1] : 0;
+  a152=(a021*a008);
+  a152=(a151-a152);
+  a005=(a005*a147);
+  a152=(a152+a005);
+  a005=(a084*a148);
+  a152=(a152+a005);
+  a005=(a092*a150);
+  a152=(a152-a005);
+  a005=(a095*a004);
+  a152=(a152-a005);
+  a005=(a147*a152);
+  a002=(a002-a005);
+  a146=(a146+a002);
+  if (res[2]!=0) res[2][0]=a146;
+  a146=(a148*a087);
+  a087=(a008*a087);
+  a146=(a146-a087);
+  a087=(a001*a081);
+  a002=(a006*a081);
+  a005=(a007*a010);
+  a153=(a002+a005);
+  a153=(a001*a153);
+  a087=(a087+a153);
+  a087=(a150*a087);
+  a146=(a146+a087);
+  a005=(a005+a002);
+  a005=(a001*a005);
+  a005=(a004*a005);
+  a146=(a146+a005);
+  a146=(a146*a148);
+  a005=(a147*a088);
+  a002=(a008*a093);
+  a005=(a005-a002);
+  a093=(a148*a093);
+  a005=(a005+a093);
+  a012=(a006*a012);
+  a016=(a007*a016);
+  a012=(a012-a016);
+  a012=(a001*a012);
+  a013=(a013+a012);
+  a013=(a150*a013);
+  a005=(a005-a013);
+  a012=(a004*a012);
+  a005=(a005-a012);
+  a005=(a005*a150);
+  a146=(a146+a005);
+  a005=(a147*a094);
+  a096=(a008*a096);
+  a005=(a005-a096);
+  a081=(a081*a006);
+  a010=(a010*a007);
+  a081=(a081+a010);
+  a081=(a001*a081);
+  a081=(a148*a081);
+  a005=(a005+a081);
+  a081=(a150*a015);
+  a005=(a005-a081);
+  a015=(a004*a015);
+  a005=(a005-a015);
+  a005=(a005*a004);
+  a146=(a146+a005);
+  a005=arg[1]? arg[1][0] : 0;
+  a021=(a021*a145);
+  a021=(a005+a021);
+  a014=(a014*a147);
+  a021=(a021-a014);
+  a014=(a088*a150);
+  a021=(a021+a014);
+  a014=(a094*a004);
+  a021=(a021+a014);
+  a014=(a147*a021);
+  a003=(a008*a003);
+  a014=(a014-a003);
+  a146=(a146+a014);
+  if (res[2]!=0) res[2][1]=a146;
+  a084=(a008*a084);
+  a083=(a083-a082);
+  a083=(a001*a083);
+  a083=(a083+a085);
+  a083=(a148*a083);
+  a084=(a084+a083);
+  a083=(a007*a011);
+  a085=(a006*a086);
+  a082=(a083+a085);
+  a082=(a001*a082);
+  a146=(a001*a086);
+  a082=(a082+a146);
+  a082=(a150*a082);
+  a084=(a084+a082);
+  a085=(a085+a083);
+  a085=(a001*a085);
+  a085=(a004*a085);
+  a084=(a084+a085);
+  a084=(a084*a148);
+  a091=(a091+a090);
+  a091=(a001*a091);
+  a091=(a091+a089);
+  a091=(a148*a091);
+  a092=(a008*a092);
+  a088=(a145*a088);
+  a092=(a092+a088);
+  a091=(a091-a092);
+  a019=(a006*a019);
+  a017=(a007*a017);
+  a019=(a019-a017);
+  a019=(a001*a019);
+  a022=(a019+a022);
+  a022=(a150*a022);
+  a091=(a091+a022);
+  a019=(a004*a019);
+  a091=(a091+a019);
+  a091=(a091*a150);
+  a084=(a084+a091);
+  a086=(a086*a006);
+  a011=(a011*a007);
+  a086=(a086+a011);
+  a086=(a001*a086);
+  a148=(a148*a086);
+  a095=(a008*a095);
+  a094=(a145*a094);
+  a095=(a095+a094);
+  a148=(a148-a095);
+  a020=(a020-a018);
+  a020=(a001*a020);
+  a150=(a150*a020);
+  a148=(a148+a150);
+  a020=(a004*a020);
+  a148=(a148+a020);
+  a148=(a148*a004);
+  a084=(a084+a148);
+  a152=(a008*a152);
+  a021=(a145*a021);
+  a152=(a152-a021);
+  a084=(a084+a152);
+  if (res[2]!=0) res[2][2]=a084;
+  a084=(a145*a103);
+  a152=(a147*a100);
+  a084=(a084-a152);
+  a152=arg[1]? arg[1][9] : 0;
+  a084=(a084*a152);
+  a021=(a145*a109);
+  a148=(a147*a108);
+  a021=(a021+a148);
+  a148=arg[1]? arg[1][10] : 0;
+  a024=(a026*a024);
+  a023=(a027*a023);
+  a024=(a024+a023);
+  a024=(a001*a024);
+  a025=(a025+a024);
+  a025=(a148*a025);
+  a021=(a021-a025);
+  a025=arg[1]? arg[1][11] : 0;
+  a024=(a025*a024);
+  a021=(a021-a024);
+  a021=(a021*a148);
+  a084=(a084+a021);
+  a021=(a145*a112);
+  a024=(a147*a111);
+  a021=(a021+a024);
+  a024=(a148*a028);
+  a021=(a021-a024);
+  a028=(a025*a028);
+  a021=(a021-a028);
+  a021=(a021*a025);
+  a084=(a084+a021);
+  a021=(a034*a008);
+  a021=(a149+a021);
+  a028=(a000*a145);
+  a021=(a021-a028);
+  a028=(a103*a152);
+  a021=(a021+a028);
+  a028=(a109*a148);
+  a021=(a021+a028);
+  a028=(a112*a025);
+  a021=(a021+a028);
+  a028=(a145*a021);
+  a024=(a041*a008);
+  a024=(a151-a024);
+  a000=(a000*a147);
+  a024=(a024+a000);
+  a000=(a100*a152);
+  a024=(a024+a000);
+  a000=(a108*a148);
+  a024=(a024-a000);
+  a000=(a111*a025);
+  a024=(a024-a000);
+  a000=(a147*a024);
+  a028=(a028-a000);
+  a084=(a084+a028);
+  if (res[2]!=0) res[2][3]=a084;
+  a084=(a152*a103);
+  a103=(a008*a103);
+  a084=(a084-a103);
+  a103=(a001*a097);
+  a028=(a026*a097);
+  a000=(a027*a030);
+  a023=(a028+a000);
+  a023=(a001*a023);
+  a103=(a103+a023);
+  a103=(a148*a103);
+  a084=(a084+a103);
+  a000=(a000+a028);
+  a000=(a001*a000);
+  a000=(a025*a000);
+  a084=(a084+a000);
+  a084=(a084*a152);
+  a000=(a147*a104);
+  a028=(a008*a109);
+  a000=(a000-a028);
+  a109=(a152*a109);
+  a000=(a000+a109);
+  a032=(a026*a032);
+  a036=(a027*a036);
+  a032=(a032-a036);
+  a032=(a001*a032);
+  a033=(a033+a032);
+  a033=(a148*a033);
+  a000=(a000-a033);
+  a032=(a025*a032);
+  a000=(a000-a032);
+  a000=(a000*a148);
+  a084=(a084+a000);
+  a000=(a147*a110);
+  a112=(a008*a112);
+  a000=(a000-a112);
+  a097=(a097*a026);
+  a030=(a030*a027);
+  a097=(a097+a030);
+  a097=(a001*a097);
+  a097=(a152*a097);
+  a000=(a000+a097);
+  a097=(a148*a035);
+  a000=(a000-a097);
+  a035=(a025*a035);
+  a000=(a000-a035);
+  a000=(a000*a025);
+  a084=(a084+a000);
+  a041=(a041*a145);
+  a041=(a005+a041);
+  a034=(a034*a147);
+  a041=(a041-a034);
+  a034=(a104*a148);
+  a041=(a041+a034);
+  a034=(a110*a025);
+  a041=(a041+a034);
+  a034=(a147*a041);
+  a021=(a008*a021);
+  a034=(a034-a021);
+  a084=(a084+a034);
+  if (res[2]!=0) res[2][4]=a084;
+  a100=(a008*a100);
+  a099=(a099-a098);
+  a099=(a001*a099);
+  a099=(a099+a101);
+  a099=(a152*a099);
+  a100=(a100+a099);
+  a099=(a027*a031);
+  a101=(a026*a102);
+  a098=(a099+a101);
+  a098=(a001*a098);
+  a084=(a001*a102);
+  a098=(a098+a084);
+  a098=(a148*a098);
+  a100=(a100+a098);
+  a101=(a101+a099);
+  a101=(a001*a101);
+  a101=(a025*a101);
+  a100=(a100+a101);
+  a100=(a100*a152);
+  a107=(a107+a106);
+  a107=(a001*a107);
+  a107=(a107+a105);
+  a107=(a152*a107);
+  a108=(a008*a108);
+  a104=(a145*a104);
+  a108=(a108+a104);
+  a107=(a107-a108);
+  a039=(a026*a039);
+  a037=(a027*a037);
+  a039=(a039-a037);
+  a039=(a001*a039);
+  a042=(a039+a042);
+  a042=(a148*a042);
+  a107=(a107+a042);
+  a039=(a025*a039);
+  a107=(a107+a039);
+  a107=(a107*a148);
+  a100=(a100+a107);
+  a102=(a102*a026);
+  a031=(a031*a027);
+  a102=(a102+a031);
+  a102=(a001*a102);
+  a152=(a152*a102);
+  a111=(a008*a111);
+  a110=(a145*a110);
+  a111=(a111+a110);
+  a152=(a152-a111);
+  a040=(a040-a038);
+  a040=(a001*a040);
+  a148=(a148*a040);
+  a152=(a152+a148);
+  a040=(a025*a040);
+  a152=(a152+a040);
+  a152=(a152*a025);
+  a100=(a100+a152);
+  a024=(a008*a024);
+  a041=(a145*a041);
+  a024=(a024-a041);
+  a100=(a100+a024);
+  if (res[2]!=0) res[2][5]=a100;
+  a100=(a145*a119);
+  a024=(a147*a116);
+  a100=(a100-a024);
+  a024=arg[1]? arg[1][12] : 0;
+  a100=(a100*a024);
+  a041=(a145*a125);
+  a152=(a147*a124);
+  a041=(a041+a152);
+  a152=arg[1]? arg[1][13] : 0;
+  a045=(a048*a045);
+  a044=(a049*a044);
+  a045=(a045+a044);
+  a045=(a001*a045);
+  a046=(a046+a045);
+  a046=(a152*a046);
+  a041=(a041-a046);
+  a046=arg[1]? arg[1][14] : 0;
+  a045=(a046*a045);
+  a041=(a041-a045);
+  a041=(a041*a152);
+  a100=(a100+a041);
+  a041=(a145*a128);
+  a045=(a147*a127);
+  a041=(a041+a045);
+  a045=(a152*a050);
+  a041=(a041-a045);
+  a050=(a046*a050);
+  a041=(a041-a050);
+  a041=(a041*a046);
+  a100=(a100+a041);
+  a041=(a009*a008);
+  a041=(a149+a041);
+  a050=(a047*a145);
+  a041=(a041-a050);
+  a050=(a119*a024);
+  a041=(a041+a050);
+  a050=(a125*a152);
+  a041=(a041+a050);
+  a050=(a128*a046);
+  a041=(a041+a050);
+  a050=(a145*a041);
+  a045=(a061*a008);
+  a045=(a151-a045);
+  a047=(a047*a147);
+  a045=(a045+a047);
+  a047=(a116*a024);
+  a045=(a045+a047);
+  a047=(a124*a152);
+  a045=(a045-a047);
+  a047=(a127*a046);
+  a045=(a045-a047);
+  a047=(a147*a045);
+  a050=(a050-a047);
+  a100=(a100+a050);
+  if (res[2]!=0) res[2][6]=a100;
+  a100=(a024*a119);
+  a119=(a008*a119);
+  a100=(a100-a119);
+  a119=(a001*a113);
+  a050=(a048*a113);
+  a047=(a049*a051);
+  a044=(a050+a047);
+  a044=(a001*a044);
+  a119=(a119+a044);
+  a119=(a152*a119);
+  a100=(a100+a119);
+  a047=(a047+a050);
+  a047=(a001*a047);
+  a047=(a046*a047);
+  a100=(a100+a047);
+  a100=(a100*a024);
+  a047=(a147*a120);
+  a050=(a008*a125);
+  a047=(a047-a050);
+  a125=(a024*a125);
+  a047=(a047+a125);
+  a053=(a048*a053);
+  a056=(a049*a056);
+  a053=(a053-a056);
+  a053=(a001*a053);
+  a054=(a054+a053);
+  a054=(a152*a054);
+  a047=(a047-a054);
+  a053=(a046*a053);
+  a047=(a047-a053);
+  a047=(a047*a152);
+  a100=(a100+a047);
+  a047=(a147*a126);
+  a128=(a008*a128);
+  a047=(a047-a128);
+  a113=(a113*a048);
+  a051=(a051*a049);
+  a113=(a113+a051);
+  a113=(a001*a113);
+  a113=(a024*a113);
+  a047=(a047+a113);
+  a113=(a152*a055);
+  a047=(a047-a113);
+  a055=(a046*a055);
+  a047=(a047-a055);
+  a047=(a047*a046);
+  a100=(a100+a047);
+  a061=(a061*a145);
+  a061=(a005+a061);
+  a009=(a009*a147);
+  a061=(a061-a009);
+  a009=(a120*a152);
+  a061=(a061+a009);
+  a009=(a126*a046);
+  a061=(a061+a009);
+  a009=(a147*a061);
+  a041=(a008*a041);
+  a009=(a009-a041);
+  a100=(a100+a009);
+  if (res[2]!=0) res[2][7]=a100;
+  a116=(a008*a116);
+  a115=(a115-a114);
+  a115=(a001*a115);
+  a115=(a115+a117);
+  a115=(a024*a115);
+  a116=(a116+a115);
+  a115=(a049*a052);
+  a117=(a048*a118);
+  a114=(a115+a117);
+  a114=(a001*a114);
+  a100=(a001*a118);
+  a114=(a114+a100);
+  a114=(a152*a114);
+  a116=(a116+a114);
+  a117=(a117+a115);
+  a117=(a001*a117);
+  a117=(a046*a117);
+  a116=(a116+a117);
+  a116=(a116*a024);
+  a123=(a123+a122);
+  a123=(a001*a123);
+  a123=(a123+a121);
+  a123=(a024*a123);
+  a124=(a008*a124);
+  a120=(a145*a120);
+  a124=(a124+a120);
+  a123=(a123-a124);
+  a059=(a048*a059);
+  a057=(a049*a057);
+  a059=(a059-a057);
+  a059=(a001*a059);
+  a062=(a059+a062);
+  a062=(a152*a062);
+  a123=(a123+a062);
+  a059=(a046*a059);
+  a123=(a123+a059);
+  a123=(a123*a152);
+  a116=(a116+a123);
+  a118=(a118*a048);
+  a052=(a052*a049);
+  a118=(a118+a052);
+  a118=(a001*a118);
+  a024=(a024*a118);
+  a127=(a008*a127);
+  a126=(a145*a126);
+  a127=(a127+a126);
+  a024=(a024-a127);
+  a060=(a060-a058);
+  a060=(a001*a060);
+  a152=(a152*a060);
+  a024=(a024+a152);
+  a060=(a046*a060);
+  a024=(a024+a060);
+  a024=(a024*a046);
+  a116=(a116+a024);
+  a045=(a008*a045);
+  a061=(a145*a061);
+  a045=(a045-a061);
+  a116=(a116+a045);
+  if (res[2]!=0) res[2][8]=a116;
+  a116=(a145*a135);
+  a045=(a147*a132);
+  a116=(a116-a045);
+  a045=arg[1]? arg[1][15] : 0;
+  a116=(a116*a045);
+  a061=(a145*a141);
+  a024=(a147*a140);
+  a061=(a061+a024);
+  a024=arg[1]? arg[1][16] : 0;
+  a064=(a066*a064);
+  a063=(a067*a063);
+  a064=(a064+a063);
+  a064=(a001*a064);
+  a065=(a065+a064);
+  a065=(a024*a065);
+  a061=(a061-a065);
+  a065=arg[1]? arg[1][17] : 0;
+  a064=(a065*a064);
+  a061=(a061-a064);
+  a061=(a061*a024);
+  a116=(a116+a061);
+  a061=(a145*a144);
+  a064=(a147*a143);
+  a061=(a061+a064);
+  a064=(a024*a068);
+  a061=(a061-a064);
+  a068=(a065*a068);
+  a061=(a061-a068);
+  a061=(a061*a065);
+  a116=(a116+a061);
+  a061=(a029*a008);
+  a149=(a149+a061);
+  a061=(a043*a145);
+  a149=(a149-a061);
+  a061=(a135*a045);
+  a149=(a149+a061);
+  a061=(a141*a024);
+  a149=(a149+a061);
+  a061=(a144*a065);
+  a149=(a149+a061);
+  a061=(a145*a149);
+  a068=(a079*a008);
+  a151=(a151-a068);
+  a043=(a043*a147);
+  a151=(a151+a043);
+  a043=(a132*a045);
+  a151=(a151+a043);
+  a043=(a140*a024);
+  a151=(a151-a043);
+  a043=(a143*a065);
+  a151=(a151-a043);
+  a043=(a147*a151);
+  a061=(a061-a043);
+  a116=(a116+a061);
+  if (res[2]!=0) res[2][9]=a116;
+  a116=(a045*a135);
+  a135=(a008*a135);
+  a116=(a116-a135);
+  a135=(a001*a129);
+  a061=(a066*a129);
+  a043=(a067*a069);
+  a068=(a061+a043);
+  a068=(a001*a068);
+  a135=(a135+a068);
+  a135=(a024*a135);
+  a116=(a116+a135);
+  a043=(a043+a061);
+  a043=(a001*a043);
+  a043=(a065*a043);
+  a116=(a116+a043);
+  a116=(a116*a045);
+  a043=(a147*a136);
+  a061=(a008*a141);
+  a043=(a043-a061);
+  a141=(a045*a141);
+  a043=(a043+a141);
+  a071=(a066*a071);
+  a074=(a067*a074);
+  a071=(a071-a074);
+  a071=(a001*a071);
+  a072=(a072+a071);
+  a072=(a024*a072);
+  a043=(a043-a072);
+  a071=(a065*a071);
+  a043=(a043-a071);
+  a043=(a043*a024);
+  a116=(a116+a043);
+  a043=(a147*a142);
+  a144=(a008*a144);
+  a043=(a043-a144);
+  a129=(a129*a066);
+  a069=(a069*a067);
+  a129=(a129+a069);
+  a129=(a001*a129);
+  a129=(a045*a129);
+  a043=(a043+a129);
+  a129=(a024*a073);
+  a043=(a043-a129);
+  a073=(a065*a073);
+  a043=(a043-a073);
+  a043=(a043*a065);
+  a116=(a116+a043);
+  a079=(a079*a145);
+  a005=(a005+a079);
+  a029=(a029*a147);
+  a005=(a005-a029);
+  a029=(a136*a024);
+  a005=(a005+a029);
+  a029=(a142*a065);
+  a005=(a005+a029);
+  a147=(a147*a005);
+  a149=(a008*a149);
+  a147=(a147-a149);
+  a116=(a116+a147);
+  if (res[2]!=0) res[2][10]=a116;
+  a132=(a008*a132);
+  a131=(a131-a130);
+  a131=(a001*a131);
+  a131=(a131+a133);
+  a131=(a045*a131);
+  a132=(a132+a131);
+  a131=(a067*a070);
+  a133=(a066*a134);
+  a130=(a131+a133);
+  a130=(a001*a130);
+  a116=(a001*a134);
+  a130=(a130+a116);
+  a130=(a024*a130);
+  a132=(a132+a130);
+  a133=(a133+a131);
+  a133=(a001*a133);
+  a133=(a065*a133);
+  a132=(a132+a133);
+  a132=(a132*a045);
+  a139=(a139+a138);
+  a139=(a001*a139);
+  a139=(a139+a137);
+  a139=(a045*a139);
+  a140=(a008*a140);
+  a136=(a145*a136);
+  a140=(a140+a136);
+  a139=(a139-a140);
+  a077=(a066*a077);
+  a075=(a067*a075);
+  a077=(a077-a075);
+  a077=(a001*a077);
+  a080=(a077+a080);
+  a080=(a024*a080);
+  a139=(a139+a080);
+  a077=(a065*a077);
+  a139=(a139+a077);
+  a139=(a139*a024);
+  a132=(a132+a139);
+  a134=(a134*a066);
+  a070=(a070*a067);
+  a134=(a134+a070);
+  a134=(a001*a134);
+  a045=(a045*a134);
+  a143=(a008*a143);
+  a142=(a145*a142);
+  a143=(a143+a142);
+  a045=(a045-a143);
+  a078=(a078-a076);
+  a001=(a001*a078);
+  a024=(a024*a001);
+  a045=(a045+a024);
+  a001=(a065*a001);
+  a045=(a045+a001);
+  a045=(a045*a065);
+  a132=(a132+a045);
+  a008=(a008*a151);
+  a145=(a145*a005);
+  a008=(a008-a145);
+  a132=(a132+a008);
+  if (res[2]!=0) res[2][11]=a132;
+  return 0;
+}
+
+CASADI_SYMBOL_EXPORT int qd_feet_full(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem){
+  return casadi_f5(arg, res, iw, w, mem);
+}
+
+CASADI_SYMBOL_EXPORT int qd_feet_full_checkout(void) {
+  return 0;
+}
+
+CASADI_SYMBOL_EXPORT void qd_feet_full_release(int mem) {
+  (void)mem;
+}
+
+CASADI_SYMBOL_EXPORT void qd_feet_full_incref(void) {
+}
+
+CASADI_SYMBOL_EXPORT void qd_feet_full_decref(void) {
+}
+
+CASADI_SYMBOL_EXPORT casadi_int qd_feet_full_n_in(void) { return 2;}
+
+CASADI_SYMBOL_EXPORT casadi_int qd_feet_full_n_out(void) { return 3;}
+
+CASADI_SYMBOL_EXPORT casadi_real qd_feet_full_default_in(casadi_int i) {
+  switch (i) {
+    default: return 0;
+  }
+}
+
+CASADI_SYMBOL_EXPORT const char* qd_feet_full_name_in(casadi_int i) {
+  switch (i) {
+    case 0: return "q";
+    case 1: return "v";
+    default: return 0;
+  }
+}
+
+CASADI_SYMBOL_EXPORT const char* qd_feet_full_name_out(casadi_int i) {
+  switch (i) {
+    case 0: return "r_feet";
+    case 1: return "J_feet";
+    case 2: return "Jdv_feet";
+    default: return 0;
+  }
+}
+
+CASADI_SYMBOL_EXPORT const casadi_int* qd_feet_full_sparsity_in(casadi_int i) {
+  switch (i) {
+    case 0: return casadi_s0;
+    case 1: return casadi_s2;
+    default: return 0;
+  }
+}
+
+CASADI_SYMBOL_EXPORT const casadi_int* qd_feet_full_sparsity_out(casadi_int i) {
+  switch (i) {
+    case 0: return casadi_s3;
+    case 1: return casadi_s5;
+    case 2: return casadi_s3;
+    default: return 0;
+  }
+}
+
+CASADI_SYMBOL_EXPORT int qd_feet_full_work(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz_iw, casadi_int *sz_w) {
+  if (sz_arg) *sz_arg = 2;
+  if (sz_res) *sz_res = 3;
+  if (sz_iw) *sz_iw = 0;
+  if (sz_w) *sz_w = 0;
+  return 0;
+}
+
+CASADI_SYMBOL_EXPORT int qd_feet_full_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz_iw, casadi_int *sz_w) {
+  if (sz_arg) *sz_arg = 2*sizeof(const casadi_real*);
+  if (sz_res) *sz_res = 3*sizeof(casadi_real*);
+  if (sz_iw) *sz_iw = 0*sizeof(casadi_int);
+  if (sz_w) *sz_w = 0*sizeof(casadi_real);
+  return 0;
+}
+
 CASADI_SYMBOL_EXPORT int qd_grf_FL_FR_BL_BR(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem){
   casadi_real w_req[6], tau_0[12], tau_f[12];
   const casadi_real* b_arg[2] = {arg[0], w_req};
@@ -20202,7 +21531,7 @@ CASADI_SYMBOL_EXPORT const casadi_int* qd_grf_FL_sparsity_in(casadi_int i) {
 
 CASADI_SYMBOL_EXPORT const casadi_int* qd_grf_FL_sparsity_out(casadi_int i) {
   switch (i) {
-    case 0: return casadi_s5;
+    case 0: return casadi_s6;
     case 1: return casadi_s3;
     case 2: return casadi_s4;
     case 3: return casadi_s3;
@@ -20289,7 +21618,7 @@ CASADI_SYMBOL_EXPORT const casadi_int* qd_grf_FR_sparsity_in(casadi_int i) {
 
 CASADI_SYMBOL_EXPORT const casadi_int* qd_grf_FR_sparsity_out(casadi_int i) {
   switch (i) {
-    case 0: return casadi_s5;
+    case 0: return casadi_s6;
     case 1: return casadi_s3;
     case 2: return casadi_s4;
     case 3: return casadi_s3;
@@ -20376,7 +21705,7 @@ CASADI_SYMBOL_EXPORT const casadi_int* qd_grf_BL_sparsity_in(casadi_int i) {
 
 CASADI_SYMBOL_EXPORT const casadi_int* qd_grf_BL_sparsity_out(casadi_int i) {
   switch (i) {
-    case 0: return casadi_s5;
+    case 0: return casadi_s6;
     case 1: return casadi_s3;
     case 2: return casadi_s4;
     case 3: return casadi_s3;
@@ -20463,7 +21792,7 @@ CASADI_SYMBOL_EXPORT const casadi_int* qd_grf_BR_sparsity_in(casadi_int i) {
 
 CASADI_SYMBOL_EXPORT const casadi_int* qd_grf_BR_sparsity_out(casadi_int i) {
   switch (i) {
-    case 0: return casadi_s5;
+    case 0: return casadi_s6;
     case 1: return casadi_s3;
     case 2: return casadi_s4;
     case 3: return casadi_s3;
@@ -20550,7 +21879,7 @@ CASADI_SYMBOL_EXPORT const casadi_int* qd_grf_none_sparsity_in(casadi_int i) {
 
 CASADI_SYMBOL_EXPORT const casadi_int* qd_grf_none_sparsity_out(casadi_int i) {
   switch (i) {
-    case 0: return casadi_s6;
+    case 0: return casadi_s7;
     case 1: return casadi_s3;
     case 2: return casadi_s4;
     case 3: return casadi_s3;

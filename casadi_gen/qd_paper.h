@@ -39,14 +39,16 @@
  * G_r = S G_full, id_r = S rnea(q, v, T qdd_r + k) (link the reduced files with qd_<robot>.c).
  * Return codes: 0 ok; QD_NONFINITE (1) an output is NaN/inf: the trunk pitched +-90 deg (two feet:
  * the roll row has tan(pitch)), a zero quaternion (M_r with three or four feet does not depend on quat and
- * returns 0 for any) or a non-finite input; QD_SINGULAR (2, fd_r, dfd_r) M_r
+ * returns 0 for any) or a non-finite input the function reads. Every reduced function reads every entry
+ * of its inputs except q_r's 13th with two feet (the roll: taken from quat) and quat in M_r with three or
+ * four feet: a NaN there is not read and not reported. QD_SINGULAR (2, fd_r, dfd_r) M_r
  * singular to working precision (a pivot below QD_SINGULAR_RTOL times the largest entry of the matrix it
  * eliminates, M_r's, or a swing leg's block and the folded rest's), and in the float build also where the
  * result's error bound
  * FLT_EPSILON x cond_1 of that matrix exceeds 0.0025 (so a float fd_r returned as 0 is
  * within 1 %);
- * (QD_SINGULAR_RTOL: qd_reduced_templates.h, a multiple of casadi_real's epsilon; QD_REGULARITY_MIN:
- * each qd_<robot>_r_<feet>.c, quadruped_dyn.tolerances.REGULARITY_MIN; neither is in this header.)
+ * (QD_SINGULAR_RTOL: reduced_templates.h, a multiple of casadi_real's epsilon; QD_REGULARITY_MIN:
+ * each qd_<robot>-r-<feet>.c, quadruped_dyn.tolerances.REGULARITY_MIN; neither is in this header.)
  * QD_DEGENERATE (3) the stance is degenerate, checked first by
  * every reduced function: its regularity (quadruped_dyn/dynamics/stance_regularity.py, in [0, 1]) is
  * at most QD_REGULARITY_MIN (coincident or collinear stance feet, or two feet whose line is
@@ -60,12 +62,12 @@
  * Each function's codes are in its [returns ...] note below; one without that note returns 0
  * always (M_full, C_full, G_full, nle_full, id_full, grf_<feet>): test its outputs for NaN/inf.
  *
- * Derivatives (qd_<robot>_d.c; quadruped_dyn/dynamics/derivatives.py, docs/derivatives.md). d/dq is
+ * Derivatives (qd_<robot>-d.c; quadruped_dyn/dynamics/derivatives.py, docs/derivatives.md). d/dq is
  * along pinocchio.integrate(q, dq): dq (18) = (dv_b, dw_b, dq_joints), a body-frame (local) increment
  * of the trunk pose (p -> p + R dv_b, R -> R Exp([dw_b]x)), as Pinocchio's analytical derivatives;
  * no column is a derivative w.r.t. a quaternion entry, and the first three (position) are zero.
  *   did_full(q, v, a)               d rnea/dq, d rnea/dv, d rnea/da = M (rnea: no foot forces); sparse:
- *                                   d rnea/dq's position columns hold no entry (since 2026-12-02),
+ *                                   d rnea/dq's position columns hold no entry,
  *                                   a leg's joint columns only the trunk's and that leg's rows;
  *   dfd_full_parts(q, v)            M (dense) and C + G;
  *   dfd_full(q, v, tau_full)        d a/dq, d a/dv, d a/dtau = M^-1 of a = M^-1 (tau_full - C - G):
@@ -82,6 +84,8 @@
  *                                   d qdd_r/dtheta: -M_r^-1 d id_r/dx by fd_r's LU, d id_r/dx by the chain
  *                                   rule over did_full and id_full (id_r = S rnea(q, v, a)); needs caller
  *                                   work memory w (its _work entry, _SZ_W); return codes as fd_r.
+ * Work memory: a function whose _SZ_W is not 0 (dfd_full, dgrf_<feet>, dfd_r_<feet>) returns QD_NO_WORK
+ * (4) for a null w and writes no output; the others never read iw or w (a null one is allowed).
  *
  * Signals:
  *   q           p [m, world frame], quaternion (x, y, z, w) of R (trunk -> world, need not be unit), 12 joint angles [rad] in order FL, FR, BL, BR x (HAA, HFE, KFE)
@@ -94,6 +98,9 @@
  *   nle         C(q, v) + G(q), as Pinocchio's nonLinearEffects
  *   w_res       base wrench residual: force [N], moment about the trunk origin [N m], trunk frame; zero when the foot forces produce the motion
  *   tau         joint torques [N m]
+ *   r_feet      foot positions FL, FR, BL, BR relative to the trunk origin, trunk frame [m]
+ *   J_feet      feet's velocity Jacobian: R^T d/dt p_foot = J_feet v, rows of a foot [I, -[r]x, its leg's J] [m/rad]
+ *   Jdv_feet    R^T d2/dt2 p_foot - J_feet a = Jdot v + omega_b x (J_feet v): the feet's bias acceleration [m/s^2]
  *   lambda      the GRF model's unknowns (minimum-norm solution), see quadruped_dyn/dynamics/grf.py
  *   residual    part of the required trunk wrench the GRF model cannot balance: force [N], moment [N m]
  *   q_r         reduced coordinates: 12 joint angles [rad] (FL, FR, BL, BR x HAA, HFE, KFE); for two stance feet a 13th, the trunk roll phi [rad] (R = Rz(psi) Ry(theta) Rx(phi)), which these functions take from quat
@@ -130,6 +137,7 @@
  *   qd_G_full(q[19]) -> (G[18]);  iw 0, w 0
  *   qd_nle_full(q[19], v[18]) -> (nle[18]);  iw 0, w 0
  *   qd_id_full(q[19], v[18], a[18], f[12]) -> (w_res[6], tau[12]);  iw 0, w 0
+ *   qd_feet_full(q[19], v[18]) -> (r_feet[12], J_feet[12x18, 80 nonzeros], Jdv_feet[12]);  iw 0, w 0
  *   qd_grf_FL_FR_BL_BR(q[19], v[18], a[18]) -> (lambda[6], f[12], residual[6], tau[12]);  iw 0, w 0  [stand, rank 5]
  *   qd_grf_FL_FR_BL(q[19], v[18], a[18]) -> (lambda[6], f[12], residual[6], tau[12]);  iw 0, w 0  [walk (lifted BR), rank 6]
  *   qd_grf_FL_FR_BR(q[19], v[18], a[18]) -> (lambda[6], f[12], residual[6], tau[12]);  iw 0, w 0  [walk (lifted BL), rank 6]
@@ -151,100 +159,100 @@
  *   qd_G_r_FL_FR_BL_BR(q_r[12], quat[4]) -> (G_r[12]);  iw 0, w 0  [stand, returns QD_NONFINITE / QD_DEGENERATE]
  *   qd_id_r_FL_FR_BL_BR(q_r[12], qd_r[12], qdd_r[12], quat[4]) -> (tau_r[12]);  iw 0, w 0  [stand, returns QD_NONFINITE / QD_DEGENERATE]
  *   qd_fd_r_FL_FR_BL_BR(q_r[12], qd_r[12], tau_ext[12], quat[4]) -> (qdd_r[12]);  iw 0, w 0  [stand, returns QD_NONFINITE / QD_SINGULAR / QD_DEGENERATE]
- *   qd_dfd_r_FL_FR_BL_BR(q_r[12], qd_r[12], tau_ext[12], quat[4]) -> (dqdd_dq[12x12], dqdd_dqd[12x12], dqdd_dtau[12x12], dqdd_dtheta[12x3]);  iw 0, w 2623  [stand, returns QD_NONFINITE / QD_SINGULAR / QD_DEGENERATE]
+ *   qd_dfd_r_FL_FR_BL_BR(q_r[12], qd_r[12], tau_ext[12], quat[4]) -> (dqdd_dq[12x12], dqdd_dqd[12x12], dqdd_dtau[12x12], dqdd_dtheta[12x3]);  iw 0, w 2623  [stand, returns QD_NONFINITE / QD_SINGULAR / QD_DEGENERATE / QD_NO_WORK]
  *   qd_M_r_FL_FR_BL(q_r[12], quat[4]) -> (M_r[12x12]);  iw 0, w 0  [walk (lifted BR), returns QD_NONFINITE / QD_DEGENERATE]
  *   qd_CG_r_FL_FR_BL(q_r[12], qd_r[12], quat[4]) -> (CG_r[12]);  iw 0, w 0  [walk (lifted BR), returns QD_NONFINITE / QD_DEGENERATE]
  *   qd_G_r_FL_FR_BL(q_r[12], quat[4]) -> (G_r[12]);  iw 0, w 0  [walk (lifted BR), returns QD_NONFINITE / QD_DEGENERATE]
  *   qd_id_r_FL_FR_BL(q_r[12], qd_r[12], qdd_r[12], quat[4]) -> (tau_r[12]);  iw 0, w 0  [walk (lifted BR), returns QD_NONFINITE / QD_DEGENERATE]
  *   qd_fd_r_FL_FR_BL(q_r[12], qd_r[12], tau_ext[12], quat[4]) -> (qdd_r[12]);  iw 0, w 0  [walk (lifted BR), returns QD_NONFINITE / QD_SINGULAR / QD_DEGENERATE]
- *   qd_dfd_r_FL_FR_BL(q_r[12], qd_r[12], tau_ext[12], quat[4]) -> (dqdd_dq[12x12], dqdd_dqd[12x12], dqdd_dtau[12x12], dqdd_dtheta[12x3]);  iw 0, w 2538  [walk (lifted BR), returns QD_NONFINITE / QD_SINGULAR / QD_DEGENERATE]
+ *   qd_dfd_r_FL_FR_BL(q_r[12], qd_r[12], tau_ext[12], quat[4]) -> (dqdd_dq[12x12], dqdd_dqd[12x12], dqdd_dtau[12x12], dqdd_dtheta[12x3]);  iw 0, w 2538  [walk (lifted BR), returns QD_NONFINITE / QD_SINGULAR / QD_DEGENERATE / QD_NO_WORK]
  *   qd_M_r_FL_FR_BR(q_r[12], quat[4]) -> (M_r[12x12]);  iw 0, w 0  [walk (lifted BL), returns QD_NONFINITE / QD_DEGENERATE]
  *   qd_CG_r_FL_FR_BR(q_r[12], qd_r[12], quat[4]) -> (CG_r[12]);  iw 0, w 0  [walk (lifted BL), returns QD_NONFINITE / QD_DEGENERATE]
  *   qd_G_r_FL_FR_BR(q_r[12], quat[4]) -> (G_r[12]);  iw 0, w 0  [walk (lifted BL), returns QD_NONFINITE / QD_DEGENERATE]
  *   qd_id_r_FL_FR_BR(q_r[12], qd_r[12], qdd_r[12], quat[4]) -> (tau_r[12]);  iw 0, w 0  [walk (lifted BL), returns QD_NONFINITE / QD_DEGENERATE]
  *   qd_fd_r_FL_FR_BR(q_r[12], qd_r[12], tau_ext[12], quat[4]) -> (qdd_r[12]);  iw 0, w 0  [walk (lifted BL), returns QD_NONFINITE / QD_SINGULAR / QD_DEGENERATE]
- *   qd_dfd_r_FL_FR_BR(q_r[12], qd_r[12], tau_ext[12], quat[4]) -> (dqdd_dq[12x12], dqdd_dqd[12x12], dqdd_dtau[12x12], dqdd_dtheta[12x3]);  iw 0, w 2538  [walk (lifted BL), returns QD_NONFINITE / QD_SINGULAR / QD_DEGENERATE]
+ *   qd_dfd_r_FL_FR_BR(q_r[12], qd_r[12], tau_ext[12], quat[4]) -> (dqdd_dq[12x12], dqdd_dqd[12x12], dqdd_dtau[12x12], dqdd_dtheta[12x3]);  iw 0, w 2538  [walk (lifted BL), returns QD_NONFINITE / QD_SINGULAR / QD_DEGENERATE / QD_NO_WORK]
  *   qd_M_r_FL_BL_BR(q_r[12], quat[4]) -> (M_r[12x12]);  iw 0, w 0  [walk (lifted FR), returns QD_NONFINITE / QD_DEGENERATE]
  *   qd_CG_r_FL_BL_BR(q_r[12], qd_r[12], quat[4]) -> (CG_r[12]);  iw 0, w 0  [walk (lifted FR), returns QD_NONFINITE / QD_DEGENERATE]
  *   qd_G_r_FL_BL_BR(q_r[12], quat[4]) -> (G_r[12]);  iw 0, w 0  [walk (lifted FR), returns QD_NONFINITE / QD_DEGENERATE]
  *   qd_id_r_FL_BL_BR(q_r[12], qd_r[12], qdd_r[12], quat[4]) -> (tau_r[12]);  iw 0, w 0  [walk (lifted FR), returns QD_NONFINITE / QD_DEGENERATE]
  *   qd_fd_r_FL_BL_BR(q_r[12], qd_r[12], tau_ext[12], quat[4]) -> (qdd_r[12]);  iw 0, w 0  [walk (lifted FR), returns QD_NONFINITE / QD_SINGULAR / QD_DEGENERATE]
- *   qd_dfd_r_FL_BL_BR(q_r[12], qd_r[12], tau_ext[12], quat[4]) -> (dqdd_dq[12x12], dqdd_dqd[12x12], dqdd_dtau[12x12], dqdd_dtheta[12x3]);  iw 0, w 2538  [walk (lifted FR), returns QD_NONFINITE / QD_SINGULAR / QD_DEGENERATE]
+ *   qd_dfd_r_FL_BL_BR(q_r[12], qd_r[12], tau_ext[12], quat[4]) -> (dqdd_dq[12x12], dqdd_dqd[12x12], dqdd_dtau[12x12], dqdd_dtheta[12x3]);  iw 0, w 2538  [walk (lifted FR), returns QD_NONFINITE / QD_SINGULAR / QD_DEGENERATE / QD_NO_WORK]
  *   qd_M_r_FR_BL_BR(q_r[12], quat[4]) -> (M_r[12x12]);  iw 0, w 0  [walk (lifted FL), returns QD_NONFINITE / QD_DEGENERATE]
  *   qd_CG_r_FR_BL_BR(q_r[12], qd_r[12], quat[4]) -> (CG_r[12]);  iw 0, w 0  [walk (lifted FL), returns QD_NONFINITE / QD_DEGENERATE]
  *   qd_G_r_FR_BL_BR(q_r[12], quat[4]) -> (G_r[12]);  iw 0, w 0  [walk (lifted FL), returns QD_NONFINITE / QD_DEGENERATE]
  *   qd_id_r_FR_BL_BR(q_r[12], qd_r[12], qdd_r[12], quat[4]) -> (tau_r[12]);  iw 0, w 0  [walk (lifted FL), returns QD_NONFINITE / QD_DEGENERATE]
  *   qd_fd_r_FR_BL_BR(q_r[12], qd_r[12], tau_ext[12], quat[4]) -> (qdd_r[12]);  iw 0, w 0  [walk (lifted FL), returns QD_NONFINITE / QD_SINGULAR / QD_DEGENERATE]
- *   qd_dfd_r_FR_BL_BR(q_r[12], qd_r[12], tau_ext[12], quat[4]) -> (dqdd_dq[12x12], dqdd_dqd[12x12], dqdd_dtau[12x12], dqdd_dtheta[12x3]);  iw 0, w 2538  [walk (lifted FL), returns QD_NONFINITE / QD_SINGULAR / QD_DEGENERATE]
+ *   qd_dfd_r_FR_BL_BR(q_r[12], qd_r[12], tau_ext[12], quat[4]) -> (dqdd_dq[12x12], dqdd_dqd[12x12], dqdd_dtau[12x12], dqdd_dtheta[12x3]);  iw 0, w 2538  [walk (lifted FL), returns QD_NONFINITE / QD_SINGULAR / QD_DEGENERATE / QD_NO_WORK]
  *   qd_M_r_FL_FR(q_r[13], quat[4]) -> (M_r[13x13]);  iw 0, w 0  [front, returns QD_NONFINITE / QD_DEGENERATE]
  *   qd_CG_r_FL_FR(q_r[13], qd_r[13], quat[4]) -> (CG_r[13]);  iw 0, w 0  [front, returns QD_NONFINITE / QD_DEGENERATE]
  *   qd_G_r_FL_FR(q_r[13], quat[4]) -> (G_r[13]);  iw 0, w 0  [front, returns QD_NONFINITE / QD_DEGENERATE]
  *   qd_id_r_FL_FR(q_r[13], qd_r[13], qdd_r[13], quat[4]) -> (tau_r[13]);  iw 0, w 0  [front, returns QD_NONFINITE / QD_DEGENERATE]
  *   qd_fd_r_FL_FR(q_r[13], qd_r[13], tau_ext[13], quat[4]) -> (qdd_r[13]);  iw 0, w 0  [front, returns QD_NONFINITE / QD_SINGULAR / QD_DEGENERATE]
- *   qd_dfd_r_FL_FR(q_r[13], qd_r[13], tau_ext[13], quat[4]) -> (dqdd_dq[13x13], dqdd_dqd[13x13], dqdd_dtau[13x13], dqdd_dtheta[13x3]);  iw 0, w 2624  [front, returns QD_NONFINITE / QD_SINGULAR / QD_DEGENERATE]
+ *   qd_dfd_r_FL_FR(q_r[13], qd_r[13], tau_ext[13], quat[4]) -> (dqdd_dq[13x13], dqdd_dqd[13x13], dqdd_dtau[13x13], dqdd_dtheta[13x3]);  iw 0, w 2624  [front, returns QD_NONFINITE / QD_SINGULAR / QD_DEGENERATE / QD_NO_WORK]
  *   qd_M_r_FL_BL(q_r[13], quat[4]) -> (M_r[13x13]);  iw 0, w 0  [pace (lateral), returns QD_NONFINITE / QD_DEGENERATE]
  *   qd_CG_r_FL_BL(q_r[13], qd_r[13], quat[4]) -> (CG_r[13]);  iw 0, w 0  [pace (lateral), returns QD_NONFINITE / QD_DEGENERATE]
  *   qd_G_r_FL_BL(q_r[13], quat[4]) -> (G_r[13]);  iw 0, w 0  [pace (lateral), returns QD_NONFINITE / QD_DEGENERATE]
  *   qd_id_r_FL_BL(q_r[13], qd_r[13], qdd_r[13], quat[4]) -> (tau_r[13]);  iw 0, w 0  [pace (lateral), returns QD_NONFINITE / QD_DEGENERATE]
  *   qd_fd_r_FL_BL(q_r[13], qd_r[13], tau_ext[13], quat[4]) -> (qdd_r[13]);  iw 0, w 0  [pace (lateral), returns QD_NONFINITE / QD_SINGULAR / QD_DEGENERATE]
- *   qd_dfd_r_FL_BL(q_r[13], qd_r[13], tau_ext[13], quat[4]) -> (dqdd_dq[13x13], dqdd_dqd[13x13], dqdd_dtau[13x13], dqdd_dtheta[13x3]);  iw 0, w 2624  [pace (lateral), returns QD_NONFINITE / QD_SINGULAR / QD_DEGENERATE]
+ *   qd_dfd_r_FL_BL(q_r[13], qd_r[13], tau_ext[13], quat[4]) -> (dqdd_dq[13x13], dqdd_dqd[13x13], dqdd_dtau[13x13], dqdd_dtheta[13x3]);  iw 0, w 2624  [pace (lateral), returns QD_NONFINITE / QD_SINGULAR / QD_DEGENERATE / QD_NO_WORK]
  *   qd_M_r_FL_BR(q_r[13], quat[4]) -> (M_r[13x13]);  iw 0, w 0  [trot (diagonal), returns QD_NONFINITE / QD_DEGENERATE]
  *   qd_CG_r_FL_BR(q_r[13], qd_r[13], quat[4]) -> (CG_r[13]);  iw 0, w 0  [trot (diagonal), returns QD_NONFINITE / QD_DEGENERATE]
  *   qd_G_r_FL_BR(q_r[13], quat[4]) -> (G_r[13]);  iw 0, w 0  [trot (diagonal), returns QD_NONFINITE / QD_DEGENERATE]
  *   qd_id_r_FL_BR(q_r[13], qd_r[13], qdd_r[13], quat[4]) -> (tau_r[13]);  iw 0, w 0  [trot (diagonal), returns QD_NONFINITE / QD_DEGENERATE]
  *   qd_fd_r_FL_BR(q_r[13], qd_r[13], tau_ext[13], quat[4]) -> (qdd_r[13]);  iw 0, w 0  [trot (diagonal), returns QD_NONFINITE / QD_SINGULAR / QD_DEGENERATE]
- *   qd_dfd_r_FL_BR(q_r[13], qd_r[13], tau_ext[13], quat[4]) -> (dqdd_dq[13x13], dqdd_dqd[13x13], dqdd_dtau[13x13], dqdd_dtheta[13x3]);  iw 0, w 2624  [trot (diagonal), returns QD_NONFINITE / QD_SINGULAR / QD_DEGENERATE]
+ *   qd_dfd_r_FL_BR(q_r[13], qd_r[13], tau_ext[13], quat[4]) -> (dqdd_dq[13x13], dqdd_dqd[13x13], dqdd_dtau[13x13], dqdd_dtheta[13x3]);  iw 0, w 2624  [trot (diagonal), returns QD_NONFINITE / QD_SINGULAR / QD_DEGENERATE / QD_NO_WORK]
  *   qd_M_r_FR_BL(q_r[13], quat[4]) -> (M_r[13x13]);  iw 0, w 0  [trot (diagonal), returns QD_NONFINITE / QD_DEGENERATE]
  *   qd_CG_r_FR_BL(q_r[13], qd_r[13], quat[4]) -> (CG_r[13]);  iw 0, w 0  [trot (diagonal), returns QD_NONFINITE / QD_DEGENERATE]
  *   qd_G_r_FR_BL(q_r[13], quat[4]) -> (G_r[13]);  iw 0, w 0  [trot (diagonal), returns QD_NONFINITE / QD_DEGENERATE]
  *   qd_id_r_FR_BL(q_r[13], qd_r[13], qdd_r[13], quat[4]) -> (tau_r[13]);  iw 0, w 0  [trot (diagonal), returns QD_NONFINITE / QD_DEGENERATE]
  *   qd_fd_r_FR_BL(q_r[13], qd_r[13], tau_ext[13], quat[4]) -> (qdd_r[13]);  iw 0, w 0  [trot (diagonal), returns QD_NONFINITE / QD_SINGULAR / QD_DEGENERATE]
- *   qd_dfd_r_FR_BL(q_r[13], qd_r[13], tau_ext[13], quat[4]) -> (dqdd_dq[13x13], dqdd_dqd[13x13], dqdd_dtau[13x13], dqdd_dtheta[13x3]);  iw 0, w 2624  [trot (diagonal), returns QD_NONFINITE / QD_SINGULAR / QD_DEGENERATE]
+ *   qd_dfd_r_FR_BL(q_r[13], qd_r[13], tau_ext[13], quat[4]) -> (dqdd_dq[13x13], dqdd_dqd[13x13], dqdd_dtau[13x13], dqdd_dtheta[13x3]);  iw 0, w 2624  [trot (diagonal), returns QD_NONFINITE / QD_SINGULAR / QD_DEGENERATE / QD_NO_WORK]
  *   qd_M_r_FR_BR(q_r[13], quat[4]) -> (M_r[13x13]);  iw 0, w 0  [pace (lateral), returns QD_NONFINITE / QD_DEGENERATE]
  *   qd_CG_r_FR_BR(q_r[13], qd_r[13], quat[4]) -> (CG_r[13]);  iw 0, w 0  [pace (lateral), returns QD_NONFINITE / QD_DEGENERATE]
  *   qd_G_r_FR_BR(q_r[13], quat[4]) -> (G_r[13]);  iw 0, w 0  [pace (lateral), returns QD_NONFINITE / QD_DEGENERATE]
  *   qd_id_r_FR_BR(q_r[13], qd_r[13], qdd_r[13], quat[4]) -> (tau_r[13]);  iw 0, w 0  [pace (lateral), returns QD_NONFINITE / QD_DEGENERATE]
  *   qd_fd_r_FR_BR(q_r[13], qd_r[13], tau_ext[13], quat[4]) -> (qdd_r[13]);  iw 0, w 0  [pace (lateral), returns QD_NONFINITE / QD_SINGULAR / QD_DEGENERATE]
- *   qd_dfd_r_FR_BR(q_r[13], qd_r[13], tau_ext[13], quat[4]) -> (dqdd_dq[13x13], dqdd_dqd[13x13], dqdd_dtau[13x13], dqdd_dtheta[13x3]);  iw 0, w 2624  [pace (lateral), returns QD_NONFINITE / QD_SINGULAR / QD_DEGENERATE]
+ *   qd_dfd_r_FR_BR(q_r[13], qd_r[13], tau_ext[13], quat[4]) -> (dqdd_dq[13x13], dqdd_dqd[13x13], dqdd_dtau[13x13], dqdd_dtheta[13x3]);  iw 0, w 2624  [pace (lateral), returns QD_NONFINITE / QD_SINGULAR / QD_DEGENERATE / QD_NO_WORK]
  *   qd_M_r_BL_BR(q_r[13], quat[4]) -> (M_r[13x13]);  iw 0, w 0  [back, returns QD_NONFINITE / QD_DEGENERATE]
  *   qd_CG_r_BL_BR(q_r[13], qd_r[13], quat[4]) -> (CG_r[13]);  iw 0, w 0  [back, returns QD_NONFINITE / QD_DEGENERATE]
  *   qd_G_r_BL_BR(q_r[13], quat[4]) -> (G_r[13]);  iw 0, w 0  [back, returns QD_NONFINITE / QD_DEGENERATE]
  *   qd_id_r_BL_BR(q_r[13], qd_r[13], qdd_r[13], quat[4]) -> (tau_r[13]);  iw 0, w 0  [back, returns QD_NONFINITE / QD_DEGENERATE]
  *   qd_fd_r_BL_BR(q_r[13], qd_r[13], tau_ext[13], quat[4]) -> (qdd_r[13]);  iw 0, w 0  [back, returns QD_NONFINITE / QD_SINGULAR / QD_DEGENERATE]
- *   qd_dfd_r_BL_BR(q_r[13], qd_r[13], tau_ext[13], quat[4]) -> (dqdd_dq[13x13], dqdd_dqd[13x13], dqdd_dtau[13x13], dqdd_dtheta[13x3]);  iw 0, w 2624  [back, returns QD_NONFINITE / QD_SINGULAR / QD_DEGENERATE]
+ *   qd_dfd_r_BL_BR(q_r[13], qd_r[13], tau_ext[13], quat[4]) -> (dqdd_dq[13x13], dqdd_dqd[13x13], dqdd_dtau[13x13], dqdd_dtheta[13x3]);  iw 0, w 2624  [back, returns QD_NONFINITE / QD_SINGULAR / QD_DEGENERATE / QD_NO_WORK]
  *   qd_did_full(q[19], v[18], a[18]) -> (dtau_dq[18x18, 162 nonzeros], dtau_dv[18x18, 212 nonzeros], dtau_da[18x18, 210 nonzeros]);  iw 0, w 0  [returns QD_NONFINITE]
  *   qd_dfd_full_parts(q[19], v[18]) -> (M[18x18], nle[18]);  iw 0, w 0  [returns QD_NONFINITE]
- *   qd_dfd_full(q[19], v[18], tau_full[18]) -> (da_dq[18x18], da_dv[18x18], da_dtau[18x18]);  iw 0, w 1476  [returns QD_NONFINITE / QD_SINGULAR]
+ *   qd_dfd_full(q[19], v[18], tau_full[18]) -> (da_dq[18x18], da_dv[18x18], da_dtau[18x18]);  iw 0, w 1476  [returns QD_NONFINITE / QD_SINGULAR / QD_NO_WORK]
  *   qd_dgrf_dir_FL_FR_BL_BR(q[19], w[6], dq[18]) -> (lambda_w[6], dlambda_w[6]);  iw 0, w 0  [returns QD_NONFINITE]
- *   qd_dgrf_FL_FR_BL_BR(q[19], v[18], a[18]) -> (dlambda_dq[6x18], dlambda_dv[6x18], dlambda_da[6x18]);  iw 0, w 1158  [returns QD_NONFINITE]
+ *   qd_dgrf_FL_FR_BL_BR(q[19], v[18], a[18]) -> (dlambda_dq[6x18], dlambda_dv[6x18], dlambda_da[6x18]);  iw 0, w 1158  [returns QD_NONFINITE / QD_NO_WORK]
  *   qd_dgrf_dir_FL_FR_BL(q[19], w[6], dq[18]) -> (lambda_w[6], dlambda_w[6]);  iw 0, w 0  [returns QD_NONFINITE]
- *   qd_dgrf_FL_FR_BL(q[19], v[18], a[18]) -> (dlambda_dq[6x18], dlambda_dv[6x18], dlambda_da[6x18]);  iw 0, w 1158  [returns QD_NONFINITE]
+ *   qd_dgrf_FL_FR_BL(q[19], v[18], a[18]) -> (dlambda_dq[6x18], dlambda_dv[6x18], dlambda_da[6x18]);  iw 0, w 1158  [returns QD_NONFINITE / QD_NO_WORK]
  *   qd_dgrf_dir_FL_FR_BR(q[19], w[6], dq[18]) -> (lambda_w[6], dlambda_w[6]);  iw 0, w 0  [returns QD_NONFINITE]
- *   qd_dgrf_FL_FR_BR(q[19], v[18], a[18]) -> (dlambda_dq[6x18], dlambda_dv[6x18], dlambda_da[6x18]);  iw 0, w 1158  [returns QD_NONFINITE]
+ *   qd_dgrf_FL_FR_BR(q[19], v[18], a[18]) -> (dlambda_dq[6x18], dlambda_dv[6x18], dlambda_da[6x18]);  iw 0, w 1158  [returns QD_NONFINITE / QD_NO_WORK]
  *   qd_dgrf_dir_FL_BL_BR(q[19], w[6], dq[18]) -> (lambda_w[6], dlambda_w[6]);  iw 0, w 0  [returns QD_NONFINITE]
- *   qd_dgrf_FL_BL_BR(q[19], v[18], a[18]) -> (dlambda_dq[6x18], dlambda_dv[6x18], dlambda_da[6x18]);  iw 0, w 1158  [returns QD_NONFINITE]
+ *   qd_dgrf_FL_BL_BR(q[19], v[18], a[18]) -> (dlambda_dq[6x18], dlambda_dv[6x18], dlambda_da[6x18]);  iw 0, w 1158  [returns QD_NONFINITE / QD_NO_WORK]
  *   qd_dgrf_dir_FR_BL_BR(q[19], w[6], dq[18]) -> (lambda_w[6], dlambda_w[6]);  iw 0, w 0  [returns QD_NONFINITE]
- *   qd_dgrf_FR_BL_BR(q[19], v[18], a[18]) -> (dlambda_dq[6x18], dlambda_dv[6x18], dlambda_da[6x18]);  iw 0, w 1158  [returns QD_NONFINITE]
+ *   qd_dgrf_FR_BL_BR(q[19], v[18], a[18]) -> (dlambda_dq[6x18], dlambda_dv[6x18], dlambda_da[6x18]);  iw 0, w 1158  [returns QD_NONFINITE / QD_NO_WORK]
  *   qd_dgrf_dir_FL_FR(q[19], w[6], dq[18]) -> (lambda_w[6], dlambda_w[6]);  iw 0, w 0  [returns QD_NONFINITE]
- *   qd_dgrf_FL_FR(q[19], v[18], a[18]) -> (dlambda_dq[6x18], dlambda_dv[6x18], dlambda_da[6x18]);  iw 0, w 1158  [returns QD_NONFINITE]
+ *   qd_dgrf_FL_FR(q[19], v[18], a[18]) -> (dlambda_dq[6x18], dlambda_dv[6x18], dlambda_da[6x18]);  iw 0, w 1158  [returns QD_NONFINITE / QD_NO_WORK]
  *   qd_dgrf_dir_FL_BL(q[19], w[6], dq[18]) -> (lambda_w[6], dlambda_w[6]);  iw 0, w 0  [returns QD_NONFINITE]
- *   qd_dgrf_FL_BL(q[19], v[18], a[18]) -> (dlambda_dq[6x18], dlambda_dv[6x18], dlambda_da[6x18]);  iw 0, w 1158  [returns QD_NONFINITE]
+ *   qd_dgrf_FL_BL(q[19], v[18], a[18]) -> (dlambda_dq[6x18], dlambda_dv[6x18], dlambda_da[6x18]);  iw 0, w 1158  [returns QD_NONFINITE / QD_NO_WORK]
  *   qd_dgrf_dir_FL_BR(q[19], w[6], dq[18]) -> (lambda_w[6], dlambda_w[6]);  iw 0, w 0  [returns QD_NONFINITE]
- *   qd_dgrf_FL_BR(q[19], v[18], a[18]) -> (dlambda_dq[6x18], dlambda_dv[6x18], dlambda_da[6x18]);  iw 0, w 1158  [returns QD_NONFINITE]
+ *   qd_dgrf_FL_BR(q[19], v[18], a[18]) -> (dlambda_dq[6x18], dlambda_dv[6x18], dlambda_da[6x18]);  iw 0, w 1158  [returns QD_NONFINITE / QD_NO_WORK]
  *   qd_dgrf_dir_FR_BL(q[19], w[6], dq[18]) -> (lambda_w[6], dlambda_w[6]);  iw 0, w 0  [returns QD_NONFINITE]
- *   qd_dgrf_FR_BL(q[19], v[18], a[18]) -> (dlambda_dq[6x18], dlambda_dv[6x18], dlambda_da[6x18]);  iw 0, w 1158  [returns QD_NONFINITE]
+ *   qd_dgrf_FR_BL(q[19], v[18], a[18]) -> (dlambda_dq[6x18], dlambda_dv[6x18], dlambda_da[6x18]);  iw 0, w 1158  [returns QD_NONFINITE / QD_NO_WORK]
  *   qd_dgrf_dir_FR_BR(q[19], w[6], dq[18]) -> (lambda_w[6], dlambda_w[6]);  iw 0, w 0  [returns QD_NONFINITE]
- *   qd_dgrf_FR_BR(q[19], v[18], a[18]) -> (dlambda_dq[6x18], dlambda_dv[6x18], dlambda_da[6x18]);  iw 0, w 1158  [returns QD_NONFINITE]
+ *   qd_dgrf_FR_BR(q[19], v[18], a[18]) -> (dlambda_dq[6x18], dlambda_dv[6x18], dlambda_da[6x18]);  iw 0, w 1158  [returns QD_NONFINITE / QD_NO_WORK]
  *   qd_dgrf_dir_BL_BR(q[19], w[6], dq[18]) -> (lambda_w[6], dlambda_w[6]);  iw 0, w 0  [returns QD_NONFINITE]
- *   qd_dgrf_BL_BR(q[19], v[18], a[18]) -> (dlambda_dq[6x18], dlambda_dv[6x18], dlambda_da[6x18]);  iw 0, w 1158  [returns QD_NONFINITE]
+ *   qd_dgrf_BL_BR(q[19], v[18], a[18]) -> (dlambda_dq[6x18], dlambda_dv[6x18], dlambda_da[6x18]);  iw 0, w 1158  [returns QD_NONFINITE / QD_NO_WORK]
  *   qd_dgrf_dir_FL(q[19], w[6], dq[18]) -> (lambda_w[3], dlambda_w[3]);  iw 0, w 0  [returns QD_NONFINITE]
- *   qd_dgrf_FL(q[19], v[18], a[18]) -> (dlambda_dq[3x18], dlambda_dv[3x18], dlambda_da[3x18]);  iw 0, w 1158  [returns QD_NONFINITE]
+ *   qd_dgrf_FL(q[19], v[18], a[18]) -> (dlambda_dq[3x18], dlambda_dv[3x18], dlambda_da[3x18]);  iw 0, w 1158  [returns QD_NONFINITE / QD_NO_WORK]
  *   qd_dgrf_dir_FR(q[19], w[6], dq[18]) -> (lambda_w[3], dlambda_w[3]);  iw 0, w 0  [returns QD_NONFINITE]
- *   qd_dgrf_FR(q[19], v[18], a[18]) -> (dlambda_dq[3x18], dlambda_dv[3x18], dlambda_da[3x18]);  iw 0, w 1158  [returns QD_NONFINITE]
+ *   qd_dgrf_FR(q[19], v[18], a[18]) -> (dlambda_dq[3x18], dlambda_dv[3x18], dlambda_da[3x18]);  iw 0, w 1158  [returns QD_NONFINITE / QD_NO_WORK]
  *   qd_dgrf_dir_BL(q[19], w[6], dq[18]) -> (lambda_w[3], dlambda_w[3]);  iw 0, w 0  [returns QD_NONFINITE]
- *   qd_dgrf_BL(q[19], v[18], a[18]) -> (dlambda_dq[3x18], dlambda_dv[3x18], dlambda_da[3x18]);  iw 0, w 1158  [returns QD_NONFINITE]
+ *   qd_dgrf_BL(q[19], v[18], a[18]) -> (dlambda_dq[3x18], dlambda_dv[3x18], dlambda_da[3x18]);  iw 0, w 1158  [returns QD_NONFINITE / QD_NO_WORK]
  *   qd_dgrf_dir_BR(q[19], w[6], dq[18]) -> (lambda_w[3], dlambda_w[3]);  iw 0, w 0  [returns QD_NONFINITE]
- *   qd_dgrf_BR(q[19], v[18], a[18]) -> (dlambda_dq[3x18], dlambda_dv[3x18], dlambda_da[3x18]);  iw 0, w 1158  [returns QD_NONFINITE]
+ *   qd_dgrf_BR(q[19], v[18], a[18]) -> (dlambda_dq[3x18], dlambda_dv[3x18], dlambda_da[3x18]);  iw 0, w 1158  [returns QD_NONFINITE / QD_NO_WORK]
  *
  * Embedded use (docs/embedded.md): memory the caller provides per call, in bytes on a 32-bit
  * target: arg and res pointer arrays (4 B each), iw (8 B casadi_int), w, and the
@@ -262,7 +270,7 @@
  *
  * Caller memory per function, bytes, double/float:
  *   qd_M_full 1840/924; qd_C_full 452/232; qd_G_full 304/156; qd_nle_full 452/232;
- *   qd_id_full 704/364; qd_grf_FL_FR_BL_BR 756/392; qd_grf_FL_FR_BL 756/392;
+ *   qd_id_full 704/364; qd_feet_full 1148/584; qd_grf_FL_FR_BL_BR 756/392; qd_grf_FL_FR_BL 756/392;
  *   qd_grf_FL_FR_BR 756/392; qd_grf_FL_BL_BR 756/392; qd_grf_FR_BL_BR 756/392;
  *   qd_grf_FL_FR 756/392; qd_grf_FL_BL 756/392; qd_grf_FL_BR 756/392; qd_grf_FR_BL 756/392;
  *   qd_grf_FR_BR 756/392; qd_grf_BL_BR 756/392; qd_grf_FL 732/380; qd_grf_FR 732/380;
@@ -298,12 +306,12 @@
  *   qd_dgrf_dir_FL 412/216; qd_dgrf_FL 11024/5524; qd_dgrf_dir_FR 412/216; qd_dgrf_FR 11024/5524;
  *   qd_dgrf_dir_BL 412/216; qd_dgrf_BL 11024/5524; qd_dgrf_dir_BR 412/216; qd_dgrf_BR 11024/5524;
  */
-#ifndef QD_NONFINITE
+#ifndef QD_RETURN_CODES
+#define QD_RETURN_CODES
 #define QD_NONFINITE 1 /* an output is NaN/inf */
-#define QD_SINGULAR 2
-#endif
-#ifndef QD_DEGENERATE
-#define QD_DEGENERATE 3
+#define QD_SINGULAR 2 /* M_r or M singular to working precision */
+#define QD_DEGENERATE 3 /* the stance is degenerate */
+#define QD_NO_WORK 4 /* the work memory w the function needs (its _SZ_W > 0) is a null pointer */
 #endif
 /* This file was automatically generated by CasADi 3.8.2.
  *  It consists of: 
@@ -414,6 +422,24 @@ int qd_id_full_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz
 #define qd_id_full_SZ_RES 2
 #define qd_id_full_SZ_IW 0
 #define qd_id_full_SZ_W 0
+int qd_feet_full(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem);
+int qd_feet_full_checkout(void);
+void qd_feet_full_release(int mem);
+void qd_feet_full_incref(void);
+void qd_feet_full_decref(void);
+casadi_int qd_feet_full_n_in(void);
+casadi_int qd_feet_full_n_out(void);
+casadi_real qd_feet_full_default_in(casadi_int i);
+const char* qd_feet_full_name_in(casadi_int i);
+const char* qd_feet_full_name_out(casadi_int i);
+const casadi_int* qd_feet_full_sparsity_in(casadi_int i);
+const casadi_int* qd_feet_full_sparsity_out(casadi_int i);
+int qd_feet_full_work(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz_iw, casadi_int *sz_w);
+int qd_feet_full_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz_iw, casadi_int *sz_w);
+#define qd_feet_full_SZ_ARG 2
+#define qd_feet_full_SZ_RES 3
+#define qd_feet_full_SZ_IW 0
+#define qd_feet_full_SZ_W 0
 int qd_grf_FL_FR_BL_BR(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem);
 int qd_grf_FL_FR_BL_BR_checkout(void);
 void qd_grf_FL_FR_BL_BR_release(int mem);

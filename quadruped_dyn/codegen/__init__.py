@@ -5,10 +5,11 @@ from quadruped_dyn.exports import lazy_exports
 
 _MODULES: dict[str, tuple[str, ...]] = {
     "casadi_source": ("PREFIX", "TEMPLATES", "work_sizes", "silence_unused_parameters", "casadi_c", "entry_point"),
+    "file_names": ("REDUCED_STANCE_SETS", "SHARED_FILES", "GeneratedFiles", "file_layout", "robot_stem", "robot_file",
+                   "feet_suffix", "reference_header_name", "robots_in", "check_no_collision"),
     "emit": (
-        "CODEGEN_FUNCTIONS", "REDUCED_STANCE_SETS", "REDUCED_NAMES", "reduced_symbol", "reduced_functions",
-        "SIGNAL_DOCS", "codegen_functions", "reduced_parts", "header_doc", "stem", "GeneratedFiles", "file_layout",
-        "generate",
+        "CODEGEN_FUNCTIONS", "REDUCED_NAMES", "reduced_symbol", "reduced_functions",
+        "SIGNAL_DOCS", "codegen_functions", "reduced_parts", "header_doc", "generate",
     ),
     "emit_derivatives": ("DERIVATIVE_NAMES", "GRF_DERIVATIVE_NAMES", "GRF_DERIVATIVE_STANCE_SETS", "REDUCED_DERIVATIVE_NAMES",
                          "derivative_functions", "derivative_source", "grf_derivative_functions",

@@ -1,4 +1,5 @@
-"""C of a function evaluated leg by leg (``dynamics.leg_template.LegPieces``; docs/derivatives.md, "did_full by leg").
+"""C of a function evaluated leg by leg (``dynamics.leg_template.LegPieces``; docs/derivatives.md, "dfd_r and dgrf as
+generated C").
 
 The head, each template's leg function and the tail become static C functions (``static_c``); the function itself
 calls the head, then each leg's template function once per leg (the legs of one template one after the other, so
@@ -12,14 +13,13 @@ from dataclasses import dataclass
 
 import casadi as ca
 
+from quadruped_dyn.codegen.c_facts import prelude_c
 from quadruped_dyn.codegen.casadi_source import static_c, unguarded_inputs
 from quadruped_dyn.codegen.joint_trig import trig_as_inputs
 from quadruped_dyn.dynamics.leg_template import LegPieces
 from quadruped_dyn.model.leg import LEG_LABELS
 
 _SIGNATURE = "(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem)"
-NOINLINE = ("#ifndef QD_NOINLINE\n#if defined(__GNUC__)\n#define QD_NOINLINE __attribute__((noinline))\n#else\n"
-            "#define QD_NOINLINE\n#endif\n#endif\n")
 
 #: A leg function's input before its parameters: ("arg", i, offset) the trunk's entries at arg[i] + offset; ("head",
 #: j) the head's output j; ("joint", i, first) the leg's three joint entries at arg[i][first + 3 k ...] (times sigma);
@@ -56,7 +56,7 @@ def by_leg_c(c_name: str, pieces: LegPieces, call: LegCall, precision: str, host
     q_input = joints[0]  # the angles: the first joint input
     if any(f.n_in() != len(call.leg_inputs) + 1 for f in pieces.legs) or pieces.tail.n_in() != len(call.tail_args) + 4:
         raise AssertionError(f"{c_name}: the pieces' inputs are not as the call reads them")
-    text = [NOINLINE]
+    text = [prelude_c()]
     if pieces.head is not None:
         text.append(static_c(f"{c_name}_head", pieces.head, precision, host_helpers, all_io=True))
     for i, leg in enumerate(pieces.legs):  # one copy of its code for every leg of its template
@@ -124,7 +124,7 @@ def foot_c(c_name: str, pieces: LegPieces, precision: str, host_helpers: frozens
     way than its template's gets q_l, qd_l and s negated into a local array and J's columns negated after (r, J qd_l
     and Jdot qd_l are the template's at sigma q_l, sigma qd_l). The reduced files call it for their stance legs only
     (c/qd_reduced_solve.c, qd_parts)."""
-    text = [NOINLINE]
+    text = [prelude_c()]
     for i, leg in enumerate(pieces.legs):
         if leg.name_in() != ["q_l", "qd_l", "p"] or leg.nnz_out(0) != 18:
             raise AssertionError(f"{c_name}: a leg function is not (q_l, qd_l, p) -> FOOT_PARTS")

@@ -12,6 +12,7 @@ from pathlib import Path
 
 import casadi as ca
 
+from quadruped_dyn.codegen.c_facts import TEMPLATES  # noqa: F401 -- the templates' folder, re-exported
 from quadruped_dyn.codegen.reciprocals import shared_reciprocals
 
 PREFIX = "qd_"
@@ -40,7 +41,6 @@ def static_helpers(c_source: str) -> str:
     return re.sub(r"\ncasadi_real (casadi_(?:sq|fabs))\(", r"\nstatic inline casadi_real \1(", c_source)
 
 
-TEMPLATES = Path(__file__).resolve().parent / "c"
 #: the sines and cosines of a vector of angles (qd_sincos), pasted into each file whose entry points call it
 SINCOS = "qd_sincos.c"
 

@@ -15,12 +15,12 @@ from __future__ import annotations
 
 import re
 from collections.abc import Callable
-from dataclasses import dataclass
 from pathlib import Path
 
 import casadi as ca
 
 from quadruped_dyn.codegen.by_leg import LegCall, by_leg_c, foot_c
+from quadruped_dyn.codegen.c_facts import layouts_c, prelude_c, return_codes_c
 from quadruped_dyn.codegen.casadi_source import (
     PREFIX,
     SINCOS,
@@ -48,10 +48,19 @@ from quadruped_dyn.codegen.emit_derivatives import (
     dfd_r_work_reals,
     reduced_derivative_functions,
 )
+from quadruped_dyn.codegen.file_names import (
+    REDUCED_STANCE_SETS,
+    REDUCED_TEMPLATES,
+    GeneratedFiles,
+    casadi_name,
+    check_no_collision,
+    file_layout,
+)
 from quadruped_dyn.codegen.joint_trig import trig_as_inputs
 from quadruped_dyn.codegen.work_memory import memory_doc
 from quadruped_dyn.dynamics.by_leg import foot_pieces, id_full_pieces, mass_matrix_pieces
 from quadruped_dyn.dynamics.grf import grf_balance, grf_solve
+from quadruped_dyn.dynamics.kinematics import feet_full
 from quadruped_dyn.dynamics.newton_euler import full_dynamics
 from quadruped_dyn.dynamics.reduced_projection import reduced_projection
 from quadruped_dyn.dynamics.stance_maps import stance_maps
@@ -83,18 +92,16 @@ CODEGEN_FUNCTIONS: dict[str, Callable[[Robot], ca.Function]] = {
     "G_full": lambda r: full_dynamics(r).G_full_crb,  # = Newton-Euler G (tested), fewer operations
     "nle_full": lambda r: full_dynamics(r).nle_full,
     "id_full": lambda r: full_dynamics(r).id_full,
+    "feet_full": feet_full,  # the feet's positions, Jacobian and Jdot v (a whole-body controller's contact rows)
     **{f"grf_{s.name.replace('+', '_')}": _grf_paper(s) for s in STANCE_SETS},
 }
 
-#: Stance sets with a reduced model (docs/formulation.md §5-§6): four feet, the four triples, the six pairs.
-REDUCED_STANCE_SETS: tuple[StanceSet, ...] = tuple(st for st in STANCE_SETS if len(st.feet) >= 2)
-
 #: Reduced-model functions generated for every stance set in REDUCED_STANCE_SETS, as
-#: qd_<name>_<feet> (feet joined by '_'), each in the file qd_<robot>_r_<feet>.c.
+#: qd_<name>_<feet> (feet joined by '_'), each in the file qd_<robot>-r-<feet>.c.
 REDUCED_NAMES = ("M_r", "CG_r", "G_r", "id_r", "fd_r")
 
 
-#: How many derivative functions ``generate`` writes: the full ones and the GRF ones in qd_<robot>_d.c, the
+#: How many derivative functions ``generate`` writes: the full ones and the GRF ones in qd_<robot>-d.c, the
 #: reduced ones in each reduced file (codegen/emit_derivatives.py).
 N_DERIVATIVE_FUNCTIONS = (len(DERIVATIVE_NAMES) + len(GRF_DERIVATIVE_NAMES) * len(GRF_DERIVATIVE_STANCE_SETS)
                           + len(REDUCED_DERIVATIVE_NAMES) * len(REDUCED_STANCE_SETS))
@@ -148,6 +155,9 @@ SIGNAL_DOCS = {
     "w_res": "base wrench residual: force [N], moment about the trunk origin [N m], trunk frame; "
     "zero when the foot forces produce the motion",
     "tau": "joint torques [N m]",
+    "r_feet": "foot positions FL, FR, BL, BR relative to the trunk origin, trunk frame [m]",
+    "J_feet": "feet's velocity Jacobian: R^T d/dt p_foot = J_feet v, rows of a foot [I, -[r]x, its leg's J] [m/rad]",
+    "Jdv_feet": "R^T d2/dt2 p_foot - J_feet a = Jdot v + omega_b x (J_feet v): the feet's bias acceleration [m/s^2]",
     "lambda": "the GRF model's unknowns (minimum-norm solution), see quadruped_dyn/dynamics/grf.py",
     "residual": "part of the required trunk wrench the GRF model cannot balance: force [N], moment [N m]",
     "q_r": "reduced coordinates: 12 joint angles [rad] (FL, FR, BL, BR x HAA, HFE, KFE); for two stance feet a "
@@ -164,7 +174,7 @@ SIGNAL_DOCS = {
     "tau_r": "12 joint torques [N m] with the paper's GRF model of the stance set; for two feet a 13th entry: "
     "the trunk moment about the foot-to-foot line (from foot 2 to foot 1) that the feet cannot produce [N m], "
     "0 for a motion the robot can make (the roll is unactuated)",
-    # derivatives (qd_<robot>_d.c, docs/derivatives.md): d/dq along pinocchio.integrate, 18 columns
+    # derivatives (qd_<robot>-d.c, docs/derivatives.md): d/dq along pinocchio.integrate, 18 columns
     "tau_full": "generalized force (18): trunk wrench (force [N], moment [N m], trunk frame), 12 joint torques [N m]",
     "dtau_dq": "d rnea / dq (18x18): columns along the tangent dq = (dv_b, dw_b, dq_joints), body-frame increment",
     "dtau_dv": "d rnea / dv (18x18)",
@@ -220,14 +230,17 @@ def _note(name: str) -> str:
         return f"  [{stance.kind}, rank {stance.rank('paper')}]"
     reduced = reduced_parts(name)
     if name == "dfd_full":
-        return "  [returns QD_NONFINITE / QD_SINGULAR]"
-    if name in ("did_full", "dfd_full_parts") or name.startswith("dgrf_") and not name.startswith("dgrf_parts_"):
+        return "  [returns QD_NONFINITE / QD_SINGULAR / QD_NO_WORK]"
+    if name.startswith("dgrf_") and not name.startswith("dgrf_dir_"):
+        return "  [returns QD_NONFINITE / QD_NO_WORK]"
+    if name in ("did_full", "dfd_full_parts") or name.startswith("dgrf_dir_"):
         return "  [returns QD_NONFINITE]"
     if not reduced:
         return ""
     # only the solves (fd_r, dfd_r) factor M_r: M_r, CG_r, G_r and id_r never return QD_SINGULAR
     singular = " / QD_SINGULAR" if reduced[0] in ("fd_r", "dfd_r") else ""
-    return f"  [{reduced[1].kind}, returns QD_NONFINITE{singular} / QD_DEGENERATE]"
+    no_work = " / QD_NO_WORK" if reduced[0] == "dfd_r" else ""
+    return f"  [{reduced[1].kind}, returns QD_NONFINITE{singular} / QD_DEGENERATE{no_work}]"
 
 
 #: The functions whose entry points read a null input pointer as zeros (CasADi's convention, kept by the generated
@@ -283,14 +296,16 @@ def header_doc(robot: Robot, functions: list[ca.Function], work: dict[str, tuple
         " * G_r = S G_full, id_r = S rnea(q, v, T qdd_r + k) (link the reduced files with qd_<robot>.c).",
         " * Return codes: 0 ok; QD_NONFINITE (1) an output is NaN/inf: the trunk pitched +-90 deg (two feet:",
         " * the roll row has tan(pitch)), a zero quaternion (M_r with three or four feet does not depend on quat and",
-        " * returns 0 for any) or a non-finite input; QD_SINGULAR (2, fd_r, dfd_r) M_r",
+        " * returns 0 for any) or a non-finite input the function reads. Every reduced function reads every entry",
+        " * of its inputs except q_r's 13th with two feet (the roll: taken from quat) and quat in M_r with three or",
+        " * four feet: a NaN there is not read and not reported. QD_SINGULAR (2, fd_r, dfd_r) M_r",
         " * singular to working precision (a pivot below QD_SINGULAR_RTOL times the largest entry of the matrix it",
         " * eliminates, M_r's, or a swing leg's block and the folded rest's), and in the float build also where the",
         " * result's error bound",
         f" * FLT_EPSILON x cond_1 of that matrix exceeds {FLOAT_MAX_BOUND:g} (so a float fd_r returned as 0 is",
         " * within 1 %);",
-        " * (QD_SINGULAR_RTOL: qd_reduced_templates.h, a multiple of casadi_real's epsilon; QD_REGULARITY_MIN:",
-        " * each qd_<robot>_r_<feet>.c, quadruped_dyn.tolerances.REGULARITY_MIN; neither is in this header.)",
+        " * (QD_SINGULAR_RTOL: reduced_templates.h, a multiple of casadi_real's epsilon; QD_REGULARITY_MIN:",
+        " * each qd_<robot>-r-<feet>.c, quadruped_dyn.tolerances.REGULARITY_MIN; neither is in this header.)",
         " * QD_DEGENERATE (3) the stance is degenerate, checked first by",
         " * every reduced function: its regularity (quadruped_dyn/dynamics/stance_regularity.py, in [0, 1]) is",
         " * at most QD_REGULARITY_MIN (coincident or collinear stance feet, or two feet whose line is",
@@ -307,12 +322,12 @@ def header_doc(robot: Robot, functions: list[ca.Function], work: dict[str, tuple
         " * Each function's codes are in its [returns ...] note below; one without that note returns 0",
         " * always (M_full, C_full, G_full, nle_full, id_full, grf_<feet>): test its outputs for NaN/inf.",
         " *",
-        " * Derivatives (qd_<robot>_d.c; quadruped_dyn/dynamics/derivatives.py, docs/derivatives.md). d/dq is",
+        " * Derivatives (qd_<robot>-d.c; quadruped_dyn/dynamics/derivatives.py, docs/derivatives.md). d/dq is",
         " * along pinocchio.integrate(q, dq): dq (18) = (dv_b, dw_b, dq_joints), a body-frame (local) increment",
         " * of the trunk pose (p -> p + R dv_b, R -> R Exp([dw_b]x)), as Pinocchio's analytical derivatives;",
         " * no column is a derivative w.r.t. a quaternion entry, and the first three (position) are zero.",
         " *   did_full(q, v, a)               d rnea/dq, d rnea/dv, d rnea/da = M (rnea: no foot forces); sparse:",
-        " *                                   d rnea/dq's position columns hold no entry (since 2026-12-02),",
+        " *                                   d rnea/dq's position columns hold no entry,",
         " *                                   a leg's joint columns only the trunk's and that leg's rows;",
         " *   dfd_full_parts(q, v)            M (dense) and C + G;",
         " *   dfd_full(q, v, tau_full)        d a/dq, d a/dv, d a/dtau = M^-1 of a = M^-1 (tau_full - C - G):",
@@ -329,6 +344,8 @@ def header_doc(robot: Robot, functions: list[ca.Function], work: dict[str, tuple
         " *                                   d qdd_r/dtheta: -M_r^-1 d id_r/dx by fd_r's LU, d id_r/dx by the chain",
         " *                                   rule over did_full and id_full (id_r = S rnea(q, v, a)); needs caller",
         " *                                   work memory w (its _work entry, _SZ_W); return codes as fd_r.",
+        " * Work memory: a function whose _SZ_W is not 0 (dfd_full, dgrf_<feet>, dfd_r_<feet>) returns QD_NO_WORK",
+        " * (4) for a null w and writes no output; the others never read iw or w (a null one is allowed).",
         " *",
         " * Signals:",
         # the names' column as wide as the longest name and a space (a fixed 9 ran dlambda_w into its text)
@@ -344,18 +361,6 @@ def header_doc(robot: Robot, functions: list[ca.Function], work: dict[str, tuple
     lines += memory_doc(functions, work)  # caller memory per function (docs/embedded.md)
     lines.append(" */")
     return "\n".join(lines) + "\n"
-
-
-#: The return codes the header documents, as macros a caller can test (the templates define the same values:
-#: c/qd_reduced_solve.c, c/qd_derivatives_solve.c; codegen.library.QD_NONFINITE, ... read them back).
-RETURN_CODES_C = """#ifndef QD_NONFINITE
-#define QD_NONFINITE 1 /* an output is NaN/inf */
-#define QD_SINGULAR 2
-#endif
-#ifndef QD_DEGENERATE
-#define QD_DEGENERATE 3
-#endif
-"""
 
 
 #: Elementary functions the generated code calls, each routed through a wrapper in casadi_real's precision.
@@ -406,9 +411,6 @@ def _precision_calls(c_source: str) -> str:
     return re.sub(r"\((\d+)\./", r"(\1/", c_source)
 
 
-#: The hand-written templates of the reduced files (checks, fd_r's solve, dfd_r's solve), one header every
-#: qd_<robot>_r_<feet>.c includes (not one copy per stance file: ~28 kB each); robot-independent.
-REDUCED_TEMPLATES = "qd_reduced_templates.h"
 _REDUCED_TEMPLATE_FILES = (SINCOS, "qd_dense.c", "qd_reduced_solve.c", "qd_reduced_derivatives.c")
 
 
@@ -416,21 +418,11 @@ def reduced_templates_h() -> str:
     """The text of ``REDUCED_TEMPLATES``: c/qd_sincos.c, c/qd_dense.c, c/qd_reduced_solve.c and
     c/qd_reduced_derivatives.c, their elementary functions routed through the including file's precision wrappers
     (``_precision_math``)."""
-    body = "\n".join((TEMPLATES / t).read_text() for t in _REDUCED_TEMPLATE_FILES)
-    return ("/* quadruped_dyn: the hand-written templates of the reduced model, included by every qd_<robot>_r_<feet>.c\n"
+    body = prelude_c() + layouts_c() + "\n".join((TEMPLATES / t).read_text() for t in _REDUCED_TEMPLATE_FILES)
+    return ("/* quadruped_dyn: the hand-written templates of the reduced model, included by every qd_<robot>-r-<feet>.c\n"
             " * after its generated pieces (quadruped_dyn/codegen/emit.py). Not a header to include elsewhere: its\n"
             " * functions are static and call the including file's qd_stance_maps, qd_M_full, qd_id_full, ... */\n"
             + _precision_calls(body))
-
-
-#: start-up and memory map of the check program on QEMU's MPS2 Cortex-M boards (the Makefile's cross builds)
-CORTEX_M_FILES = ("qd_cortex_m_startup.c", "qd_cortex_m.ld")
-#: the thread-safety check program (`make check-threads`)
-THREADS_FILE = "qd_threads.c"
-
-
-def stem(robot: Robot) -> str:
-    return f"qd_{re.sub(r'[^A-Za-z0-9_]', '_', robot.name)}"
 
 
 def float_err_per_regularity(stance: StanceSet) -> float:
@@ -605,7 +597,7 @@ def _reduced_calls_by_leg(robot: Robot, precision: str, host_helpers: frozenset[
     M's nonzero blocks (``by_leg.mass_blocks``: fd_r's), the joints' sines and cosines given, each as one leg function
     per leg template called once per leg (``dynamics.by_leg``, ``codegen.by_leg``), whose code stays in the instruction
     cache: for the reduced files' fd_r, C_r + G_r, id_r and dfd_r (c/qd_reduced_solve.c), which call them among ~45 kB
-    of other code per call (docs/benchmark.md, "id_full and M by leg"). M_r calls ``_M_full_dense``'s
+    of other code per call (docs/benchmark.md, "Design choices"). M_r calls ``_M_full_dense``'s
     qd_M_full_dense_trig, one function of fewer instructions, which fits the cache beside M_r's other ~20 kB."""
     return ("/* id_full without foot forces, the joints' sines and cosines given, leg by leg: arg = (q, v, a, sin, cos) */\n"
             + by_leg_c("qd_id_full_trig", id_full_pieces(robot), ID_FULL_CALL, precision, host_helpers) + "\n"
@@ -661,79 +653,36 @@ def _grf_through_id_full(robot: Robot, c_text: str, functions: list[ca.Function]
     return c_text[:first] + "\n" + "\n".join(helpers) + c_text[first:]
 
 
-@dataclass(frozen=True)
-class GeneratedFiles:
-    """The files ``generate`` wrote, by what they are (callers never rely on an order)."""
-
-    source: Path  # qd_<robot>.c: full-coordinate terms and GRF solves
-    header: Path  # qd_<robot>.h: one header for all, documentation first
-    extra: dict[str, Path]  # file name -> path of each of ``extra_files``' files (e.g. the reference values)
-    check_program: Path  # check_qd.c
-    makefile: Path
-    reduced: tuple[Path, ...]  # qd_<robot>_r_<feet>.c: the reduced model of each stance set of 2-4 feet
-    reduced_templates: Path  # qd_reduced_templates.h: the hand-written templates every reduced file includes
-    derivatives: tuple[Path, ...] = ()  # qd_<robot>_d.c: derivatives of the full dynamics (codegen/emit_derivatives.py)
-    embedded: tuple[Path, ...] = ()  # Cortex-M start-up and linker script, qd_threads.c (docs/embedded.md)
-
-    @property
-    def c_sources(self) -> list[Path]:
-        """The generated C files of the library (not the check program)."""
-        return [self.source, *self.reduced, *self.derivatives]
-
-    @property
-    def library_sources(self) -> list[Path]:
-        """What the library is compiled from: ``c_sources`` and the headers they include (its size is the
-        generated C's size, docs/benchmark.md)."""
-        return [*self.c_sources, self.header, self.reduced_templates]
-
-    def all(self) -> list[Path]:
-        """Every file, in the order they are written."""
-        return [self.source, self.header, *self.extra.values(), self.check_program, *self.embedded, self.makefile,
-                *self.reduced, self.reduced_templates, *self.derivatives]
-
-
-def file_layout(robot: Robot, out_dir: Path, extra_names: tuple[str, ...] = ()) -> GeneratedFiles:
-    """The files ``generate`` writes into ``out_dir`` (with ``extra_names`` for its ``extra_files``), by role:
-    the one place their names are made, known before the work (a command refuses a file it cannot write first)."""
-    out_dir = Path(out_dir)
-    name = stem(robot)
-    return GeneratedFiles(source=out_dir / f"{name}.c", header=out_dir / f"{name}.h",
-                          extra={f: out_dir / f for f in extra_names}, check_program=out_dir / "check_qd.c",
-                          makefile=out_dir / "Makefile",
-                          reduced=tuple(out_dir / f"{name}_r_{st.name.replace('+', '_')}.c" for st in REDUCED_STANCE_SETS),
-                          reduced_templates=out_dir / REDUCED_TEMPLATES, derivatives=(out_dir / f"{name}_d.c",),
-                          embedded=tuple(out_dir / f for f in (*CORTEX_M_FILES, THREADS_FILE)))
-
-
 def generate(robot: Robot, out_dir: Path, precision: str = "double",
              extra_files: Callable[[list[ca.Function], dict[str, tuple[int, int]]], dict[str, str]] | None = None,
              ) -> GeneratedFiles:
     """Write into ``out_dir``: qd_<robot>.c (full-coordinate terms and GRF solves), qd_<robot>.h
     (one header for all), the files ``extra_files(functions, work sizes)`` returns (e.g. the
-    reference values of ``checks.c_reference``), check_qd.c, the Cortex-M start-up files and qd_threads.c
-    (docs/embedded.md), the Makefile, qd_<robot>_r_<feet>.c (the reduced model of each stance set
-    of 2-4 feet) and qd_<robot>_d.c (derivatives); returns them by role (``GeneratedFiles``)."""
+    reference values of ``checks.check_program_values``), check_qd.c, the Cortex-M start-up files and check_threads.c
+    (docs/embedded.md), the Makefile, qd_<robot>-r-<feet>.c (the reduced model of each stance set
+    of 2-4 feet) and qd_<robot>-d.c (derivatives); returns them by role (``GeneratedFiles``)."""
     if precision not in ("double", "float"):
         raise InputError(f"precision '{precision}' is not supported; expected 'double' or 'float'")
     out_dir = Path(out_dir)
+    layout = file_layout(robot.name, out_dir)
+    check_no_collision(layout, robot.name, out_dir)  # before the work: another robot's files are never written over
     out_dir.mkdir(parents=True, exist_ok=True)
-    layout = file_layout(robot, out_dir)
     full = codegen_functions(robot)
-    c_full, casadi_header = casadi_c(layout.source.stem, full, precision)
+    c_full, casadi_header = casadi_c(casadi_name(layout.source), full, precision)
     c_full = _grf_through_id_full(robot, _joint_rows_first(robot, c_full, full, precision), full, precision)
     sources = {layout.source: c_full}
     functions = list(full)
     for stance, path in zip(REDUCED_STANCE_SETS, layout.reduced, strict=True):
         reduced = reduced_functions(robot, stance)
-        c_text, h_text = casadi_c(path.stem, reduced, precision)
+        c_text, h_text = casadi_c(casadi_name(path), reduced, precision)
         dfd_r = dfd_r_pieces(robot, stance)
         sources[path], h_text = _checked_reduced_c(c_text, h_text, reduced,
                                                    _reduced_helpers_c(stance, dfd_r, precision), dfd_r)
         casadi_header += h_text
         functions += reduced
-    derivatives = derivative_functions(robot)  # qd_<robot>_d.c: derivatives of the full dynamics
+    derivatives = derivative_functions(robot)  # qd_<robot>-d.c: derivatives of the full dynamics
     (derivative_path,) = layout.derivatives
-    sources[derivative_path], h_text = derivative_source(robot, derivative_path.stem, derivatives, precision)
+    sources[derivative_path], h_text = derivative_source(robot, casadi_name(derivative_path), derivatives, precision)
     casadi_header += h_text
     functions += derivatives
     work = work_sizes(casadi_header)
@@ -744,14 +693,14 @@ def generate(robot: Robot, out_dir: Path, precision: str = "double",
                              "the reduced terms M_full, G_full and id_full, qd_dfd_full_parts M_full and nle_full, "
                              "with no work memory of their own")
     extra = extra_files(functions, work) if extra_files else {}
-    layout = file_layout(robot, out_dir, tuple(extra))
+    layout = file_layout(robot.name, out_dir, tuple(extra))
     texts = {
         **{path: _precision_math(text) for path, text in sources.items()},
-        layout.header: header_doc(robot, functions, work) + RETURN_CODES_C + casadi_header,
+        layout.header: header_doc(robot, functions, work) + return_codes_c() + casadi_header,
         **{layout.extra[f]: text for f, text in extra.items()},
         layout.check_program: (TEMPLATES / "check_qd.c").read_text(),
         **{path: (TEMPLATES / path.name).read_text() for path in layout.embedded},  # docs/embedded.md
-        layout.makefile: (TEMPLATES / "Makefile").read_text().replace("ROBOT ?= paper", f"ROBOT ?= {stem(robot)[3:]}"),
+        layout.makefile: (TEMPLATES / "Makefile").read_text(),  # robot-independent: ROBOT defaults to the header's
         layout.reduced_templates: reduced_templates_h(),
     }
     with output_set():  # the package appears whole: an interrupt never leaves new sources beside old ones

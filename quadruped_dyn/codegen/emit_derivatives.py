@@ -1,6 +1,6 @@
 """Generated C of the derivatives of the dynamics (docs/derivatives.md).
 
-In ``qd_<robot>_d.c`` (prefix ``qd_``), compiled into the same library as the others:
+In ``qd_<robot>-d.c`` (prefix ``qd_``), compiled into the same library as the others:
 
 * ``did_full(q, v, a) -> (dtau_dq, dtau_dv, dtau_da)``: CasADi's Jacobians of the full inverse
   dynamics (``dynamics/derivatives.py``), sparse outputs (leg rows do not depend on other legs);
@@ -17,7 +17,7 @@ In ``qd_<robot>_d.c`` (prefix ``qd_``), compiled into the same library as the ot
   rnea's trunk rows: d lambda / dx = P d w_req / dx (``did_full``'s trunk rows) + d(P w)/dq for x = q,
   P column by column and d(P w)/dq one stance-leg joint direction at a time from dgrf_dir.
 
-In each reduced file ``qd_<robot>_r_<feet>.c`` (``reduced_derivative_functions``, ``dfd_r_pieces``):
+In each reduced file ``qd_<robot>-r-<feet>.c`` (``reduced_derivative_functions``, ``dfd_r_pieces``):
 
 * ``dfd_r_<feet>(q_r, qd_r, tau_ext, quat)``: a signature whose body (``c/qd_reduced_derivatives.c``)
   applies the chain rule over the full-coordinate derivatives: id_r = S F(q, v, a), F the full rnea, so
@@ -47,6 +47,7 @@ import casadi as ca
 import numpy as np
 
 from quadruped_dyn.codegen.by_leg import LegCall, by_leg_c, legs_reals
+from quadruped_dyn.codegen.c_facts import prelude_c
 from quadruped_dyn.codegen.casadi_source import (
     PREFIX,
     SINCOS,
@@ -60,6 +61,7 @@ from quadruped_dyn.codegen.casadi_source import (
     unguarded_inputs,
     work_sizes,
 )
+from quadruped_dyn.codegen.file_names import feet_suffix
 from quadruped_dyn.codegen.joint_trig import trig_as_inputs
 from quadruped_dyn.dynamics.derivatives import configuration_tangent, full_derivatives, quaternion_tangent
 from quadruped_dyn.dynamics.grf import solve_lambda
@@ -73,15 +75,11 @@ from quadruped_dyn.model.stance import STANCE_SETS, StanceSet, stance_set
 from quadruped_dyn.model.state import JOINT_ANGLES, NQ_FULL, NV_FULL
 
 DERIVATIVE_NAMES = ("did_full", "dfd_full_parts", "dfd_full")
-#: Stance sets with a GRF derivative (every set with a foot), as dgrf_parts_<feet> and dgrf_<feet> in qd_<robot>_d.c.
+#: Stance sets with a GRF derivative (every set with a foot), as dgrf_parts_<feet> and dgrf_<feet> in qd_<robot>-d.c.
 GRF_DERIVATIVE_STANCE_SETS: tuple[StanceSet, ...] = tuple(st for st in STANCE_SETS if st.feet)
 GRF_DERIVATIVE_NAMES = ("dgrf_dir", "dgrf")
 #: Generated in each reduced stance set's file, as <name>_<feet>.
 REDUCED_DERIVATIVE_NAMES = ("dfd_r",)
-
-
-def feet_suffix(stance: StanceSet) -> str:
-    return stance.name.replace("+", "_")
 
 
 def grf_derivative_functions(robot: Robot, stance: StanceSet) -> list[ca.Function]:
@@ -354,7 +352,7 @@ DID_FULL_CALL = LegCall(head_args=(0, 1, 2), leg_inputs=(("arg", 1, 3), ("arg", 
 
 def _did_full_trig_once(c_text: str, raw: str, did: ca.Function, robot: Robot, precision: str) -> str:
     """did_full's evaluation ``raw`` as the joints' sines and cosines taken once (c/qd_sincos.c) and qd_did_full_trig
-    reading them, did_full leg by leg (``by_leg``, docs/derivatives.md "did_full by leg"), also called by dfd_r
+    reading them, did_full leg by leg (``by_leg``, docs/derivatives.md "dfd_r and dgrf as generated C"), also called by dfd_r
     (c/qd_reduced_derivatives.c), which has the sines and cosines already."""
     exported = by_leg_c("qd_did_full_trig", did_full_pieces(robot), DID_FULL_CALL, precision, defined_helpers(c_text),
                         unguarded="did_full", export_in=True)  # dfd_r lends the legs' outputs its w (stack budget)
@@ -372,11 +370,11 @@ def _did_full_trig_once(c_text: str, raw: str, did: ca.Function, robot: Robot, p
 
 
 def derivative_source(robot: Robot, file_stem: str, functions: list[ca.Function], precision: str) -> tuple[str, str]:
-    """(C source, CasADi's header) of qd_<robot>_d.c: CasADi's code with c/qd_derivatives_solve.c
+    """(C source, CasADi's header) of qd_<robot>-d.c: CasADi's code with c/qd_derivatives_solve.c
     inserted (after c/qd_dense.c); every entry point returns QD_NONFINITE for a non-finite output, dfd_full solves."""
     c_text, h_text = casadi_c(file_stem, functions, precision)
     first = c_text.index(f"\n/* {functions[0].name()}:")
-    template = (TEMPLATES / "qd_derivatives_solve.c").read_text()
+    template = prelude_c() + (TEMPLATES / "qd_derivatives_solve.c").read_text()
     c_text = c_text[:first] + "\n" + (TEMPLATES / "qd_dense.c").read_text() + "\n" + template + c_text[first:]
     work = work_sizes(h_text)
     raw = evaluations(c_text, [f.name() for f in functions])

@@ -30,6 +30,7 @@ from collections.abc import Iterable
 from dataclasses import asdict, dataclass, field
 from pathlib import Path
 
+from quadruped_dyn.codegen.file_names import ROLE_SEPARATOR
 from quadruped_dyn.codegen.targets import TARGETS, Target, make, skip_reason
 from quadruped_dyn.codegen.work_memory import WorkMemory, work_memory  # noqa: F401 -- re-exported
 from quadruped_dyn.files.cache import cached_build
@@ -198,7 +199,7 @@ def measure_build(build_dir: Path, target: Target, function_names: list[str], st
     objects: dict[str, int] = {}
     sizes_of: dict[str, dict[str, int]] = {}
     per_object: list[tuple[str, dict[str, int], dict[str, tuple[int, bool] | None], dict[str, set[str]]]] = []
-    for obj in sorted(tdir.glob(f"{stem}*.o")):
+    for obj in sorted([*tdir.glob(f"{stem}.o"), *tdir.glob(f"{stem}{ROLE_SEPARATOR}*.o")]):
         text = subprocess.run([size, "-A", str(obj)], capture_output=True, text=True, check=True).stdout
         objects[obj.name] = _section_bytes(text)
         f_frames, f_calls = parse_callgraph(obj.with_suffix(".ci").read_text())
@@ -248,7 +249,7 @@ def measure(source_dir: Path, build_dir: Path, target_name: str, function_names:
             cflags: str = "-Os") -> Footprint:
     """Cross-build ``source_dir`` (a generated directory) for ``target_name`` with ``cflags`` and measure it."""
     target = TARGETS[target_name]
-    make(Path(source_dir), [target.name], Path(build_dir), cflags=cflags)
+    make(Path(source_dir), [target.name], Path(build_dir), cflags=cflags, stem=stem)
     return measure_build(Path(build_dir), target, function_names, stem, cflags)
 
 

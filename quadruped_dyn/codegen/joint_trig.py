@@ -1,5 +1,5 @@
 """A generated function with the sines and cosines of some of its inputs' entries as two more inputs
-(docs/formulation.md, "The joints' sines and cosines"): its sin and cos of those entries read them instead, so a
+(docs/embedded.md, "The joints' sines and cosines"): its sin and cos of those entries read them instead, so a
 caller takes them once — all twelve joint angles together at a C entry point (``c/qd_sincos.c``), or once for the
 7-13 calls of dfd_r's lift at one point — instead of one libm call per angle inside each function."""
 

@@ -24,7 +24,9 @@ from pathlib import Path
 import casadi as ca
 import numpy as np
 
-from quadruped_dyn.codegen.emit import PREFIX, TEMPLATES, generate, stem
+from quadruped_dyn.codegen import c_facts
+from quadruped_dyn.codegen.emit import PREFIX, TEMPLATES, generate
+from quadruped_dyn.codegen.file_names import robot_stem
 from quadruped_dyn.errors import BuildError, InputError, NumericalError
 from quadruped_dyn.files.cache import cached_build
 from quadruped_dyn.model.robot import Robot
@@ -67,7 +69,7 @@ class CompiledLibrary:
 
 #: A ``#include`` of anything but a <system> header: the object depends on bytes outside the source.
 _LOCAL_INCLUDE = re.compile(rb'^[ \t]*#[ \t]*include[ \t]*([^<\s].*)$', re.M)
-#: ... of a file beside the source, by name (``"qd_reduced_templates.h"``): its bytes go into the key.
+#: ... of a file beside the source, by name (``"reduced_templates.h"``): its bytes go into the key.
 _QUOTED_NAME = re.compile(rb'"([\w.]+)"')
 
 
@@ -172,8 +174,8 @@ def compiled_library(robot: Robot, precision: str = "double", cc: str = "gcc") -
             for p in files.library_sources:  # for reading; the library is what is verified
                 shutil.copy(p, building.parent / p.name)
 
-    lib = cached_build(key, f"lib{stem(robot)}.so", build)
-    return CompiledLibrary(lib, lib.parent / f"{stem(robot)}.c", key, precision)
+    lib = cached_build(key, f"lib{robot_stem(robot.name)}.so", build)
+    return CompiledLibrary(lib, lib.parent / f"{robot_stem(robot.name)}.c", key, precision)
 
 
 def load_external(library: CompiledLibrary, name: str) -> ca.Function:
@@ -182,20 +184,10 @@ def load_external(library: CompiledLibrary, name: str) -> ca.Function:
 
 
 
-#: Return codes of the generated reduced functions (c/qd_reduced_solve.c) and what they mean.
-QD_NONFINITE, QD_SINGULAR, QD_DEGENERATE = 1, 2, 3
-RETURN_CODES = {
-    1: "an output is not finite (the trunk pitched 90 deg with two stance feet, a zero quaternion, or a "
-    "non-finite input); expected a stance the model can hold",
-    2: "M_r is singular to working precision here (in float also where fd_r's error bound exceeds 1/4 %); "
-    "expected a configuration where the reduced "
-    "model is regular",
-    3: "the stance is degenerate here (coincident or collinear stance feet, or two feet whose line is "
-    "perpendicular to the roll axis: the front or back pair at zero pitch or roll, or two feet with the trunk "
-    "pitched within 2 deg of 90 deg; regularity at most "
-    "QD_REGULARITY_MIN; in float, with two feet, below FLOAT_REGULARITY_MIN); the reduced model is undefined "
-    "to this precision",
-}
+#: The generated functions' return codes (``c_facts.RETURN_CODES``, from which the C macros are written): code -> meaning.
+RETURN_CODES = {c.value: c.meaning for c in c_facts.RETURN_CODES}
+QD_NONFINITE, QD_SINGULAR, QD_DEGENERATE, QD_NO_WORK = (c_facts.RETURN_CODE[n].value for n in (
+    "QD_NONFINITE", "QD_SINGULAR", "QD_DEGENERATE", "QD_NO_WORK"))
 
 
 class CompiledFunction:
@@ -248,7 +240,8 @@ class CompiledFunction:
     def _raise_for(self, flag: int) -> None:
         """QD_SINGULAR, QD_DEGENERATE are numerical (NumericalError); QD_NONFINITE cannot tell a bad input
         from a singular stance (InputError): docs/reliability.md §6."""
-        error = NumericalError if flag in (QD_SINGULAR, QD_DEGENERATE) else InputError
+        known = {c.value: c for c in c_facts.RETURN_CODES}.get(flag)
+        error = NumericalError if known is not None and known.numerical else InputError
         raise error(f"{self.name}: {RETURN_CODES.get(flag, f'error code {flag}')}")
 
     def __call__(self, *args: np.ndarray) -> list[np.ndarray]:

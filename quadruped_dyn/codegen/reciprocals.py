@@ -1,5 +1,5 @@
-"""Quotients by a shared denominator as products with its reciprocal, in CasADi's C (docs/benchmark.md, "One
-division per denominator").
+"""Quotients by a shared denominator as products with its reciprocal, in CasADi's C (docs/benchmark.md, "Design
+choices").
 
 CasADi's graphs divide each entry by a common denominator (the closed-form solves' determinants, the squared length
 of the feet's support line, a mean's foot count, and their derivatives): a reduced stance file's parts divide ~90

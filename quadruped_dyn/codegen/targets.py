@@ -69,9 +69,12 @@ def skip_reason(target: Target, run: bool = True) -> str | None:
 
 
 def make(source_dir: Path, goals: list[str], build_dir: Path, cflags: str = "-Os", jobs: int = 2,
-         timeout: float = 3600) -> subprocess.CompletedProcess[str]:
-    """``make -C source_dir GOALS B=build_dir CROSS_CFLAGS=cflags``; BuildError on failure with its output."""
-    cmd = ["make", "-C", str(source_dir), f"-j{jobs}", f"B={Path(build_dir).resolve()}", f"CROSS_CFLAGS={cflags}", *goals]
+         timeout: float = 3600, stem: str | None = None) -> subprocess.CompletedProcess[str]:
+    """``make -C source_dir GOALS B=build_dir CROSS_CFLAGS=cflags`` (and ``ROBOT=`` the robot of the files ``stem``
+    starts, if given); BuildError on failure with its output."""
+    robot = [f"ROBOT={stem.removeprefix('qd_')}"] if stem else []
+    cmd = ["make", "-C", str(source_dir), f"-j{jobs}", f"B={Path(build_dir).resolve()}", f"CROSS_CFLAGS={cflags}", *robot,
+           *goals]
     try:
         proc = subprocess.run(cmd, capture_output=True, text=True, timeout=timeout, env={**os.environ, "LC_ALL": "C"})
     except subprocess.TimeoutExpired as e:

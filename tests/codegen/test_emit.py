@@ -4,6 +4,7 @@ to Pinocchio when compiled and loaded back (double), and to the double build (fl
 from __future__ import annotations
 
 import ctypes
+import json
 import re
 import shutil
 import subprocess
@@ -13,7 +14,7 @@ import casadi as ca
 import numpy as np
 import pytest
 
-from quadruped_dyn.checks.c_reference import (
+from quadruped_dyn.checks.check_program_values import (
     compare_generation,
     parse_reference_header,
     pinocchio_outputs,
@@ -66,7 +67,7 @@ def test_reference_values_are_compared_numerically():
     """Round-off of another CPU (a few ulps, a residual's tiny value tripled) is not a difference;
     a value moved beyond the tolerance is reported by name, index and amount; a change of the
     structure (an array's size, a case's name) is a difference whatever the values."""
-    text = (CASADI_GEN / "qd_paper_reference.h").read_text()
+    text = (CASADI_GEN / "qd_paper-reference.h").read_text()
     header = parse_reference_header(text)
     assert len(header.case_outputs) == (len(CODEGEN_FUNCTIONS) + len(REDUCED_NAMES) * len(REDUCED_STANCE_SETS)
                                         + N_DERIVATIVE_FUNCTIONS)
@@ -117,7 +118,7 @@ def test_c_program_builds_and_passes(tmp_path):
     assert not [p.name for p in CASADI_GEN.glob("qd_paper*.c") if "malloc" in p.read_text()]
 
 
-@pytest.mark.parametrize("kind", ["qd_paper.c", "qd_paper_r_FL_BL.c", "qd_paper_d.c"])
+@pytest.mark.parametrize("kind", ["qd_paper.c", "qd_paper-r-FL_BL.c", "qd_paper-d.c"])
 def test_generated_source_compiles_without_precision_flag(kind):
     """A user's plain build (no -Dcasadi_real: double, CasADi's default) compiles every kind of
     generated file with the project's warnings as errors (the precision wrappers need the default)."""
@@ -128,7 +129,7 @@ def test_generated_source_compiles_without_precision_flag(kind):
     assert proc.returncode == 0, proc.stderr[-2000:]
 
 
-@pytest.mark.parametrize("kind", ["qd_paper.c", "qd_paper_r_FL_BL.c", "qd_paper_d.c"])
+@pytest.mark.parametrize("kind", ["qd_paper.c", "qd_paper-r-FL_BL.c", "qd_paper-d.c"])
 def test_float_build_has_no_double_promotion(kind):
     """The float build computes in float (docs/embedded.md: `-Wdouble-promotion` clean): no float is promoted to
     double anywhere in the generated file or the templates it includes, as generated (fabs is qd_fabs there)."""
@@ -140,7 +141,7 @@ def test_float_build_has_no_double_promotion(kind):
 
 
 @pytest.mark.parametrize("precision", ["double", "float"])
-@pytest.mark.parametrize("kind", ["qd_paper.c", "qd_paper_r_FL_BL.c", "qd_paper_r_FL_FR_BL_BR.c", "qd_paper_d.c"])
+@pytest.mark.parametrize("kind", ["qd_paper.c", "qd_paper-r-FL_BL.c", "qd_paper-r-FL_FR_BL_BR.c", "qd_paper-d.c"])
 def test_generated_source_compiles_with_clang(kind, precision):
     """`make CC=clang` (the Makefile's -std=c99 -pedantic -Wall -Wextra -Werror): no warning from clang either
     (before: every file defined precision wrappers it never called, e.g. qd_tan, -Wunused-function)."""
@@ -151,7 +152,7 @@ def test_generated_source_compiles_with_clang(kind, precision):
     assert proc.returncode == 0, proc.stderr[-2000:]
 
 
-@pytest.mark.parametrize("kind", ["qd_paper_r_FL_BL.c", "qd_paper_r_FL_FR_BL_BR.c"])
+@pytest.mark.parametrize("kind", ["qd_paper-r-FL_BL.c", "qd_paper-r-FL_FR_BL_BR.c"])
 def test_generated_source_builds_unoptimised(kind, tmp_path):
     """`make CFLAGS=-O0` (a debug build) with the Makefile's -Werror: before, GCC's -O0 stringop check failed every
     two-feet file on fd_r's dead four-feet branch (13 x 13 + 13 reals into M_r's 169)."""
@@ -163,12 +164,12 @@ def test_generated_source_builds_unoptimised(kind, tmp_path):
 def test_header_defines_the_return_codes_it_documents(tmp_path):
     """A caller tests the documented codes by name with the header alone (before, QD_SINGULAR was undeclared), and
     they are the values the library returns."""
-    from quadruped_dyn.codegen.library import C_FLAGS, QD_DEGENERATE, QD_NONFINITE, QD_SINGULAR
+    from quadruped_dyn.codegen.library import C_FLAGS, QD_DEGENERATE, QD_NO_WORK, QD_NONFINITE, QD_SINGULAR
 
     program = tmp_path / "codes.c"
     program.write_text('#include "qd_paper.h"\n'
                        f"typedef char codes_agree[QD_NONFINITE == {QD_NONFINITE} && QD_SINGULAR == {QD_SINGULAR}"
-                       f" && QD_DEGENERATE == {QD_DEGENERATE} ? 1 : -1];\n"
+                       f" && QD_DEGENERATE == {QD_DEGENERATE} && QD_NO_WORK == {QD_NO_WORK} ? 1 : -1];\n"
                        "int main(void) { return (int)sizeof(codes_agree) - 1; }\n")
     proc = subprocess.run(["gcc", *C_FLAGS, "-I", str(CASADI_GEN), "-fsyntax-only", str(program)],
                           capture_output=True, text=True, check=False)
@@ -254,14 +255,26 @@ def test_float_build_matches_double_build(paper):
 @pytest.mark.slow
 def test_bench_reports_ratios_against_pinocchio(paper):
     """The benchmark harnesses build and run (no timing asserted: speed is a benchmark's job)."""
+    from quadruped_dyn.bench.call_cost import CODE_BUDGET_BYTES, NOT_MEASURED, valgrind_available
     from quadruped_dyn.bench.timing import PAIRS, run_bench
 
-    report = run_bench(paper, calls=200, reps=3)
+    report = run_bench(paper, calls=200, reps=3, call_cost=True)
     entries = {e.name: e for e in report.entries}
     for name, (algo, _) in PAIRS.items():
         e = entries[name]
         assert e.pinocchio == algo and e.pinocchio_ns > 0 and e.ratio == pytest.approx(e.generated_ns / e.pinocchio_ns)
     assert report.code_bytes > 0 and report.library_bytes > 0
+    assert report.cpu_model and report.compiler and json.dumps(report.as_dict())
+    if not valgrind_available():
+        assert report.call_costs == [] and report.call_cost_note == NOT_MEASURED
+        return
+    costs = {c.function[len(PREFIX):]: c for c in report.call_costs}
+    assert set(costs) == set(entries) - {"C_full + G_full"}  # every timed function counted
+    graphs = {f.name()[len(PREFIX):] for f in codegen_functions(paper)}  # one CasADi graph each: operations known
+    for name, c in costs.items():
+        assert c.instructions > 0 and c.code_bytes > 0 and c.i1_misses >= 0, c
+        assert c.over_budget == (c.code_bytes > CODE_BUDGET_BYTES)
+        assert (c.operations is not None and c.operations > 0) == (name in graphs), c
 
 
 def test_missing_compiler_is_a_clear_error(paper):
@@ -289,18 +302,18 @@ def test_codegen_check_compares_at_the_precision_asked_for(tmp_path):
     reported separately."""
     from click.testing import CliRunner
 
-    from quadruped_dyn.checks.c_reference import generate_checked
+    from quadruped_dyn.checks.check_program_values import generate_checked
     from quadruped_dyn.cli import main
 
     generate_checked(load_robot("paper"), tmp_path, "float")
     ok = CliRunner().invoke(main, ["codegen", "paper", "--out", str(tmp_path), "--precision", "float", "--check"])
     assert ok.exit_code == 0 and "(float): up to date" in ok.output, ok.output
-    (tmp_path / "qd_paper_reference.h").write_text(
-        _perturbed((tmp_path / "qd_paper_reference.h").read_text(), "qd_C_full_out0", 1, 1.01))
+    (tmp_path / "qd_paper-reference.h").write_text(
+        _perturbed((tmp_path / "qd_paper-reference.h").read_text(), "qd_C_full_out0", 1, 1.01))
     bad = CliRunner().invoke(main, ["codegen", "paper", "--out", str(tmp_path), "--check"])
     assert bad.exit_code == 1, bad.output
     assert "source differs from a fresh generation: qd_paper.c, qd_paper.h" in bad.output, bad.output
-    assert "reference values differ beyond tolerance: qd_paper_reference.h: qd_C_full_out0[1] " in bad.output
+    assert "reference values differ beyond tolerance: qd_paper-reference.h: qd_C_full_out0[1] " in bad.output
 
 
 def _evaluation_body(text: str, name: str) -> str:
@@ -330,7 +343,7 @@ def _evaluation_body(text: str, name: str) -> str:
 def test_unguarded_functions_read_no_input_pointer_and_a_null_input_as_zeros(paper):
     """Each UNGUARDED function's evaluation reads its inputs without testing the pointers; its entry point still
     gives a NULL input zeros (CasADi's convention): the same outputs, bit for bit, as zeros passed."""
-    text = "".join((CASADI_GEN / f).read_text() for f in ("qd_paper.c", "qd_paper_d.c"))
+    text = "".join((CASADI_GEN / f).read_text() for f in ("qd_paper.c", "qd_paper-d.c"))
     assert UNGUARDED == {"M_full", "G_full", "did_full"}
     for name in sorted(UNGUARDED):
         body = _evaluation_body(text, name)
@@ -368,7 +381,7 @@ def test_header_says_which_functions_read_a_null_input_as_zeros(tmp_path):
     assert len(names) == 5 + 16 + 2 + 15, names  # full terms, GRF solves, did_full and dfd_full_parts, dgrf_dir
     lib_path = tmp_path / "libfull.so"
     subprocess.run(["gcc", "-std=c99", "-O0", "-fPIC", "-shared", str(CASADI_GEN / "qd_paper.c"),
-                    str(CASADI_GEN / "qd_paper_d.c"), "-o", str(lib_path), "-lm"], check=True, capture_output=True)
+                    str(CASADI_GEN / "qd_paper-d.c"), "-o", str(lib_path), "-lm"], check=True, capture_output=True)
     lib = ctypes.CDLL(str(lib_path))
     ptr, rng = ctypes.POINTER(ctypes.c_double), np.random.default_rng(11)
 
@@ -404,7 +417,7 @@ def test_dense_patterns_are_the_short_form_the_header_states():
     header = (CASADI_GEN / "qd_paper.h").read_text()
     assert "{nrow, ncol, 1}" in header[: header.index("*/")]
     sparsity = re.findall(r"static const casadi_int casadi_s\d+\[(\d+)\] = \{(\d+), (\d+), (\d+)[,}]",
-                          (CASADI_GEN / "qd_paper_r_FL_BR.c").read_text())
+                          (CASADI_GEN / "qd_paper-r-FL_BR.c").read_text())
     assert any(size == "3" and third == "1" for size, _, _, third in sparsity)  # e.g. q_r, M_r: dense, 3 entries
 
 
@@ -412,13 +425,16 @@ def test_header_return_notes_match_the_codes_returned(tmp_path):
     """A NaN joint angle: each full-coordinate, GRF and derivative function returns 0 or a code its header note lists,
     and always 0 where the header says it returns 0 always (before, did_full and dfd_full_parts returned QD_NONFINITE with no
     note); M_r, CG_r, G_r and id_r factor nothing and are not said to return QD_SINGULAR."""
+    from quadruped_dyn.codegen.library import QD_DEGENERATE, QD_NO_WORK, QD_NONFINITE, QD_SINGULAR
+
     header = (CASADI_GEN / "qd_paper.h").read_text()
     doc = header[: header.index("*/")]
     notes = dict(re.findall(r"^ \*   (qd_\w+)\(.*?;  iw \d+, w \d+(.*)$", doc, re.M))
-    codes = {"QD_NONFINITE": 1, "QD_SINGULAR": 2, "QD_DEGENERATE": 3}
+    codes = {"QD_NONFINITE": QD_NONFINITE, "QD_SINGULAR": QD_SINGULAR, "QD_DEGENERATE": QD_DEGENERATE,
+             "QD_NO_WORK": QD_NO_WORK}
     lib_path = tmp_path / "libfull.so"
     subprocess.run(["gcc", "-std=c99", "-O0", "-fPIC", "-shared", str(CASADI_GEN / "qd_paper.c"),
-                    str(CASADI_GEN / "qd_paper_d.c"), "-o", str(lib_path), "-lm"], check=True, capture_output=True)
+                    str(CASADI_GEN / "qd_paper-d.c"), "-o", str(lib_path), "-lm"], check=True, capture_output=True)
     lib = ctypes.CDLL(str(lib_path))
     ptr = ctypes.POINTER(ctypes.c_double)
     checked = 0
@@ -433,10 +449,10 @@ def test_header_return_notes_match_the_codes_returned(tmp_path):
         w = np.zeros(4000)
         flag = getattr(lib, name)((ptr * n_in)(*[x.ctypes.data_as(ptr) for x in ins]),
                                   (ptr * n_out)(*[r.ctypes.data_as(ptr) for r in res]), None, w.ctypes.data_as(ptr), 0)
-        listed = {codes[c] for c in re.findall(r"QD_[A-Z]+", note)}
+        listed = {codes[c] for c in re.findall(r"QD_[A-Z_]+", note)}
         assert flag in listed | {0} if listed else flag == 0, (name, flag, note)  # 0 where the NaN does not enter
         checked += 1
-    assert checked == 5 + 16 + 3 + 2 * 15
+    assert checked == 6 + 16 + 3 + 2 * 15  # full terms with feet_full, GRF solves, did_full + dfd_full(_parts), dgrf(_dir)
     for name, note in notes.items():
         kind = re.match(r"qd_(\w+?_r)_", name)
         if kind:

@@ -10,7 +10,8 @@ import casadi as ca
 import numpy as np
 import pytest
 
-from quadruped_dyn.checks.derivative_reference import ReducedReference, grf_derivatives_reference
+from quadruped_dyn.checks.finite_differences import ReducedFiniteDifferences, grf_derivatives_by_differences
+from quadruped_dyn.codegen.c_facts import prelude_c
 from quadruped_dyn.codegen.casadi_source import PREFIX
 from quadruped_dyn.codegen.emit import REDUCED_STANCE_SETS, TEMPLATES, _precision_math, reduced_symbol
 from quadruped_dyn.codegen.emit_derivatives import (
@@ -27,7 +28,8 @@ from quadruped_dyn.dynamics.derivatives import full_derivatives
 from quadruped_dyn.dynamics.rnea_derivatives import did_full_pieces
 from quadruped_dyn.errors import InputError
 from quadruped_dyn.math.compare import relative_error
-from quadruped_dyn.model.robot import ROBOT_NAMES, load_robot
+from quadruped_dyn.model.registry import ROBOT_NAMES
+from quadruped_dyn.model.robot import load_robot
 from quadruped_dyn.model.stance import stance_set
 from quadruped_dyn.model.state import random_state
 from quadruped_dyn.references.pinocchio import PinocchioDerivatives, PinocchioReference
@@ -89,6 +91,7 @@ def test_singular_mass_matrix_returns_singular(tmp_path, zero):
     program = tmp_path / "singular.c"
     program.write_text(f"""#define casadi_real double
 #define casadi_int long long int
+{prelude_c()}
 #include "{TEMPLATES / 'qd_dense.c'}"
 #include "{TEMPLATES / 'qd_derivatives_solve.c'}"
 #include <stdio.h>
@@ -136,7 +139,7 @@ def _check_compiled_reduced(robot, library, stance_name, seed=0) -> float:
     n = 13 if len(stance.feet) == 2 else 12
     q_r, qd, tau, quat = reduced_point(robot, n, np.random.default_rng(seed))
     ours = CompiledFunction(library, reduced_symbol("dfd_r", stance))(q_r, qd, tau, quat)
-    expected = ReducedReference(PinocchioReference(robot), stance).dfd_r(q_r, qd, tau, quat)
+    expected = ReducedFiniteDifferences(PinocchioReference(robot), stance).dfd_r(q_r, qd, tau, quat)
     assert np.all(np.asarray(ours[0])[:, 12:] == 0.0)  # the roll is read from quat
     for name, o, e in zip(("dqdd_dq", "dqdd_dqd", "dqdd_dtau", "dqdd_dtheta"), ours, expected):
         assert_close(o, e, REL_TOL_FD_DERIVATIVES, f"{robot.name} C dfd_r_{stance_name} {name}")
@@ -148,7 +151,7 @@ def _check_compiled_grf(robot, library, stance_name, seed=0) -> float:
     stance = stance_set(stance_name)
     q, v, a = grf_point(robot, np.random.default_rng(seed))
     ours = CompiledFunction(library, f"dgrf_{stance_name.replace('+', '_')}")(q, v, a)
-    expected = grf_derivatives_reference(PinocchioReference(robot), stance, q, v, a)
+    expected = grf_derivatives_by_differences(PinocchioReference(robot), stance, q, v, a)
     for name, o, e in zip(("dlambda_dq", "dlambda_dv", "dlambda_da"), ours, expected):
         assert_close(o, e, REL_TOL_FD_DERIVATIVES, f"{robot.name} C dgrf_{stance_name} {name}")
     return max(relative_error(np.asarray(o), e) for o, e in zip(ours, expected))

@@ -86,8 +86,8 @@ def test_paper_footprint_meets_the_budgets(tmp_path, name):
 @pytest.mark.slow
 @pytest.mark.parametrize("name", ["cortex-m7"])
 def test_paper_footprint_with_the_derivatives_meets_the_budgets(tmp_path, name):
-    """The same stack and whole-robot budgets with the derivative functions counted (met since 2026-12-02, issue
-    19: the reduced files call the robot's M_full, G_full and id_full instead of their own copies; before, the
+    """The same stack and whole-robot budgets with the derivative functions counted (met since
+    the reduced files call the robot's M_full, G_full and id_full instead of their own copies; before, the
     whole robot was ~1.2 MB of 1 MB on Cortex-M7 -Os)."""
     fp, s, _ = _paper_footprint(tmp_path, name)
     assert 0 < s["max_stack"] <= BUDGET_STACK, s["max_stack"]

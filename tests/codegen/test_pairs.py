@@ -9,7 +9,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from quadruped_dyn.checks.c_reference import reduced_inputs, reference_state
+from quadruped_dyn.checks.check_program_values import reduced_inputs, reference_state
 from quadruped_dyn.codegen.library import C_FLAGS, CompiledFunction, CompiledLibrary, compile_sources
 from quadruped_dyn.model.robot import load_robot
 
@@ -19,7 +19,7 @@ STANCES = ("FL_BR", "FL_FR_BL", "FL_FR_BL_BR")
 
 @pytest.mark.slow
 def test_pairs_give_the_scalar_loops_results_to_the_bit(tmp_path):
-    sources = [CASADI_GEN / "qd_paper.c", CASADI_GEN / "qd_paper_d.c", *(CASADI_GEN / f"qd_paper_r_{s}.c" for s in STANCES)]
+    sources = [CASADI_GEN / "qd_paper.c", CASADI_GEN / "qd_paper-d.c", *(CASADI_GEN / f"qd_paper-r-{s}.c" for s in STANCES)]
     builds = {}
     for name, extra in (("pairs", ()), ("scalar", ("-DQD_NO_PAIRS",))):
         path = tmp_path / f"libqd_paper_{name}.so"

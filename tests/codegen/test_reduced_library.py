@@ -11,7 +11,13 @@ import numpy as np
 import pinocchio as pin
 import pytest
 
-from quadruped_dyn.checks.c_reference import float_bound, pinocchio_outputs, reduced_inputs, reference_state, tolerance_scale
+from quadruped_dyn.checks.check_program_values import (
+    float_bound,
+    pinocchio_outputs,
+    reduced_inputs,
+    reference_state,
+    tolerance_scale,
+)
 from quadruped_dyn.codegen.emit import REDUCED_NAMES, REDUCED_STANCE_SETS, reduced_functions, reduced_symbol
 from quadruped_dyn.codegen.library import QD_DEGENERATE, RETURN_CODES, CompiledFunction, compiled_library
 from quadruped_dyn.codegen.reduced_library import CompiledReducedDynamics
@@ -131,7 +137,7 @@ def test_trunk_pitched_near_90_deg_is_degenerate_for_two_feet(paper):
 
 
 def test_degenerate_stances_are_reported_by_every_function(paper):
-    """QD_DEGENERATE (issue 18 item 4) from every generated reduced function where the Python model
+    """QD_DEGENERATE from every generated reduced function where the Python model
     raises too: three collinear stance feet (put on a line by Pinocchio IK) and the front pair at zero
     pitch and roll (roll axis perpendicular to the feet's line); without it they return ~1e15 with
     code 0. A regular state of the same stance set next door still gets an answer."""

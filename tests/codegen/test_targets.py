@@ -16,8 +16,9 @@ from pathlib import Path
 
 import pytest
 
-from quadruped_dyn.checks.c_reference import generate_checked
-from quadruped_dyn.codegen.emit import CODEGEN_FUNCTIONS, N_DERIVATIVE_FUNCTIONS, REDUCED_NAMES, REDUCED_STANCE_SETS, stem
+from quadruped_dyn.checks.check_program_values import generate_checked
+from quadruped_dyn.codegen.emit import CODEGEN_FUNCTIONS, N_DERIVATIVE_FUNCTIONS, REDUCED_NAMES, REDUCED_STANCE_SETS
+from quadruped_dyn.codegen.file_names import robot_stem
 from quadruped_dyn.codegen.library import compiled_library
 from quadruped_dyn.codegen.targets import TARGETS, Target, make, run_check, skip_reason
 from quadruped_dyn.model.robot import load_robot
@@ -88,27 +89,27 @@ def test_example_robot_data_b1_checks_on_target(tmp_path, b1_generated, name):
 
 def test_cross_builds_are_warning_free_and_board_memory_fits():
     """The Makefile's cross flags: C99, -Wall -Wextra -Werror, the FPU of each core; a check
-    program's image fits the MPS2 boards' 4 MB code and 4 MB data RAM (qd_cortex_m.ld)."""
+    program's image fits the MPS2 boards' 4 MB code and 4 MB data RAM (cortex_m.ld)."""
     makefile = (CASADI_GEN / "Makefile").read_text()
     assert "WARN = -std=c99 -pedantic -Wall -Wextra -Werror" in makefile
     assert "-mcpu=cortex-m7 -mfpu=fpv5-d16 -mfloat-abi=hard" in makefile
     assert "-mcpu=cortex-m4 -mfpu=fpv4-sp-d16 -mfloat-abi=hard" in makefile
-    linker = (CASADI_GEN / "qd_cortex_m.ld").read_text()
+    linker = (CASADI_GEN / "cortex_m.ld").read_text()
     assert "ORIGIN = 0x00000000, LENGTH = 4M" in linker and "ORIGIN = 0x20000000, LENGTH = 4M" in linker
 
 
 def _thread_program(robot_dir: Path, library: Path, out: Path, flags: list[str]) -> Path:
-    name = stem(load_robot("paper"))
+    name = robot_stem("paper")
     cmd = ["gcc", "-std=c99", "-pedantic", "-Wall", "-Wextra", "-Werror", *flags, "-pthread", "-Dcasadi_real=double",
-           f'-DQD_HEADER="{name}.h"', f'-DQD_REFERENCE="{name}_reference.h"', f"-I{robot_dir}",
-           str(robot_dir / "qd_threads.c"), str(library), f"-Wl,-rpath,{library.parent}", "-lm", "-o", str(out)]
+           f'-DQD_HEADER="{name}.h"', f'-DQD_REFERENCE="{name}-reference.h"', f"-I{robot_dir}",
+           str(robot_dir / "check_threads.c"), str(library), f"-Wl,-rpath,{library.parent}", "-lm", "-o", str(out)]
     proc = subprocess.run(cmd, capture_output=True, text=True, check=False)
     assert proc.returncode == 0, proc.stderr[-3000:]
     return out
 
 
 def test_every_function_is_thread_safe_bit_for_bit(tmp_path, paper):
-    """qd_threads.c: 4 threads x 20 rounds of every generated function at once, each thread with
+    """check_threads.c: 4 threads x 20 rounds of every generated function at once, each thread with
     its own work memory, against the serial results bit for bit (the cached -O3 library of the
     same code)."""
     if shutil.which("gcc") is None:

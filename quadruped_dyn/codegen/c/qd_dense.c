@@ -1,5 +1,5 @@
-/* quadruped_dyn: a CasADi sparse output made dense (hand-written; inserted into qd_<robot>_d.c
- * and in qd_reduced_templates.h, which each qd_<robot>_r_<feet>.c includes; see quadruped_dyn/codegen/emit.py). */
+/* quadruped_dyn: a CasADi sparse output made dense (hand-written; inserted into qd_<robot>-d.c
+ * and in reduced_templates.h, which each qd_<robot>-r-<feet>.c includes; see quadruped_dyn/codegen/emit.py). */
 /* x (nrow * ncol reals, column-major) = the dense matrix of the nonzeros nz of a CasADi sparsity sp
  * (nrow, ncol, colind[ncol + 1], row[nnz]), x and nz apart: the zeros in one pass (memset), then the nonzeros; faster
  * than densifying in place, whose gaps are zeroed one nonzero at a time (docs/benchmark.md). */

@@ -1,5 +1,5 @@
 /* quadruped_dyn: derivatives of the full forward dynamics (hand-written, inserted into the
- * generated qd_<robot>_d.c; see quadruped_dyn/codegen/emit_derivatives.py).
+ * generated qd_<robot>-d.c; see quadruped_dyn/codegen/emit_derivatives.py).
  *
  * d/dq is along pinocchio.integrate(q, dq): dq (18) = (dv_b, dw_b, dq_joints), a body-frame
  * (local) increment of the trunk pose, p -> p + R dv_b, R -> R Exp([dw_b]x); 18 columns, none of
@@ -20,28 +20,10 @@
 #include <float.h>
 #include <math.h>
 
-#ifndef QD_NONFINITE
-#define QD_NONFINITE 1
-#define QD_SINGULAR 2
-#endif
-#ifndef QD_EPS
-#define QD_EPS (sizeof(casadi_real) == sizeof(float) ? (casadi_real)FLT_EPSILON \
-                : sizeof(casadi_real) == sizeof(double) ? (casadi_real)DBL_EPSILON : (casadi_real)LDBL_EPSILON)
-#define QD_SINGULAR_RTOL (450 * QD_EPS)
-#endif
 #define QD_NV 18
 
 typedef int (*qd_d_eval_fn)(const casadi_real**, casadi_real**, casadi_int*, casadi_real*, int);
 
-/* Where a generated function is passed as a pointer, the template is inlined into its caller so the
- * call becomes direct and a static stack walk (-fcallgraph-info, docs/embedded.md) can bound it. */
-#ifndef QD_INLINE
-#if defined(__GNUC__)
-#define QD_INLINE static inline __attribute__((always_inline))
-#else
-#define QD_INLINE static inline
-#endif
-#endif
 
 /* defined in qd_<robot>.c of the same library (no work memory: checked by the generator) */
 int qd_M_full(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem);
@@ -249,6 +231,7 @@ static int qd_d_tree_inverse(const casadi_real* restrict M, casadi_real* restric
 
 QD_INLINE int qd_dfd_full_solve(qd_d_eval_fn did, const casadi_int* sp_dq, const casadi_int* sp_dv,
                              const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem) {
+  if (!w) return QD_NO_WORK;
   casadi_real *M = w, *Minv = M + QD_NV * QD_NV, *Dq = Minv + QD_NV * QD_NV, *Dv = Dq + QD_NV * QD_NV;
   casadi_real *nle = Dv + QD_NV * QD_NV, *a = nle + QD_NV, *blk = a + QD_NV, *rest = blk + 4 * 9 + 4 * 18 + 36;
   int flag = qd_d_parts(arg, M, nle, Minv, iw, rest, mem); /* M_full's nonzeros in Minv's place until the inverse */
@@ -315,6 +298,7 @@ static void qd_d_trunk_product(int m, const casadi_real* P, const casadi_int* sp
 QD_INLINE int qd_dgrf_solve(int m, int legs, qd_d_eval_fn did, qd_d_eval_fn dir, const casadi_int* sp_dq,
                          const casadi_int* sp_dv, const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w,
                          int mem) {
+  if (!w) return QD_NO_WORK;
   casadi_real *M = w, *Dq = M + QD_NV * QD_NV, *Dv = Dq + QD_NV * QD_NV, *nle = Dv + QD_NV * QD_NV, *seed = nle + QD_NV;
   casadi_real *wrench = seed + QD_NV, *P = wrench + 6, *dPw = P + 6 * 6, *rest = dPw + 6 * QD_NV; /* m <= 6 */
   int flag = qd_d_parts(arg, M, nle, Dq, iw, rest, mem); /* M_full's nonzeros in Dq's place until did_full */

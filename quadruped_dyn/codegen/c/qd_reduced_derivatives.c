@@ -1,4 +1,4 @@
-/* quadruped_dyn: derivatives of the reduced forward dynamics (hand-written; in qd_reduced_templates.h,
+/* quadruped_dyn: derivatives of the reduced forward dynamics (hand-written; in reduced_templates.h,
  * which each qd_<robot>_r_<stance>.c includes, after qd_reduced_solve.c, whose checks, M_r product and LU it uses; see
  * quadruped_dyn/codegen/emit_derivatives.py and docs/derivatives.md).
  *
@@ -8,7 +8,7 @@
  * derivatives: id_r = S(q_r) F(q, v, a), F the full inverse dynamics (no foot forces) at q = (0, quat, q_j),
  * v = (v_b, qd_j), a = (a_b, qdd_j), S = [S_b, I] (row 12 of two feet: S_b only), so
  *   d id_r/dx = d(S_b F_b)/dx at fixed F + S (dF/dq dq/dx + dF/dv dv/dx + M da/dx),
- * with dF/dq, dF/dv from qd_did_full (qd_<robot>_d.c: same library); qdd_r as qd_fd_r_solve forms it (S_b, T_b, the
+ * with dF/dq, dF/dv from qd_did_full (qd_<robot>-d.c: same library); qdd_r as qd_fd_r_solve forms it (S_b, T_b, the
  * rnea at qdd_r = 0, M), F's trunk rows from that rnea's by M (rnea is linear in a). Only the trunk rows v_b, a_b ("the lift") depend on x other than by
  * identity: the generated qd_dfd_r_lift gives them once (the angles' sines and cosines taken once and passed in)
  * with its tape, the values of its algorithm that its derivative reads; their derivative along a joint angle or
@@ -24,7 +24,7 @@
  * temporaries in the caller's w (QD_DFD_R_W(n) reals, stated by the _work entry), ~1 kB on the stack (and
  * the lift's columns, (18 + n) K reals, but at -Os). */
 
-/* defined in qd_<robot>_d.c of the same library (no work memory: checked by the generator): did_full leg by leg with
+/* defined in qd_<robot>-d.c of the same library (no work memory: checked by the generator): did_full leg by leg with
  * the joints' sines and cosines given, arg = (q, v, a, sin, cos), sin and cos of q[7..18], its legs' outputs in L
  * (QD_DID_FULL_L reals: dfd_r's w, not the stack, the Cortex-M budget); no test of its inputs or outputs (dfd_r tests
  * its own) */
@@ -129,6 +129,7 @@ static inline void qd_dfd_r_take(int n, int K, const casadi_real* L, int c, casa
  * lift_quat: the lift depends on the trunk orientation (two feet). */
 QD_INLINE int qd_dfd_r_solve(int n, int legs, int lift_quat, const casadi_real** arg, casadi_real** res, casadi_int* iw,
                              casadi_real* w, int mem) {
+  if (!w) return QD_NO_WORK;
   casadi_real *M_r = w, *qdd = M_r + n * n, *S_b = qdd + n, *T_b = S_b + 6 * n, *M = T_b + 6 * n, *G = M + 18 * 18,
               *H = G + 18 * 18, *F = H + 18 * 18, *y = F + 18, *col = y + 18, *X = col + n, *tape = X + n * QD_DFD_R_COLUMNS(n);
   const int m = QD_DFD_R_COLUMNS(n);

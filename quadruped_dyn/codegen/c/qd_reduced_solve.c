@@ -1,4 +1,4 @@
-/* quadruped_dyn: checks and the forward-dynamics solve of the reduced model (hand-written; in qd_reduced_templates.h,
+/* quadruped_dyn: checks and the forward-dynamics solve of the reduced model (hand-written; in reduced_templates.h,
  * which each qd_<robot>_r_<stance>.c includes (quadruped_dyn/codegen/emit.py) after QD_REGULARITY_MIN and
  * qd_stance_maps (the stance's maps from its feet's positions, dynamics/stance_maps.py, and its regularity
  * (r, quat) -> [0, 1] of dynamics/stance_regularity.py), from which qd_parts forms S_b, T_b, v, a. Every
@@ -8,45 +8,14 @@
 #include <math.h>
 #include <string.h>
 
-#ifndef QD_NONFINITE
-#define QD_NONFINITE 1
-#define QD_SINGULAR 2
-#endif
-#define QD_DEGENERATE 3
-
-/* Machine epsilon of casadi_real (float, double or long double builds). */
-#define QD_EPS (sizeof(casadi_real) == sizeof(float) ? (casadi_real)FLT_EPSILON \
-                : sizeof(casadi_real) == sizeof(double) ? (casadi_real)DBL_EPSILON : (casadi_real)LDBL_EPSILON)
-/* A pivot this small relative to the largest entry of the matrix eliminated (M_r, or with a swing leg its blocks of M
- * and the folded rest K) means M_r is singular to working precision (condition number beyond ~1 / (QD_SINGULAR_RTOL)):
- * 1e-13 in double, 5e-5 in float. */
-#define QD_SINGULAR_RTOL (450 * QD_EPS)
 #define QD_N_MAX 13
 /* Regularity is the square of a relative singular value of the feet's layout; computed from
  * foot positions rounded at eps, it cannot resolve values below ~(64 eps)^2 (float: 6e-11). */
 #define QD_REGULARITY_FLOOR ((64 * QD_EPS) * (64 * QD_EPS))
 
-/* The templates are inlined into their callers: each specialised for its constant n and legs, and every call direct,
- * so a static stack walk (-fcallgraph-info, docs/embedded.md) can bound it. */
-#ifndef QD_INLINE
-#if defined(__GNUC__)
-#define QD_INLINE static inline __attribute__((always_inline))
-#else
-#define QD_INLINE static inline
-#endif
-#endif
-#ifndef QD_NOINLINE
-#if defined(__GNUC__)
-#define QD_NOINLINE static __attribute__((noinline))
-#else
-#define QD_NOINLINE static
-#endif
-#endif
-
 /* Two reals at once where the compiler has vectors (GCC's and Clang's vector extension: SSE2 pairs on x86-64, NEON on
  * AArch64, scalar code where the target has none): the same operations on each entry, in the same order, as the scalar
- * loops below them, so the same results to the bit (docs/benchmark.md, "M's blocks, the elimination's chain,
- * pairs"). */
+ * loops below them, so the same results to the bit (docs/benchmark.md, "Design choices"). */
 #if defined(__GNUC__) && !defined(QD_NO_PAIRS) /* QD_NO_PAIRS: the scalar loops (tests/codegen/test_pairs.py) */
 typedef casadi_real qd_pair __attribute__((vector_size(2 * sizeof(casadi_real))));
 #define QD_PAIRS 1
@@ -75,9 +44,9 @@ QD_INLINE void qd_gemv(int m, int p, const casadi_real* A, int lda, const casadi
 }
 
 /* qd_gemv, one copy for all its calls (not inlined): fd_r's fold and K. An fd_r call runs ~38 kB of code, more than the
- * first-level instruction cache holds, and their products inlined were its largest piece (docs/benchmark.md, "The
- * fold's products in one copy"). */
-QD_NOINLINE void qd_gemv_outlined(int m, int p, const casadi_real* A, int lda, const casadi_real* x, casadi_real* y) {
+ * first-level instruction cache holds, and their products inlined were its largest piece (docs/benchmark.md, "Design
+ * choices"). */
+static QD_NOINLINE void qd_gemv_outlined(int m, int p, const casadi_real* A, int lda, const casadi_real* x, casadi_real* y) {
   qd_gemv(m, p, A, lda, x, y);
 }
 
@@ -140,14 +109,9 @@ static void qd_trig_of(int n, const casadi_real* q_r, qd_trig* t) { qd_sincos(n,
 
 /* defined in qd_<robot>.c of the same library: leg k's foot kinematics y (QD_FOOT reals: dynamics/by_leg.py,
  * FOOT_PARTS) at its joints' q_l, qd_l and their sines s and cosines c (3 each): the foot's position r, J = dr/dq_l, J qd_l
- * and Jdot qd_l, trunk frame, read by QD_FOOT_R, QD_FOOT_J, QD_FOOT_JQD and QD_FOOT_JDQD. */
+ * and Jdot qd_l, trunk frame, read by QD_FOOT_R, QD_FOOT_J, QD_FOOT_JQD and QD_FOOT_JDQD (codegen/c_facts.py). */
 int qd_foot_trig(int k, const casadi_real* q_l, const casadi_real* qd_l, const casadi_real* s, const casadi_real* c,
                  casadi_real* y);
-#define QD_FOOT 18
-#define QD_FOOT_R(y, d) (y)[d]
-#define QD_FOOT_J(y, d, c) (y)[3 + (d) + 3 * (c)]
-#define QD_FOOT_JQD(y, d) (y)[12 + (d)]
-#define QD_FOOT_JDQD(y, d) (y)[15 + (d)]
 /* qd_parts' scratch: the stance feet (QD_FOOT each), their positions, W_T and Y (6 x 3k each), y_e, s_e, D */
 #define QD_PARTS_WORK (4 * QD_FOOT + 12 + 6 * 12 + 6 * 12 + 6 + 6 + 9)
 
@@ -157,7 +121,7 @@ static void qd_cross(const casadi_real* a, const casadi_real* b, casadi_real* c)
 }
 
 /* The parts of the reduced terms at (q_r, qd_r, qdd_r, quat) (null qd_r, qdd_r: zero), t q_r's sines and cosines, legs
- * bit l for a stance leg l (docs/formulation.md §6.2, "The parts from the feet's maps"): the regularity *m, S_b (n x 6),
+ * bit l for a stance leg l (docs/formulation.md §6.2): the regularity *m, S_b (n x 6),
  * T_b (6 x n) (column-major; S = [S_b, I_12], T = [T_b; I_12], row/column 12 no joint part), the full v, a = T qdd_r + k.
  * Without rates (qd_r and qdd_r null) v and a are not written. The stance feet's kinematics (qd_foot_trig), the
  * stance's maps from their positions (qd_stance_maps, generated before this file: dynamics/stance_maps.py; W_T (6 x 3k),
@@ -261,20 +225,16 @@ static void qd_full_q(const casadi_real* q_r, const casadi_real* quat, casadi_re
 /* M (18 x 18, dense column-major) at q (t: q_r's sines and cosines, q's joint angles), or with blocks only M's nonzero
  * blocks (QD_M_BLOCKS reals, read by QD_M_BB, QD_M_BL, QD_M_LL) leg by leg: the same values to round-off. Leg by leg
  * and without M's zeros the code is smaller, and a caller that runs much other code per call (fd_r) gains more from
- * that than it loses to the calls (docs/benchmark.md, "id_full and M by leg", "M's blocks, the elimination's chain,
- * pairs"). */
+ * that than it loses to the calls (docs/benchmark.md, "Design choices"). */
 static int qd_M_at(const casadi_real* q, const qd_trig* t, casadi_real* M, casadi_int* iw, casadi_real* w, int mem,
                    int blocks) {
   const casadi_real* m_arg[3] = {q, t->s, t->c};
   casadi_real* m_res[1] = {M};
   return blocks ? qd_M_blocks_legs_trig(m_arg, m_res, iw, w, mem) : qd_M_full_dense_trig(m_arg, m_res, iw, w, mem);
 }
-/* M's blocks (dynamics/by_leg.py, mass_blocks): M_bb (6 x 6), then per leg l M_bl (6 x 3) and M_ll (3 x 3), each
- * column-major; the blocks between two legs are zero and M_lb = M_bl^T. */
-#define QD_M_BLOCKS (36 + 4 * 27)
-#define QD_M_BB(Mc, i, k) (Mc)[(i) + 6 * (k)]
-#define QD_M_BL(Mc, l, i, c) (Mc)[36 + 27 * (l) + (i) + 6 * (c)]
-#define QD_M_LL(Mc, l, i, c) (Mc)[54 + 27 * (l) + (i) + 3 * (c)]
+/* M's blocks (dynamics/by_leg.py, mass_blocks; QD_M_BLOCKS, QD_M_BB, QD_M_BL, QD_M_LL: codegen/c_facts.py): M_bb
+ * (6 x 6), then per leg l M_bl (6 x 3) and M_ll (3 x 3), each column-major; the blocks between two legs are zero and
+ * M_lb = M_bl^T. */
 
 /* M_r = S M T (n x n, column-major) by columns: mt = M[:, 0:6] T_b e_j + M[:, 6 + j], then S_b mt[0:6] + mt[6:18].
  * legs: bit i for a stance leg i; S_b's rows and T_b's columns of the other legs' joints are zero: no trunk product
@@ -524,7 +484,7 @@ static int qd_fd_r_factor(int n, const casadi_real* tau_ext, casadi_real* M, int
 }
 
 /* x <- M_r^-1 x (legs as qd_M_r_legs'), M_r = S M T never formed, from M's blocks Mc (QD_M_BB, QD_M_BL, QD_M_LL;
- * docs/formulation.md, "fd_r without M_r"): a swing leg l's rows of S_b and columns of T_b are zero, so its rows read
+ * docs/formulation.md §6.2): a swing leg l's rows of S_b and columns of T_b are zero, so its rows read
  * M_lb a_b + M_ll qdd_l = x_l (a_b = T_b qdd_r, the trunk's acceleration), so qdd_l = w_l - Z_l a_b with
  * [Z_l, w_l] = M_ll^-1 [M_lb, x_l] (3 x 3 LU, no pivoting: M_ll is SPD); folded into the trunk,
  * M_bb <- M_bb - sum M_bl Z_l (in a copy of M_bb) and the rest R (stance joints, row 12; m = n - 3 swing legs)

@@ -1,5 +1,5 @@
 /* quadruped_dyn: the cosines and sines of the joint angles, taken once per call at a generated function's entry
- * (docs/formulation.md, "The joints' sines and cosines"). In double: the angle reduced by pi/2 in three parts
+ * (docs/embedded.md, "The joints' sines and cosines"). In double: the angle reduced by pi/2 in three parts
  * (Cody and Waite; pi/2 to 119 bits, exact products for |x| <= QD_SINCOS_MAX) and FreeBSD's kernels
  * __kernel_sin / __kernel_cos on [-pi/4, pi/4] (msun, k_sin.c and k_cos.c: < 1 ulp), with no branch, so the loop
  * vectorises; within 1 ulp of libm (tests/codegen/test_sincos.py). libm for an angle beyond QD_SINCOS_MAX or not

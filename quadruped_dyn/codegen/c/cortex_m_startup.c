@@ -1,4 +1,4 @@
-/* Minimal start-up for the check program on QEMU's MPS2 Cortex-M boards (qd_cortex_m.ld):
+/* Minimal start-up for the check program on QEMU's MPS2 Cortex-M boards (cortex_m.ld):
  * the vector table, then copy .data, zero .bss, enable the FPU, open newlib's semihosting
  * streams (librdimon, --specs=rdimon.specs) and run main. Its exit status leaves QEMU through
  * semihosting's exit call. */

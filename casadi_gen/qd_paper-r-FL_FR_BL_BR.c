@@ -22915,7 +22915,7 @@ static int qd_dfd_r_lift_dir(const casadi_real** arg, casadi_real** res, casadi_
 }
 #endif
 
-#include "qd_reduced_templates.h"
+#include "reduced_templates.h"
 static int qd_M_r_eval(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem) {
   return qd_reduced_term(12, 15, 0, arg, res, iw, w, mem);
 }

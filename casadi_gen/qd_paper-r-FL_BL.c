@@ -15,7 +15,7 @@ extern "C" {
   #define _CASADI_NAMESPACE_CONCAT(NS, ID) NS ## ID
   #define CASADI_PREFIX(ID) CASADI_NAMESPACE_CONCAT(CODEGEN_PREFIX, ID)
 #else
-  #define CASADI_PREFIX(ID) qd_paper_r_BL_BR_ ## ID
+  #define CASADI_PREFIX(ID) qd_paper_r_FL_BL_ ## ID
 #endif
 
 #include <math.h>
@@ -64,13 +64,13 @@ QD_MATH(sin) QD_MATH(cos) QD_MATH(sqrt) QD_MATH(fabs)
 static inline casadi_real casadi_sq(casadi_real x) { return x*x;}
 
 /* Configuration this file was compiled with */
-CASADI_SYMBOL_EXPORT void qd_paper_r_BL_BR_casadi_version(int* major, int* minor, int* patch) {
+CASADI_SYMBOL_EXPORT void qd_paper_r_FL_BL_casadi_version(int* major, int* minor, int* patch) {
   *major = 3;
   *minor = 8;
   *patch = 2;
 }
-CASADI_SYMBOL_EXPORT int qd_paper_r_BL_BR_casadi_int_size(void) { return (int) sizeof(casadi_int); }
-CASADI_SYMBOL_EXPORT int qd_paper_r_BL_BR_casadi_real_size(void) { return (int) sizeof(casadi_real); }
+CASADI_SYMBOL_EXPORT int qd_paper_r_FL_BL_casadi_int_size(void) { return (int) sizeof(casadi_int); }
+CASADI_SYMBOL_EXPORT int qd_paper_r_FL_BL_casadi_real_size(void) { return (int) sizeof(casadi_real); }
 
 static const casadi_int casadi_s0[3] = {13, 1, 1};
 static const casadi_int casadi_s1[3] = {4, 1, 1};
@@ -812,57 +812,57 @@ static int qd_dfd_r_lift(const casadi_real** arg, casadi_real** res, casadi_int*
   casadi_real rcp0, rcp1, rcp2, rcp3, rcp4;
   a000=7.0000000000000007e-02;
   a001=2.0000000000000001e-01;
-  a002=arg[5][6];
-  a003=arg[5][7];
+  a002=arg[5][0];
+  a003=arg[5][1];
   a004=(a002*a003);
   a005=(a001*a004);
-  a000=(a000+a005);
-  a006=arg[5][8];
-  a007=(a004*a006);
-  a008=arg[4][7];
-  a009=(a002*a008);
-  a010=arg[4][8];
-  a011=(a009*a010);
-  a007=(a007-a011);
-  a007=(a001*a007);
-  a000=(a000+a007);
-  a011=-7.0000000000000007e-02;
-  a012=arg[5][9];
-  a013=arg[5][10];
+  a006=(a000+a005);
+  a007=arg[5][2];
+  a008=(a004*a007);
+  a009=arg[4][1];
+  a010=(a002*a009);
+  a011=arg[4][2];
+  a012=(a010*a011);
+  a008=(a008-a012);
+  a008=(a001*a008);
+  a006=(a006+a008);
+  a012=arg[5][6];
+  a013=arg[5][7];
   a014=(a012*a013);
   a015=(a001*a014);
-  a011=(a011+a015);
-  a016=arg[5][11];
+  a000=(a000+a015);
+  a016=arg[5][8];
   a017=(a014*a016);
-  a018=arg[4][10];
+  a018=arg[4][7];
   a019=(a012*a018);
-  a020=arg[4][11];
+  a020=arg[4][8];
   a021=(a019*a020);
   a017=(a017-a021);
   a017=(a001*a017);
-  a011=(a011+a017);
-  a021=(a000+a011);
+  a000=(a000+a017);
+  a021=(a006+a000);
   a022=2.;
   rcp0=(1/a022);
   a021=(a021*rcp0);
-  a023=(a000-a011);
+  a023=(a006-a000);
   a024=(a023*rcp0);
-  a025=-1.9000000000000000e-01;
-  a026=(a001*a008);
-  a027=(a025+a026);
-  a028=(a003*a010);
-  a029=(a008*a006);
-  a028=(a028+a029);
-  a028=(a001*a028);
+  a025=1.9000000000000000e-01;
+  a026=(a001*a009);
+  a025=(a025+a026);
+  a027=(a003*a011);
+  a028=(a009*a007);
   a027=(a027+a028);
+  a027=(a001*a027);
+  a025=(a025+a027);
+  a028=-1.9000000000000000e-01;
   a029=(a001*a018);
-  a025=(a025+a029);
+  a028=(a028+a029);
   a030=(a013*a020);
   a031=(a018*a016);
   a030=(a030+a031);
   a030=(a001*a030);
-  a025=(a025+a030);
-  a031=(a027-a025);
+  a028=(a028+a030);
+  a031=(a025-a028);
   a032=(a031*rcp0);
   a033=(a024*a032);
   a033=(-a033);
@@ -898,16 +898,16 @@ static int qd_dfd_r_lift(const casadi_real** arg, casadi_real** res, casadi_int*
   rcp2=(1/a046);
   a045=(a045*rcp2);
   a033=(a033-a045);
-  a049=arg[4][6];
-  a050=(a049*a008);
-  a051=(a050*a010);
+  a049=arg[4][0];
+  a050=(a049*a009);
+  a051=(a050*a011);
   a052=(a049*a003);
-  a053=(a052*a006);
+  a053=(a052*a007);
   a054=(a051-a053);
   a054=(a001*a054);
   a055=(a001*a052);
   a054=(a054-a055);
-  a056=arg[4][9];
+  a056=arg[4][6];
   a057=(a056*a018);
   a058=(a057*a020);
   a059=(a056*a013);
@@ -949,7 +949,7 @@ static int qd_dfd_r_lift(const casadi_real** arg, casadi_real** res, casadi_int*
   a074=(a001*a074);
   a076=(a001*a075);
   a074=(a074-a076);
-  a076=arg[1][9];
+  a076=arg[1][6];
   a077=(a074*a076);
   a078=(a020*a059);
   a079=(a016*a057);
@@ -957,40 +957,40 @@ static int qd_dfd_r_lift(const casadi_real** arg, casadi_real** res, casadi_int*
   a078=(a001*a078);
   a079=(a001*a057);
   a078=(a078+a079);
-  a079=arg[1][10];
+  a079=arg[1][7];
   a080=(a078*a079);
   a077=(a077+a080);
   a080=(a057*a016);
   a081=(a059*a020);
   a080=(a080+a081);
   a080=(a001*a080);
-  a081=arg[1][11];
+  a081=arg[1][8];
   a082=(a080*a081);
   a077=(a077+a082);
-  a082=(a008*a002);
-  a083=(a010*a082);
+  a082=(a009*a002);
+  a083=(a011*a082);
   a084=(a003*a002);
-  a085=(a006*a084);
+  a085=(a007*a084);
   a083=(a083-a085);
   a083=(a001*a083);
   a085=(a001*a084);
   a083=(a083-a085);
-  a085=arg[1][6];
+  a085=arg[1][0];
   a086=(a083*a085);
-  a087=(a010*a052);
-  a088=(a006*a050);
+  a087=(a011*a052);
+  a088=(a007*a050);
   a087=(a087+a088);
   a087=(a001*a087);
   a088=(a001*a050);
   a087=(a087+a088);
-  a088=arg[1][7];
+  a088=arg[1][1];
   a089=(a087*a088);
   a086=(a086+a089);
-  a089=(a050*a006);
-  a090=(a052*a010);
+  a089=(a050*a007);
+  a090=(a052*a011);
   a089=(a089+a090);
   a089=(a001*a089);
-  a090=arg[1][8];
+  a090=arg[1][2];
   a091=(a089*a090);
   a086=(a086+a091);
   a091=(a077-a086);
@@ -1018,25 +1018,25 @@ static int qd_dfd_r_lift(const casadi_real** arg, casadi_real** res, casadi_int*
   a104=(a001*a104);
   a105=(a104*a081);
   a099=(a099-a105);
-  a105=(a008*a049);
-  a106=(a010*a105);
+  a105=(a009*a049);
+  a106=(a011*a105);
   a107=(a003*a049);
-  a108=(a006*a107);
+  a108=(a007*a107);
   a109=(a106-a108);
   a109=(a001*a109);
   a110=(a001*a107);
   a109=(a109-a110);
   a111=(a109*a085);
-  a112=(a001*a009);
-  a113=(a006*a009);
-  a114=(a010*a004);
+  a112=(a001*a010);
+  a113=(a007*a010);
+  a114=(a011*a004);
   a115=(a113+a114);
   a115=(a001*a115);
   a115=(a112+a115);
   a116=(a115*a088);
   a111=(a111-a116);
-  a116=(a004*a010);
-  a117=(a009*a006);
+  a116=(a004*a011);
+  a117=(a010*a007);
   a116=(a116+a117);
   a116=(a001*a116);
   a117=(a116*a090);
@@ -1071,14 +1071,14 @@ static int qd_dfd_r_lift(const casadi_real** arg, casadi_real** res, casadi_int*
   a123=(a122*a081);
   a121=(a121+a123);
   a123=(a001*a003);
-  a124=(a006*a003);
-  a125=(a010*a008);
+  a124=(a007*a003);
+  a125=(a011*a009);
   a124=(a124-a125);
   a124=(a001*a124);
   a123=(a123+a124);
   a124=(a123*a088);
-  a125=(a003*a006);
-  a126=(a008*a010);
+  a125=(a003*a007);
+  a126=(a009*a011);
   a125=(a125-a126);
   a125=(a001*a125);
   a126=(a125*a090);
@@ -1160,7 +1160,7 @@ static int qd_dfd_r_lift(const casadi_real** arg, casadi_real** res, casadi_int*
   a140=(a140+a143);
   a140=(a140*rcp3);
   a143=(a136*a140);
-  a144=(a027+a025);
+  a144=(a025+a028);
   a144=(a144*rcp0);
   a145=(a144*a119);
   a143=(a143-a145);
@@ -1178,12 +1178,12 @@ static int qd_dfd_r_lift(const casadi_real** arg, casadi_real** res, casadi_int*
   res[0][3]=a140;
   res[0][4]=a138;
   res[0][5]=a119;
-  a146=(a119*a025);
+  a146=(a119*a028);
   a147=(a140*a061);
   a146=(a146-a147);
   a147=(a140*a146);
   a148=(a138*a061);
-  a149=(a119*a011);
+  a149=(a119*a000);
   a148=(a148-a149);
   a149=(a138*a148);
   a147=(a147-a149);
@@ -1238,21 +1238,21 @@ static int qd_dfd_r_lift(const casadi_real** arg, casadi_real** res, casadi_int*
   a058=(a152*a081);
   a094=(a094+a058);
   a147=(a147+a094);
-  a094=arg[2][9];
+  a094=arg[2][6];
   a058=(a074*a094);
-  a153=arg[2][10];
+  a153=arg[2][7];
   a154=(a078*a153);
   a058=(a058+a154);
-  a154=arg[2][11];
+  a154=arg[2][8];
   a155=(a080*a154);
   a058=(a058+a155);
   a147=(a147+a058);
-  a058=(a119*a027);
+  a058=(a119*a025);
   a155=(a140*a054);
   a058=(a058-a155);
   a155=(a140*a058);
   a156=(a138*a054);
-  a157=(a119*a000);
+  a157=(a119*a006);
   a156=(a156-a157);
   a157=(a138*a156);
   a155=(a155-a157);
@@ -1265,8 +1265,8 @@ static int qd_dfd_r_lift(const casadi_real** arg, casadi_real** res, casadi_int*
   a108=(a001*a108);
   a108=(a108+a110);
   a110=(a085*a108);
-  a106=(a010*a084);
-  a157=(a006*a082);
+  a106=(a011*a084);
+  a157=(a007*a082);
   a158=(a106+a157);
   a158=(a001*a158);
   a159=(a001*a082);
@@ -1282,8 +1282,8 @@ static int qd_dfd_r_lift(const casadi_real** arg, casadi_real** res, casadi_int*
   a114=(a001*a114);
   a114=(a114+a112);
   a112=(a085*a114);
-  a113=(a006*a052);
-  a159=(a010*a050);
+  a113=(a007*a052);
+  a159=(a011*a050);
   a113=(a113-a159);
   a113=(a001*a113);
   a055=(a113+a055);
@@ -1293,8 +1293,8 @@ static int qd_dfd_r_lift(const casadi_real** arg, casadi_real** res, casadi_int*
   a112=(a112+a159);
   a159=(a112*a088);
   a106=(a106+a159);
-  a159=(a082*a006);
-  a160=(a084*a010);
+  a159=(a082*a007);
+  a160=(a084*a011);
   a159=(a159+a160);
   a159=(a001*a159);
   a160=(a085*a159);
@@ -1307,20 +1307,20 @@ static int qd_dfd_r_lift(const casadi_real** arg, casadi_real** res, casadi_int*
   a051=(a160*a090);
   a106=(a106+a051);
   a155=(a155+a106);
-  a106=arg[2][6];
+  a106=arg[2][0];
   a051=(a083*a106);
-  a161=arg[2][7];
+  a161=arg[2][1];
   a162=(a087*a161);
   a051=(a051+a162);
-  a162=arg[2][8];
+  a162=arg[2][2];
   a163=(a089*a162);
   a051=(a051+a163);
   a155=(a155+a051);
   a051=(a147-a155);
   a163=(a024*a051);
   a164=(a119*a148);
-  a165=(a140*a011);
-  a166=(a138*a025);
+  a165=(a140*a000);
+  a166=(a138*a028);
   a165=(a165-a166);
   a166=(a140*a165);
   a164=(a164-a166);
@@ -1374,8 +1374,8 @@ static int qd_dfd_r_lift(const casadi_real** arg, casadi_real** res, casadi_int*
   a168=(a168-a174);
   a164=(a164+a168);
   a168=(a119*a156);
-  a174=(a140*a000);
-  a175=(a138*a027);
+  a174=(a140*a006);
+  a175=(a138*a025);
   a174=(a174-a175);
   a175=(a140*a174);
   a168=(a168-a175);
@@ -1386,8 +1386,8 @@ static int qd_dfd_r_lift(const casadi_real** arg, casadi_real** res, casadi_int*
   a168=(a168+a175);
   a175=(a085*a083);
   a176=(a001*a105);
-  a177=(a006*a105);
-  a178=(a010*a107);
+  a177=(a007*a105);
+  a178=(a011*a107);
   a179=(a177+a178);
   a179=(a001*a179);
   a176=(a176+a179);
@@ -1399,8 +1399,8 @@ static int qd_dfd_r_lift(const casadi_real** arg, casadi_real** res, casadi_int*
   a175=(a175+a177);
   a177=(a175*a085);
   a179=(a085*a087);
-  a180=(a006*a004);
-  a181=(a010*a009);
+  a180=(a007*a004);
+  a181=(a011*a010);
   a180=(a180-a181);
   a180=(a001*a180);
   a005=(a005+a180);
@@ -1410,14 +1410,14 @@ static int qd_dfd_r_lift(const casadi_real** arg, casadi_real** res, casadi_int*
   a179=(a179-a181);
   a181=(a179*a088);
   a177=(a177+a181);
-  a181=(a105*a006);
-  a182=(a107*a010);
+  a181=(a105*a007);
+  a182=(a107*a011);
   a181=(a181+a182);
   a181=(a001*a181);
   a182=(a085*a181);
-  a183=(a088*a007);
+  a183=(a088*a008);
   a182=(a182-a183);
-  a183=(a090*a007);
+  a183=(a090*a008);
   a182=(a182-a183);
   a183=(a182*a090);
   a177=(a177+a183);
@@ -1501,8 +1501,8 @@ static int qd_dfd_r_lift(const casadi_real** arg, casadi_real** res, casadi_int*
   a202=(a202-a203);
   a202=(2*a202);
   a200=(a200+a202);
-  a202=(a006*a008);
-  a203=(a010*a003);
+  a202=(a007*a009);
+  a203=(a011*a003);
   a202=(a202+a203);
   a001=(a001*a202);
   a026=(a026+a001);
@@ -1510,8 +1510,8 @@ static int qd_dfd_r_lift(const casadi_real** arg, casadi_real** res, casadi_int*
   a203=(a090*a001);
   a202=(a202+a203);
   a203=(a202*a088);
-  a204=(a088*a028);
-  a205=(a090*a028);
+  a204=(a088*a027);
+  a205=(a090*a027);
   a204=(a204+a205);
   a205=(a204*a090);
   a203=(a203+a205);
@@ -1594,12 +1594,12 @@ static int qd_dfd_r_lift(const casadi_real** arg, casadi_real** res, casadi_int*
   res[2][7]=a019;
   res[2][8]=a049;
   res[2][9]=a003;
-  res[2][10]=a008;
+  res[2][10]=a009;
   res[2][11]=a002;
-  res[2][12]=a006;
-  res[2][13]=a010;
+  res[2][12]=a007;
+  res[2][13]=a011;
   res[2][14]=a004;
-  res[2][15]=a009;
+  res[2][15]=a010;
   res[2][16]=a032;
   res[2][17]=a024;
   a024=5.0000000000000000e-01;
@@ -1706,20 +1706,20 @@ static int qd_dfd_r_lift(const casadi_real** arg, casadi_real** res, casadi_int*
   res[2][104]=a163;
   res[2][105]=a051;
   res[2][106]=a146;
-  res[2][107]=a025;
+  res[2][107]=a028;
   res[2][108]=a061;
   res[2][109]=a148;
-  res[2][110]=a011;
+  res[2][110]=a000;
   res[2][111]=a099;
   res[2][112]=a121;
   res[2][113]=a094;
   res[2][114]=a153;
   res[2][115]=a154;
   res[2][116]=a058;
-  res[2][117]=a027;
+  res[2][117]=a025;
   res[2][118]=a054;
   res[2][119]=a156;
-  res[2][120]=a000;
+  res[2][120]=a006;
   res[2][121]=a111;
   res[2][122]=a124;
   res[2][123]=a106;
@@ -1760,43 +1760,43 @@ static int qd_dfd_r_lift(const casadi_real** arg, casadi_real** res, casadi_int*
   a207=(a207*rcp3);
   res[2][152]=a207;
   res[2][153]=a135;
-  a135=(a000*a063);
+  a135=(a006*a063);
   a207=(a054*a023);
   a135=(a135-a207);
   res[2][154]=a135;
   a054=(a054*a031);
-  a207=(a027*a063);
+  a207=(a025*a063);
   a054=(a054-a207);
   res[2][155]=a054;
-  a027=(a027*a023);
-  a000=(a000*a031);
-  a027=(a027-a000);
-  res[2][156]=a027;
-  a000=casadi_sq(a135);
+  a025=(a025*a023);
+  a006=(a006*a031);
+  a025=(a025-a006);
+  res[2][156]=a025;
+  a006=casadi_sq(a135);
   a207=casadi_sq(a054);
-  a000=(a000+a207);
-  a207=casadi_sq(a027);
-  a000=(a000+a207);
+  a006=(a006+a207);
+  a207=casadi_sq(a025);
+  a006=(a006+a207);
   a207=casadi_sq(a031);
   a132=casadi_sq(a023);
   a207=(a207+a132);
   a132=casadi_sq(a063);
   a207=(a207+a132);
-  a000=(a000+a207);
-  res[2][157]=a000;
+  a006=(a006+a207);
+  res[2][157]=a006;
   res[2][158]=a207;
   a135=(2*a135);
   res[2][159]=a135;
   a054=(2*a054);
   res[2][160]=a054;
-  a027=(2*a027);
-  res[2][161]=a027;
-  a027=(2*a031);
-  res[2][162]=a027;
-  a027=(2*a023);
-  res[2][163]=a027;
-  a027=(2*a063);
-  res[2][164]=a027;
+  a025=(2*a025);
+  res[2][161]=a025;
+  a025=(2*a031);
+  res[2][162]=a025;
+  a025=(2*a023);
+  res[2][163]=a025;
+  a025=(2*a063);
+  res[2][164]=a025;
   res[2][165]=a109;
   res[2][166]=a083;
   res[2][167]=a123;
@@ -1868,7 +1868,7 @@ static int qd_dfd_r_lift(const casadi_real** arg, casadi_real** res, casadi_int*
   res[2][224]=a180;
   res[2][225]=a179;
   res[2][226]=a181;
-  res[2][227]=a007;
+  res[2][227]=a008;
   res[2][228]=a182;
   res[2][229]=a029;
   res[2][230]=a198;
@@ -1878,7 +1878,7 @@ static int qd_dfd_r_lift(const casadi_real** arg, casadi_real** res, casadi_int*
   res[2][234]=a026;
   res[2][235]=a001;
   res[2][236]=a202;
-  res[2][237]=a028;
+  res[2][237]=a027;
   res[2][238]=a204;
   return 0;
 }
@@ -6870,12 +6870,6 @@ static int qd_dfd_r_lift_columns(const casadi_real** arg, casadi_real** res, cas
   res[2][36]=a333;
   res[2][37]=a333;
   res[2][38]=a333;
-  res[2][39]=a333;
-  res[2][40]=a333;
-  res[2][41]=a333;
-  res[2][42]=a333;
-  res[2][43]=a333;
-  res[2][44]=a333;
   a068=arg[1][1];
   a058=arg[0][155];
   a015=arg[0][154];
@@ -7047,7 +7041,7 @@ static int qd_dfd_r_lift_columns(const casadi_real** arg, casadi_real** res, cas
   a109=(a109+a353);
   a376=(a376+a109);
   a376=(-a376);
-  res[2][45]=a376;
+  res[2][39]=a376;
   a376=arg[0][167];
   a109=(a335*a125);
   a154=(a130*a154);
@@ -7078,7 +7072,7 @@ static int qd_dfd_r_lift_columns(const casadi_real** arg, casadi_real** res, cas
   a143=(a143+a319);
   a355=(a355+a143);
   a355=(-a355);
-  res[2][46]=a355;
+  res[2][40]=a355;
   a355=arg[0][170];
   a353=(a355*a353);
   a108=(a072*a108);
@@ -7092,7 +7086,10 @@ static int qd_dfd_r_lift_columns(const casadi_real** arg, casadi_real** res, cas
   a141=(a141+a327);
   a353=(a353+a141);
   a353=(-a353);
-  res[2][47]=a353;
+  res[2][41]=a353;
+  res[2][42]=a333;
+  res[2][43]=a333;
+  res[2][44]=a333;
   a353=arg[0][173];
   a278=(a278-a343);
   a343=(a353*a278);
@@ -7100,7 +7097,7 @@ static int qd_dfd_r_lift_columns(const casadi_real** arg, casadi_real** res, cas
   a029=(a029+a116);
   a116=(a141*a029);
   a343=(a343+a116);
-  res[2][48]=a343;
+  res[2][45]=a343;
   a343=arg[0][175];
   a116=(a343*a029);
   a327=arg[0][176];
@@ -7110,7 +7107,7 @@ static int qd_dfd_r_lift_columns(const casadi_real** arg, casadi_real** res, cas
   a319=(a338*a278);
   a109=(a109-a319);
   a116=(a116+a109);
-  res[2][49]=a116;
+  res[2][46]=a116;
   a116=arg[0][178];
   a029=(a116*a029);
   a109=arg[0][179];
@@ -7119,7 +7116,10 @@ static int qd_dfd_r_lift_columns(const casadi_real** arg, casadi_real** res, cas
   a278=(a319*a278);
   a297=(a297-a278);
   a029=(a029+a297);
-  res[2][50]=a029;
+  res[2][47]=a029;
+  res[2][48]=a333;
+  res[2][49]=a333;
+  res[2][50]=a333;
   a029=arg[0][184];
   a297=(a345*a115);
   a278=(a068*a125);
@@ -7167,12 +7167,6 @@ static int qd_dfd_r_lift_columns(const casadi_real** arg, casadi_real** res, cas
   a125=(a125-a115);
   a297=(a297+a125);
   res[2][51]=a297;
-  res[2][52]=a333;
-  res[2][53]=a333;
-  res[2][54]=a333;
-  res[2][55]=a333;
-  res[2][56]=a333;
-  res[2][57]=a333;
   a297=(a072*a177);
   a125=(a356*a157);
   a115=(a049*a177);
@@ -7294,7 +7288,7 @@ static int qd_dfd_r_lift_columns(const casadi_real** arg, casadi_real** res, cas
   a169=(a169+a179);
   a297=(a297+a169);
   a297=(-a297);
-  res[2][58]=a297;
+  res[2][52]=a297;
   a297=(a335*a177);
   a311=(a130*a311);
   a297=(a297-a311);
@@ -7321,7 +7315,7 @@ static int qd_dfd_r_lift_columns(const casadi_real** arg, casadi_real** res, cas
   a107=(a107+a155);
   a115=(a115+a107);
   a115=(-a115);
-  res[2][59]=a115;
+  res[2][53]=a115;
   a311=(a355*a311);
   a200=(a169*a200);
   a311=(a311-a200);
@@ -7334,26 +7328,32 @@ static int qd_dfd_r_lift_columns(const casadi_real** arg, casadi_real** res, cas
   a137=(a137+a317);
   a311=(a311+a137);
   a311=(-a311);
-  res[2][60]=a311;
+  res[2][54]=a311;
+  res[2][55]=a333;
+  res[2][56]=a333;
+  res[2][57]=a333;
   a318=(a318+a125);
   a125=(a353*a318);
   a325=(a325+a172);
   a172=(a141*a325);
   a125=(a125+a172);
-  res[2][61]=a125;
+  res[2][58]=a125;
   a125=(a343*a325);
   a265=(a265+a297);
   a297=(a327*a265);
   a172=(a338*a318);
   a297=(a297-a172);
   a125=(a125+a297);
-  res[2][62]=a125;
+  res[2][59]=a125;
   a325=(a116*a325);
   a265=(a109*a265);
   a318=(a319*a318);
   a265=(a265-a318);
   a325=(a325+a265);
-  res[2][63]=a325;
+  res[2][60]=a325;
+  res[2][61]=a333;
+  res[2][62]=a333;
+  res[2][63]=a333;
   a325=(a157*rcp6);
   a329=(a329*rcp5);
   a265=(a248*a329);
@@ -7385,12 +7385,6 @@ static int qd_dfd_r_lift_columns(const casadi_real** arg, casadi_real** res, cas
   a177=(a177-a157);
   a325=(a325+a177);
   res[2][64]=a325;
-  res[2][65]=a333;
-  res[2][66]=a333;
-  res[2][67]=a333;
-  res[2][68]=a333;
-  res[2][69]=a333;
-  res[2][70]=a333;
   a237=(a072*a237);
   a325=(a356*a183);
   a177=(a049*a216);
@@ -7511,7 +7505,7 @@ static int qd_dfd_r_lift_columns(const casadi_real** arg, casadi_real** res, cas
   a229=(a229+a217);
   a237=(a237+a229);
   a237=(-a237);
-  res[2][71]=a237;
+  res[2][65]=a237;
   a237=(a335*a216);
   a171=(a130*a171);
   a237=(a237-a171);
@@ -7536,7 +7530,7 @@ static int qd_dfd_r_lift_columns(const casadi_real** arg, casadi_real** res, cas
   a214=(a354+a214);
   a177=(a177+a214);
   a177=(-a177);
-  res[2][72]=a177;
+  res[2][66]=a177;
   a171=(a355*a171);
   a171=(a171-a169);
   a318=(a143*a318);
@@ -7546,26 +7540,32 @@ static int qd_dfd_r_lift_columns(const casadi_real** arg, casadi_real** res, cas
   a354=(a354+a297);
   a171=(a171+a354);
   a171=(-a171);
-  res[2][73]=a171;
+  res[2][67]=a171;
+  res[2][68]=a333;
+  res[2][69]=a333;
+  res[2][70]=a333;
   a329=(a329+a325);
   a325=(a353*a329);
   a265=(a265+a210);
   a210=(a141*a265);
   a325=(a325+a210);
-  res[2][74]=a325;
+  res[2][71]=a325;
   a325=(a343*a265);
   a157=(a157+a237);
   a237=(a327*a157);
   a210=(a338*a329);
   a237=(a237-a210);
   a325=(a325+a237);
-  res[2][75]=a325;
+  res[2][72]=a325;
   a265=(a116*a265);
   a157=(a109*a157);
   a329=(a319*a329);
   a157=(a157-a329);
   a265=(a265+a157);
-  res[2][76]=a265;
+  res[2][73]=a265;
+  res[2][74]=a333;
+  res[2][75]=a333;
+  res[2][76]=a333;
   a265=(a183*rcp6);
   a125=(a125*rcp5);
   a157=(a248*a125);
@@ -7597,12 +7597,6 @@ static int qd_dfd_r_lift_columns(const casadi_real** arg, casadi_real** res, cas
   a216=(a216-a352);
   a265=(a265+a216);
   res[2][77]=a265;
-  res[2][78]=a333;
-  res[2][79]=a333;
-  res[2][80]=a333;
-  res[2][81]=a333;
-  res[2][82]=a333;
-  res[2][83]=a333;
   a265=(a361*a250);
   a216=(a057*a251);
   a352=(a348*a250);
@@ -7689,7 +7683,7 @@ static int qd_dfd_r_lift_columns(const casadi_real** arg, casadi_real** res, cas
   a329=(a351*a216);
   a029=(a029-a329);
   a029=(-a029);
-  res[2][84]=a029;
+  res[2][78]=a029;
   a029=(a239*a216);
   a329=(a335*a260);
   a291=(a130*a291);
@@ -7708,14 +7702,17 @@ static int qd_dfd_r_lift_columns(const casadi_real** arg, casadi_real** res, cas
   a125=(a150*a262);
   a029=(a029+a125);
   a029=(-a029);
-  res[2][85]=a029;
+  res[2][79]=a029;
   a216=(a143*a216);
   a291=(a355*a291);
   a216=(a216-a291);
   a262=(a108*a262);
   a216=(a216+a262);
   a216=(-a216);
-  res[2][86]=a216;
+  res[2][80]=a216;
+  res[2][81]=a333;
+  res[2][82]=a333;
+  res[2][83]=a333;
   a051=(a051-a142);
   a142=(a051*a260);
   a190=(a190-a251);
@@ -7728,7 +7725,7 @@ static int qd_dfd_r_lift_columns(const casadi_real** arg, casadi_real** res, cas
   a221=(a221-a265);
   a142=(a142+a221);
   a142=(-a142);
-  res[2][87]=a142;
+  res[2][84]=a142;
   a275=(a099*a275);
   a142=(a343*a183);
   a275=(a275-a142);
@@ -7740,7 +7737,7 @@ static int qd_dfd_r_lift_columns(const casadi_real** arg, casadi_real** res, cas
   a329=(a329-a280);
   a275=(a275-a329);
   a275=(-a275);
-  res[2][88]=a275;
+  res[2][85]=a275;
   a273=(a099*a273);
   a183=(a116*a183);
   a273=(a273-a183);
@@ -7751,7 +7748,10 @@ static int qd_dfd_r_lift_columns(const casadi_real** arg, casadi_real** res, cas
   a157=(a157-a218);
   a273=(a273-a157);
   a273=(-a273);
-  res[2][89]=a273;
+  res[2][86]=a273;
+  res[2][87]=a333;
+  res[2][88]=a333;
+  res[2][89]=a333;
   a250=(a250*rcp6);
   a352=(a352*rcp5);
   a273=(a282*a352);
@@ -7766,12 +7766,6 @@ static int qd_dfd_r_lift_columns(const casadi_real** arg, casadi_real** res, cas
   a260=(a328*a260);
   a250=(a250-a260);
   res[2][90]=a250;
-  res[2][91]=a333;
-  res[2][92]=a333;
-  res[2][93]=a333;
-  res[2][94]=a333;
-  res[2][95]=a333;
-  res[2][96]=a333;
   a250=(a361*a263);
   a260=(a057*a269);
   a352=(a348*a263);
@@ -7876,7 +7870,7 @@ static int qd_dfd_r_lift_columns(const casadi_real** arg, casadi_real** res, cas
   a296=(a351*a260);
   a304=(a304-a296);
   a304=(-a304);
-  res[2][97]=a304;
+  res[2][91]=a304;
   a304=(a239*a260);
   a296=(a335*a302);
   a275=(a130*a275);
@@ -7895,14 +7889,17 @@ static int qd_dfd_r_lift_columns(const casadi_real** arg, casadi_real** res, cas
   a218=(a150*a183);
   a304=(a304+a218);
   a304=(-a304);
-  res[2][98]=a304;
+  res[2][92]=a304;
   a260=(a143*a260);
   a275=(a355*a275);
   a260=(a260-a275);
   a183=(a108*a183);
   a260=(a260+a183);
   a260=(-a260);
-  res[2][99]=a260;
+  res[2][93]=a260;
+  res[2][94]=a333;
+  res[2][95]=a333;
+  res[2][96]=a333;
   a260=(a051*a302);
   a157=(a157-a190);
   a190=(a353*a157);
@@ -7913,7 +7910,7 @@ static int qd_dfd_r_lift_columns(const casadi_real** arg, casadi_real** res, cas
   a267=(a267-a250);
   a260=(a260+a267);
   a260=(-a260);
-  res[2][100]=a260;
+  res[2][97]=a260;
   a220=(a099*a220);
   a260=(a343*a273);
   a220=(a220-a260);
@@ -7928,7 +7925,7 @@ static int qd_dfd_r_lift_columns(const casadi_real** arg, casadi_real** res, cas
   a322=(a322+a285);
   a220=(a220-a322);
   a220=(-a220);
-  res[2][101]=a220;
+  res[2][98]=a220;
   a254=(a099*a254);
   a273=(a116*a273);
   a254=(a254-a273);
@@ -7941,7 +7938,10 @@ static int qd_dfd_r_lift_columns(const casadi_real** arg, casadi_real** res, cas
   a323=(a323+a255);
   a254=(a254-a323);
   a254=(-a254);
-  res[2][102]=a254;
+  res[2][99]=a254;
+  res[2][100]=a333;
+  res[2][101]=a333;
+  res[2][102]=a333;
   a263=(a263*rcp6);
   a352=(a352*rcp5);
   a254=(a282*a352);
@@ -7958,12 +7958,6 @@ static int qd_dfd_r_lift_columns(const casadi_real** arg, casadi_real** res, cas
   a302=(a328*a302);
   a263=(a263-a302);
   res[2][103]=a263;
-  res[2][104]=a333;
-  res[2][105]=a333;
-  res[2][106]=a333;
-  res[2][107]=a333;
-  res[2][108]=a333;
-  res[2][109]=a333;
   a263=(a361*a305);
   a302=(a057*a307);
   a352=(a348*a305);
@@ -8068,7 +8062,7 @@ static int qd_dfd_r_lift_columns(const casadi_real** arg, casadi_real** res, cas
   a302=(a351*a341);
   a067=(a067-a302);
   a067=(-a067);
-  res[2][110]=a067;
+  res[2][104]=a067;
   a067=(a239*a341);
   a335=(a335*a339);
   a130=(a130*a058);
@@ -8087,14 +8081,17 @@ static int qd_dfd_r_lift_columns(const casadi_real** arg, casadi_real** res, cas
   a336=(a150*a127);
   a067=(a067+a336);
   a067=(-a067);
-  res[2][111]=a067;
+  res[2][105]=a067;
   a341=(a143*a341);
   a362=(a355*a362);
   a341=(a341-a362);
   a127=(a108*a127);
   a341=(a341+a127);
   a341=(-a341);
-  res[2][112]=a341;
+  res[2][106]=a341;
+  res[2][107]=a333;
+  res[2][108]=a333;
+  res[2][109]=a333;
   a357=(a051*a357);
   a254=(a254-a203);
   a203=(a353*a254);
@@ -8105,7 +8102,7 @@ static int qd_dfd_r_lift_columns(const casadi_real** arg, casadi_real** res, cas
   a350=(a350-a263);
   a357=(a357+a350);
   a357=(-a357);
-  res[2][113]=a357;
+  res[2][110]=a357;
   a099=(a099*a337);
   a337=(a343*a294);
   a337=(a099-a337);
@@ -8119,7 +8116,7 @@ static int qd_dfd_r_lift_columns(const casadi_real** arg, casadi_real** res, cas
   a335=(a335+a326);
   a337=(a337-a335);
   a337=(-a337);
-  res[2][114]=a337;
+  res[2][111]=a337;
   a294=(a116*a294);
   a099=(a099-a294);
   a015=(a109*a015);
@@ -8129,7 +8126,10 @@ static int qd_dfd_r_lift_columns(const casadi_real** arg, casadi_real** res, cas
   a257=(a257+a051);
   a099=(a099-a257);
   a099=(-a099);
-  res[2][115]=a099;
+  res[2][112]=a099;
+  res[2][113]=a333;
+  res[2][114]=a333;
+  res[2][115]=a333;
   a305=(a305*rcp6);
   a050=(a050*rcp5);
   a282=(a282*a050);
@@ -10092,12 +10092,12 @@ static int qd_dfd_r_lift_dir(const casadi_real** arg, casadi_real** res, casadi_
   a005=2.0000000000000001e-01;
   a006=arg[0][1];
   a007=arg[0][0];
-  a008=arg[2][9];
+  a008=arg[2][6];
   a009=(a007*a008);
   a010=(a006*a009);
   a011=arg[0][3];
   a012=arg[0][2];
-  a013=arg[2][10];
+  a013=arg[2][7];
   a014=(a012*a013);
   a015=(a011*a014);
   a016=(a010+a015);
@@ -10106,7 +10106,7 @@ static int qd_dfd_r_lift_dir(const casadi_real** arg, casadi_real** res, casadi_
   a019=(a018*a016);
   a020=arg[0][6];
   a021=arg[0][5];
-  a022=arg[2][11];
+  a022=arg[2][8];
   a023=(a021*a022);
   a024=(a020*a023);
   a025=(a019+a024);
@@ -10124,12 +10124,12 @@ static int qd_dfd_r_lift_dir(const casadi_real** arg, casadi_real** res, casadi_
   a029=(a017+a025);
   a030=arg[0][9];
   a031=arg[0][8];
-  a032=arg[2][6];
+  a032=arg[2][0];
   a033=(a031*a032);
   a034=(a030*a033);
   a035=arg[0][11];
   a036=arg[0][10];
-  a037=arg[2][7];
+  a037=arg[2][1];
   a038=(a036*a037);
   a039=(a035*a038);
   a040=(a034+a039);
@@ -10138,7 +10138,7 @@ static int qd_dfd_r_lift_dir(const casadi_real** arg, casadi_real** res, casadi_
   a043=(a042*a040);
   a044=arg[0][14];
   a045=arg[0][13];
-  a046=arg[2][8];
+  a046=arg[2][2];
   a047=(a045*a046);
   a048=(a044*a047);
   a049=(a043+a048);
@@ -11358,13 +11358,6 @@ static int qd_dfd_r_lift_dir(const casadi_real** arg, casadi_real** res, casadi_
   res[1][3]=a122;
   res[1][4]=a171;
   res[1][5]=a081;
-  a081=0.;
-  res[2][0]=a081;
-  res[2][1]=a081;
-  res[2][2]=a081;
-  res[2][3]=a081;
-  res[2][4]=a081;
-  res[2][5]=a081;
   a081=arg[1][1];
   a171=arg[0][155];
   a122=arg[0][154];
@@ -11559,7 +11552,7 @@ static int qd_dfd_r_lift_dir(const casadi_real** arg, casadi_real** res, casadi_
   a142=(a142+a119);
   a155=(a155+a142);
   a155=(-a155);
-  res[2][6]=a155;
+  res[2][0]=a155;
   a155=arg[0][167];
   a142=(a171*a105);
   a001=(a124*a001);
@@ -11594,7 +11587,7 @@ static int qd_dfd_r_lift_dir(const casadi_real** arg, casadi_real** res, casadi_
   a145=(a145+a147);
   a121=(a121+a145);
   a121=(-a121);
-  res[2][7]=a121;
+  res[2][1]=a121;
   a121=arg[0][170];
   a115=(a121*a115);
   a126=(a126*a038);
@@ -11610,7 +11603,11 @@ static int qd_dfd_r_lift_dir(const casadi_real** arg, casadi_real** res, casadi_
   a122=(a122+a166);
   a115=(a115+a122);
   a115=(-a115);
-  res[2][8]=a115;
+  res[2][2]=a115;
+  a115=0.;
+  res[2][3]=a115;
+  res[2][4]=a115;
+  res[2][5]=a115;
   a094=(a094-a129);
   a151=(a094*a151);
   a129=arg[0][173];
@@ -11625,7 +11622,7 @@ static int qd_dfd_r_lift_dir(const casadi_real** arg, casadi_real** res, casadi_
   a136=(a136-a013);
   a151=(a151+a136);
   a151=(-a151);
-  res[2][9]=a151;
+  res[2][6]=a151;
   a139=(a091*a139);
   a151=arg[0][175];
   a136=(a151*a049);
@@ -11643,7 +11640,7 @@ static int qd_dfd_r_lift_dir(const casadi_real** arg, casadi_real** res, casadi_
   a037=(a037+a016);
   a139=(a139-a037);
   a139=(-a139);
-  res[2][10]=a139;
+  res[2][7]=a139;
   a091=(a091*a140);
   a140=arg[0][178];
   a049=(a140*a049);
@@ -11659,29 +11656,32 @@ static int qd_dfd_r_lift_dir(const casadi_real** arg, casadi_real** res, casadi_
   a120=(a120+a094);
   a091=(a091-a120);
   a091=(-a091);
-  res[2][11]=a091;
-  a091=(a015*a132);
-  a120=(a097*a081);
-  a091=(a091-a120);
-  a078=(a078-a091);
-  a091=arg[0][181];
-  rcp5=(1/a091);
+  res[2][8]=a091;
+  res[2][9]=a115;
+  res[2][10]=a115;
+  res[2][11]=a115;
+  a115=(a015*a132);
+  a091=(a097*a081);
+  a115=(a115-a091);
+  a078=(a078-a115);
+  a115=arg[0][181];
+  rcp5=(1/a115);
   a068=(a068*rcp5);
-  a120=arg[0][183];
-  a094=arg[0][182];
-  a055=(a055/a094);
-  a120=(a120*a055);
-  a068=(a068-a120);
+  a091=arg[0][183];
+  a120=arg[0][182];
+  a055=(a055/a120);
+  a091=(a091*a055);
+  a068=(a068-a091);
   a078=(a078*a068);
   a068=arg[0][184];
-  a120=(a132*a053);
-  a094=(a081*a093);
-  a120=(a120+a094);
-  a068=(a068*a120);
+  a091=(a132*a053);
+  a120=(a081*a093);
+  a091=(a091+a120);
+  a068=(a068*a091);
   a078=(a078+a068);
   a068=(a097*a144);
-  a120=(a099*a132);
-  a068=(a068-a120);
+  a091=(a099*a132);
+  a068=(a068-a091);
   a070=(a070-a068);
   a054=(a054*rcp5);
   a068=arg[0][185];
@@ -11700,9 +11700,9 @@ static int qd_dfd_r_lift_dir(const casadi_real** arg, casadi_real** res, casadi_
   a070=(a070-a054);
   a032=(a032-a070);
   a105=(a105*rcp5);
-  a091=arg[0][187];
-  a091=(a091*a055);
-  a105=(a105-a091);
+  a115=arg[0][187];
+  a115=(a115*a055);
+  a105=(a105-a115);
   a032=(a032*a105);
   a105=arg[0][188];
   a081=(a081*a062);
@@ -11712,24 +11712,24 @@ static int qd_dfd_r_lift_dir(const casadi_real** arg, casadi_real** res, casadi_
   a032=(a032-a105);
   a078=(a078+a032);
   res[2][12]=a078;
-  a078=arg[4][9];
+  a078=arg[4][6];
   a118=(a118*a078);
-  a032=arg[4][10];
+  a032=arg[4][7];
   a105=(a151*a032);
   a105=(a118+a105);
-  a081=arg[4][11];
+  a081=arg[4][8];
   a140=(a140*a081);
   a105=(a105+a140);
-  a140=arg[4][6];
+  a140=arg[4][0];
   a092=(a092*a140);
-  a144=arg[4][7];
+  a144=arg[4][1];
   a053=(a040*a144);
   a053=(a092+a053);
-  a062=arg[4][8];
+  a062=arg[4][2];
   a146=(a146*a062);
   a053=(a053+a146);
   a146=(a105-a053);
-  a091=(a057*a146);
+  a115=(a057*a146);
   a129=(a129*a078);
   a142=(a142*a032);
   a129=(a129-a142);
@@ -11742,10 +11742,10 @@ static int qd_dfd_r_lift_dir(const casadi_real** arg, casadi_real** res, casadi_
   a106=(a106-a044);
   a044=(a129-a106);
   a163=(a108*a044);
-  a091=(a091-a163);
+  a115=(a115-a163);
   a163=arg[4][12];
-  a091=(a091+a163);
-  a020=(a161*a091);
+  a115=(a115+a163);
+  a020=(a161*a115);
   a124=(a124*a032);
   a014=(a014*a081);
   a124=(a124+a014);
@@ -11769,7 +11769,7 @@ static int qd_dfd_r_lift_dir(const casadi_real** arg, casadi_real** res, casadi_
   a020=(a020+a163);
   a020=(a020*rcp1);
   a163=(a109*a020);
-  a121=(a131*a091);
+  a121=(a131*a115);
   a146=(a160*a014);
   a121=(a121-a146);
   a146=(a006*a044);
@@ -11781,70 +11781,70 @@ static int qd_dfd_r_lift_dir(const casadi_real** arg, casadi_real** res, casadi_
   a142=(a169*a146);
   a163=(a163+a142);
   a014=(a130*a014);
-  a091=(a117*a091);
-  a014=(a014-a091);
+  a115=(a117*a115);
+  a014=(a014-a115);
   a044=(a071*a044);
   a014=(a014-a044);
   a014=(a014*rcp1);
   a044=(a123*a014);
   a110=(a110*a014);
-  a091=(a103*a121);
-  a110=(a110-a091);
-  a091=(a167*a110);
-  a044=(a044+a091);
+  a115=(a103*a121);
+  a110=(a110-a115);
+  a115=(a167*a110);
+  a044=(a044+a115);
   a163=(a163-a044);
   a044=(a133*a020);
-  a091=(a169*a129);
-  a044=(a044+a091);
-  a091=(a173*a014);
+  a115=(a169*a129);
+  a044=(a044+a115);
+  a115=(a173*a014);
   a142=(a167*a124);
-  a091=(a091+a142);
-  a044=(a044-a091);
+  a115=(a115+a142);
+  a044=(a044-a115);
   a044=(2*a044);
   a163=(a163+a044);
   a044=arg[0][189];
   a044=(a044*a078);
-  a091=arg[0][190];
-  a091=(a091*a032);
-  a044=(a044+a091);
-  a091=arg[0][191];
-  a091=(a091*a081);
-  a044=(a044+a091);
+  a115=arg[0][190];
+  a115=(a115*a032);
+  a044=(a044+a115);
+  a115=arg[0][191];
+  a115=(a115*a081);
+  a044=(a044+a115);
   a044=(a134*a044);
-  a091=arg[0][192];
-  a091=(a091*a078);
-  a044=(a044+a091);
-  a091=arg[0][193];
-  a091=(a091*a078);
+  a115=arg[0][192];
+  a115=(a115*a078);
+  a044=(a044+a115);
+  a115=arg[0][193];
+  a115=(a115*a078);
   a142=arg[0][194];
   a142=(a142*a032);
-  a091=(a091+a142);
+  a115=(a115+a142);
   a142=arg[0][195];
   a142=(a142*a081);
-  a091=(a091+a142);
-  a091=(a010*a091);
+  a115=(a115+a142);
+  a115=(a010*a115);
   a142=arg[0][196];
   a142=(a142*a032);
-  a091=(a091+a142);
-  a044=(a044+a091);
-  a091=arg[0][197];
-  a091=(a091*a078);
+  a115=(a115+a142);
+  a044=(a044+a115);
+  a115=arg[0][197];
+  a115=(a115*a078);
   a142=arg[0][198];
   a055=(a142*a032);
-  a091=(a091+a055);
+  a115=(a115+a055);
   a142=(a142*a081);
-  a091=(a091+a142);
-  a091=(a098*a091);
+  a115=(a115+a142);
+  a115=(a098*a115);
   a142=arg[0][199];
   a142=(a142*a081);
-  a091=(a091+a142);
-  a044=(a044+a091);
+  a115=(a115+a142);
+  a044=(a044+a115);
   a163=(a163+a044);
   a044=(a026*a020);
-  a091=(a099*a121);
+  a115=(a099*a121);
   a142=(a097*a020);
-  a091=(a091-a142);
-  a142=(a169*a091);
+  a115=(a115-a142);
+  a142=(a169*a115);
   a044=(a044+a142);
   a142=(a137*a014);
   a097=(a097*a014);
@@ -12085,8 +12085,8 @@ static int qd_dfd_r_lift_dir(const casadi_real** arg, casadi_real** res, casadi_
   a015=(a167*a015);
   a021=(a021+a015);
   a026=(a026*a121);
-  a091=(a128*a091);
-  a026=(a026+a091);
+  a115=(a128*a115);
+  a026=(a026+a115);
   a021=(a021-a026);
   a164=(a164*a014);
   a026=(a167*a053);
@@ -12214,49 +12214,49 @@ static int qd_dfd_r_lift_dir(const casadi_real** arg, casadi_real** res, casadi_
 }
 #endif
 
-#include "qd_reduced_templates.h"
+#include "reduced_templates.h"
 static int qd_M_r_eval(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem) {
-  return qd_reduced_term(13, 12, 0, arg, res, iw, w, mem);
+  return qd_reduced_term(13, 5, 0, arg, res, iw, w, mem);
 }
 static int qd_CG_r_eval(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem) {
-  return qd_reduced_term(13, 12, 1, arg, res, iw, w, mem);
+  return qd_reduced_term(13, 5, 1, arg, res, iw, w, mem);
 }
 static int qd_G_r_eval(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem) {
-  return qd_reduced_term(13, 12, 2, arg, res, iw, w, mem);
+  return qd_reduced_term(13, 5, 2, arg, res, iw, w, mem);
 }
 static int qd_id_r_eval(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem) {
-  return qd_reduced_term(13, 12, 3, arg, res, iw, w, mem);
+  return qd_reduced_term(13, 5, 3, arg, res, iw, w, mem);
 }
 
-CASADI_SYMBOL_EXPORT int qd_M_r_BL_BR(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem){
+CASADI_SYMBOL_EXPORT int qd_M_r_FL_BL(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem){
   return qd_finite(qd_M_r_eval(arg, res, iw, w, mem), res, 1, (const casadi_int[]){169});
 }
 
-CASADI_SYMBOL_EXPORT int qd_M_r_BL_BR_checkout(void) {
+CASADI_SYMBOL_EXPORT int qd_M_r_FL_BL_checkout(void) {
   return 0;
 }
 
-CASADI_SYMBOL_EXPORT void qd_M_r_BL_BR_release(int mem) {
+CASADI_SYMBOL_EXPORT void qd_M_r_FL_BL_release(int mem) {
   (void)mem;
 }
 
-CASADI_SYMBOL_EXPORT void qd_M_r_BL_BR_incref(void) {
+CASADI_SYMBOL_EXPORT void qd_M_r_FL_BL_incref(void) {
 }
 
-CASADI_SYMBOL_EXPORT void qd_M_r_BL_BR_decref(void) {
+CASADI_SYMBOL_EXPORT void qd_M_r_FL_BL_decref(void) {
 }
 
-CASADI_SYMBOL_EXPORT casadi_int qd_M_r_BL_BR_n_in(void) { return 2;}
+CASADI_SYMBOL_EXPORT casadi_int qd_M_r_FL_BL_n_in(void) { return 2;}
 
-CASADI_SYMBOL_EXPORT casadi_int qd_M_r_BL_BR_n_out(void) { return 1;}
+CASADI_SYMBOL_EXPORT casadi_int qd_M_r_FL_BL_n_out(void) { return 1;}
 
-CASADI_SYMBOL_EXPORT casadi_real qd_M_r_BL_BR_default_in(casadi_int i) {
+CASADI_SYMBOL_EXPORT casadi_real qd_M_r_FL_BL_default_in(casadi_int i) {
   switch (i) {
     default: return 0;
   }
 }
 
-CASADI_SYMBOL_EXPORT const char* qd_M_r_BL_BR_name_in(casadi_int i) {
+CASADI_SYMBOL_EXPORT const char* qd_M_r_FL_BL_name_in(casadi_int i) {
   switch (i) {
     case 0: return "q_r";
     case 1: return "quat";
@@ -12264,14 +12264,14 @@ CASADI_SYMBOL_EXPORT const char* qd_M_r_BL_BR_name_in(casadi_int i) {
   }
 }
 
-CASADI_SYMBOL_EXPORT const char* qd_M_r_BL_BR_name_out(casadi_int i) {
+CASADI_SYMBOL_EXPORT const char* qd_M_r_FL_BL_name_out(casadi_int i) {
   switch (i) {
     case 0: return "M_r";
     default: return 0;
   }
 }
 
-CASADI_SYMBOL_EXPORT const casadi_int* qd_M_r_BL_BR_sparsity_in(casadi_int i) {
+CASADI_SYMBOL_EXPORT const casadi_int* qd_M_r_FL_BL_sparsity_in(casadi_int i) {
   switch (i) {
     case 0: return casadi_s0;
     case 1: return casadi_s1;
@@ -12279,14 +12279,14 @@ CASADI_SYMBOL_EXPORT const casadi_int* qd_M_r_BL_BR_sparsity_in(casadi_int i) {
   }
 }
 
-CASADI_SYMBOL_EXPORT const casadi_int* qd_M_r_BL_BR_sparsity_out(casadi_int i) {
+CASADI_SYMBOL_EXPORT const casadi_int* qd_M_r_FL_BL_sparsity_out(casadi_int i) {
   switch (i) {
     case 0: return casadi_s2;
     default: return 0;
   }
 }
 
-CASADI_SYMBOL_EXPORT int qd_M_r_BL_BR_work(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz_iw, casadi_int *sz_w) {
+CASADI_SYMBOL_EXPORT int qd_M_r_FL_BL_work(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz_iw, casadi_int *sz_w) {
   if (sz_arg) *sz_arg = 2;
   if (sz_res) *sz_res = 1;
   if (sz_iw) *sz_iw = 0;
@@ -12294,7 +12294,7 @@ CASADI_SYMBOL_EXPORT int qd_M_r_BL_BR_work(casadi_int *sz_arg, casadi_int* sz_re
   return 0;
 }
 
-CASADI_SYMBOL_EXPORT int qd_M_r_BL_BR_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz_iw, casadi_int *sz_w) {
+CASADI_SYMBOL_EXPORT int qd_M_r_FL_BL_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz_iw, casadi_int *sz_w) {
   if (sz_arg) *sz_arg = 2*sizeof(const casadi_real*);
   if (sz_res) *sz_res = 1*sizeof(casadi_real*);
   if (sz_iw) *sz_iw = 0*sizeof(casadi_int);
@@ -12302,35 +12302,35 @@ CASADI_SYMBOL_EXPORT int qd_M_r_BL_BR_work_bytes(casadi_int *sz_arg, casadi_int*
   return 0;
 }
 
-CASADI_SYMBOL_EXPORT int qd_CG_r_BL_BR(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem){
+CASADI_SYMBOL_EXPORT int qd_CG_r_FL_BL(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem){
   return qd_finite(qd_CG_r_eval(arg, res, iw, w, mem), res, 1, (const casadi_int[]){13});
 }
 
-CASADI_SYMBOL_EXPORT int qd_CG_r_BL_BR_checkout(void) {
+CASADI_SYMBOL_EXPORT int qd_CG_r_FL_BL_checkout(void) {
   return 0;
 }
 
-CASADI_SYMBOL_EXPORT void qd_CG_r_BL_BR_release(int mem) {
+CASADI_SYMBOL_EXPORT void qd_CG_r_FL_BL_release(int mem) {
   (void)mem;
 }
 
-CASADI_SYMBOL_EXPORT void qd_CG_r_BL_BR_incref(void) {
+CASADI_SYMBOL_EXPORT void qd_CG_r_FL_BL_incref(void) {
 }
 
-CASADI_SYMBOL_EXPORT void qd_CG_r_BL_BR_decref(void) {
+CASADI_SYMBOL_EXPORT void qd_CG_r_FL_BL_decref(void) {
 }
 
-CASADI_SYMBOL_EXPORT casadi_int qd_CG_r_BL_BR_n_in(void) { return 3;}
+CASADI_SYMBOL_EXPORT casadi_int qd_CG_r_FL_BL_n_in(void) { return 3;}
 
-CASADI_SYMBOL_EXPORT casadi_int qd_CG_r_BL_BR_n_out(void) { return 1;}
+CASADI_SYMBOL_EXPORT casadi_int qd_CG_r_FL_BL_n_out(void) { return 1;}
 
-CASADI_SYMBOL_EXPORT casadi_real qd_CG_r_BL_BR_default_in(casadi_int i) {
+CASADI_SYMBOL_EXPORT casadi_real qd_CG_r_FL_BL_default_in(casadi_int i) {
   switch (i) {
     default: return 0;
   }
 }
 
-CASADI_SYMBOL_EXPORT const char* qd_CG_r_BL_BR_name_in(casadi_int i) {
+CASADI_SYMBOL_EXPORT const char* qd_CG_r_FL_BL_name_in(casadi_int i) {
   switch (i) {
     case 0: return "q_r";
     case 1: return "qd_r";
@@ -12339,14 +12339,14 @@ CASADI_SYMBOL_EXPORT const char* qd_CG_r_BL_BR_name_in(casadi_int i) {
   }
 }
 
-CASADI_SYMBOL_EXPORT const char* qd_CG_r_BL_BR_name_out(casadi_int i) {
+CASADI_SYMBOL_EXPORT const char* qd_CG_r_FL_BL_name_out(casadi_int i) {
   switch (i) {
     case 0: return "CG_r";
     default: return 0;
   }
 }
 
-CASADI_SYMBOL_EXPORT const casadi_int* qd_CG_r_BL_BR_sparsity_in(casadi_int i) {
+CASADI_SYMBOL_EXPORT const casadi_int* qd_CG_r_FL_BL_sparsity_in(casadi_int i) {
   switch (i) {
     case 0: return casadi_s0;
     case 1: return casadi_s0;
@@ -12355,14 +12355,14 @@ CASADI_SYMBOL_EXPORT const casadi_int* qd_CG_r_BL_BR_sparsity_in(casadi_int i) {
   }
 }
 
-CASADI_SYMBOL_EXPORT const casadi_int* qd_CG_r_BL_BR_sparsity_out(casadi_int i) {
+CASADI_SYMBOL_EXPORT const casadi_int* qd_CG_r_FL_BL_sparsity_out(casadi_int i) {
   switch (i) {
     case 0: return casadi_s0;
     default: return 0;
   }
 }
 
-CASADI_SYMBOL_EXPORT int qd_CG_r_BL_BR_work(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz_iw, casadi_int *sz_w) {
+CASADI_SYMBOL_EXPORT int qd_CG_r_FL_BL_work(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz_iw, casadi_int *sz_w) {
   if (sz_arg) *sz_arg = 3;
   if (sz_res) *sz_res = 1;
   if (sz_iw) *sz_iw = 0;
@@ -12370,7 +12370,7 @@ CASADI_SYMBOL_EXPORT int qd_CG_r_BL_BR_work(casadi_int *sz_arg, casadi_int* sz_r
   return 0;
 }
 
-CASADI_SYMBOL_EXPORT int qd_CG_r_BL_BR_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz_iw, casadi_int *sz_w) {
+CASADI_SYMBOL_EXPORT int qd_CG_r_FL_BL_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz_iw, casadi_int *sz_w) {
   if (sz_arg) *sz_arg = 3*sizeof(const casadi_real*);
   if (sz_res) *sz_res = 1*sizeof(casadi_real*);
   if (sz_iw) *sz_iw = 0*sizeof(casadi_int);
@@ -12378,35 +12378,35 @@ CASADI_SYMBOL_EXPORT int qd_CG_r_BL_BR_work_bytes(casadi_int *sz_arg, casadi_int
   return 0;
 }
 
-CASADI_SYMBOL_EXPORT int qd_G_r_BL_BR(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem){
+CASADI_SYMBOL_EXPORT int qd_G_r_FL_BL(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem){
   return qd_finite(qd_G_r_eval(arg, res, iw, w, mem), res, 1, (const casadi_int[]){13});
 }
 
-CASADI_SYMBOL_EXPORT int qd_G_r_BL_BR_checkout(void) {
+CASADI_SYMBOL_EXPORT int qd_G_r_FL_BL_checkout(void) {
   return 0;
 }
 
-CASADI_SYMBOL_EXPORT void qd_G_r_BL_BR_release(int mem) {
+CASADI_SYMBOL_EXPORT void qd_G_r_FL_BL_release(int mem) {
   (void)mem;
 }
 
-CASADI_SYMBOL_EXPORT void qd_G_r_BL_BR_incref(void) {
+CASADI_SYMBOL_EXPORT void qd_G_r_FL_BL_incref(void) {
 }
 
-CASADI_SYMBOL_EXPORT void qd_G_r_BL_BR_decref(void) {
+CASADI_SYMBOL_EXPORT void qd_G_r_FL_BL_decref(void) {
 }
 
-CASADI_SYMBOL_EXPORT casadi_int qd_G_r_BL_BR_n_in(void) { return 2;}
+CASADI_SYMBOL_EXPORT casadi_int qd_G_r_FL_BL_n_in(void) { return 2;}
 
-CASADI_SYMBOL_EXPORT casadi_int qd_G_r_BL_BR_n_out(void) { return 1;}
+CASADI_SYMBOL_EXPORT casadi_int qd_G_r_FL_BL_n_out(void) { return 1;}
 
-CASADI_SYMBOL_EXPORT casadi_real qd_G_r_BL_BR_default_in(casadi_int i) {
+CASADI_SYMBOL_EXPORT casadi_real qd_G_r_FL_BL_default_in(casadi_int i) {
   switch (i) {
     default: return 0;
   }
 }
 
-CASADI_SYMBOL_EXPORT const char* qd_G_r_BL_BR_name_in(casadi_int i) {
+CASADI_SYMBOL_EXPORT const char* qd_G_r_FL_BL_name_in(casadi_int i) {
   switch (i) {
     case 0: return "q_r";
     case 1: return "quat";
@@ -12414,14 +12414,14 @@ CASADI_SYMBOL_EXPORT const char* qd_G_r_BL_BR_name_in(casadi_int i) {
   }
 }
 
-CASADI_SYMBOL_EXPORT const char* qd_G_r_BL_BR_name_out(casadi_int i) {
+CASADI_SYMBOL_EXPORT const char* qd_G_r_FL_BL_name_out(casadi_int i) {
   switch (i) {
     case 0: return "G_r";
     default: return 0;
   }
 }
 
-CASADI_SYMBOL_EXPORT const casadi_int* qd_G_r_BL_BR_sparsity_in(casadi_int i) {
+CASADI_SYMBOL_EXPORT const casadi_int* qd_G_r_FL_BL_sparsity_in(casadi_int i) {
   switch (i) {
     case 0: return casadi_s0;
     case 1: return casadi_s1;
@@ -12429,14 +12429,14 @@ CASADI_SYMBOL_EXPORT const casadi_int* qd_G_r_BL_BR_sparsity_in(casadi_int i) {
   }
 }
 
-CASADI_SYMBOL_EXPORT const casadi_int* qd_G_r_BL_BR_sparsity_out(casadi_int i) {
+CASADI_SYMBOL_EXPORT const casadi_int* qd_G_r_FL_BL_sparsity_out(casadi_int i) {
   switch (i) {
     case 0: return casadi_s0;
     default: return 0;
   }
 }
 
-CASADI_SYMBOL_EXPORT int qd_G_r_BL_BR_work(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz_iw, casadi_int *sz_w) {
+CASADI_SYMBOL_EXPORT int qd_G_r_FL_BL_work(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz_iw, casadi_int *sz_w) {
   if (sz_arg) *sz_arg = 2;
   if (sz_res) *sz_res = 1;
   if (sz_iw) *sz_iw = 0;
@@ -12444,7 +12444,7 @@ CASADI_SYMBOL_EXPORT int qd_G_r_BL_BR_work(casadi_int *sz_arg, casadi_int* sz_re
   return 0;
 }
 
-CASADI_SYMBOL_EXPORT int qd_G_r_BL_BR_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz_iw, casadi_int *sz_w) {
+CASADI_SYMBOL_EXPORT int qd_G_r_FL_BL_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz_iw, casadi_int *sz_w) {
   if (sz_arg) *sz_arg = 2*sizeof(const casadi_real*);
   if (sz_res) *sz_res = 1*sizeof(casadi_real*);
   if (sz_iw) *sz_iw = 0*sizeof(casadi_int);
@@ -12452,35 +12452,35 @@ CASADI_SYMBOL_EXPORT int qd_G_r_BL_BR_work_bytes(casadi_int *sz_arg, casadi_int*
   return 0;
 }
 
-CASADI_SYMBOL_EXPORT int qd_id_r_BL_BR(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem){
+CASADI_SYMBOL_EXPORT int qd_id_r_FL_BL(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem){
   return qd_finite(qd_id_r_eval(arg, res, iw, w, mem), res, 1, (const casadi_int[]){13});
 }
 
-CASADI_SYMBOL_EXPORT int qd_id_r_BL_BR_checkout(void) {
+CASADI_SYMBOL_EXPORT int qd_id_r_FL_BL_checkout(void) {
   return 0;
 }
 
-CASADI_SYMBOL_EXPORT void qd_id_r_BL_BR_release(int mem) {
+CASADI_SYMBOL_EXPORT void qd_id_r_FL_BL_release(int mem) {
   (void)mem;
 }
 
-CASADI_SYMBOL_EXPORT void qd_id_r_BL_BR_incref(void) {
+CASADI_SYMBOL_EXPORT void qd_id_r_FL_BL_incref(void) {
 }
 
-CASADI_SYMBOL_EXPORT void qd_id_r_BL_BR_decref(void) {
+CASADI_SYMBOL_EXPORT void qd_id_r_FL_BL_decref(void) {
 }
 
-CASADI_SYMBOL_EXPORT casadi_int qd_id_r_BL_BR_n_in(void) { return 4;}
+CASADI_SYMBOL_EXPORT casadi_int qd_id_r_FL_BL_n_in(void) { return 4;}
 
-CASADI_SYMBOL_EXPORT casadi_int qd_id_r_BL_BR_n_out(void) { return 1;}
+CASADI_SYMBOL_EXPORT casadi_int qd_id_r_FL_BL_n_out(void) { return 1;}
 
-CASADI_SYMBOL_EXPORT casadi_real qd_id_r_BL_BR_default_in(casadi_int i) {
+CASADI_SYMBOL_EXPORT casadi_real qd_id_r_FL_BL_default_in(casadi_int i) {
   switch (i) {
     default: return 0;
   }
 }
 
-CASADI_SYMBOL_EXPORT const char* qd_id_r_BL_BR_name_in(casadi_int i) {
+CASADI_SYMBOL_EXPORT const char* qd_id_r_FL_BL_name_in(casadi_int i) {
   switch (i) {
     case 0: return "q_r";
     case 1: return "qd_r";
@@ -12490,14 +12490,14 @@ CASADI_SYMBOL_EXPORT const char* qd_id_r_BL_BR_name_in(casadi_int i) {
   }
 }
 
-CASADI_SYMBOL_EXPORT const char* qd_id_r_BL_BR_name_out(casadi_int i) {
+CASADI_SYMBOL_EXPORT const char* qd_id_r_FL_BL_name_out(casadi_int i) {
   switch (i) {
     case 0: return "tau_r";
     default: return 0;
   }
 }
 
-CASADI_SYMBOL_EXPORT const casadi_int* qd_id_r_BL_BR_sparsity_in(casadi_int i) {
+CASADI_SYMBOL_EXPORT const casadi_int* qd_id_r_FL_BL_sparsity_in(casadi_int i) {
   switch (i) {
     case 0: return casadi_s0;
     case 1: return casadi_s0;
@@ -12507,14 +12507,14 @@ CASADI_SYMBOL_EXPORT const casadi_int* qd_id_r_BL_BR_sparsity_in(casadi_int i) {
   }
 }
 
-CASADI_SYMBOL_EXPORT const casadi_int* qd_id_r_BL_BR_sparsity_out(casadi_int i) {
+CASADI_SYMBOL_EXPORT const casadi_int* qd_id_r_FL_BL_sparsity_out(casadi_int i) {
   switch (i) {
     case 0: return casadi_s0;
     default: return 0;
   }
 }
 
-CASADI_SYMBOL_EXPORT int qd_id_r_BL_BR_work(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz_iw, casadi_int *sz_w) {
+CASADI_SYMBOL_EXPORT int qd_id_r_FL_BL_work(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz_iw, casadi_int *sz_w) {
   if (sz_arg) *sz_arg = 4;
   if (sz_res) *sz_res = 1;
   if (sz_iw) *sz_iw = 0;
@@ -12522,7 +12522,7 @@ CASADI_SYMBOL_EXPORT int qd_id_r_BL_BR_work(casadi_int *sz_arg, casadi_int* sz_r
   return 0;
 }
 
-CASADI_SYMBOL_EXPORT int qd_id_r_BL_BR_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz_iw, casadi_int *sz_w) {
+CASADI_SYMBOL_EXPORT int qd_id_r_FL_BL_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz_iw, casadi_int *sz_w) {
   if (sz_arg) *sz_arg = 4*sizeof(const casadi_real*);
   if (sz_res) *sz_res = 1*sizeof(casadi_real*);
   if (sz_iw) *sz_iw = 0*sizeof(casadi_int);
@@ -12530,35 +12530,35 @@ CASADI_SYMBOL_EXPORT int qd_id_r_BL_BR_work_bytes(casadi_int *sz_arg, casadi_int
   return 0;
 }
 
-CASADI_SYMBOL_EXPORT int qd_fd_r_BL_BR(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem){
-  return qd_fd_r_solve(13, 12, arg, res, iw, w, mem);
+CASADI_SYMBOL_EXPORT int qd_fd_r_FL_BL(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem){
+  return qd_fd_r_solve(13, 5, arg, res, iw, w, mem);
 }
 
-CASADI_SYMBOL_EXPORT int qd_fd_r_BL_BR_checkout(void) {
+CASADI_SYMBOL_EXPORT int qd_fd_r_FL_BL_checkout(void) {
   return 0;
 }
 
-CASADI_SYMBOL_EXPORT void qd_fd_r_BL_BR_release(int mem) {
+CASADI_SYMBOL_EXPORT void qd_fd_r_FL_BL_release(int mem) {
   (void)mem;
 }
 
-CASADI_SYMBOL_EXPORT void qd_fd_r_BL_BR_incref(void) {
+CASADI_SYMBOL_EXPORT void qd_fd_r_FL_BL_incref(void) {
 }
 
-CASADI_SYMBOL_EXPORT void qd_fd_r_BL_BR_decref(void) {
+CASADI_SYMBOL_EXPORT void qd_fd_r_FL_BL_decref(void) {
 }
 
-CASADI_SYMBOL_EXPORT casadi_int qd_fd_r_BL_BR_n_in(void) { return 4;}
+CASADI_SYMBOL_EXPORT casadi_int qd_fd_r_FL_BL_n_in(void) { return 4;}
 
-CASADI_SYMBOL_EXPORT casadi_int qd_fd_r_BL_BR_n_out(void) { return 1;}
+CASADI_SYMBOL_EXPORT casadi_int qd_fd_r_FL_BL_n_out(void) { return 1;}
 
-CASADI_SYMBOL_EXPORT casadi_real qd_fd_r_BL_BR_default_in(casadi_int i) {
+CASADI_SYMBOL_EXPORT casadi_real qd_fd_r_FL_BL_default_in(casadi_int i) {
   switch (i) {
     default: return 0;
   }
 }
 
-CASADI_SYMBOL_EXPORT const char* qd_fd_r_BL_BR_name_in(casadi_int i) {
+CASADI_SYMBOL_EXPORT const char* qd_fd_r_FL_BL_name_in(casadi_int i) {
   switch (i) {
     case 0: return "q_r";
     case 1: return "qd_r";
@@ -12568,14 +12568,14 @@ CASADI_SYMBOL_EXPORT const char* qd_fd_r_BL_BR_name_in(casadi_int i) {
   }
 }
 
-CASADI_SYMBOL_EXPORT const char* qd_fd_r_BL_BR_name_out(casadi_int i) {
+CASADI_SYMBOL_EXPORT const char* qd_fd_r_FL_BL_name_out(casadi_int i) {
   switch (i) {
     case 0: return "qdd_r";
     default: return 0;
   }
 }
 
-CASADI_SYMBOL_EXPORT const casadi_int* qd_fd_r_BL_BR_sparsity_in(casadi_int i) {
+CASADI_SYMBOL_EXPORT const casadi_int* qd_fd_r_FL_BL_sparsity_in(casadi_int i) {
   switch (i) {
     case 0: return casadi_s0;
     case 1: return casadi_s0;
@@ -12585,14 +12585,14 @@ CASADI_SYMBOL_EXPORT const casadi_int* qd_fd_r_BL_BR_sparsity_in(casadi_int i) {
   }
 }
 
-CASADI_SYMBOL_EXPORT const casadi_int* qd_fd_r_BL_BR_sparsity_out(casadi_int i) {
+CASADI_SYMBOL_EXPORT const casadi_int* qd_fd_r_FL_BL_sparsity_out(casadi_int i) {
   switch (i) {
     case 0: return casadi_s0;
     default: return 0;
   }
 }
 
-CASADI_SYMBOL_EXPORT int qd_fd_r_BL_BR_work(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz_iw, casadi_int *sz_w) {
+CASADI_SYMBOL_EXPORT int qd_fd_r_FL_BL_work(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz_iw, casadi_int *sz_w) {
   if (sz_arg) *sz_arg = 4;
   if (sz_res) *sz_res = 1;
   if (sz_iw) *sz_iw = 0;
@@ -12600,7 +12600,7 @@ CASADI_SYMBOL_EXPORT int qd_fd_r_BL_BR_work(casadi_int *sz_arg, casadi_int* sz_r
   return 0;
 }
 
-CASADI_SYMBOL_EXPORT int qd_fd_r_BL_BR_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz_iw, casadi_int *sz_w) {
+CASADI_SYMBOL_EXPORT int qd_fd_r_FL_BL_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz_iw, casadi_int *sz_w) {
   if (sz_arg) *sz_arg = 4*sizeof(const casadi_real*);
   if (sz_res) *sz_res = 1*sizeof(casadi_real*);
   if (sz_iw) *sz_iw = 0*sizeof(casadi_int);
@@ -12608,37 +12608,37 @@ CASADI_SYMBOL_EXPORT int qd_fd_r_BL_BR_work_bytes(casadi_int *sz_arg, casadi_int
   return 0;
 }
 
-CASADI_SYMBOL_EXPORT int qd_dfd_r_BL_BR(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem){
+CASADI_SYMBOL_EXPORT int qd_dfd_r_FL_BL(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem){
   typedef char w_agrees[QD_DFD_R_W(13) == 2624 ? 1 : -1];
   (void)sizeof(w_agrees);
-  return qd_dfd_r_solve(13, 12, 1, arg, res, iw, w, mem);
+  return qd_dfd_r_solve(13, 5, 1, arg, res, iw, w, mem);
 }
 
-CASADI_SYMBOL_EXPORT int qd_dfd_r_BL_BR_checkout(void) {
+CASADI_SYMBOL_EXPORT int qd_dfd_r_FL_BL_checkout(void) {
   return 0;
 }
 
-CASADI_SYMBOL_EXPORT void qd_dfd_r_BL_BR_release(int mem) {
+CASADI_SYMBOL_EXPORT void qd_dfd_r_FL_BL_release(int mem) {
   (void)mem;
 }
 
-CASADI_SYMBOL_EXPORT void qd_dfd_r_BL_BR_incref(void) {
+CASADI_SYMBOL_EXPORT void qd_dfd_r_FL_BL_incref(void) {
 }
 
-CASADI_SYMBOL_EXPORT void qd_dfd_r_BL_BR_decref(void) {
+CASADI_SYMBOL_EXPORT void qd_dfd_r_FL_BL_decref(void) {
 }
 
-CASADI_SYMBOL_EXPORT casadi_int qd_dfd_r_BL_BR_n_in(void) { return 4;}
+CASADI_SYMBOL_EXPORT casadi_int qd_dfd_r_FL_BL_n_in(void) { return 4;}
 
-CASADI_SYMBOL_EXPORT casadi_int qd_dfd_r_BL_BR_n_out(void) { return 4;}
+CASADI_SYMBOL_EXPORT casadi_int qd_dfd_r_FL_BL_n_out(void) { return 4;}
 
-CASADI_SYMBOL_EXPORT casadi_real qd_dfd_r_BL_BR_default_in(casadi_int i) {
+CASADI_SYMBOL_EXPORT casadi_real qd_dfd_r_FL_BL_default_in(casadi_int i) {
   switch (i) {
     default: return 0;
   }
 }
 
-CASADI_SYMBOL_EXPORT const char* qd_dfd_r_BL_BR_name_in(casadi_int i) {
+CASADI_SYMBOL_EXPORT const char* qd_dfd_r_FL_BL_name_in(casadi_int i) {
   switch (i) {
     case 0: return "q_r";
     case 1: return "qd_r";
@@ -12648,7 +12648,7 @@ CASADI_SYMBOL_EXPORT const char* qd_dfd_r_BL_BR_name_in(casadi_int i) {
   }
 }
 
-CASADI_SYMBOL_EXPORT const char* qd_dfd_r_BL_BR_name_out(casadi_int i) {
+CASADI_SYMBOL_EXPORT const char* qd_dfd_r_FL_BL_name_out(casadi_int i) {
   switch (i) {
     case 0: return "dqdd_dq";
     case 1: return "dqdd_dqd";
@@ -12658,7 +12658,7 @@ CASADI_SYMBOL_EXPORT const char* qd_dfd_r_BL_BR_name_out(casadi_int i) {
   }
 }
 
-CASADI_SYMBOL_EXPORT const casadi_int* qd_dfd_r_BL_BR_sparsity_in(casadi_int i) {
+CASADI_SYMBOL_EXPORT const casadi_int* qd_dfd_r_FL_BL_sparsity_in(casadi_int i) {
   switch (i) {
     case 0: return casadi_s0;
     case 1: return casadi_s0;
@@ -12668,7 +12668,7 @@ CASADI_SYMBOL_EXPORT const casadi_int* qd_dfd_r_BL_BR_sparsity_in(casadi_int i) 
   }
 }
 
-CASADI_SYMBOL_EXPORT const casadi_int* qd_dfd_r_BL_BR_sparsity_out(casadi_int i) {
+CASADI_SYMBOL_EXPORT const casadi_int* qd_dfd_r_FL_BL_sparsity_out(casadi_int i) {
   switch (i) {
     case 0: return casadi_s2;
     case 1: return casadi_s2;
@@ -12678,7 +12678,7 @@ CASADI_SYMBOL_EXPORT const casadi_int* qd_dfd_r_BL_BR_sparsity_out(casadi_int i)
   }
 }
 
-CASADI_SYMBOL_EXPORT int qd_dfd_r_BL_BR_work(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz_iw, casadi_int *sz_w) {
+CASADI_SYMBOL_EXPORT int qd_dfd_r_FL_BL_work(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz_iw, casadi_int *sz_w) {
   if (sz_arg) *sz_arg = 4;
   if (sz_res) *sz_res = 4;
   if (sz_iw) *sz_iw = 0;
@@ -12686,7 +12686,7 @@ CASADI_SYMBOL_EXPORT int qd_dfd_r_BL_BR_work(casadi_int *sz_arg, casadi_int* sz_
   return 0;
 }
 
-CASADI_SYMBOL_EXPORT int qd_dfd_r_BL_BR_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz_iw, casadi_int *sz_w) {
+CASADI_SYMBOL_EXPORT int qd_dfd_r_FL_BL_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz_iw, casadi_int *sz_w) {
   if (sz_arg) *sz_arg = 4*sizeof(const casadi_real*);
   if (sz_res) *sz_res = 4*sizeof(casadi_real*);
   if (sz_iw) *sz_iw = 0*sizeof(casadi_int);

@@ -1,7 +1,7 @@
 /* Thread safety of the generated functions: each of QD_THREADS threads calls every function
  * QD_ROUNDS times, all at once, each thread with its own work memory (iw, w) and its own
  * inputs and outputs, starting at a different function; every result must equal the serial
- * result bit for bit. Inputs: the check program's reference inputs (qd_<robot>_reference.h).
+ * result bit for bit. Inputs: the check program's reference inputs (qd_<robot>-reference.h).
  * Build and run: `make check-threads` (and `make check-threads-tsan`: ThreadSanitizer).
  * Exit status 0 when every result matches. */
 #include <pthread.h>

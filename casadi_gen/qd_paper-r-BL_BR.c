@@ -15,7 +15,7 @@ extern "C" {
   #define _CASADI_NAMESPACE_CONCAT(NS, ID) NS ## ID
   #define CASADI_PREFIX(ID) CASADI_NAMESPACE_CONCAT(CODEGEN_PREFIX, ID)
 #else
-  #define CASADI_PREFIX(ID) qd_paper_r_FL_FR_ ## ID
+  #define CASADI_PREFIX(ID) qd_paper_r_BL_BR_ ## ID
 #endif
 
 #include <math.h>
@@ -64,13 +64,13 @@ QD_MATH(sin) QD_MATH(cos) QD_MATH(sqrt) QD_MATH(fabs)
 static inline casadi_real casadi_sq(casadi_real x) { return x*x;}
 
 /* Configuration this file was compiled with */
-CASADI_SYMBOL_EXPORT void qd_paper_r_FL_FR_casadi_version(int* major, int* minor, int* patch) {
+CASADI_SYMBOL_EXPORT void qd_paper_r_BL_BR_casadi_version(int* major, int* minor, int* patch) {
   *major = 3;
   *minor = 8;
   *patch = 2;
 }
-CASADI_SYMBOL_EXPORT int qd_paper_r_FL_FR_casadi_int_size(void) { return (int) sizeof(casadi_int); }
-CASADI_SYMBOL_EXPORT int qd_paper_r_FL_FR_casadi_real_size(void) { return (int) sizeof(casadi_real); }
+CASADI_SYMBOL_EXPORT int qd_paper_r_BL_BR_casadi_int_size(void) { return (int) sizeof(casadi_int); }
+CASADI_SYMBOL_EXPORT int qd_paper_r_BL_BR_casadi_real_size(void) { return (int) sizeof(casadi_real); }
 
 static const casadi_int casadi_s0[3] = {13, 1, 1};
 static const casadi_int casadi_s1[3] = {4, 1, 1};
@@ -812,31 +812,31 @@ static int qd_dfd_r_lift(const casadi_real** arg, casadi_real** res, casadi_int*
   casadi_real rcp0, rcp1, rcp2, rcp3, rcp4;
   a000=7.0000000000000007e-02;
   a001=2.0000000000000001e-01;
-  a002=arg[5][0];
-  a003=arg[5][1];
+  a002=arg[5][6];
+  a003=arg[5][7];
   a004=(a002*a003);
   a005=(a001*a004);
   a000=(a000+a005);
-  a006=arg[5][2];
+  a006=arg[5][8];
   a007=(a004*a006);
-  a008=arg[4][1];
+  a008=arg[4][7];
   a009=(a002*a008);
-  a010=arg[4][2];
+  a010=arg[4][8];
   a011=(a009*a010);
   a007=(a007-a011);
   a007=(a001*a007);
   a000=(a000+a007);
   a011=-7.0000000000000007e-02;
-  a012=arg[5][3];
-  a013=arg[5][4];
+  a012=arg[5][9];
+  a013=arg[5][10];
   a014=(a012*a013);
   a015=(a001*a014);
   a011=(a011+a015);
-  a016=arg[5][5];
+  a016=arg[5][11];
   a017=(a014*a016);
-  a018=arg[4][4];
+  a018=arg[4][10];
   a019=(a012*a018);
-  a020=arg[4][5];
+  a020=arg[4][11];
   a021=(a019*a020);
   a017=(a017-a021);
   a017=(a001*a017);
@@ -847,7 +847,7 @@ static int qd_dfd_r_lift(const casadi_real** arg, casadi_real** res, casadi_int*
   a021=(a021*rcp0);
   a023=(a000-a011);
   a024=(a023*rcp0);
-  a025=1.9000000000000000e-01;
+  a025=-1.9000000000000000e-01;
   a026=(a001*a008);
   a027=(a025+a026);
   a028=(a003*a010);
@@ -898,7 +898,7 @@ static int qd_dfd_r_lift(const casadi_real** arg, casadi_real** res, casadi_int*
   rcp2=(1/a046);
   a045=(a045*rcp2);
   a033=(a033-a045);
-  a049=arg[4][0];
+  a049=arg[4][6];
   a050=(a049*a008);
   a051=(a050*a010);
   a052=(a049*a003);
@@ -907,7 +907,7 @@ static int qd_dfd_r_lift(const casadi_real** arg, casadi_real** res, casadi_int*
   a054=(a001*a054);
   a055=(a001*a052);
   a054=(a054-a055);
-  a056=arg[4][3];
+  a056=arg[4][9];
   a057=(a056*a018);
   a058=(a057*a020);
   a059=(a056*a013);
@@ -949,7 +949,7 @@ static int qd_dfd_r_lift(const casadi_real** arg, casadi_real** res, casadi_int*
   a074=(a001*a074);
   a076=(a001*a075);
   a074=(a074-a076);
-  a076=arg[1][3];
+  a076=arg[1][9];
   a077=(a074*a076);
   a078=(a020*a059);
   a079=(a016*a057);
@@ -957,14 +957,14 @@ static int qd_dfd_r_lift(const casadi_real** arg, casadi_real** res, casadi_int*
   a078=(a001*a078);
   a079=(a001*a057);
   a078=(a078+a079);
-  a079=arg[1][4];
+  a079=arg[1][10];
   a080=(a078*a079);
   a077=(a077+a080);
   a080=(a057*a016);
   a081=(a059*a020);
   a080=(a080+a081);
   a080=(a001*a080);
-  a081=arg[1][5];
+  a081=arg[1][11];
   a082=(a080*a081);
   a077=(a077+a082);
   a082=(a008*a002);
@@ -975,7 +975,7 @@ static int qd_dfd_r_lift(const casadi_real** arg, casadi_real** res, casadi_int*
   a083=(a001*a083);
   a085=(a001*a084);
   a083=(a083-a085);
-  a085=arg[1][0];
+  a085=arg[1][6];
   a086=(a083*a085);
   a087=(a010*a052);
   a088=(a006*a050);
@@ -983,14 +983,14 @@ static int qd_dfd_r_lift(const casadi_real** arg, casadi_real** res, casadi_int*
   a087=(a001*a087);
   a088=(a001*a050);
   a087=(a087+a088);
-  a088=arg[1][1];
+  a088=arg[1][7];
   a089=(a087*a088);
   a086=(a086+a089);
   a089=(a050*a006);
   a090=(a052*a010);
   a089=(a089+a090);
   a089=(a001*a089);
-  a090=arg[1][2];
+  a090=arg[1][8];
   a091=(a089*a090);
   a086=(a086+a091);
   a091=(a077-a086);
@@ -1238,12 +1238,12 @@ static int qd_dfd_r_lift(const casadi_real** arg, casadi_real** res, casadi_int*
   a058=(a152*a081);
   a094=(a094+a058);
   a147=(a147+a094);
-  a094=arg[2][3];
+  a094=arg[2][9];
   a058=(a074*a094);
-  a153=arg[2][4];
+  a153=arg[2][10];
   a154=(a078*a153);
   a058=(a058+a154);
-  a154=arg[2][5];
+  a154=arg[2][11];
   a155=(a080*a154);
   a058=(a058+a155);
   a147=(a147+a058);
@@ -1307,12 +1307,12 @@ static int qd_dfd_r_lift(const casadi_real** arg, casadi_real** res, casadi_int*
   a051=(a160*a090);
   a106=(a106+a051);
   a155=(a155+a106);
-  a106=arg[2][0];
+  a106=arg[2][6];
   a051=(a083*a106);
-  a161=arg[2][1];
+  a161=arg[2][7];
   a162=(a087*a161);
   a051=(a051+a162);
-  a162=arg[2][2];
+  a162=arg[2][8];
   a163=(a089*a162);
   a051=(a051+a163);
   a155=(a155+a051);
@@ -6870,6 +6870,12 @@ static int qd_dfd_r_lift_columns(const casadi_real** arg, casadi_real** res, cas
   res[2][36]=a333;
   res[2][37]=a333;
   res[2][38]=a333;
+  res[2][39]=a333;
+  res[2][40]=a333;
+  res[2][41]=a333;
+  res[2][42]=a333;
+  res[2][43]=a333;
+  res[2][44]=a333;
   a068=arg[1][1];
   a058=arg[0][155];
   a015=arg[0][154];
@@ -7041,7 +7047,7 @@ static int qd_dfd_r_lift_columns(const casadi_real** arg, casadi_real** res, cas
   a109=(a109+a353);
   a376=(a376+a109);
   a376=(-a376);
-  res[2][39]=a376;
+  res[2][45]=a376;
   a376=arg[0][167];
   a109=(a335*a125);
   a154=(a130*a154);
@@ -7072,7 +7078,7 @@ static int qd_dfd_r_lift_columns(const casadi_real** arg, casadi_real** res, cas
   a143=(a143+a319);
   a355=(a355+a143);
   a355=(-a355);
-  res[2][40]=a355;
+  res[2][46]=a355;
   a355=arg[0][170];
   a353=(a355*a353);
   a108=(a072*a108);
@@ -7086,7 +7092,7 @@ static int qd_dfd_r_lift_columns(const casadi_real** arg, casadi_real** res, cas
   a141=(a141+a327);
   a353=(a353+a141);
   a353=(-a353);
-  res[2][41]=a353;
+  res[2][47]=a353;
   a353=arg[0][173];
   a278=(a278-a343);
   a343=(a353*a278);
@@ -7094,7 +7100,7 @@ static int qd_dfd_r_lift_columns(const casadi_real** arg, casadi_real** res, cas
   a029=(a029+a116);
   a116=(a141*a029);
   a343=(a343+a116);
-  res[2][42]=a343;
+  res[2][48]=a343;
   a343=arg[0][175];
   a116=(a343*a029);
   a327=arg[0][176];
@@ -7104,7 +7110,7 @@ static int qd_dfd_r_lift_columns(const casadi_real** arg, casadi_real** res, cas
   a319=(a338*a278);
   a109=(a109-a319);
   a116=(a116+a109);
-  res[2][43]=a116;
+  res[2][49]=a116;
   a116=arg[0][178];
   a029=(a116*a029);
   a109=arg[0][179];
@@ -7113,13 +7119,7 @@ static int qd_dfd_r_lift_columns(const casadi_real** arg, casadi_real** res, cas
   a278=(a319*a278);
   a297=(a297-a278);
   a029=(a029+a297);
-  res[2][44]=a029;
-  res[2][45]=a333;
-  res[2][46]=a333;
-  res[2][47]=a333;
-  res[2][48]=a333;
-  res[2][49]=a333;
-  res[2][50]=a333;
+  res[2][50]=a029;
   a029=arg[0][184];
   a297=(a345*a115);
   a278=(a068*a125);
@@ -7167,6 +7167,12 @@ static int qd_dfd_r_lift_columns(const casadi_real** arg, casadi_real** res, cas
   a125=(a125-a115);
   a297=(a297+a125);
   res[2][51]=a297;
+  res[2][52]=a333;
+  res[2][53]=a333;
+  res[2][54]=a333;
+  res[2][55]=a333;
+  res[2][56]=a333;
+  res[2][57]=a333;
   a297=(a072*a177);
   a125=(a356*a157);
   a115=(a049*a177);
@@ -7288,7 +7294,7 @@ static int qd_dfd_r_lift_columns(const casadi_real** arg, casadi_real** res, cas
   a169=(a169+a179);
   a297=(a297+a169);
   a297=(-a297);
-  res[2][52]=a297;
+  res[2][58]=a297;
   a297=(a335*a177);
   a311=(a130*a311);
   a297=(a297-a311);
@@ -7315,7 +7321,7 @@ static int qd_dfd_r_lift_columns(const casadi_real** arg, casadi_real** res, cas
   a107=(a107+a155);
   a115=(a115+a107);
   a115=(-a115);
-  res[2][53]=a115;
+  res[2][59]=a115;
   a311=(a355*a311);
   a200=(a169*a200);
   a311=(a311-a200);
@@ -7328,32 +7334,26 @@ static int qd_dfd_r_lift_columns(const casadi_real** arg, casadi_real** res, cas
   a137=(a137+a317);
   a311=(a311+a137);
   a311=(-a311);
-  res[2][54]=a311;
+  res[2][60]=a311;
   a318=(a318+a125);
   a125=(a353*a318);
   a325=(a325+a172);
   a172=(a141*a325);
   a125=(a125+a172);
-  res[2][55]=a125;
+  res[2][61]=a125;
   a125=(a343*a325);
   a265=(a265+a297);
   a297=(a327*a265);
   a172=(a338*a318);
   a297=(a297-a172);
   a125=(a125+a297);
-  res[2][56]=a125;
+  res[2][62]=a125;
   a325=(a116*a325);
   a265=(a109*a265);
   a318=(a319*a318);
   a265=(a265-a318);
   a325=(a325+a265);
-  res[2][57]=a325;
-  res[2][58]=a333;
-  res[2][59]=a333;
-  res[2][60]=a333;
-  res[2][61]=a333;
-  res[2][62]=a333;
-  res[2][63]=a333;
+  res[2][63]=a325;
   a325=(a157*rcp6);
   a329=(a329*rcp5);
   a265=(a248*a329);
@@ -7385,6 +7385,12 @@ static int qd_dfd_r_lift_columns(const casadi_real** arg, casadi_real** res, cas
   a177=(a177-a157);
   a325=(a325+a177);
   res[2][64]=a325;
+  res[2][65]=a333;
+  res[2][66]=a333;
+  res[2][67]=a333;
+  res[2][68]=a333;
+  res[2][69]=a333;
+  res[2][70]=a333;
   a237=(a072*a237);
   a325=(a356*a183);
   a177=(a049*a216);
@@ -7505,7 +7511,7 @@ static int qd_dfd_r_lift_columns(const casadi_real** arg, casadi_real** res, cas
   a229=(a229+a217);
   a237=(a237+a229);
   a237=(-a237);
-  res[2][65]=a237;
+  res[2][71]=a237;
   a237=(a335*a216);
   a171=(a130*a171);
   a237=(a237-a171);
@@ -7530,7 +7536,7 @@ static int qd_dfd_r_lift_columns(const casadi_real** arg, casadi_real** res, cas
   a214=(a354+a214);
   a177=(a177+a214);
   a177=(-a177);
-  res[2][66]=a177;
+  res[2][72]=a177;
   a171=(a355*a171);
   a171=(a171-a169);
   a318=(a143*a318);
@@ -7540,32 +7546,26 @@ static int qd_dfd_r_lift_columns(const casadi_real** arg, casadi_real** res, cas
   a354=(a354+a297);
   a171=(a171+a354);
   a171=(-a171);
-  res[2][67]=a171;
+  res[2][73]=a171;
   a329=(a329+a325);
   a325=(a353*a329);
   a265=(a265+a210);
   a210=(a141*a265);
   a325=(a325+a210);
-  res[2][68]=a325;
+  res[2][74]=a325;
   a325=(a343*a265);
   a157=(a157+a237);
   a237=(a327*a157);
   a210=(a338*a329);
   a237=(a237-a210);
   a325=(a325+a237);
-  res[2][69]=a325;
+  res[2][75]=a325;
   a265=(a116*a265);
   a157=(a109*a157);
   a329=(a319*a329);
   a157=(a157-a329);
   a265=(a265+a157);
-  res[2][70]=a265;
-  res[2][71]=a333;
-  res[2][72]=a333;
-  res[2][73]=a333;
-  res[2][74]=a333;
-  res[2][75]=a333;
-  res[2][76]=a333;
+  res[2][76]=a265;
   a265=(a183*rcp6);
   a125=(a125*rcp5);
   a157=(a248*a125);
@@ -7597,6 +7597,12 @@ static int qd_dfd_r_lift_columns(const casadi_real** arg, casadi_real** res, cas
   a216=(a216-a352);
   a265=(a265+a216);
   res[2][77]=a265;
+  res[2][78]=a333;
+  res[2][79]=a333;
+  res[2][80]=a333;
+  res[2][81]=a333;
+  res[2][82]=a333;
+  res[2][83]=a333;
   a265=(a361*a250);
   a216=(a057*a251);
   a352=(a348*a250);
@@ -7683,7 +7689,7 @@ static int qd_dfd_r_lift_columns(const casadi_real** arg, casadi_real** res, cas
   a329=(a351*a216);
   a029=(a029-a329);
   a029=(-a029);
-  res[2][78]=a029;
+  res[2][84]=a029;
   a029=(a239*a216);
   a329=(a335*a260);
   a291=(a130*a291);
@@ -7702,14 +7708,14 @@ static int qd_dfd_r_lift_columns(const casadi_real** arg, casadi_real** res, cas
   a125=(a150*a262);
   a029=(a029+a125);
   a029=(-a029);
-  res[2][79]=a029;
+  res[2][85]=a029;
   a216=(a143*a216);
   a291=(a355*a291);
   a216=(a216-a291);
   a262=(a108*a262);
   a216=(a216+a262);
   a216=(-a216);
-  res[2][80]=a216;
+  res[2][86]=a216;
   a051=(a051-a142);
   a142=(a051*a260);
   a190=(a190-a251);
@@ -7722,7 +7728,7 @@ static int qd_dfd_r_lift_columns(const casadi_real** arg, casadi_real** res, cas
   a221=(a221-a265);
   a142=(a142+a221);
   a142=(-a142);
-  res[2][81]=a142;
+  res[2][87]=a142;
   a275=(a099*a275);
   a142=(a343*a183);
   a275=(a275-a142);
@@ -7734,7 +7740,7 @@ static int qd_dfd_r_lift_columns(const casadi_real** arg, casadi_real** res, cas
   a329=(a329-a280);
   a275=(a275-a329);
   a275=(-a275);
-  res[2][82]=a275;
+  res[2][88]=a275;
   a273=(a099*a273);
   a183=(a116*a183);
   a273=(a273-a183);
@@ -7745,13 +7751,7 @@ static int qd_dfd_r_lift_columns(const casadi_real** arg, casadi_real** res, cas
   a157=(a157-a218);
   a273=(a273-a157);
   a273=(-a273);
-  res[2][83]=a273;
-  res[2][84]=a333;
-  res[2][85]=a333;
-  res[2][86]=a333;
-  res[2][87]=a333;
-  res[2][88]=a333;
-  res[2][89]=a333;
+  res[2][89]=a273;
   a250=(a250*rcp6);
   a352=(a352*rcp5);
   a273=(a282*a352);
@@ -7766,6 +7766,12 @@ static int qd_dfd_r_lift_columns(const casadi_real** arg, casadi_real** res, cas
   a260=(a328*a260);
   a250=(a250-a260);
   res[2][90]=a250;
+  res[2][91]=a333;
+  res[2][92]=a333;
+  res[2][93]=a333;
+  res[2][94]=a333;
+  res[2][95]=a333;
+  res[2][96]=a333;
   a250=(a361*a263);
   a260=(a057*a269);
   a352=(a348*a263);
@@ -7870,7 +7876,7 @@ static int qd_dfd_r_lift_columns(const casadi_real** arg, casadi_real** res, cas
   a296=(a351*a260);
   a304=(a304-a296);
   a304=(-a304);
-  res[2][91]=a304;
+  res[2][97]=a304;
   a304=(a239*a260);
   a296=(a335*a302);
   a275=(a130*a275);
@@ -7889,14 +7895,14 @@ static int qd_dfd_r_lift_columns(const casadi_real** arg, casadi_real** res, cas
   a218=(a150*a183);
   a304=(a304+a218);
   a304=(-a304);
-  res[2][92]=a304;
+  res[2][98]=a304;
   a260=(a143*a260);
   a275=(a355*a275);
   a260=(a260-a275);
   a183=(a108*a183);
   a260=(a260+a183);
   a260=(-a260);
-  res[2][93]=a260;
+  res[2][99]=a260;
   a260=(a051*a302);
   a157=(a157-a190);
   a190=(a353*a157);
@@ -7907,7 +7913,7 @@ static int qd_dfd_r_lift_columns(const casadi_real** arg, casadi_real** res, cas
   a267=(a267-a250);
   a260=(a260+a267);
   a260=(-a260);
-  res[2][94]=a260;
+  res[2][100]=a260;
   a220=(a099*a220);
   a260=(a343*a273);
   a220=(a220-a260);
@@ -7922,7 +7928,7 @@ static int qd_dfd_r_lift_columns(const casadi_real** arg, casadi_real** res, cas
   a322=(a322+a285);
   a220=(a220-a322);
   a220=(-a220);
-  res[2][95]=a220;
+  res[2][101]=a220;
   a254=(a099*a254);
   a273=(a116*a273);
   a254=(a254-a273);
@@ -7935,13 +7941,7 @@ static int qd_dfd_r_lift_columns(const casadi_real** arg, casadi_real** res, cas
   a323=(a323+a255);
   a254=(a254-a323);
   a254=(-a254);
-  res[2][96]=a254;
-  res[2][97]=a333;
-  res[2][98]=a333;
-  res[2][99]=a333;
-  res[2][100]=a333;
-  res[2][101]=a333;
-  res[2][102]=a333;
+  res[2][102]=a254;
   a263=(a263*rcp6);
   a352=(a352*rcp5);
   a254=(a282*a352);
@@ -7958,6 +7958,12 @@ static int qd_dfd_r_lift_columns(const casadi_real** arg, casadi_real** res, cas
   a302=(a328*a302);
   a263=(a263-a302);
   res[2][103]=a263;
+  res[2][104]=a333;
+  res[2][105]=a333;
+  res[2][106]=a333;
+  res[2][107]=a333;
+  res[2][108]=a333;
+  res[2][109]=a333;
   a263=(a361*a305);
   a302=(a057*a307);
   a352=(a348*a305);
@@ -8062,7 +8068,7 @@ static int qd_dfd_r_lift_columns(const casadi_real** arg, casadi_real** res, cas
   a302=(a351*a341);
   a067=(a067-a302);
   a067=(-a067);
-  res[2][104]=a067;
+  res[2][110]=a067;
   a067=(a239*a341);
   a335=(a335*a339);
   a130=(a130*a058);
@@ -8081,14 +8087,14 @@ static int qd_dfd_r_lift_columns(const casadi_real** arg, casadi_real** res, cas
   a336=(a150*a127);
   a067=(a067+a336);
   a067=(-a067);
-  res[2][105]=a067;
+  res[2][111]=a067;
   a341=(a143*a341);
   a362=(a355*a362);
   a341=(a341-a362);
   a127=(a108*a127);
   a341=(a341+a127);
   a341=(-a341);
-  res[2][106]=a341;
+  res[2][112]=a341;
   a357=(a051*a357);
   a254=(a254-a203);
   a203=(a353*a254);
@@ -8099,7 +8105,7 @@ static int qd_dfd_r_lift_columns(const casadi_real** arg, casadi_real** res, cas
   a350=(a350-a263);
   a357=(a357+a350);
   a357=(-a357);
-  res[2][107]=a357;
+  res[2][113]=a357;
   a099=(a099*a337);
   a337=(a343*a294);
   a337=(a099-a337);
@@ -8113,7 +8119,7 @@ static int qd_dfd_r_lift_columns(const casadi_real** arg, casadi_real** res, cas
   a335=(a335+a326);
   a337=(a337-a335);
   a337=(-a337);
-  res[2][108]=a337;
+  res[2][114]=a337;
   a294=(a116*a294);
   a099=(a099-a294);
   a015=(a109*a015);
@@ -8123,13 +8129,7 @@ static int qd_dfd_r_lift_columns(const casadi_real** arg, casadi_real** res, cas
   a257=(a257+a051);
   a099=(a099-a257);
   a099=(-a099);
-  res[2][109]=a099;
-  res[2][110]=a333;
-  res[2][111]=a333;
-  res[2][112]=a333;
-  res[2][113]=a333;
-  res[2][114]=a333;
-  res[2][115]=a333;
+  res[2][115]=a099;
   a305=(a305*rcp6);
   a050=(a050*rcp5);
   a282=(a282*a050);
@@ -10092,12 +10092,12 @@ static int qd_dfd_r_lift_dir(const casadi_real** arg, casadi_real** res, casadi_
   a005=2.0000000000000001e-01;
   a006=arg[0][1];
   a007=arg[0][0];
-  a008=arg[2][3];
+  a008=arg[2][9];
   a009=(a007*a008);
   a010=(a006*a009);
   a011=arg[0][3];
   a012=arg[0][2];
-  a013=arg[2][4];
+  a013=arg[2][10];
   a014=(a012*a013);
   a015=(a011*a014);
   a016=(a010+a015);
@@ -10106,7 +10106,7 @@ static int qd_dfd_r_lift_dir(const casadi_real** arg, casadi_real** res, casadi_
   a019=(a018*a016);
   a020=arg[0][6];
   a021=arg[0][5];
-  a022=arg[2][5];
+  a022=arg[2][11];
   a023=(a021*a022);
   a024=(a020*a023);
   a025=(a019+a024);
@@ -10124,12 +10124,12 @@ static int qd_dfd_r_lift_dir(const casadi_real** arg, casadi_real** res, casadi_
   a029=(a017+a025);
   a030=arg[0][9];
   a031=arg[0][8];
-  a032=arg[2][0];
+  a032=arg[2][6];
   a033=(a031*a032);
   a034=(a030*a033);
   a035=arg[0][11];
   a036=arg[0][10];
-  a037=arg[2][1];
+  a037=arg[2][7];
   a038=(a036*a037);
   a039=(a035*a038);
   a040=(a034+a039);
@@ -10138,7 +10138,7 @@ static int qd_dfd_r_lift_dir(const casadi_real** arg, casadi_real** res, casadi_
   a043=(a042*a040);
   a044=arg[0][14];
   a045=arg[0][13];
-  a046=arg[2][2];
+  a046=arg[2][8];
   a047=(a045*a046);
   a048=(a044*a047);
   a049=(a043+a048);
@@ -11358,6 +11358,13 @@ static int qd_dfd_r_lift_dir(const casadi_real** arg, casadi_real** res, casadi_
   res[1][3]=a122;
   res[1][4]=a171;
   res[1][5]=a081;
+  a081=0.;
+  res[2][0]=a081;
+  res[2][1]=a081;
+  res[2][2]=a081;
+  res[2][3]=a081;
+  res[2][4]=a081;
+  res[2][5]=a081;
   a081=arg[1][1];
   a171=arg[0][155];
   a122=arg[0][154];
@@ -11552,7 +11559,7 @@ static int qd_dfd_r_lift_dir(const casadi_real** arg, casadi_real** res, casadi_
   a142=(a142+a119);
   a155=(a155+a142);
   a155=(-a155);
-  res[2][0]=a155;
+  res[2][6]=a155;
   a155=arg[0][167];
   a142=(a171*a105);
   a001=(a124*a001);
@@ -11587,7 +11594,7 @@ static int qd_dfd_r_lift_dir(const casadi_real** arg, casadi_real** res, casadi_
   a145=(a145+a147);
   a121=(a121+a145);
   a121=(-a121);
-  res[2][1]=a121;
+  res[2][7]=a121;
   a121=arg[0][170];
   a115=(a121*a115);
   a126=(a126*a038);
@@ -11603,7 +11610,7 @@ static int qd_dfd_r_lift_dir(const casadi_real** arg, casadi_real** res, casadi_
   a122=(a122+a166);
   a115=(a115+a122);
   a115=(-a115);
-  res[2][2]=a115;
+  res[2][8]=a115;
   a094=(a094-a129);
   a151=(a094*a151);
   a129=arg[0][173];
@@ -11618,7 +11625,7 @@ static int qd_dfd_r_lift_dir(const casadi_real** arg, casadi_real** res, casadi_
   a136=(a136-a013);
   a151=(a151+a136);
   a151=(-a151);
-  res[2][3]=a151;
+  res[2][9]=a151;
   a139=(a091*a139);
   a151=arg[0][175];
   a136=(a151*a049);
@@ -11636,7 +11643,7 @@ static int qd_dfd_r_lift_dir(const casadi_real** arg, casadi_real** res, casadi_
   a037=(a037+a016);
   a139=(a139-a037);
   a139=(-a139);
-  res[2][4]=a139;
+  res[2][10]=a139;
   a091=(a091*a140);
   a140=arg[0][178];
   a049=(a140*a049);
@@ -11652,13 +11659,6 @@ static int qd_dfd_r_lift_dir(const casadi_real** arg, casadi_real** res, casadi_
   a120=(a120+a094);
   a091=(a091-a120);
   a091=(-a091);
-  res[2][5]=a091;
-  a091=0.;
-  res[2][6]=a091;
-  res[2][7]=a091;
-  res[2][8]=a091;
-  res[2][9]=a091;
-  res[2][10]=a091;
   res[2][11]=a091;
   a091=(a015*a132);
   a120=(a097*a081);
@@ -11712,20 +11712,20 @@ static int qd_dfd_r_lift_dir(const casadi_real** arg, casadi_real** res, casadi_
   a032=(a032-a105);
   a078=(a078+a032);
   res[2][12]=a078;
-  a078=arg[4][3];
+  a078=arg[4][9];
   a118=(a118*a078);
-  a032=arg[4][4];
+  a032=arg[4][10];
   a105=(a151*a032);
   a105=(a118+a105);
-  a081=arg[4][5];
+  a081=arg[4][11];
   a140=(a140*a081);
   a105=(a105+a140);
-  a140=arg[4][0];
+  a140=arg[4][6];
   a092=(a092*a140);
-  a144=arg[4][1];
+  a144=arg[4][7];
   a053=(a040*a144);
   a053=(a092+a053);
-  a062=arg[4][2];
+  a062=arg[4][8];
   a146=(a146*a062);
   a053=(a053+a146);
   a146=(a105-a053);
@@ -12214,49 +12214,49 @@ static int qd_dfd_r_lift_dir(const casadi_real** arg, casadi_real** res, casadi_
 }
 #endif
 
-#include "qd_reduced_templates.h"
+#include "reduced_templates.h"
 static int qd_M_r_eval(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem) {
-  return qd_reduced_term(13, 3, 0, arg, res, iw, w, mem);
+  return qd_reduced_term(13, 12, 0, arg, res, iw, w, mem);
 }
 static int qd_CG_r_eval(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem) {
-  return qd_reduced_term(13, 3, 1, arg, res, iw, w, mem);
+  return qd_reduced_term(13, 12, 1, arg, res, iw, w, mem);
 }
 static int qd_G_r_eval(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem) {
-  return qd_reduced_term(13, 3, 2, arg, res, iw, w, mem);
+  return qd_reduced_term(13, 12, 2, arg, res, iw, w, mem);
 }
 static int qd_id_r_eval(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem) {
-  return qd_reduced_term(13, 3, 3, arg, res, iw, w, mem);
+  return qd_reduced_term(13, 12, 3, arg, res, iw, w, mem);
 }
 
-CASADI_SYMBOL_EXPORT int qd_M_r_FL_FR(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem){
+CASADI_SYMBOL_EXPORT int qd_M_r_BL_BR(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem){
   return qd_finite(qd_M_r_eval(arg, res, iw, w, mem), res, 1, (const casadi_int[]){169});
 }
 
-CASADI_SYMBOL_EXPORT int qd_M_r_FL_FR_checkout(void) {
+CASADI_SYMBOL_EXPORT int qd_M_r_BL_BR_checkout(void) {
   return 0;
 }
 
-CASADI_SYMBOL_EXPORT void qd_M_r_FL_FR_release(int mem) {
+CASADI_SYMBOL_EXPORT void qd_M_r_BL_BR_release(int mem) {
   (void)mem;
 }
 
-CASADI_SYMBOL_EXPORT void qd_M_r_FL_FR_incref(void) {
+CASADI_SYMBOL_EXPORT void qd_M_r_BL_BR_incref(void) {
 }
 
-CASADI_SYMBOL_EXPORT void qd_M_r_FL_FR_decref(void) {
+CASADI_SYMBOL_EXPORT void qd_M_r_BL_BR_decref(void) {
 }
 
-CASADI_SYMBOL_EXPORT casadi_int qd_M_r_FL_FR_n_in(void) { return 2;}
+CASADI_SYMBOL_EXPORT casadi_int qd_M_r_BL_BR_n_in(void) { return 2;}
 
-CASADI_SYMBOL_EXPORT casadi_int qd_M_r_FL_FR_n_out(void) { return 1;}
+CASADI_SYMBOL_EXPORT casadi_int qd_M_r_BL_BR_n_out(void) { return 1;}
 
-CASADI_SYMBOL_EXPORT casadi_real qd_M_r_FL_FR_default_in(casadi_int i) {
+CASADI_SYMBOL_EXPORT casadi_real qd_M_r_BL_BR_default_in(casadi_int i) {
   switch (i) {
     default: return 0;
   }
 }
 
-CASADI_SYMBOL_EXPORT const char* qd_M_r_FL_FR_name_in(casadi_int i) {
+CASADI_SYMBOL_EXPORT const char* qd_M_r_BL_BR_name_in(casadi_int i) {
   switch (i) {
     case 0: return "q_r";
     case 1: return "quat";
@@ -12264,14 +12264,14 @@ CASADI_SYMBOL_EXPORT const char* qd_M_r_FL_FR_name_in(casadi_int i) {
   }
 }
 
-CASADI_SYMBOL_EXPORT const char* qd_M_r_FL_FR_name_out(casadi_int i) {
+CASADI_SYMBOL_EXPORT const char* qd_M_r_BL_BR_name_out(casadi_int i) {
   switch (i) {
     case 0: return "M_r";
     default: return 0;
   }
 }
 
-CASADI_SYMBOL_EXPORT const casadi_int* qd_M_r_FL_FR_sparsity_in(casadi_int i) {
+CASADI_SYMBOL_EXPORT const casadi_int* qd_M_r_BL_BR_sparsity_in(casadi_int i) {
   switch (i) {
     case 0: return casadi_s0;
     case 1: return casadi_s1;
@@ -12279,14 +12279,14 @@ CASADI_SYMBOL_EXPORT const casadi_int* qd_M_r_FL_FR_sparsity_in(casadi_int i) {
   }
 }
 
-CASADI_SYMBOL_EXPORT const casadi_int* qd_M_r_FL_FR_sparsity_out(casadi_int i) {
+CASADI_SYMBOL_EXPORT const casadi_int* qd_M_r_BL_BR_sparsity_out(casadi_int i) {
   switch (i) {
     case 0: return casadi_s2;
     default: return 0;
   }
 }
 
-CASADI_SYMBOL_EXPORT int qd_M_r_FL_FR_work(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz_iw, casadi_int *sz_w) {
+CASADI_SYMBOL_EXPORT int qd_M_r_BL_BR_work(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz_iw, casadi_int *sz_w) {
   if (sz_arg) *sz_arg = 2;
   if (sz_res) *sz_res = 1;
   if (sz_iw) *sz_iw = 0;
@@ -12294,7 +12294,7 @@ CASADI_SYMBOL_EXPORT int qd_M_r_FL_FR_work(casadi_int *sz_arg, casadi_int* sz_re
   return 0;
 }
 
-CASADI_SYMBOL_EXPORT int qd_M_r_FL_FR_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz_iw, casadi_int *sz_w) {
+CASADI_SYMBOL_EXPORT int qd_M_r_BL_BR_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz_iw, casadi_int *sz_w) {
   if (sz_arg) *sz_arg = 2*sizeof(const casadi_real*);
   if (sz_res) *sz_res = 1*sizeof(casadi_real*);
   if (sz_iw) *sz_iw = 0*sizeof(casadi_int);
@@ -12302,35 +12302,35 @@ CASADI_SYMBOL_EXPORT int qd_M_r_FL_FR_work_bytes(casadi_int *sz_arg, casadi_int*
   return 0;
 }
 
-CASADI_SYMBOL_EXPORT int qd_CG_r_FL_FR(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem){
+CASADI_SYMBOL_EXPORT int qd_CG_r_BL_BR(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem){
   return qd_finite(qd_CG_r_eval(arg, res, iw, w, mem), res, 1, (const casadi_int[]){13});
 }
 
-CASADI_SYMBOL_EXPORT int qd_CG_r_FL_FR_checkout(void) {
+CASADI_SYMBOL_EXPORT int qd_CG_r_BL_BR_checkout(void) {
   return 0;
 }
 
-CASADI_SYMBOL_EXPORT void qd_CG_r_FL_FR_release(int mem) {
+CASADI_SYMBOL_EXPORT void qd_CG_r_BL_BR_release(int mem) {
   (void)mem;
 }
 
-CASADI_SYMBOL_EXPORT void qd_CG_r_FL_FR_incref(void) {
+CASADI_SYMBOL_EXPORT void qd_CG_r_BL_BR_incref(void) {
 }
 
-CASADI_SYMBOL_EXPORT void qd_CG_r_FL_FR_decref(void) {
+CASADI_SYMBOL_EXPORT void qd_CG_r_BL_BR_decref(void) {
 }
 
-CASADI_SYMBOL_EXPORT casadi_int qd_CG_r_FL_FR_n_in(void) { return 3;}
+CASADI_SYMBOL_EXPORT casadi_int qd_CG_r_BL_BR_n_in(void) { return 3;}
 
-CASADI_SYMBOL_EXPORT casadi_int qd_CG_r_FL_FR_n_out(void) { return 1;}
+CASADI_SYMBOL_EXPORT casadi_int qd_CG_r_BL_BR_n_out(void) { return 1;}
 
-CASADI_SYMBOL_EXPORT casadi_real qd_CG_r_FL_FR_default_in(casadi_int i) {
+CASADI_SYMBOL_EXPORT casadi_real qd_CG_r_BL_BR_default_in(casadi_int i) {
   switch (i) {
     default: return 0;
   }
 }
 
-CASADI_SYMBOL_EXPORT const char* qd_CG_r_FL_FR_name_in(casadi_int i) {
+CASADI_SYMBOL_EXPORT const char* qd_CG_r_BL_BR_name_in(casadi_int i) {
   switch (i) {
     case 0: return "q_r";
     case 1: return "qd_r";
@@ -12339,14 +12339,14 @@ CASADI_SYMBOL_EXPORT const char* qd_CG_r_FL_FR_name_in(casadi_int i) {
   }
 }
 
-CASADI_SYMBOL_EXPORT const char* qd_CG_r_FL_FR_name_out(casadi_int i) {
+CASADI_SYMBOL_EXPORT const char* qd_CG_r_BL_BR_name_out(casadi_int i) {
   switch (i) {
     case 0: return "CG_r";
     default: return 0;
   }
 }
 
-CASADI_SYMBOL_EXPORT const casadi_int* qd_CG_r_FL_FR_sparsity_in(casadi_int i) {
+CASADI_SYMBOL_EXPORT const casadi_int* qd_CG_r_BL_BR_sparsity_in(casadi_int i) {
   switch (i) {
     case 0: return casadi_s0;
     case 1: return casadi_s0;
@@ -12355,14 +12355,14 @@ CASADI_SYMBOL_EXPORT const casadi_int* qd_CG_r_FL_FR_sparsity_in(casadi_int i) {
   }
 }
 
-CASADI_SYMBOL_EXPORT const casadi_int* qd_CG_r_FL_FR_sparsity_out(casadi_int i) {
+CASADI_SYMBOL_EXPORT const casadi_int* qd_CG_r_BL_BR_sparsity_out(casadi_int i) {
   switch (i) {
     case 0: return casadi_s0;
     default: return 0;
   }
 }
 
-CASADI_SYMBOL_EXPORT int qd_CG_r_FL_FR_work(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz_iw, casadi_int *sz_w) {
+CASADI_SYMBOL_EXPORT int qd_CG_r_BL_BR_work(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz_iw, casadi_int *sz_w) {
   if (sz_arg) *sz_arg = 3;
   if (sz_res) *sz_res = 1;
   if (sz_iw) *sz_iw = 0;
@@ -12370,7 +12370,7 @@ CASADI_SYMBOL_EXPORT int qd_CG_r_FL_FR_work(casadi_int *sz_arg, casadi_int* sz_r
   return 0;
 }
 
-CASADI_SYMBOL_EXPORT int qd_CG_r_FL_FR_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz_iw, casadi_int *sz_w) {
+CASADI_SYMBOL_EXPORT int qd_CG_r_BL_BR_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz_iw, casadi_int *sz_w) {
   if (sz_arg) *sz_arg = 3*sizeof(const casadi_real*);
   if (sz_res) *sz_res = 1*sizeof(casadi_real*);
   if (sz_iw) *sz_iw = 0*sizeof(casadi_int);
@@ -12378,35 +12378,35 @@ CASADI_SYMBOL_EXPORT int qd_CG_r_FL_FR_work_bytes(casadi_int *sz_arg, casadi_int
   return 0;
 }
 
-CASADI_SYMBOL_EXPORT int qd_G_r_FL_FR(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem){
+CASADI_SYMBOL_EXPORT int qd_G_r_BL_BR(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem){
   return qd_finite(qd_G_r_eval(arg, res, iw, w, mem), res, 1, (const casadi_int[]){13});
 }
 
-CASADI_SYMBOL_EXPORT int qd_G_r_FL_FR_checkout(void) {
+CASADI_SYMBOL_EXPORT int qd_G_r_BL_BR_checkout(void) {
   return 0;
 }
 
-CASADI_SYMBOL_EXPORT void qd_G_r_FL_FR_release(int mem) {
+CASADI_SYMBOL_EXPORT void qd_G_r_BL_BR_release(int mem) {
   (void)mem;
 }
 
-CASADI_SYMBOL_EXPORT void qd_G_r_FL_FR_incref(void) {
+CASADI_SYMBOL_EXPORT void qd_G_r_BL_BR_incref(void) {
 }
 
-CASADI_SYMBOL_EXPORT void qd_G_r_FL_FR_decref(void) {
+CASADI_SYMBOL_EXPORT void qd_G_r_BL_BR_decref(void) {
 }
 
-CASADI_SYMBOL_EXPORT casadi_int qd_G_r_FL_FR_n_in(void) { return 2;}
+CASADI_SYMBOL_EXPORT casadi_int qd_G_r_BL_BR_n_in(void) { return 2;}
 
-CASADI_SYMBOL_EXPORT casadi_int qd_G_r_FL_FR_n_out(void) { return 1;}
+CASADI_SYMBOL_EXPORT casadi_int qd_G_r_BL_BR_n_out(void) { return 1;}
 
-CASADI_SYMBOL_EXPORT casadi_real qd_G_r_FL_FR_default_in(casadi_int i) {
+CASADI_SYMBOL_EXPORT casadi_real qd_G_r_BL_BR_default_in(casadi_int i) {
   switch (i) {
     default: return 0;
   }
 }
 
-CASADI_SYMBOL_EXPORT const char* qd_G_r_FL_FR_name_in(casadi_int i) {
+CASADI_SYMBOL_EXPORT const char* qd_G_r_BL_BR_name_in(casadi_int i) {
   switch (i) {
     case 0: return "q_r";
     case 1: return "quat";
@@ -12414,14 +12414,14 @@ CASADI_SYMBOL_EXPORT const char* qd_G_r_FL_FR_name_in(casadi_int i) {
   }
 }
 
-CASADI_SYMBOL_EXPORT const char* qd_G_r_FL_FR_name_out(casadi_int i) {
+CASADI_SYMBOL_EXPORT const char* qd_G_r_BL_BR_name_out(casadi_int i) {
   switch (i) {
     case 0: return "G_r";
     default: return 0;
   }
 }
 
-CASADI_SYMBOL_EXPORT const casadi_int* qd_G_r_FL_FR_sparsity_in(casadi_int i) {
+CASADI_SYMBOL_EXPORT const casadi_int* qd_G_r_BL_BR_sparsity_in(casadi_int i) {
   switch (i) {
     case 0: return casadi_s0;
     case 1: return casadi_s1;
@@ -12429,14 +12429,14 @@ CASADI_SYMBOL_EXPORT const casadi_int* qd_G_r_FL_FR_sparsity_in(casadi_int i) {
   }
 }
 
-CASADI_SYMBOL_EXPORT const casadi_int* qd_G_r_FL_FR_sparsity_out(casadi_int i) {
+CASADI_SYMBOL_EXPORT const casadi_int* qd_G_r_BL_BR_sparsity_out(casadi_int i) {
   switch (i) {
     case 0: return casadi_s0;
     default: return 0;
   }
 }
 
-CASADI_SYMBOL_EXPORT int qd_G_r_FL_FR_work(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz_iw, casadi_int *sz_w) {
+CASADI_SYMBOL_EXPORT int qd_G_r_BL_BR_work(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz_iw, casadi_int *sz_w) {
   if (sz_arg) *sz_arg = 2;
   if (sz_res) *sz_res = 1;
   if (sz_iw) *sz_iw = 0;
@@ -12444,7 +12444,7 @@ CASADI_SYMBOL_EXPORT int qd_G_r_FL_FR_work(casadi_int *sz_arg, casadi_int* sz_re
   return 0;
 }
 
-CASADI_SYMBOL_EXPORT int qd_G_r_FL_FR_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz_iw, casadi_int *sz_w) {
+CASADI_SYMBOL_EXPORT int qd_G_r_BL_BR_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz_iw, casadi_int *sz_w) {
   if (sz_arg) *sz_arg = 2*sizeof(const casadi_real*);
   if (sz_res) *sz_res = 1*sizeof(casadi_real*);
   if (sz_iw) *sz_iw = 0*sizeof(casadi_int);
@@ -12452,35 +12452,35 @@ CASADI_SYMBOL_EXPORT int qd_G_r_FL_FR_work_bytes(casadi_int *sz_arg, casadi_int*
   return 0;
 }
 
-CASADI_SYMBOL_EXPORT int qd_id_r_FL_FR(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem){
+CASADI_SYMBOL_EXPORT int qd_id_r_BL_BR(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem){
   return qd_finite(qd_id_r_eval(arg, res, iw, w, mem), res, 1, (const casadi_int[]){13});
 }
 
-CASADI_SYMBOL_EXPORT int qd_id_r_FL_FR_checkout(void) {
+CASADI_SYMBOL_EXPORT int qd_id_r_BL_BR_checkout(void) {
   return 0;
 }
 
-CASADI_SYMBOL_EXPORT void qd_id_r_FL_FR_release(int mem) {
+CASADI_SYMBOL_EXPORT void qd_id_r_BL_BR_release(int mem) {
   (void)mem;
 }
 
-CASADI_SYMBOL_EXPORT void qd_id_r_FL_FR_incref(void) {
+CASADI_SYMBOL_EXPORT void qd_id_r_BL_BR_incref(void) {
 }
 
-CASADI_SYMBOL_EXPORT void qd_id_r_FL_FR_decref(void) {
+CASADI_SYMBOL_EXPORT void qd_id_r_BL_BR_decref(void) {
 }
 
-CASADI_SYMBOL_EXPORT casadi_int qd_id_r_FL_FR_n_in(void) { return 4;}
+CASADI_SYMBOL_EXPORT casadi_int qd_id_r_BL_BR_n_in(void) { return 4;}
 
-CASADI_SYMBOL_EXPORT casadi_int qd_id_r_FL_FR_n_out(void) { return 1;}
+CASADI_SYMBOL_EXPORT casadi_int qd_id_r_BL_BR_n_out(void) { return 1;}
 
-CASADI_SYMBOL_EXPORT casadi_real qd_id_r_FL_FR_default_in(casadi_int i) {
+CASADI_SYMBOL_EXPORT casadi_real qd_id_r_BL_BR_default_in(casadi_int i) {
   switch (i) {
     default: return 0;
   }
 }
 
-CASADI_SYMBOL_EXPORT const char* qd_id_r_FL_FR_name_in(casadi_int i) {
+CASADI_SYMBOL_EXPORT const char* qd_id_r_BL_BR_name_in(casadi_int i) {
   switch (i) {
     case 0: return "q_r";
     case 1: return "qd_r";
@@ -12490,14 +12490,14 @@ CASADI_SYMBOL_EXPORT const char* qd_id_r_FL_FR_name_in(casadi_int i) {
   }
 }
 
-CASADI_SYMBOL_EXPORT const char* qd_id_r_FL_FR_name_out(casadi_int i) {
+CASADI_SYMBOL_EXPORT const char* qd_id_r_BL_BR_name_out(casadi_int i) {
   switch (i) {
     case 0: return "tau_r";
     default: return 0;
   }
 }
 
-CASADI_SYMBOL_EXPORT const casadi_int* qd_id_r_FL_FR_sparsity_in(casadi_int i) {
+CASADI_SYMBOL_EXPORT const casadi_int* qd_id_r_BL_BR_sparsity_in(casadi_int i) {
   switch (i) {
     case 0: return casadi_s0;
     case 1: return casadi_s0;
@@ -12507,14 +12507,14 @@ CASADI_SYMBOL_EXPORT const casadi_int* qd_id_r_FL_FR_sparsity_in(casadi_int i) {
   }
 }
 
-CASADI_SYMBOL_EXPORT const casadi_int* qd_id_r_FL_FR_sparsity_out(casadi_int i) {
+CASADI_SYMBOL_EXPORT const casadi_int* qd_id_r_BL_BR_sparsity_out(casadi_int i) {
   switch (i) {
     case 0: return casadi_s0;
     default: return 0;
   }
 }
 
-CASADI_SYMBOL_EXPORT int qd_id_r_FL_FR_work(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz_iw, casadi_int *sz_w) {
+CASADI_SYMBOL_EXPORT int qd_id_r_BL_BR_work(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz_iw, casadi_int *sz_w) {
   if (sz_arg) *sz_arg = 4;
   if (sz_res) *sz_res = 1;
   if (sz_iw) *sz_iw = 0;
@@ -12522,7 +12522,7 @@ CASADI_SYMBOL_EXPORT int qd_id_r_FL_FR_work(casadi_int *sz_arg, casadi_int* sz_r
   return 0;
 }
 
-CASADI_SYMBOL_EXPORT int qd_id_r_FL_FR_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz_iw, casadi_int *sz_w) {
+CASADI_SYMBOL_EXPORT int qd_id_r_BL_BR_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz_iw, casadi_int *sz_w) {
   if (sz_arg) *sz_arg = 4*sizeof(const casadi_real*);
   if (sz_res) *sz_res = 1*sizeof(casadi_real*);
   if (sz_iw) *sz_iw = 0*sizeof(casadi_int);
@@ -12530,35 +12530,35 @@ CASADI_SYMBOL_EXPORT int qd_id_r_FL_FR_work_bytes(casadi_int *sz_arg, casadi_int
   return 0;
 }
 
-CASADI_SYMBOL_EXPORT int qd_fd_r_FL_FR(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem){
-  return qd_fd_r_solve(13, 3, arg, res, iw, w, mem);
+CASADI_SYMBOL_EXPORT int qd_fd_r_BL_BR(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem){
+  return qd_fd_r_solve(13, 12, arg, res, iw, w, mem);
 }
 
-CASADI_SYMBOL_EXPORT int qd_fd_r_FL_FR_checkout(void) {
+CASADI_SYMBOL_EXPORT int qd_fd_r_BL_BR_checkout(void) {
   return 0;
 }
 
-CASADI_SYMBOL_EXPORT void qd_fd_r_FL_FR_release(int mem) {
+CASADI_SYMBOL_EXPORT void qd_fd_r_BL_BR_release(int mem) {
   (void)mem;
 }
 
-CASADI_SYMBOL_EXPORT void qd_fd_r_FL_FR_incref(void) {
+CASADI_SYMBOL_EXPORT void qd_fd_r_BL_BR_incref(void) {
 }
 
-CASADI_SYMBOL_EXPORT void qd_fd_r_FL_FR_decref(void) {
+CASADI_SYMBOL_EXPORT void qd_fd_r_BL_BR_decref(void) {
 }
 
-CASADI_SYMBOL_EXPORT casadi_int qd_fd_r_FL_FR_n_in(void) { return 4;}
+CASADI_SYMBOL_EXPORT casadi_int qd_fd_r_BL_BR_n_in(void) { return 4;}
 
-CASADI_SYMBOL_EXPORT casadi_int qd_fd_r_FL_FR_n_out(void) { return 1;}
+CASADI_SYMBOL_EXPORT casadi_int qd_fd_r_BL_BR_n_out(void) { return 1;}
 
-CASADI_SYMBOL_EXPORT casadi_real qd_fd_r_FL_FR_default_in(casadi_int i) {
+CASADI_SYMBOL_EXPORT casadi_real qd_fd_r_BL_BR_default_in(casadi_int i) {
   switch (i) {
     default: return 0;
   }
 }
 
-CASADI_SYMBOL_EXPORT const char* qd_fd_r_FL_FR_name_in(casadi_int i) {
+CASADI_SYMBOL_EXPORT const char* qd_fd_r_BL_BR_name_in(casadi_int i) {
   switch (i) {
     case 0: return "q_r";
     case 1: return "qd_r";
@@ -12568,14 +12568,14 @@ CASADI_SYMBOL_EXPORT const char* qd_fd_r_FL_FR_name_in(casadi_int i) {
   }
 }
 
-CASADI_SYMBOL_EXPORT const char* qd_fd_r_FL_FR_name_out(casadi_int i) {
+CASADI_SYMBOL_EXPORT const char* qd_fd_r_BL_BR_name_out(casadi_int i) {
   switch (i) {
     case 0: return "qdd_r";
     default: return 0;
   }
 }
 
-CASADI_SYMBOL_EXPORT const casadi_int* qd_fd_r_FL_FR_sparsity_in(casadi_int i) {
+CASADI_SYMBOL_EXPORT const casadi_int* qd_fd_r_BL_BR_sparsity_in(casadi_int i) {
   switch (i) {
     case 0: return casadi_s0;
     case 1: return casadi_s0;
@@ -12585,14 +12585,14 @@ CASADI_SYMBOL_EXPORT const casadi_int* qd_fd_r_FL_FR_sparsity_in(casadi_int i) {
   }
 }
 
-CASADI_SYMBOL_EXPORT const casadi_int* qd_fd_r_FL_FR_sparsity_out(casadi_int i) {
+CASADI_SYMBOL_EXPORT const casadi_int* qd_fd_r_BL_BR_sparsity_out(casadi_int i) {
   switch (i) {
     case 0: return casadi_s0;
     default: return 0;
   }
 }
 
-CASADI_SYMBOL_EXPORT int qd_fd_r_FL_FR_work(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz_iw, casadi_int *sz_w) {
+CASADI_SYMBOL_EXPORT int qd_fd_r_BL_BR_work(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz_iw, casadi_int *sz_w) {
   if (sz_arg) *sz_arg = 4;
   if (sz_res) *sz_res = 1;
   if (sz_iw) *sz_iw = 0;
@@ -12600,7 +12600,7 @@ CASADI_SYMBOL_EXPORT int qd_fd_r_FL_FR_work(casadi_int *sz_arg, casadi_int* sz_r
   return 0;
 }
 
-CASADI_SYMBOL_EXPORT int qd_fd_r_FL_FR_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz_iw, casadi_int *sz_w) {
+CASADI_SYMBOL_EXPORT int qd_fd_r_BL_BR_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz_iw, casadi_int *sz_w) {
   if (sz_arg) *sz_arg = 4*sizeof(const casadi_real*);
   if (sz_res) *sz_res = 1*sizeof(casadi_real*);
   if (sz_iw) *sz_iw = 0*sizeof(casadi_int);
@@ -12608,37 +12608,37 @@ CASADI_SYMBOL_EXPORT int qd_fd_r_FL_FR_work_bytes(casadi_int *sz_arg, casadi_int
   return 0;
 }
 
-CASADI_SYMBOL_EXPORT int qd_dfd_r_FL_FR(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem){
+CASADI_SYMBOL_EXPORT int qd_dfd_r_BL_BR(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem){
   typedef char w_agrees[QD_DFD_R_W(13) == 2624 ? 1 : -1];
   (void)sizeof(w_agrees);
-  return qd_dfd_r_solve(13, 3, 1, arg, res, iw, w, mem);
+  return qd_dfd_r_solve(13, 12, 1, arg, res, iw, w, mem);
 }
 
-CASADI_SYMBOL_EXPORT int qd_dfd_r_FL_FR_checkout(void) {
+CASADI_SYMBOL_EXPORT int qd_dfd_r_BL_BR_checkout(void) {
   return 0;
 }
 
-CASADI_SYMBOL_EXPORT void qd_dfd_r_FL_FR_release(int mem) {
+CASADI_SYMBOL_EXPORT void qd_dfd_r_BL_BR_release(int mem) {
   (void)mem;
 }
 
-CASADI_SYMBOL_EXPORT void qd_dfd_r_FL_FR_incref(void) {
+CASADI_SYMBOL_EXPORT void qd_dfd_r_BL_BR_incref(void) {
 }
 
-CASADI_SYMBOL_EXPORT void qd_dfd_r_FL_FR_decref(void) {
+CASADI_SYMBOL_EXPORT void qd_dfd_r_BL_BR_decref(void) {
 }
 
-CASADI_SYMBOL_EXPORT casadi_int qd_dfd_r_FL_FR_n_in(void) { return 4;}
+CASADI_SYMBOL_EXPORT casadi_int qd_dfd_r_BL_BR_n_in(void) { return 4;}
 
-CASADI_SYMBOL_EXPORT casadi_int qd_dfd_r_FL_FR_n_out(void) { return 4;}
+CASADI_SYMBOL_EXPORT casadi_int qd_dfd_r_BL_BR_n_out(void) { return 4;}
 
-CASADI_SYMBOL_EXPORT casadi_real qd_dfd_r_FL_FR_default_in(casadi_int i) {
+CASADI_SYMBOL_EXPORT casadi_real qd_dfd_r_BL_BR_default_in(casadi_int i) {
   switch (i) {
     default: return 0;
   }
 }
 
-CASADI_SYMBOL_EXPORT const char* qd_dfd_r_FL_FR_name_in(casadi_int i) {
+CASADI_SYMBOL_EXPORT const char* qd_dfd_r_BL_BR_name_in(casadi_int i) {
   switch (i) {
     case 0: return "q_r";
     case 1: return "qd_r";
@@ -12648,7 +12648,7 @@ CASADI_SYMBOL_EXPORT const char* qd_dfd_r_FL_FR_name_in(casadi_int i) {
   }
 }
 
-CASADI_SYMBOL_EXPORT const char* qd_dfd_r_FL_FR_name_out(casadi_int i) {
+CASADI_SYMBOL_EXPORT const char* qd_dfd_r_BL_BR_name_out(casadi_int i) {
   switch (i) {
     case 0: return "dqdd_dq";
     case 1: return "dqdd_dqd";
@@ -12658,7 +12658,7 @@ CASADI_SYMBOL_EXPORT const char* qd_dfd_r_FL_FR_name_out(casadi_int i) {
   }
 }
 
-CASADI_SYMBOL_EXPORT const casadi_int* qd_dfd_r_FL_FR_sparsity_in(casadi_int i) {
+CASADI_SYMBOL_EXPORT const casadi_int* qd_dfd_r_BL_BR_sparsity_in(casadi_int i) {
   switch (i) {
     case 0: return casadi_s0;
     case 1: return casadi_s0;
@@ -12668,7 +12668,7 @@ CASADI_SYMBOL_EXPORT const casadi_int* qd_dfd_r_FL_FR_sparsity_in(casadi_int i) 
   }
 }
 
-CASADI_SYMBOL_EXPORT const casadi_int* qd_dfd_r_FL_FR_sparsity_out(casadi_int i) {
+CASADI_SYMBOL_EXPORT const casadi_int* qd_dfd_r_BL_BR_sparsity_out(casadi_int i) {
   switch (i) {
     case 0: return casadi_s2;
     case 1: return casadi_s2;
@@ -12678,7 +12678,7 @@ CASADI_SYMBOL_EXPORT const casadi_int* qd_dfd_r_FL_FR_sparsity_out(casadi_int i)
   }
 }
 
-CASADI_SYMBOL_EXPORT int qd_dfd_r_FL_FR_work(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz_iw, casadi_int *sz_w) {
+CASADI_SYMBOL_EXPORT int qd_dfd_r_BL_BR_work(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz_iw, casadi_int *sz_w) {
   if (sz_arg) *sz_arg = 4;
   if (sz_res) *sz_res = 4;
   if (sz_iw) *sz_iw = 0;
@@ -12686,7 +12686,7 @@ CASADI_SYMBOL_EXPORT int qd_dfd_r_FL_FR_work(casadi_int *sz_arg, casadi_int* sz_
   return 0;
 }
 
-CASADI_SYMBOL_EXPORT int qd_dfd_r_FL_FR_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz_iw, casadi_int *sz_w) {
+CASADI_SYMBOL_EXPORT int qd_dfd_r_BL_BR_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz_iw, casadi_int *sz_w) {
   if (sz_arg) *sz_arg = 4*sizeof(const casadi_real*);
   if (sz_res) *sz_res = 4*sizeof(casadi_real*);
   if (sz_iw) *sz_iw = 0*sizeof(casadi_int);

@@ -6,14 +6,15 @@ typedef int (*qd_fn)(const casadi_real**, casadi_real**, casadi_int*, casadi_rea
 #define QD_MAX_N_IN 4
 typedef struct { const char* name; qd_fn fn; int n_in, n_out; const double* in[QD_MAX_N_IN];
                  int in_len[QD_MAX_N_IN]; const double* out[4]; int out_nnz[4]; double tol_scale, tol_floor; } qd_case;
-/* tol_scale: the conditioning beyond what the tolerances assume (codegen.tolerance_scale); tol_floor:
- * the reference's own accuracy (finite differences: c_reference.tolerance_floor); the relative tolerance
+/* tol_scale: the conditioning beyond what the tolerances assume (check_program_values.tolerance_scale); tol_floor:
+ * the reference's own accuracy (finite differences: check_program_values.tolerance_floor); the relative tolerance
  * is max(QD_REL_TOL_<precision>, tol_floor) * tol_scale */
 #define QD_REL_TOL_DOUBLE 1e-10
 #define QD_REL_TOL_FLOAT 1e-05
-/* qd_float_bound[k]: the error bound case k's float build computes (c_reference.float_bound: fd_r's FLT_EPSILON
- * x cond_1 of the matrix it eliminates, a two-feet function's FLOAT_ERR_PER_REGULARITY x FLT_EPSILON /
- * regularity; 0 where none); the float build returns QD_SINGULAR or QD_DEGENERATE above QD_FLOAT_MAX_BOUND */
+/* qd_float_bound[k]: the error bound case k's float build computes (check_program_values.float_bound:
+ * fd_r's FLT_EPSILON x cond_1 of the matrix it eliminates, a two-feet function's FLOAT_ERR_PER_REGULARITY x
+ * FLT_EPSILON / regularity; 0 where none); the float build returns QD_SINGULAR or QD_DEGENERATE above
+ * QD_FLOAT_MAX_BOUND */
 #define QD_FLOAT_MAX_BOUND 0.0025
 #define QD_MAX_SZ_IW 0
 #define QD_MAX_SZ_W 2624
@@ -37,6 +38,9 @@ static const double qd_G_full_out0[18] = {-5.87278847418, 5.0893400122, 97.79171
 static const double qd_nle_full_out0[18] = {-0.559732564059, 3.10016099896, 94.4833360829, 0.215693025289, -1.79718792052, 0.0681137001882, -0.0896583854962, 0.460944816627, -0.105105940266, -0.0717816684161, 0.374113027118, -0.112823405241, -0.0468046891682, 0.482482470377, -0.0958630774787, -0.0140719577602, 0.466667557547, -0.100971898388};
 static const double qd_id_full_out0[6] = {-45.7181758117, 65.4870221704, 112.728819524, 18.5671584045, 10.0165037238, -1.07930546514};
 static const double qd_id_full_out1[12] = {-0.958337136058, -9.71760247715, -8.32297657757, -5.35122647896, 7.21582542516, 3.28033240016, -1.49404897807, -1.60082837748, -0.67303342396, -10.1421565781, -8.43913007786, -6.17008903873};
+static const double qd_feet_full_out0[12] = {0.186603396294, 0.100921208911, -0.277266526598, 0.160379461459, -0.0538229435378, -0.286219749319, -0.181111222277, 0.0809229029544, -0.287416469994, -0.18811293027, -0.0741984543938, -0.287425504329};
+static const double qd_feet_full_out1[80] = {1, 1, 1, 1, 1, 1, 1, 1, 1, 1, 1, 1, -6.95751708154e-18, 0.277266526598, 0.100921208911, -1.00924527172e-18, 0.286219749319, -0.0538229435378, -9.26039627773e-18, 0.287416469994, 0.0809229029544, -9.95771094446e-18, 0.287425504329, -0.0741984543938, -0.277266526598, -3.2094186065e-17, -0.186603396294, -0.286219749319, -2.22232216436e-17, -0.160379461459, -0.287416469994, -5.31209494693e-17, 0.181111222277, -0.287425504329, -5.70056214448e-17, 0.18811293027, -0.100921208911, 0.186603396294, -1.53247464955e-18, 0.0538229435378, 0.160379461459, -2.3765108556e-18, -0.0809229029544, -0.181111222277, 4.67540463867e-19, 0.0741984543938, -0.18811293027, 5.67974585925e-19, -0.277266526598, -0.0309212089111, 0.278985390177, 0.000376460906155, -0.00337567680971, 0.137747998693, 0.0160711907286, -0.144108312337, -0.286219749319, -0.0161770564622, 0.286676546051, 0.00167147655093, -0.0295733405219, 0.129084211366, 0.00862049748796, -0.152521976774, -0.287416469994, -0.0109229029544, 0.287623950729, -0.000337563183487, 0.00888236570467, 0.148103088302, 0.00510431799969, -0.134310912339, -0.287425504329, 0.00419845439378, 0.287456166325, 2.75616846277e-05, 0.00188686844283, 0.144641040175, -0.00201741510183, -0.138111909455};
+static const double qd_feet_full_out2[12] = {0.602842234926, -0.334933644359, 0.0217830082363, 0.468715341381, -0.136724325192, 0.0151955589245, 0.669984723319, -0.206474430992, -0.159163306541, 0.618447595875, -0.177595856108, -0.000885780565375};
 static const double qd_grf_FL_FR_BL_BR_out0[6] = {13.5599217761, 30.6575775556, 10.6993399912, 28.1070716692, 1.14568133629, 1.49579773768};
 static const double qd_grf_FL_FR_BL_BR_out1[12] = {1.14568133629, 1.49579773768, 13.5599217761, 1.14568133629, 1.49579773768, 30.6575775556, 1.14568133629, 1.49579773768, 10.6993399912, 1.14568133629, 1.49579773768, 28.1070716692};
 static const double qd_grf_FL_FR_BL_BR_out2[6] = {0.00524597540234, 0.00216780754588, 7.1054273576e-14, 5.3290705182e-15, 1.37667655054e-14, 0.389870745559};
@@ -289,6 +293,7 @@ static const qd_case QD_CASES[] = {
   {"qd_G_full", qd_G_full, 1, 1, {qd_ref_q}, {19}, {qd_G_full_out0}, {18}, 1, 0},
   {"qd_nle_full", qd_nle_full, 2, 1, {qd_ref_q, qd_ref_v}, {19, 18}, {qd_nle_full_out0}, {18}, 1, 0},
   {"qd_id_full", qd_id_full, 4, 2, {qd_ref_q, qd_ref_v, qd_ref_a, qd_ref_f}, {19, 18, 18, 12}, {qd_id_full_out0, qd_id_full_out1}, {6, 12}, 1, 0},
+  {"qd_feet_full", qd_feet_full, 2, 3, {qd_ref_q, qd_ref_v}, {19, 18}, {qd_feet_full_out0, qd_feet_full_out1, qd_feet_full_out2}, {12, 80, 12}, 1, 0},
   {"qd_grf_FL_FR_BL_BR", qd_grf_FL_FR_BL_BR, 3, 4, {qd_ref_q, qd_ref_v, qd_ref_a}, {19, 18, 18}, {qd_grf_FL_FR_BL_BR_out0, qd_grf_FL_FR_BL_BR_out1, qd_grf_FL_FR_BL_BR_out2, qd_grf_FL_FR_BL_BR_out3}, {6, 12, 6, 12}, 1, 0},
   {"qd_grf_FL_FR_BL", qd_grf_FL_FR_BL, 3, 4, {qd_ref_q, qd_ref_v, qd_ref_a}, {19, 18, 18}, {qd_grf_FL_FR_BL_out0, qd_grf_FL_FR_BL_out1, qd_grf_FL_FR_BL_out2, qd_grf_FL_FR_BL_out3}, {6, 12, 6, 12}, 1, 0},
   {"qd_grf_FL_FR_BR", qd_grf_FL_FR_BR, 3, 4, {qd_ref_q, qd_ref_v, qd_ref_a}, {19, 18, 18}, {qd_grf_FL_FR_BR_out0, qd_grf_FL_FR_BR_out1, qd_grf_FL_FR_BR_out2, qd_grf_FL_FR_BR_out3}, {6, 12, 6, 12}, 1, 0},
@@ -405,8 +410,8 @@ static const qd_case QD_CASES[] = {
   {"qd_dgrf_dir_BR", qd_dgrf_dir_BR, 3, 2, {qd_ref_q, qd_ref_w, qd_ref_dq}, {19, 6, 18}, {qd_dgrf_dir_BR_out0, qd_dgrf_dir_BR_out1}, {3, 3}, 1, 2e-06},
   {"qd_dgrf_BR", qd_dgrf_BR, 3, 3, {qd_ref_q, qd_ref_v, qd_ref_a}, {19, 18, 18}, {qd_dgrf_BR_out0, qd_dgrf_BR_out1, qd_dgrf_BR_out2}, {54, 54, 54}, 1, 2e-06},
 };
-#define QD_N_CASES 120
-static const double qd_float_bound[120] = {0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0.000124, 0, 0, 0, 0, 0, 9.17e-05, 0, 0, 0, 0, 0, 0.000114, 0, 0, 0, 0, 0, 7.93e-05, 0, 0, 0, 0, 0, 7.41e-05, 0, 0.0015, 0.0015, 0.0015, 0.0015, 0.0015, 0.0015, 8.6e-06, 8.6e-06, 8.6e-06, 8.6e-06, 2.76e-05, 8.6e-06, 8.31e-06, 8.31e-06, 8.31e-06, 8.31e-06, 3.99e-05, 8.31e-06, 9.56e-06, 9.56e-06, 9.56e-06, 9.56e-06, 3.64e-05, 9.56e-06, 9.22e-06, 9.22e-06, 9.22e-06, 9.22e-06, 2.53e-05, 9.22e-06, 0.021, 0.021, 0.021, 0.021, 0.021, 0.021, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0};
+#define QD_N_CASES 121
+static const double qd_float_bound[121] = {0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0.000124, 0, 0, 0, 0, 0, 9.17e-05, 0, 0, 0, 0, 0, 0.000114, 0, 0, 0, 0, 0, 7.93e-05, 0, 0, 0, 0, 0, 7.41e-05, 0, 0.0015, 0.0015, 0.0015, 0.0015, 0.0015, 0.0015, 8.6e-06, 8.6e-06, 8.6e-06, 8.6e-06, 2.76e-05, 8.6e-06, 8.31e-06, 8.31e-06, 8.31e-06, 8.31e-06, 3.99e-05, 8.31e-06, 9.56e-06, 9.56e-06, 9.56e-06, 9.56e-06, 3.64e-05, 9.56e-06, 9.22e-06, 9.22e-06, 9.22e-06, 9.22e-06, 2.53e-05, 9.22e-06, 0.021, 0.021, 0.021, 0.021, 0.021, 0.021, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0};
 /* Point arg/res of case k at in/out, filled with its reference inputs in casadi_real. */
 static void qd_case_args(const qd_case* k, casadi_real in[QD_MAX_N_IN][QD_MAX_IN], const casadi_real* arg[QD_MAX_N_IN],
                          casadi_real out[4][QD_MAX_OUT], casadi_real* res[4]) {

@@ -15,7 +15,7 @@ extern "C" {
   #define _CASADI_NAMESPACE_CONCAT(NS, ID) NS ## ID
   #define CASADI_PREFIX(ID) CASADI_NAMESPACE_CONCAT(CODEGEN_PREFIX, ID)
 #else
-  #define CASADI_PREFIX(ID) qd_paper_r_FL_BR_ ## ID
+  #define CASADI_PREFIX(ID) qd_paper_r_FL_FR_ ## ID
 #endif
 
 #include <math.h>
@@ -64,13 +64,13 @@ QD_MATH(sin) QD_MATH(cos) QD_MATH(sqrt) QD_MATH(fabs)
 static inline casadi_real casadi_sq(casadi_real x) { return x*x;}
 
 /* Configuration this file was compiled with */
-CASADI_SYMBOL_EXPORT void qd_paper_r_FL_BR_casadi_version(int* major, int* minor, int* patch) {
+CASADI_SYMBOL_EXPORT void qd_paper_r_FL_FR_casadi_version(int* major, int* minor, int* patch) {
   *major = 3;
   *minor = 8;
   *patch = 2;
 }
-CASADI_SYMBOL_EXPORT int qd_paper_r_FL_BR_casadi_int_size(void) { return (int) sizeof(casadi_int); }
-CASADI_SYMBOL_EXPORT int qd_paper_r_FL_BR_casadi_real_size(void) { return (int) sizeof(casadi_real); }
+CASADI_SYMBOL_EXPORT int qd_paper_r_FL_FR_casadi_int_size(void) { return (int) sizeof(casadi_int); }
+CASADI_SYMBOL_EXPORT int qd_paper_r_FL_FR_casadi_real_size(void) { return (int) sizeof(casadi_real); }
 
 static const casadi_int casadi_s0[3] = {13, 1, 1};
 static const casadi_int casadi_s1[3] = {4, 1, 1};
@@ -827,16 +827,16 @@ static int qd_dfd_r_lift(const casadi_real** arg, casadi_real** res, casadi_int*
   a007=(a001*a007);
   a000=(a000+a007);
   a011=-7.0000000000000007e-02;
-  a012=arg[5][9];
-  a013=arg[5][10];
+  a012=arg[5][3];
+  a013=arg[5][4];
   a014=(a012*a013);
   a015=(a001*a014);
   a011=(a011+a015);
-  a016=arg[5][11];
+  a016=arg[5][5];
   a017=(a014*a016);
-  a018=arg[4][10];
+  a018=arg[4][4];
   a019=(a012*a018);
-  a020=arg[4][11];
+  a020=arg[4][5];
   a021=(a019*a020);
   a017=(a017-a021);
   a017=(a001*a017);
@@ -849,21 +849,20 @@ static int qd_dfd_r_lift(const casadi_real** arg, casadi_real** res, casadi_int*
   a024=(a023*rcp0);
   a025=1.9000000000000000e-01;
   a026=(a001*a008);
-  a025=(a025+a026);
-  a027=(a003*a010);
-  a028=(a008*a006);
-  a027=(a027+a028);
-  a027=(a001*a027);
-  a025=(a025+a027);
-  a028=-1.9000000000000000e-01;
-  a029=(a001*a018);
+  a027=(a025+a026);
+  a028=(a003*a010);
+  a029=(a008*a006);
   a028=(a028+a029);
+  a028=(a001*a028);
+  a027=(a027+a028);
+  a029=(a001*a018);
+  a025=(a025+a029);
   a030=(a013*a020);
   a031=(a018*a016);
   a030=(a030+a031);
   a030=(a001*a030);
-  a028=(a028+a030);
-  a031=(a025-a028);
+  a025=(a025+a030);
+  a031=(a027-a025);
   a032=(a031*rcp0);
   a033=(a024*a032);
   a033=(-a033);
@@ -908,7 +907,7 @@ static int qd_dfd_r_lift(const casadi_real** arg, casadi_real** res, casadi_int*
   a054=(a001*a054);
   a055=(a001*a052);
   a054=(a054-a055);
-  a056=arg[4][9];
+  a056=arg[4][3];
   a057=(a056*a018);
   a058=(a057*a020);
   a059=(a056*a013);
@@ -950,7 +949,7 @@ static int qd_dfd_r_lift(const casadi_real** arg, casadi_real** res, casadi_int*
   a074=(a001*a074);
   a076=(a001*a075);
   a074=(a074-a076);
-  a076=arg[1][9];
+  a076=arg[1][3];
   a077=(a074*a076);
   a078=(a020*a059);
   a079=(a016*a057);
@@ -958,14 +957,14 @@ static int qd_dfd_r_lift(const casadi_real** arg, casadi_real** res, casadi_int*
   a078=(a001*a078);
   a079=(a001*a057);
   a078=(a078+a079);
-  a079=arg[1][10];
+  a079=arg[1][4];
   a080=(a078*a079);
   a077=(a077+a080);
   a080=(a057*a016);
   a081=(a059*a020);
   a080=(a080+a081);
   a080=(a001*a080);
-  a081=arg[1][11];
+  a081=arg[1][5];
   a082=(a080*a081);
   a077=(a077+a082);
   a082=(a008*a002);
@@ -1161,7 +1160,7 @@ static int qd_dfd_r_lift(const casadi_real** arg, casadi_real** res, casadi_int*
   a140=(a140+a143);
   a140=(a140*rcp3);
   a143=(a136*a140);
-  a144=(a025+a028);
+  a144=(a027+a025);
   a144=(a144*rcp0);
   a145=(a144*a119);
   a143=(a143-a145);
@@ -1179,7 +1178,7 @@ static int qd_dfd_r_lift(const casadi_real** arg, casadi_real** res, casadi_int*
   res[0][3]=a140;
   res[0][4]=a138;
   res[0][5]=a119;
-  a146=(a119*a028);
+  a146=(a119*a025);
   a147=(a140*a061);
   a146=(a146-a147);
   a147=(a140*a146);
@@ -1239,16 +1238,16 @@ static int qd_dfd_r_lift(const casadi_real** arg, casadi_real** res, casadi_int*
   a058=(a152*a081);
   a094=(a094+a058);
   a147=(a147+a094);
-  a094=arg[2][9];
+  a094=arg[2][3];
   a058=(a074*a094);
-  a153=arg[2][10];
+  a153=arg[2][4];
   a154=(a078*a153);
   a058=(a058+a154);
-  a154=arg[2][11];
+  a154=arg[2][5];
   a155=(a080*a154);
   a058=(a058+a155);
   a147=(a147+a058);
-  a058=(a119*a025);
+  a058=(a119*a027);
   a155=(a140*a054);
   a058=(a058-a155);
   a155=(a140*a058);
@@ -1321,7 +1320,7 @@ static int qd_dfd_r_lift(const casadi_real** arg, casadi_real** res, casadi_int*
   a163=(a024*a051);
   a164=(a119*a148);
   a165=(a140*a011);
-  a166=(a138*a028);
+  a166=(a138*a025);
   a165=(a165-a166);
   a166=(a140*a165);
   a164=(a164-a166);
@@ -1376,7 +1375,7 @@ static int qd_dfd_r_lift(const casadi_real** arg, casadi_real** res, casadi_int*
   a164=(a164+a168);
   a168=(a119*a156);
   a174=(a140*a000);
-  a175=(a138*a025);
+  a175=(a138*a027);
   a174=(a174-a175);
   a175=(a140*a174);
   a168=(a168-a175);
@@ -1511,8 +1510,8 @@ static int qd_dfd_r_lift(const casadi_real** arg, casadi_real** res, casadi_int*
   a203=(a090*a001);
   a202=(a202+a203);
   a203=(a202*a088);
-  a204=(a088*a027);
-  a205=(a090*a027);
+  a204=(a088*a028);
+  a205=(a090*a028);
   a204=(a204+a205);
   a205=(a204*a090);
   a203=(a203+a205);
@@ -1707,7 +1706,7 @@ static int qd_dfd_r_lift(const casadi_real** arg, casadi_real** res, casadi_int*
   res[2][104]=a163;
   res[2][105]=a051;
   res[2][106]=a146;
-  res[2][107]=a028;
+  res[2][107]=a025;
   res[2][108]=a061;
   res[2][109]=a148;
   res[2][110]=a011;
@@ -1717,7 +1716,7 @@ static int qd_dfd_r_lift(const casadi_real** arg, casadi_real** res, casadi_int*
   res[2][114]=a153;
   res[2][115]=a154;
   res[2][116]=a058;
-  res[2][117]=a025;
+  res[2][117]=a027;
   res[2][118]=a054;
   res[2][119]=a156;
   res[2][120]=a000;
@@ -1766,17 +1765,17 @@ static int qd_dfd_r_lift(const casadi_real** arg, casadi_real** res, casadi_int*
   a135=(a135-a207);
   res[2][154]=a135;
   a054=(a054*a031);
-  a207=(a025*a063);
+  a207=(a027*a063);
   a054=(a054-a207);
   res[2][155]=a054;
-  a025=(a025*a023);
+  a027=(a027*a023);
   a000=(a000*a031);
-  a025=(a025-a000);
-  res[2][156]=a025;
+  a027=(a027-a000);
+  res[2][156]=a027;
   a000=casadi_sq(a135);
   a207=casadi_sq(a054);
   a000=(a000+a207);
-  a207=casadi_sq(a025);
+  a207=casadi_sq(a027);
   a000=(a000+a207);
   a207=casadi_sq(a031);
   a132=casadi_sq(a023);
@@ -1790,14 +1789,14 @@ static int qd_dfd_r_lift(const casadi_real** arg, casadi_real** res, casadi_int*
   res[2][159]=a135;
   a054=(2*a054);
   res[2][160]=a054;
-  a025=(2*a025);
-  res[2][161]=a025;
-  a025=(2*a031);
-  res[2][162]=a025;
-  a025=(2*a023);
-  res[2][163]=a025;
-  a025=(2*a063);
-  res[2][164]=a025;
+  a027=(2*a027);
+  res[2][161]=a027;
+  a027=(2*a031);
+  res[2][162]=a027;
+  a027=(2*a023);
+  res[2][163]=a027;
+  a027=(2*a063);
+  res[2][164]=a027;
   res[2][165]=a109;
   res[2][166]=a083;
   res[2][167]=a123;
@@ -1879,7 +1878,7 @@ static int qd_dfd_r_lift(const casadi_real** arg, casadi_real** res, casadi_int*
   res[2][234]=a026;
   res[2][235]=a001;
   res[2][236]=a202;
-  res[2][237]=a027;
+  res[2][237]=a028;
   res[2][238]=a204;
   return 0;
 }
@@ -7088,12 +7087,6 @@ static int qd_dfd_r_lift_columns(const casadi_real** arg, casadi_real** res, cas
   a353=(a353+a141);
   a353=(-a353);
   res[2][41]=a353;
-  res[2][42]=a333;
-  res[2][43]=a333;
-  res[2][44]=a333;
-  res[2][45]=a333;
-  res[2][46]=a333;
-  res[2][47]=a333;
   a353=arg[0][173];
   a278=(a278-a343);
   a343=(a353*a278);
@@ -7101,7 +7094,7 @@ static int qd_dfd_r_lift_columns(const casadi_real** arg, casadi_real** res, cas
   a029=(a029+a116);
   a116=(a141*a029);
   a343=(a343+a116);
-  res[2][48]=a343;
+  res[2][42]=a343;
   a343=arg[0][175];
   a116=(a343*a029);
   a327=arg[0][176];
@@ -7111,7 +7104,7 @@ static int qd_dfd_r_lift_columns(const casadi_real** arg, casadi_real** res, cas
   a319=(a338*a278);
   a109=(a109-a319);
   a116=(a116+a109);
-  res[2][49]=a116;
+  res[2][43]=a116;
   a116=arg[0][178];
   a029=(a116*a029);
   a109=arg[0][179];
@@ -7120,7 +7113,13 @@ static int qd_dfd_r_lift_columns(const casadi_real** arg, casadi_real** res, cas
   a278=(a319*a278);
   a297=(a297-a278);
   a029=(a029+a297);
-  res[2][50]=a029;
+  res[2][44]=a029;
+  res[2][45]=a333;
+  res[2][46]=a333;
+  res[2][47]=a333;
+  res[2][48]=a333;
+  res[2][49]=a333;
+  res[2][50]=a333;
   a029=arg[0][184];
   a297=(a345*a115);
   a278=(a068*a125);
@@ -7330,31 +7329,31 @@ static int qd_dfd_r_lift_columns(const casadi_real** arg, casadi_real** res, cas
   a311=(a311+a137);
   a311=(-a311);
   res[2][54]=a311;
-  res[2][55]=a333;
-  res[2][56]=a333;
-  res[2][57]=a333;
-  res[2][58]=a333;
-  res[2][59]=a333;
-  res[2][60]=a333;
   a318=(a318+a125);
   a125=(a353*a318);
   a325=(a325+a172);
   a172=(a141*a325);
   a125=(a125+a172);
-  res[2][61]=a125;
+  res[2][55]=a125;
   a125=(a343*a325);
   a265=(a265+a297);
   a297=(a327*a265);
   a172=(a338*a318);
   a297=(a297-a172);
   a125=(a125+a297);
-  res[2][62]=a125;
+  res[2][56]=a125;
   a325=(a116*a325);
   a265=(a109*a265);
   a318=(a319*a318);
   a265=(a265-a318);
   a325=(a325+a265);
-  res[2][63]=a325;
+  res[2][57]=a325;
+  res[2][58]=a333;
+  res[2][59]=a333;
+  res[2][60]=a333;
+  res[2][61]=a333;
+  res[2][62]=a333;
+  res[2][63]=a333;
   a325=(a157*rcp6);
   a329=(a329*rcp5);
   a265=(a248*a329);
@@ -7542,31 +7541,31 @@ static int qd_dfd_r_lift_columns(const casadi_real** arg, casadi_real** res, cas
   a171=(a171+a354);
   a171=(-a171);
   res[2][67]=a171;
-  res[2][68]=a333;
-  res[2][69]=a333;
-  res[2][70]=a333;
-  res[2][71]=a333;
-  res[2][72]=a333;
-  res[2][73]=a333;
   a329=(a329+a325);
   a325=(a353*a329);
   a265=(a265+a210);
   a210=(a141*a265);
   a325=(a325+a210);
-  res[2][74]=a325;
+  res[2][68]=a325;
   a325=(a343*a265);
   a157=(a157+a237);
   a237=(a327*a157);
   a210=(a338*a329);
   a237=(a237-a210);
   a325=(a325+a237);
-  res[2][75]=a325;
+  res[2][69]=a325;
   a265=(a116*a265);
   a157=(a109*a157);
   a329=(a319*a329);
   a157=(a157-a329);
   a265=(a265+a157);
-  res[2][76]=a265;
+  res[2][70]=a265;
+  res[2][71]=a333;
+  res[2][72]=a333;
+  res[2][73]=a333;
+  res[2][74]=a333;
+  res[2][75]=a333;
+  res[2][76]=a333;
   a265=(a183*rcp6);
   a125=(a125*rcp5);
   a157=(a248*a125);
@@ -7711,12 +7710,6 @@ static int qd_dfd_r_lift_columns(const casadi_real** arg, casadi_real** res, cas
   a216=(a216+a262);
   a216=(-a216);
   res[2][80]=a216;
-  res[2][81]=a333;
-  res[2][82]=a333;
-  res[2][83]=a333;
-  res[2][84]=a333;
-  res[2][85]=a333;
-  res[2][86]=a333;
   a051=(a051-a142);
   a142=(a051*a260);
   a190=(a190-a251);
@@ -7729,7 +7722,7 @@ static int qd_dfd_r_lift_columns(const casadi_real** arg, casadi_real** res, cas
   a221=(a221-a265);
   a142=(a142+a221);
   a142=(-a142);
-  res[2][87]=a142;
+  res[2][81]=a142;
   a275=(a099*a275);
   a142=(a343*a183);
   a275=(a275-a142);
@@ -7741,7 +7734,7 @@ static int qd_dfd_r_lift_columns(const casadi_real** arg, casadi_real** res, cas
   a329=(a329-a280);
   a275=(a275-a329);
   a275=(-a275);
-  res[2][88]=a275;
+  res[2][82]=a275;
   a273=(a099*a273);
   a183=(a116*a183);
   a273=(a273-a183);
@@ -7752,7 +7745,13 @@ static int qd_dfd_r_lift_columns(const casadi_real** arg, casadi_real** res, cas
   a157=(a157-a218);
   a273=(a273-a157);
   a273=(-a273);
-  res[2][89]=a273;
+  res[2][83]=a273;
+  res[2][84]=a333;
+  res[2][85]=a333;
+  res[2][86]=a333;
+  res[2][87]=a333;
+  res[2][88]=a333;
+  res[2][89]=a333;
   a250=(a250*rcp6);
   a352=(a352*rcp5);
   a273=(a282*a352);
@@ -7898,12 +7897,6 @@ static int qd_dfd_r_lift_columns(const casadi_real** arg, casadi_real** res, cas
   a260=(a260+a183);
   a260=(-a260);
   res[2][93]=a260;
-  res[2][94]=a333;
-  res[2][95]=a333;
-  res[2][96]=a333;
-  res[2][97]=a333;
-  res[2][98]=a333;
-  res[2][99]=a333;
   a260=(a051*a302);
   a157=(a157-a190);
   a190=(a353*a157);
@@ -7914,7 +7907,7 @@ static int qd_dfd_r_lift_columns(const casadi_real** arg, casadi_real** res, cas
   a267=(a267-a250);
   a260=(a260+a267);
   a260=(-a260);
-  res[2][100]=a260;
+  res[2][94]=a260;
   a220=(a099*a220);
   a260=(a343*a273);
   a220=(a220-a260);
@@ -7929,7 +7922,7 @@ static int qd_dfd_r_lift_columns(const casadi_real** arg, casadi_real** res, cas
   a322=(a322+a285);
   a220=(a220-a322);
   a220=(-a220);
-  res[2][101]=a220;
+  res[2][95]=a220;
   a254=(a099*a254);
   a273=(a116*a273);
   a254=(a254-a273);
@@ -7942,7 +7935,13 @@ static int qd_dfd_r_lift_columns(const casadi_real** arg, casadi_real** res, cas
   a323=(a323+a255);
   a254=(a254-a323);
   a254=(-a254);
-  res[2][102]=a254;
+  res[2][96]=a254;
+  res[2][97]=a333;
+  res[2][98]=a333;
+  res[2][99]=a333;
+  res[2][100]=a333;
+  res[2][101]=a333;
+  res[2][102]=a333;
   a263=(a263*rcp6);
   a352=(a352*rcp5);
   a254=(a282*a352);
@@ -8090,12 +8089,6 @@ static int qd_dfd_r_lift_columns(const casadi_real** arg, casadi_real** res, cas
   a341=(a341+a127);
   a341=(-a341);
   res[2][106]=a341;
-  res[2][107]=a333;
-  res[2][108]=a333;
-  res[2][109]=a333;
-  res[2][110]=a333;
-  res[2][111]=a333;
-  res[2][112]=a333;
   a357=(a051*a357);
   a254=(a254-a203);
   a203=(a353*a254);
@@ -8106,7 +8099,7 @@ static int qd_dfd_r_lift_columns(const casadi_real** arg, casadi_real** res, cas
   a350=(a350-a263);
   a357=(a357+a350);
   a357=(-a357);
-  res[2][113]=a357;
+  res[2][107]=a357;
   a099=(a099*a337);
   a337=(a343*a294);
   a337=(a099-a337);
@@ -8120,7 +8113,7 @@ static int qd_dfd_r_lift_columns(const casadi_real** arg, casadi_real** res, cas
   a335=(a335+a326);
   a337=(a337-a335);
   a337=(-a337);
-  res[2][114]=a337;
+  res[2][108]=a337;
   a294=(a116*a294);
   a099=(a099-a294);
   a015=(a109*a015);
@@ -8130,7 +8123,13 @@ static int qd_dfd_r_lift_columns(const casadi_real** arg, casadi_real** res, cas
   a257=(a257+a051);
   a099=(a099-a257);
   a099=(-a099);
-  res[2][115]=a099;
+  res[2][109]=a099;
+  res[2][110]=a333;
+  res[2][111]=a333;
+  res[2][112]=a333;
+  res[2][113]=a333;
+  res[2][114]=a333;
+  res[2][115]=a333;
   a305=(a305*rcp6);
   a050=(a050*rcp5);
   a282=(a282*a050);
@@ -10093,12 +10092,12 @@ static int qd_dfd_r_lift_dir(const casadi_real** arg, casadi_real** res, casadi_
   a005=2.0000000000000001e-01;
   a006=arg[0][1];
   a007=arg[0][0];
-  a008=arg[2][9];
+  a008=arg[2][3];
   a009=(a007*a008);
   a010=(a006*a009);
   a011=arg[0][3];
   a012=arg[0][2];
-  a013=arg[2][10];
+  a013=arg[2][4];
   a014=(a012*a013);
   a015=(a011*a014);
   a016=(a010+a015);
@@ -10107,7 +10106,7 @@ static int qd_dfd_r_lift_dir(const casadi_real** arg, casadi_real** res, casadi_
   a019=(a018*a016);
   a020=arg[0][6];
   a021=arg[0][5];
-  a022=arg[2][11];
+  a022=arg[2][5];
   a023=(a021*a022);
   a024=(a020*a023);
   a025=(a019+a024);
@@ -11605,13 +11604,6 @@ static int qd_dfd_r_lift_dir(const casadi_real** arg, casadi_real** res, casadi_
   a115=(a115+a122);
   a115=(-a115);
   res[2][2]=a115;
-  a115=0.;
-  res[2][3]=a115;
-  res[2][4]=a115;
-  res[2][5]=a115;
-  res[2][6]=a115;
-  res[2][7]=a115;
-  res[2][8]=a115;
   a094=(a094-a129);
   a151=(a094*a151);
   a129=arg[0][173];
@@ -11626,7 +11618,7 @@ static int qd_dfd_r_lift_dir(const casadi_real** arg, casadi_real** res, casadi_
   a136=(a136-a013);
   a151=(a151+a136);
   a151=(-a151);
-  res[2][9]=a151;
+  res[2][3]=a151;
   a139=(a091*a139);
   a151=arg[0][175];
   a136=(a151*a049);
@@ -11644,7 +11636,7 @@ static int qd_dfd_r_lift_dir(const casadi_real** arg, casadi_real** res, casadi_
   a037=(a037+a016);
   a139=(a139-a037);
   a139=(-a139);
-  res[2][10]=a139;
+  res[2][4]=a139;
   a091=(a091*a140);
   a140=arg[0][178];
   a049=(a140*a049);
@@ -11660,6 +11652,13 @@ static int qd_dfd_r_lift_dir(const casadi_real** arg, casadi_real** res, casadi_
   a120=(a120+a094);
   a091=(a091-a120);
   a091=(-a091);
+  res[2][5]=a091;
+  a091=0.;
+  res[2][6]=a091;
+  res[2][7]=a091;
+  res[2][8]=a091;
+  res[2][9]=a091;
+  res[2][10]=a091;
   res[2][11]=a091;
   a091=(a015*a132);
   a120=(a097*a081);
@@ -11713,12 +11712,12 @@ static int qd_dfd_r_lift_dir(const casadi_real** arg, casadi_real** res, casadi_
   a032=(a032-a105);
   a078=(a078+a032);
   res[2][12]=a078;
-  a078=arg[4][9];
+  a078=arg[4][3];
   a118=(a118*a078);
-  a032=arg[4][10];
+  a032=arg[4][4];
   a105=(a151*a032);
   a105=(a118+a105);
-  a081=arg[4][11];
+  a081=arg[4][5];
   a140=(a140*a081);
   a105=(a105+a140);
   a140=arg[4][0];
@@ -12215,49 +12214,49 @@ static int qd_dfd_r_lift_dir(const casadi_real** arg, casadi_real** res, casadi_
 }
 #endif
 
-#include "qd_reduced_templates.h"
+#include "reduced_templates.h"
 static int qd_M_r_eval(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem) {
-  return qd_reduced_term(13, 9, 0, arg, res, iw, w, mem);
+  return qd_reduced_term(13, 3, 0, arg, res, iw, w, mem);
 }
 static int qd_CG_r_eval(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem) {
-  return qd_reduced_term(13, 9, 1, arg, res, iw, w, mem);
+  return qd_reduced_term(13, 3, 1, arg, res, iw, w, mem);
 }
 static int qd_G_r_eval(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem) {
-  return qd_reduced_term(13, 9, 2, arg, res, iw, w, mem);
+  return qd_reduced_term(13, 3, 2, arg, res, iw, w, mem);
 }
 static int qd_id_r_eval(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem) {
-  return qd_reduced_term(13, 9, 3, arg, res, iw, w, mem);
+  return qd_reduced_term(13, 3, 3, arg, res, iw, w, mem);
 }
 
-CASADI_SYMBOL_EXPORT int qd_M_r_FL_BR(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem){
+CASADI_SYMBOL_EXPORT int qd_M_r_FL_FR(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem){
   return qd_finite(qd_M_r_eval(arg, res, iw, w, mem), res, 1, (const casadi_int[]){169});
 }
 
-CASADI_SYMBOL_EXPORT int qd_M_r_FL_BR_checkout(void) {
+CASADI_SYMBOL_EXPORT int qd_M_r_FL_FR_checkout(void) {
   return 0;
 }
 
-CASADI_SYMBOL_EXPORT void qd_M_r_FL_BR_release(int mem) {
+CASADI_SYMBOL_EXPORT void qd_M_r_FL_FR_release(int mem) {
   (void)mem;
 }
 
-CASADI_SYMBOL_EXPORT void qd_M_r_FL_BR_incref(void) {
+CASADI_SYMBOL_EXPORT void qd_M_r_FL_FR_incref(void) {
 }
 
-CASADI_SYMBOL_EXPORT void qd_M_r_FL_BR_decref(void) {
+CASADI_SYMBOL_EXPORT void qd_M_r_FL_FR_decref(void) {
 }
 
-CASADI_SYMBOL_EXPORT casadi_int qd_M_r_FL_BR_n_in(void) { return 2;}
+CASADI_SYMBOL_EXPORT casadi_int qd_M_r_FL_FR_n_in(void) { return 2;}
 
-CASADI_SYMBOL_EXPORT casadi_int qd_M_r_FL_BR_n_out(void) { return 1;}
+CASADI_SYMBOL_EXPORT casadi_int qd_M_r_FL_FR_n_out(void) { return 1;}
 
-CASADI_SYMBOL_EXPORT casadi_real qd_M_r_FL_BR_default_in(casadi_int i) {
+CASADI_SYMBOL_EXPORT casadi_real qd_M_r_FL_FR_default_in(casadi_int i) {
   switch (i) {
     default: return 0;
   }
 }
 
-CASADI_SYMBOL_EXPORT const char* qd_M_r_FL_BR_name_in(casadi_int i) {
+CASADI_SYMBOL_EXPORT const char* qd_M_r_FL_FR_name_in(casadi_int i) {
   switch (i) {
     case 0: return "q_r";
     case 1: return "quat";
@@ -12265,14 +12264,14 @@ CASADI_SYMBOL_EXPORT const char* qd_M_r_FL_BR_name_in(casadi_int i) {
   }
 }
 
-CASADI_SYMBOL_EXPORT const char* qd_M_r_FL_BR_name_out(casadi_int i) {
+CASADI_SYMBOL_EXPORT const char* qd_M_r_FL_FR_name_out(casadi_int i) {
   switch (i) {
     case 0: return "M_r";
     default: return 0;
   }
 }
 
-CASADI_SYMBOL_EXPORT const casadi_int* qd_M_r_FL_BR_sparsity_in(casadi_int i) {
+CASADI_SYMBOL_EXPORT const casadi_int* qd_M_r_FL_FR_sparsity_in(casadi_int i) {
   switch (i) {
     case 0: return casadi_s0;
     case 1: return casadi_s1;
@@ -12280,14 +12279,14 @@ CASADI_SYMBOL_EXPORT const casadi_int* qd_M_r_FL_BR_sparsity_in(casadi_int i) {
   }
 }
 
-CASADI_SYMBOL_EXPORT const casadi_int* qd_M_r_FL_BR_sparsity_out(casadi_int i) {
+CASADI_SYMBOL_EXPORT const casadi_int* qd_M_r_FL_FR_sparsity_out(casadi_int i) {
   switch (i) {
     case 0: return casadi_s2;
     default: return 0;
   }
 }
 
-CASADI_SYMBOL_EXPORT int qd_M_r_FL_BR_work(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz_iw, casadi_int *sz_w) {
+CASADI_SYMBOL_EXPORT int qd_M_r_FL_FR_work(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz_iw, casadi_int *sz_w) {
   if (sz_arg) *sz_arg = 2;
   if (sz_res) *sz_res = 1;
   if (sz_iw) *sz_iw = 0;
@@ -12295,7 +12294,7 @@ CASADI_SYMBOL_EXPORT int qd_M_r_FL_BR_work(casadi_int *sz_arg, casadi_int* sz_re
   return 0;
 }
 
-CASADI_SYMBOL_EXPORT int qd_M_r_FL_BR_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz_iw, casadi_int *sz_w) {
+CASADI_SYMBOL_EXPORT int qd_M_r_FL_FR_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz_iw, casadi_int *sz_w) {
   if (sz_arg) *sz_arg = 2*sizeof(const casadi_real*);
   if (sz_res) *sz_res = 1*sizeof(casadi_real*);
   if (sz_iw) *sz_iw = 0*sizeof(casadi_int);
@@ -12303,35 +12302,35 @@ CASADI_SYMBOL_EXPORT int qd_M_r_FL_BR_work_bytes(casadi_int *sz_arg, casadi_int*
   return 0;
 }
 
-CASADI_SYMBOL_EXPORT int qd_CG_r_FL_BR(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem){
+CASADI_SYMBOL_EXPORT int qd_CG_r_FL_FR(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem){
   return qd_finite(qd_CG_r_eval(arg, res, iw, w, mem), res, 1, (const casadi_int[]){13});
 }
 
-CASADI_SYMBOL_EXPORT int qd_CG_r_FL_BR_checkout(void) {
+CASADI_SYMBOL_EXPORT int qd_CG_r_FL_FR_checkout(void) {
   return 0;
 }
 
-CASADI_SYMBOL_EXPORT void qd_CG_r_FL_BR_release(int mem) {
+CASADI_SYMBOL_EXPORT void qd_CG_r_FL_FR_release(int mem) {
   (void)mem;
 }
 
-CASADI_SYMBOL_EXPORT void qd_CG_r_FL_BR_incref(void) {
+CASADI_SYMBOL_EXPORT void qd_CG_r_FL_FR_incref(void) {
 }
 
-CASADI_SYMBOL_EXPORT void qd_CG_r_FL_BR_decref(void) {
+CASADI_SYMBOL_EXPORT void qd_CG_r_FL_FR_decref(void) {
 }
 
-CASADI_SYMBOL_EXPORT casadi_int qd_CG_r_FL_BR_n_in(void) { return 3;}
+CASADI_SYMBOL_EXPORT casadi_int qd_CG_r_FL_FR_n_in(void) { return 3;}
 
-CASADI_SYMBOL_EXPORT casadi_int qd_CG_r_FL_BR_n_out(void) { return 1;}
+CASADI_SYMBOL_EXPORT casadi_int qd_CG_r_FL_FR_n_out(void) { return 1;}
 
-CASADI_SYMBOL_EXPORT casadi_real qd_CG_r_FL_BR_default_in(casadi_int i) {
+CASADI_SYMBOL_EXPORT casadi_real qd_CG_r_FL_FR_default_in(casadi_int i) {
   switch (i) {
     default: return 0;
   }
 }
 
-CASADI_SYMBOL_EXPORT const char* qd_CG_r_FL_BR_name_in(casadi_int i) {
+CASADI_SYMBOL_EXPORT const char* qd_CG_r_FL_FR_name_in(casadi_int i) {
   switch (i) {
     case 0: return "q_r";
     case 1: return "qd_r";
@@ -12340,14 +12339,14 @@ CASADI_SYMBOL_EXPORT const char* qd_CG_r_FL_BR_name_in(casadi_int i) {
   }
 }
 
-CASADI_SYMBOL_EXPORT const char* qd_CG_r_FL_BR_name_out(casadi_int i) {
+CASADI_SYMBOL_EXPORT const char* qd_CG_r_FL_FR_name_out(casadi_int i) {
   switch (i) {
     case 0: return "CG_r";
     default: return 0;
   }
 }
 
-CASADI_SYMBOL_EXPORT const casadi_int* qd_CG_r_FL_BR_sparsity_in(casadi_int i) {
+CASADI_SYMBOL_EXPORT const casadi_int* qd_CG_r_FL_FR_sparsity_in(casadi_int i) {
   switch (i) {
     case 0: return casadi_s0;
     case 1: return casadi_s0;
@@ -12356,14 +12355,14 @@ CASADI_SYMBOL_EXPORT const casadi_int* qd_CG_r_FL_BR_sparsity_in(casadi_int i) {
   }
 }
 
-CASADI_SYMBOL_EXPORT const casadi_int* qd_CG_r_FL_BR_sparsity_out(casadi_int i) {
+CASADI_SYMBOL_EXPORT const casadi_int* qd_CG_r_FL_FR_sparsity_out(casadi_int i) {
   switch (i) {
     case 0: return casadi_s0;
     default: return 0;
   }
 }
 
-CASADI_SYMBOL_EXPORT int qd_CG_r_FL_BR_work(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz_iw, casadi_int *sz_w) {
+CASADI_SYMBOL_EXPORT int qd_CG_r_FL_FR_work(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz_iw, casadi_int *sz_w) {
   if (sz_arg) *sz_arg = 3;
   if (sz_res) *sz_res = 1;
   if (sz_iw) *sz_iw = 0;
@@ -12371,7 +12370,7 @@ CASADI_SYMBOL_EXPORT int qd_CG_r_FL_BR_work(casadi_int *sz_arg, casadi_int* sz_r
   return 0;
 }
 
-CASADI_SYMBOL_EXPORT int qd_CG_r_FL_BR_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz_iw, casadi_int *sz_w) {
+CASADI_SYMBOL_EXPORT int qd_CG_r_FL_FR_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz_iw, casadi_int *sz_w) {
   if (sz_arg) *sz_arg = 3*sizeof(const casadi_real*);
   if (sz_res) *sz_res = 1*sizeof(casadi_real*);
   if (sz_iw) *sz_iw = 0*sizeof(casadi_int);
@@ -12379,35 +12378,35 @@ CASADI_SYMBOL_EXPORT int qd_CG_r_FL_BR_work_bytes(casadi_int *sz_arg, casadi_int
   return 0;
 }
 
-CASADI_SYMBOL_EXPORT int qd_G_r_FL_BR(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem){
+CASADI_SYMBOL_EXPORT int qd_G_r_FL_FR(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem){
   return qd_finite(qd_G_r_eval(arg, res, iw, w, mem), res, 1, (const casadi_int[]){13});
 }
 
-CASADI_SYMBOL_EXPORT int qd_G_r_FL_BR_checkout(void) {
+CASADI_SYMBOL_EXPORT int qd_G_r_FL_FR_checkout(void) {
   return 0;
 }
 
-CASADI_SYMBOL_EXPORT void qd_G_r_FL_BR_release(int mem) {
+CASADI_SYMBOL_EXPORT void qd_G_r_FL_FR_release(int mem) {
   (void)mem;
 }
 
-CASADI_SYMBOL_EXPORT void qd_G_r_FL_BR_incref(void) {
+CASADI_SYMBOL_EXPORT void qd_G_r_FL_FR_incref(void) {
 }
 
-CASADI_SYMBOL_EXPORT void qd_G_r_FL_BR_decref(void) {
+CASADI_SYMBOL_EXPORT void qd_G_r_FL_FR_decref(void) {
 }
 
-CASADI_SYMBOL_EXPORT casadi_int qd_G_r_FL_BR_n_in(void) { return 2;}
+CASADI_SYMBOL_EXPORT casadi_int qd_G_r_FL_FR_n_in(void) { return 2;}
 
-CASADI_SYMBOL_EXPORT casadi_int qd_G_r_FL_BR_n_out(void) { return 1;}
+CASADI_SYMBOL_EXPORT casadi_int qd_G_r_FL_FR_n_out(void) { return 1;}
 
-CASADI_SYMBOL_EXPORT casadi_real qd_G_r_FL_BR_default_in(casadi_int i) {
+CASADI_SYMBOL_EXPORT casadi_real qd_G_r_FL_FR_default_in(casadi_int i) {
   switch (i) {
     default: return 0;
   }
 }
 
-CASADI_SYMBOL_EXPORT const char* qd_G_r_FL_BR_name_in(casadi_int i) {
+CASADI_SYMBOL_EXPORT const char* qd_G_r_FL_FR_name_in(casadi_int i) {
   switch (i) {
     case 0: return "q_r";
     case 1: return "quat";
@@ -12415,14 +12414,14 @@ CASADI_SYMBOL_EXPORT const char* qd_G_r_FL_BR_name_in(casadi_int i) {
   }
 }
 
-CASADI_SYMBOL_EXPORT const char* qd_G_r_FL_BR_name_out(casadi_int i) {
+CASADI_SYMBOL_EXPORT const char* qd_G_r_FL_FR_name_out(casadi_int i) {
   switch (i) {
     case 0: return "G_r";
     default: return 0;
   }
 }
 
-CASADI_SYMBOL_EXPORT const casadi_int* qd_G_r_FL_BR_sparsity_in(casadi_int i) {
+CASADI_SYMBOL_EXPORT const casadi_int* qd_G_r_FL_FR_sparsity_in(casadi_int i) {
   switch (i) {
     case 0: return casadi_s0;
     case 1: return casadi_s1;
@@ -12430,14 +12429,14 @@ CASADI_SYMBOL_EXPORT const casadi_int* qd_G_r_FL_BR_sparsity_in(casadi_int i) {
   }
 }
 
-CASADI_SYMBOL_EXPORT const casadi_int* qd_G_r_FL_BR_sparsity_out(casadi_int i) {
+CASADI_SYMBOL_EXPORT const casadi_int* qd_G_r_FL_FR_sparsity_out(casadi_int i) {
   switch (i) {
     case 0: return casadi_s0;
     default: return 0;
   }
 }
 
-CASADI_SYMBOL_EXPORT int qd_G_r_FL_BR_work(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz_iw, casadi_int *sz_w) {
+CASADI_SYMBOL_EXPORT int qd_G_r_FL_FR_work(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz_iw, casadi_int *sz_w) {
   if (sz_arg) *sz_arg = 2;
   if (sz_res) *sz_res = 1;
   if (sz_iw) *sz_iw = 0;
@@ -12445,7 +12444,7 @@ CASADI_SYMBOL_EXPORT int qd_G_r_FL_BR_work(casadi_int *sz_arg, casadi_int* sz_re
   return 0;
 }
 
-CASADI_SYMBOL_EXPORT int qd_G_r_FL_BR_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz_iw, casadi_int *sz_w) {
+CASADI_SYMBOL_EXPORT int qd_G_r_FL_FR_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz_iw, casadi_int *sz_w) {
   if (sz_arg) *sz_arg = 2*sizeof(const casadi_real*);
   if (sz_res) *sz_res = 1*sizeof(casadi_real*);
   if (sz_iw) *sz_iw = 0*sizeof(casadi_int);
@@ -12453,35 +12452,35 @@ CASADI_SYMBOL_EXPORT int qd_G_r_FL_BR_work_bytes(casadi_int *sz_arg, casadi_int*
   return 0;
 }
 
-CASADI_SYMBOL_EXPORT int qd_id_r_FL_BR(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem){
+CASADI_SYMBOL_EXPORT int qd_id_r_FL_FR(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem){
   return qd_finite(qd_id_r_eval(arg, res, iw, w, mem), res, 1, (const casadi_int[]){13});
 }
 
-CASADI_SYMBOL_EXPORT int qd_id_r_FL_BR_checkout(void) {
+CASADI_SYMBOL_EXPORT int qd_id_r_FL_FR_checkout(void) {
   return 0;
 }
 
-CASADI_SYMBOL_EXPORT void qd_id_r_FL_BR_release(int mem) {
+CASADI_SYMBOL_EXPORT void qd_id_r_FL_FR_release(int mem) {
   (void)mem;
 }
 
-CASADI_SYMBOL_EXPORT void qd_id_r_FL_BR_incref(void) {
+CASADI_SYMBOL_EXPORT void qd_id_r_FL_FR_incref(void) {
 }
 
-CASADI_SYMBOL_EXPORT void qd_id_r_FL_BR_decref(void) {
+CASADI_SYMBOL_EXPORT void qd_id_r_FL_FR_decref(void) {
 }
 
-CASADI_SYMBOL_EXPORT casadi_int qd_id_r_FL_BR_n_in(void) { return 4;}
+CASADI_SYMBOL_EXPORT casadi_int qd_id_r_FL_FR_n_in(void) { return 4;}
 
-CASADI_SYMBOL_EXPORT casadi_int qd_id_r_FL_BR_n_out(void) { return 1;}
+CASADI_SYMBOL_EXPORT casadi_int qd_id_r_FL_FR_n_out(void) { return 1;}
 
-CASADI_SYMBOL_EXPORT casadi_real qd_id_r_FL_BR_default_in(casadi_int i) {
+CASADI_SYMBOL_EXPORT casadi_real qd_id_r_FL_FR_default_in(casadi_int i) {
   switch (i) {
     default: return 0;
   }
 }
 
-CASADI_SYMBOL_EXPORT const char* qd_id_r_FL_BR_name_in(casadi_int i) {
+CASADI_SYMBOL_EXPORT const char* qd_id_r_FL_FR_name_in(casadi_int i) {
   switch (i) {
     case 0: return "q_r";
     case 1: return "qd_r";
@@ -12491,14 +12490,14 @@ CASADI_SYMBOL_EXPORT const char* qd_id_r_FL_BR_name_in(casadi_int i) {
   }
 }
 
-CASADI_SYMBOL_EXPORT const char* qd_id_r_FL_BR_name_out(casadi_int i) {
+CASADI_SYMBOL_EXPORT const char* qd_id_r_FL_FR_name_out(casadi_int i) {
   switch (i) {
     case 0: return "tau_r";
     default: return 0;
   }
 }
 
-CASADI_SYMBOL_EXPORT const casadi_int* qd_id_r_FL_BR_sparsity_in(casadi_int i) {
+CASADI_SYMBOL_EXPORT const casadi_int* qd_id_r_FL_FR_sparsity_in(casadi_int i) {
   switch (i) {
     case 0: return casadi_s0;
     case 1: return casadi_s0;
@@ -12508,14 +12507,14 @@ CASADI_SYMBOL_EXPORT const casadi_int* qd_id_r_FL_BR_sparsity_in(casadi_int i) {
   }
 }
 
-CASADI_SYMBOL_EXPORT const casadi_int* qd_id_r_FL_BR_sparsity_out(casadi_int i) {
+CASADI_SYMBOL_EXPORT const casadi_int* qd_id_r_FL_FR_sparsity_out(casadi_int i) {
   switch (i) {
     case 0: return casadi_s0;
     default: return 0;
   }
 }
 
-CASADI_SYMBOL_EXPORT int qd_id_r_FL_BR_work(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz_iw, casadi_int *sz_w) {
+CASADI_SYMBOL_EXPORT int qd_id_r_FL_FR_work(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz_iw, casadi_int *sz_w) {
   if (sz_arg) *sz_arg = 4;
   if (sz_res) *sz_res = 1;
   if (sz_iw) *sz_iw = 0;
@@ -12523,7 +12522,7 @@ CASADI_SYMBOL_EXPORT int qd_id_r_FL_BR_work(casadi_int *sz_arg, casadi_int* sz_r
   return 0;
 }
 
-CASADI_SYMBOL_EXPORT int qd_id_r_FL_BR_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz_iw, casadi_int *sz_w) {
+CASADI_SYMBOL_EXPORT int qd_id_r_FL_FR_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz_iw, casadi_int *sz_w) {
   if (sz_arg) *sz_arg = 4*sizeof(const casadi_real*);
   if (sz_res) *sz_res = 1*sizeof(casadi_real*);
   if (sz_iw) *sz_iw = 0*sizeof(casadi_int);
@@ -12531,35 +12530,35 @@ CASADI_SYMBOL_EXPORT int qd_id_r_FL_BR_work_bytes(casadi_int *sz_arg, casadi_int
   return 0;
 }
 
-CASADI_SYMBOL_EXPORT int qd_fd_r_FL_BR(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem){
-  return qd_fd_r_solve(13, 9, arg, res, iw, w, mem);
+CASADI_SYMBOL_EXPORT int qd_fd_r_FL_FR(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem){
+  return qd_fd_r_solve(13, 3, arg, res, iw, w, mem);
 }
 
-CASADI_SYMBOL_EXPORT int qd_fd_r_FL_BR_checkout(void) {
+CASADI_SYMBOL_EXPORT int qd_fd_r_FL_FR_checkout(void) {
   return 0;
 }
 
-CASADI_SYMBOL_EXPORT void qd_fd_r_FL_BR_release(int mem) {
+CASADI_SYMBOL_EXPORT void qd_fd_r_FL_FR_release(int mem) {
   (void)mem;
 }
 
-CASADI_SYMBOL_EXPORT void qd_fd_r_FL_BR_incref(void) {
+CASADI_SYMBOL_EXPORT void qd_fd_r_FL_FR_incref(void) {
 }
 
-CASADI_SYMBOL_EXPORT void qd_fd_r_FL_BR_decref(void) {
+CASADI_SYMBOL_EXPORT void qd_fd_r_FL_FR_decref(void) {
 }
 
-CASADI_SYMBOL_EXPORT casadi_int qd_fd_r_FL_BR_n_in(void) { return 4;}
+CASADI_SYMBOL_EXPORT casadi_int qd_fd_r_FL_FR_n_in(void) { return 4;}
 
-CASADI_SYMBOL_EXPORT casadi_int qd_fd_r_FL_BR_n_out(void) { return 1;}
+CASADI_SYMBOL_EXPORT casadi_int qd_fd_r_FL_FR_n_out(void) { return 1;}
 
-CASADI_SYMBOL_EXPORT casadi_real qd_fd_r_FL_BR_default_in(casadi_int i) {
+CASADI_SYMBOL_EXPORT casadi_real qd_fd_r_FL_FR_default_in(casadi_int i) {
   switch (i) {
     default: return 0;
   }
 }
 
-CASADI_SYMBOL_EXPORT const char* qd_fd_r_FL_BR_name_in(casadi_int i) {
+CASADI_SYMBOL_EXPORT const char* qd_fd_r_FL_FR_name_in(casadi_int i) {
   switch (i) {
     case 0: return "q_r";
     case 1: return "qd_r";
@@ -12569,14 +12568,14 @@ CASADI_SYMBOL_EXPORT const char* qd_fd_r_FL_BR_name_in(casadi_int i) {
   }
 }
 
-CASADI_SYMBOL_EXPORT const char* qd_fd_r_FL_BR_name_out(casadi_int i) {
+CASADI_SYMBOL_EXPORT const char* qd_fd_r_FL_FR_name_out(casadi_int i) {
   switch (i) {
     case 0: return "qdd_r";
     default: return 0;
   }
 }
 
-CASADI_SYMBOL_EXPORT const casadi_int* qd_fd_r_FL_BR_sparsity_in(casadi_int i) {
+CASADI_SYMBOL_EXPORT const casadi_int* qd_fd_r_FL_FR_sparsity_in(casadi_int i) {
   switch (i) {
     case 0: return casadi_s0;
     case 1: return casadi_s0;
@@ -12586,14 +12585,14 @@ CASADI_SYMBOL_EXPORT const casadi_int* qd_fd_r_FL_BR_sparsity_in(casadi_int i) {
   }
 }
 
-CASADI_SYMBOL_EXPORT const casadi_int* qd_fd_r_FL_BR_sparsity_out(casadi_int i) {
+CASADI_SYMBOL_EXPORT const casadi_int* qd_fd_r_FL_FR_sparsity_out(casadi_int i) {
   switch (i) {
     case 0: return casadi_s0;
     default: return 0;
   }
 }
 
-CASADI_SYMBOL_EXPORT int qd_fd_r_FL_BR_work(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz_iw, casadi_int *sz_w) {
+CASADI_SYMBOL_EXPORT int qd_fd_r_FL_FR_work(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz_iw, casadi_int *sz_w) {
   if (sz_arg) *sz_arg = 4;
   if (sz_res) *sz_res = 1;
   if (sz_iw) *sz_iw = 0;
@@ -12601,7 +12600,7 @@ CASADI_SYMBOL_EXPORT int qd_fd_r_FL_BR_work(casadi_int *sz_arg, casadi_int* sz_r
   return 0;
 }
 
-CASADI_SYMBOL_EXPORT int qd_fd_r_FL_BR_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz_iw, casadi_int *sz_w) {
+CASADI_SYMBOL_EXPORT int qd_fd_r_FL_FR_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz_iw, casadi_int *sz_w) {
   if (sz_arg) *sz_arg = 4*sizeof(const casadi_real*);
   if (sz_res) *sz_res = 1*sizeof(casadi_real*);
   if (sz_iw) *sz_iw = 0*sizeof(casadi_int);
@@ -12609,37 +12608,37 @@ CASADI_SYMBOL_EXPORT int qd_fd_r_FL_BR_work_bytes(casadi_int *sz_arg, casadi_int
   return 0;
 }
 
-CASADI_SYMBOL_EXPORT int qd_dfd_r_FL_BR(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem){
+CASADI_SYMBOL_EXPORT int qd_dfd_r_FL_FR(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem){
   typedef char w_agrees[QD_DFD_R_W(13) == 2624 ? 1 : -1];
   (void)sizeof(w_agrees);
-  return qd_dfd_r_solve(13, 9, 1, arg, res, iw, w, mem);
+  return qd_dfd_r_solve(13, 3, 1, arg, res, iw, w, mem);
 }
 
-CASADI_SYMBOL_EXPORT int qd_dfd_r_FL_BR_checkout(void) {
+CASADI_SYMBOL_EXPORT int qd_dfd_r_FL_FR_checkout(void) {
   return 0;
 }
 
-CASADI_SYMBOL_EXPORT void qd_dfd_r_FL_BR_release(int mem) {
+CASADI_SYMBOL_EXPORT void qd_dfd_r_FL_FR_release(int mem) {
   (void)mem;
 }
 
-CASADI_SYMBOL_EXPORT void qd_dfd_r_FL_BR_incref(void) {
+CASADI_SYMBOL_EXPORT void qd_dfd_r_FL_FR_incref(void) {
 }
 
-CASADI_SYMBOL_EXPORT void qd_dfd_r_FL_BR_decref(void) {
+CASADI_SYMBOL_EXPORT void qd_dfd_r_FL_FR_decref(void) {
 }
 
-CASADI_SYMBOL_EXPORT casadi_int qd_dfd_r_FL_BR_n_in(void) { return 4;}
+CASADI_SYMBOL_EXPORT casadi_int qd_dfd_r_FL_FR_n_in(void) { return 4;}
 
-CASADI_SYMBOL_EXPORT casadi_int qd_dfd_r_FL_BR_n_out(void) { return 4;}
+CASADI_SYMBOL_EXPORT casadi_int qd_dfd_r_FL_FR_n_out(void) { return 4;}
 
-CASADI_SYMBOL_EXPORT casadi_real qd_dfd_r_FL_BR_default_in(casadi_int i) {
+CASADI_SYMBOL_EXPORT casadi_real qd_dfd_r_FL_FR_default_in(casadi_int i) {
   switch (i) {
     default: return 0;
   }
 }
 
-CASADI_SYMBOL_EXPORT const char* qd_dfd_r_FL_BR_name_in(casadi_int i) {
+CASADI_SYMBOL_EXPORT const char* qd_dfd_r_FL_FR_name_in(casadi_int i) {
   switch (i) {
     case 0: return "q_r";
     case 1: return "qd_r";
@@ -12649,7 +12648,7 @@ CASADI_SYMBOL_EXPORT const char* qd_dfd_r_FL_BR_name_in(casadi_int i) {
   }
 }
 
-CASADI_SYMBOL_EXPORT const char* qd_dfd_r_FL_BR_name_out(casadi_int i) {
+CASADI_SYMBOL_EXPORT const char* qd_dfd_r_FL_FR_name_out(casadi_int i) {
   switch (i) {
     case 0: return "dqdd_dq";
     case 1: return "dqdd_dqd";
@@ -12659,7 +12658,7 @@ CASADI_SYMBOL_EXPORT const char* qd_dfd_r_FL_BR_name_out(casadi_int i) {
   }
 }
 
-CASADI_SYMBOL_EXPORT const casadi_int* qd_dfd_r_FL_BR_sparsity_in(casadi_int i) {
+CASADI_SYMBOL_EXPORT const casadi_int* qd_dfd_r_FL_FR_sparsity_in(casadi_int i) {
   switch (i) {
     case 0: return casadi_s0;
     case 1: return casadi_s0;
@@ -12669,7 +12668,7 @@ CASADI_SYMBOL_EXPORT const casadi_int* qd_dfd_r_FL_BR_sparsity_in(casadi_int i) 
   }
 }
 
-CASADI_SYMBOL_EXPORT const casadi_int* qd_dfd_r_FL_BR_sparsity_out(casadi_int i) {
+CASADI_SYMBOL_EXPORT const casadi_int* qd_dfd_r_FL_FR_sparsity_out(casadi_int i) {
   switch (i) {
     case 0: return casadi_s2;
     case 1: return casadi_s2;
@@ -12679,7 +12678,7 @@ CASADI_SYMBOL_EXPORT const casadi_int* qd_dfd_r_FL_BR_sparsity_out(casadi_int i)
   }
 }
 
-CASADI_SYMBOL_EXPORT int qd_dfd_r_FL_BR_work(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz_iw, casadi_int *sz_w) {
+CASADI_SYMBOL_EXPORT int qd_dfd_r_FL_FR_work(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz_iw, casadi_int *sz_w) {
   if (sz_arg) *sz_arg = 4;
   if (sz_res) *sz_res = 4;
   if (sz_iw) *sz_iw = 0;
@@ -12687,7 +12686,7 @@ CASADI_SYMBOL_EXPORT int qd_dfd_r_FL_BR_work(casadi_int *sz_arg, casadi_int* sz_
   return 0;
 }
 
-CASADI_SYMBOL_EXPORT int qd_dfd_r_FL_BR_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz_iw, casadi_int *sz_w) {
+CASADI_SYMBOL_EXPORT int qd_dfd_r_FL_FR_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz_iw, casadi_int *sz_w) {
   if (sz_arg) *sz_arg = 4*sizeof(const casadi_real*);
   if (sz_res) *sz_res = 4*sizeof(casadi_real*);
   if (sz_iw) *sz_iw = 0*sizeof(casadi_int);

@@ -187,8 +187,8 @@ static const casadi_int casadi_s7[3] = {6, 18, 1};
 static const casadi_int casadi_s8[3] = {3, 1, 1};
 static const casadi_int casadi_s9[3] = {3, 18, 1};
 
-/* quadruped_dyn: a CasADi sparse output made dense (hand-written; inserted into qd_<robot>_d.c
- * and in qd_reduced_templates.h, which each qd_<robot>_r_<feet>.c includes; see quadruped_dyn/codegen/emit.py). */
+/* quadruped_dyn: a CasADi sparse output made dense (hand-written; inserted into qd_<robot>-d.c
+ * and in reduced_templates.h, which each qd_<robot>-r-<feet>.c includes; see quadruped_dyn/codegen/emit.py). */
 /* x (nrow * ncol reals, column-major) = the dense matrix of the nonzeros nz of a CasADi sparsity sp
  * (nrow, ncol, colind[ncol + 1], row[nnz]), x and nz apart: the zeros in one pass (memset), then the nonzeros; faster
  * than densifying in place, whose gaps are zeroed one nonzero at a time (docs/benchmark.md). */
@@ -200,10 +200,42 @@ static void qd_scatter(const casadi_int* sp, const casadi_real* restrict nz, cas
   }
 }
 
+#ifndef QD_RETURN_CODES
+#define QD_RETURN_CODES
+#define QD_NONFINITE 1 /* an output is NaN/inf */
+#define QD_SINGULAR 2 /* M_r or M singular to working precision */
+#define QD_DEGENERATE 3 /* the stance is degenerate */
+#define QD_NO_WORK 4 /* the work memory w the function needs (its _SZ_W > 0) is a null pointer */
+#endif
+/* quadruped_dyn: the definitions the hand-written C shares (hand-written; written once into each generated file that
+ * uses them, after the return codes of quadruped_dyn/codegen/c_facts.py). casadi_real is defined before it. */
+#ifndef QD_PRELUDE
+#define QD_PRELUDE
+#include <float.h>
+
+/* Machine epsilon of casadi_real (float, double or long double builds). */
+#define QD_EPS (sizeof(casadi_real) == sizeof(float) ? (casadi_real)FLT_EPSILON \
+                : sizeof(casadi_real) == sizeof(double) ? (casadi_real)DBL_EPSILON : (casadi_real)LDBL_EPSILON)
+/* A pivot this small relative to the largest entry of the matrix eliminated (M_r, or with a swing leg its blocks of M
+ * and the folded rest K; M in dfd_full) means the matrix is singular to working precision (condition number beyond
+ * ~1 / (QD_SINGULAR_RTOL)): 1e-13 in double, 5e-5 in float. */
+#define QD_SINGULAR_RTOL (450 * QD_EPS)
+
+/* QD_INLINE: a template inlined into its callers, each specialised for its constant arguments and every call direct,
+ * so a static stack walk (-fcallgraph-info, docs/embedded.md) can bound it. QD_NOINLINE: a function kept out of line,
+ * its code once for all its calls (in the instruction cache). */
+#if defined(__GNUC__)
+#define QD_INLINE static inline __attribute__((always_inline))
+#define QD_NOINLINE __attribute__((noinline))
+#else
+#define QD_INLINE static inline
+#define QD_NOINLINE
+#endif
+#endif
 CASADI_SYMBOL_EXPORT const casadi_int* qd_did_full_sparsity_out(casadi_int i);
 
 /* quadruped_dyn: derivatives of the full forward dynamics (hand-written, inserted into the
- * generated qd_<robot>_d.c; see quadruped_dyn/codegen/emit_derivatives.py).
+ * generated qd_<robot>-d.c; see quadruped_dyn/codegen/emit_derivatives.py).
  *
  * d/dq is along pinocchio.integrate(q, dq): dq (18) = (dv_b, dw_b, dq_joints), a body-frame
  * (local) increment of the trunk pose, p -> p + R dv_b, R -> R Exp([dw_b]x); 18 columns, none of
@@ -224,28 +256,10 @@ CASADI_SYMBOL_EXPORT const casadi_int* qd_did_full_sparsity_out(casadi_int i);
 #include <float.h>
 #include <math.h>
 
-#ifndef QD_NONFINITE
-#define QD_NONFINITE 1
-#define QD_SINGULAR 2
-#endif
-#ifndef QD_EPS
-#define QD_EPS (sizeof(casadi_real) == sizeof(float) ? (casadi_real)FLT_EPSILON \
-                : sizeof(casadi_real) == sizeof(double) ? (casadi_real)DBL_EPSILON : (casadi_real)LDBL_EPSILON)
-#define QD_SINGULAR_RTOL (450 * QD_EPS)
-#endif
 #define QD_NV 18
 
 typedef int (*qd_d_eval_fn)(const casadi_real**, casadi_real**, casadi_int*, casadi_real*, int);
 
-/* Where a generated function is passed as a pointer, the template is inlined into its caller so the
- * call becomes direct and a static stack walk (-fcallgraph-info, docs/embedded.md) can bound it. */
-#ifndef QD_INLINE
-#if defined(__GNUC__)
-#define QD_INLINE static inline __attribute__((always_inline))
-#else
-#define QD_INLINE static inline
-#endif
-#endif
 
 /* defined in qd_<robot>.c of the same library (no work memory: checked by the generator) */
 int qd_M_full(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem);
@@ -453,6 +467,7 @@ static int qd_d_tree_inverse(const casadi_real* restrict M, casadi_real* restric
 
 QD_INLINE int qd_dfd_full_solve(qd_d_eval_fn did, const casadi_int* sp_dq, const casadi_int* sp_dv,
                              const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem) {
+  if (!w) return QD_NO_WORK;
   casadi_real *M = w, *Minv = M + QD_NV * QD_NV, *Dq = Minv + QD_NV * QD_NV, *Dv = Dq + QD_NV * QD_NV;
   casadi_real *nle = Dv + QD_NV * QD_NV, *a = nle + QD_NV, *blk = a + QD_NV, *rest = blk + 4 * 9 + 4 * 18 + 36;
   int flag = qd_d_parts(arg, M, nle, Minv, iw, rest, mem); /* M_full's nonzeros in Minv's place until the inverse */
@@ -519,6 +534,7 @@ static void qd_d_trunk_product(int m, const casadi_real* P, const casadi_int* sp
 QD_INLINE int qd_dgrf_solve(int m, int legs, qd_d_eval_fn did, qd_d_eval_fn dir, const casadi_int* sp_dq,
                          const casadi_int* sp_dv, const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w,
                          int mem) {
+  if (!w) return QD_NO_WORK;
   casadi_real *M = w, *Dq = M + QD_NV * QD_NV, *Dv = Dq + QD_NV * QD_NV, *nle = Dv + QD_NV * QD_NV, *seed = nle + QD_NV;
   casadi_real *wrench = seed + QD_NV, *P = wrench + 6, *dPw = P + 6 * 6, *rest = dPw + 6 * QD_NV; /* m <= 6 */
   int flag = qd_d_parts(arg, M, nle, Dq, iw, rest, mem); /* M_full's nonzeros in Dq's place until did_full */
@@ -570,7 +586,7 @@ QD_INLINE int qd_dgrf_solve(int m, int legs, qd_d_eval_fn did, qd_d_eval_fn dir,
 
 /* qd_did_full:(q[19],v[18],a[18])->(dtau_dq[18x18,162nz],dtau_dv[18x18,212nz],dtau_da[18x18,210nz]) */
 /* quadruped_dyn: the cosines and sines of the joint angles, taken once per call at a generated function's entry
- * (docs/formulation.md, "The joints' sines and cosines"). In double: the angle reduced by pi/2 in three parts
+ * (docs/embedded.md, "The joints' sines and cosines"). In double: the angle reduced by pi/2 in three parts
  * (Cody and Waite; pi/2 to 119 bits, exact products for |x| <= QD_SINCOS_MAX) and FreeBSD's kernels
  * __kernel_sin / __kernel_cos on [-pi/4, pi/4] (msun, k_sin.c and k_cos.c: < 1 ulp), with no branch, so the loop
  * vectorises; within 1 ulp of libm (tests/codegen/test_sincos.py). libm for an angle beyond QD_SINCOS_MAX or not
@@ -642,10 +658,35 @@ static inline void qd_sincos(int n, const casadi_real* x, casadi_real* c, casadi
   }
 }
 
-#ifndef QD_NOINLINE
+#ifndef QD_RETURN_CODES
+#define QD_RETURN_CODES
+#define QD_NONFINITE 1 /* an output is NaN/inf */
+#define QD_SINGULAR 2 /* M_r or M singular to working precision */
+#define QD_DEGENERATE 3 /* the stance is degenerate */
+#define QD_NO_WORK 4 /* the work memory w the function needs (its _SZ_W > 0) is a null pointer */
+#endif
+/* quadruped_dyn: the definitions the hand-written C shares (hand-written; written once into each generated file that
+ * uses them, after the return codes of quadruped_dyn/codegen/c_facts.py). casadi_real is defined before it. */
+#ifndef QD_PRELUDE
+#define QD_PRELUDE
+#include <float.h>
+
+/* Machine epsilon of casadi_real (float, double or long double builds). */
+#define QD_EPS (sizeof(casadi_real) == sizeof(float) ? (casadi_real)FLT_EPSILON \
+                : sizeof(casadi_real) == sizeof(double) ? (casadi_real)DBL_EPSILON : (casadi_real)LDBL_EPSILON)
+/* A pivot this small relative to the largest entry of the matrix eliminated (M_r, or with a swing leg its blocks of M
+ * and the folded rest K; M in dfd_full) means the matrix is singular to working precision (condition number beyond
+ * ~1 / (QD_SINGULAR_RTOL)): 1e-13 in double, 5e-5 in float. */
+#define QD_SINGULAR_RTOL (450 * QD_EPS)
+
+/* QD_INLINE: a template inlined into its callers, each specialised for its constant arguments and every call direct,
+ * so a static stack walk (-fcallgraph-info, docs/embedded.md) can bound it. QD_NOINLINE: a function kept out of line,
+ * its code once for all its calls (in the instruction cache). */
 #if defined(__GNUC__)
+#define QD_INLINE static inline __attribute__((always_inline))
 #define QD_NOINLINE __attribute__((noinline))
 #else
+#define QD_INLINE static inline
 #define QD_NOINLINE
 #endif
 #endif

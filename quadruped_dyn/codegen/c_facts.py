@@ -1,0 +1,95 @@
+"""Facts the generated C and the Python that calls it share, with their one source here: the return codes (the C
+``#define`` lines are written from ``RETURN_CODES``, ``return_codes_c``), the layouts of the leg-by-leg pieces'
+outputs the reduced templates read (``layouts_c``, from ``dynamics.by_leg``) and the definitions every hand-written C
+file uses (``c/qd_prelude.h``, ``prelude_c``)."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from pathlib import Path
+
+from quadruped_dyn.dynamics.by_leg import FOOT_PARTS, LEG_MASS_BLOCKS, TRUNK_MASS_BLOCKS
+
+#: The hand-written C (templates, check programs, the Cortex-M start-up, the Makefile).
+TEMPLATES = Path(__file__).resolve().parent / "c"
+PRELUDE = "qd_prelude.h"
+
+
+@dataclass(frozen=True)
+class ReturnCode:
+    """A non-zero return code of the generated functions."""
+
+    name: str  # the C macro
+    value: int
+    c_comment: str  # what the macro's line says
+    meaning: str  # what a Python caller is told (``codegen.library.CompiledFunction``)
+    numerical: bool  # True: the model is singular or degenerate there (NumericalError); False: bad input (InputError)
+
+
+RETURN_CODES: tuple[ReturnCode, ...] = (
+    ReturnCode("QD_NONFINITE", 1, "an output is NaN/inf",
+               "an output is not finite (the trunk pitched 90 deg with two stance feet, a zero quaternion, or a "
+               "non-finite input); expected a stance the model can hold", False),
+    ReturnCode("QD_SINGULAR", 2, "M_r or M singular to working precision",
+               "M_r is singular to working precision here (in float also where fd_r's error bound exceeds 1/4 %); "
+               "expected a configuration where the reduced model is regular", True),
+    ReturnCode("QD_DEGENERATE", 3, "the stance is degenerate",
+               "the stance is degenerate here (coincident or collinear stance feet, or two feet whose line is "
+               "perpendicular to the roll axis: the front or back pair at zero pitch or roll, or two feet with the "
+               "trunk pitched within 2 deg of 90 deg; regularity at most QD_REGULARITY_MIN; in float, with two feet, "
+               "below FLOAT_REGULARITY_MIN); the reduced model is undefined to this precision", True),
+    ReturnCode("QD_NO_WORK", 4, "the work memory w the function needs (its _SZ_W > 0) is a null pointer",
+               "the function needs work memory w (its _SZ_W entries) and w is a null pointer; expected the caller's w",
+               False),
+)
+#: By name.
+RETURN_CODE = {c.name: c for c in RETURN_CODES}
+
+
+def return_codes_c() -> str:
+    """The return codes as C macros, once per translation unit (guarded)."""
+    defines = [f"#define {c.name} {c.value} /* {c.c_comment} */" for c in RETURN_CODES]
+    return "\n".join(["#ifndef QD_RETURN_CODES", "#define QD_RETURN_CODES", *defines, "#endif", ""])
+
+
+def prelude_c() -> str:
+    """The return codes and ``c/qd_prelude.h`` (epsilon, inlining attributes): what the hand-written C pasted into a
+    generated file, or compiled alone, expects defined first."""
+    return return_codes_c() + (TEMPLATES / PRELUDE).read_text()
+
+
+def _offsets(layout: tuple[tuple[str, int, int], ...], start: int = 0) -> dict[str, tuple[int, int]]:
+    """name -> (first entry, rows) of each part of a column-by-column stacked ``layout``."""
+    out = {}
+    for name, rows, cols in layout:
+        out[name] = (start, rows)
+        start += rows * cols
+    return out
+
+
+def layouts_c() -> str:
+    """Macros reading a foot's ``FOOT_PARTS`` (QD_FOOT reals: QD_FOOT_R(y, d), QD_FOOT_J(y, d, c), QD_FOOT_JQD(y, d),
+    QD_FOOT_JDQD(y, d)) and M's nonzero blocks (``mass_blocks``, QD_M_BLOCKS reals: QD_M_BB(Mc, i, k),
+    QD_M_BL(Mc, l, i, c), QD_M_LL(Mc, l, i, c), leg l), as ``dynamics.by_leg`` stacks them."""
+    foot = _offsets(FOOT_PARTS)
+    trunk = _offsets(TRUNK_MASS_BLOCKS)
+    trunk_reals = sum(r * c for _, r, c in TRUNK_MASS_BLOCKS)
+    leg_reals = sum(r * c for _, r, c in LEG_MASS_BLOCKS)
+    leg = _offsets(LEG_MASS_BLOCKS, trunk_reals)
+    lines = [
+        "/* quadruped_dyn: layouts of the pieces' outputs (written from quadruped_dyn/dynamics/by_leg.py) */",
+        "#ifndef QD_LAYOUTS",
+        "#define QD_LAYOUTS",
+        f"#define QD_FOOT {sum(r * c for _, r, c in FOOT_PARTS)}",
+        f"#define QD_FOOT_R(y, d) (y)[{foot['r'][0]} + (d)]",
+        f"#define QD_FOOT_J(y, d, c) (y)[{foot['J'][0]} + (d) + {foot['J'][1]} * (c)]",
+        f"#define QD_FOOT_JQD(y, d) (y)[{foot['J_qd'][0]} + (d)]",
+        f"#define QD_FOOT_JDQD(y, d) (y)[{foot['Jdot_qd'][0]} + (d)]",
+        f"#define QD_M_BLOCKS ({trunk_reals} + 4 * {leg_reals})",
+        f"#define QD_M_BB(Mc, i, k) (Mc)[{trunk['M_bb'][0]} + (i) + {trunk['M_bb'][1]} * (k)]",
+        f"#define QD_M_BL(Mc, l, i, c) (Mc)[{leg['M_bl'][0]} + {leg_reals} * (l) + (i) + {leg['M_bl'][1]} * (c)]",
+        f"#define QD_M_LL(Mc, l, i, c) (Mc)[{leg['M_ll'][0]} + {leg_reals} * (l) + (i) + {leg['M_ll'][1]} * (c)]",
+        "#endif",
+        "",
+    ]
+    return "\n".join(lines)
