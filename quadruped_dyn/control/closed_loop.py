@@ -8,8 +8,8 @@ from typing import Any
 
 from quadruped_dyn.control.controllers import Gains, GeneratedC, parse_controllers
 from quadruped_dyn.control.measures import grf_comparison, summary
+from quadruped_dyn.control.plan import reference_cycle
 from quadruped_dyn.control.plant import Plant, PlantOptions, build_plant
-from quadruped_dyn.control.reference import reference_cycle
 from quadruped_dyn.control.run import LoopOptions, Progress, Trace, run_controller, settled_state
 from quadruped_dyn.errors import InputError
 from quadruped_dyn.experiment.gait import GAITS, Plan, gait_plan
@@ -34,12 +34,14 @@ class ClosedLoop:
         return {
             "robot": self.robot.name, "urdf": str(self.robot.urdf), "gait": self.plan.gait.name,
             "cycles": self.loop.cycles, "period_s": self.plan.gait.period, "control_rate_hz": self.loop.rate_hz,
+            "push": None if self.loop.push is None else {"t_s": self.loop.push[0], "impulse_N_s": list(self.loop.push[1:])},
             "plant": {"timestep_s": p.options.timestep, "integrator": p.options.integrator, "mu": p.options.mu,
                       "foot_radius_m": p.foot_radius, "foot_radius_from": p.foot_radius_source,
                       "floor_z_m": p.floor_z, "substeps_per_tick": self.substeps, "settle_s": self.loop.settle_s,
                       "model_changes": p.changes, "effort_Nm": p.effort.tolist()},
             "gains": self.gains.as_dict(self.robot),
-            "measured": "joint q, qd; trunk orientation and angular rate (IMU, exact); stance set from the plan",
+            "measured": "joint q, qd; trunk orientation and angular rate (IMU, exact); foot contact switches; stance set "
+                        "from the plan (wbc: trunk linear velocity by leg odometry)",
             "standing_grf": grf_comparison(self.standing_grf, self.robot.total_mass * 9.81)["4 feet"],
             "controllers": {k: {kk: vv for kk, vv in v.items() if kk != "series"} for k, v in self.results.items()},
         }
@@ -61,6 +63,7 @@ def prepare(robot: Robot, gait: str, controllers: list[str] | tuple[str, ...] = 
     gains.validate()
     plant_options.validate()
     substeps = loop.validate(plant_options, plan.gait.period)
+    loop.validate_push(loop.cycles * plan.gait.period, robot.total_mass)
     plant = build_plant(robot, plan, plant_options)
     return ClosedLoop(robot, plan, plant, gains, loop, substeps, names)
 

@@ -71,9 +71,12 @@ import pinocchio as pin
 from quadruped_dyn.arguments import real_number
 from quadruped_dyn.codegen.emit import reduced_symbol
 from quadruped_dyn.codegen.library import CompiledFunction, compiled_library
+from quadruped_dyn.control.mpc import MpcWbc
+from quadruped_dyn.control.plan import Reference
 from quadruped_dyn.control.plant import Command, Measurement
-from quadruped_dyn.control.reference import Reference
+from quadruped_dyn.control.wbc import WholeBodyQp
 from quadruped_dyn.errors import InputError
+from quadruped_dyn.experiment.gait import Plan
 from quadruped_dyn.experiment.plan_ik import ReferenceSample
 from quadruped_dyn.model.robot import Robot
 from quadruped_dyn.model.stance import StanceSet
@@ -390,7 +393,7 @@ class FfPdStep(FfPd):
 
 
 CONTROLLERS = {c.name: c for c in (Pd, FfPd, ComputedTorque, DiagonalCt, DiagonalPd, DiagonalCtLand, MeasuredIdPd,
-                                    FfPdLevel, FfPdStep)}
+                                    FfPdLevel, FfPdStep, WholeBodyQp, MpcWbc)}
 
 
 def parse_controllers(names: tuple[str, ...] | list[str]) -> list[str]:
@@ -404,5 +407,11 @@ def parse_controllers(names: tuple[str, ...] | list[str]) -> list[str]:
     return [n for n in CONTROLLERS if not names or n in names]
 
 
-def make_controller(name: str, robot: Robot, gains: Gains, c: GeneratedC) -> Controller:
-    return CONTROLLERS[name](robot, gains, c)
+def make_controller(name: str, robot: Robot, gains: Gains, c: GeneratedC, mu: float = 0.8,
+                    rate_hz: float = 1000.0, plan: Plan | None = None) -> Controller:
+    """Controller ``name``; those with ``friction`` (wbc, mpc+wbc) also get the plant's friction
+    coefficient, the control rate and the gait plan."""
+    cls = CONTROLLERS[name]
+    if getattr(cls, "friction", False):
+        return cls(robot, gains, c, mu=mu, rate_hz=rate_hz, plan=plan)  # type: ignore[call-arg]
+    return cls(robot, gains, c)

@@ -18,8 +18,9 @@
   per component (x, y, z; world frame; median |.|).
 * **saturation**: time with any commanded |tau| above the URDF effort limit (MuJoCo clamps it), s
   and fraction, and per joint.
-* **compute**: the generated-C calls per tick (median, max, us), the whole controller tick in
-  Python (measurement, reference lookup, torques; median, us), MuJoCo's steps per tick (median, us).
+* **compute**: per tick (median, 99th percentile, us) the generated-C calls, the QP (wbc), the whole
+  controller tick in Python (measurement, reference lookup, torques), the rest of the tick (Python
+  overhead); MuJoCo's steps per tick (median, us).
 """
 
 from __future__ import annotations
@@ -116,12 +117,18 @@ def saturation(trace: Trace, plant: Plant, dt: float) -> dict[str, Any]:
 
 
 def compute_time(trace: Trace) -> dict[str, Any]:
+    """Per tick, us: the generated-C calls, the QP (wbc), the whole controller tick in Python, the
+    rest of it (Python overhead: tick - C - QP), median and 99th percentile; MuJoCo's steps."""
     if not trace.t.size:
         return {}
-    return {"c_calls_median_us": float(np.median(trace.c_ns) / 1e3), "c_calls_max_us": float(trace.c_ns.max() / 1e3),
-            "tick_python_median_us": float(np.median(trace.tick_ns) / 1e3),
-            "tick_python_max_us": float(trace.tick_ns.max() / 1e3),
-            "mujoco_steps_median_us": float(np.median(trace.step_ns) / 1e3)}
+    qp = trace.qp_ns if trace.qp_ns is not None and trace.qp_ns.size == trace.t.size else np.zeros(trace.t.size)
+    out = {"c_calls_max_us": float(trace.c_ns.max() / 1e3), "tick_python_max_us": float(trace.tick_ns.max() / 1e3),
+           "mujoco_steps_median_us": float(np.median(trace.step_ns) / 1e3)}
+    for key, ns in (("c_calls", trace.c_ns), ("qp", qp), ("tick_python", trace.tick_ns),
+                    ("python_overhead", trace.tick_ns - trace.c_ns - qp)):
+        out[f"{key}_median_us"] = float(np.median(ns) / 1e3)
+        out[f"{key}_p99_us"] = float(np.percentile(ns, 99) / 1e3)
+    return out
 
 
 def summary(trace: Trace, plant: Plant, plan: Plan, dt: float, cycles: int) -> dict[str, Any]:
@@ -135,6 +142,7 @@ def summary(trace: Trace, plant: Plant, plan: Plan, dt: float, cycles: int) -> d
         "fell": trace.fell_at is not None,
         "fell_at_s": trace.fell_at,
         "stopped": trace.stopped,
+        "qp_infeasible": trace.qp_infeasible,
         "simulated_s": duration,
         "horizon_s": horizon,
         "cycles_up": float(np.floor(duration / plan.gait.period + 1e-9)) if trace.stopped else float(cycles),

@@ -48,7 +48,8 @@ from quadruped_dyn.arguments import real_number
 from quadruped_dyn.dynamics.grf import MAX_FRICTION_COEFFICIENT
 from quadruped_dyn.errors import InputError
 from quadruped_dyn.experiment.gait import Plan
-from quadruped_dyn.model.robot import Robot, actuator_limit
+from quadruped_dyn.model.actuator_limits import actuator_limits
+from quadruped_dyn.model.robot import Robot
 from quadruped_dyn.model.state import GRAVITY_W
 from quadruped_dyn.model.urdf_edit import strip_geometry, to_text
 from quadruped_dyn.references.mujoco import accepted_urdf
@@ -60,6 +61,10 @@ DEFAULT_FOOT_RADIUS = 0.02
 #: A collision sphere of the foot link counts as the foot if its centre is this close to the
 #: foot frame's origin (m).
 FOOT_SPHERE_OFFSET_TOL = 1e-3
+
+#: A push's impulse is spread evenly over this time as a force on the trunk (s): short against a gait phase
+#: (0.1-0.3 s), long against the plant's step (0.5 ms), so the impulse is what matters.
+PUSH_DURATION_S = 0.01
 
 INTEGRATORS = {"implicitfast": mujoco.mjtIntegrator.mjINT_IMPLICITFAST, "euler": mujoco.mjtIntegrator.mjINT_EULER,
                "rk4": mujoco.mjtIntegrator.mjINT_RK4, "implicit": mujoco.mjtIntegrator.mjINT_IMPLICIT}
@@ -185,6 +190,12 @@ class Plant:
             m.actuator_gainprm[24:36, 0], m.actuator_biasprm[24:36, 2] = command.kd, np.negative(command.kd)
             self._gains = (command.kp, command.kd)
         mujoco.mj_step(m, d, substeps)
+
+    def push(self, impulse_N_s: np.ndarray | tuple[float, ...], at_s: float, t_s: float) -> None:
+        """Set the force of a push of ``impulse_N_s`` (world frame, N s) at the trunk's centre of mass for the
+        next steps, at time ``t_s`` (s): impulse / PUSH_DURATION_S from ``at_s`` for PUSH_DURATION_S, else none."""
+        pushing = at_s <= t_s + 1e-9 < at_s + PUSH_DURATION_S
+        self.data.xfrc_applied[self.model.jnt_bodyid[0], :3] = np.asarray(impulse_N_s) / PUSH_DURATION_S if pushing else 0.0
 
     def unstable(self) -> bool:
         """MuJoCo found non-finite or huge accelerations or controls (and reset the state): the
@@ -320,7 +331,7 @@ def build_plant(robot: Robot, plan: Plan, options: PlantOptions = PlantOptions()
         else:
             radius, source = DEFAULT_FOOT_RADIUS, f"default {DEFAULT_FOOT_RADIUS} m (no collision sphere at the foot frames)"
     strip_geometry(root)
-    effort = actuator_limit(robot, "effort")
+    effort = actuator_limits(robot)["effort"]  # the rates too: optimize's rule (a joint that cannot move is refused)
     floor_z = float(np.mean([plan.foot(i, 0.0)[0][2] for i in range(4)])) - radius
     text = to_text(root)
     model = _compile(_spec(text, robot, options, floor_z, radius, effort))

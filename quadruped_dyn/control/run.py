@@ -37,8 +37,9 @@ import numpy as np
 from quadruped_dyn.arguments import real_number, whole_number
 from quadruped_dyn.codegen.library import CompiledFunction
 from quadruped_dyn.control.controllers import Controller, Gains, GeneratedC, Pd, make_controller
+from quadruped_dyn.control.plan import reference_cycle
 from quadruped_dyn.control.plant import Plant, PlantOptions
-from quadruped_dyn.control.reference import reference_cycle
+from quadruped_dyn.control.wbc import QpInfeasible
 from quadruped_dyn.errors import InputError, NumericalError
 from quadruped_dyn.experiment.gait import Plan
 from quadruped_dyn.experiment.plan_ik import ReferenceSample
@@ -64,12 +65,31 @@ def _whole(x: float) -> bool:
     return abs(x - round(x)) <= 1e-9 * abs(x)
 
 
+#: The largest push accepted, N s per kg of robot (a change of trunk velocity of 5 m/s: far past a fall).
+MAX_PUSH_N_S_PER_KG = 5.0
+
+
 @dataclass(frozen=True)
 class LoopOptions:
     rate_hz: float = 1000.0
     cycles: int = 10
     settle_s: float = 0.5
     grf_every: int = 10  # control ticks between GRF comparison samples
+    #: a push on the trunk (``Plant.push``): (t [s], impulse x, y, z [N s], world frame); None: no push
+    push: tuple[float, float, float, float] | None = None
+
+    def validate_push(self, horizon: float, mass: float) -> None:
+        if self.push is None:
+            return
+        if not isinstance(self.push, tuple | list) or len(self.push) != 4:
+            raise InputError(f"--push {self.push!r}; expected 4 numbers: the time (s) and the impulse x y z (N s)")
+        t, *impulse = (real_number("--push", x) for x in self.push)
+        if not (math.isfinite(t) and 0 <= t < horizon):
+            raise InputError(f"--push at t = {t} s; expected a time from 0 to the run's {horizon:g} s")
+        size = math.sqrt(sum(x * x for x in impulse))
+        if not (math.isfinite(size) and size <= MAX_PUSH_N_S_PER_KG * mass):
+            raise InputError(f"--push impulse {size:g} N s; expected at most {MAX_PUSH_N_S_PER_KG:g} N s per kg of robot "
+                             f"({MAX_PUSH_N_S_PER_KG * mass:.3g} N s)")
 
     def validate(self, plant: PlantOptions, period: float) -> int:
         """Plant steps per control tick; InputError for a rate that does not divide the plant's step."""
@@ -126,6 +146,8 @@ class Trace:
     qpos: np.ndarray | None = None  # (N, nq) MuJoCo's qpos, for the animation
     fell_at: float | None = None  # s
     stopped: str | None = None  # why the run ended early
+    qp_infeasible: bool = False  # it ended because the whole-body QP had no solution (wbc.QpInfeasible)
+    qp_ns: np.ndarray | None = None  # (N,) wall time of the controller's QP solve per tick (wbc), ns
 
 
 class _Stop(Exception):
@@ -184,18 +206,18 @@ def run_controller(plant: Plant, plan: Plan, name: str, gains: Gains, options: L
                    initial: tuple[np.ndarray, np.ndarray], c: GeneratedC, progress: Progress | None = None,
                    keep_qpos: bool = False) -> Trace:
     """One controller on the plant from ``initial`` for ``options.cycles`` gait cycles."""
-    controller: Controller = make_controller(name, plant.robot, gains, c)
+    controller: Controller = make_controller(name, plant.robot, gains, c, plant.options.mu, options.rate_hz, plan)
     cycle = reference_cycle(plan, options.rate_hz)
     dt = 1.0 / options.rate_hz
     n = int(round(options.cycles * plan.gait.period * options.rate_hz))
     plant.set_state(*initial)
     grf_functions: dict[str, CompiledFunction] = {}
     height0 = -plant.floor_z  # planned trunk height above the floor (the plan's trunk is at z = 0)
-    keys = ("t", "q", "qd", "q_ref", "qd_ref", "tau", "p", "R", "feet", "f", "touch", "c", "tick", "step", "qpos")
+    keys = ("t", "q", "qd", "q_ref", "qd_ref", "tau", "p", "R", "feet", "f", "touch", "c", "tick", "step", "qpos", "qp")
     rec: dict[str, list] = {k: [] for k in keys}
     stances: list[tuple[int, ...]] = []
     grf: list[dict] = []
-    fell_at, stopped = None, None
+    fell_at, stopped, infeasible = None, None, False
     every = max(1, n // 200)
     try:
         for k in range(n):
@@ -209,6 +231,7 @@ def run_controller(plant: Plant, plan: Plan, name: str, gains: Gains, options: L
                 command = controller.command(ref, stance, meas)
             except (InputError, NumericalError) as e:  # the generated C's return codes (CompiledFunction.raw)
                 stopped = f"controller failed at t = {t:.3f} s: {e}"
+                infeasible = isinstance(e, QpInfeasible)
                 raise _Stop from e
             t1 = time.perf_counter_ns()
             if not all(x is None or np.all(np.isfinite(x)) for x in (command.tau, command.q_des, command.qd_des)):
@@ -219,6 +242,8 @@ def run_controller(plant: Plant, plan: Plan, name: str, gains: Gains, options: L
                 q_full, v_full = plant.full_state()
             p, R = plant.trunk_position(), plant.rotation()
             feet = plant.foot_positions()
+            if options.push is not None:
+                plant.push(options.push[1:], options.push[0], t)
             plant.step(command, substeps)
             t2 = time.perf_counter_ns()
             if plant.unstable():
@@ -228,7 +253,7 @@ def run_controller(plant: Plant, plan: Plan, name: str, gains: Gains, options: L
             f, touch = plant.contact_forces()
             for key, value in (("t", t), ("q", meas.q), ("qd", meas.qd), ("q_ref", ref.q_r[:12]), ("qd_ref", ref.qd_r[:12]),
                                ("tau", tau), ("p", p), ("R", R), ("feet", feet), ("f", f), ("touch", touch),
-                               ("c", c.ns), ("tick", t1 - t0), ("step", t2 - t1)):
+                               ("c", c.ns), ("tick", t1 - t0), ("step", t2 - t1), ("qp", getattr(controller, "qp_ns", 0))):
                 rec[key].append(value)
             if keep_qpos:
                 rec["qpos"].append(plant.data.qpos.copy())
@@ -249,7 +274,7 @@ def run_controller(plant: Plant, plan: Plan, name: str, gains: Gains, options: L
                  arr["qd_ref"].reshape(-1, 12), arr["tau"].reshape(-1, 12), arr["p"].reshape(-1, 3),
                  arr["R"].reshape(-1, 3, 3), arr["feet"].reshape(-1, 4, 3), arr["f"].reshape(-1, 4, 3),
                  arr["touch"].reshape(-1, 4), stances, arr["c"], arr["tick"], arr["step"], grf,
-                 arr["qpos"] if keep_qpos else None, fell_at, stopped)
+                 arr["qpos"] if keep_qpos else None, fell_at, stopped, infeasible, arr["qp"])
 
 
 def _grf_sample(plant: Plant, functions: dict[str, CompiledFunction], c: GeneratedC, t: float, stance: StanceSet,

@@ -18,8 +18,8 @@ pytest.importorskip("mujoco", reason="MuJoCo is in the 'xlib' extra: pip install
 from quadruped_dyn.cli import EXIT_BAD_INPUT, main  # noqa: E402
 from quadruped_dyn.control.closed_loop import prepare, run_all  # noqa: E402
 from quadruped_dyn.control.controllers import CONTROLLERS, Gains  # noqa: E402
+from quadruped_dyn.control.plan import reference_cycle
 from quadruped_dyn.control.plant import PlantOptions  # noqa: E402
-from quadruped_dyn.control.reference import reference_cycle
 from quadruped_dyn.control.run import LoopOptions  # noqa: E402
 from quadruped_dyn.errors import InputError  # noqa: E402
 from quadruped_dyn.experiment.gait import GAITS, gait_plan  # noqa: E402
@@ -138,7 +138,7 @@ def test_a_start_that_did_not_settle_is_refused(tmp_path: Path) -> None:
     (dict(gains=Gains(kp_per_kg="20")), "gain kp_per_kg is '20', a str; expected a real number"),
 ])
 def test_prepare_refuses_arguments_of_the_wrong_kind(arguments: dict, message: str, monkeypatch) -> None:
-    """Found by a review (2026-12-06): these were TypeErrors (math.isfinite of a str or None, a list
+    """Found by a review: these were TypeErrors (math.isfinite of a str or None, a list
     as a dict key), a str of controllers read letter by letter, grf_every 0 a ZeroDivisionError after
     the settling, a settle time of 1e9 s hours of MuJoCo steps, a bool taken as one cycle."""
     from quadruped_dyn.control import closed_loop
@@ -162,8 +162,9 @@ def test_a_refused_rate_suggests_one_that_is_accepted(timestep: float, rate_hz: 
     assert LoopOptions(rate_hz=suggested).validate(plant, GAITS["walk"].period) >= 1
 
 
-def test_urdf_mujoco_cannot_compile_exits_2(tmp_path: Path) -> None:
-    """A hip inertia of 1e-17 kg m^2: Pinocchio loads it, MuJoCo's compiler refuses it."""
+def test_urdf_with_a_vanishing_inertia_exits_2(tmp_path: Path) -> None:
+    """A hip inertia of 1e-17 kg m^2: Pinocchio would load it and MuJoCo's compiler refuse it; the physical range
+    (model.physical_range) refuses it first, with one line, before the plant is built or --out is made."""
     text = PAPER_URDF.read_text().replace(
         'ixx="0.00028800000000000006" ixy="0" ixz="0" iyy="0.00028800000000000006" iyz="0" izz="0.00028800000000000006"',
         'ixx="1e-17" ixy="0" ixz="0" iyy="1e-17" iyz="0" izz="1e-17"', 1)
@@ -172,7 +173,8 @@ def test_urdf_mujoco_cannot_compile_exits_2(tmp_path: Path) -> None:
     out = tmp_path / "out"
     result = CliRunner().invoke(main, ["control", str(urdf), "--out", str(out)])
     assert result.exit_code == EXIT_BAD_INPUT, result.output
-    assert "MuJoCo cannot compile" in result.output and len(result.output.strip().splitlines()) == 1
+    assert "joint 'FL_HAA'" in result.output and "smallest principal moment" in result.output, result.output
+    assert len(result.output.strip().splitlines()) == 1
     assert not out.exists()  # refused before --out is made
 
 
@@ -187,7 +189,7 @@ def test_cli_writes_json_csv_plots(tmp_path: Path) -> None:
 
 
 def test_cli_writes_under_out_and_never_through_a_link(tmp_path: Path) -> None:
-    """Found by a review (2026-12-06): control wrote its JSON, CSV, plots and GIF with Path.write_text,
+    """Found by a review: control wrote its JSON, CSV, plots and GIF with Path.write_text,
     open("w"), savefig and PIL's save: through a link in --out (a victim file elsewhere overwritten
     with the CSV, a dangling link's target created), not atomically. Now files.safe_write, as every
     other command's outputs."""
@@ -218,7 +220,7 @@ def test_cli_table_columns_line_up(tmp_path: Path) -> None:
 
 
 def test_animation_renders_headless(walk, tmp_path: Path) -> None:
-    from quadruped_dyn.control.outputs import animate, rendering_available
+    from quadruped_dyn.control.study_files import animate, rendering_available
 
     ok, why = rendering_available()
     if not ok:
@@ -263,3 +265,46 @@ def test_trot_outcome_of_every_controller(name: str) -> None:
     assert set(study.results) == set(CONTROLLERS)
     for r in study.results.values():
         assert r["simulated_s"] > 0 and (r["fell"] or r["cycles_up"] == 10)
+
+
+def _trunk_after_one_cycle(tmp_path: Path, *push: str) -> dict:
+    result = CliRunner().invoke(main, ["control", "paper", "--controller", "pd-diag", "--cycles", "1", "--no-animation",
+                                       "--json", "--out", str(tmp_path), *push])
+    assert result.exit_code == 0, result.output
+    data = json.loads(result.output[result.output.index("{"):])
+    return data["controllers"]["pd-diag"]["trunk"]
+
+
+def test_cli_push_moves_the_trunk_along_the_impulse(tmp_path: Path) -> None:
+    """control --push 0.3 +-3 0 0 (+-0.3 m/s on the 10 kg trunk at 0.3 s): the trunk ends ahead of the unpushed run
+    when pushed forward and behind it when pushed backward, by about as much each way (the closed loop is nearly
+    linear for a push it survives), and not by round-off."""
+    still = _trunk_after_one_cycle(tmp_path / "still")["forward_final_m"]
+    ahead = _trunk_after_one_cycle(tmp_path / "ahead", "--push", "0.3", "3", "0", "0")["forward_final_m"]
+    behind = _trunk_after_one_cycle(tmp_path / "behind", "--push", "0.3", "-3", "0", "0")["forward_final_m"]
+    assert np.isfinite([still, ahead, behind]).all()
+    forward, backward = ahead - still, still - behind
+    assert forward > PUSH_VISIBLE_M and backward > PUSH_VISIBLE_M, (behind, still, ahead)
+    assert 1 / PUSH_SYMMETRY_RATIO < forward / backward < PUSH_SYMMETRY_RATIO, (forward, backward)
+
+
+#: A push's trace on the final trunk position that round-off and the plant's contacts cannot fake: 1 mm (the pushed
+#: runs here move ~8 mm; an unapplied push moves 0).
+PUSH_VISIBLE_M = 1e-3
+#: How unequal the responses to +J and -J may be: a nearly linear loop gives ~1; contacts switching differently on
+#: either side make them unequal, not of another order.
+PUSH_SYMMETRY_RATIO = 2.0
+
+
+@pytest.mark.parametrize("push, said", [
+    (["5.0", "1", "0", "0"], r"--push at t = 5.0 s; expected a time from 0 to the run's 1.2 s"),
+    (["0.3", "60", "0", "0"], r"--push impulse 60 N s; expected at most 5 N s per kg"),
+    (["0.3", "nan", "0", "0"], r"--push"),
+])
+def test_cli_push_out_of_range_exits_2_before_out(tmp_path: Path, push: list[str], said: str) -> None:
+    out = tmp_path / "out"
+    result = CliRunner().invoke(main, ["control", "paper", "--cycles", "1", "--no-animation", "--out", str(out),
+                                       "--push", *push])
+    assert result.exit_code == EXIT_BAD_INPUT, result.output
+    assert re.search(said, result.output) and len(result.output.strip().splitlines()) == 1, result.output
+    assert not out.exists()

@@ -1,10 +1,12 @@
-"""The reference the controllers track: the gait's IK at the control rate over one cycle.
+"""The plan the controllers track: the gait's IK at the control rate over one cycle.
 
 The feet relative to the trunk are periodic in the plan (footholds and trunk advance by
 speed x period per cycle), so the joint reference is too: one cycle is computed and repeated.
 Each tick also carries the legs' kinematics at the reference (foot positions r_i in the trunk
 frame and the inverse foot Jacobians), for the attitude-levelling controllers, and a positive
-diagonal estimate of the joints' inertia for the computed-torque feedback (``inertia``).
+diagonal estimate of the joints' inertia for the computed-torque feedback (``inertia``), and
+for the whole-body controller the feet's planned velocity and acceleration relative to the
+trunk and the trunk's planned velocity and acceleration.
 """
 
 from __future__ import annotations
@@ -29,6 +31,10 @@ class Reference(ReferenceSample):
     J: np.ndarray  # (4, 3, 3) foot Jacobians
     phase_s: float  # fraction [0, 1) of the current gait phase
     inertia: np.ndarray  # (12,) positive diagonal joint inertia estimate, kg m^2 (``joint_inertia``)
+    dr_feet: np.ndarray  # (4, 3) d/dt r_feet = J qd_r, trunk frame, m/s
+    ddr_feet: np.ndarray  # (4, 3) d2/dt2 r_feet (central differences of dr_feet along the periodic cycle), m/s^2
+    trunk_v: np.ndarray  # (3,) the plan's trunk velocity, world (= trunk frame: R = I in the plan), m/s
+    trunk_a: np.ndarray  # (3,) the plan's trunk classical acceleration, world, m/s^2
 
 
 def joint_inertia(M_legs: np.ndarray, J: np.ndarray, stance: tuple[int, ...], mass: float) -> np.ndarray:
@@ -63,6 +69,7 @@ def reference_cycle(plan: Plan, rate_hz: float) -> tuple[Reference, ...]:
     QD = np.array([s.qd_r for s in knots])
     QDD = np.array([s.qdd_r for s in knots])
     out = []
+    rows = []
     kin = robot_kinematics(plan.robot)
     M_full = CompiledFunction(compiled_library(plan.robot), "M_full")
     origin = np.array([0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 1.0])
@@ -79,6 +86,11 @@ def reference_cycle(plan: Plan, rate_hz: float) -> tuple[Reference, ...]:
         J = np.array([np.asarray(kin[i].foot_jacobian(q[3 * i : 3 * i + 3])) for i in range(4)])
         stance = plan.stance(t)
         M_legs = M_full(np.concatenate([origin, q[:12]]))[0][6:, 6:]
-        out.append(Reference(q, qd, qdd, stance, r, np.linalg.inv(J), J, plan.gait.phase(t)[1],
-                             joint_inertia(M_legs, J, stance, plan.robot.total_mass)))
+        rows.append((q, qd, qdd, stance, r, np.linalg.inv(J), J, plan.gait.phase(t)[1],
+                     joint_inertia(M_legs, J, stance, plan.robot.total_mass)))
+    dr = np.array([np.einsum("ijk,ik->ij", row[6], row[1][:12].reshape(4, 3)) for row in rows])
+    ddr = (np.roll(dr, -1, axis=0) - np.roll(dr, 1, axis=0)) * rate_hz / 2
+    for k, row in enumerate(rows):
+        _, v, a = plan.trunk(k / rate_hz)
+        out.append(Reference(*row, dr[k], ddr[k], v, a))
     return tuple(out)

@@ -67,6 +67,8 @@ def plot(path: Path, study: ClosedLoop) -> None:
     fig, axes = plt.subplots(4, 1, figsize=(8, 8), sharex=True)
     for name, tr in study.traces.items():
         s = study.results[name]["series"]
+        if not tr.t.size:  # stopped at its first tick
+            continue
         axes[0].plot(tr.t, np.sqrt(np.mean((tr.q_ref - tr.q) ** 2, axis=1)), lw=0.8, label=name)
         axes[1].plot(tr.t, s["roll_deg"], lw=0.8, label=name)
         axes[2].plot(tr.t, s["pitch_deg"], lw=0.8, label=name)
