@@ -4,9 +4,9 @@ Pinocchio's CppADCodeGen code ("pinocchio-cppadcodegen", cppadcg.py) is timed in
 ``timing.run_bench``'s rounds; this module names the peers and times adam's.
 
 adam (ami-iit/adam, PyPI ``adam-robotics``; 0.5.0 needs ``liecasadi``, undeclared): its CasADi
-mass matrix (CRBA) and bias force (RNEA, C + G), BODY_FIXED velocity representation (so M and
-C + G are Pinocchio's, base velocity (v_b, omega_b) in the trunk frame), joints in the project's
-order, g = (0, 0, -9.81). Each peer function is checked against Pinocchio's crba /
+mass matrix (CRBA) and bias force (RNEA, C + G), loaded by the cross-library adapter
+(``references/adam.py``: BODY_FIXED, so M and C + G are Pinocchio's, base velocity (v_b, omega_b)
+in the trunk frame, joints in the project's order, g = (0, 0, -9.81)). Each peer function is checked against Pinocchio's crba /
 nonLinearEffects at a random state before it is timed (NumericalError if it differs by more than
 REL_TOL_TERMS). adam takes the base pose as a 4 x 4 homogeneous matrix H; it is timed with its
 own inputs, as a user would generate it.
@@ -22,7 +22,6 @@ from __future__ import annotations
 import hashlib
 import shutil
 import tempfile
-import xml.etree.ElementTree as ET
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -30,10 +29,11 @@ import casadi as ca
 import numpy as np
 
 from quadruped_dyn.bench import cppadcg
+from quadruped_dyn.bench.call_cost import arithmetic_operations
 from quadruped_dyn.bench.harnesses import HARNESSES
-from quadruped_dyn.bench.limits import check_counts
 from quadruped_dyn.bench.placement import TimedProgram, median_over_rounds
-from quadruped_dyn.bench.timing import aligned, arithmetic_operations
+from quadruped_dyn.bench.timing import aligned
+from quadruped_dyn.bench.timing_counts import check_counts
 from quadruped_dyn.codegen.casadi_source import silence_unused_parameters
 from quadruped_dyn.codegen.emit import CODEGEN_FUNCTIONS, PREFIX
 from quadruped_dyn.codegen.library import C_FLAGS, compiler_version, run_tool
@@ -42,7 +42,7 @@ from quadruped_dyn.files.cache import cached_build
 from quadruped_dyn.files.names import printable
 from quadruped_dyn.math.compare import relative_error, within
 from quadruped_dyn.model.robot import Robot
-from quadruped_dyn.model.state import GRAVITY_W, random_state, rotation
+from quadruped_dyn.model.state import random_state
 from quadruped_dyn.references.pinocchio import PinocchioReference
 from quadruped_dyn.tolerances import REL_TOL_TERMS
 
@@ -93,30 +93,18 @@ def parse_peers(text: str) -> tuple[str, ...]:
     return names
 
 
-def _urdf_for_adam(robot: Robot, directory: Path) -> Path:
-    """A copy of the URDF with <origin/> added to every <inertial> without one (adam 0.5.0 fails there)."""
-    tree = ET.parse(robot.urdf)
-    for inertial in tree.getroot().iter("inertial"):
-        if inertial.find("origin") is None:
-            ET.SubElement(inertial, "origin", {"xyz": "0 0 0", "rpy": "0 0 0"})
-    path = directory / robot.urdf.name
-    tree.write(path)
-    return path
-
-
 def adam_functions(robot: Robot) -> list[ca.Function]:
     """adam's M(H, s) and C + G (H, s, v_b, s_dot) as SX Functions named with the C prefix."""
     try:
-        from adam import Representations
-        from adam.casadi import KinDynComputations
+        from quadruped_dyn.references.adam import AdamRefusal, casadi_functions
     except ImportError as e:
         raise InputError(f"adam is not importable ({e}); expected pip install adam-robotics liecasadi") from e
-    with tempfile.TemporaryDirectory() as tmp:
-        kd = KinDynComputations(str(_urdf_for_adam(robot, Path(tmp))), robot.joint_names,
-                                gravity=np.concatenate([GRAVITY_W, np.zeros(3)]))
-    kd.set_frame_velocity_representation(Representations.BODY_FIXED_REPRESENTATION)
+    try:
+        mass_matrix, bias_force = casadi_functions(robot)
+    except AdamRefusal as e:
+        raise InputError(f"adam cannot load {robot.name}'s URDF ({e}); expected a URDF adam reads") from e
     out = []
-    for name, f in (("adam_M", kd.mass_matrix_fun()), ("adam_nle", kd.bias_force_fun())):
+    for name, f in (("adam_M", mass_matrix), ("adam_nle", bias_force)):
         args = f.sx_in()
         out.append(ca.Function(PREFIX + name, args, f.call(args), {"cse": True}))
     return out
@@ -124,10 +112,11 @@ def adam_functions(robot: Robot) -> list[ca.Function]:
 
 def check_adam(robot: Robot, functions: list[ca.Function], seed: int = 0) -> float:
     """Largest relative error of adam's M and C + G against Pinocchio at a random state."""
+    from quadruped_dyn.references.adam import pose
+
     s = random_state(robot.lower, robot.upper, np.random.default_rng(seed))
     ref = PinocchioReference(robot)
-    H = np.eye(4)
-    H[:3, :3], H[:3, 3] = rotation(s.q), s.q[:3]
+    H = pose(s.q)
     M, nle = functions
     pairs = ((M(H, s.q[7:]), ref.mass_matrix(s.q)), (nle(H, s.q[7:], s.v[:6], s.v[6:]), ref.nonlinear_effects(s.q, s.v)))
     worst = max(relative_error(np.asarray(value, dtype=float).reshape(np.shape(expected)), expected)

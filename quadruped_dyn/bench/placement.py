@@ -1,6 +1,6 @@
 """Timing rounds, each on fresh copies of the code it times: where a program's code lands in memory moves its time.
 
-On this project's 2-core virtual machines (AMD EPYC Zen 5, 2026-12-04) byte-identical copies of the generated
+On this project's 2-core virtual machines (AMD EPYC Zen 5) byte-identical copies of the generated
 library, each a new file (new page-cache pages), time differently and each copy keeps its time: over 12 copies of
 a1's library ``qd_M_r_FL_FR_BL_BR`` took 687-1116 ns, ``qd_id_full`` 220-313 ns, ``qd_dfd_r_FL_BR`` 8.4-14.0 us
 (median 707, 230, 8,666), while 8 copies of the pin wheel's ``libpinocchio_default.so`` moved

@@ -31,17 +31,33 @@ import timeit
 from dataclasses import asdict, dataclass, field
 from pathlib import Path
 
-import casadi as ca
 import numpy as np
 import pinocchio as pin
 
 from quadruped_dyn.bench import cppadcg
+from quadruped_dyn.bench.call_cost import (
+    NOT_MEASURED,
+    CallCost,
+    arithmetic_operations,
+    call_cost_table,
+    cpu_model,
+    generated_call_costs,
+    valgrind_available,
+)
 from quadruped_dyn.bench.harnesses import HARNESSES, PINOCCHIO_CXX_FLAGS, cmeel_prefix, pinocchio_program, require_headers
-from quadruped_dyn.bench.limits import check_counts
 from quadruped_dyn.bench.placement import TimedProgram, median_over_rounds
-from quadruped_dyn.checks.c_reference import generate_checked, reference_header_name
+from quadruped_dyn.bench.timing_counts import check_counts
+from quadruped_dyn.checks.check_program_values import generate_checked, reference_header_name
 from quadruped_dyn.codegen.emit import PREFIX, GeneratedFiles, codegen_functions, work_sizes
-from quadruped_dyn.codegen.library import C_FLAGS, CompiledFunction, CompiledLibrary, compile_sources, compiled_library, run_tool
+from quadruped_dyn.codegen.library import (
+    C_FLAGS,
+    CompiledFunction,
+    CompiledLibrary,
+    compile_sources,
+    compiled_library,
+    compiler_version,
+    run_tool,
+)
 from quadruped_dyn.files.cache import cache_dir, cached_build
 from quadruped_dyn.model.robot import Robot
 from quadruped_dyn.model.state import random_state
@@ -49,7 +65,7 @@ from quadruped_dyn.references.pinocchio import PinocchioReference
 
 #: fd_r_<feet> is timed against Pinocchio's constraintDynamics with the same stance feet as rigid
 #: point contacts (different physics: the paper's GRF model vs rigid contacts; the same job, a
-#: forward dynamics step of a robot on those feet). Target ratio generated / Pinocchio (issue 19; issue 9 had 0.3).
+#: forward dynamics step of a robot on those feet). Target ratio generated / Pinocchio.
 FD_R_TARGET = 0.25
 #: dfd_r_<feet> against constraintDynamics + computeConstraintDynamicsDerivatives with the same feet (docs/derivatives.md)
 DFD_R_TARGET = 0.5
@@ -97,6 +113,10 @@ class BenchReport:
     pinocchio_flags: list[str] = field(default_factory=list)  # of the Pinocchio harness
     peers: list[cppadcg.PeerTiming] = field(default_factory=list)  # Pinocchio's CppADCodeGen code, same rounds
     rounds: int = 0  # timing rounds, each on fresh copies of every harness and library timed (placement.py)
+    cpu_model: str = field(default_factory=cpu_model)  # /proc/cpuinfo's model name
+    compiler: str = ""  # the first line of ``cc --version``
+    call_costs: list[CallCost] = field(default_factory=list)  # counted per call under callgrind (call_cost.py)
+    call_cost_note: str | None = None  # why call_costs is empty (NOT_MEASURED), None when counted or not asked
 
     def as_dict(self) -> dict[str, object]:
         return asdict(self)
@@ -129,6 +149,12 @@ class BenchReport:
                                   f"{p.checked_rel_error:.0e}"])
             lines += aligned(peer_rows)
             lines.append(f"peer: {self.peers[0].peer}, same flags as the generated C, timed in the same rounds")
+        if self.call_costs:
+            lines += aligned(call_cost_table(self.call_costs))
+            lines.append("per call, counted by callgrind (the same on any machine); I1: a simulated 32 kB 8-way cache")
+        elif self.call_cost_note:
+            lines.append(f"instructions and code per call: {self.call_cost_note}")
+        lines.append(f"CPU: {self.cpu_model}; compiler: {self.compiler}")
         return "\n".join(lines)
 
 
@@ -138,13 +164,6 @@ def aligned(rows: list[list[str]]) -> list[str]:
     widths = [max(len(row[i]) for row in rows) for i in range(len(rows[0]))]
     return [row[0].ljust(widths[0]) + "".join(cell.rjust(w + 2) for cell, w in zip(row[1:], widths[1:]))
             for row in rows]
-
-
-def arithmetic_operations(f: ca.Function) -> int:
-    """Operations of an SX Function's generated C: its instructions less inputs, outputs and
-    constants (constants are literals in the C; equal ones are shared or not by round-off)."""
-    skip = (ca.OP_CONST, ca.OP_INPUT, ca.OP_OUTPUT)
-    return sum(f.instruction_id(k) not in skip for k in range(f.n_instructions()))
 
 
 def pinocchio_harness(cxx: str = "g++") -> Path:
@@ -165,17 +184,20 @@ def pinocchio_harness(cxx: str = "g++") -> Path:
 
 
 def run_bench(robot: Robot, calls: int = 20000, reps: int = 9, rounds: int = 9, cc: str = "gcc", native: bool = False,
-              peer: bool = False, checked_c: GeneratedFiles | None = None) -> BenchReport:
+              peer: bool = False, checked_c: GeneratedFiles | None = None, call_cost: bool = False) -> BenchReport:
     """Time every generated function and its Pinocchio counterpart in the same run; with ``peer``
     also Pinocchio's CppADCodeGen code (cppadcg.py, checked against Pinocchio first). ``native``:
     the generated C and the peer built with -march=native (Pinocchio native stays the wheel's).
     ``checked_c``: ``generate_checked``'s files of ``robot`` (double), already written (the
     report's own c/), timed as they are instead of generated again (``generation_s`` is then None).
-    InputError for counts outside ``limits.check_counts``' bounds, before anything is built."""
+    ``call_cost``: also count each function's instructions, I1 misses and code bytes per call (call_cost.py;
+    ``call_cost_note`` says NOT_MEASURED without valgrind) beside the graphs' operations.
+    InputError for counts outside ``timing_counts.check_counts``' bounds, before anything is built."""
     check_counts(calls, reps)
     flags = (*C_FLAGS, "-Dcasadi_real=double", *(("-march=native",) if native else ()))  # as library.compiled_library
     report = BenchReport(robot.name, native=native, c_flags=list(flags),
-                         pinocchio_flags=list(PINOCCHIO_CXX_FLAGS))  # the wheel's algorithms, --native or not
+                         pinocchio_flags=list(PINOCCHIO_CXX_FLAGS),  # the wheel's algorithms, --native or not
+                         compiler=compiler_version(cc))
     with tempfile.TemporaryDirectory() as tmp:
         files = checked_c
         if files is None or reference_header_name(robot) not in files.extra:
@@ -194,6 +216,11 @@ def run_bench(robot: Robot, calls: int = 20000, reps: int = 9, rounds: int = 9, 
         start = time.perf_counter()
         report.compiled_objects = compile_sources(sources, flags, lib, cc)  # the library's objects, when cached
         report.compile_s = time.perf_counter() - start
+        if call_cost and valgrind_available():
+            operations = {f.name(): arithmetic_operations(f) for f in codegen_functions(robot)}
+            report.call_costs = generated_call_costs(sources, h_path, ref_path, flags, operations, cc)
+        elif call_cost:
+            report.call_cost_note = NOT_MEASURED
         run_tool([cc, *flags, f"-I{h_path.parent.resolve()}",  # the headers beside the generated C (cwd is tmp)
                   f"-DQD_HEADER=\"{h_path.name}\"", f"-DQD_REFERENCE=\"{ref_path.name}\"", "bench_qd.c",
                   lib.name, "-Wl,--enable-new-dtags", f"-Wl,-rpath,{tmp}", "-lm", "-o", exe.name], cwd=tmp)

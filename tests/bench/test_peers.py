@@ -18,7 +18,7 @@ def test_unknown_peer_is_bad_input():
 
 
 def test_none_beside_a_peer_is_bad_input():
-    """Found by a review (2026-12-06): ``--peers none,adam`` was read as adam."""
+    """Found by a review: ``--peers none,adam`` was read as adam."""
     result = CliRunner().invoke(main, ["bench", "--peers", "none,adam"])
     assert result.exit_code == 2 and result.stderr.count("\n") == 1, result.output
     assert "--peers 'none,adam' names none and a peer; expected none alone, or peers without it" in result.stderr
@@ -26,7 +26,7 @@ def test_none_beside_a_peer_is_bad_input():
 
 @pytest.mark.parametrize("peers", [",", " , ", "adam,", ",none"])
 def test_an_empty_peer_name_is_bad_input(peers, monkeypatch):
-    """Found by a review (2026-12-06): ``--peers ,`` was read as no peers (and the benchmark ran)."""
+    """Found by a review: ``--peers ,`` was read as no peers (and the benchmark ran)."""
     from quadruped_dyn.bench import timing
 
     def tripwire(*a, **k):
