@@ -37,6 +37,7 @@ class Bar:
         self.label, self.total, self.unit, self.runs, self.enabled = label, float(total), unit, runs, enabled
         self.stream = stream or _stream()
         self.done = 0.0
+        self.status = ""  # a note after the count (``set_status``), e.g. what is running and failing
         self.live = enabled and self.stream.isatty()
         self._progress: Progress | None = None
         self._task: TaskID | None = None
@@ -49,16 +50,17 @@ class Bar:
             done_runs = min(self.runs, int(self.done / per_run + 1e-9)) if per_run > 0 else 0
             text += f", {done_runs}/{self.runs} runs done"
         pct = 100.0 * self.done / self.total if self.total > 0 else 100.0
-        return f"{text} ({pct:.0f} %, {time.monotonic() - self._start:.0f} s)"
+        return f"{text} ({pct:.0f} %, {time.monotonic() - self._start:.0f} s){', ' + self.status if self.status else ''}"
 
     def __enter__(self) -> Bar:
         if self.live:
             columns = [TextColumn("{task.description}"), BarColumn(), MofNCompleteColumn() if not self.unit
                        else TextColumn("{task.completed:.3g}/{task.total:.3g} " + self.unit),
-                       TextColumn("{task.fields[runs]}"), TimeElapsedColumn(), TimeRemainingColumn()]
+                       TextColumn("{task.fields[runs]}"), TimeElapsedColumn(), TimeRemainingColumn(),
+                       TextColumn("{task.fields[status]}")]
             self._progress = Progress(*columns, console=Console(file=self.stream), transient=False)
             self._progress.start()
-            self._task = self._progress.add_task(self.label, total=self.total, runs="")
+            self._task = self._progress.add_task(self.label, total=self.total, runs="", status=self.status)
         elif self.enabled:
             print(self._describe(), file=self.stream, flush=True)
         return self
@@ -70,12 +72,16 @@ class Bar:
             if self.runs:
                 per_run = self.total / self.runs
                 runs = f"run {min(self.runs, int(self.done / per_run + 1e-9) + 1)}/{self.runs}" if per_run > 0 else ""
-            self._progress.update(self._task, completed=self.done, runs=runs)
+            self._progress.update(self._task, completed=self.done, runs=runs, status=self.status)
         elif self.enabled and time.monotonic() - self._last_line >= LINE_PERIOD_S:
             self._last_line = time.monotonic()
             print(self._describe(), file=self.stream, flush=True)
 
     update = advance  # the name click's bars use
+
+    def set_status(self, status: str) -> None:
+        """The note shown after the count from the next update on."""
+        self.status = status
 
     def __exit__(self, exc_type: type[BaseException] | None, exc: BaseException | None, tb: TracebackType | None) -> None:
         if self._progress is not None:

@@ -8,7 +8,8 @@ import pytest
 
 from quadruped_dyn.codegen.library import CompiledLibrary, compiled_library
 from quadruped_dyn.math.compare import relative_error, scale_of, within
-from quadruped_dyn.model.robot import ROBOT_NAMES, Robot, example_robot_data_dir, load_robot
+from quadruped_dyn.model.registry import ROBOT_NAMES, example_robot_data_dir
+from quadruped_dyn.model.robot import Robot, load_robot
 from quadruped_dyn.references.pinocchio import PinocchioReference
 from quadruped_dyn.tolerances import REL_TOL_TERMS
 

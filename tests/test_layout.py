@@ -19,8 +19,10 @@ import pytest
 import quadruped_dyn
 
 OPTIONAL = {"quadruped_dyn.references.mujoco": "mujoco", "quadruped_dyn.references.idyntree": "idyntree",
-            **{f"quadruped_dyn.control.{m}": "mujoco" for m in ("plant", "reference", "controllers", "run", "measures",
-                                                               "outputs", "closed_loop")}}
+            **{f"quadruped_dyn.control.{m}": "mujoco" for m in ("plant", "plan", "controllers", "run", "measures",
+                                                               "study_files", "closed_loop", "perturbations",
+                                                               "thresholds")},
+            "quadruped_dyn.control.wbc": "proxsuite", "quadruped_dyn.control.mpc": "proxsuite"}
 MODULES = sorted(m.name for m in pkgutil.walk_packages(quadruped_dyn.__path__, "quadruped_dyn.")
                  if not m.name.endswith("__main__"))
 
@@ -95,7 +97,7 @@ def test_top_level_exports_the_api_errors() -> None:
 
 
 def test_typed_names_are_the_lazy_names() -> None:
-    """The top-level package lists its names twice (helper review, 2026-12-06): as imports for a type checker and in
+    """The top-level package lists its names twice: as imports for a type checker and in
     ``_MODULES`` for loading on first use. The two lists name the same things, or a name is untyped or missing."""
     import ast
 

@@ -58,7 +58,7 @@ def test_front_page_size_and_links():
 
 
 def _robots() -> str:
-    from quadruped_dyn.model.robot import ROBOT_NAMES
+    from quadruped_dyn.model.registry import ROBOT_NAMES
 
     return f"{len(ROBOT_NAMES)}: {' '.join(ROBOT_NAMES)}"
 

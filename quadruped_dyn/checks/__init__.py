@@ -4,7 +4,7 @@ comparison, and the reference values of the generated C's check program."""
 from quadruped_dyn.exports import lazy_exports
 
 _MODULES: dict[str, tuple[str, ...]] = {
-    "c_reference": (
+    "check_program_values": (
         "REFERENCE_DIGITS", "reference_state", "reduced_inputs", "pinocchio_outputs", "tolerance_scale", "reference_header",
         "reference_header_name", "checked_files", "generate_checked", "differing_files", "ReferenceHeader",
         "parse_reference_header", "reference_differences", "GenerationDiff", "compare_generation",
@@ -13,8 +13,9 @@ _MODULES: dict[str, tuple[str, ...]] = {
         "LIBRARIES", "EXACT_CHANGES", "INSTALL_HINT", "parse_libraries", "ToolkitDynamics", "CrossLibraryResult",
         "CrossLibraryReport", "run_cross_library",
     ),
-    "limits": ("MAX_SAMPLES", "CHECK_SAMPLES", "check_samples"),
-    "derivative_reference": ("central", "rotated", "ReducedReference", "grf_derivatives_reference", "grf_wrench_reference"),
+    "sample_counts": ("MAX_SAMPLES", "CHECK_SAMPLES", "check_samples"),
+    "finite_differences": ("central", "rotated", "ReducedFiniteDifferences", "grf_derivatives_by_differences",
+                           "grf_wrench_by_differences"),
     "terms": ("TermResult", "CheckReport", "GrfResult", "REDUCED_STANCES", "run_check"),
 }
 __all__, __getattr__, __dir__ = lazy_exports(__name__, _MODULES)

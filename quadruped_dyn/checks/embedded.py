@@ -8,7 +8,7 @@ from __future__ import annotations
 from pathlib import Path
 from typing import Any
 
-from quadruped_dyn.codegen.emit import REDUCED_STANCE_SETS, stem
+from quadruped_dyn.codegen.file_names import REDUCED_STANCE_SETS, feet_suffix, robot_stem
 from quadruped_dyn.codegen.footprint import MEASURED_BUILDS, robot_footprint
 from quadruped_dyn.codegen.work_memory import header_work_memory
 from quadruped_dyn.model.robot import Robot
@@ -18,12 +18,12 @@ def embedded_summary(robot: Robot, directory: Path, footprint: bool = True,
                      builds: tuple[tuple[str, str], ...] = MEASURED_BUILDS) -> dict[str, Any]:
     """JSON-ready summary of ``directory`` (a ``codegen`` output of ``robot``), the footprint
     measured on ``builds`` ((Cortex-M target, cflags) pairs)."""
-    name = stem(robot)
+    name = robot_stem(robot.name)
     memory = header_work_memory((Path(directory) / f"{name}.h").read_text())
     functions = [{"name": n, "sz_arg": m.sz_arg, "sz_res": m.sz_res, "sz_iw": m.sz_iw, "sz_w": m.sz_w,
                   "in_reals": m.n_in, "out_reals": m.n_out, "caller_bytes_double": m.bytes(8),
                   "caller_bytes_float": m.bytes(4)} for n, m in memory.items()]
-    stances = [s.name.replace("+", "_") for s in REDUCED_STANCE_SETS]
+    stances = [feet_suffix(s) for s in REDUCED_STANCE_SETS]
     return {"robot": robot.name, "directory": str(directory), "functions": functions,
             "footprint": robot_footprint(Path(directory), list(memory), name, stances, builds) if footprint
             else {"skipped": "not requested"}}

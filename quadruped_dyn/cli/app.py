@@ -12,6 +12,7 @@ from typing import Any
 
 import click
 
+from quadruped_dyn import __version__
 from quadruped_dyn.cli.entry import interrupted
 from quadruped_dyn.errors import BuildError, InputError, NumericalError, UrdfWarning
 from quadruped_dyn.files.names import printable
@@ -102,7 +103,7 @@ def foot_frames_option(command: Any) -> Any:
 def _four_names(_ctx: Any, _param: Any, value: str | None) -> str | None:
     """``--foot-frames`` as given if ``load_robot`` takes it; else bad input naming the option (before any work)."""
     if value is not None:
-        from quadruped_dyn.model.robot import foot_frame_names
+        from quadruped_dyn.model.foot_frames import foot_frame_names
 
         foot_frame_names(value, "--foot-frames")
     return value
@@ -123,5 +124,6 @@ def progress(label: str, length: int) -> Any:
 
 
 @click.group(cls=_Group)
+@click.version_option(__version__, "--version", prog_name="quadruped-dyn", message="%(prog)s %(version)s")
 def main() -> None:
     """quadruped_dyn: the paper's quadruped Newton-Euler dynamics, checked against Pinocchio."""

@@ -6,9 +6,8 @@ import json
 
 import click
 
-from quadruped_dyn.bench.limits import MAX_CALLS, MAX_REPS
+from quadruped_dyn.bench.timing_counts import MAX_CALLS, MAX_REPS
 from quadruped_dyn.cli.app import echo, require_tools
-from quadruped_dyn.files.paths import writable_dir
 
 
 @click.command()
@@ -22,24 +21,29 @@ from quadruped_dyn.files.paths import writable_dir
               "pinocchio-cppadcodegen when its headers are installed.")
 @click.option("--native", "--march-native", "native", is_flag=True,
               help="Build the generated C and the peers with -march=native (Pinocchio native stays the pin wheel's build).")
-def bench(robots: tuple[str, ...], calls: int, reps: int, as_json: bool, peers: str, native: bool) -> None:
+@click.option("--call-cost/--no-call-cost", default=True, show_default=True,
+              help="Also count each function's instructions, I1 misses and bytes of code per call under valgrind "
+              "(callgrind; the same on any machine), beside the graphs' operation counts.")
+def bench(robots: tuple[str, ...], calls: int, reps: int, as_json: bool, peers: str, native: bool,
+          call_cost: bool) -> None:
     """Time the generated C against Pinocchio's native C++ in the same run (ratios < 1: generated is faster)."""
     from dataclasses import asdict
 
     from quadruped_dyn.bench import cppadcg
     from quadruped_dyn.bench.peers import parse_peers, peers_table, run_peers
     from quadruped_dyn.bench.timing import run_bench
-    from quadruped_dyn.files.cache import cache_dir
+    from quadruped_dyn.files.cache import writable_cache
     from quadruped_dyn.model.robot import load_robot
 
     auto = peers.strip() == "auto"
     peer_names: tuple[str, ...] = ((cppadcg.PEER,) if cppadcg.available() else ()) if auto else parse_peers(peers)
     require_tools("gcc", "g++")
-    writable_dir(cache_dir(), f"the cache directory '{cache_dir()}' (QUADRUPED_DYN_CACHE)")
+    writable_cache()
     loaded = [load_robot(r) for r in robots]  # every argument checked before minutes of work
     if auto and not peer_names:  # after the checks: bad input stays one line
         click.echo(f"note: {cppadcg.PEER} is not timed: its headers are not installed ({cppadcg.INSTALL_HINT})", err=True)
-    reports = [run_bench(r, calls, reps, native=native, peer=cppadcg.PEER in peer_names) for r in loaded]
+    reports = [run_bench(r, calls, reps, native=native, peer=cppadcg.PEER in peer_names, call_cost=call_cost)
+               for r in loaded]
     adam = [e for r in loaded for e in run_peers(r, native, calls, reps)] if "adam" in peer_names else []
     if as_json:
         out: object = [r.as_dict() for r in reports]

@@ -7,7 +7,7 @@ import sys
 
 import click
 
-from quadruped_dyn.checks.limits import MAX_SAMPLES
+from quadruped_dyn.checks.sample_counts import MAX_SAMPLES
 from quadruped_dyn.cli.app import EXIT_CHECK_FAILED, echo, foot_frames_option, progress
 
 
@@ -18,8 +18,10 @@ from quadruped_dyn.cli.app import EXIT_CHECK_FAILED, echo, foot_frames_option, p
 @click.option("--seed", default=0, show_default=True, type=click.IntRange(min=0), help="Random seed.")
 @click.option("--json", "as_json", is_flag=True, help="Print the report as JSON.")
 @click.option("--against", default=None, metavar="LIBS",
-              help="Also compare M, C + G, G and foot Jacobians with other libraries, after diagnosing what each does "
-                   "to the URDF: comma-separated subset of mujoco,idyntree (pip install 'quadruped_dyn[xlib]').")
+              help="Also compare M, C + G, G, inverse dynamics, foot positions and Jacobians with other libraries, after "
+                   "diagnosing what each does to the URDF: all, or a comma-separated subset of "
+                   "pinocchio,mujoco,idyntree,drake,adam (pip install 'quadruped_dyn[xlib]'). With --json: a "
+                   "'conformance' table, the worst error per library and term and why it differs.")
 @foot_frames_option
 def check(robot: str, samples: int, seed: int, as_json: bool, against: str | None, foot_frames: str | None) -> None:
     """Check every symbolic term of ROBOT against Pinocchio on random states (exit 1 on failure)."""

@@ -30,7 +30,7 @@ def codegen(robot: str, out_dir: str, precision: str, check: bool, as_json: bool
     and the derivatives, with a Makefile and a check program."""
     from pathlib import Path
 
-    from quadruped_dyn.checks.c_reference import checked_files, compare_generation, generate_checked
+    from quadruped_dyn.checks.check_program_values import checked_files, compare_generation, generate_checked
     from quadruped_dyn.model.robot import load_robot
 
     r = load_robot(robot, foot_frames=foot_frames)

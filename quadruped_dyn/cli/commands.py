@@ -9,11 +9,13 @@ from quadruped_dyn.cli.control_command import control
 from quadruped_dyn.cli.optimize_command import optimize
 from quadruped_dyn.cli.report_command import report
 from quadruped_dyn.cli.robot_commands import info, make_urdf, robots
+from quadruped_dyn.cli.sweep_command import sweep
 from quadruped_dyn.cli.validate_command import validate
 
 for _command in (robots, info, check, codegen, bench, validate, report, make_urdf):
     main.add_command(_command)
 main.add_command(optimize)
 main.add_command(control)
+main.add_command(sweep)
 
 __all__ = ["main"]

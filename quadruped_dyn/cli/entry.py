@@ -11,6 +11,8 @@ import sys
 from types import FrameType
 from typing import NoReturn
 
+from quadruped_dyn.interrupts import interrupt, raise_until_seen
+
 EXIT_INTERRUPTED = 130  # 128 + SIGINT, as a shell reports it; click's "Aborted!" was exit 1, a failed check
 EXIT_TERMINATED = 143  # 128 + SIGTERM
 
@@ -22,7 +24,7 @@ class Terminated(KeyboardInterrupt):
 
 
 def _terminate(signum: int, frame: FrameType | None) -> None:
-    raise Terminated
+    raise_until_seen(Terminated, frame)
 
 
 def interrupted(e: BaseException | None = None) -> NoReturn:
@@ -40,6 +42,8 @@ def interrupted(e: BaseException | None = None) -> NoReturn:
 def main() -> None:
     """Import the commands, then run the group (``cli.app``, which maps errors to exit codes)."""
     signal.signal(signal.SIGTERM, _terminate)
+    if signal.getsignal(signal.SIGINT) is signal.default_int_handler:  # not where it is ignored (a background job)
+        signal.signal(signal.SIGINT, interrupt)  # never dropped by CasADi's C++ (interrupts.raise_until_seen)
     try:
         from quadruped_dyn.cli.commands import main as group
     except KeyboardInterrupt as e:

@@ -41,9 +41,9 @@ def optimize(robot: str, gait_name: str, nodes: int | None, mu: float | None, sp
     from quadruped_dyn.experiment.gait import GAITS
     from quadruped_dyn.experiment.simulate import MAX_SAMPLES
     from quadruped_dyn.model.robot import load_robot
-    from quadruped_dyn.optimal_control.outputs import output_paths, report, write_outputs
     from quadruped_dyn.optimal_control.replay import REPLAY_DT, replay_rigid
     from quadruped_dyn.optimal_control.solve import MAX_CONSTRAINT_VIOLATION, solve
+    from quadruped_dyn.optimal_control.trajectory_files import output_paths, report, write_outputs
     from quadruped_dyn.optimal_control.transcription import MU, NODES_PER_PHASE, Options, transcribe
 
     if not (math.isfinite(cycles) and cycles >= 0):

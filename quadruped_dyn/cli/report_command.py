@@ -6,7 +6,7 @@ import sys
 
 import click
 
-from quadruped_dyn.checks.limits import CHECK_SAMPLES
+from quadruped_dyn.checks.sample_counts import CHECK_SAMPLES
 from quadruped_dyn.cli.app import EXIT_CHECK_FAILED, echo, foot_frames_option
 
 

@@ -13,7 +13,7 @@ from quadruped_dyn.cli.app import EXIT_CHECK_FAILED, echo, foot_frames_option
 @click.command()
 def robots() -> None:
     """List the built-in robot names."""
-    from quadruped_dyn.model.robot import ROBOT_NAMES
+    from quadruped_dyn.model.registry import ROBOT_NAMES
 
     for name in ROBOT_NAMES:
         echo(name)

@@ -44,7 +44,6 @@ def validate(robot: str, gait_name: str, horizon: float | None, integrator: str,
     URDF path, default paper."""
 
     from quadruped_dyn.experiment.gait import GAITS
-    from quadruped_dyn.experiment.outputs import output_paths, plot_br_hfe, plot_physics_check, summary_text, write_csv
     from quadruped_dyn.experiment.paper_experiment import (
         MIN_COMPARED_SAMPLES,
         compared_samples,
@@ -54,6 +53,7 @@ def validate(robot: str, gait_name: str, horizon: float | None, integrator: str,
         static_stability,
     )
     from quadruped_dyn.experiment.simulate import check_times, reduced_dynamics
+    from quadruped_dyn.experiment.validation_files import output_paths, plot_br_hfe, plot_physics_check, summary_text, write_csv
     from quadruped_dyn.files.json import write_json
     from quadruped_dyn.model.robot import load_robot
 

@@ -1,9 +1,9 @@
 """id_full and M (dense) leg by leg: the pieces the reduced files' C calls (``leg_template.LegPieces``; docs/derivatives.md,
-"did_full by leg", and docs/formulation.md §6.2).
+"dfd_r and dgrf as generated C", and docs/formulation.md §6.2).
 
 The reduced terms (fd_r, M_r, C_r + G_r, id_r, dfd_r) call the full-coordinate inverse dynamics and M each once per
 call, with a stance's parts and the solve around them: ~60 kB of machine code per fd_r call against a 32 kB
-instruction cache. Leg by leg, one leg function serves the four legs (docs/benchmark.md, "id_full and M by leg"):
+instruction cache. Leg by leg, one leg function serves the four legs (docs/benchmark.md, "Design choices"):
 
 * ``id_full_pieces``: head(q, v, a) -> a0 = a_lin + w_b x v_b - g_b (the trunk origin's classical acceleration minus
   gravity, trunk frame); leg(w_b, alpha_b, a0, q_l, qd_l, qdd_l, p) -> (the leg's wrench on the trunk (6), its
@@ -38,6 +38,9 @@ MASS_PARTS: tuple[tuple[str, int, int], ...] = (("M_ll", 3, 3), ("M_bl", 6, 3), 
 #: A leg's foot kinematics, in order (trunk frame): its position r [m], J = dr/dq_l (column-major), J qd_l [m/s] and
 #: Jdot qd_l [m/s^2] (the foot's classical acceleration relative to the trunk at qdd_l = 0).
 FOOT_PARTS: tuple[tuple[str, int, int], ...] = (("r", 3, 1), ("J", 3, 3), ("J_qd", 3, 1), ("Jdot_qd", 3, 1))
+#: M's nonzero blocks as ``mass_blocks`` stacks them: M_bb, then per leg (``LEG_MASS_BLOCKS``, four times) M_bl, M_ll.
+TRUNK_MASS_BLOCKS: tuple[tuple[str, int, int], ...] = (("M_bb", 6, 6),)
+LEG_MASS_BLOCKS: tuple[tuple[str, int, int], ...] = (("M_bl", 6, 3), ("M_ll", 3, 3))
 
 
 def stacked(parts: tuple[ca.SX, ...]) -> ca.SX:
@@ -81,10 +84,11 @@ def mass_blocks(M: ca.SX | ca.DM) -> ca.SX | ca.DM:
     """M's (18 x 18) nonzero blocks, as fd_r reads them (codegen/c/qd_reduced_solve.c, QD_M_BB, QD_M_BL, QD_M_LL):
     M_bb (6 x 6), then for each leg l M_bl (6 x 3) and M_ll (3 x 3), each column by column: (144,). M's blocks
     between two legs are zero and M_lb = M_bl^T: nothing else."""
-    parts = [M[0:6, 0:6]]
+    blocks = {"M_bb": lambda s: M[0:6, 0:6], "M_bl": lambda s: M[0:6, s], "M_ll": lambda s: M[s, s]}
+    parts = [blocks[name](None) for name, _, _ in TRUNK_MASS_BLOCKS]
     for k in range(4):
         s = slice(6 + 3 * k, 9 + 3 * k)
-        parts += [M[0:6, s], M[s, s]]
+        parts += [blocks[name](s) for name, _, _ in LEG_MASS_BLOCKS]
     return ca.vertcat(*(ca.vec(ca.densify(x)) for x in parts))
 
 

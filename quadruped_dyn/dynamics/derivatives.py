@@ -48,10 +48,10 @@ from quadruped_dyn.dynamics.by_leg import gravity_in_trunk
 from quadruped_dyn.dynamics.grf import grf_solve
 from quadruped_dyn.dynamics.guarded import GuardedFunction, guard_fields, guarded_call, with_condition
 from quadruped_dyn.dynamics.newton_euler import inverse_dynamics
-from quadruped_dyn.dynamics.reduced import check_regularity, regularity_function, solve_forward_dynamics
+from quadruped_dyn.dynamics.reduced import MAX_COND_M_R, check_regularity, regularity_function, solve_forward_dynamics
 from quadruped_dyn.dynamics.reduced_projection import reduced_projection
 from quadruped_dyn.dynamics.rnea_derivatives import rnea_tangent_derivatives
-from quadruped_dyn.errors import InputError
+from quadruped_dyn.errors import InputError, NumericalError
 from quadruped_dyn.math.spatial import quat_to_rotation, skew
 from quadruped_dyn.model.robot import Robot, check_robot
 from quadruped_dyn.model.stance import StanceSet, stance_set
@@ -113,9 +113,22 @@ class FullDerivatives:
     dfd_full: ca.Function  # q, v, tau -> da_dq, da_dv, da_dtau = M^-1 (18, 18 each)
     fd_full: ca.Function  # q, v, tau -> a = M^-1 (tau - C - G) (18,)
     build_seconds: float
+    mass_matrix: ca.Function | None = None  # q -> M (18, 18): the condition of dfd_full's and fd_full's solve
 
     def __post_init__(self) -> None:
         guard_fields(self)
+        for name in ("dfd_full", "fd_full"):  # through M's solve: refused where M is numerically singular
+            object.__setattr__(self, name, with_condition(getattr(self, name), self._solvable_at))
+
+    def _solvable_at(self, values: list[np.ndarray]) -> None:
+        """NumericalError where cond(M(q)) is not below MAX_COND_M_R, as the reduced model's fd_r."""
+        if self.mass_matrix is None:
+            return
+        (M,) = guarded_call(self.mass_matrix, values[0])
+        cond = float(np.linalg.cond(M))
+        if not cond < MAX_COND_M_R:
+            raise NumericalError(f"M has condition number {cond:.1e} here; the full model's forward dynamics and its "
+                                 "derivatives are numerically singular (the robot's inertias: docs/reliability.md §2)")
 
 
 def full_derivatives(robot: Robot) -> FullDerivatives:
@@ -139,7 +152,8 @@ def _full_derivatives(robot: Robot) -> FullDerivatives:
     dfd = ca.Function("dfd_full", [q, v, tau], [-Minv @ dq_fd, -Minv @ dv_fd, Minv], ["q", "v", "tau"],
                       ["da_dq", "da_dv", "da_dtau"], opts)
     fd = ca.Function("fd_full", [q, v, tau], [acc], ["q", "v", "tau"], ["a"], opts)
-    return FullDerivatives(did, did_ad, dfd, fd, time.perf_counter() - start)
+    mass = ca.Function("M_full", [q], [M], ["q"], ["M"], opts)
+    return FullDerivatives(did, did_ad, dfd, fd, time.perf_counter() - start, mass)
 
 
 # ----------------------------------------------------------------------------- reduced model and GRF

@@ -29,13 +29,13 @@ A+ = (A + U N^T)^-1 - N U^T, where A + U N^T is invertible; no solve on a singul
 
 from __future__ import annotations
 
-import numbers
 from dataclasses import dataclass
 from functools import cache
 
 import casadi as ca
 import numpy as np
 
+from quadruped_dyn.arguments import real_number
 from quadruped_dyn.dynamics.guarded import guard_fields, guarded_call
 from quadruped_dyn.dynamics.kinematics import foot_position
 from quadruped_dyn.dynamics.newton_euler import inverse_dynamics
@@ -46,7 +46,7 @@ from quadruped_dyn.math.rigid import skew
 from quadruped_dyn.math.spatial import dm, quat_to_rotation
 from quadruped_dyn.model.robot import Robot, check_robot
 from quadruped_dyn.model.stance import GRF_MODELS, STANCE_SETS, StanceSet, stance_set
-from quadruped_dyn.model.state import GRAVITY_W, NQ_FULL, NV_FULL, rotation
+from quadruped_dyn.model.state import GRAVITY_W, NQ_FULL, NV_FULL, check_array, rotation
 from quadruped_dyn.tolerances import RANK_RTOL
 
 # ----------------------------------------------------------------------------- symbolic solve
@@ -254,12 +254,9 @@ MAX_FRICTION_COEFFICIENT = 1e3
 def check_friction_coefficient(mu: object) -> float:
     """mu as a float, or an InputError unless it is a real number (not a string, not a bool) in
     [0, MAX_FRICTION_COEFFICIENT]."""
-    if isinstance(mu, (str, bytes, bool, np.bool_)) or not isinstance(mu, (numbers.Real, np.ndarray)):
-        raise InputError(f"mu = {mu!r} is {type(mu).__name__}; expected a friction coefficient, a number >= 0")
-    try:
-        value = float(mu)  # type: ignore[arg-type]
-    except (TypeError, ValueError) as e:
-        raise InputError(f"mu = {mu!r} is not a number; expected a friction coefficient >= 0") from e
+    if isinstance(mu, np.ndarray):  # a 0-d array: masked, boolean and float16 ones refused as any array input
+        mu = check_array("mu", mu, ()).item()
+    value = real_number("mu", mu)
     if not (np.isfinite(value) and 0.0 <= value <= MAX_FRICTION_COEFFICIENT):
         raise InputError(f"mu = {value} is not a friction coefficient; expected a finite number in "
                          f"[0, {MAX_FRICTION_COEFFICIENT:g}]")

@@ -15,7 +15,7 @@ from functools import cache
 
 import casadi as ca
 
-from quadruped_dyn.math.rigid import axis_rotation
+from quadruped_dyn.math.rigid import axis_rotation, skew
 from quadruped_dyn.math.spatial import dm, placement_rt
 from quadruped_dyn.model.leg import Leg
 from quadruped_dyn.model.leg_frames import axis_aligned
@@ -101,3 +101,27 @@ def robot_feet(robot: Robot) -> ca.Function:
         rs.append(r)
         Js.append(ca.jacobian(r, qi))
     return ca.Function("feet", [q], [ca.horzcat(*rs), ca.horzcat(*Js)], ["q"], ["r", "J"])
+
+
+def feet_full(robot: Robot) -> ca.Function:
+    """The four feet in full coordinates, for a whole-body controller: (q (19,), v (18,)) ->
+    r_feet (12,): the foot positions relative to the trunk origin, trunk frame, m (FL, FR, BL, BR);
+    J_feet (12, 18): the feet's velocities in the world, expressed in the trunk frame,
+    R^T d/dt p_foot = J_feet v (rows of foot i: [I, -[r_i]x, J_i on its leg's joint columns]);
+    Jdv_feet (12,): the rest of the feet's classical acceleration, R^T d2/dt2 p_foot = J_feet vdot
+    + Jdv_feet (vdot as in the project's ``a``: d/dt of v), i.e. Jdot v + omega_b x (J_feet v).
+    The quaternion of q does not enter (everything is in the trunk frame)."""
+    q, v = ca.SX.sym("q", 19), ca.SX.sym("v", 18)
+    joints, omega, qd = q[7:], v[3:6], v[6:]
+    rows, r = [], []
+    for i, leg in enumerate(robot.legs):
+        ri = foot_position(leg, joints[3 * i : 3 * i + 3])
+        Ji = ca.jacobian(ri, joints[3 * i : 3 * i + 3])
+        legs = [Ji if k == i else ca.SX(3, 3) for k in range(4)]
+        rows.append(ca.horzcat(ca.SX.eye(3), -skew(ri), *legs))
+        r.append(ri)
+    J = ca.vertcat(*rows)
+    u = J @ v
+    spin = ca.vertcat(*[ca.cross(omega, u[3 * i : 3 * i + 3]) for i in range(4)])
+    Jdv = ca.jacobian(u, joints) @ qd + spin
+    return ca.Function("feet_full", [q, v], [ca.vertcat(*r), J, Jdv], ["q", "v"], ["r_feet", "J_feet", "Jdv_feet"])

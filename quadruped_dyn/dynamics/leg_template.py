@@ -5,7 +5,7 @@ and differ in a few numbers: the hip's position, the signs of mirrored offsets a
 template is the canonical leg with each number in which its legs differ (placements, foot point, masses, centres of
 mass, inertia entries; a symmetric pair as one) replaced by an entry of the SX parameter vector ``p``; the numbers
 they share stay constants. A generated function of a template is one piece of machine code that serves all its legs,
-each call with its leg's ``values`` (docs/derivatives.md, "did_full by leg").
+each call with its leg's ``values`` (docs/derivatives.md, "dfd_r and dgrf as generated C").
 
 A joint turning about -a by q is the joint turning about a by -q (its torque about a is minus the torque about -a):
 a leg whose axes are the template's up to sign shares it in the coordinates sigma q, ``signs`` the sigma of each
@@ -120,7 +120,7 @@ def _template(turning: list[Leg], indices: tuple[int, ...]) -> LegTemplate:
 
 @dataclass(frozen=True)
 class LegPieces:
-    """A function of the whole robot as generated pieces (docs/derivatives.md, "did_full by leg"): an optional
+    """A function of the whole robot as generated pieces (docs/derivatives.md, "dfd_r and dgrf as generated C"): an optional
     ``head`` of the trunk's inputs, one ``legs`` Function per template (called once per leg of it, with the leg's
     parameters and its joint inputs times its signs) and a ``tail`` that takes the legs' outputs L_0..L_3 (in the
     template's coordinates: the tail turns them back by the signs) to the function's outputs."""

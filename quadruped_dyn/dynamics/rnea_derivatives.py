@@ -1,5 +1,5 @@
-"""did_full's form: the derivatives of the full inverse dynamics, leg by leg (docs/derivatives.md, "How did_full is
-formed" and "did_full by leg").
+"""did_full's form: the derivatives of the full inverse dynamics, leg by leg (docs/derivatives.md, "What there is",
+"dfd_r and dgrf as generated C").
 
 rnea(q, v, a) (no foot forces) in Pinocchio's tangent convention (``derivatives`` module docstring) is evaluated in
 three generated pieces, so that one piece of machine code serves every leg (``leg_template``):

@@ -1,6 +1,6 @@
 """A stance set's maps from its feet's positions alone: what the generated C of the reduced terms evaluates per stance
 set, with the feet's kinematics (``by_leg.foot_pieces``) and the products by leg in loops around it
-(docs/formulation.md §6.2, "The parts from the feet's maps").
+(docs/formulation.md §6.2).
 
 With k stance feet at r_j (trunk frame, in the order of ``stance.feet``) and J_j the Jacobian of foot j in its leg's
 joints (``ReducedProjection``'s forms, linear in what multiplies them):

@@ -10,7 +10,7 @@ _MODULES: dict[str, tuple[str, ...]] = {
     ),
     "ik": ("analytic_ik", "IK_POSITION_TOL", "numeric_ik", "gauss_newton"),
     "linearised_growth": ("PROJECTION_FD_STEP", "STEP", "linearised_departure", "linearised_growth_rate"),
-    "outputs": ("output_paths", "write_csv", "plot_br_hfe", "plot_physics_check", "summary_text"),
+    "validation_files": ("output_paths", "write_csv", "plot_br_hfe", "plot_physics_check", "summary_text"),
     "paper_experiment": (
         "ZERO_SIGNAL", "PD_KP_PER_KG", "PD_KD_PER_KG", "STABILITY_DT", "DEPARTURE_PCT", "SIGNALS", "Experiment", "joint_names",
         "percent_errors", "departure", "growth_rate", "static_stability", "pd_gains", "run_experiment", "report",

@@ -35,7 +35,7 @@ from quadruped_dyn.model.stance import StanceSet
 PROJECTION_FD_STEP = 1e-6
 
 #: Time step (s) of the propagation: the experiment projects after every DOP853 step (a few ms), and
-#: the closure drift grows at 30-45 /s between projections. Predicted rate at 20 / 5 ms (2026-12-02):
+#: the closure drift grows at 30-45 /s between projections. Predicted rate at 20 / 5 ms:
 #: paper walk 7.43 / 7.29, go2 walk 9.33 / 7.53 /s (measured 7.18 and 7.09).
 STEP = 0.005
 

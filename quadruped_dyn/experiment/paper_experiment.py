@@ -1,7 +1,7 @@
-"""The paper's validation experiment, compared and reported (docs/formulation.md §9-§10, paper Figs. 5-7).
+"""The paper's validation experiment, compared and reported (docs/experiment.md, paper Figs. 5-7).
 
-Plan (``gait``) -> IK reference (``reference``) -> id_r -> tau(t) -> reduced forward dynamics
-(``simulate``) -> compared with the IK reference, per joint:
+Plan (``gait``) -> IK plan (``reference``) -> id_r -> tau(t) -> reduced forward dynamics
+(``simulate``) -> compared with the IK plan, per joint:
 percentage error of a signal x = max_t |x_sim - x_ref| / max_t |x_ref| x 100 (None where the
 reference is identically zero, e.g. HAA rates of a straight trot).
 
@@ -261,7 +261,7 @@ def _run_summary(run: Run, ref: dict[str, np.ndarray], scale: float) -> dict[str
 
 
 def report(exp: Experiment, integrator: str, dt: float, backend: str, stability: dict[str, Any]) -> dict[str, Any]:
-    """The JSON report (keys as issue #10 names them, plus the runs' details)."""
+    """The JSON report (the keys of docs/results.md's experiment, plus the runs' details)."""
     plan, ref = exp.plan, exp.reference
     names = joint_names(plan.robot)
     horizon = float(ref["t"][-1])
@@ -333,7 +333,7 @@ def physics_check(exp: Experiment, scale: float) -> dict[str, Any]:
                   "pd": exp.runs["pd"]}
     kp, kd = pd_gains(exp.plan.robot)
     laws = {"ik": "id_r's joint torques (roll unactuated)", "plus_1pct": "1.01 x id_r's joint torques",
-            "pd": f"1.01 x id_r's joint torques + joint PD (kp {kp:g} N m/rad, kd {kd:g} N m s/rad) to the IK reference"}
+            "pd": f"1.01 x id_r's joint torques + joint PD (kp {kp:g} N m/rad, kd {kd:g} N m s/rad) to the IK plan"}
     out: dict[str, Any] = {"departure_threshold_pct_of_max_joint_angle": DEPARTURE_PCT,
                            "max_joint_angle_rad": scale}
     for name, rigid in exp.rigid.items():

@@ -1,4 +1,4 @@
-"""The IK reference of a gait plan: joint angles, rates and accelerations (docs/formulation.md §9.2).
+"""The IK plan of a gait: joint angles, rates and accelerations (docs/experiment.md §3).
 
 The trunk follows ``Plan.trunk`` with R = I, so each foot's position relative to the trunk,
 in the trunk frame, is r = P - p, with rate Pd - pd and classical acceleration Pdd - pdd. Leg

@@ -1,4 +1,4 @@
-"""Full-coordinate rigid-contact dynamics along a gait plan: the physics check (docs/formulation.md §9.4).
+"""Full-coordinate rigid-contact dynamics along a gait plan: the physics check (docs/experiment.md §5).
 
 Nothing here uses the paper's model: the robot is Pinocchio's free-flyer model (q = (p, quat x
 y z w, 12 joints), v = (v_b, omega_b, qd), project order) with the stance feet as rigid point

@@ -1,4 +1,4 @@
-"""Forward simulation of the paper's reduced dynamics along a gait plan (docs/formulation.md §6, §9.3).
+"""Forward simulation of the paper's reduced dynamics along a gait plan (docs/formulation.md §6, docs/experiment.md §4).
 
 State: the reduced coordinates q_r (12 joint angles in FL, FR, BL, BR x HAA, HFE, KFE order,
 + the trunk roll phi for a gait with two-feet phases) and their rates. The trunk orientation
@@ -8,7 +8,7 @@ each foot landed: the plan's, to round-off, while the run follows IK) and the ro
 quat) with the stance of the plan's phase. The state is kept on the stance closure
 (``project_on_stance``) after every step.
 
-Torques (``TorqueLaw``): tau_ext(t) = scale * id_r(IK reference at t) + Kp (q_ref - q) + Kd (qd_ref
+Torques (``TorqueLaw``): tau_ext(t) = scale * id_r(IK plan at t) + Kp (q_ref - q) + Kd (qd_ref
 - qd) on the 12 joints; the 13th (roll) entry is id_r's roll moment when ``roll_applied`` (the
 paper's check: the moment applied as if actuated) and 0 otherwise (unactuated, as on a robot).
 
@@ -60,13 +60,13 @@ FALLEN_TRUNK_M = 0.1
 RTOL = 1e-13
 
 #: The error budget's truncation estimate is a run at this many times RTOL: DOP853's error is
-#: proportional to its tolerance (measured on the walks of the paper robot and go2, 2026-12-02:
+#: proportional to its tolerance (measured on the walks of the paper robot and go2:
 #: error ~ rtol^0.8-0.9 from 1e-11 to 1e-13), so the 'paper' run's own truncation error is
 #: |coarse - paper| / (factor - 1). A tighter run cannot measure it: below ~3e-14 a double run is
 #: limited by its own round-off, which grows with the number of steps (go2's walk: 5.0e-5 % at
 #: 1e-13, 3.7e-5 / 4.2e-5 % at 3e-14 / 1e-14), and a run at RTOL / 10 differed from the 'paper' run
 #: by less than the paper run's own truncation (go2's walk looked 3-40x over its error budget).
-#: Measured against a long-double run (native_run, 2026-12-02): go2's truncation at 1e-13 is
+#: Measured against a long-double run (native_run): go2's truncation at 1e-13 is
 #: 2.8e-5 % (this estimate: 4.4e-5) and its round-off 2.2e-5 % (the one-ulp twin: 8e-6), so the
 #: budget's sum meets the total by compensation (docs/results.md, what limits the walks).
 TRUNCATION_RTOL_FACTOR = 10.0
@@ -358,7 +358,7 @@ def project_on_stance(robot: Robot, stance: tuple[int, ...], holds: np.ndarray, 
     are redundant -- 12 for 9 degrees of freedom with three feet, 13 for 12 with two -- and the
     paper's ODE does not keep the closure: its drift off it is the fastest-growing error. Right
     after a touch-down whose foot lands moving, the rate projection is a kinematic impact."""
-    from quadruped_dyn.references.pinocchio import roll_rate_row  # its rounding is the experiment's (issue 19 rewrites this)
+    from quadruped_dyn.references.pinocchio import roll_rate_row  # its rounding is the experiment's
 
     feet_of = robot_feet(robot)
     n = y.size // 2

@@ -4,8 +4,8 @@ from quadruped_dyn.exports import lazy_exports
 
 _MODULES: dict[str, tuple[str, ...]] = {
     "hermite": ("BASIS", "weights", "interpolate"),
-    "outputs": ("COORDINATES", "SAMPLES_PER_CYCLE", "output_paths", "coordinate_names", "per_node_residuals", "plan_effort",
-                "walk_feasibility", "report", "write_csv", "plot", "write_outputs"),
+    "trajectory_files": ("COORDINATES", "SAMPLES_PER_CYCLE", "output_paths", "coordinate_names", "per_node_residuals",
+                         "plan_effort", "walk_feasibility", "report", "write_csv", "plot", "write_outputs"),
     "replay": ("REPLAY_DT", "OptimizedTrajectory", "Replay", "replay_rigid", "node_count"),
     "node": ("N_X", "ROLL", "NodeFunctions", "node_functions", "euler_rotation", "euler_quaternion", "com_position",
              "trunk_quaternion"),

@@ -1,4 +1,4 @@
-"""The NLP's derivatives for IPOPT, assembled from the transcription's blocks (docs/optimal_control.md, "Solve").
+"""The NLP's derivatives for IPOPT, assembled from the transcription's blocks (docs/optimal_control.md, "Formulation").
 
 Every nonlinear block of the constraints is one of a few SX Functions f evaluated at z = A w + b
 (A constant and sparse, ``transcription.Piece``); the rest of g is linear (the spline's continuity

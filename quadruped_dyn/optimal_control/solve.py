@@ -8,7 +8,12 @@ bounds, not taken from IPOPT) at most MAX_CONSTRAINT_VIOLATION. Callers must che
 
 from __future__ import annotations
 
+import contextlib
+import io
+import sys
 import time
+from collections.abc import Iterator
+from contextlib import contextmanager
 from dataclasses import dataclass
 from typing import Any
 
@@ -58,6 +63,20 @@ def constraint_violation(tr: Transcription, w: np.ndarray, g: np.ndarray) -> flo
     return float(max(gv.max(initial=0.0), wv.max(initial=0.0)))
 
 
+@contextmanager
+def casadi_interrupt_warning_dropped() -> Iterator[None]:
+    """CasADi reports the KeyboardInterrupt that stops IPOPT with its own WARNING line on sys.stderr; the command
+    reports the interrupt itself ("interrupted"), so that line is dropped and every other line passed on after the block."""
+    captured = io.StringIO()
+    try:
+        with contextlib.redirect_stderr(captured):
+            yield
+    finally:
+        kept = [line for line in captured.getvalue().splitlines(keepends=True) if "KeyboardInterruptException" not in line]
+        if kept:
+            sys.stderr.write("".join(kept))
+
+
 def solve(tr: Transcription, hessian: str = "exact", expand: bool = False, w0: np.ndarray | None = None,
           verbose: bool = False) -> Solution:
     """IPOPT from the plan (``tr.w0``) or ``w0``."""
@@ -74,7 +93,8 @@ def solve(tr: Transcription, hessian: str = "exact", expand: bool = False, w0: n
     solver = ca.nlpsol("gait_cycle", "ipopt", tr.nlp, nlp_opts)
     build = time.perf_counter() - start
     start, cpu = time.perf_counter(), time.process_time()
-    with interrupts_deferred(stop=True):  # CasADi would swallow the handler's exception: 'did not converge'
+    # CasADi would swallow the handler's exception ('did not converge') and report it on sys.stderr
+    with casadi_interrupt_warning_dropped(), interrupts_deferred(stop=True):
         sol = solver(x0=tr.w0 if w0 is None else w0, lbx=tr.lbw, ubx=tr.ubw, lbg=tr.lbg, ubg=tr.ubg)
     seconds, cpu = time.perf_counter() - start, time.process_time() - cpu
     stats = solver.stats()

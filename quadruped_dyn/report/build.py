@@ -31,12 +31,15 @@ from functools import partial
 from pathlib import Path
 from typing import Any
 
-from quadruped_dyn.checks.limits import CHECK_SAMPLES, check_samples
+from quadruped_dyn.checks.sample_counts import CHECK_SAMPLES, check_samples
+from quadruped_dyn.files.cache import writable_cache
 from quadruped_dyn.files.names import printable
 from quadruped_dyn.files.paths import writable_dir
 from quadruped_dyn.files.provenance import check_source, record_source
 from quadruped_dyn.files.safe_write import dir_place, output_dir, output_path, output_set, publish, replaceable, write_text
-from quadruped_dyn.model.robot import Robot, robot_path, urdf_source
+from quadruped_dyn.model.registry import robot_path
+from quadruped_dyn.model.robot import Robot
+from quadruped_dyn.model.robot_identity import urdf_source
 from quadruped_dyn.progress import Steps
 from quadruped_dyn.report import warm
 from quadruped_dyn.report.gather import (
@@ -91,6 +94,7 @@ def prepare(robot_arg: str, out: str | Path, samples: int = CHECK_SAMPLES) -> tu
     # what is in the way of the publish (minutes later) is refused now
     replaceable([target / "report.html"])  # a directory in its place
     dir_place(target, C_FOLDER)  # a link or a file in place of the generated C's folder
+    writable_cache()  # its steps build C there
     return urdf, writable_dir(target, f"--out '{target}'", "a writable --out directory")
 
 

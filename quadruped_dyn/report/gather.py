@@ -39,7 +39,7 @@ C_FOLDER = "c"
 
 #: Libraries whose versions the page records.
 LIBRARIES = ("quadruped_dyn", "pin", "casadi", "numpy", "sympy", "matplotlib", "example-robot-data", "click",
-             "nbclient", "ipykernel", "markdown-it-py", "pygments")
+             "nbclient", "ipykernel", "markdown-it-py", "pygments", "mujoco", "idyntree", "drake", "adam-robotics")
 
 def load_with_warnings(robot_arg: str, foot_frames: object = None) -> tuple[Robot, list[str]]:
     """The robot (``foot_frames`` as ``load_robot``'s), and every warning raised while loading it (Python warnings,
@@ -150,10 +150,10 @@ def experiment(robot: Robot, out: Path, progress: Any = None) -> tuple[dict[str,
     ``validate`` writes them. ``progress``: a ``quadruped_dyn.progress.Steps`` whose current
     step gets a bar of the simulated seconds and runs."""
     from quadruped_dyn.experiment.gait import GAITS
-    from quadruped_dyn.experiment.outputs import output_paths, plot_br_hfe, plot_physics_check
     from quadruped_dyn.experiment.paper_experiment import report as validation_report
     from quadruped_dyn.experiment.paper_experiment import run_experiment, static_stability
     from quadruped_dyn.experiment.simulate import reduced_dynamics
+    from quadruped_dyn.experiment.validation_files import output_paths, plot_br_hfe, plot_physics_check
     from quadruped_dyn.files.json import write_json
 
     validations: dict[str, dict[str, Any] | None] = {}
@@ -184,7 +184,7 @@ def generate_c_directory(robot: Robot, directory: Path) -> tuple[GeneratedFiles,
     with the warm process, and the benchmark times these files (``run_bench(checked_c=...)``)."""
     import casadi as ca
 
-    from quadruped_dyn.checks.c_reference import reference_header, reference_header_name
+    from quadruped_dyn.checks.check_program_values import reference_header, reference_header_name
     from quadruped_dyn.codegen.emit import generate
 
     generated: dict[str, Any] = {}
@@ -201,7 +201,7 @@ def generated_c(robot: Robot, out: Path, progress: Any = None) -> tuple[dict[str
     solves and the reduced model of every stance set), compile (cached) and compare each
     function with Pinocchio at the fixed reference state, as the generated ``check_qd`` does;
     ``progress(k, n)`` after the k-th of n functions checked. (The section's data, the files.)"""
-    from quadruped_dyn.checks.c_reference import reference_state
+    from quadruped_dyn.checks.check_program_values import reference_state
     from quadruped_dyn.codegen.emit import PREFIX
     from quadruped_dyn.codegen.library import compiled_library
     from quadruped_dyn.dynamics.formulas import shapes
@@ -232,9 +232,9 @@ C_CHECK_MAX_TOL = 1e-2
 def c_function_check(robot: Robot, library: Any, f: Any, s: Any, expected: list[np.ndarray] | None = None) -> dict[str, Any]:
     """One compiled function at the reference state ``s`` against Pinocchio: the relative error
     (to the largest reference output), its tolerance scaled by the state's conditioning
-    (``c_reference.tolerance_scale``), and pass / FAIL / skipped with the reason, as check_qd.
+    (``check_program_values.tolerance_scale``), and pass / FAIL / skipped with the reason, as check_qd.
     ``expected``: Pinocchio's outputs at ``s`` if already computed (``reference_header``'s)."""
-    from quadruped_dyn.checks.c_reference import (
+    from quadruped_dyn.checks.check_program_values import (
         pinocchio_outputs,
         reduced_inputs,
         reference_tau_full,
@@ -250,7 +250,7 @@ def c_function_check(robot: Robot, library: Any, f: Any, s: Any, expected: list[
 
     name = f.name()[len(PREFIX):]
     ref = PinocchioReference(robot)
-    # the inputs and the tolerance of check_qd's case (c_reference.reference_header): the derivatives
+    # the inputs and the tolerance of check_qd's case (check_program_values.reference_header): the derivatives
     # take tau_full, w and dq too, and a finite-difference reference has its own accuracy (tol_floor)
     inputs = {"q": s.q, "v": s.v, "a": s.a, "f": s.f.ravel(), "tau_full": reference_tau_full(s), **reduced_inputs(s),
               **wrench_inputs(s)}
@@ -359,9 +359,9 @@ def optimal_trot(robot: Robot, out: Path) -> tuple[dict[str, Any], str]:
     """The trot optimised on the reduced model (``optimize``'s defaults) and replayed open loop in the
     rigid-contact dynamics for two cycles: the JSON dict and the plot, written beside the report."""
     from quadruped_dyn.experiment.gait import TROT
-    from quadruped_dyn.optimal_control.outputs import output_paths, report, write_outputs
     from quadruped_dyn.optimal_control.replay import replay_rigid
     from quadruped_dyn.optimal_control.solve import solve
+    from quadruped_dyn.optimal_control.trajectory_files import output_paths, report, write_outputs
     from quadruped_dyn.optimal_control.transcription import transcribe
 
     sol = solve(transcribe(robot, TROT))
@@ -376,7 +376,7 @@ def optimal_trot(robot: Robot, out: Path) -> tuple[dict[str, Any], str]:
 CROSS_LIBRARY_SAMPLES = 20
 
 def cross_library(robot: Robot) -> dict[str, Any]:
-    """MuJoCo and iDynTree as references, as ``check --against`` runs them, for each of them
+    """The other libraries as references, as ``check --against all`` runs them, for each of them
     that is installed (the ``xlib`` extra, which ``./run`` installs): ``cross_library`` rows,
     ``model_changes``, ``cross_library_passed``; ``cross_library_note`` says what was not run."""
     import importlib.util
@@ -418,8 +418,8 @@ def closed_loop(robot: Robot, out: Path, cycles: int = 10) -> dict[str, Any]:
     per gait the JSON as ``control --json`` prints it, the plots (PNG bytes) and the animation
     (GIF bytes, or why there is none); the files are written to ``out`` too."""
     from quadruped_dyn.control.closed_loop import prepare, run_all
-    from quadruped_dyn.control.outputs import best_controller, rendering_available, write_all
     from quadruped_dyn.control.run import LoopOptions
+    from quadruped_dyn.control.study_files import best_controller, rendering_available, write_all
 
     rendering, why = rendering_available()
     gaits: dict[str, Any] = {}

@@ -119,10 +119,14 @@ def cross_library_html(check: dict[str, Any]) -> str:
     """The ``check --against`` part of ``check``: ``cross_library`` rows (library, term,
     max_rel_err vs Pinocchio, max_rel_err_vs_quadruped_dyn, max_rel_err_same_model,
     model_change, explained_by, tol, passed), ``model_changes`` (library, kind, links, detail,
-    in_comparison, size) and ``cross_library_note`` (what was not run, and why)."""
+    in_comparison, size), ``conformance`` (library -> term -> status, why) and ``cross_library_note``
+    (what was not run, and why)."""
     rows, changes, note = check.get("cross_library"), check.get("model_changes") or [], check.get("cross_library_note")
     if not rows:
-        return not_available("cross-library comparison (MuJoCo, iDynTree)" + (f"; {note}" if note else ""))
+        return not_available("cross-library comparison (Pinocchio as loaded, MuJoCo, iDynTree, Drake, adam)"
+                             + (f"; {note}" if note else ""))
+    missing = [f"{lib}: {term} ({row.get('why', '')})" for lib, terms in (check.get("conformance") or {}).items()
+               for term, row in terms.items() if row.get("status") in ("not computed", "not compared")]
     out = [f"<p>The same URDF through each library, converted to the project's conventions by its adapter "
            f"(docs/conventions.md §10), on {esc(check.get('cross_library_samples', '?'))} random states. A term passes "
            "when the library agrees with Pinocchio on the model it was given and any difference from the original "
@@ -143,6 +147,8 @@ def cross_library_html(check: dict[str, Any]) -> str:
               "yes" if c.get("in_comparison") else "no",
               ", ".join(f"{t} {num(v, '.1e')}" for t, v in (c.get("size") or {}).items()) or "—"] for c in changes],
             "model diagnosis"))
+    if missing:
+        out.append(f'<p class="na">Not compared: {esc("; ".join(missing))}</p>')
     if note:
         out.append(f'<p class="na">{esc(note)}</p>')
     return "\n".join(out)
@@ -298,7 +304,7 @@ def instability_html(inst: dict[str, Any]) -> str:
              num(b.get("truncation_pct"), ".1e")] for k, b in budget.items() if isinstance(b, dict)]
     out = (f"<p>Open-loop instability: a one-ulp perturbation of the initial state grows at "
            f"{num(inst.get('growth_rate_per_s'), '.2g')} /s, to {num(inst.get('one_ulp_grows_to_rad'), '.1e')} rad by the "
-           "end (docs/formulation.md §10).</p>")
+           "end (docs/experiment.md §6).</p>")
     if rows:
         out += table(["signal", "total %", "round-off %", "truncation %"], rows,
                      "error budget, worst joint: round-off = the one-ulp twin's % difference, truncation = the "
@@ -586,7 +592,10 @@ def closed_loop_section(loop: dict[str, Any] | None) -> Section:
              "the foot contact switches). pd: joint PD; ff+pd: id_r at the plan + PD; ct: computed torque, id_r at the "
              "measured state with the feedback inside (through M_r); ct-diag: id_r at the measured state + the feedback "
              "with a positive diagonal inertia estimate, run by the drivers; pd-diag: the same gains without the model; "
-             "+level: the reference levelled by the IMU; +step: capture-point foot placement. See docs/closed_loop.md.</p>"]
+             "+level: the reference levelled by the IMU; +step: capture-point foot placement; wbc: a whole-body QP over "
+             "(v̇, f) on the generated M_full, nle_full and feet_full (floating-base rows, still contact feet, friction "
+             "pyramids, torque limits; trunk velocity by leg odometry) + the drivers' pd-diag PD; mpc+wbc: wbc tracking "
+             "the forces of a 50 Hz convex MPC of the locked-joint rigid body. See docs/closed_loop.md.</p>"]
     headlines = []
     for gait, g in loop["gaits"].items():
         d = g.get("data", {})

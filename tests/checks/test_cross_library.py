@@ -1,4 +1,5 @@
-"""Cross-library suite (``check --against``): MuJoCo and iDynTree against Pinocchio and the toolkit.
+"""Cross-library suite (``check --against``): Pinocchio as loaded, MuJoCo, iDynTree, Drake and adam
+against Pinocchio and the toolkit (Drake's and adam's conventions: tests/references/test_drake_adam.py).
 
 The library tests need the optional extra ``quadruped_dyn[xlib]`` (``./run test`` installs it)
 and skip with that reason otherwise. URDF variants that exercise each model diagnosis are
@@ -20,9 +21,10 @@ from quadruped_dyn.cli import main
 from quadruped_dyn.errors import InputError
 from quadruped_dyn.math.compare import relative_error
 from quadruped_dyn.model import paper_robot
-from quadruped_dyn.model.robot import ROBOT_NAMES, load_robot
+from quadruped_dyn.model.registry import ROBOT_NAMES
+from quadruped_dyn.model.robot import load_robot
 from quadruped_dyn.model.state import random_state, rotation
-from quadruped_dyn.references.interface import ModelChange, Prepared, max_rel_errors
+from quadruped_dyn.references.interface import ModelChange, PinocchioTerms, Prepared, max_rel_errors
 from quadruped_dyn.references.pinocchio import PinocchioReference
 from quadruped_dyn.tolerances import REL_TOL_TERMS
 from tests.conftest import assert_close
@@ -31,11 +33,19 @@ SAMPLES = 3
 _MISSING = "needs the optional extra: pip install 'quadruped_dyn[xlib]'"
 needs_mujoco = pytest.mark.skipif(importlib.util.find_spec("mujoco") is None, reason=f"mujoco {_MISSING}")
 needs_idyntree = pytest.mark.skipif(importlib.util.find_spec("idyntree") is None, reason=f"idyntree {_MISSING}")
+needs_drake_adam = pytest.mark.skipif(importlib.util.find_spec("pydrake") is None or importlib.util.find_spec("adam") is None,
+                                      reason=f"drake and adam {_MISSING}")
+#: Every library ``check --against all`` compares.
+ALL = ("pinocchio", "mujoco", "idyntree", "drake", "adam")
 #: Other example-robot-data quadrupeds, given by path.
 OTHER_QUADRUPEDS = ("b1_description/urdf/b1.urdf", "laikago_description/urdf/laikago.urdf",
                     "anymal_b_simple_description/robots/anymal.urdf")
 #: Built-in robots MuJoCo refuses (a 1e-6 dummy base link, or camera/hatch inertias).
 MUJOCO_REFUSES = {"go1", "hyq", "anymal_c"}
+#: Built-in robots whose inertias Drake regularises (the same links), and those adam refuses as
+#: written (an <inertial> without <origin>: the feet of a1 and go1, hyq's base_link and feet).
+DRAKE_REGULARISES = MUJOCO_REFUSES
+ADAM_REFUSES = {"a1", "go1", "hyq"}
 
 
 def _kinds(changes: list[ModelChange], library: str) -> set[str]:
@@ -43,7 +53,7 @@ def _kinds(changes: list[ModelChange], library: str) -> set[str]:
 
 
 def _assert_all_pass(report: cross_library.CrossLibraryReport, libraries: tuple[str, ...]) -> None:
-    assert {r.library for r in report.results} == set(libraries)
+    assert {r.library for r in report.results} == set(libraries) and report.passed
     for r in report.results:
         assert r.passed, r
         assert r.max_rel_err_same_model <= REL_TOL_TERMS, r
@@ -60,9 +70,11 @@ def test_against_names_the_package_to_install_when_missing(monkeypatch):
 
 
 @pytest.mark.parametrize(("against", "expected"), [
-    ("bullet", "unknown library 'bullet' in --against; expected a comma-separated subset of: mujoco, idyntree"),
-    ("mujoco,drake", "unknown library 'drake'"),
-    (",", "--against is empty; expected a comma-separated subset of"),
+    ("bullet", "unknown library 'bullet' in --against; expected all, or a comma-separated subset of: pinocchio, mujoco, "
+               "idyntree, drake, adam"),
+    ("mujoco,bullet", "unknown library 'bullet'"),
+    ("all,drake", "--against 'all,drake' names all beside libraries"),
+    (",", "--against is empty; expected all, or a comma-separated subset of"),
 ])
 def test_against_bad_library_list_is_exit_2_before_loading(against, expected):
     result = CliRunner().invoke(main, ["check", "no-such-robot", "--against", against])
@@ -80,14 +92,25 @@ def test_rel_err_fails_on_non_finite():
 # ---------------------------------------------------------------------------- every robot, both libraries
 @needs_mujoco
 @needs_idyntree
+@needs_drake_adam
 @pytest.mark.parametrize("name", ROBOT_NAMES)
 def test_builtin_robots_agree_or_explain(name):
-    report = run_cross_library(load_robot(name), ("mujoco", "idyntree"), SAMPLES, seed=1)
-    _assert_all_pass(report, ("mujoco", "idyntree"))
-    for r in report.results:  # no built-in robot needs a change of its dynamics for either library
-        assert r.max_rel_err <= REL_TOL_TERMS and r.max_rel_err_vs_quadruped_dyn <= REL_TOL_TERMS, r
+    report = run_cross_library(load_robot(name), ALL, SAMPLES, seed=1)
+    _assert_all_pass(report, ALL)
+    for r in report.results:  # only Drake's regularised inertias change a built-in robot's dynamics
+        if r.library == "drake" and name in DRAKE_REGULARISES and r.term in ("M", "C+G", "inverse dynamics"):
+            assert r.max_rel_err > REL_TOL_TERMS and r.explained_by == ["regularised_inertia"], r
+            assert r.max_rel_err_same_model <= REL_TOL_TERMS, r
+        else:
+            assert r.max_rel_err <= REL_TOL_TERMS and r.max_rel_err_vs_quadruped_dyn <= REL_TOL_TERMS, r
     assert ("refused" in _kinds(report.changes, "mujoco")) == (name in MUJOCO_REFUSES)
-    assert "refused" not in _kinds(report.changes, "idyntree")
+    assert ("regularised_inertia" in _kinds(report.changes, "drake")) == (name in DRAKE_REGULARISES)
+    assert ("refused" in _kinds(report.changes, "adam")) == (name in ADAM_REFUSES)
+    assert "refused" not in _kinds(report.changes, "idyntree") | _kinds(report.changes, "drake")
+    damped = [j for j in ET.parse(load_robot(name).urdf).getroot().findall("joint")
+              if float(j.find("dynamics").get("damping", "0") if j.find("dynamics") is not None else 0.0) != 0.0]
+    assert ("joint_damping" in _kinds(report.changes, "drake")) == bool(damped)  # named, left out of every term
+    assert {lib: list(terms) for lib, terms in report.not_computed.items()} == {"adam": ["inverse dynamics"]}
 
 
 @needs_mujoco
@@ -163,9 +186,9 @@ def test_joints_mapped_by_name():
     robot = load_robot("anymal_c")
     assert list(robot.idx_v) != sorted(robot.idx_v)
     states = [random_state(robot.lower, robot.upper, np.random.default_rng(5))]
-    lib = idyntree_prepare(robot, states, PinocchioReference(robot)).reference
+    lib = idyntree_prepare(robot, states, PinocchioTerms(robot)).reference
     assert lib is not None
-    errors = max_rel_errors(lib, PinocchioReference(robot), states)
+    errors = max_rel_errors(lib, PinocchioTerms(robot), states)
     assert max(errors.values()) <= REL_TOL_TERMS, errors
 
 
@@ -195,15 +218,22 @@ def _welded(root: ET.Element, name: str, parent: str, inertial: str | None, coll
     ET.SubElement(joint, "child", link=name)
 
 
-def _dummy_root(root: ET.Element) -> None:
-    """A new root link 'base' with the 1e-6 dummy inertia of b1/go1/anymal_b (rank 1), welded to the trunk."""
+def new_root(root: ET.Element, inertial: str, xyz: str | None = None) -> None:
+    """A new root link 'base' with this inertial, welded to the trunk (without an <origin>, or at xyz)."""
     link = ET.Element("link", name="base")
-    link.append(ET.fromstring('<inertial><mass value="1e-6"/><inertia ixx="1e-6" ixy="1e-6" ixz="1e-6" iyy="1e-6" '
-                              'iyz="1e-6" izz="1e-6"/></inertial>'))
+    link.append(ET.fromstring(inertial))
     root.insert(0, link)
     joint = ET.SubElement(root, "joint", name="base_to_trunk", type="fixed")
+    if xyz is not None:
+        ET.SubElement(joint, "origin", xyz=xyz, rpy="0 0 0")  # the toolkit takes the trunk unrotated
     ET.SubElement(joint, "parent", link="base")
     ET.SubElement(joint, "child", link="trunk")
+
+
+def _dummy_root(root: ET.Element) -> None:
+    """A new root link 'base' with the 1e-6 dummy inertia of b1/go1/anymal_b (rank 1), welded to the trunk."""
+    new_root(root, '<inertial><mass value="1e-6"/><inertia ixx="1e-6" ixy="1e-6" ixz="1e-6" iyy="1e-6" iyz="1e-6" '
+             'izz="1e-6"/></inertial>')
 
 
 _CAMERA = ('<inertial><origin xyz="-0.021 -0.002 0.025" rpy="0 0 0"/><mass value="0.16"/><inertia ixx="0.000637051" '
@@ -253,13 +283,14 @@ def test_moving_link_breaking_triangle_is_balanced_as_mujoco_does(tmp_path, monk
     that copy, so the difference from the original is the named change, and it is large.
     The toolkit itself refuses such a leg link (docs/reliability.md §2, urdf_rules); the comparison is
     exercised with that validation bypassed."""
-    import quadruped_dyn.model.robot
+    import quadruped_dyn.model.leg_discovery
+    import quadruped_dyn.model.urdf_parsing
 
     path = _variant(tmp_path, "thigh", _thigh_breaks_triangle)
     with pytest.raises(InputError, match=r"link 'FL_thigh' .*triangle inequality"):
         load_robot(path)
-    monkeypatch.setattr(quadruped_dyn.model.robot, "validate_urdf", lambda path, data=None: [])
-    monkeypatch.setattr(quadruped_dyn.model.robot, "inertia_problem", lambda moments: None)  # the merged-body check
+    monkeypatch.setattr(quadruped_dyn.model.urdf_parsing, "validate_urdf", lambda path, data=None: [])
+    monkeypatch.setattr(quadruped_dyn.model.leg_discovery, "inertia_problem", lambda moments: None)  # the merged-body check
     robot = load_robot(path, cached=False)
     report = run_cross_library(robot, ("mujoco",), SAMPLES, seed=7)
     _assert_all_pass(report, ("mujoco",))
@@ -322,7 +353,7 @@ def test_a_merge_that_changes_the_dynamics_is_not_an_explanation(monkeypatch, tm
 
     monkeypatch.setattr(mujoco_ref, "merge_inertial", heavier_merge)
     report = run_cross_library(load_robot(_variant(tmp_path, "dummy", _dummy_root)), ("mujoco",), SAMPLES, seed=10)
-    assert {r.term for r in report.results if not r.passed} == {"M", "C+G", "G"}
+    assert {r.term for r in report.results if not r.passed} == {"M", "C+G", "G", "inverse dynamics"}
 
 
 def _continuous_knees(root: ET.Element) -> None:
@@ -333,28 +364,33 @@ def _continuous_knees(root: ET.Element) -> None:
 
 @needs_mujoco
 @needs_idyntree
+@needs_drake_adam
 def test_continuous_joints_and_json_report(tmp_path):
-    """Continuous knees: (cos, sin) in Pinocchio's q, an angle in MuJoCo's and iDynTree's; the JSON
-    report carries one `cross_library` entry per library and term."""
+    """Continuous knees: (cos, sin) in Pinocchio's q, an angle in the other libraries'; the JSON
+    report (``--against all``) carries one `cross_library` entry per library and term it computes,
+    and the conformance table every library and term."""
     import json
 
     path = _variant(tmp_path, "continuous", _continuous_knees)
     assert list(load_robot(path).joint_nq) == [1, 1, 2] * 4
-    result = CliRunner().invoke(main, ["check", path, "--samples", "2", "--json", "--against", "mujoco,idyntree"])
+    result = CliRunner().invoke(main, ["check", path, "--samples", "2", "--json", "--against", "all"])
     assert result.exit_code == 0, result.output
     data = json.loads(result.stdout)
     entries = data["cross_library"]
-    assert {(e["library"], e["term"]) for e in entries} == {(lib, t) for lib in ("mujoco", "idyntree")
-                                                             for t in cross_library.TERMS}
+    assert {(e["library"], e["term"]) for e in entries} == {(lib, t) for lib in ALL for t in cross_library.TERMS} - {
+        ("adam", "inverse dynamics")}
     assert all(e["passed"] and e["max_rel_err"] <= REL_TOL_TERMS for e in entries)
-    assert data["passed"] and {c["kind"] for c in data["model_changes"]} >= {"fused_links"}
+    assert data["passed"] and {c["kind"] for c in data["model_changes"]} >= {"fused_links", "welded_bodies"}
+    statuses = {(lib, t): row["status"] for lib, terms in data["conformance"].items() for t, row in terms.items()}
+    assert len(statuses) == len(ALL) * len(cross_library.TERMS) and data["cross_library_unexplained"] == 0
+    assert statuses.pop(("adam", "inverse dynamics")) == "not computed" and set(statuses.values()) == {"agrees"}
 
 
 @pytest.mark.parametrize("against", ["mujoco,idyntree", "mujoco", "idyntree,mujoco"])
 def test_a_library_asked_for_and_not_compared_fails(monkeypatch, paper, against):
     """MuJoCo refusing the URDF and its edited copy compares nothing: the check fails (exit 1) and
     says which library was not compared and why, in the table and the JSON; iDynTree's rows alone
-    are not a pass (#18 item 5)."""
+    are not a pass."""
     import json
 
     from quadruped_dyn.references import mujoco as mujoco_ref
@@ -366,7 +402,7 @@ def test_a_library_asked_for_and_not_compared_fails(monkeypatch, paper, against)
     report = run_cross_library(paper, against.split(","), samples=2)
     assert not report.passed and list(report.not_compared) == ["mujoco"]
     assert "refuses the edited copy too" in report.not_compared["mujoco"]
-    assert "mujoco    (nothing)       not compared: MuJoCo refuses" in report.table()
+    assert "mujoco    (nothing)         not compared: MuJoCo refuses" in report.table()
     assert "NOT COMPARED: mujoco" in report.table()
     if against != "mujoco,idyntree":
         return  # the command line once (it runs the whole term check first)

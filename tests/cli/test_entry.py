@@ -22,7 +22,7 @@ def _script_code() -> str:
 
 @pytest.mark.parametrize("launch", [["-m", "quadruped_dyn.cli"], ["-c", _script_code()]], ids=["module", "script"])
 def test_ctrl_c_while_importing_is_one_line_and_exit_130(launch: list[str]) -> None:
-    """Found by a review (2026-12-06): Ctrl-C in the first ~2 s of any command, while the CLI imported
+    """Found by a review: Ctrl-C in the first ~2 s of any command, while the CLI imported
     its heavy modules, printed a KeyboardInterrupt traceback. The signal is sent while numpy imports (the
     first of them; ``-X importtime`` lines on stderr say when), long before Pinocchio's import ends."""
     proc = subprocess.Popen([sys.executable, "-X", "importtime", *launch, "robots"], stdout=subprocess.PIPE,

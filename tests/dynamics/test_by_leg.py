@@ -11,7 +11,8 @@ import pytest
 from quadruped_dyn.dynamics.by_leg import id_full_pieces, mass_blocks, mass_matrix_pieces
 from quadruped_dyn.dynamics.leg_template import LegPieces
 from quadruped_dyn.dynamics.newton_euler import full_dynamics
-from quadruped_dyn.model.robot import ROBOT_NAMES, load_robot
+from quadruped_dyn.model.registry import ROBOT_NAMES
+from quadruped_dyn.model.robot import load_robot
 from quadruped_dyn.model.state import random_state
 from quadruped_dyn.tolerances import REL_TOL_GRAPH
 from tests.conftest import assert_close

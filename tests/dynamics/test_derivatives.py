@@ -7,10 +7,11 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from quadruped_dyn.checks.derivative_reference import ReducedReference, central, grf_derivatives_reference
+from quadruped_dyn.checks.finite_differences import ReducedFiniteDifferences, central, grf_derivatives_by_differences
 from quadruped_dyn.dynamics.derivatives import full_derivatives, grf_derivatives, reduced_derivatives
 from quadruped_dyn.errors import InputError, NumericalError
-from quadruped_dyn.model.robot import ROBOT_NAMES, load_robot
+from quadruped_dyn.model.registry import ROBOT_NAMES
+from quadruped_dyn.model.robot import load_robot
 from quadruped_dyn.model.stance import stance_set
 from quadruped_dyn.model.state import random_state, rotation
 from quadruped_dyn.references.pinocchio import PinocchioDerivatives, PinocchioReference
@@ -112,7 +113,7 @@ def _check_reduced(robot, stance_name, seed=0):
     d = reduced_derivatives(robot, stance_name)
     q_r, qd, tau, quat = reduced_point(robot, d.n, np.random.default_rng(seed))
     ours = d.dfd_r(q_r, qd, tau, quat)
-    expected = ReducedReference(PinocchioReference(robot), d.stance).dfd_r(q_r, qd, tau, quat)
+    expected = ReducedFiniteDifferences(PinocchioReference(robot), d.stance).dfd_r(q_r, qd, tau, quat)
     assert np.all(ours[0][:, 12:] == 0.0)  # the roll is read from quat
     for name, o, e, tol in zip(("dqdd_dq", "dqdd_dqd", "M_r^-1", "dqdd_dtheta"), ours, expected,
                                (REL_TOL_FD_DERIVATIVES, REL_TOL_FD_DERIVATIVES, REL_TOL_DERIVATIVES, REL_TOL_FD_DERIVATIVES)):
@@ -135,7 +136,7 @@ def grf_point(robot, rng):
 def _check_grf(robot, stance_name, seed=0):
     q, v, a = grf_point(robot, np.random.default_rng(seed))
     ours = [np.array(x) for x in grf_derivatives(robot, stance_name)(q, v, a)]
-    expected = grf_derivatives_reference(PinocchioReference(robot), stance_set(stance_name), q, v, a)
+    expected = grf_derivatives_by_differences(PinocchioReference(robot), stance_set(stance_name), q, v, a)
     for name, o, e in zip(("dlambda_dq", "dlambda_dv", "dlambda_da"), ours, expected):
         assert_close(o, e, REL_TOL_FD_DERIVATIVES, f"{robot.name} dgrf_{stance_name} {name}")
 

@@ -13,7 +13,8 @@ from quadruped_dyn.dynamics.leg_template import leg_templates
 from quadruped_dyn.dynamics.rnea_derivatives import did_full_pieces
 from quadruped_dyn.model.leg import LegJoint
 from quadruped_dyn.model.leg_frames import axis_aligned
-from quadruped_dyn.model.robot import ROBOT_NAMES, load_robot
+from quadruped_dyn.model.registry import ROBOT_NAMES
+from quadruped_dyn.model.robot import load_robot
 from quadruped_dyn.model.state import random_state
 from quadruped_dyn.tolerances import REL_TOL_DERIVATIVES
 from tests.conftest import assert_close

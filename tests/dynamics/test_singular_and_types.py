@@ -1,4 +1,4 @@
-"""Finite nonsense is not an answer, and the Python API takes only what it can use (#18 items 4, 19).
+"""Finite nonsense is not an answer, and the Python API takes only what it can use.
 
 At collinear stance feet the GRF system loses rank and the symbolic reduced model returns finite
 values of ~1e15; with two front feet at zero pitch and roll the stance's regularity is 0 (M_r has

@@ -17,7 +17,8 @@ from quadruped_dyn.dynamics.kinematics import foot_position
 from quadruped_dyn.dynamics.reduced import reduced_maps
 from quadruped_dyn.dynamics.reduced_projection import reduced_projection
 from quadruped_dyn.dynamics.stance_maps import stance_maps
-from quadruped_dyn.model.robot import ROBOT_NAMES, load_robot
+from quadruped_dyn.model.registry import ROBOT_NAMES
+from quadruped_dyn.model.robot import load_robot
 from quadruped_dyn.tolerances import REL_TOL_GRAPH, REL_TOL_TERMS
 from tests.conftest import assert_close
 from tests.dynamics.test_leg_template import turned_robot

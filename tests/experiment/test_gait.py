@@ -1,4 +1,4 @@
-"""Gait plans (trot, statically stable walk) and the IK reference."""
+"""Gait plans (trot, statically stable walk) and the IK plan."""
 
 from __future__ import annotations
 
@@ -14,7 +14,8 @@ from quadruped_dyn.experiment.paper_experiment import static_stability
 from quadruped_dyn.experiment.plan_ik import feet_ik, reference, references
 from quadruped_dyn.experiment.simulate import CasadiReducedDynamics, IkTorques
 from quadruped_dyn.model.paper_robot import dh_form
-from quadruped_dyn.model.robot import ROBOT_NAMES, load_robot
+from quadruped_dyn.model.registry import ROBOT_NAMES
+from quadruped_dyn.model.robot import load_robot
 from tests.conftest import assert_close
 
 #: Central differences of the IK trajectory with step H: O(H^2) truncation on signals whose
@@ -27,7 +28,7 @@ REL_TOL_DIFF = 1e-5
 EPS = 1e-9
 C2_TOL = (2e-9, 2e-7, 2e-5)
 
-#: The walk's static-stability targets (docs/formulation.md §9.1): the CoM at least this far inside the
+#: The walk's static-stability targets (docs/experiment.md §2): the CoM at least this far inside the
 #: support triangle (m) at all times, and no stance foot pulling on the ground.
 MIN_COM_MARGIN_M = 0.02
 #: Static-stability samples in the tests, s (the CLI uses 5 ms; 20 ms keeps the sweep short).

@@ -85,14 +85,14 @@ def test_validate_writes_json_csv_and_plots(tmp_path):
 
 
 #: How far the error budget may fall short of the total: both terms are estimates. Measured against
-#: a long-double run (go2's walk, 2026-12-02, docs/results.md), the truncation estimate is 1.6x high
+#: a long-double run (go2's walk, docs/results.md), the truncation estimate is 1.6x high
 #: and the one-ulp twin 2.6-3.2x below the run's own round-off, which enters at every step, not only
 #: at the start; and one twin samples the round-off once (twins differ ~2x from run to run).
 BUDGET_SHORTFALL = 3.0
 
 #: Relative agreement of the growth rate predicted from the derivatives with the measured one: the
 #: measured rate of the one-ulp twin varies +-10 % between runs whose round-off differs (go2's walk: 6.4-7.8 /s
-#: over seven runs, 2026-12-02; 6.26 /s after the rnea leg by leg changed fd_r's round-off, 2026-12-06), because the
+#: over seven runs; 6.26 /s after the rnea leg by leg changed fd_r's round-off), because the
 #: round-off both runs accumulate starts ~10x above the propagated ulp; the test's twin starts ``GROWTH_TWIN_ULPS``
 #: up, so that its departure is the perturbation's.
 GROWTH_RATE_AGREEMENT = 0.2

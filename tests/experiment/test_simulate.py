@@ -113,7 +113,7 @@ def test_trot_with_the_roll_unactuated_departs_under_rigid_contacts(paper):
     (0.05, 1e-3, "euler", "unknown integrator 'euler'; expected dop853 or rk4"),
 ])
 def test_every_run_checks_its_times_before_the_work(paper, horizon, dt, integrator, message, monkeypatch):
-    """Found by a review (2026-12-06): the CLI checked these, the API did not: run_experiment and the
+    """Found by a review: the CLI checked these, the API did not: run_experiment and the
     simulations raised ValueError (a NaN horizon), ZeroDivisionError (dt 0), IndexError (dt < 0), a
     7 TiB MemoryError (1e9 s) or a TypeError (a str), after building the IK table. The messages name the
     parameters (they named the CLI's --horizon and --dt, which the API has not; the CLI passes its own names)."""

@@ -71,7 +71,7 @@ def test_c_check_program_fails_on_nan(tmp_path):
 
     work = tmp_path / "casadi_gen"
     shutil.copytree(Path(__file__).resolve().parents[2] / "casadi_gen", work, ignore=shutil.ignore_patterns("build"))
-    reference = work / "qd_paper_reference.h"
+    reference = work / "qd_paper-reference.h"
     text = reference.read_text()
     head = "qd_M_full_out0[210] = {"
     assert head in text

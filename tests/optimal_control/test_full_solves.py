@@ -15,9 +15,9 @@ from quadruped_dyn.model.robot import load_robot
 from quadruped_dyn.model.stance import StanceSet
 from quadruped_dyn.model.state import rotation
 from quadruped_dyn.optimal_control.node import trunk_quaternion
-from quadruped_dyn.optimal_control.outputs import plan_effort
 from quadruped_dyn.optimal_control.replay import replay_rigid
 from quadruped_dyn.optimal_control.solve import solve
+from quadruped_dyn.optimal_control.trajectory_files import plan_effort
 from quadruped_dyn.optimal_control.transcription import MIN_COM_MARGIN_M, Options, transcribe
 
 ROBOTS = ("paper", "solo12", "go2")

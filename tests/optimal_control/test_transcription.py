@@ -35,7 +35,7 @@ def test_quintic_hermite_reproduces_quintics() -> None:
     (Options(nodes_per_phase=41), "expected 3 to 40 collocation nodes per phase"),
     (Options(speed=5.0), "beyond"),
     (Options(speed=float("nan")), "beyond"),
-    # found by a review (2026-12-06): a TypeError from math.isfinite, or a bool, a float count or a
+    # found by a review: a TypeError from math.isfinite, or a bool, a float count or a
     # collocation point outside its interval taken as given
     (Options(mu="0.6"), r"mu is '0\.6', a str; expected a real number"),
     (Options(speed="0.2"), "speed is '0.2', a str; expected a real number"),

@@ -217,7 +217,7 @@ def _report_with_experiment_files(monkeypatch, tmp_path, run: int, figure_raises
     if given) into the report's folder, as ``gather.experiment`` does."""
     import matplotlib.pyplot as plt
 
-    from quadruped_dyn.experiment.outputs import output_paths
+    from quadruped_dyn.experiment.validation_files import output_paths
     from quadruped_dyn.files import safe_write
     from quadruped_dyn.files.json import write_json
     from quadruped_dyn.report import build

@@ -1,4 +1,4 @@
-"""The report page contains no markup from input (#18 item 9): a page built from hostile names
+"""The report page contains no markup from input: a page built from hostile names
 in every field that reaches it has exactly the elements of the same page built from harmless
 names; a non-finite error value is shown, not raised on (item 20)."""
 

@@ -139,23 +139,24 @@ def test_generated_c_lists_every_function_with_its_check():
     assert rs.generated_c_section(unchecked, None).verdict == "FAIL"
 
 
-@pytest.mark.skipif(importlib.util.find_spec("mujoco") is None or importlib.util.find_spec("idyntree") is None,
-                    reason="the xlib extra (mujoco, idyntree) is not installed")
+@pytest.mark.skipif(any(importlib.util.find_spec(p) is None for p in ("mujoco", "idyntree", "pydrake", "adam")),
+                    reason="the xlib extra (mujoco, idyntree, drake, adam) is not installed")
 def test_report_runs_cross_library_when_installed(paper, monkeypatch):
     from quadruped_dyn.report import gather
 
     monkeypatch.setattr(gather, "CROSS_LIBRARY_SAMPLES", 2)
     data = gather.cross_library(paper)
-    assert {r["library"] for r in data["cross_library"]} == {"mujoco", "idyntree"}
+    assert {r["library"] for r in data["cross_library"]} == {"pinocchio", "mujoco", "idyntree", "drake", "adam"}
     assert data["cross_library_passed"] is True and data["cross_library_note"] == ""
-    assert "not available" not in rs.cross_library_html({**CHECK, **data})
+    html = rs.cross_library_html({**CHECK, **data})
+    assert "not available" not in html and "adam: inverse dynamics (adam has no inverse dynamics" in html
 
 
 @pytest.mark.parametrize("name", ["M_full", "id_full", "grf_FL_FR_BL_BR", "M_r_FL_BR", "CG_r_FR_BL_BR", "fd_r_FL_FR_BL_BR",
                                   "id_r_FR_BL"])
 def test_generated_function_check_against_pinocchio(paper, name):
     """The report's check of one compiled function (full-coordinate, GRF and reduced alike)."""
-    from quadruped_dyn.checks.c_reference import reference_state
+    from quadruped_dyn.checks.check_program_values import reference_state
     from quadruped_dyn.codegen.emit import PREFIX
     from quadruped_dyn.codegen.library import compiled_library
     from quadruped_dyn.report.gather import c_function_check
@@ -183,7 +184,7 @@ def test_a_footprint_not_measured_says_how_to_get_it(tmp_path):
 def test_a_time_that_never_came_reads_as_such():
     """A run that never left the plan by 1 % or never fell has None times: the summary and the
     optimised trot's headline say 'never' / 'ran to the end', not 'None s' or 'n/a s'."""
-    from quadruped_dyn.experiment.outputs import summary_text
+    from quadruped_dyn.experiment.validation_files import summary_text
 
     data = {**VALIDATION, "runs": {"paper": {**VALIDATION["runs"]["paper"], "departs_1pct_at_s": 0.5},
                                    "plus_1pct": {**VALIDATION["runs"]["paper"], "stopped_at_s": 0.7}}}

@@ -62,7 +62,7 @@ def per_node_residuals(sol: Solution) -> dict[str, list[float]]:
 
 def plan_effort(sol: Solution, samples: int = SAMPLES_PER_CYCLE) -> dict[str, float]:
     """integral over one cycle of sum_j tau_j^2 (N^2 m^2 s) for the optimised motion and for today's
-    plan (id_r of the IK reference, the roll moment applied as the paper's check does), on one grid;
+    plan (id_r of the IK plan, the roll moment applied as the paper's check does), on one grid;
     and the largest roll moment each needs (N m)."""
     tr = sol.transcription
     traj = OptimizedTrajectory(sol)

@@ -1,6 +1,6 @@
-"""Finite-difference references of the reduced model's and the GRF solve's derivatives (docs/derivatives.md).
+"""Finite-difference values of the reduced model's and the GRF solve's derivatives (docs/derivatives.md).
 
-Fourth-order central differences (step ``FD_STEP_DERIVATIVES``) of the Pinocchio-built references: the reduced
+Fourth-order central differences (step ``FD_STEP_DERIVATIVES``) of the Pinocchio-built model: the reduced
 inverse dynamics ``PinocchioReference.reduced_inverse_dynamics`` (the forward dynamics' derivative from it by the
 implicit-function rule, M_r built column by column from it, then a numpy solve) and Pinocchio's GRF solve (SVD).
 Nothing here calls the project's CasADi code. The
@@ -37,7 +37,7 @@ def rotated(quat: np.ndarray, dtheta: np.ndarray) -> np.ndarray:
     return np.asarray((pin.Quaternion(np.asarray(quat, dtype=float)) * pin.Quaternion(pin.exp3(dtheta))).coeffs())
 
 
-class ReducedReference:
+class ReducedFiniteDifferences:
     """The Pinocchio-built reduced forward dynamics of one stance set and its differences."""
 
     def __init__(self, ref: PinocchioReference, stance: StanceSet) -> None:
@@ -71,7 +71,7 @@ class ReducedReference:
         return -Minv @ D_q, -Minv @ D_qd, Minv, -Minv @ D_theta
 
 
-def grf_derivatives_reference(ref: PinocchioReference, stance: StanceSet, q: np.ndarray, v: np.ndarray, a: np.ndarray
+def grf_derivatives_by_differences(ref: PinocchioReference, stance: StanceSet, q: np.ndarray, v: np.ndarray, a: np.ndarray
                               ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """(dlambda_dq, dlambda_dv, dlambda_da) of Pinocchio's GRF solve by central differences, q along
     ``pinocchio.integrate``."""
@@ -84,7 +84,7 @@ def grf_derivatives_reference(ref: PinocchioReference, stance: StanceSet, q: np.
             central(lambda x: lam(q, v, x), a))
 
 
-def grf_wrench_reference(ref: PinocchioReference, stance: StanceSet, q: np.ndarray, w: np.ndarray, dq: np.ndarray
+def grf_wrench_by_differences(ref: PinocchioReference, stance: StanceSet, q: np.ndarray, w: np.ndarray, dq: np.ndarray
                          ) -> tuple[np.ndarray, np.ndarray]:
     """(lambda_w, dlambda_w): Pinocchio's GRF solve for the trunk wrench w (SVD, minimum norm; the
     system A of ``PinocchioReference.grf_solve``) and its central difference along q -> integrate(q, t dq)."""

@@ -1,17 +1,22 @@
-"""Pinocchio's values at a fixed state for the generated C's check program (``<stem>_reference.h``)."""
+"""Pinocchio's values at a fixed state for the generated C's check program (``qd_<robot>-reference.h``)."""
 
 from __future__ import annotations
 
 import re
 import tempfile
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 
 import casadi as ca
 import numpy as np
 import pinocchio as pin
 
-from quadruped_dyn.checks.derivative_reference import ReducedReference, grf_derivatives_reference, grf_wrench_reference
+from quadruped_dyn.checks.finite_differences import (
+    ReducedFiniteDifferences,
+    grf_derivatives_by_differences,
+    grf_wrench_by_differences,
+)
+from quadruped_dyn.codegen import file_names
 from quadruped_dyn.codegen.emit import (
     PREFIX,
     GeneratedFiles,
@@ -19,7 +24,6 @@ from quadruped_dyn.codegen.emit import (
     float_err_per_regularity,
     generate,
     reduced_parts,
-    stem,
 )
 from quadruped_dyn.codegen.emit_derivatives import REDUCED_DERIVATIVE_NAMES
 from quadruped_dyn.dynamics.reduced import regularity_function
@@ -88,19 +92,19 @@ def _reduced_reference(ref: PinocchioReference, kind: str, stance: StanceSet, s:
     return M if kind == "M_r" else np.linalg.solve(M, x["tau_ext"] - id_r(x["qd_r"], zero))
 
 def _derivative_reference(ref: PinocchioReference, name: str, s: FullState) -> list[np.ndarray] | None:
-    """Central differences of the Pinocchio-built references (``checks.derivative_reference``) for the
+    """Central differences of the Pinocchio-built references (``checks.finite_differences``) for the
     reduced model's and the GRF solve's derivatives; None for any other function."""
     reduced = reduced_parts(name)
     if reduced and reduced[0] in REDUCED_DERIVATIVE_NAMES:
         _, stance = reduced
         n = 13 if len(stance.feet) == 2 else 12
         x = {k: v[:n] for k, v in reduced_inputs(s).items()}
-        return list(ReducedReference(ref, stance).dfd_r(x["q_r"], x["qd_r"], x["tau_ext"], s.q[3:7]))
+        return list(ReducedFiniteDifferences(ref, stance).dfd_r(x["q_r"], x["qd_r"], x["tau_ext"], s.q[3:7]))
     if name.startswith("dgrf_dir_"):
         w = wrench_inputs(s)
-        return list(grf_wrench_reference(ref, stance_set(name[9:].replace("_", "+")), s.q, w["w"], w["dq"]))
+        return list(grf_wrench_by_differences(ref, stance_set(name[9:].replace("_", "+")), s.q, w["w"], w["dq"]))
     if name.startswith("dgrf_"):
-        return list(grf_derivatives_reference(ref, stance_set(name[5:].replace("_", "+")), s.q, s.v, s.a))
+        return list(grf_derivatives_by_differences(ref, stance_set(name[5:].replace("_", "+")), s.q, s.v, s.a))
     return None
 
 
@@ -124,6 +128,9 @@ def pinocchio_outputs(robot: Robot, ref: PinocchioReference, name: str, s: FullS
         R = rotation(s.q)
         full = ref.rnea(s.q, s.v, s.a) - ref.contact_jacobian(s.q, (0, 1, 2, 3)).T @ np.concatenate([R @ f for f in s.f])
         return [full[:6], full[6:]]
+    if name == "feet_full":
+        J = np.kron(np.eye(4), rotation(s.q).T) @ ref.contact_jacobian(s.q, (0, 1, 2, 3))
+        return [ref.foot_positions(s.q).ravel(), J, ref.foot_accelerations(s.q, s.v, np.zeros(NV_FULL)).ravel()]
     if name in ("did_full", "dfd_full", "dfd_full_parts"):
         derivatives = PinocchioDerivatives(ref)
         if name == "did_full":
@@ -196,7 +203,7 @@ def float_bound(ref: PinocchioReference, name: str, s: FullState) -> float:
 def tolerance_floor(name: str) -> float:
     """The least relative tolerance of generated function ``name`` in either precision: the accuracy of
     its reference. The derivatives of the reduced model and of the GRF solve are checked against central
-    differences (``checks.derivative_reference``; REL_TOL_FD_DERIVATIVES); 0 for the others. Like the
+    differences (``checks.finite_differences``; REL_TOL_FD_DERIVATIVES); 0 for the others. Like the
     tolerances, it is multiplied by ``tolerance_scale``: the differences' round-off grows with the
     conditioning as the generated code's does."""
     reduced = reduced_parts(name)
@@ -231,14 +238,15 @@ def reference_header(robot: Robot, functions: list[ca.Function], work: dict[str,
         f"#define QD_MAX_N_IN {max(f.n_in() for f in functions)}",
         "typedef struct { const char* name; qd_fn fn; int n_in, n_out; const double* in[QD_MAX_N_IN];",
         "                 int in_len[QD_MAX_N_IN]; const double* out[4]; int out_nnz[4]; double tol_scale, tol_floor; } qd_case;",
-        "/* tol_scale: the conditioning beyond what the tolerances assume (codegen.tolerance_scale); tol_floor:",
-        " * the reference's own accuracy (finite differences: c_reference.tolerance_floor); the relative tolerance",
+        "/* tol_scale: the conditioning beyond what the tolerances assume (check_program_values.tolerance_scale); tol_floor:",
+        " * the reference's own accuracy (finite differences: check_program_values.tolerance_floor); the relative tolerance",
         " * is max(QD_REL_TOL_<precision>, tol_floor) * tol_scale */",
         f"#define QD_REL_TOL_DOUBLE {REL_TOL_TERMS:g}",
         f"#define QD_REL_TOL_FLOAT {FLOAT_REL_TOL:g}",
-        "/* qd_float_bound[k]: the error bound case k's float build computes (c_reference.float_bound: fd_r's FLT_EPSILON",
-        " * x cond_1 of the matrix it eliminates, a two-feet function's FLOAT_ERR_PER_REGULARITY x FLT_EPSILON /",
-        " * regularity; 0 where none); the float build returns QD_SINGULAR or QD_DEGENERATE above QD_FLOAT_MAX_BOUND */",
+        "/* qd_float_bound[k]: the error bound case k's float build computes (check_program_values.float_bound:",
+        " * fd_r's FLT_EPSILON x cond_1 of the matrix it eliminates, a two-feet function's FLOAT_ERR_PER_REGULARITY x",
+        " * FLT_EPSILON / regularity; 0 where none); the float build returns QD_SINGULAR or QD_DEGENERATE above",
+        " * QD_FLOAT_MAX_BOUND */",
         f"#define QD_FLOAT_MAX_BOUND {FLOAT_MAX_BOUND!r}",
         f"#define QD_MAX_SZ_IW {max(iw for iw, _ in work.values())}",
         f"#define QD_MAX_SZ_W {max(w for _, w in work.values())}",
@@ -281,17 +289,17 @@ def reference_header(robot: Robot, functions: list[ca.Function], work: dict[str,
     return "\n".join(lines) + "\n"
 
 def reference_header_name(robot: Robot) -> str:
-    """File name of the reference values beside the generated C: ``<stem>_reference.h``."""
-    return f"{stem(robot)}_reference.h"
+    """File name of the reference values beside the generated C: ``qd_<robot>-reference.h``."""
+    return file_names.reference_header_name(robot.name)
 
 
 def checked_files(robot: Robot, out_dir: Path) -> GeneratedFiles:
     """The files ``generate_checked`` writes into ``out_dir``, known before it runs (``codegen.emit.file_layout``)."""
-    return file_layout(robot, out_dir, (reference_header_name(robot),))
+    return file_layout(robot.name, out_dir, (reference_header_name(robot),))
 
 
 def generate_checked(robot: Robot, out_dir: Path, precision: str = "double") -> GeneratedFiles:
-    """``codegen.emit.generate`` plus ``<stem>_reference.h`` (in ``extra``, under
+    """``codegen.emit.generate`` plus ``qd_<robot>-reference.h`` (in ``extra``, under
     ``reference_header_name``): the C package that checks itself against Pinocchio (``make check``)."""
     return generate(robot, out_dir, precision,
                     extra_files=lambda functions, work: {reference_header_name(robot): reference_header(robot, functions, work)})
@@ -305,7 +313,7 @@ _CASE = re.compile(r'^  \{"(\w+)", .*\{([\w, ]*)\}, \{[\d, ]*\}, ([-+.\deE]+|inf
 
 @dataclass(frozen=True)
 class ReferenceHeader:
-    """A ``<stem>_reference.h`` split into what must be reproduced byte for byte (``skeleton``: the
+    """A ``qd_<robot>-reference.h`` split into what must be reproduced byte for byte (``skeleton``: the
     text with every value replaced by a placeholder: names, sizes, the case table's layout) and the
     values Pinocchio computed (``arrays`` by C name; ``tol_scale``, ``tol_floor`` and output arrays per case), whose
     last digits depend on the CPU and the BLAS kernel."""
@@ -368,18 +376,21 @@ def reference_differences(committed: str, fresh: str) -> list[str]:
 
 @dataclass(frozen=True)
 class GenerationDiff:
-    """How a directory differs from a fresh generation: ``sources`` (files that must be byte for
-    byte equal: the C, the header, the Makefile; missing files count) and ``references`` (one line
-    per reference value beyond its tolerance, ``reference_differences``)."""
+    """How a directory differs from a fresh generation: ``missing`` (files a generation writes that are not
+    there), ``sources`` (files there that must be byte for byte equal and are not: the C, the header, the
+    Makefile) and ``references`` (one line per reference value beyond its tolerance, ``reference_differences``)."""
 
     sources: list[str]
     references: list[str]
+    missing: list[str] = field(default_factory=list)
 
     def __bool__(self) -> bool:
-        return bool(self.sources or self.references)
+        return bool(self.sources or self.references or self.missing)
 
     def summary(self) -> str:
         parts = []
+        if self.missing:
+            parts.append(f"missing: {', '.join(self.missing)}")
         if self.sources:
             parts.append(f"source differs from a fresh generation: {', '.join(self.sources)}")
         if self.references:
@@ -390,23 +401,33 @@ class GenerationDiff:
 
 
 def compare_generation(robot: Robot, directory: Path, precision: str = "double") -> GenerationDiff:
-    """Compare ``directory`` with a fresh generation at ``precision``: every file byte for byte,
-    except ``<stem>_reference.h`` whose values are compared numerically (``reference_differences``)."""
-    sources, references = [], []
+    """Compare ``directory`` with a fresh generation at ``precision`` (``compare_files``); a directory holding none
+    of the files is answered without generating them (all missing)."""
+    expected = checked_files(robot, Path(directory)).all()
+    if not any(p.is_file() for p in expected):
+        return GenerationDiff([], [], [p.name for p in expected])
     with tempfile.TemporaryDirectory() as tmp:
-        for p in generate_checked(robot, Path(tmp), precision).all():
-            old = Path(directory) / p.name
-            if not old.is_file():
-                sources.append(p.name)
-            elif p.name == reference_header_name(robot):
-                references += [f"{p.name}: {m}" for m in reference_differences(old.read_text(), p.read_text())]
-            elif old.read_bytes() != p.read_bytes():
-                sources.append(p.name)
-    return GenerationDiff(sources, references)
+        return compare_files(robot, directory, generate_checked(robot, Path(tmp), precision))
+
+
+def compare_files(robot: Robot, directory: Path, fresh: GeneratedFiles) -> GenerationDiff:
+    """Compare ``directory`` with ``fresh``, a generation of ``robot``: a file not in ``directory`` is missing,
+    every other byte for byte, except ``qd_<robot>-reference.h`` whose values are compared numerically
+    (``reference_differences``)."""
+    sources, references, missing = [], [], []
+    for p in fresh.all():
+        old = Path(directory) / p.name
+        if not old.is_file():
+            missing.append(p.name)
+        elif p.name == reference_header_name(robot):
+            references += [f"{p.name}: {m}" for m in reference_differences(old.read_text(), p.read_text())]
+        elif old.read_bytes() != p.read_bytes():
+            sources.append(p.name)
+    return GenerationDiff(sources, references, missing)
 
 
 def differing_files(robot: Robot, directory: Path, precision: str = "double") -> list[str]:
     """Names of the files in ``directory`` that a fresh generation would change (or add); the
     reference header only if its values moved beyond their tolerance."""
     diff = compare_generation(robot, directory, precision)
-    return diff.sources + sorted({m.split(":", 1)[0] for m in diff.references})
+    return diff.missing + diff.sources + sorted({m.split(":", 1)[0] for m in diff.references})
