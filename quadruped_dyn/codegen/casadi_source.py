@@ -13,6 +13,7 @@ from pathlib import Path
 import casadi as ca
 
 from quadruped_dyn.codegen.c_facts import TEMPLATES  # noqa: F401 -- the templates' folder, re-exported
+from quadruped_dyn.codegen.printer import PrintOptions, print_function
 from quadruped_dyn.codegen.reciprocals import shared_reciprocals
 
 PREFIX = "qd_"
@@ -104,24 +105,19 @@ def evaluations(c_text: str, names: list[str]) -> dict[str, str]:
     return out
 
 
-def static_c(c_name: str, f: ca.Function, precision: str, host_helpers: frozenset[str] = frozenset(),
-              all_io: bool = False) -> str:
-    """``f`` as the static C function ``c_name`` (arg, res, iw, w, mem): CasADi's evaluation body alone,
-    checked to need no work memory (the templates call it with none) and no helper but casadi_sq and
-    ``host_helpers`` (CasADi helpers the file it goes into defines). ``all_io``: the templates pass every input
-    and output (none NULL), so CasADi's tests of each pointer at each read and write are left out."""
-    c_text, h_text = casadi_c(c_name, [f], precision)
-    body = re.search(r"static int casadi_f0\(.*?\n\}\n", c_text, re.S)
-    if not body or work_sizes(h_text)[f.name()] != (0, 0) or set(re.findall(r"casadi_\w+", body.group(0))) - {
-            "casadi_f0", "casadi_real", "casadi_int", "casadi_sq", *host_helpers}:
-        raise AssertionError(f"{f.name()}: CasADi's body is not self-contained; the templates need it to be")
-    text = body.group(0).replace("casadi_f0", c_name)
-    if all_io:
-        text = re.sub(r"arg\[(\d+)\]\? (arg\[\1\]\[\d+\]) : 0;", r"\2;", text)
-        text = re.sub(r"if \(res\[(\d+)\]!=0\) (res\[\1\]\[\d+\]=)", r"\2", text)
-        if re.search(r"arg\[\d+\]\?|res\[\d+\]!=0", text):
-            raise AssertionError(f"{f.name()}: a test of an argument pointer is left after all_io")
-    return text
+def static_c(c_name: str, f: ca.Function, host_helpers: frozenset[str] = frozenset(), all_io: bool = False,
+             inputs_given: bool = False) -> str:
+    """``f`` as the static C function ``c_name`` (arg, res, iw, w, mem), printed by ``codegen.printer`` with the
+    project's options (reciprocals, precision math, unused parameters cast to void): no work memory (its values are
+    locals; the templates call it with none), checked to call no helper but casadi_sq and ``host_helpers`` (CasADi
+    helpers the file it goes into defines). ``all_io``: the templates pass every input and output (none NULL), so
+    the tests of each pointer at each read and write are left out; ``inputs_given``: only those of the inputs."""
+    printed = print_function(f, PrintOptions(name=c_name, guard_inputs=not (all_io or inputs_given),
+                                             guard_outputs=not all_io, reciprocals=True, precision_math=True,
+                                             void_unused=True))
+    if printed.helpers - {"casadi_sq", *host_helpers}:
+        raise AssertionError(f"{f.name()}: its C is not self-contained; the templates need it to be")
+    return printed.text
 
 
 def defined_helpers(c_text: str) -> frozenset[str]:

@@ -32,7 +32,6 @@ from quadruped_dyn.codegen.casadi_source import (
     entry_point,
     evaluations,
     static_c,
-    unguarded_inputs,
     work_sizes,
 )
 from quadruped_dyn.codegen.emit_derivatives import (
@@ -57,6 +56,7 @@ from quadruped_dyn.codegen.file_names import (
     file_layout,
 )
 from quadruped_dyn.codegen.joint_trig import trig_as_inputs
+from quadruped_dyn.codegen.printer import PRECISION_MATH
 from quadruped_dyn.codegen.work_memory import memory_doc
 from quadruped_dyn.dynamics.by_leg import foot_pieces, id_full_pieces, mass_matrix_pieces
 from quadruped_dyn.dynamics.grf import grf_balance, grf_solve
@@ -364,7 +364,7 @@ def header_doc(robot: Robot, functions: list[ca.Function], work: dict[str, tuple
 
 
 #: Elementary functions the generated code calls, each routed through a wrapper in casadi_real's precision.
-_WRAPPED_MATH = ("sin", "cos", "tan", "sqrt", "fabs")
+_WRAPPED_MATH = PRECISION_MATH
 _PRECISION_MATH = """
 /* quadruped_dyn: the elementary functions in casadi_real's precision. A float build
  * (-Dcasadi_real=float) calls sinf, cosf, ... instead of promoting to double, so it does no
@@ -390,16 +390,16 @@ def _precision_math(c_source: str) -> str:
                              c_source))
     if unknown:
         raise AssertionError(f"elementary functions {sorted(unknown)} have no precision wrapper in emit._WRAPPED_MATH")
-    used = bool(_MATH_CALL.search(c_source)) or f'#include "{REDUCED_TEMPLATES}"' in c_source  # it calls qd_fabs
     c_source = _precision_calls(c_source)  # before the wrappers go in: they call the real ones
-    if used:  # after CasADi's default of casadi_real, which the wrappers' signatures need
+    # only the wrappers the file calls (its own text, and the reduced templates it includes): clang warns of an
+    # unused static inline function, which the Makefile's -Werror makes an error (`make CC=clang`)
+    calls = c_source + (reduced_templates_h() if f'#include "{REDUCED_TEMPLATES}"' in c_source else "")
+    wrapped = [f for f in _WRAPPED_MATH if re.search(rf"(?<![\w.])qd_{f}\(", calls)]
+    if wrapped:  # after CasADi's default of casadi_real, which the wrappers' signatures need
         default = _CASADI_REAL_DEFAULT.search(c_source)
         if not default:
             raise AssertionError("CasADi's '#ifndef casadi_real' default is not in the generated source")
-        # only the wrappers the file calls (its own text, and the reduced templates it includes): clang warns of an
-        # unused static inline function, which the Makefile's -Werror makes an error (`make CC=clang`)
-        calls = c_source + (reduced_templates_h() if f'#include "{REDUCED_TEMPLATES}"' in c_source else "")
-        wrappers = " ".join(f"QD_MATH({f})" for f in _WRAPPED_MATH if re.search(rf"(?<![\w.])qd_{f}\(", calls)) + "\n"
+        wrappers = " ".join(f"QD_MATH({f})" for f in wrapped) + "\n"
         c_source = c_source[:default.end()] + _PRECISION_MATH + wrappers + c_source[default.end():]
     return c_source
 
@@ -431,7 +431,7 @@ def float_err_per_regularity(stance: StanceSet) -> float:
     return FLOAT_ERR_PER_REGULARITY if len(stance.feet) == 2 else 0.0
 
 
-def _reduced_helpers_c(stance: StanceSet, dfd_r: DfdRPieces, precision: str) -> str:
+def _reduced_helpers_c(stance: StanceSet, dfd_r: DfdRPieces) -> str:
     """QD_REGULARITY_MIN, QD_FLOAT_MAX_BOUND, QD_FLOAT_ERR_PER_REGULARITY, ``qd_stance_maps`` ((r, quat) ->
     (regularity, W, Y[, y_e, s_e, D]): ``dynamics.stance_maps``, from which with the library's qd_foot_trig the
     templates' qd_parts forms S_b, T_b, v and a) and dfd_r's ``qd_dfd_r_lift`` (``emit_derivatives.dfd_r_pieces``),
@@ -440,20 +440,20 @@ def _reduced_helpers_c(stance: StanceSet, dfd_r: DfdRPieces, precision: str) -> 
             f"#define QD_FLOAT_MAX_BOUND ((casadi_real){FLOAT_MAX_BOUND!r}) /* tolerances.FLOAT_MAX_BOUND */\n"
             f"#define QD_FLOAT_ERR_PER_REGULARITY ((casadi_real){float_err_per_regularity(stance)!r}) "
             "/* tolerances.FLOAT_ERR_PER_REGULARITY; 0: three or four feet */\n"
-            + static_c("qd_stance_maps", stance_maps(stance), precision, all_io=True) + "\n"
+            + static_c("qd_stance_maps", stance_maps(stance), all_io=True) + "\n"
             + f"#define QD_DFD_R_TAPE {dfd_r.tape} /* reals of the lift's tape: emit_derivatives.split_at_seeds */\n"
             + f"#define QD_DID_FULL_L {dfd_r.did_legs} /* reals of did_full's legs' outputs: codegen.by_leg.legs_reals */\n"
-            + static_c("qd_dfd_r_lift", dfd_r.lift, precision, all_io=True) + "\n" + _lift_derivative_c(dfd_r, precision))
+            + static_c("qd_dfd_r_lift", dfd_r.lift, all_io=True) + "\n" + _lift_derivative_c(dfd_r))
 
 
-def _lift_derivative_c(dfd_r: DfdRPieces, precision: str) -> str:
+def _lift_derivative_c(dfd_r: DfdRPieces) -> str:
     """The lift's derivative dfd_r calls: qd_dfd_r_lift_columns (every direction at once, QD_DFD_R_LIFT_COLUMNS
     columns), and at -Os, the embedded builds' size budget, qd_dfd_r_lift_dir (one direction per call;
     docs/derivatives.md)."""
-    one = static_c("qd_dfd_r_lift_dir", dfd_r.lift_dir, precision, all_io=True)
+    one = static_c("qd_dfd_r_lift_dir", dfd_r.lift_dir, all_io=True)
     return ("#if !defined(__OPTIMIZE_SIZE__) /* the lift's columns at once; at -Os one direction per call */\n"
             f"#define QD_DFD_R_LIFT_COLUMNS {dfd_r.lift_columns.size2_out(0)} /* emit_derivatives.lift_seeds */\n"
-            + static_c("qd_dfd_r_lift_columns", dfd_r.lift_columns, precision, all_io=True)
+            + static_c("qd_dfd_r_lift_columns", dfd_r.lift_columns, all_io=True)
             + "#else\n" + one + "#endif\n")
 
 
@@ -515,7 +515,7 @@ M_BLOCKS_CALL = LegCall(head_args=(), leg_inputs=(("joint", 0, 7),), sin_arg=1, 
 _SIGNATURE = "(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem)"
 
 
-def _joint_rows_first(robot: Robot, c_text: str, functions: list[ca.Function], precision: str) -> str:
+def _joint_rows_first(robot: Robot, c_text: str, functions: list[ca.Function]) -> str:
     """Evaluate M_full, G_full, nle_full and id_full joint rows first (M_full: its joint columns). CasADi's C
     evaluates a graph output by output, each depth first: the trunk rows come first and gather all four legs,
     so the legs' recursions interleave and their temporaries are live together (spilled: x86-64 has 16
@@ -546,9 +546,8 @@ def _joint_rows_first(robot: Robot, c_text: str, functions: list[ca.Function], p
         if f.name_in(0) != "q" or f.nnz_in(0) != NQ_FULL or max(f.nnz_in(i) for i in range(f.n_in())) > NQ_FULL:
             raise AssertionError(f"{f.name()}: not (q (19), ...) with inputs no longer than qd_zeros")
         body = trig_as_inputs(ca.Function(f"{name}_joint_rows_first", args, ordered, {"cse": True}), 0, JOINT_ANGLES)
-        static = static_c(f"qd_{name}_joint_rows_first", body, precision, defined_helpers(c_text))
+        static = static_c(f"qd_{name}_joint_rows_first", body, defined_helpers(c_text), inputs_given=name in UNGUARDED)
         if name in UNGUARDED:  # a NULL input reads as zeros, as CasADi's tests gave it
-            static = unguarded_inputs(static, name)
             a_init = [f"arg[{i}] ? arg[{i}] : qd_zeros" for i in range(f.n_in())]
         else:
             a_init = [f"arg[{i}]" for i in range(f.n_in())]
@@ -567,15 +566,15 @@ def _joint_rows_first(robot: Robot, c_text: str, functions: list[ca.Function], p
         if count != 1:
             raise AssertionError(f"entry point of {f.name()} not found in CasADi's output")
         c_text = drop_evaluation(c_text, raw[f.name()])
-    helpers.append(_M_full_dense(functions, precision, defined_helpers(c_text)))
-    helpers.append(_reduced_calls_by_leg(robot, precision, defined_helpers(c_text)))
+    helpers.append(_M_full_dense(functions, defined_helpers(c_text)))
+    helpers.append(_reduced_calls_by_leg(robot, defined_helpers(c_text)))
     helpers.insert(0, (TEMPLATES / SINCOS).read_text()
                    + f"static const casadi_real qd_zeros[{NQ_FULL}]; /* a NULL input (CasADi's convention: zeros) */\n")
     first = _first_evaluation(c_text)
     return c_text[:first] + "\n" + "\n".join(helpers) + c_text[first:]
 
 
-def _M_full_dense(functions: list[ca.Function], precision: str, host_helpers: frozenset[str]) -> str:
+def _M_full_dense(functions: list[ca.Function], host_helpers: frozenset[str]) -> str:
     """qd_M_full_dense_trig (q, sin, cos) -> M (18 x 18, dense column-major): M_full's graph with its zeros written
     and the joints' sines and cosines given, joint columns first (as ``_joint_rows_first``), for the reduced files,
     which take the sines and cosines once for all their calls and read M dense (c/qd_reduced_solve.c)."""
@@ -584,7 +583,7 @@ def _M_full_dense(functions: list[ca.Function], precision: str, host_helpers: fr
     nz = ca.densify(m.call(args)[0]).nz[:]  # column-major, 18 x 18
     k = 18 * 6  # the joint columns first
     dense = trig_as_inputs(ca.Function("M_full_dense", args, [nz[k:], nz[:k]], {"cse": True}), 0, JOINT_ANGLES)
-    return (static_c("qd_M_full_dense_joint_rows_first", dense, precision, host_helpers, all_io=True)
+    return (static_c("qd_M_full_dense_joint_rows_first", dense, host_helpers, all_io=True)
             + "/* M_full (18 x 18, dense column-major, zeros written) with the joints' sines and cosines given: arg = "
             "(q, sin, cos) */\n"
             f"int qd_M_full_dense_trig{_SIGNATURE} {{\n"
@@ -592,7 +591,7 @@ def _M_full_dense(functions: list[ca.Function], precision: str, host_helpers: fr
             "  return qd_M_full_dense_joint_rows_first(arg, r, iw, w, mem);\n}\n")
 
 
-def _reduced_calls_by_leg(robot: Robot, precision: str, host_helpers: frozenset[str]) -> str:
+def _reduced_calls_by_leg(robot: Robot, host_helpers: frozenset[str]) -> str:
     """qd_id_full_trig (q, v, a, sin, cos) -> (w_res, tau) (no foot forces) and qd_M_blocks_legs_trig (q, sin, cos) ->
     M's nonzero blocks (``by_leg.mass_blocks``: fd_r's), the joints' sines and cosines given, each as one leg function
     per leg template called once per leg (``dynamics.by_leg``, ``codegen.by_leg``), whose code stays in the instruction
@@ -600,13 +599,13 @@ def _reduced_calls_by_leg(robot: Robot, precision: str, host_helpers: frozenset[
     of other code per call (docs/benchmark.md, "Design choices"). M_r calls ``_M_full_dense``'s
     qd_M_full_dense_trig, one function of fewer instructions, which fits the cache beside M_r's other ~20 kB."""
     return ("/* id_full without foot forces, the joints' sines and cosines given, leg by leg: arg = (q, v, a, sin, cos) */\n"
-            + by_leg_c("qd_id_full_trig", id_full_pieces(robot), ID_FULL_CALL, precision, host_helpers) + "\n"
+            + by_leg_c("qd_id_full_trig", id_full_pieces(robot), ID_FULL_CALL, host_helpers) + "\n"
             "/* M_full's nonzero blocks (M_bb, then per leg M_bl and M_ll, column-major: dynamics/by_leg.py, mass_blocks) "
             "with the joints' sines and cosines given, leg by leg: arg = (q, sin, cos) */\n"
-            + by_leg_c("qd_M_blocks_legs_trig", mass_matrix_pieces(robot), M_BLOCKS_CALL, precision, host_helpers) + "\n"
+            + by_leg_c("qd_M_blocks_legs_trig", mass_matrix_pieces(robot), M_BLOCKS_CALL, host_helpers) + "\n"
             "/* a leg's foot kinematics (dynamics/by_leg.py, FOOT_PARTS), the joints' sines and cosines given: y = (r, J, "
             "J qd_l, Jdot qd_l), trunk frame */\n"
-            + foot_c("qd_foot_trig", foot_pieces(robot), precision, host_helpers))
+            + foot_c("qd_foot_trig", foot_pieces(robot), host_helpers))
 
 
 def _first_evaluation(c_text: str) -> int:
@@ -619,7 +618,7 @@ def _first_evaluation(c_text: str) -> int:
     return min(found)
 
 
-def _grf_through_id_full(robot: Robot, c_text: str, functions: list[ca.Function], precision: str) -> str:
+def _grf_through_id_full(robot: Robot, c_text: str, functions: list[ca.Function]) -> str:
     """Route every qd_grf_<feet> of qd_<robot>.c through ``c/qd_grf_solve.c``: id_full's evaluation (one
     Newton-Euler pass) and a generated static qd_grf_balance_<feet> (``grf.grf_balance``), instead of
     CasADi's unrolled graph, which repeats the recursion in each of the 15 (dropped: ~0.4 MB per robot)."""
@@ -638,7 +637,7 @@ def _grf_through_id_full(robot: Robot, c_text: str, functions: list[ca.Function]
         balance = ca.Function(f"grf_balance_{suffix}", [q, w_req], [b.lam, b.f, b.residual, b.tau], {"cse": True})
         if [balance.sparsity_out(i) for i in range(3)] != [f.sparsity_out(i) for i in range(3)]:
             raise AssertionError(f"{f.name()}: the balance's outputs are not the GRF function's")
-        helpers.append(static_c(f"qd_grf_balance_{suffix}", balance, precision, host_helpers))
+        helpers.append(static_c(f"qd_grf_balance_{suffix}", balance, host_helpers))
         body = (r"\1  casadi_real w_req[6], tau_0[12], tau_f[12];\n"
                 r"  const casadi_real* b_arg[2] = {arg[0], w_req};\n"
                 r"  casadi_real* b_res[4] = {res[0], res[1], res[2], tau_f};\n"
@@ -669,7 +668,7 @@ def generate(robot: Robot, out_dir: Path, precision: str = "double",
     out_dir.mkdir(parents=True, exist_ok=True)
     full = codegen_functions(robot)
     c_full, casadi_header = casadi_c(casadi_name(layout.source), full, precision)
-    c_full = _grf_through_id_full(robot, _joint_rows_first(robot, c_full, full, precision), full, precision)
+    c_full = _grf_through_id_full(robot, _joint_rows_first(robot, c_full, full), full)
     sources = {layout.source: c_full}
     functions = list(full)
     for stance, path in zip(REDUCED_STANCE_SETS, layout.reduced, strict=True):
@@ -677,7 +676,7 @@ def generate(robot: Robot, out_dir: Path, precision: str = "double",
         c_text, h_text = casadi_c(casadi_name(path), reduced, precision)
         dfd_r = dfd_r_pieces(robot, stance)
         sources[path], h_text = _checked_reduced_c(c_text, h_text, reduced,
-                                                   _reduced_helpers_c(stance, dfd_r, precision), dfd_r)
+                                                   _reduced_helpers_c(stance, dfd_r), dfd_r)
         casadi_header += h_text
         functions += reduced
     derivatives = derivative_functions(robot)  # qd_<robot>-d.c: derivatives of the full dynamics

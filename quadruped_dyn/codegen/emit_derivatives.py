@@ -350,12 +350,12 @@ DID_FULL_CALL = LegCall(head_args=(0, 1, 2), leg_inputs=(("arg", 1, 3), ("arg", 
                         sin_arg=3, tail_args=(0, 1, 2))
 
 
-def _did_full_trig_once(c_text: str, raw: str, did: ca.Function, robot: Robot, precision: str) -> str:
+def _did_full_trig_once(c_text: str, raw: str, did: ca.Function, robot: Robot) -> str:
     """did_full's evaluation ``raw`` as the joints' sines and cosines taken once (c/qd_sincos.c) and qd_did_full_trig
     reading them, did_full leg by leg (``by_leg``, docs/derivatives.md "dfd_r and dgrf as generated C"), also called by dfd_r
     (c/qd_reduced_derivatives.c), which has the sines and cosines already."""
-    exported = by_leg_c("qd_did_full_trig", did_full_pieces(robot), DID_FULL_CALL, precision, defined_helpers(c_text),
-                        unguarded="did_full", export_in=True)  # dfd_r lends the legs' outputs its w (stack budget)
+    exported = by_leg_c("qd_did_full_trig", did_full_pieces(robot), DID_FULL_CALL, defined_helpers(c_text),
+                        test_outputs=True, export_in=True)  # dfd_r lends the legs' outputs its w (stack budget)
     n = len(JOINT_ANGLES)
     wrapper = (f"static int {raw}(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem) {{\n"
                f"  casadi_real s[{n}], c[{n}]; /* the joints' sines and cosines, once (qd_sincos) */\n"
@@ -395,7 +395,7 @@ def derivative_source(robot: Robot, file_stem: str, functions: list[ca.Function]
         elif f.name()[len(PREFIX):] in UNGUARDED:  # its evaluation reads the inputs unguarded: NULL ones are zeros here
             c_text = _unguarded_inputs(c_text, raw[f.name()], f)
             if f.name() == PREFIX + "did_full":
-                c_text = _did_full_trig_once(c_text, raw[f.name()], f, robot, precision)
+                c_text = _did_full_trig_once(c_text, raw[f.name()], f, robot)
             nnz = ", ".join(str(f.nnz_out(i)) for i in range(f.n_out()))
             body = (rf"\1  return qd_d_finite(qd_d_all_inputs(\2, {f.n_in()}, arg, res, iw, w, mem), res, {f.n_out()}, "
                     rf"(const casadi_int[]){{{nnz}}});\n")
