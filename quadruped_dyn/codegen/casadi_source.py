@@ -115,7 +115,7 @@ def static_c(c_name: str, f: ca.Function, host_helpers: frozenset[str] = frozens
     printed = print_function(f, PrintOptions(name=c_name, guard_inputs=not (all_io or inputs_given),
                                              guard_outputs=not all_io, reciprocals=True, precision_math=True,
                                              void_unused=True))
-    if printed.helpers - {"casadi_sq", *host_helpers}:
+    if set(printed.helpers) - {"casadi_sq", *host_helpers}:
         raise AssertionError(f"{f.name()}: its C is not self-contained; the templates need it to be")
     return printed.text
 

@@ -73,10 +73,10 @@ class PrintOptions:
 
 @dataclass(frozen=True)
 class Printed:
-    """A printed function: its C text and the CasADi helpers it calls."""
+    """A printed function: its C text and the CasADi helpers it calls, in the order of their first call."""
 
     text: str
-    helpers: frozenset[str]
+    helpers: tuple[str, ...]
 
 
 def c_constant(value: float) -> str:
@@ -105,7 +105,7 @@ class _Printer:
         slots = [s for k, (op, a, r) in enumerate(self.steps) for s in self._slots(op, a, r)]
         self.width = len(str(max(slots))) if slots else 1  # CasADi pads aK to the width of the largest index
         self.declared = sorted(set(slots))
-        self.helpers: set[str] = set()
+        self.helpers: list[str] = []
 
     @staticmethod
     def _slots(op: int, a: list[int], r: list[int]) -> list[int]:
@@ -128,8 +128,8 @@ class _Printer:
         if op not in _OPERATORS:
             raise ValueError(f"{self.f.name()}: operation {op} has no C form in the printer")
         before, between, after = _OPERATORS[op]
-        if op in _HELPERS:
-            self.helpers.add(_HELPERS[op])
+        if op in _HELPERS and _HELPERS[op] not in self.helpers:
+            self.helpers.append(_HELPERS[op])
         if self.o.precision_math:
             before = {"(2.*": "(2*", "(1./": "(1/"}.get(before, before)
             if before[:-1] in PRECISION_MATH:
@@ -183,4 +183,4 @@ class _Printer:
         if n_rcp:
             lines.append("casadi_real " + ", ".join(f"rcp{n}" for n in range(n_rcp)) + ";")
         lines += [*statements, "return 0;"]
-        return Printed("\n".join([lines[0], *(f"  {line}" for line in lines[1:]), "}"]) + "\n", frozenset(self.helpers))
+        return Printed("\n".join([lines[0], *(f"  {line}" for line in lines[1:]), "}"]) + "\n", tuple(self.helpers))
