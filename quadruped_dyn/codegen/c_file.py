@@ -60,9 +60,10 @@ class Entry:
     """One exported function of a file: its Function (signature, sparsity, names) and how it is printed."""
 
     function: ca.Function
-    #: its evaluation casadi_fK's print options (the name is set here); None: no evaluation (its entry point calls a
-    #: hand-written template), though the helpers its graph would call are still defined, as CasADi defines them
-    evaluation: PrintOptions | None = PrintOptions()
+    #: its evaluation casadi_fK's print options (the name is set here), or the C defining casadi_fK another way; None:
+    #: no evaluation (its entry point calls a hand-written template), though the helpers its graph would call are
+    #: still defined, as CasADi defines them
+    evaluation: PrintOptions | str | None = PrintOptions()
     #: the entry point's statements (indented, each line ending in a newline); None: CasADi's call of its evaluation
     body: str | None = None
     sz_w: int = 0  # reals of work w it states (a template's temporaries); CasADi's: 0 (every value a local)
@@ -115,11 +116,10 @@ class _File:
     def function(self, k: int, e: Entry) -> str:
         f, name, text = e.function, e.function.name(), ""
         raw = evaluation_name(k)
-        printed = print_function(f, e.evaluation or PrintOptions())
-        self.helpers += [h for h in printed.helpers if h not in self.helpers]
+        self.helpers += [h for h in print_function(f).helpers if h not in self.helpers]
         if e.evaluation is not None:
-            definition = str(f).removesuffix(" SXFunction")
-            text += f"/* {definition} */\n" + print_function(f, _named(e.evaluation, raw)).text + "\n"
+            evaluation = e.evaluation if isinstance(e.evaluation, str) else print_function(f, _named(e.evaluation, raw)).text
+            text += f"/* {str(f).removesuffix(' SXFunction')} */\n{evaluation}\n"
         body = e.body if e.body is not None else f"  return {raw}(arg, res, iw, w, mem);\n"
         text += f"{self.declare(f'int {name}{SIGNATURE}')}{{\n{body}}}\n\n"
         text += f"{self.declare(f'int {name}_checkout(void)')} {{\n  return 0;\n}}\n\n"
@@ -182,6 +182,16 @@ class _File:
 
 def _named(options: PrintOptions, name: str) -> PrintOptions:
     return PrintOptions(**{**options.__dict__, "name": name})
+
+
+def file_helpers(functions: list[ca.Function]) -> frozenset[str]:
+    """The CasADi helpers (casadi_sq, casadi_fabs) the file of ``functions`` defines."""
+    return frozenset(h for f in functions for h in print_function(f).helpers)
+
+
+def entry_work(entries: list[Entry]) -> dict[str, tuple[int, int]]:
+    """Each entry's work sizes (iw, w) as its file states them."""
+    return {e.function.name(): (0, e.sz_w) for e in entries}
 
 
 def c_file(stem: str, entries: list[Entry], options: FileOptions = FileOptions()) -> tuple[str, str]:

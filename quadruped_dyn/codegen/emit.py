@@ -21,26 +21,14 @@ import casadi as ca
 
 from quadruped_dyn.codegen.by_leg import LegCall, by_leg_c, foot_c
 from quadruped_dyn.codegen.c_facts import layouts_c, prelude_c, return_codes_c
-from quadruped_dyn.codegen.casadi_source import (
-    PREFIX,
-    SINCOS,
-    TEMPLATES,
-    UNGUARDED,
-    casadi_c,
-    defined_helpers,
-    drop_evaluation,
-    entry_point,
-    evaluations,
-    static_c,
-    work_sizes,
-)
+from quadruped_dyn.codegen.c_file import Entry, FileOptions, c_file, entry_work, file_helpers
+from quadruped_dyn.codegen.casadi_source import EVALUATION, PREFIX, SINCOS, TEMPLATES, UNGUARDED, static_c
 from quadruped_dyn.codegen.emit_derivatives import (
     DERIVATIVE_NAMES,
     GRF_DERIVATIVE_NAMES,
     GRF_DERIVATIVE_STANCE_SETS,
     REDUCED_DERIVATIVE_NAMES,
     DfdRPieces,
-    declare_dfd_r_work,
     derivative_functions,
     derivative_source,
     dfd_r_pieces,
@@ -56,7 +44,7 @@ from quadruped_dyn.codegen.file_names import (
     file_layout,
 )
 from quadruped_dyn.codegen.joint_trig import trig_as_inputs
-from quadruped_dyn.codegen.printer import PRECISION_MATH
+from quadruped_dyn.codegen.printer import PRECISION_MATH, SIGNATURE
 from quadruped_dyn.codegen.work_memory import memory_doc
 from quadruped_dyn.dynamics.by_leg import foot_pieces, id_full_pieces, mass_matrix_pieces
 from quadruped_dyn.dynamics.grf import grf_balance, grf_solve
@@ -457,46 +445,39 @@ def _lift_derivative_c(dfd_r: DfdRPieces) -> str:
             + "#else\n" + one + "#endif\n")
 
 
-def _checked_reduced_c(c_text: str, casadi_header: str, functions: list[ca.Function], helpers_c: str,
-                       dfd_r: DfdRPieces) -> tuple[str, str]:
-    """Insert ``helpers_c`` (``_reduced_helpers_c``) and the include of ``REDUCED_TEMPLATES`` and route the entry
-    points through them: every function returns QD_DEGENERATE at a degenerate stance and
+def _reduced_source(stem: str, functions: list[ca.Function], helpers_c: str, dfd_r: DfdRPieces,
+                    precision: str) -> tuple[str, str, dict[str, tuple[int, int]]]:
+    """A reduced file: ``helpers_c`` (``_reduced_helpers_c``) and the include of ``REDUCED_TEMPLATES``, and the entry
+    points calling them: every function returns QD_DEGENERATE at a degenerate stance and
     QD_NONFINITE for a non-finite output; M_r, CG_r, G_r and id_r by ``qd_reduced_term`` over the generated
-    qd_stance_maps and the library's qd_foot_trig, qd_M_full, qd_G_full, qd_id_full (CasADi's unrolled graphs of the four
-    dropped: ~160 kB per stance set); fd_r by ``qd_fd_r_solve`` (the parts once for M_r and C_r + G_r, checked
+    qd_stance_maps and the library's qd_foot_trig, qd_M_full, qd_G_full, qd_id_full (no unrolled graph of their own:
+    ~160 kB per stance set); fd_r by ``qd_fd_r_solve`` (the parts once for M_r and C_r + G_r, checked
     once, then the LU); dfd_r by ``c/qd_reduced_derivatives.c`` over ``dfd_r``'s pieces, its caller work memory
-    declared. Returns (C source, CasADi's header text)."""
-    first = c_text.index(f"\n/* {functions[0].name()}:")
-    raw = evaluations(c_text, [f.name() for f in functions])  # entry point -> CasADi's evaluation function
+    declared. Returns (C source, header, work sizes)."""
     stance = reduced_parts(functions[0].name()[len(PREFIX):])[1]  # type: ignore[index]
     legs = sum(1 << i for i in stance.feet)  # S_b's rows and T_b's columns of the other legs' joints are zero
     n_r = functions[0].size1_out(0)
-    signature = "(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem)"
-    evals = "".join(f"static int qd_{kind}_eval{signature} {{\n  return qd_reduced_term({n_r}, {legs}, {which}, arg, res, iw, "
+    evals = "".join(f"static int qd_{kind}_eval{SIGNATURE} {{\n  return qd_reduced_term({n_r}, {legs}, {which}, arg, res, iw, "
                     "w, mem);\n}\n" for which, kind in enumerate(("M_r", "CG_r", "G_r", "id_r")))
-    c_text = c_text[:first] + "\n" + helpers_c + f'\n#include "{REDUCED_TEMPLATES}"\n' + evals + c_text[first:]
-    work = work_sizes(casadi_header)
+    entries = []
     for f in functions:
-        if f.sz_arg() != f.n_in() or work[f.name()] != (0, 0):
+        if f.sz_arg() != f.n_in():
             raise AssertionError(f"{f.name()} needs work memory; qd_fd_r_solve assumes it does not")
+        sz_w = 0
         if f.name().startswith(PREFIX + "fd_r_"):
-            body = rf"\1  return qd_fd_r_solve({f.nnz_out(0)}, {legs}, arg, res, iw, w, mem);\n"
-        elif f.name().startswith(PREFIX + "dfd_r_"):  # caller work memory: declare_dfd_r_work; size checked at compile time
-            n, reals = f.size1_out(0), dfd_r_work_reals(f.size1_out(0), dfd_r.tape, dfd_r.did_legs)
-            body = (rf"\1  typedef char w_agrees[QD_DFD_R_W({n}) == {reals} ? 1 : -1];\n"
-                    r"  (void)sizeof(w_agrees);\n"
-                    rf"  return qd_dfd_r_solve({n}, {dfd_r.legs}, {int(dfd_r.lift_reads_quat)}, arg, res, iw, w, mem);\n")
+            body = f"  return qd_fd_r_solve({f.nnz_out(0)}, {legs}, arg, res, iw, w, mem);\n"
+        elif f.name().startswith(PREFIX + "dfd_r_"):  # caller work memory; its size checked at compile time
+            n, sz_w = f.size1_out(0), dfd_r_work_reals(f.size1_out(0), dfd_r.tape, dfd_r.did_legs)
+            body = (f"  typedef char w_agrees[QD_DFD_R_W({n}) == {sz_w} ? 1 : -1];\n"
+                    "  (void)sizeof(w_agrees);\n"
+                    f"  return qd_dfd_r_solve({n}, {dfd_r.legs}, {int(dfd_r.lift_reads_quat)}, arg, res, iw, w, mem);\n")
         else:
             nnz = ", ".join(str(f.nnz_out(i)) for i in range(f.n_out()))
             evaluation = f"qd_{reduced_parts(f.name()[len(PREFIX):])[0]}_eval"  # type: ignore[index]
-            body = rf"\1  return qd_finite({evaluation}(arg, res, iw, w, mem), res, 1, (const casadi_int[]){{{nnz}}});\n"
-        c_text, count = re.subn(entry_point(f.name()), body, c_text)
-        if count != 1:
-            raise AssertionError(f"entry point of {f.name()} not found in CasADi's output")
-        c_text = drop_evaluation(c_text, raw[f.name()])  # every one evaluated above
-        if f.name().startswith(PREFIX + "dfd_r_"):
-            c_text, casadi_header = declare_dfd_r_work(c_text, casadi_header, f, dfd_r)
-    return c_text, casadi_header
+            body = f"  return qd_finite({evaluation}(arg, res, iw, w, mem), res, 1, (const casadi_int[]){{{nnz}}});\n"
+        entries.append(Entry(f, None, body, sz_w))
+    preamble = helpers_c + f'\n#include "{REDUCED_TEMPLATES}"\n' + evals + "\n"
+    return (*c_file(stem, entries, FileOptions(precision, preamble=preamble)), entry_work(entries))
 
 
 #: The full terms whose C evaluates the joint rows first (``_joint_rows_first``); the GRF solves call id_full's.
@@ -512,23 +493,21 @@ ID_FULL_CALL = LegCall(head_args=(0, 1, 2), leg_inputs=(("arg", 1, 3), ("arg", 2
                                                         ("joint", 1, 6), ("joint", 2, 6)),
                        sin_arg=3, tail_args=(0, 1, 2))
 M_BLOCKS_CALL = LegCall(head_args=(), leg_inputs=(("joint", 0, 7),), sin_arg=1, tail_args=())
-_SIGNATURE = "(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem)"
 
 
-def _joint_rows_first(robot: Robot, c_text: str, functions: list[ca.Function]) -> str:
+def _joint_rows_first(robot: Robot, functions: list[ca.Function], host_helpers: frozenset[str]) -> tuple[str, dict[str, str]]:
     """Evaluate M_full, G_full, nle_full and id_full joint rows first (M_full: its joint columns). CasADi's C
     evaluates a graph output by output, each depth first: the trunk rows come first and gather all four legs,
     so the legs' recursions interleave and their temporaries are live together (spilled: x86-64 has 16
     registers). With the joint rows first each leg's recursion runs to its end before the next starts and
     the trunk rows then add up the legs' wrenches. Each entry point calls a static qd_<name>_eval of its own
-    signature: the same graph with its outputs in that order (``static_c``) and mapped back, CasADi's evaluation
-    in the signature's order dropped; for a function in ``UNGUARDED`` the graph reads its inputs untested and
+    signature: the same graph with its outputs in that order (``static_c``) and mapped back (no evaluation in the
+    signature's order); for a function in ``UNGUARDED`` the graph reads its inputs untested and
     qd_<name>_eval gives a NULL input qd_zeros. The same operations on the same values (docs/benchmark.md). For the
     reduced files the graphs are also exported with the joints' sines and cosines as inputs (no NULL input):
     qd_<name>_trig for ``TRIG_GIVEN``, qd_M_full_dense_trig (``_M_full_dense``); qd_id_full_trig and
-    qd_M_blocks_legs_trig leg by leg (``_reduced_calls_by_leg``)."""
-    raw = evaluations(c_text, [f.name() for f in functions])
-    helpers = []
+    qd_M_blocks_legs_trig leg by leg (``_reduced_calls_by_leg``). Returns (the C, entry point name -> its body)."""
+    helpers, bodies = [], {}
     for f in functions:
         name = f.name()[len(PREFIX):]
         if name not in JOINT_ROWS_FIRST:
@@ -546,7 +525,7 @@ def _joint_rows_first(robot: Robot, c_text: str, functions: list[ca.Function]) -
         if f.name_in(0) != "q" or f.nnz_in(0) != NQ_FULL or max(f.nnz_in(i) for i in range(f.n_in())) > NQ_FULL:
             raise AssertionError(f"{f.name()}: not (q (19), ...) with inputs no longer than qd_zeros")
         body = trig_as_inputs(ca.Function(f"{name}_joint_rows_first", args, ordered, {"cse": True}), 0, JOINT_ANGLES)
-        static = static_c(f"qd_{name}_joint_rows_first", body, defined_helpers(c_text), inputs_given=name in UNGUARDED)
+        static = static_c(f"qd_{name}_joint_rows_first", body, host_helpers, inputs_given=name in UNGUARDED)
         if name in UNGUARDED:  # a NULL input reads as zeros, as CasADi's tests gave it
             a_init = [f"arg[{i}] ? arg[{i}] : qd_zeros" for i in range(f.n_in())]
         else:
@@ -554,24 +533,20 @@ def _joint_rows_first(robot: Robot, c_text: str, functions: list[ca.Function]) -
         n = len(JOINT_ANGLES)
         if name in TRIG_GIVEN:
             static += (f"/* {name} with the joints' sines and cosines given: arg = ({', '.join(f.name_in())}, sin, cos) */\n"
-                       f"int qd_{name}_trig{_SIGNATURE} {{\n  casadi_real* r[2] = {res};\n"
+                       f"int qd_{name}_trig{SIGNATURE} {{\n  casadi_real* r[2] = {res};\n"
                        f"  return qd_{name}_joint_rows_first(arg, r, iw, w, mem);\n}}\n")
-        helpers.append(static + f"static int qd_{name}_eval{_SIGNATURE} {{\n"
+        helpers.append(static + f"static int qd_{name}_eval{SIGNATURE} {{\n"
                        f"  casadi_real c[{n}], s[{n}]; /* the joints' cosines and sines, once (qd_sincos) */\n"
                        f"  qd_sincos({n}, (arg[0] ? arg[0] : qd_zeros) + {JOINT_ANGLES.start}, c, s);\n"
                        f"  const casadi_real* a[{f.n_in() + 2}] = {{{', '.join([*a_init, 's', 'c'])}}};\n"
                        f"  casadi_real* r[2] = {res};\n"
                        f"  return qd_{name}_joint_rows_first(a, r, iw, w, mem);\n}}\n")
-        c_text, count = re.subn(entry_point(f.name()), rf"\1  return qd_{name}_eval(arg, res, iw, w, mem);\n", c_text)
-        if count != 1:
-            raise AssertionError(f"entry point of {f.name()} not found in CasADi's output")
-        c_text = drop_evaluation(c_text, raw[f.name()])
-    helpers.append(_M_full_dense(functions, defined_helpers(c_text)))
-    helpers.append(_reduced_calls_by_leg(robot, defined_helpers(c_text)))
+        bodies[f.name()] = f"  return qd_{name}_eval(arg, res, iw, w, mem);\n"
+    helpers.append(_M_full_dense(functions, host_helpers))
+    helpers.append(_reduced_calls_by_leg(robot, host_helpers))
     helpers.insert(0, (TEMPLATES / SINCOS).read_text()
                    + f"static const casadi_real qd_zeros[{NQ_FULL}]; /* a NULL input (CasADi's convention: zeros) */\n")
-    first = _first_evaluation(c_text)
-    return c_text[:first] + "\n" + "\n".join(helpers) + c_text[first:]
+    return "\n".join(helpers), bodies
 
 
 def _M_full_dense(functions: list[ca.Function], host_helpers: frozenset[str]) -> str:
@@ -586,7 +561,7 @@ def _M_full_dense(functions: list[ca.Function], host_helpers: frozenset[str]) ->
     return (static_c("qd_M_full_dense_joint_rows_first", dense, host_helpers, all_io=True)
             + "/* M_full (18 x 18, dense column-major, zeros written) with the joints' sines and cosines given: arg = "
             "(q, sin, cos) */\n"
-            f"int qd_M_full_dense_trig{_SIGNATURE} {{\n"
+            f"int qd_M_full_dense_trig{SIGNATURE} {{\n"
             f"  casadi_real* r[2] = {{res[0] + {k}, res[0]}};\n"
             "  return qd_M_full_dense_joint_rows_first(arg, r, iw, w, mem);\n}\n")
 
@@ -608,27 +583,18 @@ def _reduced_calls_by_leg(robot: Robot, host_helpers: frozenset[str]) -> str:
             + foot_c("qd_foot_trig", foot_pieces(robot), host_helpers))
 
 
-def _first_evaluation(c_text: str) -> int:
-    """Where the first of CasADi's evaluation functions (its comment) or entry points left in ``c_text`` begins:
-    helpers inserted there precede every function that calls them."""
-    found = [m.start() for m in (re.search(r"\n/\* qd_\w+:\(", c_text),
-                                 re.search(r"\nCASADI_SYMBOL_EXPORT int qd_\w+\(const casadi_real\*\* arg", c_text)) if m]
-    if not found:
-        raise AssertionError("no CasADi evaluation function in the generated source")
-    return min(found)
-
-
-def _grf_through_id_full(robot: Robot, c_text: str, functions: list[ca.Function]) -> str:
+def _grf_through_id_full(robot: Robot, functions: list[ca.Function],
+                         host_helpers: frozenset[str]) -> tuple[str, dict[str, str]]:
     """Route every qd_grf_<feet> of qd_<robot>.c through ``c/qd_grf_solve.c``: id_full's evaluation (one
     Newton-Euler pass) and a generated static qd_grf_balance_<feet> (``grf.grf_balance``), instead of
-    CasADi's unrolled graph, which repeats the recursion in each of the 15 (dropped: ~0.4 MB per robot)."""
-    raw = evaluations(c_text, [f.name() for f in functions if f.name().startswith(PREFIX + "grf_")])
+    the unrolled graph, which repeats the recursion in each of the 15 (~0.4 MB per robot). Returns (the C, entry
+    point name -> its body)."""
     id_full = next(f for f in functions if f.name() == PREFIX + "id_full")
     if id_full.name_in() != ["q", "v", "a", "f"] or id_full.name_out() != ["w_res", "tau"] or id_full.sz_arg() != 4:
         raise AssertionError("qd_grf_solve calls id_full as (q, v, a, f) -> (w_res, tau) with no work memory")
     q, w_req = ca.SX.sym("q", NQ_FULL), ca.SX.sym("w_req", 6)
-    host_helpers = defined_helpers(c_text)
     helpers = ["#define QD_ID_FULL_EVAL qd_id_full_eval /* _joint_rows_first */\n" + (TEMPLATES / "qd_grf_solve.c").read_text()]
+    bodies = {}
     for f in functions:
         if not f.name().startswith(PREFIX + "grf_"):
             continue
@@ -638,18 +604,26 @@ def _grf_through_id_full(robot: Robot, c_text: str, functions: list[ca.Function]
         if [balance.sparsity_out(i) for i in range(3)] != [f.sparsity_out(i) for i in range(3)]:
             raise AssertionError(f"{f.name()}: the balance's outputs are not the GRF function's")
         helpers.append(static_c(f"qd_grf_balance_{suffix}", balance, host_helpers))
-        body = (r"\1  casadi_real w_req[6], tau_0[12], tau_f[12];\n"
-                r"  const casadi_real* b_arg[2] = {arg[0], w_req};\n"
-                r"  casadi_real* b_res[4] = {res[0], res[1], res[2], tau_f};\n"
-                r"  int flag = qd_grf_begin(arg, w_req, tau_0, iw, w, mem);\n"
-                rf"  if (!flag) flag = qd_grf_balance_{suffix}(b_arg, b_res, iw, w, mem);\n"
-                r"  return flag ? flag : qd_grf_end(res, tau_0, tau_f);\n")
-        c_text, count = re.subn(entry_point(f.name()), body, c_text)
-        if count != 1:
-            raise AssertionError(f"entry point of {f.name()} not found in CasADi's output")
-        c_text = drop_evaluation(c_text, raw[f.name()])
-    first = _first_evaluation(c_text)
-    return c_text[:first] + "\n" + "\n".join(helpers) + c_text[first:]
+        bodies[f.name()] = ("  casadi_real w_req[6], tau_0[12], tau_f[12];\n"
+                            "  const casadi_real* b_arg[2] = {arg[0], w_req};\n"
+                            "  casadi_real* b_res[4] = {res[0], res[1], res[2], tau_f};\n"
+                            "  int flag = qd_grf_begin(arg, w_req, tau_0, iw, w, mem);\n"
+                            f"  if (!flag) flag = qd_grf_balance_{suffix}(b_arg, b_res, iw, w, mem);\n"
+                            "  return flag ? flag : qd_grf_end(res, tau_0, tau_f);\n")
+    return "\n".join(helpers), bodies
+
+
+def _full_source(robot: Robot, stem: str, functions: list[ca.Function],
+                 precision: str) -> tuple[str, str, dict[str, tuple[int, int]]]:
+    """qd_<robot>.c: the full terms joint rows first (``_joint_rows_first``), the GRF solves through id_full
+    (``_grf_through_id_full``), the other functions CasADi's graphs. Returns (C source, header, work sizes)."""
+    host_helpers = file_helpers(functions)
+    joint_rows, bodies = _joint_rows_first(robot, functions, host_helpers)
+    grf, grf_bodies = _grf_through_id_full(robot, functions, host_helpers)
+    bodies.update(grf_bodies)
+    entries = [Entry(f, None, bodies[f.name()]) if f.name() in bodies else Entry(f, EVALUATION) for f in functions]
+    c_text, h_text = c_file(stem, entries, FileOptions(precision, preamble=joint_rows + "\n" + grf + "\n"))
+    return c_text, h_text, entry_work(entries)
 
 
 def generate(robot: Robot, out_dir: Path, precision: str = "double",
@@ -667,24 +641,24 @@ def generate(robot: Robot, out_dir: Path, precision: str = "double",
     check_no_collision(layout, robot.name, out_dir)  # before the work: another robot's files are never written over
     out_dir.mkdir(parents=True, exist_ok=True)
     full = codegen_functions(robot)
-    c_full, casadi_header = casadi_c(casadi_name(layout.source), full, precision)
-    c_full = _grf_through_id_full(robot, _joint_rows_first(robot, c_full, full), full)
+    c_full, casadi_header, work = _full_source(robot, casadi_name(layout.source), full, precision)
     sources = {layout.source: c_full}
     functions = list(full)
     for stance, path in zip(REDUCED_STANCE_SETS, layout.reduced, strict=True):
         reduced = reduced_functions(robot, stance)
-        c_text, h_text = casadi_c(casadi_name(path), reduced, precision)
         dfd_r = dfd_r_pieces(robot, stance)
-        sources[path], h_text = _checked_reduced_c(c_text, h_text, reduced,
-                                                   _reduced_helpers_c(stance, dfd_r), dfd_r)
+        sources[path], h_text, reduced_work = _reduced_source(casadi_name(path), reduced,
+                                                              _reduced_helpers_c(stance, dfd_r), dfd_r, precision)
         casadi_header += h_text
+        work.update(reduced_work)
         functions += reduced
     derivatives = derivative_functions(robot)  # qd_<robot>-d.c: derivatives of the full dynamics
     (derivative_path,) = layout.derivatives
-    sources[derivative_path], h_text = derivative_source(robot, casadi_name(derivative_path), derivatives, precision)
+    sources[derivative_path], h_text, derivative_work = derivative_source(robot, casadi_name(derivative_path),
+                                                                          derivatives, precision)
     casadi_header += h_text
+    work.update(derivative_work)
     functions += derivatives
-    work = work_sizes(casadi_header)
     did = next(f for f in functions if f.name() == PREFIX + "did_full")
     if any(work[PREFIX + g] != (0, 0) for g in ("M_full", "G_full", "id_full", "nle_full", "did_full")) or (
             did.sz_arg() != 3 or (did.name_in(), did.name_out()) != (["q", "v", "a"], ["dtau_dq", "dtau_dv", "dtau_da"])):

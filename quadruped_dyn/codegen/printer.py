@@ -59,7 +59,9 @@ class PrintOptions:
     guard_inputs: bool = True  # read arg[i][k] as CasADi does, ``arg[i]? arg[i][k] : 0`` (False: the caller passes all)
     guard_outputs: bool = True  # write res[i][k] as CasADi does, ``if (res[i]!=0) ...`` (False: the caller passes all)
     #: a denominator dividing more than once, or a constant one: one reciprocal ``rcpK`` right after it is written, its
-    #: quotients products with it (~1 ulp each; docs/benchmark.md "Design choices")
+    #: quotients products with it (a division costs ~4 cycles of throughput, a product 0.5, and CasADi folds
+    #: x * (1 / d) back into x / d in its graph). Each result moves by ~1 ulp (exact for a power of two); a zero or
+    #: non-finite denominator still gives a non-finite result (docs/benchmark.md "Design choices")
     reciprocals: bool = False
     #: sin, cos, tan, sqrt as qd_sin, ... (``PRECISION_MATH``) and CasADi's double literals in products and
     #: quotients as integers ((2.*x) -> (2*x), (1./x) -> (1/x): the same value in double, no promotion in float)
