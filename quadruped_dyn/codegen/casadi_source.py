@@ -1,7 +1,6 @@
-"""CasADi's C for a list of Functions: the source and CasADi's header text (unused parameters
-cast to void for -Wextra -Werror, the scalar helpers static inline), the work sizes it states, the entry-point
-pattern, the C templates' folder.
-The one place ``codegen.emit`` and ``codegen.emit_derivatives`` both build on."""
+"""What the generated files share: the C prefix, the templates' folder, how their evaluation functions print
+(``EVALUATION``) and the static pieces the templates call (``static_c``), a list of Functions as one file in CasADi's
+layout (``casadi_c``), the work sizes a header states."""
 
 from __future__ import annotations
 
