@@ -98,9 +98,8 @@ def evaluation_name(index: int) -> str:
 
 
 def _initializer(values: list[int]) -> str:
-    text = ", ".join(str(v) if k == 0 or k % _ELEMENTS_PER_LINE else f"\n  {v}" for k, v in enumerate(values))
-    text = text.replace(", \n", ",\n")
-    return ("\n  {" if len(values) > _ELEMENTS_PER_LINE else "{") + text + "}"
+    rows = [", ".join(map(str, values[k:k + _ELEMENTS_PER_LINE])) for k in range(0, len(values), _ELEMENTS_PER_LINE)]
+    return ("\n  {" if len(values) > _ELEMENTS_PER_LINE else "{") + ",\n  ".join(rows) + "}"
 
 
 class _File:

@@ -23,14 +23,6 @@ def work_sizes(casadi_header: str) -> dict[str, tuple[int, int]]:
     return {n: (int(sizes[f"{n}_SZ_IW"]), int(sizes[f"{n}_SZ_W"])) for n in names}
 
 
-def silence_unused_parameters(c_source: str) -> str:
-    """CasADi's evaluation functions in a peer's C (bench/peers.py, not shipped) ignore some of their five parameters
-    and its release hooks ignore ``mem``: cast them to void so -Wextra -Werror passes."""
-    c_source = re.sub(r"(static int casadi_f\d+\([^)]*\) \{\n)", lambda m: m.group(1) + f"  {_UNUSED}\n", c_source)
-    return re.sub(r"(void \w+_release\(int mem\) \{\n)", lambda m: m.group(1) + "  (void)mem;\n", c_source)
-
-
-_UNUSED = "(void)arg; (void)res; (void)iw; (void)w; (void)mem;"
 #: How the evaluation functions of the shipped files print (``codegen.printer``): each shared denominator's quotients
 #: as products with its reciprocal, the elementary functions in casadi_real's precision, the unused parameters cast
 #: to void
