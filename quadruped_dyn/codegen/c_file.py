@@ -11,10 +11,11 @@ states."""
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import casadi as ca
 
+from quadruped_dyn.codegen.precision_math import wrappers_c
 from quadruped_dyn.codegen.printer import SIGNATURE, PrintOptions, print_function
 
 _VERSION = ca.CasadiMeta.version()
@@ -45,12 +46,18 @@ _EXPORT = """/* Symbol visibility in DLLs */
 #endif
 
 """
-#: CasADi's scalar helpers (its runtime's text), by name
-_HELPERS = {
-    "casadi_sq": "casadi_real casadi_sq(casadi_real x) { return x*x;}\n\n",
-    "casadi_fabs": ("casadi_real casadi_fabs(casadi_real x) {\n/* Pre-c99 compatibility */\n"
-                    "#if __STDC_VERSION__ < 199901L\n  return x>0 ? x : -x;\n#else\n  return fabs(x);\n#endif\n}\n\n"),
-}
+
+
+def _helper_c(name: str, fabs: str) -> str:
+    """CasADi's scalar helper ``name`` (its runtime's text); ``fabs``: the name of the libm function casadi_fabs calls."""
+    if name == "casadi_sq":
+        return "casadi_real casadi_sq(casadi_real x) { return x*x;}\n\n"
+    if name != "casadi_fabs":
+        raise ValueError(f"CasADi's helper {name} is not printed here (casadi_sq and casadi_fabs are)")
+    return ("casadi_real casadi_fabs(casadi_real x) {\n/* Pre-c99 compatibility */\n"
+            f"#if __STDC_VERSION__ < 199901L\n  return x>0 ? x : -x;\n#else\n  return {fabs}(x);\n#endif\n}}\n\n")
+
+
 _WORK_PARAMETERS = "casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz_iw, casadi_int *sz_w"
 _ELEMENTS_PER_LINE = 8  # CasADi's max_initializer_elements_per_line
 
@@ -79,6 +86,10 @@ class FileOptions:
     project: bool = True
     #: text printed right before the first function (the hand-written templates and static pieces its entry points call)
     preamble: str = ""
+    #: the elementary functions' wrappers in casadi_real's precision (``precision_math``) after the casadi_real
+    #: default, those the file calls (and ``included``, the C of a header it includes), and casadi_fabs calling qd_fabs
+    precision_math: bool = False
+    included: str = ""
 
 
 def evaluation_name(index: int) -> str:
@@ -87,9 +98,8 @@ def evaluation_name(index: int) -> str:
 
 
 def _initializer(values: list[int]) -> str:
-    text = ", ".join(str(v) if k == 0 or k % _ELEMENTS_PER_LINE else f"\n  {v}" for k, v in enumerate(values))
-    text = text.replace(", \n", ",\n")
-    return ("\n  {" if len(values) > _ELEMENTS_PER_LINE else "{") + text + "}"
+    rows = [", ".join(map(str, values[k:k + _ELEMENTS_PER_LINE])) for k in range(0, len(values), _ELEMENTS_PER_LINE)]
+    return ("\n  {" if len(values) > _ELEMENTS_PER_LINE else "{") + ",\n  ".join(rows) + "}"
 
 
 class _File:
@@ -118,7 +128,8 @@ class _File:
         raw = evaluation_name(k)
         self.helpers += [h for h in print_function(f).helpers if h not in self.helpers]
         if e.evaluation is not None:
-            evaluation = e.evaluation if isinstance(e.evaluation, str) else print_function(f, _named(e.evaluation, raw)).text
+            evaluation = (e.evaluation if isinstance(e.evaluation, str)
+                          else print_function(f, replace(e.evaluation, name=raw)).text)
             text += f"/* {str(f).removesuffix(' SXFunction')} */\n{evaluation}\n"
         body = e.body if e.body is not None else f"  return {raw}(arg, res, iw, w, mem);\n"
         text += f"{self.declare(f'int {name}{SIGNATURE}')}{{\n{body}}}\n\n"
@@ -151,14 +162,16 @@ class _File:
         shorthands = sorted([evaluation_name(k)[len("casadi_"):] for k, e in enumerate(self.entries) if e.evaluation]
                             + [h[len("casadi_"):] for h in self.helpers]
                             + [f"s{i}" for i in range(len(self.sparsity))])
-        helpers = "".join(("static inline " if self.o.project else "") + _HELPERS[h] for h in self.helpers)
+        fabs = "qd_fabs" if self.o.precision_math else "fabs"
+        helpers = "".join(("static inline " if self.o.project else "") + _helper_c(h, fabs) for h in self.helpers)
+        math = wrappers_c(helpers + self.o.preamble + body + self.o.included) if self.o.precision_math else ""
         major, minor, patch = _VERSION.split(".")[:3]
         return (_OPENING + "/* How to prefix internal symbols */\n#ifdef CASADI_CODEGEN_PREFIX\n"
                 "  #define CASADI_NAMESPACE_CONCAT(NS, ID) _CASADI_NAMESPACE_CONCAT(NS, ID)\n"
                 "  #define _CASADI_NAMESPACE_CONCAT(NS, ID) NS ## ID\n"
                 "  #define CASADI_PREFIX(ID) CASADI_NAMESPACE_CONCAT(CODEGEN_PREFIX, ID)\n#else\n"
                 f"  #define CASADI_PREFIX(ID) {prefix}_ ## ID\n#endif\n\n#include <math.h>\n\n"
-                f"#ifndef casadi_real\n#define casadi_real {self.o.precision}\n#endif\n\n"
+                f"#ifndef casadi_real\n#define casadi_real {self.o.precision}\n#endif\n{math}\n"
                 "#ifndef casadi_int\n#define casadi_int long long int\n#endif\n\n"
                 "/* Add prefix to internal symbols */\n"
                 + "".join(f"#define casadi_{s} CASADI_PREFIX({s})\n" for s in shorthands) + "\n"
@@ -178,10 +191,6 @@ class _File:
                 "#ifndef casadi_int\n#define casadi_int long long int\n#endif\n\n" + "".join(self.decl)
                 + f"void {prefix}_casadi_version(int* major, int* minor, int* patch);\n"
                 f"int {prefix}_casadi_int_size(void);\nint {prefix}_casadi_real_size(void);\n" + _CLOSING)
-
-
-def _named(options: PrintOptions, name: str) -> PrintOptions:
-    return PrintOptions(**{**options.__dict__, "name": name})
 
 
 def file_helpers(functions: list[ca.Function]) -> frozenset[str]:

@@ -5,6 +5,7 @@ layout (``casadi_c``), the work sizes a header states."""
 from __future__ import annotations
 
 import re
+from dataclasses import replace
 
 import casadi as ca
 
@@ -21,17 +22,10 @@ def work_sizes(casadi_header: str) -> dict[str, tuple[int, int]]:
     return {n: (int(sizes[f"{n}_SZ_IW"]), int(sizes[f"{n}_SZ_W"])) for n in names}
 
 
-def silence_unused_parameters(c_source: str) -> str:
-    """CasADi's evaluation functions in a peer's C (bench/peers.py, not shipped) ignore some of their five parameters
-    and its release hooks ignore ``mem``: cast them to void so -Wextra -Werror passes."""
-    c_source = re.sub(r"(static int casadi_f\d+\([^)]*\) \{\n)", lambda m: m.group(1) + f"  {_UNUSED}\n", c_source)
-    return re.sub(r"(void \w+_release\(int mem\) \{\n)", lambda m: m.group(1) + "  (void)mem;\n", c_source)
-
-
-_UNUSED = "(void)arg; (void)res; (void)iw; (void)w; (void)mem;"
 #: How the evaluation functions of the shipped files print (``codegen.printer``): each shared denominator's quotients
-#: as products with its reciprocal, the unused parameters cast to void
-EVALUATION = PrintOptions(reciprocals=True, void_unused=True)
+#: as products with its reciprocal, the elementary functions in casadi_real's precision, the unused parameters cast
+#: to void
+EVALUATION = PrintOptions(reciprocals=True, precision_math=True, void_unused=True)
 
 
 #: the sines and cosines of a vector of angles (qd_sincos), pasted into each file whose entry points call it
@@ -40,8 +34,8 @@ SINCOS = "qd_sincos.c"
 
 def casadi_c(file_stem: str, functions: list[ca.Function], precision: str) -> tuple[str, str]:
     """(C source, header) of ``functions`` in ``file_stem``.c, CasADi's layout printed by ``codegen.c_file``, each
-    evaluation as ``EVALUATION``."""
-    return c_file(file_stem, [Entry(f, EVALUATION) for f in functions], FileOptions(precision))
+    evaluation as ``EVALUATION`` but calling libm's names (the including build picks their precision)."""
+    return c_file(file_stem, [Entry(f, replace(EVALUATION, precision_math=False)) for f in functions], FileOptions(precision))
 
 
 #: The generated functions whose evaluation reads its inputs without CasADi's test of each input pointer at each
@@ -60,9 +54,8 @@ def static_c(c_name: str, f: ca.Function, host_helpers: frozenset[str] = frozens
     locals; the templates call it with none), checked to call no helper but casadi_sq and ``host_helpers`` (CasADi
     helpers the file it goes into defines). ``all_io``: the templates pass every input and output (none NULL), so
     the tests of each pointer at each read and write are left out; ``inputs_given``: only those of the inputs."""
-    printed = print_function(f, PrintOptions(name=c_name, guard_inputs=not (all_io or inputs_given),
-                                             guard_outputs=not all_io, reciprocals=True, precision_math=True,
-                                             void_unused=True))
+    printed = print_function(f, replace(EVALUATION, name=c_name, guard_inputs=not (all_io or inputs_given),
+                                        guard_outputs=not all_io))
     if set(printed.helpers) - {"casadi_sq", *host_helpers}:
         raise AssertionError(f"{f.name()}: its C is not self-contained; the templates need it to be")
     return printed.text

@@ -13,7 +13,6 @@ units and frames, output sparsity, and work sizes. ``compiled`` builds and loads
 
 from __future__ import annotations
 
-import re
 from collections.abc import Callable
 from pathlib import Path
 
@@ -44,7 +43,8 @@ from quadruped_dyn.codegen.file_names import (
     file_layout,
 )
 from quadruped_dyn.codegen.joint_trig import trig_as_inputs
-from quadruped_dyn.codegen.printer import PRECISION_MATH, SIGNATURE
+from quadruped_dyn.codegen.precision_math import precision_calls, template_c
+from quadruped_dyn.codegen.printer import SIGNATURE
 from quadruped_dyn.codegen.work_memory import memory_doc
 from quadruped_dyn.dynamics.by_leg import foot_pieces, id_full_pieces, mass_matrix_pieces
 from quadruped_dyn.dynamics.grf import grf_balance, grf_solve
@@ -351,66 +351,18 @@ def header_doc(robot: Robot, functions: list[ca.Function], work: dict[str, tuple
     return "\n".join(lines) + "\n"
 
 
-#: Elementary functions the generated code calls, each routed through a wrapper in casadi_real's precision.
-_WRAPPED_MATH = PRECISION_MATH
-_PRECISION_MATH = """
-/* quadruped_dyn: the elementary functions in casadi_real's precision. A float build
- * (-Dcasadi_real=float) calls sinf, cosf, ... instead of promoting to double, so it does no
- * double arithmetic (none on a single-precision FPU: -Wdouble-promotion clean); a long double
- * build wider than double (x87's 64-bit significand) calls sinl, cosl, ...; a double build
- * calls sin, cos, ... exactly as before. */
-#define QD_REAL_IS_FLOAT (sizeof(casadi_real) == sizeof(float))
-#define QD_REAL_IS_EXTENDED (sizeof(casadi_real) > sizeof(double))
-#define QD_MATH(fn) static inline casadi_real qd_##fn(casadi_real x) { return QD_REAL_IS_FLOAT ? (casadi_real)fn##f((float)x) \\
-  : QD_REAL_IS_EXTENDED ? (casadi_real)fn##l((long double)x) : (casadi_real)fn((double)x); }
-"""
-#: CasADi's default precision block; the wrappers go right after it, so a build without
-#: -Dcasadi_real (double, the default) compiles.
-_CASADI_REAL_DEFAULT = re.compile(r"#ifndef casadi_real\n#define casadi_real [\w ]+\n#endif\n")  # double or float
-_MATH_CALL = re.compile(rf"(?<![\w.])({'|'.join(_WRAPPED_MATH)})\(")
-
-
-def _precision_math(c_source: str) -> str:
-    """Route the elementary functions through ``_PRECISION_MATH`` and write CasADi's double
-    literals in products and quotients as integers ((2.*a) -> (2*a), (1./a) -> (1/a): the same
-    value in double, no promotion in float)."""
-    unknown = set(re.findall(r"(?<![\w.])(atan2?|asin|acos|exp|log|pow|tanh|sinh|cosh|floor|ceil|fmin|fmax|erf)\(",
-                             c_source))
-    if unknown:
-        raise AssertionError(f"elementary functions {sorted(unknown)} have no precision wrapper in emit._WRAPPED_MATH")
-    c_source = _precision_calls(c_source)  # before the wrappers go in: they call the real ones
-    # only the wrappers the file calls (its own text, and the reduced templates it includes): clang warns of an
-    # unused static inline function, which the Makefile's -Werror makes an error (`make CC=clang`)
-    calls = c_source + (reduced_templates_h() if f'#include "{REDUCED_TEMPLATES}"' in c_source else "")
-    wrapped = [f for f in _WRAPPED_MATH if re.search(rf"(?<![\w.])qd_{f}\(", calls)]
-    if wrapped:  # after CasADi's default of casadi_real, which the wrappers' signatures need
-        default = _CASADI_REAL_DEFAULT.search(c_source)
-        if not default:
-            raise AssertionError("CasADi's '#ifndef casadi_real' default is not in the generated source")
-        wrappers = " ".join(f"QD_MATH({f})" for f in wrapped) + "\n"
-        c_source = c_source[:default.end()] + _PRECISION_MATH + wrappers + c_source[default.end():]
-    return c_source
-
-
-def _precision_calls(c_source: str) -> str:
-    """``_precision_math`` without the wrappers' definitions (a header the file that defines them includes)."""
-    c_source = _MATH_CALL.sub(r"qd_\1(", c_source)
-    c_source = re.sub(r"\((\d+)\.\*", r"(\1*", c_source)
-    return re.sub(r"\((\d+)\./", r"(\1/", c_source)
-
-
 _REDUCED_TEMPLATE_FILES = (SINCOS, "qd_dense.c", "qd_reduced_solve.c", "qd_reduced_derivatives.c")
 
 
 def reduced_templates_h() -> str:
     """The text of ``REDUCED_TEMPLATES``: c/qd_sincos.c, c/qd_dense.c, c/qd_reduced_solve.c and
     c/qd_reduced_derivatives.c, their elementary functions routed through the including file's precision wrappers
-    (``_precision_math``)."""
+    (``precision_math``)."""
     body = prelude_c() + layouts_c() + "\n".join((TEMPLATES / t).read_text() for t in _REDUCED_TEMPLATE_FILES)
     return ("/* quadruped_dyn: the hand-written templates of the reduced model, included by every qd_<robot>-r-<feet>.c\n"
             " * after its generated pieces (quadruped_dyn/codegen/emit.py). Not a header to include elsewhere: its\n"
             " * functions are static and call the including file's qd_stance_maps, qd_M_full, qd_id_full, ... */\n"
-            + _precision_calls(body))
+            + precision_calls(body))
 
 
 def float_err_per_regularity(stance: StanceSet) -> float:
@@ -477,7 +429,8 @@ def _reduced_source(stem: str, functions: list[ca.Function], helpers_c: str, dfd
             body = f"  return qd_finite({evaluation}(arg, res, iw, w, mem), res, 1, (const casadi_int[]){{{nnz}}});\n"
         entries.append(Entry(f, None, body, sz_w))
     preamble = helpers_c + f'\n#include "{REDUCED_TEMPLATES}"\n' + evals + "\n"
-    return (*c_file(stem, entries, FileOptions(precision, preamble=preamble)), entry_work(entries))
+    options = FileOptions(precision, preamble=preamble, precision_math=True, included=reduced_templates_h())
+    return (*c_file(stem, entries, options), entry_work(entries))
 
 
 #: The full terms whose C evaluates the joint rows first (``_joint_rows_first``); the GRF solves call id_full's.
@@ -544,7 +497,7 @@ def _joint_rows_first(robot: Robot, functions: list[ca.Function], host_helpers: 
         bodies[f.name()] = f"  return qd_{name}_eval(arg, res, iw, w, mem);\n"
     helpers.append(_M_full_dense(functions, host_helpers))
     helpers.append(_reduced_calls_by_leg(robot, host_helpers))
-    helpers.insert(0, (TEMPLATES / SINCOS).read_text()
+    helpers.insert(0, template_c(SINCOS)
                    + f"static const casadi_real qd_zeros[{NQ_FULL}]; /* a NULL input (CasADi's convention: zeros) */\n")
     return "\n".join(helpers), bodies
 
@@ -593,7 +546,7 @@ def _grf_through_id_full(robot: Robot, functions: list[ca.Function],
     if id_full.name_in() != ["q", "v", "a", "f"] or id_full.name_out() != ["w_res", "tau"] or id_full.sz_arg() != 4:
         raise AssertionError("qd_grf_solve calls id_full as (q, v, a, f) -> (w_res, tau) with no work memory")
     q, w_req = ca.SX.sym("q", NQ_FULL), ca.SX.sym("w_req", 6)
-    helpers = ["#define QD_ID_FULL_EVAL qd_id_full_eval /* _joint_rows_first */\n" + (TEMPLATES / "qd_grf_solve.c").read_text()]
+    helpers = ["#define QD_ID_FULL_EVAL qd_id_full_eval /* _joint_rows_first */\n" + template_c("qd_grf_solve.c")]
     bodies = {}
     for f in functions:
         if not f.name().startswith(PREFIX + "grf_"):
@@ -622,7 +575,8 @@ def _full_source(robot: Robot, stem: str, functions: list[ca.Function],
     grf, grf_bodies = _grf_through_id_full(robot, functions, host_helpers)
     bodies.update(grf_bodies)
     entries = [Entry(f, None, bodies[f.name()]) if f.name() in bodies else Entry(f, EVALUATION) for f in functions]
-    c_text, h_text = c_file(stem, entries, FileOptions(precision, preamble=joint_rows + "\n" + grf + "\n"))
+    c_text, h_text = c_file(stem, entries, FileOptions(precision, preamble=joint_rows + "\n" + grf + "\n",
+                                                       precision_math=True))
     return c_text, h_text, entry_work(entries)
 
 
@@ -668,7 +622,7 @@ def generate(robot: Robot, out_dir: Path, precision: str = "double",
     extra = extra_files(functions, work) if extra_files else {}
     layout = file_layout(robot.name, out_dir, tuple(extra))
     texts = {
-        **{path: _precision_math(text) for path, text in sources.items()},
+        **sources,
         layout.header: header_doc(robot, functions, work) + return_codes_c() + casadi_header,
         **{layout.extra[f]: text for f, text in extra.items()},
         layout.check_program: (TEMPLATES / "check_qd.c").read_text(),

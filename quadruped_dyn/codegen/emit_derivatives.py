@@ -49,9 +49,10 @@ import numpy as np
 from quadruped_dyn.codegen.by_leg import LegCall, by_leg_c, legs_reals
 from quadruped_dyn.codegen.c_facts import prelude_c
 from quadruped_dyn.codegen.c_file import Entry, FileOptions, c_file, entry_work, evaluation_name, file_helpers
-from quadruped_dyn.codegen.casadi_source import EVALUATION, PREFIX, SINCOS, TEMPLATES, UNGUARDED
+from quadruped_dyn.codegen.casadi_source import EVALUATION, PREFIX, SINCOS, UNGUARDED
 from quadruped_dyn.codegen.file_names import feet_suffix
 from quadruped_dyn.codegen.joint_trig import trig_as_inputs
+from quadruped_dyn.codegen.precision_math import template_c
 from quadruped_dyn.codegen.printer import SIGNATURE
 from quadruped_dyn.dynamics.derivatives import configuration_tangent, full_derivatives, quaternion_tangent
 from quadruped_dyn.dynamics.grf import solve_lambda
@@ -326,7 +327,7 @@ def _did_full_trig_once(did: ca.Function, robot: Robot, host_helpers: frozenset[
                f"  qd_sincos({n}, arg[0] + {JOINT_ANGLES.start}, c, s);\n"
                f"  const casadi_real* a[{did.n_in() + 2}] = {{{', '.join(f'arg[{i}]' for i in range(did.n_in()))}, s, c}};\n"
                f"  return qd_did_full_trig(a, res, iw, w, mem);\n}}\n")
-    return (TEMPLATES / SINCOS).read_text() + "\n" + exported + "\n" + wrapper
+    return template_c(SINCOS) + "\n" + exported + "\n" + wrapper
 
 
 def _derivative_entry(f: ca.Function, index: dict[str, str], template_w: dict[str, int]) -> Entry:
@@ -360,7 +361,7 @@ def derivative_source(robot: Robot, file_stem: str, functions: list[ca.Function]
     functions; every entry point returns QD_NONFINITE for a non-finite output, dfd_full solves. dfd_full calls
     qd_did_full_sparsity_out, defined further down: declared first."""
     declaration = f"CASADI_SYMBOL_EXPORT const casadi_int* {PREFIX}did_full_sparsity_out(casadi_int i);\n"
-    solve = (TEMPLATES / "qd_derivatives_solve.c").read_text()
+    solve = template_c("qd_derivatives_solve.c")
     template = prelude_c() + declaration + "\n" + solve
     template_w = {k: int(v) for k, v in re.findall(r"#define QD_(DFD_FULL|DGRF)_SZ_W (\d+)", solve)}
     index = {f.name(): evaluation_name(k) for k, f in enumerate(functions)}
@@ -368,5 +369,6 @@ def derivative_source(robot: Robot, file_stem: str, functions: list[ca.Function]
     if functions[0].name() != PREFIX + "did_full":
         raise AssertionError("qd_<robot>-d.c's first function is not did_full, whose evaluation it prints leg by leg")
     entries[0] = Entry(functions[0], _did_full_trig_once(functions[0], robot, file_helpers(functions)), entries[0].body)
-    preamble = (TEMPLATES / "qd_dense.c").read_text() + "\n" + template + "\n"
-    return (*c_file(file_stem, entries, FileOptions(precision, preamble=preamble)), entry_work(entries))
+    preamble = template_c("qd_dense.c") + "\n" + template + "\n"
+    options = FileOptions(precision, preamble=preamble, precision_math=True)
+    return (*c_file(file_stem, entries, options), entry_work(entries))

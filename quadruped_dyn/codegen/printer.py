@@ -22,6 +22,8 @@ from dataclasses import dataclass, field
 
 import casadi as ca
 
+from quadruped_dyn.codegen.precision_math import PRECISION_MATH
+
 SIGNATURE = "(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem)"
 #: CasADi's ``max_declarations_per_line``
 _DECLARATIONS_PER_LINE = 12
@@ -44,8 +46,6 @@ _OPERATORS: dict[int, tuple[str, str, str]] = {
         (ca.OP_TANH, "tanh"), (ca.OP_FLOOR, "floor"), (ca.OP_CEIL, "ceil"), (ca.OP_FMOD, "fmod"),
         (ca.OP_COPYSIGN, "copysign"), (ca.OP_ERF, "erf"))},
 }
-#: The elementary functions with a wrapper in casadi_real's precision (qd_sin, ...: ``emit._PRECISION_MATH``)
-PRECISION_MATH = ("sin", "cos", "tan", "sqrt", "fabs")
 #: The CasADi helpers an op's C calls (the file the function goes into defines them)
 _HELPERS = {ca.OP_FABS: "casadi_fabs", ca.OP_SQ: "casadi_sq", ca.OP_SIGN: "casadi_sign", ca.OP_FMIN: "casadi_fmin",
             ca.OP_FMAX: "casadi_fmax", ca.OP_HYPOT: "casadi_hypot"}
@@ -63,7 +63,7 @@ class PrintOptions:
     #: x * (1 / d) back into x / d in its graph). Each result moves by ~1 ulp (exact for a power of two); a zero or
     #: non-finite denominator still gives a non-finite result (docs/benchmark.md "Design choices")
     reciprocals: bool = False
-    #: sin, cos, tan, sqrt as qd_sin, ... (``PRECISION_MATH``) and CasADi's double literals in products and
+    #: sin, cos, tan, sqrt as qd_sin, ... (``precision_math.PRECISION_MATH``) and CasADi's double literals in products and
     #: quotients as integers ((2.*x) -> (2*x), (1./x) -> (1/x): the same value in double, no promotion in float)
     precision_math: bool = False
     void_unused: bool = False  # cast the five parameters to void (-Wextra -Werror: some are unused)
@@ -136,6 +136,8 @@ class _Printer:
             before = {"(2.*": "(2*", "(1./": "(1/"}.get(before, before)
             if before[:-1] in PRECISION_MATH:
                 before = "qd_" + before
+            elif before[0].isalpha() and not before.startswith("casadi_"):
+                raise ValueError(f"{self.f.name()}: {before[:-1]} has no wrapper in casadi_real's precision")
         return before + between.join(args) + after
 
     def statements(self) -> tuple[list[str], int]:

@@ -59,6 +59,9 @@ def test_options_change_only_what_they_name():
     assert len(text.splitlines()) == len(plain.splitlines()) + 1 + 1 + 2  # the casts, the declaration, two reciprocals
     with pytest.raises(NotImplementedError):
         print_function(f, PrintOptions(lanes=4))
+    x = ca.SX.sym("x")
+    with pytest.raises(ValueError, match="exp has no wrapper"):  # a function without a precision wrapper
+        print_function(ca.Function("e", [x], [ca.exp(x)]), PrintOptions(precision_math=True))
 
 
 def _functions(name: str, everything: bool) -> list[ca.Function]:
