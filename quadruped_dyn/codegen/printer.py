@@ -9,11 +9,11 @@ casadi_real* w, int mem)``, one local ``aK`` per work value, one statement per i
 project's forms of it: no test of the argument pointers where the caller passes them all, products with a shared
 denominator's reciprocal, the elementary functions in casadi_real's precision, the unused parameters cast to void.
 
-Designed in, not implemented yet (``PrintOptions.lanes``, ``PrintOptions.parameters``): ``lanes`` L > 1 prints each
-work value as an array ``aK[L]`` and each statement as a loop over the lanes (``arg[i][k*L + l]``: L states side by
-side, for the batch functions); ``parameters`` names constants read from an input ``p`` (``p[j]``) instead of
-printed as literals (a robot's masses and lengths as inputs, for the parametric functions). Both change only how a
-work value, an input read and a constant print (``_Printer.work``, ``_Printer.read``, ``_Printer.constant``)."""
+``lanes`` L > 1 evaluates L states per call (the batch functions): nonzero k of input i for state l is
+``arg[i][k*L+l]``, outputs alike, and the body is one loop over the states with scalar locals (the states side by
+side, so a compiler can vectorise across them). Designed in, not implemented yet (``PrintOptions.parameters``):
+constants read from an input ``p`` (``p[j]``) instead of printed as literals (a robot's masses and lengths as inputs,
+for the parametric functions); it changes only how a constant prints (``_Printer.constant``)."""
 
 from __future__ import annotations
 
@@ -67,7 +67,7 @@ class PrintOptions:
     #: quotients as integers ((2.*x) -> (2*x), (1./x) -> (1/x): the same value in double, no promotion in float)
     precision_math: bool = False
     void_unused: bool = False  # cast the five parameters to void (-Wextra -Werror: some are unused)
-    #: lanes per work value (batch evaluation; module docstring): only 1 is implemented
+    #: states per call, side by side in each input and output (batch evaluation; module docstring)
     lanes: int = 1
     #: constants read from an input p instead of printed (parametric functions; module docstring): none implemented
     parameters: tuple[float, ...] = field(default=())
@@ -93,8 +93,10 @@ def c_constant(value: float) -> str:
 
 def print_function(f: ca.Function, options: PrintOptions = PrintOptions()) -> Printed:
     """``f`` (an SX Function) as the C function ``options.name`` (module docstring)."""
-    if options.lanes != 1 or options.parameters:
-        raise NotImplementedError("lanes > 1 and parameters are designed in the printer's API, not implemented yet")
+    if options.parameters:
+        raise NotImplementedError("parameters are designed in the printer's API, not implemented yet")
+    if options.lanes < 1:
+        raise ValueError(f"lanes {options.lanes}: expected a positive number of states per call")
     if not f.is_a("SXFunction"):
         raise ValueError(f"{f.name()}: the printer prints SX Functions; this is a {f.class_name()}")
     return _Printer(f, options).function()
@@ -120,8 +122,12 @@ class _Printer:
     def work(self, slot: int) -> str:
         return f"a{slot:0{self.width}d}"
 
+    def entry(self, k: int) -> str:
+        """Nonzero ``k`` of an input or output: of this loop's state with lanes."""
+        return f"{k * self.o.lanes}+l" if self.o.lanes > 1 else str(k)
+
     def read(self, i: int, k: int) -> str:
-        return f"arg[{i}]? arg[{i}][{k}] : 0" if self.o.guard_inputs else f"arg[{i}][{k}]"
+        return f"arg[{i}]? arg[{i}][{self.entry(k)}] : 0" if self.o.guard_inputs else f"arg[{i}][{self.entry(k)}]"
 
     def constant(self, value: float) -> str:
         return c_constant(value)
@@ -167,7 +173,7 @@ class _Printer:
     def statement(self, k: int, op: int, a: list[int], r: list[int], rcp: dict[int, int]) -> str:
         if op == ca.OP_OUTPUT:
             guard = f"if (res[{r[0]}]!=0) " if self.o.guard_outputs else ""
-            return f"{guard}res[{r[0]}][{r[1]}]={self.work(a[0])};"
+            return f"{guard}res[{r[0]}][{self.entry(r[1])}]={self.work(a[0])};"
         if op == ca.OP_INPUT:
             return f"{self.work(r[0])}={self.read(a[0], a[1])};"
         if op == ca.OP_CONST:
@@ -186,5 +192,7 @@ class _Printer:
                   + ";" for i in range(0, len(names), _DECLARATIONS_PER_LINE)]
         if n_rcp:
             lines.append("casadi_real " + ", ".join(f"rcp{n}" for n in range(n_rcp)) + ";")
+        if self.o.lanes > 1:  # one loop over the states, the locals scalars
+            statements = [f"for (int l = 0; l < {self.o.lanes}; ++l) {{", *(f"  {x}" for x in statements), "}"]
         lines += [*statements, "return 0;"]
         return Printed("\n".join([lines[0], *(f"  {line}" for line in lines[1:]), "}"]) + "\n", tuple(self.helpers))

@@ -5,17 +5,20 @@ each option changes only what it names. The options' values in the shipped C are
 
 from __future__ import annotations
 
+import ctypes
 import os
 import re
 import tempfile
 from pathlib import Path
 
 import casadi as ca
+import numpy as np
 import pytest
 
 from quadruped_dyn.codegen.emit import codegen_functions, reduced_functions
 from quadruped_dyn.codegen.emit_derivatives import derivative_functions
 from quadruped_dyn.codegen.file_names import REDUCED_STANCE_SETS
+from quadruped_dyn.codegen.library import C_FLAGS, run_tool
 from quadruped_dyn.codegen.printer import PrintOptions, c_constant, print_function
 from quadruped_dyn.model.robot import load_robot
 
@@ -58,10 +61,52 @@ def test_options_change_only_what_they_name():
     assert text.count("*rcp0)") == 2 and text.count("*rcp1)") == 1 and "(1/a" in text
     assert len(text.splitlines()) == len(plain.splitlines()) + 1 + 1 + 2  # the casts, the declaration, two reciprocals
     with pytest.raises(NotImplementedError):
-        print_function(f, PrintOptions(lanes=4))
+        print_function(f, PrintOptions(parameters=(1.0,)))
     x = ca.SX.sym("x")
     with pytest.raises(ValueError, match="exp has no wrapper"):  # a function without a precision wrapper
         print_function(ca.Function("e", [x], [ca.exp(x)]), PrintOptions(precision_math=True))
+
+
+_LANES = 4
+#: the reciprocals' products against CasADi's quotients: x * fl(1/d) against fl(x / d), two roundings for one, twice
+RECIPROCAL_REL_TOL = 4 * np.finfo(float).eps
+_HOST = """#include <math.h>
+#define casadi_real double
+#define casadi_int long long int
+static casadi_real casadi_sq(casadi_real x) { return x*x; }
+static casadi_real casadi_fabs(casadi_real x) { return fabs(x); }
+"""
+
+
+def test_lanes_evaluate_states_side_by_side_as_one_call_each(tmp_path):
+    """With lanes the compiled function gives each state's outputs bit for bit as one call per state of the function
+    printed without (the same operations in the same order), which agrees with CasADi's evaluation."""
+    f = _small()
+    one = print_function(f, PrintOptions(name="one", reciprocals=True)).text
+    many = print_function(f, PrintOptions(name="many", reciprocals=True, lanes=_LANES)).text
+    exported = "".join(f"int {n}_call(const double** arg, double** res) {{ return {n}(arg, res, 0, 0, 0); }}\n"
+                       for n in ("one", "many"))
+    (tmp_path / "lanes.c").write_text(_HOST + one + many + exported)
+    run_tool(["gcc", *C_FLAGS, "-Wno-unused-parameter", "-shared", str(tmp_path / "lanes.c"), "-o", str(tmp_path / "lanes.so")])
+    lib = ctypes.CDLL(str(tmp_path / "lanes.so"))
+    rng = np.random.default_rng(3)
+    x, y = rng.uniform(0.5, 2.0, (_LANES, 3)), rng.uniform(0.5, 2.0, (_LANES, 2))
+    sizes = [f.nnz_out(i) for i in range(f.n_out())]
+
+    def call(name: str, inputs: list[np.ndarray], lanes: int) -> list[np.ndarray]:
+        outs = [np.zeros(n * lanes) for n in sizes]
+        args = [np.ascontiguousarray(v, dtype=float) for v in inputs]
+        arg = (ctypes.c_void_p * 2)(*(a.ctypes.data for a in args))
+        res = (ctypes.c_void_p * 2)(*(o.ctypes.data for o in outs))
+        assert getattr(lib, f"{name}_call")(arg, res) == 0
+        return outs
+
+    batch = call("many", [x.T.ravel(), y.T.ravel()], _LANES)  # nonzero k of state l at k * L + l
+    for l in range(_LANES):
+        single = call("one", [x[l], y[l]], 1)
+        for out, got, want in zip(single, batch, f(x[l], y[l]), strict=True):
+            assert np.all(np.isfinite(got)) and np.array_equal(got.reshape(-1, _LANES)[:, l], out)
+            assert np.allclose(out, np.asarray(ca.DM(want).nonzeros()), rtol=RECIPROCAL_REL_TOL, atol=0.0)
 
 
 def _functions(name: str, everything: bool) -> list[ca.Function]:
