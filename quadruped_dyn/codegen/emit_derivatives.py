@@ -31,7 +31,7 @@ In each reduced file ``qd_<robot>-r-<feet>.c`` (``reduced_derivative_functions``
   ~70 % of the operations; once per stance-leg joint and two feet's rotation: 9-12 calls, at -Os). For every stance
   set also ``qd_dfd_r_lift_columns`` (``lift_columns``: every one of those directions at once, 2.3-2.4x fewer
   operations, ~4x the C), which dfd_r calls instead but at -Os. Its temporaries (~16 kB in double, the tape included) are the
-  caller's w, declared by its _work entry (``declare_dfd_r_work``).
+  caller's w, declared by its _work entry (``dfd_r_work_reals``).
 
 Why directions and a chain rule, not CasADi's Jacobians: those take 48-97k operations per reduced
 stance set and 18-21k per GRF solve (~20 bytes of C each), beyond the 6 MB budget of a robot's C.
