@@ -11,14 +11,14 @@ denominator's reciprocal, the elementary functions in casadi_real's precision, t
 
 ``lanes`` L > 1 evaluates L states per call (the batch functions): nonzero k of input i for state l is
 ``arg[i][k*L+l]``, outputs alike, and the body is one loop over the states with scalar locals (the states side by
-side, so a compiler can vectorise across them). Designed in, not implemented yet (``PrintOptions.parameters``):
-constants read from an input ``p`` (``p[j]``) instead of printed as literals (a robot's masses and lengths as inputs,
-for the parametric functions); it changes only how a constant prints (``_Printer.constant``)."""
+side, so a compiler can vectorise across them). ``parameters`` names inputs every state shares (a robot's masses and
+lengths as symbolic inputs of the graph, for the parametric functions): read at ``arg[i][k]`` whatever the lanes. A
+parameter enters the graph as a symbol, never as a literal matched by value (a mass of 1 kg is not every ``1.``)."""
 
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 
 import casadi as ca
 
@@ -69,8 +69,8 @@ class PrintOptions:
     void_unused: bool = False  # cast the five parameters to void (-Wextra -Werror: some are unused)
     #: states per call, side by side in each input and output (batch evaluation; module docstring)
     lanes: int = 1
-    #: constants read from an input p instead of printed (parametric functions; module docstring): none implemented
-    parameters: tuple[float, ...] = field(default=())
+    #: the inputs holding parameters, the same for every state (parametric functions; module docstring)
+    parameters: tuple[int, ...] = ()
 
 
 @dataclass(frozen=True)
@@ -93,8 +93,6 @@ def c_constant(value: float) -> str:
 
 def print_function(f: ca.Function, options: PrintOptions = PrintOptions()) -> Printed:
     """``f`` (an SX Function) as the C function ``options.name`` (module docstring)."""
-    if options.parameters:
-        raise NotImplementedError("parameters are designed in the printer's API, not implemented yet")
     if options.lanes < 1:
         raise ValueError(f"lanes {options.lanes}: expected a positive number of states per call")
     if not f.is_a("SXFunction"):
@@ -127,7 +125,8 @@ class _Printer:
         return f"{k * self.o.lanes}+l" if self.o.lanes > 1 else str(k)
 
     def read(self, i: int, k: int) -> str:
-        return f"arg[{i}]? arg[{i}][{self.entry(k)}] : 0" if self.o.guard_inputs else f"arg[{i}][{self.entry(k)}]"
+        entry = str(k) if i in self.o.parameters else self.entry(k)  # a parameter: one value for every state
+        return f"arg[{i}]? arg[{i}][{entry}] : 0" if self.o.guard_inputs else f"arg[{i}][{entry}]"
 
     def constant(self, value: float) -> str:
         return c_constant(value)

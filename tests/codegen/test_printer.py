@@ -60,8 +60,6 @@ def test_options_change_only_what_they_name():
     assert "  casadi_real rcp0, rcp1;\n" in text  # x[1] divides twice, 3 is a constant; 1 / y[0] is an inverse
     assert text.count("*rcp0)") == 2 and text.count("*rcp1)") == 1 and "(1/a" in text
     assert len(text.splitlines()) == len(plain.splitlines()) + 1 + 1 + 2  # the casts, the declaration, two reciprocals
-    with pytest.raises(NotImplementedError):
-        print_function(f, PrintOptions(parameters=(1.0,)))
     x = ca.SX.sym("x")
     with pytest.raises(ValueError, match="exp has no wrapper"):  # a function without a precision wrapper
         print_function(ca.Function("e", [x], [ca.exp(x)]), PrintOptions(precision_math=True))
@@ -78,12 +76,14 @@ static casadi_real casadi_fabs(casadi_real x) { return fabs(x); }
 """
 
 
-def test_lanes_evaluate_states_side_by_side_as_one_call_each(tmp_path):
+@pytest.mark.parametrize("parameters", [(), (1,)], ids=["states", "shared-y"])
+def test_lanes_evaluate_states_side_by_side_as_one_call_each(tmp_path, parameters):
     """With lanes the compiled function gives each state's outputs bit for bit as one call per state of the function
-    printed without (the same operations in the same order), which agrees with CasADi's evaluation."""
+    printed without (the same operations in the same order), which agrees with CasADi's evaluation; an input named
+    in ``parameters`` is one value every state reads."""
     f = _small()
     one = print_function(f, PrintOptions(name="one", reciprocals=True)).text
-    many = print_function(f, PrintOptions(name="many", reciprocals=True, lanes=_LANES)).text
+    many = print_function(f, PrintOptions(name="many", reciprocals=True, lanes=_LANES, parameters=parameters)).text
     exported = "".join(f"int {n}_call(const double** arg, double** res) {{ return {n}(arg, res, 0, 0, 0); }}\n"
                        for n in ("one", "many"))
     (tmp_path / "lanes.c").write_text(_HOST + one + many + exported)
@@ -91,6 +91,8 @@ def test_lanes_evaluate_states_side_by_side_as_one_call_each(tmp_path):
     lib = ctypes.CDLL(str(tmp_path / "lanes.so"))
     rng = np.random.default_rng(3)
     x, y = rng.uniform(0.5, 2.0, (_LANES, 3)), rng.uniform(0.5, 2.0, (_LANES, 2))
+    if parameters:
+        y[:] = y[0]  # every state's y is the parameters' one value
     sizes = [f.nnz_out(i) for i in range(f.n_out())]
 
     def call(name: str, inputs: list[np.ndarray], lanes: int) -> list[np.ndarray]:
@@ -101,7 +103,7 @@ def test_lanes_evaluate_states_side_by_side_as_one_call_each(tmp_path):
         assert getattr(lib, f"{name}_call")(arg, res) == 0
         return outs
 
-    batch = call("many", [x.T.ravel(), y.T.ravel()], _LANES)  # nonzero k of state l at k * L + l
+    batch = call("many", [x.T.ravel(), y[0] if parameters else y.T.ravel()], _LANES)  # nonzero k of state l at k L + l
     for l in range(_LANES):
         single = call("one", [x[l], y[l]], 1)
         for out, got, want in zip(single, batch, f(x[l], y[l]), strict=True):
