@@ -192,6 +192,9 @@ static const casadi_int casadi_s9[3] = {3, 18, 1};
 /* x (nrow * ncol reals, column-major) = the dense matrix of the nonzeros nz of a CasADi sparsity sp
  * (nrow, ncol, colind[ncol + 1], row[nnz]), x and nz apart: the zeros in one pass (memset), then the nonzeros; faster
  * than densifying in place, whose gaps are zeroed one nonzero at a time (docs/benchmark.md). */
+#ifndef CASADI_PREFIX /* compiled alone, not pasted into a generated file (codegen/c_alone.py) */
+#include "qd_alone.h"
+#endif
 static void qd_scatter(const casadi_int* sp, const casadi_real* restrict nz, casadi_real* restrict x) {
   const casadi_int nrow = sp[0], ncol = sp[1], *colind = sp + 2, *row = sp + 3 + ncol;
   for (casadi_int i = 0; i < nrow * ncol; ++i) x[i] = 0;
@@ -253,6 +256,10 @@ CASADI_SYMBOL_EXPORT const casadi_int* qd_did_full_sparsity_out(casadi_int i);
  * QD_SINGULAR (2) a pivot of M's Cholesky factorisation with the legs ordered first is below QD_SINGULAR_RTOL *
  * max diag(M) (M not positive definite to working precision: not a physical robot); the outputs are not
  * written then. */
+#ifndef CASADI_PREFIX /* compiled alone, not pasted into a generated file (codegen/c_alone.py) */
+#include "qd_alone.h"
+#include "qd_dense.c"
+#endif
 #include <float.h>
 #include <math.h>
 
@@ -592,6 +599,9 @@ QD_INLINE int qd_dgrf_solve(int m, int legs, qd_d_eval_fn did, qd_d_eval_fn dir,
  * vectorises; within 1 ulp of libm (tests/codegen/test_sincos.py). libm for an angle beyond QD_SINCOS_MAX or not
  * finite, for float and long double, and where the reduction's rounding trick cannot be trusted (-ffast-math,
  * x87's excess precision). */
+#ifndef CASADI_PREFIX /* compiled alone, not pasted into a generated file (codegen/c_alone.py) */
+#include "qd_alone.h"
+#endif
 #include <float.h>
 #include <math.h>
 #include <stdint.h>
@@ -641,7 +651,7 @@ static inline void qd_sincos_kernel(double xi, double* c, double* s) {
  * build is double without -ffast-math), else the precision wrappers qd_cos, qd_sin (libm) for all. */
 static inline void qd_sincos(int n, const casadi_real* x, casadi_real* c, casadi_real* s) {
   int fast = !QD_SINCOS_LIBM && sizeof(casadi_real) == sizeof(double);
-  /* in casadi_real: fabs is qd_fabs once generated (precision_math.template_c), and a float build compares in float */
+  /* in casadi_real (qd_fabs: precision_math), so a float build compares in float */
   for (int i = 0; i < n; ++i) fast &= qd_fabs(x[i]) <= (casadi_real)QD_SINCOS_MAX;  /* false for NaN */
   if (!fast) {
     for (int i = 0; i < n; ++i) {

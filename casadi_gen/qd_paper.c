@@ -146,6 +146,9 @@ static const casadi_int casadi_s7[3] = {0, 1, 1};
  * vectorises; within 1 ulp of libm (tests/codegen/test_sincos.py). libm for an angle beyond QD_SINCOS_MAX or not
  * finite, for float and long double, and where the reduction's rounding trick cannot be trusted (-ffast-math,
  * x87's excess precision). */
+#ifndef CASADI_PREFIX /* compiled alone, not pasted into a generated file (codegen/c_alone.py) */
+#include "qd_alone.h"
+#endif
 #include <float.h>
 #include <math.h>
 #include <stdint.h>
@@ -195,7 +198,7 @@ static inline void qd_sincos_kernel(double xi, double* c, double* s) {
  * build is double without -ffast-math), else the precision wrappers qd_cos, qd_sin (libm) for all. */
 static inline void qd_sincos(int n, const casadi_real* x, casadi_real* c, casadi_real* s) {
   int fast = !QD_SINCOS_LIBM && sizeof(casadi_real) == sizeof(double);
-  /* in casadi_real: fabs is qd_fabs once generated (precision_math.template_c), and a float build compares in float */
+  /* in casadi_real (qd_fabs: precision_math), so a float build compares in float */
   for (int i = 0; i < n; ++i) fast &= qd_fabs(x[i]) <= (casadi_real)QD_SINCOS_MAX;  /* false for NaN */
   if (!fast) {
     for (int i = 0; i < n; ++i) {
@@ -6416,6 +6419,9 @@ int qd_foot_trig(int k, const casadi_real* q_l, const casadi_real* qd_l, const c
  * One Newton-Euler pass (id_full's) serves every stance set instead of one unrolled copy per set. Direct
  * calls only (no function pointers), so the Cortex-M stack walk stays bounded. A null res[i] skips output i.
  * Before this text the generator defines QD_ID_FULL_EVAL, id_full's evaluation. */
+#ifndef CASADI_PREFIX /* compiled alone, not pasted into a generated file (codegen/c_alone.py) */
+#include "qd_alone.h"
+#endif
 static int qd_grf_begin(const casadi_real** arg, casadi_real* w_req, casadi_real* tau_0, casadi_int* iw, casadi_real* w,
                         int mem) {
   const casadi_real no_force[12] = {0};

@@ -53,6 +53,9 @@
  * vectorises; within 1 ulp of libm (tests/codegen/test_sincos.py). libm for an angle beyond QD_SINCOS_MAX or not
  * finite, for float and long double, and where the reduction's rounding trick cannot be trusted (-ffast-math,
  * x87's excess precision). */
+#ifndef CASADI_PREFIX /* compiled alone, not pasted into a generated file (codegen/c_alone.py) */
+#include "qd_alone.h"
+#endif
 #include <float.h>
 #include <math.h>
 #include <stdint.h>
@@ -102,7 +105,7 @@ static inline void qd_sincos_kernel(double xi, double* c, double* s) {
  * build is double without -ffast-math), else the precision wrappers qd_cos, qd_sin (libm) for all. */
 static inline void qd_sincos(int n, const casadi_real* x, casadi_real* c, casadi_real* s) {
   int fast = !QD_SINCOS_LIBM && sizeof(casadi_real) == sizeof(double);
-  /* in casadi_real: fabs is qd_fabs once generated (precision_math.template_c), and a float build compares in float */
+  /* in casadi_real (qd_fabs: precision_math), so a float build compares in float */
   for (int i = 0; i < n; ++i) fast &= qd_fabs(x[i]) <= (casadi_real)QD_SINCOS_MAX;  /* false for NaN */
   if (!fast) {
     for (int i = 0; i < n; ++i) {
@@ -124,6 +127,9 @@ static inline void qd_sincos(int n, const casadi_real* x, casadi_real* c, casadi
 /* x (nrow * ncol reals, column-major) = the dense matrix of the nonzeros nz of a CasADi sparsity sp
  * (nrow, ncol, colind[ncol + 1], row[nnz]), x and nz apart: the zeros in one pass (memset), then the nonzeros; faster
  * than densifying in place, whose gaps are zeroed one nonzero at a time (docs/benchmark.md). */
+#ifndef CASADI_PREFIX /* compiled alone, not pasted into a generated file (codegen/c_alone.py) */
+#include "qd_alone.h"
+#endif
 static void qd_scatter(const casadi_int* sp, const casadi_real* restrict nz, casadi_real* restrict x) {
   const casadi_int nrow = sp[0], ncol = sp[1], *colind = sp + 2, *row = sp + 3 + ncol;
   for (casadi_int i = 0; i < nrow * ncol; ++i) x[i] = 0;
@@ -138,6 +144,11 @@ static void qd_scatter(const casadi_int* sp, const casadi_real* restrict nz, cas
  * (r, quat) -> [0, 1] of dynamics/stance_regularity.py), from which qd_parts forms S_b, T_b, v, a. Every
  * entry point takes the joints' sines and cosines once (qd_trig) and passes them to the generated pieces and to the
  * library's qd_*_trig functions. The return codes are documented in qd_<robot>.h. */
+#ifndef CASADI_PREFIX /* compiled alone, not pasted into a generated file (codegen/c_alone.py) */
+#include "qd_alone.h"
+#include "qd_sincos.c"
+#include "qd_dense.c"
+#endif
 #include <float.h>
 #include <math.h>
 #include <string.h>
@@ -775,6 +786,10 @@ QD_INLINE int qd_fd_r_solve(int n, int legs, const casadi_real** arg, casadi_rea
  * QD_NONFINITE, QD_SINGULAR (M_r singular to working precision); no output is usable then. No heap; the
  * temporaries in the caller's w (QD_DFD_R_W(n) reals, stated by the _work entry), ~1 kB on the stack (and
  * the lift's columns, (18 + n) K reals, but at -Os). */
+#ifndef CASADI_PREFIX /* compiled alone, not pasted into a generated file (codegen/c_alone.py) */
+#include "qd_alone.h"
+#include "qd_reduced_solve.c"
+#endif
 
 /* defined in qd_<robot>-d.c of the same library (no work memory: checked by the generator): did_full leg by leg with
  * the joints' sines and cosines given, arg = (q, v, a, sin, cos), sin and cos of q[7..18], its legs' outputs in L

@@ -9,6 +9,7 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from quadruped_dyn.dynamics.by_leg import FOOT_PARTS, LEG_MASS_BLOCKS, TRUNK_MASS_BLOCKS
+from quadruped_dyn.tolerances import FLOAT_MAX_BOUND, REGULARITY_MIN
 
 #: The hand-written C (templates, check programs, the Cortex-M start-up, the Makefile).
 TEMPLATES = Path(__file__).resolve().parent / "c"
@@ -56,6 +57,15 @@ def prelude_c() -> str:
     """The return codes and ``c/qd_prelude.h`` (epsilon, inlining attributes): what the hand-written C pasted into a
     generated file, or compiled alone, expects defined first."""
     return return_codes_c() + (TEMPLATES / PRELUDE).read_text()
+
+
+def regularity_c(err_per_regularity: float) -> str:
+    """QD_REGULARITY_MIN, QD_FLOAT_MAX_BOUND and QD_FLOAT_ERR_PER_REGULARITY (``err_per_regularity``: a stance set's
+    ``emit.float_err_per_regularity``), the thresholds c/qd_reduced_solve.c's qd_regular_value reads."""
+    return (f"#define QD_REGULARITY_MIN ((casadi_real){REGULARITY_MIN!r}) /* quadruped_dyn.tolerances.REGULARITY_MIN */\n"
+            f"#define QD_FLOAT_MAX_BOUND ((casadi_real){FLOAT_MAX_BOUND!r}) /* tolerances.FLOAT_MAX_BOUND */\n"
+            f"#define QD_FLOAT_ERR_PER_REGULARITY ((casadi_real){err_per_regularity!r}) "
+            "/* tolerances.FLOAT_ERR_PER_REGULARITY; 0: three or four feet */\n")
 
 
 def _offsets(layout: tuple[tuple[str, int, int], ...], start: int = 0) -> dict[str, tuple[int, int]]:

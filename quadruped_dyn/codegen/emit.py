@@ -19,7 +19,7 @@ from pathlib import Path
 import casadi as ca
 
 from quadruped_dyn.codegen.by_leg import LegCall, by_leg_c, foot_c
-from quadruped_dyn.codegen.c_facts import layouts_c, prelude_c, return_codes_c
+from quadruped_dyn.codegen.c_facts import layouts_c, prelude_c, regularity_c, return_codes_c
 from quadruped_dyn.codegen.c_file import Entry, FileOptions, c_file, entry_work, file_helpers
 from quadruped_dyn.codegen.casadi_source import EVALUATION, PREFIX, SINCOS, TEMPLATES, UNGUARDED, static_c
 from quadruped_dyn.codegen.emit_derivatives import (
@@ -43,7 +43,7 @@ from quadruped_dyn.codegen.file_names import (
     file_layout,
 )
 from quadruped_dyn.codegen.joint_trig import trig_as_inputs
-from quadruped_dyn.codegen.precision_math import precision_calls, template_c
+from quadruped_dyn.codegen.precision_math import template_c
 from quadruped_dyn.codegen.printer import SIGNATURE
 from quadruped_dyn.codegen.work_memory import memory_doc
 from quadruped_dyn.dynamics.by_leg import foot_pieces, id_full_pieces, mass_matrix_pieces
@@ -63,7 +63,6 @@ from quadruped_dyn.tolerances import (
     FLOAT_MAX_BOUND,
     FLOAT_REGULARITY_MIN,
     PITCH_ERR_PER_COS3,
-    REGULARITY_MIN,
     REL_TOL_TERMS,
     TRUNK_PITCH_DEG_MARGIN,
 )
@@ -387,13 +386,13 @@ _REDUCED_TEMPLATE_FILES = (SINCOS, "qd_dense.c", "qd_reduced_solve.c", "qd_reduc
 
 def reduced_templates_h() -> str:
     """The text of ``REDUCED_TEMPLATES``: c/qd_sincos.c, c/qd_dense.c, c/qd_reduced_solve.c and
-    c/qd_reduced_derivatives.c, their elementary functions routed through the including file's precision wrappers
-    (``precision_math``)."""
-    body = prelude_c() + layouts_c() + "\n".join((TEMPLATES / t).read_text() for t in _REDUCED_TEMPLATE_FILES)
+    c/qd_reduced_derivatives.c after the return codes, ``c/qd_prelude.h`` and the pieces' layouts (``c_facts``); they
+    call the including file's precision wrappers (``precision_math``)."""
+    body = prelude_c() + layouts_c() + "\n".join(template_c(t) for t in _REDUCED_TEMPLATE_FILES)
     return ("/* quadruped_dyn: the hand-written templates of the reduced model, included by every qd_<robot>-r-<feet>.c\n"
             " * after its generated pieces (quadruped_dyn/codegen/emit.py). Not a header to include elsewhere: its\n"
             " * functions are static and call the including file's qd_stance_maps, qd_M_full, qd_id_full, ... */\n"
-            + precision_calls(body))
+            + body)
 
 
 def float_err_per_regularity(stance: StanceSet) -> float:
@@ -407,10 +406,7 @@ def _reduced_helpers_c(stance: StanceSet, dfd_r: DfdRPieces) -> str:
     (regularity, W, Y[, y_e, s_e, D]): ``dynamics.stance_maps``, from which with the library's qd_foot_trig the
     templates' qd_parts forms S_b, T_b, v and a) and dfd_r's ``qd_dfd_r_lift`` (``emit_derivatives.dfd_r_pieces``),
     the generated pieces the templates call."""
-    return (f"#define QD_REGULARITY_MIN ((casadi_real){REGULARITY_MIN!r}) /* quadruped_dyn.tolerances.REGULARITY_MIN */\n"
-            f"#define QD_FLOAT_MAX_BOUND ((casadi_real){FLOAT_MAX_BOUND!r}) /* tolerances.FLOAT_MAX_BOUND */\n"
-            f"#define QD_FLOAT_ERR_PER_REGULARITY ((casadi_real){float_err_per_regularity(stance)!r}) "
-            "/* tolerances.FLOAT_ERR_PER_REGULARITY; 0: three or four feet */\n"
+    return (regularity_c(float_err_per_regularity(stance))
             + static_c("qd_stance_maps", stance_maps(stance), all_io=True) + "\n"
             + f"#define QD_DFD_R_TAPE {dfd_r.tape} /* reals of the lift's tape: emit_derivatives.split_at_seeds */\n"
             + f"#define QD_DID_FULL_L {dfd_r.did_legs} /* reals of did_full's legs' outputs: codegen.by_leg.legs_reals */\n"

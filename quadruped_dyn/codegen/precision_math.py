@@ -1,8 +1,8 @@
 """The elementary functions in casadi_real's precision: the generated C calls qd_sin, qd_cos, ... (``PRECISION_MATH``),
 wrappers a file defines after its casadi_real default (``wrappers_c``). A float build (-Dcasadi_real=float) calls sinf,
 cosf, ... instead of promoting to double (-Wdouble-promotion clean); a long double build calls sinl, cosl, ...; a
-double build sin, cos, ... The printer writes these names (``PrintOptions.precision_math``); the hand-written
-templates are written with libm's names and read through ``template_c``."""
+double build sin, cos, ... The printer writes these names (``PrintOptions.precision_math``), and so do the
+hand-written templates (read through ``template_c``, which checks it)."""
 
 from __future__ import annotations
 
@@ -23,26 +23,18 @@ _BLOCK = """
 #define QD_MATH(fn) static inline casadi_real qd_##fn(casadi_real x) { return QD_REAL_IS_FLOAT ? (casadi_real)fn##f((float)x) \\
   : QD_REAL_IS_EXTENDED ? (casadi_real)fn##l((long double)x) : (casadi_real)fn((double)x); }
 """
-_MATH_CALL = re.compile(rf"(?<![\w.])({'|'.join(PRECISION_MATH)})\(")
-_UNWRAPPED = re.compile(r"(?<![\w.])(atan2?|asin|acos|exp|log|pow|tanh|sinh|cosh|floor|ceil|fmin|fmax|erf)\(")
-
-
-def precision_calls(c_text: str) -> str:
-    """``c_text`` (hand-written C) with its elementary functions as the wrappers (sin( -> qd_sin() and double literals
-    in products and quotients as integers ((2.*a) -> (2*a), (1./a) -> (1/a): the same value in double, no promotion
-    in float)."""
-    unknown = set(_UNWRAPPED.findall(c_text))
-    if unknown:
-        raise AssertionError(f"elementary functions {sorted(unknown)} have no precision wrapper in PRECISION_MATH")
-    c_text = _MATH_CALL.sub(r"qd_\1(", c_text)
-    c_text = re.sub(r"\((\d+)\.\*", r"(\1*", c_text)
-    return re.sub(r"\((\d+)\./", r"(\1/", c_text)
+_LIBM = "sin|cos|tan|sqrt|fabs|atan2?|asin|acos|exp|log|pow|tanh|sinh|cosh|floor|ceil|fmin|fmax|erf"
+_LIBM_CALL = re.compile(rf"(?<![\w.])({_LIBM})\(")
 
 
 def template_c(name: str) -> str:
-    """The hand-written template ``c/<name>`` as the generated files hold it: its elementary functions in casadi_real's
-    precision (``precision_calls``)."""
-    return precision_calls((TEMPLATES / name).read_text())
+    """The hand-written template ``c/<name>``, which calls the elementary functions by their wrappers (qd_sqrt,
+    qd_fabs, ...: ``PRECISION_MATH``) itself, never libm's names (an AssertionError names any it calls)."""
+    text = (TEMPLATES / name).read_text()
+    unwrapped = set(_LIBM_CALL.findall(text))
+    if unwrapped:
+        raise AssertionError(f"{name} calls {sorted(unwrapped)} by libm's names; expected qd_<fn> wrappers of {PRECISION_MATH}")
+    return text
 
 
 def wrappers_c(calls: str) -> str:

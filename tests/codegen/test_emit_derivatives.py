@@ -11,7 +11,7 @@ import numpy as np
 import pytest
 
 from quadruped_dyn.checks.finite_differences import ReducedFiniteDifferences, grf_derivatives_by_differences
-from quadruped_dyn.codegen.c_facts import prelude_c
+from quadruped_dyn.codegen.c_alone import ALONE_HEADER, alone_header_c
 from quadruped_dyn.codegen.casadi_source import PREFIX
 from quadruped_dyn.codegen.emit import REDUCED_STANCE_SETS, TEMPLATES, reduced_symbol
 from quadruped_dyn.codegen.emit_derivatives import (
@@ -89,10 +89,9 @@ def test_singular_mass_matrix_returns_singular(tmp_path, zero):
     """The hand-written solve on its own, with a mass matrix that is not positive definite: a zero pivot in
     the trunk's block (2) or in a leg's (7: the legs are factorised first)."""
     program = tmp_path / "singular.c"
+    (tmp_path / ALONE_HEADER).write_text(alone_header_c())  # what the template includes alone: prelude, qd_dense.c
     program.write_text(f"""#define casadi_real double
 #define casadi_int long long int
-{prelude_c()}
-#include "{TEMPLATES / 'qd_dense.c'}"
 #include "{TEMPLATES / 'qd_derivatives_solve.c'}"
 #include <stdio.h>
 static casadi_int sp_M[2 + 19 + 324] = {{18, 18}}; /* M dense, as a compressed-column pattern (filled in main) */
@@ -125,7 +124,8 @@ int main(void) {{
 }}
 """)
     exe = tmp_path / "singular"
-    subprocess.run(["gcc", *[f for f in C_FLAGS if f != "-fPIC"], str(program), "-lm", "-o", str(exe)], check=True)
+    subprocess.run(["gcc", *[f for f in C_FLAGS if f != "-fPIC"], "-I", str(tmp_path), str(program), "-lm", "-o", str(exe)],
+                   check=True)
     assert subprocess.run([str(exe)], capture_output=True, text=True, check=True).stdout.strip() == "2"
 
 

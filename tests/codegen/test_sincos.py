@@ -14,8 +14,8 @@ import mpmath
 import numpy as np
 import pytest
 
+from quadruped_dyn.codegen.c_alone import ALONE_HEADER, alone_header_c
 from quadruped_dyn.codegen.casadi_source import TEMPLATES
-from quadruped_dyn.codegen.precision_math import precision_calls
 
 #: ulps of the correctly rounded value: the final rounding (0.5) plus FreeBSD's k_sin.c / k_cos.c error before it
 #: (their polynomials to 2^-58 relative on [-pi/4, pi/4], the sums' roundings ~0.2 ulp) and the reduction's 2^-62
@@ -24,26 +24,21 @@ from quadruped_dyn.codegen.precision_math import precision_calls
 SINCOS_MAX_ULP = 0.8
 #: rad, qd_sincos.c's QD_SINCOS_MAX: beyond it libm
 FAST_MAX = 200.0
-WRAPPERS = """#include <math.h>
-#define QD_REAL_IS_FLOAT (sizeof(casadi_real) == sizeof(float))
-#define QD_REAL_IS_EXTENDED (sizeof(casadi_real) > sizeof(double))
-#define QD_MATH(fn) static inline casadi_real qd_##fn(casadi_real x) { return QD_REAL_IS_FLOAT ? (casadi_real)fn##f((float)x) \\
-  : QD_REAL_IS_EXTENDED ? (casadi_real)fn##l((long double)x) : (casadi_real)fn((double)x); }
-QD_MATH(sin) QD_MATH(cos) QD_MATH(fabs)
-"""
 
 
 def _library(tmp_path: Path, real: str) -> ctypes.CDLL:
     src = tmp_path / "sincos.c"
-    # the template as generated: its fabs is the precision wrapper qd_fabs (precision_math.precision_calls)
-    src.write_text(f"#define casadi_real {real}\n" + WRAPPERS + precision_calls((TEMPLATES / "qd_sincos.c").read_text())
+    # the template alone: its header gives the precision wrappers qd_fabs, ... (codegen/c_alone.py)
+    (tmp_path / ALONE_HEADER).write_text(alone_header_c())
+    src.write_text(f"#define casadi_real {real}\n#include \"{TEMPLATES / 'qd_sincos.c'}\"\n"
                    + "void qd_sincos_n(int n, const casadi_real* x, casadi_real* c, casadi_real* s)"
                    " { qd_sincos(n, x, c, s); }\n"
                    "void qd_kernel_n(int n, const double* x, double* c, double* s)"
                    " { for (int i = 0; i < n; ++i) qd_sincos_kernel(x[i], c + i, s + i); }\n")
     lib = tmp_path / f"sincos_{real.replace(' ', '_')}.so"
     subprocess.run(["gcc", "-std=c99", "-pedantic", "-Wall", "-Wextra", "-Werror", "-Wdouble-promotion", "-O3",
-                    "-fPIC", "-shared", str(src), "-o", str(lib), "-lm"], check=True, capture_output=True, text=True)
+                    "-fPIC", "-shared", "-I", str(tmp_path), str(src), "-o", str(lib), "-lm"],
+                   check=True, capture_output=True, text=True)
     return ctypes.CDLL(str(lib))
 
 

@@ -17,6 +17,10 @@
  * QD_SINGULAR (2) a pivot of M's Cholesky factorisation with the legs ordered first is below QD_SINGULAR_RTOL *
  * max diag(M) (M not positive definite to working precision: not a physical robot); the outputs are not
  * written then. */
+#ifndef CASADI_PREFIX /* compiled alone, not pasted into a generated file (codegen/c_alone.py) */
+#include "qd_alone.h"
+#include "qd_dense.c"
+#endif
 #include <float.h>
 #include <math.h>
 
@@ -140,7 +144,7 @@ static int qd_d_spd_inverse(casadi_real* restrict a, int n, casadi_real tol) {
       for (int i = j; i < n; ++i) a[i + n * j] -= a[i + n * k] * u;
     }
     if (!(a[j + n * j] > tol)) return QD_SINGULAR;
-    r[j] = 1 / sqrt(a[j + n * j]);
+    r[j] = 1 / qd_sqrt(a[j + n * j]);
     for (int i = j; i < n; ++i) a[i + n * j] *= r[j];
   }
   for (int j = 0; j < n; ++j) { /* L x_j = e_j */

@@ -6,6 +6,9 @@
  * One Newton-Euler pass (id_full's) serves every stance set instead of one unrolled copy per set. Direct
  * calls only (no function pointers), so the Cortex-M stack walk stays bounded. A null res[i] skips output i.
  * Before this text the generator defines QD_ID_FULL_EVAL, id_full's evaluation. */
+#ifndef CASADI_PREFIX /* compiled alone, not pasted into a generated file (codegen/c_alone.py) */
+#include "qd_alone.h"
+#endif
 static int qd_grf_begin(const casadi_real** arg, casadi_real* w_req, casadi_real* tau_0, casadi_int* iw, casadi_real* w,
                         int mem) {
   const casadi_real no_force[12] = {0};

@@ -23,6 +23,10 @@
  * QD_NONFINITE, QD_SINGULAR (M_r singular to working precision); no output is usable then. No heap; the
  * temporaries in the caller's w (QD_DFD_R_W(n) reals, stated by the _work entry), ~1 kB on the stack (and
  * the lift's columns, (18 + n) K reals, but at -Os). */
+#ifndef CASADI_PREFIX /* compiled alone, not pasted into a generated file (codegen/c_alone.py) */
+#include "qd_alone.h"
+#include "qd_reduced_solve.c"
+#endif
 
 /* defined in qd_<robot>-d.c of the same library (no work memory: checked by the generator): did_full leg by leg with
  * the joints' sines and cosines given, arg = (q, v, a, sin, cos), sin and cos of q[7..18], its legs' outputs in L

@@ -4,6 +4,11 @@
  * (r, quat) -> [0, 1] of dynamics/stance_regularity.py), from which qd_parts forms S_b, T_b, v, a. Every
  * entry point takes the joints' sines and cosines once (qd_trig) and passes them to the generated pieces and to the
  * library's qd_*_trig functions. The return codes are documented in qd_<robot>.h. */
+#ifndef CASADI_PREFIX /* compiled alone, not pasted into a generated file (codegen/c_alone.py) */
+#include "qd_alone.h"
+#include "qd_sincos.c"
+#include "qd_dense.c"
+#endif
 #include <float.h>
 #include <math.h>
 #include <string.h>
@@ -336,8 +341,8 @@ static int qd_lu_factor(int n, casadi_real* M, int* piv, casadi_real scale) {
   for (int k = 0; k < n; ++k) { /* M[i + n j] = M_ij */
     casadi_real* col = M + n * k;
     int p = k;
-    for (int i = k + 1; i < n; ++i) p = fabs(col[i]) > fabs(col[p]) ? i : p;
-    if (!(fabs(col[p]) > QD_SINGULAR_RTOL * scale)) return QD_SINGULAR;
+    for (int i = k + 1; i < n; ++i) p = qd_fabs(col[i]) > qd_fabs(col[p]) ? i : p;
+    if (!(qd_fabs(col[p]) > QD_SINGULAR_RTOL * scale)) return QD_SINGULAR;
     piv[k] = p;
     if (p != k) {
       for (int j = 0; j < n; ++j) {
@@ -384,9 +389,9 @@ QD_INLINE int qd_gauss_solve(int n, casadi_real* A, casadi_real scale, int* piv)
   for (int k = 0; k < n; ++k) { /* A[i + n j] = A_ij */
     casadi_real* col = A + n * k;
     int p = k; /* the first entry of largest magnitude, found by its value (a chain of compares, not of loads) */
-    casadi_real big = fabs(col[k]), pv = col[k]; /* pv = col[p]: 1 / pv need not wait for the rows' swap */
+    casadi_real big = qd_fabs(col[k]), pv = col[k]; /* pv = col[p]: 1 / pv need not wait for the rows' swap */
     for (int i = k + 1; i < n; ++i) {
-      const casadi_real a = fabs(col[i]);
+      const casadi_real a = qd_fabs(col[i]);
       p = a > big ? i : p;
       pv = a > big ? col[i] : pv;
       big = a > big ? a : big;
@@ -421,9 +426,9 @@ static casadi_real qd_max_abs(int n, const casadi_real* x) {
   casadi_real top[4] = {0, 0, 0, 0};
   int i = 0;
   for (; i + 4 <= n; i += 4) {
-    for (int k = 0; k < 4; ++k) top[k] = fabs(x[i + k]) > top[k] ? fabs(x[i + k]) : top[k];
+    for (int k = 0; k < 4; ++k) top[k] = qd_fabs(x[i + k]) > top[k] ? qd_fabs(x[i + k]) : top[k];
   }
-  for (; i < n; ++i) top[0] = fabs(x[i]) > top[0] ? fabs(x[i]) : top[0];
+  for (; i < n; ++i) top[0] = qd_fabs(x[i]) > top[0] ? qd_fabs(x[i]) : top[0];
   casadi_real a = top[0] > top[1] ? top[0] : top[1], b = top[2] > top[3] ? top[2] : top[3];
   return a > b ? a : b;
 }
@@ -433,7 +438,7 @@ static casadi_real qd_norm1(int n, const casadi_real* A) {
   casadi_real top = 0;
   for (int j = 0; j < n; ++j) {
     casadi_real s = 0;
-    for (int i = 0; i < n; ++i) s += fabs(A[i + n * j]);
+    for (int i = 0; i < n; ++i) s += qd_fabs(A[i + n * j]);
     top = s > top ? s : top;
   }
   return top;
@@ -458,7 +463,7 @@ static int qd_bound_exceeded(int n, const casadi_real* LU, const int* piv, casad
       x[j] /= LU[j + n * j];
       for (int i = 0; i < j; ++i) x[i] -= LU[i + n * j] * x[j];
     }
-    for (int i = 0; i < n; ++i) s += fabs(x[i]);
+    for (int i = 0; i < n; ++i) s += qd_fabs(x[i]);
     inv_norm1 = s > inv_norm1 ? s : inv_norm1;
   }
   return QD_EPS * norm1 * inv_norm1 > QD_FLOAT_MAX_BOUND ? QD_SINGULAR : 0;
@@ -507,7 +512,7 @@ QD_INLINE int qd_fd_r_folded(int n, int legs, const casadi_real* S_b, const casa
       for (int i = 0; i < 3; ++i) {
         const casadi_real a = QD_M_LL(Mc, l, i, j);
         sw[0] += a - a;
-        scale = fabs(a) > scale ? fabs(a) : scale;
+        scale = qd_fabs(a) > scale ? qd_fabs(a) : scale;
       }
     }
   }
@@ -523,7 +528,7 @@ QD_INLINE int qd_fd_r_folded(int n, int legs, const casadi_real* S_b, const casa
     casadi_real u11 = QD_M_LL(Mc, l, 1, 1) - l10 * u01, u12 = QD_M_LL(Mc, l, 1, 2) - l10 * u02;
     casadi_real l21 = (QD_M_LL(Mc, l, 2, 1) - l20 * u01) / u11;
     casadi_real u22 = QD_M_LL(Mc, l, 2, 2) - l20 * u02 - l21 * u12, i00 = 1 / u00, i11 = 1 / u11, i22 = 1 / u22;
-    if (!(fabs(u00) > thr && fabs(u11) > thr && fabs(u22) > thr)) return QD_SINGULAR;
+    if (!(qd_fabs(u00) > thr && qd_fabs(u11) > thr && qd_fabs(u22) > thr)) return QD_SINGULAR;
     for (int p = 0; p <= 6; ++p) { /* [Z_l, w_l] = M_ll^-1 [M_lb, x_l], M_lb's column p = M_bl's row p */
       const casadi_real a0 = p < 6 ? B[p] : x[3 * l], a1 = p < 6 ? B[p + 6] : x[3 * l + 1];
       const casadi_real a2 = p < 6 ? B[p + 12] : x[3 * l + 2];

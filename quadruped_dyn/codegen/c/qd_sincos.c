@@ -5,6 +5,9 @@
  * vectorises; within 1 ulp of libm (tests/codegen/test_sincos.py). libm for an angle beyond QD_SINCOS_MAX or not
  * finite, for float and long double, and where the reduction's rounding trick cannot be trusted (-ffast-math,
  * x87's excess precision). */
+#ifndef CASADI_PREFIX /* compiled alone, not pasted into a generated file (codegen/c_alone.py) */
+#include "qd_alone.h"
+#endif
 #include <float.h>
 #include <math.h>
 #include <stdint.h>
@@ -54,8 +57,8 @@ static inline void qd_sincos_kernel(double xi, double* c, double* s) {
  * build is double without -ffast-math), else the precision wrappers qd_cos, qd_sin (libm) for all. */
 static inline void qd_sincos(int n, const casadi_real* x, casadi_real* c, casadi_real* s) {
   int fast = !QD_SINCOS_LIBM && sizeof(casadi_real) == sizeof(double);
-  /* in casadi_real: fabs is qd_fabs once generated (precision_math.template_c), and a float build compares in float */
-  for (int i = 0; i < n; ++i) fast &= fabs(x[i]) <= (casadi_real)QD_SINCOS_MAX;  /* false for NaN */
+  /* in casadi_real (qd_fabs: precision_math), so a float build compares in float */
+  for (int i = 0; i < n; ++i) fast &= qd_fabs(x[i]) <= (casadi_real)QD_SINCOS_MAX;  /* false for NaN */
   if (!fast) {
     for (int i = 0; i < n; ++i) {
       c[i] = qd_cos(x[i]);
