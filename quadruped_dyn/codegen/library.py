@@ -71,16 +71,19 @@ class CompiledLibrary:
 _LOCAL_INCLUDE = re.compile(rb'^[ \t]*#[ \t]*include[ \t]*([^<\s].*)$', re.M)
 #: ... of a file beside the source, by name (``"reduced_templates.h"``): its bytes go into the key.
 _QUOTED_NAME = re.compile(rb'"([\w.]+)"')
+#: The includes of a hand-written C file compiled alone (``codegen/c_alone.py``): dead where it is pasted into a
+#: generated file, which defines CASADI_PREFIX first.
+_ALONE_INCLUDES = re.compile(rb'^#ifndef CASADI_PREFIX\b.*?^#endif\b', re.M | re.S)
 
 
 def _included_bytes(source: Path, text: bytes) -> bytes:
     """The bytes of the files ``text`` includes by a quoted name, from ``source``'s directory (where the compiler
     looks first); BuildError for any other local include (a macro or a path: the key could miss its bytes)."""
     included = b""
-    for target in _LOCAL_INCLUDE.findall(text):
+    for target in _LOCAL_INCLUDE.findall(_ALONE_INCLUDES.sub(b"", text)):
         name = _QUOTED_NAME.fullmatch(target.strip())
         path = source.parent / name.group(1).decode() if name else None
-        if path is None or not path.is_file() or _LOCAL_INCLUDE.search(path.read_bytes()):
+        if path is None or not path.is_file() or _LOCAL_INCLUDE.search(_ALONE_INCLUDES.sub(b"", path.read_bytes())):
             raise BuildError(f"'{source.name}' includes {target.strip().decode(errors='replace')!s}; the object cache "
                              "takes C sources that include only <system> headers and self-contained files beside them")
         included += b"\0" + name.group(1) + b"\0" + path.read_bytes()  # type: ignore[union-attr]

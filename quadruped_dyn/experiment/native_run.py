@@ -126,6 +126,18 @@ def _structures(real: Any) -> dict[str, Any]:
             "qdx_rigid": Rigid}
 
 
+def layout_checks_c(structures: dict[str, Any]) -> str:
+    """C, to follow c/qdx_native_run.c in its translation unit, that fails to compile (an array of size -1 named by the
+    structure and field) where a structure of ``structures`` (``_structures``: C name -> ctypes structure) is not laid
+    out as C lays it out: every structure's size and every field's offset, so the two sides cannot disagree."""
+    lines = ["#include <stddef.h>", "/* the ctypes structures' layout (experiment/native_run.py, layout_checks_c) */"]
+    for name, struct in structures.items():
+        checks = [("size", f"sizeof({name})", ctypes.sizeof(struct))]
+        checks += [(field, f"offsetof({name}, {field})", getattr(struct, field).offset) for field, *_ in struct._fields_]
+        lines += [f"typedef char qdx_layout_{name}_{what}[{expr} == {value} ? 1 : -1];" for what, expr, value in checks]
+    return "\n".join(lines) + "\n"
+
+
 Buffers = tuple[np.ndarray, ...]
 
 
@@ -184,14 +196,16 @@ def native_library(robot: Robot, cc: str = "gcc", precision: str = "double") -> 
     flags = C_FLAGS if precision == "double" else LONG_DOUBLE_FLAGS
     with tempfile.TemporaryDirectory() as tmp:
         feet = feet_source(robot, Path(tmp))
-        h = hashlib.sha256(SOURCE.read_bytes() + feet.read_bytes())
+        unit = Path(tmp) / SOURCE.name  # the source and the check of its structures against the ctypes side
+        unit.write_text(SOURCE.read_text() + layout_checks_c(_structures(PRECISIONS[precision][0])))
+        h = hashlib.sha256(unit.read_bytes() + feet.read_bytes())
         h.update(f"{' '.join(flags)} {compiler_version(cc)}".encode())
         if precision != "double":
             h.update(generation_key(robot, precision, flags, cc).encode())
 
         def build(building: Path) -> None:
             generated = generate(robot, Path(tmp), "double").c_sources if precision != "double" else []
-            compile_sources([SOURCE, feet, *generated], flags, building, cc)
+            compile_sources([unit, feet, *generated], flags, building, cc)
 
         suffix = "" if precision == "double" else "_" + precision.replace(" ", "_")
         return cached_build(h.hexdigest()[:16], f"libqdx_native{suffix}_{robot.name}.so", build)

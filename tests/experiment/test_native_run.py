@@ -6,11 +6,14 @@ exact IK plan."""
 
 from __future__ import annotations
 
+import ctypes
+import subprocess
+
 import numpy as np
 import pytest
 
 from quadruped_dyn.experiment.gait import TROT, WALK, gait_plan
-from quadruped_dyn.experiment.native_run import NativeRuns
+from quadruped_dyn.experiment.native_run import PRECISIONS, SOURCE, NativeRuns, _structures, layout_checks_c
 from quadruped_dyn.experiment.rigid_contact import initial_state, simulate_rigid
 from quadruped_dyn.experiment.simulate import TorqueLaw, reduced_dynamics, simulate_reduced
 from quadruped_dyn.experiment.torque_table import IkTorqueTable
@@ -147,3 +150,22 @@ def test_an_unknown_precision_is_input_error():
 
     with pytest.raises(InputError, match="precision 'quad'"):
         native_library(load_robot("paper"), precision="quad")
+
+
+@pytest.mark.parametrize("precision", list(PRECISIONS))
+def test_structures_agree_with_c_and_a_disagreement_fails_the_build(tmp_path, precision):
+    """c/qdx_native_run.c compiles with the check of its structures against ``_structures`` (every size and offset),
+    and does not where the ctypes side differs (qdx_law with its int first)."""
+    real = PRECISIONS[precision][0]
+
+    def builds(structures: dict) -> subprocess.CompletedProcess:
+        unit = tmp_path / "unit.c"
+        unit.write_text(SOURCE.read_text() + layout_checks_c(structures))
+        defines = ["-DQDX_LONG_DOUBLE"] if precision != "double" else []
+        return subprocess.run(["cc", "-std=c99", "-fsyntax-only", *defines, str(unit)], capture_output=True, text=True)
+
+    assert builds(_structures(real)).returncode == 0
+    law = type("Law", (ctypes.Structure,), {"_fields_": [("roll_applied", ctypes.c_int), ("scale", real),
+                                                          ("kp", real), ("kd", real)]})
+    failed = builds({**_structures(real), "qdx_law": law})
+    assert failed.returncode != 0 and "qdx_layout_qdx_law_scale" in failed.stderr
