@@ -13,7 +13,7 @@ from quadruped_dyn.tolerances import FLOAT_ERR_PER_REGULARITY
 #: The header's name, as the templates include it.
 ALONE_HEADER = "qd_alone.h"
 _SIGNATURE = "(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem)"
-#: macro -> the function of the generated file it names, with CasADi's signature (emit.py defines the macro there).
+#: macro -> the function of qd_<robot>.c it names, with CasADi's signature (emit.py defines the macro from it).
 PROVIDED = {"QD_ID_FULL_EVAL": "qd_id_full_eval"}
 #: The functions a reduced file generates per stance set before c/qd_reduced_solve.c (emit._reduced_helpers_c), each
 #: with CasADi's signature.

@@ -19,6 +19,7 @@ from pathlib import Path
 import casadi as ca
 
 from quadruped_dyn.codegen.by_leg import LegCall, by_leg_c, foot_c
+from quadruped_dyn.codegen.c_alone import PROVIDED
 from quadruped_dyn.codegen.c_facts import layouts_c, prelude_c, regularity_c, return_codes_c
 from quadruped_dyn.codegen.c_file import Entry, FileOptions, c_file, entry_work, file_helpers
 from quadruped_dyn.codegen.casadi_source import EVALUATION, PREFIX, SINCOS, TEMPLATES, UNGUARDED, static_c
@@ -573,7 +574,8 @@ def _grf_through_id_full(robot: Robot, functions: list[ca.Function],
     if id_full.name_in() != ["q", "v", "a", "f"] or id_full.name_out() != ["w_res", "tau"] or id_full.sz_arg() != 4:
         raise AssertionError("qd_grf_solve calls id_full as (q, v, a, f) -> (w_res, tau) with no work memory")
     q, w_req = ca.SX.sym("q", NQ_FULL), ca.SX.sym("w_req", 6)
-    helpers = ["#define QD_ID_FULL_EVAL qd_id_full_eval /* _joint_rows_first */\n" + template_c("qd_grf_solve.c")]
+    helpers = [f"#define QD_ID_FULL_EVAL {PROVIDED['QD_ID_FULL_EVAL']} /* _joint_rows_first */\n"
+               + template_c("qd_grf_solve.c")]
     bodies = {}
     for f in functions:
         if not f.name().startswith(PREFIX + "grf_"):
