@@ -20,7 +20,9 @@ in the plant's cone and 0 <= f_z <= MAX_FOOT_LOAD m g, cost sum of x_k^T Q x_k +
 are the whole-body QP's force targets (weight WBC_FORCE_WEIGHT_MPC) until the next solve.
 
 The locked-joint model is checked against Pinocchio's full dynamics with the joints' accelerations
-held at zero (tests/control/test_wbc.py): the composite rigid body, exact at any posture.
+held at zero, and its input matrix B against the generated GRF solve's derivative (B R P dlambda/da_b
+is the identity on the trunk's accelerations, every 3-feet stance, at the states of a wbc walk)
+(tests/control/test_wbc.py): the composite rigid body, exact at any posture.
 """
 
 from __future__ import annotations

@@ -4,6 +4,7 @@ cycle (default suite), an infeasible QP (exit 1, one line), and the long runs (s
 
 from __future__ import annotations
 
+from functools import cache
 from pathlib import Path
 
 import numpy as np
@@ -34,6 +35,7 @@ from quadruped_dyn.tolerances import REL_TOL_TERMS  # noqa: E402
 #: odometry's still-foot assumption ignores; measured on the paper robot's walk: 0.01-0.02 m/s.
 ODOMETRY_TOL_M_S = 0.05
 
+@cache  # one run serves the model-term and the MPC checks
 def _drive(robot_name: str, gait: str, ticks: int, every: int):
     """The wbc controller driven by hand on the settled plant: its estimated (q, v) and model terms
     every ``every`` ticks, with MuJoCo's true trunk velocity v_b."""
@@ -94,6 +96,46 @@ def test_infeasible_qp_is_named_and_exits_1(monkeypatch, tmp_path: Path) -> None
 def test_bad_controller_or_gains_exit_2(args: list[str], tmp_path: Path) -> None:
     result = CliRunner().invoke(main, ["control", "paper", *args, "--cycles", "1", "--out", str(tmp_path)])
     assert result.exit_code == 2 and len(result.output.strip().splitlines()) == 1, result.output
+
+#: The MPC's force-to-acceleration map composed with the generated dgrf's d lambda / d a against the
+#: identity it should give: round-off of two rigid-body evaluations (REL_TOL_TERMS' reason) through one
+#: 6 x 6 QR solve of the GRF model (well conditioned on a walking posture); measured on the paper robot's
+#: walk: 2e-14; a 1 % error in the MPC's mass gives 1e-2.
+MPC_VS_DGRF_TOL = 1e-10
+
+
+def test_mpc_linearisation_inverts_the_generated_dgrf_at_the_states_of_a_run() -> None:
+    """The MPC's input matrix B (forces -> the trunk's angular and the centre of mass's linear
+    acceleration, world; from M_full's trunk block at the state) against the generated GRF
+    solve's derivative d lambda / d a (``dgrf_<feet>``, C): at the states of a wbc walk, for every
+    3-feet stance set (rank 6: the paper's forces f = P lambda balance any trunk wrench), the forces
+    d f / d a_b that the GRF model needs for a trunk acceleration a_b (joints' accelerations 0), put
+    through B, must give back that acceleration: B R P dlambda/da_b = d(alpha_w, a_com)/d a_b =
+    [[0, R], [R, -R [c]x]]. Two independent derivations of the locked-joint dynamics: the MPC's
+    composite rigid body and the paper's six body equations, differentiated by CasADi."""
+    from quadruped_dyn.codegen.library import CompiledFunction
+    from quadruped_dyn.control.mpc import continuous_model, rigid_body
+    from quadruped_dyn.math.rigid import skew
+    from quadruped_dyn.model.stance import stance_set
+
+    study, samples = _drive("paper", "walk", 300, 30)
+    library = GeneratedC(study.robot).library
+    stances = [stance_set(name) for name in ("FR+BL+BR", "FL+BL+BR", "FL+FR+BR", "FL+FR+BL")]
+    dgrf = {s: CompiledFunction(library, "dgrf_" + s.name.replace("+", "_")) for s in stances}
+    worst = 0.0
+    for q, v, terms, _ in samples:
+        R = rotation(q)
+        m, c, I_c = rigid_body(terms.M[:6, :6])
+        expected = np.block([[np.zeros((3, 3)), R], [R, -R @ skew(c)]])
+        for s in stances:
+            _, _, dlam_da = dgrf[s](q, v, np.zeros(18))
+            dF_w = np.kron(np.eye(3), R) @ s.selection("paper") @ dlam_da[:, :6]  # world forces per a_b
+            _, B = continuous_model(m, R @ I_c @ R.T, [R @ (terms.r[i] - c) for i in s.feet])
+            got = B[6:12] @ dF_w
+            assert np.all(np.isfinite(got)), s.name
+            worst = max(worst, relative_error(got, expected))
+    assert worst <= MPC_VS_DGRF_TOL, worst
+
 
 def test_mpc_rigid_body_is_pinocchios_locked_joint_dynamics() -> None:
     """The MPC's model from the generated M_full's trunk block (m, c, I_c) gives the centre of
