@@ -34,7 +34,8 @@ run: ``QpInfeasible`` names the tick and the contact set.
 The command to the drivers: the QP's torques fed forward, plus the drivers' PD to the plan with
 ``pd-diag``'s per-joint gains (the stance legs' for the contact feet's legs, the swing legs'
 for the others; run at the plant's rate: what lets a 1 kHz torque loop hold a leg of ~1e-4
-kg m^2). Measured: with the PD on the swing legs only, solo12's trot fell at 1.2 s and the paper
+kg m^2; the stiffness capped where it would reach the effort limit within ``PD_LINEAR_RAD``).
+Measured: with the PD on the swing legs only, solo12's trot fell at 1.2 s and the paper
 robot's trot tracked 0.0041 rad RMS; with it on every leg both trot 10 cycles, 0.013 and 0.0006.
 """
 
@@ -78,6 +79,13 @@ WBC_WEIGHTS = {"trunk": 1.0, "attitude": 1.0, "swing": 1.0, "posture": 1e-3, "fo
 #: lifting a loaded pair kicked the trunk ~2.5 deg in roll at each switch).
 LANDING_PHASE = 0.85
 MAX_FOOT_LOAD = 2.0  # robot weights
+#: The drivers' PD stays linear up to this joint error (rad): its stiffness M^ omega^2 is capped at the
+#: effort limit / PD_LINEAR_RAD and its damping is 2 zeta sqrt(K_p M^) (~2x the joint errors wbc tracks).
+#: Uncapped it reached anymal_c's 80 N m at 4-8 mrad (stance legs with their share of the mass, and its
+#: 0.16-0.3 kg m^2 swing hips at 250 rad/s): a bang-bang PD that bounced the stance feet off the ground
+#: half the time; the walk fell at 6-8.5 s (capping the stance legs only, or the stiffness only: 6-7 s).
+#: It binds on the hips of go2's legs and of the paper robot's trot stance, never on solo12's.
+PD_LINEAR_RAD = 0.02
 #: An equality residual above this (N, m/s^2) means the QP was not solved, whatever the status.
 QP_EQUALITY_TOL = 1e-3
 #: ProxQP's absolute accuracy (m/s^2, robot weights).
@@ -297,8 +305,8 @@ class WholeBodyQp:
         self.c.ns += self.c_ns
         tau = self.torques(vdot, f, contact)
         w, z = self.gains.ct_omega(StanceSet(contact) if len(contact) else stance), self.gains.ct_zeta
-        kp, kd = ref.inertia * w**2, ref.inertia * 2 * z * w
-        return Command(tau, ref.q_r[:12], ref.qd_r[:12], kp, kd)
+        kp = np.minimum(ref.inertia * w**2, self.effort / PD_LINEAR_RAD)
+        return Command(tau, ref.q_r[:12], ref.qd_r[:12], kp, 2 * z * np.sqrt(kp * ref.inertia))
 
 
 def _new_qp(H: np.ndarray, g: np.ndarray, A: np.ndarray, b: np.ndarray, C: np.ndarray, lower: np.ndarray,

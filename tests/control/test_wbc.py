@@ -180,7 +180,8 @@ def _robot(name: str):
 
 
 #: Runs where wbc holds but tracks the joints worse than pd-diag (docs/closed_loop.md).
-TRACKS_WORSE = {("solo12", "trot"): "0.0129 against 0.0104 in the measured run"}
+TRACKS_WORSE = {("solo12", "trot"): "0.0129 against 0.0104 in the measured run",
+                ("anymal_c", "trot"): "0.0098 against 0.0090 in the measured run: its drivers' PD capped (wbc.PD_LINEAR_RAD)"}
 
 
 @pytest.mark.slow
@@ -191,8 +192,6 @@ def test_wbc_ten_cycles_tracks_at_least_as_well_as_pd_diag(name: str, gait: str)
     (RMS over the time both ran); docs/closed_loop.md has the numbers."""
     study = run_all(prepare(_robot(name), gait, ["wbc", "pd-diag"], loop=LoopOptions(cycles=10)))
     r = study.results["wbc"]
-    if (name, gait) == ("anymal_c", "walk") and r["fell"]:
-        pytest.xfail(f"measured: wbc falls on anymal_c's walk (8.16 s; pd-diag at 2.25 s): {r['stopped']}")
     assert not r["fell"] and r["stopped"] is None and r["cycles_up"] == 10, r["stopped"]
     a, b = study.traces["wbc"], study.traces["pd-diag"]
     n = min(a.t.size, b.t.size)
