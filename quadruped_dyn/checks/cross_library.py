@@ -88,7 +88,7 @@ class ToolkitDynamics:
         self.kin = robot_kinematics(robot)
 
     def mass_matrix(self, q: np.ndarray) -> np.ndarray:
-        return np.array(self.fd.M_full(q))
+        return np.array(self.fd.M_full_walker_orin(q))
 
     def nonlinear_effects(self, q: np.ndarray, v: np.ndarray) -> np.ndarray:
         return np.array(self.fd.C_full(q, v) + self.fd.G_full(q)).ravel()

@@ -110,7 +110,7 @@ def _comparisons(robot: Robot, ref: PinocchioReference, s: FullState) -> Iterato
     qj, vj = q[7:], v[6:]
     M = ref.mass_matrix(q)
     G = ref.gravity(q)
-    yield "M_full (Walker-Orin)", fd.M_full(q), M
+    yield "M_full (Walker-Orin)", fd.M_full_walker_orin(q), M
     yield "M_full (CasADi AD)", fd.M_full_ad(q), M
     yield "M_full (CRBA)", fd.M_full_crba(q), M
     yield "C_full", fd.C_full(q, v), ref.nonlinear_effects(q, v) - G

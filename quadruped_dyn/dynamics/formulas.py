@@ -165,8 +165,8 @@ def term_functions(robot: Robot) -> dict[str, ca.Function]:
     """The terms whose size and structure the report shows: full coordinates, one GRF solve
     per stance kind (paper model), and the reduced model of standing, a walk triple, a trot pair."""
     fd = full_dynamics(robot)
-    terms = {name: getattr(fd, name) for name in ("M_full", "M_full_ad", "M_full_crba", "C_full", "G_full",
-                                                   "nle_full", "coriolis", "id_full")}
+    terms = {name: getattr(fd, name) for name in ("M_full_walker_orin", "M_full_ad", "M_full_crba", "C_full",
+                                                   "G_full", "nle_full", "coriolis", "id_full")}
     terms["foot Jacobian (FL)"] = robot_kinematics(robot)[0].foot_jacobian
     for stance in ("FL+FR+BL+BR", "FR+BL+BR", "FL+BR"):
         terms[f"grf {stance}"] = grf_solve(robot, stance).function
