@@ -1,6 +1,6 @@
 """id_full, M's blocks and the feet's kinematics leg by leg: the pieces the reduced files' C calls (``LegPieces``;
-docs/derivatives.md, "dfd_r and dgrf as generated C", and docs/formulation.md §6.2). Each equals the whole-robot algorithm it stands
-for (tested, every built-in robot):
+docs/derivatives.md, "dfd_r and dgrf as generated C", and docs/formulation.md §6.2). Each equals the whole-robot
+algorithm it stands for (tested, every built-in robot):
 
 * ``id_full_pieces`` equals ``newton_euler.inverse_dynamics`` without foot forces (the reduced terms' rnea: their foot
   forces are the GRF projection's): head(q, v, a) -> a0 (``newton_euler.trunk_acceleration``); leg(w_b, alpha_b, a0,
