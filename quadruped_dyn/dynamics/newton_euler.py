@@ -221,7 +221,7 @@ class FullDynamics:
     M_full_ad: ca.Function  # q -> M (18, 18), CasADi AD of id_full w.r.t. a
     M_full_crba: ca.Function  # q -> M (18, 18), composite rigid bodies: the form generated as C
     C_full: ca.Function  # q, v -> C (18,) velocity terms (g = 0, a = 0)
-    G_full: ca.Function  # q -> G (18,) (v = 0, a = 0)
+    G_full_newton_euler: ca.Function  # q -> G (18,) (v = 0, a = 0)
     G_full_crb: ca.Function  # q -> G (18,) from composite first moments: the form generated as C
     nle_full: ca.Function  # q, v -> C + G (18,) in one evaluation (Pinocchio's nonLinearEffects)
     coriolis: ca.Function  # q, v -> C(q, v) (18, 18), Pinocchio's factorisation
@@ -264,7 +264,7 @@ def _full_dynamics(robot: Robot) -> FullDynamics:
         M_full_ad=ca.Function("M_full_ad", [q], [M_ad], ["q"], ["M"], opts),
         M_full_crba=ca.Function("M_full_crba", [q], [mass_matrix_crba(robot, qj)], ["q"], ["M"], opts),
         C_full=ca.Function("C_full", [q, v], [C], ["q", "v"], ["C"], opts),
-        G_full=ca.Function("G_full", [q], [G], ["q"], ["G"], opts),
+        G_full_newton_euler=ca.Function("G_full_newton_euler", [q], [G], ["q"], ["G"], opts),
         G_full_crb=ca.Function("G_full_crb", [q], [generalized_gravity(robot, qj, g_b)], ["q"], ["G"], opts),
         nle_full=ca.Function("nle_full", [q, v], [nle], ["q", "v"], ["nle"], opts),
         coriolis=ca.Function("coriolis_matrix", [q, v], [Cmat], ["q", "v"], ["C"], opts),

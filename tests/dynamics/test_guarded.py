@@ -65,7 +65,7 @@ def paper():
 def test_full_dynamics(paper, q, v, a, f):
     fd = full_dynamics(paper)
     _finite_or_input_error(lambda: fd.M_full_walker_orin(q))
-    _finite_or_input_error(lambda: fd.G_full(q))
+    _finite_or_input_error(lambda: fd.G_full_newton_euler(q))
     _finite_or_input_error(lambda: fd.C_full(q, v))
     _finite_or_input_error(lambda: fd.coriolis(q, v))
     _finite_or_input_error(lambda: fd.id_full(q, v, a, f))

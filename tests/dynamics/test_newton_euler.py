@@ -35,7 +35,7 @@ def test_terms_against_pinocchio(robot, ref, fd, seed):
     M, G = ref.mass_matrix(s.q), ref.gravity(s.q)
     assert_close(_np(fd.M_full_walker_orin(s.q)), M, what="M_full")
     assert_close(_np(fd.M_full_crba(s.q)), M, what="M_full by CRBA")
-    assert_close(_np(fd.G_full(s.q)), G, what="G_full")
+    assert_close(_np(fd.G_full_newton_euler(s.q)), G, what="G_full")
     assert_close(_np(fd.G_full_crb(s.q)), G, what="G_full by composite first moments")
     assert_close(_np(fd.C_full(s.q, s.v)), ref.nonlinear_effects(s.q, s.v) - G, what="C_full")
     assert_close(_np(fd.coriolis(s.q, s.v)), ref.coriolis_matrix(s.q, s.v), what="Coriolis matrix")
@@ -56,7 +56,7 @@ def test_identities(robot, fd, seed):
     assert np.linalg.eigvalsh(M).min() > 0
     w, tau = fd.id_full(s.q, s.v, s.a, np.zeros(12))
     lhs = np.concatenate([_np(w), _np(tau)])
-    assert_close(lhs, M @ s.a + _np(fd.C_full(s.q, s.v)) + _np(fd.G_full(s.q)), what="id = M a + C + G")
+    assert_close(lhs, M @ s.a + _np(fd.C_full(s.q, s.v)) + _np(fd.G_full_newton_euler(s.q)), what="id = M a + C + G")
     assert_close(_np(fd.coriolis(s.q, s.v)) @ s.v, _np(fd.C_full(s.q, s.v)), what="C(q, v) v = C_full")
 
 
