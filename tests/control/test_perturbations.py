@@ -54,14 +54,15 @@ def test_payload_is_pinocchios_sum_of_inertias(plant, paper):
 
 
 def test_push_adds_its_impulse_to_the_momentum(paper):
-    """Robot in the air (no contact), joints free: M v_com(t) = M g t + J once the push is over."""
+    """Robot in the air (no contact), joints free: M v_com(t) = M g t + J once the push (``Plant.push``, as the
+    loop applies ``LoopOptions.push`` at each tick) is over."""
     J = np.array([3.0, -2.0, 1.0])
-    explicit = build_plant(paper, gait_plan(paper, GAITS["walk"]), PlantOptions(integrator="rk4"))
-    p = perturbed(explicit, Perturbation(push_N_s=tuple(J), push_at_s=0.005))
+    p = build_plant(paper, gait_plan(paper, GAITS["walk"]), PlantOptions(integrator="rk4"))
     q = np.concatenate([[0, 0, 1.0], [0, 0, 0, 1.0], paper.standing_q])
     p.set_state(q, np.zeros(18))
     steps = 100
-    for _ in range(steps):
+    for k in range(steps):
+        p.push(J, 0.005, k * p.options.timestep)
         p.step(Command(np.zeros(12)), 1)
     mujoco.mj_forward(p.model, p.data)  # the velocity stage at the final state
     mujoco.mj_subtreeVel(p.model, p.data)
