@@ -145,7 +145,8 @@ def _plant_parts(p: dict[str, Any]) -> tuple[dict[str, Any], Any, tuple[float, f
     both = p.get("mass_scale", 1.0)
     vec = {name: tuple(float(p.get(f"{name}_{axis}_{unit}", 0.0)) for axis in "xyz")
            for name, unit in (("payload_offset", "m"), ("push", "N_s"))}
-    push = (float(p.get("push_at_s", 0.0)), *vec["push"]) if any(vec["push"]) else None
+    x, y, z = vec["push"]
+    push = (float(p.get("push_at_s", 0.0)), x, y, z) if any(vec["push"]) else None
     return plant, Perturbation(trunk_mass_scale=both * p.get("trunk_mass_scale", 1.0),
                                link_mass_scale=both * p.get("link_mass_scale", 1.0), payload_kg=p.get("payload_kg", 0.0),
                                payload_offset_m=vec["payload_offset"],  # type: ignore[arg-type]

@@ -50,6 +50,9 @@ def _sweep(tmp_path: Path, text: str, *args: str) -> tuple[int, str]:
     (CHECK + "[tasks.control]\ncontrollers = ['pd', 'lqr']\n", r"tasks\.control\.controllers\[1\] 'lqr' is unknown"),
     (CHECK + "[tasks.control.perturbations]\nmu = [0.5, 0.2]\n", r"tasks\.control\.perturbations\.mu is \[0\.5, 0\.2\]"),
     (CHECK + "[tasks.control.perturbations]\ngravity = 2\n", r"unknown key 'tasks\.control\.perturbations\.gravity'"),
+    (CHECK + "[tasks.control]\ncycles = 1\n[tasks.control.perturbations]\npush_at_s = [0.0, 5.0]\n",
+     r"tasks\.control\.perturbations\.push_at_s reaches 5 s; expected times of the run, before its 1\.2 s \(1 cycles\)"),
+    (CHECK + "[tasks.control.perturbations]\nstep_height_m = [0.0, 0.5]\n", r"perturbations\.step_height_m is \[0, 0\.5\]"),
     ('[robots]\nnames = ["paper"]\n', r"tasks is empty"),
     ("[robots\n", r"is not TOML"),
 ])
