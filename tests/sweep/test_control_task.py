@@ -19,6 +19,8 @@ PUSH_AT_S = 0.1
 #: is 0.1 m/s, ~10 mm in 0.1 s were nothing to resist it).
 MOVED_M = 1e-3
 AFTER_S = 0.1
+#: A box's placement from the sample: sums of lengths of ~1 m, to round-off.
+PLACEMENT_TOL_M = 1e-12
 
 
 def test_a_push_lands_once_at_its_time_of_the_run(paper):
@@ -37,3 +39,13 @@ def test_a_push_lands_once_at_its_time_of_the_run(paper):
     assert moved[first] > 0 and pushed.t[first] == pytest.approx(PUSH_AT_S + (still.t[1] - still.t[0]))
     later = first + int(round(AFTER_S / (still.t[1] - still.t[0])))
     assert pushed.trunk_p[later, 0] - still.trunk_p[later, 0] > MOVED_M  # along the push (+x)
+
+
+def test_a_sampled_ground_step_is_in_the_plant(paper):
+    o = {"gait": "walk", "controller": "pd-diag", "cycles": 1, "run": 0,
+         "perturbation": {"step_x_m": 0.3, "step_height_m": 0.02, "mass_scale": 1.1}}
+    plant = control_study(paper, o).plant
+    box = plant.model.geom("quadruped_dyn_step")
+    assert plant.options.ground_step == (0.3, 0.02)
+    assert box.pos[0] - box.size[0] == pytest.approx(0.3, abs=PLACEMENT_TOL_M)  # the edge at x = 0.3 m
+    assert box.pos[2] + box.size[2] == pytest.approx(plant.floor_z + 0.02, abs=PLACEMENT_TOL_M)  # the top 2 cm up
