@@ -1,6 +1,7 @@
 """How a sweep scales with workers on this machine: the same sweep file run by ``quadruped-dyn sweep`` on a
 LocalCluster of each number of workers (one thread each, BLAS and OpenMP threads 1), one after the other, each into
-its own folder; per run the wall time, the tasks' CPU time, and the machine's load while it ran (the 1-minute load
+its own folder; per run the wall time, the tasks' CPU and wall time (the cores the tasks obtained; the run's time
+outside them: the cluster's start, the last tasks' tail), and the machine's load while it ran (the 1-minute load
 average sampled every LOAD_PERIOD_S, and the fraction of all cores busy from /proc/stat: on a shared machine they
 say how much the ratio means). A benchmark, not a test::
 
@@ -24,6 +25,7 @@ from pathlib import Path
 from typing import Any
 
 from quadruped_dyn.errors import InputError
+from quadruped_dyn.sweep.dataset import Dataset
 from quadruped_dyn.sweep.engine import SINGLE_THREAD_ENV
 
 #: Load average samples are taken this often (s).
@@ -78,9 +80,14 @@ def _one_run(sweep_file: Path, workers: int, out: Path) -> dict[str, Any]:
         raise InputError(f"the sweep on {workers} workers exited {proc.returncode}: "
                          f"{(proc.stderr.strip().splitlines() or ['no output'])[-1]}") from None
     kinds = summary["kinds"]
+    task_wall = sum(float(r["wall_s"]) for r in Dataset(out).rows())
     return {"workers": workers, "exit_code": proc.returncode, "wall_s": wall, "tasks": summary["this_run"]["tasks"],
             "errors": sum(k["errors"] for k in kinds.values()),
-            "task_cpu_s_total": sum(k["cpu_s_total"] or 0.0 for k in kinds.values()),
+            "task_cpu_s_total": sum(k["cpu_s_total"] or 0.0 for k in kinds.values()), "task_wall_s_total": task_wall,
+            # the run's wall time not spent in tasks with every worker busy: starting the cluster, the tail, scheduling
+            "overhead_s": wall - task_wall / workers,
+            # the cores the sweep's tasks had on average: what the machine gave it (at most ``workers``)
+            "cores_obtained": sum(k["cpu_s_total"] or 0.0 for k in kinds.values()) / wall,
             "load_average_1min": {"start": loads[0], "max": max(loads), "mean": sum(loads) / len(loads), "samples": loads},
             "machine_busy_fraction": busy}
 
@@ -122,8 +129,10 @@ def main(argv: list[str] | None = None) -> int:
         load = r["load_average_1min"]
         busy = "n/a" if r["machine_busy_fraction"] is None else f"{r['machine_busy_fraction']:.0%}"
         print(f"{r['workers']} workers: {r['tasks']} tasks in {r['wall_s']:.1f} s wall (x{r['speedup_vs_first']:.2f}), "
-              f"{r['task_cpu_s_total']:.1f} s task CPU, {r['errors']} errors; load average {load['start']:.1f} at start, "
-              f"mean {load['mean']:.1f}, max {load['max']:.1f}; machine busy {busy} ({result['cpu']})")
+              f"{r['task_cpu_s_total']:.1f} s task CPU ({r['cores_obtained']:.2f} cores), {r['overhead_s']:.1f} s outside "
+              f"tasks, {r['errors']} errors; "
+              f"load average {load['start']:.1f} at start, mean {load['mean']:.1f}, max {load['max']:.1f}; "
+              f"machine busy {busy} ({result['cpu']})")
     return 0
 
 
