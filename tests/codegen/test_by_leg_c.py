@@ -26,7 +26,7 @@ def test_feet_of_two_leg_templates_and_a_turned_hip_compiled(tmp_path):
     pieces = foot_pieces(robot)
     assert pieces.template_of == (0, 1, 0, 0) and [pieces.leg_signs(k)[0] for k in (0, 2, 3)] == [1.0, -1.0, -1.0]
     source, library = tmp_path / "feet.c", tmp_path / "libfeet.so"
-    source.write_text(_PRELUDE + foot_c("qd_foot_trig", pieces, "double", frozenset()))
+    source.write_text(_PRELUDE + foot_c("qd_foot_trig", pieces, frozenset()))
     subprocess.run(["gcc", *C_FLAGS, "-shared", str(source), "-o", str(library), "-lm"], check=True)
     c_foot = ctypes.CDLL(str(library)).qd_foot_trig
     c_foot.restype = ctypes.c_int

@@ -13,7 +13,7 @@ import pytest
 from quadruped_dyn.checks.finite_differences import ReducedFiniteDifferences, grf_derivatives_by_differences
 from quadruped_dyn.codegen.c_facts import prelude_c
 from quadruped_dyn.codegen.casadi_source import PREFIX
-from quadruped_dyn.codegen.emit import REDUCED_STANCE_SETS, TEMPLATES, _precision_math, reduced_symbol
+from quadruped_dyn.codegen.emit import REDUCED_STANCE_SETS, TEMPLATES, reduced_symbol
 from quadruped_dyn.codegen.emit_derivatives import (
     GRF_DERIVATIVE_STANCE_SETS,
     derivative_functions,
@@ -253,9 +253,9 @@ def test_did_full_of_two_leg_templates_and_a_turned_hip_compiled(tmp_path):
     robot = turned_robot()
     pieces = did_full_pieces(robot)
     assert pieces.template_of == (0, 1, 0, 0) and [pieces.leg_signs(k)[0] for k in (0, 2, 3)] == [1.0, -1.0, -1.0]
-    c_text, _ = derivative_source(robot, "qd_turned_d", derivative_functions(robot), "double")
+    c_text, _, _ = derivative_source(robot, "qd_turned_d", derivative_functions(robot), "double")
     source = tmp_path / "qd_turned_d.c"
-    source.write_text(_precision_math(c_text))
+    source.write_text(c_text)
     library = tmp_path / "libturned.so"
     subprocess.run(["gcc", *C_FLAGS, "-shared", str(source), "-o", str(library), "-lm"], check=True)  # qd_M_full: unused
     compiled = ca.external(PREFIX + "did_full", str(library))
