@@ -201,7 +201,7 @@ NATIVE_TWIN_FACTOR = 10.0
 #: state one ulp up, or every table value one ulp off). The table's own noise is larger: the same
 #: code, the table evaluated in another order (the grid's exact plan before or after the run),
 #: gave 2.1e-7-6.5e-7 / 4.5e-7-8.5e-7 / 8.0e-6-1.3e-5 % (Intel Xeon), and the C with a
-#: shared denominator's quotients as reciprocal products (codegen.reciprocals, ~1 ulp per quotient)
+#: shared denominator's quotients as reciprocal products (codegen.printer's reciprocals, ~1 ulp per quotient)
 #: 2.2e-7-8.0e-7 / 1.8e-7-1.3e-6 / 1.8e-6-2.1e-5 %: the limit is 2.5x the largest of those. The
 #: double run at RTOL is at 5e-5 / 8e-5 / 1.2e-3-1.9e-3 % (truncation and its own round-off), so a
 #: systematic error of the experiment 25-40x below what double can see fails the check.
@@ -219,6 +219,6 @@ LIFT_COLUMNS_REL_TOL = 16 * DBL_EPSILON
 
 #: Two evaluations of the same operations that differ only in their order or grouping: the compiled C against the
 #: in-memory CasADi graph (a shared denominator's quotients are products with its reciprocal there,
-#: codegen.reciprocals: ~1 ulp each; -O3 without -ffast-math keeps IEEE order), a function leg by leg against the
-#: whole-robot graph (dynamics/by_leg.py: the legs' sums in another grouping). A few hundred operations of ~1 ulp.
+#: codegen.printer's reciprocals: ~1 ulp each; -O3 without -ffast-math keeps IEEE order), a function leg by leg against the
+#: whole-robot graph (codegen/forms/leg_pieces.py: the legs' sums in another grouping). A few hundred operations of ~1 ulp.
 REL_TOL_GRAPH = 1e-13

@@ -20,6 +20,7 @@ flags and compiler. Pairs: M_full ~ adam M, nle_full ~ adam C + G.
 from __future__ import annotations
 
 import hashlib
+import re
 import shutil
 import tempfile
 from dataclasses import dataclass
@@ -34,7 +35,6 @@ from quadruped_dyn.bench.harnesses import HARNESSES
 from quadruped_dyn.bench.placement import TimedProgram, median_over_rounds
 from quadruped_dyn.bench.timing import aligned
 from quadruped_dyn.bench.timing_counts import check_counts
-from quadruped_dyn.codegen.casadi_source import silence_unused_parameters
 from quadruped_dyn.codegen.emit import CODEGEN_FUNCTIONS, PREFIX
 from quadruped_dyn.codegen.library import C_FLAGS, compiler_version, run_tool
 from quadruped_dyn.errors import InputError, NumericalError
@@ -125,6 +125,14 @@ def check_adam(robot: Robot, functions: list[ca.Function], seed: int = 0) -> flo
         raise NumericalError(f"adam's terms differ from Pinocchio's on {robot.name} by {worst:.2e} relative; "
                          f"expected <= {REL_TOL_TERMS:g} before timing them")
     return worst
+
+
+def silence_unused_parameters(c_source: str) -> str:
+    """CasADi's evaluation functions in the peers' C (CasADi's own output, timed as it writes it) ignore some of their
+    five parameters and its release hooks ignore ``mem``: cast them to void so -Wextra -Werror passes."""
+    unused = "(void)arg; (void)res; (void)iw; (void)w; (void)mem;"
+    c_source = re.sub(r"(static int casadi_f\d+\([^)]*\) \{\n)", lambda m: m.group(1) + f"  {unused}\n", c_source)
+    return re.sub(r"(void \w+_release\(int mem\) \{\n)", lambda m: m.group(1) + "  (void)mem;\n", c_source)
 
 
 def _harness(functions: list[ca.Function], flags: tuple[str, ...], cc: str) -> Path:

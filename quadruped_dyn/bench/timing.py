@@ -48,7 +48,8 @@ from quadruped_dyn.bench.harnesses import HARNESSES, PINOCCHIO_CXX_FLAGS, cmeel_
 from quadruped_dyn.bench.placement import TimedProgram, median_over_rounds
 from quadruped_dyn.bench.timing_counts import check_counts
 from quadruped_dyn.checks.check_program_values import generate_checked, reference_header_name
-from quadruped_dyn.codegen.emit import PREFIX, GeneratedFiles, codegen_functions, work_sizes
+from quadruped_dyn.codegen.casadi_source import work_sizes
+from quadruped_dyn.codegen.emit import PREFIX, GeneratedFiles, codegen_functions
 from quadruped_dyn.codegen.library import (
     C_FLAGS,
     CompiledFunction,

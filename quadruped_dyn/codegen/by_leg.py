@@ -14,9 +14,9 @@ from dataclasses import dataclass
 import casadi as ca
 
 from quadruped_dyn.codegen.c_facts import prelude_c
-from quadruped_dyn.codegen.casadi_source import static_c, unguarded_inputs
+from quadruped_dyn.codegen.casadi_source import static_c
+from quadruped_dyn.codegen.forms.leg_template import LegPieces
 from quadruped_dyn.codegen.joint_trig import trig_as_inputs
-from quadruped_dyn.dynamics.leg_template import LegPieces
 from quadruped_dyn.model.leg import LEG_LABELS
 
 _SIGNATURE = "(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem)"
@@ -43,12 +43,12 @@ def legs_reals(pieces: LegPieces) -> int:
     return 4 * max(f.nnz_out(0) for f in pieces.legs)
 
 
-def by_leg_c(c_name: str, pieces: LegPieces, call: LegCall, precision: str, host_helpers: frozenset[str],
-             unguarded: str | None = None, export_in: bool = False) -> str:
+def by_leg_c(c_name: str, pieces: LegPieces, call: LegCall, host_helpers: frozenset[str],
+             test_outputs: bool = False, export_in: bool = False) -> str:
     """Static C functions of ``pieces``, ``{c_name}_in(arg, res, L, iw, w, mem)`` calling them with the legs' outputs in
     L (``legs_reals``: the caller's memory; exported with ``export_in``, for a caller short of stack) and
-    ``int c_name(arg, res, iw, w, mem)``, which keeps L on its stack. The tail writes every output (``unguarded``
-    None: the callers pass all) or, with ``unguarded`` a name of ``UNGUARDED``, tests each output pointer as CasADi
+    ``int c_name(arg, res, iw, w, mem)``, which keeps L on its stack. The tail writes every output (the callers pass all) or,
+    with ``test_outputs``, tests each output pointer as CasADi
     does (its inputs all given)."""
     joints = [i for i, x in enumerate(call.leg_inputs) if x[0] == "joint"]
     if not joints:
@@ -58,16 +58,15 @@ def by_leg_c(c_name: str, pieces: LegPieces, call: LegCall, precision: str, host
         raise AssertionError(f"{c_name}: the pieces' inputs are not as the call reads them")
     text = [prelude_c()]
     if pieces.head is not None:
-        text.append(static_c(f"{c_name}_head", pieces.head, precision, host_helpers, all_io=True))
+        text.append(static_c(f"{c_name}_head", pieces.head, host_helpers, all_io=True))
     for i, leg in enumerate(pieces.legs):  # one copy of its code for every leg of its template
-        text.append("QD_NOINLINE " + static_c(f"{c_name}_leg{i}", trig_as_inputs(leg, q_input), precision, host_helpers,
+        text.append("QD_NOINLINE " + static_c(f"{c_name}_leg{i}", trig_as_inputs(leg, q_input), host_helpers,
                                               all_io=True))
     for k in range(4):
         values = pieces.leg_values(k)
         text.append(f"static const casadi_real {c_name}_p{k}[{max(len(values), 1)}] = "
                     f"{{{', '.join(repr(x) for x in values) if values else '0'}}}; /* {LEG_LABELS[k]}'s parameters */\n")
-    tail = static_c(f"{c_name}_tail", pieces.tail, precision, host_helpers, all_io=unguarded is None)
-    text.append(tail if unguarded is None else unguarded_inputs(tail, unguarded))
+    text.append(static_c(f"{c_name}_tail", pieces.tail, host_helpers, all_io=not test_outputs, inputs_given=True))
     nl = legs_reals(pieces) // 4
     body = [f"{'' if export_in else 'static '}int {c_name}_in(const casadi_real** arg, casadi_real** res, casadi_real* L, "
             "casadi_int* iw, casadi_real* w, int mem) {\n"]
@@ -116,7 +115,7 @@ def _leg_call(c_name: str, pieces: LegPieces, call: LegCall, k: int, nl: int) ->
             f"    {c_name}_leg{pieces.template_of[k]}(l_arg, l_res, iw, w, mem);\n  }}\n")
 
 
-def foot_c(c_name: str, pieces: LegPieces, precision: str, host_helpers: frozenset[str]) -> str:
+def foot_c(c_name: str, pieces: LegPieces, host_helpers: frozenset[str]) -> str:
     """Static C functions of ``pieces`` (``dynamics.by_leg.foot_pieces``: leg functions (q_l, qd_l, p) -> FOOT_PARTS,
     and each at qd_l = 0, without the rates' operations) and ``int c_name(int k, q_l, qd_l, s, c, y)``: robot leg k's
     foot kinematics y (18) at its joints' q_l, qd_l (3 each; null: at rest) and their sines s and cosines c, by its
@@ -131,7 +130,7 @@ def foot_c(c_name: str, pieces: LegPieces, precision: str, host_helpers: frozens
         q_l, p = ca.SX.sym("q_l", 3), ca.SX.sym("p", leg.sparsity_in(2))
         at_rest = ca.Function(f"{leg.name()}_at_rest", [q_l, p], leg.call([q_l, ca.SX.zeros(3), p]), {"cse": True})
         for name, f in ((f"{c_name}_leg{i}", leg), (f"{c_name}_at_rest_leg{i}", at_rest)):
-            text.append("QD_NOINLINE " + static_c(name, trig_as_inputs(f, 0), precision, host_helpers, all_io=True))
+            text.append("QD_NOINLINE " + static_c(name, trig_as_inputs(f, 0), host_helpers, all_io=True))
     cases = []
     for k in range(4):
         values = pieces.leg_values(k)

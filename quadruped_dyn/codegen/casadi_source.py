@@ -1,19 +1,17 @@
-"""CasADi's C for a list of Functions: the source and CasADi's header text (unused parameters
-cast to void for -Wextra -Werror, the scalar helpers static inline), the work sizes it states, the entry-point
-pattern, the C templates' folder.
-The one place ``codegen.emit`` and ``codegen.emit_derivatives`` both build on."""
+"""What the generated files share: the C prefix, the templates' folder, how their evaluation functions print
+(``EVALUATION``) and the static pieces the templates call (``static_c``), a list of Functions as one file in CasADi's
+layout (``casadi_c``), the work sizes a header states."""
 
 from __future__ import annotations
 
-import os
 import re
-import tempfile
-from pathlib import Path
+from dataclasses import replace
 
 import casadi as ca
 
 from quadruped_dyn.codegen.c_facts import TEMPLATES  # noqa: F401 -- the templates' folder, re-exported
-from quadruped_dyn.codegen.reciprocals import shared_reciprocals
+from quadruped_dyn.codegen.c_file import Entry, FileOptions, c_file
+from quadruped_dyn.codegen.printer import PrintOptions, print_function
 
 PREFIX = "qd_"
 
@@ -24,21 +22,10 @@ def work_sizes(casadi_header: str) -> dict[str, tuple[int, int]]:
     return {n: (int(sizes[f"{n}_SZ_IW"]), int(sizes[f"{n}_SZ_W"])) for n in names}
 
 
-_UNUSED = "(void)arg; (void)res; (void)iw; (void)w; (void)mem;"
-
-
-def silence_unused_parameters(c_source: str) -> str:
-    """CasADi's evaluation functions ignore some of their five parameters and its
-    release hooks ignore ``mem``: cast them to void so -Wextra -Werror passes."""
-    c_source = re.sub(r"(static int casadi_f\d+\([^)]*\) \{\n)", lambda m: m.group(1) + f"  {_UNUSED}\n", c_source)
-    return re.sub(r"(void \w+_release\(int mem\) \{\n)", lambda m: m.group(1) + "  (void)mem;\n", c_source)
-
-
-def static_helpers(c_source: str) -> str:
-    """CasADi defines its scalar helpers (casadi_sq, casadi_fabs) with external linkage: in a -fPIC build gcc
-    does not inline an interposable function, and a call in straight-line code spills every live floating-point
-    register (all are caller-saved). ``static inline``, each file keeps its own (their names carry the file's prefix)."""
-    return re.sub(r"\ncasadi_real (casadi_(?:sq|fabs))\(", r"\nstatic inline casadi_real \1(", c_source)
+#: How the evaluation functions of the shipped files print (``codegen.printer``): each shared denominator's quotients
+#: as products with its reciprocal, the elementary functions in casadi_real's precision, the unused parameters cast
+#: to void
+EVALUATION = PrintOptions(reciprocals=True, precision_math=True, void_unused=True)
 
 
 #: the sines and cosines of a vector of angles (qd_sincos), pasted into each file whose entry points call it
@@ -46,20 +33,13 @@ SINCOS = "qd_sincos.c"
 
 
 def casadi_c(file_stem: str, functions: list[ca.Function], precision: str) -> tuple[str, str]:
-    """(C source, CasADi's header) of ``functions`` generated into ``file_stem``.c, each shared denominator's
-    quotients as products with its reciprocal (``reciprocals``)."""
-    cg = ca.CodeGenerator(f"{file_stem}.c", {"with_header": True, "casadi_real": precision})
-    for f in functions:
-        cg.add(f)
-    with tempfile.TemporaryDirectory() as tmp:
-        cg.generate(tmp + os.sep)
-        c_source = (Path(tmp) / f"{file_stem}.c").read_text()
-        c_source = shared_reciprocals(static_helpers(silence_unused_parameters(c_source)))
-        return c_source, (Path(tmp) / f"{file_stem}.h").read_text()
+    """(C source, header) of ``functions`` in ``file_stem``.c, CasADi's layout printed by ``codegen.c_file``, each
+    evaluation as ``EVALUATION`` but calling libm's names (the including build picks their precision)."""
+    return c_file(file_stem, [Entry(f, replace(EVALUATION, precision_math=False)) for f in functions], FileOptions(precision))
 
 
 #: The generated functions whose evaluation reads its inputs without CasADi's test of each input pointer at each
-#: read (``arg[i]? arg[i][k] : 0``, ``unguarded_inputs``); their entry point gives a NULL input zeros (CasADi's
+#: read (``arg[i]? arg[i][k] : 0``; ``static_c``'s ``inputs_given``); their entry point gives a NULL input zeros (CasADi's
 #: convention) before calling it. The tests split the reads into branches (gcc then takes an angle's sine and cosine
 #: in two libm calls instead of one sincos, and keeps fewer values in registers): per call M_full and G_full run
 #: fewer instructions without them, did_full too; id_full and nle_full measured more, and keep them
@@ -67,63 +47,15 @@ def casadi_c(file_stem: str, functions: list[ca.Function], precision: str) -> tu
 UNGUARDED = frozenset({"M_full", "G_full", "did_full"})
 
 
-def unguarded_inputs(body: str, name: str) -> str:
-    """``body``, one evaluation function of ``name`` (in ``UNGUARDED``), with its reads of the inputs unguarded."""
-    if name not in UNGUARDED:
-        raise AssertionError(f"{name} is not in UNGUARDED: its entry point passes NULL inputs on")
-    body = re.sub(r"arg\[(\d+)\]\? (arg\[\1\]\[\d+\]) : 0;", r"\2;", body)
-    if re.search(r"arg\[\d+\]\?", body):
-        raise AssertionError(f"{name}: a test of an input pointer is left")
-    return body
-
-
-def drop_evaluation(c_text: str, raw: str) -> str:
-    """Remove CasADi's evaluation function ``raw`` (``casadi_fN``: its #define, the comment naming it
-    and its definition). For a signature-only Function whose entry point calls a hand-written
-    template instead, its body (a placeholder filling every output) is dead code: ~0.4 MB per robot."""
-    c_text, defines = re.subn(rf"#define {raw} CASADI_PREFIX\(f\d+\)\n", "", c_text)
-    c_text, bodies = re.subn(rf"/\* [^\n]* \*/\nstatic int {raw}\(.*?\n\}}\n\n", "", c_text, count=1, flags=re.S)
-    if (defines, bodies) != (1, 1) or re.search(rf"\b{raw}\b", c_text):
-        raise AssertionError(f"{raw}: CasADi's evaluation function not found once, or still referenced")
-    return c_text
-
-
-def entry_point(name: str) -> str:
-    return (rf"(CASADI_SYMBOL_EXPORT int {name}\(const casadi_real\*\* arg, casadi_real\*\* res, casadi_int\* iw, "
-            rf"casadi_real\* w, int mem\)\{{\n)  return (casadi_f\d+)\(arg, res, iw, w, mem\);\n")
-
-
-def evaluations(c_text: str, names: list[str]) -> dict[str, str]:
-    """Entry point name -> the static evaluation function CasADi's entry point calls (casadi_fN)."""
-    out = {}
-    for name in names:
-        found = re.search(entry_point(name), c_text)
-        if not found:
-            raise AssertionError(f"entry point of {name} not found in CasADi's output")
-        out[name] = found.group(2)
-    return out
-
-
-def static_c(c_name: str, f: ca.Function, precision: str, host_helpers: frozenset[str] = frozenset(),
-              all_io: bool = False) -> str:
-    """``f`` as the static C function ``c_name`` (arg, res, iw, w, mem): CasADi's evaluation body alone,
-    checked to need no work memory (the templates call it with none) and no helper but casadi_sq and
-    ``host_helpers`` (CasADi helpers the file it goes into defines). ``all_io``: the templates pass every input
-    and output (none NULL), so CasADi's tests of each pointer at each read and write are left out."""
-    c_text, h_text = casadi_c(c_name, [f], precision)
-    body = re.search(r"static int casadi_f0\(.*?\n\}\n", c_text, re.S)
-    if not body or work_sizes(h_text)[f.name()] != (0, 0) or set(re.findall(r"casadi_\w+", body.group(0))) - {
-            "casadi_f0", "casadi_real", "casadi_int", "casadi_sq", *host_helpers}:
-        raise AssertionError(f"{f.name()}: CasADi's body is not self-contained; the templates need it to be")
-    text = body.group(0).replace("casadi_f0", c_name)
-    if all_io:
-        text = re.sub(r"arg\[(\d+)\]\? (arg\[\1\]\[\d+\]) : 0;", r"\2;", text)
-        text = re.sub(r"if \(res\[(\d+)\]!=0\) (res\[\1\]\[\d+\]=)", r"\2", text)
-        if re.search(r"arg\[\d+\]\?|res\[\d+\]!=0", text):
-            raise AssertionError(f"{f.name()}: a test of an argument pointer is left after all_io")
-    return text
-
-
-def defined_helpers(c_text: str) -> frozenset[str]:
-    """The CasADi helpers (e.g. casadi_sq, casadi_fabs) a generated file defines."""
-    return frozenset(re.findall(r"\n(?:static (?:inline )?)?casadi_real (casadi_\w+)\(", c_text))
+def static_c(c_name: str, f: ca.Function, host_helpers: frozenset[str] = frozenset(), all_io: bool = False,
+             inputs_given: bool = False) -> str:
+    """``f`` as the static C function ``c_name`` (arg, res, iw, w, mem), printed by ``codegen.printer`` with the
+    project's options (reciprocals, precision math, unused parameters cast to void): no work memory (its values are
+    locals; the templates call it with none), checked to call no helper but casadi_sq and ``host_helpers`` (CasADi
+    helpers the file it goes into defines). ``all_io``: the templates pass every input and output (none NULL), so
+    the tests of each pointer at each read and write are left out; ``inputs_given``: only those of the inputs."""
+    printed = print_function(f, replace(EVALUATION, name=c_name, guard_inputs=not (all_io or inputs_given),
+                                        guard_outputs=not all_io))
+    if set(printed.helpers) - {"casadi_sq", *host_helpers}:
+        raise AssertionError(f"{f.name()}: its C is not self-contained; the templates need it to be")
+    return printed.text

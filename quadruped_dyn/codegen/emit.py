@@ -13,7 +13,6 @@ units and frames, output sparsity, and work sizes. ``compiled`` builds and loads
 
 from __future__ import annotations
 
-import re
 from collections.abc import Callable
 from pathlib import Path
 
@@ -21,27 +20,14 @@ import casadi as ca
 
 from quadruped_dyn.codegen.by_leg import LegCall, by_leg_c, foot_c
 from quadruped_dyn.codegen.c_facts import layouts_c, prelude_c, return_codes_c
-from quadruped_dyn.codegen.casadi_source import (
-    PREFIX,
-    SINCOS,
-    TEMPLATES,
-    UNGUARDED,
-    casadi_c,
-    defined_helpers,
-    drop_evaluation,
-    entry_point,
-    evaluations,
-    static_c,
-    unguarded_inputs,
-    work_sizes,
-)
+from quadruped_dyn.codegen.c_file import Entry, FileOptions, c_file, entry_work, file_helpers
+from quadruped_dyn.codegen.casadi_source import EVALUATION, PREFIX, SINCOS, TEMPLATES, UNGUARDED, static_c
 from quadruped_dyn.codegen.emit_derivatives import (
     DERIVATIVE_NAMES,
     GRF_DERIVATIVE_NAMES,
     GRF_DERIVATIVE_STANCE_SETS,
     REDUCED_DERIVATIVE_NAMES,
     DfdRPieces,
-    declare_dfd_r_work,
     derivative_functions,
     derivative_source,
     dfd_r_pieces,
@@ -56,14 +42,16 @@ from quadruped_dyn.codegen.file_names import (
     check_no_collision,
     file_layout,
 )
+from quadruped_dyn.codegen.forms.leg_pieces import foot_pieces, id_full_pieces, mass_matrix_pieces
+from quadruped_dyn.codegen.forms.stance_maps import stance_maps
 from quadruped_dyn.codegen.joint_trig import trig_as_inputs
+from quadruped_dyn.codegen.precision_math import precision_calls, template_c
+from quadruped_dyn.codegen.printer import SIGNATURE
 from quadruped_dyn.codegen.work_memory import memory_doc
-from quadruped_dyn.dynamics.by_leg import foot_pieces, id_full_pieces, mass_matrix_pieces
 from quadruped_dyn.dynamics.grf import grf_balance, grf_solve
 from quadruped_dyn.dynamics.kinematics import feet_full
 from quadruped_dyn.dynamics.newton_euler import full_dynamics
 from quadruped_dyn.dynamics.reduced_projection import reduced_projection
-from quadruped_dyn.dynamics.stance_maps import stance_maps
 from quadruped_dyn.errors import InputError
 from quadruped_dyn.files.names import comment_text
 from quadruped_dyn.files.safe_write import output_path, output_set, write_text
@@ -363,66 +351,18 @@ def header_doc(robot: Robot, functions: list[ca.Function], work: dict[str, tuple
     return "\n".join(lines) + "\n"
 
 
-#: Elementary functions the generated code calls, each routed through a wrapper in casadi_real's precision.
-_WRAPPED_MATH = ("sin", "cos", "tan", "sqrt", "fabs")
-_PRECISION_MATH = """
-/* quadruped_dyn: the elementary functions in casadi_real's precision. A float build
- * (-Dcasadi_real=float) calls sinf, cosf, ... instead of promoting to double, so it does no
- * double arithmetic (none on a single-precision FPU: -Wdouble-promotion clean); a long double
- * build wider than double (x87's 64-bit significand) calls sinl, cosl, ...; a double build
- * calls sin, cos, ... exactly as before. */
-#define QD_REAL_IS_FLOAT (sizeof(casadi_real) == sizeof(float))
-#define QD_REAL_IS_EXTENDED (sizeof(casadi_real) > sizeof(double))
-#define QD_MATH(fn) static inline casadi_real qd_##fn(casadi_real x) { return QD_REAL_IS_FLOAT ? (casadi_real)fn##f((float)x) \\
-  : QD_REAL_IS_EXTENDED ? (casadi_real)fn##l((long double)x) : (casadi_real)fn((double)x); }
-"""
-#: CasADi's default precision block; the wrappers go right after it, so a build without
-#: -Dcasadi_real (double, the default) compiles.
-_CASADI_REAL_DEFAULT = re.compile(r"#ifndef casadi_real\n#define casadi_real [\w ]+\n#endif\n")  # double or float
-_MATH_CALL = re.compile(rf"(?<![\w.])({'|'.join(_WRAPPED_MATH)})\(")
-
-
-def _precision_math(c_source: str) -> str:
-    """Route the elementary functions through ``_PRECISION_MATH`` and write CasADi's double
-    literals in products and quotients as integers ((2.*a) -> (2*a), (1./a) -> (1/a): the same
-    value in double, no promotion in float)."""
-    unknown = set(re.findall(r"(?<![\w.])(atan2?|asin|acos|exp|log|pow|tanh|sinh|cosh|floor|ceil|fmin|fmax|erf)\(",
-                             c_source))
-    if unknown:
-        raise AssertionError(f"elementary functions {sorted(unknown)} have no precision wrapper in emit._WRAPPED_MATH")
-    used = bool(_MATH_CALL.search(c_source)) or f'#include "{REDUCED_TEMPLATES}"' in c_source  # it calls qd_fabs
-    c_source = _precision_calls(c_source)  # before the wrappers go in: they call the real ones
-    if used:  # after CasADi's default of casadi_real, which the wrappers' signatures need
-        default = _CASADI_REAL_DEFAULT.search(c_source)
-        if not default:
-            raise AssertionError("CasADi's '#ifndef casadi_real' default is not in the generated source")
-        # only the wrappers the file calls (its own text, and the reduced templates it includes): clang warns of an
-        # unused static inline function, which the Makefile's -Werror makes an error (`make CC=clang`)
-        calls = c_source + (reduced_templates_h() if f'#include "{REDUCED_TEMPLATES}"' in c_source else "")
-        wrappers = " ".join(f"QD_MATH({f})" for f in _WRAPPED_MATH if re.search(rf"(?<![\w.])qd_{f}\(", calls)) + "\n"
-        c_source = c_source[:default.end()] + _PRECISION_MATH + wrappers + c_source[default.end():]
-    return c_source
-
-
-def _precision_calls(c_source: str) -> str:
-    """``_precision_math`` without the wrappers' definitions (a header the file that defines them includes)."""
-    c_source = _MATH_CALL.sub(r"qd_\1(", c_source)
-    c_source = re.sub(r"\((\d+)\.\*", r"(\1*", c_source)
-    return re.sub(r"\((\d+)\./", r"(\1/", c_source)
-
-
 _REDUCED_TEMPLATE_FILES = (SINCOS, "qd_dense.c", "qd_reduced_solve.c", "qd_reduced_derivatives.c")
 
 
 def reduced_templates_h() -> str:
     """The text of ``REDUCED_TEMPLATES``: c/qd_sincos.c, c/qd_dense.c, c/qd_reduced_solve.c and
     c/qd_reduced_derivatives.c, their elementary functions routed through the including file's precision wrappers
-    (``_precision_math``)."""
+    (``precision_math``)."""
     body = prelude_c() + layouts_c() + "\n".join((TEMPLATES / t).read_text() for t in _REDUCED_TEMPLATE_FILES)
     return ("/* quadruped_dyn: the hand-written templates of the reduced model, included by every qd_<robot>-r-<feet>.c\n"
             " * after its generated pieces (quadruped_dyn/codegen/emit.py). Not a header to include elsewhere: its\n"
             " * functions are static and call the including file's qd_stance_maps, qd_M_full, qd_id_full, ... */\n"
-            + _precision_calls(body))
+            + precision_calls(body))
 
 
 def float_err_per_regularity(stance: StanceSet) -> float:
@@ -431,7 +371,7 @@ def float_err_per_regularity(stance: StanceSet) -> float:
     return FLOAT_ERR_PER_REGULARITY if len(stance.feet) == 2 else 0.0
 
 
-def _reduced_helpers_c(stance: StanceSet, dfd_r: DfdRPieces, precision: str) -> str:
+def _reduced_helpers_c(stance: StanceSet, dfd_r: DfdRPieces) -> str:
     """QD_REGULARITY_MIN, QD_FLOAT_MAX_BOUND, QD_FLOAT_ERR_PER_REGULARITY, ``qd_stance_maps`` ((r, quat) ->
     (regularity, W, Y[, y_e, s_e, D]): ``dynamics.stance_maps``, from which with the library's qd_foot_trig the
     templates' qd_parts forms S_b, T_b, v and a) and dfd_r's ``qd_dfd_r_lift`` (``emit_derivatives.dfd_r_pieces``),
@@ -440,63 +380,57 @@ def _reduced_helpers_c(stance: StanceSet, dfd_r: DfdRPieces, precision: str) -> 
             f"#define QD_FLOAT_MAX_BOUND ((casadi_real){FLOAT_MAX_BOUND!r}) /* tolerances.FLOAT_MAX_BOUND */\n"
             f"#define QD_FLOAT_ERR_PER_REGULARITY ((casadi_real){float_err_per_regularity(stance)!r}) "
             "/* tolerances.FLOAT_ERR_PER_REGULARITY; 0: three or four feet */\n"
-            + static_c("qd_stance_maps", stance_maps(stance), precision, all_io=True) + "\n"
+            + static_c("qd_stance_maps", stance_maps(stance), all_io=True) + "\n"
             + f"#define QD_DFD_R_TAPE {dfd_r.tape} /* reals of the lift's tape: emit_derivatives.split_at_seeds */\n"
             + f"#define QD_DID_FULL_L {dfd_r.did_legs} /* reals of did_full's legs' outputs: codegen.by_leg.legs_reals */\n"
-            + static_c("qd_dfd_r_lift", dfd_r.lift, precision, all_io=True) + "\n" + _lift_derivative_c(dfd_r, precision))
+            + static_c("qd_dfd_r_lift", dfd_r.lift, all_io=True) + "\n" + _lift_derivative_c(dfd_r))
 
 
-def _lift_derivative_c(dfd_r: DfdRPieces, precision: str) -> str:
+def _lift_derivative_c(dfd_r: DfdRPieces) -> str:
     """The lift's derivative dfd_r calls: qd_dfd_r_lift_columns (every direction at once, QD_DFD_R_LIFT_COLUMNS
     columns), and at -Os, the embedded builds' size budget, qd_dfd_r_lift_dir (one direction per call;
     docs/derivatives.md)."""
-    one = static_c("qd_dfd_r_lift_dir", dfd_r.lift_dir, precision, all_io=True)
+    one = static_c("qd_dfd_r_lift_dir", dfd_r.lift_dir, all_io=True)
     return ("#if !defined(__OPTIMIZE_SIZE__) /* the lift's columns at once; at -Os one direction per call */\n"
             f"#define QD_DFD_R_LIFT_COLUMNS {dfd_r.lift_columns.size2_out(0)} /* emit_derivatives.lift_seeds */\n"
-            + static_c("qd_dfd_r_lift_columns", dfd_r.lift_columns, precision, all_io=True)
+            + static_c("qd_dfd_r_lift_columns", dfd_r.lift_columns, all_io=True)
             + "#else\n" + one + "#endif\n")
 
 
-def _checked_reduced_c(c_text: str, casadi_header: str, functions: list[ca.Function], helpers_c: str,
-                       dfd_r: DfdRPieces) -> tuple[str, str]:
-    """Insert ``helpers_c`` (``_reduced_helpers_c``) and the include of ``REDUCED_TEMPLATES`` and route the entry
-    points through them: every function returns QD_DEGENERATE at a degenerate stance and
+def _reduced_source(stem: str, functions: list[ca.Function], helpers_c: str, dfd_r: DfdRPieces,
+                    precision: str) -> tuple[str, str, dict[str, tuple[int, int]]]:
+    """A reduced file: ``helpers_c`` (``_reduced_helpers_c``) and the include of ``REDUCED_TEMPLATES``, and the entry
+    points calling them: every function returns QD_DEGENERATE at a degenerate stance and
     QD_NONFINITE for a non-finite output; M_r, CG_r, G_r and id_r by ``qd_reduced_term`` over the generated
-    qd_stance_maps and the library's qd_foot_trig, qd_M_full, qd_G_full, qd_id_full (CasADi's unrolled graphs of the four
-    dropped: ~160 kB per stance set); fd_r by ``qd_fd_r_solve`` (the parts once for M_r and C_r + G_r, checked
+    qd_stance_maps and the library's qd_foot_trig, qd_M_full, qd_G_full, qd_id_full (no unrolled graph of their own:
+    ~160 kB per stance set); fd_r by ``qd_fd_r_solve`` (the parts once for M_r and C_r + G_r, checked
     once, then the LU); dfd_r by ``c/qd_reduced_derivatives.c`` over ``dfd_r``'s pieces, its caller work memory
-    declared. Returns (C source, CasADi's header text)."""
-    first = c_text.index(f"\n/* {functions[0].name()}:")
-    raw = evaluations(c_text, [f.name() for f in functions])  # entry point -> CasADi's evaluation function
+    declared. Returns (C source, header, work sizes)."""
     stance = reduced_parts(functions[0].name()[len(PREFIX):])[1]  # type: ignore[index]
     legs = sum(1 << i for i in stance.feet)  # S_b's rows and T_b's columns of the other legs' joints are zero
     n_r = functions[0].size1_out(0)
-    signature = "(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem)"
-    evals = "".join(f"static int qd_{kind}_eval{signature} {{\n  return qd_reduced_term({n_r}, {legs}, {which}, arg, res, iw, "
+    evals = "".join(f"static int qd_{kind}_eval{SIGNATURE} {{\n  return qd_reduced_term({n_r}, {legs}, {which}, arg, res, iw, "
                     "w, mem);\n}\n" for which, kind in enumerate(("M_r", "CG_r", "G_r", "id_r")))
-    c_text = c_text[:first] + "\n" + helpers_c + f'\n#include "{REDUCED_TEMPLATES}"\n' + evals + c_text[first:]
-    work = work_sizes(casadi_header)
+    entries = []
     for f in functions:
-        if f.sz_arg() != f.n_in() or work[f.name()] != (0, 0):
+        if f.sz_arg() != f.n_in():
             raise AssertionError(f"{f.name()} needs work memory; qd_fd_r_solve assumes it does not")
+        sz_w = 0
         if f.name().startswith(PREFIX + "fd_r_"):
-            body = rf"\1  return qd_fd_r_solve({f.nnz_out(0)}, {legs}, arg, res, iw, w, mem);\n"
-        elif f.name().startswith(PREFIX + "dfd_r_"):  # caller work memory: declare_dfd_r_work; size checked at compile time
-            n, reals = f.size1_out(0), dfd_r_work_reals(f.size1_out(0), dfd_r.tape, dfd_r.did_legs)
-            body = (rf"\1  typedef char w_agrees[QD_DFD_R_W({n}) == {reals} ? 1 : -1];\n"
-                    r"  (void)sizeof(w_agrees);\n"
-                    rf"  return qd_dfd_r_solve({n}, {dfd_r.legs}, {int(dfd_r.lift_reads_quat)}, arg, res, iw, w, mem);\n")
+            body = f"  return qd_fd_r_solve({f.nnz_out(0)}, {legs}, arg, res, iw, w, mem);\n"
+        elif f.name().startswith(PREFIX + "dfd_r_"):  # caller work memory; its size checked at compile time
+            n, sz_w = f.size1_out(0), dfd_r_work_reals(f.size1_out(0), dfd_r.tape, dfd_r.did_legs)
+            body = (f"  typedef char w_agrees[QD_DFD_R_W({n}) == {sz_w} ? 1 : -1];\n"
+                    "  (void)sizeof(w_agrees);\n"
+                    f"  return qd_dfd_r_solve({n}, {dfd_r.legs}, {int(dfd_r.lift_reads_quat)}, arg, res, iw, w, mem);\n")
         else:
             nnz = ", ".join(str(f.nnz_out(i)) for i in range(f.n_out()))
             evaluation = f"qd_{reduced_parts(f.name()[len(PREFIX):])[0]}_eval"  # type: ignore[index]
-            body = rf"\1  return qd_finite({evaluation}(arg, res, iw, w, mem), res, 1, (const casadi_int[]){{{nnz}}});\n"
-        c_text, count = re.subn(entry_point(f.name()), body, c_text)
-        if count != 1:
-            raise AssertionError(f"entry point of {f.name()} not found in CasADi's output")
-        c_text = drop_evaluation(c_text, raw[f.name()])  # every one evaluated above
-        if f.name().startswith(PREFIX + "dfd_r_"):
-            c_text, casadi_header = declare_dfd_r_work(c_text, casadi_header, f, dfd_r)
-    return c_text, casadi_header
+            body = f"  return qd_finite({evaluation}(arg, res, iw, w, mem), res, 1, (const casadi_int[]){{{nnz}}});\n"
+        entries.append(Entry(f, None, body, sz_w))
+    preamble = helpers_c + f'\n#include "{REDUCED_TEMPLATES}"\n' + evals + "\n"
+    options = FileOptions(precision, preamble=preamble, precision_math=True, included=reduced_templates_h())
+    return (*c_file(stem, entries, options), entry_work(entries))
 
 
 #: The full terms whose C evaluates the joint rows first (``_joint_rows_first``); the GRF solves call id_full's.
@@ -512,23 +446,21 @@ ID_FULL_CALL = LegCall(head_args=(0, 1, 2), leg_inputs=(("arg", 1, 3), ("arg", 2
                                                         ("joint", 1, 6), ("joint", 2, 6)),
                        sin_arg=3, tail_args=(0, 1, 2))
 M_BLOCKS_CALL = LegCall(head_args=(), leg_inputs=(("joint", 0, 7),), sin_arg=1, tail_args=())
-_SIGNATURE = "(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem)"
 
 
-def _joint_rows_first(robot: Robot, c_text: str, functions: list[ca.Function], precision: str) -> str:
+def _joint_rows_first(robot: Robot, functions: list[ca.Function], host_helpers: frozenset[str]) -> tuple[str, dict[str, str]]:
     """Evaluate M_full, G_full, nle_full and id_full joint rows first (M_full: its joint columns). CasADi's C
     evaluates a graph output by output, each depth first: the trunk rows come first and gather all four legs,
     so the legs' recursions interleave and their temporaries are live together (spilled: x86-64 has 16
     registers). With the joint rows first each leg's recursion runs to its end before the next starts and
     the trunk rows then add up the legs' wrenches. Each entry point calls a static qd_<name>_eval of its own
-    signature: the same graph with its outputs in that order (``static_c``) and mapped back, CasADi's evaluation
-    in the signature's order dropped; for a function in ``UNGUARDED`` the graph reads its inputs untested and
+    signature: the same graph with its outputs in that order (``static_c``) and mapped back (no evaluation in the
+    signature's order); for a function in ``UNGUARDED`` the graph reads its inputs untested and
     qd_<name>_eval gives a NULL input qd_zeros. The same operations on the same values (docs/benchmark.md). For the
     reduced files the graphs are also exported with the joints' sines and cosines as inputs (no NULL input):
     qd_<name>_trig for ``TRIG_GIVEN``, qd_M_full_dense_trig (``_M_full_dense``); qd_id_full_trig and
-    qd_M_blocks_legs_trig leg by leg (``_reduced_calls_by_leg``)."""
-    raw = evaluations(c_text, [f.name() for f in functions])
-    helpers = []
+    qd_M_blocks_legs_trig leg by leg (``_reduced_calls_by_leg``). Returns (the C, entry point name -> its body)."""
+    helpers, bodies = [], {}
     for f in functions:
         name = f.name()[len(PREFIX):]
         if name not in JOINT_ROWS_FIRST:
@@ -546,36 +478,31 @@ def _joint_rows_first(robot: Robot, c_text: str, functions: list[ca.Function], p
         if f.name_in(0) != "q" or f.nnz_in(0) != NQ_FULL or max(f.nnz_in(i) for i in range(f.n_in())) > NQ_FULL:
             raise AssertionError(f"{f.name()}: not (q (19), ...) with inputs no longer than qd_zeros")
         body = trig_as_inputs(ca.Function(f"{name}_joint_rows_first", args, ordered, {"cse": True}), 0, JOINT_ANGLES)
-        static = static_c(f"qd_{name}_joint_rows_first", body, precision, defined_helpers(c_text))
+        static = static_c(f"qd_{name}_joint_rows_first", body, host_helpers, inputs_given=name in UNGUARDED)
         if name in UNGUARDED:  # a NULL input reads as zeros, as CasADi's tests gave it
-            static = unguarded_inputs(static, name)
             a_init = [f"arg[{i}] ? arg[{i}] : qd_zeros" for i in range(f.n_in())]
         else:
             a_init = [f"arg[{i}]" for i in range(f.n_in())]
         n = len(JOINT_ANGLES)
         if name in TRIG_GIVEN:
             static += (f"/* {name} with the joints' sines and cosines given: arg = ({', '.join(f.name_in())}, sin, cos) */\n"
-                       f"int qd_{name}_trig{_SIGNATURE} {{\n  casadi_real* r[2] = {res};\n"
+                       f"int qd_{name}_trig{SIGNATURE} {{\n  casadi_real* r[2] = {res};\n"
                        f"  return qd_{name}_joint_rows_first(arg, r, iw, w, mem);\n}}\n")
-        helpers.append(static + f"static int qd_{name}_eval{_SIGNATURE} {{\n"
+        helpers.append(static + f"static int qd_{name}_eval{SIGNATURE} {{\n"
                        f"  casadi_real c[{n}], s[{n}]; /* the joints' cosines and sines, once (qd_sincos) */\n"
                        f"  qd_sincos({n}, (arg[0] ? arg[0] : qd_zeros) + {JOINT_ANGLES.start}, c, s);\n"
                        f"  const casadi_real* a[{f.n_in() + 2}] = {{{', '.join([*a_init, 's', 'c'])}}};\n"
                        f"  casadi_real* r[2] = {res};\n"
                        f"  return qd_{name}_joint_rows_first(a, r, iw, w, mem);\n}}\n")
-        c_text, count = re.subn(entry_point(f.name()), rf"\1  return qd_{name}_eval(arg, res, iw, w, mem);\n", c_text)
-        if count != 1:
-            raise AssertionError(f"entry point of {f.name()} not found in CasADi's output")
-        c_text = drop_evaluation(c_text, raw[f.name()])
-    helpers.append(_M_full_dense(functions, precision, defined_helpers(c_text)))
-    helpers.append(_reduced_calls_by_leg(robot, precision, defined_helpers(c_text)))
-    helpers.insert(0, (TEMPLATES / SINCOS).read_text()
+        bodies[f.name()] = f"  return qd_{name}_eval(arg, res, iw, w, mem);\n"
+    helpers.append(_M_full_dense(functions, host_helpers))
+    helpers.append(_reduced_calls_by_leg(robot, host_helpers))
+    helpers.insert(0, template_c(SINCOS)
                    + f"static const casadi_real qd_zeros[{NQ_FULL}]; /* a NULL input (CasADi's convention: zeros) */\n")
-    first = _first_evaluation(c_text)
-    return c_text[:first] + "\n" + "\n".join(helpers) + c_text[first:]
+    return "\n".join(helpers), bodies
 
 
-def _M_full_dense(functions: list[ca.Function], precision: str, host_helpers: frozenset[str]) -> str:
+def _M_full_dense(functions: list[ca.Function], host_helpers: frozenset[str]) -> str:
     """qd_M_full_dense_trig (q, sin, cos) -> M (18 x 18, dense column-major): M_full's graph with its zeros written
     and the joints' sines and cosines given, joint columns first (as ``_joint_rows_first``), for the reduced files,
     which take the sines and cosines once for all their calls and read M dense (c/qd_reduced_solve.c)."""
@@ -584,15 +511,15 @@ def _M_full_dense(functions: list[ca.Function], precision: str, host_helpers: fr
     nz = ca.densify(m.call(args)[0]).nz[:]  # column-major, 18 x 18
     k = 18 * 6  # the joint columns first
     dense = trig_as_inputs(ca.Function("M_full_dense", args, [nz[k:], nz[:k]], {"cse": True}), 0, JOINT_ANGLES)
-    return (static_c("qd_M_full_dense_joint_rows_first", dense, precision, host_helpers, all_io=True)
+    return (static_c("qd_M_full_dense_joint_rows_first", dense, host_helpers, all_io=True)
             + "/* M_full (18 x 18, dense column-major, zeros written) with the joints' sines and cosines given: arg = "
             "(q, sin, cos) */\n"
-            f"int qd_M_full_dense_trig{_SIGNATURE} {{\n"
+            f"int qd_M_full_dense_trig{SIGNATURE} {{\n"
             f"  casadi_real* r[2] = {{res[0] + {k}, res[0]}};\n"
             "  return qd_M_full_dense_joint_rows_first(arg, r, iw, w, mem);\n}\n")
 
 
-def _reduced_calls_by_leg(robot: Robot, precision: str, host_helpers: frozenset[str]) -> str:
+def _reduced_calls_by_leg(robot: Robot, host_helpers: frozenset[str]) -> str:
     """qd_id_full_trig (q, v, a, sin, cos) -> (w_res, tau) (no foot forces) and qd_M_blocks_legs_trig (q, sin, cos) ->
     M's nonzero blocks (``by_leg.mass_blocks``: fd_r's), the joints' sines and cosines given, each as one leg function
     per leg template called once per leg (``dynamics.by_leg``, ``codegen.by_leg``), whose code stays in the instruction
@@ -600,36 +527,27 @@ def _reduced_calls_by_leg(robot: Robot, precision: str, host_helpers: frozenset[
     of other code per call (docs/benchmark.md, "Design choices"). M_r calls ``_M_full_dense``'s
     qd_M_full_dense_trig, one function of fewer instructions, which fits the cache beside M_r's other ~20 kB."""
     return ("/* id_full without foot forces, the joints' sines and cosines given, leg by leg: arg = (q, v, a, sin, cos) */\n"
-            + by_leg_c("qd_id_full_trig", id_full_pieces(robot), ID_FULL_CALL, precision, host_helpers) + "\n"
+            + by_leg_c("qd_id_full_trig", id_full_pieces(robot), ID_FULL_CALL, host_helpers) + "\n"
             "/* M_full's nonzero blocks (M_bb, then per leg M_bl and M_ll, column-major: dynamics/by_leg.py, mass_blocks) "
             "with the joints' sines and cosines given, leg by leg: arg = (q, sin, cos) */\n"
-            + by_leg_c("qd_M_blocks_legs_trig", mass_matrix_pieces(robot), M_BLOCKS_CALL, precision, host_helpers) + "\n"
+            + by_leg_c("qd_M_blocks_legs_trig", mass_matrix_pieces(robot), M_BLOCKS_CALL, host_helpers) + "\n"
             "/* a leg's foot kinematics (dynamics/by_leg.py, FOOT_PARTS), the joints' sines and cosines given: y = (r, J, "
             "J qd_l, Jdot qd_l), trunk frame */\n"
-            + foot_c("qd_foot_trig", foot_pieces(robot), precision, host_helpers))
+            + foot_c("qd_foot_trig", foot_pieces(robot), host_helpers))
 
 
-def _first_evaluation(c_text: str) -> int:
-    """Where the first of CasADi's evaluation functions (its comment) or entry points left in ``c_text`` begins:
-    helpers inserted there precede every function that calls them."""
-    found = [m.start() for m in (re.search(r"\n/\* qd_\w+:\(", c_text),
-                                 re.search(r"\nCASADI_SYMBOL_EXPORT int qd_\w+\(const casadi_real\*\* arg", c_text)) if m]
-    if not found:
-        raise AssertionError("no CasADi evaluation function in the generated source")
-    return min(found)
-
-
-def _grf_through_id_full(robot: Robot, c_text: str, functions: list[ca.Function], precision: str) -> str:
+def _grf_through_id_full(robot: Robot, functions: list[ca.Function],
+                         host_helpers: frozenset[str]) -> tuple[str, dict[str, str]]:
     """Route every qd_grf_<feet> of qd_<robot>.c through ``c/qd_grf_solve.c``: id_full's evaluation (one
     Newton-Euler pass) and a generated static qd_grf_balance_<feet> (``grf.grf_balance``), instead of
-    CasADi's unrolled graph, which repeats the recursion in each of the 15 (dropped: ~0.4 MB per robot)."""
-    raw = evaluations(c_text, [f.name() for f in functions if f.name().startswith(PREFIX + "grf_")])
+    the unrolled graph, which repeats the recursion in each of the 15 (~0.4 MB per robot). Returns (the C, entry
+    point name -> its body)."""
     id_full = next(f for f in functions if f.name() == PREFIX + "id_full")
     if id_full.name_in() != ["q", "v", "a", "f"] or id_full.name_out() != ["w_res", "tau"] or id_full.sz_arg() != 4:
         raise AssertionError("qd_grf_solve calls id_full as (q, v, a, f) -> (w_res, tau) with no work memory")
     q, w_req = ca.SX.sym("q", NQ_FULL), ca.SX.sym("w_req", 6)
-    host_helpers = defined_helpers(c_text)
-    helpers = ["#define QD_ID_FULL_EVAL qd_id_full_eval /* _joint_rows_first */\n" + (TEMPLATES / "qd_grf_solve.c").read_text()]
+    helpers = ["#define QD_ID_FULL_EVAL qd_id_full_eval /* _joint_rows_first */\n" + template_c("qd_grf_solve.c")]
+    bodies = {}
     for f in functions:
         if not f.name().startswith(PREFIX + "grf_"):
             continue
@@ -638,19 +556,28 @@ def _grf_through_id_full(robot: Robot, c_text: str, functions: list[ca.Function]
         balance = ca.Function(f"grf_balance_{suffix}", [q, w_req], [b.lam, b.f, b.residual, b.tau], {"cse": True})
         if [balance.sparsity_out(i) for i in range(3)] != [f.sparsity_out(i) for i in range(3)]:
             raise AssertionError(f"{f.name()}: the balance's outputs are not the GRF function's")
-        helpers.append(static_c(f"qd_grf_balance_{suffix}", balance, precision, host_helpers))
-        body = (r"\1  casadi_real w_req[6], tau_0[12], tau_f[12];\n"
-                r"  const casadi_real* b_arg[2] = {arg[0], w_req};\n"
-                r"  casadi_real* b_res[4] = {res[0], res[1], res[2], tau_f};\n"
-                r"  int flag = qd_grf_begin(arg, w_req, tau_0, iw, w, mem);\n"
-                rf"  if (!flag) flag = qd_grf_balance_{suffix}(b_arg, b_res, iw, w, mem);\n"
-                r"  return flag ? flag : qd_grf_end(res, tau_0, tau_f);\n")
-        c_text, count = re.subn(entry_point(f.name()), body, c_text)
-        if count != 1:
-            raise AssertionError(f"entry point of {f.name()} not found in CasADi's output")
-        c_text = drop_evaluation(c_text, raw[f.name()])
-    first = _first_evaluation(c_text)
-    return c_text[:first] + "\n" + "\n".join(helpers) + c_text[first:]
+        helpers.append(static_c(f"qd_grf_balance_{suffix}", balance, host_helpers))
+        bodies[f.name()] = ("  casadi_real w_req[6], tau_0[12], tau_f[12];\n"
+                            "  const casadi_real* b_arg[2] = {arg[0], w_req};\n"
+                            "  casadi_real* b_res[4] = {res[0], res[1], res[2], tau_f};\n"
+                            "  int flag = qd_grf_begin(arg, w_req, tau_0, iw, w, mem);\n"
+                            f"  if (!flag) flag = qd_grf_balance_{suffix}(b_arg, b_res, iw, w, mem);\n"
+                            "  return flag ? flag : qd_grf_end(res, tau_0, tau_f);\n")
+    return "\n".join(helpers), bodies
+
+
+def _full_source(robot: Robot, stem: str, functions: list[ca.Function],
+                 precision: str) -> tuple[str, str, dict[str, tuple[int, int]]]:
+    """qd_<robot>.c: the full terms joint rows first (``_joint_rows_first``), the GRF solves through id_full
+    (``_grf_through_id_full``), the other functions CasADi's graphs. Returns (C source, header, work sizes)."""
+    host_helpers = file_helpers(functions)
+    joint_rows, bodies = _joint_rows_first(robot, functions, host_helpers)
+    grf, grf_bodies = _grf_through_id_full(robot, functions, host_helpers)
+    bodies.update(grf_bodies)
+    entries = [Entry(f, None, bodies[f.name()]) if f.name() in bodies else Entry(f, EVALUATION) for f in functions]
+    c_text, h_text = c_file(stem, entries, FileOptions(precision, preamble=joint_rows + "\n" + grf + "\n",
+                                                       precision_math=True))
+    return c_text, h_text, entry_work(entries)
 
 
 def generate(robot: Robot, out_dir: Path, precision: str = "double",
@@ -668,24 +595,24 @@ def generate(robot: Robot, out_dir: Path, precision: str = "double",
     check_no_collision(layout, robot.name, out_dir)  # before the work: another robot's files are never written over
     out_dir.mkdir(parents=True, exist_ok=True)
     full = codegen_functions(robot)
-    c_full, casadi_header = casadi_c(casadi_name(layout.source), full, precision)
-    c_full = _grf_through_id_full(robot, _joint_rows_first(robot, c_full, full, precision), full, precision)
+    c_full, casadi_header, work = _full_source(robot, casadi_name(layout.source), full, precision)
     sources = {layout.source: c_full}
     functions = list(full)
     for stance, path in zip(REDUCED_STANCE_SETS, layout.reduced, strict=True):
         reduced = reduced_functions(robot, stance)
-        c_text, h_text = casadi_c(casadi_name(path), reduced, precision)
         dfd_r = dfd_r_pieces(robot, stance)
-        sources[path], h_text = _checked_reduced_c(c_text, h_text, reduced,
-                                                   _reduced_helpers_c(stance, dfd_r, precision), dfd_r)
+        sources[path], h_text, reduced_work = _reduced_source(casadi_name(path), reduced,
+                                                              _reduced_helpers_c(stance, dfd_r), dfd_r, precision)
         casadi_header += h_text
+        work.update(reduced_work)
         functions += reduced
     derivatives = derivative_functions(robot)  # qd_<robot>-d.c: derivatives of the full dynamics
     (derivative_path,) = layout.derivatives
-    sources[derivative_path], h_text = derivative_source(robot, casadi_name(derivative_path), derivatives, precision)
+    sources[derivative_path], h_text, derivative_work = derivative_source(robot, casadi_name(derivative_path),
+                                                                          derivatives, precision)
     casadi_header += h_text
+    work.update(derivative_work)
     functions += derivatives
-    work = work_sizes(casadi_header)
     did = next(f for f in functions if f.name() == PREFIX + "did_full")
     if any(work[PREFIX + g] != (0, 0) for g in ("M_full", "G_full", "id_full", "nle_full", "did_full")) or (
             did.sz_arg() != 3 or (did.name_in(), did.name_out()) != (["q", "v", "a"], ["dtau_dq", "dtau_dv", "dtau_da"])):
@@ -695,7 +622,7 @@ def generate(robot: Robot, out_dir: Path, precision: str = "double",
     extra = extra_files(functions, work) if extra_files else {}
     layout = file_layout(robot.name, out_dir, tuple(extra))
     texts = {
-        **{path: _precision_math(text) for path, text in sources.items()},
+        **sources,
         layout.header: header_doc(robot, functions, work) + return_codes_c() + casadi_header,
         **{layout.extra[f]: text for f, text in extra.items()},
         layout.check_program: (TEMPLATES / "check_qd.c").read_text(),

@@ -31,7 +31,7 @@ In each reduced file ``qd_<robot>-r-<feet>.c`` (``reduced_derivative_functions``
   ~70 % of the operations; once per stance-leg joint and two feet's rotation: 9-12 calls, at -Os). For every stance
   set also ``qd_dfd_r_lift_columns`` (``lift_columns``: every one of those directions at once, 2.3-2.4x fewer
   operations, ~4x the C), which dfd_r calls instead but at -Os. Its temporaries (~16 kB in double, the tape included) are the
-  caller's w, declared by its _work entry (``declare_dfd_r_work``).
+  caller's w, declared by its _work entry (``dfd_r_work_reals``).
 
 Why directions and a chain rule, not CasADi's Jacobians: those take 48-97k operations per reduced
 stance set and 18-21k per GRF solve (~20 bytes of C each), beyond the 6 MB budget of a robot's C.
@@ -48,27 +48,18 @@ import numpy as np
 
 from quadruped_dyn.codegen.by_leg import LegCall, by_leg_c, legs_reals
 from quadruped_dyn.codegen.c_facts import prelude_c
-from quadruped_dyn.codegen.casadi_source import (
-    PREFIX,
-    SINCOS,
-    TEMPLATES,
-    UNGUARDED,
-    casadi_c,
-    defined_helpers,
-    drop_evaluation,
-    entry_point,
-    evaluations,
-    unguarded_inputs,
-    work_sizes,
-)
+from quadruped_dyn.codegen.c_file import Entry, FileOptions, c_file, entry_work, evaluation_name, file_helpers
+from quadruped_dyn.codegen.casadi_source import EVALUATION, PREFIX, SINCOS, UNGUARDED
 from quadruped_dyn.codegen.file_names import feet_suffix
+from quadruped_dyn.codegen.forms.did_full_pieces import did_full_pieces
 from quadruped_dyn.codegen.joint_trig import trig_as_inputs
+from quadruped_dyn.codegen.precision_math import template_c
+from quadruped_dyn.codegen.printer import SIGNATURE
 from quadruped_dyn.dynamics.derivatives import configuration_tangent, full_derivatives, quaternion_tangent
 from quadruped_dyn.dynamics.grf import solve_lambda
 from quadruped_dyn.dynamics.kinematics import foot_position
 from quadruped_dyn.dynamics.newton_euler import full_dynamics
 from quadruped_dyn.dynamics.reduced_projection import reduced_projection, stance_forces
-from quadruped_dyn.dynamics.rnea_derivatives import did_full_pieces
 from quadruped_dyn.math.rigid import skew
 from quadruped_dyn.model.robot import Robot
 from quadruped_dyn.model.stance import STANCE_SETS, StanceSet, stance_set
@@ -268,12 +259,6 @@ def reduced_derivative_functions(robot: Robot, stance: StanceSet) -> list[ca.Fun
     return [dfd]
 
 
-def declare_dfd_r_work(c_text: str, h_text: str, f: ca.Function, dfd_r: DfdRPieces) -> tuple[str, str]:
-    """dfd_r_<feet>'s _work / _work_bytes entries and its header's _SZ_W state the caller's w it uses
-    (``dfd_r_work_reals``); CasADi's say 0 for the signature-only Function."""
-    return declare_work(c_text, h_text, f.name(), dfd_r_work_reals(f.size1_out(0), dfd_r.tape, dfd_r.did_legs))
-
-
 def derivative_functions(robot: Robot) -> list[ca.Function]:
     """The generated derivative Functions, named with the C prefix."""
     q, v, a, tau = ca.SX.sym("q", NQ_FULL), ca.SX.sym("v", NV_FULL), ca.SX.sym("a", NV_FULL), ca.SX.sym("tau_full", NV_FULL)
@@ -321,102 +306,69 @@ def _linear_velocity_columns_are_m_wx(did: ca.Function, q: ca.SX, v: ca.SX, a: c
     return True
 
 
-def declare_work(c_text: str, h_text: str, name: str, sz_w: int) -> tuple[str, str]:
-    """State that ``name`` needs ``sz_w`` reals of work w (its template's temporaries) in its _work and
-    _work_bytes functions and the header's _SZ_W, where CasADi wrote 0 for the placeholder signature."""
-    c_text, n_c = re.subn(rf"(int {name}_work(?:_bytes)?\(.*?\n  if \(sz_w\) \*sz_w = )0((?:\*sizeof\(casadi_real\))?;)",
-                          rf"\g<1>{sz_w}\2", c_text, flags=re.S)
-    h_text, n_h = re.subn(rf"#define {name}_SZ_W 0\n", f"#define {name}_SZ_W {sz_w}\n", h_text)
-    if (n_c, n_h) != (2, 1):
-        raise AssertionError(f"{name}: CasADi's work sizes not found as expected")
-    return c_text, h_text
-
-
-def _unguarded_inputs(c_text: str, raw: str, f: ca.Function) -> str:
-    """CasADi's evaluation ``raw`` of ``f`` without its test of each input pointer at each read
-    (``casadi_source.unguarded_inputs``): its callers pass every input (qd_d_all_inputs gives a NULL one qd_d_zeros)."""
-    if f.n_in() > 3 or max(f.nnz_in(i) for i in range(f.n_in())) > NQ_FULL:
-        raise AssertionError(f"{f.name()}: more inputs or reals than qd_d_all_inputs holds")
-    head = re.search(rf"static int {raw}\(.*?\n\}}\n", c_text, re.S)
-    if not head:
-        raise AssertionError(f"{raw}: CasADi's evaluation function not found")
-    body = unguarded_inputs(head.group(0), f.name()[len(PREFIX):])
-    return c_text[:head.start()] + body + c_text[head.end():]
-
-
 #: qd_did_full_trig's arg (q, v, a, sin, cos) as did_full's pieces read it (``rnea_derivatives.did_full_pieces``).
 DID_FULL_CALL = LegCall(head_args=(0, 1, 2), leg_inputs=(("arg", 1, 3), ("arg", 2, 3), ("head", 0), ("joint", 0, 7),
                                                          ("joint", 1, 6), ("joint", 2, 6)),
                         sin_arg=3, tail_args=(0, 1, 2))
 
 
-def _did_full_trig_once(c_text: str, raw: str, did: ca.Function, robot: Robot, precision: str) -> str:
-    """did_full's evaluation ``raw`` as the joints' sines and cosines taken once (c/qd_sincos.c) and qd_did_full_trig
-    reading them, did_full leg by leg (``by_leg``, docs/derivatives.md "dfd_r and dgrf as generated C"), also called by dfd_r
-    (c/qd_reduced_derivatives.c), which has the sines and cosines already."""
-    exported = by_leg_c("qd_did_full_trig", did_full_pieces(robot), DID_FULL_CALL, precision, defined_helpers(c_text),
-                        unguarded="did_full", export_in=True)  # dfd_r lends the legs' outputs its w (stack budget)
+def _did_full_trig_once(did: ca.Function, robot: Robot, host_helpers: frozenset[str]) -> str:
+    """did_full's evaluation casadi_f0 as the joints' sines and cosines taken once (c/qd_sincos.c) and qd_did_full_trig
+    reading them, did_full leg by leg (``by_leg``, docs/derivatives.md "dfd_r and dgrf as generated C"), also called by
+    dfd_r (c/qd_reduced_derivatives.c), which has the sines and cosines already. Its callers pass every input
+    (qd_d_all_inputs gives a NULL one qd_d_zeros)."""
+    if did.n_in() > 3 or max(did.nnz_in(i) for i in range(did.n_in())) > NQ_FULL:
+        raise AssertionError(f"{did.name()}: more inputs or reals than qd_d_all_inputs holds")
+    exported = by_leg_c("qd_did_full_trig", did_full_pieces(robot), DID_FULL_CALL, host_helpers,
+                        test_outputs=True, export_in=True)  # dfd_r lends the legs' outputs its w (stack budget)
     n = len(JOINT_ANGLES)
-    wrapper = (f"static int {raw}(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem) {{\n"
+    wrapper = (f"static int {evaluation_name(0)}{SIGNATURE} {{\n"
                f"  casadi_real s[{n}], c[{n}]; /* the joints' sines and cosines, once (qd_sincos) */\n"
                f"  qd_sincos({n}, arg[0] + {JOINT_ANGLES.start}, c, s);\n"
                f"  const casadi_real* a[{did.n_in() + 2}] = {{{', '.join(f'arg[{i}]' for i in range(did.n_in()))}, s, c}};\n"
                f"  return qd_did_full_trig(a, res, iw, w, mem);\n}}\n")
-    body = re.search(rf"static int {raw}\(.*?\n\}}\n", c_text, re.S)
-    if not body:
-        raise AssertionError(f"{raw}: CasADi's evaluation function not found")
-    return (c_text[:body.start()] + (TEMPLATES / SINCOS).read_text() + "\n" + exported + "\n" + wrapper
-            + c_text[body.end():])
+    return template_c(SINCOS) + "\n" + exported + "\n" + wrapper
 
 
-def derivative_source(robot: Robot, file_stem: str, functions: list[ca.Function], precision: str) -> tuple[str, str]:
-    """(C source, CasADi's header) of qd_<robot>-d.c: CasADi's code with c/qd_derivatives_solve.c
-    inserted (after c/qd_dense.c); every entry point returns QD_NONFINITE for a non-finite output, dfd_full solves."""
-    c_text, h_text = casadi_c(file_stem, functions, precision)
-    first = c_text.index(f"\n/* {functions[0].name()}:")
-    template = prelude_c() + (TEMPLATES / "qd_derivatives_solve.c").read_text()
-    c_text = c_text[:first] + "\n" + (TEMPLATES / "qd_dense.c").read_text() + "\n" + template + c_text[first:]
-    work = work_sizes(h_text)
-    raw = evaluations(c_text, [f.name() for f in functions])
-    if any(work[f.name()] != (0, 0) for f in functions):
-        raise AssertionError("a derivative function needs work memory; qd_derivatives_solve.c passes none")
-    template_w = {k: int(v) for k, v in re.findall(r"#define QD_(DFD_FULL|DGRF)_SZ_W (\d+)", template)}
-    for f in functions:
-        signature = f.name() in (PREFIX + "dfd_full", PREFIX + "dfd_full_parts") or (
-            f.name().startswith(PREFIX + "dgrf_") and not f.name().startswith(PREFIX + "dgrf_dir_"))
-        parts = "qd_dfd_full_parts_eval"  # the template's: qd_M_full and qd_nle_full
-        if f.name() == PREFIX + "dfd_full_parts":
-            nnz = f"{f.nnz_out(0)}, {f.nnz_out(1)}"
-            body = rf"\1  return qd_d_finite({parts}(arg, res, iw, w, mem), res, 2, (const casadi_int[]){{{nnz}}});\n"
-        elif f.name() == PREFIX + "dfd_full":
-            did = raw[PREFIX + "did_full"]
-            body = (rf"\1  return qd_dfd_full_solve({did}, {PREFIX}did_full_sparsity_out(0), "
-                    rf"{PREFIX}did_full_sparsity_out(1), arg, res, iw, w, mem);\n")
-        elif f.name()[len(PREFIX):] in UNGUARDED:  # its evaluation reads the inputs unguarded: NULL ones are zeros here
-            c_text = _unguarded_inputs(c_text, raw[f.name()], f)
-            if f.name() == PREFIX + "did_full":
-                c_text = _did_full_trig_once(c_text, raw[f.name()], f, robot, precision)
-            nnz = ", ".join(str(f.nnz_out(i)) for i in range(f.n_out()))
-            body = (rf"\1  return qd_d_finite(qd_d_all_inputs(\2, {f.n_in()}, arg, res, iw, w, mem), res, {f.n_out()}, "
-                    rf"(const casadi_int[]){{{nnz}}});\n")
-        elif signature:  # dgrf_<feet>
-            suffix = f.name()[len(PREFIX + "dgrf_"):]
-            did, direction = (raw[PREFIX + n] for n in ("did_full", f"dgrf_dir_{suffix}"))
-            legs = sum(1 << i for i in stance_set(suffix.replace("_", "+")).feet)  # the joints lambda reads
-            body = (rf"\1  return qd_dgrf_solve({f.size1_out(0)}, {legs}, {did}, {direction}, "
-                    rf"{PREFIX}did_full_sparsity_out(0), {PREFIX}did_full_sparsity_out(1), arg, res, iw, w, mem);\n")
-        else:
-            nnz = ", ".join(str(f.nnz_out(i)) for i in range(f.n_out()))
-            body = rf"\1  return qd_d_finite(\2(arg, res, iw, w, mem), res, {f.n_out()}, (const casadi_int[]){{{nnz}}});\n"
-        c_text, count = re.subn(entry_point(f.name()), body, c_text)
-        if count != 1:
-            raise AssertionError(f"entry point of {f.name()} not found in CasADi's output")
-        if signature:  # its CasADi body is a placeholder: the template solves, its temporaries in the caller's w
-            c_text = drop_evaluation(c_text, raw[f.name()])
-            if f.name() != PREFIX + "dfd_full_parts":  # it uses none
-                sz_w = template_w["DFD_FULL" if f.name() == PREFIX + "dfd_full" else "DGRF"]
-                c_text, h_text = declare_work(c_text, h_text, f.name(), sz_w)
-    # dfd_full calls qd_did_full_sparsity_out, defined further down: declare it first
+def _derivative_entry(f: ca.Function, index: dict[str, str], template_w: dict[str, int]) -> Entry:
+    """How qd_<robot>-d.c prints ``f`` (``derivative_source``); ``index``: function name -> its evaluation's C name."""
+    name, raw = f.name()[len(PREFIX):], index[f.name()]
+    nnz = ", ".join(str(f.nnz_out(i)) for i in range(f.n_out()))
+    did = index[PREFIX + "did_full"]
+    sparsity = f"{PREFIX}did_full_sparsity_out(0), {PREFIX}did_full_sparsity_out(1)"
+    if name == "dfd_full_parts":  # the template's qd_dfd_full_parts_eval: qd_M_full and qd_nle_full
+        return Entry(f, None, f"  return qd_d_finite(qd_dfd_full_parts_eval(arg, res, iw, w, mem), res, 2, "
+                              f"(const casadi_int[]){{{nnz}}});\n")
+    if name == "dfd_full":  # the template solves, its temporaries in the caller's w
+        return Entry(f, None, f"  return qd_dfd_full_solve({did}, {sparsity}, arg, res, iw, w, mem);\n",
+                     template_w["DFD_FULL"])
+    if name.startswith("dgrf_") and not name.startswith("dgrf_dir_"):
+        suffix = name[len("dgrf_"):]
+        legs = sum(1 << i for i in stance_set(suffix.replace("_", "+")).feet)  # the joints lambda reads
+        direction = index[f"{PREFIX}dgrf_dir_{suffix}"]
+        return Entry(f, None, f"  return qd_dgrf_solve({f.size1_out(0)}, {legs}, {did}, {direction}, {sparsity}, arg, "
+                              "res, iw, w, mem);\n", template_w["DGRF"])
+    if name in UNGUARDED:  # did_full: its evaluation reads the inputs unguarded: NULL ones are zeros here
+        return Entry(f, EVALUATION, f"  return qd_d_finite(qd_d_all_inputs({raw}, {f.n_in()}, arg, res, iw, w, mem), "
+                                    f"res, {f.n_out()}, (const casadi_int[]){{{nnz}}});\n")
+    return Entry(f, EVALUATION, f"  return qd_d_finite({raw}(arg, res, iw, w, mem), res, {f.n_out()}, "
+                                f"(const casadi_int[]){{{nnz}}});\n")
+
+
+def derivative_source(robot: Robot, file_stem: str, functions: list[ca.Function],
+                      precision: str) -> tuple[str, str, dict[str, tuple[int, int]]]:
+    """(C source, header, work sizes) of qd_<robot>-d.c: c/qd_dense.c and c/qd_derivatives_solve.c, then the
+    functions; every entry point returns QD_NONFINITE for a non-finite output, dfd_full solves. dfd_full calls
+    qd_did_full_sparsity_out, defined further down: declared first."""
     declaration = f"CASADI_SYMBOL_EXPORT const casadi_int* {PREFIX}did_full_sparsity_out(casadi_int i);\n"
-    first = c_text.index("\n/* quadruped_dyn: derivatives")
-    return c_text[:first] + "\n" + declaration + c_text[first:], h_text
+    solve = template_c("qd_derivatives_solve.c")
+    template = prelude_c() + declaration + "\n" + solve
+    template_w = {k: int(v) for k, v in re.findall(r"#define QD_(DFD_FULL|DGRF)_SZ_W (\d+)", solve)}
+    index = {f.name(): evaluation_name(k) for k, f in enumerate(functions)}
+    entries = [_derivative_entry(f, index, template_w) for f in functions]
+    if functions[0].name() != PREFIX + "did_full":
+        raise AssertionError("qd_<robot>-d.c's first function is not did_full, whose evaluation it prints leg by leg")
+    entries[0] = Entry(functions[0], _did_full_trig_once(functions[0], robot, file_helpers(functions)), entries[0].body)
+    preamble = template_c("qd_dense.c") + "\n" + template + "\n"
+    options = FileOptions(precision, preamble=preamble, precision_math=True)
+    return (*c_file(file_stem, entries, options), entry_work(entries))

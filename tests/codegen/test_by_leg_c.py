@@ -11,12 +11,12 @@ import casadi as ca
 import numpy as np
 
 from quadruped_dyn.codegen.by_leg import foot_c
+from quadruped_dyn.codegen.forms.leg_pieces import FOOT_PARTS, foot_kinematics, foot_pieces
 from quadruped_dyn.codegen.library import C_FLAGS
-from quadruped_dyn.dynamics.by_leg import FOOT_PARTS, foot_kinematics, foot_pieces
 from quadruped_dyn.dynamics.kinematics import foot_position
 from quadruped_dyn.tolerances import REL_TOL_GRAPH
+from tests.codegen.forms.test_leg_template import turned_robot
 from tests.conftest import assert_close
-from tests.dynamics.test_leg_template import turned_robot
 
 _PRELUDE = "#include <math.h>\n#define casadi_real double\n#define casadi_int long long int\n"
 
@@ -26,7 +26,7 @@ def test_feet_of_two_leg_templates_and_a_turned_hip_compiled(tmp_path):
     pieces = foot_pieces(robot)
     assert pieces.template_of == (0, 1, 0, 0) and [pieces.leg_signs(k)[0] for k in (0, 2, 3)] == [1.0, -1.0, -1.0]
     source, library = tmp_path / "feet.c", tmp_path / "libfeet.so"
-    source.write_text(_PRELUDE + foot_c("qd_foot_trig", pieces, "double", frozenset()))
+    source.write_text(_PRELUDE + foot_c("qd_foot_trig", pieces, frozenset()))
     subprocess.run(["gcc", *C_FLAGS, "-shared", str(source), "-o", str(library), "-lm"], check=True)
     c_foot = ctypes.CDLL(str(library)).qd_foot_trig
     c_foot.restype = ctypes.c_int

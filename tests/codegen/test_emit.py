@@ -182,11 +182,12 @@ def test_precision_wrappers_follow_the_casadi_real_default(precision):
     float) the wrappers come after that default, so their signatures compile."""
     import casadi as ca
 
-    from quadruped_dyn.codegen.casadi_source import casadi_c
-    from quadruped_dyn.codegen.emit import _precision_math
+    from quadruped_dyn.codegen.c_file import Entry, FileOptions, c_file
+    from quadruped_dyn.codegen.casadi_source import EVALUATION
 
     x = ca.SX.sym("x")
-    c_text = _precision_math(casadi_c("qd_t", [ca.Function("qd_t", [x], [ca.sin(x)])], precision)[0])
+    f = ca.Function("qd_t", [x], [ca.sin(x)])
+    c_text, _ = c_file("qd_t", [Entry(f, EVALUATION)], FileOptions(precision, precision_math=True))
     assert c_text.index(f"#define casadi_real {precision}") < c_text.index("QD_MATH(sin)")
 
 

@@ -13,7 +13,7 @@ import pytest
 from quadruped_dyn.checks.finite_differences import ReducedFiniteDifferences, grf_derivatives_by_differences
 from quadruped_dyn.codegen.c_facts import prelude_c
 from quadruped_dyn.codegen.casadi_source import PREFIX
-from quadruped_dyn.codegen.emit import REDUCED_STANCE_SETS, TEMPLATES, _precision_math, reduced_symbol
+from quadruped_dyn.codegen.emit import REDUCED_STANCE_SETS, TEMPLATES, reduced_symbol
 from quadruped_dyn.codegen.emit_derivatives import (
     GRF_DERIVATIVE_STANCE_SETS,
     derivative_functions,
@@ -22,10 +22,10 @@ from quadruped_dyn.codegen.emit_derivatives import (
     dfd_r_pieces,
     lift_seeds,
 )
+from quadruped_dyn.codegen.forms.did_full_pieces import did_full_pieces
 from quadruped_dyn.codegen.joint_trig import trig_as_inputs
 from quadruped_dyn.codegen.library import C_FLAGS, CompiledFunction, compiled_library
 from quadruped_dyn.dynamics.derivatives import full_derivatives
-from quadruped_dyn.dynamics.rnea_derivatives import did_full_pieces
 from quadruped_dyn.errors import InputError
 from quadruped_dyn.math.compare import relative_error
 from quadruped_dyn.model.registry import ROBOT_NAMES
@@ -34,9 +34,9 @@ from quadruped_dyn.model.stance import stance_set
 from quadruped_dyn.model.state import random_state
 from quadruped_dyn.references.pinocchio import PinocchioDerivatives, PinocchioReference
 from quadruped_dyn.tolerances import FLOAT_REL_TOL, LIFT_COLUMNS_REL_TOL, REL_TOL_DERIVATIVES, REL_TOL_FD_DERIVATIVES
+from tests.codegen.forms.test_leg_template import turned_robot
 from tests.conftest import assert_close
 from tests.dynamics.test_derivatives import grf_point, reduced_point
-from tests.dynamics.test_leg_template import turned_robot
 
 
 def _check_compiled_full(robot, library) -> None:
@@ -253,9 +253,9 @@ def test_did_full_of_two_leg_templates_and_a_turned_hip_compiled(tmp_path):
     robot = turned_robot()
     pieces = did_full_pieces(robot)
     assert pieces.template_of == (0, 1, 0, 0) and [pieces.leg_signs(k)[0] for k in (0, 2, 3)] == [1.0, -1.0, -1.0]
-    c_text, _ = derivative_source(robot, "qd_turned_d", derivative_functions(robot), "double")
+    c_text, _, _ = derivative_source(robot, "qd_turned_d", derivative_functions(robot), "double")
     source = tmp_path / "qd_turned_d.c"
-    source.write_text(_precision_math(c_text))
+    source.write_text(c_text)
     library = tmp_path / "libturned.so"
     subprocess.run(["gcc", *C_FLAGS, "-shared", str(source), "-o", str(library), "-lm"], check=True)  # qd_M_full: unused
     compiled = ca.external(PREFIX + "did_full", str(library))

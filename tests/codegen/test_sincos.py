@@ -15,7 +15,7 @@ import numpy as np
 import pytest
 
 from quadruped_dyn.codegen.casadi_source import TEMPLATES
-from quadruped_dyn.codegen.emit import _precision_calls
+from quadruped_dyn.codegen.precision_math import precision_calls
 
 #: ulps of the correctly rounded value: the final rounding (0.5) plus FreeBSD's k_sin.c / k_cos.c error before it
 #: (their polynomials to 2^-58 relative on [-pi/4, pi/4], the sums' roundings ~0.2 ulp) and the reduction's 2^-62
@@ -35,8 +35,8 @@ QD_MATH(sin) QD_MATH(cos) QD_MATH(fabs)
 
 def _library(tmp_path: Path, real: str) -> ctypes.CDLL:
     src = tmp_path / "sincos.c"
-    # the template as generated: its fabs is the precision wrapper qd_fabs (emit._precision_calls)
-    src.write_text(f"#define casadi_real {real}\n" + WRAPPERS + _precision_calls((TEMPLATES / "qd_sincos.c").read_text())
+    # the template as generated: its fabs is the precision wrapper qd_fabs (precision_math.precision_calls)
+    src.write_text(f"#define casadi_real {real}\n" + WRAPPERS + precision_calls((TEMPLATES / "qd_sincos.c").read_text())
                    + "void qd_sincos_n(int n, const casadi_real* x, casadi_real* c, casadi_real* s)"
                    " { qd_sincos(n, x, c, s); }\n"
                    "void qd_kernel_n(int n, const double* x, double* c, double* s)"

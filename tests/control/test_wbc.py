@@ -21,7 +21,7 @@ from quadruped_dyn.cli import main  # noqa: E402
 from quadruped_dyn.control import wbc  # noqa: E402
 from quadruped_dyn.control.closed_loop import prepare, run_all  # noqa: E402
 from quadruped_dyn.control.controllers import GeneratedC, make_controller  # noqa: E402
-from quadruped_dyn.control.plan import reference_cycle  # noqa: E402
+from quadruped_dyn.control.plan import target_cycle  # noqa: E402
 from quadruped_dyn.control.run import LoopOptions, settled_state  # noqa: E402
 from quadruped_dyn.math.compare import relative_error  # noqa: E402
 from quadruped_dyn.model.robot import load_robot  # noqa: E402
@@ -45,7 +45,7 @@ def _drive(robot_name: str, gait: str, ticks: int, every: int):
                                study.loop.settle_s)
     study.plant.set_state(*initial)
     controller = make_controller("wbc", study.robot, study.gains, c, study.plant.options.mu, study.loop.rate_hz)
-    cycle = reference_cycle(study.plan, study.loop.rate_hz)
+    cycle = target_cycle(study.plan, study.loop.rate_hz)
     samples = []
     for k in range(ticks):
         meas = study.plant.measure()

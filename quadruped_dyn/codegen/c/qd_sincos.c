@@ -54,7 +54,7 @@ static inline void qd_sincos_kernel(double xi, double* c, double* s) {
  * build is double without -ffast-math), else the precision wrappers qd_cos, qd_sin (libm) for all. */
 static inline void qd_sincos(int n, const casadi_real* x, casadi_real* c, casadi_real* s) {
   int fast = !QD_SINCOS_LIBM && sizeof(casadi_real) == sizeof(double);
-  /* in casadi_real: fabs is qd_fabs once generated (emit._precision_calls), and a float build compares in float */
+  /* in casadi_real: fabs is qd_fabs once generated (precision_math.template_c), and a float build compares in float */
   for (int i = 0; i < n; ++i) fast &= fabs(x[i]) <= (casadi_real)QD_SINCOS_MAX;  /* false for NaN */
   if (!fast) {
     for (int i = 0; i < n; ++i) {
