@@ -220,5 +220,5 @@ LIFT_COLUMNS_REL_TOL = 16 * DBL_EPSILON
 #: Two evaluations of the same operations that differ only in their order or grouping: the compiled C against the
 #: in-memory CasADi graph (a shared denominator's quotients are products with its reciprocal there,
 #: codegen.printer's reciprocals: ~1 ulp each; -O3 without -ffast-math keeps IEEE order), a function leg by leg against the
-#: whole-robot graph (dynamics/by_leg.py: the legs' sums in another grouping). A few hundred operations of ~1 ulp.
+#: whole-robot graph (codegen/forms/leg_pieces.py: the legs' sums in another grouping). A few hundred operations of ~1 ulp.
 REL_TOL_GRAPH = 1e-13

@@ -107,3 +107,11 @@ def test_typed_names_are_the_lazy_names() -> None:
              for node in block.body if isinstance(node, ast.ImportFrom) and node.module for alias in node.names}
     lazy = {(module, name) for module, names in quadruped_dyn._MODULES.items() for name in names}
     assert typed and typed == lazy, (typed ^ lazy)
+
+
+def test_no_two_modules_share_a_file_name() -> None:
+    """A module's file name says its concept once in the package (``__init__`` and ``__main__`` aside)."""
+    modules = [m for m in MODULES if importlib.util.find_spec(m).submodule_search_locations is None]  # not packages
+    stems = [m.rsplit(".", 1)[-1] for m in modules]
+    shared = sorted({s for s in stems if stems.count(s) > 1})
+    assert len(modules) > 100 and not shared, shared

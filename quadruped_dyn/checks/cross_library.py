@@ -88,13 +88,13 @@ class ToolkitDynamics:
         self.kin = robot_kinematics(robot)
 
     def mass_matrix(self, q: np.ndarray) -> np.ndarray:
-        return np.array(self.fd.M_full(q))
+        return np.array(self.fd.M_full_walker_orin(q))
 
     def nonlinear_effects(self, q: np.ndarray, v: np.ndarray) -> np.ndarray:
-        return np.array(self.fd.C_full(q, v) + self.fd.G_full(q)).ravel()
+        return np.array(self.fd.C_full(q, v) + self.fd.G_full_newton_euler(q)).ravel()
 
     def gravity(self, q: np.ndarray) -> np.ndarray:
-        return np.array(self.fd.G_full(q)).ravel()
+        return np.array(self.fd.G_full_newton_euler(q)).ravel()
 
     def inverse_dynamics(self, q: np.ndarray, v: np.ndarray, a: np.ndarray) -> np.ndarray:
         w_res, tau = self.fd.id_full(q, v, a, np.zeros(12))

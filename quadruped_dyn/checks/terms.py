@@ -110,11 +110,11 @@ def _comparisons(robot: Robot, ref: PinocchioReference, s: FullState) -> Iterato
     qj, vj = q[7:], v[6:]
     M = ref.mass_matrix(q)
     G = ref.gravity(q)
-    yield "M_full (Walker-Orin)", fd.M_full(q), M
+    yield "M_full (Walker-Orin)", fd.M_full_walker_orin(q), M
     yield "M_full (CasADi AD)", fd.M_full_ad(q), M
     yield "M_full (CRBA)", fd.M_full_crba(q), M
     yield "C_full", fd.C_full(q, v), ref.nonlinear_effects(q, v) - G
-    yield "G_full", fd.G_full(q), G
+    yield "G_full", fd.G_full_newton_euler(q), G
     yield "coriolis_matrix", fd.coriolis(q, v), ref.coriolis_matrix(q, v)
     R = rotation(q)
     forces_w = np.concatenate([R @ fi for fi in s.f])

@@ -1,6 +1,6 @@
 """Facts the generated C and the Python that calls it share, with their one source here: the return codes (the C
 ``#define`` lines are written from ``RETURN_CODES``, ``return_codes_c``), the layouts of the leg-by-leg pieces'
-outputs the reduced templates read (``layouts_c``, from ``dynamics.by_leg``) and the definitions every hand-written C
+outputs the reduced templates read (``layouts_c``, from ``codegen.forms.leg_pieces``) and the definitions every hand-written C
 file uses (``c/qd_prelude.h``, ``prelude_c``)."""
 
 from __future__ import annotations
@@ -8,7 +8,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 from pathlib import Path
 
-from quadruped_dyn.dynamics.by_leg import FOOT_PARTS, LEG_MASS_BLOCKS, TRUNK_MASS_BLOCKS
+from quadruped_dyn.codegen.forms.leg_pieces import FOOT_PARTS, LEG_MASS_BLOCKS, TRUNK_MASS_BLOCKS
 from quadruped_dyn.tolerances import FLOAT_MAX_BOUND, REGULARITY_MIN
 
 #: The hand-written C (templates, check programs, the Cortex-M start-up, the Makefile).
@@ -80,7 +80,7 @@ def _offsets(layout: tuple[tuple[str, int, int], ...], start: int = 0) -> dict[s
 def layouts_c() -> str:
     """Macros reading a foot's ``FOOT_PARTS`` (QD_FOOT reals: QD_FOOT_R(y, d), QD_FOOT_J(y, d, c), QD_FOOT_JQD(y, d),
     QD_FOOT_JDQD(y, d)) and M's nonzero blocks (``mass_blocks``, QD_M_BLOCKS reals: QD_M_BB(Mc, i, k),
-    QD_M_BL(Mc, l, i, c), QD_M_LL(Mc, l, i, c), leg l), as ``dynamics.by_leg`` stacks them."""
+    QD_M_BL(Mc, l, i, c), QD_M_LL(Mc, l, i, c), leg l), as ``codegen.forms.leg_pieces`` stacks them."""
     foot = _offsets(FOOT_PARTS)
     trunk = _offsets(TRUNK_MASS_BLOCKS)
     trunk_reals = sum(r * c for _, r, c in TRUNK_MASS_BLOCKS)

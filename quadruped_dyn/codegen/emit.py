@@ -43,16 +43,16 @@ from quadruped_dyn.codegen.file_names import (
     check_no_collision,
     file_layout,
 )
+from quadruped_dyn.codegen.forms.leg_pieces import foot_pieces, id_full_pieces, mass_matrix_pieces
+from quadruped_dyn.codegen.forms.stance_maps import stance_maps
 from quadruped_dyn.codegen.joint_trig import trig_as_inputs
 from quadruped_dyn.codegen.precision_math import template_c
 from quadruped_dyn.codegen.printer import SIGNATURE
 from quadruped_dyn.codegen.work_memory import memory_doc
-from quadruped_dyn.dynamics.by_leg import foot_pieces, id_full_pieces, mass_matrix_pieces
 from quadruped_dyn.dynamics.grf import grf_balance, grf_solve
 from quadruped_dyn.dynamics.kinematics import feet_full
 from quadruped_dyn.dynamics.newton_euler import full_dynamics
 from quadruped_dyn.dynamics.reduced_projection import reduced_projection
-from quadruped_dyn.dynamics.stance_maps import stance_maps
 from quadruped_dyn.errors import InputError
 from quadruped_dyn.files.names import comment_text
 from quadruped_dyn.files.safe_write import output_path, output_set, write_text

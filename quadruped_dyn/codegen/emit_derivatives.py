@@ -51,6 +51,7 @@ from quadruped_dyn.codegen.c_facts import prelude_c
 from quadruped_dyn.codegen.c_file import Entry, FileOptions, c_file, entry_work, evaluation_name, file_helpers
 from quadruped_dyn.codegen.casadi_source import EVALUATION, PREFIX, SINCOS, UNGUARDED
 from quadruped_dyn.codegen.file_names import feet_suffix
+from quadruped_dyn.codegen.forms.did_full_pieces import did_full_pieces
 from quadruped_dyn.codegen.joint_trig import trig_as_inputs
 from quadruped_dyn.codegen.precision_math import template_c
 from quadruped_dyn.codegen.printer import SIGNATURE
@@ -59,7 +60,6 @@ from quadruped_dyn.dynamics.grf import solve_lambda
 from quadruped_dyn.dynamics.kinematics import foot_position
 from quadruped_dyn.dynamics.newton_euler import full_dynamics
 from quadruped_dyn.dynamics.reduced_projection import reduced_projection, stance_forces
-from quadruped_dyn.dynamics.rnea_derivatives import did_full_pieces
 from quadruped_dyn.math.rigid import skew
 from quadruped_dyn.model.robot import Robot
 from quadruped_dyn.model.stance import STANCE_SETS, StanceSet, stance_set

@@ -15,7 +15,7 @@ os.environ.setdefault("MUJOCO_GL", "egl")
 
 _MODULES: dict[str, tuple[str, ...]] = {
     "plant": ("DEFAULT_FOOT_RADIUS", "PUSH_DURATION_S", "PlantOptions", "Command", "Measurement", "Plant", "build_plant"),
-    "plan": ("REFERENCE_KNOT_S", "Reference", "joint_inertia", "reference_cycle"),
+    "plan": ("TARGET_KNOT_S", "Target", "joint_inertia", "target_cycle"),
     "controllers": ("KP_PER_KG", "KD_PER_KG", "CT_OMEGA_STANCE", "CT_OMEGA_SWING", "CT_ZETA", "LANDING_DROP_M",
                     "Gains", "GeneratedC",
                     "CONTROLLERS", "parse_controllers", "make_controller", "levelled", "model_stance", "measured_state"),

@@ -8,7 +8,7 @@ from typing import Any
 
 from quadruped_dyn.control.controllers import Gains, GeneratedC, parse_controllers
 from quadruped_dyn.control.measures import grf_comparison, summary
-from quadruped_dyn.control.plan import reference_cycle
+from quadruped_dyn.control.plan import target_cycle
 from quadruped_dyn.control.plant import Plant, PlantOptions, build_plant
 from quadruped_dyn.control.run import LoopOptions, Progress, Trace, run_controller, settled_state
 from quadruped_dyn.errors import InputError
@@ -71,7 +71,7 @@ def prepare(robot: Robot, gait: str, controllers: list[str] | tuple[str, ...] = 
 def run_all(study: ClosedLoop, progress: Progress | None = None, keep_qpos: bool = False) -> ClosedLoop:
     """Run every selected controller; ``progress`` gets the simulated time summed over the runs."""
     c = GeneratedC(study.robot)
-    reference_cycle(study.plan, study.loop.rate_hz)
+    target_cycle(study.plan, study.loop.rate_hz)
     initial, study.standing_grf = settled_state(study.plant, study.plan, study.gains, c, study.loop.rate_hz,
                                                 study.substeps, study.loop.settle_s, study.loop.grf_every)
     horizon = study.loop.cycles * study.plan.gait.period

@@ -1,12 +1,12 @@
 """Controllers of the closed loop, built on the compiled, verified generated C.
 
-Every controller sees the same inputs at every tick: the reference (the gait's IK at t: q_ref,
+Every controller sees the same inputs at every tick: the target (the gait's IK at t: q_ref,
 qd_ref, qdd_ref, 12 joints + the roll for a gait with two-feet phases, all from the plan), the
 plan's stance set, and the ``Measurement`` (joint q, qd; trunk orientation and angular rate,
 an IMU). Nothing else of the plant's state is used: no trunk position or linear velocity.
 All model-based terms come from the generated C of ``codegen`` (``CompiledFunction`` of the
 robot's ``compiled_library``: ``id_r`` of the stance set, one call per tick; ``G_r`` while the
-robot settles; ``M_full`` along the reference for the inertia estimate), never from the CasADi
+robot settles; ``M_full`` along the target for the inertia estimate), never from the CasADi
 graph.
 
 * ``pd``: tau = Kp (q_ref - q) + Kd (qd_ref - qd), the baseline.
@@ -22,28 +22,28 @@ graph.
   id_r(q, qd, qdd_ref + Kp e + Kd edot, R), since id_r = M_r qdd + C_r + G_r exactly.
   Kp = w^2, Kd = 2 zeta w per leg (``Gains``: w of the stance legs, w of the swing legs).
   With two stance feet the 13th coordinate is the trunk roll phi, measured by the IMU
-  (phi from R = Rz Ry Rx(phi), phid = e_phi . omega_b); its reference is 0, its commanded
+  (phi from R = Rz Ry Rx(phi), phid = e_phi . omega_b); its target is 0, its commanded
   acceleration -Kp phi - Kd phid with the stance legs' gains, and the 13th row of the result
   -- the moment about the foot-to-foot line it would take -- is dropped (unactuated).
   It falls on every robot: the feedback goes through M_r, whose rows of a stance leg carry
   the trunk, and a stance foot that unloads (soft contact) leaves a leg of ~1/100 of that
   inertia under that gain: the 1 kHz loop diverges within ~10 ticks (docs/closed_loop.md).
 * ``ct-diag``: the computed-torque law with the feedback's inertia replaced by a positive
-  diagonal estimate M_hat (``Reference.inertia``: the leg's own joint inertia plus, for a
+  diagonal estimate M_hat (``Target.inertia``: the leg's own joint inertia plus, for a
   stance leg, its share of the robot's mass carried at the hip, m / n_stance J_i^T J_i),
   tau = id_r(q, qd, qdd_ref, R) + M_hat (Kp e + Kd edot) with the same per-leg Kp, Kd as
   ``ct``: one generated call (the model's torques at the measured state), the feedback run
   by the joint drivers at the plant's rate (per-joint gains M_hat w^2, 2 zeta w M_hat), so
   that an unloaded leg meets a stiffness it can carry. Two feet: roll and roll rate from the
-  IMU in id_r, the roll's reference acceleration (0), the 13th row dropped.
+  IMU in id_r, the roll's target acceleration (0), the 13th row dropped.
 * ``pd-diag``: ``ct-diag``'s per-joint gains without the model: the "pd with the same gains".
 * ``ct-diag+land``: ``ct-diag`` whose swing feet aim a few mm below the plan's touch-down
   (``DiagonalCtLand``): what it does about the trot's roll moment the paper's model leaves
   unbalanced.
 * ``id+pd``: id_r at the **measured** state (joint q, qd; roll and roll rate from the IMU for
-  two feet; the trunk orientation) with the reference's accelerations, plus the joint PD of
+  two feet; the trunk orientation) with the target's accelerations, plus the joint PD of
   ``pd`` (per-kg gains).
-* ``ff+pd+level``: ``ff+pd`` tracking the reference levelled by the IMU (``levelled``):
+* ``ff+pd+level``: ``ff+pd`` tracking the target levelled by the IMU (``levelled``):
   trunk-attitude feedback through the legs -- the stance legs' targets tilt the trunk back to
   level (their forces, through the ground, produce the correcting moment), the swing feet land
   on the ground whatever the tilt. With two feet the moment about the foot-to-foot line,
@@ -72,12 +72,12 @@ from quadruped_dyn.arguments import real_number
 from quadruped_dyn.codegen.emit import reduced_symbol
 from quadruped_dyn.codegen.library import CompiledFunction, compiled_library
 from quadruped_dyn.control.mpc import MpcWbc
-from quadruped_dyn.control.plan import Reference
+from quadruped_dyn.control.plan import Target
 from quadruped_dyn.control.plant import Command, Measurement
 from quadruped_dyn.control.wbc import WholeBodyQp
 from quadruped_dyn.errors import InputError
 from quadruped_dyn.experiment.gait import Plan
-from quadruped_dyn.experiment.plan_ik import ReferenceSample
+from quadruped_dyn.experiment.plan_ik import IkTarget
 from quadruped_dyn.model.robot import Robot
 from quadruped_dyn.model.stance import StanceSet
 from quadruped_dyn.model.state import quaternion_rotation
@@ -143,7 +143,7 @@ class Gains:
 class Controller(Protocol):
     name: str
 
-    def command(self, ref: ReferenceSample, stance: StanceSet, meas: Measurement) -> Command:
+    def command(self, target: IkTarget, stance: StanceSet, meas: Measurement) -> Command:
         """This tick's command to the joint drivers (feedforward torques, PD target and gains)."""
         ...
 
@@ -179,7 +179,7 @@ def imu_roll(meas: Measurement) -> tuple[float, float]:
 
 
 def _pad(x: np.ndarray, n: int) -> np.ndarray:
-    """The reference's first n coordinates (a roll entry of 0 appended if it has none)."""
+    """The target's first n coordinates (a roll entry of 0 appended if it has none)."""
     return x[:n] if x.size >= n else np.append(x, np.zeros(n - x.size))
 
 
@@ -190,44 +190,44 @@ class Pd:
         self.kp, self.kd = gains.kp_per_kg * robot.total_mass, gains.kd_per_kg * robot.total_mass
         self.c = c
 
-    def pd(self, ref: ReferenceSample, tau: np.ndarray) -> Command:
-        """The joint PD to the reference, run by the drivers, plus a feedforward ``tau``."""
-        return Command(tau, ref.q_r[:12], ref.qd_r[:12], self.kp, self.kd)
+    def pd(self, target: IkTarget, tau: np.ndarray) -> Command:
+        """The joint PD to the target, run by the drivers, plus a feedforward ``tau``."""
+        return Command(tau, target.q_r[:12], target.qd_r[:12], self.kp, self.kd)
 
-    def command(self, ref: ReferenceSample, stance: StanceSet, meas: Measurement) -> Command:
-        return self.pd(ref, np.zeros(12))
+    def command(self, target: IkTarget, stance: StanceSet, meas: Measurement) -> Command:
+        return self.pd(target, np.zeros(12))
 
 
 class FfPd(Pd):
     name = "ff+pd"
 
-    def command(self, ref: ReferenceSample, stance: StanceSet, meas: Measurement) -> Command:
+    def command(self, target: IkTarget, stance: StanceSet, meas: Measurement) -> Command:
         n = 13 if len(stance.feet) == 2 else 12
-        tau = self.c("id_r", stance, _pad(ref.q_r, n), _pad(ref.qd_r, n), _pad(ref.qdd_r, n), IDENTITY_QUAT)
-        return self.pd(ref, tau[:12].copy())
+        tau = self.c("id_r", stance, _pad(target.q_r, n), _pad(target.qd_r, n), _pad(target.qdd_r, n), IDENTITY_QUAT)
+        return self.pd(target, tau[:12].copy())
 
 
-def measured_state(ref: ReferenceSample, stance: StanceSet, meas: Measurement,
+def measured_state(target: IkTarget, stance: StanceSet, meas: Measurement,
                    qdd: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """(q_r, qd_r, qdd_r) of the reduced model at the measured state: the joints' q, qd and the
     given joint accelerations (12,); with two stance feet the roll phi and its rate from the IMU
-    appended, and the roll's reference acceleration."""
+    appended, and the roll's target acceleration."""
     if len(stance.feet) != 2:
         return meas.q, meas.qd, qdd
     roll, roll_rate = imu_roll(meas)
-    return np.append(meas.q, roll), np.append(meas.qd, roll_rate), np.append(qdd, _pad(ref.qdd_r, 13)[12])
+    return np.append(meas.q, roll), np.append(meas.qd, roll_rate), np.append(qdd, _pad(target.qdd_r, 13)[12])
 
 
 class MeasuredIdPd(Pd):
-    """id_r at the **measured** state with the reference's accelerations, plus the same joint PD
+    """id_r at the **measured** state with the target's accelerations, plus the same joint PD
     (run by the drivers): the model's torques where the robot is, not where the plan is."""
 
     name = "id+pd"
 
-    def command(self, ref: ReferenceSample, stance: StanceSet, meas: Measurement) -> Command:
+    def command(self, target: IkTarget, stance: StanceSet, meas: Measurement) -> Command:
         stance = model_stance(stance, meas)
-        tau = self.c("id_r", stance, *measured_state(ref, stance, meas, ref.qdd_r[:12]), meas.quat)
-        return self.pd(ref, tau[:12].copy())
+        tau = self.c("id_r", stance, *measured_state(target, stance, meas, target.qdd_r[:12]), meas.quat)
+        return self.pd(target, tau[:12].copy())
 
 
 def model_stance(stance: StanceSet, meas: Measurement) -> StanceSet:
@@ -244,12 +244,12 @@ class ComputedTorque:
     def __init__(self, robot: Robot, gains: Gains, c: GeneratedC) -> None:
         self.gains, self.c = gains, c
 
-    def command(self, ref: ReferenceSample, stance: StanceSet, meas: Measurement) -> Command:
+    def command(self, target: IkTarget, stance: StanceSet, meas: Measurement) -> Command:
         stance = model_stance(stance, meas)
         w, z = self.gains.ct_omega(stance), self.gains.ct_zeta
-        qdd = ref.qdd_r[:12] + w**2 * (ref.q_r[:12] - meas.q) + 2 * z * w * (ref.qd_r[:12] - meas.qd)
-        q, qd, qdd = measured_state(ref, stance, meas, qdd)
-        if len(stance.feet) == 2:  # the roll's feedback, stance gains, reference 0
+        qdd = target.qdd_r[:12] + w**2 * (target.q_r[:12] - meas.q) + 2 * z * w * (target.qd_r[:12] - meas.qd)
+        q, qd, qdd = measured_state(target, stance, meas, qdd)
+        if len(stance.feet) == 2:  # the roll's feedback, stance gains, target 0
             ws = self.gains.ct_omega_stance
             qdd[12] -= ws**2 * q[12] + 2 * z * ws * qd[12]
         return Command(self.c("id_r", stance, q, qd, qdd, meas.quat)[:12].copy())
@@ -257,7 +257,7 @@ class ComputedTorque:
 
 class DiagonalPd(Pd):
     """``pd-diag``: joint PD with ``ct-diag``'s per-joint gains, M_hat w^2 and 2 zeta w M_hat
-    (M_hat = ``Reference.inertia`` of the plan's stance), no model torques."""
+    (M_hat = ``Target.inertia`` of the plan's stance), no model torques."""
 
     name = "pd-diag"
 
@@ -266,90 +266,90 @@ class DiagonalPd(Pd):
         self.gains = gains
         self._cache: dict[int, tuple[np.ndarray, np.ndarray]] = {}
 
-    def diagonal_gains(self, ref: ReferenceSample, stance: StanceSet) -> tuple[np.ndarray, np.ndarray]:
-        """(Kp, Kd) per joint at this reference tick (computed once per tick of the cycle)."""
-        gains = self._cache.get(id(ref))
+    def diagonal_gains(self, target: IkTarget, stance: StanceSet) -> tuple[np.ndarray, np.ndarray]:
+        """(Kp, Kd) per joint at this target tick (computed once per tick of the cycle)."""
+        gains = self._cache.get(id(target))
         if gains is None:
-            assert isinstance(ref, Reference)
+            assert isinstance(target, Target)
             w, z = self.gains.ct_omega(stance), self.gains.ct_zeta
-            gains = self._cache[id(ref)] = (ref.inertia * w**2, ref.inertia * 2 * z * w)
+            gains = self._cache[id(target)] = (target.inertia * w**2, target.inertia * 2 * z * w)
         return gains
 
-    def command(self, ref: ReferenceSample, stance: StanceSet, meas: Measurement) -> Command:
-        kp, kd = self.diagonal_gains(ref, stance)
-        return Command(np.zeros(12), ref.q_r[:12], ref.qd_r[:12], kp, kd)
+    def command(self, target: IkTarget, stance: StanceSet, meas: Measurement) -> Command:
+        kp, kd = self.diagonal_gains(target, stance)
+        return Command(np.zeros(12), target.q_r[:12], target.qd_r[:12], kp, kd)
 
 
 class DiagonalCt(DiagonalPd):
-    """``ct-diag`` (see the module docstring): id_r at the measured state with the reference's
+    """``ct-diag`` (see the module docstring): id_r at the measured state with the target's
     accelerations, plus the drivers' PD with the per-joint gains of ``pd-diag``."""
 
     name = "ct-diag"
 
-    def command(self, ref: ReferenceSample, stance: StanceSet, meas: Measurement) -> Command:
-        kp, kd = self.diagonal_gains(ref, stance)
+    def command(self, target: IkTarget, stance: StanceSet, meas: Measurement) -> Command:
+        kp, kd = self.diagonal_gains(target, stance)
         model = model_stance(stance, meas)
-        tau = self.c("id_r", model, *measured_state(ref, model, meas, ref.qdd_r[:12]), meas.quat)
-        return Command(tau[:12].copy(), ref.q_r[:12], ref.qd_r[:12], kp, kd)
+        tau = self.c("id_r", model, *measured_state(target, model, meas, target.qdd_r[:12]), meas.quat)
+        return Command(tau[:12].copy(), target.q_r[:12], target.qd_r[:12], kp, kd)
 
 
 class DiagonalCtLand(DiagonalCt):
     """``ct-diag+land``: ``ct-diag`` whose swing feet aim ``LANDING_DROP_M`` below the plan's
     touch-down point (in the trunk frame, ramped in with the swing's smoothstep, through the
-    inverse foot Jacobians at the reference): the landing pair meets the ground a little before
+    inverse foot Jacobians at the target): the landing pair meets the ground a little before
     the plan's switch and is loaded when it comes. What it does about the trot's unbalanced
     roll moment: nothing within a phase; the roll it builds over a phase is caught at each
     switch by a pair already on the ground."""
 
     name = "ct-diag+land"
 
-    def command(self, ref: ReferenceSample, stance: StanceSet, meas: Measurement) -> Command:
-        assert isinstance(ref, Reference)
-        base = super().command(ref, stance, meas)
-        s = ref.phase_s
+    def command(self, target: IkTarget, stance: StanceSet, meas: Measurement) -> Command:
+        assert isinstance(target, Target)
+        base = super().command(target, stance, meas)
+        s = target.phase_s
         drop = np.array([0.0, 0.0, -LANDING_DROP_M * (10 * s**3 - 15 * s**4 + 6 * s**5)])
-        q_des = ref.q_r[:12].copy()
+        q_des = target.q_r[:12].copy()
         for i in set(range(4)) - set(stance.feet):
-            q_des[3 * i : 3 * i + 3] += ref.J_inv[i] @ drop
+            q_des[3 * i : 3 * i + 3] += target.J_inv[i] @ drop
         return Command(base.tau, q_des, base.qd_des, base.kp, base.kd)
 
 
-def levelled(ref: Reference, meas: Measurement) -> Reference:
-    """The reference corrected for the measured trunk tilt: each foot's target moved in the trunk
+def levelled(target: Target, meas: Measurement) -> Target:
+    """The target corrected for the measured trunk tilt: each foot's target moved in the trunk
     frame by delta x r_i, delta = (roll, pitch, 0) from the IMU -- where the plan's foot (on
     the ground, or on its swing path) is seen from a trunk tilted by delta, to first order --
     so that the stance legs push the trunk back to level and the swing feet land on the ground
     rather than above or below it; the rates likewise with (omega_x, omega_y, 0). Through the
-    inverse foot Jacobians at the reference (``Reference.J_inv``): no kinematics per tick."""
+    inverse foot Jacobians at the target (``Target.J_inv``): no kinematics per tick."""
     R = quaternion_rotation(meas.quat)
     roll, pitch, _ = pin.rpy.matrixToRpy(R)
     delta = np.array([roll, pitch, 0.0])
     rate = np.array([meas.omega_b[0], meas.omega_b[1], 0.0])
-    dq = np.einsum("ijk,ik->ij", ref.J_inv, np.cross(delta, ref.r_feet)).ravel()
-    dqd = np.einsum("ijk,ik->ij", ref.J_inv, np.cross(rate, ref.r_feet)).ravel()
-    q, qd = ref.q_r.copy(), ref.qd_r.copy()
+    dq = np.einsum("ijk,ik->ij", target.J_inv, np.cross(delta, target.r_feet)).ravel()
+    dqd = np.einsum("ijk,ik->ij", target.J_inv, np.cross(rate, target.r_feet)).ravel()
+    q, qd = target.q_r.copy(), target.qd_r.copy()
     q[:12] += dq
     qd[:12] += dqd
-    return replace(ref, q_r=q, qd_r=qd)
+    return replace(target, q_r=q, qd_r=qd)
 
 
 class FfPdLevel(FfPd):
-    """``ff+pd`` tracking the IMU-levelled reference (``levelled``); the feedforward id_r stays
+    """``ff+pd`` tracking the IMU-levelled target (``levelled``); the feedforward id_r stays
     the plan's."""
 
     name = "ff+pd+level"
 
-    def command(self, ref: ReferenceSample, stance: StanceSet, meas: Measurement) -> Command:
+    def command(self, target: IkTarget, stance: StanceSet, meas: Measurement) -> Command:
         n = 13 if len(stance.feet) == 2 else 12
-        tau = self.c("id_r", stance, _pad(ref.q_r, n), _pad(ref.qd_r, n), _pad(ref.qdd_r, n), IDENTITY_QUAT)
-        assert isinstance(ref, Reference)
-        return self.pd(levelled(ref, meas), tau[:12].copy())
+        tau = self.c("id_r", stance, _pad(target.q_r, n), _pad(target.qd_r, n), _pad(target.qdd_r, n), IDENTITY_QUAT)
+        assert isinstance(target, Target)
+        return self.pd(levelled(target, meas), tau[:12].copy())
 
 
 class FfPdStep(FfPd):
     """``ff+pd`` with capture-point foot placement: the trunk's horizontal velocity relative to
     the stance feet is estimated from the encoders and the IMU (v_b = -(omega_b x r_i + J_i qd_i),
-    averaged over the stance feet, kinematics at the reference), its error e_v against the
+    averaged over the stance feet, kinematics at the target), its error e_v against the
     plan's, and each swing foot's target is moved horizontally (trunk frame) towards
     sqrt(h / g) e_v at touch-down (h: the trunk's height above the feet; the capture point of a
     linear inverted pendulum), ramped in with the swing's smoothstep; a foot keeps the offset it
@@ -366,20 +366,20 @@ class FfPdStep(FfPd):
         self.swing_from = np.zeros((4, 3))
         self.was_stance = [True] * 4
 
-    def command(self, ref: ReferenceSample, stance: StanceSet, meas: Measurement) -> Command:
-        assert isinstance(ref, Reference)
-        base = super().command(ref, stance, meas)
+    def command(self, target: IkTarget, stance: StanceSet, meas: Measurement) -> Command:
+        assert isinstance(target, Target)
+        base = super().command(target, stance, meas)
         feet = list(stance.feet)
-        Jqd = np.einsum("ijk,ik->ij", ref.J, meas.qd.reshape(4, 3))
-        Jqd_ref = np.einsum("ijk,ik->ij", ref.J, ref.qd_r[:12].reshape(4, 3))
-        v = -(np.cross(meas.omega_b, ref.r_feet[feet]) + Jqd[feet]).mean(axis=0)
+        Jqd = np.einsum("ijk,ik->ij", target.J, meas.qd.reshape(4, 3))
+        Jqd_ref = np.einsum("ijk,ik->ij", target.J, target.qd_r[:12].reshape(4, 3))
+        v = -(np.cross(meas.omega_b, target.r_feet[feet]) + Jqd[feet]).mean(axis=0)
         v_plan = -Jqd_ref[feet].mean(axis=0)
-        h = -float(ref.r_feet[:, 2].mean())
-        target = np.zeros(3)
-        target[:2] = self.gain * math.sqrt(max(h, 0.0) / 9.81) * (v - v_plan)[:2]
-        s = ref.phase_s
+        h = -float(target.r_feet[:, 2].mean())
+        step = np.zeros(3)
+        step[:2] = self.gain * math.sqrt(max(h, 0.0) / 9.81) * (v - v_plan)[:2]
+        s = target.phase_s
         ramp = 10 * s**3 - 15 * s**4 + 6 * s**5
-        q_des = np.array(base.q_des if base.q_des is not None else ref.q_r[:12], dtype=float)
+        q_des = np.array(base.q_des if base.q_des is not None else target.q_r[:12], dtype=float)
         for i in range(4):
             if i in feet:
                 self.was_stance[i] = True
@@ -387,8 +387,8 @@ class FfPdStep(FfPd):
                 if self.was_stance[i]:  # lift-off: ramp from the offset it stood with
                     self.swing_from[i] = self.offsets[i].copy()
                     self.was_stance[i] = False
-                self.offsets[i] = (1 - ramp) * self.swing_from[i] + ramp * target
-            q_des[3 * i : 3 * i + 3] += ref.J_inv[i] @ self.offsets[i]
+                self.offsets[i] = (1 - ramp) * self.swing_from[i] + ramp * step
+            q_des[3 * i : 3 * i + 3] += target.J_inv[i] @ self.offsets[i]
         return Command(base.tau, q_des, base.qd_des, base.kp, base.kd)
 
 

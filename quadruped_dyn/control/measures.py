@@ -19,7 +19,7 @@
 * **saturation**: time with any commanded |tau| above the URDF effort limit (MuJoCo clamps it), s
   and fraction, and per joint.
 * **compute**: per tick (median, 99th percentile, us) the generated-C calls, the QP (wbc), the whole
-  controller tick in Python (measurement, reference lookup, torques), the rest of the tick (Python
+  controller tick in Python (measurement, target lookup, torques), the rest of the tick (Python
   overhead); MuJoCo's steps per tick (median, us).
 """
 

@@ -20,7 +20,9 @@ in the plant's cone and 0 <= f_z <= MAX_FOOT_LOAD m g, cost sum of x_k^T Q x_k +
 are the whole-body QP's force targets (weight WBC_FORCE_WEIGHT_MPC) until the next solve.
 
 The locked-joint model is checked against Pinocchio's full dynamics with the joints' accelerations
-held at zero (tests/control/test_wbc.py): the composite rigid body, exact at any posture.
+held at zero, and its input matrix B against the generated GRF solve's derivative (B R P dlambda/da_b
+is the identity on the trunk's accelerations, every 3-feet stance, at the states of a wbc walk)
+(tests/control/test_wbc.py): the composite rigid body, exact at any posture.
 """
 
 from __future__ import annotations
@@ -32,12 +34,12 @@ import numpy as np
 import pinocchio as pin
 import proxsuite
 
-from quadruped_dyn.control.plan import Reference
+from quadruped_dyn.control.plan import Target
 from quadruped_dyn.control.plant import Command, Measurement
 from quadruped_dyn.control.wbc import MAX_FOOT_LOAD, WholeBodyQp, friction_rows
 from quadruped_dyn.errors import NumericalError
 from quadruped_dyn.experiment.gait import Plan
-from quadruped_dyn.experiment.plan_ik import ReferenceSample
+from quadruped_dyn.experiment.plan_ik import IkTarget
 from quadruped_dyn.math.rigid import skew
 from quadruped_dyn.model.robot import Robot
 from quadruped_dyn.model.stance import StanceSet
@@ -94,19 +96,19 @@ class MpcWbc(WholeBodyQp):
         self.tick = 0
         self.mpc: dict[tuple, Any] = {}
 
-    def command(self, ref: ReferenceSample, stance: StanceSet, meas: Measurement) -> Command:
+    def command(self, target: IkTarget, stance: StanceSet, meas: Measurement) -> Command:
         """The whole-body QP's command; every ``every`` ticks the MPC first (its time counted in ``qp_ns``)."""
-        assert isinstance(ref, Reference)
+        assert isinstance(target, Target)
         t0 = time.perf_counter_ns()
         if self.tick % self.every == 0 and self.terms is not None:
-            self.force_ref = self.plan_forces(ref, meas)
+            self.force_ref = self.plan_forces(target, meas)
         mpc_ns = time.perf_counter_ns() - t0
         self.tick += 1
-        command = super().command(ref, stance, meas)
+        command = super().command(target, stance, meas)
         self.qp_ns += mpc_ns
         return command
 
-    def plan_forces(self, ref: Reference, meas: Measurement) -> np.ndarray:
+    def plan_forces(self, target: Target, meas: Measurement) -> np.ndarray:
         """(4, 3) world ground forces of the MPC's first step (zeros for its swing feet)."""
         assert self.terms is not None
         t = self.tick * self.dt
@@ -115,9 +117,9 @@ class MpcWbc(WholeBodyQp):
         m, c, I_c = rigid_body(self.terms.M[:6, :6])
         I_w = R @ I_c @ R.T
         com_w = R @ c
-        feet = list(self.last_contact or ref.stance)
-        e_p = np.mean(self.terms.r[feet] @ R.T - ref.r_feet[feet], axis=0)
-        x = np.concatenate([pin.rpy.matrixToRpy(R), -e_p, R @ meas.omega_b, R @ self.v_b - ref.trunk_v])
+        feet = list(self.last_contact or target.stance)
+        e_p = np.mean(self.terms.r[feet] @ R.T - target.r_feet[feet], axis=0)
+        x = np.concatenate([pin.rpy.matrixToRpy(R), -e_p, R @ meas.omega_b, R @ self.v_b - target.trunk_v])
         steps = []
         for k in range(MPC_HORIZON):
             tk = t + k * h

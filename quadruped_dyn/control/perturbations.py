@@ -1,21 +1,18 @@
-"""The plant made unlike the controllers' model: a heavier trunk, a payload off centre, a push, a
-noisy and late IMU (friction and foot radius are ``PlantOptions``). The controllers keep the
-nominal robot's generated C; only MuJoCo's model changes.
+"""The plant made unlike the controllers' model: a heavier trunk, a payload off centre, a noisy and
+late IMU (friction, foot radius and a ground step are ``PlantOptions``; a push is the run's,
+``LoopOptions.push``, timed on the run's clock). The controllers keep the nominal robot's generated
+C; only MuJoCo's model changes.
 
 * ``trunk_mass_scale`` / ``link_mass_scale``: the trunk's (every leg body's) mass and rotational
   inertia times the factor (MuJoCo ``body_mass``, ``body_inertia``), centres of mass unchanged.
 * ``payload_kg`` at ``payload_offset_m`` (trunk frame, from the trunk frame's origin): a point mass
   rigidly added to the trunk (its mass, centre of mass and inertia about the new centre, parallel
   axes).
-* ``push_N_s``: an impulse (world frame, N s) on the trunk (``Plant.push``) ``push_at_s`` after the
-  run's start (the last ``set_state``).
 * ``imu_noise_rad_s``: Gaussian noise (standard deviation, rad/s) on each axis of the measured angular
   rate, and ``imu_noise_rad`` on the measured orientation (a rotation about a random axis, trunk
   frame); ``imu_delay_ticks``: the IMU reading is that of this many measurements before (the control
   loop measures once per tick: ticks of the control rate). The encoders stay exact and on time.
   The noise is drawn from ``seed``: MuJoCo is deterministic, so the sample decides the run.
-
-Not expressed: ground height steps (the floor is one plane).
 """
 
 from __future__ import annotations
@@ -29,7 +26,7 @@ import numpy as np
 import pinocchio as pin
 
 from quadruped_dyn.arguments import real_number, whole_number
-from quadruped_dyn.control.plant import Command, Measurement, Plant
+from quadruped_dyn.control.plant import Measurement, Plant
 from quadruped_dyn.errors import InputError
 
 #: Largest accepted mass scale of a body: beyond x10 the drivers' effort limits, not the model, decide.
@@ -42,8 +39,6 @@ class Perturbation:
     link_mass_scale: float = 1.0
     payload_kg: float = 0.0
     payload_offset_m: tuple[float, float, float] = (0.0, 0.0, 0.0)  # trunk frame
-    push_N_s: tuple[float, float, float] = (0.0, 0.0, 0.0)  # world frame
-    push_at_s: float = 0.0
     imu_noise_rad_s: float = 0.0
     imu_noise_rad: float = 0.0
     imu_delay_ticks: int = 0
@@ -65,7 +60,7 @@ class Perturbation:
         for name in ("trunk_mass_scale", "link_mass_scale"):
             if not 0 < getattr(self, name) <= MAX_MASS_SCALE:
                 raise InputError(f"perturbation {name} = {getattr(self, name)}; expected 0 < scale <= {MAX_MASS_SCALE:g}")
-        for name in ("payload_kg", "push_at_s", "imu_noise_rad_s", "imu_noise_rad"):
+        for name in ("payload_kg", "imu_noise_rad_s", "imu_noise_rad"):
             if getattr(self, name) < 0:
                 raise InputError(f"perturbation {name} = {getattr(self, name)}; expected a number >= 0")
 
@@ -111,11 +106,9 @@ class PerturbedPlant(Plant):
         mujoco.mj_setConst(m, self.data)
         self._rng = np.random.default_rng(p.seed)
         self._imu: deque[tuple[np.ndarray, np.ndarray]] = deque(maxlen=p.imu_delay_ticks + 1)
-        self._start = 0.0
 
     def set_state(self, q: np.ndarray, v: np.ndarray) -> None:
         super().set_state(q, v)
-        self._start = float(self.data.time)
         self._imu.clear()
 
     def measure(self) -> Measurement:
@@ -131,12 +124,6 @@ class PerturbedPlant(Plant):
         self._imu.append((np.asarray(quat, dtype=float), omega))
         quat, omega = self._imu[0]
         return Measurement(meas.q, meas.qd, quat, omega, meas.touching)
-
-    def step(self, command: Command, substeps: int) -> None:
-        p = self.perturbation
-        if any(p.push_N_s):
-            self.push(p.push_N_s, p.push_at_s, float(self.data.time) - self._start)
-        super().step(command, substeps)
 
 
 def perturbed(plant: Plant, perturbation: Perturbation) -> PerturbedPlant:

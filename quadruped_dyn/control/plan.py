@@ -1,8 +1,8 @@
 """The plan the controllers track: the gait's IK at the control rate over one cycle.
 
 The feet relative to the trunk are periodic in the plan (footholds and trunk advance by
-speed x period per cycle), so the joint reference is too: one cycle is computed and repeated.
-Each tick also carries the legs' kinematics at the reference (foot positions r_i in the trunk
+speed x period per cycle), so the joint target is too: one cycle is computed and repeated.
+Each tick also carries the legs' kinematics at the target (foot positions r_i in the trunk
 frame and the inverse foot Jacobians), for the attitude-levelling controllers, and a positive
 diagonal estimate of the joints' inertia for the computed-torque feedback (``inertia``), and
 for the whole-body controller the feet's planned velocity and acceleration relative to the
@@ -19,12 +19,12 @@ import numpy as np
 from quadruped_dyn.codegen.library import CompiledFunction, compiled_library
 from quadruped_dyn.dynamics.kinematics import robot_kinematics
 from quadruped_dyn.experiment.gait import Plan
-from quadruped_dyn.experiment.plan_ik import ReferenceSample, references
+from quadruped_dyn.experiment.plan_ik import IkTarget, ik_targets
 
 
 @dataclass(frozen=True)
-class Reference(ReferenceSample):
-    """A ``ReferenceSample`` (q_r, qd_r, qdd_r, stance) and the legs' kinematics there."""
+class Target(IkTarget):
+    """An ``IkTarget`` (q_r, qd_r, qdd_r, stance) and the legs' kinematics there."""
 
     r_feet: np.ndarray  # (4, 3) foot positions, trunk frame, m
     J_inv: np.ndarray  # (4, 3, 3) inverse foot Jacobians d r_i / d q_i
@@ -50,21 +50,21 @@ def joint_inertia(M_legs: np.ndarray, J: np.ndarray, stance: tuple[int, ...], ma
     return m
 
 
-#: The IK reference is computed at knots this far apart (s) and interpolated at the control
+#: The IK target is computed at knots this far apart (s) and interpolated at the control
 #: rate: cubic Hermite in (q, qd), linear in qdd. Measured on the paper robot's walk against
 #: IK at every 1 ms tick: error ~1e-8 rad in q, ~1e-2 rad/s^2 in qdd (IK costs ~5 ms a sample
 #: here, 1.2 s of walk at 1 kHz would take 6 s per robot and gait).
-REFERENCE_KNOT_S = 0.005
+TARGET_KNOT_S = 0.005
 
 
 @cache
-def reference_cycle(plan: Plan, rate_hz: float) -> tuple[Reference, ...]:
-    """The IK reference at the control rate over one gait cycle (see the module docstring and
-    ``REFERENCE_KNOT_S``); the stance set of each tick is the plan's."""
+def target_cycle(plan: Plan, rate_hz: float) -> tuple[Target, ...]:
+    """The IK target at the control rate over one gait cycle (see the module docstring and
+    ``TARGET_KNOT_S``); the stance set of each tick is the plan's."""
     period = plan.gait.period
-    m = max(1, int(round(period / REFERENCE_KNOT_S)))
+    m = max(1, int(round(period / TARGET_KNOT_S)))
     h = period / m
-    knots = references(plan, h * np.arange(m + 1))
+    knots = ik_targets(plan, h * np.arange(m + 1))
     Q = np.array([s.q_r for s in knots])
     QD = np.array([s.qd_r for s in knots])
     QDD = np.array([s.qdd_r for s in knots])
@@ -92,5 +92,5 @@ def reference_cycle(plan: Plan, rate_hz: float) -> tuple[Reference, ...]:
     ddr = (np.roll(dr, -1, axis=0) - np.roll(dr, 1, axis=0)) * rate_hz / 2
     for k, row in enumerate(rows):
         _, v, a = plan.trunk(k / rate_hz)
-        out.append(Reference(*row, dr[k], ddr[k], v, a))
+        out.append(Target(*row, dr[k], ddr[k], v, a))
     return tuple(out)

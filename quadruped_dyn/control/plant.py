@@ -20,6 +20,8 @@ How the URDF becomes the plant (``build_plant``):
   else ``DEFAULT_FOOT_RADIUS``. The sphere touches the ground ``radius`` below the contact
   point of the controllers' model: the floor is placed so that the plan's feet are exactly
   ``radius`` above it, so world coordinates are the plan's (the planned trunk origin is at z = 0).
+  A ground step (``PlantOptions.ground_step`` = (x, h)): from world x on, across the whole width, the
+  ground is h higher (h < 0: lower), the edge a box's; ``floor_z`` stays the start's ground.
   Feet are the only collision geometry: legs and trunk pass through the floor (a fall is
   detected from the trunk, ``measures``). Friction mu (default 0.8) on the feet and the floor,
   ``condim`` 3 (point contact with sliding friction), MuJoCo's default soft-contact parameters
@@ -66,6 +68,11 @@ FOOT_SPHERE_OFFSET_TOL = 1e-3
 #: (0.1-0.3 s), long against the plant's step (0.5 ms), so the impulse is what matters.
 PUSH_DURATION_S = 0.01
 
+#: The largest ground step accepted, up or down (m): beyond, the legs' reach, not the controller, decides.
+MAX_GROUND_STEP_M = 0.2
+#: Half the length and width of a ground step's box (m): past any run's reach (100 cycles of the fastest gait).
+GROUND_HALF_SIZE_M = 100.0
+
 INTEGRATORS = {"implicitfast": mujoco.mjtIntegrator.mjINT_IMPLICITFAST, "euler": mujoco.mjtIntegrator.mjINT_EULER,
                "rk4": mujoco.mjtIntegrator.mjINT_RK4, "implicit": mujoco.mjtIntegrator.mjINT_IMPLICIT}
 
@@ -76,10 +83,19 @@ class PlantOptions:
     integrator: str = "implicitfast"
     mu: float = 0.8  # Coulomb friction of feet and floor
     foot_radius: float | None = None  # m; None: from the URDF (see the module docstring)
+    ground_step: tuple[float, float] | None = None  # (x m, height m), world frame; None: one flat floor
 
     def validate(self) -> None:
         for name in ("timestep", "mu") + (("foot_radius",) if self.foot_radius is not None else ()):
             real_number(f"plant {name}", getattr(self, name))
+        if self.ground_step is not None:
+            step = self.ground_step
+            if not (isinstance(step, tuple | list) and len(step) == 2
+                    and all(math.isfinite(real_number("ground step", v)) for v in step)):
+                raise InputError(f"ground step {step!r}; expected two finite numbers: x (m) and height (m)")
+            if not (abs(step[0]) < GROUND_HALF_SIZE_M and abs(step[1]) <= MAX_GROUND_STEP_M):
+                raise InputError(f"ground step at x = {step[0]:g} m of {step[1]:g} m; expected |x| < "
+                                 f"{GROUND_HALF_SIZE_M:g} m and |height| <= {MAX_GROUND_STEP_M:g} m")
         if not (math.isfinite(self.timestep) and 0 < self.timestep <= 0.01):
             raise InputError(f"plant timestep {self.timestep} s; expected 0 < timestep <= 0.01 s")
         if self.integrator not in INTEGRATORS:
@@ -269,15 +285,23 @@ def _spec(text: str, robot: Robot, options: PlantOptions, floor_z: float, radius
         raise InputError(f"MuJoCo finds no body in {robot.urdf}; expected a quadruped URDF")
     trunk.add_freejoint()
     spec.worldbody.add_light(pos=[0, 0, 3], dir=[0, 0, -1])
+    x0, h = options.ground_step or (0.0, 0.0)
+    friction = [options.mu, 0.005, 0.0001]
     spec.worldbody.add_geom(name="quadruped_dyn_floor", type=mujoco.mjtGeom.mjGEOM_PLANE, size=[0, 0, 0.05],
-                            pos=[0, 0, floor_z], friction=[options.mu, 0.005, 0.0001], rgba=[0.55, 0.6, 0.65, 1])
+                            pos=[0, 0, floor_z + min(0.0, h)], friction=friction, rgba=[0.55, 0.6, 0.65, 1])
+    if h:  # the higher side (x >= x0 for a step up, x < x0 for one down) a box standing on the plane
+        side = 1.0 if h > 0 else -1.0
+        spec.worldbody.add_geom(name="quadruped_dyn_step", type=mujoco.mjtGeom.mjGEOM_BOX,
+                                size=[GROUND_HALF_SIZE_M, GROUND_HALF_SIZE_M, abs(h) / 2],
+                                pos=[x0 + side * GROUND_HALF_SIZE_M, 0, floor_z + min(0.0, h) + abs(h) / 2],
+                                friction=friction, rgba=[0.5, 0.55, 0.6, 1])
     for leg in robot.legs:
         foot = spec.body(leg.foot_frame)
         if foot is None:
             raise InputError(f"MuJoCo has no body for the foot link '{leg.foot_frame}' of {robot.name}")
         foot.add_site(name=f"quadruped_dyn_foot_{leg.label}", pos=[0.0, 0.0, 0.0])
         foot.add_geom(name=f"quadruped_dyn_foot_{leg.label}", type=mujoco.mjtGeom.mjGEOM_SPHERE, size=[radius, 0, 0],
-                      friction=[options.mu, 0.005, 0.0001], condim=3, rgba=[0.1, 0.1, 0.1, 1])
+                      friction=friction, condim=3, rgba=[0.1, 0.1, 0.1, 1])
     for name, limit in zip(robot.joint_names, effort):
         joint = spec.joint(name)
         joint.actfrclimited = mujoco.mjtLimited.mjLIMITED_TRUE

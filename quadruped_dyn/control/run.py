@@ -2,15 +2,15 @@
 
 Per control tick (period 1 / ``rate_hz``, default 1 kHz; it must be a whole number of plant
 steps): measure (joint q, qd; trunk orientation and angular rate -- ``Plant.measure``), take the
-reference and stance set of the plan at t, compute the torques (``controllers``), hold them for
+target and stance set of the plan at t, compute the torques (``controllers``), hold them for
 the tick's plant steps (zero-order hold). The stance set is the plan's: a foot is in the model's
 stance from the planned touch-down to the planned lift-off whatever MuJoCo's contacts say (a
 late touch-down is not detected; the joint feedback keeps driving the foot to the planned
 foothold, and the feet's actual contacts are recorded and compared, ``measures``).
 
-The reference is the gait's IK (``plan_ik.reference``) sampled at the control rate over one
+The target is the gait's IK (``plan_ik.ik_target``) sampled at the control rate over one
 gait cycle and repeated: the feet relative to the trunk are periodic in the plan (footholds and
-trunk advance by speed x period per cycle), so the joint reference is too.
+trunk advance by speed x period per cycle), so the joint target is too.
 
 Initial state: the IK at t = 0 with the trunk at the plan's pose and zero velocity is dropped
 onto the floor (the feet start exactly on it) and held for ``settle_s`` by joint PD plus the
@@ -37,12 +37,12 @@ import numpy as np
 from quadruped_dyn.arguments import real_number, whole_number
 from quadruped_dyn.codegen.library import CompiledFunction
 from quadruped_dyn.control.controllers import Controller, Gains, GeneratedC, Pd, make_controller
-from quadruped_dyn.control.plan import reference_cycle
+from quadruped_dyn.control.plan import target_cycle
 from quadruped_dyn.control.plant import Plant, PlantOptions
 from quadruped_dyn.control.wbc import QpInfeasible
 from quadruped_dyn.errors import InputError, NumericalError
 from quadruped_dyn.experiment.gait import Plan
-from quadruped_dyn.experiment.plan_ik import ReferenceSample
+from quadruped_dyn.experiment.plan_ik import IkTarget
 from quadruped_dyn.model.stance import StanceSet
 from quadruped_dyn.model.state import rotation
 from quadruped_dyn.references.pinocchio import PinocchioReference
@@ -140,7 +140,7 @@ class Trace:
     touching: np.ndarray  # (N, 4) bool
     stance: list[tuple[int, ...]]  # the plan's stance set per tick
     c_ns: np.ndarray  # (N,) wall time of the controller's generated-C calls, ns
-    tick_ns: np.ndarray  # (N,) the whole controller tick in Python (measure + reference + torques), ns
+    tick_ns: np.ndarray  # (N,) the whole controller tick in Python (measure + target + torques), ns
     step_ns: np.ndarray  # (N,) MuJoCo's steps of the tick, ns
     grf: list[dict] = field(default_factory=list)  # samples of MuJoCo's forces vs the paper's GRF model
     qpos: np.ndarray | None = None  # (N, nq) MuJoCo's qpos, for the animation
@@ -170,12 +170,12 @@ def settled_state(plant: Plant, plan: Plan, gains: Gains, c: GeneratedC, rate_hz
     """((q (19,), v (18,)), GRF samples): the initial state every run starts from (see the module
     docstring), and MuJoCo's contact forces vs the paper's four-feet GRF model over the second
     half of the settling (the robot standing: the only four-feet instants of the gaits)."""
-    ref0 = reference_cycle(plan, rate_hz)[0]
+    target0 = target_cycle(plan, rate_hz)[0]
     four = StanceSet((0, 1, 2, 3))
-    q0 = np.concatenate([plan.trunk(0.0)[0], [0.0, 0.0, 0.0, 1.0], ref0.q_r[:12]])
+    q0 = np.concatenate([plan.trunk(0.0)[0], [0.0, 0.0, 0.0, 1.0], target0.q_r[:12]])
     plant.set_state(q0, np.zeros(18))
     pd = Pd(plant.robot, gains, c)
-    hold = ReferenceSample(ref0.q_r[:12], np.zeros(12), np.zeros(12), four.feet)
+    hold = IkTarget(target0.q_r[:12], np.zeros(12), np.zeros(12), four.feet)
     ticks = int(round(settle_s * rate_hz))
     functions: dict[str, CompiledFunction] = {}
     grf = []
@@ -198,7 +198,7 @@ def settled_state(plant: Plant, plan: Plan, gains: Gains, c: GeneratedC, rate_hz
                              f"started at {height0:.3f} m; friction mu = {plant.options.mu:g}, "
                              f"step {plant.options.timestep:g} s)")
     stance0 = plan.stance(0.0)
-    _, v, _ = PinocchioReference(plant.robot).reduced_motion(stance0, ref0.q_r, ref0.qd_r, ref0.qdd_r, q[3:7])
+    _, v, _ = PinocchioReference(plant.robot).reduced_motion(stance0, target0.q_r, target0.qd_r, target0.qdd_r, q[3:7])
     return (q, v), grf
 
 
@@ -207,7 +207,7 @@ def run_controller(plant: Plant, plan: Plan, name: str, gains: Gains, options: L
                    keep_qpos: bool = False) -> Trace:
     """One controller on the plant from ``initial`` for ``options.cycles`` gait cycles."""
     controller: Controller = make_controller(name, plant.robot, gains, c, plant.options.mu, options.rate_hz, plan)
-    cycle = reference_cycle(plan, options.rate_hz)
+    cycle = target_cycle(plan, options.rate_hz)
     dt = 1.0 / options.rate_hz
     n = int(round(options.cycles * plan.gait.period * options.rate_hz))
     plant.set_state(*initial)
@@ -225,10 +225,10 @@ def run_controller(plant: Plant, plan: Plan, name: str, gains: Gains, options: L
             t0 = time.perf_counter_ns()
             c.ns = 0
             meas = plant.measure()
-            ref = cycle[k % len(cycle)]
-            stance = StanceSet(ref.stance)
+            target = cycle[k % len(cycle)]
+            stance = StanceSet(target.stance)
             try:
-                command = controller.command(ref, stance, meas)
+                command = controller.command(target, stance, meas)
             except (InputError, NumericalError) as e:  # the generated C's return codes (CompiledFunction.raw)
                 stopped = f"controller failed at t = {t:.3f} s: {e}"
                 infeasible = isinstance(e, QpInfeasible)
@@ -251,13 +251,13 @@ def run_controller(plant: Plant, plan: Plan, name: str, gains: Gains, options: L
                 raise _Stop
             tau = plant.joint_torques()
             f, touch = plant.contact_forces()
-            for key, value in (("t", t), ("q", meas.q), ("qd", meas.qd), ("q_ref", ref.q_r[:12]), ("qd_ref", ref.qd_r[:12]),
+            for key, value in (("t", t), ("q", meas.q), ("qd", meas.qd), ("q_ref", target.q_r[:12]), ("qd_ref", target.qd_r[:12]),
                                ("tau", tau), ("p", p), ("R", R), ("feet", feet), ("f", f), ("touch", touch),
                                ("c", c.ns), ("tick", t1 - t0), ("step", t2 - t1), ("qp", getattr(controller, "qp_ns", 0))):
                 rec[key].append(value)
             if keep_qpos:
                 rec["qpos"].append(plant.data.qpos.copy())
-            stances.append(ref.stance)
+            stances.append(target.stance)
             if sample:
                 grf.append(_grf_sample(plant, grf_functions, c, t, stance, q_full, v_full, f, touch))
             fell = fallen(plant, height0)

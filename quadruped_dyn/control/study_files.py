@@ -41,7 +41,7 @@ def write_json(path: Path, study: ClosedLoop) -> dict[str, Any]:
 
 
 def write_csv(path: Path, study: ClosedLoop) -> None:
-    """Per controller and tick: t, measured and reference joint angles, commanded torques, trunk
+    """Per controller and tick: t, measured and target joint angles, commanded torques, trunk
     position and roll/pitch/yaw, MuJoCo's normal force per foot."""
     names = study.robot.joint_names
     with text_writer(path) as f:

@@ -34,8 +34,9 @@ run: ``QpInfeasible`` names the tick and the contact set.
 The command to the drivers: the QP's torques fed forward, plus the drivers' PD to the plan with
 ``pd-diag``'s per-joint gains (the stance legs' for the contact feet's legs, the swing legs'
 for the others; run at the plant's rate: what lets a 1 kHz torque loop hold a leg of ~1e-4
-kg m^2). Measured: with the PD on the swing legs only, solo12's trot fell at 1.2 s and the paper
-robot's trot tracked 0.0041 rad RMS; with it on every leg both trot 10 cycles, 0.013 and 0.0006.
+kg m^2; the stiffness capped where it would reach the effort limit within ``PD_LINEAR_RAD``).
+Measured: with the PD on the swing legs only, solo12's trot fell at 1.2 s and the paper
+robot's trot tracked 0.0041 rad RMS; with it on every leg both trot 10 cycles, 0.013 and 0.0006 (0.0007 capped).
 """
 
 from __future__ import annotations
@@ -50,11 +51,11 @@ import pinocchio as pin
 import proxsuite
 
 from quadruped_dyn.codegen.library import CompiledFunction
-from quadruped_dyn.control.plan import Reference
+from quadruped_dyn.control.plan import Target
 from quadruped_dyn.control.plant import Command, Measurement
 from quadruped_dyn.errors import NumericalError
 from quadruped_dyn.experiment.gait import Plan
-from quadruped_dyn.experiment.plan_ik import ReferenceSample
+from quadruped_dyn.experiment.plan_ik import IkTarget
 from quadruped_dyn.model.actuator_limits import actuator_limit
 from quadruped_dyn.model.robot import Robot
 from quadruped_dyn.model.stance import StanceSet
@@ -78,6 +79,13 @@ WBC_WEIGHTS = {"trunk": 1.0, "attitude": 1.0, "swing": 1.0, "posture": 1e-3, "fo
 #: lifting a loaded pair kicked the trunk ~2.5 deg in roll at each switch).
 LANDING_PHASE = 0.85
 MAX_FOOT_LOAD = 2.0  # robot weights
+#: The drivers' PD stays linear up to this joint error (rad): its stiffness M^ omega^2 is capped at the
+#: effort limit / PD_LINEAR_RAD and its damping is 2 zeta sqrt(K_p M^) (~2x the joint errors wbc tracks).
+#: Uncapped it reached anymal_c's 80 N m at 4-8 mrad (stance legs with their share of the mass, and its
+#: 0.16-0.3 kg m^2 swing hips at 250 rad/s): a bang-bang PD that bounced the stance feet off the ground
+#: half the time; the walk fell at 6-8.5 s (capping the stance legs only, or the stiffness only: 6-7 s).
+#: It binds on the hips of go2's legs and of the paper robot's trot stance, never on solo12's.
+PD_LINEAR_RAD = 0.02
 #: An equality residual above this (N, m/s^2) means the QP was not solved, whatever the status.
 QP_EQUALITY_TOL = 1e-3
 #: ProxQP's absolute accuracy (m/s^2, robot weights).
@@ -182,23 +190,23 @@ class WholeBodyQp:
         return q, v, QpTerms(M, h, r.reshape(4, 3), J, Jdv), contact
 
     # ------------------------------------------------------------------ tasks
-    def trunk_targets(self, ref: Reference, R: np.ndarray, terms: QpTerms, v: np.ndarray,
+    def trunk_targets(self, target: Target, R: np.ndarray, terms: QpTerms, v: np.ndarray,
                       contact: tuple[int, ...], stance: StanceSet) -> tuple[np.ndarray, np.ndarray]:
         """Desired (d/dt v_b, d/dt omega_b): PD on the trunk's position relative to the contact feet
         (the plan's r_feet, R = I, against R r_i measured) and on its velocity (the plan's against
         odometry), the plan's acceleration fed forward; PD on roll, pitch, yaw to level."""
         feet = list(contact or stance.feet)
         w, wa = WBC_OMEGA_TRUNK, WBC_OMEGA_ATTITUDE
-        e_p = np.mean(terms.r[feet] @ R.T - ref.r_feet[feet], axis=0)  # p_plan - p, world
+        e_p = np.mean(terms.r[feet] @ R.T - target.r_feet[feet], axis=0)  # p_plan - p, world
         v_w = R @ v[:3]
-        a_w = ref.trunk_a + w**2 * e_p + 2 * w * (ref.trunk_v - v_w)
+        a_w = target.trunk_a + w**2 * e_p + 2 * w * (target.trunk_v - v_w)
         lin = R.T @ a_w - np.cross(v[3:6], v[:3])
         rpy = np.array(pin.rpy.matrixToRpy(R))
         e_R = -R.T @ rpy  # small-angle: the rotation back to level and yaw 0, trunk frame
         ang = wa**2 * e_R - 2 * wa * v[3:6]
         return lin, ang
 
-    def swing_targets(self, ref: Reference, terms: QpTerms, v: np.ndarray, swing: list[int]) -> dict[int, np.ndarray]:
+    def swing_targets(self, target: Target, terms: QpTerms, v: np.ndarray, swing: list[int]) -> dict[int, np.ndarray]:
         """Per swing foot, the desired d2/dt2 r_i minus J_i-dot qd_i (trunk frame): PD to the plan."""
         w = WBC_OMEGA_SWING
         u = terms.J @ v
@@ -208,13 +216,13 @@ class WholeBodyQp:
             rows = slice(3 * i, 3 * i + 3)
             Ji_qd = terms.J[rows, 6:] @ v[6:]
             bias = terms.Jdv[rows] - np.cross(omega, Ji_qd) - np.cross(omega, u[rows])  # Jdot_i qd_i
-            acc = ref.ddr_feet[i] + w**2 * (ref.r_feet[i] - terms.r[i]) + 2 * w * (ref.dr_feet[i] - Ji_qd)
+            acc = target.ddr_feet[i] + w**2 * (target.r_feet[i] - terms.r[i]) + 2 * w * (target.dr_feet[i] - Ji_qd)
             out[i] = acc - bias
         return out
 
     # ------------------------------------------------------------------ the QP
-    def qp_matrices(self, ref: Reference, meas: Measurement, stance: StanceSet) -> tuple:
-        q, v, terms, contact = self.state(meas, stance, ref.phase_s)
+    def qp_matrices(self, target: Target, meas: Measurement, stance: StanceSet) -> tuple:
+        q, v, terms, contact = self.state(meas, stance, target.phase_s)
         self.terms = terms
         R = quaternion_rotation(meas.quat)
         nc = len(contact)
@@ -227,15 +235,15 @@ class WholeBodyQp:
             targets.append(b)
             weights.append(np.full(b.size, w))
 
-        lin, ang = self.trunk_targets(ref, R, terms, v, contact, stance)
+        lin, ang = self.trunk_targets(target, R, terms, v, contact, stance)
         task(np.eye(3, n), lin, wts["trunk"])
         task(np.eye(3, n, 3), ang, wts["attitude"])
-        for i, b in self.swing_targets(ref, terms, v, [i for i in range(4) if i not in contact]).items():
+        for i, b in self.swing_targets(target, terms, v, [i for i in range(4) if i not in contact]).items():
             A = np.zeros((3, n))
             A[:, 6:18] = terms.J[3 * i : 3 * i + 3, 6:]
             task(A, b, wts["swing"])
         wp = WBC_OMEGA_POSTURE
-        qdd = ref.qdd_r[:12] + wp**2 * (ref.q_r[:12] - meas.q) + 2 * wp * (ref.qd_r[:12] - meas.qd)
+        qdd = target.qdd_r[:12] + wp**2 * (target.q_r[:12] - meas.q) + 2 * wp * (target.qd_r[:12] - meas.qd)
         task(np.eye(12, n, 6), qdd, wts["posture"])
         f_ref = np.zeros(3 * nc)
         if nc:
@@ -251,7 +259,7 @@ class WholeBodyQp:
         A_eq[6:, :18] = Jc
         b_eq = np.concatenate([-terms.h[:6], -terms.Jdv[[3 * i + k for i in contact for k in range(3)]]])
         landing = any(i not in stance.feet for i in contact)
-        ramp = min(1.0, (1.0 - ref.phase_s) / (1.0 - LANDING_PHASE))
+        ramp = min(1.0, (1.0 - target.phase_s) / (1.0 - LANDING_PHASE))
         f_max = np.array([ramp * MAX_FOOT_LOAD if landing and i in stance.feet else np.inf for i in contact])
         C_f, u_f = friction_rows(R, self.mu, n, f_max)
         C_tau = np.zeros((12, n))
@@ -261,9 +269,9 @@ class WholeBodyQp:
         upper = np.concatenate([u_f, self.effort - terms.h[6:]])
         return (H, g, A_eq, b_eq, C, lower, upper), contact, terms
 
-    def solve(self, ref: Reference, meas: Measurement, stance: StanceSet) -> tuple[np.ndarray, np.ndarray, tuple[int, ...]]:
+    def solve(self, target: Target, meas: Measurement, stance: StanceSet) -> tuple[np.ndarray, np.ndarray, tuple[int, ...]]:
         """(vdot, f (n_c, 3) trunk frame, contact feet) of this tick's QP; QpInfeasible if unsolved."""
-        (H, g, A, b, C, lower, upper), contact, terms = self.qp_matrices(ref, meas, stance)
+        (H, g, A, b, C, lower, upper), contact, terms = self.qp_matrices(target, meas, stance)
         t0 = time.perf_counter_ns()
         qp = self.qps.get(contact)
         if qp is not None and contact == self.last_contact:  # warm start: last tick's solution
@@ -291,14 +299,14 @@ class WholeBodyQp:
         Jc = t.J[[3 * i + k for i in contact for k in range(3)]]
         return t.M[6:] @ vdot + t.h[6:] - Jc[:, 6:].T @ f.ravel()
 
-    def command(self, ref: ReferenceSample, stance: StanceSet, meas: Measurement) -> Command:
-        assert isinstance(ref, Reference)
-        vdot, f, contact = self.solve(ref, meas, stance)
+    def command(self, target: IkTarget, stance: StanceSet, meas: Measurement) -> Command:
+        assert isinstance(target, Target)
+        vdot, f, contact = self.solve(target, meas, stance)
         self.c.ns += self.c_ns
         tau = self.torques(vdot, f, contact)
         w, z = self.gains.ct_omega(StanceSet(contact) if len(contact) else stance), self.gains.ct_zeta
-        kp, kd = ref.inertia * w**2, ref.inertia * 2 * z * w
-        return Command(tau, ref.q_r[:12], ref.qd_r[:12], kp, kd)
+        kp = np.minimum(target.inertia * w**2, self.effort / PD_LINEAR_RAD)
+        return Command(tau, target.q_r[:12], target.qd_r[:12], kp, 2 * z * np.sqrt(kp * target.inertia))
 
 
 def _new_qp(H: np.ndarray, g: np.ndarray, A: np.ndarray, b: np.ndarray, C: np.ndarray, lower: np.ndarray,

@@ -1,10 +1,10 @@
 """The paper's dynamics as CasADi graphs: leg kinematics, Newton-Euler, composite rigid bodies,
-the GRF solve, the reduced model and its generated forms, and guarded numeric calls."""
+the GRF solve, the reduced model, the derivatives, and guarded numeric calls."""
 
 from quadruped_dyn.exports import lazy_exports
 
 _MODULES: dict[str, tuple[str, ...]] = {
-    "crba": ("mass_matrix_crba", "generalized_gravity"),
+    "crba": ("MASS_PARTS", "mass_matrix_crba", "leg_mass_parts", "assembled_mass_matrix", "generalized_gravity"),
     "derivatives": (
         "quaternion_tangent", "configuration_tangent", "tangent_jacobian", "cholesky_solve",
         "FullDerivatives", "full_derivatives", "rotation_jacobian", "ReducedDerivatives", "reduced_derivatives",
@@ -21,7 +21,8 @@ _MODULES: dict[str, tuple[str, ...]] = {
     "guarded": ("check_quaternion", "check_inputs", "check_outputs", "guarded_call", "GuardedFunction", "guard_fields"),
     "kinematics": ("joint_frames", "foot_position", "LegKinematics", "leg_kinematics", "robot_kinematics"),
     "newton_euler": (
-        "LegForces", "leg_newton_euler", "hip_reaction_split", "inverse_dynamics", "coriolis_matrix", "FullDynamics",
+        "LegForces", "leg_newton_euler", "hip_reaction_split", "gravity_in_trunk", "trunk_acceleration",
+        "inverse_dynamics", "coriolis_matrix", "FullDynamics",
         "full_dynamics",
     ),
     "reduced": (
@@ -29,7 +30,6 @@ _MODULES: dict[str, tuple[str, ...]] = {
         "solve_forward_dynamics", "reduced_model",
     ),
     "reduced_projection": ("rigid_motion", "ReducedProjection"),
-    "rnea_derivatives": ("rnea_tangent_derivatives", "did_full_pieces"),
-    "leg_template": ("LegTemplate", "leg_templates", "LegPieces", "template_of"),
+    "rnea_derivatives": ("LEG_PARTS", "leg_rows", "rows_to_derivatives", "rnea_tangent_derivatives"),
 }
 __all__, __getattr__, __dir__ = lazy_exports(__name__, _MODULES)

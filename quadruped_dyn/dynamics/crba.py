@@ -24,13 +24,16 @@ import casadi as ca
 import numpy as np
 
 from quadruped_dyn.math.rigid import LinkInertia, axis_rotation, skew
-from quadruped_dyn.math.spatial import dm
+from quadruped_dyn.math.spatial import dm, stacked
 from quadruped_dyn.model.leg import Leg
 from quadruped_dyn.model.leg_frames import axis_aligned
 from quadruped_dyn.model.robot import Robot
 from quadruped_dyn.model.state import NV_FULL
 
 Inertia = tuple[float | ca.SX, ca.SX, ca.SX]  # (m kg, h kg m, I_o kg m^2) at a frame's origin, in its axes
+
+#: A leg's part of M, in order: (name, rows, columns), each stacked column by column (``leg_mass_blocks``).
+MASS_PARTS: tuple[tuple[str, int, int], ...] = (("M_ll", 3, 3), ("M_bl", 6, 3), ("m", 1, 1), ("h", 3, 1), ("I_o", 3, 3))
 
 
 def _symmetric(X: ca.SX) -> ca.SX:
@@ -183,3 +186,26 @@ def generalized_gravity(robot: Robot, q_joints: ca.SX, g_b: ca.SX) -> ca.SX:
         m, h, _ = _to_parent(Yc[0], leg.joints[0].axis, q[0], leg.joints[0].placement.p)
         m_total, h_total = m_total + m, h_total + h
     return ca.vertcat(-m_total * g_b, -ca.cross(h_total, g_b), *tau)
+
+
+def leg_mass_parts(leg: Leg, q: ca.SX) -> ca.SX:
+    """The leg's ``MASS_PARTS`` stacked (canonical frames; SX parameters allowed)."""
+    M_ll, M_bl, (m, h, I_o) = leg_mass_blocks(leg, q)
+    return stacked((M_ll, M_bl, ca.SX(m), h, I_o))
+
+
+def assembled_mass_matrix(robot: Robot, parts: list[dict[str, ca.SX]], signs: list[np.ndarray]) -> ca.SX:
+    """M (18, 18, sparse) from each leg's ``MASS_PARTS`` in the coordinates sigma q (sigma = +-1 per joint, ``signs``)
+    and the trunk's inertia: the legs' blocks and composite inertias as ``mass_matrix_crba`` places them."""
+    M = ca.SX(ca.Sparsity(NV_FULL, NV_FULL))
+    total = trunk_inertia(robot)
+    for k, (x, sigma) in enumerate(zip(parts, signs)):
+        D = ca.diag(ca.DM(sigma))
+        M_ll, M_bl = (x["M_ll"], x["M_bl"]) if np.all(sigma == 1.0) else (D @ x["M_ll"] @ D, x["M_bl"] @ D)
+        s = slice(6 + 3 * k, 9 + 3 * k)
+        M[s, s] = M_ll
+        M[0:6, s] = M_bl
+        M[s, 0:6] = M_bl.T
+        total = add_inertia(total, (x["m"], x["h"], x["I_o"]))
+    M[0:6, 0:6] = trunk_mass_block(total)
+    return M

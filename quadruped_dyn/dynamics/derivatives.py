@@ -44,10 +44,9 @@ from functools import cache
 import casadi as ca
 import numpy as np
 
-from quadruped_dyn.dynamics.by_leg import gravity_in_trunk
 from quadruped_dyn.dynamics.grf import grf_solve
 from quadruped_dyn.dynamics.guarded import GuardedFunction, guard_fields, guarded_call, with_condition
-from quadruped_dyn.dynamics.newton_euler import inverse_dynamics
+from quadruped_dyn.dynamics.newton_euler import gravity_in_trunk, inverse_dynamics
 from quadruped_dyn.dynamics.reduced import MAX_COND_M_R, check_regularity, regularity_function, solve_forward_dynamics
 from quadruped_dyn.dynamics.reduced_projection import reduced_projection
 from quadruped_dyn.dynamics.rnea_derivatives import rnea_tangent_derivatives
@@ -152,7 +151,7 @@ def _full_derivatives(robot: Robot) -> FullDerivatives:
     dfd = ca.Function("dfd_full", [q, v, tau], [-Minv @ dq_fd, -Minv @ dv_fd, Minv], ["q", "v", "tau"],
                       ["da_dq", "da_dv", "da_dtau"], opts)
     fd = ca.Function("fd_full", [q, v, tau], [acc], ["q", "v", "tau"], ["a"], opts)
-    mass = ca.Function("M_full", [q], [M], ["q"], ["M"], opts)
+    mass = ca.Function("M_full_crba", [q], [M], ["q"], ["M"], opts)
     return FullDerivatives(did, did_ad, dfd, fd, time.perf_counter() - start, mass)
 
 

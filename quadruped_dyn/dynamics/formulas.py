@@ -132,7 +132,7 @@ def paper_formulas(robot: Robot) -> list[Formula]:
     (J,) = to_sympy(kin.foot_jacobian, [theta])
     th = ca.SX.sym("theta", 3)
     level = ca.vertcat(ca.SX.zeros(6), 1, th, ca.SX.zeros(9))  # p = 0, quaternion (0, 0, 0, 1): R = I
-    g_leg = ca.Function("G_FL", [th], [full_dynamics(robot).G_full(level)[6:9]])
+    g_leg = ca.Function("G_FL", [th], [full_dynamics(robot).G_full_newton_euler(level)[6:9]])
     (G,) = to_sympy(g_leg, [theta])
     variables = tuple(theta)
     return [
@@ -165,8 +165,8 @@ def term_functions(robot: Robot) -> dict[str, ca.Function]:
     """The terms whose size and structure the report shows: full coordinates, one GRF solve
     per stance kind (paper model), and the reduced model of standing, a walk triple, a trot pair."""
     fd = full_dynamics(robot)
-    terms = {name: getattr(fd, name) for name in ("M_full", "M_full_ad", "M_full_crba", "C_full", "G_full",
-                                                   "nle_full", "coriolis", "id_full")}
+    terms = {name: getattr(fd, name) for name in ("M_full_walker_orin", "M_full_ad", "M_full_crba", "C_full",
+                                                   "G_full_newton_euler", "nle_full", "coriolis", "id_full")}
     terms["foot Jacobian (FL)"] = robot_kinematics(robot)[0].foot_jacobian
     for stance in ("FL+FR+BL+BR", "FR+BL+BR", "FL+BR"):
         terms[f"grf {stance}"] = grf_solve(robot, stance).function

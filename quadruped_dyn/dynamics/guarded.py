@@ -6,7 +6,7 @@ shape and finiteness and every quaternion (input ``q``'s entries 3:7, input ``qu
 refuses a non-finite result with a message saying what is singular.
 
 ``GuardedFunction`` is a CasADi Function whose numeric calls go through the same checks (the
-public API: ``full_dynamics(robot).M_full(q)`` and the like); called on SX/MX it is the plain
+public API: ``full_dynamics(robot).M_full_walker_orin(q)`` and the like); called on SX/MX it is the plain
 Function, so it builds graphs and generates C as before. A GuardedFunction may carry a
 ``condition``: a check of the (checked) numeric inputs run before every numeric evaluation, for
 configurations where the outputs would be finite nonsense rather than NaN (a GRF system that has

@@ -83,7 +83,7 @@ def aligned_leg_newton_euler(
     leg: Leg, q: ca.SX, qd: ca.SX, qdd: ca.SX, omega_b: ca.SX, alpha_b: ca.SX, a0: ca.SX, f: ca.SX
 ) -> LegForces:
     """``leg_newton_euler`` of a leg already in canonical frames (``axis_aligned``); its placements, inertias
-    and foot may be SX (a leg template, ``dynamics.leg_template``)."""
+    and foot may be SX (a leg template, ``codegen.forms.leg_template``)."""
     w, wd, vd, f_foot = omega_b, alpha_b, a0, -f
     K = point_acceleration(w, wd)  # the trunk's; CSE shares it with the trunk's and the other legs'
     links = []  # (R_parent_i, P_i, F_i, N_i) per link
@@ -133,6 +133,17 @@ def trunk_own_wrench(trunk: LinkInertia, omega_b: ca.SX, alpha_b: ca.SX, a0: ca.
     c, Ic = dm(trunk.com), dm(trunk.inertia)
     a_c = a0 + point_acceleration(omega_b, alpha_b) @ c
     return ca.vertcat(trunk.mass * a_c, Ic @ alpha_b + ca.cross(omega_b, Ic @ omega_b) + ca.cross(c, trunk.mass * a_c))
+
+
+def gravity_in_trunk(q: ca.SX) -> ca.SX:
+    """g_b (3,): gravity in the trunk frame at q (19,) (quaternion x y z w at q[3:7])."""
+    return quat_to_rotation(q[3:7]).T @ dm(GRAVITY_W)
+
+
+def trunk_acceleration(q: ca.SX, v: ca.SX, a: ca.SX) -> ca.SX:
+    """a0 = a_lin + w_b x v_b - g_b (3,): the trunk origin's classical acceleration minus gravity, trunk frame (a: the
+    spatial acceleration of the project's convention, ``model/state.py``)."""
+    return a[0:3] + ca.cross(v[3:6], v[0:3]) - gravity_in_trunk(q)
 
 
 def inverse_dynamics_parts(
@@ -206,11 +217,11 @@ class FullDynamics:
     """
 
     id_full: ca.Function  # q, v, a, f -> (w_res (6,), tau (12,))
-    M_full: ca.Function  # q -> M (18, 18), by the paper's unit accelerations (Walker & Orin)
+    M_full_walker_orin: ca.Function  # q -> M (18, 18), by the paper's unit accelerations (Walker & Orin)
     M_full_ad: ca.Function  # q -> M (18, 18), CasADi AD of id_full w.r.t. a
     M_full_crba: ca.Function  # q -> M (18, 18), composite rigid bodies: the form generated as C
     C_full: ca.Function  # q, v -> C (18,) velocity terms (g = 0, a = 0)
-    G_full: ca.Function  # q -> G (18,) (v = 0, a = 0)
+    G_full_newton_euler: ca.Function  # q -> G (18,) (v = 0, a = 0)
     G_full_crb: ca.Function  # q -> G (18,) from composite first moments: the form generated as C
     nle_full: ca.Function  # q, v -> C + G (18,) in one evaluation (Pinocchio's nonLinearEffects)
     coriolis: ca.Function  # q, v -> C(q, v) (18, 18), Pinocchio's factorisation
@@ -234,7 +245,7 @@ def _full_dynamics(robot: Robot) -> FullDynamics:
     start = time.perf_counter()
     q, v, a, f = _ordered_inputs()
     qj = q[7:]
-    g_b = quat_to_rotation(q[3:7]).T @ dm(GRAVITY_W)
+    g_b = gravity_in_trunk(q)
     zero_v, zero_f = ca.SX.zeros(NV_FULL), ca.SX.zeros(12)
     tau = inverse_dynamics(robot, qj, g_b, v, a, f)
     # Walker & Orin: column k of M is the inverse dynamics of a unit acceleration e_k, g = 0, v = 0
@@ -249,11 +260,11 @@ def _full_dynamics(robot: Robot) -> FullDynamics:
     opts = {"cse": True}
     return FullDynamics(
         id_full=ca.Function("id_full", [q, v, a, f], [tau[:6], tau[6:]], ["q", "v", "a", "f"], ["w_res", "tau"], opts),
-        M_full=ca.Function("M_full", [q], [M], ["q"], ["M"], opts),
+        M_full_walker_orin=ca.Function("M_full_walker_orin", [q], [M], ["q"], ["M"], opts),
         M_full_ad=ca.Function("M_full_ad", [q], [M_ad], ["q"], ["M"], opts),
         M_full_crba=ca.Function("M_full_crba", [q], [mass_matrix_crba(robot, qj)], ["q"], ["M"], opts),
         C_full=ca.Function("C_full", [q, v], [C], ["q", "v"], ["C"], opts),
-        G_full=ca.Function("G_full", [q], [G], ["q"], ["G"], opts),
+        G_full_newton_euler=ca.Function("G_full_newton_euler", [q], [G], ["q"], ["G"], opts),
         G_full_crb=ca.Function("G_full_crb", [q], [generalized_gravity(robot, qj, g_b)], ["q"], ["G"], opts),
         nle_full=ca.Function("nle_full", [q, v], [nle], ["q", "v"], ["nle"], opts),
         coriolis=ca.Function("coriolis_matrix", [q, v], [Cmat], ["q", "v"], ["C"], opts),

@@ -19,8 +19,8 @@ Hence, with rnea(q, v, a) the project's Newton-Euler with zero foot forces and g
     M_r = S M_full T,   C_r + G_r = S rnea(q, v, k),   G_r = S G_full = S rnea(q, 0, 0),   id_r = S rnea(q, v, T qdd_r + k),
 M_full and G_full by composite rigid bodies (``crba``); S and T are computed once and shared. The generated
 C forms S_b, T_b (``mass_matrix_factors``' S_b and T_b) and v, a (``velocity_and_acceleration``) per stance set from the
-stance's maps and the feet's kinematics (``stance_maps``, ``by_leg.foot_pieces``) and takes M_full, G_full and rnea
-from the robot's full-coordinate C, the products in loops (docs/formulation.md §6.2).
+stance's maps and the feet's kinematics (``codegen.forms.stance_maps``, ``leg_pieces.foot_pieces``) and takes M_full,
+G_full and rnea from the robot's full-coordinate C, the products in loops (docs/formulation.md §6.2).
 """
 
 from __future__ import annotations

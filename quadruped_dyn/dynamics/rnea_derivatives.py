@@ -1,45 +1,34 @@
-"""did_full's form: the derivatives of the full inverse dynamics, leg by leg (docs/derivatives.md, "What there is",
-"dfd_r and dgrf as generated C").
+"""The derivatives of the full inverse dynamics in closed form, leg by leg (docs/derivatives.md, "What there is").
 
-rnea(q, v, a) (no foot forces) in Pinocchio's tangent convention (``derivatives`` module docstring) is evaluated in
-three generated pieces, so that one piece of machine code serves every leg (``leg_template``):
-
-* ``head(q, v, a) -> a_cl`` (3,): the trunk's classical linear acceleration a_lin + w_b x v_b - g_b, trunk frame,
-  through which alone v_b and gravity enter the recursion;
-* per leg template, ``leg(w_b, alpha_b, a_cl, q_l, qd_l, qdd_l, p) -> L`` (``LEG_PARTS``, stacked column by column):
-  the leg's rows y = (its wrench on the trunk, its three torques) differentiated along its joint angles (J_q),
-  rates (J_qd) and w_b (J_w), and its part of M (M_ll, M_bl, its composite inertia (m, h, I_o));
-* ``tail(q, v, a, L_0, ..., L_3) -> (dtau_dq, dtau_dv, dtau_da = M)``: the trunk's own wrench, the sums over the legs
-  and the v_b, gravity and w_b columns by M[:, 0:3] (the identities of "How did_full is formed").
-
-``rnea_tangent_derivatives`` is the three composed as a graph: the same operations as the C's calls.
+rnea(q, v, a) (no foot forces) in Pinocchio's tangent convention (``derivatives`` module docstring): each leg's rows
+y = (its wrench on the trunk, its three torques) depend on the trunk only through w_b, alpha_b and the trunk's
+classical linear acceleration minus gravity a_cl = a_lin + w_b x v_b - g_b (``newton_euler.trunk_acceleration``).
+Per leg, ``leg_rows`` differentiates y along its joints and w_b and gives its part of M (composite rigid bodies);
+``rows_to_derivatives`` sums the legs and the trunk's own wrench and forms the v_b, gravity and w_b columns from
+M[:, 0:3] by the identities of docs/derivatives.md. ``rnea_tangent_derivatives`` is the two over the robot's legs:
+equal to CasADi's Jacobian of the whole rnea (``derivatives.FullDerivatives.did_full_ad``, tested). The generated
+C evaluates the same per-leg rows as one function per leg template (``codegen.forms.did_full_pieces``).
 """
 
 from __future__ import annotations
 
-from functools import cache
-
 import casadi as ca
 import numpy as np
 
-from quadruped_dyn.dynamics.by_leg import (
-    MASS_PARTS,
-    assembled_mass_matrix,
+from quadruped_dyn.dynamics.crba import MASS_PARTS, assembled_mass_matrix, leg_mass_blocks
+from quadruped_dyn.dynamics.newton_euler import (
+    aligned_leg_newton_euler,
     gravity_in_trunk,
-    stacked,
     trunk_acceleration,
-    trunk_head,
-    unstacked,
+    trunk_own_wrench,
 )
-from quadruped_dyn.dynamics.crba import leg_mass_blocks
-from quadruped_dyn.dynamics.leg_template import LegPieces, leg_signs, leg_templates, template_of
-from quadruped_dyn.dynamics.newton_euler import aligned_leg_newton_euler, trunk_own_wrench
-from quadruped_dyn.math.spatial import dm, skew
+from quadruped_dyn.math.spatial import dm, skew, stacked, unstacked
 from quadruped_dyn.model.leg import Leg
+from quadruped_dyn.model.leg_frames import axis_aligned
 from quadruped_dyn.model.robot import Robot
-from quadruped_dyn.model.state import NQ_FULL, NV_FULL
+from quadruped_dyn.model.state import NV_FULL
 
-#: A leg function's output L, in order: (name, rows, columns), each stacked column by column.
+#: A leg's rows' derivatives and part of M (``leg_rows``), in order: (name, rows, columns), each stacked column by column.
 LEG_PARTS: tuple[tuple[str, int, int], ...] = (("J_q", 9, 3), ("J_qd", 9, 3), ("J_w", 9, 3), *MASS_PARTS)
 
 
@@ -81,26 +70,6 @@ def leg_rows(leg: Leg, q: ca.SX, qd: ca.SX, qdd: ca.SX, w_b: ca.SX, alpha_b: ca.
     return stacked((J_q, J_qd, J_w, M_ll, M_bl, ca.SX(m), h, I_o))
 
 
-@cache
-def did_full_pieces(robot: Robot) -> LegPieces:
-    """did_full(q, v, a) -> (dtau_dq, dtau_dv, dtau_da) leg by leg (module docstring)."""
-    q, v, a = ca.SX.sym("q", NQ_FULL), ca.SX.sym("v", NV_FULL), ca.SX.sym("a", NV_FULL)
-    opts = {"cse": True}
-    head = trunk_head("did_full_head", "a_cl")
-    templates = leg_templates(robot)
-    legs = []
-    for i, t in enumerate(templates):
-        xs = [ca.SX.sym(n, 3) for n in ("w_b", "alpha_b", "a_cl", "q_l", "qd_l", "qdd_l")]
-        legs.append(ca.Function(f"did_full_leg{i}", [*xs, t.p], [leg_rows(t.leg, xs[3], xs[4], xs[5], *xs[0:3])],
-                                ["w_b", "alpha_b", "a_cl", "q_l", "qd_l", "qdd_l", "p"], ["L"], opts))
-    of = template_of(templates)
-    Ls = [ca.SX.sym(f"L_{k}", legs[of[k]].sparsity_out(0)) for k in range(4)]
-    signs = [leg_signs(templates, k) for k in range(4)]
-    tail = ca.Function("did_full_tail", [q, v, a, *Ls], list(_tail(robot, q, v, a, Ls, signs)),
-                       ["q", "v", "a", *(f"L_{k}" for k in range(4))], ["dtau_dq", "dtau_dv", "dtau_da"], opts)
-    return LegPieces(head, templates, tuple(legs), of, tail)
-
-
 def _in_robot_coordinates(parts: dict[str, ca.SX], sigma: np.ndarray) -> dict[str, ca.SX]:
     """A leg's Jacobians from its template's coordinates sigma q back to the robot's: its torque rows and its joints'
     columns times sigma (sigma = +-1: a product with 1 is dropped, with -1 a negation); M's parts: see
@@ -113,8 +82,10 @@ def _in_robot_coordinates(parts: dict[str, ca.SX], sigma: np.ndarray) -> dict[st
     return out
 
 
-def _tail(robot: Robot, q: ca.SX, v: ca.SX, a: ca.SX, Ls: list[ca.SX],
-          signs: list[np.ndarray]) -> tuple[ca.SX, ca.SX, ca.SX]:
+def rows_to_derivatives(robot: Robot, q: ca.SX, v: ca.SX, a: ca.SX, Ls: list[ca.SX],
+                        signs: list[np.ndarray]) -> tuple[ca.SX, ca.SX, ca.SX]:
+    """(dtau_dq, dtau_dv, dtau_da = M) from the four legs' ``leg_rows`` L_0..L_3, each leg's in the coordinates
+    sigma q (``signs``: +-1 per joint; ones for the robot's own), and the trunk's own wrench (module docstring)."""
     w_b, v_b = v[3:6], v[0:3]
     a_cl = ca.SX.sym("a_cl", 3)
     own = trunk_own_wrench(robot.trunk, w_b, a[3:6], a_cl)
@@ -139,17 +110,14 @@ def _tail(robot: Robot, q: ca.SX, v: ca.SX, a: ca.SX, Ls: list[ca.SX],
 
 
 def rnea_tangent_derivatives(robot: Robot, q: ca.SX, v: ca.SX, a: ca.SX) -> tuple[ca.SX, ca.SX, ca.SX]:
-    """(dtau_dq (18, 18), dtau_dv (18, 18), dtau_da = M (18, 18)) of the full inverse dynamics (no foot forces),
-    composed of ``did_full_pieces``' head, leg and tail functions (module docstring). The trunk position does not
-    enter (its columns are structurally zero). Equal to ``tangent_jacobian``'s of the whole rnea (tested)."""
-    pieces = did_full_pieces(robot)
-    if pieces.head is None:
-        raise AssertionError("did_full's pieces have a head")
-    a_cl = pieces.head(q, v, a)
+    """(dtau_dq (18, 18), dtau_dv (18, 18), dtau_da = M (18, 18)) of the full inverse dynamics (no foot forces) by
+    ``leg_rows`` for each of the robot's legs (canonical frames) and ``rows_to_derivatives``. The trunk position does
+    not enter (its columns are structurally zero)."""
+    xs = [ca.SX.sym(n, 3) for n in ("w_b", "alpha_b", "a_cl", "q_l", "qd_l", "qdd_l")]
+    a_cl = trunk_acceleration(q, v, a)
     Ls = []
-    for k in range(4):
-        i, s = pieces.template_of[k], slice(3 * k, 3 * k + 3)
-        sigma = ca.DM(pieces.leg_signs(k))
-        Ls.append(pieces.legs[i](v[3:6], a[3:6], a_cl, sigma * q[7:][s], sigma * v[6:][s], sigma * a[6:][s],
-                                 ca.DM(pieces.leg_values(k))))
-    return tuple(pieces.tail(q, v, a, *Ls))  # type: ignore[return-value]
+    for k, leg in enumerate(robot.legs):  # a_cl, w_b separate inputs of the leg's rows: J_w is at fixed a_cl
+        rows = ca.Function("leg_rows", xs, [leg_rows(axis_aligned(leg), xs[3], xs[4], xs[5], *xs[0:3])])
+        s = slice(3 * k, 3 * k + 3)
+        Ls.append(rows(v[3:6], a[3:6], a_cl, q[7:][s], v[6:][s], a[6:][s]))
+    return rows_to_derivatives(robot, q, v, a, Ls, [np.ones(3)] * 4)

@@ -16,7 +16,7 @@ _MODULES: dict[str, tuple[str, ...]] = {
         "percent_errors", "departure", "growth_rate", "static_stability", "pd_gains", "run_experiment", "report",
         "physics_check",
     ),
-    "plan_ik": ("POLISH_STEPS", "ReferenceSample", "feet_ik", "reference", "references"),
+    "plan_ik": ("POLISH_STEPS", "IkTarget", "feet_ik", "ik_target", "ik_targets"),
     "rigid_contact": ("simulate_rigid",),
     "simulate": (
         "FALLEN_CLOSURE_M", "FALLEN_TRUNK_M", "RTOL", "TRUNCATION_RTOL_FACTOR", "IDENTITY_QUAT", "ReducedDynamics",

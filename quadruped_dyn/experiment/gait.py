@@ -1,6 +1,6 @@
 """Gait plans: which feet stand when, where the feet go, where the trunk goes (docs/experiment.md §2).
 
-The experiment flows plan (this module) -> IK plan (``reference``) -> forward dynamics
+The experiment flows plan (this module) -> IK plan (``ik_target``) -> forward dynamics
 (``simulate``, ``rigid_contact``) -> comparison and report (``validation``).
 
 World frame: z up; the trunk keeps R = I (so the trot's roll phi = 0) and its origin at height

@@ -25,7 +25,7 @@ from quadruped_dyn.dynamics.derivatives import ReducedDerivatives, reduced_deriv
 from quadruped_dyn.errors import InputError
 from quadruped_dyn.experiment.gait import Gait, Plan, gait_plan
 from quadruped_dyn.experiment.paper_experiment import growth_rate
-from quadruped_dyn.experiment.plan_ik import ReferenceSample, reference
+from quadruped_dyn.experiment.plan_ik import IkTarget, ik_target
 from quadruped_dyn.experiment.simulate import IDENTITY_QUAT, project_on_stance
 from quadruped_dyn.model.robot import Robot
 from quadruped_dyn.model.stance import StanceSet
@@ -40,25 +40,25 @@ PROJECTION_FD_STEP = 1e-6
 STEP = 0.005
 
 
-def _jacobian(derivatives: ReducedDerivatives, ref: ReferenceSample) -> np.ndarray:
-    """A (2n, 2n) at the reference state and its IK torques, the trunk upright (the plan's R = I)."""
-    tau = np.asarray(derivatives.did_r(ref.q_r, ref.qd_r, ref.qdd_r, IDENTITY_QUAT)[0]).ravel()
-    dq, dqd, _, dtheta = derivatives.dfd_r(ref.q_r, ref.qd_r, tau, IDENTITY_QUAT)
+def _jacobian(derivatives: ReducedDerivatives, target: IkTarget) -> np.ndarray:
+    """A (2n, 2n) at the target state and its IK torques, the trunk upright (the plan's R = I)."""
+    tau = np.asarray(derivatives.did_r(target.q_r, target.qd_r, target.qdd_r, IDENTITY_QUAT)[0]).ravel()
+    dq, dqd, _, dtheta = derivatives.dfd_r(target.q_r, target.qd_r, tau, IDENTITY_QUAT)
     n = derivatives.n
-    W = np.asarray(derivatives.velocity_map(ref.q_r, IDENTITY_QUAT))
+    W = np.asarray(derivatives.velocity_map(target.q_r, IDENTITY_QUAT))
     return np.block([[np.zeros((n, n)), np.eye(n)], [dq + dtheta @ W, dqd]])
 
 
-def _projected(robot: Robot, plan: Plan, t: float, ref: ReferenceSample, delta: np.ndarray) -> np.ndarray:
-    """P delta: the derivative of project_on_stance at the reference state (footholds of the plan)
+def _projected(robot: Robot, plan: Plan, t: float, target: IkTarget, delta: np.ndarray) -> np.ndarray:
+    """P delta: the derivative of project_on_stance at the target state (footholds of the plan)
     along delta (2n,), by a central difference of step PROJECTION_FD_STEP along delta's direction."""
-    holds = np.array([plan.foot(i, t)[0] for i in ref.stance])
-    y = np.concatenate([ref.q_r, ref.qd_r])
+    holds = np.array([plan.foot(i, t)[0] for i in target.stance])
+    y = np.concatenate([target.q_r, target.qd_r])
     size = float(np.linalg.norm(delta))
     if size == 0.0:
         return delta
     e = delta * (PROJECTION_FD_STEP / size)
-    return (project_on_stance(robot, ref.stance, holds, y + e) - project_on_stance(robot, ref.stance, holds, y - e)) * (
+    return (project_on_stance(robot, target.stance, holds, y + e) - project_on_stance(robot, target.stance, holds, y - e)) * (
         size / (2 * PROJECTION_FD_STEP))
 
 
@@ -70,18 +70,18 @@ def linearised_departure(robot: Robot, gait: Gait, horizon: float, dt: float = S
     if not (np.isfinite(horizon) and np.isfinite(dt) and 0 < dt <= horizon):
         raise InputError(f"horizon {horizon!r} s and dt {dt!r} s: expected finite times with 0 < dt <= horizon")
     plan = gait_plan(robot, gait)
-    ref0 = reference(plan, 0.0)
-    y0 = np.concatenate([ref0.q_r, ref0.qd_r])
+    target0 = ik_target(plan, 0.0)
+    y0 = np.concatenate([target0.q_r, target0.qd_r])
     delta = np.nextafter(y0, np.inf) - y0  # the twin run's initial perturbation (simulate_reduced)
     derivatives: dict[str, ReducedDerivatives] = {}
     times = np.arange(1, int(round(horizon / dt)) + 1) * dt
     largest, guess = [], None
     for t in times:
-        mid = reference(plan, float(t - dt / 2), guess)
+        mid = ik_target(plan, float(t - dt / 2), guess)
         name = StanceSet(mid.stance).name
         if name not in derivatives:
             derivatives[name] = reduced_derivatives(robot, name)
-        end = reference(plan, float(t), mid.q_r[:12])
+        end = ik_target(plan, float(t), mid.q_r[:12])
         guess = end.q_r[:12]
         delta = _projected(robot, plan, float(t), end, expm(_jacobian(derivatives[name], mid) * dt) @ delta)
         largest.append(np.abs(delta[:12]).max())

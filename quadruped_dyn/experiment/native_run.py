@@ -1,7 +1,7 @@
 """The experiment's runs in native code: one C call integrates one gait phase.
 
 ``simulate.simulate_reduced`` and ``rigid_contact.simulate_rigid`` drive scipy's DOP853 from
-Python, and every right-hand-side evaluation (reference table, trunk pose from the feet, fd_r
+Python, and every right-hand-side evaluation (target table, trunk pose from the feet, fd_r
 or the rigid-contact KKT system, projection onto the stance closure) went through the
 interpreter. ``NativeRuns`` does the same runs with c/qdx_native_run.c: scipy's DOP853 step
 control, dense output and coefficients (read from scipy, not copied), the same projection and
@@ -21,7 +21,7 @@ and the feet, their Jacobians and J'qd' from ``qdx_feet_rates`` (generated here 
 Extended precision (``NativeRuns(robot, "long double")``, reduced runs only): the same C with
 every real a long double (x87's 64-bit significand here), linked with the robot's generated C
 compiled with casadi_real = long double (its elementary-function wrappers then call sinl, cosl,
-...: codegen/emit.py). Its inputs stay double: the reference table (the exact IK and id_r),
+...: codegen/emit.py). Its inputs stay double: the target table (the exact IK and id_r),
 the initial state, the footholds and DOP853's coefficients. It measures what the double
 integration's own round-off costs (docs/results.md, the experiment's error budget).
 

@@ -1,9 +1,9 @@
 """The paper's validation experiment, compared and reported (docs/experiment.md, paper Figs. 5-7).
 
-Plan (``gait``) -> IK plan (``reference``) -> id_r -> tau(t) -> reduced forward dynamics
+Plan (``gait``) -> IK plan (``ik_target``) -> id_r -> tau(t) -> reduced forward dynamics
 (``simulate``) -> compared with the IK plan, per joint:
 percentage error of a signal x = max_t |x_sim - x_ref| / max_t |x_ref| x 100 (None where the
-reference is identically zero, e.g. HAA rates of a straight trot).
+target is identically zero, e.g. HAA rates of a straight trot).
 
 Runs of the reduced model (all from the IK state at t = 0, on the stance closure):
 * ``paper``: tau_ext = all of id_r (for two feet the roll moment too, as if actuated): the
@@ -21,7 +21,7 @@ Runs of the reduced model (all from the IK state at t = 0, on the stance closure
 Physics check (``rigid_contact``): the same torque laws drive the full-coordinate rigid-contact
 dynamics and the reduced model with the roll unactuated: IK torques, IK torques + 1 %, and
 IK torques + 1 % with joint PD feedback. Departure = largest joint-angle difference (rad), time
-to 1 % = first time it exceeds 1 % of the reference's largest |joint angle|.
+to 1 % = first time it exceeds 1 % of the target's largest |joint angle|.
 """
 
 from __future__ import annotations
@@ -58,7 +58,7 @@ from quadruped_dyn.model.robot import Robot
 from quadruped_dyn.model.stance import StanceSet
 from quadruped_dyn.model.state import GRAVITY_W
 
-#: A reference signal whose largest |value| is below this fraction of the largest joint's is
+#: A target signal whose largest |value| is below this fraction of the largest joint's is
 #: treated as identically zero (IK round-off, ~1e-16 rad/s, would give absurd percentages).
 ZERO_SIGNAL = 1e-9
 
@@ -68,10 +68,10 @@ ZERO_SIGNAL = 1e-9
 PD_KP_PER_KG = 3.0  # N m / rad / kg
 PD_KD_PER_KG = 0.15  # N m s / rad / kg
 
-#: Static-stability samples along the reference (f_z of the paper's GRF model, CoM margin), s.
+#: Static-stability samples along the target (f_z of the paper's GRF model, CoM margin), s.
 STABILITY_DT = 5e-3
 
-#: The departure threshold, % of the reference's largest |joint angle|.
+#: The departure threshold, % of the target's largest |joint angle|.
 DEPARTURE_PCT = 1.0
 
 #: A comparison needs at least this many samples: the first (t = 0) agrees with IK by
@@ -84,11 +84,11 @@ SIGNALS = ("q", "qd", "qdd")
 
 @dataclass
 class Experiment:
-    """Everything one ``validate`` call simulated: reference samples and runs on one time grid."""
+    """Everything one ``validate`` call simulated: target samples and runs on one time grid."""
 
     plan: Plan
-    ik: IkTorques  # the reference and id_r's torques along it
-    reference: dict[str, np.ndarray]  # "t" -> (N,) grid, signal -> (N, n) IK values on it
+    ik: IkTorques  # the target and id_r's torques along it
+    target: dict[str, np.ndarray]  # "t" -> (N,) grid, signal -> (N, n) IK values on it
     runs: dict[str, Run] = field(default_factory=dict)  # reduced model
     rigid: dict[str, Run] = field(default_factory=dict)  # rigid-contact dynamics, 12 joints
     engines: set[str] = field(default_factory=set)  # how the DOP853 runs were integrated: "native", "python"
@@ -99,15 +99,15 @@ def joint_names(robot: Robot) -> list[str]:
     return [f"{leg.label}_{role}" for leg in robot.legs for role in JOINT_ROLES]
 
 
-def percent_errors(sim: np.ndarray, ref: np.ndarray) -> list[float | None]:
-    """Per joint: max_t |sim - ref| / max_t |ref| x 100 over the rows both have; None for a
-    reference below ZERO_SIGNAL of the largest joint's, or over fewer than MIN_COMPARED_SAMPLES
+def percent_errors(sim: np.ndarray, target: np.ndarray) -> list[float | None]:
+    """Per joint: max_t |sim - target| / max_t |target| x 100 over the rows both have; None for a
+    target below ZERO_SIGNAL of the largest joint's, or over fewer than MIN_COMPARED_SAMPLES
     rows (a run that stopped on its first step: no comparison, not 0 %)."""
-    m = min(len(sim), len(ref))
+    m = min(len(sim), len(target))
     if m < MIN_COMPARED_SAMPLES:
-        return [None] * ref.shape[1]
-    scale = np.abs(ref[:m]).max(axis=0)
-    err = np.abs(sim[:m] - ref[:m]).max(axis=0)
+        return [None] * target.shape[1]
+    scale = np.abs(target[:m]).max(axis=0)
+    err = np.abs(sim[:m] - target[:m]).max(axis=0)
     return [float(e / s * 100) if s > ZERO_SIGNAL * scale.max() else None for e, s in zip(err, scale)]
 
 
@@ -127,7 +127,7 @@ def departure(t: np.ndarray, q_a: np.ndarray, q_b: np.ndarray, scale: float) -> 
 
 def growth_rate(t: np.ndarray, d: np.ndarray) -> float | None:
     """Slope (1/s) of ln(running max of d) over the second half of t: how fast a difference
-    grows along the reference. None when d stays zero."""
+    grows along the target. None when d stays zero."""
     if d.size < 4 or not np.any(d > 0):
         return None
     envelope = np.maximum.accumulate(d)
@@ -144,7 +144,7 @@ def _series(t: np.ndarray, d: np.ndarray, every: float = 0.1) -> list[list[float
 
 
 def static_stability(plan: Plan, ik: IkTorques, horizon: float, dt: float = STABILITY_DT) -> dict[str, Any]:
-    """Along the reference: smallest f_z (N) of the paper's GRF model on any stance foot, and
+    """Along the target: smallest f_z (N) of the paper's GRF model on any stance foot, and
     smallest CoM margin (m) inside the support triangle (three or more feet; Pinocchio's CoM),
     sampled every ``dt`` (s). The forces come from the generated ``qd_grf_<stance>`` (the
     paper's model; the trunk is level, so trunk frame = world), which does not check the foot
@@ -161,10 +161,10 @@ def static_stability(plan: Plan, ik: IkTorques, horizon: float, dt: float = STAB
     at_fz = at_margin = 0.0
     for t in np.arange(0.0, horizon + 1e-9, dt):
         stance = plan.stance(float(t))
-        ref, _ = ik(float(t), stance)
+        target, _ = ik(float(t), stance)
         name = StanceSet(stance).name
-        v, a = guarded_call(reduced_maps(robot, name), ref.q_r, ref.qd_r, ref.qdd_r, IDENTITY_QUAT)
-        q = np.concatenate([plan.trunk(float(t))[0], IDENTITY_QUAT, ref.q_r[:12]])
+        v, a = guarded_call(reduced_maps(robot, name), target.q_r, target.qd_r, target.qdd_r, IDENTITY_QUAT)
+        q = np.concatenate([plan.trunk(float(t))[0], IDENTITY_QUAT, target.q_r[:12]])
         if name not in grf:
             grf[name] = CompiledFunction(library, reduced_symbol("grf", StanceSet(stance)))
         f_body = grf[name](q, v, a)[1].reshape(4, 3)[list(stance)]
@@ -197,7 +197,7 @@ def run_experiment(robot: Robot, gait: Gait, dynamics: ReducedDynamics, horizon:
     """Every run ``validate`` reports (see the module docstring); ``progress`` gets the
     simulated seconds of each finished stretch. ``engine``: "native" integrates DOP853 runs of
     the generated C backend one gait phase per C call (``native_run``), "python" through scipy
-    (the reference the native runs are tested against); RK4 runs and the CasADi backend always
+    (the baseline the native runs are tested against); RK4 runs and the CasADi backend always
     take the Python path. ``twin_ulps``: the twin's initial perturbation, ulps up in every coordinate (1, what
     ``validate`` reports: what one ulp of noise grows to; more, the perturbation stands above the round-off both runs
     accumulate, and the twin's departure measures the dominant mode's growth rate alone)."""
@@ -205,7 +205,7 @@ def run_experiment(robot: Robot, gait: Gait, dynamics: ReducedDynamics, horizon:
         raise InputError(f"unknown engine '{engine}'; expected one of {', '.join(ENGINES)}")
     check_times(gait, horizon, dt, integrator)
     plan = gait_plan(robot, gait)
-    ik = IkTorqueTable(plan, dynamics)  # the runs' reference torques; the compared reference stays exact
+    ik = IkTorqueTable(plan, dynamics)  # the runs' target torques; the compared target stays exact
     native = None
     if engine == "native" and integrator == "dop853" and isinstance(dynamics, CompiledReducedDynamics):
         native = NativeRuns(robot)
@@ -244,34 +244,34 @@ def run_experiment(robot: Robot, gait: Gait, dynamics: ReducedDynamics, horizon:
             if law.name != "ik":
                 exp.runs[law.name] = reduced(law)
             exp.rigid[law.name] = rigid(law)
-    # the planned grid, also when the 'paper' run stopped early (its own times would shrink the reference)
+    # the planned grid, also when the 'paper' run stopped early (its own times would shrink the target)
     grid = np.arange(int(np.floor(horizon / dt + 1e-9)) + 1) * dt
-    refs = [ref for ref, _ in ik.exact_many(grid, [plan.stance(float(t)) for t in grid])]
-    exp.reference = {"t": grid, "q": np.array([r.q_r for r in refs]), "qd": np.array([r.qd_r for r in refs]),
-                     "qdd": np.array([r.qdd_r for r in refs])}
+    targets = [target for target, _ in ik.exact_many(grid, [plan.stance(float(t)) for t in grid])]
+    exp.target = {"t": grid, "q": np.array([r.q_r for r in targets]), "qd": np.array([r.qd_r for r in targets]),
+                     "qdd": np.array([r.qdd_r for r in targets])}
     return exp
 
 
-def _run_summary(run: Run, ref: dict[str, np.ndarray], scale: float) -> dict[str, Any]:
-    _, departs = departure(run.t, run.q, ref["q"], scale)
+def _run_summary(run: Run, target: dict[str, np.ndarray], scale: float) -> dict[str, Any]:
+    _, departs = departure(run.t, run.q, target["q"], scale)
     return {"stopped_at_s": run.stopped_at, "departs_1pct_at_s": departs,
             "max_closure_m": float(run.closure_m.max()) if run.closure_m.size else None,
             "rhs_evaluations": run.rhs_evaluations,
-            **{f"max_pct_err_{s}": _worst(percent_errors(getattr(run, s)[:, :12], ref[s][:, :12])) for s in SIGNALS}}
+            **{f"max_pct_err_{s}": _worst(percent_errors(getattr(run, s)[:, :12], target[s][:, :12])) for s in SIGNALS}}
 
 
 def report(exp: Experiment, integrator: str, dt: float, backend: str, stability: dict[str, Any]) -> dict[str, Any]:
     """The JSON report (the keys of docs/results.md's experiment, plus the runs' details)."""
-    plan, ref = exp.plan, exp.reference
+    plan, target = exp.plan, exp.target
     names = joint_names(plan.robot)
-    horizon = float(ref["t"][-1])
-    scale = float(np.abs(ref["q"][:, :12]).max())
+    horizon = float(target["t"][-1])
+    scale = float(np.abs(target["q"][:, :12]).max())
     paper, twin = exp.runs["paper"], exp.runs["twin"]
-    errors = {s: percent_errors(getattr(paper, s)[:, :12], ref[s][:, :12]) for s in SIGNALS}
+    errors = {s: percent_errors(getattr(paper, s)[:, :12], target[s][:, :12]) for s in SIGNALS}
     d_twin, _ = departure(paper.t, paper.q, twin.q, scale)
     budget = {}
     for s in SIGNALS:
-        r = ref[s][:, :12]
+        r = target[s][:, :12]
         m = min(len(twin.t), len(paper.t), len(r))  # runs that stopped early have fewer samples
         budget[s] = {"total_pct": _worst(errors[s]),
                      "roundoff_pct": _worst(percent_errors(getattr(twin, s)[:m, :12] - getattr(paper, s)[:m, :12] + r[:m],
@@ -284,7 +284,7 @@ def report(exp: Experiment, integrator: str, dt: float, backend: str, stability:
     out: dict[str, Any] = {
         "robot": plan.robot.name, "gait": plan.gait.name, "horizon_s": horizon, "backend": backend,
         "engine": "+".join(sorted(exp.engines)),
-        "compared_samples": compared_samples(exp), "compared_until_s": float(ref["t"][compared_samples(exp) - 1])
+        "compared_samples": compared_samples(exp), "compared_until_s": float(target["t"][compared_samples(exp) - 1])
         if compared_samples(exp) else None,
         "integrator": method + "; restarted at every stance switch; state projected onto the stance closure after "
                       "every step",
@@ -294,7 +294,7 @@ def report(exp: Experiment, integrator: str, dt: float, backend: str, stability:
                         "one_ulp_grows_to_rad": float(d_twin[-1]) if d_twin.size else None,
                         "error_budget": budget},
         "static_stability": stability,
-        "runs": {name: _run_summary(run, ref, scale) for name, run in exp.runs.items()},
+        "runs": {name: _run_summary(run, target, scale) for name, run in exp.runs.items()},
     }
     if exp.rigid:
         out["physics_check"] = physics_check(exp, scale)
@@ -304,31 +304,31 @@ def report(exp: Experiment, integrator: str, dt: float, backend: str, stability:
 def compared_samples(exp: Experiment) -> int:
     """Samples over which the 'paper' run is compared with IK (fewer than MIN_COMPARED_SAMPLES:
     no result)."""
-    return min(len(exp.runs["paper"].t), len(exp.reference["t"]))
+    return min(len(exp.runs["paper"].t), len(exp.target["t"]))
 
 
-def truncation(exp: Experiment, signal: str, ref: np.ndarray) -> list[float | None]:
+def truncation(exp: Experiment, signal: str, target: np.ndarray) -> list[float | None]:
     """The 'paper' run's truncation error per joint, % (module docstring): from the ``coarse``
     run (DOP853) or the ``refined`` one (RK4)."""
     paper = exp.runs["paper"]
     if "coarse" in exp.runs:
         return [None if x is None else x / (TRUNCATION_RTOL_FACTOR - 1)
-                for x in _difference(exp.runs["coarse"], paper, signal, ref)]
-    return _difference(exp.runs["refined"], paper, signal, ref)
+                for x in _difference(exp.runs["coarse"], paper, signal, target)]
+    return _difference(exp.runs["refined"], paper, signal, target)
 
 
-def _difference(other: Run, run: Run, signal: str, ref: np.ndarray) -> list[float | None]:
+def _difference(other: Run, run: Run, signal: str, target: np.ndarray) -> list[float | None]:
     """% difference between another run and the run, on the run's samples (an RK4 run at
     dt / 2 has twice the samples: every second one)."""
     step = max(1, round((len(other.t) - 1) / max(len(run.t) - 1, 1)))
     a = getattr(other, signal)[::step, :12]
-    m = min(len(a), len(run.t), len(ref))  # runs that stopped early have fewer samples
-    return percent_errors(a[:m] - getattr(run, signal)[:m, :12] + ref[:m], ref[:m])
+    m = min(len(a), len(run.t), len(target))  # runs that stopped early have fewer samples
+    return percent_errors(a[:m] - getattr(run, signal)[:m, :12] + target[:m], target[:m])
 
 
 def physics_check(exp: Experiment, scale: float) -> dict[str, Any]:
     """Rigid-contact dynamics vs IK and vs the reduced model, per torque law."""
-    ref = exp.reference
+    target = exp.target
     reduced_of = {"ik": exp.runs.get("physical", exp.runs["paper"]), "plus_1pct": exp.runs["plus_1pct"],
                   "pd": exp.runs["pd"]}
     kp, kd = pd_gains(exp.plan.robot)
@@ -339,8 +339,8 @@ def physics_check(exp: Experiment, scale: float) -> dict[str, Any]:
     for name, rigid in exp.rigid.items():
         reduced = reduced_of[name]
         d_rr, t_rr = departure(rigid.t, rigid.q, reduced.q, scale)
-        d_ik, t_ik = departure(rigid.t, rigid.q, ref["q"], scale)
-        d_red, t_red = departure(reduced.t, reduced.q, ref["q"], scale)
+        d_ik, t_ik = departure(rigid.t, rigid.q, target["q"], scale)
+        d_red, t_red = departure(reduced.t, reduced.q, target["q"], scale)
         out[name] = {
             "torques": laws[name],
             "rigid_vs_reduced": {"max_joint_angle_diff_rad": float(d_rr.max()) if d_rr.size else None,

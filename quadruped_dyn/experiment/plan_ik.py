@@ -29,8 +29,8 @@ POLISH_STEPS = 2
 
 
 @dataclass(frozen=True)
-class ReferenceSample:
-    """The reference at one time: reduced coordinates (12 joints in FL, FR, BL, BR x HAA, HFE,
+class IkTarget:
+    """The target at one time: reduced coordinates (12 joints in FL, FR, BL, BR x HAA, HFE,
     KFE order, + the roll phi = 0 for a gait with two-feet phases), rad, rad/s, rad/s^2."""
 
     q_r: np.ndarray
@@ -90,13 +90,13 @@ def robot_bias_accelerations(robot: Robot) -> ca.Function:
                                                       for i in range(4)])])
 
 
-def reference(plan: Plan, t: float, q_guess: np.ndarray | None = None) -> ReferenceSample:
+def ik_target(plan: Plan, t: float, q_guess: np.ndarray | None = None) -> IkTarget:
     """IK of the plan at time t (``q_guess``: joint angles (12,) near the answer, for numeric IK)."""
-    return references(plan, np.array([t]), q_guess)[0]
+    return ik_targets(plan, np.array([t]), q_guess)[0]
 
 
-def references(plan: Plan, ts: np.ndarray, q_guess: np.ndarray | None = None) -> list[ReferenceSample]:
-    """``reference`` at each time of ``ts`` (s), in one batch (numeric IK of every target from the
+def ik_targets(plan: Plan, ts: np.ndarray, q_guess: np.ndarray | None = None) -> list[IkTarget]:
+    """``ik_target`` at each time of ``ts`` (s), in one batch (numeric IK of every target from the
     same ``q_guess``, default the gait's posture). InputError unless ``ts`` is a non-empty 1-D array of
     finite times >= 0 and ``q_guess`` (12,) finite."""
     ts = np.asarray(ts)
@@ -119,5 +119,5 @@ def references(plan: Plan, ts: np.ndarray, q_guess: np.ndarray | None = None) ->
     bias = np.asarray(robot_bias_accelerations(robot).map(n)(q.T, qd.T)).reshape(3, n, 4).transpose(1, 2, 0)
     qdd = np.linalg.solve(J, (rdd - bias)[..., None]).reshape(n, 12)
     extra = np.zeros(plan.gait.n_coords - 12)  # roll, its rate and acceleration: 0 with R = I
-    return [ReferenceSample(np.append(q[k], extra), np.append(qd[k], extra), np.append(qdd[k], extra),
+    return [IkTarget(np.append(q[k], extra), np.append(qd[k], extra), np.append(qdd[k], extra),
                             plan.stance(float(ts[k]))) for k in range(n)]

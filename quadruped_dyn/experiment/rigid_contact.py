@@ -114,7 +114,7 @@ def simulate_rigid(plan: Plan, ik: IkTorques, law: TorqueLaw, horizon: float, dt
     """Integrate the rigid-contact dynamics from the IK state at t = 0 under ``law``; the
     returned ``Run`` holds the 12 joint angles, rates and accelerations, and as closure the
     trunk's distance from the plan's trunk position (m). ``initial`` = (q (19,), v (18,))
-    replaces the IK state, ``trunk(t)`` (world position, m) the plan's trunk, for a reference
+    replaces the IK state, ``trunk(t)`` (world position, m) the plan's trunk, for a target
     that is not the plan's (e.g. an optimised gait with the plan's phases)."""
     check_times(plan.gait, horizon, dt, integrator)
     ref = PinocchioReference(plan.robot)
@@ -125,8 +125,8 @@ def simulate_rigid(plan: Plan, ik: IkTorques, law: TorqueLaw, horizon: float, dt
     def accel(t: float, y: np.ndarray, stance: tuple[int, ...]) -> np.ndarray:
         evaluations[0] += 1
         q, v = y[:19], y[19:]
-        reference_t, tau_ik = ik(t, stance)
-        tau = law.joints(reference_t, tau_ik, q[7:], v[6:])
+        target_t, tau_ik = ik(t, stance)
+        tau = law.joints(target_t, tau_ik, q[7:], v[6:])
         a = _kkt_accelerations(ref, q, v, tau, stance)
         if not np.all(np.isfinite(a)):
             raise NumericalError(f"the rigid-contact dynamics are singular at t = {t:.4f} s")

@@ -42,7 +42,7 @@ from quadruped_dyn.dynamics.kinematics import robot_feet, robot_kinematics
 from quadruped_dyn.dynamics.reduced import reduced_model
 from quadruped_dyn.errors import InputError, NumericalError
 from quadruped_dyn.experiment.gait import Gait, Plan
-from quadruped_dyn.experiment.plan_ik import ReferenceSample, references
+from quadruped_dyn.experiment.plan_ik import IkTarget, ik_targets
 from quadruped_dyn.experiment.trunk_pose import pose_from_feet
 from quadruped_dyn.math.rigid import skew
 from quadruped_dyn.model.robot import Robot
@@ -118,29 +118,29 @@ def reduced_dynamics(robot: Robot, backend: str = "c") -> ReducedDynamics:
 
 
 class IkTorques:
-    """The reference and id_r's torques along it, memoised by time (twin runs and fixed-step
+    """The target and id_r's torques along it, memoised by time (twin runs and fixed-step
     runs ask for the same times again)."""
 
     def __init__(self, plan: Plan, dynamics: ReducedDynamics) -> None:
         self.plan, self.dynamics = plan, dynamics
-        self._memo: dict[tuple[float, tuple[int, ...]], tuple[ReferenceSample, np.ndarray]] = {}
+        self._memo: dict[tuple[float, tuple[int, ...]], tuple[IkTarget, np.ndarray]] = {}
         self._guess: np.ndarray | None = None
 
-    def __call__(self, t: float, stance: tuple[int, ...]) -> tuple[ReferenceSample, np.ndarray]:
-        """(reference at t, id_r (n,) of the given stance there -- a step ending on a switch
+    def __call__(self, t: float, stance: tuple[int, ...]) -> tuple[IkTarget, np.ndarray]:
+        """(target at t, id_r (n,) of the given stance there -- a step ending on a switch
         keeps its phase's stance)."""
         return self.many(np.array([t]), [stance])[0]
 
-    def many(self, ts: np.ndarray, stances: list[tuple[int, ...]]) -> list[tuple[ReferenceSample, np.ndarray]]:
-        """``self(t, stance)`` for each pair; the times not memoised yet in one batch (``references``)."""
+    def many(self, ts: np.ndarray, stances: list[tuple[int, ...]]) -> list[tuple[IkTarget, np.ndarray]]:
+        """``self(t, stance)`` for each pair; the times not memoised yet in one batch (``ik_targets``)."""
         keys = [(float(t), stance) for t, stance in zip(ts, stances, strict=True)]
         missing = list(dict.fromkeys(k for k in keys if k not in self._memo))
         if missing:
-            refs = references(self.plan, np.array([t for t, _ in missing]), self._guess)
-            self._guess = refs[-1].q_r[:12]
-            for (t, stance), ref in zip(missing, refs):
-                tau = self.dynamics.id_r(StanceSet(stance), ref.q_r, ref.qd_r, ref.qdd_r, IDENTITY_QUAT)
-                self._memo[(t, stance)] = (ref, tau)
+            targets = ik_targets(self.plan, np.array([t for t, _ in missing]), self._guess)
+            self._guess = targets[-1].q_r[:12]
+            for (t, stance), target in zip(missing, targets):
+                tau = self.dynamics.id_r(StanceSet(stance), target.q_r, target.qd_r, target.qdd_r, IDENTITY_QUAT)
+                self._memo[(t, stance)] = (target, tau)
         return [self._memo[k] for k in keys]
 
 
@@ -155,9 +155,9 @@ class TorqueLaw:
     kd: float = 0.0
     roll_applied: bool = False
 
-    def joints(self, ref: ReferenceSample, tau_ik: np.ndarray, q: np.ndarray, qd: np.ndarray) -> np.ndarray:
+    def joints(self, target: IkTarget, tau_ik: np.ndarray, q: np.ndarray, qd: np.ndarray) -> np.ndarray:
         """The 12 joint torques for joint angles and rates q, qd (12,)."""
-        return self.scale * tau_ik[:12] + self.kp * (ref.q_r[:12] - q) + self.kd * (ref.qd_r[:12] - qd)
+        return self.scale * tau_ik[:12] + self.kp * (target.q_r[:12] - q) + self.kd * (target.qd_r[:12] - qd)
 
 
 @dataclass
@@ -257,16 +257,16 @@ def simulate_reduced(plan: Plan, dynamics: ReducedDynamics, law: TorqueLaw, hori
 
     def qdd_of(t: float, q: np.ndarray, qd: np.ndarray, stance: tuple[int, ...]) -> tuple[np.ndarray, float]:
         evaluations[0] += 1
-        ref, tau_ik = ik(t, stance)
-        tau = law.joints(ref, tau_ik, q[:12], qd[:12])
+        target, tau_ik = ik(t, stance)
+        tau = law.joints(target, tau_ik, q[:12], qd[:12])
         if n == 13:
             tau = np.append(tau, tau_ik[12] if (law.roll_applied and len(stance) == 2) else 0.0)
         quat, closure = pose(t, q, stance)
         qdd = dynamics.fd_r(StanceSet(stance), q, qd, tau, quat)
         return qdd, closure
 
-    ref0, _ = ik(0.0, gait.stance(0.0))
-    y = np.concatenate([ref0.q_r, ref0.qd_r])
+    target0, _ = ik(0.0, gait.stance(0.0))
+    y = np.concatenate([target0.q_r, target0.qd_r])
     for _ in range(initial_ulps):
         y = np.nextafter(y, np.inf)
     out_t: list[float] = []

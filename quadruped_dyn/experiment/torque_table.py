@@ -1,9 +1,9 @@
-"""The plan's reference and id_r's torques as one polynomial interpolant per gait phase.
+"""The plan's target and id_r's torques as one polynomial interpolant per gait phase.
 
 Within one phase the stance is fixed and the plan is a smooth function of t (quintic and
 sextic polynomials of the phase fraction for a swing foot, constants for stance feet, a
 trigonometric sway for the trunk), and so are the IK and id_r along it (analytic away from
-the legs' singularities). The integrators ask for the reference at tens of thousands of times
+the legs' singularities). The integrators ask for the target at tens of thousands of times
 per run; evaluating the IK and id_r there from Python was most of a ``validate`` run's time.
 ``IkTorqueTable`` evaluates them exactly at the Chebyshev-Lobatto points of each phase
 (``CHEB_DEGREE`` + 1 points, shared by every run of the experiment) and answers every other time
@@ -23,7 +23,7 @@ from __future__ import annotations
 import numpy as np
 
 from quadruped_dyn.experiment.gait import Plan
-from quadruped_dyn.experiment.plan_ik import ReferenceSample
+from quadruped_dyn.experiment.plan_ik import IkTarget
 from quadruped_dyn.experiment.simulate import IkTorques, ReducedDynamics
 from quadruped_dyn.tolerances import TABLE_NOISE_TOL, TABLE_REL_TOL
 
@@ -75,16 +75,16 @@ class IkTorqueTable(IkTorques):
         self.max_rel_error = 0.0  # the largest checked midpoint error, relative to each signal's scale
         self.degrees: list[int] = []
 
-    def exact(self, t: float, stance: tuple[int, ...]) -> tuple[ReferenceSample, np.ndarray]:
+    def exact(self, t: float, stance: tuple[int, ...]) -> tuple[IkTarget, np.ndarray]:
         return super().__call__(t, stance)
 
-    def exact_many(self, ts: np.ndarray, stances: list[tuple[int, ...]]) -> list[tuple[ReferenceSample, np.ndarray]]:
+    def exact_many(self, ts: np.ndarray, stances: list[tuple[int, ...]]) -> list[tuple[IkTarget, np.ndarray]]:
         return super().many(ts, stances)
 
     def _stack(self, ts: np.ndarray, stance: tuple[int, ...]) -> np.ndarray:
         """(len(ts), 3 n + n_tau): q_r, qd_r, qdd_r and id_r at each time, exactly."""
-        return np.array([np.concatenate([ref.q_r, ref.qd_r, ref.qdd_r, tau])
-                         for ref, tau in self.exact_many(ts, [stance] * len(ts))])
+        return np.array([np.concatenate([target.q_r, target.qd_r, target.qdd_r, tau])
+                         for target, tau in self.exact_many(ts, [stance] * len(ts))])
 
     def _build(self, k: int, stance: tuple[int, ...]) -> _Phase | None:
         h = self.plan.gait.phase_duration
@@ -118,7 +118,7 @@ class IkTorqueTable(IkTorques):
             self._phases[key] = self._build(k, stance)
         return self._phases[key]
 
-    def __call__(self, t: float, stance: tuple[int, ...]) -> tuple[ReferenceSample, np.ndarray]:
+    def __call__(self, t: float, stance: tuple[int, ...]) -> tuple[IkTarget, np.ndarray]:
         h = self.plan.gait.phase_duration
         k = int(np.floor(t / h + 1e-12))
         if k > 0 and abs(t - k * h) <= 1e-12 * max(1.0, t) and self.plan.stance(k * h + 0.5 * h) != stance:
@@ -128,4 +128,4 @@ class IkTorqueTable(IkTorques):
             return self.exact(t, stance)
         v = phase(t)
         n = self.n
-        return ReferenceSample(v[:n], v[n : 2 * n], v[2 * n : 3 * n], stance), v[3 * n :]
+        return IkTarget(v[:n], v[n : 2 * n], v[2 * n : 3 * n], stance), v[3 * n :]

@@ -25,18 +25,18 @@ def output_paths(out_dir: Path, robot: str, gait: str) -> dict[str, Path]:
 
 def write_csv(path: Path, exp: Experiment) -> None:
     """t, then per joint and signal the IK value and the 'paper' run's value (rad, rad/s, rad/s^2)."""
-    run, ref = exp.runs["paper"], exp.reference
+    run, target = exp.runs["paper"], exp.target
     names = joint_names(exp.plan.robot)
-    m = min(len(run.t), len(ref["t"]))
+    m = min(len(run.t), len(target["t"]))
     header = ["t_s"] + [f"{n}_{s}_{w}" for n in names for s in SIGNALS for w in ("ik", "sim")]
     with text_writer(path) as f:
         w = csv.writer(f)
         w.writerow(header)
         for k in range(m):
-            row = [f"{ref['t'][k]:.6f}"]
+            row = [f"{target['t'][k]:.6f}"]
             for j in range(12):
                 for s in SIGNALS:
-                    row += [repr(float(ref[s][k, j])), repr(float(getattr(run, s)[k, j]))]
+                    row += [repr(float(target[s][k, j])), repr(float(getattr(run, s)[k, j]))]
             w.writerow(row)
 
 
@@ -48,11 +48,11 @@ def plot_br_hfe(path: Path, exp: Experiment) -> None:
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    robot, ref, j = exp.plan.robot, exp.reference, BR_HFE
+    robot, target, j = exp.plan.robot, exp.target, BR_HFE
     fig, axes = plt.subplots(3, 1, figsize=(8, 8), sharex=True)
     labels = ("acceleration (rad/s²)", "velocity (rad/s)", "displacement (rad)")
     for ax, key, label in zip(axes, ("qdd", "qd", "q"), labels):
-        ax.plot(ref["t"], ref[key][:, j], "k-", lw=2.5, label="inverse kinematics")
+        ax.plot(target["t"], target[key][:, j], "k-", lw=2.5, label="inverse kinematics")
         paper = exp.runs["paper"]
         ax.plot(paper.t, getattr(paper, key)[:, j], "C1--", lw=1.5,
                 label="reduced forward dynamics" + (", roll moment applied (paper)" if "physical" in exp.runs else ""))
@@ -62,7 +62,7 @@ def plot_br_hfe(path: Path, exp: Experiment) -> None:
         if "ik" in exp.rigid:
             ax.plot(exp.rigid["ik"].t, getattr(exp.rigid["ik"], key)[:, j], "C2-.", lw=1.2,
                     label="rigid-contact dynamics, same joint torques")
-        lo, hi = ref[key][:, j].min(), ref[key][:, j].max()
+        lo, hi = target[key][:, j].min(), target[key][:, j].max()
         ax.set_ylim(lo - 0.3 * (hi - lo), hi + 0.3 * (hi - lo))  # a run that falls leaves the frame
         ax.set_ylabel(label)
         ax.grid(alpha=0.3)
@@ -82,8 +82,8 @@ def plot_physics_check(path: Path, exp: Experiment) -> None:
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    ref = exp.reference
-    scale = float(np.abs(ref["q"][:, :12]).max())
+    target = exp.target
+    scale = float(np.abs(target["q"][:, :12]).max())
     fig, ax = plt.subplots(figsize=(8, 4.5))
     reduced_ik = exp.runs.get("physical", exp.runs["paper"])
     curves = [("rigid vs IK, IK torques", exp.rigid["ik"], None),
@@ -93,7 +93,7 @@ def plot_physics_check(path: Path, exp: Experiment) -> None:
               ("rigid vs reduced, +1 % torques", exp.rigid["plus_1pct"], exp.runs["plus_1pct"]),
               ("rigid vs reduced, +1 % torques + PD", exp.rigid["pd"], exp.runs["pd"])]
     for label, a, b in curves:
-        d, _ = departure(a.t, a.q, ref["q"] if b is None else b.q, scale)
+        d, _ = departure(a.t, a.q, target["q"] if b is None else b.q, scale)
         ax.semilogy(a.t[: len(d)], np.maximum(d, 1e-17), label=label)
     ax.axhline(DEPARTURE_PCT / 100 * scale, color="k", ls="--", lw=1, label=f"{DEPARTURE_PCT:g} % of max |joint angle|")
     ax.set_xlabel("time (s)")

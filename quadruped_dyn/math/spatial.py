@@ -25,7 +25,7 @@ def quat_to_rotation(quat: ca.SX) -> ca.SX:
 
 
 def dm(x: np.ndarray | ca.SX) -> ca.DM | ca.SX:
-    """A constant as a CasADi matrix; an SX (a robot parameter left symbolic, ``dynamics.leg_template``) as is."""
+    """A constant as a CasADi matrix; an SX (a robot parameter left symbolic, ``codegen.forms.leg_template``) as is."""
     if isinstance(x, ca.SX):
         return x
     return ca.DM(np.asarray(x, dtype=float))
@@ -62,3 +62,17 @@ def spatial_inertia(link: LinkInertia, R: ca.SX, p: ca.SX) -> ca.SX:
     C = skew(c)
     m = link.mass
     return ca.vertcat(ca.horzcat(m * ca.DM.eye(3), -m * C), ca.horzcat(m * C, Ic - m * C @ C))
+
+
+def stacked(parts: tuple[ca.SX, ...]) -> ca.SX:
+    """Matrices stacked column by column into one column."""
+    return ca.vertcat(*(ca.vec(ca.SX(x)) for x in parts))
+
+
+def unstacked(L: ca.SX, layout: tuple[tuple[str, int, int], ...]) -> dict[str, ca.SX]:
+    """``stacked``'s inverse for ``layout``: (name, rows, columns) of each part, in order."""
+    out, start = {}, 0
+    for name, rows, cols in layout:
+        out[name] = ca.reshape(L[start : start + rows * cols], rows, cols)
+        start += rows * cols
+    return out

@@ -20,7 +20,7 @@ import numpy as np
 from quadruped_dyn.arguments import real_number
 from quadruped_dyn.errors import InputError
 from quadruped_dyn.experiment.paper_experiment import DEPARTURE_PCT, departure, growth_rate
-from quadruped_dyn.experiment.plan_ik import ReferenceSample
+from quadruped_dyn.experiment.plan_ik import IkTarget
 from quadruped_dyn.experiment.rigid_contact import simulate_rigid
 from quadruped_dyn.experiment.simulate import Run, TorqueLaw, check_times
 from quadruped_dyn.optimal_control.hermite import interpolate
@@ -67,30 +67,30 @@ class OptimizedTrajectory:
         tau, roll, _ = self.functions.dynamics[stance](x, xd, xdd)
         return np.asarray(tau).ravel(), float(roll)
 
-    def reference(self, t: float, stance: tuple[int, ...]) -> ReferenceSample:
+    def target(self, t: float, stance: tuple[int, ...]) -> IkTarget:
         x, xd, xdd = self.state(t)
         n = self.gait.n_coords
-        return ReferenceSample(x[:n], xd[:n], xdd[:n], stance)
+        return IkTarget(x[:n], xd[:n], xdd[:n], stance)
 
 
 class _OptimizedTorques:
-    """The ``IkTorques`` interface of ``simulate_rigid``: (reference at t, torques (n,))."""
+    """The ``IkTorques`` interface of ``simulate_rigid``: (target at t, torques (n,))."""
 
     def __init__(self, trajectory: OptimizedTrajectory) -> None:
         self.trajectory = trajectory
         self.max_roll = 0.0
 
-    def __call__(self, t: float, stance: tuple[int, ...]) -> tuple[ReferenceSample, np.ndarray]:
+    def __call__(self, t: float, stance: tuple[int, ...]) -> tuple[IkTarget, np.ndarray]:
         tau, roll = self.trajectory.torques(t, stance)
         self.max_roll = max(self.max_roll, abs(roll))
-        ref = self.trajectory.reference(t, stance)
-        return ref, np.append(tau, np.zeros(ref.q_r.size - 12))
+        target = self.trajectory.target(t, stance)
+        return target, np.append(tau, np.zeros(target.q_r.size - 12))
 
 
 @dataclass
 class Replay:
     run: Run
-    reference_q: np.ndarray  # (N, 12) the optimised joint angles on run.t
+    target_q: np.ndarray  # (N, 12) the optimised joint angles on run.t
     departure_rad: np.ndarray  # (N,) largest joint-angle difference, rad
     time_to_1pct_s: float | None
     growth_rate_per_s: float | None

@@ -197,7 +197,7 @@ def plot(path: Path, sol: Solution, replay: Replay | None = None, samples: int =
     if replay is not None and replay.run.t.size:
         m = len(replay.departure_rad)
         ax.semilogy(replay.run.t[:m], np.maximum(replay.departure_rad, 1e-16), label="optimised torques, open loop")
-        ax.axhline(0.01 * float(np.abs(replay.reference_q).max()), color="k", ls=":", label="1 %")
+        ax.axhline(0.01 * float(np.abs(replay.target_q).max()), color="k", ls=":", label="1 %")
         ax.set_title("rigid-contact replay: joint-angle departure (rad)")
         ax.legend(fontsize=7)
         ax.set_xlabel("t (s)")

@@ -48,7 +48,7 @@ from quadruped_dyn.arguments import real_number, whole_number
 from quadruped_dyn.dynamics.grf import MAX_FRICTION_COEFFICIENT
 from quadruped_dyn.errors import InputError
 from quadruped_dyn.experiment.gait import Gait, Plan, gait_plan
-from quadruped_dyn.experiment.plan_ik import reference
+from quadruped_dyn.experiment.plan_ik import ik_target
 from quadruped_dyn.model.actuator_limits import actuator_limit, actuator_limits
 from quadruped_dyn.model.robot import Robot
 from quadruped_dyn.model.stance import StanceSet
@@ -196,11 +196,11 @@ class Transcription:
 
 def plan_coordinates(plan: Plan, t: float, guess: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """The plan's 18 coordinates (joints, roll = pitch = yaw = 0, trunk position), rates, accelerations at t."""
-    ref = reference(plan, t, guess)
+    target = ik_target(plan, t, guess)
     p, pd, pdd = plan.trunk(t)
     z3 = np.zeros(3)
-    return (np.concatenate([ref.q_r[:12], z3, p]), np.concatenate([ref.qd_r[:12], z3, pd]),
-            np.concatenate([ref.qdd_r[:12], z3, pdd]))
+    return (np.concatenate([target.q_r[:12], z3, p]), np.concatenate([target.qd_r[:12], z3, pd]),
+            np.concatenate([target.qdd_r[:12], z3, pdd]))
 
 
 Layout = list[tuple[str, int, np.ndarray, np.ndarray]]
@@ -462,8 +462,8 @@ def _quadratic_terms(cycle: _Cycle, Xp: np.ndarray, Xdp: np.ndarray, Xddp: np.nd
     smooth: ca.MX = ca.MX(0)
     omega = 2 * np.pi / cycle.gait.period  # rates and accelerations compared in units of the cycle's frequency
     for k in range(K):
-        for x_, ref, scale in ((X[:, k], Xp[:, k], 1.0), (Xd[:, k], Xdp[:, k], omega), (Xdd[:, k], Xddp[:, k], omega**2)):
-            d = (x_ - ref) / scale
+        for x_, target, scale in ((X[:, k], Xp[:, k], 1.0), (Xd[:, k], Xdp[:, k], omega), (Xdd[:, k], Xddp[:, k], omega**2)):
+            d = (x_ - target) / scale
             closeness += h * (ca.sumsqr(d[:15]) + ca.sumsqr(d[15:18] / P_SCALE_M))
         (blk, off) = cycle.interval(k)
         for s_ in (0.0, 0.5, 1.0):  # Simpson's rule for the integral of the squared jerk, in units of omega^3

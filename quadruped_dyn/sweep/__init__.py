@@ -2,7 +2,7 @@
 plant perturbations, run on Dask distributed, each finished task a row of a Parquet dataset
 (docs/sweeps.md): the sweep file (``spec``, ``options``), its robots (``robots``), the perturbation
 samples (``sampling``), the tasks (``tasks``) and their rows (``rows``), the engine (``engine``), the
-dataset (``dataset``), the summary (``summary``) and its page (``page``).
+dataset (``dataset``), the summary (``summary``) and its page (``page``); the scaling benchmark (``scaling``).
 Needs the ``sweep`` extra (distributed, pyarrow, pandas)."""
 
 from quadruped_dyn.exports import lazy_exports
@@ -18,5 +18,6 @@ _MODULES: dict[str, tuple[str, ...]] = {
     "dataset": ("Dataset",),
     "summary": ("wilson", "newcombe", "summarise"),
     "page": ("page",),
+    "scaling": ("measure", "cpu_model"),
 }
 __all__, __getattr__, __dir__ = lazy_exports(__name__, _MODULES)

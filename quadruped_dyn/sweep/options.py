@@ -73,6 +73,10 @@ def checked_options(kind: str, table: dict[str, Any]) -> dict[str, Any]:
         from quadruped_dyn.sweep.sampling import check_perturbations
 
         check_perturbations(f"{key}.perturbations", o["perturbations"])
+        horizon = o["cycles"] * min(GAITS[g].period for g in o["gaits"])
+        if o["perturbations"].get("push_at_s", (0.0, 0.0))[1] >= horizon:
+            raise InputError(f"sweep file: {key}.perturbations.push_at_s reaches {o['perturbations']['push_at_s'][1]:g} s; "
+                             f"expected times of the run, before its {horizon:g} s ({o['cycles']} cycles)")
     return o
 
 

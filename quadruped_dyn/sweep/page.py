@@ -83,6 +83,29 @@ def _plot(control: dict[str, Any], perturbation: str) -> str:
     return f'<img alt="fall rate against {_e(perturbation)}" src="data:image/png;base64,{png}">'
 
 
+def _holds(groups: list[dict[str, Any]]) -> str:
+    """Robots x controllers per gait: "holds" (green) where no run fell, else the falls and their first signs
+    (red where every run fell, amber where some did)."""
+    controllers = list(dict.fromkeys(g["controller"] for g in groups))
+    cells: dict[tuple[str, str], dict[str, dict[str, Any]]] = defaultdict(dict)
+    for g in groups:
+        cells[(g["robot"], g["gait"])][g["controller"]] = g
+    rows = []
+    for (robot, gait), by in cells.items():
+        row = [_e(robot), _e(gait)]
+        for c in controllers:
+            if c not in by or not by[c]["runs"]:
+                row.append("<td></td>")
+                continue
+            g = by[c]
+            colour = GREEN if not g["falls"] else RED if g["falls"] == g["runs"] else AMBER
+            text = "holds" if not g["falls"] else (f"fell {g['falls']}/{g['runs']}: "
+                                                   + ", ".join(f"{k} {v}" for k, v in g["first_sign_of_falls"].items()))
+            row.append(f'<td style="background:{colour}">{_e(text)}</td>')
+        rows.append(row)
+    return _table(["robot", "gait", *controllers], rows)
+
+
 def _control(control: dict[str, Any]) -> str:
     header = ["robot", "gait", "controller", "runs", "falls", "fall rate", "95 % interval", "first sign of the falls",
               "tracking RMS (rad, median)"]
@@ -90,19 +113,22 @@ def _control(control: dict[str, Any]) -> str:
                     [[_e(g["robot"]), _e(g["gait"]), _e(g["controller"]), _e(g["runs"]), _e(g["falls"]), _e(g["fall_rate"]),
                       f"{g['ci95'][0]:.2f}-{g['ci95'][1]:.2f}",
                       _e(", ".join(f"{k}: {v}" for k, v in g["first_sign_of_falls"].items())),
-                      _e(g["tracking_rms_median_rad"])] for g in control["controllers"]])]
+                      _e(g["tracking_rms_median_rad"])] for g in control["controllers"]]),
+             "<h3>Which controller holds on which robot (the first warning sign of each fall)</h3>",
+             _holds(control["controllers"])]
     parts += [_plot(control, p) for p in control["perturbations"]]
     if control["bins_2d"]:
         a, b = control["perturbations"][:2]
         rows = []
         for cell in control["bins_2d"]:
-            rates = "; ".join(f"{c} {r['falls']}/{r['runs']}" for c, r in cell["controllers"].items())
+            rates = "; ".join(f"{c} {r['falls']}/{r['runs']} ({r['ci95'][0]:.2f}-{r['ci95'][1]:.2f})"
+                              for c, r in cell["controllers"].items())
             mv = cell.get("model_value")
             value = f"{mv['difference']:+.2f} [{mv['ci95'][0]:+.2f}, {mv['ci95'][1]:+.2f}]" if mv else ""
             rows.append([_e(cell["robot"]), _e(f"{cell[a][0]:.3g}-{cell[a][1]:.3g}"),
                          _e(f"{cell[b][0]:.3g}-{cell[b][1]:.3g}"), _e(rates), _e(value)])
         parts.append(f"<h3>Falls per ({_e(a)}, {_e(b)}) bin; the model's value: fall rate of ct-diag minus pd-diag</h3>")
-        parts.append(_table(["robot", a, b, "falls / runs", "ct-diag - pd-diag (95 %)"], rows))
+        parts.append(_table(["robot", a, b, "falls / runs (95 % interval)", "ct-diag - pd-diag (95 %)"], rows))
     return "\n".join(parts)
 
 

@@ -40,7 +40,7 @@ SCHEMA: dict[str, dict[str, str]] = {
                                     "payload_offset_z_m": "range", "mu": "range", "foot_radius_m": "range",
                                     "push_x_N_s": "range", "push_y_N_s": "range", "push_z_N_s": "range",
                                     "push_at_s": "range", "imu_noise_rad_s": "range", "imu_noise_rad": "range",
-                                    "imu_delay_ticks": "range"},
+                                    "imu_delay_ticks": "range", "step_x_m": "range", "step_height_m": "range"},
 }
 #: The prefix of a path inside the installed example-robot-data's robots/ folder.
 ERD_PREFIX = "example-robot-data:"

@@ -135,34 +135,47 @@ def _validate(robot: Any, o: dict[str, Any]) -> dict[str, Any]:
 
 
 # -------------------------------------------------------------------------------------------- control
-def _plant_parts(p: dict[str, Any]) -> tuple[dict[str, Any], Any]:
-    """(PlantOptions keywords, Perturbation) of one run's sample."""
+def _plant_parts(p: dict[str, Any]) -> tuple[dict[str, Any], Any, tuple[float, float, float, float] | None]:
+    """(PlantOptions keywords, Perturbation, the run's push (t s, impulse x y z N s) or None) of one run's sample."""
     from quadruped_dyn.control.perturbations import Perturbation
 
     plant = {k: v for k, v in (("mu", p.get("mu")), ("foot_radius", p.get("foot_radius_m"))) if v is not None}
+    if p.get("step_height_m"):
+        plant["ground_step"] = (float(p.get("step_x_m", 0.0)), float(p["step_height_m"]))
     both = p.get("mass_scale", 1.0)
     vec = {name: tuple(float(p.get(f"{name}_{axis}_{unit}", 0.0)) for axis in "xyz")
            for name, unit in (("payload_offset", "m"), ("push", "N_s"))}
+    x, y, z = vec["push"]
+    push = (float(p.get("push_at_s", 0.0)), x, y, z) if any(vec["push"]) else None
     return plant, Perturbation(trunk_mass_scale=both * p.get("trunk_mass_scale", 1.0),
                                link_mass_scale=both * p.get("link_mass_scale", 1.0), payload_kg=p.get("payload_kg", 0.0),
-                               payload_offset_m=vec["payload_offset"], push_N_s=vec["push"],  # type: ignore[arg-type]
-                               push_at_s=p.get("push_at_s", 0.0), imu_noise_rad_s=p.get("imu_noise_rad_s", 0.0),
-                               imu_noise_rad=p.get("imu_noise_rad", 0.0), imu_delay_ticks=p.get("imu_delay_ticks", 0),
-                               seed=int(hashlib.sha256(json.dumps(p, sort_keys=True).encode()).hexdigest()[:8], 16))
+                               payload_offset_m=vec["payload_offset"],  # type: ignore[arg-type]
+                               imu_noise_rad_s=p.get("imu_noise_rad_s", 0.0), imu_noise_rad=p.get("imu_noise_rad", 0.0),
+                               imu_delay_ticks=p.get("imu_delay_ticks", 0),
+                               seed=int(hashlib.sha256(json.dumps(p, sort_keys=True).encode()).hexdigest()[:8], 16)), push
 
 
-def _control(robot: Any, o: dict[str, Any]) -> dict[str, Any]:
-    from quadruped_dyn.control.closed_loop import prepare, run_all
+def control_study(robot: Any, o: dict[str, Any]) -> Any:
+    """The closed-loop study of a ``control`` task's options ``o``, not run: the plant perturbed by the sample,
+    the sample's push on the run's clock (``LoopOptions.push``: at ``push_at_s`` after the settled start)."""
+    from quadruped_dyn.control.closed_loop import prepare
     from quadruped_dyn.control.perturbations import perturbed
     from quadruped_dyn.control.plant import PlantOptions
     from quadruped_dyn.control.run import LoopOptions
+
+    plant_options, perturbation, push = _plant_parts(o["perturbation"])
+    study = prepare(robot, o["gait"], [o["controller"]], loop=LoopOptions(cycles=o["cycles"], push=push),
+                    plant_options=PlantOptions(**plant_options))
+    study.plant = perturbed(study.plant, perturbation)
+    return study
+
+
+def _control(robot: Any, o: dict[str, Any]) -> dict[str, Any]:
+    from quadruped_dyn.control.closed_loop import run_all
     from quadruped_dyn.control.thresholds import first_crossings
     from quadruped_dyn.errors import NumericalError
 
-    plant_options, perturbation = _plant_parts(o["perturbation"])
-    study = prepare(robot, o["gait"], [o["controller"]], loop=LoopOptions(cycles=o["cycles"]),
-                    plant_options=PlantOptions(**plant_options))
-    study.plant = perturbed(study.plant, perturbation)
+    study = control_study(robot, o)
     try:
         run_all(study)
     except NumericalError as e:  # the perturbed robot did not stand: a fall before the first step

@@ -11,12 +11,12 @@ import casadi as ca
 import numpy as np
 
 from quadruped_dyn.codegen.by_leg import foot_c
+from quadruped_dyn.codegen.forms.leg_pieces import FOOT_PARTS, foot_kinematics, foot_pieces
 from quadruped_dyn.codegen.library import C_FLAGS
-from quadruped_dyn.dynamics.by_leg import FOOT_PARTS, foot_kinematics, foot_pieces
 from quadruped_dyn.dynamics.kinematics import foot_position
 from quadruped_dyn.tolerances import REL_TOL_GRAPH
+from tests.codegen.forms.test_leg_template import turned_robot
 from tests.conftest import assert_close
-from tests.dynamics.test_leg_template import turned_robot
 
 _PRELUDE = "#include <math.h>\n#define casadi_real double\n#define casadi_int long long int\n"
 

@@ -68,7 +68,8 @@ def test_layout_macros_read_what_python_stacks(tmp_path):
     import numpy as np
 
     from quadruped_dyn.codegen.c_facts import layouts_c
-    from quadruped_dyn.dynamics.by_leg import FOOT_PARTS, mass_blocks, stacked
+    from quadruped_dyn.codegen.forms.leg_pieces import FOOT_PARTS, mass_blocks
+    from quadruped_dyn.math.spatial import stacked
 
     M = np.arange(18 * 18, dtype=float).reshape(18, 18) + 1
     Mc = np.asarray(mass_blocks(ca.DM(M))).ravel()

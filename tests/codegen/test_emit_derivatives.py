@@ -22,10 +22,10 @@ from quadruped_dyn.codegen.emit_derivatives import (
     dfd_r_pieces,
     lift_seeds,
 )
+from quadruped_dyn.codegen.forms.did_full_pieces import did_full_pieces
 from quadruped_dyn.codegen.joint_trig import trig_as_inputs
 from quadruped_dyn.codegen.library import C_FLAGS, CompiledFunction, compiled_library
 from quadruped_dyn.dynamics.derivatives import full_derivatives
-from quadruped_dyn.dynamics.rnea_derivatives import did_full_pieces
 from quadruped_dyn.errors import InputError
 from quadruped_dyn.math.compare import relative_error
 from quadruped_dyn.model.registry import ROBOT_NAMES
@@ -34,9 +34,9 @@ from quadruped_dyn.model.stance import stance_set
 from quadruped_dyn.model.state import random_state
 from quadruped_dyn.references.pinocchio import PinocchioDerivatives, PinocchioReference
 from quadruped_dyn.tolerances import FLOAT_REL_TOL, LIFT_COLUMNS_REL_TOL, REL_TOL_DERIVATIVES, REL_TOL_FD_DERIVATIVES
+from tests.codegen.forms.test_leg_template import turned_robot
 from tests.conftest import assert_close
 from tests.dynamics.test_derivatives import grf_point, reduced_point
-from tests.dynamics.test_leg_template import turned_robot
 
 
 def _check_compiled_full(robot, library) -> None:

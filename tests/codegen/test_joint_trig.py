@@ -9,9 +9,9 @@ import numpy as np
 import pytest
 
 from quadruped_dyn.codegen.emit import codegen_functions
+from quadruped_dyn.codegen.forms.did_full_pieces import did_full_pieces
+from quadruped_dyn.codegen.forms.leg_pieces import id_full_pieces, mass_matrix_pieces
 from quadruped_dyn.codegen.joint_trig import trig_as_inputs, trig_count
-from quadruped_dyn.dynamics.by_leg import id_full_pieces, mass_matrix_pieces
-from quadruped_dyn.dynamics.rnea_derivatives import did_full_pieces
 from quadruped_dyn.model.registry import ROBOT_NAMES
 from quadruped_dyn.model.robot import load_robot
 from quadruped_dyn.model.state import JOINT_ANGLES

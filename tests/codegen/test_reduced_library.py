@@ -24,7 +24,7 @@ from quadruped_dyn.codegen.reduced_library import CompiledReducedDynamics
 from quadruped_dyn.dynamics.reduced import reduced_model
 from quadruped_dyn.errors import InputError, NumericalError
 from quadruped_dyn.experiment.gait import GAITS, gait_plan
-from quadruped_dyn.experiment.plan_ik import reference
+from quadruped_dyn.experiment.plan_ik import ik_target
 from quadruped_dyn.model.stance import stance_set
 from quadruped_dyn.tolerances import FLOAT_MAX_BOUND, FLOAT_REL_TOL, REL_TOL_GRAPH, REL_TOL_TERMS, TRUNK_PITCH_DEG_MARGIN
 from tests.conftest import assert_close
@@ -176,7 +176,7 @@ def test_gait_states_are_regular(paper):
     for gait in GAITS.values():
         plan = gait_plan(paper, gait)
         for t in np.linspace(0.0, gait.period, 25)[:-1]:
-            s = reference(plan, t)
+            s = ik_target(plan, t)
             stance = stance_set("+".join(("FL", "FR", "BL", "BR")[i] for i in s.stance))
             n = 13 if len(stance.feet) == 2 else 12
             q, qd, qdd = s.q_r[:n], s.qd_r[:n], s.qdd_r[:n]

@@ -18,12 +18,12 @@ pytest.importorskip("mujoco", reason="MuJoCo is in the 'xlib' extra: pip install
 from quadruped_dyn.cli import EXIT_BAD_INPUT, main  # noqa: E402
 from quadruped_dyn.control.closed_loop import prepare, run_all  # noqa: E402
 from quadruped_dyn.control.controllers import CONTROLLERS, Gains  # noqa: E402
-from quadruped_dyn.control.plan import reference_cycle
+from quadruped_dyn.control.plan import target_cycle
 from quadruped_dyn.control.plant import PlantOptions  # noqa: E402
 from quadruped_dyn.control.run import LoopOptions  # noqa: E402
 from quadruped_dyn.errors import InputError  # noqa: E402
 from quadruped_dyn.experiment.gait import GAITS, gait_plan  # noqa: E402
-from quadruped_dyn.experiment.plan_ik import reference  # noqa: E402
+from quadruped_dyn.experiment.plan_ik import ik_target  # noqa: E402
 from quadruped_dyn.model.robot import load_robot  # noqa: E402
 
 PAPER_URDF = Path(__file__).resolve().parents[2] / "quadruped_dyn" / "urdf" / "paper_quadruped.urdf"
@@ -65,7 +65,7 @@ def test_joint_inertia_is_pinocchios_and_positive() -> None:
     robot = load_robot("paper")
     pref = PinocchioReference(robot)
     for gait in ("trot", "walk"):
-        cycle = reference_cycle(gait_plan(robot, GAITS[gait]), 1000.0)
+        cycle = target_cycle(gait_plan(robot, GAITS[gait]), 1000.0)
         for k in (0, 271, 450):
             ref = cycle[k]
             q = np.concatenate([np.zeros(3), [0.0, 0.0, 0.0, 1.0], ref.q_r[:12]])
@@ -77,14 +77,14 @@ def test_joint_inertia_is_pinocchios_and_positive() -> None:
             assert np.allclose(ref.inertia, expected, rtol=1e-9, atol=0.0)
 
 
-def test_reference_cycle_is_the_plans_ik() -> None:
-    """The periodic, interpolated reference the loop uses agrees with IK at arbitrary ticks,
+def test_target_cycle_is_the_plans_ik() -> None:
+    """The periodic, interpolated target the loop uses agrees with IK at arbitrary ticks,
     also in a later cycle (the plan's feet relative to the trunk are periodic)."""
     plan = gait_plan(load_robot("paper"), GAITS["walk"])
-    cycle = reference_cycle(plan, 1000.0)
+    cycle = target_cycle(plan, 1000.0)
     for k in (0, 3, 517, 1199):
         t = k * 1e-3 + 2 * plan.gait.period
-        ik = reference(plan, t)
+        ik = ik_target(plan, t)
         assert np.abs(cycle[k].q_r - ik.q_r).max() < 1e-6
         assert np.abs(cycle[k].qd_r - ik.qd_r).max() < 1e-3
         assert cycle[k].stance == ik.stance

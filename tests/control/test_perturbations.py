@@ -54,14 +54,15 @@ def test_payload_is_pinocchios_sum_of_inertias(plant, paper):
 
 
 def test_push_adds_its_impulse_to_the_momentum(paper):
-    """Robot in the air (no contact), joints free: M v_com(t) = M g t + J once the push is over."""
+    """Robot in the air (no contact), joints free: M v_com(t) = M g t + J once the push (``Plant.push``, as the
+    loop applies ``LoopOptions.push`` at each tick) is over."""
     J = np.array([3.0, -2.0, 1.0])
-    explicit = build_plant(paper, gait_plan(paper, GAITS["walk"]), PlantOptions(integrator="rk4"))
-    p = perturbed(explicit, Perturbation(push_N_s=tuple(J), push_at_s=0.005))
+    p = build_plant(paper, gait_plan(paper, GAITS["walk"]), PlantOptions(integrator="rk4"))
     q = np.concatenate([[0, 0, 1.0], [0, 0, 0, 1.0], paper.standing_q])
     p.set_state(q, np.zeros(18))
     steps = 100
-    for _ in range(steps):
+    for k in range(steps):
+        p.push(J, 0.005, k * p.options.timestep)
         p.step(Command(np.zeros(12)), 1)
     mujoco.mj_forward(p.model, p.data)  # the velocity stage at the final state
     mujoco.mj_subtreeVel(p.model, p.data)
@@ -72,6 +73,47 @@ def test_push_adds_its_impulse_to_the_momentum(paper):
     expected = M * np.asarray(GRAVITY_W) * steps * p.options.timestep + J
     assert steps * p.options.timestep > 0.005 + PUSH_DURATION_S
     np.testing.assert_allclose(momentum, expected, rtol=0, atol=MOMENTUM_REL_TOL * np.linalg.norm(expected))
+
+
+#: The same configuration over a step's ground and over the flat one, shifted by its height: the same penetration,
+#: so the contact points differ by the height to the round-off of positions of ~1 m.
+CONTACT_HEIGHT_TOL_M = 1e-12
+#: How far the lowest foot sphere reaches into the ground (m): a contact, far less than the sphere.
+PENETRATION_M = 1e-4
+
+
+def _contacts(plant, q: np.ndarray) -> dict[int, tuple[float, str]]:
+    """Per foot in contact: (the contact point's z, the ground geom's name) at configuration q."""
+    plant.set_state(q, np.zeros(18))
+    out = {}
+    for c in plant.data.contact[: plant.data.ncon]:
+        for foot, ground in ((c.geom1, c.geom2), (c.geom2, c.geom1)):
+            hit = np.nonzero(plant.foot_geoms == foot)[0]
+            if hit.size:
+                out[int(hit[0])] = (float(c.pos[2]), plant.model.geom(ground).name)
+    return out
+
+
+@pytest.mark.parametrize("h", [0.05, -0.03])
+def test_a_ground_step_moves_the_feets_contact_by_its_height(paper, h):
+    """From x0 on the ground is h higher: the feet touch it h higher than the flat floor, and before x0 as on it."""
+    plan = gait_plan(paper, GAITS["walk"])
+    flat, x0 = build_plant(paper, plan), 0.4
+    step = build_plant(paper, plan, PlantOptions(ground_step=(x0, h)))
+    q = np.concatenate([[x0 + 1.0, 0.0, 0.0], [0, 0, 0, 1.0], paper.standing_q])
+    flat.set_state(q, np.zeros(18))
+    q[2] = flat.floor_z - PENETRATION_M - (flat.foot_positions()[:, 2].min() - flat.foot_radius)
+    on_flat = _contacts(flat, q)
+    assert on_flat and {g for _, g in on_flat.values()} == {"quadruped_dyn_floor"}
+    on_step = _contacts(step, q + np.r_[0, 0, h, np.zeros(16)])
+    assert on_step.keys() == on_flat.keys()
+    assert {g for _, g in on_step.values()} == {"quadruped_dyn_step" if h > 0 else "quadruped_dyn_floor"}
+    for foot, (z, _) in on_flat.items():
+        assert on_step[foot][0] - z == pytest.approx(h, abs=CONTACT_HEIGHT_TOL_M)
+    before = q.copy()
+    before[0] = x0 - 1.0  # the whole robot before the step: the start's ground
+    assert {f: z for f, (z, _) in _contacts(step, before).items()} == pytest.approx({f: z for f, (z, _) in on_flat.items()},
+                                                                                    abs=CONTACT_HEIGHT_TOL_M)
 
 
 def test_imu_delay_is_the_reading_of_ticks_before_and_noise_its_spread(plant, paper):

@@ -4,6 +4,7 @@ cycle (default suite), an infeasible QP (exit 1, one line), and the long runs (s
 
 from __future__ import annotations
 
+from functools import cache
 from pathlib import Path
 
 import numpy as np
@@ -20,7 +21,7 @@ from quadruped_dyn.cli import main  # noqa: E402
 from quadruped_dyn.control import wbc  # noqa: E402
 from quadruped_dyn.control.closed_loop import prepare, run_all  # noqa: E402
 from quadruped_dyn.control.controllers import GeneratedC, make_controller  # noqa: E402
-from quadruped_dyn.control.plan import reference_cycle  # noqa: E402
+from quadruped_dyn.control.plan import target_cycle  # noqa: E402
 from quadruped_dyn.control.run import LoopOptions, settled_state  # noqa: E402
 from quadruped_dyn.math.compare import relative_error  # noqa: E402
 from quadruped_dyn.model.robot import load_robot  # noqa: E402
@@ -34,6 +35,7 @@ from quadruped_dyn.tolerances import REL_TOL_TERMS  # noqa: E402
 #: odometry's still-foot assumption ignores; measured on the paper robot's walk: 0.01-0.02 m/s.
 ODOMETRY_TOL_M_S = 0.05
 
+@cache  # one run serves the model-term and the MPC checks
 def _drive(robot_name: str, gait: str, ticks: int, every: int):
     """The wbc controller driven by hand on the settled plant: its estimated (q, v) and model terms
     every ``every`` ticks, with MuJoCo's true trunk velocity v_b."""
@@ -43,7 +45,7 @@ def _drive(robot_name: str, gait: str, ticks: int, every: int):
                                study.loop.settle_s)
     study.plant.set_state(*initial)
     controller = make_controller("wbc", study.robot, study.gains, c, study.plant.options.mu, study.loop.rate_hz)
-    cycle = reference_cycle(study.plan, study.loop.rate_hz)
+    cycle = target_cycle(study.plan, study.loop.rate_hz)
     samples = []
     for k in range(ticks):
         meas = study.plant.measure()
@@ -95,6 +97,46 @@ def test_bad_controller_or_gains_exit_2(args: list[str], tmp_path: Path) -> None
     result = CliRunner().invoke(main, ["control", "paper", *args, "--cycles", "1", "--out", str(tmp_path)])
     assert result.exit_code == 2 and len(result.output.strip().splitlines()) == 1, result.output
 
+#: The MPC's force-to-acceleration map composed with the generated dgrf's d lambda / d a against the
+#: identity it should give: round-off of two rigid-body evaluations (REL_TOL_TERMS' reason) through one
+#: 6 x 6 QR solve of the GRF model (well conditioned on a walking posture); measured on the paper robot's
+#: walk: 2e-14; a 1 % error in the MPC's mass gives 1e-2.
+MPC_VS_DGRF_TOL = 1e-10
+
+
+def test_mpc_linearisation_inverts_the_generated_dgrf_at_the_states_of_a_run() -> None:
+    """The MPC's input matrix B (forces -> the trunk's angular and the centre of mass's linear
+    acceleration, world; from M_full's trunk block at the state) against the generated GRF
+    solve's derivative d lambda / d a (``dgrf_<feet>``, C): at the states of a wbc walk, for every
+    3-feet stance set (rank 6: the paper's forces f = P lambda balance any trunk wrench), the forces
+    d f / d a_b that the GRF model needs for a trunk acceleration a_b (joints' accelerations 0), put
+    through B, must give back that acceleration: B R P dlambda/da_b = d(alpha_w, a_com)/d a_b =
+    [[0, R], [R, -R [c]x]]. Two independent derivations of the locked-joint dynamics: the MPC's
+    composite rigid body and the paper's six body equations, differentiated by CasADi."""
+    from quadruped_dyn.codegen.library import CompiledFunction
+    from quadruped_dyn.control.mpc import continuous_model, rigid_body
+    from quadruped_dyn.math.rigid import skew
+    from quadruped_dyn.model.stance import stance_set
+
+    study, samples = _drive("paper", "walk", 300, 30)
+    library = GeneratedC(study.robot).library
+    stances = [stance_set(name) for name in ("FR+BL+BR", "FL+BL+BR", "FL+FR+BR", "FL+FR+BL")]
+    dgrf = {s: CompiledFunction(library, "dgrf_" + s.name.replace("+", "_")) for s in stances}
+    worst = 0.0
+    for q, v, terms, _ in samples:
+        R = rotation(q)
+        m, c, I_c = rigid_body(terms.M[:6, :6])
+        expected = np.block([[np.zeros((3, 3)), R], [R, -R @ skew(c)]])
+        for s in stances:
+            _, _, dlam_da = dgrf[s](q, v, np.zeros(18))
+            dF_w = np.kron(np.eye(3), R) @ s.selection("paper") @ dlam_da[:, :6]  # world forces per a_b
+            _, B = continuous_model(m, R @ I_c @ R.T, [R @ (terms.r[i] - c) for i in s.feet])
+            got = B[6:12] @ dF_w
+            assert np.all(np.isfinite(got)), s.name
+            worst = max(worst, relative_error(got, expected))
+    assert worst <= MPC_VS_DGRF_TOL, worst
+
+
 def test_mpc_rigid_body_is_pinocchios_locked_joint_dynamics() -> None:
     """The MPC's model from the generated M_full's trunk block (m, c, I_c) gives the centre of
     mass's acceleration and the trunk's angular acceleration under given foot forces exactly as
@@ -138,7 +180,8 @@ def _robot(name: str):
 
 
 #: Runs where wbc holds but tracks the joints worse than pd-diag (docs/closed_loop.md).
-TRACKS_WORSE = {("solo12", "trot"): "0.0129 against 0.0104 in the measured run"}
+TRACKS_WORSE = {("solo12", "trot"): "0.0129 against 0.0104 in the measured run",
+                ("anymal_c", "trot"): "0.0098 against 0.0090 in the measured run: its drivers' PD capped (wbc.PD_LINEAR_RAD)"}
 
 
 @pytest.mark.slow
@@ -149,8 +192,6 @@ def test_wbc_ten_cycles_tracks_at_least_as_well_as_pd_diag(name: str, gait: str)
     (RMS over the time both ran); docs/closed_loop.md has the numbers."""
     study = run_all(prepare(_robot(name), gait, ["wbc", "pd-diag"], loop=LoopOptions(cycles=10)))
     r = study.results["wbc"]
-    if (name, gait) == ("anymal_c", "walk") and r["fell"]:
-        pytest.xfail(f"measured: wbc falls on anymal_c's walk (8.16 s; pd-diag at 2.25 s): {r['stopped']}")
     assert not r["fell"] and r["stopped"] is None and r["cycles_up"] == 10, r["stopped"]
     a, b = study.traces["wbc"], study.traces["pd-diag"]
     n = min(a.t.size, b.t.size)

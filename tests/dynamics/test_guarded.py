@@ -64,12 +64,12 @@ def paper():
 @given(q=vectors(19, quaternion_at=3), v=vectors(18), a=vectors(18), f=vectors(12))
 def test_full_dynamics(paper, q, v, a, f):
     fd = full_dynamics(paper)
-    _finite_or_input_error(lambda: fd.M_full(q))
-    _finite_or_input_error(lambda: fd.G_full(q))
+    _finite_or_input_error(lambda: fd.M_full_walker_orin(q))
+    _finite_or_input_error(lambda: fd.G_full_newton_euler(q))
     _finite_or_input_error(lambda: fd.C_full(q, v))
     _finite_or_input_error(lambda: fd.coriolis(q, v))
     _finite_or_input_error(lambda: fd.id_full(q, v, a, f))
-    _finite_or_input_error(lambda: fd.M_full(q=q))
+    _finite_or_input_error(lambda: fd.M_full_walker_orin(q=q))
 
 
 @SETTINGS
@@ -104,10 +104,11 @@ def _q(paper, quat=(0.0, 0.0, 0.0, 1.0)) -> np.ndarray:
 
 #: The issue's cases at the README's layer, each with the message it gets.
 API_CASES = [
-    ("M_full(NaN q)", lambda r: full_dynamics(r).M_full(np.r_[np.nan, _q(r)[1:]]), r"q contains NaN or inf"),
-    ("M_full(zero quaternion)", lambda r: full_dynamics(r).M_full(_q(r, (0, 0, 0, 0))), r"q has a zero quaternion"),
-    ("M_full(18 entries)", lambda r: full_dynamics(r).M_full(_q(r)[:18]), r"q has shape \(18,\); expected \(19,\)"),
-    ("M_full(text)", lambda r: full_dynamics(r).M_full("q"), r"q is (not numeric|a string; expected a numeric array)"),
+    ("M_full(NaN q)", lambda r: full_dynamics(r).M_full_walker_orin(np.r_[np.nan, _q(r)[1:]]), r"q contains NaN or inf"),
+    ("M_full(zero quaternion)", lambda r: full_dynamics(r).M_full_walker_orin(_q(r, (0, 0, 0, 0))), r"q has a zero quaternion"),
+    ("M_full(18 entries)", lambda r: full_dynamics(r).M_full_walker_orin(_q(r)[:18]), r"q has shape \(18,\); expected \(19,\)"),
+    ("M_full(text)", lambda r: full_dynamics(r).M_full_walker_orin("q"),
+     r"q is (not numeric|a string; expected a numeric array)"),
     ("id_full(2 inputs)", lambda r: full_dynamics(r).id_full(_q(r), np.zeros(18)), r"id_full takes 4 inputs"),
     ("id_full(v = 1e300)", lambda r: full_dynamics(r).id_full(_q(r), np.full(18, 1e300), np.zeros(18), np.zeros(12)),
      r"id_full gives a non-finite .* inputs too large"),

@@ -33,9 +33,9 @@ def fd(robot):
 def test_terms_against_pinocchio(robot, ref, fd, seed):
     s = random_state(robot.lower, robot.upper, np.random.default_rng(seed))
     M, G = ref.mass_matrix(s.q), ref.gravity(s.q)
-    assert_close(_np(fd.M_full(s.q)), M, what="M_full")
+    assert_close(_np(fd.M_full_walker_orin(s.q)), M, what="M_full")
     assert_close(_np(fd.M_full_crba(s.q)), M, what="M_full by CRBA")
-    assert_close(_np(fd.G_full(s.q)), G, what="G_full")
+    assert_close(_np(fd.G_full_newton_euler(s.q)), G, what="G_full")
     assert_close(_np(fd.G_full_crb(s.q)), G, what="G_full by composite first moments")
     assert_close(_np(fd.C_full(s.q, s.v)), ref.nonlinear_effects(s.q, s.v) - G, what="C_full")
     assert_close(_np(fd.coriolis(s.q, s.v)), ref.coriolis_matrix(s.q, s.v), what="Coriolis matrix")
@@ -49,14 +49,14 @@ def test_terms_against_pinocchio(robot, ref, fd, seed):
 @pytest.mark.parametrize("seed", SEEDS)
 def test_identities(robot, fd, seed):
     s = random_state(robot.lower, robot.upper, np.random.default_rng(seed))
-    M = _np(fd.M_full(s.q))
+    M = _np(fd.M_full_walker_orin(s.q))
     assert_close(_np(fd.M_full_ad(s.q)), M, what="Walker-Orin M = AD M")
     assert_close(_np(fd.M_full_crba(s.q)), M, what="Walker-Orin M = CRBA M")
     assert_close(M, M.T, what="M symmetric")
     assert np.linalg.eigvalsh(M).min() > 0
     w, tau = fd.id_full(s.q, s.v, s.a, np.zeros(12))
     lhs = np.concatenate([_np(w), _np(tau)])
-    assert_close(lhs, M @ s.a + _np(fd.C_full(s.q, s.v)) + _np(fd.G_full(s.q)), what="id = M a + C + G")
+    assert_close(lhs, M @ s.a + _np(fd.C_full(s.q, s.v)) + _np(fd.G_full_newton_euler(s.q)), what="id = M a + C + G")
     assert_close(_np(fd.coriolis(s.q, s.v)) @ s.v, _np(fd.C_full(s.q, s.v)), what="C(q, v) v = C_full")
 
 
@@ -65,7 +65,7 @@ def test_mdot_minus_2c_skew(robot, fd, seed):
     """M depends on the joint angles only (body-frame coordinates): Mdot = dM/dq_j . qd_j."""
     s = random_state(robot.lower, robot.upper, np.random.default_rng(seed))
     dq = np.concatenate([np.zeros(7), s.v[6:]]) * FD_STEP
-    Mdot = (_np(fd.M_full(s.q + dq)) - _np(fd.M_full(s.q - dq))) / (2 * FD_STEP)
+    Mdot = (_np(fd.M_full_walker_orin(s.q + dq)) - _np(fd.M_full_walker_orin(s.q - dq))) / (2 * FD_STEP)
     N = Mdot - 2 * _np(fd.coriolis(s.q, s.v))
     assert_close(N + N.T, np.zeros_like(N), rel=REL_TOL_FD * np.abs(Mdot).max(), what="Mdot - 2C skew")
 

@@ -11,7 +11,7 @@ from quadruped_dyn.dynamics.kinematics import robot_kinematics
 from quadruped_dyn.errors import InputError
 from quadruped_dyn.experiment.gait import TROT, WALK, deepest_point, gait_plan, gait_posture, support_margin
 from quadruped_dyn.experiment.paper_experiment import static_stability
-from quadruped_dyn.experiment.plan_ik import feet_ik, reference, references
+from quadruped_dyn.experiment.plan_ik import feet_ik, ik_target, ik_targets
 from quadruped_dyn.experiment.simulate import CasadiReducedDynamics, IkTorques
 from quadruped_dyn.model.paper_robot import dh_form
 from quadruped_dyn.model.registry import ROBOT_NAMES
@@ -110,37 +110,37 @@ def test_walk_is_statically_stable(name, erd):
 
 @pytest.mark.parametrize("name", ["paper", "solo12", "go1"])  # analytic IK, numeric IK
 @pytest.mark.parametrize("gait", [TROT, WALK], ids=["trot", "walk"])
-def test_ik_reference_is_consistent(name, gait):
+def test_ik_target_is_consistent(name, gait):
     """FK(q(t)) puts each foot where the plan says relative to the trunk; qd, qdd are the
     derivatives of q."""
     robot = load_robot(name)
     plan = gait_plan(robot, gait)
     kin = robot_kinematics(robot)
     t = 0.37
-    r = reference(plan, t)
+    r = ik_target(plan, t)
     for i in range(4):
         foot = np.asarray(kin[i].foot_position(r.q_r[3 * i : 3 * i + 3])).ravel()
         assert_close(foot, plan.foot(i, t)[0] - plan.trunk(t)[0])
-    rp, rm = reference(plan, t + H, r.q_r[:12]), reference(plan, t - H, r.q_r[:12])
+    rp, rm = ik_target(plan, t + H, r.q_r[:12]), ik_target(plan, t - H, r.q_r[:12])
     assert_close(r.qd_r, (rp.q_r - rm.q_r) / (2 * H), rel=REL_TOL_DIFF, what="qd = dq/dt")
     assert_close(r.qdd_r, (rp.qd_r - rm.qd_r) / (2 * H), rel=REL_TOL_DIFF, what="qdd = dqd/dt")
 
 
-#: The batched reference against the one-at-a-time one: both polish Newton's solution to the FK's
+#: The batched target against the one-at-a-time one: both polish Newton's solution to the FK's
 #: round-off from different starting points, so they differ by a few ulp of the signal's scale
 #: times the legs' Jacobian condition number (~10): measured <= 4 eps on solo12, go2, anymal_c.
 BATCH_REL_TOL = 64 * np.finfo(float).eps
 
 
 @pytest.mark.parametrize("name", ["paper", "solo12", "anymal_c"])  # analytic IK, numeric IK (two leg forms)
-def test_batched_reference_equals_one_at_a_time(name):
-    """``references`` (every target in one Gauss-Newton batch from the posture) gives what
-    ``reference`` gives sample by sample from the previous sample's angles."""
+def test_batched_ik_targets_equal_one_at_a_time(name):
+    """``ik_targets`` (every target in one Gauss-Newton batch from the posture) gives what
+    ``ik_target`` gives sample by sample from the previous sample's angles."""
     plan = gait_plan(load_robot(name), WALK)
     ts = np.linspace(0.0, plan.gait.period, 40)
-    batch, guess = references(plan, ts), None
+    batch, guess = ik_targets(plan, ts), None
     for t, b in zip(ts, batch):
-        one = reference(plan, float(t), guess)
+        one = ik_target(plan, float(t), guess)
         guess = one.q_r[:12]
         assert b.stance == one.stance
         for x, y, what in ((b.q_r, one.q_r, "q"), (b.qd_r, one.qd_r, "qd"), (b.qdd_r, one.qdd_r, "qdd")):
@@ -162,23 +162,23 @@ def test_unreachable_target_in_a_batch_names_the_leg():
 
 def test_closed_form_ik_is_chosen_by_the_leg_not_the_file(paper, tmp_path):
     """A copy of the paper's URDF is the same robot: its legs have the DH form, so it gets the
-    closed-form IK and the same reference; a URDF robot of another form does not."""
+    closed-form IK and the same target; a URDF robot of another form does not."""
     copy = tmp_path / "copy.urdf"
     shutil.copy(paper.urdf, copy)
     robot = load_robot(str(copy))
     assert all(dh_form(leg) is not None for leg in robot.legs)
     assert not any(dh_form(leg) is not None for leg in load_robot("solo12").legs)
-    a, b = reference(gait_plan(paper, WALK), 0.41), reference(gait_plan(robot, WALK), 0.41)
+    a, b = ik_target(gait_plan(paper, WALK), 0.41), ik_target(gait_plan(robot, WALK), 0.41)
     np.testing.assert_array_equal(a.q_r, b.q_r)
 
 
 @pytest.mark.parametrize("ts", [[0.1, np.nan], [np.inf], [], [[0.1]], [-0.1], [0.1 + 1j], ["0.1"]])
-def test_references_refuse_times_that_are_not_times(ts):
+def test_ik_targets_refuse_times_that_are_not_times(ts):
     """NaN, inf, negative, complex, empty or 2-D times: InputError naming ts, not a ValueError deep in the plan."""
     with pytest.raises(InputError, match="ts has shape .*; expected a non-empty 1-D array of finite times >= 0"):
-        references(gait_plan(load_robot("solo12"), TROT), np.array(ts, dtype=object if ts == ["0.1"] else None))
+        ik_targets(gait_plan(load_robot("solo12"), TROT), np.array(ts, dtype=object if ts == ["0.1"] else None))
 
 
-def test_references_refuse_a_non_finite_guess():
+def test_ik_targets_refuse_a_non_finite_guess():
     with pytest.raises(InputError, match="q_guess"):
-        references(gait_plan(load_robot("solo12"), TROT), np.array([0.1]), np.full(12, np.nan))
+        ik_targets(gait_plan(load_robot("solo12"), TROT), np.array([0.1]), np.full(12, np.nan))

@@ -124,7 +124,7 @@ def test_long_double_walk_reaches_the_plan():
     """go2's walk (numeric IK) integrated in long double: the experiment has no systematic error
     above its double inputs' rounding -- not in the IK plan, the torque table, the pose fit,
     the projection, the landing or the comparison grid (docs/results.md: in double the walk stops
-    at its integration's round-off, 4e-5 % in q). The reference is the exact IK plan on the grid."""
+    at its integration's round-off, 4e-5 % in q). The target is the exact IK plan on the grid."""
     from quadruped_dyn.model.robot import load_robot
 
     robot = load_robot("go2")

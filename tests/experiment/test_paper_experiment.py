@@ -25,7 +25,7 @@ def test_percent_errors_and_departure():
     sim = ref + np.column_stack([np.full(50, 1e-3), np.full(50, 1e-3)])
     err = percent_errors(sim, ref)
     assert err[0] == pytest.approx(1e-3 / np.abs(ref[:, 0]).max() * 100)
-    assert err[1] is None, "a reference that is identically zero has no percentage"
+    assert err[1] is None, "a target that is identically zero has no percentage"
     sim_nan = sim.copy()
     sim_nan[10, 0] = np.nan
     assert not percent_errors(sim_nan, ref)[0] < 1.0, "a NaN never passes"

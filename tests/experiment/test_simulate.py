@@ -92,7 +92,7 @@ def test_rigid_contact_dynamics_follow_the_walk_under_its_torques(paper):
 
 def test_trot_with_the_roll_unactuated_departs_under_rigid_contacts(paper):
     """Two feet: the paper's model asks for a moment about the support line that no joint
-    makes; without it the rigid-contact robot leaves the reference."""
+    makes; without it the rigid-contact robot leaves the target."""
     plan = gait_plan(paper, TROT)
     ik = IkTorques(plan, CasadiReducedDynamics(paper))
     run = simulate_rigid(plan, ik, TorqueLaw("ik"), horizon=0.1, dt=1e-2)

@@ -1,4 +1,4 @@
-"""The per-phase interpolant of the reference torques against the exact IK and id_r: at random
+"""The per-phase interpolant of the target torques against the exact IK and id_r: at random
 times, at the nodes and across a stance switch, and a short run driven by it against the same run
 driven by the exact evaluation (their difference within what one ulp of initial state makes)."""
 
@@ -22,7 +22,7 @@ def _stack(sample):
 
 @pytest.mark.parametrize("robot_name, gait", [("paper", WALK), pytest.param("go2", TROT, marks=pytest.mark.slow)],
                          ids=["paper-walk", "go2-trot"])
-def test_interpolant_matches_the_exact_reference(robot_name, gait):
+def test_interpolant_matches_the_exact_target(robot_name, gait):
     from quadruped_dyn.model.robot import load_robot
 
     robot = load_robot(robot_name)
@@ -96,7 +96,7 @@ def test_all_feet_in_one_call_equal_the_per_leg_functions(paper):
             np.testing.assert_array_equal(J[:, s], np.asarray(kin[i].foot_jacobian(q[s])))
 
 
-def test_rigid_contact_fast_path_equals_the_reference_bit_for_bit(paper):
+def test_rigid_contact_fast_path_equals_the_kkt_solve_bit_for_bit(paper):
     """The physics check's per-evaluation KKT solve gives ``constrained_forward_dynamics``'s a exactly."""
     from quadruped_dyn.experiment.rigid_contact import _kkt_accelerations
     from quadruped_dyn.references.pinocchio import PinocchioReference

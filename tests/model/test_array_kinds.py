@@ -33,7 +33,7 @@ def test_masked_boolean_and_half_arrays_are_refused(paper, call):
     q = _q(paper)
     calls = {
         "full_q": (paper.standing_q, lambda x: full_q(np.eye(3), np.zeros(3), x)),
-        "M_full": (q, lambda x: full_dynamics(paper).M_full(x)),
+        "M_full": (q, lambda x: full_dynamics(paper).M_full_walker_orin(x)),
         "grf solve": (np.zeros(18), lambda x: grf_solve(paper, "FL+BR").solve(q, x, np.zeros(18))),
         "id_r": (np.zeros(12), lambda x: reduced_model(paper, "FL+FR+BL+BR").id_r(paper.standing_q, x, np.zeros(12),
                                                                                     np.array([0, 0, 0, 1.0]))),
@@ -52,8 +52,8 @@ def test_other_precisions_convert_to_double_by_the_stated_rule(paper):
         converted = check_array("x", x.astype(kind), (12,))
         assert converted.dtype == np.float64
         assert np.array_equal(converted, x.astype(kind).astype(np.float64))  # exact, or rounded to the nearest double
-    M32 = np.asarray(full_dynamics(paper).M_full(_q(paper).astype(np.float32)))
-    assert np.array_equal(M32, np.asarray(full_dynamics(paper).M_full(_q(paper).astype(np.float32).astype(float))))
+    M32 = np.asarray(full_dynamics(paper).M_full_walker_orin(_q(paper).astype(np.float32)))
+    assert np.array_equal(M32, np.asarray(full_dynamics(paper).M_full_walker_orin(_q(paper).astype(np.float32).astype(float))))
 
 
 def test_a_half_precision_or_boolean_friction_coefficient_is_refused(paper):

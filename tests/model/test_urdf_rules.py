@@ -153,7 +153,7 @@ def test_continuous_joints_keep_working(tmp_path):
     assert report.passed, report.table()
     paper = load_robot("paper")
     s = random_state(paper.lower, paper.upper, np.random.default_rng(0))
-    assert_close(np.asarray(full_dynamics(robot).M_full(s.q)), PinocchioReference(paper).mass_matrix(s.q), what="M")
+    assert_close(np.asarray(full_dynamics(robot).M_full_walker_orin(s.q)), PinocchioReference(paper).mass_matrix(s.q), what="M")
 
 
 def test_one_robot_identity(tmp_path, monkeypatch):
@@ -239,7 +239,7 @@ def test_trunk_welded_to_a_world_root_with_an_offset(tmp_path):
     robot = load_robot(str(path))
     assert robot.joint_names == load_robot("paper").joint_names  # FL_HAA ... BR_KFE: each leg where its name says
     s = random_state(robot.lower, robot.upper, np.random.default_rng(0))
-    assert_close(np.asarray(full_dynamics(robot).M_full(s.q)), _pinocchio_mass_matrix(path, robot.joint_names, s.q),
+    assert_close(np.asarray(full_dynamics(robot).M_full_walker_orin(s.q)), _pinocchio_mass_matrix(path, robot.joint_names, s.q),
                  what="M")
 
 
@@ -306,7 +306,7 @@ def test_trunk_frame_origin_outside_the_hips(tmp_path):
     assert robot.joint_names == load_robot("paper").joint_names  # FL_HAA ... BR_KFE: each leg where its name says
     assert (robot.legs[0].hip[:2] > 0).all() and (robot.legs[3].hip[:2] > 0).all()  # BR's hip too, in this frame
     s = random_state(robot.lower, robot.upper, np.random.default_rng(0))
-    assert_close(np.asarray(full_dynamics(robot).M_full(s.q)), _pinocchio_mass_matrix(path, robot.joint_names, s.q),
+    assert_close(np.asarray(full_dynamics(robot).M_full_walker_orin(s.q)), _pinocchio_mass_matrix(path, robot.joint_names, s.q),
                  what="M")
 
 
@@ -351,7 +351,7 @@ def test_pinocchio_reads_the_xml_the_validation_read(tmp_path):
     assert robot.model.existFrame("batterie_\xe4")
     assert robot.total_mass == pytest.approx(load_robot("paper").total_mass + 2.0, rel=1e-12)
     s = random_state(robot.lower, robot.upper, np.random.default_rng(0))
-    assert_close(np.asarray(full_dynamics(robot).M_full(s.q)), _pinocchio_mass_matrix(plain, robot.joint_names, s.q),
+    assert_close(np.asarray(full_dynamics(robot).M_full_walker_orin(s.q)), _pinocchio_mass_matrix(plain, robot.joint_names, s.q),
                  what="M")
 
 
@@ -413,7 +413,7 @@ def test_a_colour_pinocchio_cannot_read_is_harmless(tmp_path):
     path = _variant(tmp_path, lambda r: r.insert(0, ET.Element("material", name="grey")))
     robot = load_robot(str(path))
     s = random_state(robot.lower, robot.upper, np.random.default_rng(0))
-    assert_close(np.asarray(full_dynamics(robot).M_full(s.q)),
+    assert_close(np.asarray(full_dynamics(robot).M_full_walker_orin(s.q)),
                  _pinocchio_mass_matrix(paper_robot.URDF_PATH, robot.joint_names, s.q), what="M")
 
 

@@ -6,7 +6,8 @@ import json
 
 import pytest
 
-from quadruped_dyn.sweep.summary import BINS, newcombe, summarise, wilson
+from quadruped_dyn.sweep.page import page
+from quadruped_dyn.sweep.summary import BINS, BINS_2D, newcombe, summarise, wilson
 
 pd = pytest.importorskip("pandas")
 
@@ -44,12 +45,18 @@ def test_control_summary_without_a_fall():
     assert [(g["falls"], g["runs"], g["time_to_fall_median_s"]) for g in c["controllers"]] == [(0, 3, None)] * 2
 
 
-def test_control_summary_counts_falls_per_bin_and_the_models_value():
+def _mass_mu_rows() -> list[dict]:
+    """40 (mass, mu) samples spread over [0.7, 1.3] x [0.3, 1.0]; ct-diag falls above a mass of 1.2, pd-diag above 1.0."""
     rows = []
     for i in range(40):
         mass, mu = 0.7 + 0.6 * i / 39, 0.3 + 0.7 * ((7 * i) % 40) / 39
         rows.append(_row("ct-diag", mass, mu, fell=mass > 1.2))
         rows.append(_row("pd-diag", mass, mu, fell=mass > 1.0))
+    return rows
+
+
+def test_control_summary_counts_falls_per_bin_and_the_models_value():
+    rows = _mass_mu_rows()
     s = summarise(pd.DataFrame(rows))
     c = s["control"]
     assert c["perturbations"] == ["mass_scale", "mu"]
@@ -64,3 +71,26 @@ def test_control_summary_counts_falls_per_bin_and_the_models_value():
     assert all(x["model_value"]["difference"] <= 0 for x in cells)  # ct-diag never falls where pd-diag holds here
     assert s["kinds"]["control"] == {"tasks": 80, "errors": 0, "failed_checks": 0, "wall_s_median": 1.0, "cpu_s_median": 1.0,
                                      "cpu_s_total": 80.0}
+
+
+def test_page_shows_each_bins_falls_with_interval_and_the_models_value():
+    """The heaviest, least slippery-proof cell (top third of the masses, bottom third of mu), counted here from the
+    rows, is on the page with each controller's Wilson interval and ct-diag - pd-diag with Newcombe's; the holds table
+    has each controller's falls and their first sign."""
+    df = pd.DataFrame(_mass_mu_rows())
+    html = page("walk_robustness", summarise(df))
+    mass, mu = df["p.mass_scale"], df["p.mu"]
+    heavy = mass >= mass.min() + (mass.max() - mass.min()) * (BINS_2D - 1) / BINS_2D
+    slippery = mu < mu.min() + (mu.max() - mu.min()) / BINS_2D
+    counts = {}
+    for c in ("ct-diag", "pd-diag"):
+        cell = df[(df["o.controller"] == c) & heavy & slippery]
+        counts[c] = (int(cell["m.fell"].sum()), len(cell))
+        lo, hi = wilson(*counts[c])
+        assert f"{c} {counts[c][0]}/{counts[c][1]} ({lo:.2f}-{hi:.2f})" in html
+    assert 0 < counts["ct-diag"][0] < counts["pd-diag"][0]  # a cell where the two differ: not a comparison of zeros
+    d, lo, hi = newcombe(*counts["ct-diag"], *counts["pd-diag"])
+    assert f"{d:+.2f} [{lo:+.2f}, {hi:+.2f}]" in html
+    for c in ("ct-diag", "pd-diag"):
+        falls = int(df.loc[df["o.controller"] == c, "m.fell"].sum())
+        assert f"fell {falls}/40: trunk tilt {falls}" in html

@@ -50,6 +50,9 @@ def _sweep(tmp_path: Path, text: str, *args: str) -> tuple[int, str]:
     (CHECK + "[tasks.control]\ncontrollers = ['pd', 'lqr']\n", r"tasks\.control\.controllers\[1\] 'lqr' is unknown"),
     (CHECK + "[tasks.control.perturbations]\nmu = [0.5, 0.2]\n", r"tasks\.control\.perturbations\.mu is \[0\.5, 0\.2\]"),
     (CHECK + "[tasks.control.perturbations]\ngravity = 2\n", r"unknown key 'tasks\.control\.perturbations\.gravity'"),
+    (CHECK + "[tasks.control]\ncycles = 1\n[tasks.control.perturbations]\npush_at_s = [0.0, 5.0]\n",
+     r"tasks\.control\.perturbations\.push_at_s reaches 5 s; expected times of the run, before its 1\.2 s \(1 cycles\)"),
+    (CHECK + "[tasks.control.perturbations]\nstep_height_m = [0.0, 0.5]\n", r"perturbations\.step_height_m is \[0, 0\.5\]"),
     ('[robots]\nnames = ["paper"]\n', r"tasks is empty"),
     ("[robots\n", r"is not TOML"),
 ])
@@ -151,3 +154,22 @@ def test_a_variant_reaches_the_worker_as_its_bytes(tmp_path, monkeypatch):
     assert variant.urdf_sha256 == variant_ref.sha256 and variant.urdf.is_relative_to(tmp_path / "cache")
     assert variant.total_mass == pytest.approx(1.25 * load_robot("paper").total_mass, rel=1e-12)
     assert materialise(paper_ref) is load_robot("paper")
+
+
+def test_scaling_benchmark_bad_input_is_exit_2_before_any_run(tmp_path, monkeypatch, capsys):
+    from quadruped_dyn.sweep import scaling
+
+    def fail(*args, **kwargs):
+        raise AssertionError("a sweep was run before the input was checked")
+
+    monkeypatch.setattr(scaling, "_one_run", fail)
+    (tmp_path / "out").mkdir()
+    (tmp_path / "out" / "old.json").write_text("{}")
+    path = tmp_path / "s.toml"
+    path.write_text(CHECK)
+    for argv, said in (([str(tmp_path / "none.toml")], "cannot read the sweep file"),
+                       ([str(path), "--out", str(tmp_path / "out")], "is not empty; expected a new folder"),
+                       ([str(path), "--workers", "0"], "expected whole numbers >= 1")):
+        assert scaling.main(argv) == 2
+        err = capsys.readouterr().err
+        assert len(err.strip().splitlines()) == 1 and said in err, err

@@ -1,13 +1,13 @@
 /*
  * The experiment's runs in native code (quadruped_dyn/experiment/native_run.py drives it; the
- * Python path of experiment/simulate.py and experiment/rigid_contact.py is the reference it
+ * Python path of experiment/simulate.py and experiment/rigid_contact.py is the baseline it
  * is tested against).
  *
  * One call integrates one gait phase (fixed stance) with scipy's DOP853 step control and dense
  * output (the coefficients are scipy's arrays, passed in), keeps the reduced state on the
  * stance closure after every step, and records the samples.  Everything an evaluation needs is
  * here or in the generated functions it is given:
- *   - the reference and id_r's torques: the per-phase barycentric interpolant of
+ *   - the target and id_r's torques: the per-phase barycentric interpolant of
  *     experiment/torque_table.py (its nodes, weights and values), plus the plan's trunk position;
  *   - the feet: qdx_feet / qdx_feet_rates, generated from dynamics/kinematics.robot_feet into
  *     the same library;
@@ -336,7 +336,7 @@ int qdx_pose(int k, const qdx_real *rb, const qdx_real *P, qdx_real roll, qdx_re
     return pose_from_feet(k, rb, P, roll, hint, R, p, closure);
 }
 
-/* ---------------------------------------------------------------- the reference table */
+/* ---------------------------------------------------------------- the target table */
 
 /* Barycentric interpolant at t (experiment/torque_table._Phase): out (width,). */
 static void table_at(const qdx_table *tb, qdx_real t, qdx_real *out) {

@@ -1,5 +1,5 @@
-"""The reduced terms' parts from the stance's maps and the feet's kinematics (dynamics/stance_maps.py,
-dynamics/by_leg.py ``foot_pieces``; docs/formulation.md §6.2, "The parts from the feet's maps"): the feet leg by leg
+"""The reduced terms' parts from the stance's maps and the feet's kinematics (codegen/forms/stance_maps.py,
+codegen/forms/leg_pieces.py ``foot_pieces``; docs/formulation.md §6.2, "The parts from the feet's maps"): the feet leg by leg
 against ``kinematics.foot_position`` and its derivatives, and S_b, T_b, v and a assembled from the maps as the C
 assembles them (c/qd_reduced_solve.c, qd_parts) against the generated forms' S_b, T_b (``ReducedProjection``) and
 the paper's maps (``reduced.reduced_maps``: Householder least squares), every stance set of two to four feet."""
@@ -11,17 +11,18 @@ import numpy as np
 import pytest
 
 from quadruped_dyn.codegen.emit import REDUCED_STANCE_SETS
-from quadruped_dyn.dynamics.by_leg import FOOT_PARTS, foot_kinematics, foot_pieces, unstacked
+from quadruped_dyn.codegen.forms.leg_pieces import FOOT_PARTS, foot_kinematics, foot_pieces
+from quadruped_dyn.codegen.forms.stance_maps import stance_maps
 from quadruped_dyn.dynamics.guarded import guarded_call
 from quadruped_dyn.dynamics.kinematics import foot_position
 from quadruped_dyn.dynamics.reduced import reduced_maps
 from quadruped_dyn.dynamics.reduced_projection import reduced_projection
-from quadruped_dyn.dynamics.stance_maps import stance_maps
+from quadruped_dyn.math.spatial import unstacked
 from quadruped_dyn.model.registry import ROBOT_NAMES
 from quadruped_dyn.model.robot import load_robot
 from quadruped_dyn.tolerances import REL_TOL_GRAPH, REL_TOL_TERMS
+from tests.codegen.forms.test_leg_template import turned_robot
 from tests.conftest import assert_close
-from tests.dynamics.test_leg_template import turned_robot
 from tests.dynamics.test_reduced import _reduced
 
 

@@ -5,7 +5,9 @@ and differ in a few numbers: the hip's position, the signs of mirrored offsets a
 template is the canonical leg with each number in which its legs differ (placements, foot point, masses, centres of
 mass, inertia entries; a symmetric pair as one) replaced by an entry of the SX parameter vector ``p``; the numbers
 they share stay constants. A generated function of a template is one piece of machine code that serves all its legs,
-each call with its leg's ``values`` (docs/derivatives.md, "dfd_r and dgrf as generated C").
+each call with its leg's ``values`` (docs/derivatives.md, "dfd_r and dgrf as generated C"). A template with a leg's ``values`` put
+in is that leg in canonical frames (``leg_frames.axis_aligned``), exactly (tested): the functions built from it are
+the ``dynamics`` algorithms of that leg.
 
 A joint turning about -a by q is the joint turning about a by -q (its torque about a is minus the torque about -a):
 a leg whose axes are the template's up to sign shares it in the coordinates sigma q, ``signs`` the sigma of each

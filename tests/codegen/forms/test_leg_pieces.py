@@ -1,4 +1,4 @@
-"""id_full and M leg by leg (dynamics/by_leg.py) against the whole-robot graphs they replace in the reduced files' C
+"""id_full and M leg by leg (codegen/forms/leg_pieces.py) against the whole-robot graphs they replace in the reduced files' C
 (``newton_euler.full_dynamics``: the paper's recursion and the composite rigid bodies), on every built-in robot and on
 a robot whose legs need two templates and a sign."""
 
@@ -8,15 +8,15 @@ import casadi as ca
 import numpy as np
 import pytest
 
-from quadruped_dyn.dynamics.by_leg import id_full_pieces, mass_blocks, mass_matrix_pieces
-from quadruped_dyn.dynamics.leg_template import LegPieces
+from quadruped_dyn.codegen.forms.leg_pieces import id_full_pieces, mass_blocks, mass_matrix_pieces
+from quadruped_dyn.codegen.forms.leg_template import LegPieces
 from quadruped_dyn.dynamics.newton_euler import full_dynamics
 from quadruped_dyn.model.registry import ROBOT_NAMES
 from quadruped_dyn.model.robot import load_robot
 from quadruped_dyn.model.state import random_state
 from quadruped_dyn.tolerances import REL_TOL_GRAPH
+from tests.codegen.forms.test_leg_template import turned_robot
 from tests.conftest import assert_close
-from tests.dynamics.test_leg_template import turned_robot
 
 
 def _legs(pieces: LegPieces, k: int, head: list[np.ndarray] | None, q: np.ndarray, v: np.ndarray,

@@ -1,6 +1,7 @@
 """A stance set's maps from its feet's positions alone: what the generated C of the reduced terms evaluates per stance
-set, with the feet's kinematics (``by_leg.foot_pieces``) and the products by leg in loops around it
-(docs/formulation.md §6.2).
+set, with the feet's kinematics (``leg_pieces.foot_pieces``) and the products by leg in loops around it
+(docs/formulation.md §6.2). S_b, T_b, v and a assembled from them equal the reduced model's
+(``reduced_projection.ReducedProjection``, ``reduced.reduced_maps``; tested, every stance set of two to four feet).
 
 With k stance feet at r_j (trunk frame, in the order of ``stance.feet``) and J_j the Jacobian of foot j in its leg's
 joints (``ReducedProjection``'s forms, linear in what multiplies them):
