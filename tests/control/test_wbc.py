@@ -207,3 +207,39 @@ def test_mpc_wbc_ten_cycles_on_the_paper_robot(gait: str) -> None:
     study = run_all(prepare(load_robot("paper"), gait, ["mpc+wbc"], loop=LoopOptions(cycles=10)))
     r = study.results["mpc+wbc"]
     assert not r["fell"] and r["stopped"] is None and r["cycles_up"] == 10, r["stopped"]
+
+
+#: The push-recovery sample (paper robot's trot, 4 cycles from the settled start): PUSHES pushes drawn with
+#: numpy's default_rng(PUSH_SEED), each at a time uniform in 1.2-1.8 s (the third cycle on) with a horizontal
+#: direction uniform in [0, 2 pi), the impulse over plant.PUSH_DURATION_S (10 ms).
+PUSHES = 20
+PUSH_SEED = 0
+#: The target's impulse (N s): the smallest at which pd-diag falls in at least half of the pushes (docs/closed_loop.md:
+#: it fell in 11/20 at 2.5 N s, 9/20 at 2 N s).
+PUSH_IMPULSE_N_S = 2.5
+#: The target: mpc+wbc survives 16 of the 20 pushes at that impulse.
+PUSH_TARGET_UP = 16
+
+
+def _pushes(impulse_n_s: float) -> list[tuple[float, float, float, float]]:
+    """The sample's pushes: (time s, impulse x y z N s, world), at ``impulse_n_s``."""
+    rng = np.random.default_rng(PUSH_SEED)
+    out = []
+    for _ in range(PUSHES):
+        t, heading = float(rng.uniform(1.2, 1.8)), float(rng.uniform(0.0, 2 * np.pi))
+        out.append((t, impulse_n_s * float(np.cos(heading)), impulse_n_s * float(np.sin(heading)), 0.0))
+    return out
+
+
+@pytest.mark.slow
+def test_push_recovery_on_the_paper_trot() -> None:
+    """At PUSH_IMPULSE_N_S pd-diag falls in at least half of the pushes (what makes it the target's impulse);
+    mpc+wbc survives PUSH_TARGET_UP of them (xfail with the counts while the target is missed)."""
+    up = {"pd-diag": 0, "wbc": 0, "mpc+wbc": 0}
+    for push in _pushes(PUSH_IMPULSE_N_S):
+        study = run_all(prepare(load_robot("paper"), "trot", list(up), loop=LoopOptions(cycles=4, push=push)))
+        for name, r in study.results.items():
+            up[name] += not r["fell"] and r["stopped"] is None
+    assert up["pd-diag"] <= PUSHES // 2, up
+    if up["mpc+wbc"] < PUSH_TARGET_UP:
+        pytest.xfail(f"survived of {PUSHES}: {up}")
