@@ -5359,7 +5359,7 @@ int qd_id_full_trig(const casadi_real** arg, casadi_real** res, casadi_int* iw, 
   return qd_id_full_trig_in(arg, res, L, iw, w, mem);
 }
 
-/* M_full's nonzero blocks (M_bb, then per leg M_bl and M_ll, column-major: dynamics/by_leg.py, mass_blocks) with the joints' sines and cosines given, leg by leg: arg = (q, sin, cos) */
+/* M_full's nonzero blocks (M_bb, then per leg M_bl and M_ll, column-major: codegen/forms/leg_pieces.py, mass_blocks) with the joints' sines and cosines given, leg by leg: arg = (q, sin, cos) */
 #ifndef QD_RETURN_CODES
 #define QD_RETURN_CODES
 #define QD_NONFINITE 1 /* an output is NaN/inf */
@@ -6010,7 +6010,7 @@ int qd_M_blocks_legs_trig(const casadi_real** arg, casadi_real** res, casadi_int
   return qd_M_blocks_legs_trig_in(arg, res, L, iw, w, mem);
 }
 
-/* a leg's foot kinematics (dynamics/by_leg.py, FOOT_PARTS), the joints' sines and cosines given: y = (r, J, J qd_l, Jdot qd_l), trunk frame */
+/* a leg's foot kinematics (codegen/forms/leg_pieces.py, FOOT_PARTS), the joints' sines and cosines given: y = (r, J, J qd_l, Jdot qd_l), trunk frame */
 #ifndef QD_RETURN_CODES
 #define QD_RETURN_CODES
 #define QD_NONFINITE 1 /* an output is NaN/inf */

@@ -33,7 +33,7 @@
 #define QD_NOINLINE
 #endif
 #endif
-/* quadruped_dyn: layouts of the pieces' outputs (written from quadruped_dyn/dynamics/by_leg.py) */
+/* quadruped_dyn: layouts of the pieces' outputs (written from quadruped_dyn/codegen/forms/leg_pieces.py) */
 #ifndef QD_LAYOUTS
 #define QD_LAYOUTS
 #define QD_FOOT 18
@@ -140,7 +140,7 @@ static void qd_scatter(const casadi_int* sp, const casadi_real* restrict nz, cas
 
 /* quadruped_dyn: checks and the forward-dynamics solve of the reduced model (hand-written; in reduced_templates.h,
  * which each qd_<robot>_r_<stance>.c includes (quadruped_dyn/codegen/emit.py) after QD_REGULARITY_MIN and
- * qd_stance_maps (the stance's maps from its feet's positions, dynamics/stance_maps.py, and its regularity
+ * qd_stance_maps (the stance's maps from its feet's positions, codegen/forms/stance_maps.py, and its regularity
  * (r, quat) -> [0, 1] of dynamics/stance_regularity.py), from which qd_parts forms S_b, T_b, v, a. Every
  * entry point takes the joints' sines and cosines once (qd_trig) and passes them to the generated pieces and to the
  * library's qd_*_trig functions. The return codes are documented in qd_<robot>.h. */
@@ -252,7 +252,7 @@ typedef struct {
 
 static void qd_trig_of(int n, const casadi_real* q_r, qd_trig* t) { qd_sincos(n, q_r, t->c, t->s); }
 
-/* defined in qd_<robot>.c of the same library: leg k's foot kinematics y (QD_FOOT reals: dynamics/by_leg.py,
+/* defined in qd_<robot>.c of the same library: leg k's foot kinematics y (QD_FOOT reals: codegen/forms/leg_pieces.py,
  * FOOT_PARTS) at its joints' q_l, qd_l and their sines s and cosines c (3 each): the foot's position r, J = dr/dq_l, J qd_l
  * and Jdot qd_l, trunk frame, read by QD_FOOT_R, QD_FOOT_J, QD_FOOT_JQD and QD_FOOT_JDQD (codegen/c_facts.py). */
 int qd_foot_trig(int k, const casadi_real* q_l, const casadi_real* qd_l, const casadi_real* s, const casadi_real* c,
@@ -269,7 +269,7 @@ static void qd_cross(const casadi_real* a, const casadi_real* b, casadi_real* c)
  * bit l for a stance leg l (docs/formulation.md §6.2): the regularity *m, S_b (n x 6),
  * T_b (6 x n) (column-major; S = [S_b, I_12], T = [T_b; I_12], row/column 12 no joint part), the full v, a = T qdd_r + k.
  * Without rates (qd_r and qdd_r null) v and a are not written. The stance feet's kinematics (qd_foot_trig), the
- * stance's maps from their positions (qd_stance_maps, generated before this file: dynamics/stance_maps.py; W_T (6 x 3k),
+ * stance's maps from their positions (qd_stance_maps, generated before this file: codegen/forms/stance_maps.py; W_T (6 x 3k),
  * Y (6 x 3k), with two feet y_e, s_e, D), then by foot j on leg l:
  * S_b's rows of l = -(W_T,j J_j)^T, T_b's columns of l = -Y_j J_j (row and column 12: s_e, y_e);
  * (v_b, omega_b) = sum_j Y_j (-J_j qd_j) + y_e qd_r[12] (= T_b qd_r); (a_b + omega_b x v_b, alpha_b) = sum_j Y_j b_j
@@ -377,7 +377,7 @@ static int qd_M_at(const casadi_real* q, const qd_trig* t, casadi_real* M, casad
   casadi_real* m_res[1] = {M};
   return blocks ? qd_M_blocks_legs_trig(m_arg, m_res, iw, w, mem) : qd_M_full_dense_trig(m_arg, m_res, iw, w, mem);
 }
-/* M's blocks (dynamics/by_leg.py, mass_blocks; QD_M_BLOCKS, QD_M_BB, QD_M_BL, QD_M_LL: codegen/c_facts.py): M_bb
+/* M's blocks (codegen/forms/leg_pieces.py, mass_blocks; QD_M_BLOCKS, QD_M_BB, QD_M_BL, QD_M_LL: codegen/c_facts.py): M_bb
  * (6 x 6), then per leg l M_bl (6 x 3) and M_ll (3 x 3), each column-major; the blocks between two legs are zero and
  * M_lb = M_bl^T. */
 

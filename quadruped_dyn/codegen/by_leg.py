@@ -1,4 +1,4 @@
-"""C of a function evaluated leg by leg (``dynamics.leg_template.LegPieces``; docs/derivatives.md, "dfd_r and dgrf as
+"""C of a function evaluated leg by leg (``codegen.forms.leg_template.LegPieces``; docs/derivatives.md, "dfd_r and dgrf as
 generated C").
 
 The head, each template's leg function and the tail become static C functions (``static_c``); the function itself
@@ -116,7 +116,7 @@ def _leg_call(c_name: str, pieces: LegPieces, call: LegCall, k: int, nl: int) ->
 
 
 def foot_c(c_name: str, pieces: LegPieces, host_helpers: frozenset[str]) -> str:
-    """Static C functions of ``pieces`` (``dynamics.by_leg.foot_pieces``: leg functions (q_l, qd_l, p) -> FOOT_PARTS,
+    """Static C functions of ``pieces`` (``codegen.forms.leg_pieces.foot_pieces``: leg functions (q_l, qd_l, p) -> FOOT_PARTS,
     and each at qd_l = 0, without the rates' operations) and ``int c_name(int k, q_l, qd_l, s, c, y)``: robot leg k's
     foot kinematics y (18) at its joints' q_l, qd_l (3 each; null: at rest) and their sines s and cosines c, by its
     template's function and parameters; a leg whose joints turn the other

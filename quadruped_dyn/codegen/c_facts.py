@@ -87,7 +87,7 @@ def layouts_c() -> str:
     leg_reals = sum(r * c for _, r, c in LEG_MASS_BLOCKS)
     leg = _offsets(LEG_MASS_BLOCKS, trunk_reals)
     lines = [
-        "/* quadruped_dyn: layouts of the pieces' outputs (written from quadruped_dyn/dynamics/by_leg.py) */",
+        "/* quadruped_dyn: layouts of the pieces' outputs (written from quadruped_dyn/codegen/forms/leg_pieces.py) */",
         "#ifndef QD_LAYOUTS",
         "#define QD_LAYOUTS",
         f"#define QD_FOOT {sum(r * c for _, r, c in FOOT_PARTS)}",

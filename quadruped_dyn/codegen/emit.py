@@ -404,7 +404,7 @@ def float_err_per_regularity(stance: StanceSet) -> float:
 
 def _reduced_helpers_c(stance: StanceSet, dfd_r: DfdRPieces) -> str:
     """QD_REGULARITY_MIN, QD_FLOAT_MAX_BOUND, QD_FLOAT_ERR_PER_REGULARITY, ``qd_stance_maps`` ((r, quat) ->
-    (regularity, W, Y[, y_e, s_e, D]): ``dynamics.stance_maps``, from which with the library's qd_foot_trig the
+    (regularity, W, Y[, y_e, s_e, D]): ``codegen.forms.stance_maps``, from which with the library's qd_foot_trig the
     templates' qd_parts forms S_b, T_b, v and a) and dfd_r's ``qd_dfd_r_lift`` (``emit_derivatives.dfd_r_pieces``),
     the generated pieces the templates call."""
     return (regularity_c(float_err_per_regularity(stance))
@@ -469,7 +469,7 @@ JOINT_ROWS_FIRST = ("M_full", "G_full", "nle_full", "id_full")
 #: (``_reduced_calls_by_leg``).
 TRIG_GIVEN = ("G_full",)
 #: qd_id_full_trig's arg (q, v, a, sin, cos) and qd_M_blocks_legs_trig's (q, sin, cos) as their pieces read them
-#: (``dynamics.by_leg``): the reduced files' calls, leg by leg (``_reduced_calls_by_leg``).
+#: (``codegen.forms.leg_pieces``): the reduced files' calls, leg by leg (``_reduced_calls_by_leg``).
 ID_FULL_CALL = LegCall(head_args=(0, 1, 2), leg_inputs=(("arg", 1, 3), ("arg", 2, 3), ("head", 0), ("joint", 0, 7),
                                                         ("joint", 1, 6), ("joint", 2, 6)),
                        sin_arg=3, tail_args=(0, 1, 2))
@@ -550,17 +550,17 @@ def _M_full_dense(functions: list[ca.Function], host_helpers: frozenset[str]) ->
 def _reduced_calls_by_leg(robot: Robot, host_helpers: frozenset[str]) -> str:
     """qd_id_full_trig (q, v, a, sin, cos) -> (w_res, tau) (no foot forces) and qd_M_blocks_legs_trig (q, sin, cos) ->
     M's nonzero blocks (``by_leg.mass_blocks``: fd_r's), the joints' sines and cosines given, each as one leg function
-    per leg template called once per leg (``dynamics.by_leg``, ``codegen.by_leg``), whose code stays in the instruction
+    per leg template called once per leg (``codegen.forms.leg_pieces``, ``codegen.by_leg``), whose code stays in the instruction
     cache: for the reduced files' fd_r, C_r + G_r, id_r and dfd_r (c/qd_reduced_solve.c), which call them among ~45 kB
     of other code per call (docs/benchmark.md, "Design choices"). M_r calls ``_M_full_dense``'s
     qd_M_full_dense_trig, one function of fewer instructions, which fits the cache beside M_r's other ~20 kB."""
     return ("/* id_full without foot forces, the joints' sines and cosines given, leg by leg: arg = (q, v, a, sin, cos) */\n"
             + by_leg_c("qd_id_full_trig", id_full_pieces(robot), ID_FULL_CALL, host_helpers) + "\n"
-            "/* M_full's nonzero blocks (M_bb, then per leg M_bl and M_ll, column-major: dynamics/by_leg.py, mass_blocks) "
-            "with the joints' sines and cosines given, leg by leg: arg = (q, sin, cos) */\n"
+            "/* M_full's nonzero blocks (M_bb, then per leg M_bl and M_ll, column-major: codegen/forms/leg_pieces.py, "
+            "mass_blocks) with the joints' sines and cosines given, leg by leg: arg = (q, sin, cos) */\n"
             + by_leg_c("qd_M_blocks_legs_trig", mass_matrix_pieces(robot), M_BLOCKS_CALL, host_helpers) + "\n"
-            "/* a leg's foot kinematics (dynamics/by_leg.py, FOOT_PARTS), the joints' sines and cosines given: y = (r, J, "
-            "J qd_l, Jdot qd_l), trunk frame */\n"
+            "/* a leg's foot kinematics (codegen/forms/leg_pieces.py, FOOT_PARTS), the joints' sines and cosines given: "
+            "y = (r, J, J qd_l, Jdot qd_l), trunk frame */\n"
             + foot_c("qd_foot_trig", foot_pieces(robot), host_helpers))
 
 
