@@ -14,14 +14,15 @@ import pytest
 
 from tests.files.test_cache_faults import _interrupted
 
-#: A symbolic step as the report's: the full models' Functions of four robots built from scratch (~20 s), interrupted
-#: after ``delay``.
+#: A symbolic step as the report's: the full models' Functions of the seven built-in robots built from scratch, interrupted
+#: after ``delay``. The build must outlast the longest delay on a quiet machine: ~6.5 s on an AMD EPYC (four robots
+#: took ~2.5-3.2 s there, under the 2.5 s delay at times).
 BUILD = """
 import os, signal, sys, threading, time
 {install}
 from quadruped_dyn.dynamics.newton_euler import full_dynamics
 from quadruped_dyn.model.robot import load_robot
-robots = [load_robot(name) for name in ("paper", "solo12", "go2", "a1")]
+robots = [load_robot(name) for name in ("paper", "solo12", "go2", "anymal_c", "hyq", "go1", "a1")]
 delay = float(sys.argv[1])
 threading.Timer(delay, os.kill, (os.getpid(), signal.SIGINT)).start()
 start = time.perf_counter()
