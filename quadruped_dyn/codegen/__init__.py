@@ -10,7 +10,7 @@ _MODULES: dict[str, tuple[str, ...]] = {
     "file_names": ("REDUCED_STANCE_SETS", "SHARED_FILES", "GeneratedFiles", "file_layout", "robot_stem", "robot_file",
                    "feet_suffix", "reference_header_name", "robots_in", "check_no_collision"),
     "emit": (
-        "CODEGEN_FUNCTIONS", "REDUCED_NAMES", "reduced_symbol", "reduced_functions",
+        "CODEGEN_FUNCTIONS", "ALIASES", "REDUCED_NAMES", "reduced_symbol", "reduced_functions",
         "SIGNAL_DOCS", "codegen_functions", "reduced_parts", "header_doc", "generate",
     ),
     "emit_derivatives": ("DERIVATIVE_NAMES", "GRF_DERIVATIVE_NAMES", "GRF_DERIVATIVE_STANCE_SETS", "REDUCED_DERIVATIVE_NAMES",
