@@ -48,7 +48,6 @@ from quadruped_dyn.bench.harnesses import HARNESSES, PINOCCHIO_CXX_FLAGS, cmeel_
 from quadruped_dyn.bench.placement import TimedProgram, median_over_rounds
 from quadruped_dyn.bench.timing_counts import check_counts
 from quadruped_dyn.checks.check_program_values import generate_checked, reference_header_name
-from quadruped_dyn.codegen.casadi_source import work_sizes
 from quadruped_dyn.codegen.emit import PREFIX, GeneratedFiles, codegen_functions
 from quadruped_dyn.codegen.library import (
     C_FLAGS,
@@ -59,6 +58,7 @@ from quadruped_dyn.codegen.library import (
     compiler_version,
     run_tool,
 )
+from quadruped_dyn.codegen.print_settings import work_sizes
 from quadruped_dyn.files.cache import cache_dir, cached_build
 from quadruped_dyn.model.robot import Robot
 from quadruped_dyn.model.state import random_state

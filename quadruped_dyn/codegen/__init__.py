@@ -4,9 +4,9 @@ and the C templates (``c/``); they are cached in the verified build cache (``fil
 from quadruped_dyn.exports import lazy_exports
 
 _MODULES: dict[str, tuple[str, ...]] = {
-    "casadi_source": ("PREFIX", "TEMPLATES", "work_sizes", "casadi_c"),
+    "print_settings": ("PREFIX", "EVALUATION", "UNGUARDED", "static_c", "work_sizes"),
     "printer": ("PrintOptions", "Printed", "print_function"),
-    "c_file": ("Entry", "FileOptions", "c_file"),
+    "c_file": ("Entry", "FileOptions", "c_file", "casadi_c"),
     "file_names": ("REDUCED_STANCE_SETS", "SHARED_FILES", "GeneratedFiles", "file_layout", "robot_stem", "robot_file",
                    "feet_suffix", "reference_header_name", "robots_in", "check_no_collision"),
     "emit": (

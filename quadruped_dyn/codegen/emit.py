@@ -20,9 +20,8 @@ import casadi as ca
 
 from quadruped_dyn.codegen.by_leg import LegCall, by_leg_c, foot_c
 from quadruped_dyn.codegen.c_alone import PROVIDED
-from quadruped_dyn.codegen.c_facts import layouts_c, prelude_c, regularity_c, return_codes_c
+from quadruped_dyn.codegen.c_facts import TEMPLATES, layouts_c, prelude_c, regularity_c, return_codes_c
 from quadruped_dyn.codegen.c_file import Entry, FileOptions, c_file, entry_work, file_helpers
-from quadruped_dyn.codegen.casadi_source import EVALUATION, PREFIX, SINCOS, TEMPLATES, UNGUARDED, static_c
 from quadruped_dyn.codegen.emit_derivatives import (
     DERIVATIVE_NAMES,
     GRF_DERIVATIVE_NAMES,
@@ -47,6 +46,7 @@ from quadruped_dyn.codegen.forms.leg_pieces import foot_pieces, id_full_pieces, 
 from quadruped_dyn.codegen.forms.stance_maps import stance_maps
 from quadruped_dyn.codegen.joint_trig import trig_as_inputs
 from quadruped_dyn.codegen.precision_math import template_c
+from quadruped_dyn.codegen.print_settings import EVALUATION, PREFIX, SINCOS, UNGUARDED, static_c
 from quadruped_dyn.codegen.printer import SIGNATURE
 from quadruped_dyn.codegen.work_memory import memory_doc
 from quadruped_dyn.dynamics.grf import grf_balance, grf_solve

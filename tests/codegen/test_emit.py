@@ -21,7 +21,6 @@ from quadruped_dyn.checks.check_program_values import (
     reference_differences,
     reference_state,
 )
-from quadruped_dyn.codegen.casadi_source import UNGUARDED
 from quadruped_dyn.codegen.emit import (
     ALIASES,
     CODEGEN_FUNCTIONS,
@@ -33,6 +32,7 @@ from quadruped_dyn.codegen.emit import (
     reduced_symbol,
 )
 from quadruped_dyn.codegen.library import CompiledFunction, compiled_library, load_external
+from quadruped_dyn.codegen.print_settings import UNGUARDED
 from quadruped_dyn.math.compare import max_abs_error, scale_of
 from quadruped_dyn.model.robot import load_robot
 from quadruped_dyn.model.state import random_state
@@ -184,7 +184,7 @@ def test_precision_wrappers_follow_the_casadi_real_default(precision):
     import casadi as ca
 
     from quadruped_dyn.codegen.c_file import Entry, FileOptions, c_file
-    from quadruped_dyn.codegen.casadi_source import EVALUATION
+    from quadruped_dyn.codegen.print_settings import EVALUATION
 
     x = ca.SX.sym("x")
     f = ca.Function("qd_t", [x], [ca.sin(x)])
