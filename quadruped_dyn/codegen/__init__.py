@@ -4,7 +4,7 @@ and the C templates (``c/``); they are cached in the verified build cache (``fil
 from quadruped_dyn.exports import lazy_exports
 
 _MODULES: dict[str, tuple[str, ...]] = {
-    "print_settings": ("PREFIX", "EVALUATION", "UNGUARDED", "static_c", "work_sizes"),
+    "print_settings": ("PREFIX", "EVALUATION", "UNGUARDED", "static_c"),
     "printer": ("PrintOptions", "Printed", "print_function"),
     "c_file": ("Entry", "FileOptions", "c_file", "casadi_c"),
     "file_names": ("REDUCED_STANCE_SETS", "SHARED_FILES", "GeneratedFiles", "file_layout", "robot_stem", "robot_file",

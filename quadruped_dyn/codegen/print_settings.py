@@ -4,7 +4,6 @@ template of sines and cosines (``SINCOS``)."""
 
 from __future__ import annotations
 
-import re
 from dataclasses import replace
 
 import casadi as ca
@@ -12,12 +11,6 @@ import casadi as ca
 from quadruped_dyn.codegen.printer import PrintOptions, print_function
 
 PREFIX = "qd_"
-
-
-def work_sizes(casadi_header: str) -> dict[str, tuple[int, int]]:
-    sizes = dict(re.findall(r"#define (\w+_SZ_(?:IW|W)) (\d+)", casadi_header))
-    names = {k.rsplit("_SZ_", 1)[0] for k in sizes}
-    return {n: (int(sizes[f"{n}_SZ_IW"]), int(sizes[f"{n}_SZ_W"])) for n in names}
 
 
 #: How the evaluation functions of the shipped files print (``codegen.printer``): each shared denominator's quotients

@@ -283,6 +283,9 @@ def test_bench_reports_ratios_against_pinocchio(paper):
         e = entries[name]
         assert e.pinocchio == algo and e.pinocchio_ns > 0 and e.ratio == pytest.approx(e.generated_ns / e.pinocchio_ns)
     assert report.code_bytes > 0 and report.library_bytes > 0
+    sizes = dict(re.findall(r"^#define (qd_\w+_SZ_(?:IW|W)) (\d+)$", (CASADI_GEN / "qd_paper.h").read_text(), re.M))
+    assert report.work_bytes == max(8 * (int(sizes[f"{PREFIX}{n}_SZ_IW"]) + int(sizes[f"{PREFIX}{n}_SZ_W"]))
+                                    for n in entries if n != "C_full + G_full") > 0  # the header's largest
     assert report.cpu_model and report.compiler and json.dumps(report.as_dict())
     if not valgrind_available():
         assert report.call_costs == [] and report.call_cost_note == NOT_MEASURED
