@@ -1,0 +1,132 @@
+"""The parametric library: one compiled C library per family (``model/parameters.py``) that serves every robot of it.
+
+Its functions are ``dynamics/parametric.py``'s, each ``qd_p_<name>(arg, res, iw, w, mem)`` with the robot's
+parameters p as its last input, read once per call (``PrintOptions.parameters``): M_full, C_full, G_full, nle_full,
+id_full (the fixed library's inputs, then p) and regressor_full (q, v, a, p -> Y (18, 130), id_full = Y p[:130] with
+f = 0). The header opens with p's layout, from ``PARAMETER_NAMES``; p is filled in Python (``parameters_of``; no C
+filler: a C user writes the 178 numbers in that order). Compiled once per family and cached under a key of the family
+(its rotations and axes, not a robot's numbers), the generator's source, CasADi, precision, flags and compiler: a new
+robot of a known family, or a variant, loads it with no compile.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import shutil
+import sys
+import tempfile
+from dataclasses import dataclass, replace
+from pathlib import Path
+
+import casadi as ca
+import numpy as np
+
+from quadruped_dyn.codegen.c_file import Entry, FileOptions, c_file
+from quadruped_dyn.codegen.casadi_source import EVALUATION, PREFIX
+from quadruped_dyn.codegen.file_names import family_stem
+from quadruped_dyn.codegen.library import (
+    C_FLAGS,
+    PACKAGE,
+    CompiledFunction,
+    CompiledLibrary,
+    compile_sources,
+    compiler_version,
+    generator_sources,
+)
+from quadruped_dyn.dynamics.parametric import parametric_dynamics
+from quadruped_dyn.errors import InputError
+from quadruped_dyn.files.cache import cached_build
+from quadruped_dyn.model.leg import LEG_LABELS
+from quadruped_dyn.model.parameters import (
+    BODIES,
+    FOOT_POINTS,
+    INERTIAL_NAMES,
+    JOINT_POSITIONS,
+    JOINTS,
+    N_PARAMETERS,
+    Family,
+    check_family,
+    check_parameters,
+    family_of,
+    parameters_of,
+)
+from quadruped_dyn.model.robot import Robot
+
+#: The C names of the parametric functions: qd_p_M_full, ...
+PARAMETRIC_PREFIX = PREFIX + "p_"
+PARAMETRIC_NAMES = ("M_full", "C_full", "G_full", "nle_full", "id_full", "regressor_full")
+
+
+def layout_comment(family: Family) -> str:
+    """p's layout as a C comment (``model/parameters.py``)."""
+    inertial = ", ".join(INERTIAL_NAMES)
+    lines = [f"p ({N_PARAMETERS} reals, SI units) of the family {family.key} (the structure of {family.robot.name}):"]
+    lines += [f"  p[{10 * b}..{10 * b + 9}] {body}: {inertial} (kg, kg m, kg m^2 at its frame's origin)"
+              for b, body in enumerate(BODIES)]
+    lines += [f"  p[{JOINT_POSITIONS.start + 3 * k}..{JOINT_POSITIONS.start + 3 * k + 2}] {joint}: its origin in its "
+              "parent's frame (m)" for k, joint in enumerate(JOINTS)]
+    lines += [f"  p[{FOOT_POINTS.start + 3 * n}..{FOOT_POINTS.start + 3 * n + 2}] {leg} foot: in its KFE frame (m)"
+              for n, leg in enumerate(LEG_LABELS)]
+    return "/* " + "\n   ".join(lines) + " */\n"
+
+
+def parametric_c(family: Family, precision: str = "double") -> tuple[str, str]:
+    """(C source, header) of the family's parametric functions (module docstring)."""
+    entries = []
+    for f in parametric_dynamics(family).functions():
+        args = f.sx_in()
+        renamed = ca.Function(PARAMETRIC_PREFIX + f.name(), args, f.call(args), f.name_in(), f.name_out(), {"cse": True})
+        entries.append(Entry(renamed, replace(EVALUATION, parameters=(f.n_in() - 1,))))
+    source, header = c_file(family_stem(family.key), entries, FileOptions(precision, precision_math=True))
+    return source, layout_comment(family) + header
+
+
+def _family_key(family: Family, precision: str, flags: tuple[str, ...], cc: str) -> str:
+    h = hashlib.sha256(f"parametric {family.key}\n".encode())
+    for path in generator_sources("codegen.parametric_library"):
+        h.update(str(path.relative_to(PACKAGE)).encode() + path.read_bytes())
+    h.update(f"{ca.CasadiMeta.version()} {precision} {' '.join(flags)} {compiler_version(cc)}".encode())
+    return h.hexdigest()[:16]
+
+
+@dataclass(frozen=True)
+class ParametricLibrary:
+    """A family's compiled parametric library; ``function(name)`` calls one with inputs (..., p)."""
+
+    family: Family
+    library: CompiledLibrary
+
+    def function(self, name: str) -> CompiledFunction:
+        if name not in PARAMETRIC_NAMES:
+            raise InputError(f"'{name}' is not a parametric function; expected one of {', '.join(PARAMETRIC_NAMES)}")
+        return CompiledFunction(self.library, "p_" + name)
+
+    def parameters(self, robot: Robot) -> np.ndarray:
+        """p of ``robot``, checked to be of this family (InputError naming the first difference) and physical."""
+        check_family(self.family, robot)
+        return check_parameters(parameters_of(robot))
+
+
+def parametric_library(family_or_robot: Family | Robot, precision: str = "double", cc: str = "gcc") -> ParametricLibrary:
+    """The family's parametric library (of a Family, or of a robot's family), compiled once into the cache."""
+    if not isinstance(family_or_robot, Family | Robot):
+        raise InputError(f"got {type(family_or_robot).__name__}; expected a Family or a Robot (load_robot)")
+    family = family_or_robot if isinstance(family_or_robot, Family) else family_of(family_or_robot)
+    flags = (*C_FLAGS, f"-Dcasadi_real={precision}")
+    stem = family_stem(family.key)
+
+    def build(building: Path) -> None:
+        print(f"building the parametric C of family {family.key} ({family.robot.name}'s structure, {precision}) once "
+              f"into the cache {building.parent.parent}", file=sys.stderr, flush=True)
+        with tempfile.TemporaryDirectory() as tmp:
+            source, header = parametric_c(family, precision)
+            c_path, h_path = Path(tmp) / f"{stem}.c", Path(tmp) / f"{stem}.h"
+            c_path.write_text(source)
+            h_path.write_text(header)
+            compile_sources([c_path], flags, building, cc)
+            for p in (c_path, h_path):  # for reading; the library is what is verified
+                shutil.copy(p, building.parent / p.name)
+
+    key = _family_key(family, precision, flags, cc)
+    lib = cached_build(key, f"lib{stem}.so", build)
+    return ParametricLibrary(family, CompiledLibrary(lib, lib.parent / f"{stem}.c", key, precision))
