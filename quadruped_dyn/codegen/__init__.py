@@ -11,7 +11,7 @@ _MODULES: dict[str, tuple[str, ...]] = {
                    "feet_suffix", "reference_header_name", "robots_in", "check_no_collision"),
     "emit": (
         "CODEGEN_FUNCTIONS", "REDUCED_NAMES", "reduced_symbol", "reduced_functions",
-        "SIGNAL_DOCS", "codegen_functions", "reduced_parts", "header_doc", "generate",
+        "SIGNAL_DOCS", "codegen_function", "codegen_functions", "reduced_parts", "header_doc", "generate",
     ),
     "emit_derivatives": ("DERIVATIVE_NAMES", "GRF_DERIVATIVE_NAMES", "GRF_DERIVATIVE_STANCE_SETS", "REDUCED_DERIVATIVE_NAMES",
                          "derivative_functions", "derivative_source", "grf_derivative_functions",

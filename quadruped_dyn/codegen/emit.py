@@ -189,14 +189,17 @@ SIGNAL_DOCS = {
 }
 
 
+def codegen_function(robot: Robot, name: str) -> ca.Function:
+    """The generated Function ``name`` (a key of ``CODEGEN_FUNCTIONS``), renamed with the C prefix (same graph, no
+    wrapper call, common subexpressions shared)."""
+    f = CODEGEN_FUNCTIONS[name](robot)
+    args = f.sx_in()
+    return ca.Function(PREFIX + name, args, f.call(args), f.name_in(), f.name_out(), {"cse": True})
+
+
 def codegen_functions(robot: Robot) -> list[ca.Function]:
-    """The generated Functions, renamed with the C prefix (same graphs, no wrapper call)."""
-    out = []
-    for name, build in CODEGEN_FUNCTIONS.items():
-        f = build(robot)
-        args = f.sx_in()
-        out.append(ca.Function(PREFIX + name, args, f.call(args), f.name_in(), f.name_out(), {"cse": True}))
-    return out
+    """The generated Functions, renamed with the C prefix (``codegen_function`` of each)."""
+    return [codegen_function(robot, name) for name in CODEGEN_FUNCTIONS]
 
 
 def _shape(sp: ca.Sparsity) -> str:
