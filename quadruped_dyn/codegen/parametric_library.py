@@ -3,10 +3,12 @@
 Its functions are ``dynamics/parametric.py``'s, each ``qd_p_<name>(arg, res, iw, w, mem)`` with the robot's
 parameters p as its last input, read once per call (``PrintOptions.parameters``): M_full, C_full, G_full, nle_full,
 id_full (the fixed library's inputs, then p) and regressor_full (q, v, a, p -> Y (18, 130), id_full = Y p[:130] with
-f = 0). The header opens with p's layout, from ``PARAMETER_NAMES``; p is filled in Python (``parameters_of``; no C
-filler: a C user writes the 178 numbers in that order). Compiled once per family and cached under a key of the family
-(its rotations and axes, not a robot's numbers), the generator's source, CasADi, precision, flags and compiler: a new
-robot of a known family, or a variant, loads it with no compile.
+f = 0). Every input must be given (none NULL). Each takes the joints' sines and cosines once per call (``qd_sincos``,
+docs/embedded.md "The joints' sines and cosines"), as the fixed library's full terms do. The header opens with p's
+layout, from ``PARAMETER_NAMES``; p is filled in Python (``parameters_of``; no C filler: a C user writes the 178
+numbers in that order). Compiled once per family and cached under a key of the family (its rotations and axes, not a
+robot's numbers), the generator's source, CasADi, precision, flags and compiler: a new robot of a known family, or a
+variant, loads it with no compile.
 """
 
 from __future__ import annotations
@@ -22,8 +24,9 @@ import casadi as ca
 import numpy as np
 
 from quadruped_dyn.codegen.c_file import Entry, FileOptions, c_file
-from quadruped_dyn.codegen.casadi_source import EVALUATION, PREFIX
+from quadruped_dyn.codegen.casadi_source import EVALUATION, PREFIX, SINCOS
 from quadruped_dyn.codegen.file_names import family_stem
+from quadruped_dyn.codegen.joint_trig import trig_as_inputs
 from quadruped_dyn.codegen.library import (
     C_FLAGS,
     PACKAGE,
@@ -33,6 +36,8 @@ from quadruped_dyn.codegen.library import (
     compiler_version,
     generator_sources,
 )
+from quadruped_dyn.codegen.precision_math import template_c
+from quadruped_dyn.codegen.printer import print_function
 from quadruped_dyn.dynamics.parametric import parametric_dynamics
 from quadruped_dyn.errors import InputError
 from quadruped_dyn.files.cache import cached_build
@@ -51,6 +56,7 @@ from quadruped_dyn.model.parameters import (
     parameters_of,
 )
 from quadruped_dyn.model.robot import Robot
+from quadruped_dyn.model.state import JOINT_ANGLES
 
 #: The C names of the parametric functions: qd_p_M_full, ...
 PARAMETRIC_PREFIX = PREFIX + "p_"
@@ -70,14 +76,30 @@ def layout_comment(family: Family) -> str:
     return "/* " + "\n   ".join(lines) + " */\n"
 
 
+def _entry(f: ca.Function) -> tuple[Entry, str]:
+    """The entry of parametric function ``f`` and the static C it calls: f's graph with the joints' sines and cosines
+    as inputs (``joint_trig``), taken once per call by ``qd_sincos`` as the fixed library's full terms do."""
+    args = f.sx_in()
+    renamed = ca.Function(PARAMETRIC_PREFIX + f.name(), args, f.call(args), f.name_in(), f.name_out(), {"cse": True})
+    evaluation = f"qdp_{f.name()}_eval"
+    trig = trig_as_inputs(f, 0, JOINT_ANGLES)  # inputs (..., p, sin, cos)
+    # p read once per call whatever the lanes; every input given (none NULL): no test of its pointer at each read
+    static = print_function(trig, replace(EVALUATION, name=evaluation, parameters=(f.n_in() - 1,), guard_inputs=False))
+    n = len(JOINT_ANGLES)
+    inputs = ", ".join([*(f"arg[{i}]" for i in range(f.n_in())), "s", "c"])
+    body = (f"  casadi_real c[{n}], s[{n}]; /* the joints' cosines and sines, once */\n"
+            f"  const casadi_real* a[{f.n_in() + 2}] = {{{inputs}}};\n"
+            f"  qd_sincos({n}, arg[0] + {JOINT_ANGLES.start}, c, s);\n"
+            f"  return {evaluation}(a, res, iw, w, mem);\n")
+    return Entry(renamed, None, body), static.text
+
+
 def parametric_c(family: Family, precision: str = "double") -> tuple[str, str]:
     """(C source, header) of the family's parametric functions (module docstring)."""
-    entries = []
-    for f in parametric_dynamics(family).functions():
-        args = f.sx_in()
-        renamed = ca.Function(PARAMETRIC_PREFIX + f.name(), args, f.call(args), f.name_in(), f.name_out(), {"cse": True})
-        entries.append(Entry(renamed, replace(EVALUATION, parameters=(f.n_in() - 1,))))
-    source, header = c_file(family_stem(family.key), entries, FileOptions(precision, precision_math=True))
+    entries, statics = zip(*(_entry(f) for f in parametric_dynamics(family).functions()))
+    preamble = template_c(SINCOS) + "\n".join(statics)
+    source, header = c_file(family_stem(family.key), list(entries),
+                            FileOptions(precision, preamble=preamble + "\n", precision_math=True))
     return source, layout_comment(family) + header
 
 

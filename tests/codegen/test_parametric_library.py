@@ -73,3 +73,13 @@ def test_codegen_parametric_writes_the_family_files(tmp_path):
     run_tool(["gcc", *flags, "-fsyntax-only", str(stem.with_suffix(".c"))])
     bad = CliRunner().invoke(main, ["codegen", "a1", "--out", str(tmp_path), "--parametric", "--check"])
     assert bad.exit_code == 2 and "expected --parametric alone" in bad.output and "Traceback" not in bad.output
+
+
+def test_docs_example_runs():
+    """docs/embedded.md's example, as written (the library built by the test above or an earlier run)."""
+    import re
+    from pathlib import Path
+
+    text = (Path(__file__).resolve().parents[2] / "docs" / "embedded.md").read_text()
+    section = text[text.index("## Parametric C"):]
+    exec(re.search(r"```python\n(.*?)```", section, flags=re.S).group(1), {})
