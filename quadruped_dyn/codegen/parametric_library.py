@@ -24,7 +24,6 @@ import casadi as ca
 import numpy as np
 
 from quadruped_dyn.codegen.c_file import Entry, FileOptions, c_file
-from quadruped_dyn.codegen.casadi_source import EVALUATION, PREFIX, SINCOS
 from quadruped_dyn.codegen.file_names import family_stem
 from quadruped_dyn.codegen.joint_trig import trig_as_inputs
 from quadruped_dyn.codegen.library import (
@@ -37,6 +36,7 @@ from quadruped_dyn.codegen.library import (
     generator_sources,
 )
 from quadruped_dyn.codegen.precision_math import template_c
+from quadruped_dyn.codegen.print_settings import EVALUATION, PREFIX, SINCOS
 from quadruped_dyn.codegen.printer import print_function
 from quadruped_dyn.dynamics.parametric import parametric_dynamics
 from quadruped_dyn.errors import InputError
