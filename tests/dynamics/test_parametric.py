@@ -18,6 +18,7 @@ from quadruped_dyn.model.parameters import (
     family_of,
     parameters_of,
 )
+from quadruped_dyn.model.registry import example_robot_data_dir
 from quadruped_dyn.model.state import random_state, rotation
 from quadruped_dyn.references.pinocchio import PinocchioReference
 from tests.conftest import ROBOT_NAMES, assert_close
@@ -74,10 +75,14 @@ def test_variants_against_pinocchio(name, tmp_path):
         check_variant(family_of(robot), variant(robot, seed, tmp_path), seed)
 
 
+#: example-robot-data quadrupeds given by path, beside the built-in robots
+BY_PATH = ("b1_description/urdf/b1.urdf", "anymal_b_simple_description/robots/anymal.urdf")
+
+
 @pytest.mark.slow
-@pytest.mark.parametrize("name", ROBOT_NAMES)
+@pytest.mark.parametrize("name", (*ROBOT_NAMES, *BY_PATH))
 def test_twenty_variants_every_robot(name, tmp_path):
-    robot = load_robot(name)
+    robot = load_robot(str(example_robot_data_dir() / name) if name in BY_PATH else name)
     family = family_of(robot)
     for seed in range(20):
         v = variant(robot, seed, tmp_path)
