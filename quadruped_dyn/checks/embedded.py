@@ -10,7 +10,7 @@ from typing import Any
 
 from quadruped_dyn.codegen.file_names import REDUCED_STANCE_SETS, feet_suffix, robot_stem
 from quadruped_dyn.codegen.footprint import MEASURED_BUILDS, robot_footprint
-from quadruped_dyn.codegen.work_memory import WorkMemory
+from quadruped_dyn.codegen.work_memory import WorkMemory, work_memory
 from quadruped_dyn.model.robot import Robot
 
 
@@ -30,13 +30,12 @@ def embedded_summary(robot: Robot, directory: Path, footprint: bool = True,
 
 
 def library_work_memory(robot: Robot) -> dict[str, WorkMemory]:
-    """Every generated function's WorkMemory, in the header's order: arg, res, iw and w from the compiled
-    library's ``_work`` entries (the sizes its header states), the input and output reals from the Functions."""
+    """Every generated function's WorkMemory, in the header's order: iw and w from the compiled library's ``_work``
+    entries (the sizes its header states), the rest from the Functions (``work_memory``)."""
     import ctypes
 
     from quadruped_dyn.codegen.emit import library_functions
     from quadruped_dyn.codegen.library import compiled_library, work_sizes_of
 
     lib = ctypes.CDLL(str(compiled_library(robot).path))
-    return {f.name(): WorkMemory(*work_sizes_of(lib, f.name()), sum(f.nnz_in(i) for i in range(f.n_in())),
-                                 sum(f.nnz_out(i) for i in range(f.n_out()))) for f in library_functions(robot)}
+    return {f.name(): work_memory(f, *work_sizes_of(lib, f.name())[2:]) for f in library_functions(robot)}
