@@ -269,9 +269,8 @@ def run_bench(robot: Robot, calls: int = 20000, reps: int = 9, rounds: int = 9, 
     c_plus_g = generated[PREFIX + "C_full"] + generated[PREFIX + "G_full"]
     report.entries.append(BenchEntry("C_full + G_full", c_plus_g, "nonLinearEffects", pinocchio["nonLinearEffects"],
                                      c_plus_g / pinocchio["nonLinearEffects"], 0.25))
-    if parametric:
-        from quadruped_dyn.bench.parametric_timing import parametric_timings  # it uses this module's harness
-
+    if parametric:  # parametric_timing imports this module's harness: imported here
+        from quadruped_dyn.bench.parametric_timing import parametric_timings
         report.parametric = parametric_timings(robot, calls, reps, max(3, rounds // 3), cc)
     return report
 
