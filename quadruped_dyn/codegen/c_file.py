@@ -16,6 +16,7 @@ from dataclasses import dataclass, replace
 import casadi as ca
 
 from quadruped_dyn.codegen.precision_math import wrappers_c
+from quadruped_dyn.codegen.print_settings import EVALUATION
 from quadruped_dyn.codegen.printer import SIGNATURE, PrintOptions, print_function
 
 _VERSION = ca.CasadiMeta.version()
@@ -209,3 +210,9 @@ def c_file(stem: str, entries: list[Entry], options: FileOptions = FileOptions()
     file = _File(stem, entries, options)
     c_text = file.c_text()
     return c_text, file.h_text()
+
+
+def casadi_c(file_stem: str, functions: list[ca.Function], precision: str) -> tuple[str, str]:
+    """(C source, header) of ``functions`` in ``file_stem``.c, each evaluation as the project prints it
+    (``print_settings.EVALUATION``) but calling libm's names (the including build picks their precision)."""
+    return c_file(file_stem, [Entry(f, replace(EVALUATION, precision_math=False)) for f in functions], FileOptions(precision))
