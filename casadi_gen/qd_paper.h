@@ -14,6 +14,10 @@
  * colind[ncol + 1], row[nnz]); a dense input or output's pattern is the short form
  * {nrow, ncol, 1} (nrow x ncol entries, column-major), with no colind or row after it.
  * casadi_real is double unless defined before this header (e.g. -Dcasadi_real=float).
+ * qd_NAME_batch(n, arg, res, status, w): n states, state-major (state s's input i at
+ * arg[i] + s * nnz_i, outputs alike), one qd_NAME call each with work w of qd_NAME_SZ_W reals;
+ * status[s] (if status is not NULL) gets state s's return code, a bad state does not stop the
+ * others; returns the number of non-zero codes. Outputs equal one call's, bit for bit.
  *
  * qd_grf_<feet>: the paper's GRF model for those stance feet (trunk-frame assumptions,
  * quadruped_dyn/dynamics/grf.py), minimum-norm solution. Where the model's rank is 5 (four feet,
@@ -350,6 +354,7 @@ int qd_M_full_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz_
 #define qd_M_full_SZ_RES 1
 #define qd_M_full_SZ_IW 0
 #define qd_M_full_SZ_W 0
+int qd_M_full_batch(casadi_int n, const casadi_real* const* arg, casadi_real* const* res, int* status, casadi_real* w);
 int qd_C_full(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem);
 int qd_C_full_checkout(void);
 void qd_C_full_release(int mem);
@@ -368,6 +373,7 @@ int qd_C_full_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz_
 #define qd_C_full_SZ_RES 1
 #define qd_C_full_SZ_IW 0
 #define qd_C_full_SZ_W 0
+int qd_C_full_batch(casadi_int n, const casadi_real* const* arg, casadi_real* const* res, int* status, casadi_real* w);
 int qd_G_full(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem);
 int qd_G_full_checkout(void);
 void qd_G_full_release(int mem);
@@ -386,6 +392,7 @@ int qd_G_full_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz_
 #define qd_G_full_SZ_RES 1
 #define qd_G_full_SZ_IW 0
 #define qd_G_full_SZ_W 0
+int qd_G_full_batch(casadi_int n, const casadi_real* const* arg, casadi_real* const* res, int* status, casadi_real* w);
 int qd_nle_full(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem);
 int qd_nle_full_checkout(void);
 void qd_nle_full_release(int mem);
@@ -404,6 +411,7 @@ int qd_nle_full_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *s
 #define qd_nle_full_SZ_RES 1
 #define qd_nle_full_SZ_IW 0
 #define qd_nle_full_SZ_W 0
+int qd_nle_full_batch(casadi_int n, const casadi_real* const* arg, casadi_real* const* res, int* status, casadi_real* w);
 int qd_id_full(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem);
 int qd_id_full_checkout(void);
 void qd_id_full_release(int mem);
@@ -422,6 +430,7 @@ int qd_id_full_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz
 #define qd_id_full_SZ_RES 2
 #define qd_id_full_SZ_IW 0
 #define qd_id_full_SZ_W 0
+int qd_id_full_batch(casadi_int n, const casadi_real* const* arg, casadi_real* const* res, int* status, casadi_real* w);
 int qd_feet_full(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem);
 int qd_feet_full_checkout(void);
 void qd_feet_full_release(int mem);
@@ -440,6 +449,7 @@ int qd_feet_full_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *
 #define qd_feet_full_SZ_RES 3
 #define qd_feet_full_SZ_IW 0
 #define qd_feet_full_SZ_W 0
+int qd_feet_full_batch(casadi_int n, const casadi_real* const* arg, casadi_real* const* res, int* status, casadi_real* w);
 int qd_grf_FL_FR_BL_BR(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem);
 int qd_grf_FL_FR_BL_BR_checkout(void);
 void qd_grf_FL_FR_BL_BR_release(int mem);
@@ -458,6 +468,7 @@ int qd_grf_FL_FR_BL_BR_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi
 #define qd_grf_FL_FR_BL_BR_SZ_RES 4
 #define qd_grf_FL_FR_BL_BR_SZ_IW 0
 #define qd_grf_FL_FR_BL_BR_SZ_W 0
+int qd_grf_FL_FR_BL_BR_batch(casadi_int n, const casadi_real* const* arg, casadi_real* const* res, int* status, casadi_real* w);
 int qd_grf_FL_FR_BL(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem);
 int qd_grf_FL_FR_BL_checkout(void);
 void qd_grf_FL_FR_BL_release(int mem);
@@ -476,6 +487,7 @@ int qd_grf_FL_FR_BL_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_in
 #define qd_grf_FL_FR_BL_SZ_RES 4
 #define qd_grf_FL_FR_BL_SZ_IW 0
 #define qd_grf_FL_FR_BL_SZ_W 0
+int qd_grf_FL_FR_BL_batch(casadi_int n, const casadi_real* const* arg, casadi_real* const* res, int* status, casadi_real* w);
 int qd_grf_FL_FR_BR(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem);
 int qd_grf_FL_FR_BR_checkout(void);
 void qd_grf_FL_FR_BR_release(int mem);
@@ -494,6 +506,7 @@ int qd_grf_FL_FR_BR_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_in
 #define qd_grf_FL_FR_BR_SZ_RES 4
 #define qd_grf_FL_FR_BR_SZ_IW 0
 #define qd_grf_FL_FR_BR_SZ_W 0
+int qd_grf_FL_FR_BR_batch(casadi_int n, const casadi_real* const* arg, casadi_real* const* res, int* status, casadi_real* w);
 int qd_grf_FL_BL_BR(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem);
 int qd_grf_FL_BL_BR_checkout(void);
 void qd_grf_FL_BL_BR_release(int mem);
@@ -512,6 +525,7 @@ int qd_grf_FL_BL_BR_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_in
 #define qd_grf_FL_BL_BR_SZ_RES 4
 #define qd_grf_FL_BL_BR_SZ_IW 0
 #define qd_grf_FL_BL_BR_SZ_W 0
+int qd_grf_FL_BL_BR_batch(casadi_int n, const casadi_real* const* arg, casadi_real* const* res, int* status, casadi_real* w);
 int qd_grf_FR_BL_BR(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem);
 int qd_grf_FR_BL_BR_checkout(void);
 void qd_grf_FR_BL_BR_release(int mem);
@@ -530,6 +544,7 @@ int qd_grf_FR_BL_BR_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_in
 #define qd_grf_FR_BL_BR_SZ_RES 4
 #define qd_grf_FR_BL_BR_SZ_IW 0
 #define qd_grf_FR_BL_BR_SZ_W 0
+int qd_grf_FR_BL_BR_batch(casadi_int n, const casadi_real* const* arg, casadi_real* const* res, int* status, casadi_real* w);
 int qd_grf_FL_FR(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem);
 int qd_grf_FL_FR_checkout(void);
 void qd_grf_FL_FR_release(int mem);
@@ -548,6 +563,7 @@ int qd_grf_FL_FR_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *
 #define qd_grf_FL_FR_SZ_RES 4
 #define qd_grf_FL_FR_SZ_IW 0
 #define qd_grf_FL_FR_SZ_W 0
+int qd_grf_FL_FR_batch(casadi_int n, const casadi_real* const* arg, casadi_real* const* res, int* status, casadi_real* w);
 int qd_grf_FL_BL(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem);
 int qd_grf_FL_BL_checkout(void);
 void qd_grf_FL_BL_release(int mem);
@@ -566,6 +582,7 @@ int qd_grf_FL_BL_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *
 #define qd_grf_FL_BL_SZ_RES 4
 #define qd_grf_FL_BL_SZ_IW 0
 #define qd_grf_FL_BL_SZ_W 0
+int qd_grf_FL_BL_batch(casadi_int n, const casadi_real* const* arg, casadi_real* const* res, int* status, casadi_real* w);
 int qd_grf_FL_BR(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem);
 int qd_grf_FL_BR_checkout(void);
 void qd_grf_FL_BR_release(int mem);
@@ -584,6 +601,7 @@ int qd_grf_FL_BR_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *
 #define qd_grf_FL_BR_SZ_RES 4
 #define qd_grf_FL_BR_SZ_IW 0
 #define qd_grf_FL_BR_SZ_W 0
+int qd_grf_FL_BR_batch(casadi_int n, const casadi_real* const* arg, casadi_real* const* res, int* status, casadi_real* w);
 int qd_grf_FR_BL(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem);
 int qd_grf_FR_BL_checkout(void);
 void qd_grf_FR_BL_release(int mem);
@@ -602,6 +620,7 @@ int qd_grf_FR_BL_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *
 #define qd_grf_FR_BL_SZ_RES 4
 #define qd_grf_FR_BL_SZ_IW 0
 #define qd_grf_FR_BL_SZ_W 0
+int qd_grf_FR_BL_batch(casadi_int n, const casadi_real* const* arg, casadi_real* const* res, int* status, casadi_real* w);
 int qd_grf_FR_BR(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem);
 int qd_grf_FR_BR_checkout(void);
 void qd_grf_FR_BR_release(int mem);
@@ -620,6 +639,7 @@ int qd_grf_FR_BR_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *
 #define qd_grf_FR_BR_SZ_RES 4
 #define qd_grf_FR_BR_SZ_IW 0
 #define qd_grf_FR_BR_SZ_W 0
+int qd_grf_FR_BR_batch(casadi_int n, const casadi_real* const* arg, casadi_real* const* res, int* status, casadi_real* w);
 int qd_grf_BL_BR(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem);
 int qd_grf_BL_BR_checkout(void);
 void qd_grf_BL_BR_release(int mem);
@@ -638,6 +658,7 @@ int qd_grf_BL_BR_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *
 #define qd_grf_BL_BR_SZ_RES 4
 #define qd_grf_BL_BR_SZ_IW 0
 #define qd_grf_BL_BR_SZ_W 0
+int qd_grf_BL_BR_batch(casadi_int n, const casadi_real* const* arg, casadi_real* const* res, int* status, casadi_real* w);
 int qd_grf_FL(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem);
 int qd_grf_FL_checkout(void);
 void qd_grf_FL_release(int mem);
@@ -656,6 +677,7 @@ int qd_grf_FL_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz_
 #define qd_grf_FL_SZ_RES 4
 #define qd_grf_FL_SZ_IW 0
 #define qd_grf_FL_SZ_W 0
+int qd_grf_FL_batch(casadi_int n, const casadi_real* const* arg, casadi_real* const* res, int* status, casadi_real* w);
 int qd_grf_FR(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem);
 int qd_grf_FR_checkout(void);
 void qd_grf_FR_release(int mem);
@@ -674,6 +696,7 @@ int qd_grf_FR_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz_
 #define qd_grf_FR_SZ_RES 4
 #define qd_grf_FR_SZ_IW 0
 #define qd_grf_FR_SZ_W 0
+int qd_grf_FR_batch(casadi_int n, const casadi_real* const* arg, casadi_real* const* res, int* status, casadi_real* w);
 int qd_grf_BL(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem);
 int qd_grf_BL_checkout(void);
 void qd_grf_BL_release(int mem);
@@ -692,6 +715,7 @@ int qd_grf_BL_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz_
 #define qd_grf_BL_SZ_RES 4
 #define qd_grf_BL_SZ_IW 0
 #define qd_grf_BL_SZ_W 0
+int qd_grf_BL_batch(casadi_int n, const casadi_real* const* arg, casadi_real* const* res, int* status, casadi_real* w);
 int qd_grf_BR(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem);
 int qd_grf_BR_checkout(void);
 void qd_grf_BR_release(int mem);
@@ -710,6 +734,7 @@ int qd_grf_BR_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz_
 #define qd_grf_BR_SZ_RES 4
 #define qd_grf_BR_SZ_IW 0
 #define qd_grf_BR_SZ_W 0
+int qd_grf_BR_batch(casadi_int n, const casadi_real* const* arg, casadi_real* const* res, int* status, casadi_real* w);
 int qd_grf_none(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem);
 int qd_grf_none_checkout(void);
 void qd_grf_none_release(int mem);
@@ -728,6 +753,7 @@ int qd_grf_none_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *s
 #define qd_grf_none_SZ_RES 4
 #define qd_grf_none_SZ_IW 0
 #define qd_grf_none_SZ_W 0
+int qd_grf_none_batch(casadi_int n, const casadi_real* const* arg, casadi_real* const* res, int* status, casadi_real* w);
 void qd_paper_casadi_version(int* major, int* minor, int* patch);
 int qd_paper_casadi_int_size(void);
 int qd_paper_casadi_real_size(void);
@@ -771,6 +797,7 @@ int qd_M_r_FL_FR_BL_BR_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi
 #define qd_M_r_FL_FR_BL_BR_SZ_RES 1
 #define qd_M_r_FL_FR_BL_BR_SZ_IW 0
 #define qd_M_r_FL_FR_BL_BR_SZ_W 0
+int qd_M_r_FL_FR_BL_BR_batch(casadi_int n, const casadi_real* const* arg, casadi_real* const* res, int* status, casadi_real* w);
 int qd_CG_r_FL_FR_BL_BR(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem);
 int qd_CG_r_FL_FR_BL_BR_checkout(void);
 void qd_CG_r_FL_FR_BL_BR_release(int mem);
@@ -789,6 +816,7 @@ int qd_CG_r_FL_FR_BL_BR_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casad
 #define qd_CG_r_FL_FR_BL_BR_SZ_RES 1
 #define qd_CG_r_FL_FR_BL_BR_SZ_IW 0
 #define qd_CG_r_FL_FR_BL_BR_SZ_W 0
+int qd_CG_r_FL_FR_BL_BR_batch(casadi_int n, const casadi_real* const* arg, casadi_real* const* res, int* status, casadi_real* w);
 int qd_G_r_FL_FR_BL_BR(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem);
 int qd_G_r_FL_FR_BL_BR_checkout(void);
 void qd_G_r_FL_FR_BL_BR_release(int mem);
@@ -807,6 +835,7 @@ int qd_G_r_FL_FR_BL_BR_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi
 #define qd_G_r_FL_FR_BL_BR_SZ_RES 1
 #define qd_G_r_FL_FR_BL_BR_SZ_IW 0
 #define qd_G_r_FL_FR_BL_BR_SZ_W 0
+int qd_G_r_FL_FR_BL_BR_batch(casadi_int n, const casadi_real* const* arg, casadi_real* const* res, int* status, casadi_real* w);
 int qd_id_r_FL_FR_BL_BR(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem);
 int qd_id_r_FL_FR_BL_BR_checkout(void);
 void qd_id_r_FL_FR_BL_BR_release(int mem);
@@ -825,6 +854,7 @@ int qd_id_r_FL_FR_BL_BR_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casad
 #define qd_id_r_FL_FR_BL_BR_SZ_RES 1
 #define qd_id_r_FL_FR_BL_BR_SZ_IW 0
 #define qd_id_r_FL_FR_BL_BR_SZ_W 0
+int qd_id_r_FL_FR_BL_BR_batch(casadi_int n, const casadi_real* const* arg, casadi_real* const* res, int* status, casadi_real* w);
 int qd_fd_r_FL_FR_BL_BR(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem);
 int qd_fd_r_FL_FR_BL_BR_checkout(void);
 void qd_fd_r_FL_FR_BL_BR_release(int mem);
@@ -843,6 +873,7 @@ int qd_fd_r_FL_FR_BL_BR_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casad
 #define qd_fd_r_FL_FR_BL_BR_SZ_RES 1
 #define qd_fd_r_FL_FR_BL_BR_SZ_IW 0
 #define qd_fd_r_FL_FR_BL_BR_SZ_W 0
+int qd_fd_r_FL_FR_BL_BR_batch(casadi_int n, const casadi_real* const* arg, casadi_real* const* res, int* status, casadi_real* w);
 int qd_dfd_r_FL_FR_BL_BR(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem);
 int qd_dfd_r_FL_FR_BL_BR_checkout(void);
 void qd_dfd_r_FL_FR_BL_BR_release(int mem);
@@ -861,6 +892,7 @@ int qd_dfd_r_FL_FR_BL_BR_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casa
 #define qd_dfd_r_FL_FR_BL_BR_SZ_RES 4
 #define qd_dfd_r_FL_FR_BL_BR_SZ_IW 0
 #define qd_dfd_r_FL_FR_BL_BR_SZ_W 2623
+int qd_dfd_r_FL_FR_BL_BR_batch(casadi_int n, const casadi_real* const* arg, casadi_real* const* res, int* status, casadi_real* w);
 void qd_paper_r_FL_FR_BL_BR_casadi_version(int* major, int* minor, int* patch);
 int qd_paper_r_FL_FR_BL_BR_casadi_int_size(void);
 int qd_paper_r_FL_FR_BL_BR_casadi_real_size(void);
@@ -904,6 +936,7 @@ int qd_M_r_FL_FR_BL_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_in
 #define qd_M_r_FL_FR_BL_SZ_RES 1
 #define qd_M_r_FL_FR_BL_SZ_IW 0
 #define qd_M_r_FL_FR_BL_SZ_W 0
+int qd_M_r_FL_FR_BL_batch(casadi_int n, const casadi_real* const* arg, casadi_real* const* res, int* status, casadi_real* w);
 int qd_CG_r_FL_FR_BL(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem);
 int qd_CG_r_FL_FR_BL_checkout(void);
 void qd_CG_r_FL_FR_BL_release(int mem);
@@ -922,6 +955,7 @@ int qd_CG_r_FL_FR_BL_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_i
 #define qd_CG_r_FL_FR_BL_SZ_RES 1
 #define qd_CG_r_FL_FR_BL_SZ_IW 0
 #define qd_CG_r_FL_FR_BL_SZ_W 0
+int qd_CG_r_FL_FR_BL_batch(casadi_int n, const casadi_real* const* arg, casadi_real* const* res, int* status, casadi_real* w);
 int qd_G_r_FL_FR_BL(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem);
 int qd_G_r_FL_FR_BL_checkout(void);
 void qd_G_r_FL_FR_BL_release(int mem);
@@ -940,6 +974,7 @@ int qd_G_r_FL_FR_BL_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_in
 #define qd_G_r_FL_FR_BL_SZ_RES 1
 #define qd_G_r_FL_FR_BL_SZ_IW 0
 #define qd_G_r_FL_FR_BL_SZ_W 0
+int qd_G_r_FL_FR_BL_batch(casadi_int n, const casadi_real* const* arg, casadi_real* const* res, int* status, casadi_real* w);
 int qd_id_r_FL_FR_BL(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem);
 int qd_id_r_FL_FR_BL_checkout(void);
 void qd_id_r_FL_FR_BL_release(int mem);
@@ -958,6 +993,7 @@ int qd_id_r_FL_FR_BL_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_i
 #define qd_id_r_FL_FR_BL_SZ_RES 1
 #define qd_id_r_FL_FR_BL_SZ_IW 0
 #define qd_id_r_FL_FR_BL_SZ_W 0
+int qd_id_r_FL_FR_BL_batch(casadi_int n, const casadi_real* const* arg, casadi_real* const* res, int* status, casadi_real* w);
 int qd_fd_r_FL_FR_BL(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem);
 int qd_fd_r_FL_FR_BL_checkout(void);
 void qd_fd_r_FL_FR_BL_release(int mem);
@@ -976,6 +1012,7 @@ int qd_fd_r_FL_FR_BL_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_i
 #define qd_fd_r_FL_FR_BL_SZ_RES 1
 #define qd_fd_r_FL_FR_BL_SZ_IW 0
 #define qd_fd_r_FL_FR_BL_SZ_W 0
+int qd_fd_r_FL_FR_BL_batch(casadi_int n, const casadi_real* const* arg, casadi_real* const* res, int* status, casadi_real* w);
 int qd_dfd_r_FL_FR_BL(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem);
 int qd_dfd_r_FL_FR_BL_checkout(void);
 void qd_dfd_r_FL_FR_BL_release(int mem);
@@ -994,6 +1031,7 @@ int qd_dfd_r_FL_FR_BL_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_
 #define qd_dfd_r_FL_FR_BL_SZ_RES 4
 #define qd_dfd_r_FL_FR_BL_SZ_IW 0
 #define qd_dfd_r_FL_FR_BL_SZ_W 2538
+int qd_dfd_r_FL_FR_BL_batch(casadi_int n, const casadi_real* const* arg, casadi_real* const* res, int* status, casadi_real* w);
 void qd_paper_r_FL_FR_BL_casadi_version(int* major, int* minor, int* patch);
 int qd_paper_r_FL_FR_BL_casadi_int_size(void);
 int qd_paper_r_FL_FR_BL_casadi_real_size(void);
@@ -1037,6 +1075,7 @@ int qd_M_r_FL_FR_BR_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_in
 #define qd_M_r_FL_FR_BR_SZ_RES 1
 #define qd_M_r_FL_FR_BR_SZ_IW 0
 #define qd_M_r_FL_FR_BR_SZ_W 0
+int qd_M_r_FL_FR_BR_batch(casadi_int n, const casadi_real* const* arg, casadi_real* const* res, int* status, casadi_real* w);
 int qd_CG_r_FL_FR_BR(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem);
 int qd_CG_r_FL_FR_BR_checkout(void);
 void qd_CG_r_FL_FR_BR_release(int mem);
@@ -1055,6 +1094,7 @@ int qd_CG_r_FL_FR_BR_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_i
 #define qd_CG_r_FL_FR_BR_SZ_RES 1
 #define qd_CG_r_FL_FR_BR_SZ_IW 0
 #define qd_CG_r_FL_FR_BR_SZ_W 0
+int qd_CG_r_FL_FR_BR_batch(casadi_int n, const casadi_real* const* arg, casadi_real* const* res, int* status, casadi_real* w);
 int qd_G_r_FL_FR_BR(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem);
 int qd_G_r_FL_FR_BR_checkout(void);
 void qd_G_r_FL_FR_BR_release(int mem);
@@ -1073,6 +1113,7 @@ int qd_G_r_FL_FR_BR_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_in
 #define qd_G_r_FL_FR_BR_SZ_RES 1
 #define qd_G_r_FL_FR_BR_SZ_IW 0
 #define qd_G_r_FL_FR_BR_SZ_W 0
+int qd_G_r_FL_FR_BR_batch(casadi_int n, const casadi_real* const* arg, casadi_real* const* res, int* status, casadi_real* w);
 int qd_id_r_FL_FR_BR(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem);
 int qd_id_r_FL_FR_BR_checkout(void);
 void qd_id_r_FL_FR_BR_release(int mem);
@@ -1091,6 +1132,7 @@ int qd_id_r_FL_FR_BR_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_i
 #define qd_id_r_FL_FR_BR_SZ_RES 1
 #define qd_id_r_FL_FR_BR_SZ_IW 0
 #define qd_id_r_FL_FR_BR_SZ_W 0
+int qd_id_r_FL_FR_BR_batch(casadi_int n, const casadi_real* const* arg, casadi_real* const* res, int* status, casadi_real* w);
 int qd_fd_r_FL_FR_BR(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem);
 int qd_fd_r_FL_FR_BR_checkout(void);
 void qd_fd_r_FL_FR_BR_release(int mem);
@@ -1109,6 +1151,7 @@ int qd_fd_r_FL_FR_BR_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_i
 #define qd_fd_r_FL_FR_BR_SZ_RES 1
 #define qd_fd_r_FL_FR_BR_SZ_IW 0
 #define qd_fd_r_FL_FR_BR_SZ_W 0
+int qd_fd_r_FL_FR_BR_batch(casadi_int n, const casadi_real* const* arg, casadi_real* const* res, int* status, casadi_real* w);
 int qd_dfd_r_FL_FR_BR(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem);
 int qd_dfd_r_FL_FR_BR_checkout(void);
 void qd_dfd_r_FL_FR_BR_release(int mem);
@@ -1127,6 +1170,7 @@ int qd_dfd_r_FL_FR_BR_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_
 #define qd_dfd_r_FL_FR_BR_SZ_RES 4
 #define qd_dfd_r_FL_FR_BR_SZ_IW 0
 #define qd_dfd_r_FL_FR_BR_SZ_W 2538
+int qd_dfd_r_FL_FR_BR_batch(casadi_int n, const casadi_real* const* arg, casadi_real* const* res, int* status, casadi_real* w);
 void qd_paper_r_FL_FR_BR_casadi_version(int* major, int* minor, int* patch);
 int qd_paper_r_FL_FR_BR_casadi_int_size(void);
 int qd_paper_r_FL_FR_BR_casadi_real_size(void);
@@ -1170,6 +1214,7 @@ int qd_M_r_FL_BL_BR_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_in
 #define qd_M_r_FL_BL_BR_SZ_RES 1
 #define qd_M_r_FL_BL_BR_SZ_IW 0
 #define qd_M_r_FL_BL_BR_SZ_W 0
+int qd_M_r_FL_BL_BR_batch(casadi_int n, const casadi_real* const* arg, casadi_real* const* res, int* status, casadi_real* w);
 int qd_CG_r_FL_BL_BR(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem);
 int qd_CG_r_FL_BL_BR_checkout(void);
 void qd_CG_r_FL_BL_BR_release(int mem);
@@ -1188,6 +1233,7 @@ int qd_CG_r_FL_BL_BR_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_i
 #define qd_CG_r_FL_BL_BR_SZ_RES 1
 #define qd_CG_r_FL_BL_BR_SZ_IW 0
 #define qd_CG_r_FL_BL_BR_SZ_W 0
+int qd_CG_r_FL_BL_BR_batch(casadi_int n, const casadi_real* const* arg, casadi_real* const* res, int* status, casadi_real* w);
 int qd_G_r_FL_BL_BR(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem);
 int qd_G_r_FL_BL_BR_checkout(void);
 void qd_G_r_FL_BL_BR_release(int mem);
@@ -1206,6 +1252,7 @@ int qd_G_r_FL_BL_BR_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_in
 #define qd_G_r_FL_BL_BR_SZ_RES 1
 #define qd_G_r_FL_BL_BR_SZ_IW 0
 #define qd_G_r_FL_BL_BR_SZ_W 0
+int qd_G_r_FL_BL_BR_batch(casadi_int n, const casadi_real* const* arg, casadi_real* const* res, int* status, casadi_real* w);
 int qd_id_r_FL_BL_BR(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem);
 int qd_id_r_FL_BL_BR_checkout(void);
 void qd_id_r_FL_BL_BR_release(int mem);
@@ -1224,6 +1271,7 @@ int qd_id_r_FL_BL_BR_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_i
 #define qd_id_r_FL_BL_BR_SZ_RES 1
 #define qd_id_r_FL_BL_BR_SZ_IW 0
 #define qd_id_r_FL_BL_BR_SZ_W 0
+int qd_id_r_FL_BL_BR_batch(casadi_int n, const casadi_real* const* arg, casadi_real* const* res, int* status, casadi_real* w);
 int qd_fd_r_FL_BL_BR(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem);
 int qd_fd_r_FL_BL_BR_checkout(void);
 void qd_fd_r_FL_BL_BR_release(int mem);
@@ -1242,6 +1290,7 @@ int qd_fd_r_FL_BL_BR_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_i
 #define qd_fd_r_FL_BL_BR_SZ_RES 1
 #define qd_fd_r_FL_BL_BR_SZ_IW 0
 #define qd_fd_r_FL_BL_BR_SZ_W 0
+int qd_fd_r_FL_BL_BR_batch(casadi_int n, const casadi_real* const* arg, casadi_real* const* res, int* status, casadi_real* w);
 int qd_dfd_r_FL_BL_BR(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem);
 int qd_dfd_r_FL_BL_BR_checkout(void);
 void qd_dfd_r_FL_BL_BR_release(int mem);
@@ -1260,6 +1309,7 @@ int qd_dfd_r_FL_BL_BR_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_
 #define qd_dfd_r_FL_BL_BR_SZ_RES 4
 #define qd_dfd_r_FL_BL_BR_SZ_IW 0
 #define qd_dfd_r_FL_BL_BR_SZ_W 2538
+int qd_dfd_r_FL_BL_BR_batch(casadi_int n, const casadi_real* const* arg, casadi_real* const* res, int* status, casadi_real* w);
 void qd_paper_r_FL_BL_BR_casadi_version(int* major, int* minor, int* patch);
 int qd_paper_r_FL_BL_BR_casadi_int_size(void);
 int qd_paper_r_FL_BL_BR_casadi_real_size(void);
@@ -1303,6 +1353,7 @@ int qd_M_r_FR_BL_BR_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_in
 #define qd_M_r_FR_BL_BR_SZ_RES 1
 #define qd_M_r_FR_BL_BR_SZ_IW 0
 #define qd_M_r_FR_BL_BR_SZ_W 0
+int qd_M_r_FR_BL_BR_batch(casadi_int n, const casadi_real* const* arg, casadi_real* const* res, int* status, casadi_real* w);
 int qd_CG_r_FR_BL_BR(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem);
 int qd_CG_r_FR_BL_BR_checkout(void);
 void qd_CG_r_FR_BL_BR_release(int mem);
@@ -1321,6 +1372,7 @@ int qd_CG_r_FR_BL_BR_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_i
 #define qd_CG_r_FR_BL_BR_SZ_RES 1
 #define qd_CG_r_FR_BL_BR_SZ_IW 0
 #define qd_CG_r_FR_BL_BR_SZ_W 0
+int qd_CG_r_FR_BL_BR_batch(casadi_int n, const casadi_real* const* arg, casadi_real* const* res, int* status, casadi_real* w);
 int qd_G_r_FR_BL_BR(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem);
 int qd_G_r_FR_BL_BR_checkout(void);
 void qd_G_r_FR_BL_BR_release(int mem);
@@ -1339,6 +1391,7 @@ int qd_G_r_FR_BL_BR_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_in
 #define qd_G_r_FR_BL_BR_SZ_RES 1
 #define qd_G_r_FR_BL_BR_SZ_IW 0
 #define qd_G_r_FR_BL_BR_SZ_W 0
+int qd_G_r_FR_BL_BR_batch(casadi_int n, const casadi_real* const* arg, casadi_real* const* res, int* status, casadi_real* w);
 int qd_id_r_FR_BL_BR(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem);
 int qd_id_r_FR_BL_BR_checkout(void);
 void qd_id_r_FR_BL_BR_release(int mem);
@@ -1357,6 +1410,7 @@ int qd_id_r_FR_BL_BR_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_i
 #define qd_id_r_FR_BL_BR_SZ_RES 1
 #define qd_id_r_FR_BL_BR_SZ_IW 0
 #define qd_id_r_FR_BL_BR_SZ_W 0
+int qd_id_r_FR_BL_BR_batch(casadi_int n, const casadi_real* const* arg, casadi_real* const* res, int* status, casadi_real* w);
 int qd_fd_r_FR_BL_BR(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem);
 int qd_fd_r_FR_BL_BR_checkout(void);
 void qd_fd_r_FR_BL_BR_release(int mem);
@@ -1375,6 +1429,7 @@ int qd_fd_r_FR_BL_BR_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_i
 #define qd_fd_r_FR_BL_BR_SZ_RES 1
 #define qd_fd_r_FR_BL_BR_SZ_IW 0
 #define qd_fd_r_FR_BL_BR_SZ_W 0
+int qd_fd_r_FR_BL_BR_batch(casadi_int n, const casadi_real* const* arg, casadi_real* const* res, int* status, casadi_real* w);
 int qd_dfd_r_FR_BL_BR(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem);
 int qd_dfd_r_FR_BL_BR_checkout(void);
 void qd_dfd_r_FR_BL_BR_release(int mem);
@@ -1393,6 +1448,7 @@ int qd_dfd_r_FR_BL_BR_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_
 #define qd_dfd_r_FR_BL_BR_SZ_RES 4
 #define qd_dfd_r_FR_BL_BR_SZ_IW 0
 #define qd_dfd_r_FR_BL_BR_SZ_W 2538
+int qd_dfd_r_FR_BL_BR_batch(casadi_int n, const casadi_real* const* arg, casadi_real* const* res, int* status, casadi_real* w);
 void qd_paper_r_FR_BL_BR_casadi_version(int* major, int* minor, int* patch);
 int qd_paper_r_FR_BL_BR_casadi_int_size(void);
 int qd_paper_r_FR_BL_BR_casadi_real_size(void);
@@ -1436,6 +1492,7 @@ int qd_M_r_FL_FR_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *
 #define qd_M_r_FL_FR_SZ_RES 1
 #define qd_M_r_FL_FR_SZ_IW 0
 #define qd_M_r_FL_FR_SZ_W 0
+int qd_M_r_FL_FR_batch(casadi_int n, const casadi_real* const* arg, casadi_real* const* res, int* status, casadi_real* w);
 int qd_CG_r_FL_FR(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem);
 int qd_CG_r_FL_FR_checkout(void);
 void qd_CG_r_FL_FR_release(int mem);
@@ -1454,6 +1511,7 @@ int qd_CG_r_FL_FR_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_int 
 #define qd_CG_r_FL_FR_SZ_RES 1
 #define qd_CG_r_FL_FR_SZ_IW 0
 #define qd_CG_r_FL_FR_SZ_W 0
+int qd_CG_r_FL_FR_batch(casadi_int n, const casadi_real* const* arg, casadi_real* const* res, int* status, casadi_real* w);
 int qd_G_r_FL_FR(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem);
 int qd_G_r_FL_FR_checkout(void);
 void qd_G_r_FL_FR_release(int mem);
@@ -1472,6 +1530,7 @@ int qd_G_r_FL_FR_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *
 #define qd_G_r_FL_FR_SZ_RES 1
 #define qd_G_r_FL_FR_SZ_IW 0
 #define qd_G_r_FL_FR_SZ_W 0
+int qd_G_r_FL_FR_batch(casadi_int n, const casadi_real* const* arg, casadi_real* const* res, int* status, casadi_real* w);
 int qd_id_r_FL_FR(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem);
 int qd_id_r_FL_FR_checkout(void);
 void qd_id_r_FL_FR_release(int mem);
@@ -1490,6 +1549,7 @@ int qd_id_r_FL_FR_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_int 
 #define qd_id_r_FL_FR_SZ_RES 1
 #define qd_id_r_FL_FR_SZ_IW 0
 #define qd_id_r_FL_FR_SZ_W 0
+int qd_id_r_FL_FR_batch(casadi_int n, const casadi_real* const* arg, casadi_real* const* res, int* status, casadi_real* w);
 int qd_fd_r_FL_FR(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem);
 int qd_fd_r_FL_FR_checkout(void);
 void qd_fd_r_FL_FR_release(int mem);
@@ -1508,6 +1568,7 @@ int qd_fd_r_FL_FR_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_int 
 #define qd_fd_r_FL_FR_SZ_RES 1
 #define qd_fd_r_FL_FR_SZ_IW 0
 #define qd_fd_r_FL_FR_SZ_W 0
+int qd_fd_r_FL_FR_batch(casadi_int n, const casadi_real* const* arg, casadi_real* const* res, int* status, casadi_real* w);
 int qd_dfd_r_FL_FR(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem);
 int qd_dfd_r_FL_FR_checkout(void);
 void qd_dfd_r_FL_FR_release(int mem);
@@ -1526,6 +1587,7 @@ int qd_dfd_r_FL_FR_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_int
 #define qd_dfd_r_FL_FR_SZ_RES 4
 #define qd_dfd_r_FL_FR_SZ_IW 0
 #define qd_dfd_r_FL_FR_SZ_W 2624
+int qd_dfd_r_FL_FR_batch(casadi_int n, const casadi_real* const* arg, casadi_real* const* res, int* status, casadi_real* w);
 void qd_paper_r_FL_FR_casadi_version(int* major, int* minor, int* patch);
 int qd_paper_r_FL_FR_casadi_int_size(void);
 int qd_paper_r_FL_FR_casadi_real_size(void);
@@ -1569,6 +1631,7 @@ int qd_M_r_FL_BL_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *
 #define qd_M_r_FL_BL_SZ_RES 1
 #define qd_M_r_FL_BL_SZ_IW 0
 #define qd_M_r_FL_BL_SZ_W 0
+int qd_M_r_FL_BL_batch(casadi_int n, const casadi_real* const* arg, casadi_real* const* res, int* status, casadi_real* w);
 int qd_CG_r_FL_BL(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem);
 int qd_CG_r_FL_BL_checkout(void);
 void qd_CG_r_FL_BL_release(int mem);
@@ -1587,6 +1650,7 @@ int qd_CG_r_FL_BL_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_int 
 #define qd_CG_r_FL_BL_SZ_RES 1
 #define qd_CG_r_FL_BL_SZ_IW 0
 #define qd_CG_r_FL_BL_SZ_W 0
+int qd_CG_r_FL_BL_batch(casadi_int n, const casadi_real* const* arg, casadi_real* const* res, int* status, casadi_real* w);
 int qd_G_r_FL_BL(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem);
 int qd_G_r_FL_BL_checkout(void);
 void qd_G_r_FL_BL_release(int mem);
@@ -1605,6 +1669,7 @@ int qd_G_r_FL_BL_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *
 #define qd_G_r_FL_BL_SZ_RES 1
 #define qd_G_r_FL_BL_SZ_IW 0
 #define qd_G_r_FL_BL_SZ_W 0
+int qd_G_r_FL_BL_batch(casadi_int n, const casadi_real* const* arg, casadi_real* const* res, int* status, casadi_real* w);
 int qd_id_r_FL_BL(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem);
 int qd_id_r_FL_BL_checkout(void);
 void qd_id_r_FL_BL_release(int mem);
@@ -1623,6 +1688,7 @@ int qd_id_r_FL_BL_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_int 
 #define qd_id_r_FL_BL_SZ_RES 1
 #define qd_id_r_FL_BL_SZ_IW 0
 #define qd_id_r_FL_BL_SZ_W 0
+int qd_id_r_FL_BL_batch(casadi_int n, const casadi_real* const* arg, casadi_real* const* res, int* status, casadi_real* w);
 int qd_fd_r_FL_BL(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem);
 int qd_fd_r_FL_BL_checkout(void);
 void qd_fd_r_FL_BL_release(int mem);
@@ -1641,6 +1707,7 @@ int qd_fd_r_FL_BL_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_int 
 #define qd_fd_r_FL_BL_SZ_RES 1
 #define qd_fd_r_FL_BL_SZ_IW 0
 #define qd_fd_r_FL_BL_SZ_W 0
+int qd_fd_r_FL_BL_batch(casadi_int n, const casadi_real* const* arg, casadi_real* const* res, int* status, casadi_real* w);
 int qd_dfd_r_FL_BL(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem);
 int qd_dfd_r_FL_BL_checkout(void);
 void qd_dfd_r_FL_BL_release(int mem);
@@ -1659,6 +1726,7 @@ int qd_dfd_r_FL_BL_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_int
 #define qd_dfd_r_FL_BL_SZ_RES 4
 #define qd_dfd_r_FL_BL_SZ_IW 0
 #define qd_dfd_r_FL_BL_SZ_W 2624
+int qd_dfd_r_FL_BL_batch(casadi_int n, const casadi_real* const* arg, casadi_real* const* res, int* status, casadi_real* w);
 void qd_paper_r_FL_BL_casadi_version(int* major, int* minor, int* patch);
 int qd_paper_r_FL_BL_casadi_int_size(void);
 int qd_paper_r_FL_BL_casadi_real_size(void);
@@ -1702,6 +1770,7 @@ int qd_M_r_FL_BR_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *
 #define qd_M_r_FL_BR_SZ_RES 1
 #define qd_M_r_FL_BR_SZ_IW 0
 #define qd_M_r_FL_BR_SZ_W 0
+int qd_M_r_FL_BR_batch(casadi_int n, const casadi_real* const* arg, casadi_real* const* res, int* status, casadi_real* w);
 int qd_CG_r_FL_BR(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem);
 int qd_CG_r_FL_BR_checkout(void);
 void qd_CG_r_FL_BR_release(int mem);
@@ -1720,6 +1789,7 @@ int qd_CG_r_FL_BR_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_int 
 #define qd_CG_r_FL_BR_SZ_RES 1
 #define qd_CG_r_FL_BR_SZ_IW 0
 #define qd_CG_r_FL_BR_SZ_W 0
+int qd_CG_r_FL_BR_batch(casadi_int n, const casadi_real* const* arg, casadi_real* const* res, int* status, casadi_real* w);
 int qd_G_r_FL_BR(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem);
 int qd_G_r_FL_BR_checkout(void);
 void qd_G_r_FL_BR_release(int mem);
@@ -1738,6 +1808,7 @@ int qd_G_r_FL_BR_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *
 #define qd_G_r_FL_BR_SZ_RES 1
 #define qd_G_r_FL_BR_SZ_IW 0
 #define qd_G_r_FL_BR_SZ_W 0
+int qd_G_r_FL_BR_batch(casadi_int n, const casadi_real* const* arg, casadi_real* const* res, int* status, casadi_real* w);
 int qd_id_r_FL_BR(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem);
 int qd_id_r_FL_BR_checkout(void);
 void qd_id_r_FL_BR_release(int mem);
@@ -1756,6 +1827,7 @@ int qd_id_r_FL_BR_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_int 
 #define qd_id_r_FL_BR_SZ_RES 1
 #define qd_id_r_FL_BR_SZ_IW 0
 #define qd_id_r_FL_BR_SZ_W 0
+int qd_id_r_FL_BR_batch(casadi_int n, const casadi_real* const* arg, casadi_real* const* res, int* status, casadi_real* w);
 int qd_fd_r_FL_BR(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem);
 int qd_fd_r_FL_BR_checkout(void);
 void qd_fd_r_FL_BR_release(int mem);
@@ -1774,6 +1846,7 @@ int qd_fd_r_FL_BR_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_int 
 #define qd_fd_r_FL_BR_SZ_RES 1
 #define qd_fd_r_FL_BR_SZ_IW 0
 #define qd_fd_r_FL_BR_SZ_W 0
+int qd_fd_r_FL_BR_batch(casadi_int n, const casadi_real* const* arg, casadi_real* const* res, int* status, casadi_real* w);
 int qd_dfd_r_FL_BR(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem);
 int qd_dfd_r_FL_BR_checkout(void);
 void qd_dfd_r_FL_BR_release(int mem);
@@ -1792,6 +1865,7 @@ int qd_dfd_r_FL_BR_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_int
 #define qd_dfd_r_FL_BR_SZ_RES 4
 #define qd_dfd_r_FL_BR_SZ_IW 0
 #define qd_dfd_r_FL_BR_SZ_W 2624
+int qd_dfd_r_FL_BR_batch(casadi_int n, const casadi_real* const* arg, casadi_real* const* res, int* status, casadi_real* w);
 void qd_paper_r_FL_BR_casadi_version(int* major, int* minor, int* patch);
 int qd_paper_r_FL_BR_casadi_int_size(void);
 int qd_paper_r_FL_BR_casadi_real_size(void);
@@ -1835,6 +1909,7 @@ int qd_M_r_FR_BL_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *
 #define qd_M_r_FR_BL_SZ_RES 1
 #define qd_M_r_FR_BL_SZ_IW 0
 #define qd_M_r_FR_BL_SZ_W 0
+int qd_M_r_FR_BL_batch(casadi_int n, const casadi_real* const* arg, casadi_real* const* res, int* status, casadi_real* w);
 int qd_CG_r_FR_BL(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem);
 int qd_CG_r_FR_BL_checkout(void);
 void qd_CG_r_FR_BL_release(int mem);
@@ -1853,6 +1928,7 @@ int qd_CG_r_FR_BL_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_int 
 #define qd_CG_r_FR_BL_SZ_RES 1
 #define qd_CG_r_FR_BL_SZ_IW 0
 #define qd_CG_r_FR_BL_SZ_W 0
+int qd_CG_r_FR_BL_batch(casadi_int n, const casadi_real* const* arg, casadi_real* const* res, int* status, casadi_real* w);
 int qd_G_r_FR_BL(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem);
 int qd_G_r_FR_BL_checkout(void);
 void qd_G_r_FR_BL_release(int mem);
@@ -1871,6 +1947,7 @@ int qd_G_r_FR_BL_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *
 #define qd_G_r_FR_BL_SZ_RES 1
 #define qd_G_r_FR_BL_SZ_IW 0
 #define qd_G_r_FR_BL_SZ_W 0
+int qd_G_r_FR_BL_batch(casadi_int n, const casadi_real* const* arg, casadi_real* const* res, int* status, casadi_real* w);
 int qd_id_r_FR_BL(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem);
 int qd_id_r_FR_BL_checkout(void);
 void qd_id_r_FR_BL_release(int mem);
@@ -1889,6 +1966,7 @@ int qd_id_r_FR_BL_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_int 
 #define qd_id_r_FR_BL_SZ_RES 1
 #define qd_id_r_FR_BL_SZ_IW 0
 #define qd_id_r_FR_BL_SZ_W 0
+int qd_id_r_FR_BL_batch(casadi_int n, const casadi_real* const* arg, casadi_real* const* res, int* status, casadi_real* w);
 int qd_fd_r_FR_BL(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem);
 int qd_fd_r_FR_BL_checkout(void);
 void qd_fd_r_FR_BL_release(int mem);
@@ -1907,6 +1985,7 @@ int qd_fd_r_FR_BL_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_int 
 #define qd_fd_r_FR_BL_SZ_RES 1
 #define qd_fd_r_FR_BL_SZ_IW 0
 #define qd_fd_r_FR_BL_SZ_W 0
+int qd_fd_r_FR_BL_batch(casadi_int n, const casadi_real* const* arg, casadi_real* const* res, int* status, casadi_real* w);
 int qd_dfd_r_FR_BL(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem);
 int qd_dfd_r_FR_BL_checkout(void);
 void qd_dfd_r_FR_BL_release(int mem);
@@ -1925,6 +2004,7 @@ int qd_dfd_r_FR_BL_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_int
 #define qd_dfd_r_FR_BL_SZ_RES 4
 #define qd_dfd_r_FR_BL_SZ_IW 0
 #define qd_dfd_r_FR_BL_SZ_W 2624
+int qd_dfd_r_FR_BL_batch(casadi_int n, const casadi_real* const* arg, casadi_real* const* res, int* status, casadi_real* w);
 void qd_paper_r_FR_BL_casadi_version(int* major, int* minor, int* patch);
 int qd_paper_r_FR_BL_casadi_int_size(void);
 int qd_paper_r_FR_BL_casadi_real_size(void);
@@ -1968,6 +2048,7 @@ int qd_M_r_FR_BR_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *
 #define qd_M_r_FR_BR_SZ_RES 1
 #define qd_M_r_FR_BR_SZ_IW 0
 #define qd_M_r_FR_BR_SZ_W 0
+int qd_M_r_FR_BR_batch(casadi_int n, const casadi_real* const* arg, casadi_real* const* res, int* status, casadi_real* w);
 int qd_CG_r_FR_BR(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem);
 int qd_CG_r_FR_BR_checkout(void);
 void qd_CG_r_FR_BR_release(int mem);
@@ -1986,6 +2067,7 @@ int qd_CG_r_FR_BR_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_int 
 #define qd_CG_r_FR_BR_SZ_RES 1
 #define qd_CG_r_FR_BR_SZ_IW 0
 #define qd_CG_r_FR_BR_SZ_W 0
+int qd_CG_r_FR_BR_batch(casadi_int n, const casadi_real* const* arg, casadi_real* const* res, int* status, casadi_real* w);
 int qd_G_r_FR_BR(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem);
 int qd_G_r_FR_BR_checkout(void);
 void qd_G_r_FR_BR_release(int mem);
@@ -2004,6 +2086,7 @@ int qd_G_r_FR_BR_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *
 #define qd_G_r_FR_BR_SZ_RES 1
 #define qd_G_r_FR_BR_SZ_IW 0
 #define qd_G_r_FR_BR_SZ_W 0
+int qd_G_r_FR_BR_batch(casadi_int n, const casadi_real* const* arg, casadi_real* const* res, int* status, casadi_real* w);
 int qd_id_r_FR_BR(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem);
 int qd_id_r_FR_BR_checkout(void);
 void qd_id_r_FR_BR_release(int mem);
@@ -2022,6 +2105,7 @@ int qd_id_r_FR_BR_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_int 
 #define qd_id_r_FR_BR_SZ_RES 1
 #define qd_id_r_FR_BR_SZ_IW 0
 #define qd_id_r_FR_BR_SZ_W 0
+int qd_id_r_FR_BR_batch(casadi_int n, const casadi_real* const* arg, casadi_real* const* res, int* status, casadi_real* w);
 int qd_fd_r_FR_BR(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem);
 int qd_fd_r_FR_BR_checkout(void);
 void qd_fd_r_FR_BR_release(int mem);
@@ -2040,6 +2124,7 @@ int qd_fd_r_FR_BR_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_int 
 #define qd_fd_r_FR_BR_SZ_RES 1
 #define qd_fd_r_FR_BR_SZ_IW 0
 #define qd_fd_r_FR_BR_SZ_W 0
+int qd_fd_r_FR_BR_batch(casadi_int n, const casadi_real* const* arg, casadi_real* const* res, int* status, casadi_real* w);
 int qd_dfd_r_FR_BR(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem);
 int qd_dfd_r_FR_BR_checkout(void);
 void qd_dfd_r_FR_BR_release(int mem);
@@ -2058,6 +2143,7 @@ int qd_dfd_r_FR_BR_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_int
 #define qd_dfd_r_FR_BR_SZ_RES 4
 #define qd_dfd_r_FR_BR_SZ_IW 0
 #define qd_dfd_r_FR_BR_SZ_W 2624
+int qd_dfd_r_FR_BR_batch(casadi_int n, const casadi_real* const* arg, casadi_real* const* res, int* status, casadi_real* w);
 void qd_paper_r_FR_BR_casadi_version(int* major, int* minor, int* patch);
 int qd_paper_r_FR_BR_casadi_int_size(void);
 int qd_paper_r_FR_BR_casadi_real_size(void);
@@ -2101,6 +2187,7 @@ int qd_M_r_BL_BR_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *
 #define qd_M_r_BL_BR_SZ_RES 1
 #define qd_M_r_BL_BR_SZ_IW 0
 #define qd_M_r_BL_BR_SZ_W 0
+int qd_M_r_BL_BR_batch(casadi_int n, const casadi_real* const* arg, casadi_real* const* res, int* status, casadi_real* w);
 int qd_CG_r_BL_BR(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem);
 int qd_CG_r_BL_BR_checkout(void);
 void qd_CG_r_BL_BR_release(int mem);
@@ -2119,6 +2206,7 @@ int qd_CG_r_BL_BR_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_int 
 #define qd_CG_r_BL_BR_SZ_RES 1
 #define qd_CG_r_BL_BR_SZ_IW 0
 #define qd_CG_r_BL_BR_SZ_W 0
+int qd_CG_r_BL_BR_batch(casadi_int n, const casadi_real* const* arg, casadi_real* const* res, int* status, casadi_real* w);
 int qd_G_r_BL_BR(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem);
 int qd_G_r_BL_BR_checkout(void);
 void qd_G_r_BL_BR_release(int mem);
@@ -2137,6 +2225,7 @@ int qd_G_r_BL_BR_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *
 #define qd_G_r_BL_BR_SZ_RES 1
 #define qd_G_r_BL_BR_SZ_IW 0
 #define qd_G_r_BL_BR_SZ_W 0
+int qd_G_r_BL_BR_batch(casadi_int n, const casadi_real* const* arg, casadi_real* const* res, int* status, casadi_real* w);
 int qd_id_r_BL_BR(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem);
 int qd_id_r_BL_BR_checkout(void);
 void qd_id_r_BL_BR_release(int mem);
@@ -2155,6 +2244,7 @@ int qd_id_r_BL_BR_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_int 
 #define qd_id_r_BL_BR_SZ_RES 1
 #define qd_id_r_BL_BR_SZ_IW 0
 #define qd_id_r_BL_BR_SZ_W 0
+int qd_id_r_BL_BR_batch(casadi_int n, const casadi_real* const* arg, casadi_real* const* res, int* status, casadi_real* w);
 int qd_fd_r_BL_BR(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem);
 int qd_fd_r_BL_BR_checkout(void);
 void qd_fd_r_BL_BR_release(int mem);
@@ -2173,6 +2263,7 @@ int qd_fd_r_BL_BR_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_int 
 #define qd_fd_r_BL_BR_SZ_RES 1
 #define qd_fd_r_BL_BR_SZ_IW 0
 #define qd_fd_r_BL_BR_SZ_W 0
+int qd_fd_r_BL_BR_batch(casadi_int n, const casadi_real* const* arg, casadi_real* const* res, int* status, casadi_real* w);
 int qd_dfd_r_BL_BR(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem);
 int qd_dfd_r_BL_BR_checkout(void);
 void qd_dfd_r_BL_BR_release(int mem);
@@ -2191,6 +2282,7 @@ int qd_dfd_r_BL_BR_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_int
 #define qd_dfd_r_BL_BR_SZ_RES 4
 #define qd_dfd_r_BL_BR_SZ_IW 0
 #define qd_dfd_r_BL_BR_SZ_W 2624
+int qd_dfd_r_BL_BR_batch(casadi_int n, const casadi_real* const* arg, casadi_real* const* res, int* status, casadi_real* w);
 void qd_paper_r_BL_BR_casadi_version(int* major, int* minor, int* patch);
 int qd_paper_r_BL_BR_casadi_int_size(void);
 int qd_paper_r_BL_BR_casadi_real_size(void);
@@ -2234,6 +2326,7 @@ int qd_did_full_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *s
 #define qd_did_full_SZ_RES 3
 #define qd_did_full_SZ_IW 0
 #define qd_did_full_SZ_W 0
+int qd_did_full_batch(casadi_int n, const casadi_real* const* arg, casadi_real* const* res, int* status, casadi_real* w);
 int qd_dfd_full_parts(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem);
 int qd_dfd_full_parts_checkout(void);
 void qd_dfd_full_parts_release(int mem);
@@ -2252,6 +2345,7 @@ int qd_dfd_full_parts_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_
 #define qd_dfd_full_parts_SZ_RES 2
 #define qd_dfd_full_parts_SZ_IW 0
 #define qd_dfd_full_parts_SZ_W 0
+int qd_dfd_full_parts_batch(casadi_int n, const casadi_real* const* arg, casadi_real* const* res, int* status, casadi_real* w);
 int qd_dfd_full(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem);
 int qd_dfd_full_checkout(void);
 void qd_dfd_full_release(int mem);
@@ -2270,6 +2364,7 @@ int qd_dfd_full_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *s
 #define qd_dfd_full_SZ_RES 3
 #define qd_dfd_full_SZ_IW 0
 #define qd_dfd_full_SZ_W 1476
+int qd_dfd_full_batch(casadi_int n, const casadi_real* const* arg, casadi_real* const* res, int* status, casadi_real* w);
 int qd_dgrf_dir_FL_FR_BL_BR(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem);
 int qd_dgrf_dir_FL_FR_BL_BR_checkout(void);
 void qd_dgrf_dir_FL_FR_BL_BR_release(int mem);
@@ -2288,6 +2383,7 @@ int qd_dgrf_dir_FL_FR_BL_BR_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, c
 #define qd_dgrf_dir_FL_FR_BL_BR_SZ_RES 2
 #define qd_dgrf_dir_FL_FR_BL_BR_SZ_IW 0
 #define qd_dgrf_dir_FL_FR_BL_BR_SZ_W 0
+int qd_dgrf_dir_FL_FR_BL_BR_batch(casadi_int n, const casadi_real* const* arg, casadi_real* const* res, int* status, casadi_real* w);
 int qd_dgrf_FL_FR_BL_BR(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem);
 int qd_dgrf_FL_FR_BL_BR_checkout(void);
 void qd_dgrf_FL_FR_BL_BR_release(int mem);
@@ -2306,6 +2402,7 @@ int qd_dgrf_FL_FR_BL_BR_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casad
 #define qd_dgrf_FL_FR_BL_BR_SZ_RES 3
 #define qd_dgrf_FL_FR_BL_BR_SZ_IW 0
 #define qd_dgrf_FL_FR_BL_BR_SZ_W 1158
+int qd_dgrf_FL_FR_BL_BR_batch(casadi_int n, const casadi_real* const* arg, casadi_real* const* res, int* status, casadi_real* w);
 int qd_dgrf_dir_FL_FR_BL(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem);
 int qd_dgrf_dir_FL_FR_BL_checkout(void);
 void qd_dgrf_dir_FL_FR_BL_release(int mem);
@@ -2324,6 +2421,7 @@ int qd_dgrf_dir_FL_FR_BL_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casa
 #define qd_dgrf_dir_FL_FR_BL_SZ_RES 2
 #define qd_dgrf_dir_FL_FR_BL_SZ_IW 0
 #define qd_dgrf_dir_FL_FR_BL_SZ_W 0
+int qd_dgrf_dir_FL_FR_BL_batch(casadi_int n, const casadi_real* const* arg, casadi_real* const* res, int* status, casadi_real* w);
 int qd_dgrf_FL_FR_BL(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem);
 int qd_dgrf_FL_FR_BL_checkout(void);
 void qd_dgrf_FL_FR_BL_release(int mem);
@@ -2342,6 +2440,7 @@ int qd_dgrf_FL_FR_BL_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_i
 #define qd_dgrf_FL_FR_BL_SZ_RES 3
 #define qd_dgrf_FL_FR_BL_SZ_IW 0
 #define qd_dgrf_FL_FR_BL_SZ_W 1158
+int qd_dgrf_FL_FR_BL_batch(casadi_int n, const casadi_real* const* arg, casadi_real* const* res, int* status, casadi_real* w);
 int qd_dgrf_dir_FL_FR_BR(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem);
 int qd_dgrf_dir_FL_FR_BR_checkout(void);
 void qd_dgrf_dir_FL_FR_BR_release(int mem);
@@ -2360,6 +2459,7 @@ int qd_dgrf_dir_FL_FR_BR_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casa
 #define qd_dgrf_dir_FL_FR_BR_SZ_RES 2
 #define qd_dgrf_dir_FL_FR_BR_SZ_IW 0
 #define qd_dgrf_dir_FL_FR_BR_SZ_W 0
+int qd_dgrf_dir_FL_FR_BR_batch(casadi_int n, const casadi_real* const* arg, casadi_real* const* res, int* status, casadi_real* w);
 int qd_dgrf_FL_FR_BR(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem);
 int qd_dgrf_FL_FR_BR_checkout(void);
 void qd_dgrf_FL_FR_BR_release(int mem);
@@ -2378,6 +2478,7 @@ int qd_dgrf_FL_FR_BR_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_i
 #define qd_dgrf_FL_FR_BR_SZ_RES 3
 #define qd_dgrf_FL_FR_BR_SZ_IW 0
 #define qd_dgrf_FL_FR_BR_SZ_W 1158
+int qd_dgrf_FL_FR_BR_batch(casadi_int n, const casadi_real* const* arg, casadi_real* const* res, int* status, casadi_real* w);
 int qd_dgrf_dir_FL_BL_BR(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem);
 int qd_dgrf_dir_FL_BL_BR_checkout(void);
 void qd_dgrf_dir_FL_BL_BR_release(int mem);
@@ -2396,6 +2497,7 @@ int qd_dgrf_dir_FL_BL_BR_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casa
 #define qd_dgrf_dir_FL_BL_BR_SZ_RES 2
 #define qd_dgrf_dir_FL_BL_BR_SZ_IW 0
 #define qd_dgrf_dir_FL_BL_BR_SZ_W 0
+int qd_dgrf_dir_FL_BL_BR_batch(casadi_int n, const casadi_real* const* arg, casadi_real* const* res, int* status, casadi_real* w);
 int qd_dgrf_FL_BL_BR(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem);
 int qd_dgrf_FL_BL_BR_checkout(void);
 void qd_dgrf_FL_BL_BR_release(int mem);
@@ -2414,6 +2516,7 @@ int qd_dgrf_FL_BL_BR_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_i
 #define qd_dgrf_FL_BL_BR_SZ_RES 3
 #define qd_dgrf_FL_BL_BR_SZ_IW 0
 #define qd_dgrf_FL_BL_BR_SZ_W 1158
+int qd_dgrf_FL_BL_BR_batch(casadi_int n, const casadi_real* const* arg, casadi_real* const* res, int* status, casadi_real* w);
 int qd_dgrf_dir_FR_BL_BR(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem);
 int qd_dgrf_dir_FR_BL_BR_checkout(void);
 void qd_dgrf_dir_FR_BL_BR_release(int mem);
@@ -2432,6 +2535,7 @@ int qd_dgrf_dir_FR_BL_BR_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casa
 #define qd_dgrf_dir_FR_BL_BR_SZ_RES 2
 #define qd_dgrf_dir_FR_BL_BR_SZ_IW 0
 #define qd_dgrf_dir_FR_BL_BR_SZ_W 0
+int qd_dgrf_dir_FR_BL_BR_batch(casadi_int n, const casadi_real* const* arg, casadi_real* const* res, int* status, casadi_real* w);
 int qd_dgrf_FR_BL_BR(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem);
 int qd_dgrf_FR_BL_BR_checkout(void);
 void qd_dgrf_FR_BL_BR_release(int mem);
@@ -2450,6 +2554,7 @@ int qd_dgrf_FR_BL_BR_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_i
 #define qd_dgrf_FR_BL_BR_SZ_RES 3
 #define qd_dgrf_FR_BL_BR_SZ_IW 0
 #define qd_dgrf_FR_BL_BR_SZ_W 1158
+int qd_dgrf_FR_BL_BR_batch(casadi_int n, const casadi_real* const* arg, casadi_real* const* res, int* status, casadi_real* w);
 int qd_dgrf_dir_FL_FR(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem);
 int qd_dgrf_dir_FL_FR_checkout(void);
 void qd_dgrf_dir_FL_FR_release(int mem);
@@ -2468,6 +2573,7 @@ int qd_dgrf_dir_FL_FR_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_
 #define qd_dgrf_dir_FL_FR_SZ_RES 2
 #define qd_dgrf_dir_FL_FR_SZ_IW 0
 #define qd_dgrf_dir_FL_FR_SZ_W 0
+int qd_dgrf_dir_FL_FR_batch(casadi_int n, const casadi_real* const* arg, casadi_real* const* res, int* status, casadi_real* w);
 int qd_dgrf_FL_FR(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem);
 int qd_dgrf_FL_FR_checkout(void);
 void qd_dgrf_FL_FR_release(int mem);
@@ -2486,6 +2592,7 @@ int qd_dgrf_FL_FR_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_int 
 #define qd_dgrf_FL_FR_SZ_RES 3
 #define qd_dgrf_FL_FR_SZ_IW 0
 #define qd_dgrf_FL_FR_SZ_W 1158
+int qd_dgrf_FL_FR_batch(casadi_int n, const casadi_real* const* arg, casadi_real* const* res, int* status, casadi_real* w);
 int qd_dgrf_dir_FL_BL(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem);
 int qd_dgrf_dir_FL_BL_checkout(void);
 void qd_dgrf_dir_FL_BL_release(int mem);
@@ -2504,6 +2611,7 @@ int qd_dgrf_dir_FL_BL_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_
 #define qd_dgrf_dir_FL_BL_SZ_RES 2
 #define qd_dgrf_dir_FL_BL_SZ_IW 0
 #define qd_dgrf_dir_FL_BL_SZ_W 0
+int qd_dgrf_dir_FL_BL_batch(casadi_int n, const casadi_real* const* arg, casadi_real* const* res, int* status, casadi_real* w);
 int qd_dgrf_FL_BL(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem);
 int qd_dgrf_FL_BL_checkout(void);
 void qd_dgrf_FL_BL_release(int mem);
@@ -2522,6 +2630,7 @@ int qd_dgrf_FL_BL_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_int 
 #define qd_dgrf_FL_BL_SZ_RES 3
 #define qd_dgrf_FL_BL_SZ_IW 0
 #define qd_dgrf_FL_BL_SZ_W 1158
+int qd_dgrf_FL_BL_batch(casadi_int n, const casadi_real* const* arg, casadi_real* const* res, int* status, casadi_real* w);
 int qd_dgrf_dir_FL_BR(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem);
 int qd_dgrf_dir_FL_BR_checkout(void);
 void qd_dgrf_dir_FL_BR_release(int mem);
@@ -2540,6 +2649,7 @@ int qd_dgrf_dir_FL_BR_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_
 #define qd_dgrf_dir_FL_BR_SZ_RES 2
 #define qd_dgrf_dir_FL_BR_SZ_IW 0
 #define qd_dgrf_dir_FL_BR_SZ_W 0
+int qd_dgrf_dir_FL_BR_batch(casadi_int n, const casadi_real* const* arg, casadi_real* const* res, int* status, casadi_real* w);
 int qd_dgrf_FL_BR(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem);
 int qd_dgrf_FL_BR_checkout(void);
 void qd_dgrf_FL_BR_release(int mem);
@@ -2558,6 +2668,7 @@ int qd_dgrf_FL_BR_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_int 
 #define qd_dgrf_FL_BR_SZ_RES 3
 #define qd_dgrf_FL_BR_SZ_IW 0
 #define qd_dgrf_FL_BR_SZ_W 1158
+int qd_dgrf_FL_BR_batch(casadi_int n, const casadi_real* const* arg, casadi_real* const* res, int* status, casadi_real* w);
 int qd_dgrf_dir_FR_BL(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem);
 int qd_dgrf_dir_FR_BL_checkout(void);
 void qd_dgrf_dir_FR_BL_release(int mem);
@@ -2576,6 +2687,7 @@ int qd_dgrf_dir_FR_BL_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_
 #define qd_dgrf_dir_FR_BL_SZ_RES 2
 #define qd_dgrf_dir_FR_BL_SZ_IW 0
 #define qd_dgrf_dir_FR_BL_SZ_W 0
+int qd_dgrf_dir_FR_BL_batch(casadi_int n, const casadi_real* const* arg, casadi_real* const* res, int* status, casadi_real* w);
 int qd_dgrf_FR_BL(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem);
 int qd_dgrf_FR_BL_checkout(void);
 void qd_dgrf_FR_BL_release(int mem);
@@ -2594,6 +2706,7 @@ int qd_dgrf_FR_BL_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_int 
 #define qd_dgrf_FR_BL_SZ_RES 3
 #define qd_dgrf_FR_BL_SZ_IW 0
 #define qd_dgrf_FR_BL_SZ_W 1158
+int qd_dgrf_FR_BL_batch(casadi_int n, const casadi_real* const* arg, casadi_real* const* res, int* status, casadi_real* w);
 int qd_dgrf_dir_FR_BR(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem);
 int qd_dgrf_dir_FR_BR_checkout(void);
 void qd_dgrf_dir_FR_BR_release(int mem);
@@ -2612,6 +2725,7 @@ int qd_dgrf_dir_FR_BR_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_
 #define qd_dgrf_dir_FR_BR_SZ_RES 2
 #define qd_dgrf_dir_FR_BR_SZ_IW 0
 #define qd_dgrf_dir_FR_BR_SZ_W 0
+int qd_dgrf_dir_FR_BR_batch(casadi_int n, const casadi_real* const* arg, casadi_real* const* res, int* status, casadi_real* w);
 int qd_dgrf_FR_BR(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem);
 int qd_dgrf_FR_BR_checkout(void);
 void qd_dgrf_FR_BR_release(int mem);
@@ -2630,6 +2744,7 @@ int qd_dgrf_FR_BR_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_int 
 #define qd_dgrf_FR_BR_SZ_RES 3
 #define qd_dgrf_FR_BR_SZ_IW 0
 #define qd_dgrf_FR_BR_SZ_W 1158
+int qd_dgrf_FR_BR_batch(casadi_int n, const casadi_real* const* arg, casadi_real* const* res, int* status, casadi_real* w);
 int qd_dgrf_dir_BL_BR(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem);
 int qd_dgrf_dir_BL_BR_checkout(void);
 void qd_dgrf_dir_BL_BR_release(int mem);
@@ -2648,6 +2763,7 @@ int qd_dgrf_dir_BL_BR_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_
 #define qd_dgrf_dir_BL_BR_SZ_RES 2
 #define qd_dgrf_dir_BL_BR_SZ_IW 0
 #define qd_dgrf_dir_BL_BR_SZ_W 0
+int qd_dgrf_dir_BL_BR_batch(casadi_int n, const casadi_real* const* arg, casadi_real* const* res, int* status, casadi_real* w);
 int qd_dgrf_BL_BR(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem);
 int qd_dgrf_BL_BR_checkout(void);
 void qd_dgrf_BL_BR_release(int mem);
@@ -2666,6 +2782,7 @@ int qd_dgrf_BL_BR_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_int 
 #define qd_dgrf_BL_BR_SZ_RES 3
 #define qd_dgrf_BL_BR_SZ_IW 0
 #define qd_dgrf_BL_BR_SZ_W 1158
+int qd_dgrf_BL_BR_batch(casadi_int n, const casadi_real* const* arg, casadi_real* const* res, int* status, casadi_real* w);
 int qd_dgrf_dir_FL(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem);
 int qd_dgrf_dir_FL_checkout(void);
 void qd_dgrf_dir_FL_release(int mem);
@@ -2684,6 +2801,7 @@ int qd_dgrf_dir_FL_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_int
 #define qd_dgrf_dir_FL_SZ_RES 2
 #define qd_dgrf_dir_FL_SZ_IW 0
 #define qd_dgrf_dir_FL_SZ_W 0
+int qd_dgrf_dir_FL_batch(casadi_int n, const casadi_real* const* arg, casadi_real* const* res, int* status, casadi_real* w);
 int qd_dgrf_FL(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem);
 int qd_dgrf_FL_checkout(void);
 void qd_dgrf_FL_release(int mem);
@@ -2702,6 +2820,7 @@ int qd_dgrf_FL_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz
 #define qd_dgrf_FL_SZ_RES 3
 #define qd_dgrf_FL_SZ_IW 0
 #define qd_dgrf_FL_SZ_W 1158
+int qd_dgrf_FL_batch(casadi_int n, const casadi_real* const* arg, casadi_real* const* res, int* status, casadi_real* w);
 int qd_dgrf_dir_FR(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem);
 int qd_dgrf_dir_FR_checkout(void);
 void qd_dgrf_dir_FR_release(int mem);
@@ -2720,6 +2839,7 @@ int qd_dgrf_dir_FR_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_int
 #define qd_dgrf_dir_FR_SZ_RES 2
 #define qd_dgrf_dir_FR_SZ_IW 0
 #define qd_dgrf_dir_FR_SZ_W 0
+int qd_dgrf_dir_FR_batch(casadi_int n, const casadi_real* const* arg, casadi_real* const* res, int* status, casadi_real* w);
 int qd_dgrf_FR(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem);
 int qd_dgrf_FR_checkout(void);
 void qd_dgrf_FR_release(int mem);
@@ -2738,6 +2858,7 @@ int qd_dgrf_FR_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz
 #define qd_dgrf_FR_SZ_RES 3
 #define qd_dgrf_FR_SZ_IW 0
 #define qd_dgrf_FR_SZ_W 1158
+int qd_dgrf_FR_batch(casadi_int n, const casadi_real* const* arg, casadi_real* const* res, int* status, casadi_real* w);
 int qd_dgrf_dir_BL(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem);
 int qd_dgrf_dir_BL_checkout(void);
 void qd_dgrf_dir_BL_release(int mem);
@@ -2756,6 +2877,7 @@ int qd_dgrf_dir_BL_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_int
 #define qd_dgrf_dir_BL_SZ_RES 2
 #define qd_dgrf_dir_BL_SZ_IW 0
 #define qd_dgrf_dir_BL_SZ_W 0
+int qd_dgrf_dir_BL_batch(casadi_int n, const casadi_real* const* arg, casadi_real* const* res, int* status, casadi_real* w);
 int qd_dgrf_BL(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem);
 int qd_dgrf_BL_checkout(void);
 void qd_dgrf_BL_release(int mem);
@@ -2774,6 +2896,7 @@ int qd_dgrf_BL_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz
 #define qd_dgrf_BL_SZ_RES 3
 #define qd_dgrf_BL_SZ_IW 0
 #define qd_dgrf_BL_SZ_W 1158
+int qd_dgrf_BL_batch(casadi_int n, const casadi_real* const* arg, casadi_real* const* res, int* status, casadi_real* w);
 int qd_dgrf_dir_BR(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem);
 int qd_dgrf_dir_BR_checkout(void);
 void qd_dgrf_dir_BR_release(int mem);
@@ -2792,6 +2915,7 @@ int qd_dgrf_dir_BR_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_int
 #define qd_dgrf_dir_BR_SZ_RES 2
 #define qd_dgrf_dir_BR_SZ_IW 0
 #define qd_dgrf_dir_BR_SZ_W 0
+int qd_dgrf_dir_BR_batch(casadi_int n, const casadi_real* const* arg, casadi_real* const* res, int* status, casadi_real* w);
 int qd_dgrf_BR(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem);
 int qd_dgrf_BR_checkout(void);
 void qd_dgrf_BR_release(int mem);
@@ -2810,6 +2934,7 @@ int qd_dgrf_BR_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz
 #define qd_dgrf_BR_SZ_RES 3
 #define qd_dgrf_BR_SZ_IW 0
 #define qd_dgrf_BR_SZ_W 1158
+int qd_dgrf_BR_batch(casadi_int n, const casadi_real* const* arg, casadi_real* const* res, int* status, casadi_real* w);
 void qd_paper_d_casadi_version(int* major, int* minor, int* patch);
 int qd_paper_d_casadi_int_size(void);
 int qd_paper_d_casadi_real_size(void);
