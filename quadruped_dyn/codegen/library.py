@@ -268,8 +268,8 @@ class CompiledFunction:
         arg = (self._ptr * self._n_arg)(*[x.ctypes.data_as(self._ptr) for x in arrays])
         res = (self._ptr * self._n_res)(*[y.ctypes.data_as(self._ptr) for y in out])
         self._batch(n, arg, res, status.ctypes.data_as(ctypes.POINTER(ctypes.c_int)), self._w)
-        finite = np.logical_and.reduce([np.isfinite(x).all(axis=1) for x in arrays]) if n else np.ones(0, bool)
-        status[(status == 0) & ~finite] = QD_NONFINITE
+        if not all(np.isfinite(np.sum(x)) for x in arrays):  # one pass each; a sum that overflowed is checked here
+            status[(status == 0) & ~np.logical_and.reduce([np.isfinite(x).all(axis=1) for x in arrays])] = QD_NONFINITE
         if strict and status.any():
             row = int(np.flatnonzero(status)[0])
             raise InputError(f"{self.name}.batch: row {row}: {RETURN_CODES.get(int(status[row]), status[row])}")
