@@ -22328,6 +22328,180 @@ CASADI_SYMBOL_EXPORT int qd_grf_none_batch(casadi_int n, const casadi_real* cons
   return bad;
 }
 
+CASADI_SYMBOL_EXPORT int qd_M_full_crba(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem){
+  return qd_M_full(arg, res, iw, w, mem);
+}
+
+CASADI_SYMBOL_EXPORT int qd_M_full_crba_checkout(void) {
+  return 0;
+}
+
+CASADI_SYMBOL_EXPORT void qd_M_full_crba_release(int mem) {
+  (void)mem;
+}
+
+CASADI_SYMBOL_EXPORT void qd_M_full_crba_incref(void) {
+}
+
+CASADI_SYMBOL_EXPORT void qd_M_full_crba_decref(void) {
+}
+
+CASADI_SYMBOL_EXPORT casadi_int qd_M_full_crba_n_in(void) { return 1;}
+
+CASADI_SYMBOL_EXPORT casadi_int qd_M_full_crba_n_out(void) { return 1;}
+
+CASADI_SYMBOL_EXPORT casadi_real qd_M_full_crba_default_in(casadi_int i) {
+  switch (i) {
+    default: return 0;
+  }
+}
+
+CASADI_SYMBOL_EXPORT const char* qd_M_full_crba_name_in(casadi_int i) {
+  switch (i) {
+    case 0: return "q";
+    default: return 0;
+  }
+}
+
+CASADI_SYMBOL_EXPORT const char* qd_M_full_crba_name_out(casadi_int i) {
+  switch (i) {
+    case 0: return "M";
+    default: return 0;
+  }
+}
+
+CASADI_SYMBOL_EXPORT const casadi_int* qd_M_full_crba_sparsity_in(casadi_int i) {
+  switch (i) {
+    case 0: return casadi_s0;
+    default: return 0;
+  }
+}
+
+CASADI_SYMBOL_EXPORT const casadi_int* qd_M_full_crba_sparsity_out(casadi_int i) {
+  switch (i) {
+    case 0: return casadi_s1;
+    default: return 0;
+  }
+}
+
+CASADI_SYMBOL_EXPORT int qd_M_full_crba_work(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz_iw, casadi_int *sz_w) {
+  if (sz_arg) *sz_arg = 1;
+  if (sz_res) *sz_res = 1;
+  if (sz_iw) *sz_iw = 0;
+  if (sz_w) *sz_w = 0;
+  return 0;
+}
+
+CASADI_SYMBOL_EXPORT int qd_M_full_crba_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz_iw, casadi_int *sz_w) {
+  if (sz_arg) *sz_arg = 1*sizeof(const casadi_real*);
+  if (sz_res) *sz_res = 1*sizeof(casadi_real*);
+  if (sz_iw) *sz_iw = 0*sizeof(casadi_int);
+  if (sz_w) *sz_w = 0*sizeof(casadi_real);
+  return 0;
+}
+
+CASADI_SYMBOL_EXPORT int qd_M_full_crba_batch(casadi_int n, const casadi_real* const* arg, casadi_real* const* res, int* status, casadi_real* w) {
+  const casadi_real* a[1] = {0};
+  casadi_real* r[1] = {0};
+  casadi_int s;
+  int bad = 0;
+  for (s = 0; s < n; ++s) {
+    a[0] = arg[0] ? arg[0] + s*19 : 0;
+    r[0] = res[0] ? res[0] + s*210 : 0;
+    int flag = qd_M_full_crba(a, r, 0, w, 0);
+    if (status) status[s] = flag;
+    bad += flag != 0;
+  }
+  return bad;
+}
+
+CASADI_SYMBOL_EXPORT int qd_G_full_crb(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem){
+  return qd_G_full(arg, res, iw, w, mem);
+}
+
+CASADI_SYMBOL_EXPORT int qd_G_full_crb_checkout(void) {
+  return 0;
+}
+
+CASADI_SYMBOL_EXPORT void qd_G_full_crb_release(int mem) {
+  (void)mem;
+}
+
+CASADI_SYMBOL_EXPORT void qd_G_full_crb_incref(void) {
+}
+
+CASADI_SYMBOL_EXPORT void qd_G_full_crb_decref(void) {
+}
+
+CASADI_SYMBOL_EXPORT casadi_int qd_G_full_crb_n_in(void) { return 1;}
+
+CASADI_SYMBOL_EXPORT casadi_int qd_G_full_crb_n_out(void) { return 1;}
+
+CASADI_SYMBOL_EXPORT casadi_real qd_G_full_crb_default_in(casadi_int i) {
+  switch (i) {
+    default: return 0;
+  }
+}
+
+CASADI_SYMBOL_EXPORT const char* qd_G_full_crb_name_in(casadi_int i) {
+  switch (i) {
+    case 0: return "q";
+    default: return 0;
+  }
+}
+
+CASADI_SYMBOL_EXPORT const char* qd_G_full_crb_name_out(casadi_int i) {
+  switch (i) {
+    case 0: return "G";
+    default: return 0;
+  }
+}
+
+CASADI_SYMBOL_EXPORT const casadi_int* qd_G_full_crb_sparsity_in(casadi_int i) {
+  switch (i) {
+    case 0: return casadi_s0;
+    default: return 0;
+  }
+}
+
+CASADI_SYMBOL_EXPORT const casadi_int* qd_G_full_crb_sparsity_out(casadi_int i) {
+  switch (i) {
+    case 0: return casadi_s2;
+    default: return 0;
+  }
+}
+
+CASADI_SYMBOL_EXPORT int qd_G_full_crb_work(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz_iw, casadi_int *sz_w) {
+  if (sz_arg) *sz_arg = 1;
+  if (sz_res) *sz_res = 1;
+  if (sz_iw) *sz_iw = 0;
+  if (sz_w) *sz_w = 0;
+  return 0;
+}
+
+CASADI_SYMBOL_EXPORT int qd_G_full_crb_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz_iw, casadi_int *sz_w) {
+  if (sz_arg) *sz_arg = 1*sizeof(const casadi_real*);
+  if (sz_res) *sz_res = 1*sizeof(casadi_real*);
+  if (sz_iw) *sz_iw = 0*sizeof(casadi_int);
+  if (sz_w) *sz_w = 0*sizeof(casadi_real);
+  return 0;
+}
+
+CASADI_SYMBOL_EXPORT int qd_G_full_crb_batch(casadi_int n, const casadi_real* const* arg, casadi_real* const* res, int* status, casadi_real* w) {
+  const casadi_real* a[1] = {0};
+  casadi_real* r[1] = {0};
+  casadi_int s;
+  int bad = 0;
+  for (s = 0; s < n; ++s) {
+    a[0] = arg[0] ? arg[0] + s*19 : 0;
+    r[0] = res[0] ? res[0] + s*18 : 0;
+    int flag = qd_G_full_crb(a, r, 0, w, 0);
+    if (status) status[s] = flag;
+    bad += flag != 0;
+  }
+  return bad;
+}
+
 
 #ifdef __cplusplus
 } /* extern "C" */

@@ -6,7 +6,7 @@
  * res[i] skips it), iw and w are caller-provided work arrays of qd_NAME_SZ_IW and
  * qd_NAME_SZ_W entries. No malloc, no global state: thread-safe with per-thread work.
  * A null arg[i] reads as zeros (CasADi's convention) only in
- * M_full, C_full, G_full, nle_full, id_full, grf_<feet>, did_full, dfd_full_parts, dgrf_dir_<feet>;
+ * M_full, C_full, G_full, nle_full, id_full, M_full_crba, G_full_crb, grf_<feet>, did_full, dfd_full_parts, dgrf_dir_<feet>;
  * every other function dereferences each input: pass them all. No output may overlap an
  * input or another output (e.g. id_full's tau written over its input f gives wrong values).
  * Vectors are contiguous; a sparse output holds its nonzeros column by column in the
@@ -158,6 +158,8 @@
  *   qd_grf_BL(q[19], v[18], a[18]) -> (lambda[3], f[12], residual[6], tau[12]);  iw 0, w 0  [one foot, rank 3]
  *   qd_grf_BR(q[19], v[18], a[18]) -> (lambda[3], f[12], residual[6], tau[12]);  iw 0, w 0  [one foot, rank 3]
  *   qd_grf_none(q[19], v[18], a[18]) -> (lambda[0], f[12], residual[6], tau[12]);  iw 0, w 0  [flight, rank 0]
+ *   qd_M_full_crba(q[19]) -> (M[18x18, 210 nonzeros]);  iw 0, w 0  [= qd_M_full, by its algorithm's name]
+ *   qd_G_full_crb(q[19]) -> (G[18]);  iw 0, w 0  [= qd_G_full, by its algorithm's name]
  *   qd_M_r_FL_FR_BL_BR(q_r[12], quat[4]) -> (M_r[12x12]);  iw 0, w 0  [stand, returns QD_NONFINITE / QD_DEGENERATE]
  *   qd_CG_r_FL_FR_BL_BR(q_r[12], qd_r[12], quat[4]) -> (CG_r[12]);  iw 0, w 0  [stand, returns QD_NONFINITE / QD_DEGENERATE]
  *   qd_G_r_FL_FR_BL_BR(q_r[12], quat[4]) -> (G_r[12]);  iw 0, w 0  [stand, returns QD_NONFINITE / QD_DEGENERATE]
@@ -278,37 +280,38 @@
  *   qd_grf_FL_FR_BR 756/392; qd_grf_FL_BL_BR 756/392; qd_grf_FR_BL_BR 756/392;
  *   qd_grf_FL_FR 756/392; qd_grf_FL_BL 756/392; qd_grf_FL_BR 756/392; qd_grf_FR_BL 756/392;
  *   qd_grf_FR_BR 756/392; qd_grf_BL_BR 756/392; qd_grf_FL 732/380; qd_grf_FR 732/380;
- *   qd_grf_BL 732/380; qd_grf_BR 732/380; qd_grf_none 708/368; qd_M_r_FL_FR_BL_BR 1292/652;
- *   qd_CG_r_FL_FR_BL_BR 336/176; qd_G_r_FL_FR_BL_BR 236/124; qd_id_r_FL_FR_BL_BR 436/228;
- *   qd_fd_r_FL_FR_BL_BR 436/228; qd_dfd_r_FL_FR_BL_BR 25080/12556; qd_M_r_FL_FR_BL 1292/652;
- *   qd_CG_r_FL_FR_BL 336/176; qd_G_r_FL_FR_BL 236/124; qd_id_r_FL_FR_BL 436/228;
- *   qd_fd_r_FL_FR_BL 436/228; qd_dfd_r_FL_FR_BL 24400/12216; qd_M_r_FL_FR_BR 1292/652;
- *   qd_CG_r_FL_FR_BR 336/176; qd_G_r_FL_FR_BR 236/124; qd_id_r_FL_FR_BR 436/228;
- *   qd_fd_r_FL_FR_BR 436/228; qd_dfd_r_FL_FR_BR 24400/12216; qd_M_r_FL_BL_BR 1292/652;
- *   qd_CG_r_FL_BL_BR 336/176; qd_G_r_FL_BL_BR 236/124; qd_id_r_FL_BL_BR 436/228;
- *   qd_fd_r_FL_BL_BR 436/228; qd_dfd_r_FL_BL_BR 24400/12216; qd_M_r_FR_BL_BR 1292/652;
- *   qd_CG_r_FR_BL_BR 336/176; qd_G_r_FR_BL_BR 236/124; qd_id_r_FR_BL_BR 436/228;
- *   qd_fd_r_FR_BL_BR 436/228; qd_dfd_r_FR_BL_BR 24400/12216; qd_M_r_FL_FR 1500/756;
- *   qd_CG_r_FL_FR 360/188; qd_G_r_FL_FR 252/132; qd_id_r_FL_FR 468/244; qd_fd_r_FL_FR 468/244;
- *   qd_dfd_r_FL_FR 25736/12884; qd_M_r_FL_BL 1500/756; qd_CG_r_FL_BL 360/188; qd_G_r_FL_BL 252/132;
- *   qd_id_r_FL_BL 468/244; qd_fd_r_FL_BL 468/244; qd_dfd_r_FL_BL 25736/12884;
- *   qd_M_r_FL_BR 1500/756; qd_CG_r_FL_BR 360/188; qd_G_r_FL_BR 252/132; qd_id_r_FL_BR 468/244;
- *   qd_fd_r_FL_BR 468/244; qd_dfd_r_FL_BR 25736/12884; qd_M_r_FR_BL 1500/756;
- *   qd_CG_r_FR_BL 360/188; qd_G_r_FR_BL 252/132; qd_id_r_FR_BL 468/244; qd_fd_r_FR_BL 468/244;
- *   qd_dfd_r_FR_BL 25736/12884; qd_M_r_FR_BR 1500/756; qd_CG_r_FR_BR 360/188; qd_G_r_FR_BR 252/132;
- *   qd_id_r_FR_BR 468/244; qd_fd_r_FR_BR 468/244; qd_dfd_r_FR_BR 25736/12884;
- *   qd_M_r_BL_BR 1500/756; qd_CG_r_BL_BR 360/188; qd_G_r_BL_BR 252/132; qd_id_r_BL_BR 468/244;
- *   qd_fd_r_BL_BR 468/244; qd_dfd_r_BL_BR 25736/12884; qd_did_full 5136/2580;
- *   qd_dfd_full_parts 3048/1532; qd_dfd_full 20048/10036; qd_dgrf_dir_FL_FR_BL_BR 460/240;
- *   qd_dgrf_FL_FR_BL_BR 12320/6172; qd_dgrf_dir_FL_FR_BL 460/240; qd_dgrf_FL_FR_BL 12320/6172;
- *   qd_dgrf_dir_FL_FR_BR 460/240; qd_dgrf_FL_FR_BR 12320/6172; qd_dgrf_dir_FL_BL_BR 460/240;
- *   qd_dgrf_FL_BL_BR 12320/6172; qd_dgrf_dir_FR_BL_BR 460/240; qd_dgrf_FR_BL_BR 12320/6172;
- *   qd_dgrf_dir_FL_FR 460/240; qd_dgrf_FL_FR 12320/6172; qd_dgrf_dir_FL_BL 460/240;
- *   qd_dgrf_FL_BL 12320/6172; qd_dgrf_dir_FL_BR 460/240; qd_dgrf_FL_BR 12320/6172;
- *   qd_dgrf_dir_FR_BL 460/240; qd_dgrf_FR_BL 12320/6172; qd_dgrf_dir_FR_BR 460/240;
- *   qd_dgrf_FR_BR 12320/6172; qd_dgrf_dir_BL_BR 460/240; qd_dgrf_BL_BR 12320/6172;
- *   qd_dgrf_dir_FL 412/216; qd_dgrf_FL 11024/5524; qd_dgrf_dir_FR 412/216; qd_dgrf_FR 11024/5524;
- *   qd_dgrf_dir_BL 412/216; qd_dgrf_BL 11024/5524; qd_dgrf_dir_BR 412/216; qd_dgrf_BR 11024/5524;
+ *   qd_grf_BL 732/380; qd_grf_BR 732/380; qd_grf_none 708/368; qd_M_full_crba 1840/924;
+ *   qd_G_full_crb 304/156; qd_M_r_FL_FR_BL_BR 1292/652; qd_CG_r_FL_FR_BL_BR 336/176;
+ *   qd_G_r_FL_FR_BL_BR 236/124; qd_id_r_FL_FR_BL_BR 436/228; qd_fd_r_FL_FR_BL_BR 436/228;
+ *   qd_dfd_r_FL_FR_BL_BR 25080/12556; qd_M_r_FL_FR_BL 1292/652; qd_CG_r_FL_FR_BL 336/176;
+ *   qd_G_r_FL_FR_BL 236/124; qd_id_r_FL_FR_BL 436/228; qd_fd_r_FL_FR_BL 436/228;
+ *   qd_dfd_r_FL_FR_BL 24400/12216; qd_M_r_FL_FR_BR 1292/652; qd_CG_r_FL_FR_BR 336/176;
+ *   qd_G_r_FL_FR_BR 236/124; qd_id_r_FL_FR_BR 436/228; qd_fd_r_FL_FR_BR 436/228;
+ *   qd_dfd_r_FL_FR_BR 24400/12216; qd_M_r_FL_BL_BR 1292/652; qd_CG_r_FL_BL_BR 336/176;
+ *   qd_G_r_FL_BL_BR 236/124; qd_id_r_FL_BL_BR 436/228; qd_fd_r_FL_BL_BR 436/228;
+ *   qd_dfd_r_FL_BL_BR 24400/12216; qd_M_r_FR_BL_BR 1292/652; qd_CG_r_FR_BL_BR 336/176;
+ *   qd_G_r_FR_BL_BR 236/124; qd_id_r_FR_BL_BR 436/228; qd_fd_r_FR_BL_BR 436/228;
+ *   qd_dfd_r_FR_BL_BR 24400/12216; qd_M_r_FL_FR 1500/756; qd_CG_r_FL_FR 360/188;
+ *   qd_G_r_FL_FR 252/132; qd_id_r_FL_FR 468/244; qd_fd_r_FL_FR 468/244; qd_dfd_r_FL_FR 25736/12884;
+ *   qd_M_r_FL_BL 1500/756; qd_CG_r_FL_BL 360/188; qd_G_r_FL_BL 252/132; qd_id_r_FL_BL 468/244;
+ *   qd_fd_r_FL_BL 468/244; qd_dfd_r_FL_BL 25736/12884; qd_M_r_FL_BR 1500/756;
+ *   qd_CG_r_FL_BR 360/188; qd_G_r_FL_BR 252/132; qd_id_r_FL_BR 468/244; qd_fd_r_FL_BR 468/244;
+ *   qd_dfd_r_FL_BR 25736/12884; qd_M_r_FR_BL 1500/756; qd_CG_r_FR_BL 360/188; qd_G_r_FR_BL 252/132;
+ *   qd_id_r_FR_BL 468/244; qd_fd_r_FR_BL 468/244; qd_dfd_r_FR_BL 25736/12884;
+ *   qd_M_r_FR_BR 1500/756; qd_CG_r_FR_BR 360/188; qd_G_r_FR_BR 252/132; qd_id_r_FR_BR 468/244;
+ *   qd_fd_r_FR_BR 468/244; qd_dfd_r_FR_BR 25736/12884; qd_M_r_BL_BR 1500/756;
+ *   qd_CG_r_BL_BR 360/188; qd_G_r_BL_BR 252/132; qd_id_r_BL_BR 468/244; qd_fd_r_BL_BR 468/244;
+ *   qd_dfd_r_BL_BR 25736/12884; qd_did_full 5136/2580; qd_dfd_full_parts 3048/1532;
+ *   qd_dfd_full 20048/10036; qd_dgrf_dir_FL_FR_BL_BR 460/240; qd_dgrf_FL_FR_BL_BR 12320/6172;
+ *   qd_dgrf_dir_FL_FR_BL 460/240; qd_dgrf_FL_FR_BL 12320/6172; qd_dgrf_dir_FL_FR_BR 460/240;
+ *   qd_dgrf_FL_FR_BR 12320/6172; qd_dgrf_dir_FL_BL_BR 460/240; qd_dgrf_FL_BL_BR 12320/6172;
+ *   qd_dgrf_dir_FR_BL_BR 460/240; qd_dgrf_FR_BL_BR 12320/6172; qd_dgrf_dir_FL_FR 460/240;
+ *   qd_dgrf_FL_FR 12320/6172; qd_dgrf_dir_FL_BL 460/240; qd_dgrf_FL_BL 12320/6172;
+ *   qd_dgrf_dir_FL_BR 460/240; qd_dgrf_FL_BR 12320/6172; qd_dgrf_dir_FR_BL 460/240;
+ *   qd_dgrf_FR_BL 12320/6172; qd_dgrf_dir_FR_BR 460/240; qd_dgrf_FR_BR 12320/6172;
+ *   qd_dgrf_dir_BL_BR 460/240; qd_dgrf_BL_BR 12320/6172; qd_dgrf_dir_FL 412/216;
+ *   qd_dgrf_FL 11024/5524; qd_dgrf_dir_FR 412/216; qd_dgrf_FR 11024/5524; qd_dgrf_dir_BL 412/216;
+ *   qd_dgrf_BL 11024/5524; qd_dgrf_dir_BR 412/216; qd_dgrf_BR 11024/5524;
  */
 #ifndef QD_RETURN_CODES
 #define QD_RETURN_CODES
@@ -754,6 +757,44 @@ int qd_grf_none_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *s
 #define qd_grf_none_SZ_IW 0
 #define qd_grf_none_SZ_W 0
 int qd_grf_none_batch(casadi_int n, const casadi_real* const* arg, casadi_real* const* res, int* status, casadi_real* w);
+int qd_M_full_crba(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem);
+int qd_M_full_crba_checkout(void);
+void qd_M_full_crba_release(int mem);
+void qd_M_full_crba_incref(void);
+void qd_M_full_crba_decref(void);
+casadi_int qd_M_full_crba_n_in(void);
+casadi_int qd_M_full_crba_n_out(void);
+casadi_real qd_M_full_crba_default_in(casadi_int i);
+const char* qd_M_full_crba_name_in(casadi_int i);
+const char* qd_M_full_crba_name_out(casadi_int i);
+const casadi_int* qd_M_full_crba_sparsity_in(casadi_int i);
+const casadi_int* qd_M_full_crba_sparsity_out(casadi_int i);
+int qd_M_full_crba_work(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz_iw, casadi_int *sz_w);
+int qd_M_full_crba_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz_iw, casadi_int *sz_w);
+#define qd_M_full_crba_SZ_ARG 1
+#define qd_M_full_crba_SZ_RES 1
+#define qd_M_full_crba_SZ_IW 0
+#define qd_M_full_crba_SZ_W 0
+int qd_M_full_crba_batch(casadi_int n, const casadi_real* const* arg, casadi_real* const* res, int* status, casadi_real* w);
+int qd_G_full_crb(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem);
+int qd_G_full_crb_checkout(void);
+void qd_G_full_crb_release(int mem);
+void qd_G_full_crb_incref(void);
+void qd_G_full_crb_decref(void);
+casadi_int qd_G_full_crb_n_in(void);
+casadi_int qd_G_full_crb_n_out(void);
+casadi_real qd_G_full_crb_default_in(casadi_int i);
+const char* qd_G_full_crb_name_in(casadi_int i);
+const char* qd_G_full_crb_name_out(casadi_int i);
+const casadi_int* qd_G_full_crb_sparsity_in(casadi_int i);
+const casadi_int* qd_G_full_crb_sparsity_out(casadi_int i);
+int qd_G_full_crb_work(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz_iw, casadi_int *sz_w);
+int qd_G_full_crb_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz_iw, casadi_int *sz_w);
+#define qd_G_full_crb_SZ_ARG 1
+#define qd_G_full_crb_SZ_RES 1
+#define qd_G_full_crb_SZ_IW 0
+#define qd_G_full_crb_SZ_W 0
+int qd_G_full_crb_batch(casadi_int n, const casadi_real* const* arg, casadi_real* const* res, int* status, casadi_real* w);
 void qd_paper_casadi_version(int* major, int* minor, int* patch);
 int qd_paper_casadi_int_size(void);
 int qd_paper_casadi_real_size(void);

@@ -132,16 +132,15 @@ def static_program(sources: list[Path], flags: tuple[str, ...], main: list[str],
     run_tool([cc, *flags, "-no-pie", "-static", *main, *objects, "-lm", "-o", str(exe)])
 
 
-def case_names(exe: Path, cases: int) -> list[str]:
-    """The C names of ``exe``'s cases (call_cost.c prints its case's name; 0 calls)."""
-    return [run_tool([str(exe), str(c), "0"]).split()[0] for c in range(cases)]
+def case_names(exe: Path) -> list[str]:
+    """The C names of ``exe``'s cases, in order (call_cost.c without arguments prints them)."""
+    return run_tool([str(exe)]).split()
 
 
 def generated_call_costs(sources: list[Path], header: Path, reference: Path, flags: tuple[str, ...],
                          operations: dict[str, int] | None = None, cc: str = "gcc") -> list[CallCost]:
     """The cost of one call of every generated function of a checked package (``generate_checked``'s files),
     on its reference inputs; ``operations``: C name -> graph operations, reported beside."""
-    n_cases = int(re.search(r"#define QD_N_CASES (\d+)", reference.read_text()).group(1))  # type: ignore[union-attr]
     with tempfile.TemporaryDirectory() as tmp:
         work = Path(tmp)
         exe = work / "call_cost"
@@ -149,7 +148,7 @@ def generated_call_costs(sources: list[Path], header: Path, reference: Path, fla
                                         f"-DQD_HEADER=\"{header.name}\"", f"-DQD_REFERENCE=\"{reference.name}\"",
                                         str(HARNESSES / "call_cost.c")], exe, cc)
         costs, sizes = [], instruction_sizes(exe)
-        for case, name in enumerate(case_names(exe, n_cases)):
+        for case, name in enumerate(case_names(exe)):
             cost = measure(functools.partial(_case_command, exe, case), name, exe, work, sizes)
             costs.append(dataclasses.replace(cost, operations=(operations or {}).get(name)))
     return costs

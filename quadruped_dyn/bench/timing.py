@@ -21,6 +21,7 @@ The reduced terms M_r, CG_r, G_r, id_r are timed alone.
 
 from __future__ import annotations
 
+import ctypes
 import functools
 import hashlib
 import shutil
@@ -48,7 +49,6 @@ from quadruped_dyn.bench.harnesses import HARNESSES, PINOCCHIO_CXX_FLAGS, cmeel_
 from quadruped_dyn.bench.placement import TimedProgram, median_over_rounds
 from quadruped_dyn.bench.timing_counts import check_counts
 from quadruped_dyn.checks.check_program_values import generate_checked, reference_header_name
-from quadruped_dyn.codegen.casadi_source import work_sizes
 from quadruped_dyn.codegen.emit import PREFIX, GeneratedFiles, codegen_functions
 from quadruped_dyn.codegen.library import (
     C_FLAGS,
@@ -58,6 +58,7 @@ from quadruped_dyn.codegen.library import (
     compiled_library,
     compiler_version,
     run_tool,
+    work_sizes_of,
 )
 from quadruped_dyn.files.cache import cache_dir, cached_build
 from quadruped_dyn.model.robot import Robot
@@ -210,7 +211,6 @@ def run_bench(robot: Robot, calls: int = 20000, reps: int = 9, rounds: int = 9, 
         sources = files.c_sources
         report.code_bytes = sum(p.stat().st_size for p in files.library_sources)
         report.source_files = len(sources)
-        report.work_bytes = max(8 * (iw + w) for iw, w in work_sizes(h_path.read_text()).values())
         for name in ("bench_qd.c", "bench_median.h"):
             shutil.copy(HARNESSES / name, tmp)
         exe, lib = Path(tmp) / "bench_qd", Path(tmp) / f"lib{c_path.stem}.so"
@@ -242,6 +242,8 @@ def run_bench(robot: Robot, calls: int = 20000, reps: int = 9, rounds: int = 9, 
         report.peers = cppadcg.timings({n[len(PREFIX):]: t for n, t in generated.items()}, median["peer"], pinocchio, peer_errors)
     library = compiled_library(robot, cc=cc)
     report.library_bytes = library.path.stat().st_size
+    functions = ctypes.CDLL(str(library.path))  # each function's work sizes, as its _work entry states them
+    report.work_bytes = max(8 * (iw + w) for _, _, iw, w in (work_sizes_of(functions, name) for name in generated))
     python_us = _python_call_times(robot, library)
     for name, ns in ((n[len(PREFIX):], t) for n, t in generated.items()):
         entry = BenchEntry(name, ns, python_generated_us=python_us.get(name), generated_spread=spread["generated"][PREFIX + name])

@@ -18,6 +18,7 @@ from quadruped_dyn.checks.finite_differences import (
 )
 from quadruped_dyn.codegen import file_names
 from quadruped_dyn.codegen.emit import (
+    ALIASES,
     PREFIX,
     GeneratedFiles,
     file_layout,
@@ -110,6 +111,7 @@ def _derivative_reference(ref: PinocchioReference, name: str, s: FullState) -> l
 
 def pinocchio_outputs(robot: Robot, ref: PinocchioReference, name: str, s: FullState) -> list[np.ndarray]:
     """Pinocchio's values of generated function ``name`` (without prefix) at state s."""
+    name = ALIASES.get(name, name)  # an alias (M_full_crba) is the function it names (M_full)
     derivative = _derivative_reference(ref, name, s)
     if derivative is not None:
         return derivative

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import sys
+from typing import TYPE_CHECKING
 
 import click
 
@@ -12,6 +13,11 @@ from quadruped_dyn.files.names import printable
 from quadruped_dyn.files.paths import writable_dir
 from quadruped_dyn.files.provenance import check_source, record_source
 from quadruped_dyn.files.safe_write import output_set, replaceable
+
+if TYPE_CHECKING:
+    from pathlib import Path
+
+    from quadruped_dyn.model.robot import Robot
 
 
 @click.command()
@@ -24,8 +30,12 @@ from quadruped_dyn.files.safe_write import output_set, replaceable
               help="Print a JSON summary instead of the file list: every function's caller memory, and its code size "
                    "and worst-case stack on Cortex-M7 and Cortex-M4F at -Os and -O2 (cross builds: minutes, "
                    "cached; docs/embedded.md).")
+@click.option("--parametric", is_flag=True,
+              help="Write the parametric C of ROBOT's family instead: qdp_<family>.c/.h, the full terms and the "
+                   "regressor with the robot's parameters p as the last input, p's layout in the header.")
 @foot_frames_option
-def codegen(robot: str, out_dir: str, precision: str, check: bool, as_json: bool, foot_frames: str | None) -> None:
+def codegen(robot: str, out_dir: str, precision: str, check: bool, as_json: bool, parametric: bool,
+            foot_frames: str | None) -> None:
     """Generate standalone C for ROBOT: M, C, G, id, the GRF solves, the reduced model of every stance set
     and the derivatives, with a Makefile and a check program."""
     from pathlib import Path
@@ -33,7 +43,12 @@ def codegen(robot: str, out_dir: str, precision: str, check: bool, as_json: bool
     from quadruped_dyn.checks.check_program_values import checked_files, compare_generation, generate_checked
     from quadruped_dyn.model.robot import load_robot
 
+    if parametric and (check or as_json):
+        raise InputError("--parametric with --check or --json; expected --parametric alone (it writes two files)")
     r = load_robot(robot, foot_frames=foot_frames)
+    if parametric:
+        _write_parametric(r, writable_dir(out_dir, f"--out '{out_dir}'"), precision)
+        return
     if check:
         if not Path(out_dir).is_dir():
             raise InputError(f"--out '{printable(out_dir)}' is not a directory; expected the directory to compare (--check)")
@@ -55,3 +70,17 @@ def codegen(robot: str, out_dir: str, precision: str, check: bool, as_json: bool
         return
     for path in paths:
         echo(f"wrote {path}")
+
+
+def _write_parametric(robot: Robot, out: Path, precision: str) -> None:
+    """qdp_<family>.c and .h of the robot's family into ``out``."""
+    from quadruped_dyn.codegen.file_names import family_stem
+    from quadruped_dyn.codegen.parametric_library import parametric_c
+    from quadruped_dyn.files.safe_write import write_text
+    from quadruped_dyn.model.parameters import family_of
+
+    family = family_of(robot)
+    source, header = parametric_c(family, precision)
+    stem = out / family_stem(family.key)
+    for suffix, text in ((".c", source), (".h", header)):
+        echo(f"wrote {write_text(stem.with_suffix(suffix), text)}")

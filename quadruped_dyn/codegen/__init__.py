@@ -4,14 +4,14 @@ and the C templates (``c/``); they are cached in the verified build cache (``fil
 from quadruped_dyn.exports import lazy_exports
 
 _MODULES: dict[str, tuple[str, ...]] = {
-    "casadi_source": ("PREFIX", "TEMPLATES", "work_sizes", "casadi_c"),
+    "print_settings": ("PREFIX", "EVALUATION", "UNGUARDED", "static_c"),
     "printer": ("PrintOptions", "Printed", "print_function"),
-    "c_file": ("Entry", "FileOptions", "c_file"),
+    "c_file": ("Entry", "FileOptions", "c_file", "casadi_c"),
     "file_names": ("REDUCED_STANCE_SETS", "SHARED_FILES", "GeneratedFiles", "file_layout", "robot_stem", "robot_file",
                    "feet_suffix", "reference_header_name", "robots_in", "check_no_collision"),
     "emit": (
-        "CODEGEN_FUNCTIONS", "REDUCED_NAMES", "reduced_symbol", "reduced_functions",
-        "SIGNAL_DOCS", "codegen_functions", "reduced_parts", "header_doc", "generate",
+        "CODEGEN_FUNCTIONS", "ALIASES", "REDUCED_NAMES", "reduced_symbol", "reduced_functions",
+        "SIGNAL_DOCS", "codegen_function", "codegen_functions", "reduced_parts", "header_doc", "generate",
     ),
     "emit_derivatives": ("DERIVATIVE_NAMES", "GRF_DERIVATIVE_NAMES", "GRF_DERIVATIVE_STANCE_SETS", "REDUCED_DERIVATIVE_NAMES",
                          "derivative_functions", "derivative_source", "grf_derivative_functions",

@@ -14,9 +14,9 @@ from dataclasses import dataclass
 import casadi as ca
 
 from quadruped_dyn.codegen.c_facts import prelude_c
-from quadruped_dyn.codegen.casadi_source import static_c
 from quadruped_dyn.codegen.forms.leg_template import LegPieces
 from quadruped_dyn.codegen.joint_trig import trig_as_inputs
+from quadruped_dyn.codegen.print_settings import static_c
 from quadruped_dyn.model.leg import LEG_LABELS
 
 _SIGNATURE = "(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem)"

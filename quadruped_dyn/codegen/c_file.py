@@ -10,8 +10,8 @@ call of a hand-written template), its evaluation's print options or no evaluatio
 states.
 
 With ``FileOptions(project=True)`` every function also gets a batch entry point ``NAME_batch`` (``BATCH_SIGNATURE``):
-n states, state-major (state s's input i at ``arg[i] + s * nnz_i``, outputs alike; a NULL ``arg[i]`` or ``res[i]`` as
-in the scalar call), one scalar call per state (so each state's outputs are the scalar call's, bit for bit), its
+n states, state-major (state s's input i at ``arg[i] + s * nnz_i``, outputs alike, but an input ``Entry.shared`` at
+``arg[i]`` for all; a NULL ``arg[i]`` or ``res[i]`` as in the scalar call), one scalar call per state (so each state's outputs are the scalar call's, bit for bit), its
 return code in ``status[s]`` (NULL: not written), a bad state not stopping the others; it returns how many codes
 were non-zero. ``w`` is one scalar call's work (``NAME_SZ_W`` reals); no malloc, no global state."""
 
@@ -22,6 +22,7 @@ from dataclasses import dataclass, replace
 import casadi as ca
 
 from quadruped_dyn.codegen.precision_math import wrappers_c
+from quadruped_dyn.codegen.print_settings import EVALUATION
 from quadruped_dyn.codegen.printer import SIGNATURE, PrintOptions, print_function
 
 _VERSION = ca.CasadiMeta.version()
@@ -84,6 +85,7 @@ class Entry:
     #: the entry point's statements (indented, each line ending in a newline); None: CasADi's call of its evaluation
     body: str | None = None
     sz_w: int = 0  # reals of work w it states (a template's temporaries); CasADi's: 0 (every value a local)
+    shared: tuple[int, ...] = ()  # the inputs every state of a batch shares (parameters): read at arg[i], not advanced
 
 
 @dataclass(frozen=True)
@@ -169,11 +171,13 @@ class _File:
     def batch(self, e: Entry) -> str:
         """``NAME_batch`` (module docstring): one scalar call per state."""
         f, name = e.function, e.function.name()
-        pointers = "".join(f"    a[{i}] = arg[{i}] ? arg[{i}] + s*{f.nnz_in(i)} : 0;\n" for i in range(f.n_in()))
+        pointers = "".join(f"    a[{i}] = arg[{i}] ? arg[{i}] + s*{f.nnz_in(i)} : 0;\n" for i in range(f.n_in())
+                           if i not in e.shared)
+        shared = "".join(f"  a[{i}] = arg[{i}];\n" for i in e.shared)
         pointers += "".join(f"    r[{i}] = res[{i}] ? res[{i}] + s*{f.nnz_out(i)} : 0;\n" for i in range(f.n_out()))
         return (f"{self.declare(f'int {name}_batch{BATCH_SIGNATURE}')} {{\n"
                 f"  const casadi_real* a[{max(1, f.sz_arg())}] = {{0}};\n  casadi_real* r[{max(1, f.sz_res())}] = {{0}};\n"
-                f"  casadi_int s;\n  int bad = 0;\n  for (s = 0; s < n; ++s) {{\n{pointers}"
+                f"{shared}  casadi_int s;\n  int bad = 0;\n  for (s = 0; s < n; ++s) {{\n{pointers}"
                 f"    int flag = {name}(a, r, 0, w, 0);\n"
                 "    if (status) status[s] = flag;\n    bad += flag != 0;\n  }\n  return bad;\n}\n\n")
 
@@ -230,3 +234,9 @@ def c_file(stem: str, entries: list[Entry], options: FileOptions = FileOptions()
     file = _File(stem, entries, options)
     c_text = file.c_text()
     return c_text, file.h_text()
+
+
+def casadi_c(file_stem: str, functions: list[ca.Function], precision: str) -> tuple[str, str]:
+    """(C source, header) of ``functions`` in ``file_stem``.c, each evaluation as the project prints it
+    (``print_settings.EVALUATION``) but calling libm's names (the including build picks their precision)."""
+    return c_file(file_stem, [Entry(f, replace(EVALUATION, precision_math=False)) for f in functions], FileOptions(precision))

@@ -20,9 +20,8 @@ import casadi as ca
 
 from quadruped_dyn.codegen.by_leg import LegCall, by_leg_c, foot_c
 from quadruped_dyn.codegen.c_alone import PROVIDED
-from quadruped_dyn.codegen.c_facts import layouts_c, prelude_c, regularity_c, return_codes_c
+from quadruped_dyn.codegen.c_facts import TEMPLATES, layouts_c, prelude_c, regularity_c, return_codes_c
 from quadruped_dyn.codegen.c_file import Entry, FileOptions, c_file, entry_work, file_helpers
-from quadruped_dyn.codegen.casadi_source import EVALUATION, PREFIX, SINCOS, TEMPLATES, UNGUARDED, static_c
 from quadruped_dyn.codegen.emit_derivatives import (
     DERIVATIVE_NAMES,
     GRF_DERIVATIVE_NAMES,
@@ -47,6 +46,7 @@ from quadruped_dyn.codegen.forms.leg_pieces import foot_pieces, id_full_pieces, 
 from quadruped_dyn.codegen.forms.stance_maps import stance_maps
 from quadruped_dyn.codegen.joint_trig import trig_as_inputs
 from quadruped_dyn.codegen.precision_math import template_c
+from quadruped_dyn.codegen.print_settings import EVALUATION, PREFIX, SINCOS, UNGUARDED, static_c
 from quadruped_dyn.codegen.printer import SIGNATURE
 from quadruped_dyn.codegen.work_memory import memory_doc
 from quadruped_dyn.dynamics.grf import grf_balance, grf_solve
@@ -83,6 +83,10 @@ CODEGEN_FUNCTIONS: dict[str, Callable[[Robot], ca.Function]] = {
     "feet_full": feet_full,  # the feet's positions, Jacobian and Jdot v (a whole-body controller's contact rows)
     **{f"grf_{s.name.replace('+', '_')}": _grf_paper(s) for s in STANCE_SETS},
 }
+#: Each algorithm's Python name in C too (Python's ``M_full_walker_orin`` and ``M_full_crba`` are two algorithms; the C
+#: ``qd_M_full`` is CRBA): alias -> the generated function it is, whose graph and C it shares: its entry point calls it.
+ALIASES = {"M_full_crba": "M_full", "G_full_crb": "G_full"}
+CODEGEN_FUNCTIONS.update({alias: CODEGEN_FUNCTIONS[name] for alias, name in ALIASES.items()})
 
 #: Reduced-model functions generated for every stance set in REDUCED_STANCE_SETS, as
 #: qd_<name>_<feet> (feet joined by '_'), each in the file qd_<robot>-r-<feet>.c.
@@ -189,14 +193,17 @@ SIGNAL_DOCS = {
 }
 
 
+def codegen_function(robot: Robot, name: str) -> ca.Function:
+    """The generated Function ``name`` (a key of ``CODEGEN_FUNCTIONS``), renamed with the C prefix (same graph, no
+    wrapper call, common subexpressions shared)."""
+    f = CODEGEN_FUNCTIONS[name](robot)
+    args = f.sx_in()
+    return ca.Function(PREFIX + name, args, f.call(args), f.name_in(), f.name_out(), {"cse": True})
+
+
 def codegen_functions(robot: Robot) -> list[ca.Function]:
-    """The generated Functions, renamed with the C prefix (same graphs, no wrapper call)."""
-    out = []
-    for name, build in CODEGEN_FUNCTIONS.items():
-        f = build(robot)
-        args = f.sx_in()
-        out.append(ca.Function(PREFIX + name, args, f.call(args), f.name_in(), f.name_out(), {"cse": True}))
-    return out
+    """The generated Functions, renamed with the C prefix (``codegen_function`` of each)."""
+    return [codegen_function(robot, name) for name in CODEGEN_FUNCTIONS]
 
 
 def _shape(sp: ca.Sparsity) -> str:
@@ -213,6 +220,8 @@ def reduced_parts(name: str) -> tuple[str, StanceSet] | None:
 
 
 def _note(name: str) -> str:
+    if name in ALIASES:
+        return f"  [= {PREFIX}{ALIASES[name]}, by its algorithm's name]"
     if name.startswith("grf_"):
         stance = stance_set(name[4:].replace("_", "+"))
         return f"  [{stance.kind}, rank {stance.rank('paper')}]"
@@ -233,8 +242,8 @@ def _note(name: str) -> str:
 
 #: The functions whose entry points read a null input pointer as zeros (CasADi's convention, kept by the generated
 #: graphs and the GRF solves); the templates' entry points (reduced functions, dfd_full, dgrf, dfd_r) read every input.
-NULL_INPUT_AS_ZEROS = ("M_full", "C_full", "G_full", "nle_full", "id_full", "grf_<feet>", "did_full", "dfd_full_parts",
-                       "dgrf_dir_<feet>")
+NULL_INPUT_AS_ZEROS = ("M_full", "C_full", "G_full", "nle_full", "id_full", *ALIASES, "grf_<feet>", "did_full",
+                       "dfd_full_parts", "dgrf_dir_<feet>")
 
 
 def header_doc(robot: Robot, functions: list[ca.Function], work: dict[str, tuple[int, int]]) -> str:
@@ -607,6 +616,7 @@ def _full_source(robot: Robot, stem: str, functions: list[ca.Function],
     joint_rows, bodies = _joint_rows_first(robot, functions, host_helpers)
     grf, grf_bodies = _grf_through_id_full(robot, functions, host_helpers)
     bodies.update(grf_bodies)
+    bodies.update({PREFIX + alias: f"  return {PREFIX}{name}(arg, res, iw, w, mem);\n" for alias, name in ALIASES.items()})
     entries = [Entry(f, None, bodies[f.name()]) if f.name() in bodies else Entry(f, EVALUATION) for f in functions]
     c_text, h_text = c_file(stem, entries, FileOptions(precision, preamble=joint_rows + "\n" + grf + "\n",
                                                        precision_math=True))

@@ -49,11 +49,11 @@ import numpy as np
 from quadruped_dyn.codegen.by_leg import LegCall, by_leg_c, legs_reals
 from quadruped_dyn.codegen.c_facts import prelude_c
 from quadruped_dyn.codegen.c_file import Entry, FileOptions, c_file, entry_work, evaluation_name, file_helpers
-from quadruped_dyn.codegen.casadi_source import EVALUATION, PREFIX, SINCOS, UNGUARDED
 from quadruped_dyn.codegen.file_names import feet_suffix
 from quadruped_dyn.codegen.forms.did_full_pieces import did_full_pieces
 from quadruped_dyn.codegen.joint_trig import trig_as_inputs
 from quadruped_dyn.codegen.precision_math import template_c
+from quadruped_dyn.codegen.print_settings import EVALUATION, PREFIX, SINCOS, UNGUARDED
 from quadruped_dyn.codegen.printer import SIGNATURE
 from quadruped_dyn.dynamics.derivatives import configuration_tangent, full_derivatives, quaternion_tangent
 from quadruped_dyn.dynamics.grf import solve_lambda

@@ -49,6 +49,12 @@ def robot_stem(name: str) -> str:
     return f"qd_{name if is_safe_name(name) else safe_name(name)}"
 
 
+def family_stem(key: str) -> str:
+    """``qdp_<key>``: the files of a family's parametric library (``codegen.parametric_library``); no robot's file
+    (those start with ``qd_``) is named as one of them."""
+    return f"qdp_{key}"
+
+
 def robot_file(name: str, role: str | None, suffix: str) -> str:
     """The file of robot ``name`` with ``role`` (None: its main source or header) and ``suffix`` ('.c', '.h')."""
     return robot_stem(name) + (f"{ROLE_SEPARATOR}{role}" if role else "") + suffix

@@ -131,12 +131,12 @@ def _module_file(dotted: str) -> Path | None:
     return None
 
 
-def generator_sources() -> list[Path]:
-    """codegen/emit.py and the package modules it imports, transitively, and the C templates:
+def generator_sources(root: str = "codegen.emit") -> list[Path]:
+    """``root`` (codegen/emit.py) and the package modules it imports, transitively, and the C templates:
     what the generated code depends on, and nothing else (editing the report or the experiment
     does not invalidate the compiled libraries)."""
     found: set[Path] = set()
-    todo = ["codegen.emit"]
+    todo = [root]
     while todo:
         path = _module_file(todo.pop())
         if path is None or path in found:

@@ -14,6 +14,7 @@ from quadruped_dyn.exports import lazy_exports
 os.environ.setdefault("MUJOCO_GL", "egl")
 
 _MODULES: dict[str, tuple[str, ...]] = {
+    "ground": ("MAX_GROUND_STEP_M", "GROUND_HALF_SIZE_M"),
     "plant": ("DEFAULT_FOOT_RADIUS", "PUSH_DURATION_S", "PlantOptions", "Command", "Measurement", "Plant", "build_plant"),
     "plan": ("TARGET_KNOT_S", "Target", "joint_inertia", "target_cycle"),
     "controllers": ("KP_PER_KG", "KD_PER_KG", "CT_OMEGA_STANCE", "CT_OMEGA_SWING", "CT_ZETA", "LANDING_DROP_M",

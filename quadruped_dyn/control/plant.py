@@ -47,6 +47,7 @@ import mujoco
 import numpy as np
 
 from quadruped_dyn.arguments import real_number
+from quadruped_dyn.control.ground import GROUND_HALF_SIZE_M, MAX_GROUND_STEP_M
 from quadruped_dyn.dynamics.grf import MAX_FRICTION_COEFFICIENT
 from quadruped_dyn.errors import InputError
 from quadruped_dyn.experiment.gait import Plan
@@ -68,11 +69,6 @@ FOOT_SPHERE_OFFSET_TOL = 1e-3
 #: (0.1-0.3 s), long against the plant's step (0.5 ms), so the impulse is what matters.
 PUSH_DURATION_S = 0.01
 
-#: The largest ground step accepted, up or down (m): beyond, the legs' reach, not the controller, decides.
-MAX_GROUND_STEP_M = 0.2
-#: Half the length and width of a ground step's box (m): past any run's reach (100 cycles of the fastest gait).
-GROUND_HALF_SIZE_M = 100.0
-
 INTEGRATORS = {"implicitfast": mujoco.mjtIntegrator.mjINT_IMPLICITFAST, "euler": mujoco.mjtIntegrator.mjINT_EULER,
                "rk4": mujoco.mjtIntegrator.mjINT_RK4, "implicit": mujoco.mjtIntegrator.mjINT_IMPLICIT}
 
@@ -93,8 +89,8 @@ class PlantOptions:
             if not (isinstance(step, tuple | list) and len(step) == 2
                     and all(math.isfinite(real_number("ground step", v)) for v in step)):
                 raise InputError(f"ground step {step!r}; expected two finite numbers: x (m) and height (m)")
-            if not (abs(step[0]) < GROUND_HALF_SIZE_M and abs(step[1]) <= MAX_GROUND_STEP_M):
-                raise InputError(f"ground step at x = {step[0]:g} m of {step[1]:g} m; expected |x| < "
+            if not (abs(step[0]) <= GROUND_HALF_SIZE_M and abs(step[1]) <= MAX_GROUND_STEP_M):
+                raise InputError(f"ground step at x = {step[0]:g} m of {step[1]:g} m; expected |x| <= "
                                  f"{GROUND_HALF_SIZE_M:g} m and |height| <= {MAX_GROUND_STEP_M:g} m")
         if not (math.isfinite(self.timestep) and 0 < self.timestep <= 0.01):
             raise InputError(f"plant timestep {self.timestep} s; expected 0 < timestep <= 0.01 s")

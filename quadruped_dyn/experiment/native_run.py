@@ -44,7 +44,7 @@ import casadi as ca
 import numpy as np
 from scipy.integrate._ivp import dop853_coefficients as dop
 
-from quadruped_dyn.codegen.casadi_source import casadi_c
+from quadruped_dyn.codegen.c_file import casadi_c
 from quadruped_dyn.codegen.emit import PREFIX, REDUCED_STANCE_SETS, generate, reduced_symbol
 from quadruped_dyn.codegen.library import (
     C_FLAGS,

@@ -16,10 +16,15 @@ round-off, so that:
 Link inertias and the foot follow: CoM and foot point shifted by the slide and rotated,
 inertia tensors rotated. Entries that are zero up to round-off (and up to the URDF's printed digits)
 are snapped to exact zeros (``tolerances.FRAME_SNAP_TOL``), so structural zeros stay structural.
+A leg whose positions and inertias are SX (``parameters.parametric_robot``; rotations and axes numeric) is
+re-expressed by the same formulas, symbolically, unsnapped.
 """
 
 from __future__ import annotations
 
+from typing import Any
+
+import casadi as ca
 import numpy as np
 
 from quadruped_dyn.math.rigid import LinkInertia, Placement
@@ -27,12 +32,24 @@ from quadruped_dyn.model.leg import Leg, LegJoint
 from quadruped_dyn.tolerances import FRAME_SNAP_TOL
 
 
-def _snap(x: np.ndarray, scale: float = 1.0) -> np.ndarray:
-    """Entries within FRAME_SNAP_TOL * scale of 0 or +-scale set exactly."""
+def _snap(x: Any, scale: float = 1.0) -> Any:
+    """Entries within FRAME_SNAP_TOL * scale of 0 or +-scale set exactly (an SX as is)."""
+    if isinstance(x, ca.SX):
+        return x
     x = np.array(x, dtype=float)
     for target in (0.0, scale, -scale):
         x[np.abs(x - target) < FRAME_SNAP_TOL * scale] = target
     return x + 0.0  # no negative zeros
+
+
+def _rotated(Q: np.ndarray, x: Any) -> Any:
+    """Q @ x for a numeric Q and a numeric or SX x."""
+    return ca.DM(Q) @ x if isinstance(x, ca.SX) else Q @ x
+
+
+def _along(x: Any, axis: np.ndarray) -> Any:
+    """(x . axis) axis, numeric or SX."""
+    return ca.dot(x, ca.DM(axis)) * ca.DM(axis) if isinstance(x, ca.SX) else (x @ axis) * axis
 
 
 def axis_aligned(leg: Leg) -> Leg:
@@ -44,12 +61,15 @@ def axis_aligned(leg: Leg) -> Leg:
     for i, (joint, link) in enumerate(zip(leg.joints, leg.links)):
         R, p = joint.placement.R, joint.placement.p
         axis = _snap(Q.T @ R @ joint.axis)  # the axis seen from the parent's new frame
-        origin = Q.T @ p - slide  # joint origin in the parent's new frame
-        slide = -(origin @ axis) * axis if i > 0 else np.zeros(3)
+        origin = _rotated(Q.T, p) - slide  # joint origin in the parent's new frame
+        slide = -_along(origin, axis) if i > 0 else np.zeros(3)
         Q = R.T @ Q  # the new frame is parallel to the parent's new frame at q_i = 0
         joints.append(LegJoint(joint.name, Placement(np.eye(3), _snap(origin + slide)), axis, joint.lower, joint.upper))
-        inertia = Q.T @ link.inertia @ Q
-        inertia = _snap(0.5 * (inertia + inertia.T), float(np.abs(inertia).max()))  # symmetric to the last bit
-        links.append(LinkInertia(link.mass, _snap(Q.T @ link.com - slide), inertia))
-    foot = Placement(_snap(Q.T @ leg.foot.R), _snap(Q.T @ leg.foot.p - slide))
+        if isinstance(link.inertia, ca.SX):
+            inertia = ca.DM(Q.T) @ link.inertia @ ca.DM(Q)
+        else:
+            inertia = Q.T @ link.inertia @ Q
+            inertia = _snap(0.5 * (inertia + inertia.T), float(np.abs(inertia).max()))  # symmetric to the last bit
+        links.append(LinkInertia(link.mass, _snap(_rotated(Q.T, link.com) - slide), inertia))
+    foot = Placement(_snap(Q.T @ leg.foot.R), _snap(_rotated(Q.T, leg.foot.p) - slide))
     return Leg(leg.label, tuple(joints), tuple(links), foot, leg.foot_frame)  # type: ignore[arg-type]

@@ -13,16 +13,18 @@ from __future__ import annotations
 import argparse
 import re
 import sys
-import textwrap
 from collections.abc import Callable, Sequence
 from datetime import datetime, timezone
 from pathlib import Path
-from typing import TYPE_CHECKING
 
 from quadruped_dyn.errors import InputError
-
-if TYPE_CHECKING:
-    from quadruped_dyn.references.interface import ModelChange
+from quadruped_dyn.report.results_sections import (
+    against_section,
+    conditioning_section,
+    experiment_section,
+    operations_section,
+    terms_section,
+)
 
 #: The robots of the default run: the built-in ones and example-robot-data's b1, by path.
 DEFAULT_ROBOTS: tuple[str, ...] = ("paper", "solo12", "go2", "go1", "a1", "anymal_c", "hyq", "b1")
@@ -46,90 +48,13 @@ def machine() -> str:
     return f"{m['cpu']}, {m['cores']} cores, {compiler}, Python {m['python']}"
 
 
-def robot_path(name: str) -> str:
-    """A built-in robot's name as it is, ``b1`` as its example-robot-data URDF path."""
-    if name != "b1":
-        return name
-    from quadruped_dyn.model import example_robot_data_dir
-
-    return str(Path(example_robot_data_dir()) / "b1_description" / "urdf" / "b1.urdf")
-
-
-def terms_section(robots: Sequence[str], samples: int) -> tuple[str, str]:
-    """(command, Markdown) of every term against Pinocchio, one row per robot."""
-    from quadruped_dyn.checks.terms import run_check
-    from quadruped_dyn.model.robot import load_robot
-
-    rows = []
-    for name in robots:
-        report = run_check(load_robot(robot_path(name)), samples, 0)
-        full = [t for t in report.terms if not re.search(r"_r |^d", t.name)]
-        reduced = [t for t in report.terms if "_r " in t.name]
-        derivatives = [t for t in report.terms if t.name.startswith(("did_", "dfd_"))]
-        worst_reduced = max(reduced, key=lambda t: t.max_rel_err)
-        rows.append(f"| {name}{' (by path)' if name == 'b1' else ''} | {'pass' if report.passed else 'FAIL'} "
-                    f"| {max(t.max_rel_err for t in full):.1e} "
-                    f"| {worst_reduced.max_rel_err:.1e} ({worst_reduced.name}) "
-                    f"| {max(t.max_rel_err for t in derivatives):.1e} "
-                    f"| {max(g.max_err_vs_reference for g in report.grf):.1e} "
-                    f"| {max(g.max_err_vs_pinocchio for g in report.grf):.1e} "
-                    f"| {max(g.max_cond for g in report.grf):.1e} |")
-    command = f"`quadruped-dyn check ROBOT --samples {samples} --json` (seed 0)"
-    table = ["| robot | result | full-coordinate terms | reduced terms (worst) | derivatives | GRF vs SVD "
-             "| GRF vs Pinocchio | largest cond(A) |", "|---|---|---|---|---|---|---|---|", *rows]
-    prose = (f"{command}; tolerance 1e-10 for the terms, 1e-9 for the derivatives (`tolerances.py`). Worst relative "
-             f"error over the {samples} states; the full-coordinate terms are M_full (three ways), C_full, G_full, the "
-             "Coriolis matrix, id_full and the foot kinematics; the reduced ones id_r, M_r, C_r, G_r of four stance "
-             "sets; the derivatives did_full and dfd_full against Pinocchio's analytical ones; the GRF columns cover 16 "
-             "stance sets × 2 models. The reduced terms carry the conditioning of the maps and of the GRF solve, hence "
-             "their larger errors; the GRF ranks are 5 / 6 / 5 with four / three / two feet.")
-    text = "\n".join(textwrap.wrap(prose, 118, break_on_hyphens=False)) + "\n\n" + "\n".join(table) + "\n"
-    return command, text
-
-
-def _changes(changes: Sequence[ModelChange]) -> str:
-    """What the libraries did to the model, one clause per change (``references.interface.ModelChange``)."""
-    parts = []
-    for c in changes:
-        links = ", ".join(c.links[:3]) + (f" +{len(c.links) - 3}" if len(c.links) > 3 else "")
-        size = f", M changes {c.size['M']:.1e}" if "M" in c.size else ""
-        used = "" if c.in_comparison else ", not compared"
-        parts.append(f"{c.library} {c.kind}{f' ({links})' if c.links else ''}{size}{used}")
-    return "; ".join(parts) or "nothing"
-
-
-def against_section(robots: Sequence[str], samples: int) -> tuple[str, str]:
-    """(command, Markdown) of the same URDF through MuJoCo and iDynTree against Pinocchio, one row per robot."""
-    from quadruped_dyn.checks.cross_library import parse_libraries, run_cross_library
-    from quadruped_dyn.model.robot import load_robot
-
-    libraries = parse_libraries("mujoco,idyntree")
-    n = min(samples, 20)
-    rows = []
-    for name in robots:
-        report = run_cross_library(load_robot(robot_path(name)), libraries, n, 0)
-        worst = {lib: max((r.max_rel_err for r in report.results if r.library == lib), default=float("nan"))
-                 for lib in libraries}
-        rows.append(f"| {name}{' (by path)' if name == 'b1' else ''} | {'pass' if report.passed else 'FAIL'} | "
-                    + " | ".join(f"{worst[lib]:.1e}" for lib in libraries) + f" | {_changes(report.changes).replace('|', '/')} |")
-    command = f"`quadruped-dyn check ROBOT --against mujoco,idyntree --samples {n}` (seed 0)"
-    prose = (f"{command}: M, C + G, G and the foot Jacobians of the same URDF through MuJoCo and iDynTree, largest "
-             "relative error against Pinocchio over the terms; a difference the diagnosed model changes explain passes "
-             "(conventions.md §10).")
-    note = ("Errors of ~1e-12 where a URDF writes right angles with ten digits (1.5707963268: hyq, anymal_c) are the "
-            "toolkit's snapping of placements (`SNAP_TOL` = 1e-9, moving the model by ~5e-12 rad); MuJoCo and iDynTree, "
-            "both reading the raw numbers, agree with each other to round-off there. A change that is not compared "
-            "(MuJoCo's own `balanceinertia` or `inertiafromgeom`) is what the library would do unasked, and its size.")
-    table = ["| robot | result | MuJoCo | iDynTree | what the libraries did to the model |", "|---|---|---|---|---|", *rows]
-    wrap = "\n".join
-    return command, (wrap(textwrap.wrap(prose, 118, break_on_hyphens=False)) + "\n\n" + wrap(table) + "\n\n"
-                     + wrap(textwrap.wrap(note, 118, break_on_hyphens=False)) + "\n")
-
-
 #: Section name -> (title, what reruns it): a function of (robots, samples) returning (command, Markdown).
 SECTIONS: dict[str, tuple[str, Callable[[Sequence[str], int], tuple[str, str]]]] = {
     "terms": ("Every term against Pinocchio", terms_section),
+    "conditioning": ("The reduced model's conditioning", conditioning_section),
     "against": ("Other libraries as references", against_section),
+    "experiment": ("The paper's experiment", experiment_section),
+    "generated-c": ("Generated C", operations_section),
 }
 
 

@@ -8,6 +8,7 @@ from typing import Any
 
 import numpy as np
 
+from quadruped_dyn.control.ground import GROUND_HALF_SIZE_M, MAX_GROUND_STEP_M
 from quadruped_dyn.errors import InputError
 
 #: Each perturbation's accepted [lowest, highest] value.
@@ -17,7 +18,7 @@ BOUNDS: dict[str, tuple[float, float]] = {
     "payload_offset_z_m": (-1.0, 1.0), "mu": (0.0, 10.0), "foot_radius_m": (1e-3, 0.19),
     "push_x_N_s": (-1e3, 1e3), "push_y_N_s": (-1e3, 1e3), "push_z_N_s": (-1e3, 1e3), "push_at_s": (0.0, 1e3),
     "imu_noise_rad_s": (0.0, 10.0), "imu_noise_rad": (0.0, 1.0), "imu_delay_ticks": (0.0, 1000.0),
-    "step_x_m": (-99.0, 99.0), "step_height_m": (-0.2, 0.2),  # plant.MAX_GROUND_STEP_M, GROUND_HALF_SIZE_M
+    "step_x_m": (-GROUND_HALF_SIZE_M, GROUND_HALF_SIZE_M), "step_height_m": (-MAX_GROUND_STEP_M, MAX_GROUND_STEP_M),
 }
 
 

@@ -4,6 +4,7 @@ instructions and code bytes are known from its source, and against ``nm -S``."""
 from __future__ import annotations
 
 import platform
+import re
 import shutil
 import subprocess
 from pathlib import Path
@@ -11,6 +12,7 @@ from pathlib import Path
 import pytest
 
 from quadruped_dyn.bench.call_cost import CODE_BUDGET_BYTES, callgrind_counts, measure
+from quadruped_dyn.bench.harnesses import HARNESSES
 from quadruped_dyn.errors import InputError
 
 pytestmark = pytest.mark.skipif(shutil.which("valgrind") is None or platform.machine() != "x86_64",
@@ -93,3 +95,18 @@ def test_a_function_without_a_fixed_count_is_refused(program, tmp_path):
     with pytest.raises(InputError, match="qd_growing: instructions .* expected the same count every call"):
         measure(lambda n: [str(program), str(n)], "qd_growing", program, tmp_path)
 
+
+
+def test_harness_lists_its_cases_in_order(tmp_path, paper):
+    """call_cost alone prints every case's name: the reference header's functions, in the header's order."""
+    from quadruped_dyn.bench.call_cost import case_names
+    from quadruped_dyn.codegen.library import compiled_library
+
+    gen = Path(__file__).resolve().parents[2] / "casadi_gen"
+    lib = compiled_library(paper)
+    exe = tmp_path / "call_cost"
+    subprocess.run(["gcc", "-std=c99", "-Dcasadi_real=double", f"-I{gen}", '-DQD_HEADER="qd_paper.h"',
+                    '-DQD_REFERENCE="qd_paper-reference.h"', str(HARNESSES / "call_cost.c"), str(lib.path),
+                    f"-Wl,-rpath,{lib.path.parent}", "-lm", "-o", str(exe)], check=True)
+    header = (gen / "qd_paper.h").read_text()
+    assert case_names(exe) == re.findall(r"^int (qd_\w+)\(const casadi_real\*\* arg", header, re.M)

@@ -3,11 +3,15 @@
 from __future__ import annotations
 
 import importlib.util
+import subprocess
 
+import casadi as ca
 import pytest
 from click.testing import CliRunner
 
+from quadruped_dyn.bench.peers import _harness
 from quadruped_dyn.cli import main
+from quadruped_dyn.codegen.library import C_FLAGS
 
 
 def test_unknown_peer_is_bad_input():
@@ -53,3 +57,12 @@ def test_adam_checked_then_timed(name):
     for e in entries:
         assert e.checked_rel_error <= REL_TOL_TERMS
         assert e.ours_ns > 0 and e.peer_ns > 0 and e.ours_operations > 0 and e.peer_operations > 0
+
+
+def test_harness_builds_casadis_c_unedited_and_times_each_function():
+    """CasADi's C as it writes it (its unused parameters not cast) builds under the project's warnings."""
+    x = ca.SX.sym("x", 3)
+    functions = [ca.Function("qd_sin3", [x], [ca.sin(x)]), ca.Function("qd_sq3", [x], [x * x])]
+    exe = _harness(functions, tuple(f for f in C_FLAGS if f != "-fPIC"), "gcc")
+    out = subprocess.run([str(exe), "10", "1"], capture_output=True, text=True, check=True).stdout.split()
+    assert out[0::2] == ["qd_sin3", "qd_sq3"] and all(float(t) > 0 for t in out[1::2]), out

@@ -21,8 +21,8 @@ from quadruped_dyn.checks.check_program_values import (
     reference_differences,
     reference_state,
 )
-from quadruped_dyn.codegen.casadi_source import UNGUARDED
 from quadruped_dyn.codegen.emit import (
+    ALIASES,
     CODEGEN_FUNCTIONS,
     N_DERIVATIVE_FUNCTIONS,
     PREFIX,
@@ -32,6 +32,7 @@ from quadruped_dyn.codegen.emit import (
     reduced_symbol,
 )
 from quadruped_dyn.codegen.library import CompiledFunction, compiled_library, load_external
+from quadruped_dyn.codegen.print_settings import UNGUARDED
 from quadruped_dyn.math.compare import max_abs_error, scale_of
 from quadruped_dyn.model.robot import load_robot
 from quadruped_dyn.model.state import random_state
@@ -183,7 +184,7 @@ def test_precision_wrappers_follow_the_casadi_real_default(precision):
     import casadi as ca
 
     from quadruped_dyn.codegen.c_file import Entry, FileOptions, c_file
-    from quadruped_dyn.codegen.casadi_source import EVALUATION
+    from quadruped_dyn.codegen.print_settings import EVALUATION
 
     x = ca.SX.sym("x")
     f = ca.Function("qd_t", [x], [ca.sin(x)])
@@ -236,6 +237,23 @@ def test_loaded_back_equals_graph_and_pinocchio(robot, ref, library):
         assert _function_scale_error(fast, compiled) == 0.0, f"{name}: ctypes call differs from casadi.external"
 
 
+def test_aliases_are_calls_of_the_function_they_name(paper):
+    """qd_M_full_crba and qd_G_full_crb (each algorithm's Python name) call qd_M_full and qd_G_full, no second copy of
+    their code, and state the same metadata (names, sparsity, work sizes) and outputs, bit for bit."""
+    text, header = (CASADI_GEN / "qd_paper.c").read_text(), (CASADI_GEN / "qd_paper.h").read_text()
+    lib = compiled_library(paper)
+    q = random_state(paper.lower, paper.upper, np.random.default_rng(2)).q
+    for alias, name in ALIASES.items():
+        body = re.search(rf"^CASADI_SYMBOL_EXPORT int {PREFIX}{alias}\(const casadi_real\*\* arg.*?\{{\n(.*?)^\}}",
+                         text, re.M | re.S)
+        assert body and body.group(1) == f"  return {PREFIX}{name}(arg, res, iw, w, mem);\n", alias
+        sizes = [re.findall(rf"^#define {PREFIX}{n}_SZ_(\w+) (\d+)$", header, re.M) for n in (alias, name)]
+        assert sizes[0] == sizes[1] and len(sizes[0]) == 4, (alias, sizes)
+        f, g = load_external(lib, alias), load_external(lib, name)
+        assert f.name_in() == g.name_in() and f.name_out() == g.name_out() and f.sparsity_out(0) == g.sparsity_out(0)
+        assert np.array_equal(CompiledFunction(lib, alias)(q)[0], CompiledFunction(lib, name)(q)[0]), alias
+
+
 def test_cache_key_tracks_the_source(paper):
     a, b = compiled_library(paper), compiled_library(paper)
     assert a.key == b.key and a.path == b.path, "same source, same key"
@@ -265,6 +283,9 @@ def test_bench_reports_ratios_against_pinocchio(paper):
         e = entries[name]
         assert e.pinocchio == algo and e.pinocchio_ns > 0 and e.ratio == pytest.approx(e.generated_ns / e.pinocchio_ns)
     assert report.code_bytes > 0 and report.library_bytes > 0
+    sizes = dict(re.findall(r"^#define (qd_\w+_SZ_(?:IW|W)) (\d+)$", (CASADI_GEN / "qd_paper.h").read_text(), re.M))
+    assert report.work_bytes == max(8 * (int(sizes[f"{PREFIX}{n}_SZ_IW"]) + int(sizes[f"{PREFIX}{n}_SZ_W"]))
+                                    for n in entries if n != "C_full + G_full") > 0  # the header's largest
     assert report.cpu_model and report.compiler and json.dumps(report.as_dict())
     if not valgrind_available():
         assert report.call_costs == [] and report.call_cost_note == NOT_MEASURED
@@ -379,7 +400,7 @@ def test_header_says_which_functions_read_a_null_input_as_zeros(tmp_path):
     patterns = [re.compile(PREFIX + name.replace("<feet>", "(?:FL|FR|BL|BR|none)(?:_(?:FR|BL|BR))*") + "$")
                 for name in NULL_INPUT_AS_ZEROS]
     names = [n for n in _header_function_names() if any(p.match(n) for p in patterns)]
-    assert len(names) == 5 + 16 + 2 + 15, names  # full terms, GRF solves, did_full and dfd_full_parts, dgrf_dir
+    assert len(names) == 7 + 16 + 2 + 15, names  # full terms and aliases, GRF solves, did_full, dfd_full_parts, dgrf_dir
     lib_path = tmp_path / "libfull.so"
     subprocess.run(["gcc", "-std=c99", "-O0", "-fPIC", "-shared", str(CASADI_GEN / "qd_paper.c"),
                     str(CASADI_GEN / "qd_paper-d.c"), "-o", str(lib_path), "-lm"], check=True, capture_output=True)
@@ -453,7 +474,8 @@ def test_header_return_notes_match_the_codes_returned(tmp_path):
         listed = {codes[c] for c in re.findall(r"QD_[A-Z_]+", note)}
         assert flag in listed | {0} if listed else flag == 0, (name, flag, note)  # 0 where the NaN does not enter
         checked += 1
-    assert checked == 6 + 16 + 3 + 2 * 15  # full terms with feet_full, GRF solves, did_full + dfd_full(_parts), dgrf(_dir)
+    # full terms with feet_full and the aliases, GRF solves, did_full + dfd_full(_parts), dgrf(_dir)
+    assert checked == 6 + len(ALIASES) + 16 + 3 + 2 * 15
     for name, note in notes.items():
         kind = re.match(r"qd_(\w+?_r)_", name)
         if kind:

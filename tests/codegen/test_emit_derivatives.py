@@ -12,7 +12,6 @@ import pytest
 
 from quadruped_dyn.checks.finite_differences import ReducedFiniteDifferences, grf_derivatives_by_differences
 from quadruped_dyn.codegen.c_alone import ALONE_HEADER, alone_header_c
-from quadruped_dyn.codegen.casadi_source import PREFIX
 from quadruped_dyn.codegen.emit import REDUCED_STANCE_SETS, TEMPLATES, reduced_symbol
 from quadruped_dyn.codegen.emit_derivatives import (
     GRF_DERIVATIVE_STANCE_SETS,
@@ -25,6 +24,7 @@ from quadruped_dyn.codegen.emit_derivatives import (
 from quadruped_dyn.codegen.forms.did_full_pieces import did_full_pieces
 from quadruped_dyn.codegen.joint_trig import trig_as_inputs
 from quadruped_dyn.codegen.library import C_FLAGS, CompiledFunction, compiled_library
+from quadruped_dyn.codegen.print_settings import PREFIX
 from quadruped_dyn.dynamics.derivatives import full_derivatives
 from quadruped_dyn.errors import InputError
 from quadruped_dyn.math.compare import relative_error

@@ -12,7 +12,7 @@ import casadi as ca
 import numpy as np
 import pytest
 
-from quadruped_dyn.codegen.casadi_source import casadi_c
+from quadruped_dyn.codegen.c_file import casadi_c
 from quadruped_dyn.codegen.library import C_FLAGS, run_tool
 
 CASADI_GEN = Path(__file__).resolve().parents[2] / "casadi_gen"

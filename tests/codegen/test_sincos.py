@@ -15,7 +15,7 @@ import numpy as np
 import pytest
 
 from quadruped_dyn.codegen.c_alone import ALONE_HEADER, alone_header_c
-from quadruped_dyn.codegen.casadi_source import TEMPLATES
+from quadruped_dyn.codegen.c_facts import TEMPLATES
 
 #: ulps of the correctly rounded value: the final rounding (0.5) plus FreeBSD's k_sin.c / k_cos.c error before it
 #: (their polynomials to 2^-58 relative on [-pi/4, pi/4], the sums' roundings ~0.2 ulp) and the reduction's 2^-62

@@ -1,25 +1,16 @@
-"""What the generated files share: the C prefix, the templates' folder, how their evaluation functions print
-(``EVALUATION``) and the static pieces the templates call (``static_c``), a list of Functions as one file in CasADi's
-layout (``casadi_c``), the work sizes a header states."""
+"""The project's print settings of the generated C: the prefix of its names, how the evaluation functions of the
+shipped files print (``EVALUATION``, ``UNGUARDED``), the static pieces the templates call (``static_c``) and the
+template of sines and cosines (``SINCOS``)."""
 
 from __future__ import annotations
 
-import re
 from dataclasses import replace
 
 import casadi as ca
 
-from quadruped_dyn.codegen.c_facts import TEMPLATES  # noqa: F401 -- the templates' folder, re-exported
-from quadruped_dyn.codegen.c_file import Entry, FileOptions, c_file
 from quadruped_dyn.codegen.printer import PrintOptions, print_function
 
 PREFIX = "qd_"
-
-
-def work_sizes(casadi_header: str) -> dict[str, tuple[int, int]]:
-    sizes = dict(re.findall(r"#define (\w+_SZ_(?:IW|W)) (\d+)", casadi_header))
-    names = {k.rsplit("_SZ_", 1)[0] for k in sizes}
-    return {n: (int(sizes[f"{n}_SZ_IW"]), int(sizes[f"{n}_SZ_W"])) for n in names}
 
 
 #: How the evaluation functions of the shipped files print (``codegen.printer``): each shared denominator's quotients
@@ -30,12 +21,6 @@ EVALUATION = PrintOptions(reciprocals=True, precision_math=True, void_unused=Tru
 
 #: the sines and cosines of a vector of angles (qd_sincos), pasted into each file whose entry points call it
 SINCOS = "qd_sincos.c"
-
-
-def casadi_c(file_stem: str, functions: list[ca.Function], precision: str) -> tuple[str, str]:
-    """(C source, header) of ``functions`` in ``file_stem``.c, CasADi's layout printed by ``codegen.c_file``, each
-    evaluation as ``EVALUATION`` but calling libm's names (the including build picks their precision)."""
-    return c_file(file_stem, [Entry(f, replace(EVALUATION, precision_math=False)) for f in functions], FileOptions(precision))
 
 
 #: The generated functions whose evaluation reads its inputs without CasADi's test of each input pointer at each

@@ -1,0 +1,85 @@
+"""The parametric library: compiled once per family, then 100 variants of go1 and a1 with no further build (its
+cache entry untouched, no generation or compile called), each against Pinocchio on its own URDF; ``codegen
+--parametric``."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from quadruped_dyn import load_robot
+from quadruped_dyn.codegen import parametric_library as parametric_library_module
+from quadruped_dyn.codegen.parametric_library import parametric_library
+from quadruped_dyn.errors import InputError
+from quadruped_dyn.model.parameters import N_INERTIAL
+from quadruped_dyn.model.state import random_state, rotation
+from quadruped_dyn.references.pinocchio import PinocchioReference
+from tests.conftest import assert_close
+from tests.variants import variant
+
+N_VARIANTS = 100
+
+
+def _check(library, function, robot, seed: int) -> None:
+    ref, p = PinocchioReference(robot), library.parameters(robot)
+    s = random_state(robot.lower, robot.upper, np.random.default_rng(seed))
+    assert_close(function("M_full")(s.q, p)[0], ref.mass_matrix(s.q), what=f"{robot.name} M_full")
+    R = rotation(s.q)
+    expected = ref.rnea(s.q, s.v, s.a) - ref.contact_jacobian(s.q, (0, 1, 2, 3)).T @ np.concatenate([R @ f for f in s.f])
+    w_res, tau = function("id_full")(s.q, s.v, s.a, s.f.ravel(), p)
+    assert_close(np.concatenate([w_res, tau]), expected, what=f"{robot.name} id_full")
+    Y = function("regressor_full")(s.q, s.v, s.a, p)[0]
+    assert_close(Y @ p[:N_INERTIAL], ref.rnea(s.q, s.v, s.a), what=f"{robot.name} tau = Y pi")
+
+
+def test_one_build_serves_the_family(tmp_path, monkeypatch):
+    go1 = load_robot("go1")
+    library = parametric_library(go1)  # built here, or by an earlier run
+    built = library.library.path.stat()
+
+    def tripwire(*args: object) -> None:
+        raise AssertionError("a variant or a1 built the parametric library again")
+
+    for name in ("parametric_c", "compile_sources"):  # what a build of the cache entry calls
+        monkeypatch.setattr(parametric_library_module, name, tripwire)
+    function = {name: library.function(name) for name in ("M_full", "id_full", "regressor_full")}.__getitem__
+    for seed in range(N_VARIANTS):
+        robot = variant(go1, seed, tmp_path)
+        assert parametric_library(robot).library.path == library.library.path
+        _check(library, function, robot, seed)
+    a1 = load_robot("a1")
+    assert parametric_library(a1).library.path == library.library.path
+    _check(library, function, a1, 0)
+    assert library.library.path.stat().st_mtime_ns == built.st_mtime_ns, "the library was rebuilt"
+    with pytest.raises(InputError, match="joint .* has the"):
+        library.parameters(load_robot("paper"))
+
+
+def test_codegen_parametric_writes_the_family_files(tmp_path):
+    from click.testing import CliRunner
+
+    from quadruped_dyn.cli import main
+    from quadruped_dyn.codegen.file_names import family_stem
+    from quadruped_dyn.codegen.library import C_FLAGS, run_tool
+    from quadruped_dyn.model.parameters import PARAMETER_NAMES, family_of
+
+    run = CliRunner().invoke(main, ["codegen", "a1", "--out", str(tmp_path), "--parametric"])
+    assert run.exit_code == 0, run.output
+    stem = tmp_path / family_stem(family_of(load_robot("a1")).key)
+    header = stem.with_suffix(".h").read_text()
+    assert f"p[{len(PARAMETER_NAMES) - 3}..{len(PARAMETER_NAMES) - 1}] BR foot" in header
+    assert "int qd_p_regressor_full(" in header
+    flags = [flag for flag in C_FLAGS if not flag.startswith("-O")]  # its compile is test_one_build_serves_the_family's
+    run_tool(["gcc", *flags, "-fsyntax-only", str(stem.with_suffix(".c"))])
+    bad = CliRunner().invoke(main, ["codegen", "a1", "--out", str(tmp_path), "--parametric", "--check"])
+    assert bad.exit_code == 2 and "expected --parametric alone" in bad.output and "Traceback" not in bad.output
+
+
+def test_docs_example_runs():
+    """docs/embedded.md's example, as written (the library built by the test above or an earlier run)."""
+    import re
+    from pathlib import Path
+
+    text = (Path(__file__).resolve().parents[2] / "docs" / "embedded.md").read_text()
+    section = text[text.index("## Parametric C"):]
+    exec(re.search(r"```python\n(.*?)```", section, flags=re.S).group(1), {})
