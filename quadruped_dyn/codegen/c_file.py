@@ -11,9 +11,10 @@ states.
 
 With ``FileOptions(project=True)`` every function also gets a batch entry point ``NAME_batch`` (``BATCH_SIGNATURE``):
 n states, state-major (state s's input i at ``arg[i] + s * nnz_i``, outputs alike, but an input ``Entry.shared`` at
-``arg[i]`` for all; a NULL ``arg[i]`` or ``res[i]`` as in the scalar call), one scalar call per state (so each state's outputs are the scalar call's, bit for bit), its
-return code in ``status[s]`` (NULL: not written), a bad state not stopping the others; it returns how many codes
-were non-zero. ``w`` is one scalar call's work (``NAME_SZ_W`` reals); no malloc, no global state."""
+``arg[i]`` for all; a NULL ``arg[i]`` or ``res[i]`` as in the scalar call), one scalar call per state (so each
+state's outputs are the scalar call's, bit for bit), its return code in ``status[s]`` (NULL: not written), a bad
+state not stopping the others; it returns how many codes were non-zero. ``w`` is one scalar call's work
+(``NAME_SZ_W`` reals); no malloc, no global state."""
 
 from __future__ import annotations
 
