@@ -6,7 +6,7 @@ each template alone."""
 
 from __future__ import annotations
 
-from quadruped_dyn.codegen.c_facts import layouts_c, prelude_c, regularity_c
+from quadruped_dyn.codegen.c_facts import derivative_work_c, layouts_c, prelude_c, regularity_c
 from quadruped_dyn.codegen.precision_math import PRECISION_MATH, wrappers_c
 from quadruped_dyn.tolerances import FLOAT_ERR_PER_REGULARITY
 
@@ -27,7 +27,7 @@ def alone_header_c() -> str:
     calls = " ".join(f"qd_{f}(" for f in PRECISION_MATH)
     provided = [f"int {fn}{_SIGNATURE};\n#define {macro} {fn}\n" for macro, fn in PROVIDED.items()]
     provided += [f"int {fn}{_SIGNATURE};\n" for fn in PER_STANCE]
-    provided += [regularity_c(FLOAT_ERR_PER_REGULARITY), _PER_STANCE_SIZES]
+    provided += [regularity_c(FLOAT_ERR_PER_REGULARITY), _PER_STANCE_SIZES, derivative_work_c()]
     return ("/* quadruped_dyn: what a generated file defines before the hand-written C it holds (codegen/c_alone.py) */\n"
             "#ifndef QD_ALONE_H\n#define QD_ALONE_H\n#ifndef casadi_real\n#define casadi_real double\n#endif\n"
             "#ifndef casadi_int\n#define casadi_int long long int\n#endif\n#include <math.h>\n"

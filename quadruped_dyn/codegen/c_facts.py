@@ -1,7 +1,8 @@
 """Facts the generated C and the Python that calls it share, with their one source here: the return codes (the C
 ``#define`` lines are written from ``RETURN_CODES``, ``return_codes_c``), the layouts of the leg-by-leg pieces'
-outputs the reduced templates read (``layouts_c``, from ``codegen.forms.leg_pieces``) and the definitions every hand-written C
-file uses (``c/qd_prelude.h``, ``prelude_c``)."""
+outputs the reduced templates read (``layouts_c``, from ``codegen.forms.leg_pieces``), the work sizes of the derivative
+templates (``derivative_work_c``, from ``DERIVATIVE_SZ_W``) and the definitions every hand-written C file uses
+(``c/qd_prelude.h``, ``prelude_c``)."""
 
 from __future__ import annotations
 
@@ -9,6 +10,7 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from quadruped_dyn.codegen.forms.leg_pieces import FOOT_PARTS, LEG_MASS_BLOCKS, TRUNK_MASS_BLOCKS
+from quadruped_dyn.model.state import NV_FULL
 from quadruped_dyn.tolerances import FLOAT_MAX_BOUND, REGULARITY_MIN
 
 #: The hand-written C (templates, check programs, the Cortex-M start-up, the Makefile).
@@ -45,6 +47,24 @@ RETURN_CODES: tuple[ReturnCode, ...] = (
 )
 #: By name.
 RETURN_CODE = {c.name: c for c in RETURN_CODES}
+
+
+_NV = NV_FULL
+#: Reals of the caller's w that c/qd_derivatives_solve.c's qd_dfd_full and qd_dgrf_<feet> use for their temporaries
+#: (QD_<name>_SZ_W; the generator states them as the functions' _SZ_W): name -> (reals, what they hold).
+DERIVATIVE_SZ_W = {
+    "DFD_FULL": (4 * _NV * _NV + 2 * _NV + 4 * 9 + 4 * 18 + 36,
+                 "M, M^-1, dtau/dq, dtau/dv (18 x 18 each), nle, a (18), the blocks (4 * 9 + 4 * 18 + 36)"),
+    "DGRF": (3 * _NV * _NV + 2 * _NV + 6 + 6 * 6 + 6 * _NV,
+             "M, dtau/dq, dtau/dv (18 x 18 each), nle, seed (18), wrench (6), P (6 x 6), d(P w)/dq (6 x 18)"),
+}
+
+
+def derivative_work_c() -> str:
+    """``DERIVATIVE_SZ_W`` as the C macros c/qd_derivatives_solve.c reads."""
+    return ("/* Reals of the caller's w that qd_dfd_full and qd_dgrf_<feet> use for their temporaries (the generator states\n"
+            " * them as the functions' _SZ_W, so the Cortex-M stack holds none of the 18 x 18 arrays). */\n"
+            + "".join(f"#define QD_{name}_SZ_W {reals} /* {what} */\n" for name, (reals, what) in DERIVATIVE_SZ_W.items()))
 
 
 def return_codes_c() -> str:

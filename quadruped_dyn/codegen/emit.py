@@ -206,6 +206,13 @@ def codegen_functions(robot: Robot) -> list[ca.Function]:
     return [codegen_function(robot, name) for name in CODEGEN_FUNCTIONS]
 
 
+def library_functions(robot: Robot) -> list[ca.Function]:
+    """Every generated Function, in the header's order: the full-coordinate terms and GRF solves, the
+    reduced model of each stance set, the derivatives."""
+    return [*codegen_functions(robot), *(f for s in REDUCED_STANCE_SETS for f in reduced_functions(robot, s)),
+            *derivative_functions(robot)]
+
+
 def _shape(sp: ca.Sparsity) -> str:
     shape = f"{sp.size1()}x{sp.size2()}" if sp.size2() > 1 else f"{sp.size1()}"
     return shape if sp.is_dense() else f"{shape}, {sp.nnz()} nonzeros"

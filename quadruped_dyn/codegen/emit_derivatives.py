@@ -40,14 +40,13 @@ d/dq is along ``pinocchio.integrate`` (a body-frame increment of the trunk pose;
 
 from __future__ import annotations
 
-import re
 from dataclasses import dataclass
 
 import casadi as ca
 import numpy as np
 
 from quadruped_dyn.codegen.by_leg import LegCall, by_leg_c, legs_reals
-from quadruped_dyn.codegen.c_facts import prelude_c
+from quadruped_dyn.codegen.c_facts import DERIVATIVE_SZ_W, derivative_work_c, prelude_c
 from quadruped_dyn.codegen.c_file import Entry, FileOptions, c_file, entry_work, evaluation_name, file_helpers
 from quadruped_dyn.codegen.file_names import feet_suffix
 from quadruped_dyn.codegen.forms.did_full_pieces import did_full_pieces
@@ -362,8 +361,8 @@ def derivative_source(robot: Robot, file_stem: str, functions: list[ca.Function]
     qd_did_full_sparsity_out, defined further down: declared first."""
     declaration = f"CASADI_SYMBOL_EXPORT const casadi_int* {PREFIX}did_full_sparsity_out(casadi_int i);\n"
     solve = template_c("qd_derivatives_solve.c")
-    template = prelude_c() + declaration + "\n" + solve
-    template_w = {k: int(v) for k, v in re.findall(r"#define QD_(DFD_FULL|DGRF)_SZ_W (\d+)", solve)}
+    template = prelude_c() + declaration + "\n" + derivative_work_c() + "\n" + solve
+    template_w = {k: reals for k, (reals, _) in DERIVATIVE_SZ_W.items()}
     index = {f.name(): evaluation_name(k) for k, f in enumerate(functions)}
     entries = [_derivative_entry(f, index, template_w) for f in functions]
     if functions[0].name() != PREFIX + "did_full":

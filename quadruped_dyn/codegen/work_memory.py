@@ -3,7 +3,6 @@ sizes and the signature only, so it is stated in the generated header; docs/embe
 
 from __future__ import annotations
 
-import re
 from dataclasses import dataclass
 
 import casadi as ca
@@ -70,23 +69,3 @@ def memory_doc(functions: list[ca.Function], work: dict[str, tuple[int, int]]) -
         row += " " + c + ";"
     lines.append(row.rstrip())
     return lines
-
-
-def _entries(signals: str) -> int:
-    """Reals of a header signature's signals, e.g. 'q[19], M[18x18, 210 nonzeros]' -> 19 + 210."""
-    total = 0
-    for shape in re.findall(r"\[([^\]]+)\]", signals):
-        nonzeros = re.search(r"(\d+) nonzeros", shape)
-        dims = [int(d) for d in shape.split(",")[0].split("x")]
-        total += int(nonzeros.group(1)) if nonzeros else dims[0] * (dims[1] if len(dims) > 1 else 1)
-    return total
-
-
-def header_work_memory(header: str) -> dict[str, WorkMemory]:
-    """Every function's WorkMemory from a generated header (its documentation and CasADi's sizes)."""
-    sizes = {(n, k): int(v) for n, k, v in re.findall(r"#define (\w+)_SZ_(ARG|RES|IW|W) (\d+)", header)}
-    out = {}
-    for name, ins, outs in re.findall(r"^ \*   (qd_\w+)\((.*?)\) -> \((.*?)\);", header, re.M):
-        out[name] = WorkMemory(sizes[name, "ARG"], sizes[name, "RES"], sizes[name, "IW"], sizes[name, "W"],
-                               _entries(ins), _entries(outs))
-    return out

@@ -12,6 +12,7 @@ import pytest
 
 from quadruped_dyn.checks.finite_differences import ReducedFiniteDifferences, grf_derivatives_by_differences
 from quadruped_dyn.codegen.c_alone import ALONE_HEADER, alone_header_c
+from quadruped_dyn.codegen.c_facts import DERIVATIVE_SZ_W
 from quadruped_dyn.codegen.emit import REDUCED_STANCE_SETS, TEMPLATES, reduced_symbol
 from quadruped_dyn.codegen.emit_derivatives import (
     GRF_DERIVATIVE_STANCE_SETS,
@@ -127,6 +128,45 @@ int main(void) {{
     subprocess.run(["gcc", *[f for f in C_FLAGS if f != "-fPIC"], "-I", str(tmp_path), str(program), "-lm", "-o", str(exe)],
                    check=True)
     assert subprocess.run([str(exe)], capture_output=True, text=True, check=True).stdout.strip() == "2"
+
+
+def test_the_derivative_templates_temporaries_end_at_their_stated_work_size(tmp_path):
+    """c_facts.DERIVATIVE_SZ_W (QD_<name>_SZ_W, the functions' _SZ_W) against the template's own pointer arithmetic:
+    the w it passes on to qd_M_full (the first real past its temporaries) is w + QD_<name>_SZ_W."""
+    (tmp_path / ALONE_HEADER).write_text(alone_header_c())
+    program = tmp_path / "work_end.c"
+    program.write_text(f"""#define casadi_real double
+#define casadi_int long long int
+#include "{TEMPLATES / 'qd_derivatives_solve.c'}"
+#include <stdio.h>
+static casadi_real* seen;
+const casadi_int* qd_M_full_sparsity_out(casadi_int i) {{ (void)i; return 0; }}
+int qd_M_full(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem) {{
+  (void)arg; (void)res; (void)iw; (void)mem; seen = w; return 9;
+}}
+int qd_nle_full(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem) {{
+  (void)arg; (void)res; (void)iw; (void)w; (void)mem; return 9;
+}}
+static int did(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem) {{
+  (void)arg; (void)res; (void)iw; (void)w; (void)mem; return 0;
+}}
+int main(void) {{
+  static casadi_real w[4096];
+  (void)qd_dfd_full_parts_eval;
+  qd_dfd_full_solve(did, 0, 0, 0, 0, 0, w, 0);
+  printf("%ld %d ", (long)(seen - w), QD_DFD_FULL_SZ_W);
+  qd_dgrf_solve(6, 15, did, did, 0, 0, 0, 0, 0, w, 0);
+  printf("%ld %d\\n", (long)(seen - w), QD_DGRF_SZ_W);
+  return 0;
+}}
+""")
+    exe = tmp_path / "work_end"
+    subprocess.run(["gcc", *[f for f in C_FLAGS if f != "-fPIC"], "-I", str(tmp_path), str(program), "-lm", "-o", str(exe)],
+                   check=True)
+    used_dfd, stated_dfd, used_dgrf, stated_dgrf = map(int, subprocess.run([str(exe)], capture_output=True, text=True,
+                                                                           check=True).stdout.split())
+    assert (stated_dfd, stated_dgrf) == (DERIVATIVE_SZ_W["DFD_FULL"][0], DERIVATIVE_SZ_W["DGRF"][0])
+    assert (used_dfd, used_dgrf) == (stated_dfd, stated_dgrf)
 
 
 # ----------------------------------------------------------------------------- reduced model and GRF solve

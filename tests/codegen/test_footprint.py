@@ -5,10 +5,12 @@ against the issue's budgets."""
 
 from __future__ import annotations
 
+import re
 from pathlib import Path
 
 import pytest
 
+from quadruped_dyn.checks.embedded import library_work_memory
 from quadruped_dyn.codegen.emit import REDUCED_STANCE_SETS
 from quadruped_dyn.codegen.footprint import (
     BUDGET_FULL_CODE,
@@ -22,7 +24,7 @@ from quadruped_dyn.codegen.footprint import (
     summary,
 )
 from quadruped_dyn.codegen.targets import TARGETS, skip_reason
-from quadruped_dyn.codegen.work_memory import header_work_memory
+from quadruped_dyn.model.robot import load_robot
 
 CASADI_GEN = Path(__file__).resolve().parents[2] / "casadi_gen"
 
@@ -55,11 +57,23 @@ def test_register_lists():
     assert _register_count("d8-d15") == 8
 
 
+def test_caller_memory_is_what_the_generated_header_states():
+    """``codegen --json``'s caller memory (compiled ``_work`` entries and Functions) against the committed paper
+    header: the functions in its order, its _SZ_ARG/RES/IW/W macros, its double/float byte counts."""
+    header = (CASADI_GEN / "qd_paper.h").read_text()
+    memory = library_work_memory(load_robot("paper"))
+    assert list(memory) == re.findall(r"^ \*   (qd_\w+)\(", header, re.M)
+    defines = {(n, k): int(v) for n, k, v in re.findall(r"#define (\w+)_SZ_(ARG|RES|IW|W) (\d+)", header)}
+    assert {(n, k): getattr(m, f"sz_{k.lower()}") for n, m in memory.items() for k in ("ARG", "RES", "IW", "W")} == defines
+    stated = {n: (int(d), int(f)) for n, d, f in re.findall(r" (qd_\w+) (\d+)/(\d+);", header)}
+    assert stated == {n: (m.bytes(8), m.bytes(4)) for n, m in memory.items()}
+
+
 def _paper_footprint(tmp_path: Path, name: str) -> tuple[object, dict, list[str]]:
     reason = skip_reason(TARGETS[name], run=False)
     if reason:
         pytest.skip(reason)
-    names = list(header_work_memory((CASADI_GEN / "qd_paper.h").read_text()))
+    names = list(library_work_memory(load_robot("paper")))
     fp = measure(CASADI_GEN, tmp_path / "build", name, names, "qd_paper", "-Os")
     return fp, summary(fp, names, [st.name.replace("+", "_") for st in REDUCED_STANCE_SETS]), names
 

@@ -51,6 +51,14 @@ def _wait_for(condition, timeout: float, what: str) -> None:
         time.sleep(0.2)
 
 
+def _workers_on(address: str) -> int:
+    """How many workers the scheduler at ``address`` has (a client that connects, asks and leaves)."""
+    from distributed import Client
+
+    with Client(address, timeout=60) as client:
+        return len(client.scheduler_info()["workers"])
+
+
 def _rows(out: Path) -> list[dict]:
     files = sorted((out / "rows").glob("*.parquet"))
     return [pq.read_table(f).to_pylist()[0] for f in files]  # every file a whole, readable row
@@ -92,13 +100,15 @@ def test_worker_killed_mid_run_every_row_once_then_resume_runs_nothing(tmp_path)
                                      "--no-nanny", *common], stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL, env=ENV,
                                     cwd=REPO) for _ in range(2)]
         procs += workers
+        _wait_for(lambda: _workers_on(address) == 2, SWEEP_TIMEOUT_S, "both workers on the scheduler")
         out = tmp_path / "out"
         sweep = _sweep(out, "--scheduler", address)
         procs.append(sweep)
-        _wait_for(lambda: len(list((out / "rows").glob("*.parquet"))) >= 3 or sweep.poll() is not None, SWEEP_TIMEOUT_S,
-                  "three rows")
-        assert sweep.poll() is None, sweep.communicate()
         victim = workers[0]
+        # The victim's first row, however slow the machine: then it has worked, and the sweep still has rows to do.
+        _wait_for(lambda: victim.pid in {r["pid"] for r in _rows(out)} or sweep.poll() is not None, SWEEP_TIMEOUT_S,
+                  "a row of the worker to kill")
+        assert sweep.poll() is None, sweep.communicate()
         victim.send_signal(signal.SIGKILL)
         victim.wait()
         stdout, stderr = sweep.communicate(timeout=SWEEP_TIMEOUT_S)

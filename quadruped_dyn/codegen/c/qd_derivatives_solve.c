@@ -34,11 +34,6 @@ int qd_M_full(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi
 const casadi_int* qd_M_full_sparsity_out(casadi_int i);
 int qd_nle_full(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem);
 
-/* Reals of the caller's w that qd_dfd_full and qd_dgrf_<feet> use for their temporaries (the generator states
- * them as the functions' _SZ_W, so the Cortex-M stack holds none of the 18 x 18 arrays). */
-#define QD_DFD_FULL_SZ_W 1476 /* M, M^-1, dtau/dq, dtau/dv (18 x 18 each), nle, a (18), the blocks (4 * 9 + 4 * 18 + 36) */
-#define QD_DGRF_SZ_W 1158 /* M, dtau/dq, dtau/dv (18 x 18 each), nle, seed (18), wrench (6), P (6 x 6), d(P w)/dq (6 x 18) */
-
 /* 1 if any of x[0..n) is NaN or inf: x * 0 is 0 for every finite x and NaN otherwise, summed in 8 independent
  * lanes (a reduction the compiler vectorises; one running flag or sum is a serial chain, ~6x slower here). */
 static int qd_d_nonfinite(const casadi_real* restrict x, casadi_int n) {
