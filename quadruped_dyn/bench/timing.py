@@ -119,6 +119,9 @@ class BenchReport:
     compiler: str = ""  # the first line of ``cc --version``
     call_costs: list[CallCost] = field(default_factory=list)  # counted per call under callgrind (call_cost.py)
     call_cost_note: str | None = None  # why call_costs is empty (NOT_MEASURED), None when counted or not asked
+    #: per term (parametric_timing.PAIRS): the parametric library's ns per call against the fixed library's and
+    #: Pinocchio's, same run (``parametric_timings``); None when not asked (``bench --parametric``)
+    parametric: dict[str, dict[str, float]] | None = None
 
     def as_dict(self) -> dict[str, object]:
         return asdict(self)
@@ -156,6 +159,11 @@ class BenchReport:
             lines.append("per call, counted by callgrind (the same on any machine); I1: a simulated 32 kB 8-way cache")
         elif self.call_cost_note:
             lines.append(f"instructions and code per call: {self.call_cost_note}")
+        if self.parametric:
+            lines += aligned([["parametric term", "parametric ns", "fixed ns", "Pinocchio ns", "vs Pinocchio", "vs fixed"],
+                              *([name, f"{t['parametric_ns']:.0f}", f"{t['fixed_ns']:.0f}", f"{t['pinocchio_ns']:.0f}",
+                                 f"{t['vs_pinocchio']:.2f}", f"{t['vs_fixed']:.2f}"] for name, t in self.parametric.items())])
+            lines.append("parametric: the family's library with p as an input (docs/embedded.md), default flags, own rounds")
         lines.append(f"CPU: {self.cpu_model}; compiler: {self.compiler}")
         return "\n".join(lines)
 
@@ -186,7 +194,8 @@ def pinocchio_harness(cxx: str = "g++") -> Path:
 
 
 def run_bench(robot: Robot, calls: int = 20000, reps: int = 9, rounds: int = 9, cc: str = "gcc", native: bool = False,
-              peer: bool = False, checked_c: GeneratedFiles | None = None, call_cost: bool = False) -> BenchReport:
+              peer: bool = False, checked_c: GeneratedFiles | None = None, call_cost: bool = False,
+              parametric: bool = False) -> BenchReport:
     """Time every generated function and its Pinocchio counterpart in the same run; with ``peer``
     also Pinocchio's CppADCodeGen code (cppadcg.py, checked against Pinocchio first). ``native``:
     the generated C and the peer built with -march=native (Pinocchio native stays the wheel's).
@@ -194,6 +203,8 @@ def run_bench(robot: Robot, calls: int = 20000, reps: int = 9, rounds: int = 9, 
     report's own c/), timed as they are instead of generated again (``generation_s`` is then None).
     ``call_cost``: also count each function's instructions, I1 misses and code bytes per call (call_cost.py;
     ``call_cost_note`` says NOT_MEASURED without valgrind) beside the graphs' operations.
+    ``parametric``: also the family's parametric library against the fixed library and Pinocchio
+    (``parametric_timings``; its build, once per family, costs about a minute).
     InputError for counts outside ``timing_counts.check_counts``' bounds, before anything is built."""
     check_counts(calls, reps)
     flags = (*C_FLAGS, "-Dcasadi_real=double", *(("-march=native",) if native else ()))  # as library.compiled_library
@@ -258,6 +269,9 @@ def run_bench(robot: Robot, calls: int = 20000, reps: int = 9, rounds: int = 9, 
     c_plus_g = generated[PREFIX + "C_full"] + generated[PREFIX + "G_full"]
     report.entries.append(BenchEntry("C_full + G_full", c_plus_g, "nonLinearEffects", pinocchio["nonLinearEffects"],
                                      c_plus_g / pinocchio["nonLinearEffects"], 0.25))
+    if parametric:  # parametric_timing imports this module's harness: imported here
+        from quadruped_dyn.bench.parametric_timing import parametric_timings
+        report.parametric = parametric_timings(robot, calls, reps, max(3, rounds // 3), cc)
     return report
 
 

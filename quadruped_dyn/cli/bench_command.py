@@ -24,8 +24,11 @@ from quadruped_dyn.cli.app import echo, require_tools
 @click.option("--call-cost/--no-call-cost", default=True, show_default=True,
               help="Also count each function's instructions, I1 misses and bytes of code per call under valgrind "
               "(callgrind; the same on any machine), beside the graphs' operation counts.")
+@click.option("--parametric", is_flag=True,
+              help="Also time the robot family's parametric library (p as an input; built once per family into the "
+              "cache, about a minute) against the fixed library and Pinocchio.")
 def bench(robots: tuple[str, ...], calls: int, reps: int, as_json: bool, peers: str, native: bool,
-          call_cost: bool) -> None:
+          call_cost: bool, parametric: bool) -> None:
     """Time the generated C against Pinocchio's native C++ in the same run (ratios < 1: generated is faster)."""
     from dataclasses import asdict
 
@@ -42,7 +45,8 @@ def bench(robots: tuple[str, ...], calls: int, reps: int, as_json: bool, peers: 
     loaded = [load_robot(r) for r in robots]  # every argument checked before minutes of work
     if auto and not peer_names:  # after the checks: bad input stays one line
         click.echo(f"note: {cppadcg.PEER} is not timed: its headers are not installed ({cppadcg.INSTALL_HINT})", err=True)
-    reports = [run_bench(r, calls, reps, native=native, peer=cppadcg.PEER in peer_names, call_cost=call_cost)
+    reports = [run_bench(r, calls, reps, native=native, peer=cppadcg.PEER in peer_names, call_cost=call_cost,
+                         parametric=parametric)
                for r in loaded]
     adam = [e for r in loaded for e in run_peers(r, native, calls, reps)] if "adam" in peer_names else []
     if as_json:

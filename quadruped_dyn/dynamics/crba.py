@@ -68,7 +68,9 @@ def _rotate_symmetric(axis: np.ndarray, q: ca.SX, I: ca.SX) -> ca.SX:
 
 
 def _link(link: LinkInertia) -> Inertia:
-    """(m, h, I_o) of a link in its joint frame (constants)."""
+    """(m, h, I_o) of a link in its joint frame (constants; a symbolic body's ``origin`` as it is)."""
+    if link.origin is not None:
+        return link.mass, ca.SX(link.origin[0]), ca.SX(link.origin[1])
     if any(isinstance(x, ca.SX) for x in (link.mass, link.com, link.inertia)):  # a leg template's parameters
         c_sx = ca.SX(dm(link.com))
         return link.mass, link.mass * c_sx, ca.SX(dm(link.inertia)) - link.mass * skew(c_sx) @ skew(c_sx)

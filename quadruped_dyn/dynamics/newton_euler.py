@@ -29,6 +29,7 @@ from __future__ import annotations
 import time
 from dataclasses import dataclass
 from functools import cache
+from typing import Any
 
 import casadi as ca
 
@@ -86,7 +87,7 @@ def aligned_leg_newton_euler(
     and foot may be SX (a leg template, ``codegen.forms.leg_template``)."""
     w, wd, vd, f_foot = omega_b, alpha_b, a0, -f
     K = point_acceleration(w, wd)  # the trunk's; CSE shares it with the trunk's and the other legs'
-    links = []  # (R_parent_i, P_i, F_i, N_i) per link
+    links: list[tuple[Any, Any, Any, Any, Any]] = []  # (R_parent_i, P_i, F_i, N_i, c_i or None) per link
     for i, (joint, link) in enumerate(zip(leg.joints, leg.links)):
         Rf, P = placement_rt(joint.placement)
         R = Rf @ axis_rotation(joint.axis, q[i])  # parent <- i
@@ -96,8 +97,12 @@ def aligned_leg_newton_euler(
         w_parent = R.T @ w
         w = w_parent + qd[i] * z
         wd = R.T @ wd + ca.cross(w_parent, qd[i] * z) + qdd[i] * z
-        c, Ic = dm(link.com), dm(link.inertia)
         K = point_acceleration(w, wd)
+        if link.origin is not None:  # a symbolic body: force and moment about the origin from (h, I_o) as they are
+            h, I_o = link.origin
+            links.append((R, P, K @ h + link.mass * vd, I_o @ wd + ca.cross(w, I_o @ w) + ca.cross(h, vd), None))
+            continue
+        c, Ic = dm(link.com), dm(link.inertia)
         vdc = K @ c + vd
         links.append((R, P, link.mass * vdc, Ic @ wd + ca.cross(w, Ic @ w), c))
 
@@ -108,7 +113,10 @@ def aligned_leg_newton_euler(
     for i in reversed(range(3)):
         R, P, F, N, c = links[i]
         f_i = R_next @ f_next + F
-        n_i = N + R_next @ n_next + ca.cross(c, F) + ca.cross(P_next, R_next @ f_next)
+        if c is None:  # N is about the origin already
+            n_i = N + R_next @ n_next + ca.cross(P_next, R_next @ f_next)
+        else:
+            n_i = N + R_next @ n_next + ca.cross(c, F) + ca.cross(P_next, R_next @ f_next)
         tau.insert(0, ca.dot(n_i, dm(leg.joints[i].axis)))
         f_next, n_next, R_next, P_next = f_i, n_i, R, P
     R_b1 = links[0][0]
@@ -130,6 +138,10 @@ def hip_reaction_split(
 def trunk_own_wrench(trunk: LinkInertia, omega_b: ca.SX, alpha_b: ca.SX, a0: ca.SX) -> ca.SX:
     """The trunk's own wrench (6,) (force, moment about the trunk origin; trunk frame) for its angular velocity and
     acceleration and a0 = a_b - g_b, its origin's classical acceleration minus gravity."""
+    if trunk.origin is not None:  # a symbolic body: (h, I_o) as they are
+        h, I_o = trunk.origin
+        return ca.vertcat(trunk.mass * a0 + point_acceleration(omega_b, alpha_b) @ h,
+                          I_o @ alpha_b + ca.cross(omega_b, I_o @ omega_b) + ca.cross(h, a0))
     c, Ic = dm(trunk.com), dm(trunk.inertia)
     a_c = a0 + point_acceleration(omega_b, alpha_b) @ c
     return ca.vertcat(trunk.mass * a_c, Ic @ alpha_b + ca.cross(omega_b, Ic @ omega_b) + ca.cross(c, trunk.mass * a_c))

@@ -1,7 +1,8 @@
 """The full-coordinate terms with the robot's numbers as an input: one graph per family (``model/parameters.py``).
 
 The robot of ``parameters.parametric_robot`` (its masses, CoMs, inertias, joint positions and foot points entries of
-an SX p) goes through the same algorithms as a loaded robot: ``crba`` for M and G, ``newton_euler`` for the rest.
+an SX p) goes through the same algorithms as a loaded robot: ``crba`` for M and G, ``newton_euler`` for the rest;
+they take each body's first moment m c and inertia about its origin as p has them (``LinkInertia.origin``).
 Each Function takes p (N_PARAMETERS,) as its last input, named "p"; the fixed library's inputs come first, in its
 order. The dynamics are linear in the inertial part pi = p[:N_INERTIAL]:
 ``regressor_full(q, v, a, p)`` = Y (18, 130) with id_full(q, v, a, 0, p) = Y pi (Pinocchio's

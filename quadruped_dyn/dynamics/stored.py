@@ -54,7 +54,7 @@ def sources_digest() -> str:
 
 
 def _feed(h: hashlib._Hash, value: object) -> None:
-    """Every number of ``value`` bit for bit (dataclasses, tuples, arrays, floats, strings)."""
+    """Every number of ``value`` bit for bit (dataclasses, tuples, arrays, floats, strings, None)."""
     if dataclasses.is_dataclass(value) and not isinstance(value, type):
         h.update(type(value).__name__.encode())
         for f in dataclasses.fields(value):
@@ -70,6 +70,8 @@ def _feed(h: hashlib._Hash, value: object) -> None:
         h.update(float(value).hex().encode())
     elif isinstance(value, str):
         h.update(b"s" + value.encode())
+    elif value is None:
+        h.update(b"None")
     else:
         raise TypeError(f"cannot fingerprint a {type(value).__name__}")
 

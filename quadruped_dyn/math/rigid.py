@@ -41,6 +41,9 @@ class LinkInertia:
     mass: float  # kg
     com: np.ndarray  # (3,) centre of mass, m
     inertia: np.ndarray  # (3, 3) about the CoM, axes of the joint frame, kg m^2
+    #: (h = m c kg m, I_o kg m^2 about the frame's origin) where the body is symbolic (``parameters.parametric_robot``):
+    #: the composite-inertia algorithms take them as they are, not m (h / m) back from com and inertia
+    origin: tuple[Any, Any] | None = None
 
 
 def skew(w: Any) -> Any:

@@ -52,6 +52,16 @@ def _along(x: Any, axis: np.ndarray) -> Any:
     return ca.dot(x, ca.DM(axis)) * ca.DM(axis) if isinstance(x, ca.SX) else (x @ axis) * axis
 
 
+def _moved_origin(link: LinkInertia, Q: np.ndarray, s: Any) -> tuple[ca.SX, ca.SX]:
+    """``link.origin`` (h, I_o) rotated by Q^T and taken at the origin moved by s (new frame): h' = h - m s,
+    I' = I_o + m (|s|^2 1 - s s^T) + (h s^T + s h^T) - 2 (s . h) 1 (h rotated)."""
+    assert link.origin is not None
+    h, I_o = ca.DM(Q.T) @ link.origin[0], ca.DM(Q.T) @ link.origin[1] @ ca.DM(Q)
+    s, m = ca.SX(ca.DM(s)) if isinstance(s, np.ndarray) else s, link.mass
+    shift = h @ s.T
+    return h - m * s, I_o + m * (ca.dot(s, s) * ca.SX.eye(3) - s @ s.T) + shift + shift.T - 2 * ca.dot(s, h) * ca.SX.eye(3)
+
+
 def axis_aligned(leg: Leg) -> Leg:
     """``leg`` in canonical joint frames (module docstring); joint angles, foot point and every
     trunk-frame quantity unchanged."""
@@ -70,6 +80,7 @@ def axis_aligned(leg: Leg) -> Leg:
         else:
             inertia = Q.T @ link.inertia @ Q
             inertia = _snap(0.5 * (inertia + inertia.T), float(np.abs(inertia).max()))  # symmetric to the last bit
-        links.append(LinkInertia(link.mass, _snap(_rotated(Q.T, link.com) - slide), inertia))
+        links.append(LinkInertia(link.mass, _snap(_rotated(Q.T, link.com) - slide), inertia,
+                                 None if link.origin is None else _moved_origin(link, Q, slide)))
     foot = Placement(_snap(Q.T @ leg.foot.R), _snap(_rotated(Q.T, leg.foot.p) - slide))
     return Leg(leg.label, tuple(joints), tuple(links), foot, leg.foot_frame)  # type: ignore[arg-type]

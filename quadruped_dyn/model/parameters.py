@@ -61,10 +61,20 @@ def _body(pi: Any) -> tuple[Any, Any, Any]:
     m, h = pi[0], pi[1:4]
     rows = ((pi[4], pi[5], pi[7]), (pi[5], pi[6], pi[8]), (pi[7], pi[8], pi[9]))
     if isinstance(pi, ca.SX):
-        I_o = ca.vertcat(*[ca.horzcat(*row) for row in rows])
-        return m, h / m, I_o + skew(h) @ skew(h) / m
+        I_s = _inertia_at_origin(pi)
+        return m, h / m, I_s + skew(h) @ skew(h) / m
     I_o = np.array(rows, dtype=float)
     return float(m), np.asarray(h, dtype=float) / m, I_o + skew(h) @ skew(h) / m
+
+
+def _inertia_at_origin(pi: ca.SX) -> ca.SX:
+    """I_o (3, 3) of 10 symbolic dynamic parameters."""
+    return ca.vertcat(*[ca.horzcat(*row) for row in ((pi[4], pi[5], pi[7]), (pi[5], pi[6], pi[8]), (pi[7], pi[8], pi[9]))])
+
+
+def _symbolic_body(pi: ca.SX) -> LinkInertia:
+    """The body of 10 symbolic dynamic parameters, with its (h, I_o) as they are (``LinkInertia.origin``)."""
+    return LinkInertia(*_body(pi), origin=(pi[1:4], _inertia_at_origin(pi)))
 
 
 def parameters_of(robot: Robot) -> np.ndarray:
@@ -156,7 +166,7 @@ def parametric_robot(family: Family, p: ca.SX) -> Robot:
     foot points symbolic; axes and rotations the family's. The ``dynamics`` algorithms accept it."""
     if p.shape != (N_PARAMETERS, 1):
         raise InputError(f"p has shape {p.shape}; expected ({N_PARAMETERS}, 1)")
-    bodies = [LinkInertia(*_body(p[10 * b: 10 * b + 10])) for b in range(len(BODIES))]
+    bodies = [_symbolic_body(p[10 * b: 10 * b + 10]) for b in range(len(BODIES))]
     positions, feet = p[JOINT_POSITIONS], p[FOOT_POINTS]
     legs = []
     for n, leg in enumerate(family.robot.legs):

@@ -329,7 +329,8 @@ def _c_section(job: _Job) -> Section:
 
     # the cross builds (cached; docs/embedded.md) only with --footprint: minutes of compiling on a cold cache
     gen["embedded"] = embedded_footprint(job.robot, job.target / C_FOLDER, measure=job.footprint)
-    return rs.generated_c_section(gen, run_bench(job.robot, checked_c=files).as_dict())  # the files just checked
+    bench = run_bench(job.robot, checked_c=files, parametric=True)  # the files just checked; the family's too
+    return rs.generated_c_section(gen, bench.as_dict())
 
 
 def _symbolic_section(job: _Job) -> Section:

@@ -456,6 +456,13 @@ def generated_c_section(gen: dict[str, Any] | None, bench: Sequence[dict[str, An
                           f"{b.get('rounds') or 'several'} rounds of fresh copies of the code timed "
                           f"(Pinocchio {b.get('pinocchio_version')}); "
                           f"C source {num(b.get('code_bytes'), ',')} B, library {num(b.get('library_bytes'), ',')} B"))
+        if b.get("parametric"):
+            body.append(table(["term", "parametric ns", "fixed ns", "Pinocchio ns", "vs Pinocchio", "vs fixed"],
+                              [[name, num(t["parametric_ns"], ".0f"), num(t["fixed_ns"], ".0f"),
+                                num(t["pinocchio_ns"], ".0f"), num(t["vs_pinocchio"], ".2f"), num(t["vs_fixed"], ".2f")]
+                               for name, t in b["parametric"].items()],
+                              f"{b.get('robot')}: the family's parametric library (p as an input, docs/embedded.md) "
+                              "against the fixed library and Pinocchio, same run"))
         ratios = [e["ratio"] for e in entries if e.get("ratio") is not None]
         targeted = [e for e in entries if e.get("target") is not None]
         met = sum(1 for e in targeted if grade(e.get("ratio"), e["target"]) != "bad")

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import pytest
+
 from quadruped_dyn.bench.timing import BenchEntry, BenchReport
 
 
@@ -28,3 +30,30 @@ def test_peers_table_columns_stay_apart():
     entry = PeerEntry("a_robot_named_after_its_urdf_file", "M_full", "adam_M", 200.0, 3000.0, 0.07, 1200, 9000, 1e-15)
     row = peers_table([entry], native=False).splitlines()[2]
     assert row.startswith("a_robot_named_after_its_urdf_file  "), row
+
+
+def test_parametric_rows_in_the_table():
+    report = BenchReport("paper", parametric={"M_full": {"parametric_ns": 350.0, "fixed_ns": 170.0, "pinocchio_ns": 760.0,
+                                                         "vs_pinocchio": 0.46, "vs_fixed": 2.06}})
+    row = next(line for line in report.table().splitlines() if line.startswith("M_full"))
+    assert row.split() == ["M_full", "350", "170", "760", "0.46", "2.06"]
+
+
+@pytest.mark.slow
+def test_bench_json_has_the_parametric_section():
+    """``bench --parametric --json``: per term of parametric_timing.PAIRS the three times, finite and positive."""
+    import json
+    import math
+
+    from click.testing import CliRunner
+
+    from quadruped_dyn.bench.parametric_timing import PAIRS
+    from quadruped_dyn.cli import main
+
+    run = CliRunner().invoke(main, ["bench", "--robot", "paper", "--parametric", "--json", "--calls", "200", "--reps", "1",
+                                    "--peers", "none", "--no-call-cost"])
+    assert run.exit_code == 0, run.output
+    section = json.loads(run.stdout[run.stdout.index("["):])[0]["parametric"]
+    assert set(section) == {fixed for _, fixed, _ in PAIRS}
+    for times in section.values():
+        assert all(math.isfinite(times[k]) and times[k] > 0 for k in ("parametric_ns", "fixed_ns", "pinocchio_ns")), times

@@ -83,3 +83,31 @@ def test_docs_example_runs():
     text = (Path(__file__).resolve().parents[2] / "docs" / "embedded.md").read_text()
     section = text[text.index("## Parametric C"):]
     exec(re.search(r"```python\n(.*?)```", section, flags=re.S).group(1), {})
+
+
+def test_a_bad_p_is_refused_at_the_call(monkeypatch):
+    """A p written by hand (not ``library.parameters``) is checked where it enters the compiled function, once per
+    content: a loop over states with one p runs the validator once."""
+    from quadruped_dyn.model.parameters import BODIES
+
+    go1 = load_robot("go1")
+    library = parametric_library(go1)
+    M_full, q = library.function("M_full"), random_state(go1.lower, go1.upper, np.random.default_rng(0)).q
+    good = library.parameters(go1)
+    for body, change, message in (("FL_KFE", lambda pi: np.concatenate([[-1.0], pi[1:]]), "FL_KFE has mass -1 kg"),
+                                  ("FR_HFE", lambda pi: np.array([1.0, 0, 0, 0, 0.01, 0, 0.01, 0, 0, 0.05]),
+                                   "triangle inequality")):
+        bad = good.copy()
+        b = BODIES.index(body)
+        bad[10 * b: 10 * b + 10] = change(bad[10 * b: 10 * b + 10])
+        for call in (M_full, M_full.raw):
+            with pytest.raises(InputError, match=message):
+                call(q, bad)
+    calls = []
+    monkeypatch.setattr(parametric_library_module, "check_parameters", lambda p: calls.append(1))
+    for _ in range(3):
+        assert np.all(np.isfinite(M_full(q, good.copy())[0]))
+    assert len(calls) == 1, "the same p was checked again"
+    good[0] += 1.0
+    M_full(q, good)
+    assert len(calls) == 2, "a changed p was not checked"

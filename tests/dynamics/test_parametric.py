@@ -113,3 +113,19 @@ def test_non_physical_parameters_refused(paper):
         check_parameters(_p_with(paper, "trunk", lambda pi: pi * 1e9))
     with pytest.raises(InputError, match="expected 178 finite numbers"):
         check_parameters(np.full(178, np.nan))
+
+
+def test_no_division_by_a_mass(paper):
+    """The bodies' first moments m c enter as p has them (``LinkInertia.origin``): no term divides by a mass. The
+    only division left is the quaternion's, in the terms with gravity."""
+    import casadi as ca
+
+    from quadruped_dyn.dynamics.newton_euler import gravity_in_trunk
+
+    def divisions(f: ca.Function) -> int:
+        return sum(f.instruction_id(k) == ca.OP_DIV for k in range(f.n_instructions()))
+
+    q = ca.SX.sym("q", 19)
+    quaternion = divisions(ca.Function("g", [q], [gravity_in_trunk(q)]))
+    for f in parametric_dynamics(family_of(paper)).functions():
+        assert divisions(f) == (0 if f.name() in ("M_full", "C_full") else quaternion), f.name()

@@ -135,6 +135,10 @@ def test_generated_c_lists_every_function_with_its_check():
                                            {"name": "id_r_FL_BR", "generated_ns": 4.0, "pinocchio_ns": 1.0, "ratio": 4.0}]}
     timed = rs.generated_c_section(gen, bench)  # the checks pass; the headline says a speed target is missed
     assert timed.verdict == "pass" and "speed targets met 1 of 2" in timed.headline, timed.headline
+    parametric = {"M_full": {"parametric_ns": 350.0, "fixed_ns": 170.0, "pinocchio_ns": 760.0, "vs_pinocchio": 0.46,
+                             "vs_fixed": 2.06}}
+    rows = rows_of(table_with(rs.generated_c_section(gen, {**bench, "parametric": parametric}).body, "parametric ns"))
+    assert len(rows) == 1 and "0.46" in rows[0] and "2.06" in rows[0], rows
     unchecked = {**gen, "checks": gen["checks"][:2]}  # a function without its check does not pass
     assert rs.generated_c_section(unchecked, None).verdict == "FAIL"
 
