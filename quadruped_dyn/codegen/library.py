@@ -228,6 +228,7 @@ class CompiledFunction:
         self._iw = (ctypes.c_longlong * max(1, iw))()
         self._w = (c_real * max(1, w))()
         self._real, self._ptr, self._n_arg, self._n_res = real, ptr, max(1, n_arg, len(self._in)), max(1, n_res, len(self._out))
+        self.shared: tuple[int, ...] = ()  # the inputs a batch's states share (``Entry.shared``): one (nnz,) array each
         self._batch = getattr(self._lib, self.name + "_batch")
         self._batch.argtypes = [ctypes.c_longlong, ctypes.POINTER(ptr), ctypes.POINTER(ptr), ctypes.POINTER(ctypes.c_int),
                                 ptr]
@@ -247,16 +248,21 @@ class CompiledFunction:
     def batch(self, *arrays: np.ndarray, out: list[np.ndarray] | None = None,
               strict: bool = False) -> tuple[list[np.ndarray], np.ndarray]:
         """N states in one C call (``qd_NAME_batch``): input i an (N, nnz_i) C-contiguous array in the library's
-        precision (float64, float32 for a float library; anything else is refused, not copied: ``InputError``).
+        precision (float64, float32 for a float library; anything else is refused, not copied: ``InputError``), but an
+        input in ``shared`` (the parameters p of a parametric function) one (nnz_i,) array every state reads.
         Returns the outputs, (N, nnz) arrays of the nonzeros as ``raw`` gives them (``out``'s if given, checked
         likewise), each row equal to one call's to the bit, and each row's status: the scalar call's return code,
         or QD_NONFINITE where that is 0 but an input of the row is not finite. ``strict``: ``InputError`` naming the
         first bad row and its code instead."""
         if len(arrays) != len(self._in):
             raise InputError(f"{self.name}.batch takes inputs {self.names_in}; got {len(arrays)} arrays")
-        n = arrays[0].shape[0] if isinstance(arrays[0], np.ndarray) and arrays[0].ndim == 2 else -1
-        for x, size, name in zip(arrays, self.sizes_in, self.names_in):
-            self._check_rows(f"input {name}", x, n, size)
+        per_state = [x for i, x in enumerate(arrays) if i not in self.shared]
+        n = per_state[0].shape[0] if isinstance(per_state[0], np.ndarray) and per_state[0].ndim == 2 else -1
+        for i, (x, size, name) in enumerate(zip(arrays, self.sizes_in, self.names_in)):
+            if i in self.shared:
+                self._check_shared(name, x, size)
+            else:
+                self._check_rows(f"input {name}", x, n, size)
         nnz_out = [buf.size for buf in self._out]
         if out is None:
             out = [np.empty((n, m), dtype=self._real) for m in nnz_out]
@@ -269,11 +275,20 @@ class CompiledFunction:
         res = (self._ptr * self._n_res)(*[y.ctypes.data_as(self._ptr) for y in out])
         self._batch(n, arg, res, status.ctypes.data_as(ctypes.POINTER(ctypes.c_int)), self._w)
         if not all(np.isfinite(np.sum(x)) for x in arrays):  # one pass each; a sum that overflowed is checked here
-            status[(status == 0) & ~np.logical_and.reduce([np.isfinite(x).all(axis=1) for x in arrays])] = QD_NONFINITE
+            finite = [np.isfinite(x).all(axis=-1) for x in arrays]  # a shared input's: one bool for every row
+            status[(status == 0) & ~np.logical_and.reduce(np.broadcast_arrays(*finite))] = QD_NONFINITE
         if strict and status.any():
             row = int(np.flatnonzero(status)[0])
             raise InputError(f"{self.name}.batch: row {row}: {RETURN_CODES.get(int(status[row]), status[row])}")
         return out, status
+
+    def _check_shared(self, name: str, x: object, size: int) -> None:
+        """Shared input ``x`` one (size,) C-contiguous array in the library's precision, or InputError saying so."""
+        if not isinstance(x, np.ndarray) or x.shape != (size,):
+            got = f"shape {x.shape}" if isinstance(x, np.ndarray) else type(x).__name__
+            raise InputError(f"{self.name}.batch input {name}: shared by every state (read once); expected one ({size},) "
+                             f"array; got {got}")
+        self._check_rows(f"input {name}", x[None, :], 1, size)
 
     def _check_rows(self, what: str, x: object, n: int, size: int) -> None:
         """``x`` an (n, size) C-contiguous array in the library's precision, or InputError saying what it is."""

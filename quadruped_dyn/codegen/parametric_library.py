@@ -76,6 +76,11 @@ def layout_comment(family: Family) -> str:
     return "/* " + "\n   ".join(lines) + " */\n"
 
 
+def shared_inputs(n_in: int) -> tuple[int, ...]:
+    """The inputs a batch's states share (``Entry.shared``; ``CompiledFunction.shared``): p, the last."""
+    return (n_in - 1,)
+
+
 def _entry(f: ca.Function) -> tuple[Entry, str]:
     """The entry of parametric function ``f`` and the static C it calls: f's graph with the joints' sines and cosines
     as inputs (``joint_trig``), taken once per call by ``qd_sincos`` as the fixed library's full terms do."""
@@ -91,7 +96,7 @@ def _entry(f: ca.Function) -> tuple[Entry, str]:
             f"  const casadi_real* a[{f.n_in() + 2}] = {{{inputs}}};\n"
             f"  qd_sincos({n}, arg[0] + {JOINT_ANGLES.start}, c, s);\n"
             f"  return {evaluation}(a, res, iw, w, mem);\n")
-    return Entry(renamed, None, body, shared=(f.n_in() - 1,)), static.text  # a batch's states share p
+    return Entry(renamed, None, body, shared=shared_inputs(f.n_in())), static.text
 
 
 def parametric_c(family: Family, precision: str = "double") -> tuple[str, str]:
@@ -118,6 +123,7 @@ class ParametricFunction(CompiledFunction):
 
     def __init__(self, library: CompiledLibrary, name: str) -> None:
         super().__init__(library, name)
+        self.shared = shared_inputs(len(self.sizes_in))
         self._checked: bytes | None = None
 
     def _check_p(self, args: tuple[np.ndarray, ...]) -> None:
@@ -132,6 +138,14 @@ class ParametricFunction(CompiledFunction):
     def raw(self, *args: np.ndarray) -> list[np.ndarray]:
         self._check_p(args)
         return super().raw(*args)
+
+    def batch(self, *arrays: np.ndarray, out: list[np.ndarray] | None = None,
+              strict: bool = False) -> tuple[list[np.ndarray], np.ndarray]:
+        """``CompiledFunction.batch`` with p one (178,) array, shared by every state, checked once."""
+        if len(arrays) == len(self.sizes_in):  # a p of rows is refused as shared before its numbers are checked
+            self._check_shared(self.names_in[-1], arrays[-1], self.sizes_in[-1])
+        self._check_p(arrays)
+        return super().batch(*arrays, out=out, strict=strict)
 
     def __call__(self, *args: np.ndarray) -> list[np.ndarray]:
         self._check_p(args)

@@ -111,3 +111,20 @@ def test_a_bad_p_is_refused_at_the_call(monkeypatch):
     good[0] += 1.0
     M_full(q, good)
     assert len(calls) == 2, "a changed p was not checked"
+
+
+def test_batch_shares_p():
+    """A batch's states share p (one (178,) array, read once in C): each row equals its own call with that p, to the
+    bit; an (N, 178) p -- rows that could differ -- is refused, not read as its first row."""
+    go1 = load_robot("go1")
+    library = parametric_library(go1)
+    M_full, p = library.function("M_full"), library.parameters(go1)
+    rng = np.random.default_rng(3)
+    qs = np.array([random_state(go1.lower, go1.upper, rng).q for _ in range(3)])
+    (rows,), status = M_full.batch(qs, p)
+    assert not status.any()
+    for q, row in zip(qs, rows):
+        assert np.array_equal(row, M_full.raw(q, p)[0]), "a batch row differs from its own call"
+    assert np.isfinite(rows).all()
+    with pytest.raises(InputError, match=r"shared by every state.*expected one \(178,\) array; got shape \(3, 178\)"):
+        M_full.batch(qs, np.tile(p, (3, 1)))
