@@ -238,7 +238,8 @@ def reference_header(robot: Robot, functions: list[ca.Function], work: dict[str,
         " * at a fixed state near standing; 12 significant digits. Generated; do not edit. */",
         "typedef int (*qd_fn)(const casadi_real**, casadi_real**, casadi_int*, casadi_real*, int);",
         f"#define QD_MAX_N_IN {max(f.n_in() for f in functions)}",
-        "typedef struct { const char* name; qd_fn fn; int n_in, n_out; const double* in[QD_MAX_N_IN];",
+        "typedef int (*qd_batch_fn)(casadi_int, const casadi_real* const*, casadi_real* const*, int*, casadi_real*);",
+        "typedef struct { const char* name; qd_fn fn; qd_batch_fn batch; int n_in, n_out; const double* in[QD_MAX_N_IN];",
         "                 int in_len[QD_MAX_N_IN]; const double* out[4]; int out_nnz[4]; double tol_scale, tol_floor; } qd_case;",
         "/* tol_scale: the conditioning beyond what the tolerances assume (check_program_values.tolerance_scale); tol_floor:",
         " * the reference's own accuracy (finite differences: check_program_values.tolerance_floor); the relative tolerance",
@@ -270,7 +271,7 @@ def reference_header(robot: Robot, functions: list[ca.Function], work: dict[str,
             outs.append((f"{f.name()}_out{i}", len(nz)))
         ins = [(f"qd_ref_{f.name_in(i)}", f.nnz_in(i)) for i in range(f.n_in())]
         cases.append(
-            f'  {{"{f.name()}", {f.name()}, {f.n_in()}, {f.n_out()}, {{{", ".join(n for n, _ in ins)}}}, '
+            f'  {{"{f.name()}", {f.name()}, {f.name()}_batch, {f.n_in()}, {f.n_out()}, {{{", ".join(n for n, _ in ins)}}}, '
             f'{{{", ".join(str(k) for _, k in ins)}}}, {{{", ".join(n for n, _ in outs)}}}, '
             f'{{{", ".join(str(k) for _, k in outs)}}}, {tol_scale:.3g}, {tolerance_floor(name):g}}},'
         )

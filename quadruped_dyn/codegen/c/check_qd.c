@@ -5,9 +5,11 @@
  * reduced model and of the GRF solve are checked against central differences of Pinocchio-built
  * references: their tolerance is at least the differences' accuracy (tol_floor, times tol_scale).
  * Each function is also called with null iw and w first (the header's contract): one that needs work memory
- * returns QD_NO_WORK, any other what it returns with them. */
+ * returns QD_NO_WORK, any other what it returns with them; its _batch entry on 3 copies of the inputs gives the
+ * call's outputs to the bit and its return code per row. */
 #include <math.h>
 #include <stdio.h>
+#include <string.h>
 
 #include QD_HEADER
 #include QD_REFERENCE
@@ -28,6 +30,31 @@ static casadi_real w[QD_MAX_SZ_W + 1];
  * could only fail on NaN. */
 #define QD_MAX_TOL 1e-2
 
+/* The batch entry on QD_BATCH_N copies of case k's inputs: each row's outputs equal the one call's (out) to the bit
+ * and each status its return code (flag). */
+#define QD_BATCH_N 3
+static int qd_batch_agrees(const qd_case* k, casadi_real in[QD_MAX_N_IN][QD_MAX_IN], casadi_real out[4][QD_MAX_OUT],
+                           int flag) {
+  static casadi_real bin[QD_MAX_N_IN][QD_BATCH_N * QD_MAX_IN], bout[4][QD_BATCH_N * QD_MAX_OUT];
+  const casadi_real* arg[QD_MAX_N_IN];
+  casadi_real* res[4];
+  int status[QD_BATCH_N];
+  for (int i = 0; i < k->n_in; ++i) {
+    for (int s = 0; s < QD_BATCH_N; ++s)
+      for (int j = 0; j < k->in_len[i]; ++j) bin[i][s * k->in_len[i] + j] = in[i][j];
+    arg[i] = bin[i];
+  }
+  for (int i = 0; i < k->n_out; ++i) res[i] = bout[i];
+  k->batch(QD_BATCH_N, arg, res, status, w);
+  for (int s = 0; s < QD_BATCH_N; ++s) {
+    if (status[s] != flag) return 0;
+    for (int i = 0; i < k->n_out && flag == 0; ++i)
+      for (int j = 0; j < k->out_nnz[i]; ++j)
+        if (memcmp(&bout[i][s * k->out_nnz[i] + j], &out[i][j], sizeof(casadi_real)) != 0) return 0;
+  }
+  return 1;
+}
+
 int main(void) {
   int passed = 0, failed = 0, skipped = 0;
   for (int c = 0; c < QD_N_CASES; ++c) {
@@ -40,6 +67,11 @@ int main(void) {
     int flag = k->fn(arg, res, iw, w, 0);
     if (flag_null_w != QD_NO_WORK && flag_null_w != flag) {
       printf("%-24s returned %d with a null w, %d with w: FAIL\n", k->name, flag_null_w, flag);
+      ++failed;
+      continue;
+    }
+    if (!qd_batch_agrees(k, in, out, flag)) {
+      printf("%-24s batch rows differ from its call (outputs to the bit, or statuses): FAIL\n", k->name);
       ++failed;
       continue;
     }
