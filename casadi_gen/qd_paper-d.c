@@ -4451,6 +4451,25 @@ CASADI_SYMBOL_EXPORT int qd_did_full_work_bytes(casadi_int *sz_arg, casadi_int* 
   return 0;
 }
 
+CASADI_SYMBOL_EXPORT int qd_did_full_batch(casadi_int n, const casadi_real* const* arg, casadi_real* const* res, int* status, casadi_real* w) {
+  const casadi_real* a[3] = {0};
+  casadi_real* r[3] = {0};
+  casadi_int s;
+  int bad = 0;
+  for (s = 0; s < n; ++s) {
+    a[0] = arg[0] ? arg[0] + s*19 : 0;
+    a[1] = arg[1] ? arg[1] + s*18 : 0;
+    a[2] = arg[2] ? arg[2] + s*18 : 0;
+    r[0] = res[0] ? res[0] + s*162 : 0;
+    r[1] = res[1] ? res[1] + s*212 : 0;
+    r[2] = res[2] ? res[2] + s*210 : 0;
+    int flag = qd_did_full(a, r, 0, w, 0);
+    if (status) status[s] = flag;
+    bad += flag != 0;
+  }
+  return bad;
+}
+
 CASADI_SYMBOL_EXPORT int qd_dfd_full_parts(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem){
   return qd_d_finite(qd_dfd_full_parts_eval(arg, res, iw, w, mem), res, 2, (const casadi_int[]){324, 18});
 }
@@ -4525,6 +4544,23 @@ CASADI_SYMBOL_EXPORT int qd_dfd_full_parts_work_bytes(casadi_int *sz_arg, casadi
   if (sz_iw) *sz_iw = 0*sizeof(casadi_int);
   if (sz_w) *sz_w = 0*sizeof(casadi_real);
   return 0;
+}
+
+CASADI_SYMBOL_EXPORT int qd_dfd_full_parts_batch(casadi_int n, const casadi_real* const* arg, casadi_real* const* res, int* status, casadi_real* w) {
+  const casadi_real* a[2] = {0};
+  casadi_real* r[2] = {0};
+  casadi_int s;
+  int bad = 0;
+  for (s = 0; s < n; ++s) {
+    a[0] = arg[0] ? arg[0] + s*19 : 0;
+    a[1] = arg[1] ? arg[1] + s*18 : 0;
+    r[0] = res[0] ? res[0] + s*324 : 0;
+    r[1] = res[1] ? res[1] + s*18 : 0;
+    int flag = qd_dfd_full_parts(a, r, 0, w, 0);
+    if (status) status[s] = flag;
+    bad += flag != 0;
+  }
+  return bad;
 }
 
 CASADI_SYMBOL_EXPORT int qd_dfd_full(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem){
@@ -4605,6 +4641,25 @@ CASADI_SYMBOL_EXPORT int qd_dfd_full_work_bytes(casadi_int *sz_arg, casadi_int* 
   if (sz_iw) *sz_iw = 0*sizeof(casadi_int);
   if (sz_w) *sz_w = 1476*sizeof(casadi_real);
   return 0;
+}
+
+CASADI_SYMBOL_EXPORT int qd_dfd_full_batch(casadi_int n, const casadi_real* const* arg, casadi_real* const* res, int* status, casadi_real* w) {
+  const casadi_real* a[3] = {0};
+  casadi_real* r[3] = {0};
+  casadi_int s;
+  int bad = 0;
+  for (s = 0; s < n; ++s) {
+    a[0] = arg[0] ? arg[0] + s*19 : 0;
+    a[1] = arg[1] ? arg[1] + s*18 : 0;
+    a[2] = arg[2] ? arg[2] + s*18 : 0;
+    r[0] = res[0] ? res[0] + s*324 : 0;
+    r[1] = res[1] ? res[1] + s*324 : 0;
+    r[2] = res[2] ? res[2] + s*324 : 0;
+    int flag = qd_dfd_full(a, r, 0, w, 0);
+    if (status) status[s] = flag;
+    bad += flag != 0;
+  }
+  return bad;
 }
 
 /* qd_dgrf_dir_FL_FR_BL_BR:(q[19],w[6],dq[18])->(lambda_w[6],dlambda_w[6]) */
@@ -5403,6 +5458,24 @@ CASADI_SYMBOL_EXPORT int qd_dgrf_dir_FL_FR_BL_BR_work_bytes(casadi_int *sz_arg, 
   return 0;
 }
 
+CASADI_SYMBOL_EXPORT int qd_dgrf_dir_FL_FR_BL_BR_batch(casadi_int n, const casadi_real* const* arg, casadi_real* const* res, int* status, casadi_real* w) {
+  const casadi_real* a[3] = {0};
+  casadi_real* r[2] = {0};
+  casadi_int s;
+  int bad = 0;
+  for (s = 0; s < n; ++s) {
+    a[0] = arg[0] ? arg[0] + s*19 : 0;
+    a[1] = arg[1] ? arg[1] + s*6 : 0;
+    a[2] = arg[2] ? arg[2] + s*18 : 0;
+    r[0] = res[0] ? res[0] + s*6 : 0;
+    r[1] = res[1] ? res[1] + s*6 : 0;
+    int flag = qd_dgrf_dir_FL_FR_BL_BR(a, r, 0, w, 0);
+    if (status) status[s] = flag;
+    bad += flag != 0;
+  }
+  return bad;
+}
+
 CASADI_SYMBOL_EXPORT int qd_dgrf_FL_FR_BL_BR(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem){
   return qd_dgrf_solve(6, 15, casadi_f0, casadi_f3, qd_did_full_sparsity_out(0), qd_did_full_sparsity_out(1), arg, res, iw, w, mem);
 }
@@ -5481,6 +5554,25 @@ CASADI_SYMBOL_EXPORT int qd_dgrf_FL_FR_BL_BR_work_bytes(casadi_int *sz_arg, casa
   if (sz_iw) *sz_iw = 0*sizeof(casadi_int);
   if (sz_w) *sz_w = 1158*sizeof(casadi_real);
   return 0;
+}
+
+CASADI_SYMBOL_EXPORT int qd_dgrf_FL_FR_BL_BR_batch(casadi_int n, const casadi_real* const* arg, casadi_real* const* res, int* status, casadi_real* w) {
+  const casadi_real* a[3] = {0};
+  casadi_real* r[3] = {0};
+  casadi_int s;
+  int bad = 0;
+  for (s = 0; s < n; ++s) {
+    a[0] = arg[0] ? arg[0] + s*19 : 0;
+    a[1] = arg[1] ? arg[1] + s*18 : 0;
+    a[2] = arg[2] ? arg[2] + s*18 : 0;
+    r[0] = res[0] ? res[0] + s*108 : 0;
+    r[1] = res[1] ? res[1] + s*108 : 0;
+    r[2] = res[2] ? res[2] + s*108 : 0;
+    int flag = qd_dgrf_FL_FR_BL_BR(a, r, 0, w, 0);
+    if (status) status[s] = flag;
+    bad += flag != 0;
+  }
+  return bad;
 }
 
 /* qd_dgrf_dir_FL_FR_BL:(q[19],w[6],dq[18])->(lambda_w[6],dlambda_w[6]) */
@@ -6017,6 +6109,24 @@ CASADI_SYMBOL_EXPORT int qd_dgrf_dir_FL_FR_BL_work_bytes(casadi_int *sz_arg, cas
   return 0;
 }
 
+CASADI_SYMBOL_EXPORT int qd_dgrf_dir_FL_FR_BL_batch(casadi_int n, const casadi_real* const* arg, casadi_real* const* res, int* status, casadi_real* w) {
+  const casadi_real* a[3] = {0};
+  casadi_real* r[2] = {0};
+  casadi_int s;
+  int bad = 0;
+  for (s = 0; s < n; ++s) {
+    a[0] = arg[0] ? arg[0] + s*19 : 0;
+    a[1] = arg[1] ? arg[1] + s*6 : 0;
+    a[2] = arg[2] ? arg[2] + s*18 : 0;
+    r[0] = res[0] ? res[0] + s*6 : 0;
+    r[1] = res[1] ? res[1] + s*6 : 0;
+    int flag = qd_dgrf_dir_FL_FR_BL(a, r, 0, w, 0);
+    if (status) status[s] = flag;
+    bad += flag != 0;
+  }
+  return bad;
+}
+
 CASADI_SYMBOL_EXPORT int qd_dgrf_FL_FR_BL(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem){
   return qd_dgrf_solve(6, 7, casadi_f0, casadi_f5, qd_did_full_sparsity_out(0), qd_did_full_sparsity_out(1), arg, res, iw, w, mem);
 }
@@ -6095,6 +6205,25 @@ CASADI_SYMBOL_EXPORT int qd_dgrf_FL_FR_BL_work_bytes(casadi_int *sz_arg, casadi_
   if (sz_iw) *sz_iw = 0*sizeof(casadi_int);
   if (sz_w) *sz_w = 1158*sizeof(casadi_real);
   return 0;
+}
+
+CASADI_SYMBOL_EXPORT int qd_dgrf_FL_FR_BL_batch(casadi_int n, const casadi_real* const* arg, casadi_real* const* res, int* status, casadi_real* w) {
+  const casadi_real* a[3] = {0};
+  casadi_real* r[3] = {0};
+  casadi_int s;
+  int bad = 0;
+  for (s = 0; s < n; ++s) {
+    a[0] = arg[0] ? arg[0] + s*19 : 0;
+    a[1] = arg[1] ? arg[1] + s*18 : 0;
+    a[2] = arg[2] ? arg[2] + s*18 : 0;
+    r[0] = res[0] ? res[0] + s*108 : 0;
+    r[1] = res[1] ? res[1] + s*108 : 0;
+    r[2] = res[2] ? res[2] + s*108 : 0;
+    int flag = qd_dgrf_FL_FR_BL(a, r, 0, w, 0);
+    if (status) status[s] = flag;
+    bad += flag != 0;
+  }
+  return bad;
 }
 
 /* qd_dgrf_dir_FL_FR_BR:(q[19],w[6],dq[18])->(lambda_w[6],dlambda_w[6]) */
@@ -6631,6 +6760,24 @@ CASADI_SYMBOL_EXPORT int qd_dgrf_dir_FL_FR_BR_work_bytes(casadi_int *sz_arg, cas
   return 0;
 }
 
+CASADI_SYMBOL_EXPORT int qd_dgrf_dir_FL_FR_BR_batch(casadi_int n, const casadi_real* const* arg, casadi_real* const* res, int* status, casadi_real* w) {
+  const casadi_real* a[3] = {0};
+  casadi_real* r[2] = {0};
+  casadi_int s;
+  int bad = 0;
+  for (s = 0; s < n; ++s) {
+    a[0] = arg[0] ? arg[0] + s*19 : 0;
+    a[1] = arg[1] ? arg[1] + s*6 : 0;
+    a[2] = arg[2] ? arg[2] + s*18 : 0;
+    r[0] = res[0] ? res[0] + s*6 : 0;
+    r[1] = res[1] ? res[1] + s*6 : 0;
+    int flag = qd_dgrf_dir_FL_FR_BR(a, r, 0, w, 0);
+    if (status) status[s] = flag;
+    bad += flag != 0;
+  }
+  return bad;
+}
+
 CASADI_SYMBOL_EXPORT int qd_dgrf_FL_FR_BR(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem){
   return qd_dgrf_solve(6, 11, casadi_f0, casadi_f7, qd_did_full_sparsity_out(0), qd_did_full_sparsity_out(1), arg, res, iw, w, mem);
 }
@@ -6709,6 +6856,25 @@ CASADI_SYMBOL_EXPORT int qd_dgrf_FL_FR_BR_work_bytes(casadi_int *sz_arg, casadi_
   if (sz_iw) *sz_iw = 0*sizeof(casadi_int);
   if (sz_w) *sz_w = 1158*sizeof(casadi_real);
   return 0;
+}
+
+CASADI_SYMBOL_EXPORT int qd_dgrf_FL_FR_BR_batch(casadi_int n, const casadi_real* const* arg, casadi_real* const* res, int* status, casadi_real* w) {
+  const casadi_real* a[3] = {0};
+  casadi_real* r[3] = {0};
+  casadi_int s;
+  int bad = 0;
+  for (s = 0; s < n; ++s) {
+    a[0] = arg[0] ? arg[0] + s*19 : 0;
+    a[1] = arg[1] ? arg[1] + s*18 : 0;
+    a[2] = arg[2] ? arg[2] + s*18 : 0;
+    r[0] = res[0] ? res[0] + s*108 : 0;
+    r[1] = res[1] ? res[1] + s*108 : 0;
+    r[2] = res[2] ? res[2] + s*108 : 0;
+    int flag = qd_dgrf_FL_FR_BR(a, r, 0, w, 0);
+    if (status) status[s] = flag;
+    bad += flag != 0;
+  }
+  return bad;
 }
 
 /* qd_dgrf_dir_FL_BL_BR:(q[19],w[6],dq[18])->(lambda_w[6],dlambda_w[6]) */
@@ -7245,6 +7411,24 @@ CASADI_SYMBOL_EXPORT int qd_dgrf_dir_FL_BL_BR_work_bytes(casadi_int *sz_arg, cas
   return 0;
 }
 
+CASADI_SYMBOL_EXPORT int qd_dgrf_dir_FL_BL_BR_batch(casadi_int n, const casadi_real* const* arg, casadi_real* const* res, int* status, casadi_real* w) {
+  const casadi_real* a[3] = {0};
+  casadi_real* r[2] = {0};
+  casadi_int s;
+  int bad = 0;
+  for (s = 0; s < n; ++s) {
+    a[0] = arg[0] ? arg[0] + s*19 : 0;
+    a[1] = arg[1] ? arg[1] + s*6 : 0;
+    a[2] = arg[2] ? arg[2] + s*18 : 0;
+    r[0] = res[0] ? res[0] + s*6 : 0;
+    r[1] = res[1] ? res[1] + s*6 : 0;
+    int flag = qd_dgrf_dir_FL_BL_BR(a, r, 0, w, 0);
+    if (status) status[s] = flag;
+    bad += flag != 0;
+  }
+  return bad;
+}
+
 CASADI_SYMBOL_EXPORT int qd_dgrf_FL_BL_BR(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem){
   return qd_dgrf_solve(6, 13, casadi_f0, casadi_f9, qd_did_full_sparsity_out(0), qd_did_full_sparsity_out(1), arg, res, iw, w, mem);
 }
@@ -7323,6 +7507,25 @@ CASADI_SYMBOL_EXPORT int qd_dgrf_FL_BL_BR_work_bytes(casadi_int *sz_arg, casadi_
   if (sz_iw) *sz_iw = 0*sizeof(casadi_int);
   if (sz_w) *sz_w = 1158*sizeof(casadi_real);
   return 0;
+}
+
+CASADI_SYMBOL_EXPORT int qd_dgrf_FL_BL_BR_batch(casadi_int n, const casadi_real* const* arg, casadi_real* const* res, int* status, casadi_real* w) {
+  const casadi_real* a[3] = {0};
+  casadi_real* r[3] = {0};
+  casadi_int s;
+  int bad = 0;
+  for (s = 0; s < n; ++s) {
+    a[0] = arg[0] ? arg[0] + s*19 : 0;
+    a[1] = arg[1] ? arg[1] + s*18 : 0;
+    a[2] = arg[2] ? arg[2] + s*18 : 0;
+    r[0] = res[0] ? res[0] + s*108 : 0;
+    r[1] = res[1] ? res[1] + s*108 : 0;
+    r[2] = res[2] ? res[2] + s*108 : 0;
+    int flag = qd_dgrf_FL_BL_BR(a, r, 0, w, 0);
+    if (status) status[s] = flag;
+    bad += flag != 0;
+  }
+  return bad;
 }
 
 /* qd_dgrf_dir_FR_BL_BR:(q[19],w[6],dq[18])->(lambda_w[6],dlambda_w[6]) */
@@ -7859,6 +8062,24 @@ CASADI_SYMBOL_EXPORT int qd_dgrf_dir_FR_BL_BR_work_bytes(casadi_int *sz_arg, cas
   return 0;
 }
 
+CASADI_SYMBOL_EXPORT int qd_dgrf_dir_FR_BL_BR_batch(casadi_int n, const casadi_real* const* arg, casadi_real* const* res, int* status, casadi_real* w) {
+  const casadi_real* a[3] = {0};
+  casadi_real* r[2] = {0};
+  casadi_int s;
+  int bad = 0;
+  for (s = 0; s < n; ++s) {
+    a[0] = arg[0] ? arg[0] + s*19 : 0;
+    a[1] = arg[1] ? arg[1] + s*6 : 0;
+    a[2] = arg[2] ? arg[2] + s*18 : 0;
+    r[0] = res[0] ? res[0] + s*6 : 0;
+    r[1] = res[1] ? res[1] + s*6 : 0;
+    int flag = qd_dgrf_dir_FR_BL_BR(a, r, 0, w, 0);
+    if (status) status[s] = flag;
+    bad += flag != 0;
+  }
+  return bad;
+}
+
 CASADI_SYMBOL_EXPORT int qd_dgrf_FR_BL_BR(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem){
   return qd_dgrf_solve(6, 14, casadi_f0, casadi_f11, qd_did_full_sparsity_out(0), qd_did_full_sparsity_out(1), arg, res, iw, w, mem);
 }
@@ -7937,6 +8158,25 @@ CASADI_SYMBOL_EXPORT int qd_dgrf_FR_BL_BR_work_bytes(casadi_int *sz_arg, casadi_
   if (sz_iw) *sz_iw = 0*sizeof(casadi_int);
   if (sz_w) *sz_w = 1158*sizeof(casadi_real);
   return 0;
+}
+
+CASADI_SYMBOL_EXPORT int qd_dgrf_FR_BL_BR_batch(casadi_int n, const casadi_real* const* arg, casadi_real* const* res, int* status, casadi_real* w) {
+  const casadi_real* a[3] = {0};
+  casadi_real* r[3] = {0};
+  casadi_int s;
+  int bad = 0;
+  for (s = 0; s < n; ++s) {
+    a[0] = arg[0] ? arg[0] + s*19 : 0;
+    a[1] = arg[1] ? arg[1] + s*18 : 0;
+    a[2] = arg[2] ? arg[2] + s*18 : 0;
+    r[0] = res[0] ? res[0] + s*108 : 0;
+    r[1] = res[1] ? res[1] + s*108 : 0;
+    r[2] = res[2] ? res[2] + s*108 : 0;
+    int flag = qd_dgrf_FR_BL_BR(a, r, 0, w, 0);
+    if (status) status[s] = flag;
+    bad += flag != 0;
+  }
+  return bad;
 }
 
 /* qd_dgrf_dir_FL_FR:(q[19],w[6],dq[18])->(lambda_w[6],dlambda_w[6]) */
@@ -8460,6 +8700,24 @@ CASADI_SYMBOL_EXPORT int qd_dgrf_dir_FL_FR_work_bytes(casadi_int *sz_arg, casadi
   return 0;
 }
 
+CASADI_SYMBOL_EXPORT int qd_dgrf_dir_FL_FR_batch(casadi_int n, const casadi_real* const* arg, casadi_real* const* res, int* status, casadi_real* w) {
+  const casadi_real* a[3] = {0};
+  casadi_real* r[2] = {0};
+  casadi_int s;
+  int bad = 0;
+  for (s = 0; s < n; ++s) {
+    a[0] = arg[0] ? arg[0] + s*19 : 0;
+    a[1] = arg[1] ? arg[1] + s*6 : 0;
+    a[2] = arg[2] ? arg[2] + s*18 : 0;
+    r[0] = res[0] ? res[0] + s*6 : 0;
+    r[1] = res[1] ? res[1] + s*6 : 0;
+    int flag = qd_dgrf_dir_FL_FR(a, r, 0, w, 0);
+    if (status) status[s] = flag;
+    bad += flag != 0;
+  }
+  return bad;
+}
+
 CASADI_SYMBOL_EXPORT int qd_dgrf_FL_FR(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem){
   return qd_dgrf_solve(6, 3, casadi_f0, casadi_f13, qd_did_full_sparsity_out(0), qd_did_full_sparsity_out(1), arg, res, iw, w, mem);
 }
@@ -8538,6 +8796,25 @@ CASADI_SYMBOL_EXPORT int qd_dgrf_FL_FR_work_bytes(casadi_int *sz_arg, casadi_int
   if (sz_iw) *sz_iw = 0*sizeof(casadi_int);
   if (sz_w) *sz_w = 1158*sizeof(casadi_real);
   return 0;
+}
+
+CASADI_SYMBOL_EXPORT int qd_dgrf_FL_FR_batch(casadi_int n, const casadi_real* const* arg, casadi_real* const* res, int* status, casadi_real* w) {
+  const casadi_real* a[3] = {0};
+  casadi_real* r[3] = {0};
+  casadi_int s;
+  int bad = 0;
+  for (s = 0; s < n; ++s) {
+    a[0] = arg[0] ? arg[0] + s*19 : 0;
+    a[1] = arg[1] ? arg[1] + s*18 : 0;
+    a[2] = arg[2] ? arg[2] + s*18 : 0;
+    r[0] = res[0] ? res[0] + s*108 : 0;
+    r[1] = res[1] ? res[1] + s*108 : 0;
+    r[2] = res[2] ? res[2] + s*108 : 0;
+    int flag = qd_dgrf_FL_FR(a, r, 0, w, 0);
+    if (status) status[s] = flag;
+    bad += flag != 0;
+  }
+  return bad;
 }
 
 /* qd_dgrf_dir_FL_BL:(q[19],w[6],dq[18])->(lambda_w[6],dlambda_w[6]) */
@@ -9061,6 +9338,24 @@ CASADI_SYMBOL_EXPORT int qd_dgrf_dir_FL_BL_work_bytes(casadi_int *sz_arg, casadi
   return 0;
 }
 
+CASADI_SYMBOL_EXPORT int qd_dgrf_dir_FL_BL_batch(casadi_int n, const casadi_real* const* arg, casadi_real* const* res, int* status, casadi_real* w) {
+  const casadi_real* a[3] = {0};
+  casadi_real* r[2] = {0};
+  casadi_int s;
+  int bad = 0;
+  for (s = 0; s < n; ++s) {
+    a[0] = arg[0] ? arg[0] + s*19 : 0;
+    a[1] = arg[1] ? arg[1] + s*6 : 0;
+    a[2] = arg[2] ? arg[2] + s*18 : 0;
+    r[0] = res[0] ? res[0] + s*6 : 0;
+    r[1] = res[1] ? res[1] + s*6 : 0;
+    int flag = qd_dgrf_dir_FL_BL(a, r, 0, w, 0);
+    if (status) status[s] = flag;
+    bad += flag != 0;
+  }
+  return bad;
+}
+
 CASADI_SYMBOL_EXPORT int qd_dgrf_FL_BL(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem){
   return qd_dgrf_solve(6, 5, casadi_f0, casadi_f15, qd_did_full_sparsity_out(0), qd_did_full_sparsity_out(1), arg, res, iw, w, mem);
 }
@@ -9139,6 +9434,25 @@ CASADI_SYMBOL_EXPORT int qd_dgrf_FL_BL_work_bytes(casadi_int *sz_arg, casadi_int
   if (sz_iw) *sz_iw = 0*sizeof(casadi_int);
   if (sz_w) *sz_w = 1158*sizeof(casadi_real);
   return 0;
+}
+
+CASADI_SYMBOL_EXPORT int qd_dgrf_FL_BL_batch(casadi_int n, const casadi_real* const* arg, casadi_real* const* res, int* status, casadi_real* w) {
+  const casadi_real* a[3] = {0};
+  casadi_real* r[3] = {0};
+  casadi_int s;
+  int bad = 0;
+  for (s = 0; s < n; ++s) {
+    a[0] = arg[0] ? arg[0] + s*19 : 0;
+    a[1] = arg[1] ? arg[1] + s*18 : 0;
+    a[2] = arg[2] ? arg[2] + s*18 : 0;
+    r[0] = res[0] ? res[0] + s*108 : 0;
+    r[1] = res[1] ? res[1] + s*108 : 0;
+    r[2] = res[2] ? res[2] + s*108 : 0;
+    int flag = qd_dgrf_FL_BL(a, r, 0, w, 0);
+    if (status) status[s] = flag;
+    bad += flag != 0;
+  }
+  return bad;
 }
 
 /* qd_dgrf_dir_FL_BR:(q[19],w[6],dq[18])->(lambda_w[6],dlambda_w[6]) */
@@ -9663,6 +9977,24 @@ CASADI_SYMBOL_EXPORT int qd_dgrf_dir_FL_BR_work_bytes(casadi_int *sz_arg, casadi
   return 0;
 }
 
+CASADI_SYMBOL_EXPORT int qd_dgrf_dir_FL_BR_batch(casadi_int n, const casadi_real* const* arg, casadi_real* const* res, int* status, casadi_real* w) {
+  const casadi_real* a[3] = {0};
+  casadi_real* r[2] = {0};
+  casadi_int s;
+  int bad = 0;
+  for (s = 0; s < n; ++s) {
+    a[0] = arg[0] ? arg[0] + s*19 : 0;
+    a[1] = arg[1] ? arg[1] + s*6 : 0;
+    a[2] = arg[2] ? arg[2] + s*18 : 0;
+    r[0] = res[0] ? res[0] + s*6 : 0;
+    r[1] = res[1] ? res[1] + s*6 : 0;
+    int flag = qd_dgrf_dir_FL_BR(a, r, 0, w, 0);
+    if (status) status[s] = flag;
+    bad += flag != 0;
+  }
+  return bad;
+}
+
 CASADI_SYMBOL_EXPORT int qd_dgrf_FL_BR(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem){
   return qd_dgrf_solve(6, 9, casadi_f0, casadi_f17, qd_did_full_sparsity_out(0), qd_did_full_sparsity_out(1), arg, res, iw, w, mem);
 }
@@ -9741,6 +10073,25 @@ CASADI_SYMBOL_EXPORT int qd_dgrf_FL_BR_work_bytes(casadi_int *sz_arg, casadi_int
   if (sz_iw) *sz_iw = 0*sizeof(casadi_int);
   if (sz_w) *sz_w = 1158*sizeof(casadi_real);
   return 0;
+}
+
+CASADI_SYMBOL_EXPORT int qd_dgrf_FL_BR_batch(casadi_int n, const casadi_real* const* arg, casadi_real* const* res, int* status, casadi_real* w) {
+  const casadi_real* a[3] = {0};
+  casadi_real* r[3] = {0};
+  casadi_int s;
+  int bad = 0;
+  for (s = 0; s < n; ++s) {
+    a[0] = arg[0] ? arg[0] + s*19 : 0;
+    a[1] = arg[1] ? arg[1] + s*18 : 0;
+    a[2] = arg[2] ? arg[2] + s*18 : 0;
+    r[0] = res[0] ? res[0] + s*108 : 0;
+    r[1] = res[1] ? res[1] + s*108 : 0;
+    r[2] = res[2] ? res[2] + s*108 : 0;
+    int flag = qd_dgrf_FL_BR(a, r, 0, w, 0);
+    if (status) status[s] = flag;
+    bad += flag != 0;
+  }
+  return bad;
 }
 
 /* qd_dgrf_dir_FR_BL:(q[19],w[6],dq[18])->(lambda_w[6],dlambda_w[6]) */
@@ -10265,6 +10616,24 @@ CASADI_SYMBOL_EXPORT int qd_dgrf_dir_FR_BL_work_bytes(casadi_int *sz_arg, casadi
   return 0;
 }
 
+CASADI_SYMBOL_EXPORT int qd_dgrf_dir_FR_BL_batch(casadi_int n, const casadi_real* const* arg, casadi_real* const* res, int* status, casadi_real* w) {
+  const casadi_real* a[3] = {0};
+  casadi_real* r[2] = {0};
+  casadi_int s;
+  int bad = 0;
+  for (s = 0; s < n; ++s) {
+    a[0] = arg[0] ? arg[0] + s*19 : 0;
+    a[1] = arg[1] ? arg[1] + s*6 : 0;
+    a[2] = arg[2] ? arg[2] + s*18 : 0;
+    r[0] = res[0] ? res[0] + s*6 : 0;
+    r[1] = res[1] ? res[1] + s*6 : 0;
+    int flag = qd_dgrf_dir_FR_BL(a, r, 0, w, 0);
+    if (status) status[s] = flag;
+    bad += flag != 0;
+  }
+  return bad;
+}
+
 CASADI_SYMBOL_EXPORT int qd_dgrf_FR_BL(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem){
   return qd_dgrf_solve(6, 6, casadi_f0, casadi_f19, qd_did_full_sparsity_out(0), qd_did_full_sparsity_out(1), arg, res, iw, w, mem);
 }
@@ -10343,6 +10712,25 @@ CASADI_SYMBOL_EXPORT int qd_dgrf_FR_BL_work_bytes(casadi_int *sz_arg, casadi_int
   if (sz_iw) *sz_iw = 0*sizeof(casadi_int);
   if (sz_w) *sz_w = 1158*sizeof(casadi_real);
   return 0;
+}
+
+CASADI_SYMBOL_EXPORT int qd_dgrf_FR_BL_batch(casadi_int n, const casadi_real* const* arg, casadi_real* const* res, int* status, casadi_real* w) {
+  const casadi_real* a[3] = {0};
+  casadi_real* r[3] = {0};
+  casadi_int s;
+  int bad = 0;
+  for (s = 0; s < n; ++s) {
+    a[0] = arg[0] ? arg[0] + s*19 : 0;
+    a[1] = arg[1] ? arg[1] + s*18 : 0;
+    a[2] = arg[2] ? arg[2] + s*18 : 0;
+    r[0] = res[0] ? res[0] + s*108 : 0;
+    r[1] = res[1] ? res[1] + s*108 : 0;
+    r[2] = res[2] ? res[2] + s*108 : 0;
+    int flag = qd_dgrf_FR_BL(a, r, 0, w, 0);
+    if (status) status[s] = flag;
+    bad += flag != 0;
+  }
+  return bad;
 }
 
 /* qd_dgrf_dir_FR_BR:(q[19],w[6],dq[18])->(lambda_w[6],dlambda_w[6]) */
@@ -10866,6 +11254,24 @@ CASADI_SYMBOL_EXPORT int qd_dgrf_dir_FR_BR_work_bytes(casadi_int *sz_arg, casadi
   return 0;
 }
 
+CASADI_SYMBOL_EXPORT int qd_dgrf_dir_FR_BR_batch(casadi_int n, const casadi_real* const* arg, casadi_real* const* res, int* status, casadi_real* w) {
+  const casadi_real* a[3] = {0};
+  casadi_real* r[2] = {0};
+  casadi_int s;
+  int bad = 0;
+  for (s = 0; s < n; ++s) {
+    a[0] = arg[0] ? arg[0] + s*19 : 0;
+    a[1] = arg[1] ? arg[1] + s*6 : 0;
+    a[2] = arg[2] ? arg[2] + s*18 : 0;
+    r[0] = res[0] ? res[0] + s*6 : 0;
+    r[1] = res[1] ? res[1] + s*6 : 0;
+    int flag = qd_dgrf_dir_FR_BR(a, r, 0, w, 0);
+    if (status) status[s] = flag;
+    bad += flag != 0;
+  }
+  return bad;
+}
+
 CASADI_SYMBOL_EXPORT int qd_dgrf_FR_BR(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem){
   return qd_dgrf_solve(6, 10, casadi_f0, casadi_f21, qd_did_full_sparsity_out(0), qd_did_full_sparsity_out(1), arg, res, iw, w, mem);
 }
@@ -10944,6 +11350,25 @@ CASADI_SYMBOL_EXPORT int qd_dgrf_FR_BR_work_bytes(casadi_int *sz_arg, casadi_int
   if (sz_iw) *sz_iw = 0*sizeof(casadi_int);
   if (sz_w) *sz_w = 1158*sizeof(casadi_real);
   return 0;
+}
+
+CASADI_SYMBOL_EXPORT int qd_dgrf_FR_BR_batch(casadi_int n, const casadi_real* const* arg, casadi_real* const* res, int* status, casadi_real* w) {
+  const casadi_real* a[3] = {0};
+  casadi_real* r[3] = {0};
+  casadi_int s;
+  int bad = 0;
+  for (s = 0; s < n; ++s) {
+    a[0] = arg[0] ? arg[0] + s*19 : 0;
+    a[1] = arg[1] ? arg[1] + s*18 : 0;
+    a[2] = arg[2] ? arg[2] + s*18 : 0;
+    r[0] = res[0] ? res[0] + s*108 : 0;
+    r[1] = res[1] ? res[1] + s*108 : 0;
+    r[2] = res[2] ? res[2] + s*108 : 0;
+    int flag = qd_dgrf_FR_BR(a, r, 0, w, 0);
+    if (status) status[s] = flag;
+    bad += flag != 0;
+  }
+  return bad;
 }
 
 /* qd_dgrf_dir_BL_BR:(q[19],w[6],dq[18])->(lambda_w[6],dlambda_w[6]) */
@@ -11467,6 +11892,24 @@ CASADI_SYMBOL_EXPORT int qd_dgrf_dir_BL_BR_work_bytes(casadi_int *sz_arg, casadi
   return 0;
 }
 
+CASADI_SYMBOL_EXPORT int qd_dgrf_dir_BL_BR_batch(casadi_int n, const casadi_real* const* arg, casadi_real* const* res, int* status, casadi_real* w) {
+  const casadi_real* a[3] = {0};
+  casadi_real* r[2] = {0};
+  casadi_int s;
+  int bad = 0;
+  for (s = 0; s < n; ++s) {
+    a[0] = arg[0] ? arg[0] + s*19 : 0;
+    a[1] = arg[1] ? arg[1] + s*6 : 0;
+    a[2] = arg[2] ? arg[2] + s*18 : 0;
+    r[0] = res[0] ? res[0] + s*6 : 0;
+    r[1] = res[1] ? res[1] + s*6 : 0;
+    int flag = qd_dgrf_dir_BL_BR(a, r, 0, w, 0);
+    if (status) status[s] = flag;
+    bad += flag != 0;
+  }
+  return bad;
+}
+
 CASADI_SYMBOL_EXPORT int qd_dgrf_BL_BR(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem){
   return qd_dgrf_solve(6, 12, casadi_f0, casadi_f23, qd_did_full_sparsity_out(0), qd_did_full_sparsity_out(1), arg, res, iw, w, mem);
 }
@@ -11545,6 +11988,25 @@ CASADI_SYMBOL_EXPORT int qd_dgrf_BL_BR_work_bytes(casadi_int *sz_arg, casadi_int
   if (sz_iw) *sz_iw = 0*sizeof(casadi_int);
   if (sz_w) *sz_w = 1158*sizeof(casadi_real);
   return 0;
+}
+
+CASADI_SYMBOL_EXPORT int qd_dgrf_BL_BR_batch(casadi_int n, const casadi_real* const* arg, casadi_real* const* res, int* status, casadi_real* w) {
+  const casadi_real* a[3] = {0};
+  casadi_real* r[3] = {0};
+  casadi_int s;
+  int bad = 0;
+  for (s = 0; s < n; ++s) {
+    a[0] = arg[0] ? arg[0] + s*19 : 0;
+    a[1] = arg[1] ? arg[1] + s*18 : 0;
+    a[2] = arg[2] ? arg[2] + s*18 : 0;
+    r[0] = res[0] ? res[0] + s*108 : 0;
+    r[1] = res[1] ? res[1] + s*108 : 0;
+    r[2] = res[2] ? res[2] + s*108 : 0;
+    int flag = qd_dgrf_BL_BR(a, r, 0, w, 0);
+    if (status) status[s] = flag;
+    bad += flag != 0;
+  }
+  return bad;
 }
 
 /* qd_dgrf_dir_FL:(q[19],w[6],dq[18])->(lambda_w[3],dlambda_w[3]) */
@@ -12159,6 +12621,24 @@ CASADI_SYMBOL_EXPORT int qd_dgrf_dir_FL_work_bytes(casadi_int *sz_arg, casadi_in
   return 0;
 }
 
+CASADI_SYMBOL_EXPORT int qd_dgrf_dir_FL_batch(casadi_int n, const casadi_real* const* arg, casadi_real* const* res, int* status, casadi_real* w) {
+  const casadi_real* a[3] = {0};
+  casadi_real* r[2] = {0};
+  casadi_int s;
+  int bad = 0;
+  for (s = 0; s < n; ++s) {
+    a[0] = arg[0] ? arg[0] + s*19 : 0;
+    a[1] = arg[1] ? arg[1] + s*6 : 0;
+    a[2] = arg[2] ? arg[2] + s*18 : 0;
+    r[0] = res[0] ? res[0] + s*3 : 0;
+    r[1] = res[1] ? res[1] + s*3 : 0;
+    int flag = qd_dgrf_dir_FL(a, r, 0, w, 0);
+    if (status) status[s] = flag;
+    bad += flag != 0;
+  }
+  return bad;
+}
+
 CASADI_SYMBOL_EXPORT int qd_dgrf_FL(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem){
   return qd_dgrf_solve(3, 1, casadi_f0, casadi_f25, qd_did_full_sparsity_out(0), qd_did_full_sparsity_out(1), arg, res, iw, w, mem);
 }
@@ -12237,6 +12717,25 @@ CASADI_SYMBOL_EXPORT int qd_dgrf_FL_work_bytes(casadi_int *sz_arg, casadi_int* s
   if (sz_iw) *sz_iw = 0*sizeof(casadi_int);
   if (sz_w) *sz_w = 1158*sizeof(casadi_real);
   return 0;
+}
+
+CASADI_SYMBOL_EXPORT int qd_dgrf_FL_batch(casadi_int n, const casadi_real* const* arg, casadi_real* const* res, int* status, casadi_real* w) {
+  const casadi_real* a[3] = {0};
+  casadi_real* r[3] = {0};
+  casadi_int s;
+  int bad = 0;
+  for (s = 0; s < n; ++s) {
+    a[0] = arg[0] ? arg[0] + s*19 : 0;
+    a[1] = arg[1] ? arg[1] + s*18 : 0;
+    a[2] = arg[2] ? arg[2] + s*18 : 0;
+    r[0] = res[0] ? res[0] + s*54 : 0;
+    r[1] = res[1] ? res[1] + s*54 : 0;
+    r[2] = res[2] ? res[2] + s*54 : 0;
+    int flag = qd_dgrf_FL(a, r, 0, w, 0);
+    if (status) status[s] = flag;
+    bad += flag != 0;
+  }
+  return bad;
 }
 
 /* qd_dgrf_dir_FR:(q[19],w[6],dq[18])->(lambda_w[3],dlambda_w[3]) */
@@ -12851,6 +13350,24 @@ CASADI_SYMBOL_EXPORT int qd_dgrf_dir_FR_work_bytes(casadi_int *sz_arg, casadi_in
   return 0;
 }
 
+CASADI_SYMBOL_EXPORT int qd_dgrf_dir_FR_batch(casadi_int n, const casadi_real* const* arg, casadi_real* const* res, int* status, casadi_real* w) {
+  const casadi_real* a[3] = {0};
+  casadi_real* r[2] = {0};
+  casadi_int s;
+  int bad = 0;
+  for (s = 0; s < n; ++s) {
+    a[0] = arg[0] ? arg[0] + s*19 : 0;
+    a[1] = arg[1] ? arg[1] + s*6 : 0;
+    a[2] = arg[2] ? arg[2] + s*18 : 0;
+    r[0] = res[0] ? res[0] + s*3 : 0;
+    r[1] = res[1] ? res[1] + s*3 : 0;
+    int flag = qd_dgrf_dir_FR(a, r, 0, w, 0);
+    if (status) status[s] = flag;
+    bad += flag != 0;
+  }
+  return bad;
+}
+
 CASADI_SYMBOL_EXPORT int qd_dgrf_FR(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem){
   return qd_dgrf_solve(3, 2, casadi_f0, casadi_f27, qd_did_full_sparsity_out(0), qd_did_full_sparsity_out(1), arg, res, iw, w, mem);
 }
@@ -12929,6 +13446,25 @@ CASADI_SYMBOL_EXPORT int qd_dgrf_FR_work_bytes(casadi_int *sz_arg, casadi_int* s
   if (sz_iw) *sz_iw = 0*sizeof(casadi_int);
   if (sz_w) *sz_w = 1158*sizeof(casadi_real);
   return 0;
+}
+
+CASADI_SYMBOL_EXPORT int qd_dgrf_FR_batch(casadi_int n, const casadi_real* const* arg, casadi_real* const* res, int* status, casadi_real* w) {
+  const casadi_real* a[3] = {0};
+  casadi_real* r[3] = {0};
+  casadi_int s;
+  int bad = 0;
+  for (s = 0; s < n; ++s) {
+    a[0] = arg[0] ? arg[0] + s*19 : 0;
+    a[1] = arg[1] ? arg[1] + s*18 : 0;
+    a[2] = arg[2] ? arg[2] + s*18 : 0;
+    r[0] = res[0] ? res[0] + s*54 : 0;
+    r[1] = res[1] ? res[1] + s*54 : 0;
+    r[2] = res[2] ? res[2] + s*54 : 0;
+    int flag = qd_dgrf_FR(a, r, 0, w, 0);
+    if (status) status[s] = flag;
+    bad += flag != 0;
+  }
+  return bad;
 }
 
 /* qd_dgrf_dir_BL:(q[19],w[6],dq[18])->(lambda_w[3],dlambda_w[3]) */
@@ -13543,6 +14079,24 @@ CASADI_SYMBOL_EXPORT int qd_dgrf_dir_BL_work_bytes(casadi_int *sz_arg, casadi_in
   return 0;
 }
 
+CASADI_SYMBOL_EXPORT int qd_dgrf_dir_BL_batch(casadi_int n, const casadi_real* const* arg, casadi_real* const* res, int* status, casadi_real* w) {
+  const casadi_real* a[3] = {0};
+  casadi_real* r[2] = {0};
+  casadi_int s;
+  int bad = 0;
+  for (s = 0; s < n; ++s) {
+    a[0] = arg[0] ? arg[0] + s*19 : 0;
+    a[1] = arg[1] ? arg[1] + s*6 : 0;
+    a[2] = arg[2] ? arg[2] + s*18 : 0;
+    r[0] = res[0] ? res[0] + s*3 : 0;
+    r[1] = res[1] ? res[1] + s*3 : 0;
+    int flag = qd_dgrf_dir_BL(a, r, 0, w, 0);
+    if (status) status[s] = flag;
+    bad += flag != 0;
+  }
+  return bad;
+}
+
 CASADI_SYMBOL_EXPORT int qd_dgrf_BL(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem){
   return qd_dgrf_solve(3, 4, casadi_f0, casadi_f29, qd_did_full_sparsity_out(0), qd_did_full_sparsity_out(1), arg, res, iw, w, mem);
 }
@@ -13621,6 +14175,25 @@ CASADI_SYMBOL_EXPORT int qd_dgrf_BL_work_bytes(casadi_int *sz_arg, casadi_int* s
   if (sz_iw) *sz_iw = 0*sizeof(casadi_int);
   if (sz_w) *sz_w = 1158*sizeof(casadi_real);
   return 0;
+}
+
+CASADI_SYMBOL_EXPORT int qd_dgrf_BL_batch(casadi_int n, const casadi_real* const* arg, casadi_real* const* res, int* status, casadi_real* w) {
+  const casadi_real* a[3] = {0};
+  casadi_real* r[3] = {0};
+  casadi_int s;
+  int bad = 0;
+  for (s = 0; s < n; ++s) {
+    a[0] = arg[0] ? arg[0] + s*19 : 0;
+    a[1] = arg[1] ? arg[1] + s*18 : 0;
+    a[2] = arg[2] ? arg[2] + s*18 : 0;
+    r[0] = res[0] ? res[0] + s*54 : 0;
+    r[1] = res[1] ? res[1] + s*54 : 0;
+    r[2] = res[2] ? res[2] + s*54 : 0;
+    int flag = qd_dgrf_BL(a, r, 0, w, 0);
+    if (status) status[s] = flag;
+    bad += flag != 0;
+  }
+  return bad;
 }
 
 /* qd_dgrf_dir_BR:(q[19],w[6],dq[18])->(lambda_w[3],dlambda_w[3]) */
@@ -14235,6 +14808,24 @@ CASADI_SYMBOL_EXPORT int qd_dgrf_dir_BR_work_bytes(casadi_int *sz_arg, casadi_in
   return 0;
 }
 
+CASADI_SYMBOL_EXPORT int qd_dgrf_dir_BR_batch(casadi_int n, const casadi_real* const* arg, casadi_real* const* res, int* status, casadi_real* w) {
+  const casadi_real* a[3] = {0};
+  casadi_real* r[2] = {0};
+  casadi_int s;
+  int bad = 0;
+  for (s = 0; s < n; ++s) {
+    a[0] = arg[0] ? arg[0] + s*19 : 0;
+    a[1] = arg[1] ? arg[1] + s*6 : 0;
+    a[2] = arg[2] ? arg[2] + s*18 : 0;
+    r[0] = res[0] ? res[0] + s*3 : 0;
+    r[1] = res[1] ? res[1] + s*3 : 0;
+    int flag = qd_dgrf_dir_BR(a, r, 0, w, 0);
+    if (status) status[s] = flag;
+    bad += flag != 0;
+  }
+  return bad;
+}
+
 CASADI_SYMBOL_EXPORT int qd_dgrf_BR(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem){
   return qd_dgrf_solve(3, 8, casadi_f0, casadi_f31, qd_did_full_sparsity_out(0), qd_did_full_sparsity_out(1), arg, res, iw, w, mem);
 }
@@ -14313,6 +14904,25 @@ CASADI_SYMBOL_EXPORT int qd_dgrf_BR_work_bytes(casadi_int *sz_arg, casadi_int* s
   if (sz_iw) *sz_iw = 0*sizeof(casadi_int);
   if (sz_w) *sz_w = 1158*sizeof(casadi_real);
   return 0;
+}
+
+CASADI_SYMBOL_EXPORT int qd_dgrf_BR_batch(casadi_int n, const casadi_real* const* arg, casadi_real* const* res, int* status, casadi_real* w) {
+  const casadi_real* a[3] = {0};
+  casadi_real* r[3] = {0};
+  casadi_int s;
+  int bad = 0;
+  for (s = 0; s < n; ++s) {
+    a[0] = arg[0] ? arg[0] + s*19 : 0;
+    a[1] = arg[1] ? arg[1] + s*18 : 0;
+    a[2] = arg[2] ? arg[2] + s*18 : 0;
+    r[0] = res[0] ? res[0] + s*54 : 0;
+    r[1] = res[1] ? res[1] + s*54 : 0;
+    r[2] = res[2] ? res[2] + s*54 : 0;
+    int flag = qd_dgrf_BR(a, r, 0, w, 0);
+    if (status) status[s] = flag;
+    bad += flag != 0;
+  }
+  return bad;
 }
 
 

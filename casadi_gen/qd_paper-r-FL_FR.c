@@ -12302,6 +12302,22 @@ CASADI_SYMBOL_EXPORT int qd_M_r_FL_FR_work_bytes(casadi_int *sz_arg, casadi_int*
   return 0;
 }
 
+CASADI_SYMBOL_EXPORT int qd_M_r_FL_FR_batch(casadi_int n, const casadi_real* const* arg, casadi_real* const* res, int* status, casadi_real* w) {
+  const casadi_real* a[2] = {0};
+  casadi_real* r[1] = {0};
+  casadi_int s;
+  int bad = 0;
+  for (s = 0; s < n; ++s) {
+    a[0] = arg[0] ? arg[0] + s*13 : 0;
+    a[1] = arg[1] ? arg[1] + s*4 : 0;
+    r[0] = res[0] ? res[0] + s*169 : 0;
+    int flag = qd_M_r_FL_FR(a, r, 0, w, 0);
+    if (status) status[s] = flag;
+    bad += flag != 0;
+  }
+  return bad;
+}
+
 CASADI_SYMBOL_EXPORT int qd_CG_r_FL_FR(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem){
   return qd_finite(qd_CG_r_eval(arg, res, iw, w, mem), res, 1, (const casadi_int[]){13});
 }
@@ -12378,6 +12394,23 @@ CASADI_SYMBOL_EXPORT int qd_CG_r_FL_FR_work_bytes(casadi_int *sz_arg, casadi_int
   return 0;
 }
 
+CASADI_SYMBOL_EXPORT int qd_CG_r_FL_FR_batch(casadi_int n, const casadi_real* const* arg, casadi_real* const* res, int* status, casadi_real* w) {
+  const casadi_real* a[3] = {0};
+  casadi_real* r[1] = {0};
+  casadi_int s;
+  int bad = 0;
+  for (s = 0; s < n; ++s) {
+    a[0] = arg[0] ? arg[0] + s*13 : 0;
+    a[1] = arg[1] ? arg[1] + s*13 : 0;
+    a[2] = arg[2] ? arg[2] + s*4 : 0;
+    r[0] = res[0] ? res[0] + s*13 : 0;
+    int flag = qd_CG_r_FL_FR(a, r, 0, w, 0);
+    if (status) status[s] = flag;
+    bad += flag != 0;
+  }
+  return bad;
+}
+
 CASADI_SYMBOL_EXPORT int qd_G_r_FL_FR(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem){
   return qd_finite(qd_G_r_eval(arg, res, iw, w, mem), res, 1, (const casadi_int[]){13});
 }
@@ -12450,6 +12483,22 @@ CASADI_SYMBOL_EXPORT int qd_G_r_FL_FR_work_bytes(casadi_int *sz_arg, casadi_int*
   if (sz_iw) *sz_iw = 0*sizeof(casadi_int);
   if (sz_w) *sz_w = 0*sizeof(casadi_real);
   return 0;
+}
+
+CASADI_SYMBOL_EXPORT int qd_G_r_FL_FR_batch(casadi_int n, const casadi_real* const* arg, casadi_real* const* res, int* status, casadi_real* w) {
+  const casadi_real* a[2] = {0};
+  casadi_real* r[1] = {0};
+  casadi_int s;
+  int bad = 0;
+  for (s = 0; s < n; ++s) {
+    a[0] = arg[0] ? arg[0] + s*13 : 0;
+    a[1] = arg[1] ? arg[1] + s*4 : 0;
+    r[0] = res[0] ? res[0] + s*13 : 0;
+    int flag = qd_G_r_FL_FR(a, r, 0, w, 0);
+    if (status) status[s] = flag;
+    bad += flag != 0;
+  }
+  return bad;
 }
 
 CASADI_SYMBOL_EXPORT int qd_id_r_FL_FR(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem){
@@ -12530,6 +12579,24 @@ CASADI_SYMBOL_EXPORT int qd_id_r_FL_FR_work_bytes(casadi_int *sz_arg, casadi_int
   return 0;
 }
 
+CASADI_SYMBOL_EXPORT int qd_id_r_FL_FR_batch(casadi_int n, const casadi_real* const* arg, casadi_real* const* res, int* status, casadi_real* w) {
+  const casadi_real* a[4] = {0};
+  casadi_real* r[1] = {0};
+  casadi_int s;
+  int bad = 0;
+  for (s = 0; s < n; ++s) {
+    a[0] = arg[0] ? arg[0] + s*13 : 0;
+    a[1] = arg[1] ? arg[1] + s*13 : 0;
+    a[2] = arg[2] ? arg[2] + s*13 : 0;
+    a[3] = arg[3] ? arg[3] + s*4 : 0;
+    r[0] = res[0] ? res[0] + s*13 : 0;
+    int flag = qd_id_r_FL_FR(a, r, 0, w, 0);
+    if (status) status[s] = flag;
+    bad += flag != 0;
+  }
+  return bad;
+}
+
 CASADI_SYMBOL_EXPORT int qd_fd_r_FL_FR(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem){
   return qd_fd_r_solve(13, 3, arg, res, iw, w, mem);
 }
@@ -12606,6 +12673,24 @@ CASADI_SYMBOL_EXPORT int qd_fd_r_FL_FR_work_bytes(casadi_int *sz_arg, casadi_int
   if (sz_iw) *sz_iw = 0*sizeof(casadi_int);
   if (sz_w) *sz_w = 0*sizeof(casadi_real);
   return 0;
+}
+
+CASADI_SYMBOL_EXPORT int qd_fd_r_FL_FR_batch(casadi_int n, const casadi_real* const* arg, casadi_real* const* res, int* status, casadi_real* w) {
+  const casadi_real* a[4] = {0};
+  casadi_real* r[1] = {0};
+  casadi_int s;
+  int bad = 0;
+  for (s = 0; s < n; ++s) {
+    a[0] = arg[0] ? arg[0] + s*13 : 0;
+    a[1] = arg[1] ? arg[1] + s*13 : 0;
+    a[2] = arg[2] ? arg[2] + s*13 : 0;
+    a[3] = arg[3] ? arg[3] + s*4 : 0;
+    r[0] = res[0] ? res[0] + s*13 : 0;
+    int flag = qd_fd_r_FL_FR(a, r, 0, w, 0);
+    if (status) status[s] = flag;
+    bad += flag != 0;
+  }
+  return bad;
 }
 
 CASADI_SYMBOL_EXPORT int qd_dfd_r_FL_FR(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem){
@@ -12692,6 +12777,27 @@ CASADI_SYMBOL_EXPORT int qd_dfd_r_FL_FR_work_bytes(casadi_int *sz_arg, casadi_in
   if (sz_iw) *sz_iw = 0*sizeof(casadi_int);
   if (sz_w) *sz_w = 2624*sizeof(casadi_real);
   return 0;
+}
+
+CASADI_SYMBOL_EXPORT int qd_dfd_r_FL_FR_batch(casadi_int n, const casadi_real* const* arg, casadi_real* const* res, int* status, casadi_real* w) {
+  const casadi_real* a[4] = {0};
+  casadi_real* r[4] = {0};
+  casadi_int s;
+  int bad = 0;
+  for (s = 0; s < n; ++s) {
+    a[0] = arg[0] ? arg[0] + s*13 : 0;
+    a[1] = arg[1] ? arg[1] + s*13 : 0;
+    a[2] = arg[2] ? arg[2] + s*13 : 0;
+    a[3] = arg[3] ? arg[3] + s*4 : 0;
+    r[0] = res[0] ? res[0] + s*169 : 0;
+    r[1] = res[1] ? res[1] + s*169 : 0;
+    r[2] = res[2] ? res[2] + s*169 : 0;
+    r[3] = res[3] ? res[3] + s*39 : 0;
+    int flag = qd_dfd_r_FL_FR(a, r, 0, w, 0);
+    if (status) status[s] = flag;
+    bad += flag != 0;
+  }
+  return bad;
 }
 
 

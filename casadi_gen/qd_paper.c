@@ -17892,6 +17892,21 @@ CASADI_SYMBOL_EXPORT int qd_M_full_work_bytes(casadi_int *sz_arg, casadi_int* sz
   return 0;
 }
 
+CASADI_SYMBOL_EXPORT int qd_M_full_batch(casadi_int n, const casadi_real* const* arg, casadi_real* const* res, int* status, casadi_real* w) {
+  const casadi_real* a[1] = {0};
+  casadi_real* r[1] = {0};
+  casadi_int s;
+  int bad = 0;
+  for (s = 0; s < n; ++s) {
+    a[0] = arg[0] ? arg[0] + s*19 : 0;
+    r[0] = res[0] ? res[0] + s*210 : 0;
+    int flag = qd_M_full(a, r, 0, w, 0);
+    if (status) status[s] = flag;
+    bad += flag != 0;
+  }
+  return bad;
+}
+
 /* qd_C_full:(q[19],v[18])->(C[18]) */
 static int casadi_f1(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem) {
   (void)arg; (void)res; (void)iw; (void)w; (void)mem;
@@ -19053,6 +19068,22 @@ CASADI_SYMBOL_EXPORT int qd_C_full_work_bytes(casadi_int *sz_arg, casadi_int* sz
   return 0;
 }
 
+CASADI_SYMBOL_EXPORT int qd_C_full_batch(casadi_int n, const casadi_real* const* arg, casadi_real* const* res, int* status, casadi_real* w) {
+  const casadi_real* a[2] = {0};
+  casadi_real* r[1] = {0};
+  casadi_int s;
+  int bad = 0;
+  for (s = 0; s < n; ++s) {
+    a[0] = arg[0] ? arg[0] + s*19 : 0;
+    a[1] = arg[1] ? arg[1] + s*18 : 0;
+    r[0] = res[0] ? res[0] + s*18 : 0;
+    int flag = qd_C_full(a, r, 0, w, 0);
+    if (status) status[s] = flag;
+    bad += flag != 0;
+  }
+  return bad;
+}
+
 CASADI_SYMBOL_EXPORT int qd_G_full(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem){
   return qd_G_full_eval(arg, res, iw, w, mem);
 }
@@ -19123,6 +19154,21 @@ CASADI_SYMBOL_EXPORT int qd_G_full_work_bytes(casadi_int *sz_arg, casadi_int* sz
   if (sz_iw) *sz_iw = 0*sizeof(casadi_int);
   if (sz_w) *sz_w = 0*sizeof(casadi_real);
   return 0;
+}
+
+CASADI_SYMBOL_EXPORT int qd_G_full_batch(casadi_int n, const casadi_real* const* arg, casadi_real* const* res, int* status, casadi_real* w) {
+  const casadi_real* a[1] = {0};
+  casadi_real* r[1] = {0};
+  casadi_int s;
+  int bad = 0;
+  for (s = 0; s < n; ++s) {
+    a[0] = arg[0] ? arg[0] + s*19 : 0;
+    r[0] = res[0] ? res[0] + s*18 : 0;
+    int flag = qd_G_full(a, r, 0, w, 0);
+    if (status) status[s] = flag;
+    bad += flag != 0;
+  }
+  return bad;
 }
 
 CASADI_SYMBOL_EXPORT int qd_nle_full(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem){
@@ -19197,6 +19243,22 @@ CASADI_SYMBOL_EXPORT int qd_nle_full_work_bytes(casadi_int *sz_arg, casadi_int* 
   if (sz_iw) *sz_iw = 0*sizeof(casadi_int);
   if (sz_w) *sz_w = 0*sizeof(casadi_real);
   return 0;
+}
+
+CASADI_SYMBOL_EXPORT int qd_nle_full_batch(casadi_int n, const casadi_real* const* arg, casadi_real* const* res, int* status, casadi_real* w) {
+  const casadi_real* a[2] = {0};
+  casadi_real* r[1] = {0};
+  casadi_int s;
+  int bad = 0;
+  for (s = 0; s < n; ++s) {
+    a[0] = arg[0] ? arg[0] + s*19 : 0;
+    a[1] = arg[1] ? arg[1] + s*18 : 0;
+    r[0] = res[0] ? res[0] + s*18 : 0;
+    int flag = qd_nle_full(a, r, 0, w, 0);
+    if (status) status[s] = flag;
+    bad += flag != 0;
+  }
+  return bad;
 }
 
 CASADI_SYMBOL_EXPORT int qd_id_full(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem){
@@ -19277,6 +19339,25 @@ CASADI_SYMBOL_EXPORT int qd_id_full_work_bytes(casadi_int *sz_arg, casadi_int* s
   if (sz_iw) *sz_iw = 0*sizeof(casadi_int);
   if (sz_w) *sz_w = 0*sizeof(casadi_real);
   return 0;
+}
+
+CASADI_SYMBOL_EXPORT int qd_id_full_batch(casadi_int n, const casadi_real* const* arg, casadi_real* const* res, int* status, casadi_real* w) {
+  const casadi_real* a[4] = {0};
+  casadi_real* r[2] = {0};
+  casadi_int s;
+  int bad = 0;
+  for (s = 0; s < n; ++s) {
+    a[0] = arg[0] ? arg[0] + s*19 : 0;
+    a[1] = arg[1] ? arg[1] + s*18 : 0;
+    a[2] = arg[2] ? arg[2] + s*18 : 0;
+    a[3] = arg[3] ? arg[3] + s*12 : 0;
+    r[0] = res[0] ? res[0] + s*6 : 0;
+    r[1] = res[1] ? res[1] + s*12 : 0;
+    int flag = qd_id_full(a, r, 0, w, 0);
+    if (status) status[s] = flag;
+    bad += flag != 0;
+  }
+  return bad;
 }
 
 /* qd_feet_full:(q[19],v[18])->(r_feet[12],J_feet[12x18,80nz],Jdv_feet[12]) */
@@ -20517,6 +20598,24 @@ CASADI_SYMBOL_EXPORT int qd_feet_full_work_bytes(casadi_int *sz_arg, casadi_int*
   return 0;
 }
 
+CASADI_SYMBOL_EXPORT int qd_feet_full_batch(casadi_int n, const casadi_real* const* arg, casadi_real* const* res, int* status, casadi_real* w) {
+  const casadi_real* a[2] = {0};
+  casadi_real* r[3] = {0};
+  casadi_int s;
+  int bad = 0;
+  for (s = 0; s < n; ++s) {
+    a[0] = arg[0] ? arg[0] + s*19 : 0;
+    a[1] = arg[1] ? arg[1] + s*18 : 0;
+    r[0] = res[0] ? res[0] + s*12 : 0;
+    r[1] = res[1] ? res[1] + s*80 : 0;
+    r[2] = res[2] ? res[2] + s*12 : 0;
+    int flag = qd_feet_full(a, r, 0, w, 0);
+    if (status) status[s] = flag;
+    bad += flag != 0;
+  }
+  return bad;
+}
+
 CASADI_SYMBOL_EXPORT int qd_grf_FL_FR_BL_BR(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem){
   casadi_real w_req[6], tau_0[12], tau_f[12];
   const casadi_real* b_arg[2] = {arg[0], w_req};
@@ -20602,6 +20701,26 @@ CASADI_SYMBOL_EXPORT int qd_grf_FL_FR_BL_BR_work_bytes(casadi_int *sz_arg, casad
   if (sz_iw) *sz_iw = 0*sizeof(casadi_int);
   if (sz_w) *sz_w = 0*sizeof(casadi_real);
   return 0;
+}
+
+CASADI_SYMBOL_EXPORT int qd_grf_FL_FR_BL_BR_batch(casadi_int n, const casadi_real* const* arg, casadi_real* const* res, int* status, casadi_real* w) {
+  const casadi_real* a[3] = {0};
+  casadi_real* r[4] = {0};
+  casadi_int s;
+  int bad = 0;
+  for (s = 0; s < n; ++s) {
+    a[0] = arg[0] ? arg[0] + s*19 : 0;
+    a[1] = arg[1] ? arg[1] + s*18 : 0;
+    a[2] = arg[2] ? arg[2] + s*18 : 0;
+    r[0] = res[0] ? res[0] + s*6 : 0;
+    r[1] = res[1] ? res[1] + s*12 : 0;
+    r[2] = res[2] ? res[2] + s*6 : 0;
+    r[3] = res[3] ? res[3] + s*12 : 0;
+    int flag = qd_grf_FL_FR_BL_BR(a, r, 0, w, 0);
+    if (status) status[s] = flag;
+    bad += flag != 0;
+  }
+  return bad;
 }
 
 CASADI_SYMBOL_EXPORT int qd_grf_FL_FR_BL(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem){
@@ -20691,6 +20810,26 @@ CASADI_SYMBOL_EXPORT int qd_grf_FL_FR_BL_work_bytes(casadi_int *sz_arg, casadi_i
   return 0;
 }
 
+CASADI_SYMBOL_EXPORT int qd_grf_FL_FR_BL_batch(casadi_int n, const casadi_real* const* arg, casadi_real* const* res, int* status, casadi_real* w) {
+  const casadi_real* a[3] = {0};
+  casadi_real* r[4] = {0};
+  casadi_int s;
+  int bad = 0;
+  for (s = 0; s < n; ++s) {
+    a[0] = arg[0] ? arg[0] + s*19 : 0;
+    a[1] = arg[1] ? arg[1] + s*18 : 0;
+    a[2] = arg[2] ? arg[2] + s*18 : 0;
+    r[0] = res[0] ? res[0] + s*6 : 0;
+    r[1] = res[1] ? res[1] + s*12 : 0;
+    r[2] = res[2] ? res[2] + s*6 : 0;
+    r[3] = res[3] ? res[3] + s*12 : 0;
+    int flag = qd_grf_FL_FR_BL(a, r, 0, w, 0);
+    if (status) status[s] = flag;
+    bad += flag != 0;
+  }
+  return bad;
+}
+
 CASADI_SYMBOL_EXPORT int qd_grf_FL_FR_BR(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem){
   casadi_real w_req[6], tau_0[12], tau_f[12];
   const casadi_real* b_arg[2] = {arg[0], w_req};
@@ -20776,6 +20915,26 @@ CASADI_SYMBOL_EXPORT int qd_grf_FL_FR_BR_work_bytes(casadi_int *sz_arg, casadi_i
   if (sz_iw) *sz_iw = 0*sizeof(casadi_int);
   if (sz_w) *sz_w = 0*sizeof(casadi_real);
   return 0;
+}
+
+CASADI_SYMBOL_EXPORT int qd_grf_FL_FR_BR_batch(casadi_int n, const casadi_real* const* arg, casadi_real* const* res, int* status, casadi_real* w) {
+  const casadi_real* a[3] = {0};
+  casadi_real* r[4] = {0};
+  casadi_int s;
+  int bad = 0;
+  for (s = 0; s < n; ++s) {
+    a[0] = arg[0] ? arg[0] + s*19 : 0;
+    a[1] = arg[1] ? arg[1] + s*18 : 0;
+    a[2] = arg[2] ? arg[2] + s*18 : 0;
+    r[0] = res[0] ? res[0] + s*6 : 0;
+    r[1] = res[1] ? res[1] + s*12 : 0;
+    r[2] = res[2] ? res[2] + s*6 : 0;
+    r[3] = res[3] ? res[3] + s*12 : 0;
+    int flag = qd_grf_FL_FR_BR(a, r, 0, w, 0);
+    if (status) status[s] = flag;
+    bad += flag != 0;
+  }
+  return bad;
 }
 
 CASADI_SYMBOL_EXPORT int qd_grf_FL_BL_BR(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem){
@@ -20865,6 +21024,26 @@ CASADI_SYMBOL_EXPORT int qd_grf_FL_BL_BR_work_bytes(casadi_int *sz_arg, casadi_i
   return 0;
 }
 
+CASADI_SYMBOL_EXPORT int qd_grf_FL_BL_BR_batch(casadi_int n, const casadi_real* const* arg, casadi_real* const* res, int* status, casadi_real* w) {
+  const casadi_real* a[3] = {0};
+  casadi_real* r[4] = {0};
+  casadi_int s;
+  int bad = 0;
+  for (s = 0; s < n; ++s) {
+    a[0] = arg[0] ? arg[0] + s*19 : 0;
+    a[1] = arg[1] ? arg[1] + s*18 : 0;
+    a[2] = arg[2] ? arg[2] + s*18 : 0;
+    r[0] = res[0] ? res[0] + s*6 : 0;
+    r[1] = res[1] ? res[1] + s*12 : 0;
+    r[2] = res[2] ? res[2] + s*6 : 0;
+    r[3] = res[3] ? res[3] + s*12 : 0;
+    int flag = qd_grf_FL_BL_BR(a, r, 0, w, 0);
+    if (status) status[s] = flag;
+    bad += flag != 0;
+  }
+  return bad;
+}
+
 CASADI_SYMBOL_EXPORT int qd_grf_FR_BL_BR(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem){
   casadi_real w_req[6], tau_0[12], tau_f[12];
   const casadi_real* b_arg[2] = {arg[0], w_req};
@@ -20950,6 +21129,26 @@ CASADI_SYMBOL_EXPORT int qd_grf_FR_BL_BR_work_bytes(casadi_int *sz_arg, casadi_i
   if (sz_iw) *sz_iw = 0*sizeof(casadi_int);
   if (sz_w) *sz_w = 0*sizeof(casadi_real);
   return 0;
+}
+
+CASADI_SYMBOL_EXPORT int qd_grf_FR_BL_BR_batch(casadi_int n, const casadi_real* const* arg, casadi_real* const* res, int* status, casadi_real* w) {
+  const casadi_real* a[3] = {0};
+  casadi_real* r[4] = {0};
+  casadi_int s;
+  int bad = 0;
+  for (s = 0; s < n; ++s) {
+    a[0] = arg[0] ? arg[0] + s*19 : 0;
+    a[1] = arg[1] ? arg[1] + s*18 : 0;
+    a[2] = arg[2] ? arg[2] + s*18 : 0;
+    r[0] = res[0] ? res[0] + s*6 : 0;
+    r[1] = res[1] ? res[1] + s*12 : 0;
+    r[2] = res[2] ? res[2] + s*6 : 0;
+    r[3] = res[3] ? res[3] + s*12 : 0;
+    int flag = qd_grf_FR_BL_BR(a, r, 0, w, 0);
+    if (status) status[s] = flag;
+    bad += flag != 0;
+  }
+  return bad;
 }
 
 CASADI_SYMBOL_EXPORT int qd_grf_FL_FR(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem){
@@ -21039,6 +21238,26 @@ CASADI_SYMBOL_EXPORT int qd_grf_FL_FR_work_bytes(casadi_int *sz_arg, casadi_int*
   return 0;
 }
 
+CASADI_SYMBOL_EXPORT int qd_grf_FL_FR_batch(casadi_int n, const casadi_real* const* arg, casadi_real* const* res, int* status, casadi_real* w) {
+  const casadi_real* a[3] = {0};
+  casadi_real* r[4] = {0};
+  casadi_int s;
+  int bad = 0;
+  for (s = 0; s < n; ++s) {
+    a[0] = arg[0] ? arg[0] + s*19 : 0;
+    a[1] = arg[1] ? arg[1] + s*18 : 0;
+    a[2] = arg[2] ? arg[2] + s*18 : 0;
+    r[0] = res[0] ? res[0] + s*6 : 0;
+    r[1] = res[1] ? res[1] + s*12 : 0;
+    r[2] = res[2] ? res[2] + s*6 : 0;
+    r[3] = res[3] ? res[3] + s*12 : 0;
+    int flag = qd_grf_FL_FR(a, r, 0, w, 0);
+    if (status) status[s] = flag;
+    bad += flag != 0;
+  }
+  return bad;
+}
+
 CASADI_SYMBOL_EXPORT int qd_grf_FL_BL(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem){
   casadi_real w_req[6], tau_0[12], tau_f[12];
   const casadi_real* b_arg[2] = {arg[0], w_req};
@@ -21124,6 +21343,26 @@ CASADI_SYMBOL_EXPORT int qd_grf_FL_BL_work_bytes(casadi_int *sz_arg, casadi_int*
   if (sz_iw) *sz_iw = 0*sizeof(casadi_int);
   if (sz_w) *sz_w = 0*sizeof(casadi_real);
   return 0;
+}
+
+CASADI_SYMBOL_EXPORT int qd_grf_FL_BL_batch(casadi_int n, const casadi_real* const* arg, casadi_real* const* res, int* status, casadi_real* w) {
+  const casadi_real* a[3] = {0};
+  casadi_real* r[4] = {0};
+  casadi_int s;
+  int bad = 0;
+  for (s = 0; s < n; ++s) {
+    a[0] = arg[0] ? arg[0] + s*19 : 0;
+    a[1] = arg[1] ? arg[1] + s*18 : 0;
+    a[2] = arg[2] ? arg[2] + s*18 : 0;
+    r[0] = res[0] ? res[0] + s*6 : 0;
+    r[1] = res[1] ? res[1] + s*12 : 0;
+    r[2] = res[2] ? res[2] + s*6 : 0;
+    r[3] = res[3] ? res[3] + s*12 : 0;
+    int flag = qd_grf_FL_BL(a, r, 0, w, 0);
+    if (status) status[s] = flag;
+    bad += flag != 0;
+  }
+  return bad;
 }
 
 CASADI_SYMBOL_EXPORT int qd_grf_FL_BR(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem){
@@ -21213,6 +21452,26 @@ CASADI_SYMBOL_EXPORT int qd_grf_FL_BR_work_bytes(casadi_int *sz_arg, casadi_int*
   return 0;
 }
 
+CASADI_SYMBOL_EXPORT int qd_grf_FL_BR_batch(casadi_int n, const casadi_real* const* arg, casadi_real* const* res, int* status, casadi_real* w) {
+  const casadi_real* a[3] = {0};
+  casadi_real* r[4] = {0};
+  casadi_int s;
+  int bad = 0;
+  for (s = 0; s < n; ++s) {
+    a[0] = arg[0] ? arg[0] + s*19 : 0;
+    a[1] = arg[1] ? arg[1] + s*18 : 0;
+    a[2] = arg[2] ? arg[2] + s*18 : 0;
+    r[0] = res[0] ? res[0] + s*6 : 0;
+    r[1] = res[1] ? res[1] + s*12 : 0;
+    r[2] = res[2] ? res[2] + s*6 : 0;
+    r[3] = res[3] ? res[3] + s*12 : 0;
+    int flag = qd_grf_FL_BR(a, r, 0, w, 0);
+    if (status) status[s] = flag;
+    bad += flag != 0;
+  }
+  return bad;
+}
+
 CASADI_SYMBOL_EXPORT int qd_grf_FR_BL(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem){
   casadi_real w_req[6], tau_0[12], tau_f[12];
   const casadi_real* b_arg[2] = {arg[0], w_req};
@@ -21298,6 +21557,26 @@ CASADI_SYMBOL_EXPORT int qd_grf_FR_BL_work_bytes(casadi_int *sz_arg, casadi_int*
   if (sz_iw) *sz_iw = 0*sizeof(casadi_int);
   if (sz_w) *sz_w = 0*sizeof(casadi_real);
   return 0;
+}
+
+CASADI_SYMBOL_EXPORT int qd_grf_FR_BL_batch(casadi_int n, const casadi_real* const* arg, casadi_real* const* res, int* status, casadi_real* w) {
+  const casadi_real* a[3] = {0};
+  casadi_real* r[4] = {0};
+  casadi_int s;
+  int bad = 0;
+  for (s = 0; s < n; ++s) {
+    a[0] = arg[0] ? arg[0] + s*19 : 0;
+    a[1] = arg[1] ? arg[1] + s*18 : 0;
+    a[2] = arg[2] ? arg[2] + s*18 : 0;
+    r[0] = res[0] ? res[0] + s*6 : 0;
+    r[1] = res[1] ? res[1] + s*12 : 0;
+    r[2] = res[2] ? res[2] + s*6 : 0;
+    r[3] = res[3] ? res[3] + s*12 : 0;
+    int flag = qd_grf_FR_BL(a, r, 0, w, 0);
+    if (status) status[s] = flag;
+    bad += flag != 0;
+  }
+  return bad;
 }
 
 CASADI_SYMBOL_EXPORT int qd_grf_FR_BR(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem){
@@ -21387,6 +21666,26 @@ CASADI_SYMBOL_EXPORT int qd_grf_FR_BR_work_bytes(casadi_int *sz_arg, casadi_int*
   return 0;
 }
 
+CASADI_SYMBOL_EXPORT int qd_grf_FR_BR_batch(casadi_int n, const casadi_real* const* arg, casadi_real* const* res, int* status, casadi_real* w) {
+  const casadi_real* a[3] = {0};
+  casadi_real* r[4] = {0};
+  casadi_int s;
+  int bad = 0;
+  for (s = 0; s < n; ++s) {
+    a[0] = arg[0] ? arg[0] + s*19 : 0;
+    a[1] = arg[1] ? arg[1] + s*18 : 0;
+    a[2] = arg[2] ? arg[2] + s*18 : 0;
+    r[0] = res[0] ? res[0] + s*6 : 0;
+    r[1] = res[1] ? res[1] + s*12 : 0;
+    r[2] = res[2] ? res[2] + s*6 : 0;
+    r[3] = res[3] ? res[3] + s*12 : 0;
+    int flag = qd_grf_FR_BR(a, r, 0, w, 0);
+    if (status) status[s] = flag;
+    bad += flag != 0;
+  }
+  return bad;
+}
+
 CASADI_SYMBOL_EXPORT int qd_grf_BL_BR(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem){
   casadi_real w_req[6], tau_0[12], tau_f[12];
   const casadi_real* b_arg[2] = {arg[0], w_req};
@@ -21472,6 +21771,26 @@ CASADI_SYMBOL_EXPORT int qd_grf_BL_BR_work_bytes(casadi_int *sz_arg, casadi_int*
   if (sz_iw) *sz_iw = 0*sizeof(casadi_int);
   if (sz_w) *sz_w = 0*sizeof(casadi_real);
   return 0;
+}
+
+CASADI_SYMBOL_EXPORT int qd_grf_BL_BR_batch(casadi_int n, const casadi_real* const* arg, casadi_real* const* res, int* status, casadi_real* w) {
+  const casadi_real* a[3] = {0};
+  casadi_real* r[4] = {0};
+  casadi_int s;
+  int bad = 0;
+  for (s = 0; s < n; ++s) {
+    a[0] = arg[0] ? arg[0] + s*19 : 0;
+    a[1] = arg[1] ? arg[1] + s*18 : 0;
+    a[2] = arg[2] ? arg[2] + s*18 : 0;
+    r[0] = res[0] ? res[0] + s*6 : 0;
+    r[1] = res[1] ? res[1] + s*12 : 0;
+    r[2] = res[2] ? res[2] + s*6 : 0;
+    r[3] = res[3] ? res[3] + s*12 : 0;
+    int flag = qd_grf_BL_BR(a, r, 0, w, 0);
+    if (status) status[s] = flag;
+    bad += flag != 0;
+  }
+  return bad;
 }
 
 CASADI_SYMBOL_EXPORT int qd_grf_FL(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem){
@@ -21561,6 +21880,26 @@ CASADI_SYMBOL_EXPORT int qd_grf_FL_work_bytes(casadi_int *sz_arg, casadi_int* sz
   return 0;
 }
 
+CASADI_SYMBOL_EXPORT int qd_grf_FL_batch(casadi_int n, const casadi_real* const* arg, casadi_real* const* res, int* status, casadi_real* w) {
+  const casadi_real* a[3] = {0};
+  casadi_real* r[4] = {0};
+  casadi_int s;
+  int bad = 0;
+  for (s = 0; s < n; ++s) {
+    a[0] = arg[0] ? arg[0] + s*19 : 0;
+    a[1] = arg[1] ? arg[1] + s*18 : 0;
+    a[2] = arg[2] ? arg[2] + s*18 : 0;
+    r[0] = res[0] ? res[0] + s*3 : 0;
+    r[1] = res[1] ? res[1] + s*12 : 0;
+    r[2] = res[2] ? res[2] + s*6 : 0;
+    r[3] = res[3] ? res[3] + s*12 : 0;
+    int flag = qd_grf_FL(a, r, 0, w, 0);
+    if (status) status[s] = flag;
+    bad += flag != 0;
+  }
+  return bad;
+}
+
 CASADI_SYMBOL_EXPORT int qd_grf_FR(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem){
   casadi_real w_req[6], tau_0[12], tau_f[12];
   const casadi_real* b_arg[2] = {arg[0], w_req};
@@ -21646,6 +21985,26 @@ CASADI_SYMBOL_EXPORT int qd_grf_FR_work_bytes(casadi_int *sz_arg, casadi_int* sz
   if (sz_iw) *sz_iw = 0*sizeof(casadi_int);
   if (sz_w) *sz_w = 0*sizeof(casadi_real);
   return 0;
+}
+
+CASADI_SYMBOL_EXPORT int qd_grf_FR_batch(casadi_int n, const casadi_real* const* arg, casadi_real* const* res, int* status, casadi_real* w) {
+  const casadi_real* a[3] = {0};
+  casadi_real* r[4] = {0};
+  casadi_int s;
+  int bad = 0;
+  for (s = 0; s < n; ++s) {
+    a[0] = arg[0] ? arg[0] + s*19 : 0;
+    a[1] = arg[1] ? arg[1] + s*18 : 0;
+    a[2] = arg[2] ? arg[2] + s*18 : 0;
+    r[0] = res[0] ? res[0] + s*3 : 0;
+    r[1] = res[1] ? res[1] + s*12 : 0;
+    r[2] = res[2] ? res[2] + s*6 : 0;
+    r[3] = res[3] ? res[3] + s*12 : 0;
+    int flag = qd_grf_FR(a, r, 0, w, 0);
+    if (status) status[s] = flag;
+    bad += flag != 0;
+  }
+  return bad;
 }
 
 CASADI_SYMBOL_EXPORT int qd_grf_BL(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem){
@@ -21735,6 +22094,26 @@ CASADI_SYMBOL_EXPORT int qd_grf_BL_work_bytes(casadi_int *sz_arg, casadi_int* sz
   return 0;
 }
 
+CASADI_SYMBOL_EXPORT int qd_grf_BL_batch(casadi_int n, const casadi_real* const* arg, casadi_real* const* res, int* status, casadi_real* w) {
+  const casadi_real* a[3] = {0};
+  casadi_real* r[4] = {0};
+  casadi_int s;
+  int bad = 0;
+  for (s = 0; s < n; ++s) {
+    a[0] = arg[0] ? arg[0] + s*19 : 0;
+    a[1] = arg[1] ? arg[1] + s*18 : 0;
+    a[2] = arg[2] ? arg[2] + s*18 : 0;
+    r[0] = res[0] ? res[0] + s*3 : 0;
+    r[1] = res[1] ? res[1] + s*12 : 0;
+    r[2] = res[2] ? res[2] + s*6 : 0;
+    r[3] = res[3] ? res[3] + s*12 : 0;
+    int flag = qd_grf_BL(a, r, 0, w, 0);
+    if (status) status[s] = flag;
+    bad += flag != 0;
+  }
+  return bad;
+}
+
 CASADI_SYMBOL_EXPORT int qd_grf_BR(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem){
   casadi_real w_req[6], tau_0[12], tau_f[12];
   const casadi_real* b_arg[2] = {arg[0], w_req};
@@ -21820,6 +22199,26 @@ CASADI_SYMBOL_EXPORT int qd_grf_BR_work_bytes(casadi_int *sz_arg, casadi_int* sz
   if (sz_iw) *sz_iw = 0*sizeof(casadi_int);
   if (sz_w) *sz_w = 0*sizeof(casadi_real);
   return 0;
+}
+
+CASADI_SYMBOL_EXPORT int qd_grf_BR_batch(casadi_int n, const casadi_real* const* arg, casadi_real* const* res, int* status, casadi_real* w) {
+  const casadi_real* a[3] = {0};
+  casadi_real* r[4] = {0};
+  casadi_int s;
+  int bad = 0;
+  for (s = 0; s < n; ++s) {
+    a[0] = arg[0] ? arg[0] + s*19 : 0;
+    a[1] = arg[1] ? arg[1] + s*18 : 0;
+    a[2] = arg[2] ? arg[2] + s*18 : 0;
+    r[0] = res[0] ? res[0] + s*3 : 0;
+    r[1] = res[1] ? res[1] + s*12 : 0;
+    r[2] = res[2] ? res[2] + s*6 : 0;
+    r[3] = res[3] ? res[3] + s*12 : 0;
+    int flag = qd_grf_BR(a, r, 0, w, 0);
+    if (status) status[s] = flag;
+    bad += flag != 0;
+  }
+  return bad;
 }
 
 CASADI_SYMBOL_EXPORT int qd_grf_none(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem){
@@ -21909,6 +22308,26 @@ CASADI_SYMBOL_EXPORT int qd_grf_none_work_bytes(casadi_int *sz_arg, casadi_int* 
   return 0;
 }
 
+CASADI_SYMBOL_EXPORT int qd_grf_none_batch(casadi_int n, const casadi_real* const* arg, casadi_real* const* res, int* status, casadi_real* w) {
+  const casadi_real* a[3] = {0};
+  casadi_real* r[4] = {0};
+  casadi_int s;
+  int bad = 0;
+  for (s = 0; s < n; ++s) {
+    a[0] = arg[0] ? arg[0] + s*19 : 0;
+    a[1] = arg[1] ? arg[1] + s*18 : 0;
+    a[2] = arg[2] ? arg[2] + s*18 : 0;
+    r[0] = res[0] ? res[0] + s*0 : 0;
+    r[1] = res[1] ? res[1] + s*12 : 0;
+    r[2] = res[2] ? res[2] + s*6 : 0;
+    r[3] = res[3] ? res[3] + s*12 : 0;
+    int flag = qd_grf_none(a, r, 0, w, 0);
+    if (status) status[s] = flag;
+    bad += flag != 0;
+  }
+  return bad;
+}
+
 CASADI_SYMBOL_EXPORT int qd_M_full_crba(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem){
   return qd_M_full(arg, res, iw, w, mem);
 }
@@ -21981,6 +22400,21 @@ CASADI_SYMBOL_EXPORT int qd_M_full_crba_work_bytes(casadi_int *sz_arg, casadi_in
   return 0;
 }
 
+CASADI_SYMBOL_EXPORT int qd_M_full_crba_batch(casadi_int n, const casadi_real* const* arg, casadi_real* const* res, int* status, casadi_real* w) {
+  const casadi_real* a[1] = {0};
+  casadi_real* r[1] = {0};
+  casadi_int s;
+  int bad = 0;
+  for (s = 0; s < n; ++s) {
+    a[0] = arg[0] ? arg[0] + s*19 : 0;
+    r[0] = res[0] ? res[0] + s*210 : 0;
+    int flag = qd_M_full_crba(a, r, 0, w, 0);
+    if (status) status[s] = flag;
+    bad += flag != 0;
+  }
+  return bad;
+}
+
 CASADI_SYMBOL_EXPORT int qd_G_full_crb(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem){
   return qd_G_full(arg, res, iw, w, mem);
 }
@@ -22051,6 +22485,21 @@ CASADI_SYMBOL_EXPORT int qd_G_full_crb_work_bytes(casadi_int *sz_arg, casadi_int
   if (sz_iw) *sz_iw = 0*sizeof(casadi_int);
   if (sz_w) *sz_w = 0*sizeof(casadi_real);
   return 0;
+}
+
+CASADI_SYMBOL_EXPORT int qd_G_full_crb_batch(casadi_int n, const casadi_real* const* arg, casadi_real* const* res, int* status, casadi_real* w) {
+  const casadi_real* a[1] = {0};
+  casadi_real* r[1] = {0};
+  casadi_int s;
+  int bad = 0;
+  for (s = 0; s < n; ++s) {
+    a[0] = arg[0] ? arg[0] + s*19 : 0;
+    r[0] = res[0] ? res[0] + s*18 : 0;
+    int flag = qd_G_full_crb(a, r, 0, w, 0);
+    if (status) status[s] = flag;
+    bad += flag != 0;
+  }
+  return bad;
 }
 
 

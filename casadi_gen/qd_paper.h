@@ -14,6 +14,10 @@
  * colind[ncol + 1], row[nnz]); a dense input or output's pattern is the short form
  * {nrow, ncol, 1} (nrow x ncol entries, column-major), with no colind or row after it.
  * casadi_real is double unless defined before this header (e.g. -Dcasadi_real=float).
+ * qd_NAME_batch(n, arg, res, status, w): n states, state-major (state s's input i at
+ * arg[i] + s * nnz_i, outputs alike), one qd_NAME call each with work w of qd_NAME_SZ_W reals;
+ * status[s] (if status is not NULL) gets state s's return code, a bad state does not stop the
+ * others; returns the number of non-zero codes. Outputs equal one call's, bit for bit.
  *
  * qd_grf_<feet>: the paper's GRF model for those stance feet (trunk-frame assumptions,
  * quadruped_dyn/dynamics/grf.py), minimum-norm solution. Where the model's rank is 5 (four feet,
@@ -353,6 +357,7 @@ int qd_M_full_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz_
 #define qd_M_full_SZ_RES 1
 #define qd_M_full_SZ_IW 0
 #define qd_M_full_SZ_W 0
+int qd_M_full_batch(casadi_int n, const casadi_real* const* arg, casadi_real* const* res, int* status, casadi_real* w);
 int qd_C_full(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem);
 int qd_C_full_checkout(void);
 void qd_C_full_release(int mem);
@@ -371,6 +376,7 @@ int qd_C_full_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz_
 #define qd_C_full_SZ_RES 1
 #define qd_C_full_SZ_IW 0
 #define qd_C_full_SZ_W 0
+int qd_C_full_batch(casadi_int n, const casadi_real* const* arg, casadi_real* const* res, int* status, casadi_real* w);
 int qd_G_full(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem);
 int qd_G_full_checkout(void);
 void qd_G_full_release(int mem);
@@ -389,6 +395,7 @@ int qd_G_full_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz_
 #define qd_G_full_SZ_RES 1
 #define qd_G_full_SZ_IW 0
 #define qd_G_full_SZ_W 0
+int qd_G_full_batch(casadi_int n, const casadi_real* const* arg, casadi_real* const* res, int* status, casadi_real* w);
 int qd_nle_full(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem);
 int qd_nle_full_checkout(void);
 void qd_nle_full_release(int mem);
@@ -407,6 +414,7 @@ int qd_nle_full_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *s
 #define qd_nle_full_SZ_RES 1
 #define qd_nle_full_SZ_IW 0
 #define qd_nle_full_SZ_W 0
+int qd_nle_full_batch(casadi_int n, const casadi_real* const* arg, casadi_real* const* res, int* status, casadi_real* w);
 int qd_id_full(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem);
 int qd_id_full_checkout(void);
 void qd_id_full_release(int mem);
@@ -425,6 +433,7 @@ int qd_id_full_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz
 #define qd_id_full_SZ_RES 2
 #define qd_id_full_SZ_IW 0
 #define qd_id_full_SZ_W 0
+int qd_id_full_batch(casadi_int n, const casadi_real* const* arg, casadi_real* const* res, int* status, casadi_real* w);
 int qd_feet_full(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem);
 int qd_feet_full_checkout(void);
 void qd_feet_full_release(int mem);
@@ -443,6 +452,7 @@ int qd_feet_full_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *
 #define qd_feet_full_SZ_RES 3
 #define qd_feet_full_SZ_IW 0
 #define qd_feet_full_SZ_W 0
+int qd_feet_full_batch(casadi_int n, const casadi_real* const* arg, casadi_real* const* res, int* status, casadi_real* w);
 int qd_grf_FL_FR_BL_BR(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem);
 int qd_grf_FL_FR_BL_BR_checkout(void);
 void qd_grf_FL_FR_BL_BR_release(int mem);
@@ -461,6 +471,7 @@ int qd_grf_FL_FR_BL_BR_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi
 #define qd_grf_FL_FR_BL_BR_SZ_RES 4
 #define qd_grf_FL_FR_BL_BR_SZ_IW 0
 #define qd_grf_FL_FR_BL_BR_SZ_W 0
+int qd_grf_FL_FR_BL_BR_batch(casadi_int n, const casadi_real* const* arg, casadi_real* const* res, int* status, casadi_real* w);
 int qd_grf_FL_FR_BL(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem);
 int qd_grf_FL_FR_BL_checkout(void);
 void qd_grf_FL_FR_BL_release(int mem);
@@ -479,6 +490,7 @@ int qd_grf_FL_FR_BL_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_in
 #define qd_grf_FL_FR_BL_SZ_RES 4
 #define qd_grf_FL_FR_BL_SZ_IW 0
 #define qd_grf_FL_FR_BL_SZ_W 0
+int qd_grf_FL_FR_BL_batch(casadi_int n, const casadi_real* const* arg, casadi_real* const* res, int* status, casadi_real* w);
 int qd_grf_FL_FR_BR(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem);
 int qd_grf_FL_FR_BR_checkout(void);
 void qd_grf_FL_FR_BR_release(int mem);
@@ -497,6 +509,7 @@ int qd_grf_FL_FR_BR_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_in
 #define qd_grf_FL_FR_BR_SZ_RES 4
 #define qd_grf_FL_FR_BR_SZ_IW 0
 #define qd_grf_FL_FR_BR_SZ_W 0
+int qd_grf_FL_FR_BR_batch(casadi_int n, const casadi_real* const* arg, casadi_real* const* res, int* status, casadi_real* w);
 int qd_grf_FL_BL_BR(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem);
 int qd_grf_FL_BL_BR_checkout(void);
 void qd_grf_FL_BL_BR_release(int mem);
@@ -515,6 +528,7 @@ int qd_grf_FL_BL_BR_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_in
 #define qd_grf_FL_BL_BR_SZ_RES 4
 #define qd_grf_FL_BL_BR_SZ_IW 0
 #define qd_grf_FL_BL_BR_SZ_W 0
+int qd_grf_FL_BL_BR_batch(casadi_int n, const casadi_real* const* arg, casadi_real* const* res, int* status, casadi_real* w);
 int qd_grf_FR_BL_BR(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem);
 int qd_grf_FR_BL_BR_checkout(void);
 void qd_grf_FR_BL_BR_release(int mem);
@@ -533,6 +547,7 @@ int qd_grf_FR_BL_BR_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_in
 #define qd_grf_FR_BL_BR_SZ_RES 4
 #define qd_grf_FR_BL_BR_SZ_IW 0
 #define qd_grf_FR_BL_BR_SZ_W 0
+int qd_grf_FR_BL_BR_batch(casadi_int n, const casadi_real* const* arg, casadi_real* const* res, int* status, casadi_real* w);
 int qd_grf_FL_FR(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem);
 int qd_grf_FL_FR_checkout(void);
 void qd_grf_FL_FR_release(int mem);
@@ -551,6 +566,7 @@ int qd_grf_FL_FR_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *
 #define qd_grf_FL_FR_SZ_RES 4
 #define qd_grf_FL_FR_SZ_IW 0
 #define qd_grf_FL_FR_SZ_W 0
+int qd_grf_FL_FR_batch(casadi_int n, const casadi_real* const* arg, casadi_real* const* res, int* status, casadi_real* w);
 int qd_grf_FL_BL(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem);
 int qd_grf_FL_BL_checkout(void);
 void qd_grf_FL_BL_release(int mem);
@@ -569,6 +585,7 @@ int qd_grf_FL_BL_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *
 #define qd_grf_FL_BL_SZ_RES 4
 #define qd_grf_FL_BL_SZ_IW 0
 #define qd_grf_FL_BL_SZ_W 0
+int qd_grf_FL_BL_batch(casadi_int n, const casadi_real* const* arg, casadi_real* const* res, int* status, casadi_real* w);
 int qd_grf_FL_BR(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem);
 int qd_grf_FL_BR_checkout(void);
 void qd_grf_FL_BR_release(int mem);
@@ -587,6 +604,7 @@ int qd_grf_FL_BR_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *
 #define qd_grf_FL_BR_SZ_RES 4
 #define qd_grf_FL_BR_SZ_IW 0
 #define qd_grf_FL_BR_SZ_W 0
+int qd_grf_FL_BR_batch(casadi_int n, const casadi_real* const* arg, casadi_real* const* res, int* status, casadi_real* w);
 int qd_grf_FR_BL(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem);
 int qd_grf_FR_BL_checkout(void);
 void qd_grf_FR_BL_release(int mem);
@@ -605,6 +623,7 @@ int qd_grf_FR_BL_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *
 #define qd_grf_FR_BL_SZ_RES 4
 #define qd_grf_FR_BL_SZ_IW 0
 #define qd_grf_FR_BL_SZ_W 0
+int qd_grf_FR_BL_batch(casadi_int n, const casadi_real* const* arg, casadi_real* const* res, int* status, casadi_real* w);
 int qd_grf_FR_BR(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem);
 int qd_grf_FR_BR_checkout(void);
 void qd_grf_FR_BR_release(int mem);
@@ -623,6 +642,7 @@ int qd_grf_FR_BR_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *
 #define qd_grf_FR_BR_SZ_RES 4
 #define qd_grf_FR_BR_SZ_IW 0
 #define qd_grf_FR_BR_SZ_W 0
+int qd_grf_FR_BR_batch(casadi_int n, const casadi_real* const* arg, casadi_real* const* res, int* status, casadi_real* w);
 int qd_grf_BL_BR(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem);
 int qd_grf_BL_BR_checkout(void);
 void qd_grf_BL_BR_release(int mem);
@@ -641,6 +661,7 @@ int qd_grf_BL_BR_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *
 #define qd_grf_BL_BR_SZ_RES 4
 #define qd_grf_BL_BR_SZ_IW 0
 #define qd_grf_BL_BR_SZ_W 0
+int qd_grf_BL_BR_batch(casadi_int n, const casadi_real* const* arg, casadi_real* const* res, int* status, casadi_real* w);
 int qd_grf_FL(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem);
 int qd_grf_FL_checkout(void);
 void qd_grf_FL_release(int mem);
@@ -659,6 +680,7 @@ int qd_grf_FL_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz_
 #define qd_grf_FL_SZ_RES 4
 #define qd_grf_FL_SZ_IW 0
 #define qd_grf_FL_SZ_W 0
+int qd_grf_FL_batch(casadi_int n, const casadi_real* const* arg, casadi_real* const* res, int* status, casadi_real* w);
 int qd_grf_FR(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem);
 int qd_grf_FR_checkout(void);
 void qd_grf_FR_release(int mem);
@@ -677,6 +699,7 @@ int qd_grf_FR_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz_
 #define qd_grf_FR_SZ_RES 4
 #define qd_grf_FR_SZ_IW 0
 #define qd_grf_FR_SZ_W 0
+int qd_grf_FR_batch(casadi_int n, const casadi_real* const* arg, casadi_real* const* res, int* status, casadi_real* w);
 int qd_grf_BL(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem);
 int qd_grf_BL_checkout(void);
 void qd_grf_BL_release(int mem);
@@ -695,6 +718,7 @@ int qd_grf_BL_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz_
 #define qd_grf_BL_SZ_RES 4
 #define qd_grf_BL_SZ_IW 0
 #define qd_grf_BL_SZ_W 0
+int qd_grf_BL_batch(casadi_int n, const casadi_real* const* arg, casadi_real* const* res, int* status, casadi_real* w);
 int qd_grf_BR(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem);
 int qd_grf_BR_checkout(void);
 void qd_grf_BR_release(int mem);
@@ -713,6 +737,7 @@ int qd_grf_BR_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz_
 #define qd_grf_BR_SZ_RES 4
 #define qd_grf_BR_SZ_IW 0
 #define qd_grf_BR_SZ_W 0
+int qd_grf_BR_batch(casadi_int n, const casadi_real* const* arg, casadi_real* const* res, int* status, casadi_real* w);
 int qd_grf_none(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem);
 int qd_grf_none_checkout(void);
 void qd_grf_none_release(int mem);
@@ -731,6 +756,7 @@ int qd_grf_none_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *s
 #define qd_grf_none_SZ_RES 4
 #define qd_grf_none_SZ_IW 0
 #define qd_grf_none_SZ_W 0
+int qd_grf_none_batch(casadi_int n, const casadi_real* const* arg, casadi_real* const* res, int* status, casadi_real* w);
 int qd_M_full_crba(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem);
 int qd_M_full_crba_checkout(void);
 void qd_M_full_crba_release(int mem);
@@ -749,6 +775,7 @@ int qd_M_full_crba_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_int
 #define qd_M_full_crba_SZ_RES 1
 #define qd_M_full_crba_SZ_IW 0
 #define qd_M_full_crba_SZ_W 0
+int qd_M_full_crba_batch(casadi_int n, const casadi_real* const* arg, casadi_real* const* res, int* status, casadi_real* w);
 int qd_G_full_crb(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem);
 int qd_G_full_crb_checkout(void);
 void qd_G_full_crb_release(int mem);
@@ -767,6 +794,7 @@ int qd_G_full_crb_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_int 
 #define qd_G_full_crb_SZ_RES 1
 #define qd_G_full_crb_SZ_IW 0
 #define qd_G_full_crb_SZ_W 0
+int qd_G_full_crb_batch(casadi_int n, const casadi_real* const* arg, casadi_real* const* res, int* status, casadi_real* w);
 void qd_paper_casadi_version(int* major, int* minor, int* patch);
 int qd_paper_casadi_int_size(void);
 int qd_paper_casadi_real_size(void);
@@ -810,6 +838,7 @@ int qd_M_r_FL_FR_BL_BR_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi
 #define qd_M_r_FL_FR_BL_BR_SZ_RES 1
 #define qd_M_r_FL_FR_BL_BR_SZ_IW 0
 #define qd_M_r_FL_FR_BL_BR_SZ_W 0
+int qd_M_r_FL_FR_BL_BR_batch(casadi_int n, const casadi_real* const* arg, casadi_real* const* res, int* status, casadi_real* w);
 int qd_CG_r_FL_FR_BL_BR(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem);
 int qd_CG_r_FL_FR_BL_BR_checkout(void);
 void qd_CG_r_FL_FR_BL_BR_release(int mem);
@@ -828,6 +857,7 @@ int qd_CG_r_FL_FR_BL_BR_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casad
 #define qd_CG_r_FL_FR_BL_BR_SZ_RES 1
 #define qd_CG_r_FL_FR_BL_BR_SZ_IW 0
 #define qd_CG_r_FL_FR_BL_BR_SZ_W 0
+int qd_CG_r_FL_FR_BL_BR_batch(casadi_int n, const casadi_real* const* arg, casadi_real* const* res, int* status, casadi_real* w);
 int qd_G_r_FL_FR_BL_BR(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem);
 int qd_G_r_FL_FR_BL_BR_checkout(void);
 void qd_G_r_FL_FR_BL_BR_release(int mem);
@@ -846,6 +876,7 @@ int qd_G_r_FL_FR_BL_BR_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi
 #define qd_G_r_FL_FR_BL_BR_SZ_RES 1
 #define qd_G_r_FL_FR_BL_BR_SZ_IW 0
 #define qd_G_r_FL_FR_BL_BR_SZ_W 0
+int qd_G_r_FL_FR_BL_BR_batch(casadi_int n, const casadi_real* const* arg, casadi_real* const* res, int* status, casadi_real* w);
 int qd_id_r_FL_FR_BL_BR(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem);
 int qd_id_r_FL_FR_BL_BR_checkout(void);
 void qd_id_r_FL_FR_BL_BR_release(int mem);
@@ -864,6 +895,7 @@ int qd_id_r_FL_FR_BL_BR_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casad
 #define qd_id_r_FL_FR_BL_BR_SZ_RES 1
 #define qd_id_r_FL_FR_BL_BR_SZ_IW 0
 #define qd_id_r_FL_FR_BL_BR_SZ_W 0
+int qd_id_r_FL_FR_BL_BR_batch(casadi_int n, const casadi_real* const* arg, casadi_real* const* res, int* status, casadi_real* w);
 int qd_fd_r_FL_FR_BL_BR(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem);
 int qd_fd_r_FL_FR_BL_BR_checkout(void);
 void qd_fd_r_FL_FR_BL_BR_release(int mem);
@@ -882,6 +914,7 @@ int qd_fd_r_FL_FR_BL_BR_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casad
 #define qd_fd_r_FL_FR_BL_BR_SZ_RES 1
 #define qd_fd_r_FL_FR_BL_BR_SZ_IW 0
 #define qd_fd_r_FL_FR_BL_BR_SZ_W 0
+int qd_fd_r_FL_FR_BL_BR_batch(casadi_int n, const casadi_real* const* arg, casadi_real* const* res, int* status, casadi_real* w);
 int qd_dfd_r_FL_FR_BL_BR(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem);
 int qd_dfd_r_FL_FR_BL_BR_checkout(void);
 void qd_dfd_r_FL_FR_BL_BR_release(int mem);
@@ -900,6 +933,7 @@ int qd_dfd_r_FL_FR_BL_BR_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casa
 #define qd_dfd_r_FL_FR_BL_BR_SZ_RES 4
 #define qd_dfd_r_FL_FR_BL_BR_SZ_IW 0
 #define qd_dfd_r_FL_FR_BL_BR_SZ_W 2623
+int qd_dfd_r_FL_FR_BL_BR_batch(casadi_int n, const casadi_real* const* arg, casadi_real* const* res, int* status, casadi_real* w);
 void qd_paper_r_FL_FR_BL_BR_casadi_version(int* major, int* minor, int* patch);
 int qd_paper_r_FL_FR_BL_BR_casadi_int_size(void);
 int qd_paper_r_FL_FR_BL_BR_casadi_real_size(void);
@@ -943,6 +977,7 @@ int qd_M_r_FL_FR_BL_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_in
 #define qd_M_r_FL_FR_BL_SZ_RES 1
 #define qd_M_r_FL_FR_BL_SZ_IW 0
 #define qd_M_r_FL_FR_BL_SZ_W 0
+int qd_M_r_FL_FR_BL_batch(casadi_int n, const casadi_real* const* arg, casadi_real* const* res, int* status, casadi_real* w);
 int qd_CG_r_FL_FR_BL(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem);
 int qd_CG_r_FL_FR_BL_checkout(void);
 void qd_CG_r_FL_FR_BL_release(int mem);
@@ -961,6 +996,7 @@ int qd_CG_r_FL_FR_BL_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_i
 #define qd_CG_r_FL_FR_BL_SZ_RES 1
 #define qd_CG_r_FL_FR_BL_SZ_IW 0
 #define qd_CG_r_FL_FR_BL_SZ_W 0
+int qd_CG_r_FL_FR_BL_batch(casadi_int n, const casadi_real* const* arg, casadi_real* const* res, int* status, casadi_real* w);
 int qd_G_r_FL_FR_BL(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem);
 int qd_G_r_FL_FR_BL_checkout(void);
 void qd_G_r_FL_FR_BL_release(int mem);
@@ -979,6 +1015,7 @@ int qd_G_r_FL_FR_BL_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_in
 #define qd_G_r_FL_FR_BL_SZ_RES 1
 #define qd_G_r_FL_FR_BL_SZ_IW 0
 #define qd_G_r_FL_FR_BL_SZ_W 0
+int qd_G_r_FL_FR_BL_batch(casadi_int n, const casadi_real* const* arg, casadi_real* const* res, int* status, casadi_real* w);
 int qd_id_r_FL_FR_BL(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem);
 int qd_id_r_FL_FR_BL_checkout(void);
 void qd_id_r_FL_FR_BL_release(int mem);
@@ -997,6 +1034,7 @@ int qd_id_r_FL_FR_BL_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_i
 #define qd_id_r_FL_FR_BL_SZ_RES 1
 #define qd_id_r_FL_FR_BL_SZ_IW 0
 #define qd_id_r_FL_FR_BL_SZ_W 0
+int qd_id_r_FL_FR_BL_batch(casadi_int n, const casadi_real* const* arg, casadi_real* const* res, int* status, casadi_real* w);
 int qd_fd_r_FL_FR_BL(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem);
 int qd_fd_r_FL_FR_BL_checkout(void);
 void qd_fd_r_FL_FR_BL_release(int mem);
@@ -1015,6 +1053,7 @@ int qd_fd_r_FL_FR_BL_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_i
 #define qd_fd_r_FL_FR_BL_SZ_RES 1
 #define qd_fd_r_FL_FR_BL_SZ_IW 0
 #define qd_fd_r_FL_FR_BL_SZ_W 0
+int qd_fd_r_FL_FR_BL_batch(casadi_int n, const casadi_real* const* arg, casadi_real* const* res, int* status, casadi_real* w);
 int qd_dfd_r_FL_FR_BL(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem);
 int qd_dfd_r_FL_FR_BL_checkout(void);
 void qd_dfd_r_FL_FR_BL_release(int mem);
@@ -1033,6 +1072,7 @@ int qd_dfd_r_FL_FR_BL_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_
 #define qd_dfd_r_FL_FR_BL_SZ_RES 4
 #define qd_dfd_r_FL_FR_BL_SZ_IW 0
 #define qd_dfd_r_FL_FR_BL_SZ_W 2538
+int qd_dfd_r_FL_FR_BL_batch(casadi_int n, const casadi_real* const* arg, casadi_real* const* res, int* status, casadi_real* w);
 void qd_paper_r_FL_FR_BL_casadi_version(int* major, int* minor, int* patch);
 int qd_paper_r_FL_FR_BL_casadi_int_size(void);
 int qd_paper_r_FL_FR_BL_casadi_real_size(void);
@@ -1076,6 +1116,7 @@ int qd_M_r_FL_FR_BR_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_in
 #define qd_M_r_FL_FR_BR_SZ_RES 1
 #define qd_M_r_FL_FR_BR_SZ_IW 0
 #define qd_M_r_FL_FR_BR_SZ_W 0
+int qd_M_r_FL_FR_BR_batch(casadi_int n, const casadi_real* const* arg, casadi_real* const* res, int* status, casadi_real* w);
 int qd_CG_r_FL_FR_BR(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem);
 int qd_CG_r_FL_FR_BR_checkout(void);
 void qd_CG_r_FL_FR_BR_release(int mem);
@@ -1094,6 +1135,7 @@ int qd_CG_r_FL_FR_BR_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_i
 #define qd_CG_r_FL_FR_BR_SZ_RES 1
 #define qd_CG_r_FL_FR_BR_SZ_IW 0
 #define qd_CG_r_FL_FR_BR_SZ_W 0
+int qd_CG_r_FL_FR_BR_batch(casadi_int n, const casadi_real* const* arg, casadi_real* const* res, int* status, casadi_real* w);
 int qd_G_r_FL_FR_BR(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem);
 int qd_G_r_FL_FR_BR_checkout(void);
 void qd_G_r_FL_FR_BR_release(int mem);
@@ -1112,6 +1154,7 @@ int qd_G_r_FL_FR_BR_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_in
 #define qd_G_r_FL_FR_BR_SZ_RES 1
 #define qd_G_r_FL_FR_BR_SZ_IW 0
 #define qd_G_r_FL_FR_BR_SZ_W 0
+int qd_G_r_FL_FR_BR_batch(casadi_int n, const casadi_real* const* arg, casadi_real* const* res, int* status, casadi_real* w);
 int qd_id_r_FL_FR_BR(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem);
 int qd_id_r_FL_FR_BR_checkout(void);
 void qd_id_r_FL_FR_BR_release(int mem);
@@ -1130,6 +1173,7 @@ int qd_id_r_FL_FR_BR_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_i
 #define qd_id_r_FL_FR_BR_SZ_RES 1
 #define qd_id_r_FL_FR_BR_SZ_IW 0
 #define qd_id_r_FL_FR_BR_SZ_W 0
+int qd_id_r_FL_FR_BR_batch(casadi_int n, const casadi_real* const* arg, casadi_real* const* res, int* status, casadi_real* w);
 int qd_fd_r_FL_FR_BR(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem);
 int qd_fd_r_FL_FR_BR_checkout(void);
 void qd_fd_r_FL_FR_BR_release(int mem);
@@ -1148,6 +1192,7 @@ int qd_fd_r_FL_FR_BR_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_i
 #define qd_fd_r_FL_FR_BR_SZ_RES 1
 #define qd_fd_r_FL_FR_BR_SZ_IW 0
 #define qd_fd_r_FL_FR_BR_SZ_W 0
+int qd_fd_r_FL_FR_BR_batch(casadi_int n, const casadi_real* const* arg, casadi_real* const* res, int* status, casadi_real* w);
 int qd_dfd_r_FL_FR_BR(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem);
 int qd_dfd_r_FL_FR_BR_checkout(void);
 void qd_dfd_r_FL_FR_BR_release(int mem);
@@ -1166,6 +1211,7 @@ int qd_dfd_r_FL_FR_BR_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_
 #define qd_dfd_r_FL_FR_BR_SZ_RES 4
 #define qd_dfd_r_FL_FR_BR_SZ_IW 0
 #define qd_dfd_r_FL_FR_BR_SZ_W 2538
+int qd_dfd_r_FL_FR_BR_batch(casadi_int n, const casadi_real* const* arg, casadi_real* const* res, int* status, casadi_real* w);
 void qd_paper_r_FL_FR_BR_casadi_version(int* major, int* minor, int* patch);
 int qd_paper_r_FL_FR_BR_casadi_int_size(void);
 int qd_paper_r_FL_FR_BR_casadi_real_size(void);
@@ -1209,6 +1255,7 @@ int qd_M_r_FL_BL_BR_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_in
 #define qd_M_r_FL_BL_BR_SZ_RES 1
 #define qd_M_r_FL_BL_BR_SZ_IW 0
 #define qd_M_r_FL_BL_BR_SZ_W 0
+int qd_M_r_FL_BL_BR_batch(casadi_int n, const casadi_real* const* arg, casadi_real* const* res, int* status, casadi_real* w);
 int qd_CG_r_FL_BL_BR(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem);
 int qd_CG_r_FL_BL_BR_checkout(void);
 void qd_CG_r_FL_BL_BR_release(int mem);
@@ -1227,6 +1274,7 @@ int qd_CG_r_FL_BL_BR_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_i
 #define qd_CG_r_FL_BL_BR_SZ_RES 1
 #define qd_CG_r_FL_BL_BR_SZ_IW 0
 #define qd_CG_r_FL_BL_BR_SZ_W 0
+int qd_CG_r_FL_BL_BR_batch(casadi_int n, const casadi_real* const* arg, casadi_real* const* res, int* status, casadi_real* w);
 int qd_G_r_FL_BL_BR(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem);
 int qd_G_r_FL_BL_BR_checkout(void);
 void qd_G_r_FL_BL_BR_release(int mem);
@@ -1245,6 +1293,7 @@ int qd_G_r_FL_BL_BR_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_in
 #define qd_G_r_FL_BL_BR_SZ_RES 1
 #define qd_G_r_FL_BL_BR_SZ_IW 0
 #define qd_G_r_FL_BL_BR_SZ_W 0
+int qd_G_r_FL_BL_BR_batch(casadi_int n, const casadi_real* const* arg, casadi_real* const* res, int* status, casadi_real* w);
 int qd_id_r_FL_BL_BR(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem);
 int qd_id_r_FL_BL_BR_checkout(void);
 void qd_id_r_FL_BL_BR_release(int mem);
@@ -1263,6 +1312,7 @@ int qd_id_r_FL_BL_BR_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_i
 #define qd_id_r_FL_BL_BR_SZ_RES 1
 #define qd_id_r_FL_BL_BR_SZ_IW 0
 #define qd_id_r_FL_BL_BR_SZ_W 0
+int qd_id_r_FL_BL_BR_batch(casadi_int n, const casadi_real* const* arg, casadi_real* const* res, int* status, casadi_real* w);
 int qd_fd_r_FL_BL_BR(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem);
 int qd_fd_r_FL_BL_BR_checkout(void);
 void qd_fd_r_FL_BL_BR_release(int mem);
@@ -1281,6 +1331,7 @@ int qd_fd_r_FL_BL_BR_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_i
 #define qd_fd_r_FL_BL_BR_SZ_RES 1
 #define qd_fd_r_FL_BL_BR_SZ_IW 0
 #define qd_fd_r_FL_BL_BR_SZ_W 0
+int qd_fd_r_FL_BL_BR_batch(casadi_int n, const casadi_real* const* arg, casadi_real* const* res, int* status, casadi_real* w);
 int qd_dfd_r_FL_BL_BR(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem);
 int qd_dfd_r_FL_BL_BR_checkout(void);
 void qd_dfd_r_FL_BL_BR_release(int mem);
@@ -1299,6 +1350,7 @@ int qd_dfd_r_FL_BL_BR_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_
 #define qd_dfd_r_FL_BL_BR_SZ_RES 4
 #define qd_dfd_r_FL_BL_BR_SZ_IW 0
 #define qd_dfd_r_FL_BL_BR_SZ_W 2538
+int qd_dfd_r_FL_BL_BR_batch(casadi_int n, const casadi_real* const* arg, casadi_real* const* res, int* status, casadi_real* w);
 void qd_paper_r_FL_BL_BR_casadi_version(int* major, int* minor, int* patch);
 int qd_paper_r_FL_BL_BR_casadi_int_size(void);
 int qd_paper_r_FL_BL_BR_casadi_real_size(void);
@@ -1342,6 +1394,7 @@ int qd_M_r_FR_BL_BR_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_in
 #define qd_M_r_FR_BL_BR_SZ_RES 1
 #define qd_M_r_FR_BL_BR_SZ_IW 0
 #define qd_M_r_FR_BL_BR_SZ_W 0
+int qd_M_r_FR_BL_BR_batch(casadi_int n, const casadi_real* const* arg, casadi_real* const* res, int* status, casadi_real* w);
 int qd_CG_r_FR_BL_BR(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem);
 int qd_CG_r_FR_BL_BR_checkout(void);
 void qd_CG_r_FR_BL_BR_release(int mem);
@@ -1360,6 +1413,7 @@ int qd_CG_r_FR_BL_BR_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_i
 #define qd_CG_r_FR_BL_BR_SZ_RES 1
 #define qd_CG_r_FR_BL_BR_SZ_IW 0
 #define qd_CG_r_FR_BL_BR_SZ_W 0
+int qd_CG_r_FR_BL_BR_batch(casadi_int n, const casadi_real* const* arg, casadi_real* const* res, int* status, casadi_real* w);
 int qd_G_r_FR_BL_BR(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem);
 int qd_G_r_FR_BL_BR_checkout(void);
 void qd_G_r_FR_BL_BR_release(int mem);
@@ -1378,6 +1432,7 @@ int qd_G_r_FR_BL_BR_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_in
 #define qd_G_r_FR_BL_BR_SZ_RES 1
 #define qd_G_r_FR_BL_BR_SZ_IW 0
 #define qd_G_r_FR_BL_BR_SZ_W 0
+int qd_G_r_FR_BL_BR_batch(casadi_int n, const casadi_real* const* arg, casadi_real* const* res, int* status, casadi_real* w);
 int qd_id_r_FR_BL_BR(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem);
 int qd_id_r_FR_BL_BR_checkout(void);
 void qd_id_r_FR_BL_BR_release(int mem);
@@ -1396,6 +1451,7 @@ int qd_id_r_FR_BL_BR_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_i
 #define qd_id_r_FR_BL_BR_SZ_RES 1
 #define qd_id_r_FR_BL_BR_SZ_IW 0
 #define qd_id_r_FR_BL_BR_SZ_W 0
+int qd_id_r_FR_BL_BR_batch(casadi_int n, const casadi_real* const* arg, casadi_real* const* res, int* status, casadi_real* w);
 int qd_fd_r_FR_BL_BR(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem);
 int qd_fd_r_FR_BL_BR_checkout(void);
 void qd_fd_r_FR_BL_BR_release(int mem);
@@ -1414,6 +1470,7 @@ int qd_fd_r_FR_BL_BR_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_i
 #define qd_fd_r_FR_BL_BR_SZ_RES 1
 #define qd_fd_r_FR_BL_BR_SZ_IW 0
 #define qd_fd_r_FR_BL_BR_SZ_W 0
+int qd_fd_r_FR_BL_BR_batch(casadi_int n, const casadi_real* const* arg, casadi_real* const* res, int* status, casadi_real* w);
 int qd_dfd_r_FR_BL_BR(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem);
 int qd_dfd_r_FR_BL_BR_checkout(void);
 void qd_dfd_r_FR_BL_BR_release(int mem);
@@ -1432,6 +1489,7 @@ int qd_dfd_r_FR_BL_BR_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_
 #define qd_dfd_r_FR_BL_BR_SZ_RES 4
 #define qd_dfd_r_FR_BL_BR_SZ_IW 0
 #define qd_dfd_r_FR_BL_BR_SZ_W 2538
+int qd_dfd_r_FR_BL_BR_batch(casadi_int n, const casadi_real* const* arg, casadi_real* const* res, int* status, casadi_real* w);
 void qd_paper_r_FR_BL_BR_casadi_version(int* major, int* minor, int* patch);
 int qd_paper_r_FR_BL_BR_casadi_int_size(void);
 int qd_paper_r_FR_BL_BR_casadi_real_size(void);
@@ -1475,6 +1533,7 @@ int qd_M_r_FL_FR_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *
 #define qd_M_r_FL_FR_SZ_RES 1
 #define qd_M_r_FL_FR_SZ_IW 0
 #define qd_M_r_FL_FR_SZ_W 0
+int qd_M_r_FL_FR_batch(casadi_int n, const casadi_real* const* arg, casadi_real* const* res, int* status, casadi_real* w);
 int qd_CG_r_FL_FR(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem);
 int qd_CG_r_FL_FR_checkout(void);
 void qd_CG_r_FL_FR_release(int mem);
@@ -1493,6 +1552,7 @@ int qd_CG_r_FL_FR_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_int 
 #define qd_CG_r_FL_FR_SZ_RES 1
 #define qd_CG_r_FL_FR_SZ_IW 0
 #define qd_CG_r_FL_FR_SZ_W 0
+int qd_CG_r_FL_FR_batch(casadi_int n, const casadi_real* const* arg, casadi_real* const* res, int* status, casadi_real* w);
 int qd_G_r_FL_FR(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem);
 int qd_G_r_FL_FR_checkout(void);
 void qd_G_r_FL_FR_release(int mem);
@@ -1511,6 +1571,7 @@ int qd_G_r_FL_FR_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *
 #define qd_G_r_FL_FR_SZ_RES 1
 #define qd_G_r_FL_FR_SZ_IW 0
 #define qd_G_r_FL_FR_SZ_W 0
+int qd_G_r_FL_FR_batch(casadi_int n, const casadi_real* const* arg, casadi_real* const* res, int* status, casadi_real* w);
 int qd_id_r_FL_FR(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem);
 int qd_id_r_FL_FR_checkout(void);
 void qd_id_r_FL_FR_release(int mem);
@@ -1529,6 +1590,7 @@ int qd_id_r_FL_FR_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_int 
 #define qd_id_r_FL_FR_SZ_RES 1
 #define qd_id_r_FL_FR_SZ_IW 0
 #define qd_id_r_FL_FR_SZ_W 0
+int qd_id_r_FL_FR_batch(casadi_int n, const casadi_real* const* arg, casadi_real* const* res, int* status, casadi_real* w);
 int qd_fd_r_FL_FR(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem);
 int qd_fd_r_FL_FR_checkout(void);
 void qd_fd_r_FL_FR_release(int mem);
@@ -1547,6 +1609,7 @@ int qd_fd_r_FL_FR_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_int 
 #define qd_fd_r_FL_FR_SZ_RES 1
 #define qd_fd_r_FL_FR_SZ_IW 0
 #define qd_fd_r_FL_FR_SZ_W 0
+int qd_fd_r_FL_FR_batch(casadi_int n, const casadi_real* const* arg, casadi_real* const* res, int* status, casadi_real* w);
 int qd_dfd_r_FL_FR(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem);
 int qd_dfd_r_FL_FR_checkout(void);
 void qd_dfd_r_FL_FR_release(int mem);
@@ -1565,6 +1628,7 @@ int qd_dfd_r_FL_FR_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_int
 #define qd_dfd_r_FL_FR_SZ_RES 4
 #define qd_dfd_r_FL_FR_SZ_IW 0
 #define qd_dfd_r_FL_FR_SZ_W 2624
+int qd_dfd_r_FL_FR_batch(casadi_int n, const casadi_real* const* arg, casadi_real* const* res, int* status, casadi_real* w);
 void qd_paper_r_FL_FR_casadi_version(int* major, int* minor, int* patch);
 int qd_paper_r_FL_FR_casadi_int_size(void);
 int qd_paper_r_FL_FR_casadi_real_size(void);
@@ -1608,6 +1672,7 @@ int qd_M_r_FL_BL_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *
 #define qd_M_r_FL_BL_SZ_RES 1
 #define qd_M_r_FL_BL_SZ_IW 0
 #define qd_M_r_FL_BL_SZ_W 0
+int qd_M_r_FL_BL_batch(casadi_int n, const casadi_real* const* arg, casadi_real* const* res, int* status, casadi_real* w);
 int qd_CG_r_FL_BL(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem);
 int qd_CG_r_FL_BL_checkout(void);
 void qd_CG_r_FL_BL_release(int mem);
@@ -1626,6 +1691,7 @@ int qd_CG_r_FL_BL_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_int 
 #define qd_CG_r_FL_BL_SZ_RES 1
 #define qd_CG_r_FL_BL_SZ_IW 0
 #define qd_CG_r_FL_BL_SZ_W 0
+int qd_CG_r_FL_BL_batch(casadi_int n, const casadi_real* const* arg, casadi_real* const* res, int* status, casadi_real* w);
 int qd_G_r_FL_BL(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem);
 int qd_G_r_FL_BL_checkout(void);
 void qd_G_r_FL_BL_release(int mem);
@@ -1644,6 +1710,7 @@ int qd_G_r_FL_BL_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *
 #define qd_G_r_FL_BL_SZ_RES 1
 #define qd_G_r_FL_BL_SZ_IW 0
 #define qd_G_r_FL_BL_SZ_W 0
+int qd_G_r_FL_BL_batch(casadi_int n, const casadi_real* const* arg, casadi_real* const* res, int* status, casadi_real* w);
 int qd_id_r_FL_BL(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem);
 int qd_id_r_FL_BL_checkout(void);
 void qd_id_r_FL_BL_release(int mem);
@@ -1662,6 +1729,7 @@ int qd_id_r_FL_BL_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_int 
 #define qd_id_r_FL_BL_SZ_RES 1
 #define qd_id_r_FL_BL_SZ_IW 0
 #define qd_id_r_FL_BL_SZ_W 0
+int qd_id_r_FL_BL_batch(casadi_int n, const casadi_real* const* arg, casadi_real* const* res, int* status, casadi_real* w);
 int qd_fd_r_FL_BL(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem);
 int qd_fd_r_FL_BL_checkout(void);
 void qd_fd_r_FL_BL_release(int mem);
@@ -1680,6 +1748,7 @@ int qd_fd_r_FL_BL_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_int 
 #define qd_fd_r_FL_BL_SZ_RES 1
 #define qd_fd_r_FL_BL_SZ_IW 0
 #define qd_fd_r_FL_BL_SZ_W 0
+int qd_fd_r_FL_BL_batch(casadi_int n, const casadi_real* const* arg, casadi_real* const* res, int* status, casadi_real* w);
 int qd_dfd_r_FL_BL(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem);
 int qd_dfd_r_FL_BL_checkout(void);
 void qd_dfd_r_FL_BL_release(int mem);
@@ -1698,6 +1767,7 @@ int qd_dfd_r_FL_BL_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_int
 #define qd_dfd_r_FL_BL_SZ_RES 4
 #define qd_dfd_r_FL_BL_SZ_IW 0
 #define qd_dfd_r_FL_BL_SZ_W 2624
+int qd_dfd_r_FL_BL_batch(casadi_int n, const casadi_real* const* arg, casadi_real* const* res, int* status, casadi_real* w);
 void qd_paper_r_FL_BL_casadi_version(int* major, int* minor, int* patch);
 int qd_paper_r_FL_BL_casadi_int_size(void);
 int qd_paper_r_FL_BL_casadi_real_size(void);
@@ -1741,6 +1811,7 @@ int qd_M_r_FL_BR_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *
 #define qd_M_r_FL_BR_SZ_RES 1
 #define qd_M_r_FL_BR_SZ_IW 0
 #define qd_M_r_FL_BR_SZ_W 0
+int qd_M_r_FL_BR_batch(casadi_int n, const casadi_real* const* arg, casadi_real* const* res, int* status, casadi_real* w);
 int qd_CG_r_FL_BR(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem);
 int qd_CG_r_FL_BR_checkout(void);
 void qd_CG_r_FL_BR_release(int mem);
@@ -1759,6 +1830,7 @@ int qd_CG_r_FL_BR_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_int 
 #define qd_CG_r_FL_BR_SZ_RES 1
 #define qd_CG_r_FL_BR_SZ_IW 0
 #define qd_CG_r_FL_BR_SZ_W 0
+int qd_CG_r_FL_BR_batch(casadi_int n, const casadi_real* const* arg, casadi_real* const* res, int* status, casadi_real* w);
 int qd_G_r_FL_BR(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem);
 int qd_G_r_FL_BR_checkout(void);
 void qd_G_r_FL_BR_release(int mem);
@@ -1777,6 +1849,7 @@ int qd_G_r_FL_BR_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *
 #define qd_G_r_FL_BR_SZ_RES 1
 #define qd_G_r_FL_BR_SZ_IW 0
 #define qd_G_r_FL_BR_SZ_W 0
+int qd_G_r_FL_BR_batch(casadi_int n, const casadi_real* const* arg, casadi_real* const* res, int* status, casadi_real* w);
 int qd_id_r_FL_BR(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem);
 int qd_id_r_FL_BR_checkout(void);
 void qd_id_r_FL_BR_release(int mem);
@@ -1795,6 +1868,7 @@ int qd_id_r_FL_BR_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_int 
 #define qd_id_r_FL_BR_SZ_RES 1
 #define qd_id_r_FL_BR_SZ_IW 0
 #define qd_id_r_FL_BR_SZ_W 0
+int qd_id_r_FL_BR_batch(casadi_int n, const casadi_real* const* arg, casadi_real* const* res, int* status, casadi_real* w);
 int qd_fd_r_FL_BR(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem);
 int qd_fd_r_FL_BR_checkout(void);
 void qd_fd_r_FL_BR_release(int mem);
@@ -1813,6 +1887,7 @@ int qd_fd_r_FL_BR_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_int 
 #define qd_fd_r_FL_BR_SZ_RES 1
 #define qd_fd_r_FL_BR_SZ_IW 0
 #define qd_fd_r_FL_BR_SZ_W 0
+int qd_fd_r_FL_BR_batch(casadi_int n, const casadi_real* const* arg, casadi_real* const* res, int* status, casadi_real* w);
 int qd_dfd_r_FL_BR(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem);
 int qd_dfd_r_FL_BR_checkout(void);
 void qd_dfd_r_FL_BR_release(int mem);
@@ -1831,6 +1906,7 @@ int qd_dfd_r_FL_BR_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_int
 #define qd_dfd_r_FL_BR_SZ_RES 4
 #define qd_dfd_r_FL_BR_SZ_IW 0
 #define qd_dfd_r_FL_BR_SZ_W 2624
+int qd_dfd_r_FL_BR_batch(casadi_int n, const casadi_real* const* arg, casadi_real* const* res, int* status, casadi_real* w);
 void qd_paper_r_FL_BR_casadi_version(int* major, int* minor, int* patch);
 int qd_paper_r_FL_BR_casadi_int_size(void);
 int qd_paper_r_FL_BR_casadi_real_size(void);
@@ -1874,6 +1950,7 @@ int qd_M_r_FR_BL_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *
 #define qd_M_r_FR_BL_SZ_RES 1
 #define qd_M_r_FR_BL_SZ_IW 0
 #define qd_M_r_FR_BL_SZ_W 0
+int qd_M_r_FR_BL_batch(casadi_int n, const casadi_real* const* arg, casadi_real* const* res, int* status, casadi_real* w);
 int qd_CG_r_FR_BL(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem);
 int qd_CG_r_FR_BL_checkout(void);
 void qd_CG_r_FR_BL_release(int mem);
@@ -1892,6 +1969,7 @@ int qd_CG_r_FR_BL_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_int 
 #define qd_CG_r_FR_BL_SZ_RES 1
 #define qd_CG_r_FR_BL_SZ_IW 0
 #define qd_CG_r_FR_BL_SZ_W 0
+int qd_CG_r_FR_BL_batch(casadi_int n, const casadi_real* const* arg, casadi_real* const* res, int* status, casadi_real* w);
 int qd_G_r_FR_BL(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem);
 int qd_G_r_FR_BL_checkout(void);
 void qd_G_r_FR_BL_release(int mem);
@@ -1910,6 +1988,7 @@ int qd_G_r_FR_BL_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *
 #define qd_G_r_FR_BL_SZ_RES 1
 #define qd_G_r_FR_BL_SZ_IW 0
 #define qd_G_r_FR_BL_SZ_W 0
+int qd_G_r_FR_BL_batch(casadi_int n, const casadi_real* const* arg, casadi_real* const* res, int* status, casadi_real* w);
 int qd_id_r_FR_BL(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem);
 int qd_id_r_FR_BL_checkout(void);
 void qd_id_r_FR_BL_release(int mem);
@@ -1928,6 +2007,7 @@ int qd_id_r_FR_BL_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_int 
 #define qd_id_r_FR_BL_SZ_RES 1
 #define qd_id_r_FR_BL_SZ_IW 0
 #define qd_id_r_FR_BL_SZ_W 0
+int qd_id_r_FR_BL_batch(casadi_int n, const casadi_real* const* arg, casadi_real* const* res, int* status, casadi_real* w);
 int qd_fd_r_FR_BL(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem);
 int qd_fd_r_FR_BL_checkout(void);
 void qd_fd_r_FR_BL_release(int mem);
@@ -1946,6 +2026,7 @@ int qd_fd_r_FR_BL_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_int 
 #define qd_fd_r_FR_BL_SZ_RES 1
 #define qd_fd_r_FR_BL_SZ_IW 0
 #define qd_fd_r_FR_BL_SZ_W 0
+int qd_fd_r_FR_BL_batch(casadi_int n, const casadi_real* const* arg, casadi_real* const* res, int* status, casadi_real* w);
 int qd_dfd_r_FR_BL(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem);
 int qd_dfd_r_FR_BL_checkout(void);
 void qd_dfd_r_FR_BL_release(int mem);
@@ -1964,6 +2045,7 @@ int qd_dfd_r_FR_BL_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_int
 #define qd_dfd_r_FR_BL_SZ_RES 4
 #define qd_dfd_r_FR_BL_SZ_IW 0
 #define qd_dfd_r_FR_BL_SZ_W 2624
+int qd_dfd_r_FR_BL_batch(casadi_int n, const casadi_real* const* arg, casadi_real* const* res, int* status, casadi_real* w);
 void qd_paper_r_FR_BL_casadi_version(int* major, int* minor, int* patch);
 int qd_paper_r_FR_BL_casadi_int_size(void);
 int qd_paper_r_FR_BL_casadi_real_size(void);
@@ -2007,6 +2089,7 @@ int qd_M_r_FR_BR_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *
 #define qd_M_r_FR_BR_SZ_RES 1
 #define qd_M_r_FR_BR_SZ_IW 0
 #define qd_M_r_FR_BR_SZ_W 0
+int qd_M_r_FR_BR_batch(casadi_int n, const casadi_real* const* arg, casadi_real* const* res, int* status, casadi_real* w);
 int qd_CG_r_FR_BR(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem);
 int qd_CG_r_FR_BR_checkout(void);
 void qd_CG_r_FR_BR_release(int mem);
@@ -2025,6 +2108,7 @@ int qd_CG_r_FR_BR_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_int 
 #define qd_CG_r_FR_BR_SZ_RES 1
 #define qd_CG_r_FR_BR_SZ_IW 0
 #define qd_CG_r_FR_BR_SZ_W 0
+int qd_CG_r_FR_BR_batch(casadi_int n, const casadi_real* const* arg, casadi_real* const* res, int* status, casadi_real* w);
 int qd_G_r_FR_BR(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem);
 int qd_G_r_FR_BR_checkout(void);
 void qd_G_r_FR_BR_release(int mem);
@@ -2043,6 +2127,7 @@ int qd_G_r_FR_BR_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *
 #define qd_G_r_FR_BR_SZ_RES 1
 #define qd_G_r_FR_BR_SZ_IW 0
 #define qd_G_r_FR_BR_SZ_W 0
+int qd_G_r_FR_BR_batch(casadi_int n, const casadi_real* const* arg, casadi_real* const* res, int* status, casadi_real* w);
 int qd_id_r_FR_BR(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem);
 int qd_id_r_FR_BR_checkout(void);
 void qd_id_r_FR_BR_release(int mem);
@@ -2061,6 +2146,7 @@ int qd_id_r_FR_BR_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_int 
 #define qd_id_r_FR_BR_SZ_RES 1
 #define qd_id_r_FR_BR_SZ_IW 0
 #define qd_id_r_FR_BR_SZ_W 0
+int qd_id_r_FR_BR_batch(casadi_int n, const casadi_real* const* arg, casadi_real* const* res, int* status, casadi_real* w);
 int qd_fd_r_FR_BR(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem);
 int qd_fd_r_FR_BR_checkout(void);
 void qd_fd_r_FR_BR_release(int mem);
@@ -2079,6 +2165,7 @@ int qd_fd_r_FR_BR_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_int 
 #define qd_fd_r_FR_BR_SZ_RES 1
 #define qd_fd_r_FR_BR_SZ_IW 0
 #define qd_fd_r_FR_BR_SZ_W 0
+int qd_fd_r_FR_BR_batch(casadi_int n, const casadi_real* const* arg, casadi_real* const* res, int* status, casadi_real* w);
 int qd_dfd_r_FR_BR(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem);
 int qd_dfd_r_FR_BR_checkout(void);
 void qd_dfd_r_FR_BR_release(int mem);
@@ -2097,6 +2184,7 @@ int qd_dfd_r_FR_BR_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_int
 #define qd_dfd_r_FR_BR_SZ_RES 4
 #define qd_dfd_r_FR_BR_SZ_IW 0
 #define qd_dfd_r_FR_BR_SZ_W 2624
+int qd_dfd_r_FR_BR_batch(casadi_int n, const casadi_real* const* arg, casadi_real* const* res, int* status, casadi_real* w);
 void qd_paper_r_FR_BR_casadi_version(int* major, int* minor, int* patch);
 int qd_paper_r_FR_BR_casadi_int_size(void);
 int qd_paper_r_FR_BR_casadi_real_size(void);
@@ -2140,6 +2228,7 @@ int qd_M_r_BL_BR_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *
 #define qd_M_r_BL_BR_SZ_RES 1
 #define qd_M_r_BL_BR_SZ_IW 0
 #define qd_M_r_BL_BR_SZ_W 0
+int qd_M_r_BL_BR_batch(casadi_int n, const casadi_real* const* arg, casadi_real* const* res, int* status, casadi_real* w);
 int qd_CG_r_BL_BR(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem);
 int qd_CG_r_BL_BR_checkout(void);
 void qd_CG_r_BL_BR_release(int mem);
@@ -2158,6 +2247,7 @@ int qd_CG_r_BL_BR_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_int 
 #define qd_CG_r_BL_BR_SZ_RES 1
 #define qd_CG_r_BL_BR_SZ_IW 0
 #define qd_CG_r_BL_BR_SZ_W 0
+int qd_CG_r_BL_BR_batch(casadi_int n, const casadi_real* const* arg, casadi_real* const* res, int* status, casadi_real* w);
 int qd_G_r_BL_BR(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem);
 int qd_G_r_BL_BR_checkout(void);
 void qd_G_r_BL_BR_release(int mem);
@@ -2176,6 +2266,7 @@ int qd_G_r_BL_BR_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *
 #define qd_G_r_BL_BR_SZ_RES 1
 #define qd_G_r_BL_BR_SZ_IW 0
 #define qd_G_r_BL_BR_SZ_W 0
+int qd_G_r_BL_BR_batch(casadi_int n, const casadi_real* const* arg, casadi_real* const* res, int* status, casadi_real* w);
 int qd_id_r_BL_BR(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem);
 int qd_id_r_BL_BR_checkout(void);
 void qd_id_r_BL_BR_release(int mem);
@@ -2194,6 +2285,7 @@ int qd_id_r_BL_BR_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_int 
 #define qd_id_r_BL_BR_SZ_RES 1
 #define qd_id_r_BL_BR_SZ_IW 0
 #define qd_id_r_BL_BR_SZ_W 0
+int qd_id_r_BL_BR_batch(casadi_int n, const casadi_real* const* arg, casadi_real* const* res, int* status, casadi_real* w);
 int qd_fd_r_BL_BR(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem);
 int qd_fd_r_BL_BR_checkout(void);
 void qd_fd_r_BL_BR_release(int mem);
@@ -2212,6 +2304,7 @@ int qd_fd_r_BL_BR_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_int 
 #define qd_fd_r_BL_BR_SZ_RES 1
 #define qd_fd_r_BL_BR_SZ_IW 0
 #define qd_fd_r_BL_BR_SZ_W 0
+int qd_fd_r_BL_BR_batch(casadi_int n, const casadi_real* const* arg, casadi_real* const* res, int* status, casadi_real* w);
 int qd_dfd_r_BL_BR(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem);
 int qd_dfd_r_BL_BR_checkout(void);
 void qd_dfd_r_BL_BR_release(int mem);
@@ -2230,6 +2323,7 @@ int qd_dfd_r_BL_BR_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_int
 #define qd_dfd_r_BL_BR_SZ_RES 4
 #define qd_dfd_r_BL_BR_SZ_IW 0
 #define qd_dfd_r_BL_BR_SZ_W 2624
+int qd_dfd_r_BL_BR_batch(casadi_int n, const casadi_real* const* arg, casadi_real* const* res, int* status, casadi_real* w);
 void qd_paper_r_BL_BR_casadi_version(int* major, int* minor, int* patch);
 int qd_paper_r_BL_BR_casadi_int_size(void);
 int qd_paper_r_BL_BR_casadi_real_size(void);
@@ -2273,6 +2367,7 @@ int qd_did_full_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *s
 #define qd_did_full_SZ_RES 3
 #define qd_did_full_SZ_IW 0
 #define qd_did_full_SZ_W 0
+int qd_did_full_batch(casadi_int n, const casadi_real* const* arg, casadi_real* const* res, int* status, casadi_real* w);
 int qd_dfd_full_parts(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem);
 int qd_dfd_full_parts_checkout(void);
 void qd_dfd_full_parts_release(int mem);
@@ -2291,6 +2386,7 @@ int qd_dfd_full_parts_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_
 #define qd_dfd_full_parts_SZ_RES 2
 #define qd_dfd_full_parts_SZ_IW 0
 #define qd_dfd_full_parts_SZ_W 0
+int qd_dfd_full_parts_batch(casadi_int n, const casadi_real* const* arg, casadi_real* const* res, int* status, casadi_real* w);
 int qd_dfd_full(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem);
 int qd_dfd_full_checkout(void);
 void qd_dfd_full_release(int mem);
@@ -2309,6 +2405,7 @@ int qd_dfd_full_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *s
 #define qd_dfd_full_SZ_RES 3
 #define qd_dfd_full_SZ_IW 0
 #define qd_dfd_full_SZ_W 1476
+int qd_dfd_full_batch(casadi_int n, const casadi_real* const* arg, casadi_real* const* res, int* status, casadi_real* w);
 int qd_dgrf_dir_FL_FR_BL_BR(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem);
 int qd_dgrf_dir_FL_FR_BL_BR_checkout(void);
 void qd_dgrf_dir_FL_FR_BL_BR_release(int mem);
@@ -2327,6 +2424,7 @@ int qd_dgrf_dir_FL_FR_BL_BR_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, c
 #define qd_dgrf_dir_FL_FR_BL_BR_SZ_RES 2
 #define qd_dgrf_dir_FL_FR_BL_BR_SZ_IW 0
 #define qd_dgrf_dir_FL_FR_BL_BR_SZ_W 0
+int qd_dgrf_dir_FL_FR_BL_BR_batch(casadi_int n, const casadi_real* const* arg, casadi_real* const* res, int* status, casadi_real* w);
 int qd_dgrf_FL_FR_BL_BR(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem);
 int qd_dgrf_FL_FR_BL_BR_checkout(void);
 void qd_dgrf_FL_FR_BL_BR_release(int mem);
@@ -2345,6 +2443,7 @@ int qd_dgrf_FL_FR_BL_BR_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casad
 #define qd_dgrf_FL_FR_BL_BR_SZ_RES 3
 #define qd_dgrf_FL_FR_BL_BR_SZ_IW 0
 #define qd_dgrf_FL_FR_BL_BR_SZ_W 1158
+int qd_dgrf_FL_FR_BL_BR_batch(casadi_int n, const casadi_real* const* arg, casadi_real* const* res, int* status, casadi_real* w);
 int qd_dgrf_dir_FL_FR_BL(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem);
 int qd_dgrf_dir_FL_FR_BL_checkout(void);
 void qd_dgrf_dir_FL_FR_BL_release(int mem);
@@ -2363,6 +2462,7 @@ int qd_dgrf_dir_FL_FR_BL_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casa
 #define qd_dgrf_dir_FL_FR_BL_SZ_RES 2
 #define qd_dgrf_dir_FL_FR_BL_SZ_IW 0
 #define qd_dgrf_dir_FL_FR_BL_SZ_W 0
+int qd_dgrf_dir_FL_FR_BL_batch(casadi_int n, const casadi_real* const* arg, casadi_real* const* res, int* status, casadi_real* w);
 int qd_dgrf_FL_FR_BL(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem);
 int qd_dgrf_FL_FR_BL_checkout(void);
 void qd_dgrf_FL_FR_BL_release(int mem);
@@ -2381,6 +2481,7 @@ int qd_dgrf_FL_FR_BL_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_i
 #define qd_dgrf_FL_FR_BL_SZ_RES 3
 #define qd_dgrf_FL_FR_BL_SZ_IW 0
 #define qd_dgrf_FL_FR_BL_SZ_W 1158
+int qd_dgrf_FL_FR_BL_batch(casadi_int n, const casadi_real* const* arg, casadi_real* const* res, int* status, casadi_real* w);
 int qd_dgrf_dir_FL_FR_BR(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem);
 int qd_dgrf_dir_FL_FR_BR_checkout(void);
 void qd_dgrf_dir_FL_FR_BR_release(int mem);
@@ -2399,6 +2500,7 @@ int qd_dgrf_dir_FL_FR_BR_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casa
 #define qd_dgrf_dir_FL_FR_BR_SZ_RES 2
 #define qd_dgrf_dir_FL_FR_BR_SZ_IW 0
 #define qd_dgrf_dir_FL_FR_BR_SZ_W 0
+int qd_dgrf_dir_FL_FR_BR_batch(casadi_int n, const casadi_real* const* arg, casadi_real* const* res, int* status, casadi_real* w);
 int qd_dgrf_FL_FR_BR(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem);
 int qd_dgrf_FL_FR_BR_checkout(void);
 void qd_dgrf_FL_FR_BR_release(int mem);
@@ -2417,6 +2519,7 @@ int qd_dgrf_FL_FR_BR_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_i
 #define qd_dgrf_FL_FR_BR_SZ_RES 3
 #define qd_dgrf_FL_FR_BR_SZ_IW 0
 #define qd_dgrf_FL_FR_BR_SZ_W 1158
+int qd_dgrf_FL_FR_BR_batch(casadi_int n, const casadi_real* const* arg, casadi_real* const* res, int* status, casadi_real* w);
 int qd_dgrf_dir_FL_BL_BR(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem);
 int qd_dgrf_dir_FL_BL_BR_checkout(void);
 void qd_dgrf_dir_FL_BL_BR_release(int mem);
@@ -2435,6 +2538,7 @@ int qd_dgrf_dir_FL_BL_BR_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casa
 #define qd_dgrf_dir_FL_BL_BR_SZ_RES 2
 #define qd_dgrf_dir_FL_BL_BR_SZ_IW 0
 #define qd_dgrf_dir_FL_BL_BR_SZ_W 0
+int qd_dgrf_dir_FL_BL_BR_batch(casadi_int n, const casadi_real* const* arg, casadi_real* const* res, int* status, casadi_real* w);
 int qd_dgrf_FL_BL_BR(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem);
 int qd_dgrf_FL_BL_BR_checkout(void);
 void qd_dgrf_FL_BL_BR_release(int mem);
@@ -2453,6 +2557,7 @@ int qd_dgrf_FL_BL_BR_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_i
 #define qd_dgrf_FL_BL_BR_SZ_RES 3
 #define qd_dgrf_FL_BL_BR_SZ_IW 0
 #define qd_dgrf_FL_BL_BR_SZ_W 1158
+int qd_dgrf_FL_BL_BR_batch(casadi_int n, const casadi_real* const* arg, casadi_real* const* res, int* status, casadi_real* w);
 int qd_dgrf_dir_FR_BL_BR(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem);
 int qd_dgrf_dir_FR_BL_BR_checkout(void);
 void qd_dgrf_dir_FR_BL_BR_release(int mem);
@@ -2471,6 +2576,7 @@ int qd_dgrf_dir_FR_BL_BR_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casa
 #define qd_dgrf_dir_FR_BL_BR_SZ_RES 2
 #define qd_dgrf_dir_FR_BL_BR_SZ_IW 0
 #define qd_dgrf_dir_FR_BL_BR_SZ_W 0
+int qd_dgrf_dir_FR_BL_BR_batch(casadi_int n, const casadi_real* const* arg, casadi_real* const* res, int* status, casadi_real* w);
 int qd_dgrf_FR_BL_BR(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem);
 int qd_dgrf_FR_BL_BR_checkout(void);
 void qd_dgrf_FR_BL_BR_release(int mem);
@@ -2489,6 +2595,7 @@ int qd_dgrf_FR_BL_BR_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_i
 #define qd_dgrf_FR_BL_BR_SZ_RES 3
 #define qd_dgrf_FR_BL_BR_SZ_IW 0
 #define qd_dgrf_FR_BL_BR_SZ_W 1158
+int qd_dgrf_FR_BL_BR_batch(casadi_int n, const casadi_real* const* arg, casadi_real* const* res, int* status, casadi_real* w);
 int qd_dgrf_dir_FL_FR(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem);
 int qd_dgrf_dir_FL_FR_checkout(void);
 void qd_dgrf_dir_FL_FR_release(int mem);
@@ -2507,6 +2614,7 @@ int qd_dgrf_dir_FL_FR_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_
 #define qd_dgrf_dir_FL_FR_SZ_RES 2
 #define qd_dgrf_dir_FL_FR_SZ_IW 0
 #define qd_dgrf_dir_FL_FR_SZ_W 0
+int qd_dgrf_dir_FL_FR_batch(casadi_int n, const casadi_real* const* arg, casadi_real* const* res, int* status, casadi_real* w);
 int qd_dgrf_FL_FR(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem);
 int qd_dgrf_FL_FR_checkout(void);
 void qd_dgrf_FL_FR_release(int mem);
@@ -2525,6 +2633,7 @@ int qd_dgrf_FL_FR_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_int 
 #define qd_dgrf_FL_FR_SZ_RES 3
 #define qd_dgrf_FL_FR_SZ_IW 0
 #define qd_dgrf_FL_FR_SZ_W 1158
+int qd_dgrf_FL_FR_batch(casadi_int n, const casadi_real* const* arg, casadi_real* const* res, int* status, casadi_real* w);
 int qd_dgrf_dir_FL_BL(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem);
 int qd_dgrf_dir_FL_BL_checkout(void);
 void qd_dgrf_dir_FL_BL_release(int mem);
@@ -2543,6 +2652,7 @@ int qd_dgrf_dir_FL_BL_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_
 #define qd_dgrf_dir_FL_BL_SZ_RES 2
 #define qd_dgrf_dir_FL_BL_SZ_IW 0
 #define qd_dgrf_dir_FL_BL_SZ_W 0
+int qd_dgrf_dir_FL_BL_batch(casadi_int n, const casadi_real* const* arg, casadi_real* const* res, int* status, casadi_real* w);
 int qd_dgrf_FL_BL(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem);
 int qd_dgrf_FL_BL_checkout(void);
 void qd_dgrf_FL_BL_release(int mem);
@@ -2561,6 +2671,7 @@ int qd_dgrf_FL_BL_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_int 
 #define qd_dgrf_FL_BL_SZ_RES 3
 #define qd_dgrf_FL_BL_SZ_IW 0
 #define qd_dgrf_FL_BL_SZ_W 1158
+int qd_dgrf_FL_BL_batch(casadi_int n, const casadi_real* const* arg, casadi_real* const* res, int* status, casadi_real* w);
 int qd_dgrf_dir_FL_BR(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem);
 int qd_dgrf_dir_FL_BR_checkout(void);
 void qd_dgrf_dir_FL_BR_release(int mem);
@@ -2579,6 +2690,7 @@ int qd_dgrf_dir_FL_BR_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_
 #define qd_dgrf_dir_FL_BR_SZ_RES 2
 #define qd_dgrf_dir_FL_BR_SZ_IW 0
 #define qd_dgrf_dir_FL_BR_SZ_W 0
+int qd_dgrf_dir_FL_BR_batch(casadi_int n, const casadi_real* const* arg, casadi_real* const* res, int* status, casadi_real* w);
 int qd_dgrf_FL_BR(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem);
 int qd_dgrf_FL_BR_checkout(void);
 void qd_dgrf_FL_BR_release(int mem);
@@ -2597,6 +2709,7 @@ int qd_dgrf_FL_BR_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_int 
 #define qd_dgrf_FL_BR_SZ_RES 3
 #define qd_dgrf_FL_BR_SZ_IW 0
 #define qd_dgrf_FL_BR_SZ_W 1158
+int qd_dgrf_FL_BR_batch(casadi_int n, const casadi_real* const* arg, casadi_real* const* res, int* status, casadi_real* w);
 int qd_dgrf_dir_FR_BL(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem);
 int qd_dgrf_dir_FR_BL_checkout(void);
 void qd_dgrf_dir_FR_BL_release(int mem);
@@ -2615,6 +2728,7 @@ int qd_dgrf_dir_FR_BL_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_
 #define qd_dgrf_dir_FR_BL_SZ_RES 2
 #define qd_dgrf_dir_FR_BL_SZ_IW 0
 #define qd_dgrf_dir_FR_BL_SZ_W 0
+int qd_dgrf_dir_FR_BL_batch(casadi_int n, const casadi_real* const* arg, casadi_real* const* res, int* status, casadi_real* w);
 int qd_dgrf_FR_BL(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem);
 int qd_dgrf_FR_BL_checkout(void);
 void qd_dgrf_FR_BL_release(int mem);
@@ -2633,6 +2747,7 @@ int qd_dgrf_FR_BL_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_int 
 #define qd_dgrf_FR_BL_SZ_RES 3
 #define qd_dgrf_FR_BL_SZ_IW 0
 #define qd_dgrf_FR_BL_SZ_W 1158
+int qd_dgrf_FR_BL_batch(casadi_int n, const casadi_real* const* arg, casadi_real* const* res, int* status, casadi_real* w);
 int qd_dgrf_dir_FR_BR(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem);
 int qd_dgrf_dir_FR_BR_checkout(void);
 void qd_dgrf_dir_FR_BR_release(int mem);
@@ -2651,6 +2766,7 @@ int qd_dgrf_dir_FR_BR_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_
 #define qd_dgrf_dir_FR_BR_SZ_RES 2
 #define qd_dgrf_dir_FR_BR_SZ_IW 0
 #define qd_dgrf_dir_FR_BR_SZ_W 0
+int qd_dgrf_dir_FR_BR_batch(casadi_int n, const casadi_real* const* arg, casadi_real* const* res, int* status, casadi_real* w);
 int qd_dgrf_FR_BR(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem);
 int qd_dgrf_FR_BR_checkout(void);
 void qd_dgrf_FR_BR_release(int mem);
@@ -2669,6 +2785,7 @@ int qd_dgrf_FR_BR_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_int 
 #define qd_dgrf_FR_BR_SZ_RES 3
 #define qd_dgrf_FR_BR_SZ_IW 0
 #define qd_dgrf_FR_BR_SZ_W 1158
+int qd_dgrf_FR_BR_batch(casadi_int n, const casadi_real* const* arg, casadi_real* const* res, int* status, casadi_real* w);
 int qd_dgrf_dir_BL_BR(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem);
 int qd_dgrf_dir_BL_BR_checkout(void);
 void qd_dgrf_dir_BL_BR_release(int mem);
@@ -2687,6 +2804,7 @@ int qd_dgrf_dir_BL_BR_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_
 #define qd_dgrf_dir_BL_BR_SZ_RES 2
 #define qd_dgrf_dir_BL_BR_SZ_IW 0
 #define qd_dgrf_dir_BL_BR_SZ_W 0
+int qd_dgrf_dir_BL_BR_batch(casadi_int n, const casadi_real* const* arg, casadi_real* const* res, int* status, casadi_real* w);
 int qd_dgrf_BL_BR(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem);
 int qd_dgrf_BL_BR_checkout(void);
 void qd_dgrf_BL_BR_release(int mem);
@@ -2705,6 +2823,7 @@ int qd_dgrf_BL_BR_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_int 
 #define qd_dgrf_BL_BR_SZ_RES 3
 #define qd_dgrf_BL_BR_SZ_IW 0
 #define qd_dgrf_BL_BR_SZ_W 1158
+int qd_dgrf_BL_BR_batch(casadi_int n, const casadi_real* const* arg, casadi_real* const* res, int* status, casadi_real* w);
 int qd_dgrf_dir_FL(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem);
 int qd_dgrf_dir_FL_checkout(void);
 void qd_dgrf_dir_FL_release(int mem);
@@ -2723,6 +2842,7 @@ int qd_dgrf_dir_FL_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_int
 #define qd_dgrf_dir_FL_SZ_RES 2
 #define qd_dgrf_dir_FL_SZ_IW 0
 #define qd_dgrf_dir_FL_SZ_W 0
+int qd_dgrf_dir_FL_batch(casadi_int n, const casadi_real* const* arg, casadi_real* const* res, int* status, casadi_real* w);
 int qd_dgrf_FL(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem);
 int qd_dgrf_FL_checkout(void);
 void qd_dgrf_FL_release(int mem);
@@ -2741,6 +2861,7 @@ int qd_dgrf_FL_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz
 #define qd_dgrf_FL_SZ_RES 3
 #define qd_dgrf_FL_SZ_IW 0
 #define qd_dgrf_FL_SZ_W 1158
+int qd_dgrf_FL_batch(casadi_int n, const casadi_real* const* arg, casadi_real* const* res, int* status, casadi_real* w);
 int qd_dgrf_dir_FR(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem);
 int qd_dgrf_dir_FR_checkout(void);
 void qd_dgrf_dir_FR_release(int mem);
@@ -2759,6 +2880,7 @@ int qd_dgrf_dir_FR_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_int
 #define qd_dgrf_dir_FR_SZ_RES 2
 #define qd_dgrf_dir_FR_SZ_IW 0
 #define qd_dgrf_dir_FR_SZ_W 0
+int qd_dgrf_dir_FR_batch(casadi_int n, const casadi_real* const* arg, casadi_real* const* res, int* status, casadi_real* w);
 int qd_dgrf_FR(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem);
 int qd_dgrf_FR_checkout(void);
 void qd_dgrf_FR_release(int mem);
@@ -2777,6 +2899,7 @@ int qd_dgrf_FR_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz
 #define qd_dgrf_FR_SZ_RES 3
 #define qd_dgrf_FR_SZ_IW 0
 #define qd_dgrf_FR_SZ_W 1158
+int qd_dgrf_FR_batch(casadi_int n, const casadi_real* const* arg, casadi_real* const* res, int* status, casadi_real* w);
 int qd_dgrf_dir_BL(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem);
 int qd_dgrf_dir_BL_checkout(void);
 void qd_dgrf_dir_BL_release(int mem);
@@ -2795,6 +2918,7 @@ int qd_dgrf_dir_BL_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_int
 #define qd_dgrf_dir_BL_SZ_RES 2
 #define qd_dgrf_dir_BL_SZ_IW 0
 #define qd_dgrf_dir_BL_SZ_W 0
+int qd_dgrf_dir_BL_batch(casadi_int n, const casadi_real* const* arg, casadi_real* const* res, int* status, casadi_real* w);
 int qd_dgrf_BL(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem);
 int qd_dgrf_BL_checkout(void);
 void qd_dgrf_BL_release(int mem);
@@ -2813,6 +2937,7 @@ int qd_dgrf_BL_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz
 #define qd_dgrf_BL_SZ_RES 3
 #define qd_dgrf_BL_SZ_IW 0
 #define qd_dgrf_BL_SZ_W 1158
+int qd_dgrf_BL_batch(casadi_int n, const casadi_real* const* arg, casadi_real* const* res, int* status, casadi_real* w);
 int qd_dgrf_dir_BR(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem);
 int qd_dgrf_dir_BR_checkout(void);
 void qd_dgrf_dir_BR_release(int mem);
@@ -2831,6 +2956,7 @@ int qd_dgrf_dir_BR_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_int
 #define qd_dgrf_dir_BR_SZ_RES 2
 #define qd_dgrf_dir_BR_SZ_IW 0
 #define qd_dgrf_dir_BR_SZ_W 0
+int qd_dgrf_dir_BR_batch(casadi_int n, const casadi_real* const* arg, casadi_real* const* res, int* status, casadi_real* w);
 int qd_dgrf_BR(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem);
 int qd_dgrf_BR_checkout(void);
 void qd_dgrf_BR_release(int mem);
@@ -2849,6 +2975,7 @@ int qd_dgrf_BR_work_bytes(casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz
 #define qd_dgrf_BR_SZ_RES 3
 #define qd_dgrf_BR_SZ_IW 0
 #define qd_dgrf_BR_SZ_W 1158
+int qd_dgrf_BR_batch(casadi_int n, const casadi_real* const* arg, casadi_real* const* res, int* status, casadi_real* w);
 void qd_paper_d_casadi_version(int* major, int* minor, int* patch);
 int qd_paper_d_casadi_int_size(void);
 int qd_paper_d_casadi_real_size(void);

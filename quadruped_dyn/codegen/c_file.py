@@ -7,7 +7,14 @@ calls (``NAME_checkout``/``release``/``incref``/``decref``/``n_in``/``n_out``/``
 With the default ``Entry`` and ``FileOptions(project=False)`` the text is what CasADi's ``CodeGenerator`` writes for
 the same Functions (tests/codegen/test_c_file.py); an ``Entry`` replaces what it names: the entry point's body (a
 call of a hand-written template), its evaluation's print options or no evaluation at all, the work size it
-states."""
+states.
+
+With ``FileOptions(project=True)`` every function also gets a batch entry point ``NAME_batch`` (``BATCH_SIGNATURE``):
+n states, state-major (state s's input i at ``arg[i] + s * nnz_i``, outputs alike, but an input ``Entry.shared`` at
+``arg[i]`` for all; a NULL ``arg[i]`` or ``res[i]`` as in the scalar call), one scalar call per state (so each
+state's outputs are the scalar call's, bit for bit), its return code in ``status[s]`` (NULL: not written), a bad
+state not stopping the others; it returns how many codes were non-zero. ``w`` is one scalar call's work
+(``NAME_SZ_W`` reals); no malloc, no global state."""
 
 from __future__ import annotations
 
@@ -63,6 +70,10 @@ _WORK_PARAMETERS = "casadi_int *sz_arg, casadi_int* sz_res, casadi_int *sz_iw, c
 _ELEMENTS_PER_LINE = 8  # CasADi's max_initializer_elements_per_line
 
 
+BATCH_SIGNATURE = ("(casadi_int n, const casadi_real* const* arg, casadi_real* const* res, int* status, "
+                   "casadi_real* w)")
+
+
 @dataclass(frozen=True)
 class Entry:
     """One exported function of a file: its Function (signature, sparsity, names) and how it is printed."""
@@ -75,6 +86,7 @@ class Entry:
     #: the entry point's statements (indented, each line ending in a newline); None: CasADi's call of its evaluation
     body: str | None = None
     sz_w: int = 0  # reals of work w it states (a template's temporaries); CasADi's: 0 (every value a local)
+    shared: tuple[int, ...] = ()  # the inputs every state of a batch shares (parameters): read at arg[i], not advanced
 
 
 @dataclass(frozen=True)
@@ -155,7 +167,20 @@ class _File:
             signature = f"int {name}_work{suffix}({_WORK_PARAMETERS})"
             text += f"{self.declare(signature)} {{\n{lines}  return 0;\n}}\n\n"
         self.decl += [f"#define {name}_SZ_{s.upper()} {n}\n" for s, (n, _) in sizes.items()]
-        return text
+        return text + (self.batch(e) if self.o.project else "")
+
+    def batch(self, e: Entry) -> str:
+        """``NAME_batch`` (module docstring): one scalar call per state."""
+        f, name = e.function, e.function.name()
+        pointers = "".join(f"    a[{i}] = arg[{i}] ? arg[{i}] + s*{f.nnz_in(i)} : 0;\n" for i in range(f.n_in())
+                           if i not in e.shared)
+        shared = "".join(f"  a[{i}] = arg[{i}];\n" for i in e.shared)
+        pointers += "".join(f"    r[{i}] = res[{i}] ? res[{i}] + s*{f.nnz_out(i)} : 0;\n" for i in range(f.n_out()))
+        return (f"{self.declare(f'int {name}_batch{BATCH_SIGNATURE}')} {{\n"
+                f"  const casadi_real* a[{max(1, f.sz_arg())}] = {{0}};\n  casadi_real* r[{max(1, f.sz_res())}] = {{0}};\n"
+                f"{shared}  casadi_int s;\n  int bad = 0;\n  for (s = 0; s < n; ++s) {{\n{pointers}"
+                f"    int flag = {name}(a, r, 0, w, 0);\n"
+                "    if (status) status[s] = flag;\n    bad += flag != 0;\n  }\n  return bad;\n}\n\n")
 
     def c_text(self) -> str:
         body = "".join(self.function(k, e) for k, e in enumerate(self.entries))

@@ -282,6 +282,10 @@ def _calling_doc() -> list[str]:
         " * colind[ncol + 1], row[nnz]); a dense input or output's pattern is the short form",
         " * {nrow, ncol, 1} (nrow x ncol entries, column-major), with no colind or row after it.",
         " * casadi_real is double unless defined before this header (e.g. -Dcasadi_real=float).",
+        " * qd_NAME_batch(n, arg, res, status, w): n states, state-major (state s's input i at",
+        " * arg[i] + s * nnz_i, outputs alike), one qd_NAME call each with work w of qd_NAME_SZ_W reals;",
+        " * status[s] (if status is not NULL) gets state s's return code, a bad state does not stop the",
+        " * others; returns the number of non-zero codes. Outputs equal one call's, bit for bit.",
         " *",
     ]
 

@@ -227,6 +227,10 @@ class CompiledFunction:
         self._res = (ptr * max(1, n_res, len(self._out)))(*[r.ctypes.data_as(ptr) for r in self._out])
         self._iw = (ctypes.c_longlong * max(1, iw))()
         self._w = (c_real * max(1, w))()
+        self._real, self._ptr, self._n_arg, self._n_res = real, ptr, max(1, n_arg, len(self._in)), max(1, n_res, len(self._out))
+        self._batch = getattr(self._lib, self.name + "_batch")
+        self._batch.argtypes = [ctypes.c_longlong, ctypes.POINTER(ptr), ctypes.POINTER(ptr), ctypes.POINTER(ctypes.c_int),
+                                ptr]
 
     def raw(self, *args: np.ndarray) -> list[np.ndarray]:
         """The hot path of a control loop: inputs (arrays of the right sizes, not checked) copied
@@ -239,6 +243,49 @@ class CompiledFunction:
         if flag != 0:
             self._raise_for(flag)
         return self._out
+
+    def batch(self, *arrays: np.ndarray, out: list[np.ndarray] | None = None,
+              strict: bool = False) -> tuple[list[np.ndarray], np.ndarray]:
+        """N states in one C call (``qd_NAME_batch``): input i an (N, nnz_i) C-contiguous array in the library's
+        precision (float64, float32 for a float library; anything else is refused, not copied: ``InputError``).
+        Returns the outputs, (N, nnz) arrays of the nonzeros as ``raw`` gives them (``out``'s if given, checked
+        likewise), each row equal to one call's to the bit, and each row's status: the scalar call's return code,
+        or QD_NONFINITE where that is 0 but an input of the row is not finite. ``strict``: ``InputError`` naming the
+        first bad row and its code instead."""
+        if len(arrays) != len(self._in):
+            raise InputError(f"{self.name}.batch takes inputs {self.names_in}; got {len(arrays)} arrays")
+        n = arrays[0].shape[0] if isinstance(arrays[0], np.ndarray) and arrays[0].ndim == 2 else -1
+        for x, size, name in zip(arrays, self.sizes_in, self.names_in):
+            self._check_rows(f"input {name}", x, n, size)
+        nnz_out = [buf.size for buf in self._out]
+        if out is None:
+            out = [np.empty((n, m), dtype=self._real) for m in nnz_out]
+        elif len(out) != len(nnz_out):
+            raise InputError(f"{self.name}.batch: out has {len(out)} arrays; expected {len(nnz_out)}")
+        for i, (y, m) in enumerate(zip(out, nnz_out)):
+            self._check_rows(f"output {i}", y, n, m)
+        status = np.zeros(n, dtype=np.intc)
+        arg = (self._ptr * self._n_arg)(*[x.ctypes.data_as(self._ptr) for x in arrays])
+        res = (self._ptr * self._n_res)(*[y.ctypes.data_as(self._ptr) for y in out])
+        self._batch(n, arg, res, status.ctypes.data_as(ctypes.POINTER(ctypes.c_int)), self._w)
+        if not all(np.isfinite(np.sum(x)) for x in arrays):  # one pass each; a sum that overflowed is checked here
+            status[(status == 0) & ~np.logical_and.reduce([np.isfinite(x).all(axis=1) for x in arrays])] = QD_NONFINITE
+        if strict and status.any():
+            row = int(np.flatnonzero(status)[0])
+            raise InputError(f"{self.name}.batch: row {row}: {RETURN_CODES.get(int(status[row]), status[row])}")
+        return out, status
+
+    def _check_rows(self, what: str, x: object, n: int, size: int) -> None:
+        """``x`` an (n, size) C-contiguous array in the library's precision, or InputError saying what it is."""
+        if not isinstance(x, np.ndarray) or x.ndim != 2 or x.shape != (n, size):
+            got = f"shape {x.shape}" if isinstance(x, np.ndarray) else type(x).__name__
+            raise InputError(f"{self.name}.batch {what}: expected an ({max(n, 0) if n >= 0 else 'N'}, {size}) array "
+                             f"(rows: states); got {got}")
+        writeable = " writeable" if what.startswith("output") else ""
+        if x.dtype != self._real or not x.flags.c_contiguous or (writeable and not x.flags.writeable):
+            raise InputError(f"{self.name}.batch {what}: expected a C-contiguous{writeable} "
+                             f"{np.dtype(self._real).name} array (not copied); got {x.dtype}"
+                             f"{'' if x.flags.c_contiguous else ', not C-contiguous'}")
 
     def _raise_for(self, flag: int) -> None:
         """QD_SINGULAR, QD_DEGENERATE are numerical (NumericalError); QD_NONFINITE cannot tell a bad input

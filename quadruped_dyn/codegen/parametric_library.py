@@ -91,7 +91,7 @@ def _entry(f: ca.Function) -> tuple[Entry, str]:
             f"  const casadi_real* a[{f.n_in() + 2}] = {{{inputs}}};\n"
             f"  qd_sincos({n}, arg[0] + {JOINT_ANGLES.start}, c, s);\n"
             f"  return {evaluation}(a, res, iw, w, mem);\n")
-    return Entry(renamed, None, body), static.text
+    return Entry(renamed, None, body, shared=(f.n_in() - 1,)), static.text  # a batch's states share p
 
 
 def parametric_c(family: Family, precision: str = "double") -> tuple[str, str]:
