@@ -221,15 +221,22 @@ def _c_array(name: str, values: np.ndarray) -> str:
     body = ", ".join(f"{float(x):.{REFERENCE_DIGITS}g}" for x in values) if len(values) else "0"
     return f"static const double {name}[{max(len(values), 1)}] = {{{body}}};"
 
+def _base_name(f: ca.Function) -> str:
+    """The name of generated function ``f`` without its prefix (qd_ or, parametric, qd_p_)."""
+    return f.name()[len(PREFIX):].removeprefix("p_")
+
 def reference_header(robot: Robot, functions: list[ca.Function], work: dict[str, tuple[int, int]],
-                     outputs: dict[str, list[np.ndarray]] | None = None) -> str:
+                     outputs: dict[str, list[np.ndarray]] | None = None, parameters: np.ndarray | None = None) -> str:
     """C header: Pinocchio's values of every generated function at ``reference_state``; ``outputs``
     (if given) receives them at full precision, by function name without prefix (the report checks
-    its compiled library against them instead of computing them again)."""
+    its compiled library against them instead of computing them again). ``parameters``: the robot's p, the input p
+    of parametric functions (``checks.parametric_check``)."""
     ref = PinocchioReference(robot)
     s = reference_state(robot)
     inputs = {"q": s.q, "v": s.v, "a": s.a, "f": s.f.ravel(), "tau_full": reference_tau_full(s), **reduced_inputs(s),
               **wrench_inputs(s)}
+    if parameters is not None:
+        inputs["p"] = parameters
     inputs = {k: v for k, v in inputs.items() if any(k in f.name_in() for f in functions)}
     lines = [
         f"/* Reference values for the generated functions of '{robot.name}', computed by Pinocchio",
@@ -259,7 +266,7 @@ def reference_header(robot: Robot, functions: list[ca.Function], work: dict[str,
     ]
     cases = []
     for f in functions:
-        name = f.name()[len(PREFIX):]
+        name = _base_name(f)
         expected = pinocchio_outputs(robot, ref, name, s)
         if outputs is not None:
             outputs[name] = expected
@@ -275,7 +282,7 @@ def reference_header(robot: Robot, functions: list[ca.Function], work: dict[str,
             f'{{{", ".join(str(k) for _, k in ins)}}}, {{{", ".join(n for n, _ in outs)}}}, '
             f'{{{", ".join(str(k) for _, k in outs)}}}, {tol_scale:.3g}, {tolerance_floor(name):g}}},'
         )
-    bounds = ", ".join(f"{float_bound(ref, f.name()[len(PREFIX):], s):.3g}" for f in functions)
+    bounds = ", ".join(f"{float_bound(ref, _base_name(f), s):.3g}" for f in functions)
     lines += ["static const qd_case QD_CASES[] = {", *cases, "};", f"#define QD_N_CASES {len(functions)}",
               f"static const double {FLOAT_BOUND_ARRAY}[{len(functions)}] = {{{bounds}}};"]
     lines += [

@@ -32,7 +32,8 @@ if TYPE_CHECKING:
                    "cached; docs/embedded.md).")
 @click.option("--parametric", is_flag=True,
               help="Write the parametric C of ROBOT's family instead: qdp_<family>.c/.h, the full terms and the "
-                   "regressor with the robot's parameters p as the last input, p's layout in the header.")
+                   "regressor with the robot's parameters p as the last input, p's layout in the header; with check_qd.c, "
+                   "a Makefile and Pinocchio's values at ROBOT's p for `make check`.")
 @foot_frames_option
 def codegen(robot: str, out_dir: str, precision: str, check: bool, as_json: bool, parametric: bool,
             foot_frames: str | None) -> None:
@@ -44,7 +45,7 @@ def codegen(robot: str, out_dir: str, precision: str, check: bool, as_json: bool
     from quadruped_dyn.model.robot import load_robot
 
     if parametric and (check or as_json):
-        raise InputError("--parametric with --check or --json; expected --parametric alone (it writes two files)")
+        raise InputError("--parametric with --check or --json; expected --parametric alone (it writes the C and a check package)")
     r = load_robot(robot, foot_frames=foot_frames)
     if parametric:
         _write_parametric(r, writable_dir(out_dir, f"--out '{out_dir}'"), precision)
@@ -73,14 +74,10 @@ def codegen(robot: str, out_dir: str, precision: str, check: bool, as_json: bool
 
 
 def _write_parametric(robot: Robot, out: Path, precision: str) -> None:
-    """qdp_<family>.c and .h of the robot's family into ``out``."""
-    from quadruped_dyn.codegen.file_names import family_stem
-    from quadruped_dyn.codegen.parametric_library import parametric_c
+    """qdp_<family>.c and .h of the robot's family into ``out``, with its check package at the robot's p
+    (``checks.parametric_check``: the reference header, check_qd.c, the Makefile of ``make check``)."""
+    from quadruped_dyn.checks.parametric_check import parametric_package
     from quadruped_dyn.files.safe_write import write_text
-    from quadruped_dyn.model.parameters import family_of
 
-    family = family_of(robot)
-    source, header = parametric_c(family, precision)
-    stem = out / family_stem(family.key)
-    for suffix, text in ((".c", source), (".h", header)):
-        echo(f"wrote {write_text(stem.with_suffix(suffix), text)}")
+    for name, text in parametric_package(robot, precision).items():
+        echo(f"wrote {write_text(out / name, text)}")

@@ -4,6 +4,8 @@ cache entry untouched, no generation or compile called), each against Pinocchio 
 
 from __future__ import annotations
 
+from pathlib import Path
+
 import numpy as np
 import pytest
 
@@ -55,12 +57,17 @@ def test_one_build_serves_the_family(tmp_path, monkeypatch):
         library.parameters(load_robot("paper"))
 
 
-def test_codegen_parametric_writes_the_family_files(tmp_path):
+def test_codegen_parametric_make_check(tmp_path):
+    """``codegen a1 --parametric`` writes the family's files and their check package at a1's p (a1 is not the robot
+    that defines the family: p is a genuine input); its ``make check`` passes against Pinocchio in double and float,
+    and fails when the p it is given is not a1's."""
+    import re
+    import subprocess
+
     from click.testing import CliRunner
 
     from quadruped_dyn.cli import main
     from quadruped_dyn.codegen.file_names import family_stem
-    from quadruped_dyn.codegen.library import C_FLAGS, run_tool
     from quadruped_dyn.model.parameters import PARAMETER_NAMES, family_of
 
     run = CliRunner().invoke(main, ["codegen", "a1", "--out", str(tmp_path), "--parametric"])
@@ -69,8 +76,17 @@ def test_codegen_parametric_writes_the_family_files(tmp_path):
     header = stem.with_suffix(".h").read_text()
     assert f"p[{len(PARAMETER_NAMES) - 3}..{len(PARAMETER_NAMES) - 1}] BR foot" in header
     assert "int qd_p_regressor_full(" in header
-    flags = [flag for flag in C_FLAGS if not flag.startswith("-O")]  # its compile is test_one_build_serves_the_family's
-    run_tool(["gcc", *flags, "-fsyntax-only", str(stem.with_suffix(".c"))])
+    make = subprocess.run(["make", "-C", str(tmp_path), "-j2", "check"], capture_output=True, text=True, check=False)
+    assert make.returncode == 0 and make.stdout.count("5 passed, 0 failed") == 2, make.stdout + make.stderr
+    reference = Path(f"{stem}-reference.h")  # a1's trunk mass doubled: M_full is off
+    text = reference.read_text()
+    start = text.index("qd_ref_p[")
+    start = text.index("{", start) + 1
+    mass = text[start:text.index(",", start)]
+    reference.write_text(text[:start] + repr(2 * float(mass)) + text[start + len(mass):])
+    subprocess.run(["make", "-C", str(tmp_path), "build/check_qd"], capture_output=True, check=True)  # double only
+    wrong = subprocess.run([str(tmp_path / "build" / "check_qd")], capture_output=True, text=True, check=False)
+    assert wrong.returncode != 0 and re.search(r"^qd_p_M_full .* FAIL$", wrong.stdout, re.M), wrong.stdout
     bad = CliRunner().invoke(main, ["codegen", "a1", "--out", str(tmp_path), "--parametric", "--check"])
     assert bad.exit_code == 2 and "expected --parametric alone" in bad.output and "Traceback" not in bad.output
 
@@ -78,7 +94,6 @@ def test_codegen_parametric_writes_the_family_files(tmp_path):
 def test_docs_example_runs():
     """docs/embedded.md's example, as written (the library built by the test above or an earlier run)."""
     import re
-    from pathlib import Path
 
     text = (Path(__file__).resolve().parents[2] / "docs" / "embedded.md").read_text()
     section = text[text.index("## Parametric C"):]
