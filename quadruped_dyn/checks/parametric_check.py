@@ -9,13 +9,11 @@ against them in double and float and runs both.
 
 from __future__ import annotations
 
-import casadi as ca
-
 from quadruped_dyn.checks.check_program_values import reference_header
 from quadruped_dyn.codegen import c_facts
 from quadruped_dyn.codegen.c_facts import TEMPLATES
 from quadruped_dyn.codegen.file_names import CHECK_PROGRAM, MAKEFILE, family_stem
-from quadruped_dyn.codegen.parametric_library import PARAMETRIC_PREFIX, parametric_c
+from quadruped_dyn.codegen.parametric_library import c_named, parametric_c
 from quadruped_dyn.dynamics.parametric import parametric_dynamics
 from quadruped_dyn.model.parameters import check_parameters, family_of, parameters_of
 from quadruped_dyn.model.robot import Robot
@@ -51,8 +49,7 @@ def parametric_package(robot: Robot, precision: str = "double") -> dict[str, str
     stem = family_stem(family.key)
     source, header = parametric_c(family, precision)
     functions = [f for f in parametric_dynamics(family).functions() if f.name() in CHECKED]
-    renamed = [ca.Function(PARAMETRIC_PREFIX + f.name(), f.sx_in(), f.call(f.sx_in()), f.name_in(), f.name_out())
-               for f in functions]
+    renamed = [c_named(f) for f in functions]
     work = {f.name(): (0, 0) for f in renamed}  # the parametric functions state no work (their _SZ_IW, _SZ_W: 0)
     reference = reference_header(robot, renamed, work, parameters=check_parameters(parameters_of(robot)))
     return {f"{stem}.c": source, f"{stem}.h": header, f"{stem}-reference.h": reference,

@@ -223,11 +223,12 @@ class CompiledFunction:
         self.names_in = graph.name_in()
         self.sizes_in = [x.size for x in self._in]
         n_arg, n_res, iw, w = work_sizes_of(self._lib, self.name)
-        self._arg = (ptr * max(1, n_arg, len(self._in)))(*[a.ctypes.data_as(ptr) for a in self._in])
-        self._res = (ptr * max(1, n_res, len(self._out)))(*[r.ctypes.data_as(ptr) for r in self._out])
+        self._real, self._ptr = real, ptr
+        self._n_arg, self._n_res = max(1, n_arg, len(self._in)), max(1, n_res, len(self._out))  # pointer arrays' lengths
+        self._arg = (ptr * self._n_arg)(*[a.ctypes.data_as(ptr) for a in self._in])
+        self._res = (ptr * self._n_res)(*[r.ctypes.data_as(ptr) for r in self._out])
         self._iw = (ctypes.c_longlong * max(1, iw))()
         self._w = (c_real * max(1, w))()
-        self._real, self._ptr, self._n_arg, self._n_res = real, ptr, max(1, n_arg, len(self._in)), max(1, n_res, len(self._out))
         self.shared: tuple[int, ...] = ()  # the inputs a batch's states share (``Entry.shared``): one (nnz,) array each
         self._batch = getattr(self._lib, self.name + "_batch")
         self._batch.argtypes = [ctypes.c_longlong, ctypes.POINTER(ptr), ctypes.POINTER(ptr), ctypes.POINTER(ctypes.c_int),

@@ -81,11 +81,16 @@ def shared_inputs(n_in: int) -> tuple[int, ...]:
     return (n_in - 1,)
 
 
+def c_named(f: ca.Function) -> ca.Function:
+    """Parametric function ``f`` under its C name (``PARAMETRIC_PREFIX``), the same graph, subexpressions shared."""
+    args = f.sx_in()
+    return ca.Function(PARAMETRIC_PREFIX + f.name(), args, f.call(args), f.name_in(), f.name_out(), {"cse": True})
+
+
 def _entry(f: ca.Function) -> tuple[Entry, str]:
     """The entry of parametric function ``f`` and the static C it calls: f's graph with the joints' sines and cosines
     as inputs (``joint_trig``), taken once per call by ``qd_sincos`` as the fixed library's full terms do."""
-    args = f.sx_in()
-    renamed = ca.Function(PARAMETRIC_PREFIX + f.name(), args, f.call(args), f.name_in(), f.name_out(), {"cse": True})
+    renamed = c_named(f)
     evaluation = f"qdp_{f.name()}_eval"
     trig = trig_as_inputs(f, 0, JOINT_ANGLES)  # inputs (..., p, sin, cos)
     # p read once per call whatever the lanes; every input given (none NULL): no test of its pointer at each read
